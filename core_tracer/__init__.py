@@ -1,0 +1,1 @@
+from .scene import SceneError, load_scene, parse_scene

@@ -1,0 +1,369 @@
+"""Reading, validating and normalising ``lamp-scene/1`` documents.
+
+A *scene* is the normalised document: a plain JSON-compatible dict in which every field of
+``spec.SCENE`` is present (defaults filled in, the default camera computed), numbers are
+floats, vectors are lists. The one exception is the lens colour, kept in the form the designer
+gave it: ``absorption`` or ``transmitted_color`` with ``reference_thickness``.
+
+Every problem raises ``SceneError`` whose text names the field, the value and the allowed
+range, e.g. ``lamps[0].lens.radius: -3 is out of range; allowed (0, 1000] mm``.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import os
+import re
+from typing import Any
+
+from . import spec as S
+
+MAX_FILE_BYTES = 1_000_000  # a lamp design is a few kB; refuse anything absurd before parsing
+
+
+class SceneError(ValueError):
+    """A user's mistake in a scene document; ``str()`` is the one-line message to show."""
+
+    def __init__(self, path: str, message: str):
+        self.path = path
+        self.message = message
+        super().__init__(f"{path}: {message}" if path else message)
+
+
+# ---------------------------------------------------------------------------------------------
+# Loading
+
+
+def load_scene(path: str | os.PathLike) -> dict:
+    """Read, validate and normalise a scene file."""
+    return parse_scene(read_json(path))
+
+
+def read_json(path: str | os.PathLike, max_bytes: int = MAX_FILE_BYTES) -> Any:
+    """Read a JSON file with a size limit, turning every failure into a ``SceneError``."""
+    name = os.fspath(path)
+    try:
+        size = os.path.getsize(name)
+        if size > max_bytes:
+            raise SceneError(name, f"file is {size} bytes; allowed at most {max_bytes} bytes")
+        with open(name, "rb") as f:
+            raw = f.read(max_bytes + 1)
+    except SceneError:
+        raise
+    except OSError as e:
+        raise SceneError(name, f"cannot read the file ({e.strerror or e})") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise SceneError(name, "not UTF-8 text") from None
+    return parse_json_text(text, name)
+
+
+def parse_json_text(text: str, name: str = "") -> Any:
+    def no_constants(token: str):
+        raise SceneError(name, f"not valid JSON: {token} is not a number JSON allows")
+
+    try:
+        return json.loads(text, parse_constant=no_constants)
+    except SceneError:
+        raise
+    except RecursionError:
+        raise SceneError(name, "not valid JSON: nested too deeply") from None
+    except json.JSONDecodeError as e:
+        raise SceneError(name, f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+
+
+def scene_to_json(scene: dict) -> str:
+    """The canonical JSON text of a scene: stable key order, 2-space indent, number lists on one line."""
+    text = json.dumps(scene, indent=2, ensure_ascii=False)
+    return _NUMBER_LIST.sub(lambda m: "[" + ", ".join(x.strip() for x in m.group(1).split(",")) + "]", text) + "\n"
+
+
+_NUMBER_LIST = re.compile(r"\[\s*(-?[0-9][-+0-9.eE]*(?:,\s*-?[0-9][-+0-9.eE]*)*)\s*\]")
+
+
+# ---------------------------------------------------------------------------------------------
+# Validation
+
+
+def parse_scene(doc: Any) -> dict:
+    """Validate a decoded JSON document and return the normalised scene."""
+    if not isinstance(doc, dict):
+        raise SceneError("", f"a lamp-scene/1 document is a JSON object, not {_kind(doc)}")
+    schema = doc.get("schema")
+    if schema != S.SCHEMA:
+        if isinstance(schema, str) and schema.startswith("lamp-scene/"):
+            raise SceneError("schema", f'"{schema}" is not supported; this version reads "{S.SCHEMA}"')
+        raise SceneError("schema", f"{_show(schema)} is missing or wrong; allowed \"{S.SCHEMA}\"")
+    scene = _section(doc, S.SCENE, "")
+    if "camera" not in scene:
+        scene["camera"] = default_camera(scene)
+    _lens_color_rules(doc, scene)
+    check_geometry(scene)
+    return scene
+
+
+def normalize(scene: dict) -> dict:
+    """Validate an already-normalised (or hand-edited) scene again; returns a fresh copy."""
+    return parse_scene(copy.deepcopy(scene))
+
+
+def _section(doc: Any, sec: S.Section, path: str) -> dict:
+    if not isinstance(doc, dict):
+        raise SceneError(path.rstrip("."), f"expected an object, got {_kind(doc)}")
+    for key in doc:
+        if key not in sec.fields:
+            allowed = ", ".join(sec.fields)
+            raise SceneError(f"{path}{key}", f"unknown key; allowed keys here: {allowed}")
+    out: dict = {}
+    for key, spec in sec.fields.items():
+        where = f"{path}{key}"
+        if key not in doc:
+            if key in sec.optional:
+                continue
+            out[key] = _default(spec, where)
+            continue
+        out[key] = _value(doc[key], spec, where)
+    return out
+
+
+def _default(spec: S.Spec, where: str) -> Any:
+    if isinstance(spec, S.Section):
+        return _section({}, spec, where + ".")
+    if isinstance(spec, S.ListOf):
+        raise SceneError(where, f"is required; {spec.range_text()}")
+    if isinstance(spec, S.Num):
+        return _num_out(spec.default, spec)
+    return copy.deepcopy(spec.default)
+
+
+def _value(v: Any, spec: S.Spec, where: str) -> Any:
+    if isinstance(spec, S.Section):
+        return _section(v, spec, where + ".")
+    if isinstance(spec, S.ListOf):
+        if not isinstance(v, list):
+            raise SceneError(where, f"expected a list, got {_kind(v)}; allowed {spec.range_text()}")
+        if not spec.min_items <= len(v) <= spec.max_items:
+            raise SceneError(where, f"has {len(v)} items; allowed {spec.min_items} to {spec.max_items}")
+        return [_section(item, spec.item, f"{where}[{i}].") for i, item in enumerate(v)]
+    if isinstance(spec, S.Num):
+        return _num(v, spec, where)
+    if isinstance(spec, S.Choice):
+        if v not in spec.choices:
+            raise SceneError(where, f"{_show(v)} is not allowed; allowed {spec.range_text()}")
+        return v
+    if isinstance(spec, S.Text):
+        if not isinstance(v, str):
+            raise SceneError(where, f"expected a string, got {_kind(v)}")
+        if len(v) > spec.max_len:
+            raise SceneError(where, f"has {len(v)} characters; allowed at most {spec.max_len}")
+        return v
+    if isinstance(spec, S.Flag):
+        if not isinstance(v, bool):
+            raise SceneError(where, f"{_show(v)} is not allowed; allowed true or false")
+        return v
+    if isinstance(spec, S.Tags):
+        if not isinstance(v, list) or not all(isinstance(t, str) for t in v):
+            raise SceneError(where, f"expected a list of strings, got {_show(v)}")
+        if len(v) > spec.max_items or any(len(t) > spec.max_len for t in v):
+            raise SceneError(where, f"too long; allowed {spec.range_text()}")
+        return list(v)
+    raise AssertionError(spec)  # pragma: no cover - every spec kind is handled above
+
+
+def _num(v: Any, spec: S.Num, where: str) -> Any:
+    if spec.size > 1:
+        if not isinstance(v, list) or len(v) != spec.size:
+            raise SceneError(where, f"expected a list of {spec.size} numbers, got {_show(v)}")
+        items = [_scalar(x, spec, f"{where}[{i}]") for i, x in enumerate(v)]
+        if spec.nonzero and all(x == 0 for x in items):
+            raise SceneError(where, f"{_show(v)} is a zero vector; allowed {spec.range_text()}")
+        return items
+    return _scalar(v, spec, where)
+
+
+def _scalar(x: Any, spec: S.Num, where: str) -> float | int:
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        raise SceneError(where, f"expected a number, got {_show(x)}")
+    if not math.isfinite(x):
+        raise SceneError(where, f"{_show(x)} is not a finite number; allowed {spec.range_text()}")
+    if spec.integer and x != int(x):
+        raise SceneError(where, f"{_show(x)} is not a whole number; allowed {spec.range_text()}")
+    lo_bad = spec.lo is not None and (x < spec.lo or (spec.lo_open and x == spec.lo))
+    hi_bad = spec.hi is not None and (x > spec.hi or (spec.hi_open and x == spec.hi))
+    if lo_bad or hi_bad:
+        raise SceneError(where, f"{_show(x)} is out of range; allowed {spec.range_text()}")
+    return int(x) if spec.integer else float(x)
+
+
+def _num_out(default: Any, spec: S.Num) -> Any:
+    if spec.size > 1:
+        return [float(x) for x in default]
+    return int(default) if spec.integer else float(default)
+
+
+def _lens_color_rules(doc: dict, scene: dict) -> None:
+    for i, lamp in enumerate(scene["lamps"]):
+        lens = lamp["lens"]
+        where = f"lamps[{i}].lens"
+        has_a = "absorption" in lens
+        has_t = "transmitted_color" in lens
+        if has_a and (has_t or "reference_thickness" in lens):
+            raise SceneError(f"{where}.transmitted_color",
+                             "give either absorption or transmitted_color (with reference_thickness), "
+                             "not both")
+        if "reference_thickness" in lens and not has_t:
+            raise SceneError(f"{where}.reference_thickness", "only allowed with transmitted_color")
+        if has_t and "reference_thickness" not in lens:
+            lens["reference_thickness"] = lens["thickness"]
+        if not has_a and not has_t:
+            lens["absorption"] = _num_out(S.LENS.fields["absorption"].default, S.LENS.fields["absorption"])
+
+
+# ---------------------------------------------------------------------------------------------
+# Geometry: derived quantities and the checks that involve several fields
+
+
+def lens_absorption(lens: dict) -> list[float]:
+    """Absorption coefficients per mm (MODEL.md §6: A = -ln(T) / t_ref)."""
+    if "absorption" in lens:
+        return list(lens["absorption"])
+    t_ref = lens["reference_thickness"]
+    return [-math.log(c) / t_ref for c in lens["transmitted_color"]]
+
+
+def cut_sphere_radius(pitch: float, height: float) -> float:
+    """Radius rho of a lenslet sphere (MODEL.md §3.1): (c^2 + h^2) / 2h with c = p / sqrt 2."""
+    c = pitch / math.sqrt(2.0)
+    return (c * c + height * height) / (2.0 * height)
+
+
+def lamp_geometry(lamp: dict) -> dict:
+    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3)."""
+    R = lamp["lens"]["radius"]
+    t = lamp["lens"]["thickness"]
+    h = lamp["cuts"]["height"]
+    f = lamp["reflector"]["focal_length"]
+    y_apex = t + h
+    y_rim = y_apex + lamp["reflector"]["gap"]
+    y_vertex = y_rim + R * R / (4.0 * f)
+    y_focus = y_vertex - f
+    off = lamp["bulb"]["offset"]
+    return {
+        "plane_a": t, "plane_b": y_apex, "rim": y_rim, "vertex": y_vertex, "focus": y_focus,
+        "bulb_center": (off[0], y_focus + off[1], off[2]),
+    }
+
+
+def check_geometry(scene: dict) -> None:
+    """The rules that relate several fields; raises ``SceneError`` naming the field to change."""
+    cam = scene["camera"]
+    if cam["position"][1] >= 0:
+        raise SceneError("camera.position", f"y = {_show(cam['position'][1])} is not in front of the "
+                                            "lamp; allowed y < 0 mm (the lamp faces -Y)")
+    fwd = [b - a for a, b in zip(cam["position"], cam["target"])]
+    if math.hypot(*fwd) == 0:
+        raise SceneError("camera.target", "equals camera.position; the camera needs a view direction")
+    cross = [fwd[1] * cam["up"][2] - fwd[2] * cam["up"][1], fwd[2] * cam["up"][0] - fwd[0] * cam["up"][2],
+             fwd[0] * cam["up"][1] - fwd[1] * cam["up"][0]]
+    if math.hypot(*cross) < 1e-9 * math.hypot(*fwd) * math.hypot(*cam["up"]):
+        raise SceneError("camera.up", f"{_show(cam['up'])} is parallel to the view direction; "
+                                      "allowed any direction not along it")
+    body = scene["body"]
+    bx, bz = body["center"]
+    half_w, half_h = body["size"][0] / 2, body["size"][1] / 2
+    for i, lamp in enumerate(scene["lamps"]):
+        where = f"lamps[{i}]"
+        R = lamp["lens"]["radius"]
+        cx, cz = lamp["center"]
+        if abs(cx - bx) + R > half_w + 1e-9 or abs(cz - bz) + R > half_h + 1e-9:
+            raise SceneError(f"{where}.center", f"{_show(lamp['center'])} with lens radius {R:g} mm puts "
+                             f"the lens outside the body; allowed x in [{bx - half_w + R:g}, "
+                             f"{bx + half_w - R:g}], z in [{bz - half_h + R:g}, {bz + half_h - R:g}] mm")
+        for j in range(i):
+            other = scene["lamps"][j]
+            d = math.hypot(cx - other["center"][0], cz - other["center"][1])
+            if d < R + other["lens"]["radius"] - 1e-9:
+                raise SceneError(f"{where}.center", f"lens overlaps the lens of lamps[{j}] (centres "
+                                 f"{d:g} mm apart); allowed at least {R + other['lens']['radius']:g} mm")
+        pitch, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
+        if pitch > 2 * R:
+            raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is larger than the lens; "
+                             f"allowed (0, {2 * R:g}] mm (the lens diameter)")
+        c = pitch / math.sqrt(2.0)
+        if h > c:
+            raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "
+                             f"allowed [0, {c:.4g}] mm (pitch / sqrt 2)")
+        g = lamp_geometry(lamp)
+        if g["vertex"] > body["depth"]:
+            raise SceneError(f"{where}.reflector.focal_length",
+                             f"{lamp['reflector']['focal_length']:g} makes the reflector {g['vertex']:.4g} mm "
+                             f"deep, deeper than the body ({body['depth']:g} mm); allowed at least "
+                             f"{R * R / (4 * (body['depth'] - g['rim'])):.4g} mm" if body["depth"] > g["rim"]
+                             else f"the lens and cuts ({g['rim']:.4g} mm) are deeper than the body")
+        _check_bulb(lamp, g, where)
+        rs = lamp["socket"]["radius"]
+        if rs >= R:
+            raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {R:g}) mm")
+
+
+def _check_bulb(lamp: dict, g: dict, where: str) -> None:
+    """The bulb sphere must lie inside the paraboloid, behind the cut apex plane."""
+    rb = lamp["bulb"]["radius"]
+    bx, by, bz = g["bulb_center"]
+    f = lamp["reflector"]["focal_length"]
+    R = lamp["lens"]["radius"]
+    if by - rb < g["plane_b"]:
+        raise SceneError(f"{where}.bulb.offset", f"the bulb (radius {rb:g} mm) reaches {by - rb:.4g} mm, in front "
+                         f"of the cuts at y = {g['plane_b']:.4g} mm; move it back or make it smaller")
+    # Distance from the centre to the paraboloid y = y_v - r^2/(4f), sampled finely around it.
+    rho0 = math.hypot(bx, bz)
+    best = math.inf
+    n = 720
+    for k in range(n + 1):
+        r = R * k / n
+        for sign in (-1.0, 1.0):
+            # the closest point lies in the plane through the axis and the centre
+            px = sign * r
+            dy = (g["vertex"] - r * r / (4 * f)) - by
+            d = math.hypot(px - rho0, dy)
+            best = min(best, d)
+    inside = by < g["vertex"] - rho0 * rho0 / (4 * f) and rho0 < R
+    if not inside or best < rb:
+        raise SceneError(f"{where}.bulb.radius", f"{rb:g} with offset {_show(lamp['bulb']['offset'])} does not fit "
+                         f"inside the reflector; allowed up to {max(best, 0) if inside else 0:.4g} mm here")
+
+
+def default_camera(scene: dict) -> dict:
+    """A perspective camera on the -Y side that frames the whole body (16 degree lens)."""
+    cam = _section({}, S.CAMERA, "camera.")
+    body = scene["body"]
+    bx, bz = body["center"]
+    w, h = body["size"]
+    img = scene["image"]
+    aspect = img["width"] / img["height"]
+    half_fov = math.radians(cam["fov_deg"]) / 2
+    # The fov spans the larger image side (sensor fit auto); fit both body sides with a 10 % margin.
+    if aspect >= 1:
+        half_x, half_z = math.tan(half_fov), math.tan(half_fov) / aspect
+    else:
+        half_x, half_z = math.tan(half_fov) * aspect, math.tan(half_fov)
+    dist = 1.1 * max(w / 2 / half_x, h / 2 / half_z)
+    cam["position"] = [float(bx), -round(dist, 3), float(bz)]
+    cam["target"] = [float(bx), 0.0, float(bz)]
+    return cam
+
+
+def _kind(v: Any) -> str:
+    return {dict: "an object", list: "a list", str: "a string", bool: "a boolean",
+            type(None): "null"}.get(type(v), "a number" if isinstance(v, (int, float)) else type(v).__name__)
+
+
+def _show(v: Any) -> str:
+    try:
+        text = json.dumps(v, allow_nan=True)
+    except (TypeError, ValueError):
+        text = repr(v)
+    return text if len(text) <= 60 else text[:57] + "..."
