@@ -1,1 +1,12 @@
-from .scene import SceneError, load_scene, parse_scene
+"""The lamp renderer of Nishio, Yasuda, Yokoi and Toriwaki (IPSJ 1990), in numpy.
+
+Never imports bpy: the Blender add-on (``lamp_addon``) depends on this package, not the reverse.
+"""
+
+from .render import PASS_NAMES, RenderCancelled, RenderResult, render, render_passes
+from .scene import SceneError, load_scene, normalize, parse_scene, scene_to_json
+
+__all__ = [
+    "PASS_NAMES", "RenderCancelled", "RenderResult", "SceneError", "load_scene", "normalize", "parse_scene",
+    "render", "render_passes", "scene_to_json",
+]

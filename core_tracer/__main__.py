@@ -1,0 +1,5 @@
+"""``python -m core_tracer``: the standalone command line (see ``cli.py``)."""
+
+from .cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,65 @@
+"""Eye rays: one ray per pixel through its centre, top row first.
+
+The camera follows Blender's conventions so that the tracer and Cycles see the same picture:
+``fov_deg`` (perspective) or ``width`` (orthographic) spans the *fitted* image side —
+the larger one for ``sensor_fit: auto`` — and ``shift`` moves the image window by fractions
+of that side.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Camera:
+    position: np.ndarray
+    forward: np.ndarray
+    right: np.ndarray
+    up: np.ndarray
+    orthographic: bool
+    half_width: float  # tangent (perspective) or mm (orthographic) at the image's right edge
+    half_height: float
+    shift: tuple[float, float]  # offset of the window centre, same units as half_width
+    width: int
+    height: int
+
+
+def make_camera(cam: dict, width: int, height: int) -> Camera:
+    position = np.asarray(cam["position"], dtype=np.float64)
+    forward = np.asarray(cam["target"], dtype=np.float64) - position
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, np.asarray(cam["up"], dtype=np.float64))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    orthographic = cam["type"] == "orthographic"
+    half_fit = cam["width"] / 2.0 if orthographic else math.tan(math.radians(cam["fov_deg"]) / 2.0)
+    fit = cam["sensor_fit"]
+    if fit == "auto":
+        fit = "horizontal" if width >= height else "vertical"
+    if fit == "horizontal":
+        half_w, half_h = half_fit, half_fit * height / width
+    else:
+        half_w, half_h = half_fit * width / height, half_fit
+    shift = (cam["shift"][0] * 2.0 * half_fit, cam["shift"][1] * 2.0 * half_fit)
+    return Camera(position, forward, right, up, orthographic, half_w, half_h, shift, width, height)
+
+
+def eye_rays(camera: Camera, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Origins and unit directions (N, 3) of the eye rays through the given pixel indices
+    (row-major, top row first)."""
+    row, col = np.divmod(pixels, camera.width)
+    u = ((col + 0.5) / camera.width * 2.0 - 1.0) * camera.half_width + camera.shift[0]
+    v = (1.0 - (row + 0.5) / camera.height * 2.0) * camera.half_height + camera.shift[1]
+    offset = u[:, None] * camera.right + v[:, None] * camera.up
+    if camera.orthographic:
+        origins = camera.position + offset
+        directions = np.broadcast_to(camera.forward, origins.shape).copy()
+    else:
+        origins = np.broadcast_to(camera.position, offset.shape).copy()
+        directions = camera.forward + offset
+        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    return origins, directions

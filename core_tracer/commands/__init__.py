@@ -1,0 +1,49 @@
+"""The CLI's commands, one module each (see ``cli.COMMANDS``), and what they share."""
+
+from __future__ import annotations
+
+import os
+
+from .. import spec as S
+from ..scene import SceneError, parse_scene, read_json
+
+
+def in_file(error: SceneError, file: str | os.PathLike) -> SceneError:
+    """The same error, prefixed with the file it came from (once)."""
+    name = os.fspath(file)
+    if error.path == name or error.path.startswith(name + ":"):
+        return error
+    return SceneError(f"{name}: {error.path}" if error.path else name, error.message)
+
+
+def check_image_side(option: str, value: int | None) -> None:
+    """``--width``/``--height`` follow the same range as ``image.width``/``image.height``."""
+    if value is None:
+        return
+    side = S.IMAGE.fields["width"]
+    if not side.lo <= value <= side.hi:
+        raise SceneError(option, f"{value} is out of range; allowed {side.range_text()}")
+
+
+def load_scene_file(path: str | os.PathLike, width: int | None = None, height: int | None = None) -> dict:
+    """Read and validate a scene file, with the image size optionally overridden.
+
+    The override goes into the document before validation, so a default camera frames the body
+    for the image actually rendered and the stored scene says what was rendered.
+    """
+    check_image_side("--width", width)
+    check_image_side("--height", height)
+    doc = read_json(path)
+    if isinstance(doc, dict) and (width or height):
+        image = doc.get("image", {})
+        if isinstance(image, dict):
+            image = dict(image)
+            if width:
+                image["width"] = width
+            if height:
+                image["height"] = height
+            doc["image"] = image
+    try:
+        return parse_scene(doc)
+    except SceneError as e:
+        raise in_file(e, path) from None

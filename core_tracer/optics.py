@@ -1,0 +1,80 @@
+"""Surface optics of the improved ray tracing: Fresnel, Snell, absorption, Phong, Blinn.
+
+All functions are vectorised over rays: directions and normals are (N, 3) arrays of unit
+vectors, scalars broadcast.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,ij->i", a, b)
+
+
+def normalize(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float) -> np.ndarray:
+    """Unpolarised reflectance from the exact Fresnel equations (paper §3.3.1).
+
+    ``cos_i`` is the cosine of the angle of incidence (>= 0), ``n1`` the index on the incident
+    side, ``n2`` on the far side. Total internal reflection gives exactly 1.
+    """
+    cos_i = np.clip(cos_i, 0.0, 1.0)
+    eta = n1 / n2
+    sin2_t = eta * eta * (1.0 - cos_i * cos_i)
+    tir = sin2_t >= 1.0
+    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+    rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
+    rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t)
+    r = 0.5 * (rs * rs + rp * rp)
+    return np.where(tir, 1.0, r)
+
+
+def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Mirror direction of ``d`` about the unit normal ``n`` (either orientation)."""
+    return d - 2.0 * dot(d, n)[:, None] * n
+
+
+def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float) -> np.ndarray:
+    """Snell's law. ``n`` faces the incident side (d·n < 0), ``eta`` = n1 / n2.
+
+    Only meaningful where there is no total internal reflection (callers mask those rays).
+    """
+    cos_i = -dot(d, n)
+    eta = np.broadcast_to(eta, cos_i.shape)
+    sin2_t = eta * eta * (1.0 - cos_i * cos_i)
+    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+    return eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n
+
+
+def absorption(coeff: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """Equation (2): the fraction of each channel left after ``length`` mm in the lens."""
+    return np.exp(-coeff * length[:, None])
+
+
+def phong(normal: np.ndarray, view: np.ndarray, light_dir: np.ndarray, diffuse: np.ndarray,
+          light_color: np.ndarray, ambient: float, specular: np.ndarray | float,
+          shininess: np.ndarray | float) -> np.ndarray:
+    """Equation (1): [d + (1-d) cos θ] C0 + w (cos β)^n C1, cosines below 0 counted as 0.
+
+    ``view`` points from the surface to the eye, ``light_dir`` from the surface to the light.
+    ``diffuse`` is (N, 3) or (3,); returns (N, 3).
+    """
+    cos_theta = np.maximum(0.0, normal @ light_dir)
+    half = normalize(view + light_dir)
+    cos_beta = np.maximum(0.0, dot(normal, half))
+    diffuse_term = (ambient + (1.0 - ambient) * cos_theta)[:, None] * diffuse
+    spec = np.asarray(specular) * np.power(cos_beta, shininess)
+    return diffuse_term + spec[:, None] * light_color
+
+
+def blinn(normal: np.ndarray, view: np.ndarray, to_light: np.ndarray, weight: np.ndarray,
+          shininess: np.ndarray) -> np.ndarray:
+    """Equation (3) without I0: w (cos β)^n with β between the normal and the half vector."""
+    half = normalize(view + to_light)
+    cos_beta = np.maximum(0.0, dot(normal, half))
+    return weight * np.power(cos_beta, shininess)

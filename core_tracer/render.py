@@ -1,0 +1,395 @@
+"""The improved ray tracing of the paper as a numpy wavefront.
+
+Rays are traced backward from the eye, one per pixel through its centre. At every dielectric
+surface a ray branches into a reflected and a transmitted ray (the ray-tracing tree of Fig. 7);
+each carries its accumulated attenuation k, and luminance is added to the pixel as k × the
+value found, so the tree is never stored (MODEL.md §5). All live rays of one generation are
+processed together as arrays; the image is worked in bands of rows to bound memory.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from . import geometry as G
+from . import optics
+from . import paths as P
+from .camera import Camera, eye_rays, make_camera
+
+CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
+MAX_DEPTH = 64  # safety net on the number of segments along one branch
+TILE_RAYS = 32768  # eye rays per band of rows: bounds memory whatever the image size
+
+PASS_NAMES = ("lens_surface", "bulb", "reflector_constant", "reflector_scatter", "socket", "side_wall",
+              "body", "background")
+(LENS_SURFACE, BULB_PASS, REFLECTOR_CONSTANT, REFLECTOR_SCATTER, SOCKET_PASS, SIDE_WALL_PASS, BODY_PASS,
+ BACKGROUND_PASS) = range(len(PASS_NAMES))
+
+
+class RenderCancelled(Exception):
+    """Raised when ``should_stop()`` asked the render to stop."""
+
+
+@dataclass
+class RenderResult:
+    image: np.ndarray
+    passes: dict[str, np.ndarray]
+    stats: dict = field(default_factory=dict)
+
+
+@dataclass
+class _Rays:
+    """One generation of live rays inside the lamps (local lamp coordinates)."""
+
+    pix: np.ndarray  # pixel index within the band
+    lamp: np.ndarray
+    o: np.ndarray
+    d: np.ndarray
+    k: np.ndarray  # accumulated attenuation, RGB
+    medium: np.ndarray  # paths.IN_LENS / IN_AIR
+    src: np.ndarray  # surface the segment starts on
+    parent: np.ndarray  # path class of the segment that spawned this one
+    branch: np.ndarray  # paths.REFLECTED / TRANSMITTED
+    seen_reflector: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.pix)
+
+    def take(self, sel: np.ndarray) -> _Rays:
+        return _Rays(*(getattr(self, f)[sel] for f in _RAY_FIELDS))
+
+
+_RAY_FIELDS = ("pix", "lamp", "o", "d", "k", "medium", "src", "parent", "branch", "seen_reflector")
+
+
+def _concat(parts: list[_Rays]) -> _Rays:
+    return _Rays(*(np.concatenate([getattr(p, f) for p in parts]) for f in _RAY_FIELDS))
+
+
+class _Context:
+    """Everything constant during one render."""
+
+    def __init__(self, scene: dict, camera: Camera, record_transitions: bool):
+        self.camera = camera
+        self.lamps = G.LampTable.from_scene(scene)
+        body = scene["body"]
+        w, h = body["size"]
+        bx, bz = body["center"]
+        self.box_lo = np.array([bx - w / 2, 0.0, bz - h / 2])
+        self.box_hi = np.array([bx + w / 2, body["depth"], bz + h / 2])
+        self.body = body
+        light = scene["light"]
+        self.light_dir = np.asarray(light["direction"], dtype=np.float64)
+        self.light_dir /= np.linalg.norm(self.light_dir)
+        self.light_color = np.asarray(light["color"], dtype=np.float64)
+        self.ambient = light["ambient"]
+        self.background = np.asarray(scene["background"], dtype=np.float64)
+        self.record = record_transitions
+
+
+class _Band:
+    """Accumulates the passes of one band of pixels and the band's statistics."""
+
+    def __init__(self, n_pixels: int, ctx: _Context):
+        self.n = n_pixels
+        self.acc = np.zeros((len(PASS_NAMES), n_pixels, 3))
+        self.segments = 0
+        self.max_depth = 0
+        self.transitions: set[tuple[int, int, int]] = set()
+        self.ctx = ctx
+
+    def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
+        if len(pix) == 0:
+            return
+        for c in range(3):
+            self.acc[pass_id, :, c] += np.bincount(pix, weights=values[:, c], minlength=self.n)
+
+    def note(self, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
+        if self.ctx.record and len(child):
+            codes = np.unique(parent.astype(np.int64) * 10000 + branch.astype(np.int64) * 100 + child)
+            self.transitions.update((int(c) // 10000, (int(c) // 100) % 100, int(c) % 100) for c in codes)
+
+
+def render_passes(scene: dict, width: int | None = None, height: int | None = None, *,
+                  progress: Callable[[float], None] | None = None,
+                  should_stop: Callable[[], bool] | None = None,
+                  on_rows: Callable[[int, int, np.ndarray], None] | None = None,
+                  threads: int | None = None, record_transitions: bool = False) -> RenderResult:
+    """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
+
+    ``width``/``height`` override the scene's image size (the camera's field of view still
+    spans the fitted side). Bands of rows are rendered on ``threads`` threads (numpy releases
+    the GIL); ``progress(fraction)`` and ``on_rows(row_start, row_stop, rows)`` are called from
+    the calling thread as bands finish, ``should_stop()`` is polled between bands.
+    """
+    width = int(width or scene["image"]["width"])
+    height = int(height or scene["image"]["height"])
+    start = time.perf_counter()
+    ctx = _Context(scene, make_camera(scene["camera"], width, height), record_transitions)
+    passes = np.zeros((len(PASS_NAMES), height, width, 3), dtype=np.float32)
+    image = np.zeros((height, width, 3), dtype=np.float32)
+    rows_per_band = max(1, TILE_RAYS // width)
+    bands = [(y, min(height, y + rows_per_band)) for y in range(0, height, rows_per_band)]
+    threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
+    stats = {"segments": 0, "max_depth": 0, "transitions": set()}
+
+    def finish(y0: int, y1: int, band: _Band) -> None:
+        acc = band.acc.reshape(len(PASS_NAMES), y1 - y0, width, 3)
+        passes[:, y0:y1] = acc
+        image[y0:y1] = acc.sum(axis=0)
+        stats["segments"] += band.segments
+        stats["max_depth"] = max(stats["max_depth"], band.max_depth)
+        stats["transitions"] |= band.transitions
+        if on_rows is not None:
+            on_rows(y0, y1, image[y0:y1])
+
+    done = 0
+    if threads == 1:
+        for y0, y1 in bands:
+            if should_stop is not None and should_stop():
+                raise RenderCancelled("render cancelled")
+            finish(y0, y1, _trace_band(ctx, y0, y1))
+            done += 1
+            if progress is not None:
+                progress(done / len(bands))
+    else:
+        with ThreadPoolExecutor(max_workers=threads) as pool:
+            pending = list(bands)
+            running = []
+            while pending or running:
+                while pending and len(running) < threads:
+                    y0, y1 = pending.pop(0)
+                    running.append((y0, y1, pool.submit(_trace_band, ctx, y0, y1)))
+                y0, y1, fut = running.pop(0)
+                band = fut.result()
+                if should_stop is not None and should_stop():
+                    for *_, f in running:
+                        f.cancel()
+                    raise RenderCancelled("render cancelled")
+                finish(y0, y1, band)
+                done += 1
+                if progress is not None:
+                    progress(done / len(bands))
+    stats["seconds"] = time.perf_counter() - start
+    stats["width"], stats["height"] = width, height
+    return RenderResult(image, dict(zip(PASS_NAMES, passes)), stats)
+
+
+def render(scene: dict, width: int | None = None, height: int | None = None, *,
+           progress: Callable[[float], None] | None = None,
+           should_stop: Callable[[], bool] | None = None) -> np.ndarray:
+    """Render a normalised scene: float32 (H, W, 3), top row first, linear RGB."""
+    return render_passes(scene, width, height, progress=progress, should_stop=should_stop).image
+
+
+# ---------------------------------------------------------------------------------------------
+# One band of rows
+
+
+def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
+    cam = ctx.camera
+    pixels = np.arange(y0 * cam.width, y1 * cam.width)
+    band = _Band(len(pixels), ctx)
+    o, d = eye_rays(cam, pixels)
+    band.segments += len(pixels)
+    rays = _first_hits(ctx, band, o, d)
+    depth = 1
+    while len(rays) and depth < MAX_DEPTH:
+        band.segments += len(rays)
+        rays = _step(ctx, band, rays)
+        depth += 1
+    band.max_depth = depth
+    return band
+
+
+def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Rays:
+    """Classify the eye rays (paper §3.1): background, body, or lens (①)."""
+    n = len(o)
+    pix = np.arange(n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (ctx.box_lo - o) / d
+        t2 = (ctx.box_hi - o) / d
+    # A ray parallel to a slab is inside it (−inf, inf) or outside it (inf, −inf).
+    inside = (o >= ctx.box_lo) & (o <= ctx.box_hi)
+    t_lo = np.where(d == 0, np.where(inside, -np.inf, np.inf), np.fmin(t1, t2))
+    t_hi = np.where(d == 0, np.where(inside, np.inf, -np.inf), np.fmax(t1, t2))
+    face = np.argmax(t_lo, axis=1)
+    t_near = t_lo[pix, face]
+    t_far = np.min(t_hi, axis=1)
+    hit_box = (t_near <= t_far) & (t_near > 0)
+
+    band.add(BACKGROUND_PASS, pix[~hit_box], np.broadcast_to(ctx.background, (int((~hit_box).sum()), 3)))
+
+    p = o + t_near[:, None] * d
+    lamp = np.full(n, -1)
+    front = hit_box & (face == 1) & (d[:, 1] > 0)
+    L = ctx.lamps
+    for li in range(len(L.radius)):
+        dx = p[:, 0] - L.center[li, 0]
+        dz = p[:, 2] - L.center[li, 1]
+        lamp[front & (dx * dx + dz * dz <= L.radius[li] ** 2)] = li
+    on_lens = lamp >= 0
+    on_body = hit_box & ~on_lens
+
+    # Body: equation (1) with the face's outward normal.
+    b = np.nonzero(on_body)[0]
+    normal = np.zeros((len(b), 3))
+    normal[np.arange(len(b)), face[b]] = -np.sign(d[b, face[b]])
+    body = ctx.body
+    band.add(BODY_PASS, b, optics.phong(normal, -d[b], ctx.light_dir, np.asarray(body["color"]), ctx.light_color,
+                                        ctx.ambient, body["specular"], body["shininess"]))
+
+    # Lens outer face (①): Fresnel split; the reflected branch is shaded by eq. (1) (§3.2.3).
+    s = np.nonzero(on_lens)[0]
+    li = lamp[s]
+    ds = d[s]
+    ior = L.ior[li]
+    cos_i = ds[:, 1]
+    r = optics.fresnel_reflectance(cos_i, 1.0, ior)
+    face_normal = np.tile([0.0, -1.0, 0.0], (len(s), 1))
+    surface = optics.phong(face_normal, -ds, ctx.light_dir, L.lens_diffuse[li], ctx.light_color, ctx.ambient,
+                           L.lens_specular[li], L.lens_shininess[li])
+    band.add(LENS_SURFACE, s, r[:, None] * surface)
+    band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
+    ones = np.ones(len(s), dtype=np.int8)
+    band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
+
+    k = np.repeat((1.0 - r)[:, None], 3, axis=1)
+    local = p[s] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
+    local[:, 1] = 0.0
+    d_in = optics.refract(ds, face_normal, 1.0 / ior)
+    rays = _Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
+                 src=np.full(len(s), P.OUTER, np.int8), parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8),
+                 branch=np.full(len(s), P.TRANSMITTED, np.int8), seen_reflector=np.zeros(len(s), bool))
+    return rays.take(k.max(axis=1) >= CUTOFF)
+
+
+def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nearest surface of every ray: (t, surface id, normal at cut hits)."""
+    L = ctx.lamps
+    n = len(rays)
+    li = rays.lamp
+    o, d = rays.o, rays.d
+    t_wall = G.hit_side_wall(o, d, L.radius[li])
+    t_cut, cut_normal = G.hit_cuts(o, d, L.plane_a[li], L.plane_b[li], L.pitch[li], L.cut_radius[li], t_wall)
+    t_best = np.minimum(t_wall, t_cut)
+    surface = np.where(t_cut < t_wall, P.CUT, P.WALL).astype(np.int8)
+
+    lens = rays.medium == P.IN_LENS
+    idx = np.nonzero(lens)[0]
+    if len(idx):
+        t_o = G.hit_outer_face(o[idx], d[idx])
+        nearer = t_o < t_best[idx]
+        t_best[idx[nearer]] = t_o[nearer]
+        surface[idx[nearer]] = P.OUTER
+
+    idx = np.nonzero(~lens)[0]
+    if len(idx):
+        lj = li[idx]
+        oa, da = o[idx], d[idx]
+        candidates = (
+            (P.REFLECTOR, G.hit_reflector(oa, da, L.focal[lj], L.vertex[lj], L.rim[lj])),
+            (P.BULB, G.hit_sphere(oa, da, L.bulb_center[lj], L.bulb_radius[lj])),
+            (P.SOCKET, G.hit_socket(oa, da, L.socket_radius[lj], L.bulb_center[lj, 1], L.vertex[lj])),
+        )
+        for sid, t in candidates:
+            nearer = t < t_best[idx]
+            t_best[idx[nearer]] = t[nearer]
+            surface[idx[nearer]] = sid
+    surface[~np.isfinite(t_best)] = P.NOTHING
+    assert n == len(surface)
+    return t_best, surface, cut_normal
+
+
+def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
+    """Trace one generation: find each segment's end, add its luminance, spawn the children."""
+    L = ctx.lamps
+    t, surface, cut_normal = _intersect(ctx, rays)
+    cls = P.CLASS_OF[rays.medium, rays.src, surface]
+    band.note(rays.parent, rays.branch, cls)
+
+    k = rays.k
+    lens = rays.medium == P.IN_LENS
+    if lens.any():  # equation (2): absorption over the path length in the lens
+        k = k.copy()
+        k[lens] *= np.exp(-L.absorption[rays.lamp[lens]] * t[lens, None])
+    hit = rays.o + np.where(np.isfinite(t), t, 0.0)[:, None] * rays.d
+
+    for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, L.wall_color), (P.BULB, BULB_PASS, L.bulb_intensity),
+                                (P.SOCKET, SOCKET_PASS, L.socket_color)):
+        m = surface == sid
+        if m.any():
+            band.add(pass_id, rays.pix[m], k[m] * color[rays.lamp[m]])
+
+    children: list[_Rays] = []
+    m = np.nonzero(surface == P.REFLECTOR)[0]
+    if len(m):
+        children.append(_reflector(ctx, band, rays, m, k[m], hit[m], cls[m]))
+    m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
+    if len(m):
+        children.extend(_dielectric(ctx, band, rays, m, k[m], hit[m], cls[m], surface[m], cut_normal[m]))
+    if not children:
+        return rays.take(np.zeros(0, dtype=np.int64))
+    out = _concat(children) if len(children) > 1 else children[0]
+    return out.take(out.k.max(axis=1) >= CUTOFF)
+
+
+def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
+               cls: np.ndarray) -> _Rays:
+    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter (eq. 3), then the mirror ray."""
+    L = ctx.lamps
+    li = rays.lamp[m]
+    d = rays.d[m]
+    first = ~rays.seen_reflector[m]
+    band.add(REFLECTOR_CONSTANT, rays.pix[m][first], k[first] * L.reflector_color[li[first]])
+    normal = G.reflector_normal(hit, L.focal[li])
+    to_bulb = optics.normalize(L.bulb_center[li] - hit)
+    scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
+    band.add(REFLECTOR_SCATTER, rays.pix[m], k * scatter[:, None] * L.bulb_intensity[li])
+    n = len(m)
+    return _Rays(pix=rays.pix[m], lamp=li, o=hit, d=optics.reflect(d, normal), k=k * L.reflectance[li, None],
+                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls,
+                 branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
+
+
+def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
+                cls: np.ndarray, surface: np.ndarray, cut_normal: np.ndarray) -> list[_Rays]:
+    """A lens surface hit from either side: Fresnel split into reflected and transmitted rays."""
+    L = ctx.lamps
+    li = rays.lamp[m]
+    d = rays.d[m]
+    medium = rays.medium[m]
+    from_lens = medium == P.IN_LENS
+    # Normal pointing out of the lens material: -y on the outer face, the cap normal on the cuts.
+    out_normal = np.where((surface == P.OUTER)[:, None], np.array([0.0, -1.0, 0.0]), cut_normal)
+    facing = np.where(from_lens[:, None], -out_normal, out_normal)  # toward the incident side
+    cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
+    n1 = np.where(from_lens, L.ior[li], 1.0)
+    n2 = np.where(from_lens, 1.0, L.ior[li])
+    r = optics.fresnel_reflectance(cos_i, n1, n2)
+    src = np.where(surface == P.OUTER, P.OUTER, P.CUT).astype(np.int8)
+    n = len(m)
+    pix, seen = rays.pix[m], rays.seen_reflector[m]
+    reflected = _Rays(pix=pix, lamp=li, o=hit, d=optics.reflect(d, facing), k=k * r[:, None], medium=medium,
+                      src=src, parent=cls, branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=seen)
+    out = [reflected]
+    trans = np.nonzero(r < 1.0)[0]
+    leaving = (surface[trans] == P.OUTER)
+    # ⑩: out through the outer face, to the background (ends).
+    lv = trans[leaving]
+    band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
+    band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
+    tc = trans[~leaving]
+    if len(tc):
+        eta = n1[tc] / n2[tc]
+        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
+                         k=k[tc] * (1.0 - r[tc, None]), medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
+                         .astype(np.int8), src=src[tc], parent=cls[tc],
+                         branch=np.full(len(tc), P.TRANSMITTED, np.int8), seen_reflector=seen[tc]))
+    return out
