@@ -90,7 +90,7 @@ def builtin_library() -> Library:
 def printable(text: str, limit: int = MAX_MESSAGE) -> str:
     """One line of plain text: control characters and undecodable bytes escaped, length bounded."""
     out = []
-    for ch in text:
+    for ch in text[: limit + 1]:
         code = ord(ch)
         if 0xDC80 <= code <= 0xDCFF:  # an undecodable byte of a file name (surrogateescape)
             out.append(f"\\x{code - 0xDC00:02x}")
@@ -265,7 +265,8 @@ def delete_preset(entry: PresetEntry) -> None:
     """Remove a preset (and its cached thumbnails) from a writable library."""
     path = _own_file(entry)
     os.unlink(path)
-    _remove_thumbnails(os.path.join(entry.library.folder, THUMBNAIL_FOLDER), os.path.splitext(os.path.basename(path))[0])
+    stem = os.path.splitext(os.path.basename(path))[0]
+    _remove_thumbnails(os.path.join(entry.library.folder, THUMBNAIL_FOLDER), stem)
 
 
 def rename_preset(entry: PresetEntry, new_name: str, *, overwrite: bool = False) -> PresetEntry:

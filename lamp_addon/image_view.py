@@ -1,0 +1,112 @@
+"""Images the add-on makes ("Lamp Tracer", "Lamp Compare"): pixels in, Image Editor out.
+
+Blender's image rows run bottom-up, the tracer's (and OpenImageIO's) top-down. The colour space
+is set before any pixel is written: changing it afterwards resets the pixels (BLENDER-NOTES).
+"""
+
+from __future__ import annotations
+
+import bpy
+import numpy as np
+
+
+def scene_linear_colorspace() -> str:
+    """The colour space of the tracer's linear RGB: the working space where Blender has one
+    (5.0+), else Linear Rec.709 (Blender's scene-linear space before 5.0)."""
+    items = bpy.types.ColorManagedInputColorspaceSettings.bl_rna.properties["name"].enum_items
+    return "scene_linear" if "scene_linear" in items else "Linear Rec.709"
+
+
+def rgba_rows(rgb: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
+    """(H, W, 3) top-first RGB to a flat float32 RGBA buffer in Blender's bottom-up order."""
+    height, width = rgb.shape[:2]
+    rgba = np.ones((height, width, 4), np.float32)
+    rgba[:, :, :3] = rgb
+    if alpha is not None:
+        rgba[:, :, 3] = alpha
+    return np.ascontiguousarray(rgba[::-1]).ravel()
+
+
+def prepare_image(name: str, width: int, height: int) -> bpy.types.Image:
+    """A float image ``name`` of the given size in the scene-linear colour space, reusing the
+    data-block (so editors showing it keep showing it) when it is a generated float image."""
+    image = bpy.data.images.get(name)
+    if image is not None and (image.source != "GENERATED" or not image.is_float):
+        image.name = name + ".old"  # someone else's image of that name: leave it alone
+        image = None
+    if image is None:
+        image = bpy.data.images.new(name, width, height, float_buffer=True, alpha=True)
+    elif tuple(image.size) != (width, height):
+        image.generated_width, image.generated_height = width, height
+    space = scene_linear_colorspace()
+    if image.colorspace_settings.name != space:
+        image.colorspace_settings.name = space
+    return image
+
+
+def image_from_array(name: str, rgb: np.ndarray, alpha: np.ndarray | None = None) -> bpy.types.Image:
+    """The image ``name`` holding ``rgb`` (H, W, 3 linear, top row first)."""
+    height, width = rgb.shape[:2]
+    image = prepare_image(name, width, height)
+    image.pixels.foreach_set(rgba_rows(rgb, alpha))
+    image.update()
+    return image
+
+
+def image_to_array(image: bpy.types.Image) -> np.ndarray:
+    """An image's RGB as (H, W, 3) float32, top row first."""
+    width, height = image.size
+    flat = np.empty(width * height * 4, np.float32)
+    image.pixels.foreach_get(flat)
+    return flat.reshape(height, width, 4)[::-1, :, :3].copy()
+
+
+def read_exr(path: str) -> np.ndarray:
+    """Linear RGB (H, W, 3 top row first) of an OpenEXR file, through Blender's own reader (so it
+    works in any Blender, with or without an OpenImageIO Python module)."""
+    image = bpy.data.images.load(path, check_existing=False)
+    try:
+        return image_to_array(image)
+    finally:
+        bpy.data.images.remove(image)
+
+
+def show_image(context, image: bpy.types.Image) -> bool:
+    """Show ``image`` in an Image Editor of the current screen, splitting the largest area off
+    into one when there is none. Background mode has no windows: returns False there."""
+    if bpy.app.background or context.window is None or context.screen is None:
+        return False
+    screen = context.screen
+    editor = next((a for a in screen.areas if a.type == "IMAGE_EDITOR"), None)
+    if editor is None:
+        editor = _split_off_editor(context, screen)
+    if editor is None:
+        return False
+    editor.spaces.active.image = image
+    editor.tag_redraw()
+    return True
+
+
+def _split_off_editor(context, screen):
+    candidates = [a for a in screen.areas if a.type in {"VIEW_3D", "PROPERTIES", "OUTLINER"}] or list(screen.areas)
+    if not candidates:
+        return None
+    largest = max(candidates, key=lambda a: a.width * a.height)
+    before = {a.as_pointer() for a in screen.areas}
+    with context.temp_override(window=context.window, screen=screen, area=largest):
+        bpy.ops.screen.area_split(direction="VERTICAL", factor=0.5)
+    new = [a for a in screen.areas if a.as_pointer() not in before]
+    if not new:
+        return None
+    area = new[0]
+    area.type = "IMAGE_EDITOR"
+    return area
+
+
+def redraw_image_editors(context, image: bpy.types.Image) -> None:
+    """Redraw every Image Editor that shows ``image``."""
+    wm = context.window_manager
+    for window in wm.windows:
+        for area in window.screen.areas:
+            if area.type == "IMAGE_EDITOR" and area.spaces.active.image == image:
+                area.tag_redraw()

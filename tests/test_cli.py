@@ -1,0 +1,217 @@
+"""The standalone CLI, run as users run it: ``python -m core_tracer`` in a subprocess."""
+
+from __future__ import annotations
+
+import copy
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from core_tracer import PASS_NAMES, imageio, scene
+
+ROOT = Path(__file__).resolve().parent.parent
+BASELINE = ROOT / "presets" / "paper-baseline.json"
+
+
+def run_cli(*args: str | Path, timeout: float = 120) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def baseline() -> dict:
+    return json.loads(BASELINE.read_text())
+
+
+def assert_bad_input(proc: subprocess.CompletedProcess, *needles: str) -> str:
+    """Exit 2, exactly one line on stderr containing every needle, no traceback."""
+    assert proc.returncode == 2, (proc.returncode, proc.stderr)
+    assert "Traceback" not in proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1, proc.stderr
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+    return lines[0]
+
+
+# ---------------------------------------------------------------------------------------------
+# Bad scenes: every case gives exit 2, one line naming the field, the value and the range, and
+# writes nothing.
+
+
+def _lamp(center):
+    lamp = copy.deepcopy(baseline()["lamps"][0])
+    lamp["center"] = center
+    return lamp
+
+
+def _edit(fn):
+    def make():
+        doc = baseline()
+        fn(doc)
+        return json.dumps(doc)
+    return make
+
+
+BAD_SCENES = {
+    "not-json": (lambda: '{"schema": "lamp-scene/1", "lamps": [', ("not valid JSON", "line 1")),
+    "not-utf8": (lambda: b'{"name": "\xff\xfe"}', ("not UTF-8",)),
+    "wrong-schema": (_edit(lambda d: d.update(schema="lamp-scene/2")),
+                     ("schema", '"lamp-scene/2"', '"lamp-scene/1"')),
+    "no-schema": (_edit(lambda d: d.pop("schema")), ("schema", '"lamp-scene/1"')),
+    "unknown-key": (_edit(lambda d: d["lamps"][0]["lens"].update(colour=[1, 0, 0])),
+                    ("lamps[0].lens.colour", "unknown key", "transmitted_color")),
+    "nan": (lambda: BASELINE.read_text().replace('"ior": 1.49', '"ior": NaN'), ("NaN",)),
+    "infinity": (lambda: BASELINE.read_text().replace('"ior": 1.49', '"ior": 1e999'),
+                 ("lamps[0].lens.ior", "Infinity", "[1, 3]")),
+    "negative-radius": (_edit(lambda d: d["lamps"][0]["lens"].update(radius=-3)),
+                        ("lamps[0].lens.radius", "-3", "(0, 1000] mm")),
+    "zero-body-size": (_edit(lambda d: d["body"].update(size=[0, 120])),
+                       ("body.size[0]", "0 is out of range", "(0, 10000] mm")),
+    "zero-thickness": (_edit(lambda d: d["lamps"][0]["lens"].update(thickness=0)),
+                       ("lamps[0].lens.thickness", "0", "(0, 100] mm")),
+    "ior-below-1": (_edit(lambda d: d["lamps"][0]["lens"].update(ior=0.9)),
+                    ("lamps[0].lens.ior", "0.9", "[1, 3]")),
+    "five-lamps": (_edit(lambda d: d.update(lamps=[_lamp([0, 0]) for _ in range(5)])),
+                   ("lamps", "5 items", "1 to 4")),
+    "overlapping-lenses": (_edit(lambda d: (d["body"].update(size=[300, 120]),
+                                            d.update(lamps=[_lamp([-30, 0]), _lamp([30, 0])]))),
+                           ("lamps[1].center", "overlaps the lens of lamps[0]", "at least 90 mm")),
+    "lens-outside-body": (_edit(lambda d: d["lamps"][0].update(center=[80, 0])),
+                          ("lamps[0].center", "[80.0, 0.0]", "outside the body", "[-65, 65]")),
+    "cuts-larger-than-lens": (_edit(lambda d: d["lamps"][0]["cuts"].update(pitch=100)),
+                              ("lamps[0].cuts.pitch", "100", "(0, 90] mm")),
+    "bulb-too-big": (_edit(lambda d: d["lamps"][0]["bulb"].update(radius=30)),
+                     ("lamps[0].bulb", "radius 30 mm")),
+    "bulb-off-axis-outside-reflector": (_edit(lambda d: d["lamps"][0]["bulb"].update(offset=[40, 0, 0])),
+                                        ("lamps[0].bulb.radius", "does not fit inside the reflector")),
+    "image-100000-px": (_edit(lambda d: d["image"].update(width=100000)),
+                        ("image.width", "100000", "[1, 8192] px")),
+    "lamps-not-a-list": (_edit(lambda d: d.update(lamps={"center": [0, 0]})), ("lamps", "expected a list")),
+}
+
+
+CASES = [(case, "render") for case in sorted(BAD_SCENES)]
+CASES += [(case, "validate") for case in ("not-json", "unknown-key", "five-lamps", "bulb-too-big")]
+
+
+@pytest.mark.parametrize("case,command", CASES)
+def test_bad_scene_exits_2_with_one_line(tmp_path, case, command):
+    make, needles = BAD_SCENES[case]
+    content = make()
+    src = tmp_path / "scene.json"
+    src.write_bytes(content if isinstance(content, bytes) else content.encode())
+    out = tmp_path / "out.exr"
+    extra = ["-o", out, "--passes", tmp_path / "passes"] if command == "render" else []
+    proc = run_cli(command, src, *extra)
+    line = assert_bad_input(proc, "scene.json", *needles)
+    assert line.startswith("error: ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.json"]
+
+
+def test_unreadable_file(tmp_path):
+    missing = tmp_path / "missing.json"
+    assert_bad_input(run_cli("render", missing, "-o", tmp_path / "o.exr"), "missing.json", "cannot read")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_folder_is_not_a_scene(tmp_path):
+    (tmp_path / "dir.json").mkdir()
+    assert_bad_input(run_cli("validate", tmp_path / "dir.json"), "dir.json", "cannot read")
+
+
+def test_oversized_file_is_refused_before_reading(tmp_path):
+    big = tmp_path / "big.json"
+    with open(big, "wb") as f:
+        f.truncate(100 * 1024 * 1024)  # sparse: costs no disk
+    start = time.perf_counter()
+    assert_bad_input(run_cli("validate", big), "big.json", "104857600 bytes", "at most 1000000 bytes")
+    assert time.perf_counter() - start < 10
+
+
+@pytest.mark.parametrize("option,value", [("--width", "100000"), ("--height", "0"), ("--width", "-5")])
+def test_absurd_image_size_option(tmp_path, option, value):
+    out = tmp_path / "out.png"
+    assert_bad_input(run_cli("render", BASELINE, "-o", out, option, value), option, value, "[1, 8192] px")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_image_size_option_not_a_number(tmp_path):
+    assert_bad_input(run_cli("render", BASELINE, "-o", tmp_path / "o.png", "--width", "wide"),
+                     "--width", "'wide'")
+
+
+@pytest.mark.parametrize("name", ["out.jpg", "out"])
+def test_unsupported_output_format(tmp_path, name):
+    out = tmp_path / name
+    assert_bad_input(run_cli("render", BASELINE, "-o", out), name, ".exr, .png")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_output_folder_missing(tmp_path):
+    out = tmp_path / "nowhere" / "out.exr"
+    assert_bad_input(run_cli("render", BASELINE, "-o", out), "out.exr", "does not exist")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_usage_errors_are_one_line():
+    assert_bad_input(run_cli("render"), "required")
+    assert_bad_input(run_cli("frobnicate"), "invalid choice")
+
+
+# ---------------------------------------------------------------------------------------------
+# Good input
+
+
+def test_validate_ok():
+    proc = run_cli("validate", BASELINE)
+    assert proc.returncode == 0, proc.stderr
+    assert "valid lamp-scene/1" in proc.stdout and "Round red tail lamp" in proc.stdout
+
+
+def test_render_exr_with_passes(tmp_path):
+    out = tmp_path / "out.exr"
+    passes = tmp_path / "passes"
+    proc = run_cli("render", BASELINE, "-o", out, "--width", "40", "--height", "24", "--passes", passes)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    summary = proc.stdout.strip()
+    assert "40x24 px" in summary and " s" in summary and "segments" in summary
+    image, sc = imageio.read_image(out)
+    assert image.shape == (24, 40, 3)
+    assert np.isfinite(image).all() and (image >= 0).all() and image.max() > 0
+    assert sc["image"] == {"width": 40, "height": 24}
+    expected = scene.load_scene(BASELINE)
+    expected["image"] = {"width": 40, "height": 24}
+    assert sc["lamps"] == expected["lamps"] and sc["body"] == expected["body"]
+    assert sorted(p.name for p in passes.iterdir()) == sorted(f"{n}.exr" for n in PASS_NAMES)
+    total = sum(imageio.read_image(passes / f"{n}.exr")[0] for n in PASS_NAMES)
+    assert np.allclose(total, image, rtol=1e-5, atol=1e-6)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.exr", "passes"]
+
+
+def test_render_png(tmp_path):
+    out = tmp_path / "out.png"
+    proc = run_cli("render", BASELINE, "-o", out, "--width", "32", "--height", "32")
+    assert proc.returncode == 0, proc.stderr
+    image, sc = imageio.read_image(out)
+    assert image.shape == (32, 32, 3) and sc is not None
+
+
+def test_ctrl_c_exits_130_without_a_file(tmp_path):
+    out = tmp_path / "big.exr"
+    # large enough that the render is still running when the signal arrives
+    proc = subprocess.Popen([sys.executable, "-m", "core_tracer", "render", str(BASELINE), "-o", str(out),
+                             "--width", "2048", "--height", "2048"], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and err.strip() == "interrupted"
+    assert list(tmp_path.iterdir()) == []

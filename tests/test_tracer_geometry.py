@@ -1,0 +1,125 @@
+"""The lamp's surfaces: the cut-surface cell walk against brute force, quadrics, re-intersection."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core_tracer import geometry as G
+from core_tracer.scene import cut_sphere_radius
+
+R, T, P_, H = 45.0, 3.0, 9.0, 1.5
+RHO = cut_sphere_radius(P_, H)
+
+
+def brute_force_cuts(o, d, plane_a, plane_b, pitch, rho, t_limit):
+    """Test every cell's sphere for every ray; keep the nearest root inside its own cell."""
+    n_cells = int(np.ceil(R / pitch)) + 1
+    best = np.full(len(o), np.inf)
+    for i in range(-n_cells, n_cells + 1):
+        for j in range(-n_cells, n_cells + 1):
+            c = np.array([i * pitch, plane_b - rho, j * pitch])
+            oc = o - c
+            b = np.einsum("ij,ij->i", oc, d)
+            cc = np.einsum("ij,ij->i", oc, oc) - rho * rho
+            with np.errstate(invalid="ignore"):
+                sq = np.sqrt(b * b - cc)
+            for t in (-b - sq, -b + sq):
+                p = o + t[:, None] * d
+                inside = (np.abs(p[:, 0] - i * pitch) <= pitch / 2) & (np.abs(p[:, 2] - j * pitch) <= pitch / 2)
+                ok = (t > G.T_MIN) & inside & (p[:, 1] >= plane_a - 1e-9) & (t < t_limit)
+                best = np.where(ok & (t < best), t, best)
+    return best
+
+
+def random_rays(rng, n, where):
+    if where == "lens":  # from the outer face, into the lens
+        r = R * np.sqrt(rng.uniform(0, 1, n))
+        a = rng.uniform(0, 2 * np.pi, n)
+        o = np.stack([r * np.cos(a), np.zeros(n), r * np.sin(a)], axis=1)
+        d = rng.normal(size=(n, 3))
+        d[:, 1] = np.abs(d[:, 1]) + 0.05
+    else:  # from the air above the cuts, heading back toward them, some nearly grazing
+        r = R * 0.95 * np.sqrt(rng.uniform(0, 1, n))
+        a = rng.uniform(0, 2 * np.pi, n)
+        o = np.stack([r * np.cos(a), rng.uniform(T + H + 0.01, 12, n), r * np.sin(a)], axis=1)
+        d = rng.normal(size=(n, 3))
+        d[:, 1] = -np.abs(d[:, 1]) * rng.choice([1.0, 0.05], n)
+    return o, d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+@pytest.mark.parametrize("where", ["lens", "air"])
+def test_cell_walk_agrees_with_brute_force(where):
+    rng = np.random.default_rng(1990)
+    o, d = random_rays(rng, 4000, where)
+    n = len(o)
+    radius = np.full(n, R)
+    t_limit = G.hit_side_wall(o, d, radius)
+    args = (np.full(n, T), np.full(n, T + H), np.full(n, P_), np.full(n, RHO))
+    t_walk, normal = G.hit_cuts(o, d, *args, t_limit)
+    t_brute = brute_force_cuts(o, d, T, T + H, P_, RHO, t_limit)
+    both = np.isfinite(t_walk) & np.isfinite(t_brute)
+    assert np.array_equal(np.isfinite(t_walk), np.isfinite(t_brute))
+    assert both.sum() > 0.4 * n
+    np.testing.assert_allclose(t_walk[both], t_brute[both], rtol=1e-9, atol=1e-9)
+    # the hit lies on the cut surface, and the normal is the cap's unit normal
+    p = o[both] + t_walk[both, None] * d[both]
+    height = G.cut_surface_height(p[:, 0], p[:, 2], T + H, P_, RHO)
+    np.testing.assert_allclose(p[:, 1], height, atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(normal[both], axis=1), 1.0, rtol=1e-12)
+
+
+def test_cell_walk_from_the_surface_itself_finds_the_next_cap_not_its_own():
+    # Re-intersect from hit points (pbrt's habit): rays leaving the cut surface into the air,
+    # heading up, never hit the cut surface again unless they cross into a neighbouring cap.
+    rng = np.random.default_rng(3)
+    o, d = random_rays(rng, 2000, "lens")
+    n = len(o)
+    args = (np.full(n, T), np.full(n, T + H), np.full(n, P_), np.full(n, RHO))
+    t, normal = G.hit_cuts(o, d, *args, G.hit_side_wall(o, d, np.full(n, R)))
+    ok = np.isfinite(t)
+    p = o[ok] + t[ok, None] * d[ok]
+    up = np.tile([0.0, 1.0, 0.0], (ok.sum(), 1))  # straight up, away from every cap
+    t2, _ = G.hit_cuts(p, up, *(a[ok] for a in args), np.full(ok.sum(), np.inf))
+    assert np.all(np.isinf(t2))
+
+
+def test_flat_inner_face_is_plane_a():
+    o = np.array([[1.0, 0.0, 2.0]])
+    d = np.array([[0.0, 1.0, 0.0]])
+    t, normal = G.hit_cuts(o, d, np.array([3.0]), np.array([3.0]), np.array([9.0]), np.array([np.inf]),
+                           np.array([np.inf]))
+    assert t[0] == pytest.approx(3.0)
+    np.testing.assert_array_equal(normal[0], [0.0, 1.0, 0.0])
+
+
+def test_paraboloid_hits_lie_on_the_surface_and_focus_reflects_to_axis():
+    f, R_, rim = 18.0, 45.0, 4.5
+    vertex = rim + R_ * R_ / (4 * f)
+    focus = np.array([0.0, vertex - f, 0.0])
+    rng = np.random.default_rng(5)
+    d = rng.normal(size=(3000, 3))
+    d[:, 1] = np.abs(d[:, 1])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    o = np.tile(focus, (3000, 1))
+    n = len(o)
+    t = G.hit_reflector(o, d, np.full(n, f), np.full(n, vertex), np.full(n, rim))
+    ok = np.isfinite(t)
+    assert ok.sum() > 1000
+    p = o[ok] + t[ok, None] * d[ok]
+    np.testing.assert_allclose(p[:, 1], vertex - (p[:, 0] ** 2 + p[:, 2] ** 2) / (4 * f), atol=1e-9)
+    assert np.all(p[:, 1] >= rim - 1e-9)
+    # a paraboloid sends light from its focus out parallel to its axis (toward -y)
+    normal = G.reflector_normal(p, np.full(ok.sum(), f))
+    out = d[ok] - 2 * np.einsum("ij,ij->i", d[ok], normal)[:, None] * normal
+    np.testing.assert_allclose(out, np.tile([0.0, -1.0, 0.0], (ok.sum(), 1)), atol=1e-9)
+
+
+def test_sphere_and_socket_hits():
+    o = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [3.0, 20.0, 0.0]])
+    d = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+    c = np.tile([0.0, 14.0, 0.0], (3, 1))
+    t = G.hit_sphere(o, d, c, np.full(3, 8.0))
+    assert t[0] == pytest.approx(6.0) and np.isinf(t[1])
+    ts = G.hit_socket(o, d, np.full(3, 2.0), np.full(3, 14.0), np.full(3, 30.0))
+    assert np.isinf(ts[0]) and np.isinf(ts[1]) and ts[2] == pytest.approx(1.0)
