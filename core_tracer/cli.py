@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 from .scene import SceneError
 
-COMMANDS = ("render", "validate", "presets")
+COMMANDS = ("render", "validate", "presets", "study")
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2

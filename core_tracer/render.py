@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -120,7 +120,8 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   progress: Callable[[float], None] | None = None,
                   should_stop: Callable[[], bool] | None = None,
                   on_rows: Callable[[int, int, np.ndarray], None] | None = None,
-                  threads: int | None = None, record_transitions: bool = False) -> RenderResult:
+                  threads: int | None = None, record_transitions: bool = False,
+                  keep_passes: bool = True) -> RenderResult:
     """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
@@ -132,7 +133,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     height = int(height or scene["image"]["height"])
     start = time.perf_counter()
     ctx = _Context(scene, make_camera(scene["camera"], width, height), record_transitions)
-    passes = np.zeros((len(PASS_NAMES), height, width, 3), dtype=np.float32)
+    passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
     image = np.zeros((height, width, 3), dtype=np.float32)
     rows_per_band = max(1, TILE_RAYS // width)
     bands = [(y, min(height, y + rows_per_band)) for y in range(0, height, rows_per_band)]
@@ -141,7 +142,8 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
 
     def finish(y0: int, y1: int, band: _Band) -> None:
         acc = band.acc.reshape(len(PASS_NAMES), y1 - y0, width, 3)
-        passes[:, y0:y1] = acc
+        if keep_passes:
+            passes[:, y0:y1] = acc
         image[y0:y1] = acc.sum(axis=0)
         stats["segments"] += band.segments
         stats["max_depth"] = max(stats["max_depth"], band.max_depth)
@@ -178,14 +180,14 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                     progress(done / len(bands))
     stats["seconds"] = time.perf_counter() - start
     stats["width"], stats["height"] = width, height
-    return RenderResult(image, dict(zip(PASS_NAMES, passes)), stats)
+    return RenderResult(image, dict(zip(PASS_NAMES, passes, strict=False)) if keep_passes else {}, stats)
 
 
 def render(scene: dict, width: int | None = None, height: int | None = None, *,
            progress: Callable[[float], None] | None = None,
            should_stop: Callable[[], bool] | None = None) -> np.ndarray:
     """Render a normalised scene: float32 (H, W, 3), top row first, linear RGB."""
-    return render_passes(scene, width, height, progress=progress, should_stop=should_stop).image
+    return render_passes(scene, width, height, progress=progress, should_stop=should_stop, keep_passes=False).image
 
 
 # ---------------------------------------------------------------------------------------------

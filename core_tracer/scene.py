@@ -263,7 +263,7 @@ def check_geometry(scene: dict) -> None:
     if cam["position"][1] >= 0:
         raise SceneError("camera.position", f"y = {_show(cam['position'][1])} is not in front of the "
                                             "lamp; allowed y < 0 mm (the lamp faces -Y)")
-    fwd = [b - a for a, b in zip(cam["position"], cam["target"])]
+    fwd = [b - a for a, b in zip(cam["position"], cam["target"], strict=False)]
     if math.hypot(*fwd) == 0:
         raise SceneError("camera.target", "equals camera.position; the camera needs a view direction")
     cross = [fwd[1] * cam["up"][2] - fwd[2] * cam["up"][1], fwd[2] * cam["up"][0] - fwd[0] * cam["up"][2],

@@ -10,8 +10,8 @@ linear RGB (MODEL.md §2).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Iterator, Union
 
 SCHEMA = "lamp-scene/1"
 MAX_LAMPS = 4
@@ -98,7 +98,7 @@ class Flag:
 
 @dataclass(frozen=True)
 class Section:
-    fields: dict[str, "Spec"]
+    fields: dict[str, Spec]
     doc: str = ""
     optional: tuple[str, ...] = ()  # keys that have no default and may be absent
 
@@ -114,7 +114,7 @@ class ListOf:
         return f"a list of {self.min_items} to {self.max_items} items"
 
 
-Spec = Union[Num, Choice, Text, Tags, Flag, Section, ListOf]
+Spec = Num | Choice | Text | Tags | Flag | Section | ListOf
 
 
 def _fmt(x: float) -> str:

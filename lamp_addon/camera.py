@@ -19,7 +19,7 @@ The conversion math is in small pure functions (no ``bpy``) that the tests check
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 MM_PER_BU = 1000.0  # 1 mm of the model is 0.001 Blender units (MODEL.md §2)
 CAMERA_NAME = "Lamp Camera"
@@ -104,7 +104,7 @@ def view_from_axes(position_mm: Sequence[float], y_axis: Sequence[float], z_axis
     right = _cross(forward, cam_up)
     level = abs(right[2]) < 1e-6 and cam_up[2] > 1e-6
     up = (0.0, 0.0, 1.0) if level else cam_up
-    target = tuple(p + target_distance_mm * f for p, f in zip(position_mm, forward))
+    target = tuple(p + target_distance_mm * f for p, f in zip(position_mm, forward, strict=False))
     return {"position": [float(x) for x in position_mm], "target": [float(x) for x in target],
             "up": [float(x) for x in up]}
 

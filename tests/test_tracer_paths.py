@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tracer_scenes import PRESETS, ROOT, scene_with
 
 from core_tracer import load_scene, paths, render, render_passes
-from tracer_scenes import PRESETS, ROOT, scene_with
 
 PRESET_FILES = sorted(PRESETS.glob("*.json"))
 

@@ -6,12 +6,11 @@ import math
 
 import numpy as np
 import pytest
+from tracer_scenes import flat_lens_on_axis, scene_with
 
 from core_tracer import optics, render, render_passes
 from core_tracer.camera import eye_rays, make_camera
 from core_tracer.render import CUTOFF
-from tracer_scenes import flat_lens_on_axis, scene_with
-
 
 # -- Fresnel --------------------------------------------------------------------------------------
 

@@ -85,9 +85,8 @@ def _build(args: argparse.Namespace) -> st.Study:
     try:
         return st.Study.build(base, axes, size or st.DEFAULT_SIZE, args.title or "")
     except SceneError as e:
-        if e.path.startswith("base"):
-            raise in_file(SceneError(e.path[len("base."):] if e.path.startswith("base.") else "", e.message),
-                          args.base) from None
+        if e.path == "base" or e.path.startswith("base."):  # a problem of the design file itself
+            raise in_file(SceneError(e.path[len("base."):], e.message), args.base) from None
         raise
 
 
