@@ -104,7 +104,7 @@ def view_from_axes(position_mm: Sequence[float], y_axis: Sequence[float], z_axis
     right = _cross(forward, cam_up)
     level = abs(right[2]) < 1e-6 and cam_up[2] > 1e-6
     up = (0.0, 0.0, 1.0) if level else cam_up
-    target = tuple(p + target_distance_mm * f for p, f in zip(position_mm, forward, strict=False))
+    target = tuple(p + target_distance_mm * f for p, f in zip(position_mm, forward, strict=True))
     return {"position": [float(x) for x in position_mm], "target": [float(x) for x in target],
             "up": [float(x) for x in up]}
 
@@ -153,7 +153,7 @@ def scene_camera_to_dict(bl_scene, camera_object=None) -> dict:
         "position": _round(view["position"], 4),
         "target": _round(view["target"], 4),
         "up": _round(view["up"], 7),
-        "fov_deg": _round(fov_from_lens(cam.lens, sensor_size(fit, cam.sensor_width, cam.sensor_height)), 6),
+        "fov_deg": _round(fov_from_lens(cam.lens, sensor_size(fit, cam.sensor_width, cam.sensor_height)), 5),
         "width": _round(cam.ortho_scale * MM_PER_BU, 4),
         "sensor_fit": fit,
         "shift": _round((cam.shift_x, cam.shift_y), 6),

@@ -1,0 +1,464 @@
+"""Tessellated lamp parts: vertices in mm, faces, smoothing groups (numpy; no Blender data).
+
+Every part is built to a chord tolerance: no point of any triangle of the mesh lies further than
+``CHORD_TOLERANCE_MM`` (0.05 mm) from the analytic surface the tracer uses (MODEL.md §3). The
+tessellation is chosen from that tolerance and then *measured* (``MeshData.max_deviation``: the
+largest distance to the analytic surface over a dense set of sample points on every triangle of
+both diagonal splits of every quad); if the measurement exceeds the tolerance the tessellation is
+refined until it does not, up to a cap (``MAX_CELL_SUBDIVISION``, ``MAX_SEGMENTS``) that only
+extreme designs reach — then ``max_deviation`` reports what was achieved.
+
+Coordinates are the model's (MODEL.md §2): x right, y into the lamp (the lens front face is y = 0),
+z up, millimetres. Lamp parts are given relative to their lamp's axis (x = z = 0 on the axis); the
+body in scene coordinates. Faces are wound so that normals point out of the solid: out of the lens
+glass, out of the bulb, socket and body, and from the reflector toward the lamp interior.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+CHORD_TOLERANCE_MM = 0.05
+MAX_CELL_SUBDIVISION = 48  # quads per side of one lenslet cell
+MAX_SEGMENTS = 1024  # around a circle
+FLAT = -1  # smoothing group of flat-shaded faces
+
+# Material slots of the lens mesh.
+LENS_GLASS = 0
+LENS_SIDE_WALL = 1
+
+
+@dataclass
+class MeshData:
+    """A polygon mesh: ``verts`` (N, 3) in mm, ``faces`` vertex index tuples, per face a material slot
+    and a smoothing ``group`` (``FLAT`` = flat shaded; edges between faces of different groups are
+    sharp), and the measured ``max_deviation`` (mm) from the analytic surface."""
+
+    verts: np.ndarray
+    faces: list[tuple[int, ...]]
+    material: np.ndarray
+    group: np.ndarray
+    max_deviation: float = 0.0
+
+
+class _MeshBuilder:
+    """Collects vertices (welded by position to 1e-6 mm) and faces."""
+
+    def __init__(self) -> None:
+        self._index: dict[tuple[int, int, int], int] = {}
+        self.verts: list[tuple[float, float, float]] = []
+        self.faces: list[tuple[int, ...]] = []
+        self.material: list[int] = []
+        self.group: list[int] = []
+
+    def vertex(self, x: float, y: float, z: float) -> int:
+        key = (round(x * 1e6), round(y * 1e6), round(z * 1e6))
+        i = self._index.get(key)
+        if i is None:
+            i = self._index[key] = len(self.verts)
+            self.verts.append((float(x), float(y), float(z)))
+        return i
+
+    def face(self, indices: Sequence[int], group: int = FLAT, material: int = 0) -> None:
+        out: list[int] = []
+        for i in indices:  # drop repeats made by welding (a collar of zero height, a sliver)
+            if not out or (i != out[-1] and i != out[0]):
+                out.append(i)
+        if len(out) >= 3:
+            self.faces.append(tuple(out))
+            self.material.append(material)
+            self.group.append(group)
+
+    def result(self, max_deviation: float = 0.0) -> MeshData:
+        return MeshData(np.array(self.verts, dtype=np.float64).reshape(-1, 3), self.faces,
+                        np.array(self.material, dtype=np.int32), np.array(self.group, dtype=np.int32),
+                        max_deviation)
+
+
+# ---------------------------------------------------------------------------------------------
+# Measuring
+
+
+def _barycentric(samples: int) -> np.ndarray:
+    pts = [(i / samples, j / samples) for i in range(samples + 1) for j in range(samples + 1 - i)]
+    a = np.array(pts)
+    return np.column_stack([1.0 - a.sum(axis=1), a[:, 0], a[:, 1]])
+
+
+def triangle_deviation(verts: np.ndarray, tris: np.ndarray, distance: Callable[[np.ndarray], np.ndarray],
+                       samples: int = 6) -> float:
+    """Largest ``distance`` (to an analytic surface) over a barycentric grid of points on each triangle."""
+    if len(tris) == 0:
+        return 0.0
+    w = _barycentric(samples)  # (S, 3)
+    corners = verts[np.asarray(tris)]  # (T, 3, 3)
+    points = np.einsum("sk,tkc->tsc", w, corners).reshape(-1, 3)
+    return float(np.max(distance(points)))
+
+
+def fan_triangles(faces: Sequence[Sequence[int]]) -> np.ndarray:
+    """Triangles of every polygon: both diagonal splits of a quad, a fan of anything larger."""
+    tris: list[tuple[int, int, int]] = []
+    for f in faces:
+        if len(f) == 4:
+            a, b, c, d = f
+            tris += [(a, b, c), (a, c, d), (a, b, d), (b, c, d)]
+        else:
+            tris += [(f[0], f[i], f[i + 1]) for i in range(1, len(f) - 1)]
+    return np.array(tris, dtype=np.int64).reshape(-1, 3)
+
+
+def circle_segments(radius: float, tol: float = CHORD_TOLERANCE_MM, multiple: int = 4, minimum: int = 16) -> int:
+    """Segments of a regular polygon inscribed in a circle whose sagitta r(1 - cos(pi/n)) is <= tol."""
+    if tol >= radius:
+        n = minimum
+    else:
+        n = math.ceil(math.pi / math.acos(1.0 - tol / radius) - 1e-9)
+    n = max(minimum, -(-n // multiple) * multiple)
+    return min(n, MAX_SEGMENTS)
+
+
+def rim_polygon(radius: float, segments: int) -> np.ndarray:
+    """(n, 2) [x, z] vertices of the rim polygon, counter-clockwise seen from the front (-y)."""
+    a = 2.0 * math.pi * np.arange(segments) / segments
+    return np.column_stack([radius * np.cos(a), radius * np.sin(a)])
+
+
+# ---------------------------------------------------------------------------------------------
+# Lens: outer disk, spherical cut surface, side wall (MODEL.md §3, §3.1)
+
+
+class CutSurface:
+    """The inner face of the lens: y(x, z) over the square lenslet grid (MODEL.md §3.1)."""
+
+    def __init__(self, thickness: float, pitch: float, height: float, sphere_radius: float | None):
+        self.t, self.p, self.h = thickness, pitch, height
+        self.rho = sphere_radius  # None when h = 0 (a flat inner face)
+
+    def cell_center(self, x: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Centre [x, z] of the cell holding each point (one cell is centred on the axis)."""
+        return np.round(x / self.p) * self.p, np.round(z / self.p) * self.p
+
+    def height(self, x: np.ndarray, z: np.ndarray) -> np.ndarray:
+        x, z = np.asarray(x, dtype=np.float64), np.asarray(z, dtype=np.float64)
+        if self.rho is None:
+            return np.full(np.broadcast(x, z).shape, self.t)
+        cx, cz = self.cell_center(x, z)
+        d2 = (x - cx) ** 2 + (z - cz) ** 2
+        return self.t + self.h - self.rho + np.sqrt(np.maximum(self.rho * self.rho - d2, 0.0))
+
+    def distance(self, points: np.ndarray) -> np.ndarray:
+        """Distance of points (on or near the surface) to the cap sphere of their cell, mm."""
+        x, y, z = points[:, 0], points[:, 1], points[:, 2]
+        if self.rho is None:
+            return np.abs(y - self.t)
+        cx, cz = self.cell_center(x, z)
+        cy = self.t + self.h - self.rho
+        return np.abs(np.sqrt((x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2) - self.rho)
+
+
+def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM) -> tuple[int, float]:
+    """Quads per side of a cell so that one whole cell is within ``tol``; returns (k, deviation)."""
+    if surface.rho is None:
+        return 1, 0.0
+    # Start from the sagitta estimate L^2 / (8 rho) for the cell diagonal, then measure.
+    k = max(1, math.ceil(surface.p * math.sqrt(2.0) / math.sqrt(8.0 * surface.rho * tol)))
+    while True:
+        u = (np.arange(k + 1) / k - 0.5) * surface.p
+        gx, gz = np.meshgrid(u, u, indexing="ij")
+        verts = np.column_stack([gx.ravel(), surface.height(gx, gz).ravel(), gz.ravel()])
+        idx = np.arange((k + 1) ** 2).reshape(k + 1, k + 1)
+        quads = np.column_stack([idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(),
+                                 idx[:-1, 1:].ravel()])
+        dev = triangle_deviation(verts, fan_triangles(quads.tolist()), surface.distance)
+        if dev <= tol or k >= MAX_CELL_SUBDIVISION:
+            return k, dev
+        k = min(MAX_CELL_SUBDIVISION, k + max(1, k // 4))
+
+
+def _clip_convex(poly: list[tuple[float, float]], clip: np.ndarray) -> list[tuple[float, float]]:
+    """Sutherland-Hodgman: the part of convex polygon ``poly`` inside convex CCW polygon ``clip``."""
+    out = poly
+    n = len(clip)
+    for e in range(n):
+        if not out:
+            break
+        ax, az = clip[e]
+        bx, bz = clip[(e + 1) % n]
+        ex, ez = bx - ax, bz - az
+
+        def side(p, ax=ax, az=az, ex=ex, ez=ez):
+            return ex * (p[1] - az) - ez * (p[0] - ax)  # > 0: left of the edge, inside
+
+        src, out = out, []
+        for i, cur in enumerate(src):
+            prev = src[i - 1]
+            s_cur, s_prev = side(cur), side(prev)
+            if s_cur >= 0:
+                if s_prev < 0:
+                    out.append(_lerp(prev, cur, s_prev / (s_prev - s_cur)))
+                out.append(cur)
+            elif s_prev >= 0:
+                out.append(_lerp(prev, cur, s_prev / (s_prev - s_cur)))
+    return out
+
+
+def _lerp(a, b, f):
+    return (a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f)
+
+
+def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+    """The lens solid of one lamp, relative to its axis.
+
+    Outer disk at y = 0 (flat), the cut surface (a grid of k x k quads per lenslet cell, clipped by the
+    rim polygon; smooth within a cell, sharp creases between cells), and the side wall of radius R
+    from y = 0 up to the cut apex plane y = t + h (material ``LENS_SIDE_WALL``; the part above the cut
+    surface is the open collar the tracer also has). The glass is closed (watertight).
+    """
+    R = lamp["lens"]["radius"]
+    t = lamp["lens"]["thickness"]
+    p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
+    rho = None if h == 0 else (p * p / 2 + h * h) / (2 * h)  # = scene.cut_sphere_radius(p, h)
+    surface = CutSurface(t, p, h, rho)
+    k, _ = cut_subdivision(surface, tol)
+    rim = rim_polygon(R, segments)
+    apothem = R * math.cos(math.pi / segments)
+    mb = _MeshBuilder()
+
+    def cut_vertex(x: float, z: float) -> int:
+        return mb.vertex(x, float(surface.height(x, z)), z)
+
+    s = p / k
+    g0 = math.floor((-R + p / 2) / s) - 1
+    g1 = math.ceil((R + p / 2) / s) + 1
+    for a in range(g0, g1):
+        x0 = -p / 2 + a * s
+        x1 = x0 + s
+        for b in range(g0, g1):
+            z0 = -p / 2 + b * s
+            z1 = z0 + s
+            near_x = 0.0 if x0 <= 0 <= x1 else min(abs(x0), abs(x1))
+            near_z = 0.0 if z0 <= 0 <= z1 else min(abs(z0), abs(z1))
+            if near_x * near_x + near_z * near_z >= R * R:
+                continue  # the quad misses the rim circle, hence the rim polygon
+            cx, cz = (x0 + x1) / 2, (z0 + z1) / 2
+            group = (round(cx / p) + 1000) * 4096 + round(cz / p) + 1000  # the cell: one smooth cap
+            far = max(abs(x0), abs(x1)) ** 2 + max(abs(z0), abs(z1)) ** 2
+            if far <= apothem * apothem:
+                poly = [(x0, z0), (x1, z0), (x1, z1), (x0, z1)]
+            else:
+                poly = _clip_convex([(x0, z0), (x1, z0), (x1, z1), (x0, z1)], rim)
+                if len(poly) < 3 or _area(poly) < 1e-9:
+                    continue
+            # Counter-clockwise in [x, z] faces -y; the cut surface faces +y (out of the glass).
+            mb.face([cut_vertex(x, z) for x, z in reversed(poly)], group, LENS_GLASS)
+
+    cut_faces = list(mb.faces)
+    ring = _boundary_ring(mb, cut_faces)
+    y_top = t + h
+    bottom = [mb.vertex(mb.verts[i][0], 0.0, mb.verts[i][2]) for i in ring]
+    top = [mb.vertex(mb.verts[i][0], y_top, mb.verts[i][2]) for i in ring]
+    side_group = 1  # the side wall is smooth around; cut cells use groups >= 4096
+    for j in range(len(ring)):
+        j1 = (j + 1) % len(ring)
+        mb.face([bottom[j], ring[j], ring[j1], bottom[j1]], side_group, LENS_SIDE_WALL)  # glass side
+        mb.face([ring[j], top[j], top[j1], ring[j1]], side_group, LENS_SIDE_WALL)  # collar above the cuts
+    mb.face(bottom, FLAT, LENS_GLASS)  # outer face, counter-clockwise seen from -y
+
+    data = mb.result()
+    dev_cut = triangle_deviation(data.verts, fan_triangles(cut_faces), surface.distance)
+    side_faces = [f for f, m in zip(data.faces, data.material) if m == LENS_SIDE_WALL]
+    dev_side = triangle_deviation(data.verts, fan_triangles(side_faces),
+                                  lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - R))
+    data.max_deviation = max(dev_cut, dev_side)
+    return data
+
+
+def _area(poly: Sequence[tuple[float, float]]) -> float:
+    return 0.5 * abs(sum(poly[i - 1][0] * poly[i][1] - poly[i][0] * poly[i - 1][1] for i in range(len(poly))))
+
+
+def _boundary_ring(mb: _MeshBuilder, faces: Sequence[tuple[int, ...]]) -> list[int]:
+    """The open boundary of the cut surface (it lies on the rim polygon), counter-clockwise from -y."""
+    count: dict[tuple[int, int], int] = {}
+    for f in faces:
+        for a, b in zip(f, f[1:] + f[:1]):
+            key = (min(a, b), max(a, b))
+            count[key] = count.get(key, 0) + 1
+    ring = sorted({i for e, c in count.items() if c == 1 for i in e},
+                  key=lambda i: math.atan2(mb.verts[i][2], mb.verts[i][0]))
+    return ring
+
+
+# ---------------------------------------------------------------------------------------------
+# Reflector (MODEL.md §3.2)
+
+
+def paraboloid_distance(vertex_y: float, focal_length: float) -> Callable[[np.ndarray], np.ndarray]:
+    """Distance to y = y_v - r^2 / 4f, to first order (vertical offset times the cosine of the slope)."""
+
+    def distance(points: np.ndarray) -> np.ndarray:
+        r = np.hypot(points[:, 0], points[:, 2])
+        dy = points[:, 1] - (vertex_y - r * r / (4.0 * focal_length))
+        return np.abs(dy) / np.sqrt(1.0 + (r / (2.0 * focal_length)) ** 2)
+
+    return distance
+
+
+def reflector_mesh(lamp: dict, geometry: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+    """The paraboloid from the rim (radius R, y = rim) to the vertex, normals toward the lamp interior.
+
+    Rings are spaced evenly in arc length along the profile. ``segments`` (shared with the lens rim and
+    the body opening) is raised if the measured deviation needs it; ``MeshData.group`` is one smooth
+    group.
+    """
+    R = lamp["lens"]["radius"]
+    f = lamp["reflector"]["focal_length"]
+    yv = geometry["vertex"]
+    distance = paraboloid_distance(yv, f)
+    # Every principal radius of curvature is >= 2f: a chord of length L sags at most L^2 / (16 f).
+    chord = math.sqrt(16.0 * f * tol)
+    r_dense = np.linspace(0.0, R, 2049)
+    s_dense = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(r_dense), np.diff(r_dense ** 2) / (4 * f)))])
+    rings = max(2, math.ceil(s_dense[-1] / (chord / math.sqrt(2.0))))
+    n = segments
+    while True:
+        data = _revolve(np.interp(np.linspace(0.0, s_dense[-1], rings + 1), s_dense, r_dense),
+                        lambda r: yv - r * r / (4.0 * f), n, inward=True)
+        dev = triangle_deviation(data.verts, fan_triangles(data.faces), distance)
+        if dev <= tol or n >= MAX_SEGMENTS:
+            data.max_deviation = dev
+            return data
+        rings = math.ceil(rings * 1.25)
+        n = min(MAX_SEGMENTS, n + 4 * max(1, n // 16))
+
+
+def _revolve(radii: np.ndarray, profile: Callable[[np.ndarray], np.ndarray], segments: int,
+             inward: bool) -> MeshData:
+    """A surface of revolution about the y axis through radii[0] = 0 (a pole) ... radii[-1]."""
+    mb = _MeshBuilder()
+    a = 2.0 * math.pi * np.arange(segments) / segments
+    ys = profile(radii)
+    pole = mb.vertex(0.0, float(ys[0]), 0.0)
+    rows = [[mb.vertex(r * math.cos(t), float(y), r * math.sin(t)) for t in a] for r, y in zip(radii[1:], ys[1:])]
+    for k in range(segments):
+        k1 = (k + 1) % segments
+        tri = [pole, rows[0][k], rows[0][k1]]
+        mb.face(tri if inward else tri[::-1], 0)
+        for j in range(len(rows) - 1):
+            quad = [rows[j][k], rows[j + 1][k], rows[j + 1][k1], rows[j][k1]]
+            mb.face(quad if inward else quad[::-1], 0)
+    return mb.result()
+
+
+# ---------------------------------------------------------------------------------------------
+# Bulb and socket
+
+
+def sphere_mesh(radius: float, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+    """A UV sphere about the origin (poles on the y axis... no: on z), outward normals, smooth."""
+    n = circle_segments(radius, tol / 2.0, multiple=4, minimum=16)
+    center = np.zeros(3)
+
+    def distance(points: np.ndarray) -> np.ndarray:
+        return np.abs(np.linalg.norm(points - center, axis=1) - radius)
+
+    while True:
+        data = _uv_sphere(radius, n)
+        dev = triangle_deviation(data.verts, fan_triangles(data.faces), distance)
+        if dev <= tol or n >= MAX_SEGMENTS:
+            data.max_deviation = dev
+            return data
+        n = min(MAX_SEGMENTS, n + 4 * max(1, n // 16))
+
+
+def _uv_sphere(radius: float, segments: int) -> MeshData:
+    mb = _MeshBuilder()
+    rings = segments // 2
+    lon = 2.0 * math.pi * np.arange(segments) / segments
+    south = mb.vertex(0.0, 0.0, -radius)
+    north = mb.vertex(0.0, 0.0, radius)
+    rows = []
+    for i in range(1, rings):
+        lat = -math.pi / 2 + math.pi * i / rings
+        rows.append([mb.vertex(radius * math.cos(lat) * math.cos(t), radius * math.cos(lat) * math.sin(t),
+                               radius * math.sin(lat)) for t in lon])
+    for k in range(segments):
+        k1 = (k + 1) % segments
+        mb.face([south, rows[0][k1], rows[0][k]], 0)
+        for j in range(len(rows) - 1):
+            mb.face([rows[j][k], rows[j][k1], rows[j + 1][k1], rows[j + 1][k]], 0)
+        mb.face([north, rows[-1][k], rows[-1][k1]], 0)
+    return mb.result()
+
+
+def socket_mesh(radius: float, y0: float, y1: float, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+    """A capped cylinder on the lamp axis from y0 to y1 (y0 > y1 allowed); smooth side, flat caps."""
+    n = circle_segments(radius, tol, multiple=4, minimum=16)
+    lo, hi = min(y0, y1), max(y0, y1)
+    mb = _MeshBuilder()
+    a = 2.0 * math.pi * np.arange(n) / n
+    ring_lo = [mb.vertex(radius * math.cos(t), lo, radius * math.sin(t)) for t in a]
+    ring_hi = [mb.vertex(radius * math.cos(t), hi, radius * math.sin(t)) for t in a]
+    for k in range(n):
+        k1 = (k + 1) % n
+        mb.face([ring_lo[k], ring_hi[k], ring_hi[k1], ring_lo[k1]], 0)
+    mb.face(ring_lo, FLAT)  # faces -y
+    mb.face(ring_hi[::-1], FLAT)  # faces +y
+    data = mb.result()
+    side = [f for f, g in zip(data.faces, data.group) if g == 0]
+    data.max_deviation = triangle_deviation(data.verts, fan_triangles(side),
+                                            lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - radius))
+    return data
+
+
+# ---------------------------------------------------------------------------------------------
+# Body
+
+
+def body_mesh(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[tuple[float, float]],
+              triangulate: Callable[[list], list]) -> MeshData:
+    """The body box with one opening per lamp in its front face (y = 0), in scene coordinates.
+
+    ``rims[i]`` is lamp i's rim polygon in scene [x, z] (the lens rim, counter-clockwise from -y);
+    ``bores[i]`` = (y_from, y_to) is the cylindrical wall of the opening between the lens side wall
+    and the reflector rim (the reflector gap; empty when the gap is 0). ``triangulate`` fills a polygon
+    with holes (``mathutils.geometry.tessellate_polygon``).
+    """
+    body = scene["body"]
+    bx, bz = body["center"]
+    w, hgt = body["size"]
+    depth = body["depth"]
+    x0, x1, z0, z1 = bx - w / 2, bx + w / 2, bz - hgt / 2, bz + hgt / 2
+    mb = _MeshBuilder()
+    outline = [(x0, z0), (x1, z0), (x1, z1), (x0, z1)]
+    loops = [outline] + [[(float(x), float(z)) for x, z in rim] for rim in rims]
+    points = [p for loop in loops for p in loop]
+    index = [mb.vertex(x, 0.0, z) for x, z in points]
+    for tri in triangulate([[(x, z, 0.0) for x, z in loop] for loop in loops]):
+        face = [index[i] for i in tri]
+        (ax, az), (bx_, bz_), (cx, cz) = (points[i] for i in tri)
+        if (bx_ - ax) * (cz - az) - (bz_ - az) * (cx - ax) < 0:  # counter-clockwise in [x, z] faces -y
+            face.reverse()
+        mb.face(face, FLAT)
+    corners = {(i, j, k): mb.vertex((x0, x1)[i], (0.0, depth)[j], (z0, z1)[k])
+               for i in (0, 1) for j in (0, 1) for k in (0, 1)}
+    c = corners
+    mb.face([c[0, 1, 0], c[0, 1, 1], c[1, 1, 1], c[1, 1, 0]], FLAT)  # back, +y
+    mb.face([c[0, 0, 0], c[0, 0, 1], c[0, 1, 1], c[0, 1, 0]], FLAT)  # left, -x
+    mb.face([c[1, 0, 0], c[1, 1, 0], c[1, 1, 1], c[1, 0, 1]], FLAT)  # right, +x
+    mb.face([c[0, 0, 0], c[0, 1, 0], c[1, 1, 0], c[1, 0, 0]], FLAT)  # bottom, -z
+    mb.face([c[0, 0, 1], c[1, 0, 1], c[1, 1, 1], c[0, 1, 1]], FLAT)  # top, +z
+    for i, (rim, (y_a, y_b)) in enumerate(zip(rims, bores)):
+        if y_b - y_a <= 1e-9:
+            continue
+        front = [mb.vertex(float(x), y_a, float(z)) for x, z in rim]
+        back = [mb.vertex(float(x), y_b, float(z)) for x, z in rim]
+        for k in range(len(rim)):
+            k1 = (k + 1) % len(rim)
+            mb.face([front[k], front[k1], back[k1], back[k]], 2 + i)  # normals toward the lamp axis
+    return mb.result()

@@ -1,0 +1,78 @@
+"""Small committed reference renders, compared with OpenImageIO's metrics (idiff).
+
+A failing comparison writes the render and a difference image to tests/_failures/. After a
+deliberate change to the model, regenerate the references on purpose:
+
+    .venv/bin/python tests/test_reference_images.py --regenerate
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+import OpenImageIO as oiio  # noqa: E402
+
+from core_tracer import load_scene, render  # noqa: E402
+from core_tracer.imageio import read_image, write_image  # noqa: E402
+
+REFERENCES = HERE / "references"
+FAILURES = HERE / "_failures"
+SIZE = (64, 48)
+CASES = ("paper-baseline", "paper-lamp-off", "paper-cut-size", "four-lamp-rear-combination")
+FAIL_ABS = 1e-4  # per channel, relative to the image's peak
+FAIL_FRACTION = 0.001  # pixels allowed past it (rays grazing a crease between lenslets)
+
+
+def _render(case: str) -> tuple[np.ndarray, dict]:
+    scene = load_scene(HERE.parent / "presets" / f"{case}.json")
+    return render(scene, *SIZE), scene
+
+
+def _buf(image: np.ndarray) -> oiio.ImageBuf:
+    h, w = image.shape[:2]
+    buf = oiio.ImageBuf(oiio.ImageSpec(w, h, 3, oiio.FLOAT))
+    buf.set_pixels(oiio.ROI(), np.ascontiguousarray(image, dtype=np.float32))
+    return buf
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_render_matches_reference(case):
+    reference_file = REFERENCES / f"{case}.exr"
+    assert reference_file.exists(), f"missing {reference_file}; run {Path(__file__).name} --regenerate"
+    reference, scene_in_header = read_image(reference_file)
+    image, scene = _render(case)
+    assert scene_in_header == scene, "the preset changed since the reference was made: regenerate on purpose"
+    peak = float(reference.max())
+    result = oiio.ImageBufAlgo.compare(_buf(image), _buf(reference), FAIL_ABS * peak, FAIL_ABS * peak * 0.1)
+    failed_fraction = result.nfail / image[..., 0].size
+    if failed_fraction > FAIL_FRACTION:
+        FAILURES.mkdir(exist_ok=True)
+        write_image(FAILURES / f"{case}.exr", image, scene)
+        diff = oiio.ImageBufAlgo.absdiff(_buf(image), _buf(reference))
+        diff.write(str(FAILURES / f"{case}-diff.exr"))
+    assert failed_fraction <= FAIL_FRACTION, (
+        f"{case}: {result.nfail} pixels differ by more than {FAIL_ABS * peak:.3g} "
+        f"(mean error {result.meanerror:.3g}, max {result.maxerror:.3g}, PSNR {result.PSNR:.1f} dB); "
+        f"see {FAILURES}")
+
+
+def regenerate() -> None:
+    REFERENCES.mkdir(exist_ok=True)
+    for case in CASES:
+        image, scene = _render(case)
+        write_image(REFERENCES / f"{case}.exr", image, scene)
+        print(f"wrote {REFERENCES / case}.exr  peak {image.max():.4g}")
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] != ["--regenerate"]:
+        print(__doc__)
+        raise SystemExit(2)
+    regenerate()
