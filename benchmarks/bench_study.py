@@ -52,6 +52,7 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=study_run.default_workers(),
                         help="worker processes of the parallel run (default: one per core)")
     parser.add_argument("--skip-serial", action="store_true", help="only time the parallel run")
+    parser.add_argument("--sheet", type=Path, help="also keep the contact sheet here (.png or .exr)")
     args = parser.parse_args()
 
     preset = args.preset or (DEFAULT_PRESET if DEFAULT_PRESET.exists() else FALLBACK_PRESET)
@@ -73,6 +74,8 @@ def main() -> int:
         study_sheet.write_sheet(os.path.join(folder, "sheet.png"), study, sheet)
         study_sheet.write_sheet(os.path.join(folder, "sheet.exr"), study, sheet)
         sheet_seconds = time.perf_counter() - compose_start
+    if args.sheet is not None:
+        study_sheet.write_sheet(args.sheet, study, sheet)
     print(f"contact sheet {sheet.shape[1]}x{sheet.shape[0]} px composed and written (PNG + EXR): "
           f"{sheet_seconds:.2f} s")
 

@@ -19,7 +19,6 @@ from __future__ import annotations
 import copy
 import hashlib
 import os
-import stat
 import unicodedata
 from dataclasses import dataclass, field
 
@@ -141,19 +140,20 @@ def _inside(library: Library, path: str) -> bool:
 # Reading
 
 
+def _parse(path: str) -> dict:
+    """Validate a preset file; the error's ``path`` is the field ('' for the file as a whole)."""
+    try:
+        doc = read_json(path)
+    except SceneError as e:
+        raise SceneError("", e.message) from None
+    return parse_scene(doc)
+
+
 def load_preset(path: str | os.PathLike) -> dict:
     """Read and validate one preset file; a ``SceneError`` names the file and the field."""
     name = os.fspath(path)
     try:
-        st = os.stat(name)
-    except OSError as e:
-        raise SceneError(name, f"cannot read the file ({e.strerror or e})") from None
-    if not stat.S_ISREG(st.st_mode):
-        # A pipe or device named *.json would block or never end: open regular files only.
-        raise SceneError(name, "not a regular file")
-    doc = read_json(name)
-    try:
-        return parse_scene(doc)
+        return _parse(name)
     except SceneError as e:
         raise SceneError(f"{name}: {e.path}" if e.path else name, e.message) from None
 
@@ -189,12 +189,10 @@ def list_library(library: Library) -> tuple[list[PresetEntry], list[PresetWarnin
             warnings.append(PresetWarning(shown, library, "is a link that leads out of the library; skipped"))
             continue
         try:
-            scene = load_preset(path)
+            scene = _parse(path)
         except SceneError as e:
-            text = str(e)
-            if text.startswith(path):
-                text = text[len(path):].lstrip(": ") or "not a preset"
-            warnings.append(PresetWarning(shown, library, printable(text)))
+            field = f"{printable(e.path, 120)}: " if e.path else ""
+            warnings.append(PresetWarning(shown, library, field + printable(e.message)))
             continue
         entries.append(_entry(library, path, scene))
     return entries, warnings
@@ -293,7 +291,7 @@ def thumbnail_path(entry: PresetEntry, cache_dir: str | os.PathLike) -> str:
     cache and gets a fresh thumbnail.
     """
     stem = os.path.splitext(os.path.basename(entry.file))[0]
-    if entry.library.writable:
+    if entry.library.writable and os.access(entry.library.folder, os.W_OK):
         folder = os.path.join(entry.library.folder, THUMBNAIL_FOLDER)
     else:
         folder = os.fspath(cache_dir)

@@ -16,6 +16,7 @@ import json
 import math
 import os
 import re
+import stat
 from typing import Any
 
 from . import spec as S
@@ -42,10 +43,15 @@ def load_scene(path: str | os.PathLike) -> dict:
 
 
 def read_json(path: str | os.PathLike, max_bytes: int = MAX_FILE_BYTES) -> Any:
-    """Read a JSON file with a size limit, turning every failure into a ``SceneError``."""
+    """Read a JSON file with a size limit, turning every failure into a ``SceneError``.
+
+    Only regular files are opened: a pipe or a device could block or never end."""
     name = os.fspath(path)
     try:
-        size = os.path.getsize(name)
+        st = os.stat(name)
+        if not stat.S_ISREG(st.st_mode):
+            raise SceneError(name, "not a regular file")
+        size = st.st_size
         if size > max_bytes:
             raise SceneError(name, f"file is {size} bytes; allowed at most {max_bytes} bytes")
         with open(name, "rb") as f:
@@ -62,17 +68,16 @@ def read_json(path: str | os.PathLike, max_bytes: int = MAX_FILE_BYTES) -> Any:
 
 
 def parse_json_text(text: str, name: str = "") -> Any:
-    def no_constants(token: str):
-        raise SceneError(name, f"not valid JSON: {token} is not a number JSON allows")
-
+    """Decode JSON text. NaN and Infinity (which Python's json accepts) decode to floats so that
+    validation can name the field that holds them."""
     try:
-        return json.loads(text, parse_constant=no_constants)
-    except SceneError:
-        raise
+        return json.loads(text, parse_constant=float)
     except RecursionError:
         raise SceneError(name, "not valid JSON: nested too deeply") from None
     except json.JSONDecodeError as e:
         raise SceneError(name, f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+    except ValueError as e:  # json's own limits, e.g. an integer of more than 4300 digits
+        raise SceneError(name, f"not valid JSON: {str(e)[:120]}") from None
 
 
 def scene_to_json(scene: dict) -> str:

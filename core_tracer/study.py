@@ -273,6 +273,9 @@ def _expand_range(param: Parameter, rng: Any, steps: Any) -> tuple[Any, ...]:
     if not 1 <= steps <= MAX_VARIANTS:
         raise SceneError(param.text, f"steps {steps} is out of range; allowed 1 to {MAX_VARIANTS}")
     lo, hi = (check_value(param, v) for v in rng)
+    if steps == 1 and lo != hi:
+        raise SceneError(param.text, f"steps 1 would give only {format_value(lo)}, not {format_value(hi)}; "
+                                     f"allowed 2 to {MAX_VARIANTS} for a range (or give one value)")
     values = []
     for k in range(steps):
         t = k / (steps - 1) if steps > 1 else 0.0
@@ -295,7 +298,7 @@ def format_value(value: Any) -> str:
         return "on" if value else "off"
     if isinstance(value, list):
         return "/".join(format_value(v) for v in value)
-    return f"{value:.4g}"
+    return f"{value:.6g}"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -349,8 +352,9 @@ class Study:
             raise SceneError("axes", f"expected a list of 1 or {MAX_AXES} axes, got {_show(axes_doc)}")
         axes = tuple(parse_axis(a, base, f"axes[{i}]") for i, a in enumerate(axes_doc))
         if len(axes) == 2 and _overlap(axes[0].parameter, axes[1].parameter):
-            raise SceneError(axes[1].parameter.text, f"varies the same field as {axes[0].parameter.text}; "
-                                                     "a study's two axes must differ")
+            raise SceneError(axes[1].parameter.text, f"sets what {axes[0].parameter.text} sets (the same field, "
+                                                     "or the other form of the lens colour); a study's two axes "
+                                                     "must vary different things")
         count = math.prod(len(a.values) for a in axes)
         if count > MAX_VARIANTS:
             shape = " x ".join(str(len(a.values)) for a in axes)
@@ -478,12 +482,13 @@ def _setting(axes: tuple[Axis, ...], values: tuple[Any, ...]) -> str:
 
 
 def _overlap(a: Parameter, b: Parameter) -> bool:
-    if a.lamp_scope != b.lamp_scope or a.keys != b.keys:
-        colour = {"absorption", "transmitted_color", "reference_thickness"}
-        same_lens = a.lamp_scope and b.lamp_scope and a.keys[0] == b.keys[0] == "lens"
-        return same_lens and {a.keys[-1], b.keys[-1]} <= colour and a.keys[-1] != b.keys[-1] and (
-            a.lamp is None or b.lamp is None or a.lamp == b.lamp)
-    lamps_meet = a.lamp is None or b.lamp is None or a.lamp == b.lamp
+    """Whether two axes would set the same number (or the two exclusive forms of one lens colour)."""
+    lamps_meet = a.lamp_scope == b.lamp_scope and (a.lamp is None or b.lamp is None or a.lamp == b.lamp)
+    if a.keys != b.keys:
+        forms = {a.keys, b.keys}
+        absorption = ("lens", "absorption")
+        return lamps_meet and absorption in forms and bool(forms & {("lens", "transmitted_color"),
+                                                                   ("lens", "reference_thickness")})
     comps_meet = a.component is None or b.component is None or a.component == b.component
     return lamps_meet and comps_meet
 

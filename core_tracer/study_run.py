@@ -145,7 +145,9 @@ class StudyRun:
                 with open(log_path, "wb") as log:
                     process = subprocess.Popen(worker_command(self.python), stdin=subprocess.PIPE,
                                                stdout=subprocess.PIPE, stderr=log, cwd=PACKAGE_ROOT,
-                                               env=worker_environment())
+                                               env=worker_environment(),
+                                               # a terminal's Ctrl-C reaches this process only; it stops them
+                                               start_new_session=os.name == "posix")
                 workers_started += 1
                 reader = threading.Thread(target=self._read, args=(k, process.stdout), daemon=True)
                 worker = _Worker(process, log_path, reader)
@@ -175,8 +177,11 @@ class StudyRun:
         width, height = self.study.size
         job = {"index": index, "scene": v.scene, "width": width, "height": height, "threads": self.threads,
                "out": os.path.join(self._folder, f"variant-{index:02d}.npy")}
-        worker.process.stdin.write((json.dumps(job) + "\n").encode("utf-8"))
-        worker.process.stdin.flush()
+        try:
+            worker.process.stdin.write((json.dumps(job) + "\n").encode("utf-8"))
+            worker.process.stdin.flush()
+        except OSError:  # the worker is gone (its end of the pipe is closed)
+            raise self._failure(worker, "stopped unexpectedly") from None
 
     def poll(self, timeout: float = 0.0) -> bool:
         """Handle what the workers reported, waiting up to ``timeout`` seconds for the first
@@ -300,7 +305,12 @@ def run_study(study: Study, workers: int | None = None, *, threads: int | None =
         while True:
             if should_stop is not None and should_stop():
                 raise Cancelled()
-            finished = run.poll(timeout=0.05)
+            try:
+                finished = run.poll(timeout=0.05)
+            except StudyError:
+                if should_stop is not None and should_stop():
+                    raise Cancelled() from None  # a worker stopped because the user cancelled
+                raise
             if progress is not None and run.done != reported:
                 reported = run.done
                 progress(run.done, run.total)
@@ -317,7 +327,8 @@ def _run_here(study: Study, threads: int | None, progress, should_stop) -> list[
         progress(0, len(study))
     for v in study.variants:
         try:
-            images.append(render_passes(v.scene, width, height, should_stop=should_stop, threads=threads).image)
+            images.append(render_passes(v.scene, width, height, should_stop=should_stop, threads=threads,
+                                        keep_passes=False).image)
         except RenderCancelled:
             raise Cancelled() from None
         if progress is not None:

@@ -62,7 +62,7 @@ def main() -> int:
         start = time.perf_counter()
         try:
             result = render_passes(job["scene"], job["width"], job["height"], progress=progress,
-                                   should_stop=orphaned, threads=job.get("threads", 1))
+                                   should_stop=orphaned, threads=job.get("threads", 1), keep_passes=False)
             partial = job["out"] + ".part.npy"
             np.save(partial, result.image)
             os.replace(partial, job["out"])

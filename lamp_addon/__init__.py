@@ -6,12 +6,26 @@ order of ``modules`` (properties before the operators and panels that use them) 
 in reverse. To add a module, import it here and append it to ``modules``.
 """
 
-from . import ops_design, panels, properties
+from . import (
+    camera,
+    compare,
+    engine,
+    ops_design,
+    ops_render,
+    panels,
+    preset_browser,
+    properties,
+    study_ops,
+    study_panel,
+)
 
 modules = (
     properties,
     ops_design,
     panels,
+    camera, engine, ops_render, compare,
+    preset_browser,
+    study_panel, study_ops,
 )
 
 

@@ -21,6 +21,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import bpy
+
+from . import panels
+
 MM_PER_BU = 1000.0  # 1 mm of the model is 0.001 Blender units (MODEL.md §2)
 CAMERA_NAME = "Lamp Camera"
 
@@ -150,11 +154,11 @@ def scene_camera_to_dict(bl_scene, camera_object=None) -> dict:
     fit = _FIT_FROM_BLENDER[cam.sensor_fit]
     out = {
         "type": "perspective" if cam.type == "PERSP" else "orthographic",
-        "position": _round(view["position"], 4),
-        "target": _round(view["target"], 4),
+        "position": _round(view["position"], 6),
+        "target": _round(view["target"], 6),
         "up": _round(view["up"], 7),
         "fov_deg": _round(fov_from_lens(cam.lens, sensor_size(fit, cam.sensor_width, cam.sensor_height)), 5),
-        "width": _round(cam.ortho_scale * MM_PER_BU, 4),
+        "width": _round(cam.ortho_scale * MM_PER_BU, 6),
         "sensor_fit": fit,
         "shift": _round((cam.shift_x, cam.shift_y), 6),
     }
@@ -205,32 +209,129 @@ def ensure_scene_camera(bl_scene, scene: dict):
     and set the render resolution from ``scene["image"]``. Returns the camera object."""
     if bl_scene.camera is not None:
         return bl_scene.camera
-    import bpy
-
     data = bpy.data.cameras.new(CAMERA_NAME)
     ob = bpy.data.objects.new(CAMERA_NAME, data)
     bl_scene.collection.objects.link(ob)
     apply_camera(ob, scene["camera"])
     bl_scene.camera = ob
+    set_render_size(bl_scene, scene["image"])
+    return ob
+
+
+def set_render_size(bl_scene, image: dict) -> None:
+    """Render resolution from ``scene["image"]``: 100 %, square pixels."""
     render = bl_scene.render
-    render.resolution_x = scene["image"]["width"]
-    render.resolution_y = scene["image"]["height"]
+    render.resolution_x = image["width"]
+    render.resolution_y = image["height"]
     render.resolution_percentage = 100
     render.pixel_aspect_x = render.pixel_aspect_y = 1.0
-    return ob
+
+
+def evaluated_camera(bl_scene):
+    """The scene camera as the depsgraph evaluates it (constraints, drivers, animation): the one
+    F12 renders. Falls back to the object itself for a scene that is not the context's."""
+    ob = bl_scene.camera
+    if ob is None or bl_scene != bpy.context.scene:
+        return ob
+    return ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
 
 
 def scene_for_render(bl_scene, *, camera_object=None, size: tuple[int, int] | None = None) -> dict:
     """The normalised scene the tracer renders for this Blender scene: the design from the
-    panel (``properties.design_to_scene``) seen through Blender's scene camera at the render
-    resolution (or ``size``). Raises ``SceneError``."""
+    panel (``properties.design_to_scene``) seen through Blender's scene camera (evaluated, or
+    ``camera_object``) at the render resolution (or ``size``). Raises ``SceneError``."""
     from ..core_tracer import scene as core_scene
     from . import properties
 
     scene = properties.design_to_scene(bl_scene)
+    if camera_object is None:
+        camera_object = evaluated_camera(bl_scene)
     scene["camera"] = scene_camera_to_dict(bl_scene, camera_object)
     render = bl_scene.render
     width, height = size if size is not None else render_size(
         render.resolution_x, render.resolution_y, render.resolution_percentage)
     scene["image"] = {"width": int(width), "height": int(height)}
     return core_scene.normalize(scene)
+
+
+# ---------------------------------------------------------------------------------------------
+# Operators: the design's camera section and the scene camera, either way
+
+
+class LAMP_OT_camera_from_design(bpy.types.Operator):
+    """Set the scene camera (created if there is none) and the render size from the design's camera and image"""
+
+    bl_idname = "lamp.camera_from_design"
+    bl_label = "Scene Camera from Design"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or not hasattr(context.scene, "lamp_design"):
+            cls.poll_message_set("No lamp design in this scene")
+            return False
+        return True
+
+    def execute(self, context):
+        from ..core_tracer.scene import SceneError
+        from . import properties
+
+        bl_scene = context.scene
+        try:
+            design = properties.design_to_scene(bl_scene)
+        except SceneError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        if bl_scene.camera is None or bl_scene.camera.type != "CAMERA":
+            bl_scene.camera = None
+            ensure_scene_camera(bl_scene, design)
+        else:
+            apply_camera(bl_scene.camera, design["camera"])
+            set_render_size(bl_scene, design["image"])
+        return {"FINISHED"}
+
+
+class LAMP_OT_camera_to_design(bpy.types.Operator):
+    """Store the scene camera's view and the render size in the design (what a saved preset records)"""
+
+    bl_idname = "lamp.camera_to_design"
+    bl_label = "Design Camera from Scene Camera"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or not hasattr(context.scene, "lamp_design"):
+            cls.poll_message_set("No lamp design in this scene")
+            return False
+        if context.scene.camera is None:
+            cls.poll_message_set("The scene has no camera")
+            return False
+        return True
+
+    def execute(self, context):
+        from ..core_tracer.scene import SceneError
+        from . import properties
+
+        try:
+            properties.scene_to_design(context.scene, scene_for_render(context.scene))
+        except SceneError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+
+classes = (LAMP_OT_camera_from_design, LAMP_OT_camera_to_design)
+
+
+def register() -> None:
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    panels.add_action("lamp.camera_from_design", "Scene Camera from Design", "CAMERA_DATA")
+    panels.add_action("lamp.camera_to_design", "Design Camera from Scene Camera", "OUTLINER_OB_CAMERA")
+
+
+def unregister() -> None:
+    panels.remove_action("lamp.camera_to_design")
+    panels.remove_action("lamp.camera_from_design")
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

@@ -25,12 +25,13 @@ import contextlib
 import os
 import tempfile
 import time
+from collections.abc import Sequence
 
 import bpy
 import numpy as np
 
 from ..core_tracer.scene import SceneError
-from . import bitmap_font, camera, image_view, properties
+from . import bitmap_font, camera, image_view, panels, properties
 from .engine import ENGINE_ID
 
 RENDER_RESULT = "Render Result"
@@ -64,8 +65,8 @@ def differences(tracer: np.ndarray, cycles: np.ndarray) -> dict:
     """Per-channel statistics of tracer - Cycles over the whole image (linear RGB)."""
     diff = tracer.astype(np.float64) - cycles.astype(np.float64)
     return {
-        "tracer_mean": tracer.mean(axis=(0, 1)).tolist(),
-        "cycles_mean": cycles.mean(axis=(0, 1)).tolist(),
+        "tracer_mean": tracer.astype(np.float64).mean(axis=(0, 1)).tolist(),
+        "cycles_mean": cycles.astype(np.float64).mean(axis=(0, 1)).tolist(),
         "mean_difference": diff.mean(axis=(0, 1)).tolist(),
         "mean_abs_difference": np.abs(diff).mean(axis=(0, 1)).tolist(),
         "rms_difference": np.sqrt((diff * diff).mean(axis=(0, 1))).tolist(),
@@ -81,10 +82,12 @@ def _label_scale(image_height: int) -> int:
     return max(1, min(4, image_height // 160 + 1))
 
 
-def side_by_side(left: np.ndarray, right: np.ndarray, left_label: str, right_label: str) -> np.ndarray:
+def side_by_side(left: np.ndarray, right: np.ndarray, left_labels: Sequence[str],
+                 right_labels: Sequence[str]) -> np.ndarray:
     """One (H + strip, 2W + gap, 3) image: ``left`` and ``right`` next to each other below a
-    strip holding their labels. Labels are drawn with OpenImageIO's ``render_text`` when it can
-    (the PyPI OpenImageIO has FreeType and a font), else with the bitmap font."""
+    strip holding their labels. Each label is the first of its alternatives (longest first) that
+    fits above its half. Labels are drawn with OpenImageIO's ``render_text`` when it can (the
+    PyPI OpenImageIO has FreeType and a font), else with the bitmap font."""
     height, width = left.shape[:2]
     gap = max(2, width // 128)
     strip = label_height(height)
@@ -92,29 +95,37 @@ def side_by_side(left: np.ndarray, right: np.ndarray, left_label: str, right_lab
     out[strip:, :width] = left
     out[strip:, width + gap:] = right
     out[:, width:width + gap] = 0.5
-    labels = ((left_label, 0), (right_label, width + gap))
-    text = _oiio_text(out.shape[1], strip, labels)
-    if text is not None:
-        out[:strip] = np.maximum(out[:strip], text)
-    else:
-        scale = _label_scale(height)
-        for label, x in labels:
-            bitmap_font.draw_text(out, label, x + 3 * scale, 3, color=(1.0, 1.0, 1.0), scale=scale)
+    halves = ((left_labels, 0), (right_labels, width + gap))
+    scale = _label_scale(height)
+    for alternatives, x in halves:
+        # Each label is drawn into its own half of the strip, so a long one is clipped there.
+        area = out[:strip, x:x + width]
+        text = _oiio_text(alternatives, width, strip)
+        if text is not None:
+            np.maximum(area, text, out=area)
+        else:
+            label = _fitting(alternatives, width - 4 * scale, lambda t: bitmap_font.text_mask(t, scale).shape[1])
+            bitmap_font.draw_text(area, label, 3 * scale, 3, color=(1.0, 1.0, 1.0), scale=scale)
     return out
 
 
-def _oiio_text(width: int, strip: int, labels) -> np.ndarray | None:
-    """The labels drawn by OpenImageIO into a (strip, width, 3) array, or None when it cannot."""
+def _fitting(alternatives: Sequence[str], room: int, measure) -> str:
+    """The first label that fits in ``room`` pixels, else the shortest (clipped when drawn)."""
+    return next((t for t in alternatives if measure(t) <= room), alternatives[-1])
+
+
+def _oiio_text(alternatives: Sequence[str], width: int, height: int) -> np.ndarray | None:
+    """A (height, width, 3) label drawn by OpenImageIO, or None when it cannot draw text."""
     try:
         import OpenImageIO as oiio
     except ImportError:
         return None
-    buf = oiio.ImageBuf(oiio.ImageSpec(width, strip, 3, oiio.FLOAT))
-    size = strip - 2
-    for label, x in labels:
-        if not oiio.ImageBufAlgo.render_text(buf, x + 4, strip - 4, label, size, "", (1.0, 1.0, 1.0)):
-            return None  # Blender's bundled OpenImageIO has no FreeType
-    return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(strip, width, 3)
+    buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 3, oiio.FLOAT))
+    size = height - 2
+    label = _fitting(alternatives, width - 8, lambda t: oiio.ImageBufAlgo.text_size(t, size, "").width)
+    if not oiio.ImageBufAlgo.render_text(buf, 4, height - 4, label, size, "", (1.0, 1.0, 1.0)):
+        return None  # Blender's bundled OpenImageIO has no FreeType
+    return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(height, width, 3)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -178,11 +189,11 @@ def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tupl
     labelled "Lamp Compare" image. Returns a dict: ``scene`` (what the tracer rendered),
     ``tracer``/``cycles``/``side_by_side`` (H, W, 3 float32 top row first), ``seconds``
     ({"tracer", "cycles"}), ``samples``, ``size`` and ``differences``. Raises ``SceneError``."""
-    from . import builder
-
     design = properties.design_to_scene(bl_scene)
     if build:
-        builder.build(bl_scene)
+        from . import builder
+
+        builder.build_lamp(bl_scene, design)
     camera.ensure_scene_camera(bl_scene, design)
     scene = camera.scene_for_render(bl_scene, size=resolution)
     width, height = scene["image"]["width"], scene["image"]["height"]
@@ -200,8 +211,10 @@ def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tupl
         render.engine = ENGINE_ID
         tracer_rgb, tracer_seconds = _render_into_slot(bl_scene, TRACER_SLOT, os.path.join(tmp, "tracer.exr"))
 
-    labels = (f"Lamp Tracer  {tracer_seconds:.2f} s", f"Cycles {samples} spp  {cycles_seconds:.1f} s")
-    combined = side_by_side(tracer_rgb, cycles_rgb, *labels)
+    combined = side_by_side(
+        tracer_rgb, cycles_rgb,
+        (f"Lamp Tracer  {tracer_seconds:.2f} s", "Lamp Tracer", "Tracer"),
+        (f"Cycles  {samples} spp  {cycles_seconds:.1f} s", f"Cycles  {cycles_seconds:.1f} s", "Cycles"))
     image_view.image_from_array(COMPARE_IMAGE, combined)
     return {
         "scene": scene,
@@ -232,6 +245,9 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
 
     samples: bpy.props.IntProperty(name="Cycles Samples", default=DEFAULT_SAMPLES, min=1, max=65536,
                                    description="Samples per pixel of the Cycles render")
+    filepath: bpy.props.StringProperty(name="Save As", subtype="FILE_PATH", default="",
+                                       description="Also write the side-by-side image here (.png sRGB or "
+                                                   ".exr linear); empty: do not write")
 
     @classmethod
     def poll(cls, context):
@@ -244,7 +260,12 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
         return True
 
     def execute(self, context):
+        from ..core_tracer import imageio
+
+        path = bpy.path.abspath(self.filepath) if self.filepath else ""
         try:
+            if path:
+                imageio.image_format(path)  # refuse a bad file name before minutes of rendering
             comparison = compare_design(context.scene, samples=self.samples)
         except SceneError as e:
             self.report({"ERROR"}, str(e))
@@ -253,6 +274,12 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
             self.report({"ERROR"}, str(e).strip())
             return {"CANCELLED"}
         image_view.show_image(context, bpy.data.images[COMPARE_IMAGE])
+        if path:
+            try:
+                write_comparison(path, comparison)
+            except (SceneError, OSError) as e:
+                self.report({"ERROR"}, str(e))
+                return {"CANCELLED"}
         seconds = comparison["seconds"]
         self.report({"INFO"}, f"Lamp Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
                               f"({comparison['samples']} samples)")
@@ -265,8 +292,10 @@ classes = (LAMP_OT_compare_cycles,)
 def register() -> None:
     for cls in classes:
         bpy.utils.register_class(cls)
+    panels.add_action("lamp.compare_cycles", "Compare with Cycles", "IMAGE_REFERENCE")
 
 
 def unregister() -> None:
+    panels.remove_action("lamp.compare_cycles")
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)

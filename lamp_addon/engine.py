@@ -68,6 +68,7 @@ class LampTracerEngine(bpy.types.RenderEngine):
         from .. import core_tracer
 
         width, height = self.resolution_x, self.resolution_y
+        self._region = render_region(depsgraph.scene.render, width, height)
         try:
             scene = camera.scene_for_render(depsgraph.scene, camera_object=self.camera_override,
                                             size=(width, height))
@@ -91,20 +92,36 @@ class LampTracerEngine(bpy.types.RenderEngine):
 
         try:
             core_tracer.render_passes(scene, width, height, progress=self.update_progress,
-                                      should_stop=self.test_break, on_rows=on_rows)
+                                      should_stop=self.test_break, on_rows=on_rows,
+                                      threads=depsgraph.scene.render.threads)  # Blender's thread count
         except core_tracer.RenderCancelled:
             return  # Esc: Blender keeps the rows finished so far
 
     def _fill(self, rows: np.ndarray, row_start: int, alpha: np.ndarray) -> None:
-        """Write ``rows`` (top-based, top row first) into the result; Blender's rows run bottom-up."""
+        """Write ``rows`` (top-based, top row first) into the result. Blender's rows run bottom-up,
+        and with a render region the result covers only the region, addressed from its corner."""
+        x0, y0, x1, y1 = self._region
         n, width = rows.shape[:2]
+        bottom = self.resolution_y - row_start - n  # of the band, counted from the frame's bottom
+        lo, hi = max(bottom, y0), min(bottom + n, y1)
+        if lo >= hi:
+            return
         rgba = np.empty((n, width, 4), np.float32)
         rgba[:, :, :3] = rows
         rgba[:, :, 3] = alpha
-        y = self.resolution_y - row_start - n
-        result = self.begin_result(0, y, width, n)
-        result.layers[0].passes["Combined"].rect.foreach_set(rgba[::-1].ravel())
+        rgba = rgba[::-1][lo - bottom:hi - bottom, x0:x1]
+        result = self.begin_result(0, lo - y0, x1 - x0, hi - lo)
+        result.layers[0].passes["Combined"].rect.foreach_set(np.ascontiguousarray(rgba).ravel())
         self.end_result(result)
+
+
+def render_region(render, width: int, height: int) -> tuple[int, int, int, int]:
+    """The pixels Blender keeps, (x0, y0, x1, y1) from the bottom-left corner: the whole frame, or
+    the render region (border) truncated to whole pixels as Blender does."""
+    if not render.use_border:
+        return 0, 0, width, height
+    return (int(render.border_min_x * width), int(render.border_min_y * height),
+            int(render.border_max_x * width), int(render.border_max_y * height))
 
 
 classes = (LampTracerEngine,)

@@ -96,7 +96,7 @@ def triangle_deviation(verts: np.ndarray, tris: np.ndarray, distance: Callable[[
         return 0.0
     w = _barycentric(samples)  # (S, 3)
     corners = verts[np.asarray(tris)]  # (T, 3, 3)
-    points = np.einsum("sk,tkc->tsc", w, corners).reshape(-1, 3)
+    points = np.matmul(w, corners).reshape(-1, 3)  # (T, S, 3)
     return float(np.max(distance(points)))
 
 
@@ -161,14 +161,31 @@ class CutSurface:
         return np.abs(np.sqrt((x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2) - self.rho)
 
 
+def cell_lines(surface: CutSurface, k: int) -> np.ndarray:
+    """The k + 1 grid lines across one cell, offsets from its centre, -p/2 ... p/2.
+
+    Evenly spaced in angle on the cap sphere (x = rho sin(theta)), i.e. in arc length along the cell's
+    axes, so the quads are smaller where the cap is steep; evenly spaced on a flat face.
+    """
+    half = surface.p / 2.0
+    if surface.rho is None:
+        lines = np.linspace(-half, half, k + 1)
+    else:
+        edge = math.asin(min(1.0, half / surface.rho))
+        lines = surface.rho * np.sin(np.linspace(-edge, edge, k + 1))
+    lines[0], lines[-1] = -half, half
+    return lines
+
+
 def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM) -> tuple[int, float]:
     """Quads per side of a cell so that one whole cell is within ``tol``; returns (k, deviation)."""
     if surface.rho is None:
         return 1, 0.0
-    # Start from the sagitta estimate L^2 / (8 rho) for the cell diagonal, then measure.
-    k = max(1, math.ceil(surface.p * math.sqrt(2.0) / math.sqrt(8.0 * surface.rho * tol)))
+    # Start from the sagitta estimate L^2 / (8 rho) along the cell's axes, then measure.
+    arc = 2.0 * surface.rho * math.asin(min(1.0, surface.p / 2.0 / surface.rho))
+    k = max(1, math.ceil(arc / math.sqrt(8.0 * surface.rho * tol)))
     while True:
-        u = (np.arange(k + 1) / k - 0.5) * surface.p
+        u = cell_lines(surface, k)
         gx, gz = np.meshgrid(u, u, indexing="ij")
         verts = np.column_stack([gx.ravel(), surface.height(gx, gz).ravel(), gz.ravel()])
         idx = np.arange((k + 1) ** 2).reshape(k + 1, k + 1)
@@ -180,11 +197,28 @@ def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM) -> tup
         k = min(MAX_CELL_SUBDIVISION, k + max(1, k // 4))
 
 
-def _clip_convex(poly: list[tuple[float, float]], clip: np.ndarray) -> list[tuple[float, float]]:
-    """Sutherland-Hodgman: the part of convex polygon ``poly`` inside convex CCW polygon ``clip``."""
+def _rim_edges_near(quad: list[tuple[float, float]], rim: np.ndarray, holds_axis: bool) -> list[int]:
+    """The rim polygon's edges whose angular sector (seen from the axis) overlaps the quad's.
+
+    The rim polygon is convex around the axis, so a point is inside it exactly when it is inside the
+    edge whose sector holds the point's angle: clipping by these few edges is clipping by all.
+    """
+    n = len(rim)
+    if holds_axis:
+        return list(range(n))
+    mid = math.atan2(sum(z for _, z in quad), sum(x for x, _ in quad))
+    rel = [math.remainder(math.atan2(z, x) - mid, 2.0 * math.pi) for x, z in quad]
+    step = 2.0 * math.pi / n
+    first = math.floor((mid + min(rel)) / step)
+    last = math.floor((mid + max(rel)) / step)
+    return [e % n for e in range(first, last + 1)]
+
+
+def _clip_convex(poly: list[tuple[float, float]], clip: np.ndarray, edge_list: Sequence[int]) -> list:
+    """Sutherland-Hodgman: the part of convex polygon ``poly`` inside edges ``edge_list`` of CCW polygon ``clip``."""
     out = poly
     n = len(clip)
-    for e in range(n):
+    for e in edge_list:
         if not out:
             break
         ax, az = clip[e]
@@ -224,41 +258,107 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> Mes
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     rho = None if h == 0 else (p * p / 2 + h * h) / (2 * h)  # = scene.cut_sphere_radius(p, h)
     surface = CutSurface(t, p, h, rho)
-    k, _ = cut_subdivision(surface, tol)
+    k, dev_cell = cut_subdivision(surface, tol)
     rim = rim_polygon(R, segments)
     apothem = R * math.cos(math.pi / segments)
+
+    # The grid lines of all cells (shared along cell edges) and the quads between them.
+    lines = cell_lines(surface, k)
+    cells = math.ceil(R / p + 0.5)
+    grid = np.append((np.arange(-cells, cells + 1)[:, None] * p + lines[None, :-1]).ravel(), cells * p + p / 2)
+    size = len(grid)
+    lo, hi = grid[:-1], grid[1:]
+    near = np.where((lo <= 0) & (hi >= 0), 0.0, np.minimum(np.abs(lo), np.abs(hi)))
+    far = np.maximum(np.abs(lo), np.abs(hi))
+    near2 = near[:, None] ** 2 + near[None, :] ** 2
+    far2 = far[:, None] ** 2 + far[None, :] ** 2
+    cell = np.arange(size - 1) // k - cells
+    a_idx, b_idx = np.meshgrid(np.arange(size - 1), np.arange(size - 1), indexing="ij")
+    full = far2 <= apothem * apothem
+    edge = ~full & (near2 < R * R)
+
+    # Whole quads: grid vertex (a, b) has index a * size + b. Reversed counter-clockwise order in
+    # [x, z] makes the normal point +y, out of the glass.
+    a, b = a_idx[full], b_idx[full]
+    quads = np.column_stack([a * size + b + 1, (a + 1) * size + b + 1, (a + 1) * size + b, a * size + b])
+    polygons: list[tuple[int, ...]] = [tuple(q) for q in quads.tolist()]
+    groups = ((cell[a] + 1000) * 4096 + cell[b] + 1000).tolist()
+
+    # Quads across the rim: clipped by the rim polygon; new points get indices after the grid's.
+    extra: dict[tuple[int, int], int] = {}
+    extra_xz: list[tuple[float, float]] = []
+    for a, b in zip(a_idx[edge].tolist(), b_idx[edge].tolist(), strict=True):
+        x0, x1, z0, z1 = grid[a], grid[a + 1], grid[b], grid[b + 1]
+        corners = {(x0, z0): a * size + b, (x1, z0): (a + 1) * size + b, (x1, z1): (a + 1) * size + b + 1,
+                   (x0, z1): a * size + b + 1}
+        holds_axis = near[a] == 0.0 and near[b] == 0.0
+        poly = _clip_convex(list(corners), rim, _rim_edges_near(list(corners), rim, holds_axis))
+        if len(poly) < 3 or _area(poly) < 1e-9:
+            continue
+        face = []
+        for x, z in reversed(poly):
+            i = corners.get((x, z))
+            if i is None:
+                key = (round(x * 1e6), round(z * 1e6))
+                i = extra.get(key)
+                if i is None:
+                    i = extra[key] = size * size + len(extra_xz)
+                    extra_xz.append((x, z))
+            if not face or (i != face[-1] and i != face[0]):
+                face.append(i)
+        if len(face) >= 3:
+            polygons.append(tuple(face))
+            groups.append((cell[a] + 1000) * 4096 + cell[b] + 1000)  # the cell: one smooth cap
+
+    # Keep the grid vertices in use, then the rim points; heights from the cap spheres.
+    used = np.unique(np.fromiter((i for f in polygons for i in f), dtype=np.int64))
+    remap = np.full(size * size + len(extra_xz), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    gx = np.where(used < size * size, grid[np.minimum(used // size, size - 1)], 0.0)
+    gz = np.where(used < size * size, grid[used % size], 0.0)
+    if extra_xz:
+        ex = np.array(extra_xz)
+        is_extra = used >= size * size
+        gx[is_extra] = ex[used[is_extra] - size * size, 0]
+        gz[is_extra] = ex[used[is_extra] - size * size, 1]
+    # A rim point may coincide with a grid vertex (to 1e-6 mm): weld them.
+    keys = np.round(np.column_stack([gx, gz]) * 1e6).astype(np.int64)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # keep the original order of first occurrences
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    gx, gz = gx[first[order]], gz[first[order]]
+    remap = rank[inverse.ravel()][remap.clip(0)]
+    verts = np.column_stack([gx, surface.height(gx, gz), gz])
+    flat = remap[np.fromiter((i for f in polygons for i in f), dtype=np.int64)]
+    sizes = [len(f) for f in polygons]
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    flat_list = flat.tolist()
+    cut_faces = []
+    cut_groups = []
+    for j, group in enumerate(groups):
+        face = flat_list[offsets[j]:offsets[j + 1]]
+        if len(set(face)) < len(face):  # a welded corner: drop the repeat
+            face = [v for n, v in enumerate(face) if v != face[n - 1]]
+        if len(face) >= 3:
+            cut_faces.append(tuple(face))
+            cut_groups.append(group)
+
+    # The rim: cut vertices on the rim polygon, counter-clockwise seen from -y.
+    angle = np.arctan2(verts[:, 2], verts[:, 0])
+    step = 2.0 * math.pi / segments
+    boundary = apothem / np.cos(angle - (np.floor(angle / step) + 0.5) * step)
+    on_rim = np.abs(np.hypot(verts[:, 0], verts[:, 2]) - boundary) < 1e-6
+    ring = np.flatnonzero(on_rim)[np.argsort(angle[on_rim], kind="stable")].tolist()
+
     mb = _MeshBuilder()
-
-    def cut_vertex(x: float, z: float) -> int:
-        return mb.vertex(x, float(surface.height(x, z)), z)
-
-    s = p / k
-    g0 = math.floor((-R + p / 2) / s) - 1
-    g1 = math.ceil((R + p / 2) / s) + 1
-    for a in range(g0, g1):
-        x0 = -p / 2 + a * s
-        x1 = x0 + s
-        for b in range(g0, g1):
-            z0 = -p / 2 + b * s
-            z1 = z0 + s
-            near_x = 0.0 if x0 <= 0 <= x1 else min(abs(x0), abs(x1))
-            near_z = 0.0 if z0 <= 0 <= z1 else min(abs(z0), abs(z1))
-            if near_x * near_x + near_z * near_z >= R * R:
-                continue  # the quad misses the rim circle, hence the rim polygon
-            cx, cz = (x0 + x1) / 2, (z0 + z1) / 2
-            group = (round(cx / p) + 1000) * 4096 + round(cz / p) + 1000  # the cell: one smooth cap
-            far = max(abs(x0), abs(x1)) ** 2 + max(abs(z0), abs(z1)) ** 2
-            if far <= apothem * apothem:
-                poly = [(x0, z0), (x1, z0), (x1, z1), (x0, z1)]
-            else:
-                poly = _clip_convex([(x0, z0), (x1, z0), (x1, z1), (x0, z1)], rim)
-                if len(poly) < 3 or _area(poly) < 1e-9:
-                    continue
-            # Counter-clockwise in [x, z] faces -y; the cut surface faces +y (out of the glass).
-            mb.face([cut_vertex(x, z) for x, z in reversed(poly)], group, LENS_GLASS)
-
-    cut_faces = list(mb.faces)
-    ring = _boundary_ring(mb, cut_faces)
+    mb.verts = verts.tolist()
+    for i in ring:  # the side wall welds to these (a cell apex on the rim is also the collar's top)
+        x, y, z = mb.verts[i]
+        mb._index[(round(x * 1e6), round(y * 1e6), round(z * 1e6))] = i
+    mb.faces = list(cut_faces)
+    mb.material = [LENS_GLASS] * len(cut_faces)
+    mb.group = cut_groups
     y_top = t + h
     bottom = [mb.vertex(mb.verts[i][0], 0.0, mb.verts[i][2]) for i in ring]
     top = [mb.vertex(mb.verts[i][0], y_top, mb.verts[i][2]) for i in ring]
@@ -270,8 +370,10 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> Mes
     mb.face(bottom, FLAT, LENS_GLASS)  # outer face, counter-clockwise seen from -y
 
     data = mb.result()
-    dev_cut = triangle_deviation(data.verts, fan_triangles(cut_faces), surface.distance)
-    side_faces = [f for f, m in zip(data.faces, data.material) if m == LENS_SIDE_WALL]
+    # Whole quads are copies of the cell measured by cut_subdivision; measure the clipped ones here.
+    clipped = [f for f in cut_faces if on_rim[list(f)].any()]
+    dev_cut = max(dev_cell, triangle_deviation(data.verts, fan_triangles(clipped), surface.distance))
+    side_faces = [f for f, m in zip(data.faces, data.material, strict=True) if m == LENS_SIDE_WALL]
     dev_side = triangle_deviation(data.verts, fan_triangles(side_faces),
                                   lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - R))
     data.max_deviation = max(dev_cut, dev_side)
@@ -280,18 +382,6 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> Mes
 
 def _area(poly: Sequence[tuple[float, float]]) -> float:
     return 0.5 * abs(sum(poly[i - 1][0] * poly[i][1] - poly[i][0] * poly[i - 1][1] for i in range(len(poly))))
-
-
-def _boundary_ring(mb: _MeshBuilder, faces: Sequence[tuple[int, ...]]) -> list[int]:
-    """The open boundary of the cut surface (it lies on the rim polygon), counter-clockwise from -y."""
-    count: dict[tuple[int, int], int] = {}
-    for f in faces:
-        for a, b in zip(f, f[1:] + f[:1]):
-            key = (min(a, b), max(a, b))
-            count[key] = count.get(key, 0) + 1
-    ring = sorted({i for e, c in count.items() if c == 1 for i in e},
-                  key=lambda i: math.atan2(mb.verts[i][2], mb.verts[i][0]))
-    return ring
 
 
 # ---------------------------------------------------------------------------------------------
@@ -344,7 +434,8 @@ def _revolve(radii: np.ndarray, profile: Callable[[np.ndarray], np.ndarray], seg
     a = 2.0 * math.pi * np.arange(segments) / segments
     ys = profile(radii)
     pole = mb.vertex(0.0, float(ys[0]), 0.0)
-    rows = [[mb.vertex(r * math.cos(t), float(y), r * math.sin(t)) for t in a] for r, y in zip(radii[1:], ys[1:])]
+    rows = [[mb.vertex(r * math.cos(t), float(y), r * math.sin(t)) for t in a]
+            for r, y in zip(radii[1:], ys[1:], strict=True)]
     for k in range(segments):
         k1 = (k + 1) % segments
         tri = [pole, rows[0][k], rows[0][k1]]
@@ -360,7 +451,7 @@ def _revolve(radii: np.ndarray, profile: Callable[[np.ndarray], np.ndarray], seg
 
 
 def sphere_mesh(radius: float, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
-    """A UV sphere about the origin (poles on the y axis... no: on z), outward normals, smooth."""
+    """A UV sphere about the origin (poles on the z axis), outward normals, smooth; measured like the rest."""
     n = circle_segments(radius, tol / 2.0, multiple=4, minimum=16)
     center = np.zeros(3)
 
@@ -410,7 +501,7 @@ def socket_mesh(radius: float, y0: float, y1: float, tol: float = CHORD_TOLERANC
     mb.face(ring_lo, FLAT)  # faces -y
     mb.face(ring_hi[::-1], FLAT)  # faces +y
     data = mb.result()
-    side = [f for f, g in zip(data.faces, data.group) if g == 0]
+    side = [f for f, g in zip(data.faces, data.group, strict=True) if g == 0]
     data.max_deviation = triangle_deviation(data.verts, fan_triangles(side),
                                             lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - radius))
     return data
@@ -453,7 +544,7 @@ def body_mesh(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[tuple[flo
     mb.face([c[1, 0, 0], c[1, 1, 0], c[1, 1, 1], c[1, 0, 1]], FLAT)  # right, +x
     mb.face([c[0, 0, 0], c[0, 1, 0], c[1, 1, 0], c[1, 0, 0]], FLAT)  # bottom, -z
     mb.face([c[0, 0, 1], c[1, 0, 1], c[1, 1, 1], c[0, 1, 1]], FLAT)  # top, +z
-    for i, (rim, (y_a, y_b)) in enumerate(zip(rims, bores)):
+    for i, (rim, (y_a, y_b)) in enumerate(zip(rims, bores, strict=True)):
         if y_b - y_a <= 1e-9:
             continue
         front = [mb.vertex(float(x), y_a, float(z)) for x, z in rim]

@@ -20,7 +20,7 @@ import bpy
 import numpy as np
 
 from ..core_tracer.scene import SceneError
-from . import camera, image_view
+from . import camera, image_view, panels
 
 IMAGE_NAME = "Lamp Tracer"
 POLL_SECONDS = 0.2
@@ -95,14 +95,15 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
     bl_label = "Render with Lamp Tracer"
     bl_options = {"REGISTER"}
 
-    _running = False  # one interactive render at a time
+    _active: TracerJob | None = None  # one interactive render at a time
 
     @classmethod
     def poll(cls, context):
         if context.scene is None or context.scene.camera is None:
             cls.poll_message_set("The scene has no camera; build the lamp or add a camera")
             return False
-        if LAMP_OT_render_tracer._running:
+        job = LAMP_OT_render_tracer._active
+        if job is not None and not job.done.is_set():
             cls.poll_message_set("A Lamp Tracer render is running (Esc cancels it)")
             return False
         return True
@@ -133,8 +134,7 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
         self._timer = wm.event_timer_add(POLL_SECONDS, window=context.window)
         wm.modal_handler_add(self)
         wm.progress_begin(0, 100)
-        LAMP_OT_render_tracer._running = True
-        self._job.start()
+        LAMP_OT_render_tracer._active = self._job.start()
         self._status(context)
         return {"RUNNING_MODAL"}
 
@@ -187,7 +187,7 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
         wm.progress_end()
         context.workspace.status_text_set(None)
         self._show_rows(context)
-        LAMP_OT_render_tracer._running = False
+        LAMP_OT_render_tracer._active = None
 
 
 classes = (LAMP_OT_render_tracer,)
@@ -196,8 +196,10 @@ classes = (LAMP_OT_render_tracer,)
 def register() -> None:
     for cls in classes:
         bpy.utils.register_class(cls)
+    panels.add_action("lamp.render_tracer", "Render with Lamp Tracer", "RENDER_STILL")
 
 
 def unregister() -> None:
+    panels.remove_action("lamp.render_tracer")
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)

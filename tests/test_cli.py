@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -122,7 +123,19 @@ def test_unreadable_file(tmp_path):
 
 def test_a_folder_is_not_a_scene(tmp_path):
     (tmp_path / "dir.json").mkdir()
-    assert_bad_input(run_cli("validate", tmp_path / "dir.json"), "dir.json", "cannot read")
+    assert_bad_input(run_cli("validate", tmp_path / "dir.json"), "dir.json", "not a regular file")
+
+
+def test_a_pipe_is_refused_not_waited_on(tmp_path):
+    os.mkfifo(tmp_path / "pipe.json")
+    assert_bad_input(run_cli("validate", tmp_path / "pipe.json", timeout=20), "pipe.json", "not a regular file")
+
+
+def test_integer_beyond_json_limits(tmp_path):
+    src = tmp_path / "scene.json"
+    src.write_text(BASELINE.read_text().replace('"ior": 1.49', '"ior": ' + "9" * 5000))
+    assert_bad_input(run_cli("render", src, "-o", tmp_path / "o.exr"), "scene.json", "not valid JSON", "digits")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.json"]
 
 
 def test_oversized_file_is_refused_before_reading(tmp_path):

@@ -1,0 +1,108 @@
+"""Shared fixtures. Their names are stable: every test module of the project uses them.
+
+``bpy`` is imported lazily, inside the fixtures, so the tracer's tests run without it.
+
+Session fixtures
+- ``repo_root``: ``pathlib.Path`` of the repository (the extension's source folder).
+- ``blender_user_resources``: the temporary folder set as ``BLENDER_USER_RESOURCES``. It is put into the
+  environment when this file is imported, which pytest does before any test module can import bpy,
+  so Blender's preferences, extensions and caches never touch the home folder.
+- ``addon``: enables the add-on from the working tree through a development extension repository
+  (``<tmp>/dev-extensions/lamp_styling`` is a symlink to the repository) and returns its module name,
+  ``"bl_ext.lamp_dev.lamp_styling"``. Disabled again at the end of the session.
+- ``lamp_addon``: the add-on's ``lamp_addon`` package as Blender imported it (``lamp_addon.properties``,
+  ``lamp_addon.builder``, ...).
+- ``addon_core``: the add-on's own copy of ``core_tracer`` (``bl_ext.lamp_dev.lamp_styling.core_tracer``).
+  Catch ``addon_core.SceneError`` for errors raised inside the add-on: the top-level ``core_tracer``
+  package that the tracer tests import is a different module object with its own ``SceneError``.
+
+Function fixtures
+- ``bl_scene``: ``bpy.context.scene`` of the freshly reset file.
+- ``_reset_blender`` (autouse): before every test that uses ``addon`` (directly or through another
+  fixture) or is marked ``blender``, ``bpy.ops.wm.read_homefile(use_empty=True)`` empties the file;
+  it keeps the enabled add-ons.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+EXTENSION_ID = "lamp_styling"
+DEV_REPO_MODULE = "lamp_dev"
+
+# Before bpy can be imported by anything: Blender reads this once, at start-up.
+_USER_RESOURCES = tempfile.mkdtemp(prefix="lamp-blender-user-")
+os.environ["BLENDER_USER_RESOURCES"] = _USER_RESOURCES
+
+if str(REPO_ROOT) not in sys.path:  # `import core_tracer` however pytest was started
+    sys.path.insert(0, str(REPO_ROOT))
+
+
+@pytest.fixture(scope="session")
+def repo_root() -> Path:
+    return REPO_ROOT
+
+
+@pytest.fixture(scope="session")
+def blender_user_resources():
+    yield Path(_USER_RESOURCES)
+    shutil.rmtree(_USER_RESOURCES, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def addon(blender_user_resources) -> str:
+    import bpy  # noqa: I001 (first: it puts Blender's own modules, addon_utils, on sys.path)
+    import addon_utils
+
+    repo_dir = blender_user_resources / "dev-extensions"
+    repo_dir.mkdir(exist_ok=True)
+    link = repo_dir / EXTENSION_ID
+    if not link.exists():
+        link.symlink_to(REPO_ROOT, target_is_directory=True)
+    repos = bpy.context.preferences.extensions.repos
+    repos.new(name="Lamp development", module=DEV_REPO_MODULE, custom_directory=str(repo_dir),
+                     source="USER")
+    module_name = f"bl_ext.{DEV_REPO_MODULE}.{EXTENSION_ID}"
+
+    def fail(ex: BaseException) -> None:
+        raise ex
+
+    addon_utils.enable(module_name, default_set=True, handle_error=fail)
+    assert module_name in sys.modules, f"{module_name} did not load"
+    yield module_name
+    addon_utils.disable(module_name, default_set=True, handle_error=fail)
+    # The repository stays registered until the process ends: removing it would disable the add-on
+    # a second time. Preferences are not saved in background mode.
+
+
+@pytest.fixture(scope="session")
+def lamp_addon(addon):
+    return sys.modules[f"{addon}.lamp_addon"]
+
+
+@pytest.fixture(scope="session")
+def addon_core(addon):
+    return sys.modules[f"{addon}.core_tracer"]
+
+
+@pytest.fixture(autouse=True)
+def _reset_blender(request):
+    if "addon" in request.fixturenames or request.node.get_closest_marker("blender"):
+        import bpy
+
+        bpy.ops.wm.read_homefile(use_empty=True)
+    yield
+
+
+@pytest.fixture
+def bl_scene(addon):
+    import bpy
+
+    return bpy.context.scene

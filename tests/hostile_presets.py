@@ -1,0 +1,67 @@
+"""A folder of hostile presets (issue 4, item 6), shared by the library tests with and without Blender."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+BUILTIN = Path(__file__).resolve().parent.parent / "presets"
+
+
+def _doc(stem: str = "paper-baseline") -> dict:
+    return json.loads((BUILTIN / f"{stem}.json").read_text())
+
+
+def make_hostile_folder(folder: Path) -> tuple[set[str], dict[str, tuple[str, ...]]]:
+    """Good presets and bad ones; returns the good file names and, per bad file, what its warning says."""
+    folder.mkdir()
+    base = _doc()
+    (folder / "good-1.json").write_text(json.dumps(base))
+    (folder / "good-2.json").write_text(json.dumps(_doc("four-lamp-rear-combination")))
+    os.symlink("good-1.json", folder / "link-inside.json")  # a link within the library is fine
+    bad: dict[str, tuple[str, ...]] = {}
+
+    def write(name: str, content: str | bytes, *needles: str) -> None:
+        data = content.encode() if isinstance(content, str) else content
+        (folder / name).write_bytes(data)
+        bad[name] = needles
+
+    with open(folder / "huge.json", "wb") as f:
+        f.truncate(100 * 1024 * 1024)  # 100 MB, sparse
+    bad["huge.json"] = ("104857600 bytes", "at most 1000000 bytes")
+    write("many-lamps.json", '{"schema": "lamp-scene/1", "lamps": [' + ",".join(["{}"] * 300_000) + "]}",
+          "lamps: has 300000 items; allowed 1 to 4")
+    write("huge-image.json", json.dumps({**base, "image": {"width": 100_000, "height": 100_000}}),
+          "image.width: 100000 is out of range; allowed [1, 8192] px")
+    write("deep.json", "[" * 100_000 + "]" * 100_000, "nested too deeply")
+    write("deep-name.json", '{"schema": "lamp-scene/1", "name": ' + "[" * 5000 + "]" * 5000 + "}",
+          "nested too deeply")
+    write("not-utf8.json", b'{"name": "\xff\xfe\xfa"}', "not UTF-8")
+    write("future.json", json.dumps({**base, "schema": "lamp-scene/2"}), "schema:", '"lamp-scene/2" is not supported')
+    write("not-json.json", "{{", "not valid JSON")
+    write("empty.json", "", "not valid JSON")
+    write("unknown-key.json", json.dumps({**base, "bulb_power": 3}), "bulb_power: unknown key")
+    write("nan.json", json.dumps(base).replace('"ior": 1.49', '"ior": NaN'), "NaN")
+    write("range.json", json.dumps(base).replace('"ior": 1.49', '"ior": 0.5'),
+          "lamps[0].lens.ior: 0.5 is out of range; allowed [1, 3]")
+    write("big-int.json", json.dumps(base).replace('"ior": 1.49', '"ior": ' + "9" * 5000), "not valid JSON")
+    write("huge-key.json", '{"schema": "lamp-scene/1", "' + "k" * 900_000 + '": 1}', "unknown key")
+    write("array.json", "[1, 2, 3]", "JSON object")
+    write("line\nbreak.json", "nope", "not valid JSON")
+    os.mkfifo(folder / "fifo.json")  # opening it would block forever
+    bad["fifo.json"] = ("not a regular file",)
+    (folder / "dir.json").mkdir()
+    bad["dir.json"] = ("not a regular file",)
+    (folder.parent / "outside.json").write_text(json.dumps(base))
+    os.symlink("../outside.json", folder / "escape.json")
+    bad["escape.json"] = ("leads out of the library",)
+    os.symlink("/dev/zero", folder / "zero.json")
+    bad["zero.json"] = ("leads out of the library",)
+    os.symlink("loop.json", folder / "loop.json")
+    bad["loop.json"] = ("cannot read",)
+    (folder / "notes.txt").write_text("not a preset, not listed")
+    (folder / ".hidden.json").write_text("hidden, not listed")
+    os.mkdir(folder / "sub")
+    (folder / "sub" / "nested.json").write_text(json.dumps(base))  # only the folder itself is a library
+    return {"good-1.json", "good-2.json", "link-inside.json"}, bad

@@ -1,0 +1,402 @@
+"""The scene camera, the Lamp Tracer render engine and the Render with Lamp Tracer operator.
+
+The camera conversion is checked three ways: the pure conversion formulas, a round trip
+scene camera -> Blender camera -> scene camera, and Blender's own projection
+(``bpy_extras.object_utils.world_to_camera_view``) against the tracer's eye rays. The engine
+and the operator must give ``core_tracer.render``'s image pixel for pixel.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import core_tracer
+from core_tracer import imageio
+
+pytestmark = pytest.mark.blender
+
+PRESET = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "presets",
+                      "paper-baseline.json")
+
+CAMERAS = {
+    "perspective-auto": {"type": "perspective", "position": [12.5, -800.25, 30.0], "target": [5.0, 0.0, -10.0],
+                         "up": [0, 0, 1], "fov_deg": 16.0, "sensor_fit": "auto", "shift": [0.1, -0.05]},
+    "perspective-horizontal": {"type": "perspective", "position": [300.0, -700.0, 200.0],
+                               "target": [0.0, 10.0, 0.0], "up": [0.1, 0.0, 1.0], "fov_deg": 23.7,
+                               "sensor_fit": "horizontal", "shift": [0.0, 0.2]},
+    "perspective-vertical": {"type": "perspective", "position": [-40.0, -650.0, -90.0], "target": [0.0, 0.0, 0.0],
+                             "up": [0, 0, 1], "fov_deg": 31.25, "sensor_fit": "vertical", "shift": [-0.15, 0.0]},
+    "orthographic-auto": {"type": "orthographic", "position": [0.0, -800.0, 0.0], "target": [0.0, 0.0, 0.0],
+                          "up": [0, 0, 1], "width": 263.5, "sensor_fit": "auto", "shift": [0.2, 0.3]},
+    "orthographic-horizontal": {"type": "orthographic", "position": [100.0, -500.0, 50.0],
+                                "target": [10.0, 20.0, 0.0], "up": [0, 0, 1], "width": 180.0,
+                                "sensor_fit": "horizontal", "shift": [0.0, 0.0]},
+    "orthographic-vertical": {"type": "orthographic", "position": [0.0, -900.0, 0.0], "target": [0.0, 0.0, 0.0],
+                              "up": [0.2, 0.0, 1.0], "width": 150.0, "sensor_fit": "vertical", "shift": [0.1, 0.1]},
+}
+SIZES = [(48, 32), (32, 48)]  # landscape and portrait: AUTO fits a different side in each
+
+
+def _preset_scene(camera: dict | None = None, size=(48, 32)) -> dict:
+    with open(PRESET, encoding="utf-8") as f:
+        doc = json.load(f)
+    if camera is not None:
+        doc["camera"] = {**doc.get("camera", {}), **camera}
+    doc["image"] = {"width": size[0], "height": size[1]}
+    return core_tracer.parse_scene(doc)
+
+
+def _load_design(lamp_addon, bl_scene, scene: dict) -> None:
+    lamp_addon.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.camera.ensure_scene_camera(bl_scene, scene)
+
+
+def _axes(cam, camera_module):
+    return np.array(camera_module.look_at_axes(cam["position"], cam["target"], cam["up"]))
+
+
+# ---------------------------------------------------------------------------------------------
+# Camera: the pure formulas
+
+
+def test_camera_formulas(lamp_addon):
+    cam = lamp_addon.camera
+    assert cam.render_size(1920, 1080, 50) == (960, 540)
+    assert cam.render_size(101, 33, 33) == (33, 10)  # Blender divides integers
+    assert cam.fitted_side("auto", 48, 32) == "horizontal"
+    assert cam.fitted_side("auto", 32, 48) == "vertical"
+    assert cam.fitted_side("auto", 40, 40) == "horizontal"  # a tie fits horizontally, as Blender
+    assert cam.fitted_side("vertical", 48, 32) == "vertical"
+    assert cam.sensor_size("auto", 36.0, 24.0) == 36.0  # AUTO uses the sensor width for either side
+    assert cam.sensor_size("vertical", 36.0, 24.0) == 24.0
+    assert cam.fov_from_lens(50.0, 36.0) == pytest.approx(39.5977, abs=1e-4)  # Blender's default camera
+    for fov in (0.5, 16.0, 90.0, 169.0):
+        assert cam.fov_from_lens(cam.lens_from_fov(fov, 36.0), 36.0) == pytest.approx(fov, abs=1e-9)
+
+
+def test_view_from_axes_keeps_world_up_when_level(lamp_addon):
+    cam = lamp_addon.camera
+    right, up, back = cam.look_at_axes((0, -800, 100), (0, 0, 0), (0, 0, 1))
+    view = cam.view_from_axes((0, -800, 100), up, back, math.dist((0, -800, 100), (0, 0, 0)))
+    assert view["up"] == [0.0, 0.0, 1.0]
+    assert view["target"] == pytest.approx([0, 0, 0], abs=1e-9)
+    right, up, back = cam.look_at_axes((0, -800, 0), (0, 0, 0), (0.3, 0, 1))  # rolled
+    view = cam.view_from_axes((0, -800, 0), up, back, 800.0)
+    assert view["up"] == pytest.approx(list(up), abs=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------
+# Camera: scene camera -> Blender camera -> scene camera
+
+
+@pytest.mark.parametrize("size", SIZES, ids=lambda s: f"{s[0]}x{s[1]}")
+@pytest.mark.parametrize("name", sorted(CAMERAS))
+def test_camera_round_trip(lamp_addon, bl_scene, name, size):
+    scene = _preset_scene(CAMERAS[name], size)
+    _load_design(lamp_addon, bl_scene, scene)
+    # What the renderers see: the camera as the depsgraph evaluates it (location + rotation, float32)
+    back = lamp_addon.camera.scene_camera_to_dict(bl_scene, lamp_addon.camera.evaluated_camera(bl_scene))
+    want = scene["camera"]
+    assert back["type"] == want["type"]
+    assert back["sensor_fit"] == want["sensor_fit"]
+    assert back["position"] == pytest.approx(want["position"], abs=1e-4)
+    # Orientation to 1e-4 degrees; the target keeps its distance to 1e-4 mm. The target point itself
+    # is only as exact as a float32 rotation at ~1 m allows (1e-7 rad is 1e-4 mm at 800 mm).
+    for got, wanted in zip(_axes(back, lamp_addon.camera), _axes(want, lamp_addon.camera), strict=True):
+        assert math.degrees(math.acos(min(1.0, float(np.dot(got, wanted))))) < 1e-4
+    assert math.dist(back["position"], back["target"]) == pytest.approx(
+        math.dist(want["position"], want["target"]), abs=1e-4)
+    assert back["target"] == pytest.approx(want["target"], abs=1e-3)
+    assert back["shift"] == pytest.approx(want["shift"], abs=1e-6)
+    if want["type"] == "perspective":
+        assert back["fov_deg"] == pytest.approx(want["fov_deg"], abs=1e-4)
+    else:
+        assert back["width"] == pytest.approx(want["width"], abs=1e-4)
+    rendered = lamp_addon.camera.scene_for_render(bl_scene)
+    assert rendered["image"] == {"width": size[0], "height": size[1]}
+    assert rendered["camera"] == back
+
+
+def _tracer_projection(cam: dict, width: int, height: int, point) -> tuple[float, float]:
+    """Where the tracer's camera (core_tracer.camera) puts a world point: (x, y) in [0, 1] from the
+    image's bottom-left corner, Blender's convention."""
+    c = core_tracer.camera.make_camera(cam, width, height)
+    rel = np.asarray(point, float) - c.position
+    u, v, depth = rel @ c.right, rel @ c.up, rel @ c.forward
+    if not c.orthographic:
+        u, v = u / depth, v / depth
+    return ((u - c.shift[0]) / c.half_width + 1) / 2, ((v - c.shift[1]) / c.half_height + 1) / 2
+
+
+@pytest.mark.parametrize("size", SIZES, ids=lambda s: f"{s[0]}x{s[1]}")
+@pytest.mark.parametrize("name", sorted(CAMERAS))
+def test_tracer_camera_projects_like_blender(lamp_addon, bl_scene, name, size):
+    """Blender's own projection of the Blender camera and the tracer's projection of the scene
+    camera read from it put the lamp's corners at the same place in the image."""
+    import bpy  # noqa: F401 (bpy_extras needs it first)
+    from bpy_extras.object_utils import world_to_camera_view
+    from mathutils import Vector
+
+    scene = _preset_scene(CAMERAS[name], size)
+    _load_design(lamp_addon, bl_scene, scene)
+    read = lamp_addon.camera.scene_camera_to_dict(bl_scene)
+    for point in ([-110, 0, -60], [110, 0, 60], [45, 30, -20], [0, 80, 0]):
+        blender = world_to_camera_view(bl_scene, bl_scene.camera, Vector(point) * 0.001)
+        tracer = _tracer_projection(read, size[0], size[1], point)
+        # 1e-5 of the image side: far below a pixel at any size this project renders
+        assert tracer == pytest.approx((blender.x, blender.y), abs=1e-5), point
+
+
+def test_camera_refuses_what_the_tracer_cannot_render(lamp_addon, addon_core, bl_scene):
+    with pytest.raises(addon_core.SceneError, match="no camera"):
+        lamp_addon.camera.scene_camera_to_dict(bl_scene)
+    _load_design(lamp_addon, bl_scene, _preset_scene())
+    bl_scene.render.pixel_aspect_x = 2.0
+    with pytest.raises(addon_core.SceneError, match="pixel aspect 2:1"):
+        lamp_addon.camera.scene_camera_to_dict(bl_scene)
+    bl_scene.render.pixel_aspect_x = 1.0
+    bl_scene.camera.data.type = "PANO"
+    with pytest.raises(addon_core.SceneError, match='camera.type: "pano"'):
+        lamp_addon.camera.scene_camera_to_dict(bl_scene)
+
+
+def test_camera_operators(lamp_addon, bl_scene):
+    import bpy
+
+    scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
+    lamp_addon.properties.scene_to_design(bl_scene, scene)
+    assert bpy.ops.lamp.camera_from_design() == {"FINISHED"}
+    assert bl_scene.camera is not None and (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (40, 30)
+    assert lamp_addon.camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(31.25, abs=1e-4)
+    bl_scene.camera.location.x += 0.05  # the user moves the camera 50 mm to the right ...
+    bl_scene.render.resolution_x = 64
+    assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # ... and stores the view in the design
+    design = lamp_addon.properties.design_to_scene(bl_scene)
+    assert design["camera"]["position"][0] == pytest.approx(-40.0 + 50.0, abs=1e-3)
+    assert design["image"] == {"width": 64, "height": 30}
+
+
+# ---------------------------------------------------------------------------------------------
+# The render engine
+
+
+def _render_engine_exr(bl_scene, path) -> np.ndarray:
+    import bpy
+
+    settings = bl_scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "32"
+    bpy.ops.render.render()
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(str(path))
+    return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
+
+
+def test_engine_equals_core_render(lamp_addon, bl_scene, tmp_path):
+    scene = _preset_scene(size=(48, 32))
+    _load_design(lamp_addon, bl_scene, scene)
+    bl_scene.render.engine = "LAMP_TRACER"
+    rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
+    seen = lamp_addon.camera.scene_for_render(bl_scene)
+    # The scene the engine rendered is the preset's, camera included (up to Blender's float32 storage).
+    assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-4)
+    assert seen["camera"]["fov_deg"] == pytest.approx(scene["camera"]["fov_deg"], abs=1e-4)
+    expected = core_tracer.render(seen)
+    assert rgba.shape == (32, 48, 4)
+    np.testing.assert_array_equal(rgba[:, :, :3], expected)  # pixel for pixel, top row first
+    np.testing.assert_array_equal(rgba[:, :, 3], 1.0)
+    assert expected.max() > 1.0 and expected[0, 0].sum() == 0.0  # a real image: bulb and background
+
+
+def test_engine_renders_percentage_and_writes_still(lamp_addon, bl_scene, tmp_path):
+    import bpy
+
+    _load_design(lamp_addon, bl_scene, _preset_scene(size=(64, 40)))
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.render.resolution_percentage = 50
+    bl_scene.render.filepath = str(tmp_path / "still.png")
+    bl_scene.render.image_settings.file_format = "PNG"
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    image, _ = imageio.read_image(tmp_path / "still.png")
+    assert image.shape == (20, 32, 3)
+    expected = core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene))
+    assert expected.shape == (20, 32, 3)
+    # PNG: 8-bit sRGB under the scene's view transform; compare where the view is the identity
+    bl_scene.view_settings.view_transform = "Standard"
+    bpy.ops.render.render(write_still=True)
+    image, _ = imageio.read_image(tmp_path / "still.png")
+    low = expected.max(axis=2) < 1.0  # not clipped
+    assert np.abs(image[low] - expected[low]).max() < 0.01
+
+
+@pytest.mark.parametrize("crop", [False, True], ids=["region", "crop"])
+@pytest.mark.parametrize("border", [(0.25, 0.75, 0.1, 0.6), (0.0, 0.33, 0.55, 1.0)])
+def test_engine_render_region(lamp_addon, bl_scene, tmp_path, border, crop):
+    _load_design(lamp_addon, bl_scene, _preset_scene(size=(64, 48)))
+    bl_scene.render.engine = "LAMP_TRACER"
+    full = _render_engine_exr(bl_scene, tmp_path / "full.exr")
+    render = bl_scene.render
+    render.use_border, render.use_crop_to_border = True, crop
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = border
+    got = _render_engine_exr(bl_scene, tmp_path / "region.exr")
+    x0, x1, y0, y1 = int(border[0] * 64), int(border[1] * 64), int(border[2] * 48), int(border[3] * 48)
+    want = full[48 - y1:48 - y0, x0:x1]  # rows top-first, the region counted from the bottom
+    if not crop:
+        assert got.shape == full.shape
+        assert got[:, :, 3].sum() == want[:, :, 3].sum()  # nothing outside the region
+        got = got[48 - y1:48 - y0, x0:x1]
+    np.testing.assert_array_equal(got, want)
+
+
+def test_engine_film_transparent_alpha_is_the_lamp(lamp_addon, bl_scene, tmp_path):
+    scene = _preset_scene(size=(48, 32))
+    _load_design(lamp_addon, bl_scene, scene)
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.render.film_transparent = True
+    rgba = _render_engine_exr(bl_scene, tmp_path / "alpha.exr")
+    alpha = rgba[:, :, 3]
+    assert set(np.unique(alpha)) == {0.0, 1.0}
+    assert alpha[16, 24] == 1.0 and alpha[0, 0] == 0.0
+    # The body (220 x 120 mm) seen from 800 mm with a 16 degree lens across 48 px: its outline.
+    mm_per_px = 2 * 800 * math.tan(math.radians(8)) / 48
+    assert alpha.sum() == pytest.approx((220 / mm_per_px) * (120 / mm_per_px), rel=0.1)
+    assert np.all(rgba[alpha == 0, :3] == 0.0)
+
+
+def test_engine_reports_design_errors_without_traceback(lamp_addon, bl_scene, tmp_path):
+    import bpy
+
+    _load_design(lamp_addon, bl_scene, _preset_scene(size=(16, 16)))
+    bl_scene.camera.location.y = 0.5  # behind the lamp's front
+    bl_scene.render.engine = "LAMP_TRACER"
+    with pytest.raises(RuntimeError, match=r"Lamp Tracer: camera.position: y = 500(\.0)? is not in front"):
+        bpy.ops.render.render()
+    bl_scene.render.image_settings.file_format = "OPEN_EXR"
+    bpy.data.images["Render Result"].save_render(str(tmp_path / "black.exr"), scene=bl_scene)
+    image, _ = imageio.read_image(tmp_path / "black.exr")
+    assert image.shape == (16, 16, 3) and not image.any()  # a black result, not a stale one
+
+
+def test_engine_panels_are_compatible_and_registration_is_symmetric(lamp_addon):
+    import bpy
+
+    panels = (bpy.types.RENDER_PT_format, bpy.types.RENDER_PT_output, bpy.types.DATA_PT_lens,
+              bpy.types.DATA_PT_camera, bpy.types.RENDER_PT_color_management)
+    assert all("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
+    assert lamp_addon.engine.LampTracerEngine.is_registered
+    assert "LAMP_TRACER" not in bpy.types.CYCLES_RENDER_PT_sampling.COMPAT_ENGINES
+    lamp_addon.engine.unregister()
+    try:
+        assert not any("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
+        assert not lamp_addon.engine.LampTracerEngine.is_registered
+    finally:
+        lamp_addon.engine.register()
+    assert all("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
+    assert lamp_addon.engine.LampTracerEngine.is_registered
+
+
+# ---------------------------------------------------------------------------------------------
+# The Render with Lamp Tracer operator and its worker
+
+
+def test_render_operator_image_equals_core_render(lamp_addon, bl_scene):
+    import bpy
+
+    _load_design(lamp_addon, bl_scene, _preset_scene(size=(48, 32)))
+    assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
+    image = bpy.data.images["Lamp Tracer"]
+    assert image.is_float and tuple(image.size) == (48, 32)
+    assert image.colorspace_settings.name == lamp_addon.image_view.scene_linear_colorspace()
+    expected = core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene))
+    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(image), expected)
+    # Again at another size: the same data-block, resized, still exact.
+    bl_scene.render.resolution_x = 24
+    assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
+    again = bpy.data.images["Lamp Tracer"]
+    assert again == image and tuple(again.size) == (24, 32)
+    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(again),
+                                  core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene)))
+
+
+def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):
+    import bpy
+
+    lamp_addon.properties.scene_to_design(bl_scene, _preset_scene())
+    assert not bpy.ops.lamp.render_tracer.poll()
+    with pytest.raises(RuntimeError, match="no camera"):
+        bpy.ops.lamp.render_tracer()
+
+
+def test_tracer_job_runs_on_a_thread_and_equals_core_render(lamp_addon):
+    scene = _preset_scene(size=(40, 24))
+    job = lamp_addon.ops_render.TracerJob(scene).start()
+    assert job.wait(60.0)
+    assert job.error is None and not job.cancelled
+    assert job.progress == 1.0 and job.rows_done == 24
+    np.testing.assert_array_equal(job.rows, core_tracer.render(scene))
+
+
+def test_tracer_job_cancels_through_should_stop(lamp_addon):
+    scene = _preset_scene(size=(256, 256))  # several bands of rows
+    job = lamp_addon.ops_render.TracerJob(scene)
+    job.stop()  # Esc before the first band is polled
+    job.start()
+    assert job.wait(60.0)
+    assert job.cancelled and job.error is None
+    assert job.rows_done < 256
+
+
+def test_render_passes_stops_between_bands():
+    scene = _preset_scene(size=(256, 256))
+    bands = []
+
+    def stop_after_first() -> bool:
+        return len(bands) >= 1
+
+    with pytest.raises(core_tracer.RenderCancelled):
+        core_tracer.render_passes(scene, on_rows=lambda a, b, rows: bands.append((a, b)),
+                                  should_stop=stop_after_first, threads=1)
+    assert len(bands) == 1
+
+
+# ---------------------------------------------------------------------------------------------
+# The headless main job
+
+
+def _run_tool(args, tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "BLENDER_USER_RESOURCES"}
+    tool = os.path.join(os.path.dirname(PRESET), "..", "tools", "compare_preset.py")
+    return subprocess.run([sys.executable, tool, *args], capture_output=True, text=True, env=env,
+                          cwd=tmp_path, timeout=300)
+
+
+def test_headless_job_writes_the_side_by_side_image(tmp_path):
+    out = tmp_path / "out" / "compare.png"
+    done = _run_tool([PRESET, "-o", str(out), "--samples", "2", "--size", "40x32"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    image, scene = imageio.read_image(out)
+    assert image.shape[1] == 2 * 40 + 2 and image.shape[0] > 32
+    assert scene["image"] == {"width": 40, "height": 32}
+    assert "Lamp Tracer:  40x32 in" in done.stdout and "2 samples per pixel" in done.stdout
+    assert "mean difference" in done.stdout
+
+
+@pytest.mark.parametrize("args, message", [
+    (["missing.json"], "compare_preset: missing.json: cannot read the file"),
+    ([PRESET, "-o", "x.jpg"], "compare_preset: x.jpg: .jpg is not an image format this writes"),
+])
+def test_headless_job_bad_input_is_one_line_and_exit_2(tmp_path, args, message):
+    done = _run_tool(args, tmp_path)
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [done.stderr.strip()]
+    assert done.stderr.startswith(message)
+    assert "Traceback" not in done.stderr + done.stdout

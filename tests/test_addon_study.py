@@ -1,0 +1,138 @@
+"""The Study section of the add-on: settings -> study -> worker processes -> the "Lamp Study" image."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+
+import numpy as np
+import pytest
+
+import core_tracer
+from core_tracer import study as st
+from core_tracer import study_sheet
+
+pytestmark = pytest.mark.blender
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PRESET = os.path.join(ROOT, "presets", "paper-baseline.json")
+
+
+@pytest.fixture
+def design(lamp_addon, bl_scene):
+    with open(PRESET, encoding="utf-8") as f:
+        scene = core_tracer.parse_scene(json.load(f))
+    lamp_addon.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.camera.ensure_scene_camera(bl_scene, scene)
+    settings = bl_scene.lamp_study
+    settings.width, settings.height = 32, 32
+    settings.workers = 2
+    return bl_scene
+
+
+def _two_by_one(settings) -> None:
+    settings.axis_1.parameter = "lens.ior"
+    settings.axis_1.mode = "LIST"
+    settings.axis_1.values = "1.45, 1.6"
+    settings.use_axis_2 = False
+
+
+def test_every_study_parameter_is_offered(lamp_addon):
+    offered = [item[0] for item in lamp_addon.study_panel.PARAMETER_ITEMS]
+    assert offered == st.study_parameters()
+    assert "lens.transmitted_color" in offered and "cuts.height" in offered
+
+
+def test_run_study_operator_makes_the_sheet_image(design, lamp_addon):
+    import bpy
+
+    _two_by_one(design.lamp_study)
+    assert bpy.ops.lamp.study_run() == {"FINISHED"}
+    image = bpy.data.images["Lamp Study"]
+    study = lamp_addon.study_ops.last_study()
+    assert len(study) == 2 and study.size == (32, 32)
+    # The sheet in Blender has the layout core_tracer computes, and each cell is the variant's render.
+    lay = study_sheet.layout(st.Study.from_json(study.to_json()))
+    assert tuple(image.size) == (lay.width, lay.height)
+    pixels = lamp_addon.image_view.image_to_array(image)
+    for v, rect in zip(study.variants, lay.cells, strict=True):
+        expected = core_tracer.render(v.scene, 32, 32)
+        assert np.array_equal(pixels[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w], expected)
+    assert study.variants[0].scene["lamps"][0]["lens"]["ior"] == 1.45
+    # The image carries its study, so it can be re-run.
+    assert json.loads(image["lamp_study"])["axes"] == [{"parameter": "lens.ior", "values": [1.45, 1.6]}]
+
+
+def test_range_settings_and_one_lamp(design, lamp_addon):
+    settings = design.lamp_study
+    settings.axis_1.parameter = "cuts.height"  # the update suggests a range around the default
+    assert settings.axis_1.mode == "RANGE" and settings.axis_1.start < 1.5 < settings.axis_1.stop
+    settings.axis_1.start, settings.axis_1.stop, settings.axis_1.steps = 0.5, 2.0, 4
+    settings.axis_1.lamp = "0"
+    settings.use_axis_2 = True
+    settings.axis_2.parameter = "lens.transmitted_color"
+    assert settings.axis_2.mode == "LIST"
+    settings.axis_2.values = "0.9/0.1/0.1, 0.9/0.5/0.05"
+    study = lamp_addon.study_panel.study_from_settings(design)
+    assert [a.parameter.text for a in study.axes] == ["lamps[0].cuts.height", "lens.transmitted_color"]
+    assert (study.columns, study.rows) == (4, 2)
+
+
+def test_bad_settings_are_reported_without_rendering(design, lamp_addon, addon_core):
+    import bpy
+
+    settings = design.lamp_study
+    _two_by_one(settings)
+    settings.axis_1.values = "1.45, 3.5"
+    run_module = f"{addon_core.__name__}.study_run"
+    before = getattr(sys.modules.get(run_module), "workers_started", 0)
+    with pytest.raises(RuntimeError, match=r"lens.ior: 3.5 is out of range; allowed \[1, 3\]"):
+        bpy.ops.lamp.study_run()
+    assert "Lamp Study" not in bpy.data.images
+    assert getattr(sys.modules.get(run_module), "workers_started", 0) == before
+
+
+def test_apply_variant_sets_the_varied_parameter(design, lamp_addon):
+    import bpy
+
+    _two_by_one(design.lamp_study)
+    bpy.ops.lamp.study_run()
+    design.lamp_study.variant = 2
+    assert bpy.ops.lamp.study_apply_variant() == {"FINISHED"}
+    scene = lamp_addon.properties.design_to_scene(design)
+    assert scene["lamps"][0]["lens"]["ior"] == 1.6
+
+
+def test_save_sheet_writes_the_study_into_the_file(design, lamp_addon, tmp_path):
+    import bpy
+
+    _two_by_one(design.lamp_study)
+    bpy.ops.lamp.study_run()
+    path = tmp_path / "sheet.exr"
+    assert bpy.ops.lamp.study_save_sheet(filepath=str(path)) == {"FINISHED"}
+    again = st.Study.load(path)
+    assert again.to_json() == lamp_addon.study_ops.last_study().to_json()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.exr"]
+
+
+def test_keep_variant_saves_a_preset_in_the_user_library(design, lamp_addon, addon_core):
+    import bpy
+
+    library, why = lamp_addon.preset_library.user_library()
+    assert library is not None, why
+    _two_by_one(design.lamp_study)
+    bpy.ops.lamp.study_run()
+    design.lamp_study.variant = 1
+    before = set(os.listdir(library.folder))
+    try:
+        assert bpy.ops.lamp.study_keep_variant() == {"FINISHED"}
+        added = set(os.listdir(library.folder)) - before
+        assert len(added) == 1
+        path = os.path.join(library.folder, added.pop())
+        saved = addon_core.scene.load_scene(path)
+        assert saved["name"].endswith("(lens.ior=1.45)")
+        assert saved["lamps"][0]["lens"]["ior"] == 1.45
+    finally:
+        for name in set(os.listdir(library.folder)) - before:
+            os.unlink(os.path.join(library.folder, name))

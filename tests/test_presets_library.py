@@ -1,0 +1,320 @@
+"""Preset libraries without Blender: sharing, safe saving, hostile folders, thumbnails, the CLI."""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hostile_presets import make_hostile_folder
+
+from core_tracer import fileio, imageio
+from core_tracer import presets as P
+from core_tracer.scene import SceneError, parse_scene, read_json, scene_to_json
+
+ROOT = Path(__file__).resolve().parent.parent
+BUILTIN = ROOT / "presets"
+
+
+def builtin_doc(stem: str = "paper-baseline") -> dict:
+    return json.loads((BUILTIN / f"{stem}.json").read_text())
+
+
+def leaves(node, prefix: str = "") -> dict:
+    """Every parameter as a flat path -> value dict, to compare designs parameter for parameter."""
+    if isinstance(node, dict):
+        out = {}
+        for k, v in node.items():
+            out.update(leaves(v, f"{prefix}.{k}" if prefix else k))
+        return out
+    if isinstance(node, list) and node and isinstance(node[0], dict):
+        out = {}
+        for i, v in enumerate(node):
+            out.update(leaves(v, f"{prefix}[{i}]"))
+        return out
+    return {prefix: node}
+
+
+def files_in(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+# ---------------------------------------------------------------------------------------------
+# Two designers share a folder
+
+
+def test_two_designers_share_a_folder(tmp_path):
+    share = tmp_path / "team-share"
+    share.mkdir()
+    alice = P.Library("Team share", str(share), writable=True)
+    bob = P.Library("Team share (Bob)", str(share), writable=False)
+
+    design = parse_scene(builtin_doc("paper-lens-color"))
+    design["author"] = "Alice"
+    design["tags"] = ["amber", "turn"]
+    design["description"] = "My amber turn lamp; try it with your cuts"
+    design["lamps"][0]["lens"]["ior"] = 1.4937
+    design["lamps"][0]["cuts"] = {"pitch": 7.3, "height": 0.1 + 0.2}  # a float that must survive exactly
+    design["lamps"][0]["bulb"]["offset"] = [0.5, 2.25, -0.125]
+    saved = P.save_preset(alice, "Amber turn (Alice)", design)
+    assert Path(saved.file).name == "amber-turn-alice.json"
+
+    entries, warnings = P.list_presets([P.builtin_library(), bob])
+    assert warnings == []
+    mine = [e for e in entries if e.library == bob]
+    assert [e.name for e in mine] == ["Amber turn (Alice)"]
+    entry = mine[0]
+    assert (entry.author, entry.tags, entry.description) == ("Alice", ("amber", "turn"),
+                                                            "My amber turn lamp; try it with your cuts")
+    loaded = P.load_preset(entry.file)
+    expected = copy.deepcopy(design)
+    expected["name"] = "Amber turn (Alice)"
+    assert leaves(loaded) == leaves(expected)
+    assert loaded["lamps"][0]["cuts"]["height"] == 0.1 + 0.2
+    assert entry.digest == saved.digest
+
+
+# ---------------------------------------------------------------------------------------------
+# Saving safely
+
+
+def test_overwrite_is_refused_without_confirmation(tmp_path):
+    lib = P.Library("mine", str(tmp_path), writable=True)
+    first = P.save_preset(lib, "Red tail", parse_scene(builtin_doc()))
+    before = Path(first.file).read_bytes()
+    changed = parse_scene(builtin_doc())
+    changed["lamps"][0]["lens"]["ior"] = 1.6
+    for name in ("Red tail", "RED  tail!"):  # the same file name either way
+        with pytest.raises(P.PresetExistsError) as err:
+            P.save_preset(lib, name, changed)
+        assert "red-tail.json" in str(err.value) and "overwrite" in str(err.value)
+        assert Path(first.file).read_bytes() == before
+    again = P.save_preset(lib, "Red tail", changed, overwrite=True)
+    assert again.file == first.file
+    assert P.load_preset(again.file)["lamps"][0]["lens"]["ior"] == 1.6
+    assert files_in(tmp_path) == ["red-tail.json"]
+
+
+def test_invalid_design_is_not_saved(tmp_path):
+    lib = P.Library("mine", str(tmp_path), writable=True)
+    bad = parse_scene(builtin_doc())
+    bad["lamps"][0]["lens"]["ior"] = 0.7
+    with pytest.raises(SceneError, match=r"lamps\[0\]\.lens\.ior"):
+        P.save_preset(lib, "Bad", bad)
+    assert files_in(tmp_path) == []
+
+
+def _boom(*args, **kwargs):
+    raise OSError(28, "No space left on device")
+
+
+@pytest.mark.parametrize("where", ["fsync", "replace"])
+def test_interrupted_save_keeps_the_old_file(tmp_path, monkeypatch, where):
+    lib = P.Library("mine", str(tmp_path), writable=True)
+    first = P.save_preset(lib, "Red tail", parse_scene(builtin_doc()))
+    before = Path(first.file).read_bytes()
+    changed = parse_scene(builtin_doc("four-lamp-rear-combination"))
+    # fsync fails after the new content went into the temporary file (a full disk at flush);
+    # replace fails at the very last step
+    monkeypatch.setattr(fileio.os, where, _boom)
+    with pytest.raises(OSError, match="No space left"):
+        P.save_preset(lib, "Red tail", changed, overwrite=True)
+    monkeypatch.undo()
+    assert Path(first.file).read_bytes() == before
+    assert files_in(tmp_path) == ["red-tail.json"]  # no temporary file left behind
+
+
+def test_ctrl_c_during_save_keeps_the_old_file(tmp_path, monkeypatch):
+    lib = P.Library("mine", str(tmp_path), writable=True)
+    first = P.save_preset(lib, "Red tail", parse_scene(builtin_doc()))
+    before = Path(first.file).read_bytes()
+
+    def interrupt(fd):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fileio.os, "fsync", interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        P.save_preset(lib, "Red tail", parse_scene(builtin_doc("paper-lamp-off")), overwrite=True)
+    monkeypatch.undo()
+    assert Path(first.file).read_bytes() == before
+    assert files_in(tmp_path) == ["red-tail.json"]
+
+
+def test_read_only_library_refuses_changes(tmp_path):
+    (tmp_path / "a.json").write_text(json.dumps(builtin_doc()))
+    lib = P.Library("Team (read-only)", str(tmp_path), writable=False)
+    (entry,), _ = P.list_presets([lib])
+    with pytest.raises(P.PresetError, match="read-only"):
+        P.save_preset(lib, "New", entry.scene)
+    with pytest.raises(P.PresetError, match="read-only"):
+        P.delete_preset(entry)
+    with pytest.raises(P.PresetError, match="read-only"):
+        P.rename_preset(entry, "Other")
+    assert files_in(tmp_path) == ["a.json"]
+
+
+def test_rename_and_delete(tmp_path):
+    lib = P.Library("mine", str(tmp_path), writable=True)
+    entry = P.save_preset(lib, "Red tail", parse_scene(builtin_doc()))
+    other = P.save_preset(lib, "Other", parse_scene(builtin_doc()))
+    with pytest.raises(P.PresetExistsError):
+        P.rename_preset(entry, "other")
+    renamed = P.rename_preset(entry, "Red tail v2")
+    assert files_in(tmp_path) == ["other.json", "red-tail-v2.json"]
+    assert P.load_preset(renamed.file)["name"] == "Red tail v2"
+    recased = P.rename_preset(renamed, "Red Tail V2")  # same file, new name
+    assert recased.file == renamed.file and P.load_preset(recased.file)["name"] == "Red Tail V2"
+    P.delete_preset(other)
+    assert files_in(tmp_path) == ["red-tail-v2.json"]
+
+
+def test_names_never_leave_the_library(tmp_path):
+    lib = P.Library("mine", str(tmp_path / "lib"), writable=True)
+    os.mkdir(lib.folder)
+    entry = P.save_preset(lib, "../../etc/passwd", parse_scene(builtin_doc()))
+    assert Path(entry.file).parent == Path(lib.folder) and Path(entry.file).name == "etc-passwd.json"
+    for bad in ("../x.json", "a/b.json", "a\\b.json", ".hidden.json", "x.txt", "", "/etc/x.json"):
+        with pytest.raises(P.PresetError, match="not a preset file name"):
+            P.preset_file(lib, bad)
+    assert P.slug("Amber Turn (Alice)") == "amber-turn-alice"
+    assert P.slug("") == P.slug("///") == "preset"
+    assert P.slug("CON") == "con-preset"
+    assert P.slug("赤いテールランプ 2") == "赤いテールランプ-2"
+    assert len(P.slug("x" * 500)) == P.MAX_SLUG
+
+
+# ---------------------------------------------------------------------------------------------
+# A folder of hostile presets
+
+
+def test_hostile_folder_through_the_api(tmp_path):
+    folder = tmp_path / "hostile"
+    good, bad = make_hostile_folder(folder)
+    lib = P.Library("hostile", str(folder), writable=False)
+    start = time.perf_counter()
+    entries, warnings = P.list_presets([lib, P.builtin_library()])
+    seconds = time.perf_counter() - start
+    assert seconds < 0.1 * (len(good) + len(bad) + 12)  # well under a second per file, on a shared machine
+    assert {Path(e.file).name for e in entries if e.library == lib} == good
+    assert len([e for e in entries if e.library != lib]) == len(list(BUILTIN.glob("*.json")))
+    by_file = {Path(w.file).name: w for w in warnings}
+    assert len(warnings) == len(bad)
+    assert set(by_file) == {P.printable(n) for n in bad}
+    for name, needles in bad.items():
+        text = str(by_file[P.printable(name)])
+        assert text.startswith(str(folder)), text
+        assert "\n" not in text and len(text) < 600
+        for needle in needles:
+            assert needle in text, (name, needle, text)
+
+
+def test_ten_to_the_six_lamps_stop_validation_at_once():
+    doc = builtin_doc()
+    doc["lamps"] = [copy.deepcopy(doc["lamps"][0]) for _ in range(10)] * 100_000  # 10^6 lamps
+    start = time.perf_counter()
+    with pytest.raises(SceneError, match="lamps: has 1000000 items; allowed 1 to 4"):
+        parse_scene(doc)
+    assert time.perf_counter() - start < 0.05
+
+
+def run_cli(*args) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT, capture_output=True,
+                          text=True, timeout=60)
+
+
+def test_hostile_folder_through_the_cli(tmp_path):
+    folder = tmp_path / "hostile"
+    good, bad = make_hostile_folder(folder)
+    start = time.perf_counter()
+    proc = run_cli("presets", "list", folder)
+    assert time.perf_counter() - start < 10
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr
+    listed = proc.stdout.splitlines()
+    assert len(listed) == len(good)
+    assert sum("Round red tail lamp" in line for line in listed) == 2
+    assert sum("Four-lamp rear combination" in line for line in listed) == 1
+    warnings = proc.stderr.splitlines()
+    assert len(warnings) == len(bad)
+    for name, needles in bad.items():
+        (line,) = [w for w in warnings if f"{folder}/{P.printable(name)}:" in w]
+        for needle in needles:
+            assert needle in line, (name, needle, line)
+
+    proc = run_cli("presets", "validate", folder)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert f"{len(good)} valid, {len(bad)} not valid" in proc.stderr
+
+
+def test_cli_lists_and_shows_the_builtin_presets():
+    proc = run_cli("presets", "list", "--json")
+    assert proc.returncode == 0, proc.stderr
+    rows = json.loads(proc.stdout)
+    assert {Path(r["file"]).name for r in rows} == {p.name for p in BUILTIN.glob("*.json")}
+    assert all(r["library"] == "Built-in" for r in rows)
+
+    proc = run_cli("presets", "validate")
+    assert proc.returncode == 0, proc.stderr
+
+    proc = run_cli("presets", "show", "four-lamp-rear-combination")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == scene_to_json(parse_scene(read_json(BUILTIN / "four-lamp-rear-combination.json")))
+    assert run_cli("presets", "show", "Four-lamp rear combination").stdout == proc.stdout
+
+
+@pytest.mark.parametrize("name", ["../presets/paper-baseline.json", "/etc/passwd", "no-such-preset"])
+def test_cli_show_refuses_paths_and_unknown_names(name):
+    proc = run_cli("presets", "show", name)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert len(proc.stderr.splitlines()) == 1 and name in proc.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# Thumbnails
+
+
+def test_thumbnail_beside_a_writable_library_refreshes_when_the_preset_changes(tmp_path):
+    lib = P.Library("mine", str(tmp_path / "lib"), writable=True)
+    os.mkdir(lib.folder)
+    cache = tmp_path / "cache"
+    entry = P.save_preset(lib, "Red tail", parse_scene(builtin_doc()))
+    path = P.thumbnail_path(entry, cache)
+    assert Path(path).parent == Path(lib.folder) / ".thumbnails"
+    assert Path(path).name == f"red-tail-{entry.digest}.png"
+    assert P.make_thumbnail(entry, path, size=32) == path
+    image, scene = imageio.read_image(path)
+    assert image.shape == (32, 32, 3) and image.max() > 0 and scene["name"] == "Red tail"
+
+    changed = parse_scene(builtin_doc())
+    changed["lamps"][0]["bulb"]["on"] = False
+    entry2 = P.save_preset(lib, "Red tail", changed, overwrite=True)
+    path2 = P.thumbnail_path(entry2, cache)
+    assert path2 != path and not os.path.exists(path2)
+    P.make_thumbnail(entry2, path2, size=32)
+    assert files_in(Path(lib.folder) / ".thumbnails") == [Path(path2).name]  # the stale one is gone
+    # the hidden folder is not a preset and the listing ignores it
+    entries, warnings = P.list_presets([lib])
+    assert [e.name for e in entries] == ["Red tail"] and warnings == []
+    assert not cache.exists()
+    P.delete_preset(entry2)
+    assert files_in(Path(lib.folder) / ".thumbnails") == []
+
+
+@pytest.mark.parametrize("path", sorted(BUILTIN.glob("*.json")), ids=lambda p: p.stem)
+def test_every_builtin_preset_has_a_thumbnail(tmp_path, path):
+    entries, warnings = P.list_presets([P.builtin_library()])
+    assert warnings == []
+    (entry,) = [e for e in entries if Path(e.file).name == path.name]
+    thumb = P.thumbnail_path(entry, tmp_path)
+    assert Path(thumb).parent == tmp_path  # read-only library: the cache folder, never the preset folder
+    P.make_thumbnail(entry, thumb)
+    image, _ = imageio.read_image(thumb)
+    assert image.shape == (P.THUMBNAIL_SIZE, P.THUMBNAIL_SIZE, 3)
+    assert np.isfinite(image).all() and image.max() > 0
+    assert files_in(tmp_path) == [Path(thumb).name]

@@ -1,0 +1,482 @@
+"""Design studies (issue 5): definitions, parallel rendering, cancel, contact sheets, the CLI."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from core_tracer import cli, render, scene, study_run, study_sheet
+from core_tracer import study as st
+from core_tracer.scene import SceneError
+
+ROOT = Path(__file__).resolve().parent.parent
+BASELINE = ROOT / "presets" / "paper-baseline.json"
+FOUR_LAMPS = ROOT / "presets" / "four-lamp-rear-combination.json"
+SIZE = (32, 32)
+
+
+def baseline() -> dict:
+    return scene.read_json(BASELINE)
+
+
+def two_by_two(size=SIZE) -> st.Study:
+    return st.Study.build(baseline(), [{"parameter": "lens.ior", "values": [1.45, 1.6]},
+                                       {"parameter": "cuts.height", "range": [0.5, 2.0], "steps": 2}], size)
+
+
+def run_cli(*args, timeout: float = 120) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "core_tracer", "study", *map(str, args)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def _children(pid: int) -> list[int]:
+    """Process ids whose parent is ``pid`` (Linux /proc)."""
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = Path(f"/proc/{entry}/stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                out.append(int(entry))
+    return out
+
+
+def _gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+# ---------------------------------------------------------------------------------------------
+# The definition
+
+
+def test_variants_are_row_major_with_the_edited_values():
+    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.45:1.60:4"), st.parse_vary("cuts.height=0.5,1,2")])
+    assert (s.columns, s.rows, len(s)) == (4, 3, 12)
+    assert s.axes[0].values == (1.45, 1.5, 1.55, 1.6)  # tidy decimals, not 1.4999999999999998
+    for v in s.variants:
+        assert v.index == v.row * 4 + v.column
+        assert v.values == (s.axes[0].values[v.column], s.axes[1].values[v.row])
+        lamp = v.scene["lamps"][0]
+        assert (lamp["lens"]["ior"], lamp["cuts"]["height"]) == v.values
+    # The base is untouched and everything else in a variant equals the base.
+    assert s.base == scene.parse_scene(baseline())
+    other = s.variants[5].scene
+    assert other["body"] == s.base["body"] and other["camera"] == s.base["camera"]
+
+
+def test_lamp_index_edits_one_lamp_and_no_index_edits_all():
+    base = scene.read_json(FOUR_LAMPS)
+    one = st.Study.build(base, [st.parse_vary("lamps[2].lens.ior=1.6")])
+    every = st.Study.build(base, [st.parse_vary("lens.ior=1.6")])
+    iors = [lamp["lens"]["ior"] for lamp in one.variants[0].scene["lamps"]]
+    assert iors[2] == 1.6 and iors[:2] + iors[3:] == [lamp["lens"]["ior"] for i, lamp
+                                                     in enumerate(one.base["lamps"]) if i != 2]
+    assert all(lamp["lens"]["ior"] == 1.6 for lamp in every.variants[0].scene["lamps"])
+    # lamps[] (no index) is the same as the lamp-relative name
+    assert st.Study.build(base, [st.parse_vary("lamps[].lens.ior=1.6")]).variants[0].scene == every.variants[0].scene
+
+
+def test_lens_colour_replaces_absorption():
+    s = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05")])
+    lens = s.variants[1].scene["lamps"][0]["lens"]
+    assert "absorption" not in lens
+    assert lens["transmitted_color"] == [0.9, 0.5, 0.05]
+    assert lens["reference_thickness"] == lens["thickness"]
+    assert scene.lens_absorption(lens) == pytest.approx([-np.log(c) / 3.0 for c in (0.9, 0.5, 0.05)])
+    # One component: the others keep the colour the base's absorption gives through its thickness.
+    s = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color[1]=0.2,0.4")])
+    base_a = s.base["lamps"][0]["lens"]["absorption"]
+    lens = s.variants[0].scene["lamps"][0]["lens"]
+    assert lens["transmitted_color"][1] == 0.2
+    assert lens["transmitted_color"][0] == pytest.approx(np.exp(-base_a[0] * 3.0))
+    # And back: varying absorption drops a transmitted colour.
+    tc = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1")]).variants[0].scene
+    back = st.Study.build(tc, [st.parse_vary("lens.absorption=0.1/1/1")]).variants[0].scene["lamps"][0]["lens"]
+    assert back["absorption"] == [0.1, 1.0, 1.0] and "transmitted_color" not in back
+
+
+def test_two_axes_on_one_field_differ_by_lamp_or_component():
+    base = scene.read_json(FOUR_LAMPS)
+    s = st.Study.build(base, [st.parse_vary("lamps[0].lens.ior=1.5,1.6"), st.parse_vary("lamps[1].lens.ior=1.4,1.7")])
+    assert [[lamp["lens"]["ior"] for lamp in v.scene["lamps"][:2]] for v in s.variants] == [
+        [1.5, 1.4], [1.6, 1.4], [1.5, 1.7], [1.6, 1.7]]
+    s = st.Study.build(baseline(), [st.parse_vary("body.color[0]=0.2,0.8"), st.parse_vary("body.color[2]=0.1,0.9")])
+    assert s.variants[3].scene["body"]["color"] == [0.8, s.base["body"]["color"][1], 0.9]
+    # A transmitted colour against its reference thickness is a real study (not one field twice).
+    colour = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1")]).variants[0].scene
+    s = st.Study.build(colour, [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05"),
+                                st.parse_vary("lens.reference_thickness=1.5,3")])
+    assert s.variants[3].scene["lamps"][0]["lens"]["reference_thickness"] == 3.0
+
+
+def test_vector_range_and_flag_values():
+    s = st.Study.build(baseline(), [st.parse_vary("bulb.intensity=2/2/2:8/6/4:3"), st.parse_vary("bulb.on=on,off")])
+    assert s.axes[0].values == ([2.0, 2.0, 2.0], [5.0, 4.0, 3.0], [8.0, 6.0, 4.0])
+    assert [v.scene["lamps"][0]["bulb"]["on"] for v in s.variants] == [True] * 3 + [False] * 3
+
+
+def test_study_json_round_trip(tmp_path):
+    s = two_by_two()
+    path = tmp_path / "study.json"
+    s.save(path)
+    doc = json.loads(path.read_text())
+    assert doc["schema"] == "lamp-study/1" and doc["size"] == [32, 32]
+    assert doc["axes"][1] == {"parameter": "cuts.height", "range": [0.5, 2.0], "steps": 2}
+    assert doc["base"]["schema"] == "lamp-scene/1"  # embedded: the study travels alone
+    again = st.Study.load(path)
+    assert again.to_json() == s.to_json()
+    assert [v.scene for v in again.variants] == [v.scene for v in s.variants]
+
+
+def test_variants_saved_as_presets(tmp_path):
+    s = two_by_two()
+    paths = s.save_variants(tmp_path / "variants")
+    assert [Path(p).name for p in paths] == [f"variant-0{i}.json" for i in range(4)]
+    for v, path in zip(s.variants, paths, strict=True):
+        loaded = scene.load_scene(path)
+        assert loaded["name"] == s.variant_name(v.index)
+        assert "lens.ior=" in loaded["name"] and "cuts.height=" in loaded["name"]
+        assert {**loaded, "name": v.scene["name"]} == v.scene
+    assert sorted(p.name for p in (tmp_path / "variants").iterdir()) == [f"variant-0{i}.json" for i in range(4)]
+
+
+BAD_STUDIES = {
+    "unknown parameter": ([{"parameter": "lens.colour", "values": [1]}], ("lens.colour", "unknown parameter")),
+    "not a study field": ([{"parameter": "image.width", "values": [64]}], ("image.width", "unknown parameter")),
+    "value out of range": ([{"parameter": "lens.ior", "values": [1.5, 3.5]}], ("lens.ior", "3.5", "[1, 3]")),
+    "range end out of range": ([{"parameter": "body.specular", "range": [0, 2], "steps": 3}],
+                               ("body.specular", "2", "[0, 1]")),
+    "colour out of range": ([{"parameter": "lens.transmitted_color", "values": [[0.9, 0, 0.1]]}],
+                            ("lens.transmitted_color", "0", "(0, 1]")),
+    "steps 1 of a range": ([{"parameter": "lens.ior", "range": [1.4, 1.6], "steps": 1}],
+                           ("lens.ior", "steps 1", "2 to 64")),
+    "steps 0": ([{"parameter": "lens.ior", "range": [1.4, 1.6], "steps": 0}], ("lens.ior", "steps 0", "1 to 64")),
+    "more than 64 variants": ([{"parameter": "lens.ior", "range": [1.4, 1.6], "steps": 9},
+                               {"parameter": "cuts.height", "range": [0.5, 2], "steps": 8}],
+                              ("9 x 8 = 72 variants", "at most 64")),
+    "65 values": ([{"parameter": "lens.ior", "values": [1.5] * 65}], ("lens.ior", "65 values", "at most 64")),
+    "no such lamp": ([{"parameter": "lamps[1].lens.ior", "values": [1.5]}], ("lamps[1].lens.ior", "index 1")),
+    "no such component": ([{"parameter": "bulb.offset[3]", "values": [1]}], ("bulb.offset[3]", "0 to 2")),
+    "same parameter twice": ([{"parameter": "lens.ior", "values": [1.5]}, {"parameter": "lamps[0].lens.ior",
+                                                                           "values": [1.6]}], ("same field",)),
+    "absorption against colour": ([{"parameter": "lens.absorption", "values": [[0.1, 1, 1]]},
+                                   {"parameter": "lens.transmitted_color", "values": [[0.9, 0.1, 0.1]]}],
+                                  ("lens.transmitted_color", "lens colour")),
+    "breaks the geometry": ([{"parameter": "cuts.height", "values": [1, 7]}],
+                            ("lamps[0].cuts.height", "7", "pitch 9", "cuts.height=7")),
+    "three axes": ([{"parameter": "lens.ior", "values": [1.5]}] * 3, ("axes", "1 or 2")),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_STUDIES))
+def test_bad_study_is_refused_when_built(case):
+    axes, needles = BAD_STUDIES[case]
+    with pytest.raises(SceneError) as info:
+        st.Study.build(baseline(), axes, SIZE)
+    for needle in needles:
+        assert needle in str(info.value), (needle, str(info.value))
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("vary,needles", [
+    (["lens.colour=1,2"], ("lens.colour", "unknown parameter")),
+    (["lens.ior=1.45,3.5"], ("lens.ior", "3.5", "[1, 3]")),
+    (["lens.ior=1.4:1.6:0"], ("steps 0",)),
+    (["lens.ior=1.4:1.6:9", "cuts.height=0.5:2:8"], ("72 variants", "at most 64")),
+    (["lens.ior=1.4:x:3"], ("lens.ior", "'x' is not a number")),
+])
+def test_cli_refuses_a_bad_study_before_any_worker_starts(tmp_path, capsys, vary, needles):
+    started = study_run.workers_started
+    out = tmp_path / "sheet.png"
+    args = ["study", str(BASELINE), "-o", str(out), "--size", "32x32"]
+    for v in vary:
+        args += ["--vary", v]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "\n" not in err
+    for needle in needles:
+        assert needle in err
+    assert study_run.workers_started == started
+    assert list(tmp_path.iterdir()) == []
+
+
+# ---------------------------------------------------------------------------------------------
+# Rendering
+
+
+def test_two_by_two_gives_the_images_of_four_separate_renders():
+    s = two_by_two()
+    seen = []
+    images = study_run.run_study(s, workers=2, progress=lambda done, total: seen.append((done, total)))
+    assert len(images) == 4
+    for v, image in zip(s.variants, images, strict=True):
+        expected = render(v.scene, *SIZE)
+        assert image.dtype == np.float32 and image.shape == (32, 32, 3)
+        assert np.array_equal(image, expected), v.index
+    # variants differ from each other (the parameters reach the tracer)
+    assert not np.array_equal(images[0], images[3])
+    assert seen[-1] == (4, 4) and [d for d, _ in seen] == sorted(d for d, _ in seen)
+    # the same in this process
+    here = study_run.run_study(s, workers=0)
+    assert all(np.array_equal(a, b) for a, b in zip(images, here, strict=True))
+
+
+def test_cancel_stops_the_workers_and_removes_the_temporary_files():
+    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.4:1.6:4"), st.parse_vary("cuts.height=0.5:2:4")],
+                       (48, 48))
+    runs: list[study_run.StudyRun] = []
+    state = {}
+
+    def on_start(run):
+        runs.append(run)
+        state["pids"] = run.process_ids()
+        state["folder"] = run._folder
+
+    with pytest.raises(study_run.Cancelled):
+        study_run.run_study(s, workers=2, on_start=on_start, should_stop=lambda: runs[0].done >= 1)
+    run = runs[0]
+    assert 1 <= run.done < len(s)  # stopped mid-study
+    assert len(state["pids"]) == 2
+    assert all(_gone(pid) for pid in state["pids"])
+    assert all(w.process.returncode is not None for w in run._pool)
+    assert not os.path.exists(state["folder"])
+
+
+def test_a_worker_that_dies_stops_the_study_with_an_error():
+    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.4:1.6:8")], (48, 48))
+    run = study_run.StudyRun(s, workers=2)
+    run.start()
+    folder = run._folder
+    try:
+        os.kill(run.process_ids()[0], signal.SIGKILL)
+        with pytest.raises(study_run.StudyError, match="stopped unexpectedly"):
+            deadline = time.monotonic() + 60
+            while not run.poll(timeout=0.05):
+                assert time.monotonic() < deadline
+    finally:
+        run.close()
+    assert all(_gone(pid) for pid in run.process_ids())
+    assert not os.path.exists(folder)
+
+
+# ---------------------------------------------------------------------------------------------
+# The contact sheet
+
+
+def _rects_overlap(a: study_sheet.Rect, b: study_sheet.Rect) -> bool:
+    return a.x < b.x + b.w and b.x < a.x + a.w and a.y < b.y + b.h and b.y < a.y + a.h
+
+
+@pytest.mark.parametrize("size", [(32, 32), (64, 40), (256, 256)])
+def test_layout_follows_from_the_study(size):
+    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.45:1.6:3"), st.parse_vary("cuts.height=0.5,2")], size)
+    lay = study_sheet.layout(s)
+    w, h = size
+    scale = study_sheet.text_scale(size)
+    adv, line, pad = 6 * scale, 10 * scale, 4 * scale
+    # Column width: the image or the widest label ("height=0.5" is 10 characters), whichever is wider.
+    cell_w = max(w, 10 * adv)
+    cell_h = h + pad // 2 + 2 * line
+    row_header = len("height=0.5") * adv + pad
+    assert lay.width == max(pad + row_header + 3 * cell_w + 2 * pad + pad, 2 * pad + 28 * adv)
+    assert lay.height == pad + 2 * line + pad + line + 2 * cell_h + pad + pad
+    assert len(lay.cells) == 6
+    for v, rect in zip(s.variants, lay.cells, strict=True):
+        assert (rect.w, rect.h) == (w, h)
+        assert rect.x == pad + row_header + v.column * (cell_w + pad) + (cell_w - w) // 2
+        assert rect.y == pad + 3 * line + pad + v.row * (cell_h + pad)
+        assert 0 <= rect.x and rect.x + rect.w <= lay.width and rect.y + rect.h <= lay.height
+    boxes = [b.rect for b in lay.texts] + list(lay.cells)
+    for i, a in enumerate(boxes):
+        assert a.x >= 0 and a.y >= 0 and a.x + a.w <= lay.width and a.y + a.h <= lay.height
+        for b in boxes[i + 1:]:
+            assert not _rects_overlap(a, b), (a, b)
+    kinds = [b.kind for b in lay.texts]
+    assert kinds.count("column") == 3 and kinds.count("row") == 2 and kinds.count("cell") == 12
+    texts = [b.text for b in lay.texts]
+    assert "columns: lens.ior   rows: cuts.height" in texts
+    assert ["ior=1.45", "ior=1.525", "ior=1.6"] == [b.text for b in lay.texts if b.kind == "column"]
+
+
+def test_one_axis_sheet_is_one_row_without_row_labels():
+    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.45,1.5,1.55,1.6,1.65")], (64, 64))
+    lay = study_sheet.layout(s)
+    assert len({r.y for r in lay.cells}) == 1 and len({r.x for r in lay.cells}) == 5
+    assert not [b for b in lay.texts if b.kind == "row"]
+    assert all(r.x >= 4 for r in lay.cells)
+
+
+@pytest.mark.parametrize("text", ["oiio", "bitmap"])
+def test_sheet_pastes_each_image_in_its_cell_and_labels_it(text):
+    s = two_by_two()
+    rng = np.random.default_rng(5)
+    images = [rng.random((32, 32, 3), dtype=np.float32) for _ in range(4)]
+    sheet = study_sheet.compose(s, images, text=text)
+    lay = study_sheet.layout(s)
+    assert sheet.shape == (lay.height, lay.width, 3) and sheet.dtype == np.float32
+    for rect, image in zip(lay.cells, images, strict=True):
+        assert np.array_equal(sheet[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w], image)
+    bg = np.asarray(study_sheet.BACKGROUND, dtype=np.float32)
+    for box in lay.texts:
+        r = box.rect
+        region = sheet[r.y:r.y + r.h, r.x:r.x + r.w]
+        assert (np.abs(region - bg).max(axis=2) > 0.2).any(), box  # something is written in every label
+    plain = study_sheet.compose(s, images, text="none")
+    outside = np.ones(sheet.shape[:2], dtype=bool)
+    for rect in lay.cells:
+        outside[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w] = False
+    assert np.all(plain[outside] == bg)
+
+
+@pytest.mark.parametrize("suffix", [".exr", ".png"])
+def test_sheet_file_carries_the_study(tmp_path, suffix):
+    s = two_by_two()
+    images = [np.full((32, 32, 3), 0.25 * (i + 1), dtype=np.float32) for i in range(4)]
+    sheet = study_sheet.compose(s, images)
+    path = tmp_path / f"sheet{suffix}"
+    study_sheet.write_sheet(path, s, sheet)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
+    inp = oiio.ImageInput.open(str(path))
+    spec = inp.spec()
+    pixels = inp.read_image(0, 0, 0, 3, oiio.FLOAT)
+    inp.close()
+    assert (spec.width, spec.height) == (sheet.shape[1], sheet.shape[0])
+    if suffix == ".exr":
+        assert spec.format == oiio.FLOAT and np.array_equal(pixels, sheet)
+    else:
+        assert spec.format == oiio.UINT8
+        from core_tracer.imageio import to_srgb8
+        assert np.array_equal(np.rint(pixels * 255).astype(np.uint8), to_srgb8(sheet))
+    assert json.loads(spec.getattribute("lamp:study")) == s.to_doc()
+    assert st.Study.load(path).to_json() == s.to_json()
+
+
+def test_loading_a_study_from_an_image_without_one(tmp_path):
+    from core_tracer.imageio import write_image
+
+    path = tmp_path / "plain.png"
+    write_image(path, np.zeros((4, 4, 3), dtype=np.float32))
+    with pytest.raises(SceneError, match="carries no study"):
+        st.Study.load(path)
+
+
+# ---------------------------------------------------------------------------------------------
+# The command line, as users run it
+
+
+def test_cli_study_writes_the_sheet_and_reruns_it(tmp_path):
+    out = tmp_path / "sheet.png"
+    proc = run_cli(BASELINE, "--vary", "lens.ior=1.45:1.6:2", "--vary", "cuts.height=0.5,2", "-o", out,
+                   "--size", "32x32", "--workers", "2", "--save-study", tmp_path / "study.json",
+                   "--save-variants", tmp_path / "variants")
+    assert proc.returncode == 0, proc.stderr
+    assert "2 x 2 variants of 32x32 px" in proc.stdout
+    s = st.Study.load(out)
+    assert len(s) == 4 and s.to_json() == (tmp_path / "study.json").read_text()
+    assert len(list((tmp_path / "variants").glob("variant-*.json"))) == 4
+    lay = study_sheet.layout(s)
+    inp = oiio.ImageInput.open(str(out))
+    assert (inp.spec().width, inp.spec().height) == (lay.width, lay.height)
+    inp.close()
+    # Re-run from the sheet's own header, as EXR this time, at another size.
+    again = tmp_path / "again.exr"
+    proc = run_cli("--study", out, "-o", again, "--size", "24x16")
+    assert proc.returncode == 0, proc.stderr
+    assert st.Study.load(again).size == (24, 16)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["again.exr", "sheet.png", "study.json", "variants"]
+
+
+@pytest.mark.parametrize("args,needles", [
+    (["--vary", "lens.ior=1.45,9", "-o", "{out}"], ("lens.ior", "9", "[1, 3]")),
+    (["--vary", "lens.ior=1.45:1.6:0", "-o", "{out}"], ("steps 0",)),
+    (["--vary", "lens.ior", "-o", "{out}"], ("--vary", "PARAMETER=")),
+    (["--vary", "lens.ior=1.5", "-o", "{tmp}/sheet.tif"], ("sheet.tif", ".exr, .png")),
+    (["--vary", "lens.ior=1.5", "-o", "{tmp}/no/sheet.png"], ("does not exist",)),
+    (["--vary", "lens.ior=1.5", "-o", "{out}", "--size", "64"], ("--size", "WIDTHxHEIGHT")),
+    (["-o", "{out}"], ("--vary", "is required")),
+])
+def test_cli_bad_input_exits_2_with_one_line(tmp_path, args, needles):
+    out = tmp_path / "sheet.png"
+    args = [a.format(out=out, tmp=tmp_path) for a in args]
+    proc = run_cli(BASELINE, *args)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    for needle in needles:
+        assert needle in lines[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_study_of_a_missing_sheet_exits_2(tmp_path):
+    proc = run_cli("--study", tmp_path / "nothing.exr", "-o", tmp_path / "x.png")
+    assert proc.returncode == 2 and "nothing.exr" in proc.stderr and "Traceback" not in proc.stderr
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
+def test_cli_ctrl_c_exits_130_and_writes_nothing(tmp_path):
+    out = tmp_path / "sheet.png"
+    cmd = [sys.executable, "-m", "core_tracer", "study", str(BASELINE), "--vary", "lens.ior=1.4:1.6:8",
+           "--vary", "cuts.height=0.5:2:8", "-o", str(out), "--size", "128x128", "--workers", "2"]
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        # Wait until both workers run (the 64 variants then take far longer than this test waits).
+        deadline = time.monotonic() + 30
+        workers: list[int] = []
+        while len(workers) < 2 and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.1)
+            workers = _children(proc.pid)
+        time.sleep(0.5)
+        assert proc.poll() is None, proc.communicate()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+    assert len(workers) == 2
+    assert all(_gone(pid) for pid in workers)
+
+
+def test_study_run_driven_by_polling_like_a_modal_operator():
+    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.4:1.6:3")], (48, 48))
+    run = study_run.StudyRun(s, workers=2)
+    run.start()
+    folder = run._folder
+    fractions = []
+    try:
+        deadline = time.monotonic() + 60
+        while not run.poll():  # never blocks, as a timer callback must not
+            fractions.append(run.fraction)
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+    finally:
+        run.close()
+    assert run.finished and run.done == 3 and run.fraction == 1.0
+    assert fractions == sorted(fractions) and all(0 <= f <= 1 for f in fractions)
+    for v, image in zip(s.variants, run.images, strict=True):
+        assert np.array_equal(image, render(v.scene, 48, 48))
+    assert all(_gone(pid) for pid in run.process_ids())
+    assert not os.path.exists(folder)
+
+
+def test_cli_lists_the_parameters():
+    proc = run_cli("--list")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == st.study_parameters()
