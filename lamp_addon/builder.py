@@ -50,6 +50,9 @@ def lamp_label(index: int) -> str:
 
 def build_lamp(bl_scene: bpy.types.Scene, scene: dict) -> BuildReport:
     """Create or update the objects of a normalised scene in ``bl_scene``; returns a ``BuildReport``."""
+    for obj in list(bpy.data.objects):  # parts whose collection the user deleted: free their data
+        if obj.get(PART_KEY) and obj.users == 0:
+            bpy.data.objects.remove(obj)
     coll = _collection(bl_scene)
     owned = {obj.get(PART_KEY): obj for obj in coll.objects if obj.get(PART_KEY)}
     report = BuildReport()
@@ -75,6 +78,28 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict) -> BuildReport:
         report.objects.append(obj.name)
         return obj
 
+    def mesh(part: str, name: str, data: meshes.MeshData, slots: list[tuple[str, str]]) -> bpy.types.Mesh:
+        """This scene's mesh of ``part`` (reused) with materials ``slots`` = [(material part, name)]."""
+        obj = owned.get(part)
+        block = obj.data if obj is not None and obj.type == "MESH" else None
+        mats = []
+        for i, (mat_part, mat_name) in enumerate(slots):
+            mat = block.materials[i] if block is not None and i < len(block.materials) else None
+            if mat is None or mat.get(PART_KEY) != mat_part:
+                mat = bpy.data.materials.new(mat_name)
+                mat[PART_KEY] = mat_part
+            mat.name = mat_name
+            mats.append(mat)
+        if block is None or block.get(PART_KEY) != part or block.users > 1:
+            block = bpy.data.meshes.new(name)
+            block[PART_KEY] = part
+        block.name = name
+        block.materials.clear()  # before the geometry: clearing slots resets the faces' material indices
+        for mat in mats:
+            block.materials.append(mat)
+        fill_mesh(block, data)
+        return block
+
     segments = []
     rims = []
     bores = []
@@ -92,9 +117,8 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict) -> BuildReport:
         lamp_objects.append((i, lamp, g, reflector))
 
     body_data = meshes.body_mesh(scene, rims, bores, tessellate_polygon)
-    body_mat = _material("body", "Lamp Body")
-    materials.diffuse(body_mat, scene["body"]["color"], "Body BSDF")
-    place("body", "Lamp Body", _mesh("body", "Lamp Body", body_data, [body_mat]))
+    body = place("body", "Lamp Body", mesh("body", "Lamp Body", body_data, [("body", "Lamp Body")]))
+    materials.diffuse(body.data.materials[0], scene["body"]["color"], "Body BSDF")
 
     for (i, lamp, g, reflector_data), n in zip(lamp_objects, segments, strict=True):
         base = f"lamps[{i}]"
@@ -103,50 +127,56 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict) -> BuildReport:
         axis = (cx * MM, 0.0, cz * MM)
 
         lens_data = meshes.lens_mesh(lamp, n)
-        glass = _material(f"{base}.lens", f"{label} Lens")
-        materials.lens_glass(glass, lamp)
-        wall = _material(f"{base}.side_wall", f"{label} Side Wall")
-        materials.diffuse(wall, lamp["lens"]["side_wall_color"], "Side Wall BSDF")
-        place(f"{base}.lens", f"{label} Lens", _mesh(f"{base}.lens", f"{label} Lens", lens_data, [glass, wall]),
-              axis)
+        lens = place(f"{base}.lens", f"{label} Lens", mesh(f"{base}.lens", f"{label} Lens", lens_data, [
+            (f"{base}.lens", f"{label} Lens"), (f"{base}.side_wall", f"{label} Side Wall")]), axis)
+        materials.lens_glass(lens.data.materials[meshes.LENS_GLASS], lamp)
+        materials.diffuse(lens.data.materials[meshes.LENS_SIDE_WALL], lamp["lens"]["side_wall_color"],
+                          "Side Wall BSDF")
         report.max_deviation[f"{base}.lens"] = lens_data.max_deviation
 
-        mirror = _material(f"{base}.reflector", f"{label} Reflector")
-        materials.reflector(mirror, lamp)
-        place(f"{base}.reflector", f"{label} Reflector",
-              _mesh(f"{base}.reflector", f"{label} Reflector", reflector_data, [mirror]), axis)
+        reflector = place(f"{base}.reflector", f"{label} Reflector", mesh(
+            f"{base}.reflector", f"{label} Reflector", reflector_data, [(f"{base}.reflector", f"{label} Reflector")]),
+            axis)
+        materials.reflector(reflector.data.materials[0], lamp)
         report.max_deviation[f"{base}.reflector"] = reflector_data.max_deviation
 
         bulb_data = meshes.sphere_mesh(lamp["bulb"]["radius"])
-        emit = _material(f"{base}.bulb", f"{label} Bulb")
-        materials.bulb(emit, lamp)
         bx, by, bz = g["bulb_center"]
-        place(f"{base}.bulb", f"{label} Bulb", _mesh(f"{base}.bulb", f"{label} Bulb", bulb_data, [emit]),
-              ((cx + bx) * MM, by * MM, (cz + bz) * MM))
+        bulb = place(f"{base}.bulb", f"{label} Bulb", mesh(
+            f"{base}.bulb", f"{label} Bulb", bulb_data, [(f"{base}.bulb", f"{label} Bulb")]),
+            ((cx + bx) * MM, by * MM, (cz + bz) * MM))
+        materials.bulb(bulb.data.materials[0], lamp)
         report.max_deviation[f"{base}.bulb"] = bulb_data.max_deviation
 
         socket_data = meshes.socket_mesh(lamp["socket"]["radius"], g["vertex"], by)
-        dull = _material(f"{base}.socket", f"{label} Socket")
-        materials.diffuse(dull, lamp["socket"]["color"], "Socket BSDF")
-        place(f"{base}.socket", f"{label} Socket",
-              _mesh(f"{base}.socket", f"{label} Socket", socket_data, [dull]), axis)
+        socket = place(f"{base}.socket", f"{label} Socket", mesh(
+            f"{base}.socket", f"{label} Socket", socket_data, [(f"{base}.socket", f"{label} Socket")]), axis)
+        materials.diffuse(socket.data.materials[0], lamp["socket"]["color"], "Socket BSDF")
         report.max_deviation[f"{base}.socket"] = socket_data.max_deviation
 
-    light = _datablock(bpy.data.lights, "sun", "Lamp Sun", lambda: bpy.data.lights.new("Lamp Sun", "SUN"))
+    old_sun = owned.get("sun")
+    light = old_sun.data if old_sun is not None and old_sun.type == "LIGHT" else None
+    if light is None or light.get(PART_KEY) != "sun" or light.users > 1:
+        light = bpy.data.lights.new("Lamp Sun", "SUN")
+        light[PART_KEY] = "sun"
     if light.type != "SUN":
         light.type = "SUN"
-    light = bpy.data.lights[light.name]  # the type change gives the datablock its SunLight type
+        light = bpy.data.lights[light.name]  # the type change gives the datablock its SunLight type
+    light.name = "Lamp Sun"
     materials.sun(light, scene)
     direction = Vector(scene["light"]["direction"]).normalized()
     sun = place("sun", "Lamp Sun", light, tuple(direction * 0.5))
     sun.rotation_mode = "QUATERNION"
     sun.rotation_quaternion = direction.to_track_quat("Z", "Y")  # the sun shines along its -Z
 
-    wld = _datablock(bpy.data.worlds, "world", WORLD_NAME, lambda: bpy.data.worlds.new(WORLD_NAME))
+    wld = bl_scene.world
+    if wld is None or wld.get(PART_KEY) != "world":
+        if wld is not None:
+            wld.use_fake_user = True  # keep the user's own world when ours replaces it
+        wld = bpy.data.worlds.new(WORLD_NAME)
+        wld[PART_KEY] = "world"
+        bl_scene.world = wld
     materials.world(wld, scene)
-    if bl_scene.world is not None and bl_scene.world != wld and bl_scene.world.get(PART_KEY) is None:
-        bl_scene.world.use_fake_user = True  # keep the user's own world when ours replaces it
-    bl_scene.world = wld
 
     _remove_stale(coll, wanted)
     return report
@@ -166,38 +196,6 @@ def _collection(bl_scene: bpy.types.Scene) -> bpy.types.Collection:
     coll[PART_KEY] = "collection"
     bl_scene.collection.children.link(coll)
     return coll
-
-
-def _datablock(collection, part: str, name: str, create):
-    for block in collection:
-        if block.get(PART_KEY) == part:
-            block.name = name
-            return block
-    block = create()
-    block[PART_KEY] = part
-    return block
-
-
-def _material(part: str, name: str) -> bpy.types.Material:
-    return _datablock(bpy.data.materials, part, name, lambda: bpy.data.materials.new(name))
-
-
-def _mesh(part: str, name: str, data: meshes.MeshData, mats: list[bpy.types.Material]) -> bpy.types.Mesh:
-    """The part's mesh datablock (reused when only the builder uses it), filled with ``data`` in metres."""
-    mesh = None
-    for m in bpy.data.meshes:
-        if m.get(PART_KEY) == part and m.users <= 1:
-            mesh = m
-            break
-    if mesh is None:
-        mesh = bpy.data.meshes.new(name)
-        mesh[PART_KEY] = part
-    mesh.name = name
-    mesh.materials.clear()  # before the geometry: clearing slots resets the faces' material indices
-    for mat in mats:
-        mesh.materials.append(mat)
-    fill_mesh(mesh, data)
-    return mesh
 
 
 def fill_mesh(mesh: bpy.types.Mesh, data: meshes.MeshData) -> None:
@@ -233,7 +231,7 @@ def _remove_stale(coll: bpy.types.Collection, wanted: set[str]) -> None:
         part = obj.get(PART_KEY)
         if part and part not in wanted:
             bpy.data.objects.remove(obj)
-    for blocks in (bpy.data.meshes, bpy.data.materials, bpy.data.lights):
+    for blocks in (bpy.data.meshes, bpy.data.materials, bpy.data.lights, bpy.data.worlds):
         for block in list(blocks):
             if block.get(PART_KEY) and block.users == 0:
                 blocks.remove(block)

@@ -13,7 +13,7 @@ Blender keeps no look-at target, only an orientation; the target distance is kep
 camera's focus distance (``dof.focus_distance``, or the distance to ``dof.focus_object`` as
 Blender measures it), which is what "the point the camera looks at" means to a photographer.
 
-The conversion math is in small pure functions (no ``bpy``) that the tests check directly.
+The conversion math is in small functions that use no ``bpy``, which the tests check directly.
 """
 
 from __future__ import annotations

@@ -108,6 +108,27 @@ def test_objects_and_names(lamp_addon, bl_scene, scene_mod):
     assert bl_scene.world.name == "Lamp Design World"
 
 
+def test_body_has_an_opening_per_lens(lamp_addon, bl_scene, scene_mod):
+    scene = _load(scene_mod, "four-lamp-rear-combination")
+    _build(lamp_addon, bl_scene, scene)
+    body = _objects(bl_scene)["Lamp Body"]
+    front = [p for p in body.data.polygons if abs(p.center.y) < 1e-9]
+    assert all(tuple(p.normal) == pytest.approx((0, -1, 0), abs=1e-6) for p in front)
+    w, h = scene["body"]["size"]
+    holes = sum(r * r * math.pi for r in (lamp["lens"]["radius"] for lamp in scene["lamps"]))
+    area = sum(p.area for p in front) * 1e6  # mm^2
+    assert area == pytest.approx(w * h - holes, rel=2e-3)  # the rim polygons are inscribed in the circles
+    # No front face covers a lens: the centre of each lens is in no front polygon.
+    xs = np.array([[v.co.x, v.co.z] for v in body.data.vertices]) * 1000
+    for lamp in scene["lamps"]:
+        d = np.hypot(xs[:, 0] - lamp["center"][0], xs[:, 1] - lamp["center"][1])
+        assert d.min() >= lamp["lens"]["radius"] * math.cos(math.pi / 16) - 1e-3
+    box_min = np.array([v.co[:] for v in body.data.vertices]).min(axis=0) * 1000
+    assert box_min[1] == pytest.approx(0.0, abs=1e-6)
+    assert np.array([v.co[:] for v in body.data.vertices]).max(axis=0)[1] * 1000 == pytest.approx(
+        scene["body"]["depth"], abs=1e-3)
+
+
 @pytest.mark.parametrize("preset", ["paper-baseline", "four-lamp-rear-combination", "paper-cut-size",
                                     "paper-bulb-position"])
 def test_geometry_on_the_analytic_surfaces(lamp_addon, bl_scene, scene_mod, preset):
@@ -151,10 +172,10 @@ def test_geometry_on_the_analytic_surfaces(lamp_addon, bl_scene, scene_mod, pres
         assert v[r > R - 1e-3, 1] == pytest.approx(g["rim"], abs=1e-3)
         assert v[:, 1].max() == pytest.approx(g["vertex"], abs=1e-3)
         worst[f"{label} reflector"] = _paraboloid_distance(_local(_triangle_samples(refl), lamp), lamp, g).max()
-        centers = np.array([p.center[:] for p in refl.data.polygons]) * 1000.0 - np.array(refl.location) * 0
+        centers = np.array([p.center[:] for p in refl.data.polygons])  # local metres, origin on the axis
         normals = np.array([p.normal[:] for p in refl.data.polygons])
         focus = np.array([0.0, g["focus"], 0.0]) / 1000.0
-        assert (np.einsum("ij,ij->i", normals, focus - centers / 1000.0) > 0).all()
+        assert (np.einsum("ij,ij->i", normals, focus - centers) > 0).all()
 
         # Bulb: a sphere of the bulb radius about the focus plus the offset.
         bulb = objs[f"{label} Bulb"]
@@ -233,6 +254,43 @@ def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     assert len(bpy.data.materials) == 6  # body; lens, side wall, reflector, bulb, socket of one lamp
     assert len(bpy.data.lights) == 1 and len(bpy.data.worlds) == 1
     assert bl_scene.camera == cam and cam.name in bl_scene.objects  # the user's camera is kept
+
+
+def test_two_scenes_keep_their_own_lamps(lamp_addon, bl_scene, scene_mod):
+    import bpy
+
+    props, builder = lamp_addon.properties, lamp_addon.builder
+    other = bpy.data.scenes.new("Other")
+    other_design = _load(scene_mod, "paper-baseline")
+    other_design["lamps"][0]["lens"]["ior"] = 1.7
+    props.scene_to_design(other, other_design)
+    builder.build_lamp(other, props.design_to_scene(other))
+    _build(lamp_addon, bl_scene, _load(scene_mod, "four-lamp-rear-combination"))
+    builder.build_lamp(other, props.design_to_scene(other))  # rebuild one, then the other again
+    _build(lamp_addon, bl_scene, _load(scene_mod, "four-lamp-rear-combination"))
+
+    mine, theirs = _objects(bl_scene), _objects(other)
+    assert len(mine) == 18 and len(theirs) == 6
+    assert not {o.as_pointer() for o in mine.values()} & {o.as_pointer() for o in theirs.values()}
+    lens_a = next(o for o in mine.values() if o.get("lamp_part") == "lamps[0].lens")
+    lens_b = next(o for o in theirs.values() if o.get("lamp_part") == "lamps[0].lens")
+    assert lens_a.data != lens_b.data and lens_a.data.materials[0] != lens_b.data.materials[0]
+    assert _input(lens_b.data.materials[0], "Lens BSDF", "IOR") == pytest.approx(1.7)
+    assert bl_scene.world != other.world
+    assert all(m.users > 0 for m in bpy.data.meshes) and all(m.users > 0 for m in bpy.data.materials)
+
+
+def test_rebuild_after_the_collection_was_deleted(lamp_addon, bl_scene, scene_mod):
+    import bpy
+
+    _build(lamp_addon, bl_scene, _load(scene_mod, "paper-baseline"))
+    coll = next(c for c in bl_scene.collection.children if c.name.startswith("Lamp Design"))
+    bpy.data.collections.remove(coll)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    assert len(_objects(bl_scene)) == 6
+    assert len([o for o in bpy.data.objects if o.get("lamp_part")]) == 6
+    assert {m.name for m in bpy.data.meshes} == {o.data.name for o in bpy.data.objects if o.type == "MESH"}
+    assert all(m.users > 0 for m in bpy.data.materials)
 
 
 def test_user_world_is_kept(lamp_addon, bl_scene, scene_mod):

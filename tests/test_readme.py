@@ -1,0 +1,24 @@
+"""The README documents every scene field, as declared in core_tracer/spec.py."""
+
+from pathlib import Path
+
+from core_tracer import fields_doc, spec
+
+README = Path(__file__).resolve().parent.parent / "README.md"
+
+
+def test_readme_field_table_is_generated_from_the_spec():
+    text = README.read_text()
+    table = text[text.index(fields_doc.BEGIN) + len(fields_doc.BEGIN):text.index(fields_doc.END)].strip()
+    assert table == fields_doc.field_table(), "run: python -m core_tracer.fields_doc --update README.md"
+    for info in spec.iter_fields():
+        assert f"`{info.path}`" in table
+
+
+def test_readme_gives_the_two_commands_and_ci_runs_the_test_command():
+    text = README.read_text()
+    test_command = "tools/ensure-venv && .venv/bin/python -m pytest tests"
+    assert test_command in text
+    ci = (README.parent / ".ci" / "run").read_text()
+    assert test_command in ci
+    assert "tools/ensure-venv && .venv/bin/python tools/compare_preset.py" in text
