@@ -339,14 +339,19 @@ class Study:
                 raise SceneError(key, f"unknown key; allowed keys here: {', '.join(allowed)}")
         if "base" not in doc:
             raise SceneError("base", "is required: the lamp-scene/1 design the study varies")
+        size = parse_size(doc.get("size", list(DEFAULT_SIZE)))
+        base_doc = doc["base"]
+        if isinstance(base_doc, dict):
+            # The variants are rendered at the study's size: a default camera frames the body for it,
+            # and a variant kept as a preset says what was rendered.
+            base_doc = {**base_doc, "image": {"width": size[0], "height": size[1]}}
         try:
-            base = parse_scene(doc["base"])
+            base = parse_scene(base_doc)
         except SceneError as e:
             raise SceneError(f"base.{e.path}" if e.path else "base", e.message) from None
         title = doc.get("title", "")
         if not isinstance(title, str) or len(title) > 200:
             raise SceneError("title", f"expected a string of at most 200 characters, got {_show(title)}")
-        size = parse_size(doc.get("size", list(DEFAULT_SIZE)))
         axes_doc = doc.get("axes")
         if not isinstance(axes_doc, list) or not 1 <= len(axes_doc) <= MAX_AXES:
             raise SceneError("axes", f"expected a list of 1 or {MAX_AXES} axes, got {_show(axes_doc)}")

@@ -179,6 +179,8 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict) -> BuildReport:
     materials.world(wld, scene)
 
     _remove_stale(coll, wanted)
+    for view_layer in bl_scene.view_layers:  # objects' matrix_world valid for whoever reads them next
+        view_layer.update()
     return report
 
 

@@ -102,8 +102,9 @@ class LAMP_OT_build(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         report = builder.build_lamp(context.scene, scene)
-        self.report({"INFO"}, f"Built {len(report.objects)} objects; largest deviation from the model "
-                              f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)")
+        level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
+        self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
+                             f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)")
         return {"FINISHED"}
 
 

@@ -25,6 +25,7 @@ Function fixtures
 
 from __future__ import annotations
 
+import atexit
 import os
 import shutil
 import sys
@@ -40,6 +41,7 @@ DEV_REPO_MODULE = "lamp_dev"
 # Before bpy can be imported by anything: Blender reads this once, at start-up.
 _USER_RESOURCES = tempfile.mkdtemp(prefix="lamp-blender-user-")
 os.environ["BLENDER_USER_RESOURCES"] = _USER_RESOURCES
+atexit.register(shutil.rmtree, _USER_RESOURCES, True)  # removes the link to the repository, not its target
 
 if str(REPO_ROOT) not in sys.path:  # `import core_tracer` however pytest was started
     sys.path.insert(0, str(REPO_ROOT))
@@ -51,9 +53,8 @@ def repo_root() -> Path:
 
 
 @pytest.fixture(scope="session")
-def blender_user_resources():
-    yield Path(_USER_RESOURCES)
-    shutil.rmtree(_USER_RESOURCES, ignore_errors=True)
+def blender_user_resources() -> Path:
+    return Path(_USER_RESOURCES)
 
 
 @pytest.fixture(scope="session")

@@ -73,8 +73,8 @@ def test_variants_are_row_major_with_the_edited_values():
         assert v.values == (s.axes[0].values[v.column], s.axes[1].values[v.row])
         lamp = v.scene["lamps"][0]
         assert (lamp["lens"]["ior"], lamp["cuts"]["height"]) == v.values
-    # The base is untouched and everything else in a variant equals the base.
-    assert s.base == scene.parse_scene(baseline())
+    # The base is the design at the study's size, and everything else in a variant equals the base.
+    assert s.base == scene.parse_scene({**baseline(), "image": {"width": 256, "height": 256}})
     other = s.variants[5].scene
     assert other["body"] == s.base["body"] and other["camera"] == s.base["camera"]
 
@@ -108,6 +108,15 @@ def test_lens_colour_replaces_absorption():
     tc = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1")]).variants[0].scene
     back = st.Study.build(tc, [st.parse_vary("lens.absorption=0.1/1/1")]).variants[0].scene["lamps"][0]["lens"]
     assert back["absorption"] == [0.1, 1.0, 1.0] and "transmitted_color" not in back
+
+
+def test_a_default_camera_frames_the_body_at_the_study_size():
+    doc = baseline()
+    del doc["camera"]
+    wide = st.Study.build(doc, [st.parse_vary("lens.ior=1.5")], (96, 32))
+    expected = scene.parse_scene({**doc, "image": {"width": 96, "height": 32}})
+    assert wide.base["camera"] == expected["camera"] != scene.parse_scene(doc)["camera"]
+    assert wide.variants[0].scene["image"] == {"width": 96, "height": 32}
 
 
 def test_two_axes_on_one_field_differ_by_lamp_or_component():
