@@ -275,7 +275,6 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
 def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Nearest surface of every ray: (t, surface id, normal at cut hits)."""
     L = ctx.lamps
-    n = len(rays)
     li = rays.lamp
     o, d = rays.o, rays.d
     t_wall = G.hit_side_wall(o, d, L.radius[li])
@@ -305,7 +304,6 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
             t_best[idx[nearer]] = t[nearer]
             surface[idx[nearer]] = sid
     surface[~np.isfinite(t_best)] = P.NOTHING
-    assert n == len(surface)
     return t_best, surface, cut_normal
 
 

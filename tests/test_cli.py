@@ -67,7 +67,7 @@ BAD_SCENES = {
     "no-schema": (_edit(lambda d: d.pop("schema")), ("schema", '"lamp-scene/1"')),
     "unknown-key": (_edit(lambda d: d["lamps"][0]["lens"].update(colour=[1, 0, 0])),
                     ("lamps[0].lens.colour", "unknown key", "transmitted_color")),
-    "nan": (lambda: BASELINE.read_text().replace('"ior": 1.49', '"ior": NaN'), ("NaN",)),
+    "nan": (lambda: BASELINE.read_text().replace('"ior": 1.49', '"ior": NaN'), ("lamps[0].lens.ior", "NaN", "[1, 3]")),
     "infinity": (lambda: BASELINE.read_text().replace('"ior": 1.49', '"ior": 1e999'),
                  ("lamps[0].lens.ior", "Infinity", "[1, 3]")),
     "negative-radius": (_edit(lambda d: d["lamps"][0]["lens"].update(radius=-3)),
