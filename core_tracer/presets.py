@@ -9,9 +9,11 @@ still show. Hostile files are bounded: a file is refused by its size before it i
 nothing but regular ``*.json`` files directly in the folder is opened; a link that leads out of
 the library is skipped. Writes are atomic (``fileio``), so a crash never leaves half a preset.
 
-Thumbnails are small tracer renders cached as PNG, beside the presets (``.thumbnails/``) when
-the library is writable, else in a cache folder; their file name carries a hash of the
-preset's canonical JSON, so a changed preset gets a new thumbnail.
+Thumbnails are small tracer renders as PNG whose file name carries a hash of the preset's
+canonical JSON, so a changed preset gets a new thumbnail. A library may ship them in its
+``thumbnails/`` folder (the built-in presets do: ``python -m core_tracer presets thumbnails``
+makes them); otherwise they are made on demand and cached beside the presets (``.thumbnails/``)
+when the library is writable, else in a cache folder.
 """
 
 from __future__ import annotations
@@ -26,7 +28,10 @@ from . import fileio
 from .scene import SceneError, normalize, parse_scene, read_json, scene_to_json
 
 SUFFIX = ".json"
-THUMBNAIL_FOLDER = ".thumbnails"
+THUMBNAIL_FOLDER = ".thumbnails"  # made on demand beside the presets of a writable library
+SHIPPED_THUMBNAIL_FOLDER = "thumbnails"  # made on purpose and shipped with the library
+REGENERATE_COMMAND = "python -m core_tracer presets thumbnails"
+MAX_THUMBNAIL_BYTES = 1_000_000  # a 96 x 96 PNG is a few kB; anything bigger is not ours
 THUMBNAIL_SIZE = 96
 MAX_SLUG = 64
 MAX_MESSAGE = 400  # a warning quotes the file; a hostile key or value must not flood the list
@@ -263,8 +268,7 @@ def delete_preset(entry: PresetEntry) -> None:
     """Remove a preset (and its cached thumbnails) from a writable library."""
     path = _own_file(entry)
     os.unlink(path)
-    stem = os.path.splitext(os.path.basename(path))[0]
-    _remove_thumbnails(os.path.join(entry.library.folder, THUMBNAIL_FOLDER), stem)
+    _forget_thumbnails(entry.library, path)
 
 
 def rename_preset(entry: PresetEntry, new_name: str, *, overwrite: bool = False) -> PresetEntry:
@@ -275,8 +279,7 @@ def rename_preset(entry: PresetEntry, new_name: str, *, overwrite: bool = False)
         entry.library, slug(new_name) + SUFFIX) == old)
     if os.path.normpath(new.file) != os.path.normpath(old):
         os.unlink(old)
-        _remove_thumbnails(os.path.join(entry.library.folder, THUMBNAIL_FOLDER),
-                           os.path.splitext(os.path.basename(old))[0])
+        _forget_thumbnails(entry.library, old)
     return new
 
 
@@ -284,18 +287,62 @@ def rename_preset(entry: PresetEntry, new_name: str, *, overwrite: bool = False)
 # Thumbnails
 
 
-def thumbnail_path(entry: PresetEntry, cache_dir: str | os.PathLike) -> str:
-    """Where the thumbnail of ``entry`` lives: ``<library>/.thumbnails/`` if writable, else ``cache_dir``.
-
-    The name carries the hash of the preset's canonical JSON, so an edited preset misses the
-    cache and gets a fresh thumbnail.
-    """
+def thumbnail_name(entry: PresetEntry) -> str:
+    """``<file stem>-<hash of the preset>.png``: the same in every thumbnail folder."""
     stem = os.path.splitext(os.path.basename(entry.file))[0]
-    if entry.library.writable and os.access(entry.library.folder, os.W_OK):
-        folder = os.path.join(entry.library.folder, THUMBNAIL_FOLDER)
-    else:
-        folder = os.fspath(cache_dir)
-    return os.path.join(folder, f"{stem}-{entry.digest}.png")
+    return f"{stem}-{entry.digest}.png"
+
+
+def _own_subfolder(library: Library, subfolder: str) -> str | None:
+    """``<library>/<subfolder>``, unless it is a link that leads out of the library."""
+    folder = os.path.join(library.folder, subfolder)
+    inside = os.path.dirname(os.path.realpath(folder)) == os.path.realpath(library.folder)
+    return folder if inside else None
+
+
+def _thumbnail_in(entry: PresetEntry, subfolder: str) -> str | None:
+    """The thumbnail of ``entry`` in ``<library>/<subfolder>/`` if it is there and looks like one.
+
+    Only a regular file of a thumbnail's size whose real location is that folder counts: a link
+    out of the library is never opened, whoever wrote the library."""
+    folder = _own_subfolder(entry.library, subfolder)
+    if folder is None:
+        return None
+    path = os.path.join(folder, thumbnail_name(entry))
+    try:
+        ok = os.path.isfile(path) and os.path.getsize(path) <= MAX_THUMBNAIL_BYTES
+    except OSError:
+        return None
+    return path if ok and os.path.dirname(os.path.realpath(path)) == os.path.realpath(folder) else None
+
+
+def shipped_thumbnail(entry: PresetEntry) -> str | None:
+    """The thumbnail shipped with the library (``thumbnails/``) for the preset as it is now, if any."""
+    return _thumbnail_in(entry, SHIPPED_THUMBNAIL_FOLDER)
+
+
+def thumbnail_path(entry: PresetEntry, cache_dir: str | os.PathLike) -> str:
+    """Where the thumbnail of ``entry`` is, or is to be made.
+
+    First the library's shipped ``thumbnails/`` folder, if it holds the thumbnail of the preset's
+    current content; else ``<library>/.thumbnails/`` when the library is writable; else, for a
+    read-only library, ``.thumbnails/`` if someone who may write there made it already, or
+    ``cache_dir``. The name carries the hash of the preset's canonical JSON, so an edited preset
+    misses every stale thumbnail and gets a fresh one.
+    """
+    shipped = shipped_thumbnail(entry)
+    if shipped is not None:
+        return shipped
+    beside = _own_subfolder(entry.library, THUMBNAIL_FOLDER)
+    if beside is not None and entry.library.writable and os.access(entry.library.folder, os.W_OK):
+        return os.path.join(beside, thumbnail_name(entry))
+    made = _thumbnail_in(entry, THUMBNAIL_FOLDER)
+    return made if made is not None else os.path.join(os.fspath(cache_dir), thumbnail_name(entry))
+
+
+def _is_thumbnail_of(name: str, stem: str) -> bool:
+    key = name[len(stem) + 1:-4]
+    return name.startswith(stem + "-") and name.endswith(".png") and len(key) == 16 and key.isalnum()
 
 
 def _remove_thumbnails(folder: str, stem: str, keep: str = "") -> None:
@@ -305,13 +352,20 @@ def _remove_thumbnails(folder: str, stem: str, keep: str = "") -> None:
         return
     for name in names:
         old = os.path.join(folder, name)
-        key = name[len(stem) + 1:-4]
-        stale = name.startswith(stem + "-") and name.endswith(".png") and len(key) == 16 and key.isalnum()
-        if stale and old != keep:
+        if _is_thumbnail_of(name, stem) and old != keep:
             try:
                 os.unlink(old)
             except OSError:
                 pass
+
+
+def _forget_thumbnails(library: Library, preset_path: str) -> None:
+    """Remove the thumbnails of a preset file that is gone from its (writable) library."""
+    stem = os.path.splitext(os.path.basename(preset_path))[0]
+    for subfolder in (THUMBNAIL_FOLDER, SHIPPED_THUMBNAIL_FOLDER):
+        folder = _own_subfolder(library, subfolder)
+        if folder is not None:
+            _remove_thumbnails(folder, stem)
 
 
 def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUMBNAIL_SIZE) -> str:
@@ -328,3 +382,70 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     stem = os.path.splitext(os.path.basename(entry.file))[0]
     _remove_thumbnails(os.path.dirname(os.path.abspath(target)), stem, keep=os.path.abspath(target))
     return target
+
+
+# ---------------------------------------------------------------------------------------------
+# Shipped thumbnails
+
+
+@dataclass(frozen=True)
+class ShippedThumbnails:
+    """How a library's ``thumbnails/`` folder stands against its presets."""
+
+    folder: str
+    missing: tuple[PresetEntry, ...]  # presets without a thumbnail of their current content
+    stale: tuple[str, ...]  # PNG files of no current preset (an old hash, a removed preset)
+    warnings: tuple[PresetWarning, ...]  # library files that are not valid presets
+
+    @property
+    def ok(self) -> bool:
+        return not (self.missing or self.stale or self.warnings)
+
+    def problems(self) -> list[str]:
+        """One line per problem, each saying what to do."""
+        lines = [f"{printable(e.file)}: has no thumbnail {thumbnail_name(e)} in {printable(self.folder)}"
+                 for e in self.missing]
+        lines += [f"{printable(os.path.join(self.folder, name))}: belongs to no current preset"
+                  for name in self.stale]
+        lines += [str(w) for w in self.warnings]
+        return lines
+
+
+def check_shipped_thumbnails(library: Library) -> ShippedThumbnails:
+    """Compare a library's shipped ``thumbnails/`` folder with its presets as they are now."""
+    entries, warnings = list_library(library)
+    folder = _own_subfolder(library, SHIPPED_THUMBNAIL_FOLDER)
+    if folder is None:
+        raise PresetError(printable(os.path.join(library.folder, SHIPPED_THUMBNAIL_FOLDER)),
+                          "is a link that leads out of the library; a library's thumbnails are its own")
+    missing = tuple(e for e in entries if shipped_thumbnail(e) is None)
+    wanted = {thumbnail_name(e) for e in entries}
+    try:
+        names = sorted(os.listdir(folder))
+    except (FileNotFoundError, NotADirectoryError):
+        names = []
+    stale = tuple(n for n in names if n.lower().endswith(".png") and n not in wanted and not n.startswith("."))
+    return ShippedThumbnails(folder, missing, stale, tuple(warnings))
+
+
+def make_shipped_thumbnails(library: Library,
+                            size: int = THUMBNAIL_SIZE) -> tuple[list[str], list[str], list[PresetWarning]]:
+    """Make the missing thumbnails of ``thumbnails/`` and remove the stale ones, on purpose.
+
+    Writes into the library's folder whatever its ``writable`` flag says: this is how a library is
+    prepared for shipping. Returns the thumbnails made, the files removed and the warnings about
+    files that are not valid presets (which get no thumbnail)."""
+    state = check_shipped_thumbnails(library)
+    os.makedirs(state.folder, exist_ok=True)
+    made = []
+    for entry in state.missing:
+        path = make_thumbnail(entry, os.path.join(state.folder, thumbnail_name(entry)), size)
+        os.chmod(path, 0o644)  # shipped to everyone who installs the library (the temporary file was private)
+        made.append(path)
+    removed = []
+    for name in state.stale:
+        path = os.path.join(state.folder, name)
+        if os.path.isfile(path) or os.path.islink(path):
+            os.unlink(path)
+            removed.append(path)
+    return made, removed, list(state.warnings)

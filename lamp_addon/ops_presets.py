@@ -5,11 +5,19 @@ A preset is applied only after it has been read again and validated in full, and
 (``properties.scene_to_design``), so a bad preset never changes the design half-way. Presets are only
 ever opened from the listed libraries or from a file the designer picked; names never become paths
 outside a library (``core_tracer.presets``).
+
+A saved or exported preset records the view the designer sees: the Blender scene camera and the render
+size when the scene has a camera, else the design's own camera and image. Applying a preset shows its
+view through the add-on's own "Lamp Camera" (created when the scene has no camera); a camera of the
+designer's own is never moved.
 """
 
 from __future__ import annotations
 
+import math
 import os
+import re
+import struct
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, StringProperty
@@ -17,8 +25,13 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..core_tracer import fileio
 from ..core_tracer import presets as P
-from ..core_tracer.scene import SceneError, scene_to_json
-from . import preset_library, properties
+from ..core_tracer.scene import SceneError, normalize, scene_to_json
+from . import camera, preset_library, properties
+
+# Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
+# the camera object that differs from the design's by less than this, relative to the view's size, is
+# the design's view.
+SAME_VIEW = 1e-6
 
 
 def selected_entry(context) -> P.PresetEntry | None:
@@ -38,6 +51,91 @@ def _error_text(e: Exception) -> str:
     if isinstance(e, OSError) and e.strerror:
         return f"{e.filename}: {e.strerror}" if e.filename else e.strerror
     return str(e)
+
+
+def _failed(operator: bpy.types.Operator, message: str, error: Exception | None = None) -> set[str]:
+    """Report why ``operator`` did nothing (``message: error``) and cancel it."""
+    operator.report({"ERROR"}, message if error is None else f"{message}: {_error_text(error)}")
+    return {"CANCELLED"}
+
+
+def _exists(operator: bpy.types.Operator, path: str) -> set[str]:
+    return _failed(operator, f"{path} exists already; tick \"Replace Existing\" to overwrite it")
+
+
+# ---------------------------------------------------------------------------------------------
+# The view a preset records and shows
+
+
+def _as_stored(value):
+    """A camera value as the design's 32-bit float properties keep it, so that applying the preset
+    gives back exactly the numbers it holds (``properties.from_float32``)."""
+    if isinstance(value, dict):
+        return {k: _as_stored(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_as_stored(v) for v in value]
+    if isinstance(value, float):
+        return properties.from_float32(struct.unpack("<f", struct.pack("<f", value))[0])
+    return value
+
+
+def _same_view(a: dict, b: dict) -> bool:
+    """Whether two normalised camera sections show the same view, up to Blender's single precision."""
+    if (a["type"], a["sensor_fit"]) != (b["type"], b["sensor_fit"]):
+        return False
+    reach = max(math.dist(a["position"], a["target"]), a["width"], 1.0)  # mm: the size of the view
+    sizes = {"position": reach, "target": reach, "width": reach, "up": 1.0, "fov_deg": 180.0, "shift": 1.0}
+    for key, size in sizes.items():
+        x, y = (v if isinstance(v, list) else [v] for v in (a[key], b[key]))
+        if not all(abs(p - q) <= SAME_VIEW * size for p, q in zip(x, y, strict=True)):
+            return False
+    return True
+
+
+def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
+    """The design as a preset records it: seen through the Blender scene camera at the render size
+    when the scene has a camera, else through the design's own camera. Raises ``SceneError``.
+
+    A scene camera that shows the design's own view (say, right after applying a preset) keeps the
+    design's numbers, free of Blender's single-precision noise.
+    """
+    if bl_scene.camera is None:
+        return properties.design_to_scene(bl_scene)
+    seen = camera.scene_for_render(bl_scene)
+    try:
+        own = properties.design_to_scene(bl_scene)["camera"]
+    except SceneError:
+        own = None  # the design's own camera section does not hold a valid view: the scene camera is the view
+    seen["camera"] = own if own is not None and _same_view(seen["camera"], own) else _as_stored(seen["camera"])
+    return normalize(seen)
+
+
+def is_lamp_camera(ob: bpy.types.Object) -> bool:
+    """Whether ``ob`` is the camera the add-on made (``camera.ensure_scene_camera``), not the designer's."""
+    return ob.type == "CAMERA" and re.fullmatch(re.escape(camera.CAMERA_NAME) + r"(\.\d{3,})?", ob.name) is not None
+
+
+def show_view(bl_scene: bpy.types.Scene, scene: dict) -> str:
+    """Show a normalised scene's camera and image through the scene camera, if it is the add-on's.
+
+    No scene camera: the "Lamp Camera" is made. The add-on's camera: moved there. The designer's own
+    camera: kept as it is. Returns what happened, for the report."""
+    ob = bl_scene.camera
+    if ob is None:
+        ob = camera.ensure_scene_camera(bl_scene, scene)
+        return f"made the scene camera \"{ob.name}\" at its view"
+    if is_lamp_camera(ob):
+        camera.apply_camera(ob, scene["camera"])
+        camera.set_render_size(bl_scene, scene["image"])
+        return f"moved \"{ob.name}\" to its view"
+    return (f"kept your camera \"{ob.name}\" (the preset's view is the design's camera; \"Scene Camera from "
+            "Design\" moves your camera there)")
+
+
+def apply_preset(bl_scene: bpy.types.Scene, scene: dict) -> str:
+    """Set the design from a preset, all or nothing, then show its view (``show_view``)."""
+    properties.scene_to_design(bl_scene, scene)
+    return show_view(bl_scene, properties.design_to_scene(bl_scene))
 
 
 # Dynamic enum items must stay referenced from Python while Blender shows them.
@@ -92,16 +190,13 @@ class LAMP_OT_preset_apply(bpy.types.Operator):
     def execute(self, context):
         entry = preset_library.listing().entry(self.file) if self.file else selected_entry(context)
         if entry is None:
-            self.report({"ERROR"}, "Not a preset of the listed libraries; refresh the preset list")
-            return {"CANCELLED"}
+            return _failed(self, "Not a preset of the listed libraries; refresh the preset list")
         try:
             # Read again: the file may have changed since it was listed.
-            scene = P.load_preset(entry.file)
-            properties.scene_to_design(context.scene, scene)
+            view = apply_preset(context.scene, P.load_preset(entry.file))
         except SceneError as e:
-            self.report({"ERROR"}, f"Preset not applied, the design is unchanged: {e}")
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"Applied \"{entry.name}\" from {entry.library.name}")
+            return _failed(self, "Preset not applied, the design is unchanged", e)
+        self.report({"INFO"}, f"Applied \"{entry.name}\" from {entry.library.name}; {view}")
         return {"FINISHED"}
 
 
@@ -158,22 +253,18 @@ class LAMP_OT_preset_save(bpy.types.Operator):
     def execute(self, context):
         lib, path = self._target()
         if lib is None:
-            self.report({"ERROR"}, "Choose a writable library to save into")
-            return {"CANCELLED"}
+            return _failed(self, "Choose a writable library to save into")
         if not path:
-            self.report({"ERROR"}, "Give the preset a name")
-            return {"CANCELLED"}
+            return _failed(self, "Give the preset a name")
         try:
-            scene = properties.design_to_scene(context.scene)
+            scene = design_as_seen(context.scene)
             scene["author"], scene["description"], scene["tags"] = self.author, self.description, \
                 _split_tags(self.tags)
             entry = P.save_preset(lib, self.name.strip(), scene, overwrite=self.overwrite)
         except P.PresetExistsError:
-            self.report({"ERROR"}, f"{path} exists already; tick \"Replace Existing\" to overwrite it")
-            return {"CANCELLED"}
+            return _exists(self, path)
         except (SceneError, OSError) as e:
-            self.report({"ERROR"}, f"Preset not saved: {_error_text(e)}")
-            return {"CANCELLED"}
+            return _failed(self, "Preset not saved", e)
         preset_library.sync(context, select=entry.file)
         self.report({"INFO"}, f"Saved \"{entry.name}\" to {entry.file}")
         return {"FINISHED"}
@@ -209,8 +300,7 @@ class LAMP_OT_preset_delete(_WritableSelected, bpy.types.Operator):
         try:
             P.delete_preset(entry)
         except (SceneError, OSError) as e:
-            self.report({"ERROR"}, f"Preset not deleted: {_error_text(e)}")
-            return {"CANCELLED"}
+            return _failed(self, "Preset not deleted", e)
         preset_library.sync(context)
         self.report({"INFO"}, f"Deleted \"{entry.name}\"")
         return {"FINISHED"}
@@ -233,16 +323,13 @@ class LAMP_OT_preset_rename(_WritableSelected, bpy.types.Operator):
     def execute(self, context):
         entry = selected_entry(context)
         if not self.new_name.strip():
-            self.report({"ERROR"}, "Give the preset a name")
-            return {"CANCELLED"}
+            return _failed(self, "Give the preset a name")
         try:
             renamed = P.rename_preset(entry, self.new_name.strip(), overwrite=self.overwrite)
         except P.PresetExistsError as e:
-            self.report({"ERROR"}, f"{e.path} exists already; tick \"Replace Existing\" to overwrite it")
-            return {"CANCELLED"}
+            return _exists(self, e.path)
         except (SceneError, OSError) as e:
-            self.report({"ERROR"}, f"Preset not renamed: {_error_text(e)}")
-            return {"CANCELLED"}
+            return _failed(self, "Preset not renamed", e)
         preset_library.sync(context, select=renamed.file)
         return {"FINISHED"}
 
@@ -269,19 +356,17 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
 
     def execute(self, context):
         if not self.apply and not self.add_to_library:
-            self.report({"ERROR"}, "Nothing to do: tick Apply to Design or Add to My Presets")
-            return {"CANCELLED"}
+            return _failed(self, "Nothing to do: tick Apply to Design or Add to My Presets")
         try:
             scene = P.load_preset(self.filepath)
         except SceneError as e:
-            self.report({"ERROR"}, f"Not imported: {e}")
-            return {"CANCELLED"}
+            return _failed(self, "Not imported", e)
         lib = _default_library() if self.add_to_library else None
         overwrite = self.overwrite
         if self.add_to_library:
             if lib is None:
-                self.report({"ERROR"}, "No writable preset library to add the preset to; untick Add to My Presets")
-                return {"CANCELLED"}
+                return _failed(self, "No writable preset library to add the preset to; untick Add to My "
+                                     "Presets")
             target = P.preset_file(lib, P.slug(scene["name"]) + P.SUFFIX)
             if os.path.lexists(target) and not overwrite:
                 try:
@@ -289,16 +374,15 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
                 except SceneError:
                     same = False
                 if not same:
-                    self.report({"ERROR"}, f"{target} exists already with another design; tick \"Replace "
-                                           "Existing\" or rename the preset first")
-                    return {"CANCELLED"}
+                    return _failed(self, f"{target} exists already with another design; tick \"Replace "
+                                         "Existing\" or rename the preset first")
                 overwrite = True  # the very same design: saving again changes nothing
+        view = ""
         if self.apply:
             try:
-                properties.scene_to_design(context.scene, scene)
+                view = f"; {apply_preset(context.scene, scene)}"
             except SceneError as e:
-                self.report({"ERROR"}, f"Not imported, the design is unchanged: {e}")
-                return {"CANCELLED"}
+                return _failed(self, "Not imported, the design is unchanged", e)
         if lib is not None:
             try:
                 entry = P.save_preset(lib, scene["name"], scene, overwrite=overwrite)
@@ -306,7 +390,7 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
                 self.report({"WARNING"}, f"Applied, but not added to {lib.name}: {_error_text(e)}")
                 return {"FINISHED"}
             preset_library.sync(context, select=entry.file)
-        self.report({"INFO"}, f"Imported \"{scene['name']}\"")
+        self.report({"INFO"}, f"Imported \"{scene['name']}\"{view}")
         return {"FINISHED"}
 
 
@@ -326,11 +410,10 @@ class LAMP_OT_preset_export(bpy.types.Operator, ExportHelper):
 
     def execute(self, context):
         try:
-            scene = properties.design_to_scene(context.scene)
+            scene = design_as_seen(context.scene)
             fileio.atomic_write_text(self.filepath, scene_to_json(scene))
         except (SceneError, OSError) as e:
-            self.report({"ERROR"}, f"Not exported: {_error_text(e)}")
-            return {"CANCELLED"}
+            return _failed(self, "Not exported", e)
         self.report({"INFO"}, f"Exported \"{scene['name']}\" to {self.filepath}")
         return {"FINISHED"}
 
@@ -359,12 +442,4 @@ classes = (
     LAMP_FH_preset,
 )
 
-
-def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(classes)

@@ -126,19 +126,20 @@ classes = (
     LAMP_PT_presets,
 )
 
-# The parts of the preset browser, registered in this order and unregistered in reverse.
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+# The parts of the preset browser, registered in this order (its own classes last) and unregistered in
+# reverse.
 _parts = (preferences, preset_library, ops_presets)
 
 
 def register() -> None:
     for part in _parts:
         part.register()
-    for cls in classes:
-        bpy.utils.register_class(cls)
+    _register_classes()
 
 
 def unregister() -> None:
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+    _unregister_classes()
     for part in reversed(_parts):
         part.unregister()

@@ -322,10 +322,12 @@ _WM_PROPERTIES = {
 }
 
 
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
 def register() -> None:
     global _thumbnails, _listing
-    for cls in classes:
-        bpy.utils.register_class(cls)
+    _register_classes()
     for key, make in _WM_PROPERTIES.items():
         setattr(bpy.types.WindowManager, key, make())
     _listing = Listing()
@@ -346,5 +348,4 @@ def unregister() -> None:
         _thumbnails = None
     for key in reversed(_WM_PROPERTIES):
         delattr(bpy.types.WindowManager, key)
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+    _unregister_classes()

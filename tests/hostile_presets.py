@@ -1,4 +1,5 @@
-"""A folder of hostile presets (issue 4, item 6), shared by the library tests with and without Blender."""
+"""Shared by the preset tests with and without Blender: a folder of hostile presets (issue 4, item 6), and
+designs flattened to compare them parameter for parameter."""
 
 from __future__ import annotations
 
@@ -11,6 +12,21 @@ BUILTIN = Path(__file__).resolve().parent.parent / "presets"
 
 def _doc(stem: str = "paper-baseline") -> dict:
     return json.loads((BUILTIN / f"{stem}.json").read_text())
+
+
+def leaves(node, prefix: str = "") -> dict:
+    """Every parameter of a scene as a flat ``path -> value`` dict (``lamps[0].lens.ior``)."""
+    if isinstance(node, dict):
+        out = {}
+        for k, v in node.items():
+            out.update(leaves(v, f"{prefix}.{k}" if prefix else k))
+        return out
+    if isinstance(node, list) and node and isinstance(node[0], dict):
+        out = {}
+        for i, v in enumerate(node):
+            out.update(leaves(v, f"{prefix}[{i}]"))
+        return out
+    return {prefix: node}
 
 
 def make_hostile_folder(folder: Path) -> tuple[set[str], dict[str, tuple[str, ...]]]:
@@ -61,6 +77,7 @@ def make_hostile_folder(folder: Path) -> tuple[set[str], dict[str, tuple[str, ..
     os.symlink("loop.json", folder / "loop.json")
     bad["loop.json"] = ("cannot read",)
     (folder / "notes.txt").write_text("not a preset, not listed")
+    os.symlink("..", folder / "thumbnails")  # a thumbnail folder leading out: neither listed nor opened
     (folder / ".hidden.json").write_text("hidden, not listed")
     os.mkdir(folder / "sub")
     (folder / "sub" / "nested.json").write_text(json.dumps(base))  # only the folder itself is a library

@@ -7,8 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hostile_presets import leaves
 
-from core_tracer import render
+from core_tracer import imageio, render
+from core_tracer import presets as P
 from core_tracer.scene import lamp_geometry, lens_absorption, parse_scene, read_json
 
 PRESETS = Path(__file__).resolve().parent.parent / "presets"
@@ -33,20 +35,6 @@ META = {"name", "author", "description", "tags"}
 
 def load(stem: str) -> dict:
     return parse_scene(read_json(PRESETS / f"{stem}.json"))
-
-
-def leaves(node, prefix: str = "") -> dict:
-    if isinstance(node, dict):
-        out = {}
-        for k, v in node.items():
-            out.update(leaves(v, f"{prefix}.{k}" if prefix else k))
-        return out
-    if isinstance(node, list) and node and isinstance(node[0], dict):
-        out = {}
-        for i, v in enumerate(node):
-            out.update(leaves(v, f"{prefix}[{i}]"))
-        return out
-    return {prefix: node}
 
 
 def test_the_expected_presets_exist():
@@ -120,3 +108,28 @@ def test_every_preset_renders(path):
     assert np.isfinite(image).all()
     assert (image >= 0).all()
     assert image.max() > 0
+
+
+@pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
+def test_every_preset_ships_its_thumbnail(path, tmp_path):
+    entries, warnings = P.list_presets([P.builtin_library()])
+    assert warnings == []
+    (entry,) = [e for e in entries if Path(e.file).name == path.name]
+    shipped = P.shipped_thumbnail(entry)
+    assert shipped is not None, (f"presets/{path.name} is new or changed: presets/{P.SHIPPED_THUMBNAIL_FOLDER}/ has "
+                                 f"no {P.thumbnail_name(entry)}; regenerate the thumbnails with "
+                                 f"`{P.REGENERATE_COMMAND}` (from the repository root)")
+    # the browser shows the shipped file and makes nothing
+    cache = tmp_path / "cache"
+    assert P.thumbnail_path(entry, cache) == shipped and not cache.exists()
+    image, scene = imageio.read_image(shipped)
+    assert image.shape == (P.THUMBNAIL_SIZE, P.THUMBNAIL_SIZE, 3)
+    assert np.isfinite(image).all() and image.max() > 0
+    # it is a render of this very preset, not a renamed file
+    assert P.digest(dict(scene, image=entry.scene["image"])) == entry.digest
+
+
+def test_no_stale_shipped_thumbnails():
+    state = P.check_shipped_thumbnails(P.builtin_library())
+    assert state.stale == (), (f"thumbnails of no current preset: {', '.join(state.stale)}; remove them with "
+                               f"`{P.REGENERATE_COMMAND}`")

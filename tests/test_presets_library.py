@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import os
 import subprocess
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hostile_presets import make_hostile_folder
+from hostile_presets import leaves, make_hostile_folder
 
 from core_tracer import fileio, imageio
 from core_tracer import presets as P
@@ -24,21 +25,6 @@ BUILTIN = ROOT / "presets"
 
 def builtin_doc(stem: str = "paper-baseline") -> dict:
     return json.loads((BUILTIN / f"{stem}.json").read_text())
-
-
-def leaves(node, prefix: str = "") -> dict:
-    """Every parameter as a flat path -> value dict, to compare designs parameter for parameter."""
-    if isinstance(node, dict):
-        out = {}
-        for k, v in node.items():
-            out.update(leaves(v, f"{prefix}.{k}" if prefix else k))
-        return out
-    if isinstance(node, list) and node and isinstance(node[0], dict):
-        out = {}
-        for i, v in enumerate(node):
-            out.update(leaves(v, f"{prefix}[{i}]"))
-        return out
-    return {prefix: node}
 
 
 def files_in(folder: Path) -> list[str]:
@@ -306,15 +292,146 @@ def test_thumbnail_beside_a_writable_library_refreshes_when_the_preset_changes(t
     assert files_in(Path(lib.folder) / ".thumbnails") == []
 
 
-@pytest.mark.parametrize("path", sorted(BUILTIN.glob("*.json")), ids=lambda p: p.stem)
-def test_every_builtin_preset_has_a_thumbnail(tmp_path, path):
-    entries, warnings = P.list_presets([P.builtin_library()])
+def _thumbnail_library(tmp_path: Path, writable: bool) -> tuple[P.Library, P.PresetEntry]:
+    folder = tmp_path / "lib"
+    folder.mkdir()
+    (folder / "red-tail.json").write_text(json.dumps(builtin_doc()))
+    lib = P.Library("lib", str(folder), writable=writable)
+    (entry,), warnings = P.list_presets([lib])
     assert warnings == []
-    (entry,) = [e for e in entries if Path(e.file).name == path.name]
-    thumb = P.thumbnail_path(entry, tmp_path)
-    assert Path(thumb).parent == tmp_path  # read-only library: the cache folder, never the preset folder
+    return lib, entry
+
+
+def test_a_read_only_library_without_thumbnails_uses_the_cache(tmp_path):
+    lib, entry = _thumbnail_library(tmp_path, writable=False)
+    cache = tmp_path / "cache"
+    thumb = P.thumbnail_path(entry, cache)
+    assert Path(thumb) == cache / f"red-tail-{entry.digest}.png"  # never inside the read-only folder
     P.make_thumbnail(entry, thumb)
     image, _ = imageio.read_image(thumb)
     assert image.shape == (P.THUMBNAIL_SIZE, P.THUMBNAIL_SIZE, 3)
     assert np.isfinite(image).all() and image.max() > 0
-    assert files_in(tmp_path) == [Path(thumb).name]
+    assert files_in(cache) == [Path(thumb).name] and files_in(Path(lib.folder)) == ["red-tail.json"]
+
+
+def test_thumbnail_lookup_order(tmp_path):
+    lib, entry = _thumbnail_library(tmp_path, writable=False)
+    folder, cache = Path(lib.folder), tmp_path / "cache"
+    name = P.thumbnail_name(entry)
+    assert name == f"red-tail-{entry.digest}.png"
+    # a thumbnail made beside the presets by a designer who may write there serves read-only viewers too
+    (folder / ".thumbnails").mkdir()
+    P.make_thumbnail(entry, folder / ".thumbnails" / name, size=16)
+    assert P.thumbnail_path(entry, cache) == str(folder / ".thumbnails" / name)
+    # the shipped one comes first, for read-only and writable libraries alike
+    (folder / "thumbnails").mkdir()
+    P.make_thumbnail(entry, folder / "thumbnails" / name, size=16)
+    assert P.thumbnail_path(entry, cache) == P.shipped_thumbnail(entry) == str(folder / "thumbnails" / name)
+    writable_entry = dataclasses.replace(entry, library=dataclasses.replace(lib, writable=True))
+    assert P.thumbnail_path(writable_entry, cache) == str(folder / "thumbnails" / name)
+    # a thumbnail of another content (an old hash) is not this preset's
+    changed = P.save_preset(writable_entry.library, "Red tail", dict(entry.scene, body={
+        **entry.scene["body"], "color": [0.1, 0.2, 0.3]}), overwrite=True)
+    assert P.shipped_thumbnail(changed) is None
+    assert P.thumbnail_path(changed, cache) == str(folder / ".thumbnails" / P.thumbnail_name(changed))
+    assert not cache.exists()
+
+
+@pytest.mark.parametrize("hostile", ["link-out", "huge", "folder-link-out", "directory"])
+def test_a_library_cannot_pass_off_other_files_as_thumbnails(tmp_path, hostile):
+    lib, entry = _thumbnail_library(tmp_path, writable=False)
+    folder, name = Path(lib.folder), P.thumbnail_name(entry)
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    P.make_thumbnail(entry, outside / name, size=16)  # a real thumbnail, but not in the library
+    if hostile == "folder-link-out":
+        os.symlink(outside, folder / "thumbnails")
+        os.symlink(outside, folder / ".thumbnails")
+    else:
+        for sub in ("thumbnails", ".thumbnails"):
+            (folder / sub).mkdir()
+            target = folder / sub / name
+            if hostile == "link-out":
+                os.symlink(outside / name, target)
+            elif hostile == "huge":
+                with open(target, "wb") as f:
+                    f.truncate(P.MAX_THUMBNAIL_BYTES + 1)
+            else:
+                target.mkdir()
+    assert P.shipped_thumbnail(entry) is None
+    assert P.thumbnail_path(entry, tmp_path / "cache") == str(tmp_path / "cache" / name)
+    writable = dataclasses.replace(entry, library=dataclasses.replace(lib, writable=True))
+    if hostile == "folder-link-out":  # neither made, removed nor listed through the link
+        assert Path(P.thumbnail_path(writable, tmp_path / "cache")).parent == tmp_path / "cache"
+        (outside / "stale-0123456789abcdef.png").write_bytes(b"someone else's")
+        with pytest.raises(P.PresetError, match="thumbnails: is a link that leads out of the library"):
+            P.make_shipped_thumbnails(lib)
+        P.delete_preset(writable)
+        assert files_in(outside) == sorted([name, "stale-0123456789abcdef.png"])
+
+
+def test_libraries_list_only_their_json_files(tmp_path):
+    entries, warnings = P.list_presets([P.builtin_library()])
+    assert warnings == [] and (BUILTIN / P.SHIPPED_THUMBNAIL_FOLDER).is_dir()
+    assert sorted(Path(e.file).name for e in entries) == sorted(p.name for p in BUILTIN.glob("*.json"))
+    lib, entry = _thumbnail_library(tmp_path, writable=True)
+    folder = Path(lib.folder)
+    for sub in ("thumbnails", ".thumbnails", "old"):
+        (folder / sub).mkdir()
+        (folder / sub / "red-tail.json").write_text("{not a preset, and not listed")
+    for name in ("README.md", "thumb.png", "red-tail.json.bak", "notes"):
+        (folder / name).write_text("not a preset")
+    entries, warnings = P.list_presets([lib])
+    assert [e.file for e in entries] == [entry.file] and warnings == []
+
+
+def test_shipped_thumbnails_are_made_on_purpose(tmp_path):
+    lib, entry = _thumbnail_library(tmp_path, writable=False)
+    folder = Path(lib.folder)
+    (folder / "amber.json").write_text(json.dumps(builtin_doc("paper-lens-color")))
+    (folder / "broken.json").write_text("{")
+    proc = run_cli("presets", "thumbnails", "--check", folder)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert f"red-tail.json: has no thumbnail red-tail-{entry.digest}.png" in proc.stderr
+    assert "broken.json: not valid JSON" in proc.stderr
+    assert f"run python -m core_tracer presets thumbnails {folder}" in proc.stderr
+    assert not (folder / "thumbnails").exists()  # --check changes nothing
+
+    proc = run_cli("presets", "thumbnails", folder)
+    assert proc.returncode == 2 and "broken.json" in proc.stderr  # the valid presets still get theirs
+    (folder / "broken.json").unlink()
+    made = sorted(Path(line.removeprefix("made: ")).name for line in proc.stdout.splitlines())
+    assert made == sorted(files_in(folder / "thumbnails")) and len(made) == 2
+    assert run_cli("presets", "thumbnails", "--check", folder).returncode == 0
+    assert run_cli("presets", "thumbnails", folder).stdout == ""  # nothing to do
+
+    # a preset edited without regenerating: the check fails and names the command; regenerating
+    # makes the new thumbnail and removes the old one, and leaves other files alone
+    (folder / "thumbnails" / "README.txt").write_text("made by python -m core_tracer presets thumbnails")
+    doc = builtin_doc()
+    doc["lamps"][0]["bulb"]["on"] = False
+    (folder / "red-tail.json").write_text(json.dumps(doc))
+    proc = run_cli("presets", "thumbnails", "--check", folder)
+    assert proc.returncode == 2 and "red-tail.json: has no thumbnail" in proc.stderr
+    assert f"red-tail-{entry.digest}.png: belongs to no current preset" in proc.stderr
+    proc = run_cli("presets", "thumbnails", folder)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.count("made: ") == 1 and proc.stdout.count("removed: ") == 0  # made over the old one
+    (new,) = [e for e in P.list_presets([lib])[0] if Path(e.file).name == "red-tail.json"]
+    assert P.shipped_thumbnail(new) is not None and new.digest != entry.digest
+    assert len(files_in(folder / "thumbnails")) == 3  # two thumbnails and the README
+    (folder / "amber.json").unlink()
+    proc = run_cli("presets", "thumbnails", folder)
+    assert proc.stdout.count("removed: ") == 1
+    assert files_in(folder / "thumbnails") == sorted(["README.txt", P.thumbnail_name(new)])
+    assert os.stat(P.shipped_thumbnail(new)).st_mode & 0o644 == 0o644  # readable by whoever installs it
+
+
+def test_deleting_a_preset_removes_its_thumbnails(tmp_path):
+    lib, entry = _thumbnail_library(tmp_path, writable=True)
+    for sub in ("thumbnails", ".thumbnails"):
+        P.make_thumbnail(entry, Path(lib.folder) / sub / P.thumbnail_name(entry), size=16)
+    (Path(lib.folder) / "thumbnails" / "keep.png").write_bytes(b"not ours")
+    P.delete_preset(entry)
+    assert files_in(Path(lib.folder) / ".thumbnails") == []
+    assert files_in(Path(lib.folder) / "thumbnails") == ["keep.png"]

@@ -1,4 +1,4 @@
-"""``presets list|show|validate [FOLDER ...]``: the preset libraries without Blender."""
+"""``presets list|show|validate|thumbnails [FOLDER ...]``: the preset libraries without Blender."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ import sys
 from .. import presets as P
 from ..scene import SceneError, scene_to_json
 
-HELP = "list, show or validate the presets of a library folder (default: the built-in presets)"
+HELP = ("list, show or validate the presets of a library folder (default: the built-in presets), or make "
+        "its shipped thumbnails")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -24,6 +25,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p = actions.add_parser("show", help="print one preset in canonical form")
     p.add_argument("preset", metavar="PRESET", help="preset name, file name or file stem (no folders)")
     p.add_argument("folders", nargs="*", metavar="FOLDER", help=folders_help)
+    p = actions.add_parser("thumbnails", help=f"make the thumbnails shipped in FOLDER/{P.SHIPPED_THUMBNAIL_FOLDER}/ "
+                           "for every preset and remove stale ones (run after editing a preset)")
+    p.add_argument("folders", nargs="*", metavar="FOLDER", help=folders_help)
+    p.add_argument("--check", action="store_true",
+                   help="change nothing; exit 2 if a thumbnail is missing or stale")
     for sub in actions.choices.values():
         sub.error = parser.error  # one-line usage errors, as the parent parser
 
@@ -45,8 +51,33 @@ def _print_warnings(warnings: list[P.PresetWarning]) -> None:
         print(f"warning: {w}", file=sys.stderr)
 
 
+def _thumbnails(libraries: list[P.Library], check: bool) -> int:
+    status = 0
+    for library in libraries:
+        if check:
+            state = P.check_shipped_thumbnails(library)
+            for line in state.problems():
+                print(f"problem: {line}", file=sys.stderr)
+            if not state.ok:
+                again = "" if library.folder == P.BUILTIN_FOLDER else f" {library.folder}"
+                print(f"{library.folder}: the shipped thumbnails are out of date; run {P.REGENERATE_COMMAND}{again}",
+                      file=sys.stderr)
+                status = 2
+            continue
+        made, removed, warnings = P.make_shipped_thumbnails(library)
+        for path in made:
+            print(f"made: {P.printable(path)}")
+        for path in removed:
+            print(f"removed: {P.printable(path)}")
+        _print_warnings(warnings)
+        status = 2 if warnings else status
+    return status
+
+
 def run(args: argparse.Namespace) -> int:
     libraries = _libraries(args.folders)
+    if args.action == "thumbnails":
+        return _thumbnails(libraries, args.check)
     entries, warnings = P.list_presets(libraries)
     if args.action == "list":
         if args.json:
