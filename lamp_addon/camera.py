@@ -23,7 +23,7 @@ from collections.abc import Sequence
 
 import bpy
 
-from . import panels
+from . import panels, properties
 
 MM_PER_BU = 1000.0  # 1 mm of the model is 0.001 Blender units (MODEL.md §2)
 CAMERA_NAME = "Lamp Camera"
@@ -239,19 +239,17 @@ def evaluated_camera(bl_scene):
 def scene_for_render(bl_scene, *, camera_object=None, size: tuple[int, int] | None = None) -> dict:
     """The normalised scene the tracer renders for this Blender scene: the design from the
     panel (``properties.design_to_scene``) seen through Blender's scene camera (evaluated, or
-    ``camera_object``) at the render resolution (or ``size``). Raises ``SceneError``."""
-    from ..core_tracer import scene as core_scene
-    from . import properties
+    ``camera_object``) at the render resolution (or ``size``). Raises ``SceneError``.
 
-    scene = properties.design_to_scene(bl_scene)
+    The Blender camera and size replace the design's own camera and image sections before the
+    scene is checked: the design's camera is not what renders, so it cannot block a render."""
     if camera_object is None:
         camera_object = evaluated_camera(bl_scene)
-    scene["camera"] = scene_camera_to_dict(bl_scene, camera_object)
     render = bl_scene.render
     width, height = size if size is not None else render_size(
         render.resolution_x, render.resolution_y, render.resolution_percentage)
-    scene["image"] = {"width": int(width), "height": int(height)}
-    return core_scene.normalize(scene)
+    return properties.design_to_scene(bl_scene, camera=scene_camera_to_dict(bl_scene, camera_object),
+                                      image={"width": int(width), "height": int(height)})
 
 
 # ---------------------------------------------------------------------------------------------
@@ -267,14 +265,10 @@ class LAMP_OT_camera_from_design(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if context.scene is None or not hasattr(context.scene, "lamp_design"):
-            cls.poll_message_set("No lamp design in this scene")
-            return False
-        return True
+        return properties.poll_design(cls, context)
 
     def execute(self, context):
         from ..core_tracer.scene import SceneError
-        from . import properties
 
         bl_scene = context.scene
         try:
@@ -300,8 +294,7 @@ class LAMP_OT_camera_to_design(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if context.scene is None or not hasattr(context.scene, "lamp_design"):
-            cls.poll_message_set("No lamp design in this scene")
+        if not properties.poll_design(cls, context):
             return False
         if context.scene.camera is None:
             cls.poll_message_set("The scene has no camera")
@@ -310,7 +303,6 @@ class LAMP_OT_camera_to_design(bpy.types.Operator):
 
     def execute(self, context):
         from ..core_tracer.scene import SceneError
-        from . import properties
 
         try:
             properties.scene_to_design(context.scene, scene_for_render(context.scene))
@@ -323,15 +315,7 @@ class LAMP_OT_camera_to_design(bpy.types.Operator):
 classes = (LAMP_OT_camera_from_design, LAMP_OT_camera_to_design)
 
 
-def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
-    panels.add_action("lamp.camera_from_design", "Scene Camera from Design", "CAMERA_DATA")
-    panels.add_action("lamp.camera_to_design", "Design Camera from Scene Camera", "OUTLINER_OB_CAMERA")
-
-
-def unregister() -> None:
-    panels.remove_action("lamp.camera_to_design")
-    panels.remove_action("lamp.camera_from_design")
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = panels.register_actions_factory(classes, (
+    ("lamp.camera_from_design", "Scene Camera from Design", "CAMERA_DATA"),
+    ("lamp.camera_to_design", "Design Camera from Scene Camera", "OUTLINER_OB_CAMERA"),
+))

@@ -134,9 +134,11 @@ def _panels():
             yield panel
 
 
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
 def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
+    _register_classes()
     for panel in _panels():
         panel.COMPAT_ENGINES.add(ENGINE_ID)
 
@@ -144,5 +146,4 @@ def register() -> None:
 def unregister() -> None:
     for panel in _panels():
         panel.COMPAT_ENGINES.discard(ENGINE_ID)
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+    _unregister_classes()

@@ -1,51 +1,116 @@
-"""Operators that edit the design: add and remove lamps, build the lamp as objects."""
+"""Operators that edit the design: add and remove lamps, build the lamp as objects.
+
+Add Lamp keeps a valid design valid: the new lamp is a copy of the active one (the spec's default
+lamp in an empty design), placed right of the others with a small margin, and the body grows to
+hold it. When the result would not be a valid design (a body wider than the spec allows), poll and
+execute refuse, naming the field and its allowed range.
+"""
 
 from __future__ import annotations
+
+import copy
 
 import bpy
 
 from ..core_tracer import spec
-from ..core_tracer.scene import SceneError
+from ..core_tracer.scene import SceneError, parse_scene
+from . import properties
+
+MARGIN_MM = 5.0  # between a new lens and its neighbour, and at least between it and the body's edge
 
 
 class LAMP_OT_lamp_add(bpy.types.Operator):
     bl_idname = "lamp.lamp_add"
     bl_label = "Add Lamp"
-    bl_description = f"Add a lamp with default values to the design (at most {spec.MAX_LAMPS})"
+    bl_description = (f"Add a copy of the active lamp right of the others (at most {spec.MAX_LAMPS} lamps; the "
+                      "first one with default values); the body grows to hold it")
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
     def poll(cls, context):
-        if context.scene is None:
+        if not properties.poll_design(cls, context):
             return False
         if len(context.scene.lamp_design.lamps) >= spec.MAX_LAMPS:
             cls.poll_message_set(f"A design has at most {spec.MAX_LAMPS} lamps")
+            return False
+        refusal = _add_refusal(context.scene)
+        if refusal is not None:
+            cls.poll_message_set(refusal)
             return False
         return True
 
     def execute(self, context):
         design = context.scene.lamp_design
-        lamp = design.lamps.add()
-        center = free_lamp_center(design, lamp.lens.radius)
-        if center is not None:
-            lamp.center = center
+        try:
+            doc = design_with_new_lamp(properties.design_document(context.scene), design.active_lamps_index)
+        except SceneError as e:
+            self.report({"ERROR"}, f"Cannot add a lamp: {e}")
+            return {"CANCELLED"}
+        properties.set_lamp(design.lamps.add(), doc["lamps"][-1])
+        design.body.center = doc["body"]["center"]
+        design.body.size = doc["body"]["size"]
         design.active_lamps_index = len(design.lamps) - 1
         return {"FINISHED"}
 
 
-def free_lamp_center(design, radius: float, step: float = 5.0) -> tuple[float, float] | None:
-    """The free place nearest the body centre for a new lens of ``radius`` (mm), or None if there is none."""
-    bx, bz = design.body.center
-    w, h = design.body.size
-    others = [(tuple(lamp.center), lamp.lens.radius) for lamp in design.lamps[:-1]]
-    nx, nz = int((w / 2 - radius) // step), int((h / 2 - radius) // step)
-    candidates = sorted(((i * step, j * step) for i in range(-nx, nx + 1) for j in range(-nz, nz + 1)),
-                        key=lambda c: (c[0] ** 2 + c[1] ** 2, c))
-    for dx, dz in candidates:
-        x, z = bx + dx, bz + dz
-        if all((x - ox) ** 2 + (z - oz) ** 2 >= (radius + r) ** 2 for (ox, oz), r in others):
-            return (x, z)
-    return None
+_refusal_memo: dict = {"key": None, "refusal": None}  # the last design poll checked, and its answer
+
+
+def _add_refusal(bl_scene) -> str | None:
+    """Why a lamp cannot be added to the scene's design, or None. Checking a design takes
+    milliseconds and poll runs at every redraw of the panel, so the answer is kept until the
+    design changes."""
+    key = (properties.design_document(bl_scene), bl_scene.lamp_design.active_lamps_index)
+    if _refusal_memo["key"] != key:
+        try:
+            design_with_new_lamp(*key)
+            refusal = None
+        except SceneError as e:
+            refusal = f"Cannot add a lamp: {e}"
+        _refusal_memo.update(key=key, refusal=refusal)
+    return _refusal_memo["refusal"]
+
+
+def design_with_new_lamp(doc: dict, active_index: int) -> dict:
+    """A copy of the design document ``doc`` with a lamp added by ``place_new_lamp``: a copy of
+    the active lamp (so its lens radius, and a reflector and bulb that fit that lens), or the
+    spec's default lamp in an empty design. Raises ``SceneError`` (field and allowed range) when
+    the result is not a valid design, checked as ``parse_scene`` does, camera aside (a new lamp
+    does not change what the camera may be)."""
+    doc = copy.deepcopy(doc)
+    lamps = doc["lamps"]
+    if 0 <= active_index < len(lamps):
+        lamps.append(copy.deepcopy(lamps[active_index]))
+    else:
+        lamps.append(parse_scene({"schema": spec.SCHEMA, "lamps": [{}]})["lamps"][0])
+    place_new_lamp(doc)
+    parse_scene({key: value for key, value in doc.items() if key != "camera"})
+    return doc
+
+
+def place_new_lamp(doc: dict, margin: float = MARGIN_MM) -> None:
+    """Place the last lamp of the design document ``doc`` and make the body hold it (in place).
+
+    The new lens goes ``margin`` to the right of the rightmost lens, at its own height ``center[1]``
+    (the first lamp at the body's centre). The body keeps its other edges and grows on each side the
+    new lens needs, leaving beside it the free border the body has left of its leftmost lens (at
+    least ``margin``), so the body's centre moves as it grows."""
+    *others, new = doc["lamps"]
+    radius = new["lens"]["radius"]
+    body = doc["body"]
+    (bx, bz), (width, height) = body["center"], body["size"]
+    left, right, bottom, top = bx - width / 2, bx + width / 2, bz - height / 2, bz + height / 2
+    if others:
+        x = max(o["center"][0] + o["lens"]["radius"] for o in others) + margin + radius
+        z = new["center"][1]
+        border = max(margin, min(o["center"][0] - o["lens"]["radius"] for o in others) - left)
+    else:
+        x, z, border = bx, bz, margin
+    new["center"] = [x, z]
+    left, right = min(left, x - radius - border), max(right, x + radius + border)
+    bottom, top = min(bottom, z - radius - margin), max(top, z + radius + margin)
+    body["center"] = [(left + right) / 2, (bottom + top) / 2]
+    body["size"] = [right - left, top - bottom]
 
 
 class LAMP_OT_lamp_remove(bpy.types.Operator):
@@ -56,7 +121,7 @@ class LAMP_OT_lamp_remove(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if context.scene is None:
+        if not properties.poll_design(cls, context):
             return False
         design = context.scene.lamp_design
         if not 0 <= design.active_lamps_index < len(design.lamps):
@@ -83,7 +148,7 @@ class LAMP_OT_build(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if context.scene is None:
+        if not properties.poll_design(cls, context):
             return False
         if context.mode != "OBJECT":
             cls.poll_message_set("Switch to Object Mode first")
@@ -94,7 +159,7 @@ class LAMP_OT_build(bpy.types.Operator):
         return True
 
     def execute(self, context):
-        from . import builder, properties
+        from . import builder
 
         try:
             scene = properties.design_to_scene(context.scene)
@@ -115,11 +180,4 @@ classes = (
 )
 
 
-def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(classes)

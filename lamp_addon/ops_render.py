@@ -193,13 +193,5 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
 classes = (LAMP_OT_render_tracer,)
 
 
-def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
-    panels.add_action("lamp.render_tracer", "Render with Lamp Tracer", "RENDER_STILL")
-
-
-def unregister() -> None:
-    panels.remove_action("lamp.render_tracer")
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = panels.register_actions_factory(
+    classes, (("lamp.render_tracer", "Render with Lamp Tracer", "RENDER_STILL"),))

@@ -28,6 +28,25 @@ def remove_action(idname: str) -> None:
     ACTION_OPERATORS[:] = [entry for entry in ACTION_OPERATORS if entry[0] != idname]
 
 
+def register_actions_factory(classes: tuple[type, ...], actions: tuple[tuple[str, str, str], ...]):
+    """``register``/``unregister`` of a module whose operators show as buttons in the actions area:
+    ``bpy.utils.register_classes_factory(classes)`` plus ``add_action`` of each (idname, text, icon)
+    of ``actions`` (in order), taken away again in reverse."""
+    register_classes, unregister_classes = bpy.utils.register_classes_factory(classes)
+
+    def register() -> None:
+        register_classes()
+        for action in actions:
+            add_action(*action)
+
+    def unregister() -> None:
+        for idname, _text, _icon in reversed(actions):
+            remove_action(idname)
+        unregister_classes()
+
+    return register, unregister
+
+
 def leaf_keys(section: S.Section) -> list[str]:
     """The keys of ``section`` drawn as plain properties: leaves that are not constants."""
     return [key for key, spec in section.fields.items()
@@ -195,11 +214,4 @@ classes = (
 )
 
 
-def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(classes)

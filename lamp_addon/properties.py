@@ -218,12 +218,32 @@ def _read_section(group, section: S.Section) -> dict:
     return out
 
 
-def design_to_scene(bl_scene: bpy.types.Scene) -> dict:
+def poll_design(cls, context) -> bool:
+    """The ``poll`` of operators that work on the scene's design: False, saying why, without one."""
+    if context.scene is None or not hasattr(context.scene, "lamp_design"):
+        cls.poll_message_set("No lamp design in this scene")
+        return False
+    return True
+
+
+def design_document(bl_scene: bpy.types.Scene) -> dict:
+    """The scene's design as a ``lamp-scene/1`` document, read but not checked (``parse_scene`` checks it)."""
+    return _read_section(bl_scene.lamp_design, S.SCENE)
+
+
+def design_to_scene(bl_scene: bpy.types.Scene, *, camera: dict | None = None, image: dict | None = None) -> dict:
     """The scene's design as a normalised ``lamp-scene/1`` scene; raises ``SceneError`` if it is invalid.
 
-    The camera is the design's own camera section (the Blender camera is applied elsewhere).
+    The camera and image are the design's own sections unless ``camera`` / ``image`` replace them;
+    they are replaced before the scene is checked, so an out-of-date design camera cannot block a
+    render through Blender's scene camera (``camera.scene_for_render``).
     """
-    return lamp_scene.parse_scene(_read_section(bl_scene.lamp_design, S.SCENE))
+    doc = design_document(bl_scene)
+    if camera is not None:
+        doc["camera"] = camera
+    if image is not None:
+        doc["image"] = image
+    return lamp_scene.parse_scene(doc)
 
 
 def _check_section(data: dict, section: S.Section, path: str) -> None:
@@ -274,6 +294,12 @@ def _write_section(group, section: S.Section, data: dict) -> None:
         group.color_mode = next(mode for mode, keys in LENS_COLOR_MODES.items() if keys[0] in data)
 
 
+def set_lamp(item, lamp: dict) -> None:
+    """Set one lamp of the design (an item of ``lamp_design.lamps``) from a lamp of a checked design
+    document or scene."""
+    _write_section(item, S.LAMP, lamp)
+
+
 def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
     """Set the scene's design from a scene; validates everything first, so it applies all or nothing.
 
@@ -284,11 +310,4 @@ def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
     _write_section(bl_scene.lamp_design, S.SCENE, scene)
 
 
-def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(classes)

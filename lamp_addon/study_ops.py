@@ -206,23 +206,23 @@ def _chosen_variant(operator, context) -> tuple[st.Study, int] | None:
     return study, index
 
 
-def _variant_poll(cls, context) -> bool:
-    if last_study() is None:
-        cls.poll_message_set("Run a study first")
-        return False
-    return True
+class _OnLastStudy:
+    """Operators on the last study's sheet or its chosen variant: available once there is a study."""
+
+    @classmethod
+    def poll(cls, context):
+        if last_study() is None:
+            cls.poll_message_set("Run a study first")
+            return False
+        return True
 
 
-class LAMP_OT_study_apply_variant(bpy.types.Operator):
+class LAMP_OT_study_apply_variant(_OnLastStudy, bpy.types.Operator):
     """Set the design's varied parameters to the values of the chosen variant"""
 
     bl_idname = "lamp.study_apply_variant"
     bl_label = "Apply to Design"
     bl_options = {"REGISTER", "UNDO"}
-
-    @classmethod
-    def poll(cls, context):
-        return _variant_poll(cls, context)
 
     def execute(self, context):
         chosen = _chosen_variant(self, context)
@@ -242,16 +242,12 @@ class LAMP_OT_study_apply_variant(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class LAMP_OT_study_keep_variant(bpy.types.Operator):
+class LAMP_OT_study_keep_variant(_OnLastStudy, bpy.types.Operator):
     """Save the chosen variant as a preset in your preset library"""
 
     bl_idname = "lamp.study_keep_variant"
     bl_label = "Keep as Preset"
     bl_options = {"REGISTER"}
-
-    @classmethod
-    def poll(cls, context):
-        return _variant_poll(cls, context)
 
     def execute(self, context):
         from . import preset_library
@@ -277,7 +273,7 @@ class LAMP_OT_study_keep_variant(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class LAMP_OT_study_save_sheet(bpy.types.Operator, ExportHelper):
+class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
     """Save the contact sheet as EXR (linear) or PNG (sRGB), with the study in its header"""
 
     bl_idname = "lamp.study_save_sheet"
@@ -286,10 +282,6 @@ class LAMP_OT_study_save_sheet(bpy.types.Operator, ExportHelper):
 
     filename_ext = ".png"
     filter_glob: StringProperty(default="*.png;*.exr", options={"HIDDEN"})
-
-    @classmethod
-    def poll(cls, context):
-        return _variant_poll(cls, context)
 
     def check(self, context):
         # Keep a .exr the user typed; anything else becomes .png.
@@ -335,12 +327,9 @@ def _openimageio_available() -> bool:
 classes = (LAMP_OT_study_run, LAMP_OT_study_apply_variant, LAMP_OT_study_keep_variant, LAMP_OT_study_save_sheet)
 
 
-def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
+register, _unregister_classes = bpy.utils.register_classes_factory(classes)
 
 
 def unregister() -> None:
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
-    _cache.update(json=None, study=None)
+    _unregister_classes()
+    _cache.update(json=None, study=None)  # the cached study belongs to this registration

@@ -229,11 +229,4 @@ class LAMP_PT_study(bpy.types.Panel):
 classes = (LAMP_PG_study_axis_1, LAMP_PG_study_axis_2, LAMP_PG_study, LAMP_PT_study)
 
 
-def register() -> None:
-    for cls in classes:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(classes)

@@ -336,6 +336,53 @@ def test_lamp_list_operators(lamp_addon, bl_scene):
         bpy.ops.lamp.lamp_remove()
 
 
+def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, scene_mod):
+    import bpy
+
+    props, margin = lamp_addon.properties, lamp_addon.ops_design.MARGIN_MM
+    baseline = _load(scene_mod, "paper-baseline")
+    props.scene_to_design(bl_scene, baseline)
+    design = bl_scene.lamp_design
+    design.lamps[0].lens.radius = 50.0  # a new lamp is a copy of the active one: its radius
+    design.lamps[0].lens.ior = 1.6
+    border = 110.0 - 50.0  # free body left of the first lens, kept right of the last one
+    for count in (2, 3, 4):
+        assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
+        scene = props.design_to_scene(bl_scene)  # valid: no overlap, every lens inside the body
+        assert len(scene["lamps"]) == count and design.active_lamps_index == count - 1
+        new, previous = scene["lamps"][-1], scene["lamps"][-2]
+        assert {**new, "center": None} == {**previous, "center": None}  # a copy of the active lamp ...
+        assert new["center"][1] == previous["center"][1]  # ... in its row, right of it
+        assert new["center"][0] - previous["center"][0] == pytest.approx(2 * 50.0 + margin)
+        (bx, bz), (width, height) = scene["body"]["center"], scene["body"]["size"]
+        assert (bx - width / 2, bz, height) == pytest.approx((-110.0, 0.0, 120.0))  # grown to the right only
+        assert bx + width / 2 - (new["center"][0] + 50.0) == pytest.approx(border)
+        assert scene["lamps"][0]["center"] == baseline["lamps"][0]["center"]  # the first lamp stays
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    assert not bpy.ops.lamp.lamp_add.poll()  # four is the most
+    for count in (3, 2, 1):
+        assert bpy.ops.lamp.lamp_remove() == {"FINISHED"}
+        assert len(props.design_to_scene(bl_scene)["lamps"]) == count
+
+
+def test_adding_a_lamp_that_does_not_fit_the_spec_is_refused(lamp_addon, bl_scene, scene_mod):
+    import bpy
+
+    props = lamp_addon.properties
+    props.scene_to_design(bl_scene, _load(scene_mod, "paper-baseline"))
+    bl_scene.lamp_design.body.size = (9990.0, 120.0)  # the lens in the middle: no room within 10 m
+    before = props.design_to_scene(bl_scene)
+    assert not bpy.ops.lamp.lamp_add.poll()
+    with pytest.raises(RuntimeError, match=r"Cannot add a lamp: body\.size\[0\]: 10085(\.0)? is out of range; allowed"):
+        bpy.ops.lamp.lamp_add()
+    assert props.design_to_scene(bl_scene) == before  # nothing added, nothing moved
+    doc = props.design_document(bl_scene)  # the check execute makes, past poll
+    with pytest.raises(lamp_addon.ops_design.SceneError, match=r"body\.size"):
+        lamp_addon.ops_design.design_with_new_lamp(doc, 0)
+    bl_scene.lamp_design.body.size = (9900.0, 120.0)  # a little more room: poll sees the change
+    assert bpy.ops.lamp.lamp_add.poll()
+
+
 # ---------------------------------------------------------------------------------------------
 # Materials
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -76,22 +77,33 @@ def test_side_by_side_layout_and_labels(lamp_addon):
     assert out[:strip, :30].max() > 0.5 and out[:strip, 32:].max() > 0.5  # a label above each half
 
 
-def test_side_by_side_picks_the_label_that_fits(lamp_addon):
+def test_side_by_side_picks_the_label_that_fits(lamp_addon, addon_core):
     compare = lamp_addon.compare
-    font = lamp_addon.bitmap_font
-    measure = lambda t: font.text_mask(t).shape[1]  # noqa: E731
+    measure = lambda t: len(t) * addon_core.bitmap_font.ADVANCE_W  # noqa: E731
     assert compare._fitting(("Lamp Tracer  0.12 s", "Lamp Tracer", "Tracer"), 70, measure) == "Lamp Tracer"
     assert compare._fitting(("Lamp Tracer  0.12 s", "Lamp Tracer"), 10, measure) == "Lamp Tracer"
 
 
-def test_bitmap_font_draws_and_clips(lamp_addon):
-    font = lamp_addon.bitmap_font
-    mask = font.text_mask("Cycles 64", scale=2)
-    assert mask.shape == (14, (6 * 9 - 1) * 2)
-    assert mask.any()
-    image = np.zeros((10, 12, 3), np.float32)
-    font.draw_text(image, "Lamp Tracer", 2, 1)  # wider than the image: clipped, no error
-    assert image[1:8, 2:].any() and not image[8:].any() and not image[:, :2].any()
+def test_bitmap_labels_use_core_tracers_font(lamp_addon, addon_core):
+    compare, font = lamp_addon.compare, addon_core.bitmap_font
+    assert compare.bitmap_font is font  # one font in the project, core_tracer's
+    labels = ("Lamp Tracer  12.34 s", "Tracer", "Cycles  64 spp  56.7 s", "Cycles  56.7 s", "Cycles")
+    assert all(c.upper() in font.GLYPHS for label in labels for c in label)  # no character drawn as a box
+    left = np.zeros((40, 120, 3), np.float32)
+    out = compare.side_by_side(left, left, ("Lamp Tracer",), ("Cycles  64 spp  1.0 s", "Cycles"), text="bitmap")
+    strip = compare.label_height(40)
+    # The left label is "Lamp Tracer" in the font, from 3 px in and 3 px down; the right one, too long
+    # for 120 px with its figures, is "Cycles".
+    mask = font.text_mask("Lamp Tracer")
+    rows, cols = min(mask.shape[0], strip - 3), mask.shape[1]
+    np.testing.assert_array_equal(out[3:3 + rows, 3:3 + cols, 0], mask[:rows])
+    right = out[:strip, 120 + 2:]
+    cycles = font.text_mask("Cycles")
+    np.testing.assert_array_equal(right[3:3 + rows, 3:3 + cycles.shape[1], 1], cycles[:rows])
+    assert not right[:, 3 + cycles.shape[1]:].any()
+    # A label wider than its half is clipped to it, not drawn across the gap.
+    narrow = compare.side_by_side(left[:, :20], left[:, :20], ("Lamp Tracer",), ("Cycles",), text="bitmap")
+    assert narrow.shape[1] == 42 and (narrow[:, 20:22] == 0.5).all()
 
 
 def test_differences(lamp_addon):
@@ -110,20 +122,63 @@ def test_differences(lamp_addon):
 # The comparison in Blender
 
 
+def _user_settings(bl_scene) -> None:
+    """Settings a user may have, each unlike what the comparison sets."""
+    bl_scene.render.engine = "BLENDER_EEVEE"
+    bl_scene.render.resolution_x, bl_scene.render.resolution_y = 77, 55
+    bl_scene.render.resolution_percentage = 50
+    bl_scene.render.use_border = True
+    bl_scene.cycles.samples = 123
+    bl_scene.cycles.use_denoising = True
+    bl_scene.cycles.filter_width = 1.5
+    bl_scene.render.image_settings.file_format = "PNG"
+    bl_scene.render.image_settings.color_depth = "8"  # not a depth OpenEXR has
+    bl_scene.view_settings.view_transform = "AgX"
+    bl_scene.view_settings.exposure = 0.5
+
+
+def _settings(compare, bl_scene) -> dict:
+    """Every scene setting a comparison changes, by owner and name."""
+    owners = {
+        "render": (bl_scene.render, ("engine", "resolution_x", "resolution_y", "resolution_percentage", "use_border")),
+        "cycles": (bl_scene.cycles, ("samples", *compare.MIN_BOUNCES, *compare.CYCLES_SETTINGS)),
+        "view": (bl_scene.view_settings, tuple(compare.STANDARD_VIEW)),
+        "output": (bl_scene.render.image_settings,
+                   tuple(compare._exr_output_values(bl_scene.render.image_settings))),
+    }
+    return {f"{name}.{key}": getattr(owner, key) for name, (owner, keys) in owners.items() for key in keys}
+
+
+def _handlers_installed(compare) -> list[str]:
+    import bpy
+
+    return [name for name, handler in compare.HANDLERS.items() if handler in getattr(bpy.app.handlers, name)]
+
+
+def _design_and_user_settings(lamp_addon, bl_scene, size=(24, 16)) -> dict:
+    """The baseline design with its scene camera and the user's settings; returns those settings."""
+    lamp_addon.properties.scene_to_design(bl_scene, _scene(size=size))
+    lamp_addon.camera.ensure_scene_camera(bl_scene, _scene())
+    _user_settings(bl_scene)
+    return _settings(lamp_addon.compare, bl_scene)
+
+
 def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, tmp_path):
     import bpy
 
+    compare = lamp_addon.compare
     scene = _scene(size=(40, 24))
     lamp_addon.properties.scene_to_design(bl_scene, scene)
-    bl_scene.render.engine = "BLENDER_EEVEE"
-    bl_scene.cycles.samples = 123
-    bl_scene.render.image_settings.file_format = "PNG"
-    result = lamp_addon.compare.compare_design(bl_scene, samples=2)
+    lamp_addon.camera.ensure_scene_camera(bl_scene, scene)
+    _user_settings(bl_scene)
+    before = _settings(compare, bl_scene)
+    result = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
     assert result["size"] == (40, 24) and result["samples"] == 2
     assert result["seconds"]["tracer"] > 0 and result["seconds"]["cycles"] > 0
-    # The lamp was built and the design's camera became the scene camera.
-    assert bl_scene.camera is not None
-    assert any(o.name == "Lamp 1 Bulb" for o in bl_scene.objects)
+    assert any(o.name == "Lamp 1 Bulb" for o in bl_scene.objects)  # the lamp was built
+    # Everything the comparison changed for itself is put back, and its handlers are gone.
+    assert _settings(compare, bl_scene) == before and result["not_restored"] == []
+    assert _handlers_installed(compare) == [] and compare.running() is None
     # The tracer half is core_tracer's image of the same scene, exactly.
     np.testing.assert_array_equal(result["tracer"], core_tracer.render(result["scene"]))
     # Render Result: Cycles in slot 1, the tracer in slot 2 (indices 0 and 1).
@@ -135,13 +190,137 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
         path = tmp_path / f"slot{index}.exr"
         render_result.save_render(str(path), scene=bl_scene)
         np.testing.assert_array_equal(imageio.read_image(path)[0], result[key])
-    # The side-by-side image, and everything the comparison changed for itself put back.
+    # The side-by-side image.
     compare_image = bpy.data.images["Lamp Compare"]
     assert tuple(compare_image.size) == (result["side_by_side"].shape[1], result["side_by_side"].shape[0])
     np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(compare_image), result["side_by_side"])
-    assert bl_scene.render.engine == "BLENDER_EEVEE" and bl_scene.cycles.samples == 123
-    assert bl_scene.render.image_settings.file_format == "OPEN_EXR"
-    assert bl_scene.view_settings.view_transform == "Standard"
+
+
+def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):
+    scene = _scene(size=(24, 16))
+    lamp_addon.properties.scene_to_design(bl_scene, scene)
+    assert bl_scene.camera is None
+    result = lamp_addon.compare.compare_design(bl_scene, samples=1)
+    assert bl_scene.camera is not None  # the design's camera became the scene camera
+    assert result["size"] == (24, 16) and result["scene"]["camera"]["position"] == pytest.approx(
+        scene["camera"]["position"], abs=1e-3)
+
+
+# ---------------------------------------------------------------------------------------------
+# The steps of the modal path. Without a window, Blender's render job is not a job: an
+# INVOKE_DEFAULT render runs to the end at once and calls the render handlers then. So these tests
+# take a comparison through the modal path's steps (start as a render job, the handlers' report,
+# advance on the timer, close on every exit) but cannot show that the interface stays live.
+
+
+def _modal_run(compare, bl_scene, samples=2, resolution=(40, 24)):
+    run = compare.CompareRun(bl_scene, samples=samples, resolution=resolution)
+    compare.watch(run)
+    run.prepare()
+    assert run.ended is None
+    run.start(compare.CYCLES, invoke=True)
+    return run
+
+
+def test_modal_steps_give_the_synchronous_result(lamp_addon, bl_scene):
+    compare = lamp_addon.compare
+    before = _design_and_user_settings(lamp_addon, bl_scene, (40, 24))
+    blocking = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
+
+    run = _modal_run(compare, bl_scene)
+    try:
+        assert _handlers_installed(compare) == ["render_complete", "render_cancel"]
+        assert run.ended == "complete"  # reported by Blender through the render_complete handler
+        assert not compare.LAMP_OT_compare_cycles.poll(SimpleNamespace(scene=bl_scene))  # one at a time
+        assert run.advance() is False  # Cycles read back, the tracer started
+        assert run.stage is compare.TRACER and set(run.images) == {"cycles"}
+        assert run.advance() is True
+        result = run.compose()
+    finally:
+        run.close()
+    assert _settings(compare, bl_scene) == before and run.not_restored == []
+    assert _handlers_installed(compare) == [] and compare.running() is None
+    np.testing.assert_array_equal(result["tracer"], blocking["tracer"])
+    np.testing.assert_array_equal(result["cycles"], blocking["cycles"])  # seed 0: Cycles repeats itself
+    assert result["scene"] == blocking["scene"]
+
+
+def _cancel_as_blender_does(bl_scene) -> None:
+    import bpy
+
+    for handler in list(bpy.app.handlers.render_cancel):
+        handler(bl_scene, None)
+
+
+@pytest.mark.parametrize("stage", ["cycles", "tracer"])
+def test_a_cancelled_render_restores_the_settings_and_removes_the_handlers(lamp_addon, bl_scene, stage):
+    compare = lamp_addon.compare
+    before = _design_and_user_settings(lamp_addon, bl_scene)
+    run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
+    assert _settings(compare, bl_scene) != before
+    if stage == "tracer":
+        assert run.advance() is False and run.stage is compare.TRACER
+    _cancel_as_blender_does(bl_scene)  # Esc: Blender stops the render job and calls render_cancel
+    with pytest.raises(compare.CompareCancelled, match="render cancelled"):
+        run.advance()
+    run.close()  # what the operator does on every way out
+    assert _settings(compare, bl_scene) == before
+    assert _handlers_installed(compare) == [] and compare.running() is None
+    run.close()  # again: nothing more happens
+    assert _settings(compare, bl_scene) == before
+
+
+def test_a_render_of_another_scene_is_not_taken_for_the_comparisons(lamp_addon, bl_scene):
+    import bpy
+
+    compare = lamp_addon.compare
+    lamp_addon.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
+    try:
+        other = bpy.data.scenes.new("Other")
+        for handler in list(bpy.app.handlers.render_cancel):
+            handler(other, None)
+        assert run.ended == "complete"
+    finally:
+        run.close()
+
+
+def test_a_design_edited_between_the_renders_stops_the_comparison(lamp_addon, bl_scene):
+    compare = lamp_addon.compare
+    before = _design_and_user_settings(lamp_addon, bl_scene)
+    run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
+    bl_scene.lamp_design.lamps[0].lens.ior = 1.6  # the interface is live during the Cycles render
+    with pytest.raises(compare.CompareError, match="changed during the Cycles render; compare again"):
+        run.advance()
+    run.close()
+    assert _settings(compare, bl_scene) == before and _handlers_installed(compare) == []
+
+
+def test_a_setting_the_user_changes_during_the_comparison_is_kept(lamp_addon, bl_scene):
+    compare = lamp_addon.compare
+    before = _design_and_user_settings(lamp_addon, bl_scene)
+    run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
+    bl_scene.cycles.seed = 42  # while Cycles renders, the user sets the seed for later
+    run.close()
+    assert _settings(compare, bl_scene) == {**before, "cycles.seed": 42}
+
+
+def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
+    import bpy
+
+    compare, panels = lamp_addon.compare, lamp_addon.panels
+    before = _design_and_user_settings(lamp_addon, bl_scene)
+    actions = list(panels.ACTION_OPERATORS)
+    _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
+    compare.unregister()
+    try:
+        assert _handlers_installed(compare) == [] and compare.running() is None
+        assert _settings(compare, bl_scene) == before
+        assert not hasattr(bpy.types, "LAMP_OT_compare_cycles")
+    finally:
+        compare.register()
+        panels.ACTION_OPERATORS[:] = actions  # the button back in its place
+    assert bpy.ops.lamp.compare_cycles.poll()
 
 
 def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
@@ -177,6 +356,7 @@ def test_compare_operator_reports_design_errors(lamp_addon, bl_scene):
     bl_scene.lamp_design.lamps[0].cuts.pitch = 95.0  # larger than the lens
     with pytest.raises(RuntimeError, match=r"lamps\[0\]\.cuts\.pitch: 95 is larger than the lens"):
         bpy.ops.lamp.compare_cycles(samples=1)
+    assert _handlers_installed(lamp_addon.compare) == [] and lamp_addon.compare.running() is None
 
 
 # ---------------------------------------------------------------------------------------------

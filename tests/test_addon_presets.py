@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 import pytest
-from hostile_presets import make_hostile_folder
+from hostile_presets import leaves, make_hostile_folder
 
 pytestmark = pytest.mark.blender
 
@@ -63,20 +63,6 @@ def select(wm, file_name: str, library: str | None = None) -> None:
     raise AssertionError(f"{file_name} is not listed: {[i.file for i in wm.lamp_presets]}")
 
 
-def leaves(node, prefix: str = "") -> dict:
-    if isinstance(node, dict):
-        out = {}
-        for k, v in node.items():
-            out.update(leaves(v, f"{prefix}.{k}" if prefix else k))
-        return out
-    if isinstance(node, list) and node and isinstance(node[0], dict):
-        out = {}
-        for i, v in enumerate(node):
-            out.update(leaves(v, f"{prefix}[{i}]"))
-        return out
-    return {prefix: node}
-
-
 def test_preferences_belong_to_the_extension(addon, browser):
     import bpy
 
@@ -95,6 +81,20 @@ def test_libraries_are_builtin_user_and_preferences(browser, add_library, tmp_pa
     assert listing.notes == [] and listing.warnings == []
     assert len(wm.lamp_presets) == len(list(BUILTIN.glob("*.json")))
     assert all(item.library == "Built-in" and not item.writable for item in wm.lamp_presets)
+
+
+def test_builtin_thumbnails_are_shipped_not_made(browser):
+    wm = refresh()
+    thumbs = browser.preset_library.thumbnails()
+    assert not thumbs.busy()  # nothing to render: opening the browser stays instant
+    builtin = [item for item in wm.lamp_presets if item.library == "Built-in"]
+    assert len(builtin) == len(list(BUILTIN.glob("*.json")))
+    for item in builtin:
+        path = Path(thumbs.paths[item.file])
+        assert path.parent.name == "thumbnails" and path.parent.parent.samefile(BUILTIN), path
+        assert thumbs.previews[str(path)].image_size[:] == (96, 96)  # loaded for the list (icon_id is 0 headless)
+    cache = Path(browser.preset_library.thumbnail_cache())
+    assert not any(cache.glob("*.png")) if cache.is_dir() else True
 
 
 def test_two_designers_share_a_folder(browser, add_library, bl_scene, tmp_path, addon_core):
@@ -304,3 +304,129 @@ def test_json_files_dropped_on_the_viewport_are_imported(browser):
     assert handler.bl_import_operator == "lamp.preset_import"
     assert handler.bl_file_extensions == ".json"
     assert issubclass(handler, bpy.types.FileHandler)
+
+
+# ---------------------------------------------------------------------------------------------
+# The view a preset records and shows
+
+
+def _move_camera(ob, location, rotation_deg, lens) -> None:
+    import math
+
+    ob.location = location
+    ob.rotation_euler = [math.radians(a) for a in rotation_deg]
+    ob.data.lens = lens
+    ob.data.shift_x = 0.05
+
+
+def _assert_camera_shows(camera_module, bl_scene, preset: dict) -> None:
+    seen = camera_module.scene_camera_to_dict(bl_scene)
+    for key, value in preset["camera"].items():
+        if isinstance(value, str):
+            assert seen[key] == value, key
+        else:
+            assert seen[key] == pytest.approx(value, rel=1e-5, abs=2e-3), key
+    render = bl_scene.render
+    assert (render.resolution_x, render.resolution_y, render.resolution_percentage) == (
+        preset["image"]["width"], preset["image"]["height"], 100)
+
+
+def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_scene, tmp_path, addon_core, capfd):
+    import bpy
+
+    camera = browser.camera
+    team = add_library(tmp_path, "Team share")
+    props = browser.properties
+
+    # Designer 1 applies a preset (the add-on makes its camera), then moves the Blender camera and
+    # changes the render size: the preset records that view, not the design's camera section.
+    select(refresh(), "paper-lens-color.json")
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    assert "made the scene camera \"Lamp Camera\" at its view" in capfd.readouterr().out
+    design_camera = props.design_to_scene(bl_scene)["camera"]
+    _move_camera(bl_scene.camera, (0.25, -1.4, 0.18), (82.0, 0.0, 9.5), 62.0)
+    bl_scene.render.resolution_x, bl_scene.render.resolution_y, bl_scene.render.resolution_percentage = 160, 90, 50
+    bpy.context.view_layer.update()
+    seen = camera.scene_camera_to_dict(bl_scene)
+    assert bpy.ops.lamp.preset_save(name="Amber, low view", author="Alice", library=team) == {"FINISHED"}
+    preset = addon_core.presets.load_preset(Path(team) / "amber-low-view.json")
+    assert preset["image"] == {"width": 80, "height": 45}  # what F12 renders
+    assert preset["camera"]["position"] != design_camera["position"]
+    for key, value in seen.items():
+        assert preset["camera"][key] == (value if isinstance(value, str) else pytest.approx(value, abs=1e-4)), key
+    assert props.design_to_scene(bl_scene)["camera"] == design_camera  # saving changes nothing in the design
+
+    # Exporting records the same view.
+    out = tmp_path / "exported.json"
+    assert bpy.ops.lamp.preset_export(filepath=str(out)) == {"FINISHED"}
+    exported = addon_core.presets.load_preset(out)
+    assert (exported["camera"], exported["image"]) == (preset["camera"], preset["image"])
+
+    # Designer 2, in a new file without a camera, applies it: the same design parameter for parameter,
+    # camera and image included, and a scene camera that shows the same view.
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    assert scene.camera is None
+    select(refresh(), "amber-low-view.json", "Team share")
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    assert leaves(props.design_to_scene(scene)) == leaves(preset)
+    assert scene.camera.name == "Lamp Camera"
+    _assert_camera_shows(camera, scene, preset)
+    # saving it again records exactly the same numbers (no single-precision drift)
+    assert bpy.ops.lamp.preset_save(name="Amber, low view", author="Alice", library=team, overwrite=True) == \
+        {"FINISHED"}
+    assert leaves(addon_core.presets.load_preset(Path(team) / "amber-low-view.json")) == leaves(preset)
+
+    # Applying another preset moves the add-on's camera again.
+    capfd.readouterr()
+    select(refresh(), "paper-baseline.json", "Built-in")
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    assert "moved \"Lamp Camera\" to its view" in capfd.readouterr().out
+    _assert_camera_shows(camera, scene, props.design_to_scene(scene))
+
+
+def test_applying_never_moves_the_designers_own_camera(browser, bl_scene, addon_core, capfd):
+    import bpy
+
+    own = bpy.data.objects.new("Studio", bpy.data.cameras.new("Studio"))
+    bl_scene.collection.objects.link(own)
+    bl_scene.camera = own
+    _move_camera(own, (0.1, -2.0, 0.3), (80.0, 0.0, 3.0), 85.0)
+    bl_scene.render.resolution_x, bl_scene.render.resolution_y = 320, 200
+    bpy.context.view_layer.update()
+    before = ([list(row) for row in own.matrix_world], own.data.lens, own.data.shift_x)
+    select(refresh(), "four-lamp-rear-combination.json")
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    assert "kept your camera \"Studio\"" in capfd.readouterr().out
+    assert ([list(row) for row in own.matrix_world], own.data.lens, own.data.shift_x) == before
+    assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (320, 200)
+    assert bl_scene.camera == own and "Lamp Camera" not in bpy.data.objects
+    preset = addon_core.presets.load_preset(BUILTIN / "four-lamp-rear-combination.json")
+    assert leaves(browser.properties.design_to_scene(bl_scene)) == leaves(preset)  # the design has its view
+
+
+def test_a_camera_the_tracer_cannot_render_is_not_saved(browser, add_library, bl_scene, tmp_path):
+    import bpy
+
+    team = add_library(tmp_path, "Team")
+    select(refresh(), "paper-baseline.json")
+    bpy.ops.lamp.preset_apply()
+    bl_scene.camera.data.type = "PANO"
+    with pytest.raises(RuntimeError, match="Preset not saved: camera.type"):
+        bpy.ops.lamp.preset_save(name="Pano", library=team)
+    assert list(tmp_path.glob("*.json")) == []
+
+
+def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(browser, add_library, bl_scene,
+                                                                             tmp_path, addon_core):
+    import bpy
+
+    team = add_library(tmp_path, "Team")
+    select(refresh(), "paper-baseline.json")
+    bpy.ops.lamp.preset_apply()
+    bl_scene.lamp_design.camera.position = (0.0, 500.0, 0.0)  # behind the lamp: not a view of it
+    with pytest.raises(addon_core.SceneError, match="camera.position"):
+        browser.properties.design_to_scene(bl_scene)
+    assert bpy.ops.lamp.preset_save(name="Seen", library=team) == {"FINISHED"}
+    saved = addon_core.presets.load_preset(tmp_path / "seen.json")
+    assert saved["camera"]["position"] == [0.0, -800.0, 0.0]  # where the Lamp Camera is

@@ -183,6 +183,27 @@ def test_camera_operators(lamp_addon, bl_scene):
     assert design["image"] == {"width": 64, "height": 30}
 
 
+def test_an_out_of_date_design_camera_does_not_block_a_render(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    scene = _preset_scene(size=(24, 16))
+    _load_design(lamp_addon, bl_scene, scene)
+    bl_scene.lamp_design.camera.position = (0.0, 500.0, 0.0)  # the design's own camera: behind the lamp
+    with pytest.raises(addon_core.SceneError, match=r"camera\.position: y = 500"):
+        lamp_addon.properties.design_to_scene(bl_scene)
+    # The Blender camera renders, and it replaces the design's camera before the scene is checked.
+    seen = lamp_addon.camera.scene_for_render(bl_scene)
+    assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-3)
+    assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
+    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Tracer"]),
+                                  core_tracer.render(seen))
+    bl_scene.render.engine = "LAMP_TRACER"
+    assert bpy.ops.render.render() == {"FINISHED"}  # the engine reports no error
+    assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # and the design camera can be brought up to date
+    assert lamp_addon.properties.design_to_scene(bl_scene)["camera"]["position"] == pytest.approx(
+        seen["camera"]["position"], abs=1e-3)
+
+
 # ---------------------------------------------------------------------------------------------
 # The render engine
 
