@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
+import threading
+from collections.abc import Iterator
 
 from .. import spec as S
 from ..scene import SceneError, parse_scene, read_json
@@ -47,3 +51,18 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
         return parse_scene(doc)
     except SceneError as e:
         raise in_file(e, path) from None
+
+
+@contextlib.contextmanager
+def ctrl_c_sets(stop: threading.Event | None = None) -> Iterator[threading.Event]:
+    """While rendering, Ctrl-C sets an event that the work polls between bands or variants,
+    instead of interrupting numpy, the tracer's threads or the study's workers wherever they are."""
+    stop = stop or threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: stop.set())
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -3,16 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
-import signal
-import threading
 import time
-from collections.abc import Iterator
 
 from ..imageio import image_format
 from ..scene import SceneError
-from . import load_scene_file
+from . import ctrl_c_sets, load_scene_file
 
 HELP = "render a scene to an .exr (linear, scene in the header) or .png (sRGB) image"
 
@@ -32,21 +28,6 @@ def _check_folder(path: str, what: str) -> None:
         raise SceneError(path, f"the {what} folder {folder} does not exist")
 
 
-@contextlib.contextmanager
-def _ctrl_c_stops_between_bands() -> Iterator[threading.Event]:
-    """While rendering, Ctrl-C asks the tracer to stop at the next band instead of interrupting
-    numpy (and the tracer's threads) wherever they are."""
-    stop = threading.Event()
-    if threading.current_thread() is not threading.main_thread():
-        yield stop
-        return
-    previous = signal.signal(signal.SIGINT, lambda signum, frame: stop.set())
-    try:
-        yield stop
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 def run(args: argparse.Namespace) -> int:
     # Every check on the user's input happens before the (long) render.
     image_format(args.output)
@@ -59,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     from ..imageio import write_image
 
     start = time.perf_counter()
-    with _ctrl_c_stops_between_bands() as stop:
+    with ctrl_c_sets() as stop:
         try:
             result = render_passes(scene, should_stop=stop.is_set)
         except RenderCancelled:

@@ -7,18 +7,14 @@ carries its study in its header), and ``study --list`` prints the parameters a s
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
-import signal
 import sys
-import threading
 import time
-from collections.abc import Iterator
 
 from .. import study as st
 from ..imageio import image_format
 from ..scene import SceneError
-from . import in_file
+from . import ctrl_c_sets, in_file
 
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
 
@@ -90,20 +86,6 @@ def _build(args: argparse.Namespace) -> st.Study:
         raise
 
 
-@contextlib.contextmanager
-def _ctrl_c_cancels() -> Iterator[threading.Event]:
-    """While rendering, Ctrl-C asks the study to stop (workers ended, temporary files removed)."""
-    stop = threading.Event()
-    if threading.current_thread() is not threading.main_thread():
-        yield stop
-        return
-    previous = signal.signal(signal.SIGINT, lambda signum, frame: stop.set())
-    try:
-        yield stop
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 def _progress_printer():
     if not sys.stderr.isatty():
         return None
@@ -145,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     from .. import study_run, study_sheet  # the tracer loads only when it is needed
 
     start = time.perf_counter()
-    with _ctrl_c_cancels() as stop:
+    with ctrl_c_sets() as stop:
         try:
             images = study_run.run_study(study, args.workers, progress=_progress_printer(), should_stop=stop.is_set)
         except study_run.Cancelled:
