@@ -30,6 +30,9 @@ def _oiio():
     return OpenImageIO
 
 
+EXPOSURE_ATTRIBUTE = "lamp:exposure"  # stops applied to a PNG before encoding; read_image undoes it
+
+
 def image_format(path: str | os.PathLike) -> str:
     """``"exr"`` or ``"png"`` from the file name; a ``SceneError`` naming the path otherwise."""
     name = os.fspath(path)
@@ -70,11 +73,15 @@ def write_image(
     scene: dict | None = None,
     *,
     passes: Mapping[str, np.ndarray] | None = None,
+    attributes: Mapping[str, str] | None = None,
+    exposure: float = 0.0,
 ) -> None:
     """Write ``image`` (H, W, 3 linear RGB, top row first) as EXR or PNG, chosen by the suffix.
 
-    ``scene`` is normalised and stored as JSON in the ``lamp:scene`` attribute. ``passes``
-    (name -> H, W, 3) become extra channels ``name.R/G/B`` of an EXR; a PNG cannot hold them.
+    ``scene`` is normalised and stored as JSON in the ``lamp:scene`` attribute; ``attributes``
+    are further string attributes of the header. ``passes`` (name -> H, W, 3) become extra
+    channels ``name.R/G/B`` of an EXR; a PNG cannot hold them. ``exposure`` (stops) scales a PNG
+    before its sRGB encoding, so bright lamps need not clip; an EXR always keeps the linear values.
     Raises ``SceneError`` for an unsupported suffix, ``OSError`` when the file cannot be written.
     """
     name = os.fspath(path)
@@ -102,11 +109,15 @@ def write_image(
         spec.channelnames = tuple(names)
         spec.attribute("compression", "zip")
     else:
-        pixels = np.ascontiguousarray(to_srgb8(rgb))
+        pixels = np.ascontiguousarray(to_srgb8(rgb * np.float32(2.0**exposure) if exposure else rgb))
         spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
+        if exposure:
+            spec.attribute(EXPOSURE_ATTRIBUTE, f"{exposure:g}")
     if scene_text is not None:
         spec.attribute(SCENE_ATTRIBUTE, scene_text)
+    for key, value in (attributes or {}).items():
+        spec.attribute(key, value)
 
     with fileio.atomic_path(name) as tmp:
         out = oiio.ImageOutput.create(tmp)
@@ -153,8 +164,8 @@ def _channels(name: str, spec, pixels: np.ndarray, wanted: tuple[str, ...]) -> n
 def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict | None]:
     """Read an image written by ``write_image``: (linear float32 H, W, 3 top row first, scene or None).
 
-    A PNG's 8-bit sRGB codes are decoded back to linear. The scene is parsed and validated with
-    ``parse_scene``; a header that does not hold a valid scene raises ``SceneError``.
+    A PNG's 8-bit sRGB codes are decoded back to linear (and its exposure undone). The scene is
+    parsed and validated with ``parse_scene``; a header that does not hold a valid scene raises ``SceneError``.
     """
     fmt = image_format(path)
     name, spec, pixels = _read(path)
@@ -163,7 +174,14 @@ def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict | None]:
     else:
         rgb = _channels(name, spec, pixels, RGB)
     if fmt == "png":
-        rgb = srgb_decode(rgb).astype(np.float32)
+        rgb = srgb_decode(rgb)
+        exposure = spec.getattribute(EXPOSURE_ATTRIBUTE)
+        if isinstance(exposure, str):
+            try:
+                rgb = rgb / 2.0 ** float(exposure)
+            except ValueError:
+                raise SceneError(name, f"{EXPOSURE_ATTRIBUTE} {exposure[:40]!r} is not a number") from None
+        rgb = rgb.astype(np.float32)
     text = spec.getattribute(SCENE_ATTRIBUTE)
     if text is None:
         return rgb, None

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import bitmap_font, fileio
-from .imageio import image_format, to_srgb8
+from . import bitmap_font
+from .imageio import write_image
 from .study import STUDY_ATTRIBUTE, Study, format_value
 
 BACKGROUND = (0.018, 0.018, 0.02)  # linear; a dark grey that sets off the black of each render
@@ -234,32 +234,9 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto") -
 # Files
 
 
-def write_sheet(path: str | os.PathLike, study: Study, sheet: np.ndarray) -> None:
-    """Write a composed sheet as EXR (linear float) or PNG (8-bit sRGB), chosen by the suffix,
-    with the study JSON in the ``lamp:study`` attribute. Atomic: never a partial file."""
-    import OpenImageIO as oiio
-
-    name = os.fspath(path)
-    fmt = image_format(name)
-    height, width = sheet.shape[:2]
-    if fmt == "exr":
-        pixels = np.ascontiguousarray(sheet, dtype=np.float32)
-        spec = oiio.ImageSpec(width, height, 3, oiio.FLOAT)
-        spec.attribute("compression", "zip")
-    else:
-        pixels = np.ascontiguousarray(to_srgb8(sheet))
-        spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
-        spec.attribute("oiio:ColorSpace", "sRGB")
-    spec.attribute(STUDY_ATTRIBUTE, study.to_json())
-    spec.attribute("ImageDescription", study.heading())
-    with fileio.atomic_path(name) as tmp:
-        out = oiio.ImageOutput.create(tmp)
-        if out is None:
-            raise OSError(f"{name}: OpenImageIO cannot write this format ({oiio.geterror()})")
-        try:
-            if not out.open(tmp, spec) or not out.write_image(pixels):
-                raise OSError(f"{name}: cannot write the sheet ({out.geterror()})")
-        finally:
-            closed = out.close()
-        if not closed:
-            raise OSError(f"{name}: cannot finish the sheet ({out.geterror()})")
+def write_sheet(path: str | os.PathLike, study: Study, sheet: np.ndarray, *, exposure: float = 0.0) -> None:
+    """Write a composed sheet as EXR (linear float) or PNG (8-bit sRGB, ``exposure`` stops
+    applied), chosen by the suffix, with the study JSON in the ``lamp:study`` attribute.
+    Atomic: never a partial file."""
+    write_image(path, sheet, attributes={STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()},
+                exposure=exposure)

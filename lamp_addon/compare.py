@@ -461,11 +461,12 @@ def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tupl
     return {**comparison, "not_restored": run.not_restored}
 
 
-def write_comparison(path: str, comparison: dict) -> None:
-    """Write the side-by-side image as .exr (linear) or .png (sRGB) with the scene in its header."""
+def write_comparison(path: str, comparison: dict, *, exposure: float = 0.0) -> None:
+    """Write the side-by-side image as .exr (linear) or .png (sRGB, ``exposure`` stops applied)
+    with the scene in its header."""
     from ..core_tracer import imageio
 
-    imageio.write_image(path, comparison["side_by_side"], comparison["scene"])
+    imageio.write_image(path, comparison["side_by_side"], comparison["scene"], exposure=exposure)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -18,7 +18,7 @@ CHANNELS = ("R", "G", "B")
 
 
 def run(preset: str, output: str, *, samples: int = compare.DEFAULT_SAMPLES,
-        size: tuple[int, int] | None = None, prog: str = "compare_preset") -> int:
+        size: tuple[int, int] | None = None, exposure: float = 0.0, prog: str = "compare_preset") -> int:
     """Load ``preset`` into the current (empty) scene's design, build it, render it both ways
     and write the side-by-side image to ``output`` (.png or .exr). Returns the exit status:
     0 done, 2 bad input (one line on stderr)."""
@@ -40,7 +40,7 @@ def run(preset: str, output: str, *, samples: int = compare.DEFAULT_SAMPLES,
     comparison = compare.compare_design(bl_scene, samples=samples, resolution=size)
     folder = os.path.dirname(os.path.abspath(output))
     os.makedirs(folder, exist_ok=True)
-    compare.write_comparison(output, comparison)
+    compare.write_comparison(output, comparison, exposure=exposure)
     print(report(comparison, preset, output))
     return 0
 

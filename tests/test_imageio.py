@@ -190,3 +190,18 @@ def test_header_with_a_broken_scene_is_reported(tmp_path):
         imageio.read_image(path)
     assert "odd.exr" in str(err.value) and "lamp-scene/2" in str(err.value)
     assert os.path.exists(path)
+
+
+def test_png_exposure_scales_before_encoding_and_is_undone_on_reading(tmp_path):
+    image = np.full((4, 6, 3), 4.0, dtype=np.float32)  # a bright lamp: clips at exposure 0
+    image[:, :3] = [8.0, 1.0, 0.25]
+    plain, darker = tmp_path / "plain.png", tmp_path / "darker.png"
+    imageio.write_image(plain, image)
+    imageio.write_image(darker, image, exposure=-3)
+    assert np.all(imageio.read_image(plain)[0] <= 1.0)  # clipped
+    back, _ = imageio.read_image(darker)
+    # 8-bit sRGB quantisation at 1/8 of the value, scaled back up by 8
+    np.testing.assert_allclose(back, image, rtol=0.03, atol=0.01)
+    exr = tmp_path / "linear.exr"
+    imageio.write_image(exr, image, exposure=-3)
+    np.testing.assert_array_equal(imageio.read_image(exr)[0], image)  # an EXR keeps the linear values

@@ -2,9 +2,9 @@
 """Render a lamp preset with the Lamp Tracer and with Cycles; write the two side by side.
 
 With Blender:
-    blender --background --python tools/compare_preset.py -- PRESET.json -o out/compare.png [--samples N] [--size WxH]
+    blender --background --python tools/compare_preset.py -- PRESET.json -o out/compare.png [options]
 With the bpy module (the project's .venv):
-    .venv/bin/python tools/compare_preset.py PRESET.json -o out/compare.png [--samples N] [--size WxH]
+    .venv/bin/python tools/compare_preset.py PRESET.json -o out/compare.png [--samples N] [--size WxH] [--exposure EV]
 
 The extension is used from this source tree through a temporary development repository (an
 already enabled Lamp Styling extension is used instead). The job starts from an empty scene, so
@@ -23,6 +23,10 @@ import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+from core_tracer.commands import add_exposure_argument  # noqa: E402 (bpy-free: safe before Blender starts)
+
 EXTENSION_ID = "lamp_styling"
 DEV_REPO = "lamp_styling_dev"
 PROG = "compare_preset"
@@ -57,6 +61,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--samples", type=_samples, default=64, help="Cycles samples per pixel (default 64)")
     parser.add_argument("--size", type=_size, default=None,
                         help="render size WIDTHxHEIGHT (default: the preset's image size)")
+    add_exposure_argument(parser)
     return parser.parse_args(argv)
 
 
@@ -114,7 +119,8 @@ def main() -> int:
         bpy.ops.wm.read_homefile(use_empty=True)  # an empty scene: the preset's camera is the view
         with extension(bpy) as package:
             headless = importlib.import_module(f"{package}.lamp_addon.headless")
-            return headless.run(args.preset, args.output, samples=args.samples, size=args.size, prog=PROG)
+            return headless.run(args.preset, args.output, samples=args.samples, size=args.size,
+                                exposure=args.exposure, prog=PROG)
     finally:
         if own_resources is not None:
             shutil.rmtree(own_resources, ignore_errors=True)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import argparse
 import contextlib
+import math
 import os
 import signal
 import threading
@@ -66,3 +68,23 @@ def ctrl_c_sets(stop: threading.Event | None = None) -> Iterator[threading.Event
         yield stop
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+MAX_EXPOSURE = 16.0
+
+
+def add_exposure_argument(parser: argparse.ArgumentParser) -> None:
+    """``--exposure EV``: stops applied to PNG output before its sRGB encoding (EXR stays linear)."""
+    parser.add_argument("--exposure", type=_exposure, default=0.0, metavar="EV",
+                        help="brighten (+) or darken (-) a .png by this many stops so bright lamps do not clip; "
+                             "an .exr keeps the linear values (default 0)")
+
+
+def _exposure(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value) or abs(value) > MAX_EXPOSURE:
+        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed [-{MAX_EXPOSURE:g}, {MAX_EXPOSURE:g}] stops")
+    return value

@@ -8,7 +8,7 @@ import time
 
 from ..imageio import image_format
 from ..scene import SceneError
-from . import ctrl_c_sets, load_scene_file
+from . import add_exposure_argument, ctrl_c_sets, load_scene_file
 
 HELP = "render a scene to an .exr (linear, scene in the header) or .png (sRGB) image"
 
@@ -20,6 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--height", type=int, metavar="H", help="image height in pixels (overrides the scene)")
     parser.add_argument("--passes", metavar="DIR",
                         help="also write one .exr per contribution pass (lens surface, bulb, ...) into DIR")
+    add_exposure_argument(parser)
 
 
 def _check_folder(path: str, what: str) -> None:
@@ -53,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         os.makedirs(args.passes, exist_ok=True)
         for name, data in result.passes.items():
             write_image(os.path.join(args.passes, f"{name}.exr"), data, scene)
-    write_image(args.output, result.image, scene)
+    write_image(args.output, result.image, scene, exposure=args.exposure)
 
     h, w = result.image.shape[:2]
     segments = result.stats.get("segments")

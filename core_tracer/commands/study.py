@@ -14,7 +14,7 @@ import time
 from .. import study as st
 from ..imageio import image_format
 from ..scene import SceneError
-from . import ctrl_c_sets, in_file
+from . import add_exposure_argument, ctrl_c_sets, in_file
 
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
 
@@ -34,6 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="worker processes (default: one per core; 0 renders in this process)")
     parser.add_argument("--save-study", metavar="STUDY.json", help="write the study definition (base embedded)")
     parser.add_argument("--save-variants", metavar="DIR", help="write every variant as a lamp-scene/1 preset")
+    add_exposure_argument(parser)
     parser.add_argument("--list", action="store_true", help="list the parameters a study can vary and exit")
 
 
@@ -136,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
         raise KeyboardInterrupt
     seconds = time.perf_counter() - start
     sheet = study_sheet.compose(study, images)
-    study_sheet.write_sheet(args.output, study, sheet)
+    study_sheet.write_sheet(args.output, study, sheet, exposure=args.exposure)
     workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
     how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
     w, h = study.size
