@@ -11,10 +11,15 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
+from ..core_tracer.render import PASS_NAMES
 from ..core_tracer.scene import SceneError
 from . import camera
 
 ENGINE_ID = "LAMP_TRACER"
+
+# Blender's name of each contribution pass, in the tracer's order: "Lamp Lens Surface", ...
+PASS_LABELS = {name: "Lamp " + name.replace("_", " ").title() for name in PASS_NAMES}
+PASSES_PROPERTY = "lamp_contribution_passes"  # the per-view-layer toggle, on bpy.types.ViewLayer
 
 # Blender's own panels that apply to this engine: output and format, colour management (the
 # tracer's linear RGB is shown through the view transform like any render) and the camera.
@@ -29,6 +34,8 @@ _PANELS = (
     "DATA_PT_camera_display_composition_guides", "DATA_PT_camera_safe_areas",
     "DATA_PT_camera_safe_areas_center_cut", "DATA_PT_camera_background_image", "DATA_PT_camera_animation",
     "DATA_PT_custom_props_camera",
+    # View Layer properties: the layer list, Use for Rendering, and Passes (our toggle's parent)
+    "VIEWLAYER_PT_context_layer", "VIEWLAYER_PT_layer", "VIEWLAYER_PT_layer_passes",
 )
 
 BAND_ROWS = 16  # rows per result update when the tracer reports rows in larger blocks
@@ -64,55 +71,121 @@ class LampTracerEngine(bpy.types.RenderEngine):
     bl_use_preview = False
     bl_use_eevee_viewport = True  # Material Preview shading uses EEVEE on the Cycles materials
 
+    def update_render_passes(self, scene=None, renderlayer=None):
+        """The passes a view layer will have: what the compositor's Render Layers node offers."""
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
+        if contribution_passes_enabled(renderlayer):
+            for label in PASS_LABELS.values():
+                self.register_pass(scene, renderlayer, label, 3, "RGB", "COLOR")
+
     def render(self, depsgraph):
         from .. import core_tracer
 
         width, height = self.resolution_x, self.resolution_y
         self._region = render_region(depsgraph.scene.render, width, height)
+        self._layer = depsgraph.view_layer.name  # the engine renders each view layer in turn
+        with_passes = contribution_passes_enabled(depsgraph.view_layer)
+        if with_passes:
+            for label in PASS_LABELS.values():  # before the first begin_result, which copies them
+                self.add_pass(label, 3, "RGB", layer=self._layer)
         try:
             scene = camera.scene_for_render(depsgraph.scene, camera_object=self.camera_override,
                                             size=(width, height))
         except SceneError as e:
-            self._fill(np.zeros((height, width, 3), np.float32), 0, np.ones((height, width), np.float32))
+            black = np.zeros((height, width, 3), np.float32)
+            self._fill(black, 0, np.ones((height, width), np.float32),
+                       dict.fromkeys(PASS_LABELS.values(), black) if with_passes else {})
             self.report({"ERROR"}, f"Lamp Tracer: {e}")
             return
 
         transparent = depsgraph.scene.render.film_transparent
 
-        def on_rows(row_start: int, row_stop: int, rows: np.ndarray) -> None:
+        def write_rows(row_start: int, row_stop: int, rows: np.ndarray,
+                       passes: dict[str, np.ndarray] | None = None) -> None:
+            """Rows ``row_start:row_stop`` of the image (and of each pass) into the result, in bands."""
             for start in range(row_start, row_stop, BAND_ROWS):
                 stop = min(start + BAND_ROWS, row_stop)
-                band = rows[start - row_start:stop - row_start]
-                if transparent:
+                band = slice(start - row_start, stop - row_start)
+                if transparent:  # premultiplied; the passes too, so that they still sum to Combined
                     alpha = body_coverage(scene, start, stop)
-                    band = band * alpha[:, :, None]
+                    weight = alpha[:, :, None]
                 else:
-                    alpha = np.ones(band.shape[:2], np.float32)
-                self._fill(band, start, alpha)
+                    alpha, weight = np.ones((stop - start, width), np.float32), None
+                self._fill(_weighted(rows[band], weight), start, alpha,
+                           {PASS_LABELS[name]: _weighted(values[band], weight)
+                            for name, values in (passes or {}).items()})
 
         try:
-            core_tracer.render_passes(scene, width, height, progress=self.update_progress,
-                                      should_stop=self.test_break, on_rows=on_rows,
-                                      threads=depsgraph.scene.render.threads)  # Blender's thread count
+            result = core_tracer.render_passes(scene, width, height, progress=self.update_progress,
+                                               should_stop=self.test_break, on_rows=write_rows,
+                                               threads=depsgraph.scene.render.threads,  # Blender's count
+                                               keep_passes=with_passes)
         except core_tracer.RenderCancelled:
-            return  # Esc: Blender keeps the rows finished so far
+            return  # Esc: Blender keeps the rows finished so far (Combined only: see below)
+        if with_passes:
+            # render_passes hands out the passes only when the whole image is done, so they are
+            # written now, band by band, with Combined again (end_result stores every pass of a band).
+            write_rows(0, height, result.image, result.passes)
 
-    def _fill(self, rows: np.ndarray, row_start: int, alpha: np.ndarray) -> None:
-        """Write ``rows`` (top-based, top row first) into the result. Blender's rows run bottom-up,
-        and with a render region the result covers only the region, addressed from its corner."""
+    def _fill(self, rows: np.ndarray, row_start: int, alpha: np.ndarray,
+              passes: dict[str, np.ndarray] | None = None) -> None:
+        """Write ``rows`` (top-based, top row first) into the result's Combined pass and each of
+        ``passes`` (Blender pass name -> rows of the same shape) into that pass. Blender's rows run
+        bottom-up, and with a render region the result covers only the region, addressed from its
+        corner."""
         x0, y0, x1, y1 = self._region
         n, width = rows.shape[:2]
         bottom = self.resolution_y - row_start - n  # of the band, counted from the frame's bottom
         lo, hi = max(bottom, y0), min(bottom + n, y1)
         if lo >= hi:
             return
+
+        def kept(values: np.ndarray) -> np.ndarray:
+            return np.ascontiguousarray(values[::-1][lo - bottom:hi - bottom, x0:x1], np.float32).ravel()
+
         rgba = np.empty((n, width, 4), np.float32)
         rgba[:, :, :3] = rows
         rgba[:, :, 3] = alpha
-        rgba = rgba[::-1][lo - bottom:hi - bottom, x0:x1]
-        result = self.begin_result(0, lo - y0, x1 - x0, hi - lo)
-        result.layers[0].passes["Combined"].rect.foreach_set(np.ascontiguousarray(rgba).ravel())
+        result = self.begin_result(0, lo - y0, x1 - x0, hi - lo, layer=self._layer)
+        layer = result.layers[0]
+        layer.passes["Combined"].rect.foreach_set(kept(rgba))
+        for label, values in (passes or {}).items():
+            layer.passes[label].rect.foreach_set(kept(values))
         self.end_result(result)
+
+
+def _weighted(values: np.ndarray, weight: np.ndarray | None) -> np.ndarray:
+    return values if weight is None else values * weight
+
+
+def contribution_passes_enabled(view_layer: bpy.types.ViewLayer) -> bool:
+    """The view layer's *Contribution Passes* toggle (False while the add-on is not registered)."""
+    return bool(getattr(view_layer, PASSES_PROPERTY, False))
+
+
+def _passes_changed(view_layer: bpy.types.ViewLayer, _context) -> None:
+    view_layer.update_render_passes()  # the Render Layers node gains or loses its sockets
+
+
+class LAMP_PT_view_layer_passes(bpy.types.Panel):
+    """View Layer properties › Passes › Lamp Tracer, shown for this engine only."""
+
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "view_layer"
+    bl_label = "Lamp Tracer"
+    bl_parent_id = "VIEWLAYER_PT_layer_passes"
+    COMPAT_ENGINES = {ENGINE_ID}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.column().prop(context.view_layer, PASSES_PROPERTY)
 
 
 def render_region(render, width: int, height: int) -> tuple[int, int, int, int]:
@@ -124,7 +197,7 @@ def render_region(render, width: int, height: int) -> tuple[int, int, int, int]:
             int(render.border_max_x * width), int(render.border_max_y * height))
 
 
-classes = (LampTracerEngine,)
+classes = (LampTracerEngine, LAMP_PT_view_layer_passes)
 
 
 def _panels():
@@ -138,12 +211,18 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory(clas
 
 
 def register() -> None:
-    _register_classes()
+    setattr(bpy.types.ViewLayer, PASSES_PROPERTY, bpy.props.BoolProperty(
+        name="Contribution Passes",
+        description="Also write the Lamp Tracer's contribution passes (lens surface, bulb, reflector "
+                    "constant and scatter, socket, side wall, body, background), which sum to Combined",
+        default=False, update=_passes_changed))
     for panel in _panels():
         panel.COMPAT_ENGINES.add(ENGINE_ID)
+    _register_classes()
 
 
 def unregister() -> None:
+    _unregister_classes()
     for panel in _panels():
         panel.COMPAT_ENGINES.discard(ENGINE_ID)
-    _unregister_classes()
+    delattr(bpy.types.ViewLayer, PASSES_PROPERTY)

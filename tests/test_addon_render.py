@@ -326,6 +326,232 @@ def test_engine_panels_are_compatible_and_registration_is_symmetric(lamp_addon):
 
 
 # ---------------------------------------------------------------------------------------------
+# The engine's contribution passes (MODEL.md §5.2) as Blender render passes
+
+LABELS = {"lens_surface": "Lamp Lens Surface", "bulb": "Lamp Bulb", "reflector_constant": "Lamp Reflector Constant",
+          "reflector_scatter": "Lamp Reflector Scatter", "socket": "Lamp Socket", "side_wall": "Lamp Side Wall",
+          "body": "Lamp Body", "background": "Lamp Background"}
+
+
+def _lit_background_scene(size=(40, 24)) -> dict:
+    """The baseline with a coloured background, so that every one of the eight passes has pixels."""
+    scene = _preset_scene(size=size)
+    scene["background"] = [0.05, 0.1, 0.2]
+    return core_tracer.normalize(scene)
+
+
+def _render_multilayer_exr(bl_scene, path) -> dict[str, dict[str, np.ndarray]]:
+    """Render, save the Render Result as a multilayer OpenEXR and read it back with OpenImageIO:
+    {view layer: {pass: (H, W, channels) top row first}}. Blender writes one EXR part per pass,
+    with channels named ``<view layer>.<pass>.<R|G|B|A>``."""
+    import bpy
+
+    settings = bl_scene.render.image_settings
+    settings.media_type = "MULTI_LAYER_IMAGE"
+    assert settings.file_format == "OPEN_EXR_MULTILAYER"
+    settings.color_depth = "32"
+    bpy.ops.render.render()
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    return _read_multilayer_exr(path)
+
+
+def _read_multilayer_exr(path) -> dict[str, dict[str, np.ndarray]]:
+    import OpenImageIO as oiio
+
+    channels: dict[tuple[str, str], dict[str, np.ndarray]] = {}
+    inp = oiio.ImageInput.open(str(path))
+    assert inp, oiio.geterror()
+    try:
+        part = 0
+        while inp.seek_subimage(part, 0):
+            pixels = inp.read_image(oiio.FLOAT)
+            for i, name in enumerate(inp.spec().channelnames):
+                layer, pass_name, channel = name.rsplit(".", 2)
+                channels.setdefault((layer, pass_name), {})[channel] = pixels[:, :, i]
+            part += 1
+    finally:
+        inp.close()
+    layers: dict[str, dict[str, np.ndarray]] = {}
+    for (layer, pass_name), by_channel in channels.items():
+        order = "RGBA" if "A" in by_channel else "RGB"
+        assert set(by_channel) == set(order), (layer, pass_name, sorted(by_channel))
+        layers.setdefault(layer, {})[pass_name] = np.dstack([by_channel[c] for c in order])
+    return layers
+
+
+def _assert_passes_sum_to_combined(passes: dict[str, np.ndarray]) -> None:
+    total = np.sum([passes[label] for label in LABELS.values()], axis=0, dtype=np.float64)
+    np.testing.assert_allclose(total, passes["Combined"][:, :, :3], rtol=1e-6, atol=1e-7)
+
+
+def test_engine_writes_contribution_passes_to_multilayer_exr(lamp_addon, bl_scene, tmp_path):
+    _load_design(lamp_addon, bl_scene, _lit_background_scene())
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.view_layers["ViewLayer"].lamp_contribution_passes = True
+    layers = _render_multilayer_exr(bl_scene, tmp_path / "passes.exr")
+    assert set(layers) == {"ViewLayer"}
+    got = layers["ViewLayer"]
+    assert set(got) == {"Combined", *LABELS.values()}
+    expected = core_tracer.render_passes(lamp_addon.camera.scene_for_render(bl_scene))
+    assert got["Combined"].shape == (24, 40, 4)
+    np.testing.assert_array_equal(got["Combined"][:, :, :3], expected.image)
+    np.testing.assert_array_equal(got["Combined"][:, :, 3], 1.0)
+    for name, label in LABELS.items():
+        assert got[label].shape == (24, 40, 3)
+        np.testing.assert_array_equal(got[label], expected.passes[name], err_msg=label)  # top row first
+        assert got[label].any(), f"{label} is black: the test would not see a misplaced pass"
+    _assert_passes_sum_to_combined(got)
+
+
+def test_engine_without_contribution_passes_writes_combined_only(lamp_addon, bl_scene, tmp_path):
+    _load_design(lamp_addon, bl_scene, _preset_scene(size=(40, 24)))
+    bl_scene.render.engine = "LAMP_TRACER"
+    assert not bl_scene.view_layers["ViewLayer"].lamp_contribution_passes  # off by default
+    layers = _render_multilayer_exr(bl_scene, tmp_path / "combined.exr")
+    assert {layer: set(passes) for layer, passes in layers.items()} == {"ViewLayer": {"Combined"}}
+    np.testing.assert_array_equal(layers["ViewLayer"]["Combined"][:, :, :3],
+                                  core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene)))
+
+
+def test_engine_contribution_passes_are_per_view_layer(lamp_addon, bl_scene, tmp_path):
+    """Each view layer gets its own result: the second layer is rendered too (it stayed black when
+    the engine wrote every layer into the first), and only the layer with the toggle has passes."""
+    _load_design(lamp_addon, bl_scene, _lit_background_scene())
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.view_layers.new("Plain")
+    bl_scene.view_layers["ViewLayer"].lamp_contribution_passes = True
+    layers = _render_multilayer_exr(bl_scene, tmp_path / "layers.exr")
+    assert set(layers["ViewLayer"]) == {"Combined", *LABELS.values()}
+    assert set(layers["Plain"]) == {"Combined"}
+    expected = core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene))
+    np.testing.assert_array_equal(layers["Plain"]["Combined"][:, :, :3], expected)
+    np.testing.assert_array_equal(layers["ViewLayer"]["Combined"][:, :, :3], expected)
+
+
+def test_engine_contribution_passes_follow_transparency_and_region(lamp_addon, bl_scene, tmp_path):
+    """With Film › Transparent the passes are premultiplied like Combined (they still sum to it);
+    with a cropped render region they cover the region only."""
+    _load_design(lamp_addon, bl_scene, _lit_background_scene((48, 32)))
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.view_layers["ViewLayer"].lamp_contribution_passes = True
+    render = bl_scene.render
+    render.film_transparent = True
+    render.use_border, render.use_crop_to_border = True, True
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.0, 0.33, 0.55, 1.0
+    got = _render_multilayer_exr(bl_scene, tmp_path / "region.exr")["ViewLayer"]
+    x0, x1, y0, y1 = 0, 15, 17, 32  # the border in whole pixels, rows counted from the bottom
+    alpha = got["Combined"][:, :, 3]
+    assert set(np.unique(alpha)) == {0.0, 1.0}  # the lamp's outline cuts the region
+    expected = core_tracer.render_passes(lamp_addon.camera.scene_for_render(bl_scene))
+    for name, label in LABELS.items():
+        want = expected.passes[name][32 - y1:32 - y0, x0:x1] * alpha[:, :, None]
+        np.testing.assert_array_equal(got[label], want, err_msg=label)
+    assert expected.passes["background"][32 - y1:32 - y0, x0:x1][alpha == 0].any()  # was there to remove
+    _assert_passes_sum_to_combined(got)
+
+
+def test_engine_contribution_passes_are_black_after_a_design_error(lamp_addon, bl_scene, tmp_path):
+    import bpy
+
+    _load_design(lamp_addon, bl_scene, _preset_scene(size=(16, 16)))
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.view_layers["ViewLayer"].lamp_contribution_passes = True
+    bl_scene.render.film_transparent = True
+    bl_scene.camera.location.y = 0.5  # behind the lamp's front
+    with pytest.raises(RuntimeError, match=r"Lamp Tracer: camera.position"):
+        _render_multilayer_exr(bl_scene, tmp_path / "unused.exr")
+    path = tmp_path / "black.exr"
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    got = _read_multilayer_exr(path)["ViewLayer"]
+    assert set(got) == {"Combined", *LABELS.values()}  # every pass there, and black, not stale
+    assert all(not p[:, :, :3].any() for p in got.values())
+
+
+def test_contribution_passes_in_the_compositor(lamp_addon, bl_scene, tmp_path):
+    """The Render Layers node offers the passes while the toggle is on, and a pass composited to
+    the output is what the render result then holds."""
+    import bpy
+
+    _load_design(lamp_addon, bl_scene, _preset_scene(size=(40, 24)))
+    bl_scene.render.engine = "LAMP_TRACER"
+    layer = bl_scene.view_layers["ViewLayer"]
+    tree = bpy.data.node_groups.new("Lamp passes", "CompositorNodeTree")
+    tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
+    bl_scene.compositing_node_group = tree
+    render_layers = tree.nodes.new("CompositorNodeRLayers")
+
+    def offered() -> set[str]:
+        return {socket.name for socket in render_layers.outputs if socket.enabled}
+
+    assert offered() == {"Image", "Alpha"}
+    layer.lamp_contribution_passes = True  # the update callback asks the engine for its passes again
+    assert offered() == {"Image", "Alpha", *LABELS.values()}
+    tree.links.new(render_layers.outputs["Lamp Bulb"], tree.nodes.new("NodeGroupOutput").inputs[0])
+    rgba = _render_engine_exr(bl_scene, tmp_path / "bulb.exr")
+    bulb = core_tracer.render_passes(lamp_addon.camera.scene_for_render(bl_scene)).passes["bulb"]
+    assert bulb.max() > 1.0
+    np.testing.assert_array_equal(rgba[:, :, :3], bulb)
+    layer.lamp_contribution_passes = False
+    assert offered() == {"Image", "Alpha"}
+
+
+class _RecordingLayout:
+    """Just what the passes panel calls: records ``prop`` after checking the property exists."""
+
+    def __init__(self, log: list):
+        self.log, self.use_property_split, self.use_property_decorate = log, False, True
+
+    def column(self, **_kw):
+        return _RecordingLayout(self.log)
+
+    def prop(self, data, prop, **_kw):
+        assert prop in data.bl_rna.properties.keys(), prop
+        self.log.append((data, prop))
+
+
+def test_contribution_passes_panel_and_symmetric_registration(lamp_addon, bl_scene):
+    from types import SimpleNamespace
+
+    import bpy
+
+    engine = lamp_addon.engine
+    layer = bl_scene.view_layers["ViewLayer"]
+    panel = bpy.types.LAMP_PT_view_layer_passes
+    assert panel.bl_context == "view_layer" and panel.bl_parent_id == "VIEWLAYER_PT_layer_passes"
+    assert "LAMP_TRACER" in bpy.types.VIEWLAYER_PT_layer_passes.COMPAT_ENGINES  # the parent shows too
+    assert panel.poll(SimpleNamespace(engine="LAMP_TRACER"))
+    assert not panel.poll(SimpleNamespace(engine="CYCLES"))
+    log = []
+    panel.draw(SimpleNamespace(layout=_RecordingLayout(log)), SimpleNamespace(view_layer=layer))
+    assert log == [(layer, "lamp_contribution_passes")]
+    assert bpy.types.ViewLayer.bl_rna.properties["lamp_contribution_passes"].name == "Contribution Passes"
+    layer.lamp_contribution_passes = True
+
+    def registered() -> tuple[bool, bool, bool]:
+        return ("lamp_contribution_passes" in bpy.types.ViewLayer.bl_rna.properties,
+                hasattr(bpy.types, "LAMP_PT_view_layer_passes"),
+                "LAMP_TRACER" in bpy.types.VIEWLAYER_PT_layer_passes.COMPAT_ENGINES)
+
+    for _ in range(2):  # the engine module alone, then the whole add-on's chain
+        for module in (engine, lamp_addon):
+            module.unregister()
+            try:
+                assert registered() == (False, False, False)
+                assert not hasattr(layer, "lamp_contribution_passes")
+            finally:
+                module.register()
+            assert registered() == (True, True, True)
+            assert layer.lamp_contribution_passes  # the value is kept in the file across a disable
+
+
+def test_readme_names_the_contribution_passes(lamp_addon, repo_root):
+    assert lamp_addon.engine.PASS_LABELS == LABELS
+    text = " ".join((repo_root / "README.md").read_text().split())
+    assert "Contribution Passes" in text
+    assert all(f"*{label}*" in text for label in LABELS.values())
+
+
+# ---------------------------------------------------------------------------------------------
 # The Render with Lamp Tracer operator and its worker
 
 
