@@ -159,6 +159,8 @@ class LAMP_PT_lamps(_LampTab, bpy.types.Panel):
         lamp = active_lamp(context)
         if lamp is not None:
             draw_section(self._split(layout.column()), lamp, S.LAMP)
+        elif not design.lamps:  # a new scene: say how to start rather than show an empty list
+            layout.label(text="Add a lamp with + or apply a preset below", icon="INFO")
 
 
 class _LampPartPanel(_LampTab):

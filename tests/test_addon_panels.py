@@ -245,3 +245,5 @@ def test_empty_design(lamp_addon, bl_scene):
         else:
             draw(cls, bl_scene)
     assert bpy.ops.lamp.lamp_add.poll() and not bpy.ops.lamp.lamp_remove.poll()
+    hints = [e for e in draw(lamp_addon.panels.LAMP_PT_lamps, bl_scene).log if e[0] == "label"]
+    assert any("Add a lamp" in e[1] for e in hints)  # the empty list says how to start
