@@ -120,14 +120,17 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   progress: Callable[[float], None] | None = None,
                   should_stop: Callable[[], bool] | None = None,
                   on_rows: Callable[[int, int, np.ndarray], None] | None = None,
+                  on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
                   threads: int | None = None, record_transitions: bool = False,
                   keep_passes: bool = True) -> RenderResult:
     """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
     spans the fitted side). Bands of rows are rendered on ``threads`` threads (numpy releases
-    the GIL); ``progress(fraction)`` and ``on_rows(row_start, row_stop, rows)`` are called from
-    the calling thread as bands finish, ``should_stop()`` is polled between bands.
+    the GIL); ``progress(fraction)``, ``on_rows(row_start, row_stop, rows)`` and
+    ``on_band(row_start, row_stop, rows, pass_rows)`` (the same with each pass's rows, an empty
+    dict without ``keep_passes``) are called from the calling thread as bands finish;
+    ``should_stop()`` is polled between bands.
     """
     width = int(width or scene["image"]["width"])
     height = int(height or scene["image"]["height"])
@@ -150,6 +153,9 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
         stats["transitions"] |= band.transitions
         if on_rows is not None:
             on_rows(y0, y1, image[y0:y1])
+        if on_band is not None:
+            on_band(y0, y1, image[y0:y1], {name: passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)}
+                    if keep_passes else {})
 
     done = 0
     if threads == 1:

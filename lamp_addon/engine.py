@@ -116,16 +116,12 @@ class LampTracerEngine(bpy.types.RenderEngine):
                             for name, values in (passes or {}).items()})
 
         try:
-            result = core_tracer.render_passes(scene, width, height, progress=self.update_progress,
-                                               should_stop=self.test_break, on_rows=write_rows,
+            core_tracer.render_passes(scene, width, height, progress=self.update_progress,
+                                               should_stop=self.test_break, on_band=write_rows,
                                                threads=depsgraph.scene.render.threads,  # Blender's count
                                                keep_passes=with_passes)
         except core_tracer.RenderCancelled:
-            return  # Esc: Blender keeps the rows finished so far (Combined only: see below)
-        if with_passes:
-            # render_passes hands out the passes only when the whole image is done, so they are
-            # written now, band by band, with Combined again (end_result stores every pass of a band).
-            write_rows(0, height, result.image, result.passes)
+            return  # Esc: Blender keeps the bands finished so far, with their passes
 
     def _fill(self, rows: np.ndarray, row_start: int, alpha: np.ndarray,
               passes: dict[str, np.ndarray] | None = None) -> None:

@@ -187,3 +187,20 @@ def test_passes_sum_to_the_image():
     for name in ("lens_surface", "bulb", "reflector_constant", "reflector_scatter", "body"):
         assert result.passes[name].max() > 0, name
     assert all(np.all(p >= 0) for p in result.passes.values())
+
+
+def test_on_band_hands_out_each_band_of_the_image_and_its_passes(monkeypatch):
+    import core_tracer.render as render_module
+
+    monkeypatch.setattr(render_module, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide
+    scene = scene_with(**{"image": {"width": 40, "height": 30}})
+    bands = []
+
+    def keep(a, b, rows, passes):
+        bands.append((a, b, rows.copy(), {k: v.copy() for k, v in passes.items()}))
+
+    result = render_passes(scene, on_band=keep)
+    assert [(a, b) for a, b, *_ in bands] == [(0, 10), (10, 20), (20, 30)]
+    np.testing.assert_array_equal(np.concatenate([rows for _, _, rows, _ in bands]), result.image)
+    for name, full in result.passes.items():
+        np.testing.assert_array_equal(np.concatenate([p[name] for *_, p in bands]), full)
