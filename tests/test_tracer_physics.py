@@ -190,9 +190,10 @@ def test_passes_sum_to_the_image():
 
 
 def test_on_band_hands_out_each_band_of_the_image_and_its_passes(monkeypatch):
-    import core_tracer.render as render_module
+    import importlib
 
-    monkeypatch.setattr(render_module, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide
+    # (core_tracer.render is also the name of the function the package exports)
+    monkeypatch.setattr(importlib.import_module("core_tracer.render"), "TILE_RAYS", 400)  # 10 rows a band at 40 px wide
     scene = scene_with(**{"image": {"width": 40, "height": 30}})
     bands = []
 
