@@ -32,8 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .render import RenderCancelled, render_passes
 from .study import Study
+from .tracer import RenderCancelled, render_passes
 
 # The folder that holds the core_tracer package: a worker's import root.
 PACKAGE_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

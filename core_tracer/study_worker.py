@@ -35,7 +35,7 @@ def main() -> int:
 
     import numpy as np
 
-    from .render import RenderCancelled, render_passes
+    from .tracer import RenderCancelled, render_passes
 
     parent = os.getppid()
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from ..core_tracer.render import PASS_NAMES
 from ..core_tracer.scene import SceneError
+from ..core_tracer.tracer import PASS_NAMES
 from . import camera
 
 ENGINE_ID = "LAMP_TRACER"

@@ -10,7 +10,7 @@ from tracer_scenes import flat_lens_on_axis, scene_with
 
 from core_tracer import optics, render, render_passes
 from core_tracer.camera import eye_rays, make_camera
-from core_tracer.render import CUTOFF
+from core_tracer.tracer import CUTOFF
 
 # -- Fresnel --------------------------------------------------------------------------------------
 
@@ -190,10 +190,9 @@ def test_passes_sum_to_the_image():
 
 
 def test_on_band_hands_out_each_band_of_the_image_and_its_passes(monkeypatch):
-    import importlib
+    from core_tracer import tracer
 
-    # (core_tracer.render is also the name of the function the package exports)
-    monkeypatch.setattr(importlib.import_module("core_tracer.render"), "TILE_RAYS", 400)  # 10 rows a band at 40 px wide
+    monkeypatch.setattr(tracer, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide
     scene = scene_with(**{"image": {"width": 40, "height": 30}})
     bands = []
 
