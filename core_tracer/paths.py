@@ -1,8 +1,9 @@
 """The twelve elementary light paths of the paper (§3.2.2, Fig. 8, Table 1).
 
 Every ray segment inside a lamp belongs to one class, fixed by the medium it travels in, the
-surface it leaves and the surface it reaches. The class decides what happens at its end:
-absorption (② ⑥ ⑦ ⑧), reflector scattering (③ ④), terminal luminance (⑦ ⑩ ⑪ ⑫).
+surface it leaves and the surface it reaches (``CLASS_OF``). What happens at its end follows from
+the same medium and surface: absorption for the segments inside the lens (② ⑥ ⑧, and ⑦ from
+inside), reflector scattering at ③ ④, terminal luminance at ⑦ ⑩ ⑪ ⑫.
 """
 
 from __future__ import annotations
@@ -22,13 +23,6 @@ CUT_TO_CUT_IN_AIR = 9  # ⑨ between lenslets, in the air
 LENS_OUTER_TO_OUTSIDE = 10  # ⑩ leaves the lamp (ends, background)
 TO_BULB = 11  # ⑪ (ends)
 TO_SOCKET = 12  # ⑫ (ends)
-
-NAMES = {
-    1: "outside -> lens outer face", 2: "lens outer face -> cut face (in lens)",
-    3: "cut face -> reflector", 4: "reflector -> reflector", 5: "reflector -> cut face",
-    6: "cut face -> lens outer face (in lens)", 7: "-> lens side wall", 8: "cut -> cut (in lens)",
-    9: "cut -> cut (in air)", 10: "lens outer face -> outside", 11: "-> bulb", 12: "-> socket",
-}
 
 # Table 1: for each incident class, the classes its reflected and its transmitted ray can be.
 TABLE_1: dict[int, tuple[frozenset[int], frozenset[int]]] = {
@@ -60,8 +54,6 @@ AIR_SIDE_WALL: dict[int, tuple[frozenset[int], frozenset[int]]] = {
 }
 
 ENDS = frozenset({7, 10, 11, 12})
-ABSORBING = frozenset({2, 6, 7, 8})  # segments inside the lens (⑦ when reached from inside)
-SCATTERING = frozenset({3, 4})
 
 REFLECTED, TRANSMITTED = 0, 1
 

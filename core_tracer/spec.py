@@ -11,7 +11,7 @@ linear RGB (MODEL.md §2).
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 SCHEMA = "lamp-scene/1"
 MAX_LAMPS = 4
@@ -283,7 +283,6 @@ class FieldInfo:
 
     path: str
     spec: Spec
-    parents: tuple[str, ...] = field(default=())
 
 
 def iter_fields(section: Section = SCENE, prefix: str = "") -> Iterator[FieldInfo]:
