@@ -3,8 +3,8 @@
 Never imports bpy: the Blender add-on (``lamp_addon``) depends on this package, not the reverse.
 """
 
-from .scene import SceneError, load_scene, normalize, parse_scene, scene_to_json
-from .tracer import PASS_NAMES, RenderCancelled, RenderResult, render, render_passes
+from .raytrace.tracer import PASS_NAMES, RenderCancelled, RenderResult, render, render_passes
+from .scene.validate import SceneError, load_scene, normalize, parse_scene, scene_to_json
 
 __all__ = [
     "PASS_NAMES", "RenderCancelled", "RenderResult", "SceneError", "load_scene", "normalize", "parse_scene",

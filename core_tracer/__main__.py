@@ -1,5 +1,5 @@
 """``python -m core_tracer``: the standalone command line (see ``cli.py``)."""
 
-from .cli import main
+from .cli.main import main
 
 raise SystemExit(main())

@@ -7,6 +7,9 @@ import os
 import tempfile
 from collections.abc import Iterator
 
+# The folder that holds ``core_tracer`` (the repository, or the installed extension's folder).
+EXTENSION_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[str]:

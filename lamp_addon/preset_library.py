@@ -23,7 +23,7 @@ import bpy.utils.previews
 from bpy.app.handlers import persistent
 from bpy.props import BoolProperty, CollectionProperty, IntProperty, StringProperty
 
-from ..core_tracer import presets as P
+from ..core_tracer.library import presets as P
 from . import preferences
 
 USER_LIBRARY_NAME = "My Presets"

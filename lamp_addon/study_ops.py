@@ -21,10 +21,10 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..core_tracer import presets as P
-from ..core_tracer import study as st
-from ..core_tracer.scene import SceneError
-from . import image_view, properties, study_panel
+from ..core_tracer.library import presets as P
+from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.study import definition as st
+from . import design_properties, image_view, study_panel
 
 POLL_SECONDS = 0.1
 _cache: dict[str, object] = {"json": None, "study": None}
@@ -55,7 +55,7 @@ def last_study() -> st.Study | None:
 
 def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
     """Compose the contact sheet into the "Lamp Study" image and show it in an Image Editor."""
-    from ..core_tracer import study_sheet
+    from ..core_tracer.study import sheet as study_sheet
 
     sheet = study_sheet.compose(study, images)
     image = image_view.image_from_array(study_panel.SHEET_IMAGE, sheet)
@@ -69,7 +69,7 @@ def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
 def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, st.Study, float]:
     """Build the study of the settings, render it (blocking) and show its sheet; the image, the study
     and the render time. Raises ``SceneError`` for a bad setting or design."""
-    from ..core_tracer import study_run
+    from ..core_tracer.study import run as study_run
 
     study = study_panel.study_from_settings(context.scene)
     if workers is None:
@@ -110,7 +110,7 @@ class LAMP_OT_study_run(bpy.types.Operator):
         return True
 
     def execute(self, context):
-        from ..core_tracer.study_run import StudyError
+        from ..core_tracer.study.run import StudyError
 
         try:
             image, study, seconds = render_study(context)
@@ -126,7 +126,7 @@ class LAMP_OT_study_run(bpy.types.Operator):
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
             return self.execute(context)
-        from ..core_tracer.study_run import StudyRun
+        from ..core_tracer.study.run import StudyRun
 
         try:
             self._study = study_panel.study_from_settings(context.scene)
@@ -149,7 +149,7 @@ class LAMP_OT_study_run(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        from ..core_tracer.study_run import StudyError
+        from ..core_tracer.study.run import StudyError
 
         if event.type == "ESC" and event.value == "PRESS":
             self._run.cancel()
@@ -230,11 +230,11 @@ class LAMP_OT_study_apply_variant(_OnLastStudy, bpy.types.Operator):
             return {"CANCELLED"}
         study, index = chosen
         try:
-            design = properties.design_to_scene(context.scene)
+            design = design_properties.design_to_scene(context.scene)
             for axis, value in zip(study.axes, study.variants[index].values, strict=True):
                 parameter = st.resolve_parameter(axis.parameter.text, design)  # the design may have changed
                 st.apply_value(design, parameter, value)
-            properties.scene_to_design(context.scene, design)
+            design_properties.scene_to_design(context.scene, design)
         except SceneError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -290,7 +290,7 @@ class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
         return super().check(context)
 
     def execute(self, context):
-        from ..core_tracer import study_sheet
+        from ..core_tracer.study import sheet as study_sheet
 
         study = last_study()
         image = sheet_image()

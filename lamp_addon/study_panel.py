@@ -14,10 +14,10 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
-from ..core_tracer import spec as S
-from ..core_tracer import study as st
-from ..core_tracer.scene import SceneError
-from . import properties
+from ..core_tracer.scene import spec as S
+from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.study import definition as st
+from . import design_properties
 
 LENS_COLOUR = "lens.transmitted_color"
 ALL_LAMPS = "ALL"
@@ -31,8 +31,9 @@ def _parameter_label(path: str) -> str:
     spec = S.lookup(path)
     *parents, key = path.split(".")
     unit = spec.unit if isinstance(spec, S.Num) else ""
-    prefix = " ".join(properties.display_name(p) for p in parents)
-    return f"{prefix}: {properties.display_name(key, unit)}" if prefix else properties.display_name(key, unit)
+    prefix = " ".join(design_properties.display_name(p) for p in parents)
+    label = design_properties.display_name(key, unit)
+    return f"{prefix}: {label}" if prefix else label
 
 
 def _parameter_items() -> tuple[tuple[str, str, str], ...]:
@@ -65,7 +66,7 @@ def _suggest_range(self, context) -> None:
     """A new parameter gets a range around its default, inside its allowed range."""
     spec = S.lookup(self.parameter)
     if isinstance(spec, S.Num) and spec.size == 1:
-        lo, hi = properties.blender_range(spec)
+        lo, hi = design_properties.blender_range(spec)
         d = float(spec.default)
         span = abs(d) * 0.25 or 1.0
         self.start = max(d - span, lo) if lo is not None else d - span
@@ -143,14 +144,14 @@ def axis_doc(axis) -> dict:
 def study_from_settings(bl_scene) -> st.Study:
     """The study the settings describe, of the scene's current design seen through its camera.
     Raises ``SceneError`` (with the parameter, value and range) for a bad setting or design."""
-    from . import camera
+    from . import render_camera
 
     settings = bl_scene.lamp_study
     size = (settings.width, settings.height)
     if bl_scene.camera is not None:
-        base = camera.scene_for_render(bl_scene, size=size)
+        base = render_camera.scene_for_render(bl_scene, size=size)
     else:  # no scene camera: the design's own camera section
-        base = properties.design_to_scene(bl_scene)
+        base = design_properties.design_to_scene(bl_scene)
         base["image"] = {"width": size[0], "height": size[1]}
     axes = [axis_doc(settings.axis_1)]
     if settings.use_axis_2:

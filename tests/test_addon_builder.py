@@ -31,7 +31,7 @@ def _load(scene_mod, name: str) -> dict:
 def _build(lamp_addon, bl_scene, scene: dict) -> None:
     import bpy
 
-    lamp_addon.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
 
 
@@ -259,7 +259,7 @@ def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
 def test_two_scenes_keep_their_own_lamps(lamp_addon, bl_scene, scene_mod):
     import bpy
 
-    props, builder = lamp_addon.properties, lamp_addon.builder
+    props, builder = lamp_addon.design_properties, lamp_addon.design_builder
     other = bpy.data.scenes.new("Other")
     other_design = _load(scene_mod, "paper-baseline")
     other_design["lamps"][0]["lens"]["ior"] = 1.7
@@ -326,7 +326,7 @@ def test_lamp_list_operators(lamp_addon, bl_scene):
     for _ in range(4):
         assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert design.active_lamps_index == 3
-    assert lamp_addon.properties.design_to_scene(bl_scene)  # new lamps were placed without overlaps
+    assert lamp_addon.design_properties.design_to_scene(bl_scene)  # new lamps were placed without overlaps
     with pytest.raises(RuntimeError, match="at most 4 lamps"):
         bpy.ops.lamp.lamp_add()
     for _ in range(3):
@@ -339,7 +339,7 @@ def test_lamp_list_operators(lamp_addon, bl_scene):
 def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, scene_mod):
     import bpy
 
-    props, margin = lamp_addon.properties, lamp_addon.ops_design.MARGIN_MM
+    props, margin = lamp_addon.design_properties, lamp_addon.design_ops.MARGIN_MM
     baseline = _load(scene_mod, "paper-baseline")
     props.scene_to_design(bl_scene, baseline)
     design = bl_scene.lamp_design
@@ -368,7 +368,7 @@ def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, 
 def test_adding_a_lamp_that_does_not_fit_the_spec_is_refused(lamp_addon, bl_scene, scene_mod):
     import bpy
 
-    props = lamp_addon.properties
+    props = lamp_addon.design_properties
     props.scene_to_design(bl_scene, _load(scene_mod, "paper-baseline"))
     bl_scene.lamp_design.body.size = (9990.0, 120.0)  # the lens in the middle: no room within 10 m
     before = props.design_to_scene(bl_scene)
@@ -377,8 +377,8 @@ def test_adding_a_lamp_that_does_not_fit_the_spec_is_refused(lamp_addon, bl_scen
         bpy.ops.lamp.lamp_add()
     assert props.design_to_scene(bl_scene) == before  # nothing added, nothing moved
     doc = props.design_document(bl_scene)  # the check execute makes, past poll
-    with pytest.raises(lamp_addon.ops_design.SceneError, match=r"body\.size"):
-        lamp_addon.ops_design.design_with_new_lamp(doc, 0)
+    with pytest.raises(lamp_addon.design_ops.SceneError, match=r"body\.size"):
+        lamp_addon.design_ops.design_with_new_lamp(doc, 0)
     bl_scene.lamp_design.body.size = (9900.0, 120.0)  # a little more room: poll sees the change
     assert bpy.ops.lamp.lamp_add.poll()
 

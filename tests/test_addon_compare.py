@@ -29,7 +29,7 @@ import numpy as np
 import pytest
 
 import core_tracer
-from core_tracer import imageio
+from core_tracer.images import imageio
 
 pytestmark = pytest.mark.blender
 
@@ -52,8 +52,8 @@ def _scene(edit=None, size=(48, 32)) -> dict:
 
 
 def _compare(lamp_addon, bl_scene, scene, samples, size=None):
-    lamp_addon.properties.scene_to_design(bl_scene, scene)
-    return lamp_addon.compare.compare_design(bl_scene, samples=samples, resolution=size)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    return lamp_addon.compare_ops.compare_design(bl_scene, samples=samples, resolution=size)
 
 
 def _region_mean(image: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
@@ -65,7 +65,7 @@ def _region_mean(image: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
 
 
 def test_side_by_side_layout_and_labels(lamp_addon):
-    compare = lamp_addon.compare
+    compare = lamp_addon.compare_ops
     left = np.full((40, 30, 3), 0.25, np.float32)
     right = np.full((40, 30, 3), 0.75, np.float32)
     out = compare.side_by_side(left, right, ("Lamp Tracer",), ("Cycles",))
@@ -78,14 +78,14 @@ def test_side_by_side_layout_and_labels(lamp_addon):
 
 
 def test_side_by_side_picks_the_label_that_fits(lamp_addon, addon_core):
-    compare = lamp_addon.compare
-    measure = lambda t: len(t) * addon_core.bitmap_font.ADVANCE_W  # noqa: E731
+    compare = lamp_addon.compare_ops
+    measure = lambda t: len(t) * addon_core.images.bitmap_font.ADVANCE_W  # noqa: E731
     assert compare._fitting(("Lamp Tracer  0.12 s", "Lamp Tracer", "Tracer"), 70, measure) == "Lamp Tracer"
     assert compare._fitting(("Lamp Tracer  0.12 s", "Lamp Tracer"), 10, measure) == "Lamp Tracer"
 
 
 def test_bitmap_labels_use_core_tracers_font(lamp_addon, addon_core):
-    compare, font = lamp_addon.compare, addon_core.bitmap_font
+    compare, font = lamp_addon.compare_ops, addon_core.images.bitmap_font
     assert compare.bitmap_font is font  # one font in the project, core_tracer's
     labels = ("Lamp Tracer  12.34 s", "Tracer", "Cycles  64 spp  56.7 s", "Cycles  56.7 s", "Cycles")
     assert all(c.upper() in font.GLYPHS for label in labels for c in label)  # no character drawn as a box
@@ -112,7 +112,7 @@ def test_differences(lamp_addon):
     a[0, 0] = (1.0, 2.0, 0.0)
     b[0, 0] = (0.0, 0.0, 0.0)
     b[1, 1] = (0.0, 0.0, 2.0)
-    d = lamp_addon.compare.differences(a, b)
+    d = lamp_addon.compare_ops.differences(a, b)
     assert d["mean_difference"] == pytest.approx([0.25, 0.5, -0.5])
     assert d["mean_abs_difference"] == pytest.approx([0.25, 0.5, 0.5])
     assert d["rms_difference"] == pytest.approx([0.5, 1.0, 1.0])
@@ -157,19 +157,19 @@ def _handlers_installed(compare) -> list[str]:
 
 def _design_and_user_settings(lamp_addon, bl_scene, size=(24, 16)) -> dict:
     """The baseline design with its scene camera and the user's settings; returns those settings."""
-    lamp_addon.properties.scene_to_design(bl_scene, _scene(size=size))
-    lamp_addon.camera.ensure_scene_camera(bl_scene, _scene())
+    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=size))
+    lamp_addon.render_camera.ensure_scene_camera(bl_scene, _scene())
     _user_settings(bl_scene)
-    return _settings(lamp_addon.compare, bl_scene)
+    return _settings(lamp_addon.compare_ops, bl_scene)
 
 
 def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, tmp_path):
     import bpy
 
-    compare = lamp_addon.compare
+    compare = lamp_addon.compare_ops
     scene = _scene(size=(40, 24))
-    lamp_addon.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.camera.ensure_scene_camera(bl_scene, scene)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render_camera.ensure_scene_camera(bl_scene, scene)
     _user_settings(bl_scene)
     before = _settings(compare, bl_scene)
     result = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
@@ -198,9 +198,9 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
 
 def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):
     scene = _scene(size=(24, 16))
-    lamp_addon.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
     assert bl_scene.camera is None
-    result = lamp_addon.compare.compare_design(bl_scene, samples=1)
+    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
     assert bl_scene.camera is not None  # the design's camera became the scene camera
     assert result["size"] == (24, 16) and result["scene"]["camera"]["position"] == pytest.approx(
         scene["camera"]["position"], abs=1e-3)
@@ -223,7 +223,7 @@ def _modal_run(compare, bl_scene, samples=2, resolution=(40, 24)):
 
 
 def test_modal_steps_give_the_synchronous_result(lamp_addon, bl_scene):
-    compare = lamp_addon.compare
+    compare = lamp_addon.compare_ops
     before = _design_and_user_settings(lamp_addon, bl_scene, (40, 24))
     blocking = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
 
@@ -254,7 +254,7 @@ def _cancel_as_blender_does(bl_scene) -> None:
 
 @pytest.mark.parametrize("stage", ["cycles", "tracer"])
 def test_a_cancelled_render_restores_the_settings_and_removes_the_handlers(lamp_addon, bl_scene, stage):
-    compare = lamp_addon.compare
+    compare = lamp_addon.compare_ops
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     assert _settings(compare, bl_scene) != before
@@ -273,8 +273,8 @@ def test_a_cancelled_render_restores_the_settings_and_removes_the_handlers(lamp_
 def test_a_render_of_another_scene_is_not_taken_for_the_comparisons(lamp_addon, bl_scene):
     import bpy
 
-    compare = lamp_addon.compare
-    lamp_addon.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    compare = lamp_addon.compare_ops
+    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     try:
         other = bpy.data.scenes.new("Other")
@@ -286,7 +286,7 @@ def test_a_render_of_another_scene_is_not_taken_for_the_comparisons(lamp_addon, 
 
 
 def test_a_design_edited_between_the_renders_stops_the_comparison(lamp_addon, bl_scene):
-    compare = lamp_addon.compare
+    compare = lamp_addon.compare_ops
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     bl_scene.lamp_design.lamps[0].lens.ior = 1.6  # the interface is live during the Cycles render
@@ -297,7 +297,7 @@ def test_a_design_edited_between_the_renders_stops_the_comparison(lamp_addon, bl
 
 
 def test_a_setting_the_user_changes_during_the_comparison_is_kept(lamp_addon, bl_scene):
-    compare = lamp_addon.compare
+    compare = lamp_addon.compare_ops
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     bl_scene.cycles.seed = 42  # while Cycles renders, the user sets the seed for later
@@ -308,7 +308,7 @@ def test_a_setting_the_user_changes_during_the_comparison_is_kept(lamp_addon, bl
 def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
     import bpy
 
-    compare, panels = lamp_addon.compare, lamp_addon.panels
+    compare, panels = lamp_addon.compare_ops, lamp_addon.design_panels
     before = _design_and_user_settings(lamp_addon, bl_scene)
     actions = list(panels.ACTION_OPERATORS)
     _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
@@ -326,7 +326,7 @@ def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
 def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
     result = _compare(lamp_addon, bl_scene, _scene(size=(24, 16)), samples=1)
     for name in ("c.exr", "c.png"):
-        lamp_addon.compare.write_comparison(str(tmp_path / name), result)
+        lamp_addon.compare_ops.write_comparison(str(tmp_path / name), result)
         image, scene = imageio.read_image(tmp_path / name)
         assert image.shape == result["side_by_side"].shape
         assert scene == core_tracer.normalize(result["scene"])
@@ -337,7 +337,7 @@ def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
 def test_compare_operator(lamp_addon, bl_scene, tmp_path):
     import bpy
 
-    lamp_addon.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     assert bpy.ops.lamp.compare_cycles(samples=1) == {"FINISHED"}
     shown = lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Compare"])
     assert not (tmp_path / "c.png").exists()
@@ -352,11 +352,11 @@ def test_compare_operator(lamp_addon, bl_scene, tmp_path):
 def test_compare_operator_reports_design_errors(lamp_addon, bl_scene):
     import bpy
 
-    lamp_addon.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     bl_scene.lamp_design.lamps[0].cuts.pitch = 95.0  # larger than the lens
     with pytest.raises(RuntimeError, match=r"lamps\[0\]\.cuts\.pitch: 95 is larger than the lens"):
         bpy.ops.lamp.compare_cycles(samples=1)
-    assert _handlers_installed(lamp_addon.compare) == [] and lamp_addon.compare.running() is None
+    assert _handlers_installed(lamp_addon.compare_ops) == [] and lamp_addon.compare_ops.running() is None
 
 
 # ---------------------------------------------------------------------------------------------

@@ -108,13 +108,13 @@ def draw(cls, bl_scene) -> RecordingLayout:
 
 @pytest.fixture
 def S(addon_core):
-    return addon_core.spec
+    return addon_core.scene.spec
 
 
 @pytest.fixture
 def design(lamp_addon, addon_core, bl_scene):
     scene = addon_core.scene.load_scene(PRESETS / "four-lamp-rear-combination.json")
-    lamp_addon.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
     bl_scene.lamp_design.active_lamps_index = 2
     return bl_scene.lamp_design
 
@@ -122,7 +122,7 @@ def design(lamp_addon, addon_core, bl_scene):
 def _panels(lamp_addon):
     import bpy
 
-    return [cls for cls in lamp_addon.panels.classes if issubclass(cls, bpy.types.Panel)]
+    return [cls for cls in lamp_addon.design_panels.classes if issubclass(cls, bpy.types.Panel)]
 
 
 def test_panels_are_in_the_lamp_tab(lamp_addon):
@@ -143,7 +143,7 @@ def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
         design.lamps[2].lens.color_mode = mode
         for cls in _panels(lamp_addon):
             shown |= draw(cls, bl_scene).spec_paths()
-    wanted = {info.path for info in S.iter_fields() if not lamp_addon.properties.is_constant(info.spec)}
+    wanted = {info.path for info in S.iter_fields() if not lamp_addon.design_properties.is_constant(info.spec)}
     assert wanted - shown == set()
     assert shown - wanted == {"lamps[].lens.color_mode"}  # the only property that is not a scene field
 
@@ -221,7 +221,7 @@ def test_lamp_list_and_actions(lamp_addon, bl_scene, design):
     assert ("label", "Lamp 2", "LIGHT_POINT") in row.log
     assert [p[2] for p in row.props()] == ["on"]
 
-    panels = lamp_addon.panels
+    panels = lamp_addon.design_panels
     ops = draw(bpy.types.LAMP_PT_design, bl_scene).operators()
     assert ops[0] == "lamp.build"
     assert ops == [idname for idname, _, _ in panels.ACTION_OPERATORS]
@@ -245,5 +245,5 @@ def test_empty_design(lamp_addon, bl_scene):
         else:
             draw(cls, bl_scene)
     assert bpy.ops.lamp.lamp_add.poll() and not bpy.ops.lamp.lamp_remove.poll()
-    hints = [e for e in draw(lamp_addon.panels.LAMP_PT_lamps, bl_scene).log if e[0] == "label"]
+    hints = [e for e in draw(lamp_addon.design_panels.LAMP_PT_lamps, bl_scene).log if e[0] == "label"]
     assert any("Add a lamp" in e[1] for e in hints)  # the empty list says how to start

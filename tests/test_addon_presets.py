@@ -102,7 +102,7 @@ def test_two_designers_share_a_folder(browser, add_library, bl_scene, tmp_path, 
 
     (tmp_path / "share").mkdir()
     team = add_library(tmp_path / "share", "Team share")
-    props = browser.properties
+    props = browser.design_properties
 
     # Alice starts from the amber study, changes it and saves it to the team's folder.
     wm = refresh()
@@ -139,7 +139,7 @@ def test_two_designers_share_a_folder(browser, add_library, bl_scene, tmp_path, 
     expected = dict(alice, name="Amber turn (Alice)", author="Alice", tags=["amber", "turn"],
                     description="Try it with your cuts")
     assert leaves(bob) == leaves(expected)
-    assert leaves(addon_core.presets.load_preset(saved)) == leaves(expected)
+    assert leaves(addon_core.library.presets.load_preset(saved)) == leaves(expected)
 
 
 def test_overwrite_is_refused_without_confirmation(browser, add_library, bl_scene, tmp_path):
@@ -194,7 +194,7 @@ def _design(props, bl_scene) -> dict:
 def test_apply_is_all_or_nothing(browser, add_library, bl_scene, tmp_path):
     import bpy
 
-    props = browser.properties
+    props = browser.design_properties
     team = Path(add_library(tmp_path, "Team"))
     doc = json.loads((BUILTIN / "paper-baseline.json").read_text())
     # Valid for the tracer, but a tag with a comma cannot be kept in the comma-separated tag field.
@@ -263,7 +263,7 @@ def test_rename_and_delete(browser, add_library, bl_scene, tmp_path):
 def test_export_then_import(browser, bl_scene, tmp_path, addon_core):
     import bpy
 
-    props = browser.properties
+    props = browser.design_properties
     wm = refresh()
     select(wm, "four-lamp-rear-combination.json")
     bpy.ops.lamp.preset_apply()
@@ -334,9 +334,9 @@ def _assert_camera_shows(camera_module, bl_scene, preset: dict) -> None:
 def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_scene, tmp_path, addon_core, capfd):
     import bpy
 
-    camera = browser.camera
+    camera = browser.render_camera
     team = add_library(tmp_path, "Team share")
-    props = browser.properties
+    props = browser.design_properties
 
     # Designer 1 applies a preset (the add-on makes its camera), then moves the Blender camera and
     # changes the render size: the preset records that view, not the design's camera section.
@@ -349,7 +349,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     bpy.context.view_layer.update()
     seen = camera.scene_camera_to_dict(bl_scene)
     assert bpy.ops.lamp.preset_save(name="Amber, low view", author="Alice", library=team) == {"FINISHED"}
-    preset = addon_core.presets.load_preset(Path(team) / "amber-low-view.json")
+    preset = addon_core.library.presets.load_preset(Path(team) / "amber-low-view.json")
     assert preset["image"] == {"width": 80, "height": 45}  # what F12 renders
     assert preset["camera"]["position"] != design_camera["position"]
     for key, value in seen.items():
@@ -359,7 +359,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     # Exporting records the same view.
     out = tmp_path / "exported.json"
     assert bpy.ops.lamp.preset_export(filepath=str(out)) == {"FINISHED"}
-    exported = addon_core.presets.load_preset(out)
+    exported = addon_core.library.presets.load_preset(out)
     assert (exported["camera"], exported["image"]) == (preset["camera"], preset["image"])
 
     # Designer 2, in a new file without a camera, applies it: the same design parameter for parameter,
@@ -375,7 +375,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     # saving it again records exactly the same numbers (no single-precision drift)
     assert bpy.ops.lamp.preset_save(name="Amber, low view", author="Alice", library=team, overwrite=True) == \
         {"FINISHED"}
-    assert leaves(addon_core.presets.load_preset(Path(team) / "amber-low-view.json")) == leaves(preset)
+    assert leaves(addon_core.library.presets.load_preset(Path(team) / "amber-low-view.json")) == leaves(preset)
 
     # Applying another preset moves the add-on's camera again.
     capfd.readouterr()
@@ -401,8 +401,8 @@ def test_applying_never_moves_the_designers_own_camera(browser, bl_scene, addon_
     assert ([list(row) for row in own.matrix_world], own.data.lens, own.data.shift_x) == before
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (320, 200)
     assert bl_scene.camera == own and "Lamp Camera" not in bpy.data.objects
-    preset = addon_core.presets.load_preset(BUILTIN / "four-lamp-rear-combination.json")
-    assert leaves(browser.properties.design_to_scene(bl_scene)) == leaves(preset)  # the design has its view
+    preset = addon_core.library.presets.load_preset(BUILTIN / "four-lamp-rear-combination.json")
+    assert leaves(browser.design_properties.design_to_scene(bl_scene)) == leaves(preset)  # the design has its view
 
 
 def test_a_camera_the_tracer_cannot_render_is_not_saved(browser, add_library, bl_scene, tmp_path):
@@ -426,7 +426,7 @@ def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(bro
     bpy.ops.lamp.preset_apply()
     bl_scene.lamp_design.camera.position = (0.0, 500.0, 0.0)  # behind the lamp: not a view of it
     with pytest.raises(addon_core.SceneError, match="camera.position"):
-        browser.properties.design_to_scene(bl_scene)
+        browser.design_properties.design_to_scene(bl_scene)
     assert bpy.ops.lamp.preset_save(name="Seen", library=team) == {"FINISHED"}
-    saved = addon_core.presets.load_preset(tmp_path / "seen.json")
+    saved = addon_core.library.presets.load_preset(tmp_path / "seen.json")
     assert saved["camera"]["position"] == [0.0, -800.0, 0.0]  # where the Lamp Camera is

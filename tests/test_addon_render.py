@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import core_tracer
-from core_tracer import imageio
+from core_tracer.images import imageio
 
 pytestmark = pytest.mark.blender
 
@@ -54,8 +54,8 @@ def _preset_scene(camera: dict | None = None, size=(48, 32)) -> dict:
 
 
 def _load_design(lamp_addon, bl_scene, scene: dict) -> None:
-    lamp_addon.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.camera.ensure_scene_camera(bl_scene, scene)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render_camera.ensure_scene_camera(bl_scene, scene)
 
 
 def _axes(cam, camera_module):
@@ -67,7 +67,7 @@ def _axes(cam, camera_module):
 
 
 def test_camera_formulas(lamp_addon):
-    cam = lamp_addon.camera
+    cam = lamp_addon.render_camera
     assert cam.render_size(1920, 1080, 50) == (960, 540)
     assert cam.render_size(101, 33, 33) == (33, 10)  # Blender divides integers
     assert cam.fitted_side("auto", 48, 32) == "horizontal"
@@ -82,7 +82,7 @@ def test_camera_formulas(lamp_addon):
 
 
 def test_view_from_axes_keeps_world_up_when_level(lamp_addon):
-    cam = lamp_addon.camera
+    cam = lamp_addon.render_camera
     right, up, back = cam.look_at_axes((0, -800, 100), (0, 0, 0), (0, 0, 1))
     view = cam.view_from_axes((0, -800, 100), up, back, math.dist((0, -800, 100), (0, 0, 0)))
     assert view["up"] == [0.0, 0.0, 1.0]
@@ -102,14 +102,14 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
     scene = _preset_scene(CAMERAS[name], size)
     _load_design(lamp_addon, bl_scene, scene)
     # What the renderers see: the camera as the depsgraph evaluates it (location + rotation, float32)
-    back = lamp_addon.camera.scene_camera_to_dict(bl_scene, lamp_addon.camera.evaluated_camera(bl_scene))
+    back = lamp_addon.render_camera.scene_camera_to_dict(bl_scene, lamp_addon.render_camera.evaluated_camera(bl_scene))
     want = scene["camera"]
     assert back["type"] == want["type"]
     assert back["sensor_fit"] == want["sensor_fit"]
     assert back["position"] == pytest.approx(want["position"], abs=1e-4)
     # Orientation to 1e-4 degrees; the target keeps its distance to 1e-4 mm. The target point itself
     # is only as exact as a float32 rotation at ~1 m allows (1e-7 rad is 1e-4 mm at 800 mm).
-    for got, wanted in zip(_axes(back, lamp_addon.camera), _axes(want, lamp_addon.camera), strict=True):
+    for got, wanted in zip(_axes(back, lamp_addon.render_camera), _axes(want, lamp_addon.render_camera), strict=True):
         assert math.degrees(math.acos(min(1.0, float(np.dot(got, wanted))))) < 1e-4
     assert math.dist(back["position"], back["target"]) == pytest.approx(
         math.dist(want["position"], want["target"]), abs=1e-4)
@@ -119,15 +119,15 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
         assert back["fov_deg"] == pytest.approx(want["fov_deg"], abs=1e-4)
     else:
         assert back["width"] == pytest.approx(want["width"], abs=1e-4)
-    rendered = lamp_addon.camera.scene_for_render(bl_scene)
+    rendered = lamp_addon.render_camera.scene_for_render(bl_scene)
     assert rendered["image"] == {"width": size[0], "height": size[1]}
     assert rendered["camera"] == back
 
 
 def _tracer_projection(cam: dict, width: int, height: int, point) -> tuple[float, float]:
-    """Where the tracer's camera (core_tracer.camera) puts a world point: (x, y) in [0, 1] from the
+    """Where the tracer's camera (core_tracer.raytrace.camera) puts a world point: (x, y) in [0, 1] from the
     image's bottom-left corner, Blender's convention."""
-    c = core_tracer.camera.make_camera(cam, width, height)
+    c = core_tracer.raytrace.camera.make_camera(cam, width, height)
     rel = np.asarray(point, float) - c.position
     u, v, depth = rel @ c.right, rel @ c.up, rel @ c.forward
     if not c.orthographic:
@@ -146,7 +146,7 @@ def test_tracer_camera_projects_like_blender(lamp_addon, bl_scene, name, size):
 
     scene = _preset_scene(CAMERAS[name], size)
     _load_design(lamp_addon, bl_scene, scene)
-    read = lamp_addon.camera.scene_camera_to_dict(bl_scene)
+    read = lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
     for point in ([-110, 0, -60], [110, 0, 60], [45, 30, -20], [0, 80, 0]):
         blender = world_to_camera_view(bl_scene, bl_scene.camera, Vector(point) * 0.001)
         tracer = _tracer_projection(read, size[0], size[1], point)
@@ -156,29 +156,29 @@ def test_tracer_camera_projects_like_blender(lamp_addon, bl_scene, name, size):
 
 def test_camera_refuses_what_the_tracer_cannot_render(lamp_addon, addon_core, bl_scene):
     with pytest.raises(addon_core.SceneError, match="no camera"):
-        lamp_addon.camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
     _load_design(lamp_addon, bl_scene, _preset_scene())
     bl_scene.render.pixel_aspect_x = 2.0
     with pytest.raises(addon_core.SceneError, match="pixel aspect 2:1"):
-        lamp_addon.camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
     bl_scene.render.pixel_aspect_x = 1.0
     bl_scene.camera.data.type = "PANO"
     with pytest.raises(addon_core.SceneError, match='camera.type: "pano"'):
-        lamp_addon.camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
 
 
 def test_camera_operators(lamp_addon, bl_scene):
     import bpy
 
     scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
-    lamp_addon.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
     assert bpy.ops.lamp.camera_from_design() == {"FINISHED"}
     assert bl_scene.camera is not None and (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (40, 30)
-    assert lamp_addon.camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(31.25, abs=1e-4)
+    assert lamp_addon.render_camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(31.25, abs=1e-4)
     bl_scene.camera.location.x += 0.05  # the user moves the camera 50 mm to the right ...
     bl_scene.render.resolution_x = 64
     assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # ... and stores the view in the design
-    design = lamp_addon.properties.design_to_scene(bl_scene)
+    design = lamp_addon.design_properties.design_to_scene(bl_scene)
     assert design["camera"]["position"][0] == pytest.approx(-40.0 + 50.0, abs=1e-3)
     assert design["image"] == {"width": 64, "height": 30}
 
@@ -190,9 +190,9 @@ def test_an_out_of_date_design_camera_does_not_block_a_render(lamp_addon, addon_
     _load_design(lamp_addon, bl_scene, scene)
     bl_scene.lamp_design.camera.position = (0.0, 500.0, 0.0)  # the design's own camera: behind the lamp
     with pytest.raises(addon_core.SceneError, match=r"camera\.position: y = 500"):
-        lamp_addon.properties.design_to_scene(bl_scene)
+        lamp_addon.design_properties.design_to_scene(bl_scene)
     # The Blender camera renders, and it replaces the design's camera before the scene is checked.
-    seen = lamp_addon.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
     assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-3)
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Tracer"]),
@@ -200,7 +200,7 @@ def test_an_out_of_date_design_camera_does_not_block_a_render(lamp_addon, addon_
     bl_scene.render.engine = "LAMP_TRACER"
     assert bpy.ops.render.render() == {"FINISHED"}  # the engine reports no error
     assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # and the design camera can be brought up to date
-    assert lamp_addon.properties.design_to_scene(bl_scene)["camera"]["position"] == pytest.approx(
+    assert lamp_addon.design_properties.design_to_scene(bl_scene)["camera"]["position"] == pytest.approx(
         seen["camera"]["position"], abs=1e-3)
 
 
@@ -227,7 +227,7 @@ def test_engine_equals_core_render(lamp_addon, bl_scene, tmp_path):
     _load_design(lamp_addon, bl_scene, scene)
     bl_scene.render.engine = "LAMP_TRACER"
     rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
-    seen = lamp_addon.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
     # The scene the engine rendered is the preset's, camera included (up to Blender's float32 storage).
     assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-4)
     assert seen["camera"]["fov_deg"] == pytest.approx(scene["camera"]["fov_deg"], abs=1e-4)
@@ -249,7 +249,7 @@ def test_engine_renders_percentage_and_writes_still(lamp_addon, bl_scene, tmp_pa
     assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
     image, _ = imageio.read_image(tmp_path / "still.png")
     assert image.shape == (20, 32, 3)
-    expected = core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
     assert expected.shape == (20, 32, 3)
     # PNG: 8-bit sRGB under the scene's view transform; compare where the view is the identity
     bl_scene.view_settings.view_transform = "Standard"
@@ -313,16 +313,16 @@ def test_engine_panels_are_compatible_and_registration_is_symmetric(lamp_addon):
     panels = (bpy.types.RENDER_PT_format, bpy.types.RENDER_PT_output, bpy.types.DATA_PT_lens,
               bpy.types.DATA_PT_camera, bpy.types.RENDER_PT_color_management)
     assert all("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
-    assert lamp_addon.engine.LampTracerEngine.is_registered
+    assert lamp_addon.render_engine.LampTracerEngine.is_registered
     assert "LAMP_TRACER" not in bpy.types.CYCLES_RENDER_PT_sampling.COMPAT_ENGINES
-    lamp_addon.engine.unregister()
+    lamp_addon.render_engine.unregister()
     try:
         assert not any("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
-        assert not lamp_addon.engine.LampTracerEngine.is_registered
+        assert not lamp_addon.render_engine.LampTracerEngine.is_registered
     finally:
-        lamp_addon.engine.register()
+        lamp_addon.render_engine.register()
     assert all("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
-    assert lamp_addon.engine.LampTracerEngine.is_registered
+    assert lamp_addon.render_engine.LampTracerEngine.is_registered
 
 
 # ---------------------------------------------------------------------------------------------
@@ -392,7 +392,7 @@ def test_engine_writes_contribution_passes_to_multilayer_exr(lamp_addon, bl_scen
     assert set(layers) == {"ViewLayer"}
     got = layers["ViewLayer"]
     assert set(got) == {"Combined", *LABELS.values()}
-    expected = core_tracer.render_passes(lamp_addon.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render_passes(lamp_addon.render_camera.scene_for_render(bl_scene))
     assert got["Combined"].shape == (24, 40, 4)
     np.testing.assert_array_equal(got["Combined"][:, :, :3], expected.image)
     np.testing.assert_array_equal(got["Combined"][:, :, 3], 1.0)
@@ -410,7 +410,7 @@ def test_engine_without_contribution_passes_writes_combined_only(lamp_addon, bl_
     layers = _render_multilayer_exr(bl_scene, tmp_path / "combined.exr")
     assert {layer: set(passes) for layer, passes in layers.items()} == {"ViewLayer": {"Combined"}}
     np.testing.assert_array_equal(layers["ViewLayer"]["Combined"][:, :, :3],
-                                  core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene)))
+                                  core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene)))
 
 
 def test_engine_contribution_passes_are_per_view_layer(lamp_addon, bl_scene, tmp_path):
@@ -423,7 +423,7 @@ def test_engine_contribution_passes_are_per_view_layer(lamp_addon, bl_scene, tmp
     layers = _render_multilayer_exr(bl_scene, tmp_path / "layers.exr")
     assert set(layers["ViewLayer"]) == {"Combined", *LABELS.values()}
     assert set(layers["Plain"]) == {"Combined"}
-    expected = core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
     np.testing.assert_array_equal(layers["Plain"]["Combined"][:, :, :3], expected)
     np.testing.assert_array_equal(layers["ViewLayer"]["Combined"][:, :, :3], expected)
 
@@ -442,7 +442,7 @@ def test_engine_contribution_passes_follow_transparency_and_region(lamp_addon, b
     x0, x1, y0, y1 = 0, 15, 17, 32  # the border in whole pixels, rows counted from the bottom
     alpha = got["Combined"][:, :, 3]
     assert set(np.unique(alpha)) == {0.0, 1.0}  # the lamp's outline cuts the region
-    expected = core_tracer.render_passes(lamp_addon.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render_passes(lamp_addon.render_camera.scene_for_render(bl_scene))
     for name, label in LABELS.items():
         want = expected.passes[name][32 - y1:32 - y0, x0:x1] * alpha[:, :, None]
         np.testing.assert_array_equal(got[label], want, err_msg=label)
@@ -488,7 +488,7 @@ def test_contribution_passes_in_the_compositor(lamp_addon, bl_scene, tmp_path):
     assert offered() == {"Image", "Alpha", *LABELS.values()}
     tree.links.new(render_layers.outputs["Lamp Bulb"], tree.nodes.new("NodeGroupOutput").inputs[0])
     rgba = _render_engine_exr(bl_scene, tmp_path / "bulb.exr")
-    bulb = core_tracer.render_passes(lamp_addon.camera.scene_for_render(bl_scene)).passes["bulb"]
+    bulb = core_tracer.render_passes(lamp_addon.render_camera.scene_for_render(bl_scene)).passes["bulb"]
     assert bulb.max() > 1.0
     np.testing.assert_array_equal(rgba[:, :, :3], bulb)
     layer.lamp_contribution_passes = False
@@ -514,7 +514,7 @@ def test_contribution_passes_panel_and_symmetric_registration(lamp_addon, bl_sce
 
     import bpy
 
-    engine = lamp_addon.engine
+    engine = lamp_addon.render_engine
     layer = bl_scene.view_layers["ViewLayer"]
     panel = bpy.types.LAMP_PT_view_layer_passes
     assert panel.bl_context == "view_layer" and panel.bl_parent_id == "VIEWLAYER_PT_layer_passes"
@@ -545,7 +545,7 @@ def test_contribution_passes_panel_and_symmetric_registration(lamp_addon, bl_sce
 
 
 def test_readme_names_the_contribution_passes(lamp_addon, repo_root):
-    assert lamp_addon.engine.PASS_LABELS == LABELS
+    assert lamp_addon.render_engine.PASS_LABELS == LABELS
     text = " ".join((repo_root / "README.md").read_text().split())
     assert "Contribution Passes" in text
     assert all(f"*{label}*" in text for label in LABELS.values())
@@ -563,7 +563,7 @@ def test_render_operator_image_equals_core_render(lamp_addon, bl_scene):
     image = bpy.data.images["Lamp Tracer"]
     assert image.is_float and tuple(image.size) == (48, 32)
     assert image.colorspace_settings.name == lamp_addon.image_view.scene_linear_colorspace()
-    expected = core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
     np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(image), expected)
     # Again at another size: the same data-block, resized, still exact.
     bl_scene.render.resolution_x = 24
@@ -571,13 +571,13 @@ def test_render_operator_image_equals_core_render(lamp_addon, bl_scene):
     again = bpy.data.images["Lamp Tracer"]
     assert again == image and tuple(again.size) == (24, 32)
     np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(again),
-                                  core_tracer.render(lamp_addon.camera.scene_for_render(bl_scene)))
+                                  core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene)))
 
 
 def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):
     import bpy
 
-    lamp_addon.properties.scene_to_design(bl_scene, _preset_scene())
+    lamp_addon.design_properties.scene_to_design(bl_scene, _preset_scene())
     assert not bpy.ops.lamp.render_tracer.poll()
     with pytest.raises(RuntimeError, match="no camera"):
         bpy.ops.lamp.render_tracer()
@@ -585,7 +585,7 @@ def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):
 
 def test_tracer_job_runs_on_a_thread_and_equals_core_render(lamp_addon):
     scene = _preset_scene(size=(40, 24))
-    job = lamp_addon.ops_render.TracerJob(scene).start()
+    job = lamp_addon.render_ops.TracerJob(scene).start()
     assert job.wait(60.0)
     assert job.error is None and not job.cancelled
     assert job.progress == 1.0 and job.rows_done == 24
@@ -594,7 +594,7 @@ def test_tracer_job_runs_on_a_thread_and_equals_core_render(lamp_addon):
 
 def test_tracer_job_cancels_through_should_stop(lamp_addon):
     scene = _preset_scene(size=(256, 256))  # several bands of rows
-    job = lamp_addon.ops_render.TracerJob(scene)
+    job = lamp_addon.render_ops.TracerJob(scene)
     job.stop()  # Esc before the first band is polled
     job.start()
     assert job.wait(60.0)

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import core_tracer
-from core_tracer import study as st
-from core_tracer import study_sheet
+from core_tracer.study import definition as st
+from core_tracer.study import sheet as study_sheet
 
 pytestmark = pytest.mark.blender
 
@@ -23,8 +23,8 @@ PRESET = os.path.join(ROOT, "presets", "paper-baseline.json")
 def design(lamp_addon, bl_scene):
     with open(PRESET, encoding="utf-8") as f:
         scene = core_tracer.parse_scene(json.load(f))
-    lamp_addon.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.camera.ensure_scene_camera(bl_scene, scene)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render_camera.ensure_scene_camera(bl_scene, scene)
     settings = bl_scene.lamp_study
     settings.width, settings.height = 32, 32
     settings.workers = 2
@@ -100,7 +100,7 @@ def test_apply_variant_sets_the_varied_parameter(design, lamp_addon):
     bpy.ops.lamp.study_run()
     design.lamp_study.variant = 2
     assert bpy.ops.lamp.study_apply_variant() == {"FINISHED"}
-    scene = lamp_addon.properties.design_to_scene(design)
+    scene = lamp_addon.design_properties.design_to_scene(design)
     assert scene["lamps"][0]["lens"]["ior"] == 1.6
 
 

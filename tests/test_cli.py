@@ -14,7 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core_tracer import PASS_NAMES, imageio, scene
+from core_tracer import PASS_NAMES
+from core_tracer.images import imageio
+from core_tracer.scene import validate as scene
 
 ROOT = Path(__file__).resolve().parent.parent
 BASELINE = ROOT / "presets" / "paper-baseline.json"
@@ -241,7 +243,7 @@ def test_exposure_darkens_the_png(tmp_path):
     assert run_cli("render", BASELINE, "-o", normal, "--width", "32", "--height", "32").returncode == 0
     size = ("--width", "32", "--height", "32")
     assert run_cli("render", BASELINE, "-o", darker, *size, "--exposure", "-2").returncode == 0
-    from core_tracer.imageio import read_image
+    from core_tracer.images.imageio import read_image
 
     a, _ = read_image(normal)  # read_image undoes the exposure: compare the stored codes instead
     b, _ = read_image(darker)

@@ -9,8 +9,9 @@ import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-from core_tracer import imageio, scene
-from core_tracer.scene import SceneError
+from core_tracer.images import imageio
+from core_tracer.scene import validate as scene
+from core_tracer.scene.validate import SceneError
 
 ROOT = Path(__file__).resolve().parent.parent
 BASELINE = ROOT / "presets" / "paper-baseline.json"

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 from hostile_presets import leaves
 
-from core_tracer import imageio, render
-from core_tracer import presets as P
-from core_tracer.scene import lamp_geometry, lens_absorption, parse_scene, read_json
+from core_tracer import render
+from core_tracer.images import imageio
+from core_tracer.library import presets as P
+from core_tracer.scene.validate import lamp_geometry, lens_absorption, parse_scene, read_json
 
 PRESETS = Path(__file__).resolve().parent.parent / "presets"
 FILES = sorted(PRESETS.glob("*.json"))

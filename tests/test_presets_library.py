@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 from hostile_presets import leaves, make_hostile_folder
 
-from core_tracer import fileio, imageio
-from core_tracer import presets as P
-from core_tracer.scene import SceneError, parse_scene, read_json, scene_to_json
+from core_tracer import fileio
+from core_tracer.images import imageio
+from core_tracer.library import presets as P
+from core_tracer.scene.validate import SceneError, parse_scene, read_json, scene_to_json
 
 ROOT = Path(__file__).resolve().parent.parent
 BUILTIN = ROOT / "presets"

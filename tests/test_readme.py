@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from core_tracer import fields_doc, spec
+from core_tracer.scene import fields_doc, spec
 
 README = Path(__file__).resolve().parent.parent / "README.md"
 
@@ -10,7 +10,7 @@ README = Path(__file__).resolve().parent.parent / "README.md"
 def test_readme_field_table_is_generated_from_the_spec():
     text = README.read_text()
     table = text[text.index(fields_doc.BEGIN) + len(fields_doc.BEGIN):text.index(fields_doc.END)].strip()
-    assert table == fields_doc.field_table(), "run: python -m core_tracer.fields_doc --update README.md"
+    assert table == fields_doc.field_table(), "run: python -m core_tracer.scene.fields_doc --update README.md"
     for info in spec.iter_fields():
         assert f"`{info.path}`" in table
 

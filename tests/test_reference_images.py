@@ -20,7 +20,7 @@ sys.path.insert(0, str(HERE.parent))
 import OpenImageIO as oiio  # noqa: E402
 
 from core_tracer import load_scene, render  # noqa: E402
-from core_tracer.imageio import read_image, write_image  # noqa: E402
+from core_tracer.images.imageio import read_image, write_image  # noqa: E402
 
 REFERENCES = HERE / "references"
 FAILURES = HERE / "_failures"

@@ -14,9 +14,13 @@ import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-from core_tracer import cli, render, scene, study_run, study_sheet
-from core_tracer import study as st
-from core_tracer.scene import SceneError
+from core_tracer import render
+from core_tracer.cli import main as cli
+from core_tracer.scene import validate as scene
+from core_tracer.scene.validate import SceneError
+from core_tracer.study import definition as st
+from core_tracer.study import run as study_run
+from core_tracer.study import sheet as study_sheet
 
 ROOT = Path(__file__).resolve().parent.parent
 BASELINE = ROOT / "presets" / "paper-baseline.json"
@@ -369,14 +373,14 @@ def test_sheet_file_carries_the_study(tmp_path, suffix):
         assert spec.format == oiio.FLOAT and np.array_equal(pixels, sheet)
     else:
         assert spec.format == oiio.UINT8
-        from core_tracer.imageio import to_srgb8
+        from core_tracer.images.imageio import to_srgb8
         assert np.array_equal(np.rint(pixels * 255).astype(np.uint8), to_srgb8(sheet))
     assert json.loads(spec.getattribute("lamp:study")) == s.to_doc()
     assert st.Study.load(path).to_json() == s.to_json()
 
 
 def test_loading_a_study_from_an_image_without_one(tmp_path):
-    from core_tracer.imageio import write_image
+    from core_tracer.images.imageio import write_image
 
     path = tmp_path / "plain.png"
     write_image(path, np.zeros((4, 4, 3), dtype=np.float32))

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core_tracer import geometry as G
-from core_tracer.scene import cut_sphere_radius
+from core_tracer.raytrace import geometry as G
+from core_tracer.scene.validate import cut_sphere_radius
 
 R, T, P_, H = 45.0, 3.0, 9.0, 1.5
 RHO = cut_sphere_radius(P_, H)

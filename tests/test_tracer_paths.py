@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from tracer_scenes import PRESETS, ROOT, scene_with
 
-from core_tracer import load_scene, paths, render, render_passes
+from core_tracer import load_scene, render, render_passes
+from core_tracer.raytrace import paths
 
 PRESET_FILES = sorted(PRESETS.glob("*.json"))
 

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 from tracer_scenes import flat_lens_on_axis, scene_with
 
-from core_tracer import optics, render, render_passes
-from core_tracer.camera import eye_rays, make_camera
-from core_tracer.tracer import CUTOFF
+from core_tracer import render, render_passes
+from core_tracer.raytrace import optics
+from core_tracer.raytrace.camera import eye_rays, make_camera
+from core_tracer.raytrace.tracer import CUTOFF
 
 # -- Fresnel --------------------------------------------------------------------------------------
 
@@ -190,7 +191,7 @@ def test_passes_sum_to_the_image():
 
 
 def test_on_band_hands_out_each_band_of_the_image_and_its_passes(monkeypatch):
-    from core_tracer import tracer
+    from core_tracer.raytrace import tracer
 
     monkeypatch.setattr(tracer, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide
     scene = scene_with(**{"image": {"width": 40, "height": 30}})

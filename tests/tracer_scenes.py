@@ -6,7 +6,7 @@ import copy
 import json
 from pathlib import Path
 
-from core_tracer.scene import parse_scene
+from core_tracer.scene.validate import parse_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 PRESETS = ROOT / "presets"

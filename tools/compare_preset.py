@@ -25,7 +25,7 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from core_tracer.commands import add_exposure_argument  # noqa: E402 (bpy-free: safe before Blender starts)
+from core_tracer.cli.common import add_exposure_argument  # noqa: E402 (bpy-free: safe before Blender starts)
 
 EXTENSION_ID = "lamp_styling"
 DEV_REPO = "lamp_styling_dev"
@@ -118,7 +118,7 @@ def main() -> int:
 
         bpy.ops.wm.read_homefile(use_empty=True)  # an empty scene: the preset's camera is the view
         with extension(bpy) as package:
-            headless = importlib.import_module(f"{package}.lamp_addon.headless")
+            headless = importlib.import_module(f"{package}.lamp_addon.compare_headless")
             return headless.run(args.preset, args.output, samples=args.samples, size=args.size,
                                 exposure=args.exposure, prog=PROG)
     finally:

@@ -1,0 +1,90 @@
+"""The CLI's commands, one module each (see ``cli.COMMANDS``), and what they share."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import os
+import signal
+import threading
+from collections.abc import Iterator
+
+from ..scene import spec as S
+from ..scene.validate import SceneError, parse_scene, read_json
+
+
+def in_file(error: SceneError, file: str | os.PathLike) -> SceneError:
+    """The same error, prefixed with the file it came from (once)."""
+    name = os.fspath(file)
+    if error.path == name or error.path.startswith(name + ":"):
+        return error
+    return SceneError(f"{name}: {error.path}" if error.path else name, error.message)
+
+
+def check_image_side(option: str, value: int | None) -> None:
+    """``--width``/``--height`` follow the same range as ``image.width``/``image.height``."""
+    if value is None:
+        return
+    side = S.IMAGE.fields["width"]
+    if not side.lo <= value <= side.hi:
+        raise SceneError(option, f"{value} is out of range; allowed {side.range_text()}")
+
+
+def load_scene_file(path: str | os.PathLike, width: int | None = None, height: int | None = None) -> dict:
+    """Read and validate a scene file, with the image size optionally overridden.
+
+    The override goes into the document before validation, so a default camera frames the body
+    for the image actually rendered and the stored scene says what was rendered.
+    """
+    check_image_side("--width", width)
+    check_image_side("--height", height)
+    doc = read_json(path)
+    if isinstance(doc, dict) and (width or height):
+        image = doc.get("image", {})
+        if isinstance(image, dict):
+            image = dict(image)
+            if width:
+                image["width"] = width
+            if height:
+                image["height"] = height
+            doc["image"] = image
+    try:
+        return parse_scene(doc)
+    except SceneError as e:
+        raise in_file(e, path) from None
+
+
+@contextlib.contextmanager
+def ctrl_c_sets(stop: threading.Event | None = None) -> Iterator[threading.Event]:
+    """While rendering, Ctrl-C sets an event that the work polls between bands or variants,
+    instead of interrupting numpy, the tracer's threads or the study's workers wherever they are."""
+    stop = stop or threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: stop.set())
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+MAX_EXPOSURE = 16.0
+
+
+def add_exposure_argument(parser: argparse.ArgumentParser) -> None:
+    """``--exposure EV``: stops applied to PNG output before its sRGB encoding (EXR stays linear)."""
+    parser.add_argument("--exposure", type=_exposure, default=0.0, metavar="EV",
+                        help="brighten (+) or darken (-) a .png by this many stops so bright lamps do not clip; "
+                             "an .exr keeps the linear values (default 0)")
+
+
+def _exposure(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value) or abs(value) > MAX_EXPOSURE:
+        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed [-{MAX_EXPOSURE:g}, {MAX_EXPOSURE:g}] stops")
+    return value

@@ -1,0 +1,147 @@
+"""``study BASE.json --vary P=LO:HI:STEPS [--vary ...] -o SHEET``: a design study on a contact sheet.
+
+Also ``study --study STUDY.json|SHEET.exr|SHEET.png -o SHEET`` re-runs a saved study (a sheet
+carries its study in its header), and ``study --list`` prints the parameters a study can vary.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+from ..images.imageio import image_format
+from ..scene.validate import SceneError
+from ..study import definition as st
+from .common import add_exposure_argument, ctrl_c_sets, in_file
+
+HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("base", nargs="?", metavar="BASE.json", help="the design to vary (a lamp-scene/1 file)")
+    parser.add_argument("--vary", action="append", default=[], metavar="PARAM=SPEC",
+                        help="a parameter and its values: lens.ior=1.45:1.6:4 (lo:hi:steps), "
+                             "cuts.height=0.5,1,2 (a list), lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05 "
+                             "(colours); lamps[1].lens.ior names one lamp; once or twice")
+    parser.add_argument("--study", metavar="STUDY", help="re-run a study: a .json definition or a sheet .exr/.png")
+    parser.add_argument("-o", "--output", metavar="SHEET", help="the contact sheet, .png (sRGB) or .exr (linear)")
+    parser.add_argument("--size", metavar="WxH", help=f"size of each variant image (default "
+                                                      f"{st.DEFAULT_SIZE[0]}x{st.DEFAULT_SIZE[1]})")
+    parser.add_argument("--title", help="the sheet's title (default: the design's name)")
+    parser.add_argument("--workers", type=int, metavar="N",
+                        help="worker processes (default: one per core; 0 renders in this process)")
+    parser.add_argument("--save-study", metavar="STUDY.json", help="write the study definition (base embedded)")
+    parser.add_argument("--save-variants", metavar="DIR", help="write every variant as a lamp-scene/1 preset")
+    add_exposure_argument(parser)
+    parser.add_argument("--list", action="store_true", help="list the parameters a study can vary and exit")
+
+
+def _size(text: str) -> tuple[int, int]:
+    parts = text.lower().split("x")
+    try:
+        size = [int(p) for p in parts]
+    except ValueError:
+        size = []
+    if len(size) != 2:
+        raise SceneError("--size", f"{text!r} is not WIDTHxHEIGHT (e.g. 256x256)")
+    return st.parse_size(size, "--size")
+
+
+def _check_folder(path: str, what: str) -> None:
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise SceneError(path, f"the {what} folder {folder} does not exist")
+
+
+def _build(args: argparse.Namespace) -> st.Study:
+    size = _size(args.size) if args.size else None
+    if args.study:
+        if args.base or args.vary:
+            raise SceneError("--study", "re-runs a saved study; give it without BASE.json and --vary")
+        study = st.Study.load(args.study)
+        if size is None and args.title is None:
+            return study
+        doc = study.to_doc()
+        if size is not None:
+            doc["size"] = list(size)
+        if args.title is not None:
+            doc["title"] = args.title
+        return st.Study.from_doc(doc)
+    if not args.base:
+        raise SceneError("study", "give BASE.json with --vary, or --study STUDY")
+    if not args.vary:
+        raise SceneError("--vary", "is required: one or two parameters to vary, e.g. --vary lens.ior=1.45:1.6:4")
+    if len(args.vary) > st.MAX_AXES:
+        raise SceneError("--vary", f"given {len(args.vary)} times; a study varies 1 or {st.MAX_AXES} parameters")
+    from ..scene.validate import read_json
+
+    base = read_json(args.base)
+    axes = [st.parse_vary(v) for v in args.vary]
+    try:
+        return st.Study.build(base, axes, size or st.DEFAULT_SIZE, args.title or "")
+    except SceneError as e:
+        if e.path == "base" or e.path.startswith("base."):  # a problem of the design file itself
+            raise in_file(SceneError(e.path[len("base."):], e.message), args.base) from None
+        raise
+
+
+def _progress_printer():
+    if not sys.stderr.isatty():
+        return None
+
+    def progress(done: int, total: int) -> None:
+        end = "\n" if done == total else ""
+        print(f"\rrendering variants: {done}/{total}", end=end, file=sys.stderr, flush=True)
+
+    return progress
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.list:
+        for name in st.study_parameters():
+            print(name)
+        return 0
+    # Every check on the user's input happens before the first worker starts.
+    if args.workers is not None and args.workers < 0:
+        raise SceneError("--workers", f"{args.workers} is out of range; allowed 0 (this process) or more")
+    if args.output is None and not (args.save_study or args.save_variants):
+        raise SceneError("--output", "is required: the contact sheet to write (.png or .exr)")
+    if args.output is not None:
+        image_format(args.output)
+        _check_folder(args.output, "output")
+    if args.save_study:
+        _check_folder(args.save_study, "--save-study")
+    if args.save_variants and os.path.exists(args.save_variants) and not os.path.isdir(args.save_variants):
+        raise SceneError(args.save_variants, "--save-variants must name a folder; this is a file")
+    study = _build(args)
+
+    if args.save_study:
+        study.save(args.save_study)
+    if args.save_variants:
+        study.save_variants(args.save_variants)
+    if args.output is None:
+        print(f"study of {len(study)} variants saved")
+        return 0
+
+    from ..study import run as study_run  # the tracer loads only when it is needed
+    from ..study import sheet as study_sheet
+
+    start = time.perf_counter()
+    with ctrl_c_sets() as stop:
+        try:
+            images = study_run.run_study(study, args.workers, progress=_progress_printer(), should_stop=stop.is_set)
+        except study_run.Cancelled:
+            raise KeyboardInterrupt from None
+    if stop.is_set():
+        raise KeyboardInterrupt
+    seconds = time.perf_counter() - start
+    sheet = study_sheet.compose(study, images)
+    study_sheet.write_sheet(args.output, study, sheet, exposure=args.exposure)
+    workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
+    how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
+    w, h = study.size
+    shape = " x ".join(str(len(a.values)) for a in study.axes)
+    print(f"{args.output}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}")
+    return 0

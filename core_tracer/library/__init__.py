@@ -1,0 +1,1 @@
+"""Preset libraries: listing folders of ``lamp-scene`` JSON safely, saving, thumbnails."""

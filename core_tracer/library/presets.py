@@ -1,0 +1,451 @@
+"""Preset libraries: folders of ``lamp-scene/1`` JSON files, listed, saved and shared safely.
+
+A preset is data, never code: a JSON file validated by ``scene.parse_scene`` with the same
+rules and messages as the CLI. A *library* is one folder: the built-in presets (read-only),
+a designer's own folder, a team share. Listing a folder never fails as a whole: every file
+that is not a valid preset becomes a warning naming the file and the field, and the others
+still show. Hostile files are bounded: a file is refused by its size before it is read
+(``scene.MAX_FILE_BYTES``), a list of lamps by its length before its items are looked at, and
+nothing but regular ``*.json`` files directly in the folder is opened; a link that leads out of
+the library is skipped. Writes are atomic (``fileio``), so a crash never leaves half a preset.
+
+Thumbnails are small tracer renders as PNG whose file name carries a hash of the preset's
+canonical JSON, so a changed preset gets a new thumbnail. A library may ship them in its
+``thumbnails/`` folder (the built-in presets do: ``python -m core_tracer presets thumbnails``
+makes them); otherwise they are made on demand and cached beside the presets (``.thumbnails/``)
+when the library is writable, else in a cache folder.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import os
+import unicodedata
+from dataclasses import dataclass, field
+
+from .. import fileio
+from ..scene.validate import SceneError, normalize, parse_scene, read_json, scene_to_json
+
+SUFFIX = ".json"
+THUMBNAIL_FOLDER = ".thumbnails"  # made on demand beside the presets of a writable library
+SHIPPED_THUMBNAIL_FOLDER = "thumbnails"  # made on purpose and shipped with the library
+REGENERATE_COMMAND = "python -m core_tracer presets thumbnails"
+MAX_THUMBNAIL_BYTES = 1_000_000  # a 96 x 96 PNG is a few kB; anything bigger is not ours
+THUMBNAIL_SIZE = 96
+MAX_SLUG = 64
+MAX_MESSAGE = 400  # a warning quotes the file; a hostile key or value must not flood the list
+BUILTIN_FOLDER = os.path.join(fileio.EXTENSION_ROOT, "presets")
+_RESERVED = {"con", "prn", "aux", "nul", *(f"com{i}" for i in range(10)), *(f"lpt{i}" for i in range(10))}
+
+
+class PresetError(SceneError):
+    """A preset operation that cannot be done; ``str()`` names the file or library."""
+
+
+class PresetExistsError(PresetError):
+    """Saving would replace an existing preset and ``overwrite`` was not given."""
+
+
+@dataclass(frozen=True)
+class Library:
+    """A folder of presets. ``writable`` says whether this program may save, rename and delete there."""
+
+    name: str
+    folder: str
+    writable: bool
+
+
+@dataclass(frozen=True)
+class PresetEntry:
+    """One valid preset found in a library."""
+
+    name: str
+    author: str
+    tags: tuple[str, ...]
+    description: str
+    file: str
+    library: Library
+    digest: str  # hash of the canonical JSON of the normalised scene
+    scene: dict = field(repr=False, compare=False)
+
+
+@dataclass(frozen=True)
+class PresetWarning:
+    """A file in a library that is not a usable preset; ``message`` names the field."""
+
+    file: str
+    library: Library
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.file}: {self.message}" if self.file else self.message
+
+
+def builtin_library() -> Library:
+    """The presets shipped with the program (read-only)."""
+    return Library("Built-in", BUILTIN_FOLDER, writable=False)
+
+
+# ---------------------------------------------------------------------------------------------
+# Names and paths
+
+
+def printable(text: str, limit: int = MAX_MESSAGE) -> str:
+    """One line of plain text: control characters and undecodable bytes escaped, length bounded."""
+    out = []
+    for ch in text[: limit + 1]:
+        code = ord(ch)
+        if 0xDC80 <= code <= 0xDCFF:  # an undecodable byte of a file name (surrogateescape)
+            out.append(f"\\x{code - 0xDC00:02x}")
+        elif ch.isprintable():
+            out.append(ch)
+        else:
+            out.append(ch.encode("unicode_escape").decode("ascii"))
+    line = "".join(out)
+    return line if len(line) <= limit else line[: limit - 3] + "..."
+
+
+def slug(name: str) -> str:
+    """A safe file stem for a preset name: lower case letters and digits joined by '-'."""
+    text = unicodedata.normalize("NFKC", name).casefold()
+    parts: list[str] = []
+    word = ""
+    for ch in text:
+        if ch.isalnum():
+            word += ch
+        elif word:
+            parts.append(word)
+            word = ""
+    if word:
+        parts.append(word)
+    stem = "-".join(parts)[:MAX_SLUG].strip("-") or "preset"
+    if stem in _RESERVED:
+        stem += "-preset"
+    return stem
+
+
+def preset_file(library: Library, file_name: str) -> str:
+    """The path of ``file_name`` in ``library``; refuses anything that is not a plain ``*.json`` name."""
+    bad = (not file_name or file_name != os.path.basename(file_name) or "/" in file_name or "\\" in file_name
+           or file_name.startswith(".") or not file_name.lower().endswith(SUFFIX) or "\0" in file_name)
+    if bad:
+        raise PresetError(printable(file_name), f"not a preset file name; allowed a plain name ending in {SUFFIX} "
+                          "inside the library, without folders")
+    return os.path.join(library.folder, file_name)
+
+
+def _inside(library: Library, path: str) -> bool:
+    """Whether ``path`` (after following links) is a file directly in the library's folder."""
+    real_folder = os.path.realpath(library.folder)
+    return os.path.dirname(os.path.realpath(path)) == real_folder
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading
+
+
+def _parse(path: str) -> dict:
+    """Validate a preset file; the error's ``path`` is the field ('' for the file as a whole)."""
+    try:
+        doc = read_json(path)
+    except SceneError as e:
+        raise SceneError("", e.message) from None
+    return parse_scene(doc)
+
+
+def load_preset(path: str | os.PathLike) -> dict:
+    """Read and validate one preset file; a ``SceneError`` names the file and the field."""
+    name = os.fspath(path)
+    try:
+        return _parse(name)
+    except SceneError as e:
+        raise SceneError(f"{name}: {e.path}" if e.path else name, e.message) from None
+
+
+def digest(scene: dict) -> str:
+    return hashlib.sha256(scene_to_json(scene).encode("utf-8")).hexdigest()[:16]
+
+
+def _entry(library: Library, path: str, scene: dict) -> PresetEntry:
+    return PresetEntry(name=scene["name"], author=scene["author"], tags=tuple(scene["tags"]),
+                       description=scene["description"], file=path, library=library, digest=digest(scene),
+                       scene=scene)
+
+
+def list_library(library: Library) -> tuple[list[PresetEntry], list[PresetWarning]]:
+    """Every preset of one library, sorted by file name, and a warning for every file that is not one."""
+    entries: list[PresetEntry] = []
+    warnings: list[PresetWarning] = []
+    folder = library.folder
+    try:
+        names = sorted(os.listdir(folder))
+    except OSError as e:
+        warnings.append(PresetWarning(printable(folder), library,
+                                      f"cannot open the library \"{printable(library.name)}\" "
+                                      f"({e.strerror or e})"))
+        return entries, warnings
+    for file_name in names:
+        if file_name.startswith(".") or not file_name.lower().endswith(SUFFIX):
+            continue
+        path = os.path.join(folder, file_name)
+        shown = printable(path)
+        if not _inside(library, path):
+            warnings.append(PresetWarning(shown, library, "is a link that leads out of the library; skipped"))
+            continue
+        try:
+            scene = _parse(path)
+        except SceneError as e:
+            field = f"{printable(e.path, 120)}: " if e.path else ""
+            warnings.append(PresetWarning(shown, library, field + printable(e.message)))
+            continue
+        entries.append(_entry(library, path, scene))
+    return entries, warnings
+
+
+def list_presets(libraries: list[Library] | tuple[Library, ...]) -> tuple[list[PresetEntry], list[PresetWarning]]:
+    """The presets of several libraries, in library order, and the warnings of all of them."""
+    entries: list[PresetEntry] = []
+    warnings: list[PresetWarning] = []
+    for library in libraries:
+        e, w = list_library(library)
+        entries += e
+        warnings += w
+    return entries, warnings
+
+
+def find_preset(entries: list[PresetEntry], key: str) -> PresetEntry | None:
+    """The entry whose file name, file stem or preset name is ``key`` (case-insensitive)."""
+    k = key.casefold()
+    for entry in entries:
+        base = os.path.basename(entry.file)
+        if k in (base.casefold(), os.path.splitext(base)[0].casefold(), entry.name.casefold()):
+            return entry
+    return None
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing
+
+
+def _require_writable(library: Library) -> None:
+    if not library.writable:
+        raise PresetError(printable(library.folder), f"the library \"{printable(library.name)}\" is read-only")
+
+
+def save_preset(library: Library, name: str, scene: dict, *, overwrite: bool = False) -> PresetEntry:
+    """Save ``scene`` under ``name`` as ``<slug>.json`` in ``library``; returns its entry.
+
+    The scene is validated first (nothing is written if it is invalid) and saved in canonical
+    form with ``name`` as its name. An existing file is replaced only with ``overwrite=True``,
+    otherwise ``PresetExistsError`` names it. The write is atomic: the old file stays intact
+    until the new one is complete.
+    """
+    _require_writable(library)
+    doc = copy.deepcopy(scene)
+    if isinstance(doc, dict):
+        doc["name"] = name
+    checked = normalize(doc)
+    path = preset_file(library, slug(name) + SUFFIX)
+    if not os.path.isdir(library.folder):
+        raise PresetError(printable(library.folder), f"the library \"{printable(library.name)}\" folder does not exist")
+    if os.path.lexists(path) and not overwrite:
+        raise PresetExistsError(printable(path), "a preset with this file name exists already; "
+                                "confirm to replace it (overwrite=True)")
+    fileio.atomic_write_text(path, scene_to_json(checked))
+    return _entry(library, path, checked)
+
+
+def _own_file(entry: PresetEntry) -> str:
+    _require_writable(entry.library)
+    path = preset_file(entry.library, os.path.basename(entry.file))
+    if os.path.normpath(path) != os.path.normpath(entry.file) or not _inside(entry.library, path):
+        raise PresetError(printable(entry.file), f"is not a file of the library \"{printable(entry.library.name)}\"")
+    return path
+
+
+def delete_preset(entry: PresetEntry) -> None:
+    """Remove a preset (and its cached thumbnails) from a writable library."""
+    path = _own_file(entry)
+    os.unlink(path)
+    _forget_thumbnails(entry.library, path)
+
+
+def rename_preset(entry: PresetEntry, new_name: str, *, overwrite: bool = False) -> PresetEntry:
+    """Give a preset a new name (and the file the matching slug) in its writable library."""
+    old = _own_file(entry)
+    scene = load_preset(old)
+    new = save_preset(entry.library, new_name, scene, overwrite=overwrite or preset_file(
+        entry.library, slug(new_name) + SUFFIX) == old)
+    if os.path.normpath(new.file) != os.path.normpath(old):
+        os.unlink(old)
+        _forget_thumbnails(entry.library, old)
+    return new
+
+
+# ---------------------------------------------------------------------------------------------
+# Thumbnails
+
+
+def thumbnail_name(entry: PresetEntry) -> str:
+    """``<file stem>-<hash of the preset>.png``: the same in every thumbnail folder."""
+    stem = os.path.splitext(os.path.basename(entry.file))[0]
+    return f"{stem}-{entry.digest}.png"
+
+
+def _own_subfolder(library: Library, subfolder: str) -> str | None:
+    """``<library>/<subfolder>``, unless it is a link that leads out of the library."""
+    folder = os.path.join(library.folder, subfolder)
+    inside = os.path.dirname(os.path.realpath(folder)) == os.path.realpath(library.folder)
+    return folder if inside else None
+
+
+def _thumbnail_in(entry: PresetEntry, subfolder: str) -> str | None:
+    """The thumbnail of ``entry`` in ``<library>/<subfolder>/`` if it is there and looks like one.
+
+    Only a regular file of a thumbnail's size whose real location is that folder counts: a link
+    out of the library is never opened, whoever wrote the library."""
+    folder = _own_subfolder(entry.library, subfolder)
+    if folder is None:
+        return None
+    path = os.path.join(folder, thumbnail_name(entry))
+    try:
+        ok = os.path.isfile(path) and os.path.getsize(path) <= MAX_THUMBNAIL_BYTES
+    except OSError:
+        return None
+    return path if ok and os.path.dirname(os.path.realpath(path)) == os.path.realpath(folder) else None
+
+
+def shipped_thumbnail(entry: PresetEntry) -> str | None:
+    """The thumbnail shipped with the library (``thumbnails/``) for the preset as it is now, if any."""
+    return _thumbnail_in(entry, SHIPPED_THUMBNAIL_FOLDER)
+
+
+def thumbnail_path(entry: PresetEntry, cache_dir: str | os.PathLike) -> str:
+    """Where the thumbnail of ``entry`` is, or is to be made.
+
+    First the library's shipped ``thumbnails/`` folder, if it holds the thumbnail of the preset's
+    current content; else ``<library>/.thumbnails/`` when the library is writable; else, for a
+    read-only library, ``.thumbnails/`` if someone who may write there made it already, or
+    ``cache_dir``. The name carries the hash of the preset's canonical JSON, so an edited preset
+    misses every stale thumbnail and gets a fresh one.
+    """
+    shipped = shipped_thumbnail(entry)
+    if shipped is not None:
+        return shipped
+    beside = _own_subfolder(entry.library, THUMBNAIL_FOLDER)
+    if beside is not None and entry.library.writable and os.access(entry.library.folder, os.W_OK):
+        return os.path.join(beside, thumbnail_name(entry))
+    made = _thumbnail_in(entry, THUMBNAIL_FOLDER)
+    return made if made is not None else os.path.join(os.fspath(cache_dir), thumbnail_name(entry))
+
+
+def _is_thumbnail_of(name: str, stem: str) -> bool:
+    key = name[len(stem) + 1:-4]
+    return name.startswith(stem + "-") and name.endswith(".png") and len(key) == 16 and key.isalnum()
+
+
+def _remove_thumbnails(folder: str, stem: str, keep: str = "") -> None:
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return
+    for name in names:
+        old = os.path.join(folder, name)
+        if _is_thumbnail_of(name, stem) and old != keep:
+            try:
+                os.unlink(old)
+            except OSError:
+                pass
+
+
+def _forget_thumbnails(library: Library, preset_path: str) -> None:
+    """Remove the thumbnails of a preset file that is gone from its (writable) library."""
+    stem = os.path.splitext(os.path.basename(preset_path))[0]
+    for subfolder in (THUMBNAIL_FOLDER, SHIPPED_THUMBNAIL_FOLDER):
+        folder = _own_subfolder(library, subfolder)
+        if folder is not None:
+            _remove_thumbnails(folder, stem)
+
+
+def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUMBNAIL_SIZE) -> str:
+    """Render ``entry`` with the tracer at ``size`` x ``size`` and write it as PNG (atomically)."""
+    from .. import render  # the tracer loads only when a thumbnail is actually made
+    from ..images.imageio import write_image
+
+    target = os.fspath(path)
+    scene = copy.deepcopy(entry.scene)
+    scene["image"] = {"width": int(size), "height": int(size)}
+    image = render(scene, size, size)
+    os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
+    write_image(target, image, scene)
+    stem = os.path.splitext(os.path.basename(entry.file))[0]
+    _remove_thumbnails(os.path.dirname(os.path.abspath(target)), stem, keep=os.path.abspath(target))
+    return target
+
+
+# ---------------------------------------------------------------------------------------------
+# Shipped thumbnails
+
+
+@dataclass(frozen=True)
+class ShippedThumbnails:
+    """How a library's ``thumbnails/`` folder stands against its presets."""
+
+    folder: str
+    missing: tuple[PresetEntry, ...]  # presets without a thumbnail of their current content
+    stale: tuple[str, ...]  # PNG files of no current preset (an old hash, a removed preset)
+    warnings: tuple[PresetWarning, ...]  # library files that are not valid presets
+
+    @property
+    def ok(self) -> bool:
+        return not (self.missing or self.stale or self.warnings)
+
+    def problems(self) -> list[str]:
+        """One line per problem, each saying what to do."""
+        lines = [f"{printable(e.file)}: has no thumbnail {thumbnail_name(e)} in {printable(self.folder)}"
+                 for e in self.missing]
+        lines += [f"{printable(os.path.join(self.folder, name))}: belongs to no current preset"
+                  for name in self.stale]
+        lines += [str(w) for w in self.warnings]
+        return lines
+
+
+def check_shipped_thumbnails(library: Library) -> ShippedThumbnails:
+    """Compare a library's shipped ``thumbnails/`` folder with its presets as they are now."""
+    entries, warnings = list_library(library)
+    folder = _own_subfolder(library, SHIPPED_THUMBNAIL_FOLDER)
+    if folder is None:
+        raise PresetError(printable(os.path.join(library.folder, SHIPPED_THUMBNAIL_FOLDER)),
+                          "is a link that leads out of the library; a library's thumbnails are its own")
+    missing = tuple(e for e in entries if shipped_thumbnail(e) is None)
+    wanted = {thumbnail_name(e) for e in entries}
+    try:
+        names = sorted(os.listdir(folder))
+    except (FileNotFoundError, NotADirectoryError):
+        names = []
+    stale = tuple(n for n in names if n.lower().endswith(".png") and n not in wanted and not n.startswith("."))
+    return ShippedThumbnails(folder, missing, stale, tuple(warnings))
+
+
+def make_shipped_thumbnails(library: Library,
+                            size: int = THUMBNAIL_SIZE) -> tuple[list[str], list[str], list[PresetWarning]]:
+    """Make the missing thumbnails of ``thumbnails/`` and remove the stale ones, on purpose.
+
+    Writes into the library's folder whatever its ``writable`` flag says: this is how a library is
+    prepared for shipping. Returns the thumbnails made, the files removed and the warnings about
+    files that are not valid presets (which get no thumbnail)."""
+    state = check_shipped_thumbnails(library)
+    os.makedirs(state.folder, exist_ok=True)
+    made = []
+    for entry in state.missing:
+        path = make_thumbnail(entry, os.path.join(state.folder, thumbnail_name(entry)), size)
+        os.chmod(path, 0o644)  # shipped to everyone who installs the library (the temporary file was private)
+        made.append(path)
+    removed = []
+    for name in state.stale:
+        path = os.path.join(state.folder, name)
+        if os.path.isfile(path) or os.path.islink(path):
+            os.unlink(path)
+            removed.append(path)
+    return made, removed, list(state.warnings)

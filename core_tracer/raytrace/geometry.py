@@ -1,0 +1,251 @@
+"""Ray-surface intersections of the simplified lamp (MODEL.md §3, paper §3.2.4).
+
+Inside a lamp everything is in the lamp's local frame: x and z measured from the lamp axis,
+y as in the world (outer lens face y = 0, interior y > 0). Each function takes ray origins
+``o`` and unit directions ``d`` (N, 3) and per-ray parameters (N,), and returns the ray
+parameter of the first hit beyond ``T_MIN`` (``inf`` for a miss).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..scene.validate import cut_sphere_radius, lamp_geometry, lens_absorption
+
+T_MIN = 1e-6  # mm: a hit closer than this to the ray's origin is the origin's own surface
+MAX_CELL_STEPS = 100_000  # safety net for the cell walk; a ray crosses at most ~4R/p cells
+
+
+@dataclass(frozen=True)
+class LampTable:
+    """Every lamp's parameters as arrays indexed by lamp number (gathered per ray)."""
+
+    center: np.ndarray  # (L, 2) [x, z] of the axis in the world
+    radius: np.ndarray
+    plane_a: np.ndarray  # y of the cut base (= lens thickness)
+    plane_b: np.ndarray  # y of the cut apexes
+    pitch: np.ndarray
+    cut_radius: np.ndarray  # rho of the lenslet spheres (inf for a flat inner face)
+    ior: np.ndarray
+    absorption: np.ndarray  # (L, 3) per mm
+    wall_color: np.ndarray  # (L, 3)
+    lens_diffuse: np.ndarray  # (L, 3)
+    lens_specular: np.ndarray
+    lens_shininess: np.ndarray
+    focal: np.ndarray
+    rim: np.ndarray
+    vertex: np.ndarray
+    reflector_color: np.ndarray  # (L, 3)
+    reflectance: np.ndarray
+    scatter: np.ndarray
+    scatter_shininess: np.ndarray
+    bulb_center: np.ndarray  # (L, 3) local
+    bulb_radius: np.ndarray
+    bulb_intensity: np.ndarray  # (L, 3), zero when the bulb is off
+    socket_radius: np.ndarray
+    socket_color: np.ndarray  # (L, 3)
+
+    @classmethod
+    def from_scene(cls, scene: dict) -> LampTable:
+        rows = []
+        for lamp in scene["lamps"]:
+            g = lamp_geometry(lamp)
+            lens, cuts, refl, bulb = lamp["lens"], lamp["cuts"], lamp["reflector"], lamp["bulb"]
+            h = cuts["height"]
+            rows.append(dict(
+                center=lamp["center"], radius=lens["radius"], plane_a=g["plane_a"], plane_b=g["plane_b"],
+                pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 else np.inf,
+                ior=lens["ior"], absorption=lens_absorption(lens), wall_color=lens["side_wall_color"],
+                lens_diffuse=lens["diffuse_color"], lens_specular=lens["specular"],
+                lens_shininess=lens["shininess"], focal=refl["focal_length"], rim=g["rim"], vertex=g["vertex"],
+                reflector_color=refl["color"], reflectance=refl["reflectance"], scatter=refl["scatter"],
+                scatter_shininess=refl["shininess"], bulb_center=g["bulb_center"], bulb_radius=bulb["radius"],
+                bulb_intensity=bulb["intensity"] if bulb["on"] else [0.0, 0.0, 0.0],
+                socket_radius=lamp["socket"]["radius"], socket_color=lamp["socket"]["color"],
+            ))
+        return cls(**{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
+
+
+def _solve_quadratic(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Roots (small, large) of a t^2 + b t + c = 0 by the stable formula; NaN where none.
+    Handles a == 0 (a linear equation) with both roots equal."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        disc = b * b - 4.0 * a * c
+        sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
+        q = -0.5 * (b + np.copysign(sq, b))
+        r1 = q / a
+        r2 = c / q
+        linear = np.abs(a) < 1e-15
+        lin = np.where(linear, -c / b, np.nan)
+        lo = np.where(linear, lin, np.fmin(r1, r2))
+        hi = np.where(linear, lin, np.fmax(r1, r2))
+    return lo, hi
+
+
+def _first_beyond(lo: np.ndarray, hi: np.ndarray, ok_lo: np.ndarray, ok_hi: np.ndarray) -> np.ndarray:
+    lo_ok = (lo > T_MIN) & ok_lo
+    hi_ok = (hi > T_MIN) & ok_hi
+    return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
+
+
+def hit_outer_face(o: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """The plane y = 0, reached from inside the lens (d_y < 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = -o[:, 1] / d[:, 1]
+    return np.where((d[:, 1] < 0) & (t > T_MIN), t, np.inf)
+
+
+def hit_side_wall(o: np.ndarray, d: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """The cylinder r = R, left from inside (the far root)."""
+    a = d[:, 0] ** 2 + d[:, 2] ** 2
+    b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
+    c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
+    _, hi = _solve_quadratic(a, b, c)
+    return np.where((a > 1e-15) & (hi > T_MIN), hi, np.inf)
+
+
+def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.ndarray,
+                  rim: np.ndarray) -> np.ndarray:
+    """The paraboloid y = y_v - (x^2 + z^2) / 4f between the rim and the vertex."""
+    inv4f = 0.25 / focal
+    a = (d[:, 0] ** 2 + d[:, 2] ** 2) * inv4f
+    b = d[:, 1] + 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2]) * inv4f
+    c = o[:, 1] + (o[:, 0] ** 2 + o[:, 2] ** 2) * inv4f - vertex
+    lo, hi = _solve_quadratic(a, b, c)
+    y_lo = o[:, 1] + lo * d[:, 1]
+    y_hi = o[:, 1] + hi * d[:, 1]
+    return _first_beyond(lo, hi, y_lo >= rim - 1e-9, y_hi >= rim - 1e-9)
+
+
+def reflector_normal(p: np.ndarray, focal: np.ndarray) -> np.ndarray:
+    """Unit normal of the paraboloid facing the lamp interior."""
+    n = np.stack([-p[:, 0] / (2.0 * focal), -np.ones(len(p)), -p[:, 2] / (2.0 * focal)], axis=1)
+    return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def hit_sphere(o: np.ndarray, d: np.ndarray, center: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """A sphere reached from outside (the near root)."""
+    oc = o - center
+    b = np.einsum("ij,ij->i", oc, d)
+    c = np.einsum("ij,ij->i", oc, oc) - radius**2
+    with np.errstate(invalid="ignore"):
+        t = -b - np.sqrt(b * b - c)
+    return np.where(t > T_MIN, t, np.inf)
+
+
+def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.ndarray,
+               y_end: np.ndarray) -> np.ndarray:
+    """The socket: a cylinder of ``radius`` about the axis between ``y_start`` and ``y_end``."""
+    a = d[:, 0] ** 2 + d[:, 2] ** 2
+    b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
+    c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
+    lo, _ = _solve_quadratic(a, b, c)
+    y = o[:, 1] + lo * d[:, 1]
+    ok = (a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end)
+    return np.where(ok, lo, np.inf)
+
+
+def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndarray, pitch: np.ndarray,
+             rho: np.ndarray, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cut surface (MODEL.md §3.1): returns the hit parameter and the unit normal pointing
+    out of the lens material (toward the air), for hits nearer than ``t_limit``.
+
+    Intersect the ray with plane A (cut base) and plane B (apexes); the true hit lies on a cell
+    crossed between them. Walk those cells from the entry side (a 2-D grid traversal) and test
+    each cell's sphere; the first root that lies inside its own cell is the hit (paper Fig. 9).
+    Cost: the few cells the ray crosses in the slab, whatever the number of cuts.
+    """
+    n = len(o)
+    t_hit = np.full(n, np.inf)
+    normal = np.zeros((n, 3))
+    normal[:, 1] = 1.0
+
+    flat = ~np.isfinite(rho)
+    if flat.any():
+        idx = np.nonzero(flat)[0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (plane_a[idx] - o[idx, 1]) / d[idx, 1]
+        ok = (t > T_MIN) & (t < t_limit[idx])
+        t_hit[idx[ok]] = t[ok]
+    idx = np.nonzero(~flat)[0]
+    if len(idx) == 0:
+        return t_hit, normal
+
+    oy, dy = o[idx, 1], d[idx, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ta = (plane_a[idx] - oy) / dy
+        tb = (plane_b[idx] - oy) / dy
+    in_slab = (oy >= plane_a[idx]) & (oy <= plane_b[idx])
+    parallel = dy == 0
+    t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), np.fmin(ta, tb))
+    t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), np.fmax(ta, tb))
+    t_in = np.maximum(t_in, 0.0)
+    t_out = np.minimum(t_out, t_limit[idx])
+    live = t_in <= t_out
+    idx, t_in, t_out = idx[live], t_in[live], t_out[live]
+    if len(idx) == 0:
+        return t_hit, normal
+
+    p = pitch[idx]
+    ox, oz = o[idx, 0], o[idx, 2]
+    dx, dz = d[idx, 0], d[idx, 2]
+    # Cell (i, j) covers [(i - 1/2) p, (i + 1/2) p] in x and likewise in z (one cell on the axis).
+    i = np.floor((ox + t_in * dx) / p + 0.5)
+    j = np.floor((oz + t_in * dz) / p + 0.5)
+    si, sj = np.sign(dx), np.sign(dz)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_next_i = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
+        t_next_j = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
+        dt_i = np.where(si != 0, p / np.abs(dx), np.inf)
+        dt_j = np.where(sj != 0, p / np.abs(dz), np.inf)
+    t_cell = t_in.copy()
+    tol = 1e-9
+
+    for _ in range(MAX_CELL_STEPS):
+        if len(idx) == 0:
+            break
+        rho_k = rho[idx]
+        t_cell_end = np.minimum(np.minimum(t_next_i, t_next_j), t_out)
+        cy = plane_b[idx] - rho_k
+        ocx, ocy, ocz = ox - i * p, o[idx, 1] - cy, oz - j * p
+        b = ocx * dx + ocy * d[idx, 1] + ocz * dz
+        c = ocx * ocx + ocy * ocy + ocz * ocz - rho_k * rho_k
+        with np.errstate(invalid="ignore"):
+            sq = np.sqrt(b * b - c)
+        lo, hi = -b - sq, -b + sq
+        lo_ok = (lo > T_MIN) & (lo >= t_cell - tol) & (lo <= t_cell_end + tol)
+        hi_ok = (hi > T_MIN) & (hi >= t_cell - tol) & (hi <= t_cell_end + tol)
+        t = np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
+        found = np.isfinite(t)
+        if found.any():
+            f = np.nonzero(found)[0]
+            g = idx[f]
+            t_hit[g] = t[f]
+            hit = o[g] + t[f, None] * d[g]
+            centre = np.stack([i[f] * p[f], cy[f], j[f] * p[f]], axis=1)
+            normal[g] = (hit - centre) / rho_k[f, None]
+        # Advance to the neighbouring cell the ray enters next.
+        step_i = t_next_i < t_next_j
+        t_cell = np.where(step_i, t_next_i, t_next_j)
+        i = np.where(step_i, i + si, i)
+        j = np.where(step_i, j, j + sj)
+        t_next_i = np.where(step_i, t_next_i + dt_i, t_next_i)
+        t_next_j = np.where(step_i, t_next_j, t_next_j + dt_j)
+        keep = ~found & (t_cell <= t_out)
+        if not keep.all():
+            idx, i, j, t_cell, t_out = idx[keep], i[keep], j[keep], t_cell[keep], t_out[keep]
+            t_next_i, t_next_j, dt_i, dt_j = t_next_i[keep], t_next_j[keep], dt_i[keep], dt_j[keep]
+            si, sj, p, ox, oz, dx, dz = si[keep], sj[keep], p[keep], ox[keep], oz[keep], dx[keep], dz[keep]
+    return t_hit, normal
+
+
+def cut_surface_height(x: np.ndarray, z: np.ndarray, plane_b: float, pitch: float, rho: float) -> np.ndarray:
+    """Height y of the cut surface above (x, z): the cap of the cell containing the point."""
+    if not np.isfinite(rho):
+        return np.full(np.shape(x), plane_b)
+    i = np.floor(np.asarray(x) / pitch + 0.5)
+    j = np.floor(np.asarray(z) / pitch + 0.5)
+    r2 = (x - i * pitch) ** 2 + (z - j * pitch) ** 2
+    return plane_b - rho + np.sqrt(np.maximum(rho * rho - r2, 0.0))

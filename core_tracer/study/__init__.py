@@ -1,0 +1,2 @@
+"""Design studies: the definition (``definition``), the parallel run (``run``, ``worker``) and the
+contact sheet (``sheet``)."""

@@ -1,0 +1,581 @@
+"""Design studies (issue 5): one design turned into a grid of variants.
+
+A *study* (``lamp-study/1``) varies one or two parameters of a base design, each over a list of
+values or over a range with a number of steps, at most ``MAX_VARIANTS`` variants in all::
+
+    {"schema": "lamp-study/1",
+     "title": "Refractive index against cut height",          (optional)
+     "base": { ...a complete lamp-scene/1 document... },
+     "axes": [{"parameter": "lens.ior", "range": [1.45, 1.6], "steps": 4},
+              {"parameter": "lamps[1].cuts.height", "values": [0.5, 1, 2]}],
+     "size": [256, 256]}
+
+The base is embedded, so a study file (or a contact sheet carrying one) can be handed to another
+machine and re-run. A *parameter* is a dotted path of ``spec.py``:
+
+- ``body.…``, ``light.…``, ``camera.…``, ``background``: scene fields;
+- ``lens.ior``, ``cuts.height``, ``bulb.intensity`` …: a lamp field, applied to every lamp;
+- ``lamps[2].lens.ior``: the same field of one lamp (the index is checked against the base);
+- a trailing ``[k]`` picks one component of a vector: ``bulb.offset[1]`` is the bulb's y offset.
+
+Every numeric field (``spec.Num``) can be varied, scalar or vector (vector values are lists;
+a vector range is interpolated per component), and ``bulb.on`` over ``[true, false]``. Varying
+the lens colour (``lens.transmitted_color``) replaces the lens's absorption coefficients, as the
+scene format allows only one of the two (MODEL.md §6); varying ``lens.absorption`` replaces a
+transmitted colour.
+
+Everything is checked when the study is built, before anything renders: the parameter names,
+each value against its field's range, the number of variants, and every variant scene with
+``scene.parse_scene`` (a cut height too large for the pitch, a bulb outside its reflector…).
+Errors are ``SceneError``s naming the parameter, the value and the allowed range.
+
+This module is bpy-free and numpy-free; rendering is ``study_run``, the contact sheet
+``study_sheet``.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import json
+import math
+import os
+import re
+from dataclasses import dataclass
+from typing import Any
+
+from ..scene import spec as S
+from ..scene.validate import SceneError, lens_absorption, parse_json_text, parse_scene, read_json, scene_to_json
+
+SCHEMA = "lamp-study/1"
+STUDY_ATTRIBUTE = "lamp:study"  # the header attribute of a contact sheet that holds the study
+MAX_VARIANTS = 64
+MAX_AXES = 2
+DEFAULT_SIZE = (256, 256)
+MAX_SIZE = 2048  # per variant image side; a study is for comparing, not for final images
+
+_PARAMETER = re.compile(
+    r"^(?:lamps\[(?P<lamp>\d*)\]\.)?(?P<path>[a-z_]+(?:\.[a-z_]+)*)(?:\[(?P<component>\d+)\])?$"
+)
+# Scene-level sections and fields a study may vary; image is the study's own size.
+_SCENE_PARTS = ("camera", "light", "background", "body")
+
+
+# ---------------------------------------------------------------------------------------------
+# Parameters
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A resolved parameter path."""
+
+    text: str  # as the user wrote it, e.g. "lamps[1].lens.ior"
+    keys: tuple[str, ...]  # path inside the scene (or inside each lamp when lamp_scope)
+    spec: S.Num | S.Flag
+    lamp_scope: bool  # a lamp field
+    lamp: int | None  # one lamp; None = every lamp
+    component: int | None  # one component of a vector field
+
+    @property
+    def short(self) -> str:
+        """The name printed next to each cell's value: the last key (and component)."""
+        name = self.keys[-1]
+        return name if self.component is None else f"{name}[{self.component}]"
+
+    @property
+    def is_vector(self) -> bool:
+        return isinstance(self.spec, S.Num) and self.spec.size > 1 and self.component is None
+
+
+def study_parameters() -> list[str]:
+    """Every parameter a study can vary, lamp fields lamp-relative (``lens.ior``), in spec order.
+
+    Lamp centres are left out: moving every lamp to the same place makes the lenses overlap;
+    ``lamps[i].center`` names one lamp's centre.
+    """
+    out = []
+    for info in S.iter_fields():
+        if not isinstance(info.spec, S.Num | S.Flag):
+            continue
+        path = info.path
+        if path.startswith("lamps[]."):
+            path = path[len("lamps[]."):]
+            if path == "center":
+                continue
+        elif path.split(".")[0] not in _SCENE_PARTS:
+            continue
+        out.append(path)
+    return out
+
+
+def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
+    """Check a parameter path against ``spec`` (and the lamp index against ``base``)."""
+    if not isinstance(text, str) or not text:
+        raise SceneError("parameter", f"expected a parameter name such as \"lens.ior\", got {_show(text)}")
+    m = _PARAMETER.match(text)
+    if m is None:
+        raise SceneError(text, "is not a parameter name; write e.g. lens.ior, lamps[1].cuts.height, "
+                               "body.color or bulb.offset[1]")
+    keys = tuple(m["path"].split("."))
+    explicit_lamp = m["lamp"] is not None
+    lamp_scope = explicit_lamp or (keys[0] in S.LAMP.fields and keys[0] not in S.SCENE.fields)
+    if not lamp_scope and keys[0] not in _SCENE_PARTS:
+        raise SceneError(text, f"unknown parameter; a study varies {', '.join(_SCENE_PARTS)} fields "
+                               "or lamp fields (lens, cuts, reflector, bulb, socket)")
+    try:
+        field_spec = S.lookup(".".join(("lamps[]",) + keys) if lamp_scope else ".".join(keys))
+    except KeyError:
+        raise SceneError(text, "unknown parameter; see `python -m core_tracer study --list` "
+                               "for the names") from None
+    if not isinstance(field_spec, S.Num | S.Flag):
+        raise SceneError(text, "is not a numeric field a study can vary")
+    lamp = None
+    if explicit_lamp and m["lamp"] != "":
+        lamp = int(m["lamp"])
+        if base is not None and lamp >= len(base["lamps"]):
+            n = len(base["lamps"])
+            raise SceneError(text, f"lamp index {lamp} does not exist; the base design has {n} "
+                                   f"lamp{'s' if n != 1 else ''} (allowed 0 to {n - 1})")
+    component = None
+    if m["component"] is not None:
+        component = int(m["component"])
+        size = field_spec.size if isinstance(field_spec, S.Num) else 1
+        if size == 1:
+            raise SceneError(text, "is a single number; a component [k] only applies to vectors")
+        if component >= size:
+            raise SceneError(text, f"component {component} does not exist; allowed 0 to {size - 1}")
+    return Parameter(text, keys, field_spec, lamp_scope, lamp, component)
+
+
+def check_value(param: Parameter, value: Any) -> Any:
+    """One axis value, checked against the field's range; returns it as the scene stores it."""
+    sp = param.spec
+    if isinstance(sp, S.Flag):
+        if not isinstance(value, bool):
+            raise SceneError(param.text, f"{_show(value)} is not allowed; allowed true or false")
+        return value
+    if param.is_vector:
+        if not isinstance(value, list) or len(value) != sp.size:
+            raise SceneError(param.text, f"expected a list of {sp.size} numbers, got {_show(value)}; "
+                                         f"allowed {sp.range_text()}")
+        items = [_check_scalar(param, x, sp) for x in value]
+        if sp.nonzero and all(x == 0 for x in items):
+            raise SceneError(param.text, f"{_show(value)} is a zero vector; allowed {sp.range_text()}")
+        return items
+    return _check_scalar(param, value, sp)
+
+
+def _check_scalar(param: Parameter, x: Any, sp: S.Num) -> float | int:
+    if isinstance(x, bool) or not isinstance(x, int | float):
+        raise SceneError(param.text, f"expected a number, got {_show(x)}")
+    one = S.Num(None, sp.lo, sp.hi, sp.lo_open, sp.hi_open, sp.unit)  # the range of one component
+    if not math.isfinite(x):
+        raise SceneError(param.text, f"{_show(x)} is not a finite number; allowed {one.range_text()}")
+    if sp.integer and x != int(x):
+        raise SceneError(param.text, f"{_show(x)} is not a whole number; allowed {one.range_text()}")
+    lo_bad = sp.lo is not None and (x < sp.lo or (sp.lo_open and x == sp.lo))
+    hi_bad = sp.hi is not None and (x > sp.hi or (sp.hi_open and x == sp.hi))
+    if lo_bad or hi_bad:
+        raise SceneError(param.text, f"{_show(x)} is out of range; allowed {one.range_text()}")
+    return int(x) if sp.integer else float(x)
+
+
+def apply_value(scene: dict, param: Parameter, value: Any) -> None:
+    """Set ``param`` to ``value`` in ``scene`` (a normalised scene, edited in place)."""
+    if not param.lamp_scope:
+        _set(scene, param, value)
+        return
+    lamps = scene["lamps"] if param.lamp is None else [scene["lamps"][param.lamp]]
+    for lamp in lamps:
+        if param.keys[0] == "lens" and len(param.keys) == 2:
+            _prepare_lens_colour(lamp["lens"], param.keys[1])
+        _set(lamp, param, value)
+
+
+def _set(node: dict, param: Parameter, value: Any) -> None:
+    for key in param.keys[:-1]:
+        node = node[key]
+    last = param.keys[-1]
+    if param.component is None:
+        node[last] = copy.deepcopy(value)
+    else:
+        vector = list(node[last])
+        vector[param.component] = value
+        node[last] = vector
+
+
+def _prepare_lens_colour(lens: dict, key: str) -> None:
+    """Keep one lens colour form (scene.py allows absorption or transmitted_color, never both)."""
+    if key == "transmitted_color" and "absorption" in lens:
+        # The colour seen through the lens's own thickness, so a component edit keeps the others.
+        t = lens["thickness"]
+        lens["transmitted_color"] = [math.exp(-a * t) for a in lens.pop("absorption")]
+        lens["reference_thickness"] = t
+    elif key == "absorption" and "transmitted_color" in lens:
+        lens["absorption"] = lens_absorption(lens)
+        del lens["transmitted_color"]
+        lens.pop("reference_thickness", None)
+
+
+# ---------------------------------------------------------------------------------------------
+# Axes
+
+
+@dataclass(frozen=True)
+class Axis:
+    parameter: Parameter
+    values: tuple[Any, ...]
+    doc: dict  # the axis as written (a list or a range), kept so a saved study reads the same
+
+    def label(self, value: Any) -> str:
+        return format_value(value)
+
+
+def parse_axis(doc: Any, base: dict, where: str) -> Axis:
+    if not isinstance(doc, dict):
+        raise SceneError(where, f"expected an object with parameter and values or range, got {_show(doc)}")
+    unknown = [k for k in doc if k not in ("parameter", "values", "range", "steps")]
+    if unknown:
+        raise SceneError(f"{where}.{unknown[0]}", "unknown key; allowed keys here: parameter, values, range, steps")
+    if "parameter" not in doc:
+        raise SceneError(f"{where}.parameter", "is required (e.g. \"lens.ior\")")
+    param = resolve_parameter(doc["parameter"], base)
+    if param.lamp_scope and param.keys == ("lens", "reference_thickness"):
+        lamps = base["lamps"] if param.lamp is None else [base["lamps"][param.lamp]]
+        if any("transmitted_color" not in lamp["lens"] for lamp in lamps):
+            raise SceneError(param.text, "only applies to a lens coloured by transmitted_color; this base "
+                                         "gives absorption coefficients (vary lens.transmitted_color instead)")
+    has_values, has_range = "values" in doc, "range" in doc
+    if has_values == has_range:
+        raise SceneError(param.text, "give either values (a list) or range [lo, hi] with steps, not "
+                         + ("both" if has_values else "neither"))
+    if has_values:
+        values = doc["values"]
+        if "steps" in doc:
+            raise SceneError(param.text, "steps only goes with range, not with values")
+        if not isinstance(values, list) or not values:
+            raise SceneError(param.text, f"values must be a non-empty list, got {_show(values)}")
+        if len(values) > MAX_VARIANTS:
+            raise SceneError(param.text, f"has {len(values)} values; allowed at most {MAX_VARIANTS} variants")
+        checked = tuple(check_value(param, v) for v in values)
+    else:
+        checked = _expand_range(param, doc.get("range"), doc.get("steps"))
+    return Axis(param, checked, dict(doc))
+
+
+def _expand_range(param: Parameter, rng: Any, steps: Any) -> tuple[Any, ...]:
+    if isinstance(param.spec, S.Flag):
+        raise SceneError(param.text, "is true or false; give values [true, false] instead of a range")
+    if not isinstance(rng, list) or len(rng) != 2:
+        raise SceneError(param.text, f"range must be [lo, hi], got {_show(rng)}")
+    if isinstance(steps, bool) or not isinstance(steps, int):
+        raise SceneError(param.text, f"steps must be a whole number, got {_show(steps)}; allowed 1 to {MAX_VARIANTS}")
+    if not 1 <= steps <= MAX_VARIANTS:
+        raise SceneError(param.text, f"steps {steps} is out of range; allowed 1 to {MAX_VARIANTS}")
+    lo, hi = (check_value(param, v) for v in rng)
+    if steps == 1 and lo != hi:
+        raise SceneError(param.text, f"steps 1 would give only {format_value(lo)}, not {format_value(hi)}; "
+                                     f"allowed 2 to {MAX_VARIANTS} for a range (or give one value)")
+    values = []
+    for k in range(steps):
+        t = k / (steps - 1) if steps > 1 else 0.0
+        if param.is_vector:
+            v = [_tidy(a + (b - a) * t) for a, b in zip(lo, hi, strict=True)]
+        else:
+            v = _tidy(lo + (hi - lo) * t)
+        values.append(check_value(param, v))
+    return tuple(values)
+
+
+def _tidy(x: float) -> float:
+    """1.45 + 0.05 * 1 is 1.4999999999999998; 12 significant digits keep labels and files clean."""
+    return float(f"{x:.12g}")
+
+
+def format_value(value: Any) -> str:
+    """A value as cell labels and the CLI print it: 1.5, 0.9/0.1/0.1, on/off."""
+    if isinstance(value, bool):
+        return "on" if value else "off"
+    if isinstance(value, list):
+        return "/".join(format_value(v) for v in value)
+    return f"{value:.6g}"
+
+
+# ---------------------------------------------------------------------------------------------
+# The study
+
+
+@dataclass(frozen=True)
+class Variant:
+    index: int  # row-major: index = row * columns + column
+    column: int  # position along axis 1
+    row: int  # position along axis 2 (0 for a one-axis study)
+    values: tuple[Any, ...]  # one value per axis
+    scene: dict  # the normalised, validated variant scene
+
+    def label(self, study: Study) -> str:
+        return "  ".join(f"{a.parameter.short}={a.label(v)}" for a, v in zip(study.axes, self.values, strict=True))
+
+
+@dataclass(frozen=True)
+class Study:
+    base: dict  # normalised scene
+    axes: tuple[Axis, ...]
+    size: tuple[int, int]  # (width, height) of each variant image
+    title: str = ""
+
+    # -- construction ------------------------------------------------------------------------
+
+    @classmethod
+    def from_doc(cls, doc: Any) -> Study:
+        """Validate a ``lamp-study/1`` document; every variant is built and checked here."""
+        if not isinstance(doc, dict):
+            raise SceneError("", f"a {SCHEMA} document is a JSON object, got {_show(doc)}")
+        if doc.get("schema") != SCHEMA:
+            raise SceneError("schema", f"{_show(doc.get('schema'))} is missing or wrong; allowed \"{SCHEMA}\"")
+        allowed = ("schema", "title", "base", "axes", "size")
+        for key in doc:
+            if key not in allowed:
+                raise SceneError(key, f"unknown key; allowed keys here: {', '.join(allowed)}")
+        if "base" not in doc:
+            raise SceneError("base", "is required: the lamp-scene/1 design the study varies")
+        size = parse_size(doc.get("size", list(DEFAULT_SIZE)))
+        base_doc = doc["base"]
+        if isinstance(base_doc, dict):
+            # The variants are rendered at the study's size: a default camera frames the body for it,
+            # and a variant kept as a preset says what was rendered.
+            base_doc = {**base_doc, "image": {"width": size[0], "height": size[1]}}
+        try:
+            base = parse_scene(base_doc)
+        except SceneError as e:
+            raise SceneError(f"base.{e.path}" if e.path else "base", e.message) from None
+        title = doc.get("title", "")
+        if not isinstance(title, str) or len(title) > 200:
+            raise SceneError("title", f"expected a string of at most 200 characters, got {_show(title)}")
+        axes_doc = doc.get("axes")
+        if not isinstance(axes_doc, list) or not 1 <= len(axes_doc) <= MAX_AXES:
+            raise SceneError("axes", f"expected a list of 1 or {MAX_AXES} axes, got {_show(axes_doc)}")
+        axes = tuple(parse_axis(a, base, f"axes[{i}]") for i, a in enumerate(axes_doc))
+        if len(axes) == 2 and _overlap(axes[0].parameter, axes[1].parameter):
+            raise SceneError(axes[1].parameter.text, f"sets what {axes[0].parameter.text} sets (the same field, "
+                                                     "or the other form of the lens colour); a study's two axes "
+                                                     "must vary different things")
+        count = math.prod(len(a.values) for a in axes)
+        if count > MAX_VARIANTS:
+            shape = " x ".join(str(len(a.values)) for a in axes)
+            raise SceneError("axes", f"{shape} = {count} variants; allowed at most {MAX_VARIANTS}")
+        study = cls(base, axes, size, title)
+        object.__setattr__(study, "_variants", study._build_variants())
+        return study
+
+    @classmethod
+    def from_json(cls, text: str, name: str = "") -> Study:
+        return cls.from_doc(parse_json_text(text, name))
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> Study:
+        """A study from a ``.json`` definition or from the header of a contact sheet (EXR or PNG)."""
+        name = os.fspath(path)
+        suffix = os.path.splitext(name)[1].lower()
+        if suffix in (".exr", ".png"):
+            text = _sheet_attribute(name)
+            try:
+                return cls.from_json(text, f"{name} {STUDY_ATTRIBUTE}")
+            except SceneError as e:
+                raise SceneError(name, f"{STUDY_ATTRIBUTE} holds no valid study ({e})") from None
+        doc = read_json(name)
+        try:
+            return cls.from_doc(doc)
+        except SceneError as e:
+            raise SceneError(f"{name}: {e.path}" if e.path else name, e.message) from None
+
+    @classmethod
+    def build(cls, base: dict, axes: list[dict], size: tuple[int, int] = DEFAULT_SIZE, title: str = "") -> Study:
+        """A study from a base scene document and axis documents (the Python API, the CLI, Blender)."""
+        doc = {"schema": SCHEMA, "base": base, "axes": axes, "size": list(size)}
+        if title:
+            doc["title"] = title
+        return cls.from_doc(doc)
+
+    def _build_variants(self) -> tuple[Variant, ...]:
+        columns = len(self.axes[0].values)
+        out = []
+        grids = [range(len(a.values)) for a in self.axes]
+        # Row-major, axis 1 varying fastest: itertools.product varies the last factor fastest.
+        for position in itertools.product(*reversed(grids)):
+            index_per_axis = tuple(reversed(position))
+            values = tuple(a.values[k] for a, k in zip(self.axes, index_per_axis, strict=True))
+            column = index_per_axis[0]
+            row = index_per_axis[1] if len(self.axes) > 1 else 0
+            scene = copy.deepcopy(self.base)
+            for axis, value in zip(self.axes, values, strict=True):
+                apply_value(scene, axis.parameter, value)
+            try:
+                scene = parse_scene(scene)
+            except SceneError as e:
+                raise SceneError(e.path, f"{e.message} (in the variant {_setting(self.axes, values)})") from None
+            out.append(Variant(row * columns + column, column, row, values, scene))
+        return tuple(out)
+
+    # -- queries ------------------------------------------------------------------------------
+
+    @property
+    def variants(self) -> tuple[Variant, ...]:
+        return self._variants  # type: ignore[attr-defined]
+
+    @property
+    def columns(self) -> int:
+        return len(self.axes[0].values)
+
+    @property
+    def rows(self) -> int:
+        return len(self.axes[1].values) if len(self.axes) > 1 else 1
+
+    def __len__(self) -> int:
+        return len(self.variants)
+
+    def variant_scene(self, index: int) -> dict:
+        """The full scene of one variant (a fresh copy), e.g. to keep it as a preset."""
+        v = self.variants[index]
+        scene = copy.deepcopy(v.scene)
+        scene["name"] = self.variant_name(index)[:S.SCENE.fields["name"].max_len]
+        return scene
+
+    def variant_name(self, index: int) -> str:
+        return f"{self.base['name']} ({_setting(self.axes, self.variants[index].values)})"
+
+    def heading(self) -> str:
+        """The sheet's title: the study's own, else the base design's name."""
+        return self.title or f"Study of {self.base['name']}"
+
+    # -- saving -------------------------------------------------------------------------------
+
+    def to_doc(self) -> dict:
+        doc: dict = {"schema": SCHEMA}
+        if self.title:
+            doc["title"] = self.title
+        doc["base"] = copy.deepcopy(self.base)
+        doc["axes"] = [copy.deepcopy(a.doc) for a in self.axes]
+        doc["size"] = list(self.size)
+        return doc
+
+    def to_json(self) -> str:
+        """Canonical JSON text (same layout as scene files)."""
+        return scene_to_json(self.to_doc())
+
+    def save(self, path: str | os.PathLike) -> None:
+        from ..fileio import atomic_write_text
+
+        atomic_write_text(path, self.to_json())
+
+    def save_variants(self, folder: str | os.PathLike) -> list[str]:
+        """Write every variant as a ``lamp-scene/1`` preset, ``<folder>/variant-NN.json``; returns the paths."""
+        from ..fileio import atomic_write_text
+
+        folder = os.fspath(folder)
+        os.makedirs(folder, exist_ok=True)
+        paths = []
+        for v in self.variants:
+            path = os.path.join(folder, f"variant-{v.index:02d}.json")
+            atomic_write_text(path, scene_to_json(self.variant_scene(v.index)))
+            paths.append(path)
+        return paths
+
+
+def _setting(axes: tuple[Axis, ...], values: tuple[Any, ...]) -> str:
+    return ", ".join(f"{a.parameter.text}={format_value(v)}" for a, v in zip(axes, values, strict=True))
+
+
+def _overlap(a: Parameter, b: Parameter) -> bool:
+    """Whether two axes would set the same number (or the two exclusive forms of one lens colour)."""
+    lamps_meet = a.lamp_scope == b.lamp_scope and (a.lamp is None or b.lamp is None or a.lamp == b.lamp)
+    if a.keys != b.keys:
+        forms = {a.keys, b.keys}
+        absorption = ("lens", "absorption")
+        return lamps_meet and absorption in forms and bool(forms & {("lens", "transmitted_color"),
+                                                                   ("lens", "reference_thickness")})
+    comps_meet = a.component is None or b.component is None or a.component == b.component
+    return lamps_meet and comps_meet
+
+
+def parse_size(value: Any, where: str = "size") -> tuple[int, int]:
+    ok = (isinstance(value, list | tuple) and len(value) == 2
+          and all(isinstance(v, int) and not isinstance(v, bool) for v in value))
+    if not ok:
+        raise SceneError(where, f"expected [width, height] in pixels, got {_show(value)}")
+    for v in value:
+        if not 1 <= v <= MAX_SIZE:
+            raise SceneError(where, f"{v} is out of range; allowed [1, {MAX_SIZE}] px")
+    return int(value[0]), int(value[1])
+
+
+def _sheet_attribute(name: str) -> str:
+    if not os.path.isfile(name):
+        raise SceneError(name, "cannot read the image (no such file)")
+    import OpenImageIO as oiio  # on use: a study without sheets needs no OpenImageIO
+
+    inp = oiio.ImageInput.open(name)
+    if inp is None:
+        raise SceneError(name, f"cannot read the image ({oiio.geterror()})")
+    try:
+        text = inp.spec().getattribute(STUDY_ATTRIBUTE)
+    finally:
+        inp.close()
+    if not isinstance(text, str):
+        raise SceneError(name, f"the image carries no study (no {STUDY_ATTRIBUTE} attribute)")
+    return text
+
+
+# ---------------------------------------------------------------------------------------------
+# The command line's --vary syntax
+
+
+def parse_vary(text: str) -> dict:
+    """``lens.ior=1.45:1.60:4`` (lo:hi:steps, inclusive), ``lens.ior=1.45,1.5,1.55`` (a list),
+    ``lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05`` (vectors with /), ``bulb.on=on,off``.
+    Returns an axis document; the values are checked when the study is built."""
+    name, sep, spec_text = text.partition("=")
+    name = name.strip()
+    if not sep or not name or not spec_text.strip():
+        raise SceneError("--vary", f"{text!r} is not PARAMETER=LO:HI:STEPS or PARAMETER=V1,V2,...")
+    spec_text = spec_text.strip()
+    if ":" in spec_text:
+        parts = spec_text.split(":")
+        if len(parts) != 3:
+            raise SceneError(name, f"{spec_text!r} is not LO:HI:STEPS (e.g. 1.45:1.6:4)")
+        lo, hi = _parse_item(name, parts[0]), _parse_item(name, parts[1])
+        try:
+            steps = int(parts[2])
+        except ValueError:
+            raise SceneError(name, f"steps {parts[2]!r} is not a whole number; allowed 1 to {MAX_VARIANTS}") from None
+        return {"parameter": name, "range": [lo, hi], "steps": steps}
+    return {"parameter": name, "values": [_parse_item(name, item) for item in spec_text.split(",")]}
+
+
+def _parse_item(name: str, item: str) -> Any:
+    item = item.strip()
+    if "/" in item:
+        return [_parse_number(name, x) for x in item.split("/")]
+    if item.lower() in ("on", "true"):
+        return True
+    if item.lower() in ("off", "false"):
+        return False
+    return _parse_number(name, item)
+
+
+def _parse_number(name: str, text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise SceneError(name, f"{text.strip()!r} is not a number") from None
+    if not math.isfinite(x):
+        raise SceneError(name, f"{text.strip()} is not a finite number")
+    return x
+
+
+def _show(v: Any) -> str:
+    try:
+        text = json.dumps(v)
+    except (TypeError, ValueError):
+        text = repr(v)
+    return text if len(text) <= 60 else text[:57] + "..."

@@ -1,0 +1,68 @@
+"""The headless main job: a preset rendered by the tracer and by Cycles, written side by side
+(issue 3, item 8). ``tools/compare_preset.py`` starts Blender (or the bpy module), enables the
+extension and calls ``run``; this module is the part that needs the extension.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import bpy
+
+from ..core_tracer.images import imageio
+from ..core_tracer.scene.validate import SceneError, load_scene
+from . import compare_ops, design_properties, render_camera
+
+CHANNELS = ("R", "G", "B")
+
+
+def run(preset: str, output: str, *, samples: int = compare_ops.DEFAULT_SAMPLES,
+        size: tuple[int, int] | None = None, exposure: float = 0.0, prog: str = "compare_preset") -> int:
+    """Load ``preset`` into the current (empty) scene's design, build it, render it both ways
+    and write the side-by-side image to ``output`` (.png or .exr). Returns the exit status:
+    0 done, 2 bad input (one line on stderr)."""
+    try:
+        imageio.image_format(output)
+        scene = load_scene(preset)
+    except SceneError as e:
+        print(f"{prog}: {e}", file=sys.stderr)
+        return 2
+    bl_scene = bpy.context.scene
+    design_properties.scene_to_design(bl_scene, scene)
+    # The preset fixes the view: its camera becomes the scene camera.
+    if bl_scene.camera is None:
+        render_camera.ensure_scene_camera(bl_scene, scene)
+    else:
+        render_camera.apply_camera(bl_scene.camera, scene["camera"])
+    if size is None:
+        size = (scene["image"]["width"], scene["image"]["height"])
+    comparison = compare_ops.compare_design(bl_scene, samples=samples, resolution=size)
+    folder = os.path.dirname(os.path.abspath(output))
+    os.makedirs(folder, exist_ok=True)
+    compare_ops.write_comparison(output, comparison, exposure=exposure)
+    print(report(comparison, preset, output))
+    return 0
+
+
+def report(comparison: dict, preset: str, output: str) -> str:
+    """The text the job prints: the two render times and the per-channel differences."""
+    width, height = comparison["size"]
+    seconds = comparison["seconds"]
+    diff = comparison["differences"]
+    rows = (
+        ("mean, Lamp Tracer", diff["tracer_mean"]),
+        ("mean, Cycles", diff["cycles_mean"]),
+        ("mean difference", diff["mean_difference"]),
+        ("mean |difference|", diff["mean_abs_difference"]),
+        ("RMS difference", diff["rms_difference"]),
+    )
+    lines = [
+        f"preset:       {preset}",
+        f"Lamp Tracer:  {width}x{height} in {seconds['tracer']:.2f} s",
+        f"Cycles:       {width}x{height}, {comparison['samples']} samples per pixel, in {seconds['cycles']:.2f} s",
+        "tracer - Cycles, linear RGB  " + "".join(f"{c:>10}" for c in CHANNELS),
+    ]
+    lines += [f"  {name:<27}" + "".join(f"{v:10.4f}" for v in values) for name, values in rows]
+    lines.append(f"wrote {output}")
+    return "\n".join(lines)

@@ -1,0 +1,613 @@
+"""Compare with Cycles: the same design, camera and resolution rendered by the paper's tracer and
+by Cycles, side by side (issue 3, item 7).
+
+Both renders go through ``bpy.ops.render.render`` into the "Render Result" image, Cycles into
+render slot 1 and the tracer (the Lamp Tracer render engine) into slot 2 (slot indices 0 and 1),
+so J flips between them in the Image Editor; their pixels are read back with ``save_render`` to
+OpenEXR (in background mode the Render Result has no pixels). A third image, "Lamp Compare",
+holds the two halves with labels. During the comparison the scene shows renders on the Standard
+view transform, under which the tracer's linear RGB (the paper's stimulus values) and Cycles'
+radiance are shown the same way; like every setting the comparison changes, it is put back
+afterwards.
+
+One comparison is a ``CompareRun`` taken through the same steps on both paths: ``prepare``
+(build the lamp, the scene camera, the render settings), for each stage ``start`` (render into
+its slot) and ``collect`` (read the slot back), ``compose`` (the labelled image) and ``close``
+(put every setting back, stop listening to the render handlers, remove the temporary files).
+
+- ``execute`` (scripts, background mode, tests) renders with blocking ``render.render()`` calls
+  (``compare_design``).
+- From the interface the operator is modal, as Blender's own long renders are: each stage is a
+  render job (``render.render('INVOKE_DEFAULT')``), so the interface stays live, Blender shows the
+  render's progress and Esc cancels it. The ``render_complete`` / ``render_cancel`` handlers
+  (added for the duration of the comparison, removed on every exit path and on unregister) mark
+  the stage as ended; a window-manager timer then calls ``CompareRun.advance``, which reads the
+  finished slot back and starts the next stage, or ends the comparison. Handlers run on Blender's
+  render thread, so they only set plain attributes; everything that touches ``bpy`` happens on
+  the timer.
+
+Cycles settings. The tracer follows every specular branch to the end (cut-off 0.1 %); Cycles
+follows one sampled path per sample, so the bounce limits must cover the longest specular chain
+camera -> lens -> cuts -> reflector -> ... -> bulb: ``transmission_bounces`` >= 8,
+``glossy_bounces`` >= 6, ``max_bounces`` >= 12; caustics stay on and glossy filtering and
+clamping off, since the bulb is seen through the lens and in the mirror. Denoising and
+adaptive sampling are off so that the result is the plain Monte Carlo estimate. The tracer
+takes one ray through each pixel centre; Cycles integrates over its pixel filter. A box filter
+of the smallest width (0.01 px) makes Cycles sample the same pixel centres, so edges alias the
+same way in both halves and the per-pixel difference measures the models, not the filters.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+
+from ..core_tracer.images import bitmap_font
+from ..core_tracer.scene.validate import SceneError
+from . import design_panels, design_properties, image_view, render_camera
+from .render_engine import ENGINE_ID
+
+RENDER_RESULT = "Render Result"
+COMPARE_IMAGE = "Lamp Compare"
+DEFAULT_SAMPLES = 64
+POLL_SECONDS = 0.2
+
+MIN_BOUNCES = {"max_bounces": 12, "transmission_bounces": 8, "glossy_bounces": 6}
+CYCLES_SETTINGS = {
+    "device": "CPU",
+    "use_denoising": False,
+    "use_adaptive_sampling": False,
+    "caustics_reflective": True,
+    "caustics_refractive": True,
+    "blur_glossy": 0.0,
+    "sample_clamp_direct": 0.0,
+    "sample_clamp_indirect": 0.0,
+    "pixel_filter_type": "BOX",
+    "filter_width": 0.01,
+    "seed": 0,
+    "use_animated_seed": False,
+}
+# Renders shown as their linear values map to the display: Standard, no look, no exposure.
+STANDARD_VIEW = {"view_transform": "Standard", "look": "None", "exposure": 0.0, "gamma": 1.0,
+                 "use_curve_mapping": False}
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One of the two renders: its key in the results, its name in messages, engine and slot."""
+
+    name: str
+    label: str
+    engine: str
+    slot: int
+
+
+CYCLES = Stage("cycles", "Cycles", "CYCLES", 0)
+TRACER = Stage("tracer", "Lamp Tracer", ENGINE_ID, 1)
+STAGES = (CYCLES, TRACER)
+
+
+class CompareError(Exception):
+    """The comparison cannot go on (a render did not start, the scene changed between the renders)."""
+
+
+class CompareCancelled(Exception):
+    """A render of the comparison was cancelled (Esc)."""
+
+
+# What the operator reports (RuntimeError: bpy.ops.render.render raises an engine's error as one).
+REPORTED_ERRORS = (SceneError, CompareError, CompareCancelled, RuntimeError)
+
+
+# ---------------------------------------------------------------------------------------------
+# Pure parts: the side-by-side image and the differences
+
+
+def differences(tracer: np.ndarray, cycles: np.ndarray) -> dict:
+    """Per-channel statistics of tracer - Cycles over the whole image (linear RGB)."""
+    diff = tracer.astype(np.float64) - cycles.astype(np.float64)
+    return {
+        "tracer_mean": tracer.astype(np.float64).mean(axis=(0, 1)).tolist(),
+        "cycles_mean": cycles.astype(np.float64).mean(axis=(0, 1)).tolist(),
+        "mean_difference": diff.mean(axis=(0, 1)).tolist(),
+        "mean_abs_difference": np.abs(diff).mean(axis=(0, 1)).tolist(),
+        "rms_difference": np.sqrt((diff * diff).mean(axis=(0, 1))).tolist(),
+    }
+
+
+def label_height(image_height: int) -> int:
+    """Height of the label strip: the 7-pixel font at an integer scale, with a margin."""
+    return bitmap_font.GLYPH_H * _label_scale(image_height) + 6
+
+
+def _label_scale(image_height: int) -> int:
+    return max(1, min(4, image_height // 160 + 1))
+
+
+def side_by_side(left: np.ndarray, right: np.ndarray, left_labels: Sequence[str],
+                 right_labels: Sequence[str], *, text: str = "auto") -> np.ndarray:
+    """One (H + strip, 2W + gap, 3) image: ``left`` and ``right`` next to each other below a
+    strip holding their labels. Each label is the first of its alternatives (longest first) that
+    fits above its half. Labels are drawn with OpenImageIO's ``render_text`` when it can (the
+    PyPI OpenImageIO has FreeType and a font; ``text="auto"``), else (or with ``text="bitmap"``)
+    with core_tracer's bitmap font, which draws capitals."""
+    height, width = left.shape[:2]
+    gap = max(2, width // 128)
+    strip = label_height(height)
+    out = np.zeros((height + strip, 2 * width + gap, 3), np.float32)
+    out[strip:, :width] = left
+    out[strip:, width + gap:] = right
+    out[:, width:width + gap] = 0.5
+    for alternatives, x in ((left_labels, 0), (right_labels, width + gap)):
+        # Each label is drawn into its own half of the strip, so a long one is clipped there.
+        label = _oiio_text(alternatives, width, strip) if text == "auto" else None
+        if label is None:
+            label = _bitmap_text(alternatives, width, strip, _label_scale(height))
+        area = out[:strip, x:x + width]
+        np.maximum(area, label, out=area)
+    return out
+
+
+def _fitting(alternatives: Sequence[str], room: int, measure: Callable[[str], int]) -> str:
+    """The first label that fits in ``room`` pixels, else the shortest (clipped when drawn)."""
+    return next((t for t in alternatives if measure(t) <= room), alternatives[-1])
+
+
+def _bitmap_text(alternatives: Sequence[str], width: int, height: int, scale: int) -> np.ndarray:
+    """A (height, width, 3) label drawn with the bitmap font, clipped to its box."""
+    x = 3 * scale
+    label = _fitting(alternatives, width - 2 * x, lambda t: bitmap_font.ADVANCE_W * scale * len(t))
+    mask = bitmap_font.text_mask(label, scale)
+    out = np.zeros((height, width, 3), np.float32)
+    rows, cols = max(0, min(mask.shape[0], height - 3)), max(0, min(mask.shape[1], width - x))
+    out[3:3 + rows, x:x + cols] = mask[:rows, :cols, None]
+    return out
+
+
+def _oiio_text(alternatives: Sequence[str], width: int, height: int) -> np.ndarray | None:
+    """A (height, width, 3) label drawn by OpenImageIO, or None when it cannot draw text."""
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        return None
+    buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 3, oiio.FLOAT))
+    size = height - 2
+    label = _fitting(alternatives, width - 8, lambda t: oiio.ImageBufAlgo.text_size(t, size, "").width)
+    if not oiio.ImageBufAlgo.render_text(buf, 4, height - 4, label, size, "", (1.0, 1.0, 1.0)):
+        return None  # Blender's bundled OpenImageIO has no FreeType
+    return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(height, width, 3)
+
+
+# ---------------------------------------------------------------------------------------------
+# The scene settings a comparison changes
+
+
+class SceneSettings:
+    """Settings changed for the comparison with their old values, put back by ``restore``.
+
+    Old values are recorded the first time a setting is changed, before any of the values given
+    with it are set (setting the file format can change the colour depth). ``restore`` puts them
+    back in the order they were first set, so dependent settings stay valid (format before depth).
+    A setting that no longer holds the comparison's value was changed by the user meanwhile (the
+    interface is live during the modal comparison) and is left as the user set it."""
+
+    def __init__(self) -> None:
+        self._old: dict[tuple[int, str], tuple[object, str, object]] = {}  # (owner, key) -> (owner, key, old)
+        self._ours: dict[tuple[int, str], object] = {}
+
+    def set(self, owner, **values) -> None:
+        for key in values:
+            self._old.setdefault((owner.as_pointer(), key), (owner, key, getattr(owner, key)))
+        for key, value in values.items():
+            setattr(owner, key, value)
+            self._ours[(owner.as_pointer(), key)] = getattr(owner, key)  # as Blender stores it
+
+    def restore(self) -> list[str]:
+        """Put the old values back; returns what could not be put back (normally nothing)."""
+        problems = []
+        unchanged = [(owner, key, old) for slot, (owner, key, old) in self._old.items()
+                     if getattr(owner, key) == self._ours[slot]]  # all decided before any is put back
+        for owner, key, old in unchanged:
+            try:
+                setattr(owner, key, old)
+            except (AttributeError, TypeError, ValueError) as e:
+                problems.append(f"{key}: {e}")
+        self._old.clear()
+        self._ours.clear()
+        return problems
+
+
+def _exr_output_values(settings) -> dict:
+    """Output settings under which ``save_render`` writes the exact linear values."""
+    values = {"file_format": "OPEN_EXR", "color_depth": "32", "exr_codec": "ZIP"}
+    if hasattr(settings, "media_type"):  # Blender 5.0: the format list depends on the media type
+        values = {"media_type": "IMAGE", **values}
+    if hasattr(settings, "color_management"):
+        values["color_management"] = "FOLLOW_SCENE"
+    return values
+
+
+# ---------------------------------------------------------------------------------------------
+# The render handlers: how a render job tells the comparison it has ended
+
+
+_active: list[CompareRun] = []  # the comparison the handlers report to: at most one
+
+
+def _report_end(scene, how: str) -> None:
+    # Called by Blender, for a render job on its render thread: plain attributes only.
+    pointer = scene.as_pointer() if scene is not None else 0
+    for run in _active:
+        if run.scene_pointer == pointer:
+            run.report_end(how)
+
+
+@bpy.app.handlers.persistent
+def _on_render_complete(scene, *_args) -> None:
+    _report_end(scene, "complete")
+
+
+@bpy.app.handlers.persistent
+def _on_render_cancel(scene, *_args) -> None:
+    _report_end(scene, "cancel")
+
+
+HANDLERS = {"render_complete": _on_render_complete, "render_cancel": _on_render_cancel}
+
+
+def watch(run: CompareRun) -> None:
+    """Make ``run`` the comparison the render handlers report to, adding the handlers."""
+    if _active and _active[0] is not run:
+        raise CompareError("A comparison with Cycles is already running")
+    _active[:] = [run]
+    for name, handler in HANDLERS.items():
+        handlers = getattr(bpy.app.handlers, name)
+        if handler not in handlers:
+            handlers.append(handler)
+
+
+def unwatch() -> None:
+    """Stop reporting to any comparison and remove the handlers."""
+    _active.clear()
+    for name, handler in HANDLERS.items():
+        handlers = getattr(bpy.app.handlers, name)
+        while handler in handlers:
+            handlers.remove(handler)
+
+
+def running() -> CompareRun | None:
+    """The comparison under way, if any."""
+    return _active[0] if _active else None
+
+
+# ---------------------------------------------------------------------------------------------
+# One comparison, step by step
+
+
+class CompareRun:
+    """One comparison of the scene's design: the steps both paths take (see the module's doc).
+
+    Used as a context manager, it is watched by the render handlers for the duration and closed
+    at the end, however the block ends."""
+
+    def __init__(self, bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tuple[int, int] | None = None,
+                 build: bool = True):
+        self.bl_scene = bl_scene
+        self.scene_pointer = bl_scene.as_pointer()
+        self.samples = int(samples)
+        self.resolution = resolution
+        self.build = build
+        self.scene: dict | None = None  # what the tracer renders, set by prepare
+        self.stage: Stage | None = None
+        self.ended: str | None = None  # "complete" or "cancel", from the render handlers
+        self.images: dict[str, np.ndarray] = {}
+        self.seconds: dict[str, float] = {}
+        self.not_restored: list[str] = []
+        self._settings = SceneSettings()
+        self._folder: str | None = None
+        self._started_at = self._ended_at = 0.0
+
+    def __enter__(self) -> CompareRun:
+        watch(self)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def report_end(self, how: str) -> None:
+        """The running stage's render ended (``how`` "complete" or "cancel"). A cancel always wins."""
+        if self.ended is None or how == "cancel":
+            self._ended_at = time.perf_counter()
+            self.ended = how
+
+    def prepare(self) -> None:
+        """Build the lamp, make sure there is a scene camera (from the design's when there is none),
+        fix the scene the tracer renders and set the render settings both renders use.
+        Raises ``SceneError``."""
+        from . import design_builder
+
+        bl_scene = self.bl_scene
+        if bl_scene.camera is None:
+            render_camera.ensure_scene_camera(bl_scene, design_properties.design_to_scene(bl_scene))
+        self.scene = render_camera.scene_for_render(bl_scene, size=self.resolution)
+        if self.build:
+            design_builder.build_lamp(bl_scene, self.scene)
+        width, height = self.scene["image"]["width"], self.scene["image"]["height"]
+        cycles = bl_scene.cycles
+        settings = self._settings
+        settings.set(bl_scene.view_settings, **STANDARD_VIEW)
+        settings.set(bl_scene.render, resolution_x=width, resolution_y=height, resolution_percentage=100,
+                     use_border=False)
+        settings.set(cycles, samples=self.samples, **{k: max(v, getattr(cycles, k)) for k, v in MIN_BOUNCES.items()},
+                     **CYCLES_SETTINGS)
+        image_settings = bl_scene.render.image_settings
+        settings.set(image_settings, **_exr_output_values(image_settings))
+        self._folder = tempfile.mkdtemp(prefix="lamp-compare-")
+
+    def start(self, stage: Stage, *, invoke: bool = False) -> None:
+        """Render ``stage`` into its Render Result slot: a blocking render, or (``invoke``) Blender's
+        render job, which returns at once. Raises ``CompareError``."""
+        if self.images:
+            self._check_unchanged()
+        self._settings.set(self.bl_scene.render, engine=stage.engine)
+        result = bpy.data.images.get(RENDER_RESULT)
+        if result is not None:
+            result.render_slots.active_index = stage.slot
+        self.stage, self.ended = stage, None
+        self._started_at = time.perf_counter()
+        with bpy.context.temp_override(scene=self.bl_scene):
+            outcome = bpy.ops.render.render("INVOKE_DEFAULT" if invoke else "EXEC_DEFAULT")
+        if "CANCELLED" in outcome:
+            raise CompareError(f"The {stage.label} render did not start (is another render running?)")
+        if not invoke:
+            self.report_end("complete")  # a blocking render has ended when it returns (a cancel stays)
+
+    def advance(self) -> bool:
+        """The modal path's step, on its timer: while the stage's render job runs, nothing; once it
+        has ended, read its slot back and start the next stage as a render job. True when every
+        stage is done (``compose`` next). Raises ``CompareCancelled``, ``CompareError``."""
+        if self.ended is None or bpy.app.is_job_running("RENDER"):
+            return False
+        self.collect()
+        following = STAGES.index(self.stage) + 1
+        if following == len(STAGES):
+            return True
+        self.start(STAGES[following], invoke=True)
+        return False
+
+    def collect(self) -> None:
+        """Read the ended stage's slot back. Raises ``CompareCancelled`` if it was cancelled."""
+        stage = self.stage
+        if self.ended == "cancel":
+            raise CompareCancelled(f"{stage.label} render cancelled")
+        self.seconds[stage.name] = self._ended_at - self._started_at
+        result = bpy.data.images[RENDER_RESULT]
+        result.render_slots.active_index = stage.slot
+        path = os.path.join(self._folder, f"{stage.name}.exr")
+        result.save_render(path, scene=self.bl_scene)
+        self.images[stage.name] = image_view.read_exr(path)
+
+    def _check_unchanged(self) -> None:
+        """The scene must still be the one the first render was made of: the interface is live
+        during a modal comparison, and the design, camera or render size may have been edited."""
+        try:
+            now = render_camera.scene_for_render(self.bl_scene)
+        except SceneError as e:
+            raise CompareError(f"The scene changed during the {self.stage.label} render: {e}") from None
+        if now != self.scene:
+            raise CompareError(f"The design, the camera or the render size changed during the {self.stage.label} "
+                               "render; compare again")
+
+    def compose(self) -> dict:
+        """The labelled side-by-side "Lamp Compare" image and the comparison's figures: ``scene``
+        (what the tracer rendered), ``tracer``/``cycles``/``side_by_side`` (H, W, 3 float32 top row
+        first), ``seconds`` ({"tracer", "cycles"}), ``samples``, ``size`` and ``differences``."""
+        tracer, cycles = self.images[TRACER.name], self.images[CYCLES.name]
+        seconds = dict(self.seconds)
+        combined = side_by_side(
+            tracer, cycles,
+            (f"Lamp Tracer  {seconds['tracer']:.2f} s", "Lamp Tracer", "Tracer"),
+            (f"Cycles  {self.samples} spp  {seconds['cycles']:.1f} s", f"Cycles  {seconds['cycles']:.1f} s",
+             "Cycles"))
+        image_view.image_from_array(COMPARE_IMAGE, combined)
+        return {
+            "scene": self.scene,
+            "tracer": tracer,
+            "cycles": cycles,
+            "side_by_side": combined,
+            "seconds": seconds,
+            "samples": self.samples,
+            "size": (tracer.shape[1], tracer.shape[0]),
+            "differences": differences(tracer, cycles),
+        }
+
+    def close(self) -> None:
+        """Put back every setting the comparison changed, stop listening to the render handlers
+        and remove the temporary files. Every exit path calls it; calling it again does nothing."""
+        if any(s.as_pointer() == self.scene_pointer for s in bpy.data.scenes):
+            self.not_restored += self._settings.restore()
+        else:  # Blender ends the operator while loading another file: the scene is gone with its settings
+            self._settings = SceneSettings()
+        if running() is self:
+            unwatch()
+        if self._folder is not None:
+            shutil.rmtree(self._folder, ignore_errors=True)
+            self._folder = None
+
+
+def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tuple[int, int] | None = None,
+                   build: bool = True) -> dict:
+    """Render the scene's design with the tracer and with Cycles from the scene camera, blocking.
+
+    Builds (or updates) the lamp objects first unless ``build`` is False, creates the scene
+    camera from the design when there is none, renders both into render slots, makes the
+    labelled "Lamp Compare" image and returns ``CompareRun.compose``'s dict, with
+    ``not_restored``: the settings it could not put back (normally none). Raises ``SceneError``,
+    ``CompareError``, ``CompareCancelled`` and the ``RuntimeError`` of ``bpy.ops.render.render``
+    (an engine's error)."""
+    with CompareRun(bl_scene, samples=samples, resolution=resolution, build=build) as run:
+        run.prepare()
+        for stage in STAGES:
+            run.start(stage)
+            run.collect()
+        comparison = run.compose()
+    return {**comparison, "not_restored": run.not_restored}
+
+
+def write_comparison(path: str, comparison: dict, *, exposure: float = 0.0) -> None:
+    """Write the side-by-side image as .exr (linear) or .png (sRGB, ``exposure`` stops applied)
+    with the scene in its header."""
+    from ..core_tracer.images import imageio
+
+    imageio.write_image(path, comparison["side_by_side"], comparison["scene"], exposure=exposure)
+
+
+# ---------------------------------------------------------------------------------------------
+# The operator
+
+
+class LAMP_OT_compare_cycles(bpy.types.Operator):
+    """Render the design with Cycles and with the Lamp Tracer from the scene camera and show them
+    side by side (render slots 1 and 2 of Render Result, flip with J, and the "Lamp Compare" image)"""
+
+    bl_idname = "lamp.compare_cycles"
+    bl_label = "Compare with Cycles"
+    bl_options = {"REGISTER", "UNDO"}  # builds the lamp objects
+
+    samples: bpy.props.IntProperty(name="Cycles Samples", default=DEFAULT_SAMPLES, min=1, max=65536,
+                                   description="Samples per pixel of the Cycles render")
+    filepath: bpy.props.StringProperty(name="Save As", subtype="FILE_PATH", default="",
+                                       description="Also write the side-by-side image here (.png sRGB or "
+                                                   ".exr linear); empty: do not write")
+
+    @classmethod
+    def poll(cls, context):
+        if not design_properties.poll_design(cls, context):
+            return False
+        if not hasattr(context.scene, "cycles"):
+            cls.poll_message_set("Cycles is not enabled")
+            return False
+        if running() is not None:
+            cls.poll_message_set("A comparison is running (Esc cancels its render)")
+            return False
+        return True
+
+    def _output_path(self) -> str:
+        """The file to write, checked before minutes of rendering (raises ``SceneError``), or ""."""
+        from ..core_tracer.images import imageio
+
+        path = bpy.path.abspath(self.filepath) if self.filepath else ""
+        if path:
+            imageio.image_format(path)
+        return path
+
+    def execute(self, context):
+        try:
+            path = self._output_path()
+            comparison = compare_design(context.scene, samples=self.samples)
+        except REPORTED_ERRORS as e:
+            return self._failed(e)
+        return self._finished(context, comparison, path)
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        run = CompareRun(context.scene, samples=self.samples)
+        try:
+            self._path = self._output_path()
+            watch(run)
+            run.prepare()
+            run.start(CYCLES, invoke=True)
+        except REPORTED_ERRORS as e:
+            run.close()
+            return self._failed(e)
+        except BaseException:
+            run.close()
+            raise
+        self._run = run
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(POLL_SECONDS, window=context.window)
+        wm.modal_handler_add(self)
+        self._status(context)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        if event.type == "ESC" and event.value == "PRESS" and not bpy.app.is_job_running("RENDER"):
+            self._end(context)  # between the two renders: Esc is ours
+            self.report({"WARNING"}, "Compare with Cycles cancelled")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}  # Esc during a render goes on to Blender's render job, which stops
+        try:
+            if not self._run.advance():
+                self._status(context)
+                return {"PASS_THROUGH"}
+            comparison = self._run.compose()
+        except REPORTED_ERRORS as e:
+            self._end(context)
+            return self._failed(e)
+        except BaseException:
+            self._end(context)
+            raise
+        self._end(context)
+        return self._finished(context, {**comparison, "not_restored": self._run.not_restored}, self._path)
+
+    def cancel(self, context):
+        # Blender ends the operator (file load, quit): put the settings back, remove the handlers.
+        self._end(context)
+
+    def _status(self, context) -> None:
+        stage = self._run.stage
+        number = STAGES.index(stage) + 1
+        context.workspace.status_text_set(f"Compare with Cycles: {stage.label} render, {number} of {len(STAGES)} "
+                                          "(Esc cancels)")
+
+    def _end(self, context) -> None:
+        context.window_manager.event_timer_remove(self._timer)
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+        self._run.close()
+
+    def _failed(self, error: Exception):
+        """Report why the comparison stopped (one of ``REPORTED_ERRORS``)."""
+        if isinstance(error, CompareCancelled):
+            self.report({"WARNING"}, f"Compare with Cycles cancelled: {error}")
+        else:
+            self.report({"ERROR"}, str(error).strip())
+        return {"CANCELLED"}
+
+    def _finished(self, context, comparison: dict, path: str):
+        image_view.show_image(context, bpy.data.images[COMPARE_IMAGE])
+        if path:
+            try:
+                write_comparison(path, comparison)
+            except (SceneError, OSError) as e:
+                self.report({"ERROR"}, str(e))
+                return {"CANCELLED"}
+        if comparison["not_restored"]:
+            self.report({"WARNING"}, "Settings not put back: " + "; ".join(comparison["not_restored"]))
+        seconds = comparison["seconds"]
+        self.report({"INFO"}, f"Lamp Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
+                              f"({comparison['samples']} samples)")
+        return {"FINISHED"}
+
+
+classes = (LAMP_OT_compare_cycles,)
+
+register, _unregister = design_panels.register_actions_factory(
+    classes, (("lamp.compare_cycles", "Compare with Cycles", "IMAGE_REFERENCE"),))
+
+
+def unregister() -> None:
+    run = running()
+    if run is not None:  # a comparison still under way: its settings back, its handlers removed
+        run.close()
+    unwatch()
+    _unregister()

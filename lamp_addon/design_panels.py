@@ -1,0 +1,219 @@
+"""The "Lamp" tab of the 3D Viewport sidebar: every field of the design, the lamp list and the actions.
+
+Fields are drawn by walking ``core_tracer.spec`` sections, so a field added to the spec shows up
+without touching this file. Lengths carry their unit in the property name ("Radius (mm)").
+
+Other modules add buttons to the actions area at register time with ``add_action(idname, text,
+icon)`` and take them away with ``remove_action(idname)``; ``ACTION_OPERATORS`` holds them in order.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from ..core_tracer.scene import spec as S
+from . import design_properties
+
+# (operator idname, button text, icon) drawn in the actions area, in order.
+ACTION_OPERATORS: list[tuple[str, str, str]] = [("lamp.build", "Build Lamp", "MESH_CYLINDER")]
+
+
+def add_action(idname: str, text: str, icon: str = "NONE") -> None:
+    """Show operator ``idname`` as a button in the actions area (call from a module's ``register``)."""
+    remove_action(idname)
+    ACTION_OPERATORS.append((idname, text, icon))
+
+
+def remove_action(idname: str) -> None:
+    ACTION_OPERATORS[:] = [entry for entry in ACTION_OPERATORS if entry[0] != idname]
+
+
+def register_actions_factory(classes: tuple[type, ...], actions: tuple[tuple[str, str, str], ...]):
+    """``register``/``unregister`` of a module whose operators show as buttons in the actions area:
+    ``bpy.utils.register_classes_factory(classes)`` plus ``add_action`` of each (idname, text, icon)
+    of ``actions`` (in order), taken away again in reverse."""
+    register_classes, unregister_classes = bpy.utils.register_classes_factory(classes)
+
+    def register() -> None:
+        register_classes()
+        for action in actions:
+            add_action(*action)
+
+    def unregister() -> None:
+        for idname, _text, _icon in reversed(actions):
+            remove_action(idname)
+        unregister_classes()
+
+    return register, unregister
+
+
+def leaf_keys(section: S.Section) -> list[str]:
+    """The keys of ``section`` drawn as plain properties: leaves that are not constants."""
+    return [key for key, spec in section.fields.items()
+            if not isinstance(spec, (S.Section, S.ListOf)) and not design_properties.is_constant(spec)]
+
+
+def draw_section(layout, group, section: S.Section, kinds: tuple[type, ...] | None = None) -> None:
+    """One ``prop`` per leaf field of ``section`` (only of the given spec ``kinds`` if set)."""
+    for key in leaf_keys(section):
+        if kinds is None or isinstance(section.fields[key], kinds):
+            layout.prop(group, key)
+
+
+def active_lamp(context):
+    design = context.scene.lamp_design
+    if 0 <= design.active_lamps_index < len(design.lamps):
+        return design.lamps[design.active_lamps_index]
+    return None
+
+
+class LAMP_UL_lamps(bpy.types.UIList):
+    """The design's lamps, at most ``MAX_LAMPS``; the bulb switch on each row."""
+
+    def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0, flt_flag=0):
+        row = layout.row(align=True)
+        row.label(text=f"Lamp {index + 1}", icon="LIGHT_POINT")
+        row.prop(item.bulb, "on", text="", emboss=False, icon="OUTLINER_OB_LIGHT" if item.bulb.on else "LIGHT")
+
+
+class _LampTab:
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Lamp"
+
+    @staticmethod
+    def _split(layout):
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        return layout
+
+
+class LAMP_PT_design(_LampTab, bpy.types.Panel):
+    bl_label = "Lamp Design"
+
+    def draw(self, context):
+        col = self.layout.column(align=True)
+        for idname, text, icon in ACTION_OPERATORS:
+            col.operator(idname, text=text, icon=icon)
+
+
+class LAMP_PT_info(_LampTab, bpy.types.Panel):
+    bl_label = "Design"
+    bl_parent_id = "LAMP_PT_design"
+    bl_options = {"DEFAULT_CLOSED"}
+    bl_order = 0
+
+    def draw(self, context):
+        draw_section(self._split(self.layout), context.scene.lamp_design, S.SCENE, (S.Text, S.Tags))
+
+
+class LAMP_PT_body(_LampTab, bpy.types.Panel):
+    bl_label = "Body"
+    bl_parent_id = "LAMP_PT_design"
+    bl_order = 1
+
+    def draw(self, context):
+        draw_section(self._split(self.layout), context.scene.lamp_design.body, S.BODY)
+
+
+class LAMP_PT_light(_LampTab, bpy.types.Panel):
+    bl_label = "Light"
+    bl_parent_id = "LAMP_PT_design"
+    bl_order = 2
+
+    def draw(self, context):
+        layout = self._split(self.layout)
+        design = context.scene.lamp_design
+        draw_section(layout, design.light, S.LIGHT)
+        draw_section(layout, design, S.SCENE, (S.Num,))  # the background colour
+
+
+class LAMP_PT_camera(_LampTab, bpy.types.Panel):
+    bl_label = "Camera & Image"
+    bl_parent_id = "LAMP_PT_design"
+    bl_options = {"DEFAULT_CLOSED"}
+    bl_order = 3
+
+    def draw(self, context):
+        layout = self._split(self.layout)
+        design = context.scene.lamp_design
+        draw_section(layout.column(), design.camera, S.CAMERA)
+        layout.separator()
+        draw_section(layout.column(), design.image, S.IMAGE)
+
+
+class LAMP_PT_lamps(_LampTab, bpy.types.Panel):
+    bl_label = "Lamps"
+    bl_parent_id = "LAMP_PT_design"
+    bl_order = 4
+
+    def draw(self, context):
+        layout = self.layout
+        design = context.scene.lamp_design
+        row = layout.row()
+        row.template_list("LAMP_UL_lamps", "", design, "lamps", design, "active_lamps_index",
+                          rows=2, maxrows=S.MAX_LAMPS)
+        col = row.column(align=True)
+        col.operator("lamp.lamp_add", icon="ADD", text="")
+        col.operator("lamp.lamp_remove", icon="REMOVE", text="")
+        lamp = active_lamp(context)
+        if lamp is not None:
+            draw_section(self._split(layout.column()), lamp, S.LAMP)
+        elif not design.lamps:  # a new scene: say how to start rather than show an empty list
+            layout.label(text="Add a lamp with + or apply a preset below", icon="INFO")
+
+
+class _LampPartPanel(_LampTab):
+    """A sub-panel of the active lamp showing one section of ``spec.LAMP``."""
+
+    bl_parent_id = "LAMP_PT_lamps"
+    part = ""
+
+    @classmethod
+    def poll(cls, context):
+        return active_lamp(context) is not None
+
+    def draw(self, context):
+        draw_section(self._split(self.layout), getattr(active_lamp(context), self.part), S.LAMP.fields[self.part])
+
+
+class LAMP_PT_lens(_LampPartPanel, bpy.types.Panel):
+    bl_label = "Lens"
+    part = "lens"
+    bl_order = list(S.LAMP.fields).index("lens")
+
+    def draw(self, context):
+        layout = self._split(self.layout)
+        lens = active_lamp(context).lens
+        for key in leaf_keys(S.LENS):
+            if key not in S.LENS.optional:
+                layout.prop(lens, key)
+        box = layout.box()
+        box.row().prop(lens, "color_mode", expand=True)
+        for key in design_properties.LENS_COLOR_MODES[lens.color_mode]:
+            box.prop(lens, key)
+
+
+def _make_part_panel(key: str, order: int) -> type:
+    return type(f"LAMP_PT_{key}", (_LampPartPanel, bpy.types.Panel),
+                {"bl_label": design_properties.display_name(key), "part": key, "bl_order": order})
+
+
+_part_panels = tuple(
+    LAMP_PT_lens if key == "lens" else _make_part_panel(key, order)
+    for order, (key, spec) in enumerate(S.LAMP.fields.items()) if isinstance(spec, S.Section)
+)
+
+classes = (
+    LAMP_UL_lamps,
+    LAMP_PT_design,
+    LAMP_PT_info,
+    LAMP_PT_body,
+    LAMP_PT_light,
+    LAMP_PT_camera,
+    LAMP_PT_lamps,
+    *_part_panels,
+)
+
+
+register, unregister = bpy.utils.register_classes_factory(classes)

@@ -1,0 +1,313 @@
+"""The lamp design stored on the scene (``Scene.lamp_design``), generated from ``core_tracer.spec``.
+
+No field is listed here by hand: the PropertyGroups are made by walking ``spec.SCENE`` (and the
+``LAMP`` section inside its ``lamps`` list), so names, descriptions, ranges and defaults follow the
+scene declaration. Kinds map as follows:
+
+- ``Num`` -> ``FloatProperty`` / ``IntProperty``, or ``FloatVectorProperty`` (size 2 or 3, subtype
+  ``COLOR`` for colours, ``XYZ`` for 3-vectors), hard and soft limits from the spec range; an open
+  bound such as ``(0, 1000] mm`` becomes a closed one just inside it (``OPEN_BOUND_MARGIN``).
+- ``Choice`` -> ``EnumProperty`` (identifiers are the JSON strings); a choice with a single allowed
+  value (``schema``) is a constant, not a property.
+- ``Flag`` -> ``BoolProperty``; ``Text`` -> ``StringProperty``; ``Tags`` -> ``StringProperty`` holding
+  the tags separated by commas.
+- ``Section`` -> a nested PropertyGroup; ``ListOf`` (the lamps) -> ``CollectionProperty`` plus an
+  ``active_<key>_index``.
+
+Lengths are kept in millimetres exactly as in the JSON (the property name carries the unit, e.g.
+"Radius (mm)"), not in Blender units, so no scale factor touches the numbers. Blender stores floats in
+32 bits; reading one back takes the shortest decimal that gives the same 32-bit float, which turns
+every JSON value of at most 6 significant digits back into itself (``design_to_scene``).
+
+The lens colour is the designer's choice of two forms (``LENS_COLOR_MODES``): a transmitted colour at
+a reference thickness (set with a colour picker) or absorption coefficients. Both sets of properties
+exist; ``color_mode`` says which one the design uses and only that one is written to the scene.
+"""
+
+from __future__ import annotations
+
+import struct
+
+import bpy
+from bpy.props import (
+    BoolProperty,
+    CollectionProperty,
+    EnumProperty,
+    FloatProperty,
+    FloatVectorProperty,
+    IntProperty,
+    PointerProperty,
+    StringProperty,
+)
+
+from ..core_tracer.scene import spec as S
+from ..core_tracer.scene import validate as lamp_scene
+
+OPEN_BOUND_MARGIN = 1.0e-6  # an open bound lo < x becomes lo + margin * max(1, |lo|) <= x
+TAG_SEPARATOR = ","
+
+# The lens colour: mode identifier -> the optional lens fields that mode writes.
+LENS_COLOR_MODES = {
+    "TRANSMITTED": ("transmitted_color", "reference_thickness"),
+    "ABSORPTION": ("absorption",),
+}
+LENS_COLOR_MODE_ITEMS = (
+    ("TRANSMITTED", "Transmitted Colour", "Colour seen through the reference thickness of lens (colour picker)"),
+    ("ABSORPTION", "Absorption", "RGB absorption coefficients A per mm (eq. 2)"),
+)
+assert all(k in S.LENS.optional for keys in LENS_COLOR_MODES.values() for k in keys)
+
+_ACRONYMS = {"fov": "FOV", "ior": "IOR", "rgb": "RGB"}
+
+
+# ---------------------------------------------------------------------------------------------
+# Spec -> bpy.props
+
+
+def display_name(key: str, unit: str = "") -> str:
+    """The UI name of a field: ``focal_length`` + mm -> "Focal Length (mm)", ``fov_deg`` -> "FOV (deg)"."""
+    words = key.split("_")
+    if unit and len(words) > 1 and words[-1] == unit:
+        words = words[:-1]
+    text = " ".join(_ACRONYMS.get(w, w.capitalize()) for w in words)
+    return f"{text} ({unit})" if unit else text
+
+
+def is_constant(spec: S.Spec) -> bool:
+    """A field with one allowed value (the schema tag): written by the converter, never a property."""
+    return isinstance(spec, S.Choice) and len(spec.choices) == 1
+
+
+def blender_range(spec: S.Num) -> tuple[float | None, float | None]:
+    """The closed (min, max) of the Blender property for a spec range; ``None`` is unbounded."""
+    lo, hi = spec.lo, spec.hi
+    if lo is not None and spec.lo_open:
+        lo = lo + OPEN_BOUND_MARGIN * max(1.0, abs(lo))
+    if hi is not None and spec.hi_open:
+        hi = hi - OPEN_BOUND_MARGIN * max(1.0, abs(hi))
+    return lo, hi
+
+
+def _description(spec: S.Spec) -> str:
+    return f"{spec.doc}. Allowed: {spec.range_text()}" if spec.doc else f"Allowed: {spec.range_text()}"
+
+
+def _num_property(key: str, spec: S.Num):
+    lo, hi = blender_range(spec)
+    kw = {"name": display_name(key, spec.unit), "description": _description(spec)}
+    if spec.integer:
+        if lo is not None:
+            kw["min"] = kw["soft_min"] = int(lo)
+        if hi is not None:
+            kw["max"] = kw["soft_max"] = int(hi)
+        return IntProperty(default=int(spec.default), **kw)
+    if lo is not None:
+        kw["min"] = kw["soft_min"] = lo
+    if hi is not None:
+        kw["max"] = kw["soft_max"] = hi
+    kw["precision"] = 4
+    if spec.size > 1:
+        if spec.subtype == "color":
+            subtype = "COLOR"
+        elif spec.size == 3:
+            subtype = "XYZ"
+        else:
+            subtype = "NONE"  # the 2-vectors are [x, z] or [width, height]: X/Y labels would mislead
+        return FloatVectorProperty(size=spec.size, subtype=subtype, default=tuple(float(x) for x in spec.default),
+                                   **kw)
+    return FloatProperty(default=float(spec.default), **kw)
+
+
+def _leaf_property(key: str, spec: S.Spec):
+    if isinstance(spec, S.Num):
+        return _num_property(key, spec)
+    if isinstance(spec, S.Choice):
+        items = tuple((c, display_name(c), "") for c in spec.choices)
+        return EnumProperty(name=display_name(key), description=_description(spec), items=items,
+                            default=spec.default)
+    if isinstance(spec, S.Flag):
+        return BoolProperty(name=display_name(key), description=_description(spec), default=spec.default)
+    if isinstance(spec, S.Text):
+        return StringProperty(name=display_name(key), description=_description(spec), default=spec.default)
+    if isinstance(spec, S.Tags):
+        return StringProperty(name=display_name(key), default="",
+                              description=f"{spec.doc}, separated by commas. Allowed: {spec.range_text()}")
+    raise TypeError(f"no property for {spec!r}")  # pragma: no cover - every leaf kind is handled above
+
+
+def _make_groups(section: S.Section, class_name: str, out: list[type], extra: dict | None = None) -> type:
+    """Create the PropertyGroup of ``section`` (and, first, of every section inside it) into ``out``."""
+    annotations: dict = {}
+    for key, spec in section.fields.items():
+        if is_constant(spec):
+            continue
+        if isinstance(spec, S.Section):
+            sub = _make_groups(spec, f"{class_name}_{key}", out)
+            annotations[key] = PointerProperty(type=sub, name=display_name(key), description=spec.doc)
+        elif isinstance(spec, S.ListOf):
+            item = _make_groups(spec.item, f"{class_name}_{key}_item", out)
+            annotations[key] = CollectionProperty(type=item, name=display_name(key), description=spec.doc)
+            annotations[f"active_{key}_index"] = IntProperty(name=f"Active {display_name(key)} Index", min=0)
+        else:
+            annotations[key] = _leaf_property(key, spec)
+    if section is S.LENS:
+        annotations["color_mode"] = EnumProperty(
+            name="Colour Mode", items=LENS_COLOR_MODE_ITEMS, default="ABSORPTION",
+            description="How the lens colour is given: transmitted colour at a thickness, or absorption")
+    namespace = {"__annotations__": annotations, "__doc__": section.doc or class_name, **(extra or {})}
+    cls = type(class_name, (bpy.types.PropertyGroup,), namespace)
+    out.append(cls)
+    return cls
+
+
+def _attach(cls) -> None:
+    bpy.types.Scene.lamp_design = PointerProperty(type=cls, name="Lamp Design",
+                                                  description="The lamp-scene/1 design of this scene")
+
+
+def _detach(cls) -> None:
+    del bpy.types.Scene.lamp_design
+
+
+classes: list[type] = []
+LampDesign = _make_groups(S.SCENE, "LAMP_PG_design", classes,
+                          extra={"register": classmethod(_attach), "unregister": classmethod(_detach)})
+classes = tuple(classes)  # nested groups first, the root last: registration order
+
+
+# ---------------------------------------------------------------------------------------------
+# Conversion between the properties and a normalised scene
+
+
+def from_float32(x: float) -> float:
+    """The shortest decimal that is the same 32-bit float as ``x`` (undoes Blender's float storage)."""
+    target = struct.pack("<f", x)
+    for digits in range(1, 10):
+        y = float(f"{x:.{digits}g}")
+        if struct.pack("<f", y) == target:
+            return y
+    return float(x)  # pragma: no cover - 9 significant digits always identify a float32
+
+
+def _read_leaf(value, spec: S.Spec):
+    if isinstance(spec, S.Num):
+        if spec.size > 1:
+            return [from_float32(x) for x in value]
+        return int(value) if spec.integer else from_float32(value)
+    if isinstance(spec, S.Flag):
+        return bool(value)
+    if isinstance(spec, S.Tags):
+        return [t.strip() for t in value.split(TAG_SEPARATOR) if t.strip()]
+    return str(value)
+
+
+def _read_section(group, section: S.Section) -> dict:
+    out: dict = {}
+    for key, spec in section.fields.items():
+        if is_constant(spec):
+            out[key] = spec.default
+        elif isinstance(spec, S.Section):
+            out[key] = _read_section(getattr(group, key), spec)
+        elif isinstance(spec, S.ListOf):
+            out[key] = [_read_section(item, spec.item) for item in getattr(group, key)]
+        elif section is S.LENS and key in S.LENS.optional:
+            if key in LENS_COLOR_MODES[group.color_mode]:
+                out[key] = _read_leaf(getattr(group, key), spec)
+        else:
+            out[key] = _read_leaf(getattr(group, key), spec)
+    return out
+
+
+def poll_design(cls, context) -> bool:
+    """The ``poll`` of operators that work on the scene's design: False, saying why, without one."""
+    if context.scene is None or not hasattr(context.scene, "lamp_design"):
+        cls.poll_message_set("No lamp design in this scene")
+        return False
+    return True
+
+
+def design_document(bl_scene: bpy.types.Scene) -> dict:
+    """The scene's design as a ``lamp-scene/1`` document, read but not checked (``parse_scene`` checks it)."""
+    return _read_section(bl_scene.lamp_design, S.SCENE)
+
+
+def design_to_scene(bl_scene: bpy.types.Scene, *, camera: dict | None = None, image: dict | None = None) -> dict:
+    """The scene's design as a normalised ``lamp-scene/1`` scene; raises ``SceneError`` if it is invalid.
+
+    The camera and image are the design's own sections unless ``camera`` / ``image`` replace them;
+    they are replaced before the scene is checked, so an out-of-date design camera cannot block a
+    render through Blender's scene camera (``camera.scene_for_render``).
+    """
+    doc = design_document(bl_scene)
+    if camera is not None:
+        doc["camera"] = camera
+    if image is not None:
+        doc["image"] = image
+    return lamp_scene.parse_scene(doc)
+
+
+def _check_section(data: dict, section: S.Section, path: str) -> None:
+    """Refuse values the properties cannot hold as given, before anything is written."""
+    for key, spec in section.fields.items():
+        if key not in data or is_constant(spec):
+            continue
+        where = f"{path}{key}"
+        value = data[key]
+        if isinstance(spec, S.Section):
+            _check_section(value, spec, where + ".")
+        elif isinstance(spec, S.ListOf):
+            for i, item in enumerate(value):
+                _check_section(item, spec.item, f"{where}[{i}].")
+        elif isinstance(spec, S.Tags):
+            for tag in value:
+                if TAG_SEPARATOR in tag or tag != tag.strip() or not tag:
+                    raise lamp_scene.SceneError(where, f'"{tag}" cannot be kept in the comma-separated tag field; '
+                                                       "allowed tags without commas or surrounding spaces")
+        elif isinstance(spec, S.Num):
+            lo, hi = blender_range(spec)
+            for x in value if spec.size > 1 else (value,):
+                if (lo is not None and x < lo) or (hi is not None and x > hi):
+                    low = "-inf" if lo is None else f"{lo:g}"
+                    high = "inf" if hi is None else f"{hi:g}"
+                    raise lamp_scene.SceneError(where, f"{x:g} is too close to the open bound; allowed "
+                                                       f"[{low}, {high}] in Blender")
+
+
+def _write_section(group, section: S.Section, data: dict) -> None:
+    for key, spec in section.fields.items():
+        if is_constant(spec) or key not in data:
+            continue
+        value = data[key]
+        if isinstance(spec, S.Section):
+            _write_section(getattr(group, key), spec, value)
+        elif isinstance(spec, S.ListOf):
+            items = getattr(group, key)
+            items.clear()
+            for item_data in value:
+                _write_section(items.add(), spec.item, item_data)
+            setattr(group, f"active_{key}_index", 0)
+        elif isinstance(spec, S.Tags):
+            setattr(group, key, f"{TAG_SEPARATOR} ".join(value))
+        else:
+            setattr(group, key, value)
+    if section is S.LENS:
+        group.color_mode = next(mode for mode, keys in LENS_COLOR_MODES.items() if keys[0] in data)
+
+
+def set_lamp(item, lamp: dict) -> None:
+    """Set one lamp of the design (an item of ``lamp_design.lamps``) from a lamp of a checked design
+    document or scene."""
+    _write_section(item, S.LAMP, lamp)
+
+
+def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
+    """Set the scene's design from a scene; validates everything first, so it applies all or nothing.
+
+    Raises ``SceneError`` (and changes nothing) when ``scene_dict`` is not a valid scene.
+    """
+    scene = lamp_scene.normalize(scene_dict)
+    _check_section(scene, S.SCENE, "")
+    _write_section(bl_scene.lamp_design, S.SCENE, scene)
+
+
+register, unregister = bpy.utils.register_classes_factory(classes)

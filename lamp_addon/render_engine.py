@@ -1,0 +1,224 @@
+"""The "Lamp Tracer" render engine: the paper's renderer behind F12 (issue 3, item 6).
+
+As a ``RenderEngine`` the tracer gets everything Blender gives any engine: F12, render slots,
+Image > Save, ``bpy.ops.render.render(write_still=True)`` headless, the output and colour
+management panels. The scene it renders is the design from the Lamp panel seen through the
+scene camera at the render resolution (``render_camera.scene_for_render``).
+"""
+
+from __future__ import annotations
+
+import bpy
+import numpy as np
+
+from ..core_tracer.raytrace.tracer import PASS_NAMES
+from ..core_tracer.scene.validate import SceneError
+from . import render_camera
+
+ENGINE_ID = "LAMP_TRACER"
+
+# Blender's name of each contribution pass, in the tracer's order: "Lamp Lens Surface", ...
+PASS_LABELS = {name: "Lamp " + name.replace("_", " ").title() for name in PASS_NAMES}
+PASSES_PROPERTY = "lamp_contribution_passes"  # the per-view-layer toggle, on bpy.types.ViewLayer
+
+# Blender's own panels that apply to this engine: output and format, colour management (the
+# tracer's linear RGB is shown through the view transform like any render) and the camera.
+_PANELS = (
+    "RENDER_PT_format", "RENDER_PT_frame_range", "RENDER_PT_time_stretching", "RENDER_PT_output",
+    "RENDER_PT_output_views", "RENDER_PT_output_color_management", "RENDER_PT_output_pixel_density",
+    "RENDER_PT_encoding", "RENDER_PT_encoding_video", "RENDER_PT_encoding_audio",
+    "RENDER_PT_post_processing", "RENDER_PT_stamp", "RENDER_PT_stamp_note", "RENDER_PT_stamp_burn",
+    "RENDER_PT_color_management", "RENDER_PT_color_management_curves", "RENDER_PT_color_management_advanced",
+    "RENDER_PT_color_management_white_balance", "RENDER_PT_color_management_working_space",
+    "DATA_PT_context_camera", "DATA_PT_lens", "DATA_PT_camera", "DATA_PT_camera_display",
+    "DATA_PT_camera_display_composition_guides", "DATA_PT_camera_safe_areas",
+    "DATA_PT_camera_safe_areas_center_cut", "DATA_PT_camera_background_image", "DATA_PT_camera_animation",
+    "DATA_PT_custom_props_camera",
+    # View Layer properties: the layer list, Use for Rendering, and Passes (our toggle's parent)
+    "VIEWLAYER_PT_context_layer", "VIEWLAYER_PT_layer", "VIEWLAYER_PT_layer_passes",
+)
+
+BAND_ROWS = 16  # rows per result update when the tracer reports rows in larger blocks
+
+
+def body_coverage(scene: dict, row_start: int, row_stop: int) -> np.ndarray:
+    """1 where the eye ray of a pixel hits the body box (the lamp's silhouette), else 0.
+
+    Shape (row_stop - row_start, width), rows top-based like the tracer's. The lenses lie in
+    the body's front face, so the box is the whole lamp seen from outside."""
+    from ..core_tracer.raytrace.camera import eye_rays, make_camera
+
+    width, height = scene["image"]["width"], scene["image"]["height"]
+    cam = make_camera(scene["camera"], width, height)
+    pixels = np.arange(row_start * width, row_stop * width)
+    origins, directions = eye_rays(cam, pixels)
+    body = scene["body"]
+    (cx, cz), (sx, sz) = body["center"], body["size"]
+    lo = np.array([cx - sx / 2, 0.0, cz - sz / 2])
+    hi = np.array([cx + sx / 2, body["depth"], cz + sz / 2])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0 = (lo - origins) / directions
+        t1 = (hi - origins) / directions
+    near = np.nanmax(np.minimum(t0, t1), axis=1)
+    far = np.nanmin(np.maximum(t0, t1), axis=1)
+    hit = (near <= far) & (far > 0)
+    return hit.reshape(row_stop - row_start, width).astype(np.float32)
+
+
+class LampTracerEngine(bpy.types.RenderEngine):
+    bl_idname = ENGINE_ID
+    bl_label = "Lamp Tracer"
+    bl_use_preview = False
+    bl_use_eevee_viewport = True  # Material Preview shading uses EEVEE on the Cycles materials
+
+    def update_render_passes(self, scene=None, renderlayer=None):
+        """The passes a view layer will have: what the compositor's Render Layers node offers."""
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
+        if contribution_passes_enabled(renderlayer):
+            for label in PASS_LABELS.values():
+                self.register_pass(scene, renderlayer, label, 3, "RGB", "COLOR")
+
+    def render(self, depsgraph):
+        from .. import core_tracer
+
+        width, height = self.resolution_x, self.resolution_y
+        self._region = render_region(depsgraph.scene.render, width, height)
+        self._layer = depsgraph.view_layer.name  # the engine renders each view layer in turn
+        with_passes = contribution_passes_enabled(depsgraph.view_layer)
+        if with_passes:
+            for label in PASS_LABELS.values():  # before the first begin_result, which copies them
+                self.add_pass(label, 3, "RGB", layer=self._layer)
+        try:
+            scene = render_camera.scene_for_render(depsgraph.scene, camera_object=self.camera_override,
+                                            size=(width, height))
+        except SceneError as e:
+            black = np.zeros((height, width, 3), np.float32)
+            self._fill(black, 0, np.ones((height, width), np.float32),
+                       dict.fromkeys(PASS_LABELS.values(), black) if with_passes else {})
+            self.report({"ERROR"}, f"Lamp Tracer: {e}")
+            return
+
+        transparent = depsgraph.scene.render.film_transparent
+
+        def write_rows(row_start: int, row_stop: int, rows: np.ndarray,
+                       passes: dict[str, np.ndarray] | None = None) -> None:
+            """Rows ``row_start:row_stop`` of the image (and of each pass) into the result, in bands."""
+            for start in range(row_start, row_stop, BAND_ROWS):
+                stop = min(start + BAND_ROWS, row_stop)
+                band = slice(start - row_start, stop - row_start)
+                if transparent:  # premultiplied; the passes too, so that they still sum to Combined
+                    alpha = body_coverage(scene, start, stop)
+                    weight = alpha[:, :, None]
+                else:
+                    alpha, weight = np.ones((stop - start, width), np.float32), None
+                self._fill(_weighted(rows[band], weight), start, alpha,
+                           {PASS_LABELS[name]: _weighted(values[band], weight)
+                            for name, values in (passes or {}).items()})
+
+        try:
+            core_tracer.render_passes(scene, width, height, progress=self.update_progress,
+                                               should_stop=self.test_break, on_band=write_rows,
+                                               threads=depsgraph.scene.render.threads,  # Blender's count
+                                               keep_passes=with_passes)
+        except core_tracer.RenderCancelled:
+            return  # Esc: Blender keeps the bands finished so far, with their passes
+
+    def _fill(self, rows: np.ndarray, row_start: int, alpha: np.ndarray,
+              passes: dict[str, np.ndarray] | None = None) -> None:
+        """Write ``rows`` (top-based, top row first) into the result's Combined pass and each of
+        ``passes`` (Blender pass name -> rows of the same shape) into that pass. Blender's rows run
+        bottom-up, and with a render region the result covers only the region, addressed from its
+        corner."""
+        x0, y0, x1, y1 = self._region
+        n, width = rows.shape[:2]
+        bottom = self.resolution_y - row_start - n  # of the band, counted from the frame's bottom
+        lo, hi = max(bottom, y0), min(bottom + n, y1)
+        if lo >= hi:
+            return
+
+        def kept(values: np.ndarray) -> np.ndarray:
+            return np.ascontiguousarray(values[::-1][lo - bottom:hi - bottom, x0:x1], np.float32).ravel()
+
+        rgba = np.empty((n, width, 4), np.float32)
+        rgba[:, :, :3] = rows
+        rgba[:, :, 3] = alpha
+        result = self.begin_result(0, lo - y0, x1 - x0, hi - lo, layer=self._layer)
+        layer = result.layers[0]
+        layer.passes["Combined"].rect.foreach_set(kept(rgba))
+        for label, values in (passes or {}).items():
+            layer.passes[label].rect.foreach_set(kept(values))
+        self.end_result(result)
+
+
+def _weighted(values: np.ndarray, weight: np.ndarray | None) -> np.ndarray:
+    return values if weight is None else values * weight
+
+
+def contribution_passes_enabled(view_layer: bpy.types.ViewLayer) -> bool:
+    """The view layer's *Contribution Passes* toggle (False while the add-on is not registered)."""
+    return bool(getattr(view_layer, PASSES_PROPERTY, False))
+
+
+def _passes_changed(view_layer: bpy.types.ViewLayer, _context) -> None:
+    view_layer.update_render_passes()  # the Render Layers node gains or loses its sockets
+
+
+class LAMP_PT_view_layer_passes(bpy.types.Panel):
+    """View Layer properties › Passes › Lamp Tracer, shown for this engine only."""
+
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "view_layer"
+    bl_label = "Lamp Tracer"
+    bl_parent_id = "VIEWLAYER_PT_layer_passes"
+    COMPAT_ENGINES = {ENGINE_ID}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.column().prop(context.view_layer, PASSES_PROPERTY)
+
+
+def render_region(render, width: int, height: int) -> tuple[int, int, int, int]:
+    """The pixels Blender keeps, (x0, y0, x1, y1) from the bottom-left corner: the whole frame, or
+    the render region (border) truncated to whole pixels as Blender does."""
+    if not render.use_border:
+        return 0, 0, width, height
+    return (int(render.border_min_x * width), int(render.border_min_y * height),
+            int(render.border_max_x * width), int(render.border_max_y * height))
+
+
+classes = (LampTracerEngine, LAMP_PT_view_layer_passes)
+
+
+def _panels():
+    for name in _PANELS:
+        panel = getattr(bpy.types, name, None)
+        if panel is not None and hasattr(panel, "COMPAT_ENGINES"):
+            yield panel
+
+
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register() -> None:
+    setattr(bpy.types.ViewLayer, PASSES_PROPERTY, bpy.props.BoolProperty(
+        name="Contribution Passes",
+        description="Also write the Lamp Tracer's contribution passes (lens surface, bulb, reflector "
+                    "constant and scatter, socket, side wall, body, background), which sum to Combined",
+        default=False, update=_passes_changed))
+    for panel in _panels():
+        panel.COMPAT_ENGINES.add(ENGINE_ID)
+    _register_classes()
+
+
+def unregister() -> None:
+    _unregister_classes()
+    for panel in _panels():
+        panel.COMPAT_ENGINES.discard(ENGINE_ID)
+    delattr(bpy.types.ViewLayer, PASSES_PROPERTY)

@@ -1,0 +1,197 @@
+"""Render with Lamp Tracer: the tracer into an image shown in an Image Editor (issue 3, item 6).
+
+From the interface the tracer runs on a worker thread (numpy releases the GIL) while a modal
+operator polls it on a timer: the image fills in band by band, the progress shows in the
+status bar, Esc cancels, the interface keeps responding. Called from a script, or in
+background mode where there are no windows, the operator renders synchronously (``execute``).
+
+Only ``{'REGISTER'}``, like Blender's own ``render.render``: the operator makes a picture of
+the design and changes nothing the design is made of, so there is nothing for undo to take
+back (and an undo step pushed when a background render ends would land between whatever
+the user did meanwhile).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import bpy
+import numpy as np
+
+from ..core_tracer.scene.validate import SceneError
+from . import design_panels, image_view, render_camera
+
+IMAGE_NAME = "Lamp Tracer"
+POLL_SECONDS = 0.2
+
+
+class TracerJob:
+    """One tracer render on a worker thread. The worker touches only numpy arrays and plain
+    attributes; the main thread reads them (``bpy`` is not thread-safe)."""
+
+    def __init__(self, scene: dict):
+        self.scene = scene
+        width, height = scene["image"]["width"], scene["image"]["height"]
+        self.rows = np.zeros((height, width, 3), np.float32)
+        self.progress = 0.0
+        self.rows_done = 0
+        self.stop_requested = False
+        self.cancelled = False
+        self.error: str | None = None
+        self.seconds = 0.0
+        self.done = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="Lamp Tracer", daemon=True)
+
+    def start(self) -> TracerJob:
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self.stop_requested = True
+
+    def wait(self, timeout: float | None = None) -> bool:
+        return self.done.wait(timeout)
+
+    def _on_rows(self, row_start: int, row_stop: int, rows: np.ndarray) -> None:
+        self.rows[row_start:row_stop] = rows
+        self.rows_done += row_stop - row_start
+
+    def _set_progress(self, fraction: float) -> None:
+        self.progress = fraction
+
+    def _run(self) -> None:
+        from .. import core_tracer
+
+        start = time.perf_counter()
+        try:
+            core_tracer.render_passes(self.scene, progress=self._set_progress,
+                                      should_stop=lambda: self.stop_requested, on_rows=self._on_rows)
+        except core_tracer.RenderCancelled:
+            self.cancelled = True
+        except Exception as e:  # a tracer bug: shown to the user by the main thread, not lost in a thread
+            self.error = f"{type(e).__name__}: {e}"
+        finally:
+            self.seconds = time.perf_counter() - start
+            self.done.set()
+
+
+def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
+    """Render the scene with the tracer synchronously into the "Lamp Tracer" image.
+    Returns the image and the render time in seconds. Raises ``SceneError``."""
+    from .. import core_tracer
+
+    scene = render_camera.scene_for_render(bl_scene)
+    start = time.perf_counter()
+    rgb = core_tracer.render(scene)
+    seconds = time.perf_counter() - start
+    return image_view.image_from_array(IMAGE_NAME, rgb), seconds
+
+
+class LAMP_OT_render_tracer(bpy.types.Operator):
+    """Render the lamp design with the paper's tracer into the "Lamp Tracer" image"""
+
+    bl_idname = "lamp.render_tracer"
+    bl_label = "Render with Lamp Tracer"
+    bl_options = {"REGISTER"}
+
+    _active: TracerJob | None = None  # one interactive render at a time
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or context.scene.camera is None:
+            cls.poll_message_set("The scene has no camera; build the lamp or add a camera")
+            return False
+        job = LAMP_OT_render_tracer._active
+        if job is not None and not job.done.is_set():
+            cls.poll_message_set("A Lamp Tracer render is running (Esc cancels it)")
+            return False
+        return True
+
+    def execute(self, context):
+        try:
+            image, seconds = render_to_image(context.scene)
+        except SceneError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        image_view.show_image(context, image)
+        self.report({"INFO"}, f"Lamp Tracer: {image.size[0]}x{image.size[1]} in {seconds:.2f} s")
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        try:
+            scene = render_camera.scene_for_render(context.scene)
+        except SceneError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        self._job = TracerJob(scene)
+        self._image = image_view.image_from_array(IMAGE_NAME, self._job.rows)
+        image_view.show_image(context, self._image)
+        self._shown_rows = 0
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(POLL_SECONDS, window=context.window)
+        wm.modal_handler_add(self)
+        wm.progress_begin(0, 100)
+        LAMP_OT_render_tracer._active = self._job.start()
+        self._status(context)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        job = self._job
+        if event.type == "ESC" and event.value == "PRESS":
+            job.stop()
+            self._status(context)
+            return {"RUNNING_MODAL"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        self._show_rows(context)
+        if not job.done.is_set():
+            context.window_manager.progress_update(int(100 * job.progress))
+            self._status(context)
+            return {"PASS_THROUGH"}
+        self._finish(context)
+        if job.error is not None:
+            self.report({"ERROR"}, f"Lamp Tracer failed: {job.error}")
+            return {"CANCELLED"}
+        if job.cancelled:
+            self.report({"WARNING"}, "Lamp Tracer render cancelled")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Lamp Tracer: {self._image.size[0]}x{self._image.size[1]} in {job.seconds:.2f} s")
+        return {"FINISHED"}
+
+    def cancel(self, context):
+        # Blender ends the operator (file load, quit): stop the worker and clean up.
+        self._job.stop()
+        self._job.wait(5.0)
+        self._finish(context)
+
+    def _show_rows(self, context) -> None:
+        if self._job.rows_done != self._shown_rows:
+            self._shown_rows = self._job.rows_done
+            self._image.pixels.foreach_set(image_view.rgba_rows(self._job.rows))
+            self._image.update()
+            image_view.redraw_image_editors(context, self._image)
+
+    def _status(self, context) -> None:
+        if self._job.stop_requested:
+            text = "Lamp Tracer: cancelling..."
+        else:
+            text = f"Lamp Tracer: {100 * self._job.progress:.0f}% (Esc to cancel)"
+        context.workspace.status_text_set(text)
+
+    def _finish(self, context) -> None:
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        context.workspace.status_text_set(None)
+        self._show_rows(context)
+        LAMP_OT_render_tracer._active = None
+
+
+classes = (LAMP_OT_render_tracer,)
+
+
+register, unregister = design_panels.register_actions_factory(
+    classes, (("lamp.render_tracer", "Render with Lamp Tracer", "RENDER_STILL"),))
