@@ -7,7 +7,9 @@ import json
 import os
 from pathlib import Path
 
-BUILTIN = Path(__file__).resolve().parent.parent / "presets"
+from helpers import PRESETS
+
+BUILTIN = PRESETS
 
 
 def _doc(stem: str = "paper-baseline") -> dict:

@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from helpers import BASELINE
 
 import core_tracer
 from core_tracer.study import definition as st
@@ -15,8 +16,7 @@ from core_tracer.study import sheet as study_sheet
 
 pytestmark = pytest.mark.blender
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-PRESET = os.path.join(ROOT, "presets", "paper-baseline.json")
+PRESET = str(BASELINE)
 
 
 @pytest.fixture

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from tracer_scenes import flat_lens_on_axis, scene_with
+from helpers import flat_lens_on_axis, scene_with
 
 from core_tracer import render, render_passes
 from core_tracer.raytrace import optics

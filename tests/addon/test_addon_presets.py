@@ -9,11 +9,12 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import PRESETS
 from hostile_presets import leaves, make_hostile_folder
 
 pytestmark = pytest.mark.blender
 
-BUILTIN = Path(__file__).resolve().parent.parent / "presets"
+BUILTIN = PRESETS
 
 
 @pytest.fixture

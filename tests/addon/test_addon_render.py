@@ -16,14 +16,14 @@ import sys
 
 import numpy as np
 import pytest
+from helpers import BASELINE, ROOT
 
 import core_tracer
 from core_tracer.images import imageio
 
 pytestmark = pytest.mark.blender
 
-PRESET = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "presets",
-                      "paper-baseline.json")
+PRESET = str(BASELINE)
 
 CAMERAS = {
     "perspective-auto": {"type": "perspective", "position": [12.5, -800.25, 30.0], "target": [5.0, 0.0, -10.0],
@@ -621,7 +621,7 @@ def test_render_passes_stops_between_bands():
 
 def _run_tool(args, tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "BLENDER_USER_RESOURCES"}
-    tool = os.path.join(os.path.dirname(PRESET), "..", "tools", "compare_preset.py")
+    tool = str(ROOT / "tools" / "compare_preset.py")
     return subprocess.run([sys.executable, tool, *args], capture_output=True, text=True, env=env,
                           cwd=tmp_path, timeout=300)
 

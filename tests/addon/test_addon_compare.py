@@ -22,19 +22,18 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from helpers import BASELINE
 
 import core_tracer
 from core_tracer.images import imageio
 
 pytestmark = pytest.mark.blender
 
-PRESET = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "presets",
-                      "paper-baseline.json")
+PRESET = str(BASELINE)
 
 BULB_SAMPLES = 64
 BULB_TOLERANCE = 0.01  # per channel, relative: 64 samples leave ~0.3 % noise in an 8 x 8 region mean

@@ -1,9 +1,9 @@
 """Small committed reference renders, compared with OpenImageIO's metrics (idiff).
 
-A failing comparison writes the render and a difference image to tests/_failures/. After a
+A failing comparison writes the render and a difference image to tests/raytrace/_failures/. After a
 deliberate change to the model, regenerate the references on purpose:
 
-    .venv/bin/python tests/test_reference_images.py --regenerate
+    .venv/bin/python tests/raytrace/test_reference_images.py --regenerate
 """
 
 from __future__ import annotations
@@ -15,9 +15,11 @@ import numpy as np
 import pytest
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE.parent))  # run as a script (--regenerate): helpers and the project
+sys.path.insert(0, str(HERE.parent.parent))
 
 import OpenImageIO as oiio  # noqa: E402
+from helpers import PRESETS  # noqa: E402
 
 from core_tracer import load_scene, render  # noqa: E402
 from core_tracer.images.imageio import read_image, write_image  # noqa: E402
@@ -31,7 +33,7 @@ FAIL_FRACTION = 0.001  # pixels allowed past it (rays grazing a crease between l
 
 
 def _render(case: str) -> tuple[np.ndarray, dict]:
-    scene = load_scene(HERE.parent / "presets" / f"{case}.json")
+    scene = load_scene(PRESETS / f"{case}.json")
     return render(scene, *SIZE), scene
 
 

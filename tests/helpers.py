@@ -1,19 +1,41 @@
-"""Small scenes built for the tracer's tests: each isolates one part of the model."""
+"""What the tests share: the project's folders, the command line in a subprocess, and small scenes
+built for the tracer's tests (each isolates one part of the model)."""
 
 from __future__ import annotations
 
 import copy
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 from core_tracer.scene.validate import parse_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 PRESETS = ROOT / "presets"
+BASELINE = PRESETS / "paper-baseline.json"
+FOUR_LAMPS = PRESETS / "four-lamp-rear-combination.json"
+
+
+def run_cli(*args: str | Path, timeout: float = 120) -> subprocess.CompletedProcess:
+    """``python -m core_tracer ARGS`` from the repository root, output captured as text."""
+    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def assert_bad_input(proc: subprocess.CompletedProcess, *needles: str) -> str:
+    """Exit 2, exactly one line on stderr containing every needle, no traceback."""
+    assert proc.returncode == 2, (proc.returncode, proc.stderr)
+    assert "Traceback" not in proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1, proc.stderr
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+    return lines[0]
 
 
 def baseline_doc() -> dict:
-    return json.loads((PRESETS / "paper-baseline.json").read_text())
+    return json.loads(BASELINE.read_text())
 
 
 def scene_with(**edits) -> dict:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import PRESETS
 from hostile_presets import leaves
 
 from core_tracer import render
@@ -14,7 +15,6 @@ from core_tracer.images import imageio
 from core_tracer.library import presets as P
 from core_tracer.scene.validate import lamp_geometry, lens_absorption, parse_scene, read_json
 
-PRESETS = Path(__file__).resolve().parent.parent / "presets"
 FILES = sorted(PRESETS.glob("*.json"))
 AUTHOR = "Lamp Styling (after Nishio et al. 1990)"
 

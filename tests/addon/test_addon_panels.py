@@ -8,14 +8,13 @@ registered) and records it. A panel calling anything else fails the test with an
 from __future__ import annotations
 
 import re
-from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
+from helpers import PRESETS
 
 pytestmark = pytest.mark.blender
 
-PRESETS = Path(__file__).resolve().parent.parent / "presets"
 
 
 class RecordingLayout:

@@ -16,8 +16,8 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from helpers import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 MANIFEST_ID = "lamp_styling"
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tracer_scenes import PRESETS, ROOT, scene_with
+from helpers import PRESETS, ROOT, scene_with
 
 from core_tracer import load_scene, render, render_passes
 from core_tracer.raytrace import paths

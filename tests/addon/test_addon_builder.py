@@ -7,14 +7,13 @@ code), with the derived positions from ``core_tracer.scene.lamp_geometry``.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import PRESETS
 
 pytestmark = pytest.mark.blender
 
-PRESETS = Path(__file__).resolve().parent.parent / "presets"
 TOL_MM = 0.05  # the chord tolerance the builder promises
 VERTEX_TOL_MM = 1e-3  # vertices sit on the surface up to float32 rounding of metres
 

@@ -1,10 +1,11 @@
 """The README documents every scene field, as declared in core_tracer/spec.py."""
 
-from pathlib import Path
+
+from helpers import ROOT
 
 from core_tracer.scene import fields_doc, spec
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+README = ROOT / "README.md"
 
 
 def test_readme_field_table_is_generated_from_the_spec():

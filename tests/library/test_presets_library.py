@@ -6,13 +6,12 @@ import copy
 import dataclasses
 import json
 import os
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import ROOT, run_cli
 from hostile_presets import leaves, make_hostile_folder
 
 from core_tracer import fileio
@@ -20,7 +19,6 @@ from core_tracer.images import imageio
 from core_tracer.library import presets as P
 from core_tracer.scene.validate import SceneError, parse_scene, read_json, scene_to_json
 
-ROOT = Path(__file__).resolve().parent.parent
 BUILTIN = ROOT / "presets"
 
 
@@ -210,9 +208,6 @@ def test_ten_to_the_six_lamps_stop_validation_at_once():
     assert time.perf_counter() - start < 0.05
 
 
-def run_cli(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT, capture_output=True,
-                          text=True, timeout=60)
 
 
 def test_hostile_folder_through_the_cli(tmp_path):

@@ -8,13 +8,11 @@ from pathlib import Path
 import numpy as np
 import OpenImageIO as oiio
 import pytest
+from helpers import BASELINE
 
 from core_tracer.images import imageio
 from core_tracer.scene import validate as scene
 from core_tracer.scene.validate import SceneError
-
-ROOT = Path(__file__).resolve().parent.parent
-BASELINE = ROOT / "presets" / "paper-baseline.json"
 
 
 def _random_image(rng: np.random.Generator, h: int = 7, w: int = 11) -> np.ndarray:

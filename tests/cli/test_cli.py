@@ -9,38 +9,14 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import BASELINE, ROOT, assert_bad_input, baseline_doc, run_cli
 
 from core_tracer import PASS_NAMES
 from core_tracer.images import imageio
 from core_tracer.scene import validate as scene
-
-ROOT = Path(__file__).resolve().parent.parent
-BASELINE = ROOT / "presets" / "paper-baseline.json"
-
-
-def run_cli(*args: str | Path, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=timeout)
-
-
-def baseline() -> dict:
-    return json.loads(BASELINE.read_text())
-
-
-def assert_bad_input(proc: subprocess.CompletedProcess, *needles: str) -> str:
-    """Exit 2, exactly one line on stderr containing every needle, no traceback."""
-    assert proc.returncode == 2, (proc.returncode, proc.stderr)
-    assert "Traceback" not in proc.stderr
-    lines = proc.stderr.splitlines()
-    assert len(lines) == 1, proc.stderr
-    for needle in needles:
-        assert needle in lines[0], (needle, lines[0])
-    return lines[0]
-
 
 # ---------------------------------------------------------------------------------------------
 # Bad scenes: every case gives exit 2, one line naming the field, the value and the range, and
@@ -48,14 +24,14 @@ def assert_bad_input(proc: subprocess.CompletedProcess, *needles: str) -> str:
 
 
 def _lamp(center):
-    lamp = copy.deepcopy(baseline()["lamps"][0])
+    lamp = copy.deepcopy(baseline_doc()["lamps"][0])
     lamp["center"] = center
     return lamp
 
 
 def _edit(fn):
     def make():
-        doc = baseline()
+        doc = baseline_doc()
         fn(doc)
         return json.dumps(doc)
     return make

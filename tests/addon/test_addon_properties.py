@@ -5,13 +5,13 @@ from __future__ import annotations
 import copy
 import json
 import math
-from pathlib import Path
 
 import pytest
+from helpers import PRESETS as PRESET_FOLDER
 
 pytestmark = pytest.mark.blender
 
-PRESETS = sorted((Path(__file__).resolve().parent.parent / "presets").glob("*.json"))
+PRESETS = sorted(PRESET_FOLDER.glob("*.json"))
 
 
 @pytest.fixture

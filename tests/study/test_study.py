@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import OpenImageIO as oiio
 import pytest
+from helpers import BASELINE, FOUR_LAMPS, ROOT, baseline_doc, run_cli
 
 from core_tracer import render
 from core_tracer.cli import main as cli
@@ -22,24 +23,16 @@ from core_tracer.study import definition as st
 from core_tracer.study import run as study_run
 from core_tracer.study import sheet as study_sheet
 
-ROOT = Path(__file__).resolve().parent.parent
-BASELINE = ROOT / "presets" / "paper-baseline.json"
-FOUR_LAMPS = ROOT / "presets" / "four-lamp-rear-combination.json"
 SIZE = (32, 32)
 
 
-def baseline() -> dict:
-    return scene.read_json(BASELINE)
 
 
 def two_by_two(size=SIZE) -> st.Study:
-    return st.Study.build(baseline(), [{"parameter": "lens.ior", "values": [1.45, 1.6]},
+    return st.Study.build(baseline_doc(), [{"parameter": "lens.ior", "values": [1.45, 1.6]},
                                        {"parameter": "cuts.height", "range": [0.5, 2.0], "steps": 2}], size)
 
 
-def run_cli(*args, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "core_tracer", "study", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=timeout)
 
 
 def _children(pid: int) -> list[int]:
@@ -69,7 +62,7 @@ def _gone(pid: int) -> bool:
 
 
 def test_variants_are_row_major_with_the_edited_values():
-    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.45:1.60:4"), st.parse_vary("cuts.height=0.5,1,2")])
+    s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.45:1.60:4"), st.parse_vary("cuts.height=0.5,1,2")])
     assert (s.columns, s.rows, len(s)) == (4, 3, 12)
     assert s.axes[0].values == (1.45, 1.5, 1.55, 1.6)  # tidy decimals, not 1.4999999999999998
     for v in s.variants:
@@ -78,7 +71,7 @@ def test_variants_are_row_major_with_the_edited_values():
         lamp = v.scene["lamps"][0]
         assert (lamp["lens"]["ior"], lamp["cuts"]["height"]) == v.values
     # The base is the design at the study's size, and everything else in a variant equals the base.
-    assert s.base == scene.parse_scene({**baseline(), "image": {"width": 256, "height": 256}})
+    assert s.base == scene.parse_scene({**baseline_doc(), "image": {"width": 256, "height": 256}})
     other = s.variants[5].scene
     assert other["body"] == s.base["body"] and other["camera"] == s.base["camera"]
 
@@ -96,26 +89,26 @@ def test_lamp_index_edits_one_lamp_and_no_index_edits_all():
 
 
 def test_lens_colour_replaces_absorption():
-    s = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05")])
+    s = st.Study.build(baseline_doc(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05")])
     lens = s.variants[1].scene["lamps"][0]["lens"]
     assert "absorption" not in lens
     assert lens["transmitted_color"] == [0.9, 0.5, 0.05]
     assert lens["reference_thickness"] == lens["thickness"]
     assert scene.lens_absorption(lens) == pytest.approx([-np.log(c) / 3.0 for c in (0.9, 0.5, 0.05)])
     # One component: the others keep the colour the base's absorption gives through its thickness.
-    s = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color[1]=0.2,0.4")])
+    s = st.Study.build(baseline_doc(), [st.parse_vary("lens.transmitted_color[1]=0.2,0.4")])
     base_a = s.base["lamps"][0]["lens"]["absorption"]
     lens = s.variants[0].scene["lamps"][0]["lens"]
     assert lens["transmitted_color"][1] == 0.2
     assert lens["transmitted_color"][0] == pytest.approx(np.exp(-base_a[0] * 3.0))
     # And back: varying absorption drops a transmitted colour.
-    tc = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1")]).variants[0].scene
+    tc = st.Study.build(baseline_doc(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1")]).variants[0].scene
     back = st.Study.build(tc, [st.parse_vary("lens.absorption=0.1/1/1")]).variants[0].scene["lamps"][0]["lens"]
     assert back["absorption"] == [0.1, 1.0, 1.0] and "transmitted_color" not in back
 
 
 def test_a_default_camera_frames_the_body_at_the_study_size():
-    doc = baseline()
+    doc = baseline_doc()
     del doc["camera"]
     wide = st.Study.build(doc, [st.parse_vary("lens.ior=1.5")], (96, 32))
     expected = scene.parse_scene({**doc, "image": {"width": 96, "height": 32}})
@@ -128,17 +121,17 @@ def test_two_axes_on_one_field_differ_by_lamp_or_component():
     s = st.Study.build(base, [st.parse_vary("lamps[0].lens.ior=1.5,1.6"), st.parse_vary("lamps[1].lens.ior=1.4,1.7")])
     assert [[lamp["lens"]["ior"] for lamp in v.scene["lamps"][:2]] for v in s.variants] == [
         [1.5, 1.4], [1.6, 1.4], [1.5, 1.7], [1.6, 1.7]]
-    s = st.Study.build(baseline(), [st.parse_vary("body.color[0]=0.2,0.8"), st.parse_vary("body.color[2]=0.1,0.9")])
+    s = st.Study.build(baseline_doc(), [st.parse_vary("body.color[0]=0.2,0.8"), st.parse_vary("body.color[2]=0.1,0.9")])
     assert s.variants[3].scene["body"]["color"] == [0.8, s.base["body"]["color"][1], 0.9]
     # A transmitted colour against its reference thickness is a real study (not one field twice).
-    colour = st.Study.build(baseline(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1")]).variants[0].scene
+    colour = st.Study.build(baseline_doc(), [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1")]).variants[0].scene
     s = st.Study.build(colour, [st.parse_vary("lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05"),
                                 st.parse_vary("lens.reference_thickness=1.5,3")])
     assert s.variants[3].scene["lamps"][0]["lens"]["reference_thickness"] == 3.0
 
 
 def test_vector_range_and_flag_values():
-    s = st.Study.build(baseline(), [st.parse_vary("bulb.intensity=2/2/2:8/6/4:3"), st.parse_vary("bulb.on=on,off")])
+    s = st.Study.build(baseline_doc(), [st.parse_vary("bulb.intensity=2/2/2:8/6/4:3"), st.parse_vary("bulb.on=on,off")])
     assert s.axes[0].values == ([2.0, 2.0, 2.0], [5.0, 4.0, 3.0], [8.0, 6.0, 4.0])
     assert [v.scene["lamps"][0]["bulb"]["on"] for v in s.variants] == [True] * 3 + [False] * 3
 
@@ -200,7 +193,7 @@ BAD_STUDIES = {
 def test_bad_study_is_refused_when_built(case):
     axes, needles = BAD_STUDIES[case]
     with pytest.raises(SceneError) as info:
-        st.Study.build(baseline(), axes, SIZE)
+        st.Study.build(baseline_doc(), axes, SIZE)
     for needle in needles:
         assert needle in str(info.value), (needle, str(info.value))
     assert "\n" not in str(info.value)
@@ -250,7 +243,7 @@ def test_two_by_two_gives_the_images_of_four_separate_renders():
 
 
 def test_cancel_stops_the_workers_and_removes_the_temporary_files():
-    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.4:1.6:4"), st.parse_vary("cuts.height=0.5:2:4")],
+    s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.4:1.6:4"), st.parse_vary("cuts.height=0.5:2:4")],
                        (48, 48))
     runs: list[study_run.StudyRun] = []
     state = {}
@@ -271,7 +264,7 @@ def test_cancel_stops_the_workers_and_removes_the_temporary_files():
 
 
 def test_a_worker_that_dies_stops_the_study_with_an_error():
-    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.4:1.6:8")], (48, 48))
+    s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.4:1.6:8")], (48, 48))
     run = study_run.StudyRun(s, workers=2)
     run.start()
     folder = run._folder
@@ -297,7 +290,7 @@ def _rects_overlap(a: study_sheet.Rect, b: study_sheet.Rect) -> bool:
 
 @pytest.mark.parametrize("size", [(32, 32), (64, 40), (256, 256)])
 def test_layout_follows_from_the_study(size):
-    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.45:1.6:3"), st.parse_vary("cuts.height=0.5,2")], size)
+    s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.45:1.6:3"), st.parse_vary("cuts.height=0.5,2")], size)
     lay = study_sheet.layout(s)
     w, h = size
     scale = study_sheet.text_scale(size)
@@ -327,7 +320,7 @@ def test_layout_follows_from_the_study(size):
 
 
 def test_one_axis_sheet_is_one_row_without_row_labels():
-    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.45,1.5,1.55,1.6,1.65")], (64, 64))
+    s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.45,1.5,1.55,1.6,1.65")], (64, 64))
     lay = study_sheet.layout(s)
     assert len({r.y for r in lay.cells}) == 1 and len({r.x for r in lay.cells}) == 5
     assert not [b for b in lay.texts if b.kind == "row"]
@@ -394,7 +387,7 @@ def test_loading_a_study_from_an_image_without_one(tmp_path):
 
 def test_cli_study_writes_the_sheet_and_reruns_it(tmp_path):
     out = tmp_path / "sheet.png"
-    proc = run_cli(BASELINE, "--vary", "lens.ior=1.45:1.6:2", "--vary", "cuts.height=0.5,2", "-o", out,
+    proc = run_cli("study", BASELINE, "--vary", "lens.ior=1.45:1.6:2", "--vary", "cuts.height=0.5,2", "-o", out,
                    "--size", "32x32", "--workers", "2", "--save-study", tmp_path / "study.json",
                    "--save-variants", tmp_path / "variants")
     assert proc.returncode == 0, proc.stderr
@@ -408,7 +401,7 @@ def test_cli_study_writes_the_sheet_and_reruns_it(tmp_path):
     inp.close()
     # Re-run from the sheet's own header, as EXR this time, at another size.
     again = tmp_path / "again.exr"
-    proc = run_cli("--study", out, "-o", again, "--size", "24x16")
+    proc = run_cli("study", "--study", out, "-o", again, "--size", "24x16")
     assert proc.returncode == 0, proc.stderr
     assert st.Study.load(again).size == (24, 16)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["again.exr", "sheet.png", "study.json", "variants"]
@@ -426,7 +419,7 @@ def test_cli_study_writes_the_sheet_and_reruns_it(tmp_path):
 def test_cli_bad_input_exits_2_with_one_line(tmp_path, args, needles):
     out = tmp_path / "sheet.png"
     args = [a.format(out=out, tmp=tmp_path) for a in args]
-    proc = run_cli(BASELINE, *args)
+    proc = run_cli("study", BASELINE, *args)
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
@@ -436,7 +429,7 @@ def test_cli_bad_input_exits_2_with_one_line(tmp_path, args, needles):
 
 
 def test_cli_study_of_a_missing_sheet_exits_2(tmp_path):
-    proc = run_cli("--study", tmp_path / "nothing.exr", "-o", tmp_path / "x.png")
+    proc = run_cli("study", "--study", tmp_path / "nothing.exr", "-o", tmp_path / "x.png")
     assert proc.returncode == 2 and "nothing.exr" in proc.stderr and "Traceback" not in proc.stderr
 
 
@@ -468,7 +461,7 @@ def test_cli_ctrl_c_exits_130_and_writes_nothing(tmp_path):
 
 
 def test_study_run_driven_by_polling_like_a_modal_operator():
-    s = st.Study.build(baseline(), [st.parse_vary("lens.ior=1.4:1.6:3")], (48, 48))
+    s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.4:1.6:3")], (48, 48))
     run = study_run.StudyRun(s, workers=2)
     run.start()
     folder = run._folder
@@ -490,6 +483,6 @@ def test_study_run_driven_by_polling_like_a_modal_operator():
 
 
 def test_cli_lists_the_parameters():
-    proc = run_cli("--list")
+    proc = run_cli("study", "--list")
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == st.study_parameters()
