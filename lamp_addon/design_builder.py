@@ -23,9 +23,9 @@ from mathutils.geometry import tessellate_polygon
 
 from ..core_tracer.scene import validate as lamp_scene
 from . import design_materials
-from .convert import meshes
+from .convert import meshes, units
 
-MM = 0.001  # Blender units per millimetre
+MM = units.BU_PER_MM
 PART_KEY = "lamp_part"
 COLLECTION_NAME = "Lamp Design"
 WORLD_NAME = "Lamp Design World"

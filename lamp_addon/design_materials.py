@@ -31,8 +31,9 @@ import math
 import bpy
 
 from ..core_tracer.scene import validate as lamp_scene
+from .convert import units
 
-MM_PER_BU = 1000.0
+MM_PER_BU = units.MM_PER_BU
 
 
 # ---------------------------------------------------------------------------------------------

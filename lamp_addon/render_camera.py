@@ -24,8 +24,9 @@ from collections.abc import Sequence
 import bpy
 
 from . import design_panels, design_properties
+from .convert import units
 
-MM_PER_BU = 1000.0  # 1 mm of the model is 0.001 Blender units (MODEL.md §2)
+MM_PER_BU = units.MM_PER_BU
 CAMERA_NAME = "Lamp Camera"
 
 _FIT_TO_BLENDER = {"auto": "AUTO", "horizontal": "HORIZONTAL", "vertical": "VERTICAL"}
