@@ -8,7 +8,7 @@ Session fixtures
   environment when this file is imported, which pytest does before any test module can import bpy,
   so Blender's preferences, extensions and caches never touch the home folder.
 - ``addon``: enables the add-on from the working tree through a development extension repository
-  (``<tmp>/dev-extensions/lamp_styling`` is a symlink to the repository) and returns its module name,
+  (``tools/dev_extension.py``, the same set-up as ``tools/compare_preset.py``) and returns its module name,
   ``"bl_ext.lamp_dev.lamp_styling"``. Disabled again at the end of the session.
 - ``lamp_addon``: the add-on's ``lamp_addon`` package as Blender imported it (``lamp_addon.design_properties``,
   ``lamp_addon.design_builder``, ...).
@@ -59,28 +59,13 @@ def blender_user_resources() -> Path:
 
 @pytest.fixture(scope="session")
 def addon(blender_user_resources) -> str:
-    import bpy  # noqa: I001 (first: it puts Blender's own modules, addon_utils, on sys.path)
-    import addon_utils
+    import bpy
 
-    repo_dir = blender_user_resources / "dev-extensions"
-    repo_dir.mkdir(exist_ok=True)
-    link = repo_dir / EXTENSION_ID
-    if not link.exists():
-        link.symlink_to(REPO_ROOT, target_is_directory=True)
-    repos = bpy.context.preferences.extensions.repos
-    repos.new(name="Lamp development", module=DEV_REPO_MODULE, custom_directory=str(repo_dir),
-                     source="USER")
-    module_name = f"bl_ext.{DEV_REPO_MODULE}.{EXTENSION_ID}"
+    from tools import dev_extension
 
-    def fail(ex: BaseException) -> None:
-        raise ex
-
-    addon_utils.enable(module_name, default_set=True, handle_error=fail)
-    assert module_name in sys.modules, f"{module_name} did not load"
-    yield module_name
-    addon_utils.disable(module_name, default_set=True, handle_error=fail)
-    # The repository stays registered until the process ends: removing it would disable the add-on
-    # a second time. Preferences are not saved in background mode.
+    with dev_extension.enabled_from_source(bpy, DEV_REPO_MODULE, reuse_enabled=False, strict=True) as module_name:
+        assert module_name in sys.modules, f"{module_name} did not load"
+        yield module_name
 
 
 @pytest.fixture(scope="session")

@@ -6,16 +6,16 @@ With Blender:
 With the bpy module (the project's .venv):
     .venv/bin/python tools/compare_preset.py PRESET.json -o out/compare.png [--samples N] [--size WxH] [--exposure EV]
 
-The extension is used from this source tree through a temporary development repository (an
-already enabled Lamp Styling extension is used instead). The job starts from an empty scene, so
-the preset's camera is the view. It prints both render times and the per-channel differences.
+The extension is used from this source tree through a temporary development repository
+(``tools/dev_extension.py``; an already enabled Lamp Styling extension is used instead). The job
+starts from an empty scene, so the preset's camera is the view. It prints both render times and the
+per-channel differences.
 Exit status: 0 done, 2 bad arguments or preset (one line on stderr).
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import importlib
 import os
 import shutil
@@ -26,8 +26,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 from core_tracer.cli.common import add_exposure_argument  # noqa: E402 (bpy-free: safe before Blender starts)
+from tools import dev_extension  # noqa: E402
 
-EXTENSION_ID = "lamp_styling"
 DEV_REPO = "lamp_styling_dev"
 PROG = "compare_preset"
 MAX_SIDE = 8192
@@ -72,39 +72,6 @@ def script_argv(in_blender: bool) -> list[str]:
     return [] if in_blender else sys.argv[1:]
 
 
-@contextlib.contextmanager
-def extension(bpy):
-    """The enabled extension's package name (``bl_ext.<repo>.lamp_styling``): an enabled one, or this
-    source tree through a temporary development repository, removed again afterwards."""
-    import addon_utils
-
-    prefs = bpy.context.preferences
-    enabled = [a.module for a in prefs.addons if a.module.rsplit(".", 1)[-1] == EXTENSION_ID]
-    if enabled:
-        yield enabled[0]
-        return
-    folder = tempfile.mkdtemp(prefix="lamp-dev-repo-")
-    try:
-        try:
-            os.symlink(ROOT, os.path.join(folder, EXTENSION_ID), target_is_directory=True)
-        except OSError:  # no symlinks (Windows without the privilege): copy what the zip would hold
-            shutil.copytree(ROOT, os.path.join(folder, EXTENSION_ID),
-                            ignore=shutil.ignore_patterns(".*", "__pycache__", "tests", "tools", "out", "dist"))
-        repo = prefs.extensions.repos.new(name=DEV_REPO, module=DEV_REPO, custom_directory=folder, source="USER")
-        package = f"bl_ext.{DEV_REPO}.{EXTENSION_ID}"
-
-        def fail(e: BaseException) -> None:
-            raise e
-
-        addon_utils.enable(package, default_set=True, handle_error=fail)
-        try:
-            yield package
-        finally:
-            prefs.extensions.repos.remove(repo)  # disables the repository's add-ons too
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
-
-
 def main() -> int:
     in_blender = "bpy" in sys.modules  # Blender imports bpy before it runs a --python script
     args = parse_args(script_argv(in_blender))
@@ -117,7 +84,7 @@ def main() -> int:
         import bpy
 
         bpy.ops.wm.read_homefile(use_empty=True)  # an empty scene: the preset's camera is the view
-        with extension(bpy) as package:
+        with dev_extension.enabled_from_source(bpy, DEV_REPO) as package:
             headless = importlib.import_module(f"{package}.lamp_addon.compare_headless")
             return headless.run(args.preset, args.output, samples=args.samples, size=args.size,
                                 exposure=args.exposure, prog=PROG)
