@@ -1,0 +1,217 @@
+"""The live preview in the 3D Viewport: its camera, its progressive stages and its drawing.
+
+- The camera made from a viewport's matrices (``lamp_addon.convert.viewport``) must project the
+  design exactly as Blender's own view does. The matrices are Blender's: a camera's projection from
+  ``Camera.calc_matrix_camera`` (the code the viewport's camera view uses, with the viewport's
+  zoom and pan as a scaled, off-centre window) and ``matrix_world.inverted()``; a point on each
+  tracer eye ray (``core_tracer.raytrace.camera``) must land on its pixel's centre to 1e-6 of
+  the image.
+- The progressive stages (``lamp_addon.render_preview``), stepped in the test's own thread:
+  coarse then full, restarted on an edit, and a stale job never publishes.
+- The draw path (``render_engine.draw_image``) drawn into a ``gpu.types.GPUOffScreen`` gives the
+  tracer's image back; through Blender's view transform it equals the tracer's image under that
+  transform within 1/255. Needs a display: run under ``xvfb-run -a`` (the README's test command
+  does); without one those tests skip.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers import FOUR_LAMPS
+
+import core_tracer
+from core_tracer.raytrace.camera import eye_rays, make_camera
+from lamp_addon.convert import viewport
+
+pytestmark = pytest.mark.blender
+
+
+# ---------------------------------------------------------------------------------------------
+# The camera
+
+
+def _rows(matrix) -> list[list[float]]:
+    return [list(row) for row in matrix]
+
+
+def _blender_camera(kind: str, *, sensor_fit: str = "AUTO", shift=(0.0, 0.0), lens: float = 50.0,
+                    ortho_scale: float = 0.3, location=(0.35, -1.2, 0.25), rotation=(1.35, 0.1, 0.4)):
+    import bpy
+
+    data = bpy.data.cameras.new("View")
+    data.type = kind
+    data.sensor_fit = sensor_fit
+    data.lens = lens
+    data.ortho_scale = ortho_scale
+    data.shift_x, data.shift_y = shift
+    data.clip_start, data.clip_end = 0.01, 100.0
+    ob = bpy.data.objects.new("View", data)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.location = location
+    ob.rotation_euler = rotation
+    bpy.context.view_layer.update()
+    return ob
+
+
+def _window_matrix(ob, width: int, height: int) -> list[list[float]]:
+    import bpy
+
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    return _rows(ob.calc_matrix_camera(depsgraph, x=width, y=height))
+
+
+def _pixel_errors(camera: dict, width: int, height: int, window, view, world_from_model=None) -> float:
+    """Largest distance, in pixels, between each pixel's centre and Blender's projection of a point
+    on the tracer's eye ray through it (every pixel of a coarse grid, and the corners)."""
+    cam = make_camera(camera, width, height)
+    rows = np.unique(np.r_[np.linspace(0, height - 1, 7).astype(int), 0, height - 1])
+    cols = np.unique(np.r_[np.linspace(0, width - 1, 9).astype(int), 0, width - 1])
+    rr, cc = np.meshgrid(rows, cols, indexing="ij")
+    pixels = (rr * width + cc).ravel()
+    origins, directions = eye_rays(cam, pixels)
+    to_world = viewport.model_matrix() if world_from_model is None else np.asarray(world_from_model)
+    clip_from_model = np.asarray(window) @ np.asarray(view) @ to_world
+    worst = 0.0
+    for t in (150.0, 900.0, 2500.0):  # millimetres along the ray: in front of, at and behind the lamp
+        points = np.c_[origins + t * directions, np.ones(len(pixels))]
+        clip = points @ clip_from_model.T
+        ndc = clip[:, :2] / clip[:, 3:4]
+        x = (ndc[:, 0] + 1.0) / 2.0 * width
+        y = (1.0 - ndc[:, 1]) / 2.0 * height  # from the top, like the tracer's rows
+        worst = max(worst, float(np.max(np.hypot(x - (cc.ravel() + 0.5), y - (rr.ravel() + 0.5)))))
+    return worst
+
+
+VIEWS = [
+    # kind, sensor fit, shift, region size: landscape, portrait, square, odd sizes, off-centre
+    ("PERSP", "AUTO", (0.0, 0.0), (1024, 768)),
+    ("PERSP", "AUTO", (0.13, -0.21), (333, 517)),
+    ("PERSP", "HORIZONTAL", (-0.3, 0.05), (640, 640)),
+    ("PERSP", "VERTICAL", (0.02, 0.4), (801, 299)),
+    ("ORTHO", "AUTO", (0.0, 0.0), (1024, 768)),
+    ("ORTHO", "VERTICAL", (0.25, -0.1), (411, 733)),
+    ("ORTHO", "HORIZONTAL", (-0.05, 0.3), (97, 61)),
+]
+
+
+@pytest.mark.parametrize("kind, fit, shift, size", VIEWS)
+def test_viewport_camera_projects_as_blender(bl_scene, kind, fit, shift, size):
+    ob = _blender_camera(kind, sensor_fit=fit, shift=shift)
+    width, height = size
+    window, view = _window_matrix(ob, width, height), _rows(ob.matrix_world.inverted())
+    camera = viewport.camera_from_view(width, height, window, view)
+    assert camera["type"] == ("perspective" if kind == "PERSP" else "orthographic")
+    assert _pixel_errors(camera, width, height, window, view) < 1e-6 * max(width, height)
+
+
+def test_viewport_camera_in_the_design_roots_space(bl_scene):
+    """A built design moved, turned and scaled as a whole: the camera is in the root's local
+    space, and the tracer still sees what Blender's view shows."""
+    from mathutils import Euler, Matrix
+
+    ob = _blender_camera("PERSP", shift=(0.1, 0.0))
+    root = Matrix.LocRotScale((0.4, -0.2, 0.9), Euler((0.2, -0.1, 0.7)), (1.5, 1.5, 1.5))
+    model = viewport.model_matrix(_rows(root))
+    window, view = _window_matrix(ob, 640, 480), _rows(ob.matrix_world.inverted())
+    camera = viewport.camera_from_view(640, 480, window, view, model)
+    assert _pixel_errors(camera, 640, 480, window, view, model) < 1e-6 * 640
+    ortho = _blender_camera("ORTHO", shift=(0.0, -0.2))
+    window, view = _window_matrix(ortho, 640, 480), _rows(ortho.matrix_world.inverted())
+    camera = viewport.camera_from_view(640, 480, window, view, model)
+    assert _pixel_errors(camera, 640, 480, window, view, model) < 1e-6 * 640
+
+
+def test_viewport_camera_refuses_an_unevenly_scaled_root(bl_scene):
+    from mathutils import Matrix
+
+    ob = _blender_camera("PERSP")
+    root = Matrix.Diagonal((1.0, 2.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="scaled unevenly"):
+        viewport.camera_from_view(64, 48, _window_matrix(ob, 64, 48), _rows(ob.matrix_world.inverted()),
+                                  viewport.model_matrix(_rows(root)))
+
+
+def _camera_view_window(ob, width: int, height: int, zoom: float, offset: tuple[float, float]):
+    """The window matrix of camera view in a region of ``width`` x ``height``, zoomed by ``zoom``
+    (the camera's window is 1/zoom of the region's natural size) and panned by ``offset`` (a
+    fraction of the region), built as Blender's ``BKE_camera_params_compute_viewplane`` does:
+    the viewport's zoom scales the window and its pan adds ``offset * region / viewfac`` to the
+    lens shift. Returned with the camera restored."""
+    cam = ob.data
+    saved = cam.lens, cam.ortho_scale, cam.shift_x, cam.shift_y
+    fit = cam.sensor_fit
+    if fit == "AUTO":
+        fit = "HORIZONTAL" if width >= height else "VERTICAL"
+    viewfac = width if fit == "HORIZONTAL" else height
+    try:
+        cam.lens = saved[0] * zoom
+        cam.ortho_scale = saved[1] / zoom
+        cam.shift_x = saved[2] + offset[0] * width / viewfac
+        cam.shift_y = saved[3] + offset[1] * height / viewfac
+        return _window_matrix(ob, width, height)
+    finally:
+        cam.lens, cam.ortho_scale, cam.shift_x, cam.shift_y = saved
+
+
+@pytest.mark.parametrize("kind", ["PERSP", "ORTHO"])
+def test_camera_view_shows_the_cameras_frame(bl_scene, kind):
+    """Camera view, zoomed and panned off centre: the tracer's camera projects as the region's
+    matrices do, and a point seen by the scene camera at a fraction (fx, fy) of its rendered frame
+    lies at the same fraction of the camera border drawn in the viewport."""
+    import bpy
+
+    ob = _blender_camera(kind, sensor_fit="HORIZONTAL", shift=(0.05, -0.1))
+    bl_scene.render.resolution_x, bl_scene.render.resolution_y = 800, 450
+    width, height = 1000, 700
+    window = _camera_view_window(ob, width, height, zoom=1.6, offset=(0.12, -0.07))
+    view = _rows(ob.matrix_world.inverted())
+    camera = viewport.camera_from_view(width, height, window, view)
+    assert _pixel_errors(camera, width, height, window, view) < 1e-6 * width
+
+    # The camera border: the camera's frame corners (Camera.view_frame, in the camera's space)
+    # projected by the region's matrices.
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    corners = [ob.matrix_world @ v for v in ob.data.view_frame(scene=bl_scene)]
+    clip = np.asarray(window) @ np.asarray(view)
+
+    def region_xy(point) -> np.ndarray:
+        c = clip @ np.r_[np.asarray(point), 1.0]
+        return np.array([(c[0] / c[3] + 1) / 2 * width, (c[1] / c[3] + 1) / 2 * height])
+
+    border = np.array([region_xy(c) for c in corners])
+    x0, y0 = border.min(axis=0)
+    x1, y1 = border.max(axis=0)
+    assert (x1 - x0) / (y1 - y0) == pytest.approx(800 / 450, rel=1e-5)  # the render's shape
+    render_clip = np.asarray(_rows(ob.calc_matrix_camera(depsgraph, x=800, y=450))) @ np.asarray(view)
+    rng = np.random.default_rng(7)
+    for point in rng.uniform((-0.2, -0.1, -0.1), (0.2, 0.1, 0.1), (20, 3)):
+        c = render_clip @ np.r_[point, 1.0]
+        fx, fy = (c[0] / c[3] + 1) / 2, (c[1] / c[3] + 1) / 2  # where F12 shows it, in the frame
+        expected = np.array([x0 + fx * (x1 - x0), y0 + fy * (y1 - y0)])
+        assert np.max(np.abs(region_xy(point) - expected)) < 1e-3  # pixels (single-precision frame)
+
+
+def test_orthographic_view_sees_the_lamp_behind_the_viewer(bl_scene):
+    """Blender's orthographic viewport clips at -clip_end/2 and +clip_end/2 around its eye point,
+    so it shows what lies behind the eye: the tracer's rays start on the near plane. The eye
+    stands 300 mm behind the lamp's front face, looking the same way as the lamp faces away; the
+    lit lenses must show."""
+    ob = _blender_camera("ORTHO", location=(0.0, 0.3, 0.0), rotation=(math.pi / 2, 0.0, 0.0))
+    window, view = _window_matrix(ob, 64, 48), _rows(ob.matrix_world.inverted())
+    near, far = -50.0, 50.0  # a camera cannot clip behind itself; the viewport's matrix does
+    window[2][2], window[2][3] = -2.0 / (far - near), -(far + near) / (far - near)
+    camera = viewport.camera_from_view(64, 48, window, view)
+    assert camera["position"][1] == pytest.approx(300.0 - 50_000.0, abs=1e-3)  # single precision
+    assert _pixel_errors(camera, 64, 48, window, view) < 1e-6 * 64
+    image = core_tracer.render(core_tracer.parse_scene({**_four_lamps_doc(), "camera": camera,
+                                                        "image": {"width": 64, "height": 48}}))
+    assert image.max() > 1.0  # a lit lens (values reach ~11); the body alone stays below 1
+
+
+def _four_lamps_doc() -> dict:
+    import json
+
+    return json.loads(FOUR_LAMPS.read_text())
