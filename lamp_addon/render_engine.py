@@ -13,7 +13,7 @@ import numpy as np
 
 from ..core_tracer.raytrace.tracer import PASS_NAMES
 from ..core_tracer.scene.validate import SceneError
-from . import render_camera
+from . import render_camera, render_viewport
 
 ENGINE_ID = "LAMP_TRACER"
 
@@ -70,6 +70,32 @@ class LampTracerEngine(bpy.types.RenderEngine):
     bl_label = "Lamp Tracer"
     bl_use_preview = False
     bl_use_eevee_viewport = True  # Material Preview shading uses EEVEE on the Cycles materials
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._viewport: render_viewport.ViewportSession | None = None  # Rendered shading only
+
+    def __del__(self):
+        viewport = getattr(self, "_viewport", None)
+        if viewport is not None:  # the viewport left Rendered shading: stop its preview
+            viewport.free()
+
+    # Rendered shading in the 3D Viewport: the design from the viewport's own view, refined in
+    # stages on a worker thread (render_viewport).
+
+    def view_update(self, context, depsgraph):
+        if self._viewport is None:
+            self._viewport = render_viewport.ViewportSession(self)
+        self._viewport.update(depsgraph.scene)
+
+    def view_draw(self, context, depsgraph):
+        if self._viewport is None:
+            self._viewport = render_viewport.ViewportSession(self)
+        region, view = context.region, context.region_data
+        session = self._viewport
+        session.sync(depsgraph.scene, region.width, region.height, view.window_matrix, view.view_matrix)
+        self.update_stats("", session.status())
+        session.draw_frame(self, depsgraph.scene, region.width, region.height)
 
     def update_render_passes(self, scene=None, renderlayer=None):
         """The passes a view layer will have: what the compositor's Render Layers node offers."""

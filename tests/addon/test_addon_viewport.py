@@ -215,3 +215,119 @@ def _four_lamps_doc() -> dict:
     import json
 
     return json.loads(FOUR_LAMPS.read_text())
+
+
+# ---------------------------------------------------------------------------------------------
+# The progressive stages
+
+
+def _four_lamps() -> dict:
+    return core_tracer.parse_scene(_four_lamps_doc())
+
+
+def test_stages_run_coarse_then_full(lamp_addon):
+    scene = _four_lamps()
+    preview = lamp_addon.render_preview.ProgressivePreview(divisors=(8, 1), threads=1)
+    assert not preview.step() and preview.frame() is None  # nothing to do before a restart
+    preview.restart(scene, 64, 48)
+    assert preview.busy() and preview.frame() is None
+    assert preview.step()
+    coarse = preview.frame()
+    assert (coarse.generation, coarse.stage, coarse.divisor) == (1, 0, 8)
+    np.testing.assert_array_equal(coarse.image, core_tracer.render(scene, 8, 6))
+    assert preview.take_news() and not preview.take_news()  # one redraw per finished stage
+    assert preview.step()
+    full = preview.frame()
+    assert (full.stage, full.divisor) == (1, 1)
+    np.testing.assert_array_equal(full.image, core_tracer.render(scene, 64, 48))
+    assert not preview.step() and not preview.busy()
+    assert preview.history == [(1, 0), (1, 1)]
+
+
+def test_an_edit_restarts_from_the_coarse_stage(lamp_addon):
+    scene = _four_lamps()
+    edited = core_tracer.parse_scene({**_four_lamps_doc(), "background": [0.2, 0.3, 0.4]})
+    preview = lamp_addon.render_preview.ProgressivePreview(divisors=(8, 1), threads=1)
+    preview.restart(scene, 64, 48)
+    preview.step()  # the coarse image of the first design
+    stale = preview.job
+    preview.restart(edited, 64, 48)
+    assert stale.cancelled and stale.run_next_stage() is None  # the old job's full stage never runs
+    assert preview.frame().generation == 1  # still shown until the new coarse image arrives
+    preview.step()
+    preview.step()
+    assert preview.history == [(1, 0), (2, 0), (2, 1)]
+    np.testing.assert_array_equal(preview.frame().image, core_tracer.render(edited, 64, 48))
+
+
+def test_a_stage_finished_after_the_view_changed_is_never_shown(lamp_addon):
+    rp = lamp_addon.render_preview
+    preview = rp.ProgressivePreview(divisors=(8, 1), threads=1)
+    preview.restart(_four_lamps(), 64, 48)
+    old = preview.job
+    late = old.run_next_stage()  # finishes just as the viewport turns
+    preview.restart(_four_lamps(), 80, 48)
+    preview.publish(old, late)
+    assert preview.frame() is None and preview.history == [] and not preview.take_news()
+
+
+def test_a_stopped_job_stops_between_bands(lamp_addon):
+    """The tracer polls the job's cancel flag between bands: a cancelled stage ends early."""
+    rp = lamp_addon.render_preview
+    job = rp.PreviewJob(_four_lamps(), 512, 512, generation=1, divisors=(1,), threads=1)
+    bands = []
+    original = job._cancel.is_set
+
+    def cancel_after_two_bands() -> bool:
+        bands.append(1)
+        if len(bands) == 2:
+            job.cancel()
+        return original()
+
+    job._cancel.is_set = cancel_after_two_bands
+    assert job.run_next_stage() is None
+    assert len(bands) == 2 and not job.done
+
+
+def _design_session(lamp_addon, bl_scene):
+    lamp_addon.design_properties.scene_to_design(bl_scene, _four_lamps())
+    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    session.update(bl_scene)
+    return session
+
+
+def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_scene):
+    session = _design_session(lamp_addon, bl_scene)
+    ob = _blender_camera("PERSP")
+    window, view = _window_matrix(ob, 64, 48), ob.matrix_world.inverted()
+    session.sync(bl_scene, 64, 48, window, view)
+    assert session.preview.generation == 1
+    session.sync(bl_scene, 64, 48, window, view)  # a redraw of the same view: keeps going
+    assert session.preview.generation == 1
+    assert session.preview.step()  # the coarse stage of view 1
+
+    bl_scene.lamp_design.lamps[0].bulb.intensity = (3.0, 2.0, 1.0)  # a design edit
+    session.update(bl_scene)
+    session.sync(bl_scene, 64, 48, window, view)
+    assert session.preview.generation == 2
+    ob.location.x += 0.01  # orbiting
+    bl_scene.view_layers[0].update()
+    session.sync(bl_scene, 64, 48, window, ob.matrix_world.inverted())
+    assert session.preview.generation == 3
+    session.sync(bl_scene, 80, 48, _window_matrix(ob, 80, 48), ob.matrix_world.inverted())  # region resized
+    assert session.preview.generation == 4
+    while session.preview.step():
+        pass
+    assert session.preview.history == [(1, 0), (4, 0), (4, 1)]
+    assert session.status() == "Lamp Tracer: full resolution"
+    assert session.preview.frame().image.shape == (48, 80, 3)
+
+
+def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_scene):
+    session = _design_session(lamp_addon, bl_scene)
+    bl_scene.lamp_design.lamps[0].bulb.radius = 1000.0  # far outside its reflector
+    session.update(bl_scene)
+    ob = _blender_camera("PERSP")
+    session.sync(bl_scene, 64, 48, _window_matrix(ob, 64, 48), ob.matrix_world.inverted())
+    assert session.preview.generation == 0 and session.preview.frame() is None
+    assert session.status().startswith("Lamp Tracer: ") and "bulb" in session.status()
