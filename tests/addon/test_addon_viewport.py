@@ -331,3 +331,170 @@ def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_sc
     session.sync(bl_scene, 64, 48, _window_matrix(ob, 64, 48), ob.matrix_world.inverted())
     assert session.preview.generation == 0 and session.preview.frame() is None
     assert session.status().startswith("Lamp Tracer: ") and "bulb" in session.status()
+
+
+# ---------------------------------------------------------------------------------------------
+# Drawing: needs a GPU (a display; xvfb-run in CI)
+
+DRAWN_PNG_ENV = "LAMP_VIEWPORT_PNG"  # set to a path to keep the AgX read-back for a look
+
+
+@pytest.fixture
+def gpu_context(bl_scene):
+    """Blender's GPU module, initialised. The bpy module starts in background mode and creates its
+    GPU context the first time a draw engine renders: a Workbench render of an empty scene."""
+    import os
+
+    import bpy
+
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        pytest.skip("GPU drawing needs a display: run the tests under `xvfb-run -a` (README)")
+    import gpu
+
+    try:
+        gpu.types.GPUOffScreen(4, 4).free()
+    except SystemError:
+        camera = bpy.data.objects.new("GPU start", bpy.data.cameras.new("GPU start"))
+        bl_scene.collection.objects.link(camera)
+        bl_scene.camera = camera
+        bl_scene.render.engine = "BLENDER_WORKBENCH"
+        bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4
+        bpy.ops.render.render()
+        bl_scene.camera = None
+        bpy.data.objects.remove(camera)
+        try:
+            gpu.types.GPUOffScreen(4, 4).free()
+        except SystemError as e:
+            pytest.skip(f"no GPU context on this display: {e}")
+    return gpu
+
+
+def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) -> np.ndarray:
+    """What the engine's viewport path draws for this view, read back from an offscreen: the
+    session as view_draw drives it (update, sync, both stages, draw_frame), drawn by a real engine
+    instance (Blender makes engine instances only to render, so a subclass draws from render())."""
+    import bpy
+    import gpu
+    from mathutils import Matrix
+
+    offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
+    out = {}
+
+    class DrawProbe(lamp_addon.render_engine.LampTracerEngine):
+        bl_idname = "LAMP_TRACER_DRAW_PROBE"
+        bl_label = "Lamp Tracer draw probe"
+
+        def render(self, depsgraph):
+            scene = depsgraph.scene
+            session = lamp_addon.render_viewport.ViewportSession(self, in_background=False)
+            session.update(scene)
+            session.sync(scene, width, height, window, view)
+            while session.preview.step():
+                pass
+            out["status"] = session.status()
+            with offscreen.bind():
+                gpu.state.active_framebuffer_get().clear(color=(0.0, 0.0, 0.0, 0.0))
+                with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
+                    # Pixel coordinates, as Blender sets them up before view_draw
+                    gpu.matrix.load_matrix(Matrix.Identity(4))
+                    gpu.matrix.load_projection_matrix(Matrix.Identity(4))
+                    gpu.matrix.translate((-1.0, -1.0))
+                    gpu.matrix.scale((2.0 / width, 2.0 / height))
+                    session.draw_frame(self, scene, width, height)
+                out["pixels"] = np.array(offscreen.texture_color.read().to_list(), np.float32)
+            out["scene"] = session.scene
+
+    bpy.utils.register_class(DrawProbe)
+    camera = bpy.data.objects.new("F12", bpy.data.cameras.new("F12"))
+    bl_scene.collection.objects.link(camera)
+    bl_scene.camera = camera
+    engine = bl_scene.render.engine
+    try:
+        bl_scene.render.engine = DrawProbe.bl_idname
+        bl_scene.render.resolution_x, bl_scene.render.resolution_y = 4, 4
+        bpy.ops.render.render()
+    finally:
+        bl_scene.render.engine = engine
+        bpy.utils.unregister_class(DrawProbe)
+        offscreen.free()
+    assert out["status"] == "Lamp Tracer: full resolution"
+    return out
+
+
+def _display(bl_scene, rgba_bottom_up: np.ndarray, path) -> np.ndarray:
+    """Blender's own display transform of a scene-linear image (the scene's view settings), as
+    8-bit values, top row first: the image saved as a render to PNG and read back."""
+    import bpy
+    from OpenImageIO import UINT8, ImageBuf
+
+    height, width = rgba_bottom_up.shape[:2]
+    image = bpy.data.images.new("drawn", width, height, float_buffer=True, alpha=True)
+    try:
+        image.pixels.foreach_set(np.ascontiguousarray(rgba_bottom_up, np.float32).ravel())
+        settings = bl_scene.render.image_settings
+        settings.file_format, settings.color_mode, settings.color_depth = "PNG", "RGB", "8"
+        image.save_render(str(path), scene=bl_scene)
+    finally:
+        bpy.data.images.remove(image)
+    return np.asarray(ImageBuf(str(path)).get_pixels(format=UINT8), np.float64)[:, :, :3]
+
+
+def _srgb(linear: np.ndarray) -> np.ndarray:
+    linear = np.clip(linear, 0.0, 1.0)
+    return np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * linear ** (1 / 2.4) - 0.055)
+
+
+def _three_quarter_view(width: int, height: int):
+    """A viewport orbited to the lamp's front left, a little above, looking at the body's centre."""
+    from mathutils import Vector
+
+    eye, centre = Vector((-0.38, -0.62, 0.22)), Vector((0.0, 0.04, 0.0))
+    rotation = (centre - eye).to_track_quat("-Z", "Y").to_euler()
+    ob = _blender_camera("PERSP", lens=35.0, location=eye, rotation=rotation)
+    return _window_matrix(ob, width, height), ob.matrix_world.inverted()
+
+
+def test_drawn_pixels_are_the_tracers_image_under_the_view_transform(lamp_addon, bl_scene, gpu_context, tmp_path):
+    """Standard view transform with an exposure: the drawn region, colour-managed by Blender,
+    equals the sRGB encoding of 2^exposure times the tracer's image within 1/255."""
+    width, height = 160, 120
+    lamp_addon.design_properties.scene_to_design(bl_scene, _four_lamps())
+    window, view = _three_quarter_view(width, height)
+    drawn = _draw_viewport(lamp_addon, bl_scene, width, height, window, view)
+    traced = core_tracer.render(drawn["scene"], width, height)
+    assert traced.max() > 5.0  # lit lenses in view, far above display white
+
+    pixels = drawn["pixels"]  # bottom row first, as the GPU stores it
+    # Half floats (11-bit mantissa), and the texture's linear filter taking up to ~1e-5 of a
+    # neighbouring texel where the rasteriser's texture coordinate is not exactly a texel centre.
+    np.testing.assert_allclose(pixels[::-1, :, :3], traced, rtol=2.0 ** -10, atol=2e-4)
+    np.testing.assert_array_equal(pixels[:, :, 3], 1.0)
+
+    settings = bl_scene.view_settings
+    settings.view_transform, settings.look, settings.exposure, settings.gamma = "Standard", "None", -2.5, 1.0
+    shown = _display(bl_scene, pixels, tmp_path / "standard.png")
+    expected = np.round(_srgb(traced * 2.0 ** -2.5) * 255.0)
+    assert np.max(np.abs(shown - expected)) <= 1.0
+    assert len(np.unique(shown[..., 0])) > 50  # a real picture, not a clipped flat disk
+
+
+def test_drawn_pixels_under_agx_match_the_tracers_image_under_agx(lamp_addon, bl_scene, gpu_context, tmp_path):
+    """AgX (Blender's default): the drawn region and the tracer's own image, both through Blender's
+    AgX, agree within 1/255."""
+    import os
+    import shutil
+
+    width, height = 320, 240
+    lamp_addon.design_properties.scene_to_design(bl_scene, _four_lamps())
+    window, view = _three_quarter_view(width, height)
+    drawn = _draw_viewport(lamp_addon, bl_scene, width, height, window, view)
+    traced = core_tracer.render(drawn["scene"], width, height)
+    settings = bl_scene.view_settings
+    settings.view_transform, settings.look, settings.exposure = "AgX", "None", 0.0
+    shown = _display(bl_scene, drawn["pixels"], tmp_path / "agx-drawn.png")
+    reference = np.ones((height, width, 4), np.float32)
+    reference[:, :, :3] = traced[::-1]
+    expected = _display(bl_scene, reference, tmp_path / "agx-traced.png")
+    assert np.max(np.abs(shown - expected)) <= 1.0
+    if os.environ.get(DRAWN_PNG_ENV):
+        shutil.copyfile(tmp_path / "agx-drawn.png", os.environ[DRAWN_PNG_ENV])
