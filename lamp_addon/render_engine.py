@@ -42,26 +42,19 @@ BAND_ROWS = 16  # rows per result update when the tracer reports rows in larger 
 
 
 def body_coverage(scene: dict, row_start: int, row_stop: int) -> np.ndarray:
-    """1 where the eye ray of a pixel hits the body box (the lamp's silhouette), else 0.
+    """1 where the eye ray of a pixel hits the body box (the lamp's silhouette), else 0, decided
+    as the tracer decides it.
 
     Shape (row_stop - row_start, width), rows top-based like the tracer's. The lenses lie in
     the body's front face, so the box is the whole lamp seen from outside."""
     from ..core_tracer.raytrace.camera import eye_rays, make_camera
+    from ..core_tracer.raytrace.geometry import body_box, hit_box
 
     width, height = scene["image"]["width"], scene["image"]["height"]
     cam = make_camera(scene["camera"], width, height)
-    pixels = np.arange(row_start * width, row_stop * width)
-    origins, directions = eye_rays(cam, pixels)
-    body = scene["body"]
-    (cx, cz), (sx, sz) = body["center"], body["size"]
-    lo = np.array([cx - sx / 2, 0.0, cz - sz / 2])
-    hi = np.array([cx + sx / 2, body["depth"], cz + sz / 2])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t0 = (lo - origins) / directions
-        t1 = (hi - origins) / directions
-    near = np.nanmax(np.minimum(t0, t1), axis=1)
-    far = np.nanmin(np.maximum(t0, t1), axis=1)
-    hit = (near <= far) & (far > 0)
+    origins, directions = eye_rays(cam, np.arange(row_start * width, row_stop * width))
+    t_near, t_far, _ = hit_box(origins, directions, *body_box(scene["body"]))
+    hit = (t_near <= t_far) & (t_near > 0)
     return hit.reshape(row_stop - row_start, width).astype(np.float32)
 
 

@@ -498,3 +498,21 @@ def test_drawn_pixels_under_agx_match_the_tracers_image_under_agx(lamp_addon, bl
     assert np.max(np.abs(shown - expected)) <= 1.0
     if os.environ.get(DRAWN_PNG_ENV):
         shutil.copyfile(tmp_path / "agx-drawn.png", os.environ[DRAWN_PNG_ENV])
+
+
+# ---------------------------------------------------------------------------------------------
+# The engine's alpha (film transparent) is the tracer's own ray-box decision
+
+
+@pytest.mark.parametrize("position", [[30.0, -700.0, 20.0], [0.0, 40.0, 0.0]])  # outside; inside the body
+def test_body_coverage_is_where_the_tracer_hits_the_body(lamp_addon, position):
+    """Alpha 0 exactly where the tracer shows the background: the full background colour in the
+    background pass (lens pixels show only a Fresnel fraction of it, body pixels none). A viewport
+    may stand anywhere, even inside the body (the scene file's check of the camera is for files)."""
+    doc = {**_four_lamps_doc(), "background": [0.2, 0.3, 0.4], "image": {"width": 48, "height": 32}}
+    scene = core_tracer.parse_scene(doc)
+    scene["camera"] = {**scene["camera"], "position": position, "target": [0.0, 500.0, 0.0], "fov_deg": 60.0}
+    passes = core_tracer.render_passes(scene).passes
+    coverage = lamp_addon.render_engine.body_coverage(scene, 0, 32)
+    background_only = np.all(np.isclose(passes["background"], [0.2, 0.3, 0.4]), axis=-1)
+    np.testing.assert_array_equal(coverage == 0, background_only)
