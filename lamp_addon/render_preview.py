@@ -141,9 +141,16 @@ class ProgressivePreview:
         return self._generation
 
     def busy(self) -> bool:
-        """A job has stages left and is not cancelled."""
+        """The current job has stages left, or its worker has yet to publish the last one."""
         job = self._job
-        return job is not None and not job.done and not job.cancelled and self.error is None
+        if job is None or job.cancelled or self.error is not None:
+            return False
+        return not job.done or (self._worker is not None and self._worker.is_alive())
+
+    def wait(self, timeout: float | None = None) -> None:
+        """Block until the worker started last has finished (benchmarks and tests; never the UI)."""
+        if self._worker is not None:
+            self._worker.join(timeout)
 
     def frame(self) -> Frame | None:
         """The newest published frame (possibly of an earlier view, until the new one has a stage)."""

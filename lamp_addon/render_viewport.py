@@ -126,13 +126,14 @@ class ViewportSession:
             if engine is None:  # the viewport stopped rendering: nothing to redraw
                 preview.cancel()
                 return None
+            busy = preview.busy()  # first: a worker found finished has published everything
             if preview.take_news():
                 try:
                     engine.tag_redraw()
                 except ReferenceError:
                     preview.cancel()
                     return None
-            return POLL_SECONDS if preview.busy() else None
+            return POLL_SECONDS if busy else None
 
         return poll
 

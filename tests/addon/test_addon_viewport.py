@@ -516,3 +516,25 @@ def test_body_coverage_is_where_the_tracer_hits_the_body(lamp_addon, position):
     coverage = lamp_addon.render_engine.body_coverage(scene, 0, 32)
     background_only = np.all(np.isclose(passes["background"], [0.2, 0.3, 0.4]), axis=-1)
     np.testing.assert_array_equal(coverage == 0, background_only)
+
+
+def test_stages_on_the_worker_thread(lamp_addon):
+    """What the engine does: the stages on a worker thread; a restart while it runs means nothing
+    of the old job is published afterwards."""
+    rp = lamp_addon.render_preview
+    scene = _four_lamps()
+    preview = rp.ProgressivePreview(divisors=(8, 1), threads=2)
+    preview.restart(scene, 64, 48)
+    preview.start()
+    preview.wait()
+    assert preview.history == [(1, 0), (1, 1)] and not preview.busy() and preview.take_news()
+    np.testing.assert_array_equal(preview.frame().image, core_tracer.render(scene, 64, 48))
+
+    preview.restart(scene, 640, 480)
+    preview.start()
+    preview.restart(scene, 64, 40)  # the view changed while the 640x480 job was running
+    published_before = len(preview.history)
+    preview.start()
+    preview.wait()
+    assert preview.history[published_before:] == [(3, 0), (3, 1)]
+    assert preview.frame().image.shape == (40, 64, 3)
