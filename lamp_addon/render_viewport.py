@@ -49,6 +49,7 @@ class ViewportSession:
         self.design: dict | None = None
         self.error: str | None = None
         self.scene: dict | None = None  # the scene of the current preview job
+        self.world_from_model = viewport.model_matrix()  # model mm -> world: the design root's matrix
         self._texture = None
         self._texture_frame = None
         self._poll = self._make_poll()
@@ -58,6 +59,8 @@ class ViewportSession:
     def update(self, bl_scene: bpy.types.Scene) -> None:
         """Read the design (after any depsgraph update: an edited property, a moved root)."""
         self.preview.threads = bl_scene.render.threads  # Blender's thread count, as for F12
+        # Read here, not at every redraw: finding the root walks the scene's objects.
+        self.world_from_model = viewport.model_matrix(_rows(design_root.world_from_design(bl_scene)))
         try:
             self.design = design_properties.design_to_scene(bl_scene, camera=_STAND_IN_CAMERA,
                                                             image=_STAND_IN_IMAGE)
@@ -76,7 +79,7 @@ class ViewportSession:
                 return
         try:
             camera = viewport.camera_from_view(width, height, _rows(window_matrix), _rows(view_matrix),
-                                               viewport.model_matrix(_rows(design_root.world_from_design(bl_scene))))
+                                               self.world_from_model)
         except ValueError as e:
             self.error = str(e)
             self.preview.cancel()

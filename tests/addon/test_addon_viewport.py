@@ -538,3 +538,26 @@ def test_stages_on_the_worker_thread(lamp_addon):
     preview.wait()
     assert preview.history[published_before:] == [(3, 0), (3, 1)]
     assert preview.frame().image.shape == (40, 64, 3)
+
+
+def test_moving_the_design_root_moves_the_view_of_the_lamp(lamp_addon, bl_scene):
+    """The tracer's camera is the viewport in the root's local space: a root moved 0.2 m to the
+    right shows the lamp 200 mm further right, i.e. the camera 200 mm to the left in model space."""
+    import bpy
+
+    session = _design_session(lamp_addon, bl_scene)
+    root = bpy.data.objects.new("Lamp Design", None)
+    root[lamp_addon.design_root.PART_KEY] = lamp_addon.design_root.ROOT_PART
+    bl_scene.collection.objects.link(root)
+    ob = _blender_camera("PERSP")
+    window, view = _window_matrix(ob, 64, 48), ob.matrix_world.inverted()
+    session.update(bl_scene)
+    session.sync(bl_scene, 64, 48, window, view)
+    before = session.scene["camera"]["position"]
+    root.location.x = 0.2
+    bl_scene.view_layers[0].update()
+    session.update(bl_scene)  # the depsgraph update of the root
+    session.sync(bl_scene, 64, 48, window, view)
+    assert session.preview.generation == 2
+    after = session.scene["camera"]["position"]
+    np.testing.assert_allclose(np.subtract(after, before), [-200.0, 0.0, 0.0], atol=1e-3)
