@@ -103,7 +103,7 @@ def main() -> int:
     print(f"preset        {Path(args.preset).name}")
     print(f"machine       {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}; "
           f"{args.threads} threads, {args.runs} runs (medians)")
-    print(f"region        {width}x{height}; stages 1/{render_preview.STAGES[0]} then full "
+    print(f"region        {width}x{height}; stages 1/{render_preview.coarse_divisor(width, height)} then full "
           "(targets: first <= 0.1 s, full <= 0.4 s)")
     for name, camera in views.items():
         scene = {**design, "camera": camera, "image": {"width": width, "height": height}}

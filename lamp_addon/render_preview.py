@@ -21,10 +21,24 @@ import numpy as np
 
 from ..core_tracer.raytrace.tracer import RenderCancelled, render_passes
 
-# 1/8 of a 1024x768 region (128x96) renders the four-lamp preset in ~0.05 s on 2 cores, inside
-# the 0.1 s wanted for the first image; 1/4 takes ~0.1 s (benchmarks/bench_viewport.py).
-COARSE_DIVISOR = 8
-STAGES = (COARSE_DIVISOR, 1)
+# The coarse stage's pixel budget: 128x96, 1/8 of a 1024x768 region, renders the four-lamp preset
+# in about 0.05 s on 2 idle cores (0.1 s on a loaded machine), the first image wanted within 0.1 s;
+# 1/4 of that region takes 2-3 times as long (benchmarks/bench_viewport.py). A budget rather than
+# a fixed fraction keeps the first image as quick in a full-screen 4K viewport.
+COARSE_PIXELS = 128 * 96
+
+
+def coarse_divisor(width: int, height: int) -> int:
+    """The smallest power of two, at least 2, that brings the region within ``COARSE_PIXELS``."""
+    divisor = 2
+    while (width / divisor) * (height / divisor) > COARSE_PIXELS:
+        divisor *= 2
+    return divisor
+
+
+def stages_for(width: int, height: int) -> tuple[int, ...]:
+    """The divisors of a region's stages: coarse, then full resolution."""
+    return (coarse_divisor(width, height), 1)
 
 
 @dataclass(frozen=True)
@@ -46,11 +60,11 @@ class PreviewJob:
     """The stages of one view of one design, run in order until done or cancelled."""
 
     def __init__(self, scene: dict, width: int, height: int, generation: int,
-                 divisors: tuple[int, ...] = STAGES, threads: int | None = None):
+                 divisors: tuple[int, ...] | None = None, threads: int | None = None):
         self.scene = scene
         self.width, self.height = width, height
         self.generation = generation
-        self.divisors = divisors
+        self.divisors = divisors if divisors is not None else stages_for(width, height)
         self.threads = threads
         self.next_stage = 0
         self._cancel = threading.Event()
@@ -85,8 +99,8 @@ class PreviewJob:
 class ProgressivePreview:
     """The current preview job and the newest frame it (or an earlier job) finished."""
 
-    def __init__(self, divisors: tuple[int, ...] = STAGES, threads: int | None = None):
-        self.divisors = divisors
+    def __init__(self, divisors: tuple[int, ...] | None = None, threads: int | None = None):
+        self.divisors = divisors  # None: ``stages_for`` the region of each restart
         self.threads = threads
         self.history: list[tuple[int, int]] = []  # (generation, stage) of each published frame
         self.error: str | None = None  # what stopped the last job, if it failed

@@ -561,3 +561,13 @@ def test_moving_the_design_root_moves_the_view_of_the_lamp(lamp_addon, bl_scene)
     assert session.preview.generation == 2
     after = session.scene["camera"]["position"]
     np.testing.assert_allclose(np.subtract(after, before), [-200.0, 0.0, 0.0], atol=1e-3)
+
+
+@pytest.mark.parametrize("size, divisor", [((1024, 768), 8), ((1920, 1080), 16), ((3840, 2160), 32),
+                                           ((300, 200), 4), ((200, 150), 2), ((40, 30), 2)])
+def test_the_coarse_stage_keeps_to_its_pixel_budget(lamp_addon, size, divisor):
+    rp = lamp_addon.render_preview
+    assert rp.coarse_divisor(*size) == divisor
+    assert rp.stages_for(*size) == (divisor, 1)
+    w, h = rp.stage_size(*size, divisor)
+    assert w * h <= rp.COARSE_PIXELS * 1.05  # (sizes round up)
