@@ -47,7 +47,8 @@ class ViewportSession:
         self.in_background = in_background  # False: the caller steps the preview itself (tests)
         self.preview = ProgressivePreview()
         self.design: dict | None = None
-        self.error: str | None = None
+        self.error: str | None = None  # why the design cannot be rendered
+        self.view_error: str | None = None  # why this view cannot be (a root scaled unevenly)
         self.scene: dict | None = None  # the scene of the current preview job
         self.world_from_model = viewport.model_matrix()  # model mm -> world: the design root's matrix
         self._texture = None
@@ -81,11 +82,12 @@ class ViewportSession:
             camera = viewport.camera_from_view(width, height, _rows(window_matrix), _rows(view_matrix),
                                                self.world_from_model)
         except ValueError as e:
-            self.error = str(e)
+            self.view_error = str(e)
             self.preview.cancel()
             return
+        self.view_error = None
         scene = {**self.design, "camera": camera, "image": {"width": int(width), "height": int(height)}}
-        if scene == self.scene and self.preview.error is None:
+        if scene == self.scene:
             return
         self.scene = scene
         self.preview.restart(scene, int(width), int(height))
@@ -96,7 +98,7 @@ class ViewportSession:
 
     def status(self) -> str:
         """One line for the viewport's text overlay."""
-        error = self.error or self.preview.error
+        error = self.error or self.view_error or self.preview.error
         if error is not None:
             return f"Lamp Tracer: {error}"
         frame = self.preview.frame()
@@ -109,7 +111,7 @@ class ViewportSession:
     def draw_frame(self, engine: bpy.types.RenderEngine, bl_scene: bpy.types.Scene, width: int, height: int) -> None:
         """Draw the newest frame over the region (stretched from a coarse stage's size)."""
         frame = self.preview.frame()
-        if frame is None or self.design is None:
+        if frame is None or self.design is None or self.view_error is not None:
             return
         if self._texture_frame is not frame:
             self._texture = image_texture(frame.image)

@@ -571,3 +571,24 @@ def test_the_coarse_stage_keeps_to_its_pixel_budget(lamp_addon, size, divisor):
     assert rp.stages_for(*size) == (divisor, 1)
     w, h = rp.stage_size(*size, divisor)
     assert w * h <= rp.COARSE_PIXELS * 1.05  # (sizes round up)
+
+
+def test_an_unevenly_scaled_root_is_said_and_undone(lamp_addon, bl_scene):
+    import bpy
+
+    session = _design_session(lamp_addon, bl_scene)
+    root = bpy.data.objects.new("Lamp Design", None)
+    root[lamp_addon.design_root.PART_KEY] = lamp_addon.design_root.ROOT_PART
+    bl_scene.collection.objects.link(root)
+    ob = _blender_camera("PERSP")
+    window, view = _window_matrix(ob, 64, 48), ob.matrix_world.inverted()
+    root.scale = (1.0, 2.0, 1.0)
+    bl_scene.view_layers[0].update()
+    session.update(bl_scene)
+    session.sync(bl_scene, 64, 48, window, view)
+    assert "scaled unevenly" in session.status() and session.preview.generation == 0
+    root.scale = (2.0, 2.0, 2.0)  # a uniform scale is fine
+    bl_scene.view_layers[0].update()
+    session.update(bl_scene)
+    session.sync(bl_scene, 64, 48, window, view)
+    assert session.status() == "Lamp Tracer: rendering" and session.preview.generation == 1
