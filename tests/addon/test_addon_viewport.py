@@ -85,6 +85,25 @@ def _pixel_errors(camera: dict, width: int, height: int, window, view, world_fro
     return worst
 
 
+def test_the_viewport_camera_needs_no_blender():
+    """convert.viewport is bpy-free: it imports with bpy and mathutils unavailable."""
+    import subprocess
+    import sys
+
+    from helpers import ROOT
+
+    code = ("import sys; sys.modules['bpy'] = sys.modules['mathutils'] = None\n"
+            "from lamp_addon.convert import viewport\n"
+            "window = [[2, 0, 0, 0], [0, 2, 0, 0], [0, 0, -1, -0.02], [0, 0, -1, 0]]\n"
+            "view = [[1, 0, 0, 0], [0, 0, 1, 0], [0, -1, 0, -1], [0, 0, 0, 1]]\n"
+            "camera = viewport.camera_from_view(64, 64, window, view)\n"
+            "assert camera['type'] == 'perspective' and abs(camera['fov_deg'] - 53.130102354) < 1e-6, camera\n"
+            "assert max(abs(a - b) for a, b in zip(camera['position'], [0, -1000, 0])) < 1e-9, camera\n"
+            "print('ok')\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr
+
+
 VIEWS = [
     # kind, sensor fit, shift, region size: landscape, portrait, square, odd sizes, off-centre
     ("PERSP", "AUTO", (0.0, 0.0), (1024, 768)),
