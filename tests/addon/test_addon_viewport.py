@@ -8,10 +8,14 @@
   the image.
 - The progressive stages (``lamp_addon.render_preview``), stepped in the test's own thread:
   coarse then full, restarted on an edit, and a stale job never publishes.
-- The draw path (``render_engine.draw_image``) drawn into a ``gpu.types.GPUOffScreen`` gives the
+  The viewport session (``lamp_addon.render_viewport``) restarts on design edits, view changes,
+  region resizes and moves of the design root, and says why it shows nothing.
+- The draw path (``ViewportSession.draw_frame``) drawn into a ``gpu.types.GPUOffScreen`` gives the
   tracer's image back; through Blender's view transform it equals the tracer's image under that
   transform within 1/255. Needs a display: run under ``xvfb-run -a`` (the README's test command
   does); without one those tests skip.
+- The engine's film-transparent alpha (``render_engine.body_coverage``) is the tracer's own
+  ray-box decision.
 """
 
 from __future__ import annotations
