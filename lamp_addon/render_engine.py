@@ -13,7 +13,7 @@ import numpy as np
 
 from ..core_tracer.raytrace.tracer import PASS_NAMES
 from ..core_tracer.scene.validate import SceneError
-from . import render_camera
+from . import render_camera, render_viewport
 
 ENGINE_ID = "LAMP_TRACER"
 
@@ -42,26 +42,19 @@ BAND_ROWS = 16  # rows per result update when the tracer reports rows in larger 
 
 
 def body_coverage(scene: dict, row_start: int, row_stop: int) -> np.ndarray:
-    """1 where the eye ray of a pixel hits the body box (the lamp's silhouette), else 0.
+    """1 where the eye ray of a pixel hits the body box (the lamp's silhouette), else 0, decided
+    as the tracer decides it.
 
     Shape (row_stop - row_start, width), rows top-based like the tracer's. The lenses lie in
     the body's front face, so the box is the whole lamp seen from outside."""
     from ..core_tracer.raytrace.camera import eye_rays, make_camera
+    from ..core_tracer.raytrace.geometry import body_box, hit_box
 
     width, height = scene["image"]["width"], scene["image"]["height"]
     cam = make_camera(scene["camera"], width, height)
-    pixels = np.arange(row_start * width, row_stop * width)
-    origins, directions = eye_rays(cam, pixels)
-    body = scene["body"]
-    (cx, cz), (sx, sz) = body["center"], body["size"]
-    lo = np.array([cx - sx / 2, 0.0, cz - sz / 2])
-    hi = np.array([cx + sx / 2, body["depth"], cz + sz / 2])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t0 = (lo - origins) / directions
-        t1 = (hi - origins) / directions
-    near = np.nanmax(np.minimum(t0, t1), axis=1)
-    far = np.nanmin(np.maximum(t0, t1), axis=1)
-    hit = (near <= far) & (far > 0)
+    origins, directions = eye_rays(cam, np.arange(row_start * width, row_stop * width))
+    t_near, t_far, _ = hit_box(origins, directions, *body_box(scene["body"]))
+    hit = (t_near <= t_far) & (t_near > 0)
     return hit.reshape(row_stop - row_start, width).astype(np.float32)
 
 
@@ -70,6 +63,32 @@ class LampTracerEngine(bpy.types.RenderEngine):
     bl_label = "Lamp Tracer"
     bl_use_preview = False
     bl_use_eevee_viewport = True  # Material Preview shading uses EEVEE on the Cycles materials
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._viewport: render_viewport.ViewportSession | None = None  # Rendered shading only
+
+    def __del__(self):
+        viewport = getattr(self, "_viewport", None)
+        if viewport is not None:  # the viewport left Rendered shading: stop its preview
+            viewport.free()
+
+    # Rendered shading in the 3D Viewport: the design from the viewport's own view, refined in
+    # stages on a worker thread (render_viewport).
+
+    def view_update(self, context, depsgraph):
+        if self._viewport is None:
+            self._viewport = render_viewport.ViewportSession(self)
+        self._viewport.update(depsgraph.scene)
+
+    def view_draw(self, context, depsgraph):
+        if self._viewport is None:
+            self._viewport = render_viewport.ViewportSession(self)
+        region, view = context.region, context.region_data
+        session = self._viewport
+        session.sync(depsgraph.scene, region.width, region.height, view.window_matrix, view.view_matrix)
+        self.update_stats("", session.status())
+        session.draw_frame(self, depsgraph.scene, region.width, region.height)
 
     def update_render_passes(self, scene=None, renderlayer=None):
         """The passes a view layer will have: what the compositor's Render Layers node offers."""

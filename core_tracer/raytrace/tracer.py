@@ -79,10 +79,7 @@ class _Context:
         self.camera = camera
         self.lamps = G.LampTable.from_scene(scene)
         body = scene["body"]
-        w, h = body["size"]
-        bx, bz = body["center"]
-        self.box_lo = np.array([bx - w / 2, 0.0, bz - h / 2])
-        self.box_hi = np.array([bx + w / 2, body["depth"], bz + h / 2])
+        self.box_lo, self.box_hi = G.body_box(body)
         self.body = body
         light = scene["light"]
         self.light_dir = np.asarray(light["direction"], dtype=np.float64)
@@ -220,16 +217,7 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     """Classify the eye rays (paper §3.1): background, body, or lens (①)."""
     n = len(o)
     pix = np.arange(n)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1 = (ctx.box_lo - o) / d
-        t2 = (ctx.box_hi - o) / d
-    # A ray parallel to a slab is inside it (−inf, inf) or outside it (inf, −inf).
-    inside = (o >= ctx.box_lo) & (o <= ctx.box_hi)
-    t_lo = np.where(d == 0, np.where(inside, -np.inf, np.inf), np.fmin(t1, t2))
-    t_hi = np.where(d == 0, np.where(inside, np.inf, -np.inf), np.fmax(t1, t2))
-    face = np.argmax(t_lo, axis=1)
-    t_near = t_lo[pix, face]
-    t_far = np.min(t_hi, axis=1)
+    t_near, t_far, face = G.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     hit_box = (t_near <= t_far) & (t_near > 0)
 
     band.add(BACKGROUND_PASS, pix[~hit_box], np.broadcast_to(ctx.background, (int((~hit_box).sum()), 3)))

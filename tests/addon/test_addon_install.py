@@ -53,7 +53,7 @@ def test_zip_contents(built_zip):
     assert len(thumbnails) == len(presets) and {f"presets/thumbnails/{t}" for t in thumbnails} <= names
     for name in names:
         top = name.split("/")[0]
-        assert top not in {"tests", "tools", "benchmarks", ".ci", ".venv", "dist", ".git"}, name
+        assert top not in {"tests", "tools", "benchmarks", "docs", ".ci", ".venv", "dist", ".git"}, name
         assert "__pycache__" not in name and not name.endswith(".pyc"), name
         assert name not in {"pyproject.toml", "requirements.txt", ".gitignore"}, name
 

@@ -123,3 +123,27 @@ def test_sphere_and_socket_hits():
     assert t[0] == pytest.approx(6.0) and np.isinf(t[1])
     ts = G.hit_socket(o, d, np.full(3, 2.0), np.full(3, 14.0), np.full(3, 30.0))
     assert np.isinf(ts[0]) and np.isinf(ts[1]) and ts[2] == pytest.approx(1.0)
+
+
+def test_box_entry_exit_and_face():
+    lo, hi = np.array([-10.0, 0.0, -5.0]), np.array([10.0, 8.0, 5.0])
+    o = np.array([
+        [0.0, -20.0, 0.0],  # straight at the front face
+        [-30.0, 4.0, 0.0],  # at the left face, parallel to the y and z slabs (inside them)
+        [0.0, -20.0, 7.0],  # parallel to the z slab, outside it: a miss
+        [3.0, -20.0, -12.0],  # oblique, in through the front face and out through the top
+        [0.0, 4.0, 0.0],  # from inside the box
+    ])
+    d = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.8, 0.6], [0.0, 1.0, 0.0]])
+    t_near, t_far, face = G.hit_box(o, d, lo, hi)
+    np.testing.assert_allclose(t_near[[0, 1, 3]], [20.0, 20.0, 25.0])
+    np.testing.assert_allclose(t_far[[0, 1, 3]], [28.0, 40.0, 17.0 / 0.6])
+    assert list(face[[0, 1, 3]]) == [1, 0, 1]
+    hit = (t_near <= t_far) & (t_near > 0)
+    assert list(hit) == [True, True, False, True, False]  # from inside: not a hit from outside
+    assert t_near[4] < 0 < t_far[4]
+
+
+def test_body_box_corners():
+    lo, hi = G.body_box({"center": [5.0, -2.0], "size": [40.0, 20.0], "depth": 30.0})
+    assert lo.tolist() == [-15.0, 0.0, -12.0] and hi.tolist() == [25.0, 30.0, 8.0]

@@ -1,0 +1,124 @@
+"""How fast is the viewport preview? For a region of 1024x768 on 2 threads, the time from a restart
+(a design edit or a view change) to the coarse image, and to the full-resolution image, through the
+engine's own stages (``lamp_addon.render_preview``), for the four-lamp preset seen two ways: through
+the preset's own camera (the lamp fills the view) and from a three-quarter viewport view.
+
+    .venv/bin/python benchmarks/bench_viewport.py [--runs 5] [--threads 2] [--size 1024x768]
+
+Targets (issue 10): first image <= 0.1 s; full resolution <= 0.4 s. Also prints the time of each
+candidate coarse divisor, the figure the coarse stage's divisor is chosen from.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+import core_tracer  # noqa: E402
+
+
+def _addon_package():
+    """The extension as Blender loads it (its root ``__init__`` is a package holding ``lamp_addon``
+    and ``core_tracer`` side by side); nothing of it needs ``bpy`` until ``register``."""
+    spec = importlib.util.spec_from_file_location("lamp_styling", ROOT / "__init__.py",
+                                                  submodule_search_locations=[str(ROOT)])
+    package = importlib.util.module_from_spec(spec)
+    sys.modules["lamp_styling"] = package
+    spec.loader.exec_module(package)
+    from lamp_styling.lamp_addon import render_preview  # type: ignore[import-not-found]
+    from lamp_styling.lamp_addon.convert import viewport  # type: ignore[import-not-found]
+
+    return render_preview, viewport
+
+
+def _look_at_view(eye, centre) -> list[list[float]]:
+    """A viewport's view matrix (world to view) looking from ``eye`` at ``centre``, Z up."""
+    eye, centre = np.asarray(eye, float), np.asarray(centre, float)
+    back = eye - centre
+    back /= np.linalg.norm(back)
+    right = np.cross([0.0, 0.0, 1.0], back)
+    right /= np.linalg.norm(right)
+    up = np.cross(back, right)
+    rotation = np.array([right, up, back])
+    view = np.eye(4)
+    view[:3, :3] = rotation
+    view[:3, 3] = -rotation @ eye
+    return view.tolist()
+
+
+def _perspective_window(width: int, height: int, lens_mm: float = 50.0, sensor_mm: float = 36.0,
+                        near: float = 0.01, far: float = 100.0) -> list[list[float]]:
+    """Blender's viewport projection for a lens (the sensor spans the region's larger side)."""
+    half = sensor_mm / (2.0 * lens_mm)
+    half_w, half_h = (half, half * height / width) if width >= height else (half * width / height, half)
+    window = np.zeros((4, 4))
+    window[0, 0], window[1, 1] = 1.0 / half_w, 1.0 / half_h
+    window[2, 2], window[2, 3] = -(far + near) / (far - near), -2.0 * far * near / (far - near)
+    window[3, 2] = -1.0
+    return window.tolist()
+
+
+def _time_stages(render_preview, scene: dict, width: int, height: int, threads: int, runs: int):
+    firsts, fulls = [], []
+    for _ in range(runs):
+        preview = render_preview.ProgressivePreview(threads=threads)
+        start = time.perf_counter()
+        preview.restart(scene, width, height)
+        preview.step()
+        firsts.append(time.perf_counter() - start)
+        while preview.step():
+            pass
+        fulls.append(time.perf_counter() - start)
+    return statistics.median(firsts), statistics.median(fulls)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--preset", default=str(ROOT / "presets" / "four-lamp-rear-combination.json"))
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--size", default="1024x768")
+    args = parser.parse_args()
+    width, height = (int(v) for v in args.size.split("x"))
+    render_preview, viewport = _addon_package()
+
+    design = core_tracer.load_scene(args.preset)
+    core_tracer.render(design, 64, 48)  # warm up imports and caches
+    views = {
+        "preset camera": design["camera"],
+        "three-quarter view": viewport.camera_from_view(
+            width, height, _perspective_window(width, height),
+            _look_at_view((-0.38, -0.62, 0.22), (0.0, 0.04, 0.0))),
+    }
+    print(f"preset        {Path(args.preset).name}")
+    print(f"machine       {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}; "
+          f"{args.threads} threads, {args.runs} runs (medians)")
+    print(f"region        {width}x{height}; stages 1/{render_preview.coarse_divisor(width, height)} then full "
+          "(targets: first <= 0.1 s, full <= 0.4 s)")
+    for name, camera in views.items():
+        scene = {**design, "camera": camera, "image": {"width": width, "height": height}}
+        first, full = _time_stages(render_preview, scene, width, height, args.threads, args.runs)
+        print(f"{name:<20} first image {first:.3f} s   full resolution {full:.3f} s")
+        for divisor in (2, 4, 8, 16):
+            w, h = render_preview.stage_size(width, height, divisor)
+            times = []
+            for _ in range(args.runs):
+                start = time.perf_counter()
+                core_tracer.render_passes(scene, w, h, threads=args.threads, keep_passes=False)
+                times.append(time.perf_counter() - start)
+            print(f"{'':<20} 1/{divisor:<2} ({w}x{h}) {statistics.median(times):.3f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
