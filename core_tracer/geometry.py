@@ -8,14 +8,20 @@ parameter of the first hit beyond ``T_MIN`` (``inf`` for a miss).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from . import optics
 from .scene import cut_sphere_radius, lamp_geometry, lens_absorption
+from .spec import MAX_CUTS_ACROSS
 
 T_MIN = 1e-6  # mm: a hit closer than this to the ray's origin is the origin's own surface
-MAX_CELL_STEPS = 100_000  # safety net for the cell walk; a ray crosses at most ~4R/p cells
+# The cell walk's bound: before the side wall a ray's path across the cut slab is at most a
+# diameter 2R long in x-z, so it visits at most (|dx| + |dz|) / p + 3 <= sqrt 2 * 2R/p + 3 cells,
+# and validation keeps 2R/p <= MAX_CUTS_ACROSS.
+MAX_CELL_STEPS = math.ceil(math.sqrt(2.0) * MAX_CUTS_ACROSS) + 3
 
 
 @dataclass(frozen=True)
@@ -137,14 +143,20 @@ def hit_sphere(o: np.ndarray, d: np.ndarray, center: np.ndarray, radius: np.ndar
 
 def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.ndarray,
                y_end: np.ndarray) -> np.ndarray:
-    """The socket: a cylinder of ``radius`` about the axis between ``y_start`` and ``y_end``."""
+    """The socket (MODEL.md §3): a solid cylinder of ``radius`` about the axis from the plane of the
+    bulb centre ``y_start`` back to the reflector vertex ``y_end``, closed at ``y_start`` by a flat
+    disk. Its far end lies behind the reflector, so it needs no cap."""
     a = d[:, 0] ** 2 + d[:, 2] ** 2
     b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
     c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
     lo, _ = _solve_quadratic(a, b, c)
     y = o[:, 1] + lo * d[:, 1]
-    ok = (a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end)
-    return np.where(ok, lo, np.inf)
+    side = np.where((a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end), lo, np.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (y_start - o[:, 1]) / d[:, 1]
+    x, z = o[:, 0] + t * d[:, 0], o[:, 2] + t * d[:, 2]
+    end = np.where((t > T_MIN) & (x * x + z * z <= radius**2), t, np.inf)
+    return np.minimum(side, end)
 
 
 def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndarray, pitch: np.ndarray,
@@ -208,13 +220,8 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
             break
         rho_k = rho[idx]
         t_cell_end = np.minimum(np.minimum(t_next_i, t_next_j), t_out)
-        cy = plane_b[idx] - rho_k
-        ocx, ocy, ocz = ox - i * p, o[idx, 1] - cy, oz - j * p
-        b = ocx * dx + ocy * d[idx, 1] + ocz * dz
-        c = ocx * ocx + ocy * ocy + ocz * ocz - rho_k * rho_k
-        with np.errstate(invalid="ignore"):
-            sq = np.sqrt(b * b - c)
-        lo, hi = -b - sq, -b + sq
+        ax, ay, az = ox - i * p, o[idx, 1] - plane_b[idx], oz - j * p  # origin relative to the cell's apex
+        lo, hi = _cap_roots(ax, ay, az, dx, d[idx, 1], dz, rho_k)
         lo_ok = (lo > T_MIN) & (lo >= t_cell - tol) & (lo <= t_cell_end + tol)
         hi_ok = (hi > T_MIN) & (hi >= t_cell - tol) & (hi <= t_cell_end + tol)
         t = np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
@@ -223,9 +230,7 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
             f = np.nonzero(found)[0]
             g = idx[f]
             t_hit[g] = t[f]
-            hit = o[g] + t[f, None] * d[g]
-            centre = np.stack([i[f] * p[f], cy[f], j[f] * p[f]], axis=1)
-            normal[g] = (hit - centre) / rho_k[f, None]
+            normal[g] = _cap_normal(ax[f] + t[f] * dx[f], ay[f] + t[f] * d[g, 1], az[f] + t[f] * dz[f], rho_k[f])
         # Advance to the neighbouring cell the ray enters next.
         step_i = t_next_i < t_next_j
         t_cell = np.where(step_i, t_next_i, t_next_j)
@@ -239,6 +244,31 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
             t_next_i, t_next_j, dt_i, dt_j = t_next_i[keep], t_next_j[keep], dt_i[keep], dt_j[keep]
             si, sj, p, ox, oz, dx, dz = si[keep], sj[keep], p[keep], ox[keep], oz[keep], dx[keep], dz[keep]
     return t_hit, normal
+
+
+def _cap_roots(ax: np.ndarray, ay: np.ndarray, az: np.ndarray, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray,
+               rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Both roots (near, far; NaN for a miss) of a ray with a lenslet sphere; the ray's origin
+    (ax, ay, az) is given relative to the cap's apex.
+
+    The sphere of radius rho hangs below its apex, so |a + t d + rho y|^2 = rho^2 becomes
+    t^2 + 2 (a.d + rho d_y) t + |a|^2 + 2 rho a_y = 0: no rho^2 term left to cancel. For very low
+    cuts rho reaches 1e11 mm, and the textbook |o - c|^2 - rho^2 loses every digit. The small root
+    is taken as c / q so that it stays exact when the cap is nearly flat (it tends to the plane)."""
+    b = ax * dx + ay * dy + az * dz + rho * dy
+    c = ax * ax + ay * ay + az * az + 2.0 * rho * ay
+    with np.errstate(invalid="ignore", divide="ignore"):
+        q = -(b + np.copysign(np.sqrt(b * b - c), b))
+        r1, r2 = q, c / q
+    return np.fmin(r1, r2), np.fmax(r1, r2)
+
+
+def _cap_normal(hx: np.ndarray, hy: np.ndarray, hz: np.ndarray, rho: np.ndarray) -> np.ndarray:
+    """Unit normal, out of the lens, at a point (hx, hy, hz) given relative to the cap's apex.
+
+    Normalised explicitly: the hit is on the sphere only to rounding, so (hit - centre) / rho is
+    not of unit length, and the error would grow at every later bounce."""
+    return optics.normalize(np.stack([hx, hy + rho, hz], axis=1))
 
 
 def cut_surface_height(x: np.ndarray, z: np.ndarray, plane_b: float, pitch: float, rho: float) -> np.ndarray:

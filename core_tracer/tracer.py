@@ -24,6 +24,10 @@ from .camera import Camera, eye_rays, make_camera
 
 CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
 MAX_DEPTH = 64  # safety net on the number of segments along one branch
+# mm: a new ray starts this far off the surface it leaves, on its own side. A hit lies on the
+# surface only to rounding; a grazing ray that starts on the wrong side meets its own surface
+# again (a lens ray marked as in the air, or a ray behind the reflector).
+RESTART_OFFSET = 1e-9
 TILE_RAYS = 32768  # eye rays per band of rows: bounds memory whatever the image size
 
 PASS_NAMES = ("lens_surface", "bulb", "reflector_constant", "reflector_scatter", "socket", "side_wall",
@@ -359,7 +363,8 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
     band.add(REFLECTOR_SCATTER, rays.pix[m], k * scatter[:, None] * L.bulb_intensity[li])
     n = len(m)
-    return _Rays(pix=rays.pix[m], lamp=li, o=hit, d=optics.reflect(d, normal), k=k * L.reflectance[li, None],
+    start = hit + RESTART_OFFSET * normal
+    return _Rays(pix=rays.pix[m], lamp=li, o=start, d=optics.reflect(d, normal), k=k * L.reflectance[li, None],
                  medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls,
                  branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
@@ -382,7 +387,8 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     src = np.where(surface == P.OUTER, P.OUTER, P.CUT).astype(np.int8)
     n = len(m)
     pix, seen = rays.pix[m], rays.seen_reflector[m]
-    reflected = _Rays(pix=pix, lamp=li, o=hit, d=optics.reflect(d, facing), k=k * r[:, None], medium=medium,
+    near_side, far_side = hit + RESTART_OFFSET * facing, hit - RESTART_OFFSET * facing
+    reflected = _Rays(pix=pix, lamp=li, o=near_side, d=optics.reflect(d, facing), k=k * r[:, None], medium=medium,
                       src=src, parent=cls, branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=seen)
     out = [reflected]
     trans = np.nonzero(r < 1.0)[0]
@@ -394,7 +400,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     tc = trans[~leaving]
     if len(tc):
         eta = n1[tc] / n2[tc]
-        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
+        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=far_side[tc], d=optics.refract(d[tc], facing[tc], eta),
                          k=k[tc] * (1.0 - r[tc, None]), medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
                          .astype(np.int8), src=src[tc], parent=cls[tc],
                          branch=np.full(len(tc), P.TRANSMITTED, np.int8), seen_reflector=seen[tc]))
