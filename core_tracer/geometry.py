@@ -9,7 +9,7 @@ parameter of the first hit beyond ``T_MIN`` (``inf`` for a miss).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -112,14 +112,21 @@ def hit_side_wall(o: np.ndarray, d: np.ndarray, radius: np.ndarray) -> np.ndarra
     return np.where((a > 1e-15) & (hi > T_MIN), hi, np.inf)
 
 
-def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.ndarray,
-                  rim: np.ndarray) -> np.ndarray:
-    """The paraboloid y = y_v - (x^2 + z^2) / 4f between the rim and the vertex."""
+def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.ndarray, rim: np.ndarray,
+                  leaving: np.ndarray | None = None) -> np.ndarray:
+    """The paraboloid y = y_v - (x^2 + z^2) / 4f between the rim and the vertex.
+
+    For rays that start on the reflector (``leaving``) the root nearer 0 is the start itself:
+    only the other one can be a hit, whatever its distance (see ``hit_cuts``)."""
     inv4f = 0.25 / focal
     a = (d[:, 0] ** 2 + d[:, 2] ** 2) * inv4f
     b = d[:, 1] + 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2]) * inv4f
     c = o[:, 1] + (o[:, 0] ** 2 + o[:, 2] ** 2) * inv4f - vertex
     lo, hi = _solve_quadratic(a, b, c)
+    if leaving is not None:
+        own_is_lo = np.abs(lo) <= np.abs(hi)
+        lo = np.where(leaving & own_is_lo, np.nan, lo)
+        hi = np.where(leaving & ~own_is_lo, np.nan, hi)
     y_lo = o[:, 1] + lo * d[:, 1]
     y_hi = o[:, 1] + hi * d[:, 1]
     return _first_beyond(lo, hi, y_lo >= rim - 1e-9, y_hi >= rim - 1e-9)
@@ -152,15 +159,19 @@ def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.nda
     lo, _ = _solve_quadratic(a, b, c)
     y = o[:, 1] + lo * d[:, 1]
     side = np.where((a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end), lo, np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # rays parallel to the disk miss it (NaN, inf)
         t = (y_start - o[:, 1]) / d[:, 1]
-    x, z = o[:, 0] + t * d[:, 0], o[:, 2] + t * d[:, 2]
+        x, z = o[:, 0] + t * d[:, 0], o[:, 2] + t * d[:, 2]
     end = np.where((t > T_MIN) & (x * x + z * z <= radius**2), t, np.inf)
     return np.minimum(side, end)
 
 
+# How a ray starts relative to the cut surface (the ``on_cap`` argument of ``hit_cuts``).
+OFF_CAP, INTO_AIR, INTO_LENS = 0, 1, -1
+
+
 def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndarray, pitch: np.ndarray,
-             rho: np.ndarray, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+             rho: np.ndarray, t_limit: np.ndarray, on_cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The cut surface (MODEL.md §3.1): returns the hit parameter and the unit normal pointing
     out of the lens material (toward the air), for hits nearer than ``t_limit``.
 
@@ -168,82 +179,130 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
     crossed between them. Walk those cells from the entry side (a 2-D grid traversal) and test
     each cell's sphere; the first root that lies inside its own cell is the hit (paper Fig. 9).
     Cost: the few cells the ray crosses in the slab, whatever the number of cuts.
+
+    ``on_cap`` (per ray, default ``OFF_CAP``) says that a ray starts on the cut surface itself,
+    heading ``INTO_AIR`` or ``INTO_LENS``. Its own surface is then excluded by geometry rather than
+    by distance: a ray leaving a sphere outward never meets it again, one leaving it inward only
+    at the far root, and a plane is never met again. A distance threshold alone fails for grazing
+    rays, whose own cap, met again from a start a rounding error on the wrong side, lies farther
+    away than any safe threshold.
     """
     n = len(o)
     t_hit = np.full(n, np.inf)
     normal = np.zeros((n, 3))
     normal[:, 1] = 1.0
+    on_cap = np.zeros(n, np.int8) if on_cap is None else on_cap
 
-    flat = ~np.isfinite(rho)
-    if flat.any():
-        idx = np.nonzero(flat)[0]
+    flat = np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0]
+    if len(flat):
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = (plane_a[idx] - o[idx, 1]) / d[idx, 1]
-        ok = (t > T_MIN) & (t < t_limit[idx])
-        t_hit[idx[ok]] = t[ok]
-    idx = np.nonzero(~flat)[0]
-    if len(idx) == 0:
-        return t_hit, normal
+            t = (plane_a[flat] - o[flat, 1]) / d[flat, 1]
+        ok = (t > T_MIN) & (t < t_limit[flat])
+        t_hit[flat[ok]] = t[ok]
 
-    oy, dy = o[idx, 1], d[idx, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ta = (plane_a[idx] - oy) / dy
-        tb = (plane_b[idx] - oy) / dy
-    in_slab = (oy >= plane_a[idx]) & (oy <= plane_b[idx])
-    parallel = dy == 0
-    t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), np.fmin(ta, tb))
-    t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), np.fmax(ta, tb))
-    t_in = np.maximum(t_in, 0.0)
-    t_out = np.minimum(t_out, t_limit[idx])
-    live = t_in <= t_out
-    idx, t_in, t_out = idx[live], t_in[live], t_out[live]
-    if len(idx) == 0:
-        return t_hit, normal
-
-    p = pitch[idx]
-    ox, oz = o[idx, 0], o[idx, 2]
-    dx, dz = d[idx, 0], d[idx, 2]
-    # Cell (i, j) covers [(i - 1/2) p, (i + 1/2) p] in x and likewise in z (one cell on the axis).
-    i = np.floor((ox + t_in * dx) / p + 0.5)
-    j = np.floor((oz + t_in * dz) / p + 0.5)
-    si, sj = np.sign(dx), np.sign(dz)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_next_i = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
-        t_next_j = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
-        dt_i = np.where(si != 0, p / np.abs(dx), np.inf)
-        dt_j = np.where(sj != 0, p / np.abs(dz), np.inf)
-    t_cell = t_in.copy()
-    tol = 1e-9
-
+    walk = _CellWalk.enter(o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap)
     for _ in range(MAX_CELL_STEPS):
-        if len(idx) == 0:
+        if len(walk.ray) == 0:
             break
-        rho_k = rho[idx]
-        t_cell_end = np.minimum(np.minimum(t_next_i, t_next_j), t_out)
-        ax, ay, az = ox - i * p, o[idx, 1] - plane_b[idx], oz - j * p  # origin relative to the cell's apex
-        lo, hi = _cap_roots(ax, ay, az, dx, d[idx, 1], dz, rho_k)
-        lo_ok = (lo > T_MIN) & (lo >= t_cell - tol) & (lo <= t_cell_end + tol)
-        hi_ok = (hi > T_MIN) & (hi >= t_cell - tol) & (hi <= t_cell_end + tol)
+        t, cap_normal = walk.cap_hits()
+        found = np.isfinite(t)
+        t_hit[walk.ray[found]] = t[found]
+        normal[walk.ray[found]] = cap_normal[found]
+        walk.advance()
+        walk = walk.take(~found & (walk.t_cell <= walk.t_out))
+    return t_hit, normal
+
+
+@dataclass
+class _CellWalk:
+    """The rays still walking the cut cells (a 2-D grid traversal), one entry per ray.
+
+    Cell (i, j) covers [(i - 1/2) p, (i + 1/2) p] in x and likewise in z (one cell on the axis);
+    its cap's apex is at (i p, plane B, j p)."""
+
+    ray: np.ndarray  # index of the ray in the caller's arrays
+    o: np.ndarray  # (K, 3) origin
+    d: np.ndarray  # (K, 3) unit direction
+    top: np.ndarray  # plane B, the apexes
+    p: np.ndarray  # pitch
+    rho: np.ndarray  # cap sphere radius
+    on_cap: np.ndarray  # how the ray leaves the cap of its first cell (cleared after that cell)
+    i: np.ndarray  # current cell
+    j: np.ndarray
+    t_cell: np.ndarray  # where the ray enters the current cell
+    t_out: np.ndarray  # where it leaves the slab (or meets the side wall)
+    t_next_i: np.ndarray  # where it crosses the next cell border in x, and in z
+    t_next_j: np.ndarray
+    dt_i: np.ndarray  # ray length across one cell in x, and in z
+    dt_j: np.ndarray
+
+    TOL = 1e-9  # mm of ray parameter: a root on a cell border belongs to both cells
+
+    @classmethod
+    def enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
+        """The rays with curved cuts whose path crosses the slab between planes A and B before
+        ``t_limit``, each placed in the cell where it enters the slab."""
+        ray = np.nonzero(np.isfinite(rho))[0]
+        oy, dy = o[ray, 1], d[ray, 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ta = (plane_a[ray] - oy) / dy
+            tb = (plane_b[ray] - oy) / dy
+        in_slab = (oy >= plane_a[ray]) & (oy <= plane_b[ray])
+        parallel = dy == 0
+        t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), np.fmin(ta, tb))
+        t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), np.fmax(ta, tb))
+        t_in = np.maximum(t_in, 0.0)
+        t_out = np.minimum(t_out, t_limit[ray])
+        live = t_in <= t_out
+        ray, t_in, t_out = ray[live], t_in[live], t_out[live]
+
+        oo, dd, p = o[ray], d[ray], pitch[ray]
+        ox, oz, dx, dz = oo[:, 0], oo[:, 2], dd[:, 0], dd[:, 2]
+        i = np.floor((ox + t_in * dx) / p + 0.5)
+        j = np.floor((oz + t_in * dz) / p + 0.5)
+        si, sj = np.sign(dx), np.sign(dz)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_next_i = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
+            t_next_j = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
+            dt_i = np.where(si != 0, p / np.abs(dx), np.inf)
+            dt_j = np.where(sj != 0, p / np.abs(dz), np.inf)
+        return cls(ray, oo, dd, plane_b[ray], p, rho[ray], on_cap[ray], i, j, t_in, t_out, t_next_i, t_next_j,
+                   dt_i, dt_j)
+
+    def take(self, keep: np.ndarray) -> _CellWalk:
+        if keep.all():
+            return self
+        return _CellWalk(*(getattr(self, f.name)[keep] for f in fields(self)))
+
+    def cap_hits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each ray's hit on the cap of its current cell within the cell (inf if none), and the
+        unit normal there."""
+        o, d = self.o, self.d
+        a = np.stack([o[:, 0] - self.i * self.p, o[:, 1] - self.top, o[:, 2] - self.j * self.p], axis=1)
+        lo, hi = _cap_roots(a[:, 0], a[:, 1], a[:, 2], d[:, 0], d[:, 1], d[:, 2], self.rho)
+        lo = np.where(self.on_cap == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
+        hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
+        t_end = np.minimum(np.minimum(self.t_next_i, self.t_next_j), self.t_out)
+        lo_ok = (lo > T_MIN) & (lo >= self.t_cell - self.TOL) & (lo <= t_end + self.TOL)
+        hi_ok = (hi > T_MIN) & (hi >= self.t_cell - self.TOL) & (hi <= t_end + self.TOL)
         t = np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
         found = np.isfinite(t)
+        normal = np.zeros((len(t), 3))
         if found.any():
-            f = np.nonzero(found)[0]
-            g = idx[f]
-            t_hit[g] = t[f]
-            normal[g] = _cap_normal(ax[f] + t[f] * dx[f], ay[f] + t[f] * d[g, 1], az[f] + t[f] * dz[f], rho_k[f])
-        # Advance to the neighbouring cell the ray enters next.
-        step_i = t_next_i < t_next_j
-        t_cell = np.where(step_i, t_next_i, t_next_j)
-        i = np.where(step_i, i + si, i)
-        j = np.where(step_i, j, j + sj)
-        t_next_i = np.where(step_i, t_next_i + dt_i, t_next_i)
-        t_next_j = np.where(step_i, t_next_j, t_next_j + dt_j)
-        keep = ~found & (t_cell <= t_out)
-        if not keep.all():
-            idx, i, j, t_cell, t_out = idx[keep], i[keep], j[keep], t_cell[keep], t_out[keep]
-            t_next_i, t_next_j, dt_i, dt_j = t_next_i[keep], t_next_j[keep], dt_i[keep], dt_j[keep]
-            si, sj, p, ox, oz, dx, dz = si[keep], sj[keep], p[keep], ox[keep], oz[keep], dx[keep], dz[keep]
-    return t_hit, normal
+            hit = a[found] + t[found, None] * d[found]
+            normal[found] = _cap_normal(hit[:, 0], hit[:, 1], hit[:, 2], self.rho[found])
+        return t, normal
+
+    def advance(self) -> None:
+        """Step every ray to the neighbouring cell it enters next."""
+        step_i = self.t_next_i < self.t_next_j
+        self.t_cell = np.where(step_i, self.t_next_i, self.t_next_j)
+        self.i = np.where(step_i, self.i + np.sign(self.d[:, 0]), self.i)
+        self.j = np.where(step_i, self.j, self.j + np.sign(self.d[:, 2]))
+        self.t_next_i = np.where(step_i, self.t_next_i + self.dt_i, self.t_next_i)
+        self.t_next_j = np.where(step_i, self.t_next_j, self.t_next_j + self.dt_j)
+        if self.on_cap.any():
+            self.on_cap = np.zeros_like(self.on_cap)
 
 
 def _cap_roots(ax: np.ndarray, ay: np.ndarray, az: np.ndarray, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray,

@@ -24,10 +24,6 @@ from .camera import Camera, eye_rays, make_camera
 
 CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
 MAX_DEPTH = 64  # safety net on the number of segments along one branch
-# mm: a new ray starts this far off the surface it leaves, on its own side. A hit lies on the
-# surface only to rounding; a grazing ray that starts on the wrong side meets its own surface
-# again (a lens ray marked as in the air, or a ray behind the reflector).
-RESTART_OFFSET = 1e-9
 TILE_RAYS = 32768  # eye rays per band of rows: bounds memory whatever the image size
 
 PASS_NAMES = ("lens_surface", "bulb", "reflector_constant", "reflector_scatter", "socket", "side_wall",
@@ -288,7 +284,10 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
     li = rays.lamp
     o, d = rays.o, rays.d
     t_wall = G.hit_side_wall(o, d, L.radius[li])
-    t_cut, cut_normal = G.hit_cuts(o, d, L.plane_a[li], L.plane_b[li], L.pitch[li], L.cut_radius[li], t_wall)
+    # A ray that starts on a cut knows it: its own cap is excluded by geometry, not by distance.
+    on_cap = np.where(rays.src != P.CUT, G.OFF_CAP, np.where(rays.medium == P.IN_AIR, G.INTO_AIR, G.INTO_LENS))
+    t_cut, cut_normal = G.hit_cuts(o, d, L.plane_a[li], L.plane_b[li], L.pitch[li], L.cut_radius[li], t_wall,
+                                   on_cap.astype(np.int8))
     t_best = np.minimum(t_wall, t_cut)
     surface = np.where(t_cut < t_wall, P.CUT, P.WALL).astype(np.int8)
 
@@ -305,7 +304,8 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
         lj = li[idx]
         oa, da = o[idx], d[idx]
         candidates = (
-            (P.REFLECTOR, G.hit_reflector(oa, da, L.focal[lj], L.vertex[lj], L.rim[lj])),
+            (P.REFLECTOR, G.hit_reflector(oa, da, L.focal[lj], L.vertex[lj], L.rim[lj],
+                                          rays.src[idx] == P.REFLECTOR)),
             (P.BULB, G.hit_sphere(oa, da, L.bulb_center[lj], L.bulb_radius[lj])),
             (P.SOCKET, G.hit_socket(oa, da, L.socket_radius[lj], L.bulb_center[lj, 1], L.vertex[lj])),
         )
@@ -363,8 +363,7 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
     band.add(REFLECTOR_SCATTER, rays.pix[m], k * scatter[:, None] * L.bulb_intensity[li])
     n = len(m)
-    start = hit + RESTART_OFFSET * normal
-    return _Rays(pix=rays.pix[m], lamp=li, o=start, d=optics.reflect(d, normal), k=k * L.reflectance[li, None],
+    return _Rays(pix=rays.pix[m], lamp=li, o=hit, d=optics.reflect(d, normal), k=k * L.reflectance[li, None],
                  medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls,
                  branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
@@ -387,8 +386,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     src = np.where(surface == P.OUTER, P.OUTER, P.CUT).astype(np.int8)
     n = len(m)
     pix, seen = rays.pix[m], rays.seen_reflector[m]
-    near_side, far_side = hit + RESTART_OFFSET * facing, hit - RESTART_OFFSET * facing
-    reflected = _Rays(pix=pix, lamp=li, o=near_side, d=optics.reflect(d, facing), k=k * r[:, None], medium=medium,
+    reflected = _Rays(pix=pix, lamp=li, o=hit, d=optics.reflect(d, facing), k=k * r[:, None], medium=medium,
                       src=src, parent=cls, branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=seen)
     out = [reflected]
     trans = np.nonzero(r < 1.0)[0]
@@ -400,7 +398,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     tc = trans[~leaving]
     if len(tc):
         eta = n1[tc] / n2[tc]
-        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=far_side[tc], d=optics.refract(d[tc], facing[tc], eta),
+        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
                          k=k[tc] * (1.0 - r[tc, None]), medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
                          .astype(np.int8), src=src[tc], parent=cls[tc],
                          branch=np.full(len(tc), P.TRANSMITTED, np.int8), seen_reflector=seen[tc]))

@@ -27,13 +27,17 @@ def _orthographic(width_mm: float, pixels: int) -> dict:
 
 # -- Directions stay unit and rays stay where they are ---------------------------------------------
 
-def test_high_ior_hemispherical_cuts_match_the_reference_pixel_by_pixel():
+@pytest.mark.parametrize("absorption", [[0.02, 1.5, 1.6], [0.0, 0.0, 0.0]], ids=["red", "clear"])
+def test_high_ior_hemispherical_cuts_match_the_reference_pixel_by_pixel(absorption):
     # n = 3 with hemispherical cuts: rays reach the caps at grazing angles and bounce many times.
-    scene = scene_with(**{"lamps[0].lens.ior": 3.0, "lamps[0].cuts.height": HEMISPHERE_9MM})
-    result = compare(scene, 96, 72, threshold=1e-5)
-    assert result["lens_pixels"] == 1160 and result["unstable"] == 0, result
+    # In the clear lens some pixels are chaotic (the reference itself changes when the camera
+    # moves by 1e-9 mm); ``compare`` leaves those out and counts every other lens pixel.
+    scene = scene_with(**{"lamps[0].lens.ior": 3.0, "lamps[0].cuts.height": HEMISPHERE_9MM,
+                          "lamps[0].lens.absorption": absorption})
+    result = compare(scene, 64, 48, threshold=1e-5)
+    assert result["lens_pixels"] == 524 and result["unstable"] < 30, result
     assert result["wrong"] == 0, result
-    assert result["max_error"] < 1e-5, result
+    assert result["max_error"] < 1e-6, result
 
 
 def test_many_internal_reflections_keep_unit_directions_and_stay_inside_the_lamp(monkeypatch):
