@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
@@ -157,36 +158,40 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
             on_band(y0, y1, image[y0:y1], {name: passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)}
                     if keep_passes else {})
 
-    done = 0
-    if threads == 1:
-        for y0, y1 in bands:
-            if should_stop is not None and should_stop():
-                raise RenderCancelled("render cancelled")
-            finish(y0, y1, _trace_band(ctx, y0, y1))
-            done += 1
-            if progress is not None:
-                progress(done / len(bands))
-    else:
-        with ThreadPoolExecutor(max_workers=threads) as pool:
-            pending = list(bands)
-            running = []
-            while pending or running:
-                while pending and len(running) < threads:
-                    y0, y1 = pending.pop(0)
-                    running.append((y0, y1, pool.submit(_trace_band, ctx, y0, y1)))
-                y0, y1, fut = running.pop(0)
-                band = fut.result()
-                if should_stop is not None and should_stop():
-                    for *_, f in running:
-                        f.cancel()
-                    raise RenderCancelled("render cancelled")
-                finish(y0, y1, band)
-                done += 1
-                if progress is not None:
-                    progress(done / len(bands))
+    for done, (y0, y1, band) in enumerate(_traced_bands(ctx, bands, threads, should_stop or _never), start=1):
+        finish(y0, y1, band)
+        if progress is not None:
+            progress(done / len(bands))
     stats["seconds"] = time.perf_counter() - start
     stats["width"], stats["height"] = width, height
     return RenderResult(image, dict(zip(PASS_NAMES, passes, strict=False)) if keep_passes else {}, stats)
+
+
+def _never() -> bool:
+    return False
+
+
+def _traced_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
+                  should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
+    """Trace the bands, at most ``threads`` at a time (in the calling thread when 1), and yield
+    them in order; ``should_stop()`` is polled before starting a band and after each finishes."""
+    pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
+    pending, running = deque(bands), deque()
+    try:
+        while pending or running:
+            while pending and len(running) < threads:
+                if should_stop():
+                    raise RenderCancelled("render cancelled")
+                y0, y1 = pending.popleft()
+                running.append((y0, y1, pool.submit(_trace_band, ctx, y0, y1) if pool else _trace_band(ctx, y0, y1)))
+            y0, y1, band = running.popleft()
+            band = band.result() if pool else band
+            if should_stop():
+                raise RenderCancelled("render cancelled")
+            yield y0, y1, band
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def render(scene: dict, width: int | None = None, height: int | None = None, *,
@@ -326,9 +331,9 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
 
     k = rays.k
     lens = rays.medium == P.IN_LENS
-    if lens.any():  # equation (2): absorption over the path length in the lens
+    if lens.any():
         k = k.copy()
-        k[lens] *= np.exp(-L.absorption[rays.lamp[lens]] * t[lens, None])
+        k[lens] *= optics.absorption(L.absorption[rays.lamp[lens]], t[lens])
     hit = rays.o + np.where(np.isfinite(t), t, 0.0)[:, None] * rays.d
 
     for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, L.wall_color), (P.BULB, BULB_PASS, L.bulb_intensity),
