@@ -278,10 +278,12 @@ class _CellWalk:
         """Each ray's hit on the cap of its current cell within the cell (inf if none), and the
         unit normal there."""
         o, d = self.o, self.d
-        a = np.stack([o[:, 0] - self.i * self.p, o[:, 1] - self.top, o[:, 2] - self.j * self.p], axis=1)
-        lo, hi = _cap_roots(a[:, 0], a[:, 1], a[:, 2], d[:, 0], d[:, 1], d[:, 2], self.rho)
-        lo = np.where(self.on_cap == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
-        hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
+        ax, ay, az = o[:, 0] - self.i * self.p, o[:, 1] - self.top, o[:, 2] - self.j * self.p
+        dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
+        lo, hi = _cap_roots(ax, ay, az, dx, dy, dz, self.rho)
+        if self.on_cap.any():  # only in a ray's first cell: the cap it starts on
+            lo = np.where(self.on_cap == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
+            hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
         t_end = np.minimum(np.minimum(self.t_next_i, self.t_next_j), self.t_out)
         lo_ok = (lo > T_MIN) & (lo >= self.t_cell - self.TOL) & (lo <= t_end + self.TOL)
         hi_ok = (hi > T_MIN) & (hi >= self.t_cell - self.TOL) & (hi <= t_end + self.TOL)
@@ -289,8 +291,9 @@ class _CellWalk:
         found = np.isfinite(t)
         normal = np.zeros((len(t), 3))
         if found.any():
-            hit = a[found] + t[found, None] * d[found]
-            normal[found] = _cap_normal(hit[:, 0], hit[:, 1], hit[:, 2], self.rho[found])
+            tf = t[found]
+            normal[found] = _cap_normal(ax[found] + tf * dx[found], ay[found] + tf * dy[found],
+                                        az[found] + tf * dz[found], self.rho[found])
         return t, normal
 
     def advance(self) -> None:

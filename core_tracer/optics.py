@@ -14,7 +14,10 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def normalize(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    """Rows of ``v`` scaled to unit length (a single vector too)."""
+    if v.ndim == 1:
+        return v / np.sqrt(v @ v)
+    return v / np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
 
 
 def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float) -> np.ndarray:
