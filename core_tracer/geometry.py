@@ -340,4 +340,5 @@ def cut_surface_height(x: np.ndarray, z: np.ndarray, plane_b: float, pitch: floa
     i = np.floor(np.asarray(x) / pitch + 0.5)
     j = np.floor(np.asarray(z) / pitch + 0.5)
     r2 = (x - i * pitch) ** 2 + (z - j * pitch) ** 2
-    return plane_b - rho + np.sqrt(np.maximum(rho * rho - r2, 0.0))
+    # the sag below the apex, rho - sqrt(rho^2 - r^2), written without cancellation for huge rho
+    return plane_b - r2 / (rho + np.sqrt(np.maximum(rho * rho - r2, 0.0)))
