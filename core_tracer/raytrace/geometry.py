@@ -8,14 +8,20 @@ parameter of the first hit beyond ``T_MIN`` (``inf`` for a miss).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..scene.spec import MAX_CUTS_ACROSS
 from ..scene.validate import cut_sphere_radius, lamp_geometry, lens_absorption
+from . import optics
 
 T_MIN = 1e-6  # mm: a hit closer than this to the ray's origin is the origin's own surface
-MAX_CELL_STEPS = 100_000  # safety net for the cell walk; a ray crosses at most ~4R/p cells
+# The cell walk's bound: before the side wall a ray's path across the cut slab is at most a
+# diameter 2R long in x-z, so it visits at most (|dx| + |dz|) / p + 3 <= sqrt 2 * 2R/p + 3 cells,
+# and validation keeps 2R/p <= MAX_CUTS_ACROSS.
+MAX_CELL_STEPS = math.ceil(math.sqrt(2.0) * MAX_CUTS_ACROSS) + 3
 
 
 @dataclass(frozen=True)
@@ -106,14 +112,21 @@ def hit_side_wall(o: np.ndarray, d: np.ndarray, radius: np.ndarray) -> np.ndarra
     return np.where((a > 1e-15) & (hi > T_MIN), hi, np.inf)
 
 
-def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.ndarray,
-                  rim: np.ndarray) -> np.ndarray:
-    """The paraboloid y = y_v - (x^2 + z^2) / 4f between the rim and the vertex."""
+def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.ndarray, rim: np.ndarray,
+                  leaving: np.ndarray | None = None) -> np.ndarray:
+    """The paraboloid y = y_v - (x^2 + z^2) / 4f between the rim and the vertex.
+
+    For rays that start on the reflector (``leaving``) the root nearer 0 is the start itself:
+    only the other one can be a hit, whatever its distance (see ``hit_cuts``)."""
     inv4f = 0.25 / focal
     a = (d[:, 0] ** 2 + d[:, 2] ** 2) * inv4f
     b = d[:, 1] + 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2]) * inv4f
     c = o[:, 1] + (o[:, 0] ** 2 + o[:, 2] ** 2) * inv4f - vertex
     lo, hi = _solve_quadratic(a, b, c)
+    if leaving is not None:
+        own_is_lo = np.abs(lo) <= np.abs(hi)
+        lo = np.where(leaving & own_is_lo, np.nan, lo)
+        hi = np.where(leaving & ~own_is_lo, np.nan, hi)
     y_lo = o[:, 1] + lo * d[:, 1]
     y_hi = o[:, 1] + hi * d[:, 1]
     return _first_beyond(lo, hi, y_lo >= rim - 1e-9, y_hi >= rim - 1e-9)
@@ -137,18 +150,28 @@ def hit_sphere(o: np.ndarray, d: np.ndarray, center: np.ndarray, radius: np.ndar
 
 def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.ndarray,
                y_end: np.ndarray) -> np.ndarray:
-    """The socket: a cylinder of ``radius`` about the axis between ``y_start`` and ``y_end``."""
+    """The socket (MODEL.md §3): a solid cylinder of ``radius`` about the axis from the plane of the
+    bulb centre ``y_start`` back to the reflector vertex ``y_end``, closed at ``y_start`` by a flat
+    disk. Its far end lies behind the reflector, so it needs no cap."""
     a = d[:, 0] ** 2 + d[:, 2] ** 2
     b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
     c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
     lo, _ = _solve_quadratic(a, b, c)
     y = o[:, 1] + lo * d[:, 1]
-    ok = (a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end)
-    return np.where(ok, lo, np.inf)
+    side = np.where((a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end), lo, np.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):  # rays parallel to the disk miss it (NaN, inf)
+        t = (y_start - o[:, 1]) / d[:, 1]
+        x, z = o[:, 0] + t * d[:, 0], o[:, 2] + t * d[:, 2]
+    end = np.where((t > T_MIN) & (x * x + z * z <= radius**2), t, np.inf)
+    return np.minimum(side, end)
+
+
+# How a ray starts relative to the cut surface (the ``on_cap`` argument of ``hit_cuts``).
+OFF_CAP, INTO_AIR, INTO_LENS = 0, 1, -1
 
 
 def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndarray, pitch: np.ndarray,
-             rho: np.ndarray, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+             rho: np.ndarray, t_limit: np.ndarray, on_cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The cut surface (MODEL.md §3.1): returns the hit parameter and the unit normal pointing
     out of the lens material (toward the air), for hits nearer than ``t_limit``.
 
@@ -156,89 +179,158 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
     crossed between them. Walk those cells from the entry side (a 2-D grid traversal) and test
     each cell's sphere; the first root that lies inside its own cell is the hit (paper Fig. 9).
     Cost: the few cells the ray crosses in the slab, whatever the number of cuts.
+
+    ``on_cap`` (per ray, default ``OFF_CAP``) says that a ray starts on the cut surface itself,
+    heading ``INTO_AIR`` or ``INTO_LENS``. Its own surface is then excluded by geometry rather than
+    by distance: a ray leaving a sphere outward never meets it again, one leaving it inward only
+    at the far root, and a plane is never met again. A distance threshold alone fails for grazing
+    rays, whose own cap, met again from a start a rounding error on the wrong side, lies farther
+    away than any safe threshold.
     """
     n = len(o)
     t_hit = np.full(n, np.inf)
     normal = np.zeros((n, 3))
     normal[:, 1] = 1.0
+    on_cap = np.zeros(n, np.int8) if on_cap is None else on_cap
 
-    flat = ~np.isfinite(rho)
-    if flat.any():
-        idx = np.nonzero(flat)[0]
+    flat = np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0]
+    if len(flat):
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = (plane_a[idx] - o[idx, 1]) / d[idx, 1]
-        ok = (t > T_MIN) & (t < t_limit[idx])
-        t_hit[idx[ok]] = t[ok]
-    idx = np.nonzero(~flat)[0]
-    if len(idx) == 0:
-        return t_hit, normal
+            t = (plane_a[flat] - o[flat, 1]) / d[flat, 1]
+        ok = (t > T_MIN) & (t < t_limit[flat])
+        t_hit[flat[ok]] = t[ok]
 
-    oy, dy = o[idx, 1], d[idx, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ta = (plane_a[idx] - oy) / dy
-        tb = (plane_b[idx] - oy) / dy
-    in_slab = (oy >= plane_a[idx]) & (oy <= plane_b[idx])
-    parallel = dy == 0
-    t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), np.fmin(ta, tb))
-    t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), np.fmax(ta, tb))
-    t_in = np.maximum(t_in, 0.0)
-    t_out = np.minimum(t_out, t_limit[idx])
-    live = t_in <= t_out
-    idx, t_in, t_out = idx[live], t_in[live], t_out[live]
-    if len(idx) == 0:
-        return t_hit, normal
-
-    p = pitch[idx]
-    ox, oz = o[idx, 0], o[idx, 2]
-    dx, dz = d[idx, 0], d[idx, 2]
-    # Cell (i, j) covers [(i - 1/2) p, (i + 1/2) p] in x and likewise in z (one cell on the axis).
-    i = np.floor((ox + t_in * dx) / p + 0.5)
-    j = np.floor((oz + t_in * dz) / p + 0.5)
-    si, sj = np.sign(dx), np.sign(dz)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_next_i = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
-        t_next_j = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
-        dt_i = np.where(si != 0, p / np.abs(dx), np.inf)
-        dt_j = np.where(sj != 0, p / np.abs(dz), np.inf)
-    t_cell = t_in.copy()
-    tol = 1e-9
-
+    walk = _CellWalk.enter(o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap)
     for _ in range(MAX_CELL_STEPS):
-        if len(idx) == 0:
+        if len(walk.ray) == 0:
             break
-        rho_k = rho[idx]
-        t_cell_end = np.minimum(np.minimum(t_next_i, t_next_j), t_out)
-        cy = plane_b[idx] - rho_k
-        ocx, ocy, ocz = ox - i * p, o[idx, 1] - cy, oz - j * p
-        b = ocx * dx + ocy * d[idx, 1] + ocz * dz
-        c = ocx * ocx + ocy * ocy + ocz * ocz - rho_k * rho_k
-        with np.errstate(invalid="ignore"):
-            sq = np.sqrt(b * b - c)
-        lo, hi = -b - sq, -b + sq
-        lo_ok = (lo > T_MIN) & (lo >= t_cell - tol) & (lo <= t_cell_end + tol)
-        hi_ok = (hi > T_MIN) & (hi >= t_cell - tol) & (hi <= t_cell_end + tol)
+        t, cap_normal = walk.cap_hits()
+        found = np.isfinite(t)
+        t_hit[walk.ray[found]] = t[found]
+        normal[walk.ray[found]] = cap_normal[found]
+        walk.advance()
+        walk = walk.take(~found & (walk.t_cell <= walk.t_out))
+    return t_hit, normal
+
+
+@dataclass
+class _CellWalk:
+    """The rays still walking the cut cells (a 2-D grid traversal), one entry per ray.
+
+    Cell (i, j) covers [(i - 1/2) p, (i + 1/2) p] in x and likewise in z (one cell on the axis);
+    its cap's apex is at (i p, plane B, j p)."""
+
+    ray: np.ndarray  # index of the ray in the caller's arrays
+    o: np.ndarray  # (K, 3) origin
+    d: np.ndarray  # (K, 3) unit direction
+    top: np.ndarray  # plane B, the apexes
+    p: np.ndarray  # pitch
+    rho: np.ndarray  # cap sphere radius
+    on_cap: np.ndarray  # how the ray leaves the cap of its first cell (cleared after that cell)
+    i: np.ndarray  # current cell
+    j: np.ndarray
+    t_cell: np.ndarray  # where the ray enters the current cell
+    t_out: np.ndarray  # where it leaves the slab (or meets the side wall)
+    t_next_i: np.ndarray  # where it crosses the next cell border in x, and in z
+    t_next_j: np.ndarray
+    dt_i: np.ndarray  # ray length across one cell in x, and in z
+    dt_j: np.ndarray
+
+    TOL = 1e-9  # mm of ray parameter: a root on a cell border belongs to both cells
+
+    @classmethod
+    def enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
+        """The rays with curved cuts whose path crosses the slab between planes A and B before
+        ``t_limit``, each placed in the cell where it enters the slab."""
+        ray = np.nonzero(np.isfinite(rho))[0]
+        oy, dy = o[ray, 1], d[ray, 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ta = (plane_a[ray] - oy) / dy
+            tb = (plane_b[ray] - oy) / dy
+        in_slab = (oy >= plane_a[ray]) & (oy <= plane_b[ray])
+        parallel = dy == 0
+        t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), np.fmin(ta, tb))
+        t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), np.fmax(ta, tb))
+        t_in = np.maximum(t_in, 0.0)
+        t_out = np.minimum(t_out, t_limit[ray])
+        live = t_in <= t_out
+        ray, t_in, t_out = ray[live], t_in[live], t_out[live]
+
+        oo, dd, p = o[ray], d[ray], pitch[ray]
+        ox, oz, dx, dz = oo[:, 0], oo[:, 2], dd[:, 0], dd[:, 2]
+        i = np.floor((ox + t_in * dx) / p + 0.5)
+        j = np.floor((oz + t_in * dz) / p + 0.5)
+        si, sj = np.sign(dx), np.sign(dz)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_next_i = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
+            t_next_j = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
+            dt_i = np.where(si != 0, p / np.abs(dx), np.inf)
+            dt_j = np.where(sj != 0, p / np.abs(dz), np.inf)
+        return cls(ray, oo, dd, plane_b[ray], p, rho[ray], on_cap[ray], i, j, t_in, t_out, t_next_i, t_next_j,
+                   dt_i, dt_j)
+
+    def take(self, keep: np.ndarray) -> _CellWalk:
+        if keep.all():
+            return self
+        return _CellWalk(*(getattr(self, f.name)[keep] for f in fields(self)))
+
+    def cap_hits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each ray's hit on the cap of its current cell within the cell (inf if none), and the
+        unit normal there."""
+        o, d = self.o, self.d
+        ax, ay, az = o[:, 0] - self.i * self.p, o[:, 1] - self.top, o[:, 2] - self.j * self.p
+        dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
+        lo, hi = _cap_roots(ax, ay, az, dx, dy, dz, self.rho)
+        if self.on_cap.any():  # only in a ray's first cell: the cap it starts on
+            lo = np.where(self.on_cap == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
+            hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
+        t_end = np.minimum(np.minimum(self.t_next_i, self.t_next_j), self.t_out)
+        lo_ok = (lo > T_MIN) & (lo >= self.t_cell - self.TOL) & (lo <= t_end + self.TOL)
+        hi_ok = (hi > T_MIN) & (hi >= self.t_cell - self.TOL) & (hi <= t_end + self.TOL)
         t = np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
         found = np.isfinite(t)
+        normal = np.zeros((len(t), 3))
         if found.any():
-            f = np.nonzero(found)[0]
-            g = idx[f]
-            t_hit[g] = t[f]
-            hit = o[g] + t[f, None] * d[g]
-            centre = np.stack([i[f] * p[f], cy[f], j[f] * p[f]], axis=1)
-            normal[g] = (hit - centre) / rho_k[f, None]
-        # Advance to the neighbouring cell the ray enters next.
-        step_i = t_next_i < t_next_j
-        t_cell = np.where(step_i, t_next_i, t_next_j)
-        i = np.where(step_i, i + si, i)
-        j = np.where(step_i, j, j + sj)
-        t_next_i = np.where(step_i, t_next_i + dt_i, t_next_i)
-        t_next_j = np.where(step_i, t_next_j, t_next_j + dt_j)
-        keep = ~found & (t_cell <= t_out)
-        if not keep.all():
-            idx, i, j, t_cell, t_out = idx[keep], i[keep], j[keep], t_cell[keep], t_out[keep]
-            t_next_i, t_next_j, dt_i, dt_j = t_next_i[keep], t_next_j[keep], dt_i[keep], dt_j[keep]
-            si, sj, p, ox, oz, dx, dz = si[keep], sj[keep], p[keep], ox[keep], oz[keep], dx[keep], dz[keep]
-    return t_hit, normal
+            tf = t[found]
+            normal[found] = _cap_normal(ax[found] + tf * dx[found], ay[found] + tf * dy[found],
+                                        az[found] + tf * dz[found], self.rho[found])
+        return t, normal
+
+    def advance(self) -> None:
+        """Step every ray to the neighbouring cell it enters next."""
+        step_i = self.t_next_i < self.t_next_j
+        self.t_cell = np.where(step_i, self.t_next_i, self.t_next_j)
+        self.i = np.where(step_i, self.i + np.sign(self.d[:, 0]), self.i)
+        self.j = np.where(step_i, self.j, self.j + np.sign(self.d[:, 2]))
+        self.t_next_i = np.where(step_i, self.t_next_i + self.dt_i, self.t_next_i)
+        self.t_next_j = np.where(step_i, self.t_next_j, self.t_next_j + self.dt_j)
+        if self.on_cap.any():
+            self.on_cap = np.zeros_like(self.on_cap)
+
+
+def _cap_roots(ax: np.ndarray, ay: np.ndarray, az: np.ndarray, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray,
+               rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Both roots (near, far; NaN for a miss) of a ray with a lenslet sphere; the ray's origin
+    (ax, ay, az) is given relative to the cap's apex.
+
+    The sphere of radius rho hangs below its apex, so |a + t d + rho y|^2 = rho^2 becomes
+    t^2 + 2 (a.d + rho d_y) t + |a|^2 + 2 rho a_y = 0: no rho^2 term left to cancel. For very low
+    cuts rho reaches 1e11 mm, and the textbook |o - c|^2 - rho^2 loses every digit. The small root
+    is taken as c / q so that it stays exact when the cap is nearly flat (it tends to the plane)."""
+    b = ax * dx + ay * dy + az * dz + rho * dy
+    c = ax * ax + ay * ay + az * az + 2.0 * rho * ay
+    with np.errstate(invalid="ignore", divide="ignore"):
+        q = -(b + np.copysign(np.sqrt(b * b - c), b))
+        r1, r2 = q, c / q
+    return np.fmin(r1, r2), np.fmax(r1, r2)
+
+
+def _cap_normal(hx: np.ndarray, hy: np.ndarray, hz: np.ndarray, rho: np.ndarray) -> np.ndarray:
+    """Unit normal, out of the lens, at a point (hx, hy, hz) given relative to the cap's apex.
+
+    Normalised explicitly: the hit is on the sphere only to rounding, so (hit - centre) / rho is
+    not of unit length, and the error would grow at every later bounce."""
+    return optics.normalize(np.stack([hx, hy + rho, hz], axis=1))
 
 
 def cut_surface_height(x: np.ndarray, z: np.ndarray, plane_b: float, pitch: float, rho: float) -> np.ndarray:
@@ -248,7 +340,8 @@ def cut_surface_height(x: np.ndarray, z: np.ndarray, plane_b: float, pitch: floa
     i = np.floor(np.asarray(x) / pitch + 0.5)
     j = np.floor(np.asarray(z) / pitch + 0.5)
     r2 = (x - i * pitch) ** 2 + (z - j * pitch) ** 2
-    return plane_b - rho + np.sqrt(np.maximum(rho * rho - r2, 0.0))
+    # the sag below the apex, rho - sqrt(rho^2 - r^2), written without cancellation for huge rho
+    return plane_b - r2 / (rho + np.sqrt(np.maximum(rho * rho - r2, 0.0)))
 
 
 def body_box(body: dict) -> tuple[np.ndarray, np.ndarray]:

@@ -14,7 +14,10 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def normalize(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    """Rows of ``v`` scaled to unit length (a single vector too)."""
+    if v.ndim == 1:
+        return v / np.sqrt(v @ v)
+    return v / np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
 
 
 def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float) -> np.ndarray:
@@ -35,8 +38,11 @@ def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarra
 
 
 def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """Mirror direction of ``d`` about the unit normal ``n`` (either orientation)."""
-    return d - 2.0 * dot(d, n)[:, None] * n
+    """Mirror direction of ``d`` about the unit normal ``n`` (either orientation), of unit length.
+
+    Renormalised: a ray may bounce dozens of times inside the lens (total internal reflection),
+    and each bounce would otherwise multiply the rounding error of its length."""
+    return normalize(d - 2.0 * dot(d, n)[:, None] * n)
 
 
 def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float) -> np.ndarray:
@@ -48,7 +54,7 @@ def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float) -> np.ndarray
     eta = np.broadcast_to(eta, cos_i.shape)
     sin2_t = eta * eta * (1.0 - cos_i * cos_i)
     cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
-    return eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n
+    return normalize(eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n)  # unit, as in reflect()
 
 
 def absorption(coeff: np.ndarray, length: np.ndarray) -> np.ndarray:
@@ -59,16 +65,17 @@ def absorption(coeff: np.ndarray, length: np.ndarray) -> np.ndarray:
 def phong(normal: np.ndarray, view: np.ndarray, light_dir: np.ndarray, diffuse: np.ndarray,
           light_color: np.ndarray, ambient: float, specular: np.ndarray | float,
           shininess: np.ndarray | float) -> np.ndarray:
-    """Equation (1): [d + (1-d) cos θ] C0 + w (cos β)^n C1, cosines below 0 counted as 0.
+    """Equation (1): [d + (1-d) cos θ] C0 + w (cos β)^n C1, cosines below 0 counted as 0, and
+    no specular term where the light is behind the surface, cos θ <= 0 (MODEL.md §4).
 
     ``view`` points from the surface to the eye, ``light_dir`` from the surface to the light.
     ``diffuse`` is (N, 3) or (3,); returns (N, 3).
     """
-    cos_theta = np.maximum(0.0, normal @ light_dir)
+    cos_theta = normal @ light_dir
     half = normalize(view + light_dir)
     cos_beta = np.maximum(0.0, dot(normal, half))
-    diffuse_term = (ambient + (1.0 - ambient) * cos_theta)[:, None] * diffuse
-    spec = np.asarray(specular) * np.power(cos_beta, shininess)
+    diffuse_term = (ambient + (1.0 - ambient) * np.maximum(0.0, cos_theta))[:, None] * diffuse
+    spec = np.where(cos_theta > 0.0, np.asarray(specular) * np.power(cos_beta, shininess), 0.0)
     return diffuse_term + spec[:, None] * light_color
 
 

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
@@ -154,36 +155,40 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
             on_band(y0, y1, image[y0:y1], {name: passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)}
                     if keep_passes else {})
 
-    done = 0
-    if threads == 1:
-        for y0, y1 in bands:
-            if should_stop is not None and should_stop():
-                raise RenderCancelled("render cancelled")
-            finish(y0, y1, _trace_band(ctx, y0, y1))
-            done += 1
-            if progress is not None:
-                progress(done / len(bands))
-    else:
-        with ThreadPoolExecutor(max_workers=threads) as pool:
-            pending = list(bands)
-            running = []
-            while pending or running:
-                while pending and len(running) < threads:
-                    y0, y1 = pending.pop(0)
-                    running.append((y0, y1, pool.submit(_trace_band, ctx, y0, y1)))
-                y0, y1, fut = running.pop(0)
-                band = fut.result()
-                if should_stop is not None and should_stop():
-                    for *_, f in running:
-                        f.cancel()
-                    raise RenderCancelled("render cancelled")
-                finish(y0, y1, band)
-                done += 1
-                if progress is not None:
-                    progress(done / len(bands))
+    for done, (y0, y1, band) in enumerate(_traced_bands(ctx, bands, threads, should_stop or _never), start=1):
+        finish(y0, y1, band)
+        if progress is not None:
+            progress(done / len(bands))
     stats["seconds"] = time.perf_counter() - start
     stats["width"], stats["height"] = width, height
     return RenderResult(image, dict(zip(PASS_NAMES, passes, strict=False)) if keep_passes else {}, stats)
+
+
+def _never() -> bool:
+    return False
+
+
+def _traced_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
+                  should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
+    """Trace the bands, at most ``threads`` at a time (in the calling thread when 1), and yield
+    them in order; ``should_stop()`` is polled before starting a band and after each finishes."""
+    pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
+    pending, running = deque(bands), deque()
+    try:
+        while pending or running:
+            while pending and len(running) < threads:
+                if should_stop():
+                    raise RenderCancelled("render cancelled")
+                y0, y1 = pending.popleft()
+                running.append((y0, y1, pool.submit(_trace_band, ctx, y0, y1) if pool else _trace_band(ctx, y0, y1)))
+            y0, y1, band = running.popleft()
+            band = band.result() if pool else band
+            if should_stop():
+                raise RenderCancelled("render cancelled")
+            yield y0, y1, band
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def render(scene: dict, width: int | None = None, height: int | None = None, *,
@@ -272,7 +277,10 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
     li = rays.lamp
     o, d = rays.o, rays.d
     t_wall = G.hit_side_wall(o, d, L.radius[li])
-    t_cut, cut_normal = G.hit_cuts(o, d, L.plane_a[li], L.plane_b[li], L.pitch[li], L.cut_radius[li], t_wall)
+    # A ray that starts on a cut knows it: its own cap is excluded by geometry, not by distance.
+    on_cap = np.where(rays.src != P.CUT, G.OFF_CAP, np.where(rays.medium == P.IN_AIR, G.INTO_AIR, G.INTO_LENS))
+    t_cut, cut_normal = G.hit_cuts(o, d, L.plane_a[li], L.plane_b[li], L.pitch[li], L.cut_radius[li], t_wall,
+                                   on_cap.astype(np.int8))
     t_best = np.minimum(t_wall, t_cut)
     surface = np.where(t_cut < t_wall, P.CUT, P.WALL).astype(np.int8)
 
@@ -289,7 +297,8 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
         lj = li[idx]
         oa, da = o[idx], d[idx]
         candidates = (
-            (P.REFLECTOR, G.hit_reflector(oa, da, L.focal[lj], L.vertex[lj], L.rim[lj])),
+            (P.REFLECTOR, G.hit_reflector(oa, da, L.focal[lj], L.vertex[lj], L.rim[lj],
+                                          rays.src[idx] == P.REFLECTOR)),
             (P.BULB, G.hit_sphere(oa, da, L.bulb_center[lj], L.bulb_radius[lj])),
             (P.SOCKET, G.hit_socket(oa, da, L.socket_radius[lj], L.bulb_center[lj, 1], L.vertex[lj])),
         )
@@ -310,9 +319,9 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
 
     k = rays.k
     lens = rays.medium == P.IN_LENS
-    if lens.any():  # equation (2): absorption over the path length in the lens
+    if lens.any():
         k = k.copy()
-        k[lens] *= np.exp(-L.absorption[rays.lamp[lens]] * t[lens, None])
+        k[lens] *= optics.absorption(L.absorption[rays.lamp[lens]], t[lens])
     hit = rays.o + np.where(np.isfinite(t), t, 0.0)[:, None] * rays.d
 
     for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, L.wall_color), (P.BULB, BULB_PASS, L.bulb_intensity),

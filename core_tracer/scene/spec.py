@@ -10,12 +10,20 @@ linear RGB (MODEL.md §2).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 SCHEMA = "lamp-scene/1"
 MAX_LAMPS = 4
 MAX_IMAGE_SIDE = 8192
+# A direction vector shorter than this cannot be normalised reliably (its square underflows).
+MIN_DIRECTION_LENGTH = 1e-9
+# mm: the camera must stand at least this far from its target to have a view direction.
+MIN_CAMERA_DISTANCE = 1e-6
+# At most this many cuts across the lens diameter: the cut cell walk then crosses a bounded
+# number of cells (about sqrt 2 times this) and its cell arithmetic stays exact.
+MAX_CUTS_ACROSS = 1000
 
 
 @dataclass(frozen=True)
@@ -31,7 +39,7 @@ class Num:
     doc: str = ""
     size: int = 1
     integer: bool = False
-    nonzero: bool = False  # a direction: the vector may not be all zeros
+    nonzero: bool = False  # a direction: length at least MIN_DIRECTION_LENGTH
     subtype: str = ""  # a hint for user interfaces: "color", "distance", "direction", "xyz"
 
     def range_text(self) -> str:
@@ -49,8 +57,12 @@ class Num:
         if self.size > 1:
             text = f"{self.size} numbers, each {text}"
         if self.nonzero:
-            text += ", not all zero"
+            text += f", length at least {_fmt(MIN_DIRECTION_LENGTH)}"
         return text
+
+    def too_short(self, items: list[float]) -> bool:
+        """Whether a direction vector is too short to normalise (only for ``nonzero`` fields)."""
+        return self.nonzero and math.fsum(x * x for x in items) < MIN_DIRECTION_LENGTH**2
 
 
 @dataclass(frozen=True)

@@ -183,8 +183,8 @@ def _num(v: Any, spec: S.Num, where: str) -> Any:
         if not isinstance(v, list) or len(v) != spec.size:
             raise SceneError(where, f"expected a list of {spec.size} numbers, got {_show(v)}")
         items = [_scalar(x, spec, f"{where}[{i}]") for i, x in enumerate(v)]
-        if spec.nonzero and all(x == 0 for x in items):
-            raise SceneError(where, f"{_show(v)} is a zero vector; allowed {spec.range_text()}")
+        if spec.too_short(items):
+            raise SceneError(where, f"{_show(v)} is too short to give a direction; allowed {spec.range_text()}")
         return items
     return _scalar(v, spec, where)
 
@@ -269,8 +269,9 @@ def check_geometry(scene: dict) -> None:
         raise SceneError("camera.position", f"y = {_show(cam['position'][1])} is not in front of the "
                                             "lamp; allowed y < 0 mm (the lamp faces -Y)")
     fwd = [b - a for a, b in zip(cam["position"], cam["target"], strict=False)]
-    if math.hypot(*fwd) == 0:
-        raise SceneError("camera.target", "equals camera.position; the camera needs a view direction")
+    if math.hypot(*fwd) < S.MIN_CAMERA_DISTANCE:
+        raise SceneError("camera.target", f"is {math.hypot(*fwd):.3g} mm from camera.position; allowed at least "
+                                          f"{S.MIN_CAMERA_DISTANCE:g} mm away (the camera needs a view direction)")
     cross = [fwd[1] * cam["up"][2] - fwd[2] * cam["up"][1], fwd[2] * cam["up"][0] - fwd[0] * cam["up"][2],
              fwd[0] * cam["up"][1] - fwd[1] * cam["up"][0]]
     if math.hypot(*cross) < 1e-9 * math.hypot(*fwd) * math.hypot(*cam["up"]):
@@ -294,9 +295,12 @@ def check_geometry(scene: dict) -> None:
                 raise SceneError(f"{where}.center", f"lens overlaps the lens of lamps[{j}] (centres "
                                  f"{d:g} mm apart); allowed at least {R + other['lens']['radius']:g} mm")
         pitch, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
+        pitch_range = f"allowed [{2 * R / S.MAX_CUTS_ACROSS:g}, {2 * R:g}] mm (at most {S.MAX_CUTS_ACROSS} cuts " \
+                      "across the lens diameter)"
         if pitch > 2 * R:
-            raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is larger than the lens; "
-                             f"allowed (0, {2 * R:g}] mm (the lens diameter)")
+            raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is larger than the lens; {pitch_range}")
+        if pitch < 2 * R / S.MAX_CUTS_ACROSS:
+            raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is too fine for lens radius {R:g} mm; {pitch_range}")
         c = pitch / math.sqrt(2.0)
         if h > c:
             raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "

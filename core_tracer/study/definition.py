@@ -159,8 +159,9 @@ def check_value(param: Parameter, value: Any) -> Any:
             raise SceneError(param.text, f"expected a list of {sp.size} numbers, got {_show(value)}; "
                                          f"allowed {sp.range_text()}")
         items = [_check_scalar(param, x, sp) for x in value]
-        if sp.nonzero and all(x == 0 for x in items):
-            raise SceneError(param.text, f"{_show(value)} is a zero vector; allowed {sp.range_text()}")
+        if sp.too_short(items):
+            raise SceneError(param.text, f"{_show(value)} is too short to give a direction; "
+                                         f"allowed {sp.range_text()}")
         return items
     return _check_scalar(param, value, sp)
 

@@ -64,7 +64,7 @@ BAD_SCENES = {
     "lens-outside-body": (_edit(lambda d: d["lamps"][0].update(center=[80, 0])),
                           ("lamps[0].center", "[80.0, 0.0]", "outside the body", "[-65, 65]")),
     "cuts-larger-than-lens": (_edit(lambda d: d["lamps"][0]["cuts"].update(pitch=100)),
-                              ("lamps[0].cuts.pitch", "100", "(0, 90] mm")),
+                              ("lamps[0].cuts.pitch", "100", "[0.09, 90] mm")),
     "bulb-too-big": (_edit(lambda d: d["lamps"][0]["bulb"].update(radius=30)),
                      ("lamps[0].bulb", "radius 30 mm")),
     "bulb-off-axis-outside-reflector": (_edit(lambda d: d["lamps"][0]["bulb"].update(offset=[40, 0, 0])),
@@ -72,6 +72,14 @@ BAD_SCENES = {
     "image-100000-px": (_edit(lambda d: d["image"].update(width=100000)),
                         ("image.width", "100000", "[1, 8192] px")),
     "lamps-not-a-list": (_edit(lambda d: d.update(lamps={"center": [0, 0]})), ("lamps", "expected a list")),
+    "light-direction-too-short": (_edit(lambda d: d["light"].update(direction=[1e-170, 0, 0])),
+                                  ("light.direction", "too short", "length at least 1e-09")),
+    "camera-up-too-short": (_edit(lambda d: d["camera"].update(up=[0, 0, 1e-300])),
+                            ("camera.up", "too short", "length at least 1e-09")),
+    "camera-on-its-target": (_edit(lambda d: d["camera"].update(position=[0, -1e-200, 0], target=[0, 0, 0])),
+                             ("camera.target", "1e-200 mm from camera.position", "at least 1e-06 mm")),
+    "cuts-too-fine": (_edit(lambda d: d["lamps"][0]["cuts"].update(pitch=1e-15)),
+                      ("lamps[0].cuts.pitch", "1e-15 is too fine", "[0.09, 90] mm")),
 }
 
 

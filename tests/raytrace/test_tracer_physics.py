@@ -205,3 +205,16 @@ def test_on_band_hands_out_each_band_of_the_image_and_its_passes(monkeypatch):
     np.testing.assert_array_equal(np.concatenate([rows for _, _, rows, _ in bands]), result.image)
     for name, full in result.passes.items():
         np.testing.assert_array_equal(np.concatenate([p[name] for *_, p in bands]), full)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_should_stop_ends_the_render_after_the_band_it_follows(monkeypatch, threads):
+    from core_tracer.raytrace import tracer
+
+    monkeypatch.setattr(tracer, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide: 3 bands
+    scene = scene_with(**{"image": {"width": 40, "height": 30}})
+    bands = []
+    with pytest.raises(tracer.RenderCancelled):
+        render_passes(scene, threads=threads, on_band=lambda a, b, rows, passes: bands.append((a, b)),
+                      should_stop=lambda: len(bands) >= 1)
+    assert bands == [(0, 10)]
