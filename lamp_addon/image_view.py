@@ -1,13 +1,24 @@
-"""Images the add-on makes ("Lamp Tracer", "Lamp Compare"): pixels in, Image Editor out.
+"""Images the add-on makes ("Lamp Tracer", "Lamp Compare", "Lamp Study"): pixels in, Image Editor out.
 
 Blender's image rows run bottom-up, the tracer's (and OpenImageIO's) top-down. The colour space
 is set before any pixel is written: changing it afterwards resets the pixels (BLENDER-NOTES).
+
+Colour: the images hold linear values and are shown with Blender's own colour management, the
+scene's view transform (AgX, Standard, False Color, ...) applied exactly as to a render
+(``use_view_as_render``). Images of the lamp carry the design's automatic exposure in their
+pixels (``core_tracer.images.display.auto_exposure``), recorded in the image's ``lamp_exposure``
+property, so the lit lens's cut pattern reads; the scene's own exposure adds to it.
 """
 
 from __future__ import annotations
 
 import bpy
 import numpy as np
+
+from ..core_tracer.images import display
+
+EXPOSURE_PROPERTY = "lamp_exposure"  # stops already applied to an image's pictures
+NO_OPENIMAGEIO = "this Blender has no OpenImageIO Python module to write image files"
 
 
 def scene_linear_colorspace() -> str:
@@ -51,6 +62,48 @@ def image_from_array(name: str, rgb: np.ndarray, alpha: np.ndarray | None = None
     image.pixels.foreach_set(rgba_rows(rgb, alpha))
     image.update()
     return image
+
+
+def show_linear(name: str, rgb: np.ndarray, exposure: float) -> bpy.types.Image:
+    """The image ``name`` holding ``rgb`` (H, W, 3, linear, its pictures already scaled by
+    ``exposure`` stops), shown through the scene's view transform like a render."""
+    image = image_from_array(name, rgb)
+    image.use_view_as_render = True
+    image[EXPOSURE_PROPERTY] = float(exposure)
+    return image
+
+
+def image_exposure(image: bpy.types.Image) -> float:
+    """The stops applied to an image's pictures (0 for an image without ``lamp_exposure``)."""
+    value = image.get(EXPOSURE_PROPERTY, 0.0)
+    return float(value) if isinstance(value, int | float) else 0.0
+
+
+def scene_view(bl_scene) -> display.ViewTransform:
+    """The scene's view transform, applied outside Blender's drawing (files): Blender's own
+    configuration through OpenImageIO; Standard where the scene's view is not one of its sRGB views."""
+    try:
+        return display.view_transform(bl_scene.view_settings.view_transform)
+    except ValueError:
+        return display.view_transform(display.STANDARD)
+
+
+def openimageio_available() -> bool:
+    """Whether an OpenImageIO module can be imported (Blender 4.4+ bundles one, made importable by
+    ``bpy.utils.expose_bundled_modules``). Without it the add-on writes no image files and draws
+    labels with its bitmap font."""
+    try:
+        import OpenImageIO  # noqa: F401
+    except ImportError:
+        expose = getattr(bpy.utils, "expose_bundled_modules", None)
+        if expose is None:
+            return False
+        expose()
+        try:
+            import OpenImageIO  # noqa: F401
+        except ImportError:
+            return False
+    return True
 
 
 def image_to_array(image: bpy.types.Image) -> np.ndarray:

@@ -369,7 +369,8 @@ def _forget_thumbnails(library: Library, preset_path: str) -> None:
 
 
 def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUMBNAIL_SIZE) -> str:
-    """Render ``entry`` with the tracer at ``size`` x ``size`` and write it as PNG (atomically)."""
+    """Render ``entry`` with the tracer at ``size`` x ``size`` and write it as PNG (atomically), shown
+    as everywhere else: Blender's AgX at the design's automatic exposure (``images.display``)."""
     from .. import render  # the tracer loads only when a thumbnail is actually made
     from ..images.imageio import write_image
 
