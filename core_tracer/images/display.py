@@ -194,9 +194,7 @@ def view_transform(view: str = DEFAULT_VIEW, config: str | None = None) -> ViewT
     oiio = _oiio()
     if config is None or oiio is None:
         if view != STANDARD:
-            missing = ("OpenImageIO is not installed" if oiio is None else
-                       f"Blender's colour configuration was not found (no bpy module, no Blender install, "
-                       f"no {CONFIG_ENV})")
+            missing = "OpenImageIO is not installed" if oiio is None else _why_no_config()
             note = f"{missing}, so images use the Standard view (plain sRGB) instead of {view}"
             if view not in KNOWN_VIEWS:
                 raise ValueError(f"{view!r} is not a view; allowed {', '.join(KNOWN_VIEWS)}")
@@ -208,6 +206,13 @@ def view_transform(view: str = DEFAULT_VIEW, config: str | None = None) -> ViewT
     if view == STANDARD:
         return ViewTransform(STANDARD, view, None)  # the sRGB transfer function, exactly (no config needed)
     return ViewTransform(view, view, config)
+
+
+def _why_no_config() -> str:
+    own = os.environ.get(CONFIG_ENV)
+    if own:
+        return f"{CONFIG_ENV} names no file ({own})"
+    return f"Blender's colour configuration was not found (no bpy module, no Blender install, no {CONFIG_ENV})"
 
 
 def available_views(config: str | None = None) -> tuple[str, ...]:

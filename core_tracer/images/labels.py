@@ -30,8 +30,10 @@ def _oiio():
 def render_text_available() -> bool:
     """Whether OpenImageIO can draw text here (probed once: it draws a "1" and looks for ink)."""
     global _render_text_works
+    oiio = _oiio()
+    if oiio is None:  # checked every time: a module that cannot be imported draws nothing
+        return False
     if _render_text_works is None:
-        oiio = _oiio()
         ok = False
         if oiio is not None:
             probe = oiio.ImageBuf(oiio.ImageSpec(16, 16, 1, oiio.FLOAT))
