@@ -73,6 +73,20 @@ def show_linear(name: str, rgb: np.ndarray, exposure: float) -> bpy.types.Image:
     return image
 
 
+PREVIEW_SIDE = 96  # px of the longer side of the preview that measures a design's exposure
+
+
+def design_exposure(scene: dict) -> float:
+    """The automatic exposure of a design (a normalised scene), measured on a small preview render
+    of the same view, for images shown while they are still being rendered."""
+    from ..core_tracer import render
+
+    width, height = scene["image"]["width"], scene["image"]["height"]
+    scale = min(1.0, PREVIEW_SIDE / max(width, height))
+    preview = render(scene, max(1, round(width * scale)), max(1, round(height * scale)))
+    return display.auto_exposure(preview)
+
+
 def image_exposure(image: bpy.types.Image) -> float:
     """The stops applied to an image's pictures (0 for an image without ``lamp_exposure``)."""
     value = image.get(EXPOSURE_PROPERTY, 0.0)
