@@ -102,6 +102,12 @@ def scene_view(bl_scene) -> display.ViewTransform:
         return display.view_transform(display.STANDARD)
 
 
+def thumbnail_view() -> display.ViewTransform:
+    """Thumbnails are shown as the shipped ones were made, whatever a scene's settings: the
+    default view (AgX) of Blender's own configuration."""
+    return display.view_transform(display.DEFAULT_VIEW)
+
+
 def openimageio_available() -> bool:
     """Whether an OpenImageIO module can be imported (Blender 4.4+ bundles one, made importable by
     ``bpy.utils.expose_bundled_modules``). Without it the add-on writes no image files and draws

@@ -205,6 +205,7 @@ class Thumbnails:
         self._queued: set[str] = set()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self.view = None  # the view transform thumbnails are shown through, found on first request
 
     def path(self, entry: P.PresetEntry) -> str:
         return P.thumbnail_path(entry, self.cache)
@@ -212,6 +213,8 @@ class Thumbnails:
     def request(self, entries: list[P.PresetEntry]) -> None:
         """Show the thumbnails that exist; queue the others for the worker (where it can write them)."""
         can_write = image_view.openimageio_available()
+        if can_write and self.view is None:
+            self.view = image_view.thumbnail_view()  # here, on the main thread: the worker never touches bpy
         for entry in entries:
             path = self.path(entry)
             self.paths[entry.file] = path
@@ -291,7 +294,7 @@ class Thumbnails:
                 path.set()
                 continue
             try:
-                P.make_thumbnail(entry, path)
+                P.make_thumbnail(entry, path, view=self.view)
                 self._done.put((path, ""))
             except Exception as e:  # noqa: BLE001 - a thumbnail that fails is reported, never fatal
                 self._done.put((path, f"{type(e).__name__}: {e}"))

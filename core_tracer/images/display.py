@@ -108,8 +108,13 @@ def _installed_blender_configs() -> list[str]:
 
 def find_config() -> str | None:
     """Blender's ``config.ocio``: ``$LAMP_OCIO_CONFIG``, the running Blender's, the bpy module's, or a
-    Blender install's; None when there is none."""
-    own = os.environ.get(CONFIG_ENV)
+    Blender install's; None when there is none. Looked for once (per value of ``$LAMP_OCIO_CONFIG``):
+    the first call inside Blender must come from the main thread, as every use of ``bpy``."""
+    return _find_config(os.environ.get(CONFIG_ENV, ""))
+
+
+@lru_cache(maxsize=4)
+def _find_config(own: str) -> str | None:
     if own:
         return own if os.path.isfile(own) else None
     for found in (_running_blender_config(), _bpy_module_config()):
@@ -202,7 +207,7 @@ def view_transform(view: str = DEFAULT_VIEW, config: str | None = None) -> ViewT
         return ViewTransform(STANDARD, view, None)
     views = _views_of(config)
     if view not in views:
-        raise ValueError(f"{view!r} is not a view of {config}; allowed {', '.join(views)}")
+        raise ValueError(f"{view!r} is not a view of Blender's colour management; allowed {', '.join(views)}")
     if view == STANDARD:
         return ViewTransform(STANDARD, view, None)  # the sRGB transfer function, exactly (no config needed)
     return ViewTransform(view, view, config)

@@ -25,6 +25,7 @@ import unicodedata
 from dataclasses import dataclass, field
 
 from .. import fileio
+from ..images.display import ViewTransform
 from ..scene.validate import SceneError, normalize, parse_scene, read_json, scene_to_json
 
 SUFFIX = ".json"
@@ -368,9 +369,11 @@ def _forget_thumbnails(library: Library, preset_path: str) -> None:
             _remove_thumbnails(folder, stem)
 
 
-def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUMBNAIL_SIZE) -> str:
+def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUMBNAIL_SIZE, *,
+                   view: ViewTransform | None = None) -> str:
     """Render ``entry`` with the tracer at ``size`` x ``size`` and write it as PNG (atomically), shown
-    as everywhere else: Blender's AgX at the design's automatic exposure (``images.display``)."""
+    as everywhere else: through ``view`` (default Blender's AgX, ``images.display``) at the design's
+    automatic exposure."""
     from .. import render  # the tracer loads only when a thumbnail is actually made
     from ..images.imageio import write_image
 
@@ -379,7 +382,7 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     scene["image"] = {"width": int(size), "height": int(size)}
     image = render(scene, size, size)
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
-    write_image(target, image, scene)
+    write_image(target, image, scene, view=view)
     stem = os.path.splitext(os.path.basename(entry.file))[0]
     _remove_thumbnails(os.path.dirname(os.path.abspath(target)), stem, keep=os.path.abspath(target))
     return target
