@@ -478,8 +478,9 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
     samples: bpy.props.IntProperty(name="Cycles Samples", default=DEFAULT_SAMPLES, min=1, max=65536,
                                    description="Samples per pixel of the Cycles render")
     filepath: bpy.props.StringProperty(name="Save As", subtype="FILE_PATH", default="",
-                                       description="Also write the side-by-side image here (.png sRGB or "
-                                                   ".exr linear); empty: do not write")
+                                       description="Also write the side-by-side image here (.png as shown, "
+                                                   "through the scene's view transform, or .exr linear); "
+                                                   "empty: do not write")
 
     @classmethod
     def poll(cls, context):

@@ -276,7 +276,8 @@ class LAMP_OT_study_keep_variant(_OnLastStudy, bpy.types.Operator):
 
 
 class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
-    """Save the contact sheet as EXR (linear) or PNG (sRGB), with the study in its header"""
+    """Save the contact sheet as PNG (as shown: the scene's view transform) or EXR (linear), with the
+    study in its header"""
 
     bl_idname = "lamp.study_save_sheet"
     bl_label = "Save Sheet"
