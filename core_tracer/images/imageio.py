@@ -10,8 +10,9 @@ a failure never leaves a partial file.
 
 from __future__ import annotations
 
+import contextlib
 import os
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 
@@ -133,8 +134,9 @@ def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mappin
             raise OSError(f"{name}: cannot finish the image ({out.geterror()})")
 
 
-def read_attribute(path: str | os.PathLike, attribute: str) -> object:
-    """One header attribute of an image file (None when it has none), without reading the pixels."""
+@contextlib.contextmanager
+def _opened(path: str | os.PathLike) -> Iterator[tuple[str, object, object]]:
+    """The one way images are opened for reading: (name, OpenImageIO module, ImageInput), closed after."""
     name = os.fspath(path)
     if not os.path.isfile(name):
         raise SceneError(name, "cannot read the image (no such file)")
@@ -143,26 +145,23 @@ def read_attribute(path: str | os.PathLike, attribute: str) -> object:
     if inp is None:
         raise SceneError(name, f"cannot read the image ({oiio.geterror()})")
     try:
-        return inp.spec().getattribute(attribute)
+        yield name, oiio, inp
     finally:
         inp.close()
 
 
+def read_attribute(path: str | os.PathLike, attribute: str) -> object:
+    """One header attribute of an image file (None when it has none), without reading the pixels."""
+    with _opened(path) as (_name, _oiio_module, inp):
+        return inp.spec().getattribute(attribute)
+
+
 def _read(path: str | os.PathLike):
-    name = os.fspath(path)
-    if not os.path.isfile(name):
-        raise SceneError(name, "cannot read the image (no such file)")
-    oiio = _oiio()
-    inp = oiio.ImageInput.open(name)
-    if inp is None:
-        raise SceneError(name, f"cannot read the image ({oiio.geterror()})")
-    try:
+    with _opened(path) as (name, oiio, inp):
         spec = inp.spec()
         pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
         if pixels is None:
             raise SceneError(name, f"cannot read the image ({inp.geterror()})")
-    finally:
-        inp.close()
     pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, spec.nchannels)
     return name, spec, pixels
 

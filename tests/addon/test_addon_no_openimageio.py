@@ -8,15 +8,12 @@ bring it back).
 
 from __future__ import annotations
 
-import json
 import sys
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from helpers import BASELINE
-
-import core_tracer
+from helpers import BASELINE, scene_with
 
 pytestmark = pytest.mark.blender
 
@@ -26,14 +23,10 @@ def no_openimageio(monkeypatch):
     monkeypatch.setitem(sys.modules, "OpenImageIO", None)
 
 
-def _design(lamp_addon, bl_scene, size=(24, 16)) -> dict:
-    with open(BASELINE, encoding="utf-8") as f:
-        doc = json.load(f)
-    doc["image"] = {"width": size[0], "height": size[1]}
-    scene = core_tracer.parse_scene(doc)
+def _design(lamp_addon, bl_scene) -> None:
+    scene = scene_with(image={"width": 24, "height": 16})
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
     lamp_addon.render_camera.ensure_scene_camera(bl_scene, scene)
-    return scene
 
 
 def test_openimageio_is_missing_as_blender_sees_it(lamp_addon, no_openimageio):
