@@ -4,14 +4,17 @@ and look exactly like the PNGs core_tracer writes outside Blender."""
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 
 import numpy as np
 import OpenImageIO as oiio
 import pytest
-from helpers import BASELINE, FOUR_LAMPS
+from helpers import BASELINE, FOUR_LAMPS, ROOT
 
 import core_tracer
-from core_tracer.images import display
+from core_tracer.images import display, imageio
 
 pytestmark = pytest.mark.blender
 
@@ -54,11 +57,45 @@ def test_design_exposure_from_a_preview_equals_the_full_renders(lamp_addon):
 
 
 def test_thumbnails_use_the_default_view_of_the_running_blenders_config(lamp_addon):
-    import os
-
     import bpy
 
     view = lamp_addon.image_view.thumbnail_view()
     own = bpy.utils.system_resource("DATAFILES", path="colormanagement")
     assert view.view == "AgX" and view.note == ""
     assert os.path.samefile(view.config, os.path.join(own, "config.ocio"))
+
+
+def test_compare_tool_png_shows_both_halves_through_one_transform(tmp_path):
+    tool = str(ROOT / "tools" / "compare_preset.py")
+    env = {k: v for k, v in os.environ.items() if k != "BLENDER_USER_RESOURCES"}
+    args = [str(BASELINE), "--samples", "2", "--size", "40x32"]
+    outputs = {}
+    for name, extra in (("linear.exr", []), ("shown.png", ["--view", "Filmic"])):
+        done = subprocess.run([sys.executable, tool, *args, "-o", str(tmp_path / name), *extra], capture_output=True,
+                              text=True, env=env, cwd=tmp_path, timeout=300)
+        assert done.returncode == 0, done.stderr
+        outputs[name] = done.stdout
+    assert "shown: Filmic at " in outputs["shown.png"] and "shown:" not in outputs["linear.exr"]
+    linear, _ = imageio.read_image(tmp_path / "linear.exr")
+    png = tmp_path / "shown.png"
+    ev = float(imageio.read_attribute(png, imageio.EXPOSURE_ATTRIBUTE))
+    assert imageio.read_attribute(png, imageio.VIEW_ATTRIBUTE) == "Filmic"
+    strip = linear.shape[0] - 32
+    tracer, cycles = linear[strip:, :40], linear[strip:, 42:]
+    assert ev == display.auto_exposure([tracer, cycles]) < -2  # measured over both halves together
+    codes = np.asarray(oiio.ImageBuf(str(png)).get_pixels(oiio.UINT8))[..., :3].astype(int)
+    view = display.view_transform("Filmic")
+    for half, cols in ((tracer, slice(0, 40)), (cycles, slice(42, 82))):
+        expected = view.to_display8(half, ev).astype(int)
+        assert np.abs(codes[strip:, cols] - expected).max() <= 1
+
+
+def test_compare_tool_refuses_an_unknown_view_in_one_line(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "BLENDER_USER_RESOURCES"}
+    done = subprocess.run([sys.executable, str(ROOT / "tools" / "compare_preset.py"), str(BASELINE), "-o",
+                           str(tmp_path / "c.png"), "--view", "Bogus"], capture_output=True, text=True, env=env,
+                          cwd=tmp_path, timeout=300)
+    assert done.returncode == 2 and "Traceback" not in done.stderr + done.stdout
+    assert done.stderr.strip().splitlines() == [done.stderr.strip()]
+    assert done.stderr.startswith("compare_preset: --view: 'Bogus' is not a view") and "AgX" in done.stderr
+    assert list(tmp_path.iterdir()) == []
