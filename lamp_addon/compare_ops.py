@@ -389,9 +389,10 @@ class CompareRun:
                                "render; compare again")
 
     def compose(self) -> dict:
-        """The labelled side-by-side "Lamp Compare" image and the comparison's figures: ``scene``
-        (what the tracer rendered), ``tracer``/``cycles``/``side_by_side`` (H, W, 3 float32 top row
-        first), ``seconds`` ({"tracer", "cycles"}), ``samples``, ``size`` and ``differences``."""
+        """The comparison's figures: ``scene`` (what the tracer rendered), ``tracer``/``cycles``/
+        ``side_by_side`` (H, W, 3 float32 top row first, linear), ``labels`` (of the two halves),
+        ``exposure`` (one automatic exposure for both halves), ``seconds`` ({"tracer", "cycles"}),
+        ``samples``, ``size`` and ``differences``. ``show_comparison`` makes the image of it."""
         tracer, cycles = self.images[TRACER.name], self.images[CYCLES.name]
         seconds = dict(self.seconds)
         names = ((f"Lamp Tracer  {seconds['tracer']:.2f} s", "Lamp Tracer", "Tracer"),
@@ -409,8 +410,6 @@ class CompareRun:
             "size": (tracer.shape[1], tracer.shape[0]),
             "differences": differences(tracer, cycles),
         }
-        image_view.show_linear(COMPARE_IMAGE, shown_side_by_side(comparison, None, comparison["exposure"]),
-                               comparison["exposure"])
         return comparison
 
     def close(self) -> None:
@@ -443,7 +442,15 @@ def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tupl
             run.start(stage)
             run.collect()
         comparison = run.compose()
+    show_comparison(bl_scene, comparison)
     return {**comparison, "not_restored": run.not_restored}
+
+
+def show_comparison(bl_scene, comparison: dict) -> None:
+    """The "Lamp Compare" image: both halves at the comparison's one exposure, through the scene's
+    view transform. Made once the scene's own colour settings are back (after ``close``)."""
+    exposure = comparison["exposure"]
+    image_view.show_linear(COMPARE_IMAGE, shown_side_by_side(comparison, None, exposure), exposure, bl_scene)
 
 
 def write_comparison(path: str, comparison: dict, *, view: display.ViewTransform | None = None,
@@ -558,6 +565,7 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
             self._end(context)
             raise
         self._end(context)
+        show_comparison(context.scene, comparison)
         return self._finished(context, {**comparison, "not_restored": self._run.not_restored}, self._path)
 
     def cancel(self, context):
@@ -588,9 +596,9 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
         image_view.show_image(context, bpy.data.images[COMPARE_IMAGE])
         if path:
             try:
-                # What the "Lamp Compare" image shows: the scene's view, its exposure on top of the design's.
+                # What the "Lamp Compare" image shows: both halves at the design's exposure, the scene's view.
                 write_comparison(path, comparison, view=image_view.scene_view(context.scene),
-                                 exposure=comparison["exposure"] + context.scene.view_settings.exposure)
+                                 exposure=comparison["exposure"])
             except (SceneError, OSError) as e:
                 self.report({"ERROR"}, str(e))
                 return {"CANCELLED"}

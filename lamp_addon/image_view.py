@@ -5,9 +5,11 @@ is set before any pixel is written: changing it afterwards resets the pixels (BL
 
 Colour: the images hold linear values and are shown with Blender's own colour management, the
 scene's view transform (AgX, Standard, False Color, ...) applied exactly as to a render
-(``use_view_as_render``). Images of the lamp carry the design's automatic exposure in their
-pixels (``core_tracer.images.display.auto_exposure``), recorded in the image's ``lamp_exposure``
-property, so the lit lens's cut pattern reads; the scene's own exposure adds to it.
+(``use_view_as_render``). Images of the lamp are shown at the design's automatic exposure
+(``core_tracer.images.display.auto_exposure``) whatever the scene's exposure is when they are made:
+their pixels carry the difference (recorded in the image's ``lamp_exposure`` property), so the lit
+lens's cut pattern reads and labels keep their grey. The scene's exposure (which *Exposure from
+Design* sets for F12 renders and the viewport) still moves them afterwards, as any render.
 """
 
 from __future__ import annotations
@@ -64,12 +66,19 @@ def image_from_array(name: str, rgb: np.ndarray, alpha: np.ndarray | None = None
     return image
 
 
-def show_linear(name: str, rgb: np.ndarray, exposure: float) -> bpy.types.Image:
-    """The image ``name`` holding ``rgb`` (H, W, 3, linear, its pictures already scaled by
-    ``exposure`` stops), shown through the scene's view transform like a render."""
-    image = image_from_array(name, rgb)
+def shown_gain(bl_scene, exposure: float) -> np.float32:
+    """The factor that makes pictures show at ``exposure`` stops under the scene's own exposure."""
+    return np.float32(2.0 ** (exposure - bl_scene.view_settings.exposure))
+
+
+def show_linear(name: str, rgb: np.ndarray, exposure: float, bl_scene) -> bpy.types.Image:
+    """The image ``name`` showing ``rgb`` (H, W, 3, linear; its pictures already at ``exposure``
+    stops, its labels as they are) through the scene's view transform, like a render, and as if the
+    scene's exposure were 0."""
+    scene_exposure = bl_scene.view_settings.exposure
+    image = image_from_array(name, rgb * np.float32(2.0 ** -scene_exposure) if scene_exposure else rgb)
     image.use_view_as_render = True
-    image[EXPOSURE_PROPERTY] = float(exposure)
+    image[EXPOSURE_PROPERTY] = float(exposure - scene_exposure)
     return image
 
 

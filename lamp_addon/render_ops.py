@@ -13,7 +13,6 @@ the user did meanwhile).
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 
@@ -88,7 +87,7 @@ def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
     rgb = core_tracer.render(scene)
     seconds = time.perf_counter() - start
     exposure = display.auto_exposure(rgb)
-    return image_view.show_linear(IMAGE_NAME, rgb * np.float32(2.0 ** exposure), exposure), seconds
+    return image_view.show_linear(IMAGE_NAME, rgb * np.float32(2.0 ** exposure), exposure, bl_scene), seconds
 
 
 class LAMP_OT_render_tracer(bpy.types.Operator):
@@ -130,8 +129,9 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         self._job = TracerJob(scene)
-        self._gain = np.float32(2.0 ** image_view.design_exposure(scene))  # known before the rows arrive
-        self._image = image_view.show_linear(IMAGE_NAME, self._job.rows, math.log2(self._gain))
+        exposure = image_view.design_exposure(scene)  # known before the rows arrive
+        self._gain = image_view.shown_gain(context.scene, exposure)
+        self._image = image_view.show_linear(IMAGE_NAME, self._job.rows, exposure, context.scene)
         image_view.show_image(context, self._image)
         self._shown_rows = 0
         wm = context.window_manager

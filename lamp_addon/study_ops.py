@@ -60,7 +60,7 @@ def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
 
     exposure = display.auto_exposure(list(images))  # one for every variant, so the cells compare
     sheet = study_sheet.compose(study, images, exposure=exposure)
-    image = image_view.show_linear(study_panel.SHEET_IMAGE, sheet, exposure)
+    image = image_view.show_linear(study_panel.SHEET_IMAGE, sheet, exposure, context.scene)
     text = study.to_json()
     image[study_panel.STUDY_PROPERTY] = text
     _cache.update(json=text, study=study)

@@ -194,11 +194,14 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     # The side-by-side image.
     compare_image = bpy.data.images["Lamp Compare"]
     assert tuple(compare_image.size) == (result["side_by_side"].shape[1], result["side_by_side"].shape[0])
-    # Both halves at one automatic exposure, shown through the scene's view transform like a render.
+    # Both halves at one automatic exposure, shown through the scene's view transform like a render,
+    # the user's own exposure (0.5) taken out so that the lit lens shows at the design's exposure.
     assert result["exposure"] == display.auto_exposure([result["tracer"], result["cycles"]]) < -2
-    assert compare_image.use_view_as_render and compare_image["lamp_exposure"] == result["exposure"]
-    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(compare_image),
-                                  compare.shown_side_by_side(result, None, result["exposure"]))
+    assert compare_image.use_view_as_render
+    assert compare_image["lamp_exposure"] == pytest.approx(result["exposure"] - 0.5)
+    np.testing.assert_allclose(lamp_addon.image_view.image_to_array(compare_image),
+                               compare.shown_side_by_side(result, None, result["exposure"]) * np.float32(2 ** -0.5),
+                               rtol=1e-6)
 
 
 def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):

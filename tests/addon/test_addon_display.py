@@ -99,3 +99,36 @@ def test_compare_tool_refuses_an_unknown_view_in_one_line(tmp_path):
     assert done.stderr.strip().splitlines() == [done.stderr.strip()]
     assert done.stderr.startswith("compare_preset: --view: 'Bogus' is not a view") and "AgX" in done.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_exposure_from_design_makes_f12_show_what_the_cli_shows(lamp_addon, bl_scene, tmp_path):
+    import bpy
+
+    scene = _load(lamp_addon, bl_scene, FOUR_LAMPS, (96, 64))
+    assert bl_scene.view_settings.exposure == 0.0 and bl_scene.view_settings.view_transform == "AgX"
+    assert bpy.ops.lamp.exposure_from_design() == {"FINISHED"}
+    linear = core_tracer.render(scene)
+    exposure = display.auto_exposure(linear)
+    assert bl_scene.view_settings.exposure == pytest.approx(exposure, abs=1e-6) and exposure < -2
+    # F12 with the Lamp Tracer engine, as Blender shows it (Render Result through the scene's settings).
+    bl_scene.render.engine = "LAMP_TRACER"
+    assert bpy.ops.render.render() == {"FINISHED"}
+    settings = bl_scene.render.image_settings
+    settings.file_format, settings.color_mode, settings.color_depth = "PNG", "RGB", "8"
+    path = tmp_path / "f12.png"
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    shown = np.asarray(oiio.ImageBuf(str(path)).get_pixels(oiio.UINT8))[..., :3].astype(int)
+    assert np.abs(shown - display.view_transform("AgX").to_display8(linear, exposure).astype(int)).max() <= 1
+    # The add-on's own images are not exposed twice: with the scene at the design's exposure, they
+    # hold the plain render.
+    assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
+    image = bpy.data.images["Lamp Tracer"]
+    assert image["lamp_exposure"] == pytest.approx(0.0, abs=1e-6)
+    np.testing.assert_allclose(lamp_addon.image_view.image_to_array(image), linear, rtol=1e-6)
+
+
+def test_exposure_from_design_needs_a_camera(lamp_addon, bl_scene):
+    import bpy
+
+    assert bl_scene.camera is None
+    assert not bpy.ops.lamp.exposure_from_design.poll()
