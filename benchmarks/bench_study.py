@@ -71,13 +71,13 @@ def main() -> int:
 
     with tempfile.TemporaryDirectory() as folder:
         compose_start = time.perf_counter()
-        sheet = study_sheet.compose(study, images)
-        study_sheet.write_sheet(os.path.join(folder, "sheet.png"), study, sheet)
-        study_sheet.write_sheet(os.path.join(folder, "sheet.exr"), study, sheet)
+        study_sheet.write_sheet(os.path.join(folder, "sheet.png"), study, images)
+        study_sheet.write_sheet(os.path.join(folder, "sheet.exr"), study, images)
         sheet_seconds = time.perf_counter() - compose_start
     if args.sheet is not None:
-        study_sheet.write_sheet(args.sheet, study, sheet)
-    print(f"contact sheet {sheet.shape[1]}x{sheet.shape[0]} px composed and written (PNG + EXR): "
+        study_sheet.write_sheet(args.sheet, study, images)
+    layout = study_sheet.layout(study)
+    print(f"contact sheet {layout.width}x{layout.height} px composed and written (PNG through AgX + EXR): "
           f"{sheet_seconds:.2f} s")
 
     if not args.skip_serial:

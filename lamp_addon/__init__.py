@@ -20,6 +20,7 @@ def modules() -> tuple:
         design_ops,
         design_panels,
         design_properties,
+        display_ops,
         preferences,
         preset_library,
         preset_ops,
@@ -35,7 +36,7 @@ def modules() -> tuple:
         design_properties,
         design_ops,
         design_panels,
-        render_camera, render_engine, render_ops, compare_ops,
+        render_camera, render_engine, render_ops, compare_ops, display_ops,
         preferences, preset_library, preset_ops, preset_panel,
         study_panel, study_ops,
     )

@@ -10,7 +10,7 @@ import sys
 
 import bpy
 
-from ..core_tracer.images import imageio
+from ..core_tracer.images import display, imageio
 from ..core_tracer.scene.validate import SceneError, load_scene
 from . import compare_ops, design_properties, render_camera
 
@@ -18,16 +18,23 @@ CHANNELS = ("R", "G", "B")
 
 
 def run(preset: str, output: str, *, samples: int = compare_ops.DEFAULT_SAMPLES,
-        size: tuple[int, int] | None = None, exposure: float = 0.0, prog: str = "compare_preset") -> int:
+        size: tuple[int, int] | None = None, view: str = display.DEFAULT_VIEW, exposure: float | str = "auto",
+        prog: str = "compare_preset") -> int:
     """Load ``preset`` into the current (empty) scene's design, build it, render it both ways
-    and write the side-by-side image to ``output`` (.png or .exr). Returns the exit status:
-    0 done, 2 bad input (one line on stderr)."""
+    and write the side-by-side image to ``output`` (.png through ``view`` at ``exposure``, both
+    halves alike, or .exr). Returns the exit status: 0 done, 2 bad input (one line on stderr)."""
     try:
         imageio.image_format(output)
         scene = load_scene(preset)
+        transform = display.view_transform(view)
     except SceneError as e:
         print(f"{prog}: {e}", file=sys.stderr)
         return 2
+    except ValueError as e:  # not a view of Blender's configuration
+        print(f"{prog}: --view: {e}", file=sys.stderr)
+        return 2
+    if transform.note and output.lower().endswith(".png"):
+        print(f"{prog}: note: {transform.note}", file=sys.stderr)
     bl_scene = bpy.context.scene
     design_properties.scene_to_design(bl_scene, scene)
     # The preset fixes the view: its camera becomes the scene camera.
@@ -40,8 +47,10 @@ def run(preset: str, output: str, *, samples: int = compare_ops.DEFAULT_SAMPLES,
     comparison = compare_ops.compare_design(bl_scene, samples=samples, resolution=size)
     folder = os.path.dirname(os.path.abspath(output))
     os.makedirs(folder, exist_ok=True)
-    compare_ops.write_comparison(output, comparison, exposure=exposure)
+    ev = compare_ops.write_comparison(output, comparison, view=transform, exposure=exposure)
     print(report(comparison, preset, output))
+    if output.lower().endswith(".png"):
+        print(f"shown: {transform.view} at {ev:+.1f} EV, both halves")
     return 0
 
 

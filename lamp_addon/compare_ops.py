@@ -5,10 +5,11 @@ Both renders go through ``bpy.ops.render.render`` into the "Render Result" image
 render slot 1 and the tracer (the Lamp Tracer render engine) into slot 2 (slot indices 0 and 1),
 so J flips between them in the Image Editor; their pixels are read back with ``save_render`` to
 OpenEXR (in background mode the Render Result has no pixels). A third image, "Lamp Compare",
-holds the two halves with labels. During the comparison the scene shows renders on the Standard
-view transform, under which the tracer's linear RGB (the paper's stimulus values) and Cycles'
-radiance are shown the same way; like every setting the comparison changes, it is put back
-afterwards.
+holds the two halves with labels, both at one automatic exposure (``images.display``) and shown
+through the scene's own view transform (``image_view``), so they always share one transform.
+During the comparison the scene shows renders on the Standard view transform, under which the
+tracer's linear RGB (the paper's stimulus values) and Cycles' radiance are shown the same way;
+like every setting the comparison changes, it is put back afterwards.
 
 One comparison is a ``CompareRun`` taken through the same steps on both paths: ``prepare``
 (build the lamp, the scene camera, the render settings), for each stage ``start`` (render into
@@ -43,13 +44,13 @@ import os
 import shutil
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import bpy
 import numpy as np
 
-from ..core_tracer.images import bitmap_font
+from ..core_tracer.images import bitmap_font, display, labels
 from ..core_tracer.scene.validate import SceneError
 from . import design_panels, design_properties, image_view, render_camera
 from .render_engine import ENGINE_ID
@@ -135,9 +136,8 @@ def side_by_side(left: np.ndarray, right: np.ndarray, left_labels: Sequence[str]
                  right_labels: Sequence[str], *, text: str = "auto") -> np.ndarray:
     """One (H + strip, 2W + gap, 3) image: ``left`` and ``right`` next to each other below a
     strip holding their labels. Each label is the first of its alternatives (longest first) that
-    fits above its half. Labels are drawn with OpenImageIO's ``render_text`` when it can (the
-    PyPI OpenImageIO has FreeType and a font; ``text="auto"``), else (or with ``text="bitmap"``)
-    with core_tracer's bitmap font, which draws capitals."""
+    fits above its half, drawn by ``core_tracer.images.labels`` (OpenImageIO's font where it can
+    draw text, else, or with ``text="bitmap"``, the bitmap font, which draws capitals)."""
     height, width = left.shape[:2]
     gap = max(2, width // 128)
     strip = label_height(height)
@@ -145,44 +145,27 @@ def side_by_side(left: np.ndarray, right: np.ndarray, left_labels: Sequence[str]
     out[strip:, :width] = left
     out[strip:, width + gap:] = right
     out[:, width:width + gap] = 0.5
+    oiio_text = labels.use_oiio(text)
+    size, inset = strip - 2, 3 * _label_scale(height)
     for alternatives, x in ((left_labels, 0), (right_labels, width + gap)):
         # Each label is drawn into its own half of the strip, so a long one is clipped there.
-        label = _oiio_text(alternatives, width, strip) if text == "auto" else None
-        if label is None:
-            label = _bitmap_text(alternatives, width, strip, _label_scale(height))
+        label = labels.fitting(alternatives, width - 2 * inset, lambda t: labels.text_width(t, size, oiio_text))
+        mask = labels.coverage(label, width, strip, size=size, oiio_text=oiio_text, inset=inset, top=3)
         area = out[:strip, x:x + width]
-        np.maximum(area, label, out=area)
+        np.maximum(area, mask[..., None], out=area)
     return out
 
 
-def _fitting(alternatives: Sequence[str], room: int, measure: Callable[[str], int]) -> str:
-    """The first label that fits in ``room`` pixels, else the shortest (clipped when drawn)."""
-    return next((t for t in alternatives if measure(t) <= room), alternatives[-1])
+def shown_side_by_side(comparison: dict, view: display.ViewTransform | None, exposure: float) -> np.ndarray:
+    """The side-by-side image of ``comparison`` with both halves at ``exposure`` stops: linear
+    without ``view``, else display values through ``view`` (both halves through the one transform)."""
+    def shown(image: np.ndarray) -> np.ndarray:
+        if view is not None:
+            return view.to_display(image, exposure)
+        return image * np.float32(2.0 ** exposure)
 
-
-def _bitmap_text(alternatives: Sequence[str], width: int, height: int, scale: int) -> np.ndarray:
-    """A (height, width, 3) label drawn with the bitmap font, clipped to its box."""
-    x = 3 * scale
-    label = _fitting(alternatives, width - 2 * x, lambda t: bitmap_font.ADVANCE_W * scale * len(t))
-    mask = bitmap_font.text_mask(label, scale)
-    out = np.zeros((height, width, 3), np.float32)
-    rows, cols = max(0, min(mask.shape[0], height - 3)), max(0, min(mask.shape[1], width - x))
-    out[3:3 + rows, x:x + cols] = mask[:rows, :cols, None]
-    return out
-
-
-def _oiio_text(alternatives: Sequence[str], width: int, height: int) -> np.ndarray | None:
-    """A (height, width, 3) label drawn by OpenImageIO, or None when it cannot draw text."""
-    try:
-        import OpenImageIO as oiio
-    except ImportError:
-        return None
-    buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 3, oiio.FLOAT))
-    size = height - 2
-    label = _fitting(alternatives, width - 8, lambda t: oiio.ImageBufAlgo.text_size(t, size, "").width)
-    if not oiio.ImageBufAlgo.render_text(buf, 4, height - 4, label, size, "", (1.0, 1.0, 1.0)):
-        return None  # Blender's bundled OpenImageIO has no FreeType
-    return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(height, width, 3)
+    left, right = comparison["labels"]
+    return side_by_side(shown(comparison["tracer"]), shown(comparison["cycles"]), left, right)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -406,27 +389,28 @@ class CompareRun:
                                "render; compare again")
 
     def compose(self) -> dict:
-        """The labelled side-by-side "Lamp Compare" image and the comparison's figures: ``scene``
-        (what the tracer rendered), ``tracer``/``cycles``/``side_by_side`` (H, W, 3 float32 top row
-        first), ``seconds`` ({"tracer", "cycles"}), ``samples``, ``size`` and ``differences``."""
+        """The comparison's figures: ``scene`` (what the tracer rendered), ``tracer``/``cycles``/
+        ``side_by_side`` (H, W, 3 float32 top row first, linear), ``labels`` (of the two halves),
+        ``exposure`` (one automatic exposure for both halves), ``seconds`` ({"tracer", "cycles"}),
+        ``samples``, ``size`` and ``differences``. ``show_comparison`` makes the image of it."""
         tracer, cycles = self.images[TRACER.name], self.images[CYCLES.name]
         seconds = dict(self.seconds)
-        combined = side_by_side(
-            tracer, cycles,
-            (f"Lamp Tracer  {seconds['tracer']:.2f} s", "Lamp Tracer", "Tracer"),
-            (f"Cycles  {self.samples} spp  {seconds['cycles']:.1f} s", f"Cycles  {seconds['cycles']:.1f} s",
-             "Cycles"))
-        image_view.image_from_array(COMPARE_IMAGE, combined)
-        return {
+        names = ((f"Lamp Tracer  {seconds['tracer']:.2f} s", "Lamp Tracer", "Tracer"),
+                 (f"Cycles  {self.samples} spp  {seconds['cycles']:.1f} s", f"Cycles  {seconds['cycles']:.1f} s",
+                  "Cycles"))
+        comparison = {
             "scene": self.scene,
             "tracer": tracer,
             "cycles": cycles,
-            "side_by_side": combined,
+            "labels": names,
+            "exposure": display.auto_exposure([tracer, cycles]),  # one exposure for both halves
+            "side_by_side": side_by_side(tracer, cycles, *names),
             "seconds": seconds,
             "samples": self.samples,
             "size": (tracer.shape[1], tracer.shape[0]),
             "differences": differences(tracer, cycles),
         }
+        return comparison
 
     def close(self) -> None:
         """Put back every setting the comparison changed, stop listening to the render handlers
@@ -458,15 +442,32 @@ def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tupl
             run.start(stage)
             run.collect()
         comparison = run.compose()
+    show_comparison(bl_scene, comparison)
     return {**comparison, "not_restored": run.not_restored}
 
 
-def write_comparison(path: str, comparison: dict, *, exposure: float = 0.0) -> None:
-    """Write the side-by-side image as .exr (linear) or .png (sRGB, ``exposure`` stops applied)
-    with the scene in its header."""
+def show_comparison(bl_scene, comparison: dict) -> None:
+    """The "Lamp Compare" image: both halves at the comparison's one exposure, through the scene's
+    view transform. Made once the scene's own colour settings are back (after ``close``)."""
+    exposure = comparison["exposure"]
+    image_view.show_linear(COMPARE_IMAGE, shown_side_by_side(comparison, None, exposure), exposure, bl_scene)
+
+
+def write_comparison(path: str, comparison: dict, *, view: display.ViewTransform | None = None,
+                     exposure: float | str | None = "auto") -> float:
+    """Write the side-by-side image as .exr (linear) or .png (both halves through ``view``, default
+    ``display.view_transform()``, at one ``exposure``: "auto" measures both halves together) with the
+    scene in its header. Returns the exposure applied (0 for an .exr)."""
     from ..core_tracer.images import imageio
 
-    imageio.write_image(path, comparison["side_by_side"], comparison["scene"], exposure=exposure)
+    if imageio.image_format(path) == "exr":
+        imageio.write_image(path, comparison["side_by_side"], comparison["scene"])
+        return 0.0
+    view = view or display.view_transform()
+    ev = display.resolve_exposure(exposure, [comparison["tracer"], comparison["cycles"]])
+    imageio.write_display(path, shown_side_by_side(comparison, view, ev), comparison["scene"], view=view.view,
+                          exposure=ev)
+    return ev
 
 
 # ---------------------------------------------------------------------------------------------
@@ -484,8 +485,9 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
     samples: bpy.props.IntProperty(name="Cycles Samples", default=DEFAULT_SAMPLES, min=1, max=65536,
                                    description="Samples per pixel of the Cycles render")
     filepath: bpy.props.StringProperty(name="Save As", subtype="FILE_PATH", default="",
-                                       description="Also write the side-by-side image here (.png sRGB or "
-                                                   ".exr linear); empty: do not write")
+                                       description="Also write the side-by-side image here (.png as shown, "
+                                                   "through the scene's view transform, or .exr linear); "
+                                                   "empty: do not write")
 
     @classmethod
     def poll(cls, context):
@@ -500,12 +502,18 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
         return True
 
     def _output_path(self) -> str:
-        """The file to write, checked before minutes of rendering (raises ``SceneError``), or ""."""
+        """The file to write, checked before minutes of rendering (raises ``SceneError``), or "" (also
+        when this Blender cannot write image files: ``_not_saved`` then says so)."""
         from ..core_tracer.images import imageio
 
+        self._not_saved = ""
         path = bpy.path.abspath(self.filepath) if self.filepath else ""
         if path:
             imageio.image_format(path)
+            if not image_view.openimageio_available():
+                self._not_saved = (f"{path} not written: {image_view.NO_OPENIMAGEIO}; save the "
+                                   f"\"{COMPARE_IMAGE}\" image from the Image Editor")
+                return ""
         return path
 
     def execute(self, context):
@@ -557,6 +565,7 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
             self._end(context)
             raise
         self._end(context)
+        show_comparison(context.scene, comparison)
         return self._finished(context, {**comparison, "not_restored": self._run.not_restored}, self._path)
 
     def cancel(self, context):
@@ -587,10 +596,14 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
         image_view.show_image(context, bpy.data.images[COMPARE_IMAGE])
         if path:
             try:
-                write_comparison(path, comparison)
+                # What the "Lamp Compare" image shows: both halves at the design's exposure, the scene's view.
+                write_comparison(path, comparison, view=image_view.scene_view(context.scene),
+                                 exposure=comparison["exposure"])
             except (SceneError, OSError) as e:
                 self.report({"ERROR"}, str(e))
                 return {"CANCELLED"}
+        if self._not_saved:
+            self.report({"WARNING"}, self._not_saved)
         if comparison["not_restored"]:
             self.report({"WARNING"}, "Settings not put back: " + "; ".join(comparison["not_restored"]))
         seconds = comparison["seconds"]

@@ -1,13 +1,26 @@
-"""Images the add-on makes ("Lamp Tracer", "Lamp Compare"): pixels in, Image Editor out.
+"""Images the add-on makes ("Lamp Tracer", "Lamp Compare", "Lamp Study"): pixels in, Image Editor out.
 
 Blender's image rows run bottom-up, the tracer's (and OpenImageIO's) top-down. The colour space
 is set before any pixel is written: changing it afterwards resets the pixels (BLENDER-NOTES).
+
+Colour: the images hold linear values and are shown with Blender's own colour management, the
+scene's view transform (AgX, Standard, False Color, ...) applied exactly as to a render
+(``use_view_as_render``). Images of the lamp are shown at the design's automatic exposure
+(``core_tracer.images.display.auto_exposure``) whatever the scene's exposure is when they are made:
+their pixels carry the difference (recorded in the image's ``lamp_exposure`` property), so the lit
+lens's cut pattern reads and labels keep their grey. The scene's exposure (which *Exposure from
+Design* sets for F12 renders and the viewport) still moves them afterwards, as any render.
 """
 
 from __future__ import annotations
 
 import bpy
 import numpy as np
+
+from ..core_tracer.images import display
+
+EXPOSURE_PROPERTY = "lamp_exposure"  # stops already applied to an image's pictures
+NO_OPENIMAGEIO = "this Blender has no OpenImageIO Python module to write image files"
 
 
 def scene_linear_colorspace() -> str:
@@ -51,6 +64,75 @@ def image_from_array(name: str, rgb: np.ndarray, alpha: np.ndarray | None = None
     image.pixels.foreach_set(rgba_rows(rgb, alpha))
     image.update()
     return image
+
+
+def shown_gain(bl_scene, exposure: float) -> np.float32:
+    """The factor that makes pictures show at ``exposure`` stops under the scene's own exposure."""
+    return np.float32(2.0 ** (exposure - bl_scene.view_settings.exposure))
+
+
+def show_linear(name: str, rgb: np.ndarray, exposure: float, bl_scene) -> bpy.types.Image:
+    """The image ``name`` showing ``rgb`` (H, W, 3, linear; its pictures already at ``exposure``
+    stops, its labels as they are) through the scene's view transform, like a render, and as if the
+    scene's exposure were 0."""
+    scene_exposure = bl_scene.view_settings.exposure
+    image = image_from_array(name, rgb * np.float32(2.0 ** -scene_exposure) if scene_exposure else rgb)
+    image.use_view_as_render = True
+    image[EXPOSURE_PROPERTY] = float(exposure - scene_exposure)
+    return image
+
+
+PREVIEW_SIDE = 96  # px of the longer side of the preview that measures a design's exposure
+
+
+def design_exposure(scene: dict) -> float:
+    """The automatic exposure of a design (a normalised scene), measured on a small preview render
+    of the same view, for images shown while they are still being rendered."""
+    from ..core_tracer import render
+
+    width, height = scene["image"]["width"], scene["image"]["height"]
+    scale = min(1.0, PREVIEW_SIDE / max(width, height))
+    preview = render(scene, max(1, round(width * scale)), max(1, round(height * scale)))
+    return display.auto_exposure(preview)
+
+
+def image_exposure(image: bpy.types.Image) -> float:
+    """The stops applied to an image's pictures (0 for an image without ``lamp_exposure``)."""
+    value = image.get(EXPOSURE_PROPERTY, 0.0)
+    return float(value) if isinstance(value, int | float) else 0.0
+
+
+def scene_view(bl_scene) -> display.ViewTransform:
+    """The scene's view transform, applied outside Blender's drawing (files): Blender's own
+    configuration through OpenImageIO; Standard where the scene's view is not one of its sRGB views."""
+    try:
+        return display.view_transform(bl_scene.view_settings.view_transform)
+    except ValueError:
+        return display.view_transform(display.STANDARD)
+
+
+def thumbnail_view() -> display.ViewTransform:
+    """Thumbnails are shown as the shipped ones were made, whatever a scene's settings: the
+    default view (AgX) of Blender's own configuration."""
+    return display.view_transform(display.DEFAULT_VIEW)
+
+
+def openimageio_available() -> bool:
+    """Whether an OpenImageIO module can be imported (Blender 4.4+ bundles one, made importable by
+    ``bpy.utils.expose_bundled_modules``). Without it the add-on writes no image files and draws
+    labels with its bitmap font."""
+    try:
+        import OpenImageIO  # noqa: F401
+    except ImportError:
+        expose = getattr(bpy.utils, "expose_bundled_modules", None)
+        if expose is None:
+            return False
+        expose()
+        try:
+            import OpenImageIO  # noqa: F401
+        except ImportError:
+            return False
+    return True
 
 
 def image_to_array(image: bpy.types.Image) -> np.ndarray:

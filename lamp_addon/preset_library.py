@@ -24,7 +24,7 @@ from bpy.app.handlers import persistent
 from bpy.props import BoolProperty, CollectionProperty, IntProperty, StringProperty
 
 from ..core_tracer.library import presets as P
-from . import preferences
+from . import image_view, preferences
 
 USER_LIBRARY_NAME = "My Presets"
 POLL_SECONDS = 0.25
@@ -205,12 +205,16 @@ class Thumbnails:
         self._queued: set[str] = set()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self.view = None  # the view transform thumbnails are shown through, found on first request
 
     def path(self, entry: P.PresetEntry) -> str:
         return P.thumbnail_path(entry, self.cache)
 
     def request(self, entries: list[P.PresetEntry]) -> None:
-        """Show the thumbnails that exist; queue the others for the worker."""
+        """Show the thumbnails that exist; queue the others for the worker (where it can write them)."""
+        can_write = image_view.openimageio_available()
+        if can_write and self.view is None:
+            self.view = image_view.thumbnail_view()  # here, on the main thread: the worker never touches bpy
         for entry in entries:
             path = self.path(entry)
             self.paths[entry.file] = path
@@ -218,11 +222,17 @@ class Thumbnails:
                 continue
             if os.path.isfile(path):
                 self._show(path)
+            elif not can_write:
+                self.errors[path] = f"No thumbnail: {image_view.NO_OPENIMAGEIO}"
             else:
                 self._queued.add(path)
                 self._jobs.put((entry, path))
         if self._queued:
             self._start()
+
+    def missing_reason(self, file: str) -> str:
+        """Why the preset ``file`` has no thumbnail and will get none ("" while it is being made)."""
+        return self.errors.get(self.paths.get(file, ""), "")
 
     def icon_id(self, file: str) -> int:
         preview = self.previews.get(self.paths.get(file, ""))
@@ -284,7 +294,7 @@ class Thumbnails:
                 path.set()
                 continue
             try:
-                P.make_thumbnail(entry, path)
+                P.make_thumbnail(entry, path, view=self.view)
                 self._done.put((path, ""))
             except Exception as e:  # noqa: BLE001 - a thumbnail that fails is reported, never fatal
                 self._done.put((path, f"{type(e).__name__}: {e}"))

@@ -90,6 +90,8 @@ class LAMP_PT_presets(bpy.types.Panel):
         icon_id = thumbs.icon_id(item.file) if thumbs is not None else 0
         if icon_id:
             box.template_icon(icon_value=icon_id, scale=6.0)
+        elif thumbs is not None and thumbs.missing_reason(item.file):
+            box.label(text=thumbs.missing_reason(item.file)[:200], icon="ERROR")
         else:
             box.label(text="Thumbnail being made...", icon="TIME")
         col = box.column(align=True)

@@ -19,6 +19,7 @@ import time
 import bpy
 import numpy as np
 
+from ..core_tracer.images import display
 from ..core_tracer.scene.validate import SceneError
 from . import design_panels, image_view, render_camera
 
@@ -85,7 +86,8 @@ def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
     start = time.perf_counter()
     rgb = core_tracer.render(scene)
     seconds = time.perf_counter() - start
-    return image_view.image_from_array(IMAGE_NAME, rgb), seconds
+    exposure = display.auto_exposure(rgb)
+    return image_view.show_linear(IMAGE_NAME, rgb * np.float32(2.0 ** exposure), exposure, bl_scene), seconds
 
 
 class LAMP_OT_render_tracer(bpy.types.Operator):
@@ -127,7 +129,9 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         self._job = TracerJob(scene)
-        self._image = image_view.image_from_array(IMAGE_NAME, self._job.rows)
+        exposure = image_view.design_exposure(scene)  # known before the rows arrive
+        self._gain = image_view.shown_gain(context.scene, exposure)
+        self._image = image_view.show_linear(IMAGE_NAME, self._job.rows, exposure, context.scene)
         image_view.show_image(context, self._image)
         self._shown_rows = 0
         wm = context.window_manager
@@ -170,7 +174,7 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
     def _show_rows(self, context) -> None:
         if self._job.rows_done != self._shown_rows:
             self._shown_rows = self._job.rows_done
-            self._image.pixels.foreach_set(image_view.rgba_rows(self._job.rows))
+            self._image.pixels.foreach_set(image_view.rgba_rows(self._job.rows * self._gain))
             self._image.update()
             image_view.redraw_image_editors(context, self._image)
 

@@ -55,10 +55,12 @@ def last_study() -> st.Study | None:
 
 def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
     """Compose the contact sheet into the "Lamp Study" image and show it in an Image Editor."""
+    from ..core_tracer.images import display
     from ..core_tracer.study import sheet as study_sheet
 
-    sheet = study_sheet.compose(study, images)
-    image = image_view.image_from_array(study_panel.SHEET_IMAGE, sheet)
+    exposure = display.auto_exposure(list(images))  # one for every variant, so the cells compare
+    sheet = study_sheet.compose(study, images, exposure=exposure)
+    image = image_view.show_linear(study_panel.SHEET_IMAGE, sheet, exposure, context.scene)
     text = study.to_json()
     image[study_panel.STUDY_PROPERTY] = text
     _cache.update(json=text, study=study)
@@ -274,7 +276,8 @@ class LAMP_OT_study_keep_variant(_OnLastStudy, bpy.types.Operator):
 
 
 class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
-    """Save the contact sheet as EXR (linear) or PNG (sRGB), with the study in its header"""
+    """Save the contact sheet as PNG (as shown: the scene's view transform) or EXR (linear), with the
+    study in its header"""
 
     bl_idname = "lamp.study_save_sheet"
     bl_label = "Save Sheet"
@@ -297,31 +300,20 @@ class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
         if study is None or image is None:
             self.report({"ERROR"}, "There is no study sheet; run a study first")
             return {"CANCELLED"}
-        if not _openimageio_available():
-            self.report({"ERROR"}, "This Blender has no OpenImageIO module; save the image from the Image Editor")
+        if not image_view.openimageio_available():
+            self.report({"ERROR"}, f"Sheet not saved: {image_view.NO_OPENIMAGEIO}; save the image from the "
+                                   "Image Editor")
             return {"CANCELLED"}
         try:
-            study_sheet.write_sheet(self.filepath, study, image_view.image_to_array(image))
+            study_sheet.write_composed(self.filepath, study, image_view.image_to_array(image),
+                                       view=image_view.scene_view(context.scene),
+                                       exposure=image_view.image_exposure(image),
+                                       view_exposure=context.scene.view_settings.exposure)
         except (SceneError, OSError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         self.report({"INFO"}, f"Saved {self.filepath}")
         return {"FINISHED"}
-
-
-def _openimageio_available() -> bool:
-    try:
-        import OpenImageIO  # noqa: F401
-    except ImportError:
-        expose = getattr(bpy.utils, "expose_bundled_modules", None)  # Blender 4.4+: its own OpenImageIO
-        if expose is None:
-            return False
-        expose()
-        try:
-            import OpenImageIO  # noqa: F401
-        except ImportError:
-            return False
-    return True
 
 
 classes = (LAMP_OT_study_run, LAMP_OT_study_apply_variant, LAMP_OT_study_keep_variant, LAMP_OT_study_save_sheet)

@@ -4,7 +4,8 @@
 With Blender:
     blender --background --python tools/compare_preset.py -- PRESET.json -o out/compare.png [options]
 With the bpy module (the project's .venv):
-    .venv/bin/python tools/compare_preset.py PRESET.json -o out/compare.png [--samples N] [--size WxH] [--exposure EV]
+    .venv/bin/python tools/compare_preset.py PRESET.json -o out/compare.png [--samples N] [--size WxH]
+        [--view AgX] [--exposure EV|auto]
 
 The extension is used from this source tree through a temporary development repository
 (``tools/dev_extension.py``; an already enabled Lamp Styling extension is used instead). The job
@@ -25,7 +26,7 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from core_tracer.cli.common import add_exposure_argument  # noqa: E402 (bpy-free: safe before Blender starts)
+from core_tracer.cli.common import add_display_arguments  # noqa: E402 (bpy-free: safe before Blender starts)
 from tools import dev_extension  # noqa: E402
 
 DEV_REPO = "lamp_styling_dev"
@@ -57,11 +58,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     parser.add_argument("preset", help="a lamp-scene/1 JSON file, e.g. presets/paper-baseline.json")
     parser.add_argument("-o", "--output", default=os.path.join("out", "compare.png"),
-                        help="side-by-side image to write, .png (sRGB) or .exr (linear); default out/compare.png")
+                        help="side-by-side image to write, .png (view transform, both halves at one exposure) or "
+                             ".exr (linear); default out/compare.png")
     parser.add_argument("--samples", type=_samples, default=64, help="Cycles samples per pixel (default 64)")
     parser.add_argument("--size", type=_size, default=None,
                         help="render size WIDTHxHEIGHT (default: the preset's image size)")
-    add_exposure_argument(parser)
+    add_display_arguments(parser)
     return parser.parse_args(argv)
 
 
@@ -87,7 +89,7 @@ def main() -> int:
         with dev_extension.enabled_from_source(bpy, DEV_REPO) as package:
             headless = importlib.import_module(f"{package}.lamp_addon.compare_headless")
             return headless.run(args.preset, args.output, samples=args.samples, size=args.size,
-                                exposure=args.exposure, prog=PROG)
+                                view=args.view, exposure=args.exposure, prog=PROG)
     finally:
         if own_resources is not None:
             shutil.rmtree(own_resources, ignore_errors=True)

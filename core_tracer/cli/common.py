@@ -7,9 +7,11 @@ import contextlib
 import math
 import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 
+from ..images import display
 from ..scene import spec as S
 from ..scene.validate import SceneError, parse_scene, read_json
 
@@ -70,21 +72,39 @@ def ctrl_c_sets(stop: threading.Event | None = None) -> Iterator[threading.Event
         signal.signal(signal.SIGINT, previous)
 
 
-MAX_EXPOSURE = 16.0
+def add_display_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--view NAME`` and ``--exposure EV|auto``: how a .png shows the linear image (an .exr keeps
+    the linear values). The values are checked by ``check_view`` and ``_exposure``."""
+    parser.add_argument("--view", default=display.DEFAULT_VIEW, metavar="VIEW",
+                        help=f"view transform of Blender's colour management for a .png: "
+                             f"{', '.join(display.KNOWN_VIEWS)} (default {display.DEFAULT_VIEW}, as in a new "
+                             f"Blender scene); Standard is plain sRGB")
+    parser.add_argument("--exposure", type=_exposure, default="auto", metavar="EV|auto",
+                        help="brighten (+) or darken (-) a .png by this many stops before its view transform; "
+                             "auto (the default) puts the lit lens just below the view's shoulder so its cut "
+                             "pattern reads")
 
 
-def add_exposure_argument(parser: argparse.ArgumentParser) -> None:
-    """``--exposure EV``: stops applied to PNG output before its sRGB encoding (EXR stays linear)."""
-    parser.add_argument("--exposure", type=_exposure, default=0.0, metavar="EV",
-                        help="brighten (+) or darken (-) a .png by this many stops so bright lamps do not clip; "
-                             "an .exr keeps the linear values (default 0)")
+def view_for(args: argparse.Namespace) -> display.ViewTransform:
+    """The view transform ``--view`` names (a ``SceneError`` naming the views there are otherwise);
+    where it must fall back to Standard, says why on stderr, once."""
+    try:
+        view = display.view_transform(args.view)
+    except ValueError as e:
+        raise SceneError("--view", str(e)) from None
+    if view.note:
+        print(f"note: {view.note}", file=sys.stderr)
+    return view
 
 
-def _exposure(text: str) -> float:
+def _exposure(text: str) -> float | str:
+    if text.strip().lower() == "auto":
+        return "auto"
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(value) or abs(value) > MAX_EXPOSURE:
-        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed [-{MAX_EXPOSURE:g}, {MAX_EXPOSURE:g}] stops")
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number or auto") from None
+    if not math.isfinite(value) or abs(value) > display.MAX_EXPOSURE:
+        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed auto or [-{display.MAX_EXPOSURE:g}, "
+                                         f"{display.MAX_EXPOSURE:g}] stops")
     return value

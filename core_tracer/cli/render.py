@@ -8,9 +8,9 @@ import time
 
 from ..images.imageio import image_format
 from ..scene.validate import SceneError
-from .common import add_exposure_argument, ctrl_c_sets, load_scene_file
+from .common import add_display_arguments, ctrl_c_sets, load_scene_file, view_for
 
-HELP = "render a scene to an .exr (linear, scene in the header) or .png (sRGB) image"
+HELP = "render a scene to an .exr (linear, scene in the header) or .png (view transform, exposure) image"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -20,7 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--height", type=int, metavar="H", help="image height in pixels (overrides the scene)")
     parser.add_argument("--passes", metavar="DIR",
                         help="also write one .exr per contribution pass (lens surface, bulb, ...) into DIR")
-    add_exposure_argument(parser)
+    add_display_arguments(parser)
 
 
 def _check_folder(path: str, what: str) -> None:
@@ -31,8 +31,9 @@ def _check_folder(path: str, what: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # Every check on the user's input happens before the (long) render.
-    image_format(args.output)
+    fmt = image_format(args.output)
     _check_folder(args.output, "output")
+    view = view_for(args) if fmt == "png" else None
     if args.passes is not None and os.path.exists(args.passes) and not os.path.isdir(args.passes):
         raise SceneError(args.passes, "--passes must name a folder; this is a file")
     scene = load_scene_file(args.scene, args.width, args.height)
@@ -54,10 +55,11 @@ def run(args: argparse.Namespace) -> int:
         os.makedirs(args.passes, exist_ok=True)
         for name, data in result.passes.items():
             write_image(os.path.join(args.passes, f"{name}.exr"), data, scene)
-    write_image(args.output, result.image, scene, exposure=args.exposure)
+    ev = write_image(args.output, result.image, scene, view=view, exposure=args.exposure)
 
     h, w = result.image.shape[:2]
     segments = result.stats.get("segments")
     traced = f", {segments} ray segments" if segments is not None else ""
-    print(f"{args.output}: {w}x{h} px in {seconds:.2f} s{traced}")
+    shown = f", {view.view} at {ev:+.1f} EV" if view is not None else ""
+    print(f"{args.output}: {w}x{h} px in {seconds:.2f} s{traced}{shown}")
     return 0

@@ -14,7 +14,7 @@ import time
 from ..images.imageio import image_format
 from ..scene.validate import SceneError
 from ..study import definition as st
-from .common import add_exposure_argument, ctrl_c_sets, in_file
+from .common import add_display_arguments, ctrl_c_sets, in_file, view_for
 
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
 
@@ -26,7 +26,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "cuts.height=0.5,1,2 (a list), lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05 "
                              "(colours); lamps[1].lens.ior names one lamp; once or twice")
     parser.add_argument("--study", metavar="STUDY", help="re-run a study: a .json definition or a sheet .exr/.png")
-    parser.add_argument("-o", "--output", metavar="SHEET", help="the contact sheet, .png (sRGB) or .exr (linear)")
+    parser.add_argument("-o", "--output", metavar="SHEET",
+                        help="the contact sheet, .png (view transform) or .exr (linear)")
     parser.add_argument("--size", metavar="WxH", help=f"size of each variant image (default "
                                                       f"{st.DEFAULT_SIZE[0]}x{st.DEFAULT_SIZE[1]})")
     parser.add_argument("--title", help="the sheet's title (default: the design's name)")
@@ -34,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="worker processes (default: one per core; 0 renders in this process)")
     parser.add_argument("--save-study", metavar="STUDY.json", help="write the study definition (base embedded)")
     parser.add_argument("--save-variants", metavar="DIR", help="write every variant as a lamp-scene/1 preset")
-    add_exposure_argument(parser)
+    add_display_arguments(parser)
     parser.add_argument("--list", action="store_true", help="list the parameters a study can vary and exit")
 
 
@@ -108,8 +109,10 @@ def run(args: argparse.Namespace) -> int:
         raise SceneError("--workers", f"{args.workers} is out of range; allowed 0 (this process) or more")
     if args.output is None and not (args.save_study or args.save_variants):
         raise SceneError("--output", "is required: the contact sheet to write (.png or .exr)")
+    view = None
     if args.output is not None:
-        image_format(args.output)
+        if image_format(args.output) == "png":
+            view = view_for(args)
         _check_folder(args.output, "output")
     if args.save_study:
         _check_folder(args.save_study, "--save-study")
@@ -137,11 +140,11 @@ def run(args: argparse.Namespace) -> int:
     if stop.is_set():
         raise KeyboardInterrupt
     seconds = time.perf_counter() - start
-    sheet = study_sheet.compose(study, images)
-    study_sheet.write_sheet(args.output, study, sheet, exposure=args.exposure)
+    ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure)
     workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
     how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
     w, h = study.size
     shape = " x ".join(str(len(a.values)) for a in study.axes)
-    print(f"{args.output}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}")
+    shown = f", {view.view} at {ev:+.1f} EV" if view is not None else ""
+    print(f"{args.output}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}{shown}")
     return 0

@@ -1,24 +1,28 @@
-"""Image files through OpenImageIO: linear float EXR with the scene in the header, sRGB 8-bit PNG.
+"""Image files through OpenImageIO: linear float EXR with the scene in the header, 8-bit display PNG.
 
 An EXR keeps the tracer's linear RGB exactly (32-bit float) and carries the normalised scene
 JSON in the header attribute ``lamp:scene``, so an image can always be traced back to its
-design; contribution passes may ride along as extra channels (``bulb.R``, ``bulb.G``, ...).
-A PNG is display-referred: the exact sRGB transfer function, 8 bits, with the scene JSON as a
-text chunk of the same name. Every write goes through ``fileio.atomic_path``: a failure never
-leaves a partial file.
+design. A PNG is display-referred: exposure and a view transform of Blender's colour management
+(``display``), 8 bits, with the scene JSON as a text chunk of the same name and the view and
+exposure as ``lamp:view`` and ``lamp:exposure``. Every write goes through ``fileio.atomic_path``:
+a failure never leaves a partial file.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 
 from .. import fileio
 from ..scene.validate import SceneError, normalize, parse_json_text, parse_scene, scene_to_json
+from . import display
 
 SCENE_ATTRIBUTE = "lamp:scene"
+VIEW_ATTRIBUTE = "lamp:view"  # the view transform of a PNG; read_image undoes it
+EXPOSURE_ATTRIBUTE = "lamp:exposure"  # stops applied to a PNG before its view; read_image undoes them
 SUFFIXES = (".exr", ".png")
 RGB = ("R", "G", "B")
 
@@ -30,8 +34,6 @@ def _oiio():
     return OpenImageIO
 
 
-EXPOSURE_ATTRIBUTE = "lamp:exposure"  # stops applied to a PNG before encoding; read_image undoes it
-
 
 def image_format(path: str | os.PathLike) -> str:
     """``"exr"`` or ``"png"`` from the file name; a ``SceneError`` naming the path otherwise."""
@@ -41,23 +43,6 @@ def image_format(path: str | os.PathLike) -> str:
         allowed = ", ".join(SUFFIXES)
         raise SceneError(name, f"{suffix or 'no suffix'} is not an image format this writes; allowed {allowed}")
     return suffix[1:]
-
-
-def srgb_encode(linear: np.ndarray) -> np.ndarray:
-    """The sRGB transfer function (IEC 61966-2-1) of linear values, clipped to [0, 1]."""
-    x = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
-
-
-def srgb_decode(encoded: np.ndarray) -> np.ndarray:
-    """The inverse of ``srgb_encode``: display values in [0, 1] back to linear."""
-    v = np.asarray(encoded, dtype=np.float64)
-    return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4))
-
-
-def to_srgb8(linear: np.ndarray) -> np.ndarray:
-    """Linear RGB to 8-bit sRGB codes, rounded to nearest."""
-    return np.rint(srgb_encode(linear) * 255.0).astype(np.uint8)
 
 
 def _check_image(image: np.ndarray, what: str) -> np.ndarray:
@@ -72,52 +57,67 @@ def write_image(
     image: np.ndarray,
     scene: dict | None = None,
     *,
-    passes: Mapping[str, np.ndarray] | None = None,
     attributes: Mapping[str, str] | None = None,
-    exposure: float = 0.0,
-) -> None:
+    view: display.ViewTransform | None = None,
+    exposure: float | str | None = "auto",
+) -> float:
     """Write ``image`` (H, W, 3 linear RGB, top row first) as EXR or PNG, chosen by the suffix.
 
     ``scene`` is normalised and stored as JSON in the ``lamp:scene`` attribute; ``attributes``
-    are further string attributes of the header. ``passes`` (name -> H, W, 3) become extra
-    channels ``name.R/G/B`` of an EXR; a PNG cannot hold them. ``exposure`` (stops) scales a PNG
-    before its sRGB encoding, so bright lamps need not clip; an EXR always keeps the linear values.
-    Raises ``SceneError`` for an unsupported suffix, ``OSError`` when the file cannot be written.
+    are further string attributes of the header. An EXR keeps the linear values. A PNG shows the
+    image through ``view`` (default: ``display.view_transform()``, Blender's AgX) at ``exposure``
+    stops (a number, or "auto"/None for ``display.auto_exposure``). Returns the exposure applied
+    (0 for an EXR). Raises ``SceneError`` for an unsupported suffix, ``OSError`` when the file
+    cannot be written.
     """
     name = os.fspath(path)
     fmt = image_format(name)
     rgb = _check_image(image, "image")
-    channels = [rgb]
-    names = list(RGB)
-    for pass_name, data in (passes or {}).items():
-        if fmt != "exr":
-            raise SceneError(name, "passes can only be stored in an .exr file")
-        if not pass_name or "." in pass_name or pass_name in RGB:
-            raise ValueError(f"pass name {pass_name!r} cannot name an EXR channel layer")
-        p = _check_image(data, f"pass {pass_name}")
-        if p.shape != rgb.shape:
-            raise ValueError(f"pass {pass_name}: shape {p.shape} differs from the image {rgb.shape}")
-        channels.append(p)
-        names += [f"{pass_name}.{c}" for c in RGB]
-    scene_text = scene_to_json(normalize(scene)) if scene is not None else None
-
-    oiio = _oiio()
-    height, width = rgb.shape[:2]
     if fmt == "exr":
-        pixels = np.ascontiguousarray(np.concatenate(channels, axis=2), dtype=np.float32)
-        spec = oiio.ImageSpec(width, height, len(names), oiio.FLOAT)
-        spec.channelnames = tuple(names)
-        spec.attribute("compression", "zip")
-    else:
-        pixels = np.ascontiguousarray(to_srgb8(rgb * np.float32(2.0**exposure) if exposure else rgb))
+        _write(name, rgb, scene, attributes)
+        return 0.0
+    view = view or display.view_transform()
+    ev = display.resolve_exposure(exposure, rgb)
+    write_display(name, view.to_display(rgb, ev), scene, attributes=attributes, view=view.view, exposure=ev)
+    return ev
+
+
+def write_display(
+    path: str | os.PathLike,
+    shown: np.ndarray,
+    scene: dict | None = None,
+    *,
+    attributes: Mapping[str, str] | None = None,
+    view: str = display.STANDARD,
+    exposure: float = 0.0,
+) -> None:
+    """Write display values ``shown`` (H, W, 3 in [0, 1], top row first) as an 8-bit PNG, for images
+    composed on the display side (labels on a sheet); ``view`` and ``exposure`` say how the
+    pictures in it were made, for ``read_image`` to undo."""
+    name = os.fspath(path)
+    if image_format(name) != "png":
+        raise SceneError(name, "display values are written as .png; an .exr holds linear values")
+    codes = np.rint(np.clip(_check_image(shown, "image"), 0.0, 1.0) * 255.0).astype(np.uint8)
+    extra = {VIEW_ATTRIBUTE: view, EXPOSURE_ATTRIBUTE: f"{exposure:g}", **(attributes or {})}
+    _write(name, codes, scene, extra)
+
+
+def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mapping[str, str] | None) -> None:
+    scene_text = scene_to_json(normalize(scene)) if scene is not None else None
+    oiio = _oiio()
+    height, width = pixels.shape[:2]
+    if pixels.dtype == np.uint8:
         spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
-        if exposure:
-            spec.attribute(EXPOSURE_ATTRIBUTE, f"{exposure:g}")
+    else:
+        spec = oiio.ImageSpec(width, height, 3, oiio.FLOAT)
+        spec.attribute("compression", "zip")
+    spec.channelnames = RGB
     if scene_text is not None:
         spec.attribute(SCENE_ATTRIBUTE, scene_text)
     for key, value in (attributes or {}).items():
         spec.attribute(key, value)
+    pixels = np.ascontiguousarray(pixels)
 
     with fileio.atomic_path(name) as tmp:
         out = oiio.ImageOutput.create(tmp)
@@ -134,7 +134,9 @@ def write_image(
             raise OSError(f"{name}: cannot finish the image ({out.geterror()})")
 
 
-def _read(path: str | os.PathLike):
+@contextlib.contextmanager
+def _opened(path: str | os.PathLike) -> Iterator[tuple[str, object, object]]:
+    """The one way images are opened for reading: (name, OpenImageIO module, ImageInput), closed after."""
     name = os.fspath(path)
     if not os.path.isfile(name):
         raise SceneError(name, "cannot read the image (no such file)")
@@ -143,12 +145,23 @@ def _read(path: str | os.PathLike):
     if inp is None:
         raise SceneError(name, f"cannot read the image ({oiio.geterror()})")
     try:
+        yield name, oiio, inp
+    finally:
+        inp.close()
+
+
+def read_attribute(path: str | os.PathLike, attribute: str) -> object:
+    """One header attribute of an image file (None when it has none), without reading the pixels."""
+    with _opened(path) as (_name, _oiio_module, inp):
+        return inp.spec().getattribute(attribute)
+
+
+def _read(path: str | os.PathLike):
+    with _opened(path) as (name, oiio, inp):
         spec = inp.spec()
         pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
         if pixels is None:
             raise SceneError(name, f"cannot read the image ({inp.geterror()})")
-    finally:
-        inp.close()
     pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, spec.nchannels)
     return name, spec, pixels
 
@@ -164,7 +177,8 @@ def _channels(name: str, spec, pixels: np.ndarray, wanted: tuple[str, ...]) -> n
 def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict | None]:
     """Read an image written by ``write_image``: (linear float32 H, W, 3 top row first, scene or None).
 
-    A PNG's 8-bit sRGB codes are decoded back to linear (and its exposure undone). The scene is
+    A PNG's 8-bit codes are taken back to linear through the inverse of its view and exposure (a
+    PNG without ``lamp:view`` is plain sRGB); where a view clipped, so does the result. The scene is
     parsed and validated with ``parse_scene``; a header that does not hold a valid scene raises ``SceneError``.
     """
     fmt = image_format(path)
@@ -174,14 +188,7 @@ def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict | None]:
     else:
         rgb = _channels(name, spec, pixels, RGB)
     if fmt == "png":
-        rgb = srgb_decode(rgb)
-        exposure = spec.getattribute(EXPOSURE_ATTRIBUTE)
-        if isinstance(exposure, str):
-            try:
-                rgb = rgb / 2.0 ** float(exposure)
-            except ValueError:
-                raise SceneError(name, f"{EXPOSURE_ATTRIBUTE} {exposure[:40]!r} is not a number") from None
-        rgb = rgb.astype(np.float32)
+        rgb = _undo_display(name, spec, rgb)
     text = spec.getattribute(SCENE_ATTRIBUTE)
     if text is None:
         return rgb, None
@@ -194,12 +201,15 @@ def read_image(path: str | os.PathLike) -> tuple[np.ndarray, dict | None]:
     return rgb, scene
 
 
-def read_passes(path: str | os.PathLike) -> dict[str, np.ndarray]:
-    """The extra ``name.R/G/B`` channel layers of an EXR, as name -> (H, W, 3) float32."""
-    name, spec, pixels = _read(path)
-    layers: list[str] = []
-    for channel in spec.channelnames:
-        layer, _, c = channel.rpartition(".")
-        if layer and c == "R" and layer not in layers:
-            layers.append(layer)
-    return {layer: _channels(name, spec, pixels, tuple(f"{layer}.{c}" for c in RGB)) for layer in layers}
+def _undo_display(name: str, spec, shown: np.ndarray) -> np.ndarray:
+    view_name = spec.getattribute(VIEW_ATTRIBUTE)
+    exposure = spec.getattribute(EXPOSURE_ATTRIBUTE)
+    try:
+        ev = float(exposure) if isinstance(exposure, str) else 0.0
+    except ValueError:
+        raise SceneError(name, f"{EXPOSURE_ATTRIBUTE} {exposure[:40]!r} is not a number") from None
+    try:
+        view = display.view_transform(view_name if isinstance(view_name, str) else display.STANDARD)
+    except ValueError as e:
+        raise SceneError(name, f"{VIEW_ATTRIBUTE}: {e}") from None
+    return view.to_linear(shown, ev)

@@ -25,6 +25,8 @@ import unicodedata
 from dataclasses import dataclass, field
 
 from .. import fileio
+from ..images import display
+from ..images.display import ViewTransform
 from ..scene.validate import SceneError, normalize, parse_scene, read_json, scene_to_json
 
 SUFFIX = ".json"
@@ -287,10 +289,23 @@ def rename_preset(entry: PresetEntry, new_name: str, *, overwrite: bool = False)
 # Thumbnails
 
 
+# How a thumbnail shows its preset. It is part of the thumbnail's name, so a change to the display
+# pipeline makes every thumbnail stale (``presets thumbnails --check`` says so) instead of leaving
+# old-looking ones in place.
+THUMBNAIL_LOOK = (f"{display.DEFAULT_VIEW}; auto exposure {display.AUTO_TARGET:g} at the "
+                  f"{display.AUTO_PERCENTILE:g}th percentile within {display.AUTO_REGION_STOPS:g} stops of the "
+                  f"{display.AUTO_BRIGHT_END:g}th")
+
+
+def thumbnail_digest(entry: PresetEntry) -> str:
+    """The hash of a preset's content and of ``THUMBNAIL_LOOK``."""
+    return hashlib.sha256(f"{entry.digest}\n{THUMBNAIL_LOOK}".encode()).hexdigest()[:16]
+
+
 def thumbnail_name(entry: PresetEntry) -> str:
-    """``<file stem>-<hash of the preset>.png``: the same in every thumbnail folder."""
+    """``<file stem>-<hash of the preset and of how it is shown>.png``: the same in every thumbnail folder."""
     stem = os.path.splitext(os.path.basename(entry.file))[0]
-    return f"{stem}-{entry.digest}.png"
+    return f"{stem}-{thumbnail_digest(entry)}.png"
 
 
 def _own_subfolder(library: Library, subfolder: str) -> str | None:
@@ -368,8 +383,11 @@ def _forget_thumbnails(library: Library, preset_path: str) -> None:
             _remove_thumbnails(folder, stem)
 
 
-def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUMBNAIL_SIZE) -> str:
-    """Render ``entry`` with the tracer at ``size`` x ``size`` and write it as PNG (atomically)."""
+def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUMBNAIL_SIZE, *,
+                   view: ViewTransform | None = None) -> str:
+    """Render ``entry`` with the tracer at ``size`` x ``size`` and write it as PNG (atomically), shown
+    as everywhere else: through ``view`` (default Blender's AgX, ``images.display``) at the design's
+    automatic exposure."""
     from .. import render  # the tracer loads only when a thumbnail is actually made
     from ..images.imageio import write_image
 
@@ -378,7 +396,7 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     scene["image"] = {"width": int(size), "height": int(size)}
     image = render(scene, size, size)
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
-    write_image(target, image, scene)
+    write_image(target, image, scene, view=view)
     stem = os.path.splitext(os.path.basename(entry.file))[0]
     _remove_thumbnails(os.path.dirname(os.path.abspath(target)), stem, keep=os.path.abspath(target))
     return target
@@ -436,10 +454,13 @@ def make_shipped_thumbnails(library: Library,
     prepared for shipping. Returns the thumbnails made, the files removed and the warnings about
     files that are not valid presets (which get no thumbnail)."""
     state = check_shipped_thumbnails(library)
+    view = display.view_transform(display.DEFAULT_VIEW)
+    if view.note and state.missing:  # shipped thumbnails must look as their name says
+        raise PresetError(printable(state.folder), f"cannot make shipped thumbnails: {view.note}")
     os.makedirs(state.folder, exist_ok=True)
     made = []
     for entry in state.missing:
-        path = make_thumbnail(entry, os.path.join(state.folder, thumbnail_name(entry)), size)
+        path = make_thumbnail(entry, os.path.join(state.folder, thumbnail_name(entry)), size, view=view)
         os.chmod(path, 0o644)  # shipped to everyone who installs the library (the temporary file was private)
         made.append(path)
     removed = []

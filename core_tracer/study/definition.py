@@ -511,17 +511,9 @@ def parse_size(value: Any, where: str = "size") -> tuple[int, int]:
 
 
 def _sheet_attribute(name: str) -> str:
-    if not os.path.isfile(name):
-        raise SceneError(name, "cannot read the image (no such file)")
-    import OpenImageIO as oiio  # on use: a study without sheets needs no OpenImageIO
+    from ..images.imageio import read_attribute  # on use: a study without sheets needs no OpenImageIO
 
-    inp = oiio.ImageInput.open(name)
-    if inp is None:
-        raise SceneError(name, f"cannot read the image ({oiio.geterror()})")
-    try:
-        text = inp.spec().getattribute(STUDY_ATTRIBUTE)
-    finally:
-        inp.close()
+    text = read_attribute(name, STUDY_ATTRIBUTE)
     if not isinstance(text, str):
         raise SceneError(name, f"the image carries no study (no {STUDY_ATTRIBUTE} attribute)")
     return text

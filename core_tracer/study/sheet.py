@@ -5,13 +5,15 @@ names of the two parameters; above each column its value of axis 1, left of each
 of axis 2; under each image the variant's values. ``layout(study)`` computes every rectangle
 and is a pure function of the study, so the geometry is testable without rendering.
 
-Composition uses OpenImageIO (``ImageBufAlgo.paste``; labels with ``render_text`` and its
-bundled font). Where ``render_text`` is unavailable (the OpenImageIO inside Blender has no
-FreeType) the labels are drawn with ``bitmap_font``; without OpenImageIO at all the sheet is
-composed in numpy (same pixels) and only the file writers need it.
+Composition is numpy; labels come from ``images.labels`` (OpenImageIO's font where it can draw
+text, else the bitmap font), so a sheet is made without OpenImageIO and only the files need it.
+Every variant shares one exposure (chosen over all of them by ``display.auto_exposure``), so the
+cells compare: a brighter bulb shows as a brighter cell.
 
-Files: EXR is linear float with the study JSON in the header attribute ``lamp:study``; PNG is
-8-bit sRGB with the same JSON as a text chunk. ``Study.load(sheet)`` reads it back.
+Files: EXR is linear float with the study JSON in the header attribute ``lamp:study``; PNG shows
+the variants through a view transform (``images.display``) with the labels drawn on the display
+side, so they read whatever the exposure; the same JSON rides as a text chunk. ``Study.load(sheet)``
+reads it back.
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..images import bitmap_font
-from ..images.imageio import write_image
+from ..images import bitmap_font, display, labels
+from ..images.imageio import EXPOSURE_ATTRIBUTE, image_format, write_display, write_image
 from .definition import STUDY_ATTRIBUTE, Study, format_value
 
 BACKGROUND = (0.018, 0.018, 0.02)  # linear; a dark grey that sets off the black of each render
@@ -129,61 +131,11 @@ def layout(study: Study) -> SheetLayout:
 # Composition
 
 
-def _oiio():
-    try:
-        import OpenImageIO
-    except ImportError:
-        return None
-    return OpenImageIO
-
-
-_render_text_works: bool | None = None
-
-
-def render_text_available() -> bool:
-    """Whether this OpenImageIO can draw text (it cannot without FreeType, as inside Blender)."""
-    global _render_text_works
-    if _render_text_works is None:
-        oiio = _oiio()
-        ok = False
-        if oiio is not None:
-            probe = oiio.ImageBuf(oiio.ImageSpec(16, 16, 1, oiio.FLOAT))
-            try:
-                ok = bool(oiio.ImageBufAlgo.render_text(probe, 1, 8, "1", 10, "", (1.0,), "left", "center"))
-            except Exception:  # bindings without text support raise instead of returning False
-                ok = False
-            ok = ok and float(np.asarray(probe.get_pixels(oiio.FLOAT)).max()) > 0.0
-        _render_text_works = ok
-    return _render_text_works
-
-
-def _fit(text: str, width: int, char_width: int) -> str:
-    room = max(1, width // char_width)
-    return text if len(text) <= room else text[: max(1, room - 3)] + "..."
-
-
-def _text_coverage(box: TextBox, scale: int, char_width: int, use_oiio: bool) -> np.ndarray:
-    """Coverage in [0, 1] of ``box.text`` drawn in a (h, w) array the size of its rectangle."""
-    r = box.rect
-    text = _fit(box.text, r.w, char_width)
-    if use_oiio:
-        oiio = _oiio()
-        buf = oiio.ImageBuf(oiio.ImageSpec(r.w, r.h, 1, oiio.FLOAT))
-        align = "right" if box.kind == "row" else "left"
-        x = r.w - 1 if box.kind == "row" else 0
-        if oiio.ImageBufAlgo.render_text(buf, x, r.h // 2, text, 10 * scale, "", (1.0,), align, "center"):
-            return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(r.h, r.w)
-    mask = bitmap_font.text_mask(text, scale)
-    out = np.zeros((r.h, r.w), dtype=np.float32)
-    mh, mw = min(mask.shape[0], r.h), min(mask.shape[1], r.w)
-    y0 = (r.h - mh) // 2
-    x0 = r.w - mw if box.kind == "row" else 0
-    out[y0:y0 + mh, x0:x0 + mw] = mask[:mh, :mw]
-    return out
-
-
-def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto") -> np.ndarray:
-    """The contact sheet (H, W, 3 float32 linear, top row first) of the rendered variants.
+def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float = 0.0,
+            view: display.ViewTransform | None = None) -> np.ndarray:
+    """The contact sheet (H, W, 3 float32, top row first) of the rendered variants, each scaled by
+    ``exposure`` stops. Without ``view`` the sheet is linear; with it the variants are shown
+    through ``view`` and the sheet holds display values in [0, 1] (background and labels too).
 
     ``text``: ``"auto"`` (OpenImageIO's ``render_text`` where it works, else the bitmap font),
     ``"oiio"``, ``"bitmap"`` or ``"none"``.
@@ -195,36 +147,29 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto") -
     for i, img in enumerate(images):
         if np.shape(img) != (h, w, 3):
             raise ValueError(f"image {i}: expected shape {(h, w, 3)}, got {np.shape(img)}")
-    if text not in ("auto", "oiio", "bitmap", "none"):
-        raise ValueError(f"text must be auto, oiio, bitmap or none, not {text!r}")
-    oiio = _oiio()
-    use_oiio_text = text == "oiio" or (text == "auto" and render_text_available())
-    if use_oiio_text and not render_text_available():
-        raise RuntimeError("OpenImageIO cannot render text here (no FreeType)")
+    oiio_text = labels.use_oiio(text)
 
-    if oiio is not None:
-        sheet = oiio.ImageBuf(oiio.ImageSpec(lay.width, lay.height, 3, oiio.FLOAT))
-        oiio.ImageBufAlgo.fill(sheet, BACKGROUND)
-        for rect, img in zip(lay.cells, images, strict=True):
-            cell = oiio.ImageBuf(oiio.ImageSpec(rect.w, rect.h, 3, oiio.FLOAT))
-            cell.set_pixels(oiio.ROI(0, rect.w, 0, rect.h, 0, 1, 0, 3), np.ascontiguousarray(img, dtype=np.float32))
-            if not oiio.ImageBufAlgo.paste(sheet, rect.x, rect.y, 0, 0, cell):
-                raise RuntimeError(f"cannot paste a variant into the sheet ({oiio.geterror()})")
-        canvas = np.asarray(sheet.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(lay.height, lay.width, 3)
-        canvas = np.array(canvas)  # writable
-    else:
-        canvas = np.empty((lay.height, lay.width, 3), dtype=np.float32)
-        canvas[:] = BACKGROUND
-        for rect, img in zip(lay.cells, images, strict=True):
-            canvas[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w] = img
+    background, color = np.asarray(BACKGROUND, np.float32), np.asarray(TEXT_COLOR, np.float32)
+    if view is not None:  # the same greys as a linear sheet shows under Standard
+        background, color = (display.srgb_encode(c).astype(np.float32) for c in (background, color))
+    canvas = np.empty((lay.height, lay.width, 3), dtype=np.float32)
+    canvas[:] = background
+    for rect, img in zip(lay.cells, images, strict=True):
+        if view is not None:
+            cell = view.to_display(img, exposure)
+        else:
+            cell = np.asarray(img, np.float32) * np.float32(2.0 ** exposure) if exposure else img
+        canvas[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w] = cell
 
     if text != "none":
-        color = np.asarray(TEXT_COLOR, dtype=np.float32)
+        size = (bitmap_font.LINE_H + 2) * lay.scale
         for box in lay.texts:
             r = box.rect
             if r.w <= 0 or r.h <= 0:
                 continue
-            m = _text_coverage(box, lay.scale, lay.char_width, use_oiio_text)[..., None]
+            line = labels.shorten(box.text, r.w, lay.char_width)
+            m = labels.coverage(line, r.w, r.h, size=size, oiio_text=oiio_text,
+                                align="right" if box.kind == "row" else "left")[..., None]
             region = canvas[r.y:r.y + r.h, r.x:r.x + r.w]
             region[:] = region * (1.0 - m) + color * m
     return canvas
@@ -234,9 +179,35 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto") -
 # Files
 
 
-def write_sheet(path: str | os.PathLike, study: Study, sheet: np.ndarray, *, exposure: float = 0.0) -> None:
-    """Write a composed sheet as EXR (linear float) or PNG (8-bit sRGB, ``exposure`` stops
-    applied), chosen by the suffix, with the study JSON in the ``lamp:study`` attribute.
-    Atomic: never a partial file."""
-    write_image(path, sheet, attributes={STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()},
-                exposure=exposure)
+def write_sheet(path: str | os.PathLike, study: Study, images: Sequence[np.ndarray], *,
+                view: display.ViewTransform | None = None, exposure: float | str | None = "auto",
+                text: str = "auto") -> float:
+    """Compose the sheet of the rendered variants and write it, with the study JSON in the
+    ``lamp:study`` attribute: EXR linear (no exposure), PNG through ``view`` (default
+    ``display.view_transform()``) at ``exposure`` stops ("auto": ``display.auto_exposure`` over all
+    variants). Returns the exposure applied. Atomic: never a partial file."""
+    attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()}
+    if image_format(path) == "exr":
+        write_image(path, compose(study, images, text=text), attributes=attributes)
+        return 0.0
+    view = view or display.view_transform()
+    ev = display.resolve_exposure(exposure, list(images))
+    shown = compose(study, images, text=text, exposure=ev, view=view)
+    write_display(path, shown, attributes=attributes, view=view.view, exposure=ev)
+    return ev
+
+
+def write_composed(path: str | os.PathLike, study: Study, sheet: np.ndarray, *,
+                   view: display.ViewTransform | None = None, exposure: float = 0.0,
+                   view_exposure: float = 0.0) -> None:
+    """Write a sheet composed already (linear, its variants scaled by ``exposure`` stops, as Blender
+    shows it): EXR as it is, with ``lamp:exposure`` saying how the variants were scaled; PNG
+    through ``view`` at ``view_exposure`` more stops (Blender's own exposure slider). Atomic: never
+    a partial file."""
+    attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()}
+    if image_format(path) == "exr":
+        write_image(path, sheet, attributes={**attributes, EXPOSURE_ATTRIBUTE: f"{exposure:g}"})
+        return
+    view = view or display.view_transform()
+    write_display(path, view.to_display(sheet, view_exposure), attributes=attributes, view=view.view,
+                  exposure=exposure + view_exposure)

@@ -29,7 +29,7 @@ import pytest
 from helpers import BASELINE
 
 import core_tracer
-from core_tracer.images import imageio
+from core_tracer.images import display, imageio
 
 pytestmark = pytest.mark.blender
 
@@ -78,9 +78,11 @@ def test_side_by_side_layout_and_labels(lamp_addon):
 
 def test_side_by_side_picks_the_label_that_fits(lamp_addon, addon_core):
     compare = lamp_addon.compare_ops
+    fitting = addon_core.images.labels.fitting  # the one label module, shared with study sheets
+    assert compare.labels.fitting is fitting
     measure = lambda t: len(t) * addon_core.images.bitmap_font.ADVANCE_W  # noqa: E731
-    assert compare._fitting(("Lamp Tracer  0.12 s", "Lamp Tracer", "Tracer"), 70, measure) == "Lamp Tracer"
-    assert compare._fitting(("Lamp Tracer  0.12 s", "Lamp Tracer"), 10, measure) == "Lamp Tracer"
+    assert fitting(("Lamp Tracer  0.12 s", "Lamp Tracer", "Tracer"), 70, measure) == "Lamp Tracer"
+    assert fitting(("Lamp Tracer  0.12 s", "Lamp Tracer"), 10, measure) == "Lamp Tracer"
 
 
 def test_bitmap_labels_use_core_tracers_font(lamp_addon, addon_core):
@@ -192,7 +194,14 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     # The side-by-side image.
     compare_image = bpy.data.images["Lamp Compare"]
     assert tuple(compare_image.size) == (result["side_by_side"].shape[1], result["side_by_side"].shape[0])
-    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(compare_image), result["side_by_side"])
+    # Both halves at one automatic exposure, shown through the scene's view transform like a render,
+    # the user's own exposure (0.5) taken out so that the lit lens shows at the design's exposure.
+    assert result["exposure"] == display.auto_exposure([result["tracer"], result["cycles"]]) < -2
+    assert compare_image.use_view_as_render
+    assert compare_image["lamp_exposure"] == pytest.approx(result["exposure"] - 0.5)
+    np.testing.assert_allclose(lamp_addon.image_view.image_to_array(compare_image),
+                               compare.shown_side_by_side(result, None, result["exposure"]) * np.float32(2 ** -0.5),
+                               rtol=1e-6)
 
 
 def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):

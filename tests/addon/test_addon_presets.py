@@ -122,7 +122,7 @@ def test_two_designers_share_a_folder(browser, add_library, bl_scene, tmp_path, 
     thumbs = browser.preset_library.thumbnails()
     thumbs.wait()
     entry = browser.preset_library.listing().entry(str(saved))
-    thumb = Path(team) / ".thumbnails" / f"amber-turn-alice-{entry.digest}.png"
+    thumb = Path(team) / ".thumbnails" / f"amber-turn-alice-{browser.preset_library.P.thumbnail_digest(entry)}.png"
     assert thumb.is_file() and thumbs.errors == {}
 
     # Bob, in a new file, lists the folder: he sees the preset with its thumbnail and applies it.

@@ -19,7 +19,7 @@ import pytest
 from helpers import BASELINE, ROOT
 
 import core_tracer
-from core_tracer.images import imageio
+from core_tracer.images import display, imageio
 
 pytestmark = pytest.mark.blender
 
@@ -195,8 +195,7 @@ def test_an_out_of_date_design_camera_does_not_block_a_render(lamp_addon, addon_
     seen = lamp_addon.render_camera.scene_for_render(bl_scene)
     assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-3)
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
-    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Tracer"]),
-                                  core_tracer.render(seen))
+    _assert_shown(lamp_addon, bpy.data.images["Lamp Tracer"], core_tracer.render(seen))
     bl_scene.render.engine = "LAMP_TRACER"
     assert bpy.ops.render.render() == {"FINISHED"}  # the engine reports no error
     assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # and the design camera can be brought up to date
@@ -564,14 +563,22 @@ def test_render_operator_image_equals_core_render(lamp_addon, bl_scene):
     assert image.is_float and tuple(image.size) == (48, 32)
     assert image.colorspace_settings.name == lamp_addon.image_view.scene_linear_colorspace()
     expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
-    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(image), expected)
+    _assert_shown(lamp_addon, image, expected)
     # Again at another size: the same data-block, resized, still exact.
     bl_scene.render.resolution_x = 24
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     again = bpy.data.images["Lamp Tracer"]
     assert again == image and tuple(again.size) == (24, 32)
-    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(again),
-                                  core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene)))
+    _assert_shown(lamp_addon, again, core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene)))
+
+
+def _assert_shown(lamp_addon, image, expected) -> None:
+    """The image holds the tracer's render at the design's automatic exposure, shown through the
+    scene's view transform like a render."""
+    exposure = display.auto_exposure(expected)
+    assert image.use_view_as_render and image["lamp_exposure"] == exposure and exposure < -2
+    np.testing.assert_allclose(lamp_addon.image_view.image_to_array(image), expected * np.float32(2.0 ** exposure),
+                               rtol=1e-6)
 
 
 def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):

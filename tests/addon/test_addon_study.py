@@ -11,6 +11,7 @@ import pytest
 from helpers import BASELINE
 
 import core_tracer
+from core_tracer.images import display
 from core_tracer.study import definition as st
 from core_tracer.study import sheet as study_sheet
 
@@ -56,9 +57,13 @@ def test_run_study_operator_makes_the_sheet_image(design, lamp_addon):
     lay = study_sheet.layout(st.Study.from_json(study.to_json()))
     assert tuple(image.size) == (lay.width, lay.height)
     pixels = lamp_addon.image_view.image_to_array(image)
-    for v, rect in zip(study.variants, lay.cells, strict=True):
-        expected = core_tracer.render(v.scene, 32, 32)
-        assert np.array_equal(pixels[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w], expected)
+    renders = [core_tracer.render(v.scene, 32, 32) for v in study.variants]
+    # One automatic exposure for every variant, shown through the scene's view transform.
+    exposure = display.auto_exposure(renders)
+    assert exposure < -2 and image["lamp_exposure"] == exposure and image.use_view_as_render
+    for expected, rect in zip(renders, lay.cells, strict=True):
+        cell = pixels[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w]
+        np.testing.assert_allclose(cell, expected * np.float32(2.0 ** exposure), rtol=1e-6)
     assert study.variants[0].scene["lamps"][0]["lens"]["ior"] == 1.45
     # The image carries its study, so it can be re-run.
     assert json.loads(image["lamp_study"])["axes"] == [{"parameter": "lens.ior", "values": [1.45, 1.6]}]

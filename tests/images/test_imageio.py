@@ -10,7 +10,7 @@ import OpenImageIO as oiio
 import pytest
 from helpers import BASELINE
 
-from core_tracer.images import imageio
+from core_tracer.images import display, imageio
 from core_tracer.scene import validate as scene
 from core_tracer.scene.validate import SceneError
 
@@ -55,22 +55,6 @@ def test_exr_carries_the_normalised_scene(tmp_path):
     assert back == expected
 
 
-def test_exr_passes_are_named_channel_layers(tmp_path):
-    rng = np.random.default_rng(2)
-    img = _random_image(rng)
-    passes = {"bulb": img * 0.25, "reflector_scatter": img * 0.75}
-    path = tmp_path / "passes.exr"
-    imageio.write_image(path, img, passes=passes)
-    names = set(oiio.ImageInput.open(str(path)).spec().channelnames)
-    assert {"R", "G", "B", "bulb.R", "bulb.G", "bulb.B", "reflector_scatter.B"} <= names
-    back, _ = imageio.read_image(path)
-    assert np.array_equal(back, img)
-    layers = imageio.read_passes(path)
-    assert set(layers) == set(passes)
-    for k, v in passes.items():
-        assert np.array_equal(layers[k], v)
-
-
 def _srgb_formula(x: float) -> float:
     # IEC 61966-2-1, written out independently of the module under test
     x = min(max(x, 0.0), 1.0)
@@ -83,7 +67,7 @@ def test_png_is_8_bit_srgb(tmp_path):
     img = np.stack([values, values[::-1], np.full_like(values, 0.18)], axis=1)[None, :, :]
     sc = scene.load_scene(BASELINE)
     path = tmp_path / "out.png"
-    imageio.write_image(path, img, sc)
+    imageio.write_image(path, img, sc, view=display.view_transform("Standard"), exposure=0)
 
     inp = oiio.ImageInput.open(str(path))
     spec = inp.spec()
@@ -100,7 +84,7 @@ def test_png_is_8_bit_srgb(tmp_path):
     assert back_scene == sc
     # decoded back to linear within half an 8-bit step of the clipped input
     clipped = np.clip(img, 0, 1)
-    assert np.allclose(imageio.srgb_encode(back), imageio.srgb_encode(clipped), atol=0.5 / 255 + 1e-6)
+    assert np.allclose(display.srgb_encode(back), display.srgb_encode(clipped), atol=0.5 / 255 + 1e-6)
 
 
 def test_srgb_matches_openimageio_colorconvert():
@@ -109,8 +93,8 @@ def test_srgb_matches_openimageio_colorconvert():
     buf.set_pixels(oiio.ROI(), x)
     conv = oiio.ImageBufAlgo.colorconvert(buf, "linear", "sRGB")
     assert not conv.has_error
-    assert np.abs(conv.get_pixels(oiio.FLOAT) - imageio.srgb_encode(x)).max() < 1e-4
-    assert np.allclose(imageio.srgb_decode(imageio.srgb_encode(x)), x, atol=1e-6)
+    assert np.abs(conv.get_pixels(oiio.FLOAT) - display.srgb_encode(x)).max() < 1e-4
+    assert np.allclose(display.srgb_decode(display.srgb_encode(x)), x, atol=1e-6)
 
 
 @pytest.mark.parametrize("name", ["out.jpg", "out.tif", "out", "out.exr.txt"])
@@ -119,13 +103,6 @@ def test_unknown_suffix_is_refused_clearly(tmp_path, name):
     with pytest.raises(SceneError) as err:
         imageio.write_image(path, np.zeros((2, 2, 3), np.float32))
     assert str(path) in str(err.value) and ".exr, .png" in str(err.value)
-    assert _leftovers(tmp_path) == []
-
-
-def test_passes_refused_in_png(tmp_path):
-    img = np.zeros((2, 2, 3), np.float32)
-    with pytest.raises(SceneError, match="passes"):
-        imageio.write_image(tmp_path / "a.png", img, passes={"bulb": img})
     assert _leftovers(tmp_path) == []
 
 
@@ -161,7 +138,7 @@ def test_failure_while_writing_keeps_the_previous_image(tmp_path):
     first = np.full((3, 4, 3), 0.25, np.float32)
     imageio.write_image(path, first)
     with pytest.raises(ValueError):
-        imageio.write_image(path, first, passes={"bulb": np.zeros((9, 9, 3), np.float32)})
+        imageio.write_image(path, np.zeros((9, 9, 4), np.float32))  # not an RGB image
     back, _ = imageio.read_image(path)
     assert np.array_equal(back, first)
     assert _leftovers(tmp_path) == ["out.exr"]
@@ -191,16 +168,26 @@ def test_header_with_a_broken_scene_is_reported(tmp_path):
     assert os.path.exists(path)
 
 
-def test_png_exposure_scales_before_encoding_and_is_undone_on_reading(tmp_path):
-    image = np.full((4, 6, 3), 4.0, dtype=np.float32)  # a bright lamp: clips at exposure 0
+@pytest.mark.parametrize("view", ["Standard", "AgX"])
+def test_png_exposure_and_view_are_undone_on_reading(tmp_path, view):
+    image = np.full((4, 6, 3), 4.0, dtype=np.float32)  # a bright lamp: clips at exposure 0 in Standard
     image[:, :3] = [8.0, 1.0, 0.25]
+    transform = display.view_transform(view)
     plain, darker = tmp_path / "plain.png", tmp_path / "darker.png"
-    imageio.write_image(plain, image)
-    imageio.write_image(darker, image, exposure=-3)
+    imageio.write_image(plain, image, view=display.view_transform("Standard"), exposure=0)
+    assert imageio.write_image(darker, image, view=transform, exposure=-3) == -3
     assert np.all(imageio.read_image(plain)[0] <= 1.0)  # clipped
+    header = oiio.ImageInput.open(str(darker)).spec()
+    assert header.getattribute(imageio.VIEW_ATTRIBUTE) == view and header.getattribute("lamp:exposure") == "-3"
     back, _ = imageio.read_image(darker)
-    # 8-bit sRGB quantisation at 1/8 of the value, scaled back up by 8
-    np.testing.assert_allclose(back, image, rtol=0.03, atol=0.01)
+    # 8-bit quantisation at 1/8 of the value, taken back through the view and scaled back up by 8
+    np.testing.assert_allclose(back, image, rtol=0.04, atol=0.01)
     exr = tmp_path / "linear.exr"
-    imageio.write_image(exr, image, exposure=-3)
+    assert imageio.write_image(exr, image, exposure=-3) == 0.0
     np.testing.assert_array_equal(imageio.read_image(exr)[0], image)  # an EXR keeps the linear values
+
+
+def test_exr_has_only_rgb_channels(tmp_path):
+    path = tmp_path / "rgb.exr"
+    imageio.write_image(path, np.ones((2, 3, 3), np.float32))
+    assert tuple(oiio.ImageInput.open(str(path)).spec().channelnames) == ("R", "G", "B")

@@ -6,12 +6,14 @@ import copy
 import dataclasses
 import json
 import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import ROOT, run_cli
+from helpers import ROOT, assert_bad_input, run_cli
 from hostile_presets import leaves, make_hostile_folder
 
 from core_tracer import fileio
@@ -268,7 +270,7 @@ def test_thumbnail_beside_a_writable_library_refreshes_when_the_preset_changes(t
     entry = P.save_preset(lib, "Red tail", parse_scene(builtin_doc()))
     path = P.thumbnail_path(entry, cache)
     assert Path(path).parent == Path(lib.folder) / ".thumbnails"
-    assert Path(path).name == f"red-tail-{entry.digest}.png"
+    assert Path(path).name == f"red-tail-{P.thumbnail_digest(entry)}.png"
     assert P.make_thumbnail(entry, path, size=32) == path
     image, scene = imageio.read_image(path)
     assert image.shape == (32, 32, 3) and image.max() > 0 and scene["name"] == "Red tail"
@@ -302,7 +304,7 @@ def test_a_read_only_library_without_thumbnails_uses_the_cache(tmp_path):
     lib, entry = _thumbnail_library(tmp_path, writable=False)
     cache = tmp_path / "cache"
     thumb = P.thumbnail_path(entry, cache)
-    assert Path(thumb) == cache / f"red-tail-{entry.digest}.png"  # never inside the read-only folder
+    assert Path(thumb) == cache / f"red-tail-{P.thumbnail_digest(entry)}.png"  # never inside the read-only folder
     P.make_thumbnail(entry, thumb)
     image, _ = imageio.read_image(thumb)
     assert image.shape == (P.THUMBNAIL_SIZE, P.THUMBNAIL_SIZE, 3)
@@ -314,7 +316,7 @@ def test_thumbnail_lookup_order(tmp_path):
     lib, entry = _thumbnail_library(tmp_path, writable=False)
     folder, cache = Path(lib.folder), tmp_path / "cache"
     name = P.thumbnail_name(entry)
-    assert name == f"red-tail-{entry.digest}.png"
+    assert name == f"red-tail-{P.thumbnail_digest(entry)}.png"
     # a thumbnail made beside the presets by a designer who may write there serves read-only viewers too
     (folder / ".thumbnails").mkdir()
     P.make_thumbnail(entry, folder / ".thumbnails" / name, size=16)
@@ -388,7 +390,7 @@ def test_shipped_thumbnails_are_made_on_purpose(tmp_path):
     (folder / "broken.json").write_text("{")
     proc = run_cli("presets", "thumbnails", "--check", folder)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
-    assert f"red-tail.json: has no thumbnail red-tail-{entry.digest}.png" in proc.stderr
+    assert f"red-tail.json: has no thumbnail red-tail-{P.thumbnail_digest(entry)}.png" in proc.stderr
     assert "broken.json: not valid JSON" in proc.stderr
     assert f"run python -m core_tracer presets thumbnails {folder}" in proc.stderr
     assert not (folder / "thumbnails").exists()  # --check changes nothing
@@ -409,7 +411,7 @@ def test_shipped_thumbnails_are_made_on_purpose(tmp_path):
     (folder / "red-tail.json").write_text(json.dumps(doc))
     proc = run_cli("presets", "thumbnails", "--check", folder)
     assert proc.returncode == 2 and "red-tail.json: has no thumbnail" in proc.stderr
-    assert f"red-tail-{entry.digest}.png: belongs to no current preset" in proc.stderr
+    assert f"red-tail-{P.thumbnail_digest(entry)}.png: belongs to no current preset" in proc.stderr
     proc = run_cli("presets", "thumbnails", folder)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.count("made: ") == 1 and proc.stdout.count("removed: ") == 0  # made over the old one
@@ -431,3 +433,21 @@ def test_deleting_a_preset_removes_its_thumbnails(tmp_path):
     P.delete_preset(entry)
     assert files_in(Path(lib.folder) / ".thumbnails") == []
     assert files_in(Path(lib.folder) / "thumbnails") == ["keep.png"]
+
+
+def test_a_change_of_display_makes_thumbnails_stale(tmp_path, monkeypatch):
+    lib, entry = _thumbnail_library(tmp_path, writable=False)
+    made, _, _ = P.make_shipped_thumbnails(lib, size=16)
+    assert P.check_shipped_thumbnails(lib).ok
+    monkeypatch.setattr(P, "THUMBNAIL_LOOK", P.THUMBNAIL_LOOK + "; another view")
+    state = P.check_shipped_thumbnails(lib)
+    assert [e.file for e in state.missing] == [entry.file] and state.stale == (Path(made[0]).name,)
+
+
+def test_shipped_thumbnails_need_blenders_colour_configuration(tmp_path):
+    lib, _ = _thumbnail_library(tmp_path, writable=False)
+    env = {**os.environ, "LAMP_OCIO_CONFIG": str(tmp_path / "missing.ocio")}
+    proc = subprocess.run([sys.executable, "-m", "core_tracer", "presets", "thumbnails", lib.folder], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120, env=env)
+    assert_bad_input(proc, "cannot make shipped thumbnails", "LAMP_OCIO_CONFIG names no file", "Standard")
+    assert not (Path(lib.folder) / "thumbnails").exists()

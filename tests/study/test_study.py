@@ -17,6 +17,7 @@ from helpers import BASELINE, FOUR_LAMPS, ROOT, baseline_doc, run_cli
 
 from core_tracer import render
 from core_tracer.cli import main as cli
+from core_tracer.images import display
 from core_tracer.scene import validate as scene
 from core_tracer.scene.validate import SceneError
 from core_tracer.study import definition as st
@@ -353,21 +354,25 @@ def test_sheet_pastes_each_image_in_its_cell_and_labels_it(text):
 def test_sheet_file_carries_the_study(tmp_path, suffix):
     s = two_by_two()
     images = [np.full((32, 32, 3), 0.25 * (i + 1), dtype=np.float32) for i in range(4)]
-    sheet = study_sheet.compose(s, images)
+    standard = display.view_transform("Standard")
     path = tmp_path / f"sheet{suffix}"
-    study_sheet.write_sheet(path, s, sheet)
+    assert study_sheet.write_sheet(path, s, images, view=standard, exposure=-1) == (-1 if suffix == ".png" else 0)
     assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
     inp = oiio.ImageInput.open(str(path))
     spec = inp.spec()
     pixels = inp.read_image(0, 0, 0, 3, oiio.FLOAT)
     inp.close()
-    assert (spec.width, spec.height) == (sheet.shape[1], sheet.shape[0])
-    if suffix == ".exr":
-        assert spec.format == oiio.FLOAT and np.array_equal(pixels, sheet)
-    else:
+    lay = study_sheet.layout(s)
+    assert (spec.width, spec.height) == (lay.width, lay.height)
+    if suffix == ".exr":  # linear, no exposure
+        assert spec.format == oiio.FLOAT and np.array_equal(pixels, study_sheet.compose(s, images))
+    else:  # the variants at -1 EV through the view, labels on the display side
         assert spec.format == oiio.UINT8
-        from core_tracer.images.imageio import to_srgb8
-        assert np.array_equal(np.rint(pixels * 255).astype(np.uint8), to_srgb8(sheet))
+        shown = study_sheet.compose(s, images, exposure=-1, view=standard)
+        assert np.array_equal(np.rint(pixels * 255).astype(np.uint8), np.rint(shown * 255).astype(np.uint8))
+        for rect, image in zip(study_sheet.layout(s).cells, images, strict=True):
+            cell = pixels[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w]
+            assert np.abs(cell - display.srgb_encode(image / 2)).max() <= 0.5 / 255 + 1e-6
     assert json.loads(spec.getattribute("lamp:study")) == s.to_doc()
     assert st.Study.load(path).to_json() == s.to_json()
 

@@ -1,0 +1,279 @@
+"""Linear RGB to what a screen shows: exposure, then a view transform of Blender's colour management.
+
+One pipeline for every display-referred image the project writes (PNG renders, study sheets,
+preset thumbnails, the Compare side by side): the tracer's linear Rec.709 values are scaled by
+2^EV (the exposure), then mapped to the sRGB display by a *view* of Blender's OpenColorIO
+configuration (AgX, Standard, Filmic, Khronos PBR Neutral, False Color, ...), then quantised to
+8 bits. Outside Blender OpenImageIO applies Blender's own ``config.ocio``
+(``ImageBufAlgo.ociodisplay``), which gives exactly what Blender shows for the same view
+(BLENDER-NOTES.md, "Blender's colour management outside Blender").
+
+Where Blender's configuration cannot be found (no bpy module, no Blender install, no
+``LAMP_OCIO_CONFIG``) or OpenImageIO is missing, only the Standard view can be applied: it is the
+plain sRGB transfer function, which needs no configuration. A request for any other view then
+falls back to Standard and the transform carries a one-sentence ``note`` saying so, for the
+caller to tell the user once.
+
+Automatic exposure (``auto_exposure``), in the spirit of Speos's automatic adaptation: the
+brightest region of the image (the lit lens) is placed just below the view's shoulder, so its
+cut pattern reads instead of clipping to a flat disk. See ``auto_exposure`` for the measure.
+"""
+
+from __future__ import annotations
+
+import glob
+import importlib.util
+import math
+import os
+import sys
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+DISPLAY = "sRGB"
+SCENE_LINEAR = "Linear Rec.709"  # the tracer's values: linear, Rec.709 primaries (Blender's scene linear)
+STANDARD = "Standard"
+# What a designer sees in Blender by default (a new scene's view transform is AgX): a CLI PNG
+# should look like the same design rendered in Blender, and AgX rolls bright colours off
+# instead of clipping them.
+DEFAULT_VIEW = "AgX"
+# The views of Blender 4.2–5.0's configuration for the sRGB display, for help texts and for
+# checking a name before a long render when no configuration is at hand.
+KNOWN_VIEWS = ("AgX", "Standard", "Filmic", "Filmic Log", "Khronos PBR Neutral", "False Color",
+               "ACES 1.3", "ACES 2.0", "Raw")
+CONFIG_ENV = "LAMP_OCIO_CONFIG"  # a config.ocio to use instead of Blender's
+MAX_EXPOSURE = 16.0
+
+# Automatic exposure: where the lit lens's bright end is put (linear value after exposure) and
+# how that bright end is found. 0.7 is half a stop below display white in Standard (code 219)
+# and in AgX keeps a red lens red (R 199, G 68) rather than the pale pink of an overexposed one.
+AUTO_TARGET = 0.7
+AUTO_REGION_STOPS = 4.0  # the lit region: within 4 stops of the image's bright end
+AUTO_PERCENTILE = 99.0  # the lit region's bright end, ignoring the brightest 1 % (glints of the bulb)
+AUTO_BRIGHT_END = 99.9  # the image's bright end that bounds the lit region
+
+
+# ---------------------------------------------------------------------------------------------
+# Finding Blender's configuration
+
+
+def _config_in(datafiles: str) -> str | None:
+    path = os.path.join(datafiles, "colormanagement", "config.ocio")
+    return path if os.path.isfile(path) else None
+
+
+def _bpy_module_config() -> str | None:
+    """The configuration inside the bpy wheel, found without importing bpy (which takes a second
+    and would load Blender into a process that only writes images)."""
+    try:
+        spec = importlib.util.find_spec("bpy")
+    except (ImportError, ValueError):
+        return None
+    folders = list(spec.submodule_search_locations or []) if spec is not None else []
+    for folder in folders:
+        found = sorted(glob.glob(os.path.join(folder, "*", "datafiles", "colormanagement", "config.ocio")))
+        if found:
+            return found[-1]  # the newest version folder
+    return None
+
+
+def _running_blender_config() -> str | None:
+    # Inside Blender bpy is already loaded: ask it for its own data files (never import it here).
+    bpy = sys.modules.get("bpy")
+    utils = getattr(bpy, "utils", None)
+    if utils is None or not hasattr(utils, "system_resource"):
+        return None
+    try:
+        folder = utils.system_resource("DATAFILES", path="colormanagement")
+    except (TypeError, ValueError, AttributeError):
+        return None
+    return _config_in(os.path.dirname(folder)) if folder else None
+
+
+def _installed_blender_configs() -> list[str]:
+    """Blender installs in their usual places (newest version last in each)."""
+    patterns = [
+        "/usr/share/blender/*/datafiles/colormanagement/config.ocio",
+        "/opt/blender*/*/datafiles/colormanagement/config.ocio",
+        "/Applications/Blender.app/Contents/Resources/*/datafiles/colormanagement/config.ocio",
+        os.path.join(os.environ.get("ProgramFiles", r"C:\Program Files"), "Blender Foundation", "Blender*", "*",
+                     "datafiles", "colormanagement", "config.ocio"),
+    ]
+    found: list[str] = []
+    for pattern in patterns:
+        found += sorted(glob.glob(pattern))
+    return found
+
+
+def find_config() -> str | None:
+    """Blender's ``config.ocio``: ``$LAMP_OCIO_CONFIG``, the running Blender's, the bpy module's, or a
+    Blender install's; None when there is none. Looked for once (per value of ``$LAMP_OCIO_CONFIG``):
+    the first call inside Blender must come from the main thread, as every use of ``bpy``."""
+    return _find_config(os.environ.get(CONFIG_ENV, ""))
+
+
+@lru_cache(maxsize=4)
+def _find_config(own: str) -> str | None:
+    if own:
+        return own if os.path.isfile(own) else None
+    for found in (_running_blender_config(), _bpy_module_config()):
+        if found:
+            return found
+    installed = _installed_blender_configs()
+    return installed[-1] if installed else None
+
+
+def _oiio():
+    try:
+        import OpenImageIO
+    except ImportError:
+        return None
+    return OpenImageIO
+
+
+@lru_cache(maxsize=8)
+def _views_of(config: str) -> tuple[str, ...]:
+    oiio = _oiio()
+    colors = oiio.ColorConfig(config)
+    return tuple(colors.getViewNameByIndex(DISPLAY, i) for i in range(colors.getNumViews(DISPLAY)))
+
+
+# ---------------------------------------------------------------------------------------------
+# The transform
+
+
+@dataclass(frozen=True)
+class ViewTransform:
+    """A view of the sRGB display, ready to apply. ``view`` is what is applied, ``asked`` what was
+    asked for; ``note`` says in words why they differ ("" when they do not)."""
+
+    view: str
+    asked: str
+    config: str | None
+    note: str = ""
+
+    def to_display(self, linear: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+        """Display values in [0, 1] (float32, H, W, 3) of linear RGB ``linear`` at ``exposure`` stops."""
+        rgb = np.ascontiguousarray(np.asarray(linear, dtype=np.float32) * np.float32(2.0 ** exposure))
+        if self.config is None:
+            return srgb_encode(rgb).astype(np.float32)
+        oiio = _oiio()
+        height, width = rgb.shape[:2]
+        buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 3, oiio.FLOAT))
+        buf.set_pixels(oiio.ROI(0, width, 0, height, 0, 1, 0, 3), rgb)
+        out = oiio.ImageBufAlgo.ociodisplay(buf, DISPLAY, self.view, SCENE_LINEAR, colorconfig=self.config)
+        if out.has_error:
+            raise RuntimeError(f"the {self.view} view cannot be applied ({out.geterror()})")
+        shown = np.asarray(out.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(height, width, 3)
+        return np.clip(shown, 0.0, 1.0)
+
+    def to_display8(self, linear: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+        """8-bit display codes (uint8, H, W, 3), rounded to nearest, of ``linear`` at ``exposure`` stops."""
+        return np.rint(self.to_display(linear, exposure) * 255.0).astype(np.uint8)
+
+    def to_linear(self, shown: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+        """The inverse of ``to_display`` (exact up to quantisation where the view did not clip)."""
+        v = np.ascontiguousarray(np.asarray(shown, dtype=np.float32))
+        if self.config is None:
+            rgb = srgb_decode(v)
+        else:
+            oiio = _oiio()
+            height, width = v.shape[:2]
+            buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 3, oiio.FLOAT))
+            buf.set_pixels(oiio.ROI(0, width, 0, height, 0, 1, 0, 3), v)
+            out = oiio.ImageBufAlgo.ociodisplay(buf, DISPLAY, self.view, SCENE_LINEAR, inverse=True,
+                                                colorconfig=self.config)
+            rgb = np.asarray(out.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(height, width, 3)
+        return (rgb / 2.0 ** exposure).astype(np.float32)
+
+
+def view_transform(view: str = DEFAULT_VIEW, config: str | None = None) -> ViewTransform:
+    """The transform for ``view`` with Blender's configuration (``config`` or ``find_config()``).
+
+    Standard needs no configuration. Another view without a configuration or without OpenImageIO
+    falls back to Standard with a ``note``. A view the configuration does not have raises
+    ``ValueError`` naming the views it has.
+    """
+    config = config or find_config()
+    oiio = _oiio()
+    if config is None or oiio is None:
+        if view != STANDARD:
+            missing = "OpenImageIO is not installed" if oiio is None else _why_no_config()
+            note = f"{missing}, so images use the Standard view (plain sRGB) instead of {view}"
+            if view not in KNOWN_VIEWS:
+                raise ValueError(f"{view!r} is not a view; allowed {', '.join(KNOWN_VIEWS)}")
+            return ViewTransform(STANDARD, view, None, note)
+        return ViewTransform(STANDARD, view, None)
+    views = _views_of(config)
+    if view not in views:
+        raise ValueError(f"{view!r} is not a view of Blender's colour management; allowed {', '.join(views)}")
+    if view == STANDARD:
+        return ViewTransform(STANDARD, view, None)  # the sRGB transfer function, exactly (no config needed)
+    return ViewTransform(view, view, config)
+
+
+def _why_no_config() -> str:
+    own = os.environ.get(CONFIG_ENV)
+    if own:
+        return f"{CONFIG_ENV} names no file ({own})"
+    return f"Blender's colour configuration was not found (no bpy module, no Blender install, no {CONFIG_ENV})"
+
+
+def available_views(config: str | None = None) -> tuple[str, ...]:
+    """The views that can be asked for: those of Blender's configuration, else the known names."""
+    config = config or find_config()
+    if config is None or _oiio() is None:
+        return KNOWN_VIEWS
+    return _views_of(config)
+
+
+# ---------------------------------------------------------------------------------------------
+# Exposure
+
+
+def auto_exposure(linear: np.ndarray | list[np.ndarray]) -> float:
+    """Stops that put the lit lens just below the view's shoulder (rounded to 1/10 stop).
+
+    The measure, per pixel, is its brightest channel m = max(R, G, B) (a channel that clips is
+    what flattens a coloured lens). The image's bright end is the 99.9th percentile of m; the lit
+    region is every pixel within ``AUTO_REGION_STOPS`` of it (the lit lens; the body, the
+    socket and the black background lie further below); the region's 99th percentile of m is
+    placed at ``AUTO_TARGET``. Several images (a study's variants, the two halves of a Compare)
+    are measured together, so they share one exposure. A black image gets 0.
+    """
+    images = linear if isinstance(linear, list) else [linear]
+    m = np.concatenate([np.asarray(a, dtype=np.float32).max(axis=-1).ravel() for a in images])
+    m = m[np.isfinite(m) & (m > 0.0)]
+    if m.size == 0:
+        return 0.0
+    bright_end = float(np.percentile(m, AUTO_BRIGHT_END))
+    region = m[m >= bright_end * 2.0 ** -AUTO_REGION_STOPS]
+    key = float(np.percentile(region, AUTO_PERCENTILE))
+    if key <= 0.0:
+        return 0.0
+    ev = math.log2(AUTO_TARGET / key)
+    return round(max(-MAX_EXPOSURE, min(MAX_EXPOSURE, ev)), 1)
+
+
+def resolve_exposure(exposure: float | str | None, linear: np.ndarray | list[np.ndarray]) -> float:
+    """``exposure`` stops as given, or ``auto_exposure(linear)`` for None or ``"auto"``."""
+    if exposure is None or exposure == "auto":
+        return auto_exposure(linear)
+    return float(exposure)
+
+
+# ---------------------------------------------------------------------------------------------
+# The sRGB transfer function (the Standard view)
+
+
+def srgb_encode(linear: np.ndarray) -> np.ndarray:
+    """The sRGB transfer function (IEC 61966-2-1) of linear values, clipped to [0, 1]."""
+    x = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
+
+
+def srgb_decode(encoded: np.ndarray) -> np.ndarray:
+    """The inverse of ``srgb_encode``: display values in [0, 1] back to linear."""
+    v = np.asarray(encoded, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4))
