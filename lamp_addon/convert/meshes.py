@@ -181,13 +181,15 @@ def cell_lines(surface: CutSurface, k: int) -> np.ndarray:
     return lines
 
 
-def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM) -> tuple[int, float]:
-    """Quads per side of a cell so that one whole cell is within ``tol``; returns (k, deviation)."""
+def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM,
+                    most: int = MAX_CELL_SUBDIVISION) -> tuple[int, float]:
+    """Quads per side of a cell so that one whole cell is within ``tol``, at most ``most``; returns
+    (k, deviation)."""
     if surface.rho is None:
         return 1, 0.0
     # Start from the sagitta estimate L^2 / (8 rho) along the cell's axes, then measure.
     arc = 2.0 * surface.rho * math.asin(min(1.0, surface.p / 2.0 / surface.rho))
-    k = max(1, math.ceil(arc / math.sqrt(8.0 * surface.rho * tol)))
+    k = min(most, max(1, math.ceil(arc / math.sqrt(8.0 * surface.rho * tol))))
     while True:
         u = cell_lines(surface, k)
         gx, gz = np.meshgrid(u, u, indexing="ij")
@@ -196,9 +198,9 @@ def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM) -> tup
         quads = np.column_stack([idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(),
                                  idx[:-1, 1:].ravel()])
         dev = triangle_deviation(verts, fan_triangles(quads.tolist()), surface.distance)
-        if dev <= SAMPLED_MARGIN * tol or k >= MAX_CELL_SUBDIVISION:
+        if dev <= SAMPLED_MARGIN * tol or k >= most:
             return k, dev
-        k = min(MAX_CELL_SUBDIVISION, k + max(1, k // 4))
+        k = min(most, k + max(1, k // 4))
 
 
 def _rim_edges_near(quad: list[tuple[float, float]], rim: np.ndarray, holds_axis: bool) -> list[int]:
@@ -249,7 +251,8 @@ def _lerp(a, b, f):
     return (a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f)
 
 
-def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
+              max_subdivision: int = MAX_CELL_SUBDIVISION) -> MeshData:
     """The lens solid of one lamp, relative to its axis.
 
     Outer disk at y = 0 (flat), the cut surface (a grid of k x k quads per lenslet cell, clipped by the
@@ -262,7 +265,7 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> Mes
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     rho = None if h == 0 else (p * p / 2 + h * h) / (2 * h)  # = scene.cut_sphere_radius(p, h)
     surface = CutSurface(t, p, h, rho)
-    k, dev_cell = cut_subdivision(surface, tol)
+    k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
     rim = rim_polygon(R, segments)
     apothem = R * math.cos(math.pi / segments)
 
