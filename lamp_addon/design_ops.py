@@ -90,6 +90,7 @@ class LAMP_OT_lamp_remove(bpy.types.Operator):
         design = context.scene.lamp_design
         design.lamps.remove(design.active_lamps_index)
         design.active_lamps_index = min(design.active_lamps_index, len(design.lamps) - 1)
+        design_properties.notify_edited(context.scene)  # removing from the list calls no update callback
         return {"FINISHED"}
 
 

@@ -1,0 +1,128 @@
+"""Auto Build: the lamp's objects follow the design while the designer edits it.
+
+An edit only notes the scene and the time (``design_edited``, called by every design property's update
+callback) and makes sure one timer is running; the timer builds, never the callback, so a drag that
+changes a value sixty times a second is not sixty builds. While edits keep coming (the last one less
+than ``SETTLE_SECONDS`` ago) the timer builds at most every ``TICK_SECONDS``, with a preview lens
+(``design_builder.PREVIEW_CUT_QUADS``: a deep cut's 190,000 faces take seconds, a preview about 0.1 s);
+once the edits have stopped for ``SETTLE_SECONDS`` it builds at full quality and stops. Only what an
+edit changed is rebuilt (``design_builder``: unchanged meshes are kept), so most edits of the
+four-lamp preset take a few milliseconds; ``benchmarks/bench_build.py`` measures them.
+
+Auto Build is on by default: a designer expects the lamp in the viewport to be the lamp in the panel
+(an "out of date" lamp that Cycles still renders is the surprise it removes), and it changes only the
+add-on's own objects, keeping the designer's edits to them. Scripts are unaffected: timers do not run
+while a background script runs, so they build with ``bpy.ops.lamp.build``.
+
+Undo: a build in the timer is no undo step of its own (it belongs to the edit that caused it, and is
+saved with the next step). After Undo or Redo restores an earlier design, the timer rebuilds at once
+so that the objects match it again (``undo_post``/``redo_post``): Ctrl+Z takes back the design and
+the objects together, as after the Build operator.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import bpy
+from bpy.app.handlers import persistent
+
+from ..core_tracer.scene.validate import SceneError
+from . import design_builder, design_properties, design_root
+
+TICK_SECONDS = 0.1
+SETTLE_SECONDS = 0.5
+
+_edits: dict[str, float] = {}  # scene name -> time.monotonic() of its last design edit
+
+
+def design_edited(bl_scene: bpy.types.Scene) -> None:
+    """Schedule a build of ``bl_scene`` (cheap: called on every step of a drag)."""
+    design = getattr(bl_scene, "lamp_design", None)
+    if design is None or not design.auto_build:
+        return
+    _schedule(bl_scene.name, time.monotonic())
+
+
+def pending() -> list[str]:
+    """Names of the scenes waiting for a build."""
+    return list(_edits)
+
+
+def _schedule(scene_name: str, edited: float) -> None:
+    _edits[scene_name] = edited
+    if not bpy.app.timers.is_registered(tick):
+        bpy.app.timers.register(tick, first_interval=TICK_SECONDS)
+
+
+def tick(now: float | None = None) -> float | None:
+    """The timer: build every scene with pending edits, a preview while the edits go on, in full once
+    they have stopped. Returns the seconds to the next call, or None when nothing is left to do."""
+    now = time.monotonic() if now is None else now
+    for name, edited in list(_edits.items()):
+        bl_scene = bpy.data.scenes.get(name)
+        if bl_scene is None or not bl_scene.lamp_design.auto_build:
+            del _edits[name]
+            continue
+        if _part_being_edited(bl_scene):
+            continue  # building would replace a mesh the designer has open in Edit Mode: wait
+        settled = now - edited >= SETTLE_SECONDS
+        if _update(bl_scene, preview=not settled) or settled:
+            del _edits[name]
+    return TICK_SECONDS if _edits else None
+
+
+def _update(bl_scene: bpy.types.Scene, preview: bool) -> bool:
+    """Build ``bl_scene`` if its objects do not show its design; True when nothing is left to do."""
+    try:
+        scene = design_properties.design_to_scene(bl_scene)
+    except SceneError:
+        return True  # an invalid design is not built; the panel says why, the next edit tries again
+    status = design_builder.build_status(bl_scene, scene)
+    if status == design_builder.UP_TO_DATE or (preview and status == design_builder.PREVIEW):
+        return status == design_builder.UP_TO_DATE
+    report = design_builder.build_lamp(bl_scene, scene, preview=preview)
+    return not report.preview
+
+
+def _part_being_edited(bl_scene: bpy.types.Scene) -> bool:
+    return any(obj.mode != "OBJECT" for obj in bl_scene.objects if obj.get(design_root.PART_KEY))
+
+
+@persistent
+def _after_undo(*_args) -> None:
+    """Bring the objects in line with the design an undo or redo restored, at full quality."""
+    for bl_scene in bpy.data.scenes:
+        design = getattr(bl_scene, "lamp_design", None)
+        if design is not None and design.auto_build and design_root.find_root(bl_scene) is not None:
+            _schedule(bl_scene.name, -math.inf)
+
+
+@persistent
+def _after_load(*_args) -> None:
+    _edits.clear()  # scene names of the file that was open before
+
+
+_HANDLERS = (
+    (bpy.app.handlers.undo_post, _after_undo),
+    (bpy.app.handlers.redo_post, _after_undo),
+    (bpy.app.handlers.load_post, _after_load),
+)
+
+
+def register() -> None:
+    design_properties.EDIT_LISTENERS.append(design_edited)
+    for handlers, handler in _HANDLERS:
+        handlers.append(handler)
+
+
+def unregister() -> None:
+    for handlers, handler in _HANDLERS:
+        if handler in handlers:
+            handlers.remove(handler)
+    if design_edited in design_properties.EDIT_LISTENERS:
+        design_properties.EDIT_LISTENERS.remove(design_edited)
+    if bpy.app.timers.is_registered(tick):
+        bpy.app.timers.unregister(tick)
+    _edits.clear()
