@@ -180,7 +180,7 @@ def _lamp_parts(i: int, lamp: dict, preview: bool) -> tuple[list[_MeshPart], np.
 
     reflector_shape = ("reflector", R, f, g["vertex"], CHORD_TOLERANCE_MM)
     reflector = _shapes.get(reflector_shape,
-                            lambda: meshes.reflector_mesh(lamp, g, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
+                            lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
     n = _ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
 
     full_k = _subdivisions.get((lens["thickness"], cuts["pitch"], cuts["height"]), partial(
