@@ -30,6 +30,7 @@ says "preview" until a full build. Undo is the operator's business (one step).
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import math
 from collections import OrderedDict
@@ -183,9 +184,14 @@ def _lamp_parts(i: int, lamp: dict, preview: bool) -> tuple[list[_MeshPart], np.
                             lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
     n = _ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
 
-    full_k = _subdivisions.get((lens["thickness"], cuts["pitch"], cuts["height"]), partial(
-        _cut_subdivision, lens["thickness"], cuts["pitch"], cuts["height"]))
-    k = min(full_k, _preview_subdivision(R, cuts["pitch"])) if preview else full_k
+    # A preview lens has at most `light` quads per cell side; the search for the full count stops just
+    # past it (a deep cut's full search measures cells up to 48 x 48 quads).
+    light = _preview_subdivision(R, cuts["pitch"]) if preview else meshes.MAX_CELL_SUBDIVISION
+    most = light + 1 if preview else meshes.MAX_CELL_SUBDIVISION
+    k = _subdivisions.get((lens["thickness"], cuts["pitch"], cuts["height"], most), partial(
+        _cut_subdivision, lens["thickness"], cuts["pitch"], cuts["height"], most))
+    lighter = k > light
+    k = min(k, light)
     lens_shape = ("lens", R, lens["thickness"], cuts["pitch"], cuts["height"], n, CHORD_TOLERANCE_MM, k)
 
     rb, rs = lamp["bulb"]["radius"], lamp["socket"]["radius"]
@@ -211,7 +217,7 @@ def _lamp_parts(i: int, lamp: dict, preview: bool) -> tuple[list[_MeshPart], np.
                   axis),
     ]
     rim = meshes.rim_polygon(R, n) + np.array([cx, cz])
-    return parts, rim, (g["plane_b"], g["rim"]), k < full_k
+    return parts, rim, (g["plane_b"], g["rim"]), lighter
 
 
 def _body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> _MeshPart:
@@ -223,9 +229,9 @@ def _body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> _Mesh
                                                          node_name="Body BSDF"))], Matrix.Identity(4))
 
 
-def _cut_subdivision(thickness: float, pitch: float, height: float) -> int:
+def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:
     rho = None if height == 0 else lamp_scene.cut_sphere_radius(pitch, height)
-    return meshes.cut_subdivision(meshes.CutSurface(thickness, pitch, height, rho))[0]
+    return meshes.cut_subdivision(meshes.CutSurface(thickness, pitch, height, rho), most=most)[0]
 
 
 def _preview_subdivision(radius: float, pitch: float) -> int:
@@ -429,9 +435,9 @@ def _free_parts_whose_collection_was_deleted() -> None:
 def fill_mesh(mesh: bpy.types.Mesh, data: meshes.MeshData) -> None:
     """Replace ``mesh``'s geometry: vertices (mm -> BU), faces, material slots, smooth faces and sharp creases."""
     mesh.clear_geometry()
-    sizes = np.fromiter((len(f) for f in data.faces), dtype=np.int32, count=len(data.faces))
+    sizes = np.fromiter(map(len, data.faces), dtype=np.int32, count=len(data.faces))
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int32)
-    flat = np.fromiter((i for f in data.faces for i in f), dtype=np.int32, count=int(sizes.sum()))
+    flat = np.fromiter(itertools.chain.from_iterable(data.faces), dtype=np.int32, count=int(sizes.sum()))
     mesh.vertices.add(len(data.verts))
     mesh.vertices.foreach_set("co", (data.verts * MM).astype(np.float32).ravel())
     mesh.loops.add(len(flat))

@@ -17,6 +17,7 @@ glass, out of the bulb, socket and body, and from the reflector toward the lamp 
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -284,20 +285,22 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
 
     mb = _MeshBuilder()
     mb.add_vertices(verts, weld=ring)  # the side wall welds to the rim ring (a cell apex on the rim is its top)
-    for face, group in zip(cut_faces, cut_groups, strict=True):
-        mb.faces.append(face)
-        mb.material.append(LENS_GLASS)
-        mb.group.append(group)
+    mb.faces += cut_faces
+    mb.material += [LENS_GLASS] * len(cut_faces)
+    mb.group += cut_groups
     bottom = _side_wall(mb, ring, lamp_geometry(lamp)["plane_b"])
+    side_faces = mb.faces[len(cut_faces):]
     mb.face(bottom, FLAT, LENS_GLASS)  # outer face, counter-clockwise seen from -y
 
     data = mb.result()
-    # Whole quads are copies of the cell measured by cut_subdivision; measure the clipped ones here.
+    # Whole quads are copies of the cell measured by cut_subdivision; measure the faces on the rim here.
     on_rim = np.zeros(len(verts), dtype=bool)
     on_rim[ring] = True
-    clipped = [f for f in cut_faces if on_rim[list(f)].any()]
+    sizes = np.fromiter(map(len, cut_faces), dtype=np.int64, count=len(cut_faces))
+    flat = np.fromiter(itertools.chain.from_iterable(cut_faces), dtype=np.int64, count=int(sizes.sum()))
+    touches = np.logical_or.reduceat(on_rim[flat], np.concatenate([[0], np.cumsum(sizes)[:-1]]))
+    clipped = [cut_faces[i] for i in np.flatnonzero(touches)]
     dev_cut = max(dev_cell, triangle_deviation(data.verts, fan_triangles(clipped), surface.distance))
-    side_faces = [f for f, m in zip(data.faces, data.material, strict=True) if m == LENS_SIDE_WALL]
     dev_side = triangle_deviation(data.verts, fan_triangles(side_faces),
                                   lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - R))
     data.max_deviation = max(dev_cut, dev_side)
@@ -339,17 +342,19 @@ class _CutGrid:
         # Reversed counter-clockwise order in [x, z] makes the normal point +y, out of the glass.
         a, b, s = a_idx[inside], b_idx[inside], self.size
         quads = np.column_stack([a * s + b + 1, (a + 1) * s + b + 1, (a + 1) * s + b, a * s + b])
-        out = _CutPolygons(self, [tuple(q) for q in quads.tolist()], self.group(a, b).tolist())
+        out = _CutPolygons(self, quads, self.group(a, b).tolist())
         for a, b in zip(a_idx[across].tolist(), b_idx[across].tolist(), strict=True):
             out.add_clipped(a, b, rim, holds_axis=self.near[a] == 0.0 and self.near[b] == 0.0)
         return out
 
 
 class _CutPolygons:
-    """Cut-surface polygons over grid vertices and, after them, the points where the rim cuts the grid."""
+    """Cut-surface polygons over grid vertices and, after them, the points where the rim cuts the grid:
+    the whole quads (an (n, 4) array), then the clipped polygons (a list)."""
 
-    def __init__(self, grid: _CutGrid, polygons: list[tuple[int, ...]], groups: list[int]):
-        self.grid, self.polygons, self.groups = grid, polygons, groups
+    def __init__(self, grid: _CutGrid, quads: np.ndarray, groups: list[int]):
+        self.grid, self.quads, self.groups = grid, quads, groups
+        self.polygons: list[tuple[int, ...]] = []
         self.rim_points: list[tuple[float, float]] = []
         self._rim_index: dict[tuple[int, int], int] = {}
 
@@ -384,7 +389,8 @@ class _CutPolygons:
         """([x, z] of the vertices in use, faces over them, their groups): unused grid vertices dropped,
         a rim point that falls on a grid vertex (to 1e-6 mm) welded to it, repeats left by welding dropped."""
         grid_count = self.grid.size ** 2
-        flat = np.fromiter((i for f in self.polygons for i in f), dtype=np.int64)
+        flat = np.concatenate([self.quads.ravel(), np.fromiter(itertools.chain.from_iterable(self.polygons),
+                                                               dtype=np.int64)])
         used = np.unique(flat)
         on_grid = used < grid_count
         xz = np.empty((len(used), 2))
@@ -399,17 +405,30 @@ class _CutPolygons:
         rank[order] = np.arange(len(order))
         new_index = np.full(grid_count + len(self.rim_points), -1, dtype=np.int64)
         new_index[used] = rank[inverse.ravel()]
-        flat = new_index[flat].tolist()
-        faces, groups, start = [], [], 0
-        for polygon, group in zip(self.polygons, self.groups, strict=True):
-            face = flat[start:start + len(polygon)]
+        flat = new_index[flat]
+        quads = flat[:self.quads.size].reshape(-1, 4)
+        ordered = np.sort(quads, axis=1)
+        welded = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)  # rare: a rim point on a corner
+        polygons = [*map(tuple, quads.tolist()), *self._split(flat[self.quads.size:].tolist())]
+        for i in np.flatnonzero(welded).tolist() + list(range(len(quads), len(polygons))):
+            polygons[i] = _drop_repeats(polygons[i])
+        keep = [i for i, face in enumerate(polygons) if len(face) >= 3]
+        return xz[first[order]], [polygons[i] for i in keep], [self.groups[i] for i in keep]
+
+    def _split(self, flat: list[int]) -> list[list[int]]:
+        """``flat`` cut back into the clipped polygons' sizes."""
+        out, start = [], 0
+        for polygon in self.polygons:
+            out.append(flat[start:start + len(polygon)])
             start += len(polygon)
-            if len(set(face)) < len(face):  # a welded corner: drop the repeat
-                face = [v for n, v in enumerate(face) if v != face[n - 1]]
-            if len(face) >= 3:
-                faces.append(tuple(face))
-                groups.append(group)
-        return xz[first[order]], faces, groups
+        return out
+
+
+def _drop_repeats(face) -> tuple[int, ...]:
+    """A polygon without the repeats welding left (a corner welded to its neighbour)."""
+    if len(set(face)) < len(face):
+        face = [v for n, v in enumerate(face) if v != face[n - 1]]
+    return tuple(face)
 
 
 def _rim_ring(verts: np.ndarray, radius: float, segments: int) -> list[int]:
