@@ -275,6 +275,7 @@ class _Build:
         self.coll = _collection(bl_scene)
         for view_layer in bl_scene.view_layers:  # current world matrices: a part's offset is read from them
             view_layer.update()
+        self.new_root = design_root.find_root(bl_scene) is None
         self.root = _root(bl_scene, self.coll)
         self.owned: dict[str, bpy.types.Object] = {}
         for obj in [*self.coll.objects, *bl_scene.objects]:  # in our collection first (a copy may be elsewhere)
@@ -380,6 +381,10 @@ class _Build:
             obj.matrix_parent_inverse = Matrix.Identity(4)
             obj.matrix_basis = matrix
         else:
+            if self.new_root and obj.parent is None:  # the designer deleted the root: the new one takes the parts
+                world = obj.matrix_world.copy()
+                obj.parent = self.root  # a new root stands at the origin: the part stays where it is
+                obj.matrix_world = world
             before = Matrix([driven[i:i + 4] for i in range(0, 16, 4)])
             if before != matrix:
                 root = self.root.matrix_world

@@ -97,8 +97,8 @@ class LAMP_OT_lamp_remove(bpy.types.Operator):
 class LAMP_OT_build(bpy.types.Operator):
     bl_idname = "lamp.build"
     bl_label = "Build Lamp"
-    bl_description = ("Build the design as objects in the \"Lamp Design\" collection, replacing the "
-                      "previous build")
+    bl_description = ("Build the design as objects under the \"Lamp Design\" root object, updating the previous "
+                      "build in place: your names, placement, modifiers and material edits are kept")
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod

@@ -359,3 +359,33 @@ def test_remove_lamp_schedules_a_build(lamp_addon, addon_core, autobuild, bl_sce
     autobuild._edits.clear()
     assert bpy.ops.lamp.lamp_remove() == {"FINISHED"}
     assert autobuild.pending() == [bl_scene.name]
+
+
+def test_a_deleted_root_is_made_again_and_takes_the_parts(lamp_addon, addon_core, builder, bl_scene):
+    import bpy
+
+    _design(lamp_addon, addon_core, bl_scene)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    lens = _part(bl_scene, "lamps[0].lens")
+    bpy.data.objects.remove(lamp_addon.design_root.find_root(bl_scene))
+    assert lens.parent is None and builder.build_status(bl_scene) == builder.NOT_BUILT
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    root = lamp_addon.design_root.find_root(bl_scene)
+    assert _part(bl_scene, "lamps[0].lens") == lens and lens.parent == root
+    assert all(o.parent == root for o in bl_scene.objects if o.get("lamp_part") not in (None, "root"))
+    assert builder.is_up_to_date(bl_scene)
+
+
+def test_after_undo_the_objects_follow_the_restored_design(lamp_addon, addon_core, builder, autobuild, bl_scene):
+    """Undo restores a design whose objects may lag one build behind (the timer's build is saved with the
+    next step); the undo handler has them rebuilt at once, in full."""
+    import bpy
+
+    _design(lamp_addon, addon_core, bl_scene)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    bl_scene.lamp_design.lamps[0].lens.ior = 1.6  # as if undo had brought back a design not yet built
+    autobuild._edits.clear()
+    autobuild._after_undo(bl_scene)
+    assert autobuild.pending() == [bl_scene.name]
+    assert autobuild.tick(now=0.0) is None  # settled at once: a full build, not a preview
+    assert builder.is_up_to_date(bl_scene)
