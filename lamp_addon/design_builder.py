@@ -174,50 +174,52 @@ def _lamp_parts(i: int, lamp: dict, preview: bool) -> tuple[list[_MeshPart], np.
     whether its lens is a preview."""
     base, label = f"lamps[{i}]", lamp_label(i)
     g = lamp_scene.lamp_geometry(lamp)
-    lens, cuts = lamp["lens"], lamp["cuts"]
-    R, f = lens["radius"], lamp["reflector"]["focal_length"]
-    cx, cz = lamp["center"]
-    axis = _translation(cx, 0.0, cz)
-
-    reflector_shape = ("reflector", R, f, g["vertex"], CHORD_TOLERANCE_MM)
+    R = lamp["lens"]["radius"]
+    reflector_shape = ("reflector", R, lamp["reflector"]["focal_length"], g["vertex"], CHORD_TOLERANCE_MM)
     reflector = _shapes.get(reflector_shape,
                             lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
     n = _ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
-
-    # A preview lens has at most `light` quads per cell side; the search for the full count stops just
-    # past it (a deep cut's full search measures cells up to 48 x 48 quads).
-    light = _preview_subdivision(R, cuts["pitch"]) if preview else meshes.MAX_CELL_SUBDIVISION
-    most = light + 1 if preview else meshes.MAX_CELL_SUBDIVISION
-    k = _subdivisions.get((lens["thickness"], cuts["pitch"], cuts["height"], most), partial(
-        _cut_subdivision, lens["thickness"], cuts["pitch"], cuts["height"], most))
-    lighter = k > light
-    k = min(k, light)
-    lens_shape = ("lens", R, lens["thickness"], cuts["pitch"], cuts["height"], n, CHORD_TOLERANCE_MM, k)
-
-    rb, rs = lamp["bulb"]["radius"], lamp["socket"]["radius"]
+    k, lighter = _cut_quads(lamp, preview)
+    cx, cz = lamp["center"]
+    axis = _translation(cx, 0.0, cz)
     bx, by, bz = g["bulb_center"]
+    rb, rs = lamp["bulb"]["radius"], lamp["socket"]["radius"]
+    lens, cuts = lamp["lens"], lamp["cuts"]
     parts = [
-        _MeshPart(f"{base}.lens", f"{label} Lens", lens_shape,
+        _MeshPart(f"{base}.lens", f"{label} Lens",
+                  ("lens", R, lens["thickness"], cuts["pitch"], cuts["height"], n, CHORD_TOLERANCE_MM, k),
                   partial(meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k),
                   [_Slot(f"{base}.lens", f"{label} Lens", partial(design_materials.lens_glass, lamp=lamp)),
-                   _Slot(f"{base}.side_wall", f"{label} Side Wall", partial(
-                       design_materials.diffuse, color=lens["side_wall_color"], node_name="Side Wall BSDF"))],
-                  axis),
+                   _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
+                                 "Side Wall BSDF")], axis),
         _MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
-                  [_Slot(f"{base}.reflector", f"{label} Reflector",
-                         partial(design_materials.reflector, lamp=lamp))], axis),
-        _MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM),
-                  partial(meshes.sphere_mesh, rb),
+                  [_Slot(f"{base}.reflector", f"{label} Reflector", partial(design_materials.reflector, lamp=lamp))],
+                  axis),
+        _MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM), partial(meshes.sphere_mesh, rb),
                   [_Slot(f"{base}.bulb", f"{label} Bulb", partial(design_materials.bulb, lamp=lamp))],
                   _translation(cx + bx, by, cz + bz)),
         _MeshPart(f"{base}.socket", f"{label} Socket", ("socket", rs, g["vertex"], by, CHORD_TOLERANCE_MM),
                   partial(meshes.socket_mesh, rs, g["vertex"], by),
-                  [_Slot(f"{base}.socket", f"{label} Socket", partial(
-                      design_materials.diffuse, color=lamp["socket"]["color"], node_name="Socket BSDF"))],
-                  axis),
+                  [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
     rim = meshes.rim_polygon(R, n) + np.array([cx, cz])
     return parts, rim, (g["plane_b"], g["rim"]), lighter
+
+
+def _diffuse_slot(part: str, name: str, color, node: str) -> _Slot:
+    return _Slot(part, name, partial(design_materials.diffuse, color=color, node_name=node))
+
+
+def _cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
+    """Quads per side of one lenslet cell, and whether that is fewer than the tolerance needs (a preview).
+
+    A preview has at most ``_preview_subdivision`` quads per side; the search for the full count then
+    stops just past that (a deep cut's full search measures cells of up to 48 x 48 quads)."""
+    t, p, h = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], lamp["cuts"]["height"]
+    light = _preview_subdivision(lamp["lens"]["radius"], p) if preview else meshes.MAX_CELL_SUBDIVISION
+    most = light + 1 if preview else meshes.MAX_CELL_SUBDIVISION
+    k = _subdivisions.get((t, p, h, most), partial(_cut_subdivision, t, p, h, most))
+    return min(k, light), k > light
 
 
 def _body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> _MeshPart:
@@ -225,8 +227,7 @@ def _body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> _Mesh
     shape = ("body", tuple(body["center"]), tuple(body["size"]), body["depth"],
              tuple(tuple(map(tuple, rim.round(9).tolist())) for rim in rims), tuple(bores))
     return _MeshPart("body", "Lamp Body", shape, partial(meshes.body_mesh, scene, rims, bores, tessellate_polygon),
-                     [_Slot("body", "Lamp Body", partial(design_materials.diffuse, color=body["color"],
-                                                         node_name="Body BSDF"))], Matrix.Identity(4))
+                     [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
 
 
 def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:
