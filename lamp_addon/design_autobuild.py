@@ -65,8 +65,8 @@ def tick(now: float | None = None) -> float | None:
         if bl_scene is None or not bl_scene.lamp_design.auto_build:
             del _edits[name]
             continue
-        if _part_being_edited(bl_scene):
-            continue  # building would replace a mesh the designer has open in Edit Mode: wait
+        if _part_being_edited(bl_scene) or bpy.app.is_job_running("RENDER"):
+            continue  # a mesh open in Edit Mode, or a render (Compare, F12) reading the objects: wait
         settled = now - edited >= SETTLE_SECONDS
         if _update(bl_scene, preview=not settled) or settled:
             del _edits[name]
@@ -79,6 +79,8 @@ def _update(bl_scene: bpy.types.Scene, preview: bool) -> bool:
         scene = design_properties.design_to_scene(bl_scene)
     except SceneError:
         return True  # an invalid design is not built; the panel says why, the next edit tries again
+    if not scene["lamps"]:
+        return True  # nothing to build (as the Build operator: "Add a lamp first")
     status = design_builder.build_status(bl_scene, scene)
     if status == design_builder.UP_TO_DATE or (preview and status == design_builder.PREVIEW):
         return status == design_builder.UP_TO_DATE

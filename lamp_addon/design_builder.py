@@ -52,8 +52,8 @@ PART_KEY = design_root.PART_KEY
 COLLECTION_NAME = design_root.COLLECTION_NAME
 WORLD_NAME = "Lamp Design World"
 CHORD_TOLERANCE_MM = meshes.CHORD_TOLERANCE_MM
-# A preview lens has at most about this many cut-surface quads (a deep cut at full tolerance has
-# ~190,000 faces and takes seconds; 5,000 take about 0.1 s, see benchmarks/bench_build.py).
+# A preview lens has at most about this many cut-surface quads: a deep cut at full tolerance has up
+# to ~190,000 faces and takes 2-4 s to build, its preview 0.1-0.25 s (benchmarks/bench_build.py).
 PREVIEW_CUT_QUADS = 5000
 
 DRIVEN_KEY = "lamp_driven_matrix"  # part object: the transform the design gave it, relative to the root
