@@ -2,12 +2,14 @@
 
 An edit only notes the scene and the time (``design_edited``, called by every design property's update
 callback) and makes sure one timer is running; the timer builds, never the callback, so a drag that
-changes a value sixty times a second is not sixty builds. While edits keep coming (the last one less
-than ``SETTLE_SECONDS`` ago) the timer builds at most every ``TICK_SECONDS``, with a preview lens
-(``design_builder.PREVIEW_CUT_QUADS``: a deep cut's 190,000 faces take seconds, a preview about 0.1 s);
-once the edits have stopped for ``SETTLE_SECONDS`` it builds at full quality and stops. Only what an
-edit changed is rebuilt (``design_builder``: unchanged meshes are kept), so most edits of the
-four-lamp preset take a few milliseconds; ``benchmarks/bench_build.py`` measures them.
+changes a value sixty times a second is not sixty builds. The timer builds at most every
+``TICK_SECONDS``. A lens whose cuts need more quads than a preview has
+(``design_builder.PREVIEW_CUT_QUADS``: a deep cut's 190,000 faces take 2-4 s, its preview 0.1-0.25 s)
+is built as a preview while the edits go on; once they have stopped for ``SETTLE_SECONDS`` the full
+lens is made in a worker thread (``design_builder.make_lenses``, no Blender data touched) and copied
+into Blender when it is ready, so the UI does not freeze for it. Every other build is done at once in
+full. Only what an edit changed is rebuilt (unchanged meshes are kept), so most edits of the
+four-lamp preset take 0.01-0.2 s; ``benchmarks/bench_build.py`` measures them.
 
 Auto Build is on by default: a designer expects the lamp in the viewport to be the lamp in the panel
 (an "out of date" lamp that Cycles still renders is the surprise it removes), and it changes only the
@@ -22,8 +24,10 @@ the objects together, as after the Build operator.
 
 from __future__ import annotations
 
+import copy
 import math
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import bpy
 from bpy.app.handlers import persistent
@@ -35,6 +39,8 @@ TICK_SECONDS = 0.1
 SETTLE_SECONDS = 0.5
 
 _edits: dict[str, float] = {}  # scene name -> time.monotonic() of its last design edit
+_jobs: dict[str, tuple[str, Future]] = {}  # scene name -> (design digest, its full lenses being made)
+_pool: ThreadPoolExecutor | None = None
 
 
 def design_edited(bl_scene: bpy.types.Scene) -> None:
@@ -57,8 +63,8 @@ def _schedule(scene_name: str, edited: float) -> None:
 
 
 def tick(now: float | None = None) -> float | None:
-    """The timer: build every scene with pending edits, a preview while the edits go on, in full once
-    they have stopped. Returns the seconds to the next call, or None when nothing is left to do."""
+    """The timer: bring every scene with pending edits up to date, with a preview lens while the edits go
+    on, in full once they have stopped. Returns the seconds to the next call, or None when done."""
     now = time.monotonic() if now is None else now
     for name, edited in list(_edits.items()):
         bl_scene = bpy.data.scenes.get(name)
@@ -67,14 +73,13 @@ def tick(now: float | None = None) -> float | None:
             continue
         if _part_being_edited(bl_scene) or bpy.app.is_job_running("RENDER"):
             continue  # a mesh open in Edit Mode, or a render (Compare, F12) reading the objects: wait
-        settled = now - edited >= SETTLE_SECONDS
-        if _update(bl_scene, preview=not settled) or settled:
+        if _step(bl_scene, settled=now - edited >= SETTLE_SECONDS):
             del _edits[name]
     return TICK_SECONDS if _edits else None
 
 
-def _update(bl_scene: bpy.types.Scene, preview: bool) -> bool:
-    """Build ``bl_scene`` if its objects do not show its design; True when nothing is left to do."""
+def _step(bl_scene: bpy.types.Scene, settled: bool) -> bool:
+    """One step toward objects that show the design; True when nothing is left to do."""
     try:
         scene = design_properties.design_to_scene(bl_scene)
     except SceneError:
@@ -82,10 +87,35 @@ def _update(bl_scene: bpy.types.Scene, preview: bool) -> bool:
     if not scene["lamps"]:
         return True  # nothing to build (as the Build operator: "Add a lamp first")
     status = design_builder.build_status(bl_scene, scene)
-    if status == design_builder.UP_TO_DATE or (preview and status == design_builder.PREVIEW):
-        return status == design_builder.UP_TO_DATE
-    report = design_builder.build_lamp(bl_scene, scene, preview=preview)
-    return not report.preview
+    if status == design_builder.UP_TO_DATE:
+        return True
+    if status != design_builder.PREVIEW and not design_builder.build_lamp(bl_scene, scene, preview=True).preview:
+        return True  # every lens was light: the quick build was the full one
+    if not settled:
+        return False  # a preview shows this design; the full lenses when the edits stop
+    return _full_lenses(bl_scene, scene)
+
+
+def _full_lenses(bl_scene: bpy.types.Scene, scene: dict) -> bool:
+    """Make the full lenses in the worker thread, then build with them; True once built."""
+    digest = design_builder.design_digest(scene)
+    job = _jobs.get(bl_scene.name)
+    if job is not None and not job[1].done():
+        return False
+    if job is not None and job[0] == digest:
+        del _jobs[bl_scene.name]
+        job[1].result()  # an error in the worker surfaces here
+        design_builder.build_lamp(bl_scene, scene)  # the lenses are made: this copies them into Blender
+        return True
+    _jobs[bl_scene.name] = (digest, _worker().submit(design_builder.make_lenses, copy.deepcopy(scene)))
+    return False
+
+
+def _worker() -> ThreadPoolExecutor:
+    global _pool
+    if _pool is None:
+        _pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="lamp-lenses")
+    return _pool
 
 
 def _part_being_edited(bl_scene: bpy.types.Scene) -> bool:
@@ -104,6 +134,7 @@ def _after_undo(*_args) -> None:
 @persistent
 def _after_load(*_args) -> None:
     _edits.clear()  # scene names of the file that was open before
+    _jobs.clear()
 
 
 _HANDLERS = (
@@ -128,3 +159,8 @@ def unregister() -> None:
     if bpy.app.timers.is_registered(tick):
         bpy.app.timers.unregister(tick)
     _edits.clear()
+    _jobs.clear()
+    global _pool
+    if _pool is not None:
+        _pool.shutdown(wait=False, cancel_futures=True)  # a lens being made is finished and dropped
+        _pool = None

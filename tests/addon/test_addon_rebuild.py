@@ -34,8 +34,10 @@ def builder(lamp_addon):
 def autobuild(lamp_addon):
     auto = lamp_addon.design_autobuild
     auto._edits.clear()  # edits other tests made (their timers never ran: no event loop)
+    auto._jobs.clear()
     yield auto
     auto._edits.clear()
+    auto._jobs.clear()
 
 
 def _design(lamp_addon, addon_core, bl_scene, name: str = "paper-baseline") -> dict:
@@ -289,8 +291,8 @@ def test_auto_build_coalesces_edits_into_one_build(lamp_addon, addon_core, build
     assert autobuild.pending() == [bl_scene.name]
     assert bpy.app.timers.is_registered(autobuild.tick)
     edited = autobuild._edits[bl_scene.name]
-    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS) is None  # settled: one full build, done
-    assert builds == [{"preview": False}] and builder.is_up_to_date(bl_scene)
+    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS) is None  # one build, done
+    assert len(builds) == 1 and builder.is_up_to_date(bl_scene)  # a light lens: the quick build is the full one
 
     builds.clear()
     for ior in (1.50, 1.52, 1.55):  # three steps of a drag
@@ -315,9 +317,37 @@ def test_auto_build_previews_while_editing_then_builds_in_full(lamp_addon, addon
     preview_faces = len(_part(bl_scene, "lamps[0].lens").data.polygons)
     assert autobuild.tick(now=edited + 0.02) == autobuild.TICK_SECONDS  # the preview shows this design
     assert len(_part(bl_scene, "lamps[0].lens").data.polygons) == preview_faces
-    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS) is None  # edits stopped: in full
-    assert builder.is_up_to_date(bl_scene)
+    # Edits stopped: the full lens is made in the worker thread; the objects keep the preview meanwhile.
+    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS) == autobuild.TICK_SECONDS
+    digest, job = autobuild._jobs[bl_scene.name]
+    assert digest == builder.design_digest(lamp_addon.design_properties.design_to_scene(bl_scene))
+    job.result(timeout=120)  # waits for the worker (no sleeping)
+    assert builder.build_status(bl_scene) == builder.PREVIEW
+    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS + 0.1) is None  # copied into Blender
+    assert builder.is_up_to_date(bl_scene) and not autobuild._jobs
     assert len(_part(bl_scene, "lamps[0].lens").data.polygons) > 10 * preview_faces
+
+
+def test_an_edit_while_the_full_lens_is_made_starts_again(lamp_addon, addon_core, builder, autobuild, bl_scene):
+    _design(lamp_addon, addon_core, bl_scene)
+    autobuild._edits.clear()
+    height = _deep_cut(bl_scene)
+    edited = autobuild._edits[bl_scene.name]
+    autobuild.tick(now=edited + 0.01)  # preview
+    autobuild.tick(now=edited + autobuild.SETTLE_SECONDS)  # full lens for this height, in the worker
+    _, first = autobuild._jobs[bl_scene.name]
+    bl_scene.lamp_design.lamps[0].cuts.height = height - 0.01  # the designer edits again meanwhile
+    first.result(timeout=120)
+    edited = autobuild._edits[bl_scene.name]
+    assert autobuild.tick(now=edited + 0.01) == autobuild.TICK_SECONDS  # a preview of the new height
+    assert builder.build_status(bl_scene) == builder.PREVIEW
+    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS) == autobuild.TICK_SECONDS
+    digest, second = autobuild._jobs[bl_scene.name]
+    assert second is not first  # the lens made for the old height is not used
+    second.result(timeout=120)
+    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS + 0.1) is None
+    assert builder.is_up_to_date(bl_scene)
+    assert lamp_addon.design_root.find_root(bl_scene)[builder.DIGEST_KEY] == digest
 
 
 def test_auto_build_off_and_invalid_designs_build_nothing(lamp_addon, addon_core, builder, autobuild, bl_scene):
