@@ -107,17 +107,30 @@ def build_status(bl_scene: bpy.types.Scene, scene: dict | None = None) -> str:
     root = design_root.find_root(bl_scene)
     if root is None:
         return NOT_BUILT
-    if scene is None:
-        try:
-            scene = design_properties.design_to_scene(bl_scene)
-        except lamp_scene.SceneError:
-            return INVALID
-    if root.get(DIGEST_KEY) != design_digest(scene):
+    digest = design_digest(scene) if scene is not None else _current_digest(bl_scene)
+    if digest is None:
+        return INVALID
+    if root.get(DIGEST_KEY) != digest:
         return OUT_OF_DATE
     present = {obj.get(PART_KEY) for obj in bl_scene.objects}
     if not set(root.get(PARTS_KEY, ())) <= present:
         return OUT_OF_DATE  # the designer deleted a part
     return PREVIEW if root.get(PREVIEW_KEY) else UP_TO_DATE
+
+
+_last_design: dict = {"document": None, "digest": None}  # panels ask at every redraw: check a design once
+
+
+def _current_digest(bl_scene: bpy.types.Scene) -> str | None:
+    """``design_digest`` of the scene's design, None when it is invalid."""
+    document = json.dumps(design_properties.design_document(bl_scene), sort_keys=True)
+    if _last_design["document"] != document:
+        try:
+            digest = design_digest(lamp_scene.parse_scene(json.loads(document)))
+        except lamp_scene.SceneError:
+            digest = None
+        _last_design.update(document=document, digest=digest)
+    return _last_design["digest"]
 
 
 def is_up_to_date(bl_scene: bpy.types.Scene) -> bool:
@@ -293,7 +306,9 @@ class _Build:
         self.new_root = design_root.find_root(bl_scene) is None
         self.root = _root(bl_scene, self.coll)
         self.owned: dict[str, bpy.types.Object] = {}
-        for obj in [*self.coll.objects, *bl_scene.objects]:  # in our collection first (a copy may be elsewhere)
+        # Under our root first, then in our collection: a copy the designer made of a part (Shift+D copies
+        # its tags) stays theirs.
+        for obj in [*self.root.children_recursive, *self.coll.objects, *bl_scene.objects]:
             part = obj.get(PART_KEY)
             if part and part != design_root.ROOT_PART:
                 self.owned.setdefault(part, obj)

@@ -430,3 +430,28 @@ def test_after_undo_the_objects_follow_the_restored_design(lamp_addon, addon_cor
     assert autobuild.pending() == [bl_scene.name]
     assert autobuild.tick(now=0.0) is None  # settled at once: a full build, not a preview
     assert builder.is_up_to_date(bl_scene)
+
+
+def test_a_copy_of_the_lamp_is_left_alone(lamp_addon, addon_core, builder, bl_scene):
+    """A designer copies the built lamp for the other side of the car (Shift+D copies the part tags too):
+    rebuilding updates the lamp under the root, not the copy."""
+    import bpy
+
+    _design(lamp_addon, addon_core, bl_scene)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    root = lamp_addon.design_root.find_root(bl_scene)
+    lens = _part(bl_scene, "lamps[0].lens")
+    copy = lens.copy()  # as Shift+D: tags and all, in the same collection, parented elsewhere
+    copy.data = lens.data.copy()
+    lens.users_collection[0].objects.link(copy)
+    copy.parent = None
+    copy.name = "Right Lens"
+    coll = lens.users_collection[0]
+    coll.objects.unlink(lens)  # the copy now comes first in the collection
+    coll.objects.link(lens)
+    copy_vertices = len(copy.data.vertices)
+    bl_scene.lamp_design.lamps[0].lens.radius = 48.0
+    builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    assert lens.parent == root and _local_radius_mm(lens) == pytest.approx(48.0, abs=1e-3)
+    assert copy.name in bl_scene.objects and len(copy.data.vertices) == copy_vertices  # untouched
+    assert _local_radius_mm(copy) == pytest.approx(45.0, abs=1e-3)
