@@ -160,11 +160,14 @@ class _MeshPart:
 
 
 class _Memo:
-    """The last few results of a slow function of hashable arguments (shared with Auto Build's worker
-    thread: the lock guards the table, not the making)."""
+    """The last results of a slow function of hashable arguments, at most ``size`` of them weighing at
+    most ``most`` together (shared with Auto Build's worker thread: the lock guards the table, not the
+    making)."""
 
-    def __init__(self, size: int):
-        self.size, self.items, self.lock = size, OrderedDict(), threading.Lock()
+    def __init__(self, size: int, weight: Callable = lambda value: 1, most: float = math.inf):
+        self.size, self.weight, self.most = size, weight, most
+        self.items: OrderedDict = OrderedDict()
+        self.lock = threading.Lock()
 
     def get(self, key, make: Callable):
         with self.lock:
@@ -174,12 +177,15 @@ class _Memo:
         value = make()
         with self.lock:
             self.items[key] = value
-            while len(self.items) > self.size:
+            while len(self.items) > 1 and (len(self.items) > self.size or
+                                           sum(map(self.weight, self.items.values())) > self.most):
                 self.items.popitem(last=False)
         return value
 
 
-_shapes = _Memo(40)  # MeshData by shape: undo, redo and dragging back rebuild nothing
+# MeshData by shape, so that undo, redo and dragging back make nothing again. A face costs ~200 bytes
+# of Python objects: 500,000 faces (under three deep-cut lenses of 190,000) are ~100 MB.
+_shapes = _Memo(40, weight=lambda data: len(data.faces), most=500_000)
 _subdivisions = _Memo(64)  # quads per cell side of a cut surface
 
 
@@ -301,8 +307,7 @@ class _Build:
     def __init__(self, bl_scene: bpy.types.Scene):
         self.bl_scene = bl_scene
         self.coll = _collection(bl_scene)
-        for view_layer in bl_scene.view_layers:  # current world matrices: a part's offset is read from them
-            view_layer.update()
+        self.matrices_current = False  # world matrices evaluated since the designer's last change
         self.new_root = design_root.find_root(bl_scene) is None
         self.root = _root(bl_scene, self.coll)
         self.owned: dict[str, bpy.types.Object] = {}
@@ -412,15 +417,23 @@ class _Build:
             obj.matrix_basis = matrix
         else:
             if self.new_root and obj.parent is None:  # the designer deleted the root: the new one takes the parts
+                self._evaluate()
                 world = obj.matrix_world.copy()
                 obj.parent = self.root  # a new root stands at the origin: the part stays where it is
                 obj.matrix_world = world
             before = Matrix([driven[i:i + 4] for i in range(0, 16, 4)])
             if before != matrix:
+                self._evaluate()  # the part's offset is read from its world matrix
                 root = self.root.matrix_world
                 in_root = root.inverted_safe() @ obj.matrix_world
                 self.moves.append((obj, root @ matrix @ before.inverted_safe() @ in_root))
         obj[DRIVEN_KEY] = [x for row in matrix for x in row]
+
+    def _evaluate(self) -> None:
+        """World matrices as the designer sees them (once per build, and only if a part is moved)."""
+        if not self.matrices_current:
+            _update_view_layers(self.bl_scene)
+            self.matrices_current = True
 
     def finish(self, digest: str) -> None:
         for obj, matrix in sorted(self.moves, key=lambda move: _depth(move[0])):
@@ -429,8 +442,12 @@ class _Build:
         self.root[DIGEST_KEY] = digest
         self.root[PREVIEW_KEY] = self.report.preview
         self.root[PARTS_KEY] = sorted(self.wanted)
-        for view_layer in self.bl_scene.view_layers:  # objects' matrix_world valid for whoever reads them next
-            view_layer.update()
+        _update_view_layers(self.bl_scene)  # objects' matrix_world valid for whoever reads them next
+
+
+def _update_view_layers(bl_scene: bpy.types.Scene) -> None:
+    for view_layer in bl_scene.view_layers:
+        view_layer.update()
 
 
 def _depth(obj: bpy.types.Object) -> int:
