@@ -92,6 +92,7 @@ def test_rebuild_keeps_the_designers_edits(lamp_addon, addon_core, builder, star
 
     _design(lamp_addon, addon_core, startup_scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
+    others = {name: _state(bpy.data.objects[name]) for name in ("Camera", "Light")}
     car = bpy.data.objects["Cube"]
     root = lamp_addon.design_root.find_root(startup_scene)
     lens, reflector = _part(startup_scene, "lamps[0].lens"), _part(startup_scene, "lamps[0].reflector")
@@ -127,6 +128,8 @@ def test_rebuild_keeps_the_designers_edits(lamp_addon, addon_core, builder, star
     assert not report.not_driven
 
     # Kept
+    assert {name: _state(bpy.data.objects[name]) for name in others} == others
+    assert "lamp_part" not in car and not car.modifiers
     assert {o.get("lamp_part"): o.as_pointer() for o in startup_scene.objects if o.get("lamp_part")} == pointers
     assert root.parent == car and root.matrix_basis == root_basis
     assert lens.name == "Stop Lens"
@@ -455,3 +458,27 @@ def test_a_copy_of_the_lamp_is_left_alone(lamp_addon, addon_core, builder, bl_sc
     assert lens.parent == root and _local_radius_mm(lens) == pytest.approx(48.0, abs=1e-3)
     assert copy.name in bl_scene.objects and len(copy.data.vertices) == copy_vertices  # untouched
     assert _local_radius_mm(copy) == pytest.approx(45.0, abs=1e-3)
+
+
+def test_a_lamp_built_before_the_root_existed_is_adopted(lamp_addon, addon_core, builder, bl_scene):
+    """A file saved by an earlier version: parts at the world origin without root, driven transform or
+    shape tags. A build puts them under a new root, where the design says, and keeps their materials."""
+    import bpy
+
+    _design(lamp_addon, addon_core, bl_scene)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    bpy.data.objects.remove(lamp_addon.design_root.find_root(bl_scene))
+    parts = {o.get("lamp_part"): o for o in bl_scene.objects if o.get("lamp_part")}
+    for obj in parts.values():
+        del obj[builder.DRIVEN_KEY]
+        if obj.type == "MESH":
+            del obj.data[builder.GEOMETRY_KEY]
+    glass = parts["lamps[0].lens"].data.materials[0]
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    root = lamp_addon.design_root.find_root(bl_scene)
+    assert {o.get("lamp_part"): o for o in bl_scene.objects if o.get("lamp_part") not in (None, "root")} == parts
+    assert all(o.parent == root for o in parts.values())
+    g = addon_core.scene.lamp_geometry(lamp_addon.design_properties.design_to_scene(bl_scene)["lamps"][0])
+    assert tuple(parts["lamps[0].bulb"].location) == pytest.approx(
+        tuple(x / 1000 for x in g["bulb_center"]), abs=1e-7)
+    assert parts["lamps[0].lens"].data.materials[0] == glass and builder.is_up_to_date(bl_scene)
