@@ -96,6 +96,7 @@ def main() -> int:
 def run(bpy, package: str, repeat: int) -> int:
     props = importlib.import_module(f"{package}.lamp_addon.design_properties")
     builder = importlib.import_module(f"{package}.lamp_addon.design_builder")
+    parts = importlib.import_module(f"{package}.lamp_addon.design_parts")
     auto = importlib.import_module(f"{package}.lamp_addon.design_autobuild")
     core = importlib.import_module(f"{package}.core_tracer.scene")
     bl_scene = bpy.context.scene
@@ -127,7 +128,7 @@ def run(bpy, package: str, repeat: int) -> int:
         preview_faces = len(lens.data.polygons)
         scene = props.design_to_scene(bl_scene)
         start = time.perf_counter()
-        builder.make_lenses(scene)
+        parts.make_lenses(scene)
         made = time.perf_counter() - start
         start = time.perf_counter()
         builder.build_lamp(bl_scene, scene)

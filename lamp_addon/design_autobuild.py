@@ -4,9 +4,9 @@ An edit only notes the scene and the time (``design_edited``, called by every de
 callback) and makes sure one timer is running; the timer builds, never the callback, so a drag that
 changes a value sixty times a second is not sixty builds. The timer builds at most every
 ``TICK_SECONDS``. A lens whose cuts need more quads than a preview has
-(``design_builder.PREVIEW_CUT_QUADS``: a deep cut's 190,000 faces take 2-4 s, its preview 0.1-0.25 s)
+(``design_parts.PREVIEW_CUT_QUADS``: a deep cut's 190,000 faces take 1-4 s, its preview 0.03-0.25 s)
 is built as a preview while the edits go on; once they have stopped for ``SETTLE_SECONDS`` the full
-lens is made in a worker thread (``design_builder.make_lenses``, no Blender data touched) and copied
+lens is made in a worker thread (``design_parts.make_lenses``, no Blender data touched) and copied
 into Blender when it is ready, so the UI does not freeze for it. Every other build is done at once in
 full. Only what an edit changed is rebuilt (unchanged meshes are kept), so most edits of the
 four-lamp preset take 0.01-0.2 s; ``benchmarks/bench_build.py`` measures them.
@@ -33,7 +33,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from ..core_tracer.scene.validate import SceneError
-from . import design_builder, design_properties, design_root
+from . import design_builder, design_parts, design_properties, design_root
 
 TICK_SECONDS = 0.1
 SETTLE_SECONDS = 0.5
@@ -107,7 +107,7 @@ def _full_lenses(bl_scene: bpy.types.Scene, scene: dict) -> bool:
         job[1].result()  # an error in the worker surfaces here
         design_builder.build_lamp(bl_scene, scene)  # the lenses are made: this copies them into Blender
         return True
-    _jobs[bl_scene.name] = (digest, _worker().submit(design_builder.make_lenses, copy.deepcopy(scene)))
+    _jobs[bl_scene.name] = (digest, _worker().submit(design_parts.make_lenses, copy.deepcopy(scene)))
     return False
 
 

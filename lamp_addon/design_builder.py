@@ -21,10 +21,11 @@ modifiers, visibility, extra material nodes and materials the designer put in a 
 kept. Parts that no longer exist (a removed lamp) are deleted with their data; objects the builder did
 not make are never touched (children of a deleted part move to the root, where they were in the world).
 
-The root records what it was built from (``DIGEST_KEY``), so ``build_status`` tells whether the
-objects are up to date with the design. ``build_lamp(..., preview=True)`` makes a lighter lens (fewer
-quads per lenslet cell, ``PREVIEW_CUT_QUADS``) for Auto Build while the designer drags; the root then
-says "preview" until a full build. Undo is the operator's business (one step).
+What the parts are (shapes, materials, places) is ``design_parts``; this module puts them into
+Blender. The root records what it was built from (``DIGEST_KEY``), so ``build_status`` tells whether
+the objects are up to date with the design. ``build_lamp(..., preview=True)`` makes lighter lenses
+(fewer quads per lenslet cell, ``design_parts.PREVIEW_CUT_QUADS``) for Auto Build while the designer
+drags; the root then says "preview" until a full build. Undo is the operator's business (one step).
 """
 
 from __future__ import annotations
@@ -32,30 +33,21 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-import math
-import threading
-from collections import OrderedDict
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import partial
 
 import bpy
 import numpy as np
 from mathutils import Matrix, Vector
-from mathutils.geometry import tessellate_polygon
 
 from ..core_tracer.scene import validate as lamp_scene
-from . import design_materials, design_properties, design_root
+from . import design_materials, design_parts, design_properties, design_root
 from .convert import meshes, units
 
 MM = units.BU_PER_MM
 PART_KEY = design_root.PART_KEY
 COLLECTION_NAME = design_root.COLLECTION_NAME
 WORLD_NAME = "Lamp Design World"
-CHORD_TOLERANCE_MM = meshes.CHORD_TOLERANCE_MM
-# A preview lens has at most about this many cut-surface quads: a deep cut at full tolerance has up
-# to ~190,000 faces and takes 2-4 s to build, its preview 0.1-0.25 s (benchmarks/bench_build.py).
-PREVIEW_CUT_QUADS = 5000
+CHORD_TOLERANCE_MM = design_parts.CHORD_TOLERANCE_MM
 
 DRIVEN_KEY = "lamp_driven_matrix"  # part object: the transform the design gave it, relative to the root
 GEOMETRY_KEY = "lamp_geometry"  # mesh: the numbers its shape was made from
@@ -84,10 +76,6 @@ class BuildReport:
     @property
     def worst_deviation(self) -> float:
         return max(self.max_deviation.values(), default=0.0)
-
-
-def lamp_label(index: int) -> str:
-    return f"Lamp {index + 1}"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -139,148 +127,6 @@ def is_up_to_date(bl_scene: bpy.types.Scene) -> bool:
 
 
 # ---------------------------------------------------------------------------------------------
-# The parts a design has
-
-
-@dataclass
-class _Slot:
-    part: str  # the material's lamp_part
-    name: str  # its name when the builder makes it
-    drive: Callable[..., list[str]]  # design_materials function with the design's values: drive(mat, new=...)
-
-
-@dataclass
-class _MeshPart:
-    part: str
-    name: str
-    shape: tuple  # the numbers the mesh is made from (``GEOMETRY_KEY``)
-    make: Callable[[], meshes.MeshData]
-    slots: list[_Slot]
-    matrix: Matrix  # where the design puts it, relative to the root
-
-
-class _Memo:
-    """The last results of a slow function of hashable arguments, at most ``size`` of them weighing at
-    most ``most`` together (shared with Auto Build's worker thread: the lock guards the table, not the
-    making)."""
-
-    def __init__(self, size: int, weight: Callable = lambda value: 1, most: float = math.inf):
-        self.size, self.weight, self.most = size, weight, most
-        self.items: OrderedDict = OrderedDict()
-        self.lock = threading.Lock()
-
-    def get(self, key, make: Callable):
-        with self.lock:
-            if key in self.items:
-                self.items.move_to_end(key)
-                return self.items[key]
-        value = make()
-        with self.lock:
-            self.items[key] = value
-            while len(self.items) > 1 and (len(self.items) > self.size or
-                                           sum(map(self.weight, self.items.values())) > self.most):
-                self.items.popitem(last=False)
-        return value
-
-
-# MeshData by shape, so that undo, redo and dragging back make nothing again. A face costs ~200 bytes
-# of Python objects: 500,000 faces (under three deep-cut lenses of 190,000) are ~100 MB.
-_shapes = _Memo(40, weight=lambda data: len(data.faces), most=500_000)
-_subdivisions = _Memo(64)  # quads per cell side of a cut surface
-
-
-def _translation(x_mm: float, y_mm: float, z_mm: float) -> Matrix:
-    return Matrix.Translation((x_mm * MM, y_mm * MM, z_mm * MM))
-
-
-def _lamp_parts(i: int, lamp: dict, preview: bool) -> tuple[list[_MeshPart], np.ndarray, tuple, bool]:
-    """Lamp i's mesh parts, its rim polygon in scene [x, z] and its bore (for the body's opening), and
-    whether its lens is a preview."""
-    base, label = f"lamps[{i}]", lamp_label(i)
-    g = lamp_scene.lamp_geometry(lamp)
-    R = lamp["lens"]["radius"]
-    reflector_shape = ("reflector", R, lamp["reflector"]["focal_length"], g["vertex"], CHORD_TOLERANCE_MM)
-    reflector = _shapes.get(reflector_shape,
-                            lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
-    n = _ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
-    k, lighter = _cut_quads(lamp, preview)
-    cx, cz = lamp["center"]
-    axis = _translation(cx, 0.0, cz)
-    bx, by, bz = g["bulb_center"]
-    rb, rs = lamp["bulb"]["radius"], lamp["socket"]["radius"]
-    lens, cuts = lamp["lens"], lamp["cuts"]
-    parts = [
-        _MeshPart(f"{base}.lens", f"{label} Lens",
-                  ("lens", R, lens["thickness"], cuts["pitch"], cuts["height"], n, CHORD_TOLERANCE_MM, k),
-                  partial(meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k),
-                  [_Slot(f"{base}.lens", f"{label} Lens", partial(design_materials.lens_glass, lamp=lamp)),
-                   _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
-                                 "Side Wall BSDF")], axis),
-        _MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
-                  [_Slot(f"{base}.reflector", f"{label} Reflector", partial(design_materials.reflector, lamp=lamp))],
-                  axis),
-        _MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM), partial(meshes.sphere_mesh, rb),
-                  [_Slot(f"{base}.bulb", f"{label} Bulb", partial(design_materials.bulb, lamp=lamp))],
-                  _translation(cx + bx, by, cz + bz)),
-        _MeshPart(f"{base}.socket", f"{label} Socket", ("socket", rs, g["vertex"], by, CHORD_TOLERANCE_MM),
-                  partial(meshes.socket_mesh, rs, g["vertex"], by),
-                  [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
-    ]
-    rim = meshes.rim_polygon(R, n) + np.array([cx, cz])
-    return parts, rim, (g["plane_b"], g["rim"]), lighter
-
-
-def _diffuse_slot(part: str, name: str, color, node: str) -> _Slot:
-    return _Slot(part, name, partial(design_materials.diffuse, color=color, node_name=node))
-
-
-def _cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
-    """Quads per side of one lenslet cell, and whether that is fewer than the tolerance needs (a preview).
-
-    A preview has at most ``_preview_subdivision`` quads per side; the search for the full count then
-    stops just past that (a deep cut's full search measures cells of up to 48 x 48 quads)."""
-    t, p, h = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], lamp["cuts"]["height"]
-    light = _preview_subdivision(lamp["lens"]["radius"], p) if preview else meshes.MAX_CELL_SUBDIVISION
-    most = light + 1 if preview else meshes.MAX_CELL_SUBDIVISION
-    k = _subdivisions.get((t, p, h, most), partial(_cut_subdivision, t, p, h, most))
-    return min(k, light), k > light
-
-
-def _body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> _MeshPart:
-    body = scene["body"]
-    shape = ("body", tuple(body["center"]), tuple(body["size"]), body["depth"],
-             tuple(tuple(map(tuple, rim.round(9).tolist())) for rim in rims), tuple(bores))
-    return _MeshPart("body", "Lamp Body", shape, partial(meshes.body_mesh, scene, rims, bores, tessellate_polygon),
-                     [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
-
-
-def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:
-    rho = None if height == 0 else lamp_scene.cut_sphere_radius(pitch, height)
-    return meshes.cut_subdivision(meshes.CutSurface(thickness, pitch, height, rho), most=most)[0]
-
-
-def _preview_subdivision(radius: float, pitch: float) -> int:
-    """Quads per cell side that keep a preview lens near ``PREVIEW_CUT_QUADS`` quads."""
-    cells = math.pi * (radius / pitch + 0.5) ** 2
-    return max(2, math.floor(math.sqrt(PREVIEW_CUT_QUADS / cells)))
-
-
-def _ring_segments(data: meshes.MeshData) -> int:
-    """Segments of the reflector's rim ring (its vertices at the largest radius)."""
-    r = np.hypot(data.verts[:, 0], data.verts[:, 2])
-    return int(np.count_nonzero(r > r.max() * (1 - 1e-9)))
-
-
-def make_lenses(scene: dict) -> None:
-    """Make the full-quality lenses of a normalised scene, into memory only: no Blender data is read or
-    written, so Auto Build runs this in a worker thread, and the ``build_lamp`` that follows only
-    copies the meshes into Blender (a deep cut's lens takes seconds to make, 0.3 s to copy)."""
-    for i, lamp in enumerate(scene["lamps"]):
-        lens = _lamp_parts(i, lamp, preview=False)[0][0]
-        _shapes.get(lens.shape, lens.make)
-
-
-# ---------------------------------------------------------------------------------------------
 # Building
 
 
@@ -289,8 +135,8 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False)
     ``preview``: lenses with fewer quads per cut cell, where that is lighter (Auto Build while dragging)."""
     _free_parts_whose_collection_was_deleted()
     build = _Build(bl_scene)
-    lamps = [_lamp_parts(i, lamp, preview) for i, lamp in enumerate(scene["lamps"])]
-    build.mesh_part(_body_part(scene, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps]))
+    lamps = [design_parts.lamp_parts(i, lamp, preview) for i, lamp in enumerate(scene["lamps"])]
+    build.mesh_part(design_parts.body_part(scene, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps]))
     for parts, _, _, lens_preview in lamps:
         for part in parts:
             build.mesh_part(part)
@@ -321,7 +167,7 @@ class _Build:
         self.wanted: set[str] = set()
         self.moves: list[tuple[bpy.types.Object, Matrix]] = []
 
-    def mesh_part(self, spec: _MeshPart) -> None:
+    def mesh_part(self, spec: design_parts.MeshPart) -> None:
         obj = self._existing(spec.part, "MESH")
         old = obj.data if obj is not None else None
         mesh = old if old is not None and old.get(PART_KEY) == spec.part and old.users == 1 else None
@@ -331,7 +177,7 @@ class _Build:
         self._materials(mesh, old, spec)
         shape = repr(spec.shape)
         if mesh.get(GEOMETRY_KEY) != shape:
-            data = _shapes.get(spec.shape, spec.make)
+            data = design_parts.shapes.get(spec.shape, spec.make)
             fill_mesh(mesh, data)
             mesh[GEOMETRY_KEY] = shape
             mesh[DEVIATION_KEY] = data.max_deviation
@@ -340,7 +186,7 @@ class _Build:
             self.report.max_deviation[spec.part] = mesh[DEVIATION_KEY]
         self._place(self._object(spec.part, spec.name, obj, mesh), spec.matrix)
 
-    def _materials(self, mesh: bpy.types.Mesh, old: bpy.types.Mesh | None, spec: _MeshPart) -> None:
+    def _materials(self, mesh: bpy.types.Mesh, old: bpy.types.Mesh | None, spec: design_parts.MeshPart) -> None:
         """Drive our material in each slot; keep a material the designer put there themselves."""
         before = list(old.materials) if old is not None else []
         for i, slot in enumerate(spec.slots):
