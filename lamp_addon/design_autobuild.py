@@ -104,7 +104,11 @@ def _full_lenses(bl_scene: bpy.types.Scene, scene: dict) -> bool:
         return False
     if job is not None and job[0] == digest:
         del _jobs[bl_scene.name]
-        job[1].result()  # an error in the worker surfaces here
+        error = job[1].exception()
+        if error is not None:  # out of memory, say: keep the preview, say so once, stop trying
+            print(f"Lamp Styling: Auto Build could not make the full lens ({error!r}); the preview stays "
+                  "until Build Lamp")
+            return True
         design_builder.build_lamp(bl_scene, scene)  # the lenses are made: this copies them into Blender
         return True
     _jobs[bl_scene.name] = (digest, _worker().submit(design_parts.make_lenses, copy.deepcopy(scene)))

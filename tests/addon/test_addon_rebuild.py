@@ -482,3 +482,21 @@ def test_a_lamp_built_before_the_root_existed_is_adopted(lamp_addon, addon_core,
     assert tuple(parts["lamps[0].bulb"].location) == pytest.approx(
         tuple(x / 1000 for x in g["bulb_center"]), abs=1e-7)
     assert parts["lamps[0].lens"].data.materials[0] == glass and builder.is_up_to_date(bl_scene)
+
+
+def test_a_full_lens_that_cannot_be_made_leaves_the_preview(lamp_addon, addon_core, builder, autobuild, bl_scene,
+                                                             monkeypatch, capsys):
+    def fail(scene):
+        raise MemoryError("no room for the lens")
+
+    monkeypatch.setattr(lamp_addon.design_parts, "make_lenses", fail)
+    _design(lamp_addon, addon_core, bl_scene)
+    autobuild._edits.clear()
+    _deep_cut(bl_scene)
+    edited = autobuild._edits[bl_scene.name]
+    autobuild.tick(now=edited + 0.01)
+    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS) == autobuild.TICK_SECONDS
+    autobuild._jobs[bl_scene.name][1].exception(timeout=120)
+    assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS + 0.1) is None  # no traceback, no retry loop
+    assert builder.build_status(bl_scene) == builder.PREVIEW
+    assert "could not make the full lens (MemoryError('no room for the lens'))" in capsys.readouterr().out
