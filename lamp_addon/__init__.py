@@ -17,6 +17,7 @@ def modules() -> tuple:
     """Every module that registers, in registration order."""
     from . import (
         compare_ops,
+        design_autobuild,
         design_ops,
         design_panels,
         design_properties,
@@ -35,6 +36,7 @@ def modules() -> tuple:
     return (
         design_properties,
         design_ops,
+        design_autobuild,
         design_panels,
         render_camera, render_engine, render_ops, compare_ops, display_ops,
         preferences, preset_library, preset_ops, preset_panel,

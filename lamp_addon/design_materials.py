@@ -1,81 +1,46 @@
 """Cycles materials, sun and world equivalent to the paper's parameters (BLENDER-NOTES "Cycles equivalents").
 
-The mapping, part by part (A per mm; 1 mm = 0.001 Blender units):
+The numbers come from ``convert.cycles``; this module puts them into node trees. The mapping, part by
+part:
 
-- **Lens glass**: Principled BSDF, Transmission Weight 1, Roughness 0, Base Color white, IOR = n; plus a
-  Volume Absorption node on the Volume output. Cycles absorbs ``Density * (1 - Color)`` per Blender unit,
-  so ``Density = D = 1000 * max(A)`` and ``Color = 1 - 1000 * A / D`` give exactly A per mm (eq. 2).
-  A clear lens (A = 0) gets Density 0. ``Color`` is written unclamped (the socket accepts any value).
-- **Bulb**: Emission; a camera sees ``Strength * Color``, so ``Strength = max(I0)`` and
-  ``Color = I0 / max(I0)`` show exactly I0. A bulb that is off has Strength 0.
+- **Lens glass**: Principled BSDF (Transmission Weight 1, Roughness 0, Base Color white, IOR = n) and a
+  Volume Absorption node on the Volume output absorbing A per mm (eq. 2).
+- **Bulb**: Emission showing exactly I0 to the camera; a bulb that is off has Strength 0.
 - **Reflector**: the sum of (a) a sharp mirror (Glossy, GGX, Roughness 0) of colour = reflectance, the
   paper's recursive mirror ray; (b) the Blinn scatter lobe of eq. 3 as a Glossy BSDF with the Beckmann
-  distribution, colour = scatter w and ``Roughness = (2 / (n + 2)) ** 0.25``: Walter et al. (2007) match
-  a Blinn-Phong exponent n with the Beckmann slope alpha = sqrt(2 / (n + 2)), and Cycles' Glossy node
-  squares its Roughness input into alpha; (c) the constant colour C of the first reflector hit as an
-  Emission of colour C, seen by every ray but diffuse ones (so it lights nothing). Approximations: the
-  Beckmann lobe is normalised where the paper's term is not, and Cycles adds C on every hit, the paper on
-  the first of each branch.
+  distribution, colour = scatter w (``cycles.blinn_roughness``); (c) the constant colour C of the first
+  reflector hit as an Emission of colour C, seen by every ray but diffuse ones (so it lights nothing).
+  Approximations: the Beckmann lobe is normalised where the paper's term is not, and Cycles adds C on
+  every hit, the paper on the first of each branch.
 - **Body, socket, lens side wall**: Diffuse BSDF of their colour. The paper's body adds the specular term
   of eq. 1 and treats socket and side wall as constant colours; only the diffuse part is reproduced.
 - **Light** (the diffuse part of eq. 1, ``[d + (1 - d) cos theta] R0``): a sun of strength ``pi (1 - d)``
-  shining along ``-light.direction`` (a Diffuse BSDF of albedo R0 then shows ``R0 (1 - d) cos theta``), and
-  a world of colour d seen by diffuse rays only (adds ``R0 d``). Every other ray that leaves the scene sees
-  the scene's ``background`` colour (black in the paper), so the camera sees a black background.
+  shining along ``-light.direction`` and a world of colour d seen by diffuse rays only (adds ``R0 d``).
+  Every other ray that leaves the scene sees the scene's ``background`` colour (black in the paper).
+
+A designer may edit these materials. So a tree is laid out once, when the builder makes the material
+(``new=True``); every later build only writes the sockets a design parameter drives, on the nodes it
+finds by their names (``"Lens BSDF"``, ...). Nodes the designer added, links they changed and the
+inputs no parameter drives (a Roughness they raised, say) are left as they are. A driven node the
+designer deleted is not brought back: each function returns the names of such nodes, and the build
+reports them.
 """
 
 from __future__ import annotations
 
-import math
-
 import bpy
 
 from ..core_tracer.scene import validate as lamp_scene
-from .convert import units
-
-MM_PER_BU = units.MM_PER_BU
+from .convert import cycles
 
 
-# ---------------------------------------------------------------------------------------------
-# The numbers
-
-
-def absorption_volume(absorption: list[float]) -> tuple[float, tuple[float, float, float]]:
-    """(Density, Color) of a Volume Absorption node absorbing ``absorption`` per mm."""
-    density = MM_PER_BU * max(absorption)
-    if density <= 0.0:
-        return 0.0, (1.0, 1.0, 1.0)
-    return density, tuple(1.0 - MM_PER_BU * a / density for a in absorption)
-
-
-def emission_of(intensity: list[float], on: bool = True) -> tuple[float, tuple[float, float, float]]:
-    """(Strength, Color) of an Emission node that shows ``intensity`` to the camera."""
-    peak = max(intensity)
-    if peak <= 0.0:
-        return 0.0, (1.0, 1.0, 1.0)
-    return (peak if on else 0.0), tuple(c / peak for c in intensity)
-
-
-def blinn_roughness(shininess: float) -> float:
-    """Glossy Roughness input (Beckmann) matching a Blinn exponent n: alpha = sqrt(2/(n+2)), r = sqrt(alpha)."""
-    return (2.0 / (shininess + 2.0)) ** 0.25
-
-
-def sun_strength(ambient: float) -> float:
-    """Sun strength giving a Diffuse BSDF of albedo R0 the value R0 (1 - d) cos theta (eq. 1)."""
-    return math.pi * (1.0 - ambient)
-
-
-# ---------------------------------------------------------------------------------------------
-# Node trees
-
-
-def _fresh_tree(idblock) -> bpy.types.NodeTree:
-    if idblock.node_tree is None:  # Blender < 5.0 creates materials and worlds without nodes
-        idblock.use_nodes = True
-    tree = idblock.node_tree
-    tree.nodes.clear()
-    return tree
+def _tree(idblock, new: bool) -> bpy.types.NodeTree | None:
+    """The node tree of a material or world; emptied when the builder has just made ``idblock``."""
+    if new:
+        if idblock.node_tree is None:  # Blender < 5.0 creates materials and worlds without nodes
+            idblock.use_nodes = True
+        idblock.node_tree.nodes.clear()
+    return idblock.node_tree
 
 
 def _node(tree, kind: str, name: str, location: tuple[float, float], **inputs):
@@ -87,57 +52,123 @@ def _node(tree, kind: str, name: str, location: tuple[float, float], **inputs):
     return node
 
 
+def _drive(tree, name: str, missing: list[str], **inputs) -> None:
+    """Set the driven ``inputs`` of the node called ``name`` (only those that differ, so an unchanged
+    design does not make the renderers recompile the shader); note the node if it is gone."""
+    node = tree.nodes.get(name) if tree is not None else None
+    if node is None:
+        missing.append(name)
+        return
+    for key, value in inputs.items():
+        socket = node.inputs.get(key.replace("_", " "))
+        if socket is None:
+            missing.append(f"{name}: {key.replace('_', ' ')}")
+            continue
+        if not _same(socket.default_value, value):
+            socket.default_value = value
+
+
+def _same(stored, value) -> bool:
+    """Whether a socket already holds ``value`` (Blender keeps 32-bit floats)."""
+    stored = list(stored) if hasattr(stored, "__len__") else [stored]
+    value = list(value) if hasattr(value, "__len__") else [value]
+    if len(stored) != len(value):
+        return False
+    return all(abs(a - b) <= 1e-6 * max(1.0, abs(b)) for a, b in zip(stored, value, strict=True))
+
+
 def _rgba(color) -> tuple[float, float, float, float]:
     return (float(color[0]), float(color[1]), float(color[2]), 1.0)
 
 
-def lens_glass(mat: bpy.types.Material, lamp: dict) -> None:
+def _grey(value: float) -> tuple[float, float, float, float]:
+    return (value, value, value, 1.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Lens glass
+
+
+def lens_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+    tree = _tree(mat, new)
+    if new:
+        out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
+        bsdf = _node(tree, "ShaderNodeBsdfPrincipled", "Lens BSDF", (0, 100), Base_Color=(1, 1, 1, 1),
+                     Metallic=0.0, Roughness=0.0, Transmission_Weight=1.0)
+        vol = _node(tree, "ShaderNodeVolumeAbsorption", "Lens Absorption", (0, -300))
+        tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+        tree.links.new(vol.outputs["Volume"], out.inputs["Volume"])
     lens = lamp["lens"]
-    tree = _fresh_tree(mat)
-    out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
-    bsdf = _node(tree, "ShaderNodeBsdfPrincipled", "Lens BSDF", (0, 100), Base_Color=(1, 1, 1, 1),
-                 Metallic=0.0, Roughness=0.0, IOR=lens["ior"], Transmission_Weight=1.0)
     a = lamp_scene.lens_absorption(lens)
-    density, color = absorption_volume(a)
-    vol = _node(tree, "ShaderNodeVolumeAbsorption", "Lens Absorption", (0, -300), Color=(*color, 1.0),
-                Density=density)
-    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
-    tree.links.new(vol.outputs["Volume"], out.inputs["Volume"])
-    t = lens["thickness"]
-    mat.diffuse_color = (*(math.exp(-x * t) for x in a), 0.5)  # solid view: the colour through the lens
+    density, color = cycles.absorption_volume(a)
+    missing: list[str] = []
+    _drive(tree, "Lens BSDF", missing, IOR=lens["ior"])
+    _drive(tree, "Lens Absorption", missing, Color=(*color, 1.0), Density=density)
+    mat.diffuse_color = (*cycles.transmitted_color(a, lens["thickness"]), 0.5)  # solid view: seen through
+    return missing
 
 
-def diffuse(mat: bpy.types.Material, color, name: str) -> None:
-    tree = _fresh_tree(mat)
-    out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
-    bsdf = _node(tree, "ShaderNodeBsdfDiffuse", name, (0, 0), Color=_rgba(color), Roughness=0.0)
-    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+# ---------------------------------------------------------------------------------------------
+# Body, socket, side wall
+
+
+def diffuse(mat: bpy.types.Material, color, node_name: str, *, new: bool) -> list[str]:
+    tree = _tree(mat, new)
+    if new:
+        out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
+        bsdf = _node(tree, "ShaderNodeBsdfDiffuse", node_name, (0, 0), Roughness=0.0)
+        tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    missing: list[str] = []
+    _drive(tree, node_name, missing, Color=_rgba(color))
     mat.diffuse_color = _rgba(color)
+    return missing
 
 
-def bulb(mat: bpy.types.Material, lamp: dict) -> None:
+# ---------------------------------------------------------------------------------------------
+# Bulb
+
+
+def bulb(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+    tree = _tree(mat, new)
+    if new:
+        out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
+        em = _node(tree, "ShaderNodeEmission", "Bulb Emission", (0, 0))
+        tree.links.new(em.outputs["Emission"], out.inputs["Surface"])
     b = lamp["bulb"]
-    tree = _fresh_tree(mat)
-    out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
-    strength, color = emission_of(b["intensity"], b["on"])
-    em = _node(tree, "ShaderNodeEmission", "Bulb Emission", (0, 0), Color=(*color, 1.0), Strength=strength)
-    tree.links.new(em.outputs["Emission"], out.inputs["Surface"])
+    strength, color = cycles.emission_of(b["intensity"], b["on"])
+    missing: list[str] = []
+    _drive(tree, "Bulb Emission", missing, Color=(*color, 1.0), Strength=strength)
     mat.diffuse_color = (*color, 1.0) if b["on"] else (0.05, 0.05, 0.05, 1.0)
+    return missing
 
 
-def reflector(mat: bpy.types.Material, lamp: dict) -> None:
+# ---------------------------------------------------------------------------------------------
+# Reflector
+
+
+def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+    tree = _tree(mat, new)
+    if new:
+        _lay_out_reflector(tree)
+        mat.diffuse_color = (0.8, 0.8, 0.82, 1.0)
+        mat.metallic = 1.0
+        mat.roughness = 0.1
     r = lamp["reflector"]
-    tree = _fresh_tree(mat)
+    missing: list[str] = []
+    _drive(tree, "Reflector Mirror", missing, Color=_grey(r["reflectance"]))
+    _drive(tree, "Reflector Scatter", missing, Color=_grey(r["scatter"]),
+           Roughness=cycles.blinn_roughness(r["shininess"]))
+    _drive(tree, "Reflector Constant", missing, Color=_rgba(r["color"]))
+    return missing
+
+
+def _lay_out_reflector(tree) -> None:
     out = _node(tree, "ShaderNodeOutputMaterial", "Output", (900, 0))
-    grey = (r["reflectance"],) * 3 + (1.0,)
-    mirror = _node(tree, "ShaderNodeBsdfGlossy", "Reflector Mirror", (0, 300), Color=grey, Roughness=0.0)
+    mirror = _node(tree, "ShaderNodeBsdfGlossy", "Reflector Mirror", (0, 300), Roughness=0.0)
     mirror.distribution = "GGX"
-    w = (r["scatter"],) * 3 + (1.0,)
-    scatter = _node(tree, "ShaderNodeBsdfGlossy", "Reflector Scatter", (0, 50), Color=w,
-                    Roughness=blinn_roughness(r["shininess"]))
+    scatter = _node(tree, "ShaderNodeBsdfGlossy", "Reflector Scatter", (0, 50))
     scatter.distribution = "BECKMANN"
-    constant = _node(tree, "ShaderNodeEmission", "Reflector Constant", (0, -200), Color=_rgba(r["color"]),
-                     Strength=1.0)
+    constant = _node(tree, "ShaderNodeEmission", "Reflector Constant", (0, -200), Strength=1.0)
     path = _node(tree, "ShaderNodeLightPath", "Light Path", (0, -400))
     gate = _node(tree, "ShaderNodeMixShader", "Constant Not For Diffuse Rays", (300, -250))
     tree.links.new(path.outputs["Is Diffuse Ray"], gate.inputs[0])
@@ -149,29 +180,37 @@ def reflector(mat: bpy.types.Material, lamp: dict) -> None:
     tree.links.new(add1.outputs["Shader"], add2.inputs[0])
     tree.links.new(gate.outputs["Shader"], add2.inputs[1])
     tree.links.new(add2.outputs["Shader"], out.inputs["Surface"])
-    mat.diffuse_color = (0.8, 0.8, 0.82, 1.0)
-    mat.metallic = 1.0
-    mat.roughness = 0.1
 
 
-def world(wld: bpy.types.World, scene: dict) -> None:
+# ---------------------------------------------------------------------------------------------
+# Light: world and sun
+
+
+def world(wld: bpy.types.World, scene: dict, *, new: bool) -> list[str]:
     """Background ``d`` for diffuse rays (ambient of eq. 1), the scene's background colour for all others."""
-    d = scene["light"]["ambient"]
-    tree = _fresh_tree(wld)
-    out = _node(tree, "ShaderNodeOutputWorld", "Output", (600, 0))
-    seen = _node(tree, "ShaderNodeBackground", "Background", (0, 150), Color=_rgba(scene["background"]),
-                 Strength=1.0)
-    ambient = _node(tree, "ShaderNodeBackground", "Ambient", (0, -50), Color=(d, d, d, 1.0), Strength=1.0)
-    path = _node(tree, "ShaderNodeLightPath", "Light Path", (0, 400))
-    mix = _node(tree, "ShaderNodeMixShader", "Ambient For Diffuse Rays", (300, 0))
-    tree.links.new(path.outputs["Is Diffuse Ray"], mix.inputs[0])
-    tree.links.new(seen.outputs["Background"], mix.inputs[1])
-    tree.links.new(ambient.outputs["Background"], mix.inputs[2])
-    tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    tree = _tree(wld, new)
+    if new:
+        out = _node(tree, "ShaderNodeOutputWorld", "Output", (600, 0))
+        seen = _node(tree, "ShaderNodeBackground", "Background", (0, 150), Strength=1.0)
+        ambient = _node(tree, "ShaderNodeBackground", "Ambient", (0, -50), Strength=1.0)
+        path = _node(tree, "ShaderNodeLightPath", "Light Path", (0, 400))
+        mix = _node(tree, "ShaderNodeMixShader", "Ambient For Diffuse Rays", (300, 0))
+        tree.links.new(path.outputs["Is Diffuse Ray"], mix.inputs[0])
+        tree.links.new(seen.outputs["Background"], mix.inputs[1])
+        tree.links.new(ambient.outputs["Background"], mix.inputs[2])
+        tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    missing: list[str] = []
+    _drive(tree, "Background", missing, Color=_rgba(scene["background"]))
+    _drive(tree, "Ambient", missing, Color=_grey(scene["light"]["ambient"]))
     wld.color = tuple(float(c) for c in scene["background"])
+    return missing
 
 
-def sun(light: bpy.types.SunLight, scene: dict) -> None:
-    light.energy = sun_strength(scene["light"]["ambient"])
-    light.color = (1.0, 1.0, 1.0)  # eq. 1's diffuse part carries no light colour
-    light.angle = 0.0  # a directional light, as in the paper
+def sun(light: bpy.types.SunLight, scene: dict, *, new: bool) -> list[str]:
+    if new:
+        light.color = (1.0, 1.0, 1.0)  # eq. 1's diffuse part carries no light colour
+        light.angle = 0.0  # a directional light, as in the paper
+    energy = cycles.sun_strength(scene["light"]["ambient"])
+    if not _same(light.energy, energy):
+        light.energy = energy
+    return []

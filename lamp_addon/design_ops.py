@@ -1,22 +1,18 @@
 """Operators that edit the design: add and remove lamps, build the lamp as objects.
 
-Add Lamp keeps a valid design valid: the new lamp is a copy of the active one (the spec's default
-lamp in an empty design), placed right of the others with a small margin, and the body grows to
-hold it. When the result would not be a valid design (a body wider than the spec allows), poll and
-execute refuse, naming the field and its allowed range.
+Add Lamp keeps a valid design valid (``convert.layout``: a copy of the active lamp right of the
+others, the body grown to hold it). When the result would not be a valid design (a body wider than
+the spec allows), poll and execute refuse, naming the field and its allowed range.
 """
 
 from __future__ import annotations
 
-import copy
-
 import bpy
 
 from ..core_tracer.scene import spec
-from ..core_tracer.scene.validate import SceneError, parse_scene
+from ..core_tracer.scene.validate import SceneError
 from . import design_properties
-
-MARGIN_MM = 5.0  # between a new lens and its neighbour, and at least between it and the body's edge
+from .convert.layout import design_with_new_lamp
 
 
 class LAMP_OT_lamp_add(bpy.types.Operator):
@@ -71,48 +67,6 @@ def _add_refusal(bl_scene) -> str | None:
     return _refusal_memo["refusal"]
 
 
-def design_with_new_lamp(doc: dict, active_index: int) -> dict:
-    """A copy of the design document ``doc`` with a lamp added by ``place_new_lamp``: a copy of
-    the active lamp (so its lens radius, and a reflector and bulb that fit that lens), or the
-    spec's default lamp in an empty design. Raises ``SceneError`` (field and allowed range) when
-    the result is not a valid design, checked as ``parse_scene`` does, camera aside (a new lamp
-    does not change what the camera may be)."""
-    doc = copy.deepcopy(doc)
-    lamps = doc["lamps"]
-    if 0 <= active_index < len(lamps):
-        lamps.append(copy.deepcopy(lamps[active_index]))
-    else:
-        lamps.append(parse_scene({"schema": spec.SCHEMA, "lamps": [{}]})["lamps"][0])
-    place_new_lamp(doc)
-    parse_scene({key: value for key, value in doc.items() if key != "camera"})
-    return doc
-
-
-def place_new_lamp(doc: dict, margin: float = MARGIN_MM) -> None:
-    """Place the last lamp of the design document ``doc`` and make the body hold it (in place).
-
-    The new lens goes ``margin`` to the right of the rightmost lens, at its own height ``center[1]``
-    (the first lamp at the body's centre). The body keeps its other edges and grows on each side the
-    new lens needs, leaving beside it the free border the body has left of its leftmost lens (at
-    least ``margin``), so the body's centre moves as it grows."""
-    *others, new = doc["lamps"]
-    radius = new["lens"]["radius"]
-    body = doc["body"]
-    (bx, bz), (width, height) = body["center"], body["size"]
-    left, right, bottom, top = bx - width / 2, bx + width / 2, bz - height / 2, bz + height / 2
-    if others:
-        x = max(o["center"][0] + o["lens"]["radius"] for o in others) + margin + radius
-        z = new["center"][1]
-        border = max(margin, min(o["center"][0] - o["lens"]["radius"] for o in others) - left)
-    else:
-        x, z, border = bx, bz, margin
-    new["center"] = [x, z]
-    left, right = min(left, x - radius - border), max(right, x + radius + border)
-    bottom, top = min(bottom, z - radius - margin), max(top, z + radius + margin)
-    body["center"] = [(left + right) / 2, (bottom + top) / 2]
-    body["size"] = [right - left, top - bottom]
-
-
 class LAMP_OT_lamp_remove(bpy.types.Operator):
     bl_idname = "lamp.lamp_remove"
     bl_label = "Remove Lamp"
@@ -136,14 +90,15 @@ class LAMP_OT_lamp_remove(bpy.types.Operator):
         design = context.scene.lamp_design
         design.lamps.remove(design.active_lamps_index)
         design.active_lamps_index = min(design.active_lamps_index, len(design.lamps) - 1)
+        design_properties.notify_edited(context.scene)  # removing from the list calls no update callback
         return {"FINISHED"}
 
 
 class LAMP_OT_build(bpy.types.Operator):
     bl_idname = "lamp.build"
     bl_label = "Build Lamp"
-    bl_description = ("Build the design as objects in the \"Lamp Design\" collection, replacing the "
-                      "previous build")
+    bl_description = ("Build the design as objects under the \"Lamp Design\" root object, updating the previous "
+                      "build in place: your names, placement, modifiers and material edits are kept")
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
@@ -170,6 +125,8 @@ class LAMP_OT_build(bpy.types.Operator):
         level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
         self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
                              f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)")
+        if report.not_driven:
+            self.report({"WARNING"}, f"Not following the design (your edits kept): {'; '.join(report.not_driven)}")
         return {"FINISHED"}
 
 

@@ -59,6 +59,20 @@ assert all(k in S.LENS.optional for keys in LENS_COLOR_MODES.values() for k in k
 
 _ACRONYMS = {"fov": "FOV", "ior": "IOR", "rgb": "RGB"}
 
+# Called with the scene after every edit of its design (Auto Build listens); see ``notify_edited``.
+EDIT_LISTENERS: list = []
+
+
+def notify_edited(bl_scene: bpy.types.Scene) -> None:
+    """Tell the listeners that the design of ``bl_scene`` changed. Property edits call it themselves;
+    changes no property reports (a lamp removed from the list) call it directly."""
+    for listener in EDIT_LISTENERS:
+        listener(bl_scene)
+
+
+def _edited(self, context) -> None:
+    notify_edited(self.id_data)  # the scene that owns the edited group, whichever scene is active
+
 
 # ---------------------------------------------------------------------------------------------
 # Spec -> bpy.props
@@ -94,7 +108,7 @@ def _description(spec: S.Spec) -> str:
 
 def _num_property(key: str, spec: S.Num):
     lo, hi = blender_range(spec)
-    kw = {"name": display_name(key, spec.unit), "description": _description(spec)}
+    kw = {"name": display_name(key, spec.unit), "description": _description(spec), "update": _edited}
     if spec.integer:
         if lo is not None:
             kw["min"] = kw["soft_min"] = int(lo)
@@ -124,13 +138,15 @@ def _leaf_property(key: str, spec: S.Spec):
     if isinstance(spec, S.Choice):
         items = tuple((c, display_name(c), "") for c in spec.choices)
         return EnumProperty(name=display_name(key), description=_description(spec), items=items,
-                            default=spec.default)
+                            default=spec.default, update=_edited)
     if isinstance(spec, S.Flag):
-        return BoolProperty(name=display_name(key), description=_description(spec), default=spec.default)
+        return BoolProperty(name=display_name(key), description=_description(spec), default=spec.default,
+                            update=_edited)
     if isinstance(spec, S.Text):
-        return StringProperty(name=display_name(key), description=_description(spec), default=spec.default)
+        return StringProperty(name=display_name(key), description=_description(spec), default=spec.default,
+                              update=_edited)
     if isinstance(spec, S.Tags):
-        return StringProperty(name=display_name(key), default="",
+        return StringProperty(name=display_name(key), default="", update=_edited,
                               description=f"{spec.doc}, separated by commas. Allowed: {spec.range_text()}")
     raise TypeError(f"no property for {spec!r}")  # pragma: no cover - every leaf kind is handled above
 
@@ -152,8 +168,13 @@ def _make_groups(section: S.Section, class_name: str, out: list[type], extra: di
             annotations[key] = _leaf_property(key, spec)
     if section is S.LENS:
         annotations["color_mode"] = EnumProperty(
-            name="Colour Mode", items=LENS_COLOR_MODE_ITEMS, default="ABSORPTION",
+            name="Colour Mode", items=LENS_COLOR_MODE_ITEMS, default="ABSORPTION", update=_edited,
             description="How the lens colour is given: transmitted colour at a thickness, or absorption")
+    if section is S.SCENE:
+        # Not a design field (never written to a scene document): how the built objects follow the design.
+        annotations["auto_build"] = BoolProperty(
+            name="Auto Build", default=True, update=_edited,
+            description="Update the lamp's objects as you edit the design (a lighter lens while you drag)")
     namespace = {"__annotations__": annotations, "__doc__": section.doc or class_name, **(extra or {})}
     cls = type(class_name, (bpy.types.PropertyGroup,), namespace)
     out.append(cls)

@@ -17,11 +17,14 @@ glass, out of the bulb, socket and body, and from the reflector toward the lamp 
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
+from ...core_tracer.scene.validate import cut_sphere_radius, lamp_geometry
 
 CHORD_TOLERANCE_MM = 0.05
 MAX_CELL_SUBDIVISION = 48  # quads per side of one lenslet cell
@@ -66,6 +69,14 @@ class _MeshBuilder:
             i = self._index[key] = len(self.verts)
             self.verts.append((float(x), float(y), float(z)))
         return i
+
+    def add_vertices(self, verts: np.ndarray, weld: Sequence[int] = ()) -> None:
+        """Append ``verts`` as they are; later ``vertex`` calls weld to those listed in ``weld``."""
+        start = len(self.verts)
+        self.verts.extend(tuple(v) for v in verts.tolist())
+        for i in weld:
+            x, y, z = self.verts[start + i]
+            self._index[(round(x * 1e6), round(y * 1e6), round(z * 1e6))] = start + i
 
     def face(self, indices: Sequence[int], group: int = FLAT, material: int = 0) -> None:
         out: list[int] = []
@@ -181,13 +192,15 @@ def cell_lines(surface: CutSurface, k: int) -> np.ndarray:
     return lines
 
 
-def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM) -> tuple[int, float]:
-    """Quads per side of a cell so that one whole cell is within ``tol``; returns (k, deviation)."""
+def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM,
+                    most: int = MAX_CELL_SUBDIVISION) -> tuple[int, float]:
+    """Quads per side of a cell so that one whole cell is within ``tol``, at most ``most``; returns
+    (k, deviation)."""
     if surface.rho is None:
         return 1, 0.0
     # Start from the sagitta estimate L^2 / (8 rho) along the cell's axes, then measure.
     arc = 2.0 * surface.rho * math.asin(min(1.0, surface.p / 2.0 / surface.rho))
-    k = max(1, math.ceil(arc / math.sqrt(8.0 * surface.rho * tol)))
+    k = min(most, max(1, math.ceil(arc / math.sqrt(8.0 * surface.rho * tol))))
     while True:
         u = cell_lines(surface, k)
         gx, gz = np.meshgrid(u, u, indexing="ij")
@@ -196,9 +209,9 @@ def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM) -> tup
         quads = np.column_stack([idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(),
                                  idx[:-1, 1:].ravel()])
         dev = triangle_deviation(verts, fan_triangles(quads.tolist()), surface.distance)
-        if dev <= SAMPLED_MARGIN * tol or k >= MAX_CELL_SUBDIVISION:
+        if dev <= SAMPLED_MARGIN * tol or k >= most:
             return k, dev
-        k = min(MAX_CELL_SUBDIVISION, k + max(1, k // 4))
+        k = min(most, k + max(1, k // 4))
 
 
 def _rim_edges_near(quad: list[tuple[float, float]], rim: np.ndarray, holds_axis: bool) -> list[int]:
@@ -249,121 +262,187 @@ def _lerp(a, b, f):
     return (a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f)
 
 
-def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
+              max_subdivision: int = MAX_CELL_SUBDIVISION) -> MeshData:
     """The lens solid of one lamp, relative to its axis.
 
     Outer disk at y = 0 (flat), the cut surface (a grid of k x k quads per lenslet cell, clipped by the
     rim polygon; smooth within a cell, sharp creases between cells), and the side wall of radius R
     from y = 0 up to the cut apex plane y = t + h (material ``LENS_SIDE_WALL``; the part above the cut
-    surface is the open collar the tracer also has). The glass is closed (watertight).
+    surface is the open collar the tracer also has). The glass is closed (watertight). At most
+    ``max_subdivision`` quads per cell side (a lighter preview when smaller than the tolerance needs).
     """
-    R = lamp["lens"]["radius"]
-    t = lamp["lens"]["thickness"]
+    R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
-    rho = None if h == 0 else (p * p / 2 + h * h) / (2 * h)  # = scene.cut_sphere_radius(p, h)
-    surface = CutSurface(t, p, h, rho)
-    k, dev_cell = cut_subdivision(surface, tol)
+    surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))
+    k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
+    grid = _CutGrid(surface, k, R)
     rim = rim_polygon(R, segments)
-    apothem = R * math.cos(math.pi / segments)
+    cut = grid.polygons(rim, R * math.cos(math.pi / segments))
+    xz, cut_faces, cut_groups = cut.welded()
+    verts = np.column_stack([xz[:, 0], surface.height(xz[:, 0], xz[:, 1]), xz[:, 1]])
+    ring = _rim_ring(verts, R, segments)
 
-    # The grid lines of all cells (shared along cell edges) and the quads between them.
-    lines = cell_lines(surface, k)
-    cells = math.ceil(R / p + 0.5)
-    grid = np.append((np.arange(-cells, cells + 1)[:, None] * p + lines[None, :-1]).ravel(), cells * p + p / 2)
-    size = len(grid)
-    lo, hi = grid[:-1], grid[1:]
-    near = np.where((lo <= 0) & (hi >= 0), 0.0, np.minimum(np.abs(lo), np.abs(hi)))
-    far = np.maximum(np.abs(lo), np.abs(hi))
-    near2 = near[:, None] ** 2 + near[None, :] ** 2
-    far2 = far[:, None] ** 2 + far[None, :] ** 2
-    cell = np.arange(size - 1) // k - cells
-    a_idx, b_idx = np.meshgrid(np.arange(size - 1), np.arange(size - 1), indexing="ij")
-    full = far2 <= apothem * apothem
-    edge = ~full & (near2 < R * R)
+    mb = _MeshBuilder()
+    mb.add_vertices(verts, weld=ring)  # the side wall welds to the rim ring (a cell apex on the rim is its top)
+    mb.faces += cut_faces
+    mb.material += [LENS_GLASS] * len(cut_faces)
+    mb.group += cut_groups
+    bottom = _side_wall(mb, ring, lamp_geometry(lamp)["plane_b"])
+    side_faces = mb.faces[len(cut_faces):]
+    mb.face(bottom, FLAT, LENS_GLASS)  # outer face, counter-clockwise seen from -y
 
-    # Whole quads: grid vertex (a, b) has index a * size + b. Reversed counter-clockwise order in
-    # [x, z] makes the normal point +y, out of the glass.
-    a, b = a_idx[full], b_idx[full]
-    quads = np.column_stack([a * size + b + 1, (a + 1) * size + b + 1, (a + 1) * size + b, a * size + b])
-    polygons: list[tuple[int, ...]] = [tuple(q) for q in quads.tolist()]
-    groups = ((cell[a] + 1000) * 4096 + cell[b] + 1000).tolist()
+    data = mb.result()
+    # Whole quads are copies of the cell measured by cut_subdivision; measure the faces on the rim here.
+    on_rim = np.zeros(len(verts), dtype=bool)
+    on_rim[ring] = True
+    sizes = np.fromiter(map(len, cut_faces), dtype=np.int64, count=len(cut_faces))
+    flat = np.fromiter(itertools.chain.from_iterable(cut_faces), dtype=np.int64, count=int(sizes.sum()))
+    touches = np.logical_or.reduceat(on_rim[flat], np.concatenate([[0], np.cumsum(sizes)[:-1]]))
+    clipped = [cut_faces[i] for i in np.flatnonzero(touches)]
+    dev_cut = max(dev_cell, triangle_deviation(data.verts, fan_triangles(clipped), surface.distance))
+    dev_side = triangle_deviation(data.verts, fan_triangles(side_faces),
+                                  lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - R))
+    data.max_deviation = max(dev_cut, dev_side)
+    return data
 
-    # Quads across the rim: clipped by the rim polygon; new points get indices after the grid's.
-    extra: dict[tuple[int, int], int] = {}
-    extra_xz: list[tuple[float, float]] = []
-    for a, b in zip(a_idx[edge].tolist(), b_idx[edge].tolist(), strict=True):
-        x0, x1, z0, z1 = grid[a], grid[a + 1], grid[b], grid[b + 1]
-        corners = {(x0, z0): a * size + b, (x1, z0): (a + 1) * size + b, (x1, z1): (a + 1) * size + b + 1,
-                   (x0, z1): a * size + b + 1}
-        holds_axis = near[a] == 0.0 and near[b] == 0.0
+
+class _CutGrid:
+    """The grid of the cut surface over the lens: the same k + 1 lines across every cell (``cell_lines``),
+    for cells -c ... c around the axis, in x and in z alike.
+
+    Grid vertex (a, b) is the point (lines[a], lines[b]) with index ``a * size + b``; quad (a, b) lies
+    between lines a, a + 1 and b, b + 1, in cell (cell[a], cell[b]), one smoothing group per cell.
+    """
+
+    def __init__(self, surface: CutSurface, k: int, radius: float):
+        p = surface.p
+        cells = math.ceil(radius / p + 0.5)
+        across = cell_lines(surface, k)[:-1]  # the last line of a cell is the first of the next
+        self.lines = np.append((np.arange(-cells, cells + 1)[:, None] * p + across[None, :]).ravel(),
+                               cells * p + p / 2)
+        self.size = len(self.lines)
+        self.cell = np.arange(self.size - 1) // k - cells
+        lo, hi = self.lines[:-1], self.lines[1:]
+        self.near = np.where((lo <= 0) & (hi >= 0), 0.0, np.minimum(np.abs(lo), np.abs(hi)))
+        self.far = np.maximum(np.abs(lo), np.abs(hi))
+
+    def group(self, a, b):
+        """Smoothing group of quad (a, b): its cell (>= 4096, clear of the side wall's group 1)."""
+        return (self.cell[a] + 1000) * 4096 + self.cell[b] + 1000
+
+    def polygons(self, rim: np.ndarray, apothem: float) -> _CutPolygons:
+        """The quads inside the rim polygon, and the quads across it clipped by it."""
+        near2 = self.near[:, None] ** 2 + self.near[None, :] ** 2
+        far2 = self.far[:, None] ** 2 + self.far[None, :] ** 2
+        a_idx, b_idx = np.meshgrid(np.arange(self.size - 1), np.arange(self.size - 1), indexing="ij")
+        inside = far2 <= apothem * apothem
+        across = ~inside & (near2 < rim[0, 0] ** 2)  # rim[0] = (R, 0)
+
+        # Reversed counter-clockwise order in [x, z] makes the normal point +y, out of the glass.
+        a, b, s = a_idx[inside], b_idx[inside], self.size
+        quads = np.column_stack([a * s + b + 1, (a + 1) * s + b + 1, (a + 1) * s + b, a * s + b])
+        out = _CutPolygons(self, quads, self.group(a, b).tolist())
+        for a, b in zip(a_idx[across].tolist(), b_idx[across].tolist(), strict=True):
+            out.add_clipped(a, b, rim, holds_axis=self.near[a] == 0.0 and self.near[b] == 0.0)
+        return out
+
+
+class _CutPolygons:
+    """Cut-surface polygons over grid vertices and, after them, the points where the rim cuts the grid:
+    the whole quads (an (n, 4) array), then the clipped polygons (a list)."""
+
+    def __init__(self, grid: _CutGrid, quads: np.ndarray, groups: list[int]):
+        self.grid, self.quads, self.groups = grid, quads, groups
+        self.polygons: list[tuple[int, ...]] = []
+        self.rim_points: list[tuple[float, float]] = []
+        self._rim_index: dict[tuple[int, int], int] = {}
+
+    def add_clipped(self, a: int, b: int, rim: np.ndarray, holds_axis: bool) -> None:
+        """Quad (a, b) clipped by the rim polygon, if anything of it is left."""
+        x, s = self.grid.lines, self.grid.size
+        corners = {(x[a], x[b]): a * s + b, (x[a + 1], x[b]): (a + 1) * s + b,
+                   (x[a + 1], x[b + 1]): (a + 1) * s + b + 1, (x[a], x[b + 1]): a * s + b + 1}
         poly = _clip_convex(list(corners), rim, _rim_edges_near(list(corners), rim, holds_axis))
         if len(poly) < 3 or _area(poly) < 1e-9:
-            continue
-        face = []
-        for x, z in reversed(poly):
-            i = corners.get((x, z))
+            return
+        face: list[int] = []
+        for point in reversed(poly):
+            i = corners.get(point)
             if i is None:
-                key = (round(x * 1e6), round(z * 1e6))
-                i = extra.get(key)
-                if i is None:
-                    i = extra[key] = size * size + len(extra_xz)
-                    extra_xz.append((x, z))
+                i = self._rim_point(point)
             if not face or (i != face[-1] and i != face[0]):
                 face.append(i)
         if len(face) >= 3:
-            polygons.append(tuple(face))
-            groups.append((cell[a] + 1000) * 4096 + cell[b] + 1000)  # the cell: one smooth cap
+            self.polygons.append(tuple(face))
+            self.groups.append(int(self.grid.group(a, b)))  # the cell: one smooth cap
 
-    # Keep the grid vertices in use, then the rim points; heights from the cap spheres.
-    used = np.unique(np.fromiter((i for f in polygons for i in f), dtype=np.int64))
-    remap = np.full(size * size + len(extra_xz), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    gx = np.where(used < size * size, grid[np.minimum(used // size, size - 1)], 0.0)
-    gz = np.where(used < size * size, grid[used % size], 0.0)
-    if extra_xz:
-        ex = np.array(extra_xz)
-        is_extra = used >= size * size
-        gx[is_extra] = ex[used[is_extra] - size * size, 0]
-        gz[is_extra] = ex[used[is_extra] - size * size, 1]
-    # A rim point may coincide with a grid vertex (to 1e-6 mm): weld them.
-    keys = np.round(np.column_stack([gx, gz]) * 1e6).astype(np.int64)
-    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first)  # keep the original order of first occurrences
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    gx, gz = gx[first[order]], gz[first[order]]
-    remap = rank[inverse.ravel()][remap.clip(0)]
-    verts = np.column_stack([gx, surface.height(gx, gz), gz])
-    flat = remap[np.fromiter((i for f in polygons for i in f), dtype=np.int64)]
-    sizes = [len(f) for f in polygons]
-    offsets = np.concatenate([[0], np.cumsum(sizes)])
-    flat_list = flat.tolist()
-    cut_faces = []
-    cut_groups = []
-    for j, group in enumerate(groups):
-        face = flat_list[offsets[j]:offsets[j + 1]]
-        if len(set(face)) < len(face):  # a welded corner: drop the repeat
-            face = [v for n, v in enumerate(face) if v != face[n - 1]]
-        if len(face) >= 3:
-            cut_faces.append(tuple(face))
-            cut_groups.append(group)
+    def _rim_point(self, point: tuple[float, float]) -> int:
+        key = (round(point[0] * 1e6), round(point[1] * 1e6))
+        i = self._rim_index.get(key)
+        if i is None:
+            i = self._rim_index[key] = self.grid.size ** 2 + len(self.rim_points)
+            self.rim_points.append(point)
+        return i
 
-    # The rim: cut vertices on the rim polygon, counter-clockwise seen from -y.
+    def welded(self) -> tuple[np.ndarray, list[tuple[int, ...]], list[int]]:
+        """([x, z] of the vertices in use, faces over them, their groups): unused grid vertices dropped,
+        a rim point that falls on a grid vertex (to 1e-6 mm) welded to it, repeats left by welding dropped."""
+        grid_count = self.grid.size ** 2
+        flat = np.concatenate([self.quads.ravel(), np.fromiter(itertools.chain.from_iterable(self.polygons),
+                                                               dtype=np.int64)])
+        used = np.unique(flat)
+        on_grid = used < grid_count
+        xz = np.empty((len(used), 2))
+        xz[on_grid, 0] = self.grid.lines[used[on_grid] // self.grid.size]
+        xz[on_grid, 1] = self.grid.lines[used[on_grid] % self.grid.size]
+        if self.rim_points:
+            xz[~on_grid] = np.array(self.rim_points)[used[~on_grid] - grid_count]
+        keys = np.round(xz * 1e6).astype(np.int64)
+        _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+        order = np.argsort(first)  # vertices in the order they were first used
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        new_index = np.full(grid_count + len(self.rim_points), -1, dtype=np.int64)
+        new_index[used] = rank[inverse.ravel()]
+        flat = new_index[flat]
+        quads = flat[:self.quads.size].reshape(-1, 4)
+        ordered = np.sort(quads, axis=1)
+        welded = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)  # rare: a rim point on a corner
+        polygons = [*map(tuple, quads.tolist()), *self._split(flat[self.quads.size:].tolist())]
+        for i in np.flatnonzero(welded).tolist() + list(range(len(quads), len(polygons))):
+            polygons[i] = _drop_repeats(polygons[i])
+        keep = [i for i, face in enumerate(polygons) if len(face) >= 3]
+        return xz[first[order]], [polygons[i] for i in keep], [self.groups[i] for i in keep]
+
+    def _split(self, flat: list[int]) -> list[list[int]]:
+        """``flat`` cut back into the clipped polygons' sizes."""
+        out, start = [], 0
+        for polygon in self.polygons:
+            out.append(flat[start:start + len(polygon)])
+            start += len(polygon)
+        return out
+
+
+def _drop_repeats(face) -> tuple[int, ...]:
+    """A polygon without the repeats welding left (a corner welded to its neighbour)."""
+    if len(set(face)) < len(face):
+        face = [v for n, v in enumerate(face) if v != face[n - 1]]
+    return tuple(face)
+
+
+def _rim_ring(verts: np.ndarray, radius: float, segments: int) -> list[int]:
+    """The cut-surface vertices on the rim polygon, counter-clockwise seen from -y."""
     angle = np.arctan2(verts[:, 2], verts[:, 0])
     step = 2.0 * math.pi / segments
-    boundary = apothem / np.cos(angle - (np.floor(angle / step) + 0.5) * step)
+    boundary = radius * math.cos(math.pi / segments) / np.cos(angle - (np.floor(angle / step) + 0.5) * step)
     on_rim = np.abs(np.hypot(verts[:, 0], verts[:, 2]) - boundary) < 1e-6
-    ring = np.flatnonzero(on_rim)[np.argsort(angle[on_rim], kind="stable")].tolist()
+    return np.flatnonzero(on_rim)[np.argsort(angle[on_rim], kind="stable")].tolist()
 
-    mb = _MeshBuilder()
-    mb.verts = verts.tolist()
-    for i in ring:  # the side wall welds to these (a cell apex on the rim is also the collar's top)
-        x, y, z = mb.verts[i]
-        mb._index[(round(x * 1e6), round(y * 1e6), round(z * 1e6))] = i
-    mb.faces = list(cut_faces)
-    mb.material = [LENS_GLASS] * len(cut_faces)
-    mb.group = cut_groups
-    y_top = t + h
+
+def _side_wall(mb: _MeshBuilder, ring: list[int], y_top: float) -> list[int]:
+    """The side wall from the outer face (y = 0) to the cut surface's rim ``ring``, and the open collar
+    from there up to the apex plane ``y_top``; returns the outer face's rim vertices."""
     bottom = [mb.vertex(mb.verts[i][0], 0.0, mb.verts[i][2]) for i in ring]
     top = [mb.vertex(mb.verts[i][0], y_top, mb.verts[i][2]) for i in ring]
     side_group = 1  # the side wall is smooth around; cut cells use groups >= 4096
@@ -371,17 +450,7 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> Mes
         j1 = (j + 1) % len(ring)
         mb.face([bottom[j], ring[j], ring[j1], bottom[j1]], side_group, LENS_SIDE_WALL)  # glass side
         mb.face([ring[j], top[j], top[j1], ring[j1]], side_group, LENS_SIDE_WALL)  # collar above the cuts
-    mb.face(bottom, FLAT, LENS_GLASS)  # outer face, counter-clockwise seen from -y
-
-    data = mb.result()
-    # Whole quads are copies of the cell measured by cut_subdivision; measure the clipped ones here.
-    clipped = [f for f in cut_faces if on_rim[list(f)].any()]
-    dev_cut = max(dev_cell, triangle_deviation(data.verts, fan_triangles(clipped), surface.distance))
-    side_faces = [f for f, m in zip(data.faces, data.material, strict=True) if m == LENS_SIDE_WALL]
-    dev_side = triangle_deviation(data.verts, fan_triangles(side_faces),
-                                  lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - R))
-    data.max_deviation = max(dev_cut, dev_side)
-    return data
+    return bottom
 
 
 def _area(poly: Sequence[tuple[float, float]]) -> float:
@@ -403,7 +472,7 @@ def paraboloid_distance(vertex_y: float, focal_length: float) -> Callable[[np.nd
     return distance
 
 
-def reflector_mesh(lamp: dict, geometry: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def reflector_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
     """The paraboloid from the rim (radius R, y = rim) to the vertex, normals toward the lamp interior.
 
     Rings are spaced evenly in arc length along the profile. ``segments`` (shared with the lens rim and
@@ -412,7 +481,7 @@ def reflector_mesh(lamp: dict, geometry: dict, segments: int, tol: float = CHORD
     """
     R = lamp["lens"]["radius"]
     f = lamp["reflector"]["focal_length"]
-    yv = geometry["vertex"]
+    yv = lamp_geometry(lamp)["vertex"]
     distance = paraboloid_distance(yv, f)
     # Every principal radius of curvature is >= 2f: a chord of length L sags at most L^2 / (16 f).
     chord = math.sqrt(16.0 * f * tol)

@@ -98,11 +98,14 @@ def _local(points_mm: np.ndarray, lamp: dict) -> np.ndarray:
 def test_objects_and_names(lamp_addon, bl_scene, scene_mod):
     _build(lamp_addon, bl_scene, _load(scene_mod, "four-lamp-rear-combination"))
     objs = _objects(bl_scene)
-    expected = {"Lamp Body", "Lamp Sun"} | {f"Lamp {i} {part}" for i in range(1, 5)
-                                            for part in ("Lens", "Reflector", "Bulb", "Socket")}
+    expected = {"Lamp Design", "Lamp Body", "Lamp Sun"} | {f"Lamp {i} {part}" for i in range(1, 5)
+                                                           for part in ("Lens", "Reflector", "Bulb", "Socket")}
     assert set(objs) == expected
+    root = objs["Lamp Design"]
+    assert root.type == "EMPTY" and root.get("lamp_part") == "root" and root.parent is None
+    assert all(obj.parent == root for name, obj in objs.items() if name != "Lamp Design")
     assert objs["Lamp Sun"].type == "LIGHT" and objs["Lamp Sun"].data.type == "SUN"
-    assert all(obj.type == "MESH" for name, obj in objs.items() if name != "Lamp Sun")
+    assert all(obj.type == "MESH" for name, obj in objs.items() if name not in ("Lamp Sun", "Lamp Design"))
     assert [m.name for m in objs["Lamp 2 Lens"].data.materials] == ["Lamp 2 Lens", "Lamp 2 Side Wall"]
     assert bl_scene.world.name == "Lamp Design World"
 
@@ -244,7 +247,8 @@ def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
 
     _build(lamp_addon, bl_scene, _load(scene_mod, "paper-baseline"))  # four lamps -> one
     objs = _objects(bl_scene)
-    assert set(objs) == {"Lamp Body", "Lamp Sun", "Lamp 1 Lens", "Lamp 1 Reflector", "Lamp 1 Bulb", "Lamp 1 Socket"}
+    assert set(objs) == {"Lamp Design", "Lamp Body", "Lamp Sun", "Lamp 1 Lens", "Lamp 1 Reflector", "Lamp 1 Bulb",
+                         "Lamp 1 Socket"}
     assert objs["Lamp 1 Lens"].as_pointer() == first["Lamp 1 Lens"]
     assert len([c for c in bl_scene.collection.children if c.name.startswith("Lamp Design")]) == 1
     mesh_users = {obj.data.name for obj in bpy.data.objects if obj.type == "MESH"}
@@ -269,7 +273,7 @@ def test_two_scenes_keep_their_own_lamps(lamp_addon, bl_scene, scene_mod):
     _build(lamp_addon, bl_scene, _load(scene_mod, "four-lamp-rear-combination"))
 
     mine, theirs = _objects(bl_scene), _objects(other)
-    assert len(mine) == 18 and len(theirs) == 6
+    assert len(mine) == 19 and len(theirs) == 7  # the root and its parts
     assert not {o.as_pointer() for o in mine.values()} & {o.as_pointer() for o in theirs.values()}
     lens_a = next(o for o in mine.values() if o.get("lamp_part") == "lamps[0].lens")
     lens_b = next(o for o in theirs.values() if o.get("lamp_part") == "lamps[0].lens")
@@ -286,8 +290,8 @@ def test_rebuild_after_the_collection_was_deleted(lamp_addon, bl_scene, scene_mo
     coll = next(c for c in bl_scene.collection.children if c.name.startswith("Lamp Design"))
     bpy.data.collections.remove(coll)
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    assert len(_objects(bl_scene)) == 6
-    assert len([o for o in bpy.data.objects if o.get("lamp_part")]) == 6
+    assert len(_objects(bl_scene)) == 7
+    assert len([o for o in bpy.data.objects if o.get("lamp_part")]) == 7
     assert {m.name for m in bpy.data.meshes} == {o.data.name for o in bpy.data.objects if o.type == "MESH"}
     assert all(m.users > 0 for m in bpy.data.materials)
 
@@ -338,7 +342,7 @@ def test_lamp_list_operators(lamp_addon, bl_scene):
 def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, scene_mod):
     import bpy
 
-    props, margin = lamp_addon.design_properties, lamp_addon.design_ops.MARGIN_MM
+    props, margin = lamp_addon.design_properties, lamp_addon.convert.layout.MARGIN_MM
     baseline = _load(scene_mod, "paper-baseline")
     props.scene_to_design(bl_scene, baseline)
     design = bl_scene.lamp_design
@@ -364,7 +368,7 @@ def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, 
         assert len(props.design_to_scene(bl_scene)["lamps"]) == count
 
 
-def test_adding_a_lamp_that_does_not_fit_the_spec_is_refused(lamp_addon, bl_scene, scene_mod):
+def test_adding_a_lamp_that_does_not_fit_the_spec_is_refused(lamp_addon, addon_core, bl_scene, scene_mod):
     import bpy
 
     props = lamp_addon.design_properties
@@ -376,8 +380,8 @@ def test_adding_a_lamp_that_does_not_fit_the_spec_is_refused(lamp_addon, bl_scen
         bpy.ops.lamp.lamp_add()
     assert props.design_to_scene(bl_scene) == before  # nothing added, nothing moved
     doc = props.design_document(bl_scene)  # the check execute makes, past poll
-    with pytest.raises(lamp_addon.design_ops.SceneError, match=r"body\.size"):
-        lamp_addon.design_ops.design_with_new_lamp(doc, 0)
+    with pytest.raises(addon_core.SceneError, match=r"body\.size"):
+        lamp_addon.convert.layout.design_with_new_lamp(doc, 0)
     bl_scene.lamp_design.body.size = (9900.0, 120.0)  # a little more room: poll sees the change
     assert bpy.ops.lamp.lamp_add.poll()
 

@@ -111,7 +111,7 @@ INSTALL_SCRIPT = textwrap.dedent("""
     # The design stored in the scene survived: the properties read it back.
     assert mod.lamp_addon.design_properties.design_to_scene(bpy.context.scene) == scene
     assert bpy.ops.lamp.build() == {{"FINISHED"}}
-    assert len([o for o in bpy.data.objects if o.get("lamp_part")]) == 6
+    assert len([o for o in bpy.data.objects if o.get("lamp_part")]) == 7  # the root and its six parts
 
     addon_utils.disable(name, default_set=True, handle_error=fail)
     addon_utils.enable(name, default_set=True, handle_error=fail)

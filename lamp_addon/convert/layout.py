@@ -1,0 +1,57 @@
+"""Where a new lamp goes: Add Lamp keeps a valid design valid.
+
+The new lamp is a copy of the active one (the spec's default lamp in an empty design), placed right
+of the others with a small margin, and the body grows to hold it. A result that is not a valid
+design (a body wider than the spec allows) raises ``SceneError`` naming the field and its range.
+"""
+
+from __future__ import annotations
+
+import copy
+
+from ...core_tracer.scene import spec
+from ...core_tracer.scene.validate import parse_scene
+
+MARGIN_MM = 5.0  # between a new lens and its neighbour, and at least between it and the body's edge
+
+
+def design_with_new_lamp(doc: dict, active_index: int) -> dict:
+    """A copy of the design document ``doc`` with a lamp added by ``place_new_lamp``: a copy of
+    the active lamp (so its lens radius, and a reflector and bulb that fit that lens), or the
+    spec's default lamp in an empty design. Raises ``SceneError`` (field and allowed range) when
+    the result is not a valid design, checked as ``parse_scene`` does, camera aside (a new lamp
+    does not change what the camera may be)."""
+    doc = copy.deepcopy(doc)
+    lamps = doc["lamps"]
+    if 0 <= active_index < len(lamps):
+        lamps.append(copy.deepcopy(lamps[active_index]))
+    else:
+        lamps.append(parse_scene({"schema": spec.SCHEMA, "lamps": [{}]})["lamps"][0])
+    place_new_lamp(doc)
+    parse_scene({key: value for key, value in doc.items() if key != "camera"})
+    return doc
+
+
+def place_new_lamp(doc: dict, margin: float = MARGIN_MM) -> None:
+    """Place the last lamp of the design document ``doc`` and make the body hold it (in place).
+
+    The new lens goes ``margin`` to the right of the rightmost lens, at its own height ``center[1]``
+    (the first lamp at the body's centre). The body keeps its other edges and grows on each side the
+    new lens needs, leaving beside it the free border the body has left of its leftmost lens (at
+    least ``margin``), so the body's centre moves as it grows."""
+    *others, new = doc["lamps"]
+    radius = new["lens"]["radius"]
+    body = doc["body"]
+    (bx, bz), (width, height) = body["center"], body["size"]
+    left, right, bottom, top = bx - width / 2, bx + width / 2, bz - height / 2, bz + height / 2
+    if others:
+        x = max(o["center"][0] + o["lens"]["radius"] for o in others) + margin + radius
+        z = new["center"][1]
+        border = max(margin, min(o["center"][0] - o["lens"]["radius"] for o in others) - left)
+    else:
+        x, z, border = bx, bz, margin
+    new["center"] = [x, z]
+    left, right = min(left, x - radius - border), max(right, x + radius + border)
+    bottom, top = min(bottom, z - radius - margin), max(top, z + radius + margin)
+    body["center"] = [(left + right) / 2, (bottom + top) / 2]
+    body["size"] = [right - left, top - bottom]
