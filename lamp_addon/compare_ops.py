@@ -43,15 +43,14 @@ import os
 import shutil
 import tempfile
 import time
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import bpy
 import numpy as np
 
-from ..core_tracer.images import bitmap_font
 from ..core_tracer.scene.validate import SceneError
 from . import design_panels, design_properties, image_view, render_camera
+from .convert.sheet import differences, side_by_side
 from .render_engine import ENGINE_ID
 
 RENDER_RESULT = "Render Result"
@@ -104,85 +103,6 @@ class CompareCancelled(Exception):
 
 # What the operator reports (RuntimeError: bpy.ops.render.render raises an engine's error as one).
 REPORTED_ERRORS = (SceneError, CompareError, CompareCancelled, RuntimeError)
-
-
-# ---------------------------------------------------------------------------------------------
-# Pure parts: the side-by-side image and the differences
-
-
-def differences(tracer: np.ndarray, cycles: np.ndarray) -> dict:
-    """Per-channel statistics of tracer - Cycles over the whole image (linear RGB)."""
-    diff = tracer.astype(np.float64) - cycles.astype(np.float64)
-    return {
-        "tracer_mean": tracer.astype(np.float64).mean(axis=(0, 1)).tolist(),
-        "cycles_mean": cycles.astype(np.float64).mean(axis=(0, 1)).tolist(),
-        "mean_difference": diff.mean(axis=(0, 1)).tolist(),
-        "mean_abs_difference": np.abs(diff).mean(axis=(0, 1)).tolist(),
-        "rms_difference": np.sqrt((diff * diff).mean(axis=(0, 1))).tolist(),
-    }
-
-
-def label_height(image_height: int) -> int:
-    """Height of the label strip: the 7-pixel font at an integer scale, with a margin."""
-    return bitmap_font.GLYPH_H * _label_scale(image_height) + 6
-
-
-def _label_scale(image_height: int) -> int:
-    return max(1, min(4, image_height // 160 + 1))
-
-
-def side_by_side(left: np.ndarray, right: np.ndarray, left_labels: Sequence[str],
-                 right_labels: Sequence[str], *, text: str = "auto") -> np.ndarray:
-    """One (H + strip, 2W + gap, 3) image: ``left`` and ``right`` next to each other below a
-    strip holding their labels. Each label is the first of its alternatives (longest first) that
-    fits above its half. Labels are drawn with OpenImageIO's ``render_text`` when it can (the
-    PyPI OpenImageIO has FreeType and a font; ``text="auto"``), else (or with ``text="bitmap"``)
-    with core_tracer's bitmap font, which draws capitals."""
-    height, width = left.shape[:2]
-    gap = max(2, width // 128)
-    strip = label_height(height)
-    out = np.zeros((height + strip, 2 * width + gap, 3), np.float32)
-    out[strip:, :width] = left
-    out[strip:, width + gap:] = right
-    out[:, width:width + gap] = 0.5
-    for alternatives, x in ((left_labels, 0), (right_labels, width + gap)):
-        # Each label is drawn into its own half of the strip, so a long one is clipped there.
-        label = _oiio_text(alternatives, width, strip) if text == "auto" else None
-        if label is None:
-            label = _bitmap_text(alternatives, width, strip, _label_scale(height))
-        area = out[:strip, x:x + width]
-        np.maximum(area, label, out=area)
-    return out
-
-
-def _fitting(alternatives: Sequence[str], room: int, measure: Callable[[str], int]) -> str:
-    """The first label that fits in ``room`` pixels, else the shortest (clipped when drawn)."""
-    return next((t for t in alternatives if measure(t) <= room), alternatives[-1])
-
-
-def _bitmap_text(alternatives: Sequence[str], width: int, height: int, scale: int) -> np.ndarray:
-    """A (height, width, 3) label drawn with the bitmap font, clipped to its box."""
-    x = 3 * scale
-    label = _fitting(alternatives, width - 2 * x, lambda t: bitmap_font.ADVANCE_W * scale * len(t))
-    mask = bitmap_font.text_mask(label, scale)
-    out = np.zeros((height, width, 3), np.float32)
-    rows, cols = max(0, min(mask.shape[0], height - 3)), max(0, min(mask.shape[1], width - x))
-    out[3:3 + rows, x:x + cols] = mask[:rows, :cols, None]
-    return out
-
-
-def _oiio_text(alternatives: Sequence[str], width: int, height: int) -> np.ndarray | None:
-    """A (height, width, 3) label drawn by OpenImageIO, or None when it cannot draw text."""
-    try:
-        import OpenImageIO as oiio
-    except ImportError:
-        return None
-    buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 3, oiio.FLOAT))
-    size = height - 2
-    label = _fitting(alternatives, width - 8, lambda t: oiio.ImageBufAlgo.text_size(t, size, "").width)
-    if not oiio.ImageBufAlgo.render_text(buf, 4, height - 4, label, size, "", (1.0, 1.0, 1.0)):
-        return None  # Blender's bundled OpenImageIO has no FreeType
-    return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(height, width, 3)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -288,6 +208,49 @@ def running() -> CompareRun | None:
 
 
 # ---------------------------------------------------------------------------------------------
+# What is compared: the design, whatever else is in the file
+
+
+def needs_build(bl_scene) -> bool:
+    """Whether Compare must build the lamp before rendering: the one place that decides it.
+
+    Always, for now: the objects are rebuilt from the design so that Cycles renders what the tracer
+    renders. (Once the builder can tell that the objects are up to date, this is where to ask it.)"""
+    return True
+
+
+def _in_design(ob) -> bool:
+    """Objects the builder made carry the part key; what the designer parented under the root is
+    part of the lamp too."""
+    from .design_root import PART_KEY
+
+    while ob is not None:
+        if ob.get(PART_KEY):
+            return True
+        ob = ob.parent
+    return False
+
+
+def objects_outside_design(bl_scene) -> list:
+    """Objects that Cycles would render and that are not part of the design: the startup Cube and
+    Light, a car body around the lamp ... Cameras and plain empties render nothing and are not listed."""
+    out = []
+    for ob in bl_scene.objects:
+        if ob.hide_render or _in_design(ob) or ob.type == "CAMERA":
+            continue
+        if ob.type == "EMPTY" and ob.instance_type == "NONE":
+            continue
+        out.append(ob)
+    return out
+
+
+def left_out_text(names: list[str], limit: int = 6) -> str:
+    """"left out of the Cycles half: Cube, Light" (at most ``limit`` names, then how many more)."""
+    shown = ", ".join(names[:limit]) + (f" and {len(names) - limit} more" if len(names) > limit else "")
+    return f"left out of the Cycles half: {shown}"
+
+
+# ---------------------------------------------------------------------------------------------
 # One comparison, step by step
 
 
@@ -310,6 +273,9 @@ class CompareRun:
         self.images: dict[str, np.ndarray] = {}
         self.seconds: dict[str, float] = {}
         self.not_restored: list[str] = []
+        self.left_out: list[str] = []  # objects hidden from the Cycles render: not part of the design
+        self.camera_news = ""  # what making the Lamp Camera did, if it was made
+        self._paused = False
         self._settings = SceneSettings()
         self._folder: str | None = None
         self._started_at = self._ended_at = 0.0
@@ -328,17 +294,17 @@ class CompareRun:
             self.ended = how
 
     def prepare(self) -> None:
-        """Build the lamp, make sure there is a scene camera (from the design's when there is none),
-        fix the scene the tracer renders and set the render settings both renders use.
-        Raises ``SceneError``."""
-        from . import design_builder
-
+        """Make sure the Lamp Camera exists (made and framed the first time, ``render_camera``), build
+        the lamp when its objects are out of date, fix the scene the tracer renders, set the render
+        settings both renders use and leave out of the Cycles render every object that is not part of
+        the design (``left_out``). Raises ``SceneError``."""
         bl_scene = self.bl_scene
-        if bl_scene.camera is None:
-            render_camera.ensure_scene_camera(bl_scene, design_properties.design_to_scene(bl_scene))
+        _camera, self.camera_news = render_camera.ensure_lamp_camera(bl_scene)
+        render_camera.pause_link(bl_scene)  # the render size set below is the comparison's, not the user's
+        self._paused = True
+        if self.build and needs_build(bl_scene):
+            self._build()
         self.scene = render_camera.scene_for_render(bl_scene, size=self.resolution)
-        if self.build:
-            design_builder.build_lamp(bl_scene, self.scene)
         width, height = self.scene["image"]["width"], self.scene["image"]["height"]
         cycles = bl_scene.cycles
         settings = self._settings
@@ -349,7 +315,16 @@ class CompareRun:
                      **CYCLES_SETTINGS)
         image_settings = bl_scene.render.image_settings
         settings.set(image_settings, **_exr_output_values(image_settings))
+        for ob in objects_outside_design(bl_scene):
+            settings.set(ob, hide_render=True)
+            self.left_out.append(ob.name)
         self._folder = tempfile.mkdtemp(prefix="lamp-compare-")
+
+    def _build(self) -> None:
+        from . import design_builder
+
+        # Seen through the scene camera: a design camera that is not used cannot block the build.
+        design_builder.build_lamp(self.bl_scene, render_camera.scene_for_render(self.bl_scene, size=self.resolution))
 
     def start(self, stage: Stage, *, invoke: bool = False) -> None:
         """Render ``stage`` into its Render Result slot: a blocking render, or (``invoke``) Blender's
@@ -426,15 +401,22 @@ class CompareRun:
             "samples": self.samples,
             "size": (tracer.shape[1], tracer.shape[0]),
             "differences": differences(tracer, cycles),
+            "left_out": list(self.left_out),
+            "camera_news": self.camera_news,
         }
 
     def close(self) -> None:
         """Put back every setting the comparison changed, stop listening to the render handlers
         and remove the temporary files. Every exit path calls it; calling it again does nothing."""
-        if any(s.as_pointer() == self.scene_pointer for s in bpy.data.scenes):
+        scene_exists = any(s.as_pointer() == self.scene_pointer for s in bpy.data.scenes)
+        if scene_exists:
             self.not_restored += self._settings.restore()
         else:  # Blender ends the operator while loading another file: the scene is gone with its settings
             self._settings = SceneSettings()
+        if self._paused:
+            self._paused = False
+            if scene_exists:
+                render_camera.resume_link(self.bl_scene)
         if running() is self:
             unwatch()
         if self._folder is not None:
@@ -594,8 +576,11 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
         if comparison["not_restored"]:
             self.report({"WARNING"}, "Settings not put back: " + "; ".join(comparison["not_restored"]))
         seconds = comparison["seconds"]
+        notes = [comparison["camera_news"]] if comparison["camera_news"] else []
+        if comparison["left_out"]:
+            notes.append(left_out_text(comparison["left_out"]))
         self.report({"INFO"}, f"Lamp Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
-                              f"({comparison['samples']} samples)")
+                              f"({comparison['samples']} samples)" + "".join(f"; {n}" for n in notes))
         return {"FINISHED"}
 
 

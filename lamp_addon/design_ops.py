@@ -14,7 +14,7 @@ import bpy
 
 from ..core_tracer.scene import spec
 from ..core_tracer.scene.validate import SceneError, parse_scene
-from . import design_properties
+from . import design_properties, render_camera
 
 MARGIN_MM = 5.0  # between a new lens and its neighbour, and at least between it and the body's edge
 
@@ -50,6 +50,7 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
         design.body.center = doc["body"]["center"]
         design.body.size = doc["body"]["size"]
         design.active_lamps_index = len(design.lamps) - 1
+        render_camera.keep_framed(context.scene)
         return {"FINISHED"}
 
 
@@ -136,6 +137,7 @@ class LAMP_OT_lamp_remove(bpy.types.Operator):
         design = context.scene.lamp_design
         design.lamps.remove(design.active_lamps_index)
         design.active_lamps_index = min(design.active_lamps_index, len(design.lamps) - 1)
+        render_camera.keep_framed(context.scene)
         return {"FINISHED"}
 
 
@@ -167,9 +169,12 @@ class LAMP_OT_build(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         report = design_builder.build_lamp(context.scene, scene)
+        # A scene without a camera gets the framed Lamp Camera; a camera of the user's stays the scene camera.
+        camera_news = render_camera.ensure_lamp_camera(context.scene)[1] if context.scene.camera is None else ""
         level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
         self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
-                             f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)")
+                             f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)"
+                             + (f"; {camera_news}" if camera_news else ""))
         return {"FINISHED"}
 
 

@@ -100,7 +100,7 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
     @classmethod
     def poll(cls, context):
         if context.scene is None or context.scene.camera is None:
-            cls.poll_message_set("The scene has no camera; build the lamp or add a camera")
+            cls.poll_message_set("The scene has no camera; Frame Lamp (Camera & Image) or Build Lamp makes one")
             return False
         job = LAMP_OT_render_tracer._active
         if job is not None and not job.done.is_set():
