@@ -280,7 +280,7 @@ def keep_framed(bl_scene) -> bool:
 
     doc = design_properties.design_document(bl_scene)
     try:
-        camera = parse_scene({**doc, "lamps": []})["camera"]
+        camera = parse_scene(doc)["camera"]
     except SceneError:
         return False  # the design is not valid yet: the panel says why
     render = bl_scene.render
