@@ -49,14 +49,13 @@ import bpy
 import numpy as np
 
 from ..core_tracer.scene.validate import SceneError
-from . import design_panels, design_properties, image_view, render_camera
+from . import design_panels, design_properties, image_view, jobs, render_camera
 from .convert.sheet import differences, side_by_side
 from .render_engine import ENGINE_ID
 
 RENDER_RESULT = "Render Result"
 COMPARE_IMAGE = "Lamp Compare"
 DEFAULT_SAMPLES = 64
-POLL_SECONDS = 0.2
 
 MIN_BOUNCES = {"max_bounces": 12, "transmission_bounces": 8, "glossy_bounces": 6}
 CYCLES_SETTINGS = {
@@ -158,15 +157,15 @@ def _exr_output_values(settings) -> dict:
 # The render handlers: how a render job tells the comparison it has ended
 
 
-_active: list[CompareRun] = []  # the comparison the handlers report to: at most one
+JOB_KEY = "lamp.compare_cycles"  # the comparison under way is jobs.running(JOB_KEY): at most one
 
 
 def _report_end(scene, how: str) -> None:
     # Called by Blender, for a render job on its render thread: plain attributes only.
     pointer = scene.as_pointer() if scene is not None else 0
-    for run in _active:
-        if run.scene_pointer == pointer:
-            run.report_end(how)
+    run = running()
+    if run is not None and run.scene_pointer == pointer:
+        run.report_end(how)
 
 
 @bpy.app.handlers.persistent
@@ -184,9 +183,10 @@ HANDLERS = {"render_complete": _on_render_complete, "render_cancel": _on_render_
 
 def watch(run: CompareRun) -> None:
     """Make ``run`` the comparison the render handlers report to, adding the handlers."""
-    if _active and _active[0] is not run:
-        raise CompareError("A comparison with Cycles is already running")
-    _active[:] = [run]
+    try:
+        jobs.claim(JOB_KEY, run, "A comparison with Cycles is already running")
+    except jobs.JobBusy as e:
+        raise CompareError(str(e)) from None
     for name, handler in HANDLERS.items():
         handlers = getattr(bpy.app.handlers, name)
         if handler not in handlers:
@@ -195,7 +195,7 @@ def watch(run: CompareRun) -> None:
 
 def unwatch() -> None:
     """Stop reporting to any comparison and remove the handlers."""
-    _active.clear()
+    jobs.release(JOB_KEY)
     for name, handler in HANDLERS.items():
         handlers = getattr(bpy.app.handlers, name)
         while handler in handlers:
@@ -204,7 +204,7 @@ def unwatch() -> None:
 
 def running() -> CompareRun | None:
     """The comparison under way, if any."""
-    return _active[0] if _active else None
+    return jobs.running(JOB_KEY)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -455,13 +455,16 @@ def write_comparison(path: str, comparison: dict, *, exposure: float = 0.0) -> N
 # The operator
 
 
-class LAMP_OT_compare_cycles(bpy.types.Operator):
+class LAMP_OT_compare_cycles(jobs.ModalJob, bpy.types.Operator):
     """Render the design with Cycles and with the Lamp Tracer from the scene camera and show them
     side by side (render slots 1 and 2 of Render Result, flip with J, and the "Lamp Compare" image)"""
 
     bl_idname = "lamp.compare_cycles"
     bl_label = "Compare with Cycles"
     bl_options = {"REGISTER", "UNDO"}  # builds the lamp objects
+
+    job_key = JOB_KEY
+    busy_message = "A comparison is running (Esc cancels its render)"
 
     samples: bpy.props.IntProperty(name="Cycles Samples", default=DEFAULT_SAMPLES, min=1, max=65536,
                                    description="Samples per pixel of the Cycles render")
@@ -476,10 +479,7 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
         if not hasattr(context.scene, "cycles"):
             cls.poll_message_set("Cycles is not enabled")
             return False
-        if running() is not None:
-            cls.poll_message_set("A comparison is running (Esc cancels its render)")
-            return False
-        return True
+        return cls.poll_not_running()
 
     def _output_path(self) -> str:
         """The file to write, checked before minutes of rendering (raises ``SceneError``), or ""."""
@@ -514,48 +514,42 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
             run.close()
             raise
         self._run = run
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(POLL_SECONDS, window=context.window)
-        wm.modal_handler_add(self)
-        self._status(context)
-        return {"RUNNING_MODAL"}
+        return self.begin_modal(context, run)
 
-    def modal(self, context, event):
-        if event.type == "ESC" and event.value == "PRESS" and not bpy.app.is_job_running("RENDER"):
-            self._end(context)  # between the two renders: Esc is ours
-            self.report({"WARNING"}, "Compare with Cycles cancelled")
-            return {"CANCELLED"}
-        if event.type != "TIMER":
+    def escape(self, context):
+        if bpy.app.is_job_running("RENDER"):
             return {"PASS_THROUGH"}  # Esc during a render goes on to Blender's render job, which stops
+        self.end_modal(context)  # between the two renders: Esc is ours
+        self.report({"WARNING"}, "Compare with Cycles cancelled")
+        return {"CANCELLED"}
+
+    def step(self, context):
         try:
             if not self._run.advance():
-                self._status(context)
-                return {"PASS_THROUGH"}
+                return None
             comparison = self._run.compose()
         except REPORTED_ERRORS as e:
-            self._end(context)
+            self.end_modal(context)
             return self._failed(e)
         except BaseException:
-            self._end(context)
+            self.end_modal(context)
             raise
-        self._end(context)
+        self.end_modal(context)
         return self._finished(context, {**comparison, "not_restored": self._run.not_restored}, self._path)
 
-    def cancel(self, context):
-        # Blender ends the operator (file load, quit): put the settings back, remove the handlers.
-        self._end(context)
+    def abandon(self, context):
+        pass  # nothing runs between the timer ticks but Blender's render job; end_modal puts the settings back
 
-    def _status(self, context) -> None:
+    def status(self) -> str:
         stage = self._run.stage
-        number = STAGES.index(stage) + 1
-        context.workspace.status_text_set(f"Compare with Cycles: {stage.label} render, {number} of {len(STAGES)} "
-                                          "(Esc cancels)")
+        return f"Compare with Cycles: {stage.label} render, {STAGES.index(stage) + 1} of {len(STAGES)} (Esc cancels)"
 
-    def _end(self, context) -> None:
-        context.window_manager.event_timer_remove(self._timer)
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
-        self._run.close()
+    def fraction(self) -> float:
+        return STAGES.index(self._run.stage) / len(STAGES)
+
+    def end_modal(self, context) -> None:
+        super().end_modal(context)
+        self._run.close()  # the settings back, the handlers removed (again: nothing)
 
     def _failed(self, error: Exception):
         """Report why the comparison stopped (one of ``REPORTED_ERRORS``)."""

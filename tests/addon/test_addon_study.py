@@ -74,7 +74,7 @@ def test_range_settings_and_one_lamp(design, lamp_addon):
     settings.axis_2.parameter = "lens.transmitted_color"
     assert settings.axis_2.mode == "LIST"
     settings.axis_2.values = "0.9/0.1/0.1, 0.9/0.5/0.05"
-    study = lamp_addon.study_panel.study_from_settings(design)
+    study = lamp_addon.study_settings.study_from_settings(design)
     assert [a.parameter.text for a in study.axes] == ["lamps[0].cuts.height", "lens.transmitted_color"]
     assert (study.columns, study.rows) == (4, 2)
 
