@@ -25,7 +25,7 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 from ..core_tracer import fileio
 from ..core_tracer.library import presets as P
 from ..core_tracer.scene.validate import SceneError, normalize, scene_to_json
-from . import design_properties, preset_library, render_camera
+from . import design_properties, design_root, preset_library, render_camera
 
 # Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
 # the camera object that differs from the design's by less than this, relative to the view's size, is
@@ -127,9 +127,18 @@ def show_view(bl_scene: bpy.types.Scene, scene: dict) -> str:
 
 
 def apply_preset(bl_scene: bpy.types.Scene, scene: dict) -> str:
-    """Set the design from a preset, all or nothing, then show its view (``show_view``)."""
+    """Set the design from a preset, all or nothing, then show its view (``show_view``) and, when the
+    lamp has been built in this scene, rebuild it so that its objects are the preset's too. Returns
+    what happened, for the report."""
     design_properties.scene_to_design(bl_scene, scene)
-    return show_view(bl_scene, design_properties.design_to_scene(bl_scene))
+    design = design_properties.design_to_scene(bl_scene)
+    view = show_view(bl_scene, design)
+    if not any(ob.get(design_root.PART_KEY) for ob in bl_scene.objects):
+        return view
+    from . import design_builder
+
+    design_builder.build_lamp(bl_scene, design)
+    return f"{view}; rebuilt the lamp objects"
 
 
 # Dynamic enum items must stay referenced from Python while Blender shows them.

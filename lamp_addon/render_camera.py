@@ -471,11 +471,9 @@ class LAMP_OT_frame_design(bpy.types.Operator):
             self.report({"ERROR"}, f'"{ob.name}" is a panoramic camera; set it to Perspective or Orthographic')
             return {"CANCELLED"}
         view = scene_camera_to_dict(bl_scene, ob)
-        if view_axes is not None:
+        if view_axes is not None:  # the 3D View's axes in the design's model space
             model = design_root.world_from_design(bl_scene).to_3x3().inverted() @ view_axes
-            start = [p - 1000.0 * (-model[i][2]) for i, p in enumerate(view["target"])]
-            view = {**view, **cm.view_from_axes(start, [model[i][1] for i in range(3)],
-                                                [model[i][2] for i in range(3)], 1000.0)}
+            view = cm.looking_along(view, [-model[i][2] for i in range(3)], [model[i][1] for i in range(3)])
         previous = bl_scene.camera
         bl_scene.camera = ob
         _frame(bl_scene, ob, view)

@@ -104,6 +104,15 @@ def view_from_axes(position_mm: Sequence[float], y_axis: Sequence[float], z_axis
             "up": [float(x) for x in up]}
 
 
+def looking_along(camera: dict, forward: Sequence[float], up: Sequence[float]) -> dict:
+    """A copy of ``camera`` that keeps its target and distance but looks along ``forward`` with image
+    up ``up`` (a 3D View's direction, to be framed next)."""
+    distance = math.dist(camera["position"], camera["target"])
+    f = _unit(forward)
+    position = [t - distance * c for t, c in zip(camera["target"], f, strict=True)]
+    return {**camera, "position": position, "up": [float(x) for x in _unit(up)]}
+
+
 # ---------------------------------------------------------------------------------------------
 # Projection and framing
 

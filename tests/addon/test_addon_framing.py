@@ -216,3 +216,51 @@ def test_frame_lamp_moves_only_the_lamp_camera(lamp_addon, bl_scene):
     assert (points[:, 0] > 0).all() and (points[:, 0] < size[0]).all()
     # The margin leaves about 1/11 of the half image free on the widest side.
     assert min(points[:, 0].min(), size[0] - points[:, 0].max()) == pytest.approx(size[0] / 2 / 11, rel=1e-3)
+
+
+def test_applying_a_preset_to_a_built_lamp_rebuilds_it(lamp_addon, bl_scene):
+    import bpy
+    from helpers import FOUR_LAMPS
+
+    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    report = lamp_addon.preset_ops.apply_preset(bl_scene, core_tracer.load_scene(str(FOUR_LAMPS)))
+    assert "rebuilt the lamp objects" in report
+    lenses = [ob for ob in bl_scene.objects if str(ob.get("lamp_part", "")).endswith(".lens")]
+    assert len(lenses) == 4  # the objects are the preset's
+
+
+def test_the_design_fov_reaches_both_halves_of_compare(lamp_addon, bl_scene):
+    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline((24, 20)))
+    narrow = lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
+    bl_scene.lamp_design.camera.fov_deg = 40.0  # the edit: 16 -> 40
+    wide = lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
+    assert narrow["scene"]["camera"]["fov_deg"] == pytest.approx(16.0, abs=1e-4)
+    assert wide["scene"]["camera"]["fov_deg"] == pytest.approx(40.0, abs=1e-4)
+    assert lamp_addon.render_camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
+    # Cycles sees it too: the lens covers a smaller share of the wider view, in both halves.
+    for half in ("tracer", "cycles"):
+        assert lens_share(wide[half]) < 0.5 * lens_share(narrow[half]), half
+    assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (24, 20)
+
+
+def test_the_camera_area_says_which_camera_renders(lamp_addon, bl_scene):
+    import bpy
+    from test_addon_panels import draw
+
+    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    panel = bpy.types.LAMP_PT_camera_view
+    assert panel.bl_parent_id == "LAMP_PT_camera"
+    layout = draw(panel, bl_scene)
+    assert layout.operators() == ["lamp.frame_design"]
+    assert any("No scene camera" in entry[1] for entry in layout.log if entry[0] == "label")
+    bpy.ops.lamp.frame_design()
+    layout = draw(panel, bl_scene)
+    assert any('"Lamp Camera"' in entry[1] and "its view" in entry[1] for entry in layout.log if entry[0] == "label")
+    mine = bpy.data.objects.new("Mine", bpy.data.cameras.new("Mine"))
+    bl_scene.collection.objects.link(mine)
+    bl_scene.camera = mine
+    layout = draw(panel, bl_scene)
+    assert layout.operators() == ["lamp.frame_design", "lamp.camera_to_design"]
+    assert any('"Mine"' in entry[1] and "not used" in entry[1] for entry in layout.log if entry[0] == "label")
+    assert "lamp.frame_design" in [idname for idname, *_ in lamp_addon.design_panels.ACTION_OPERATORS]

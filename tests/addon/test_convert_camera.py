@@ -144,3 +144,18 @@ def test_frame_view_of_four_lamps_holds_every_lens():
         points = np.array(cm.project(framed, size, rim))
         assert (points[:, 0] > 0).all() and (points[:, 0] < size[0]).all()
         assert (points[:, 1] > 0).all() and (points[:, 1] < size[1]).all()
+
+
+def test_looking_along_a_view_direction_then_framing():
+    """Frame Lamp from a 3D View: the camera takes the view's direction and up, then frames the body."""
+    cam = _camera(CAMERAS[0], (0, -800, 0), (0, 0, 0))
+    forward, up = (0.5, 0.7, -0.3), (0.2, 0.1, 1.0)
+    turned = cm.looking_along(cam, forward, up)
+    assert math.dist(turned["position"], turned["target"]) == pytest.approx(800.0)
+    right, true_up, back = cm.look_at_axes(turned["position"], turned["target"], turned["up"])
+    np.testing.assert_allclose(-np.array(back), np.array(forward) / np.linalg.norm(forward), atol=1e-12)
+    assert np.dot(true_up, up) > 0 and abs(np.dot(right, up)) < 1e-12
+    box = ((-110.0, 0.0, -60.0), (110.0, 80.0, 60.0))
+    framed = cm.frame_view(turned, box, (64, 48))
+    points = np.array(cm.project(framed, (64, 48), cm.box_corners(*box)))
+    assert (points[:, 0] > 0).all() and (points[:, 0] < 64).all() and (points[:, 1] > 0).all()
