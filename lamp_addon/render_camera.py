@@ -410,8 +410,14 @@ def _sync_quietly(bl_scene) -> None:
 @bpy.app.handlers.persistent
 def _on_depsgraph_update(scene, depsgraph) -> None:
     # Blender's side changed: the Lamp Camera moved or its lens changed, or the resolution (the Scene).
-    if is_linked(scene) and any(isinstance(u.id, (bpy.types.Object, bpy.types.Camera, bpy.types.Scene))
-                                for u in depsgraph.updates):
+    # Other objects moving (every step of a drag) are not looked at.
+    if not is_linked(scene):
+        return
+    ob = find_lamp_camera(scene)
+    watched = {scene.as_pointer()}
+    if ob is not None:
+        watched |= {ob.as_pointer(), ob.data.as_pointer()}
+    if any(u.id.original.as_pointer() in watched for u in depsgraph.updates):
         _sync_quietly(scene)
 
 
