@@ -169,8 +169,7 @@ class LAMP_OT_build(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         report = design_builder.build_lamp(context.scene, scene)
-        # A scene without a camera gets the framed Lamp Camera; a camera of the user's stays the scene camera.
-        camera_news = render_camera.ensure_lamp_camera(context.scene)[1] if context.scene.camera is None else ""
+        camera_news = render_camera.camera_after_build(context.scene)
         level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
         self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
                              f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)"

@@ -246,6 +246,18 @@ def ensure_lamp_camera(bl_scene, *, frame: bool = False) -> tuple[object, str]:
     return ob, what
 
 
+def camera_after_build(bl_scene) -> str:
+    """What Build does about the camera, for its report: a scene without a camera gets the Lamp Camera
+    (at the design's view, which ``keep_framed`` keeps framed); a camera of the user's stays the scene
+    camera, and the report says how to see the lamp framed."""
+    if bl_scene.camera is None:
+        return ensure_lamp_camera(bl_scene)[1]
+    if not is_lamp_camera(bl_scene.camera):
+        return f'rendering through your "{bl_scene.camera.name}"; Frame Lamp shows the lamp through the Lamp Camera'
+    sync_view(bl_scene)
+    return ""
+
+
 def _push_design(bl_scene, ob) -> None:
     """The design's view onto camera ``ob`` and the render size; starts (or renews) the link."""
     _, image = _design_view(bl_scene)

@@ -66,6 +66,7 @@ def test_startup_file_build_then_compare_shows_the_lamp_in_both_halves(lamp_addo
     before = tuple(startup_camera.location), tuple(startup_camera.rotation_euler), startup_camera.data.lens
     lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
+    assert "Frame Lamp" in lamp_addon.render_camera.camera_after_build(bl_scene)  # what Build's report says
     assert bpy.ops.lamp.compare_cycles(samples=SAMPLES) == {"FINISHED"}
     result = lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES)
     _assert_same_lamp(result, clean_shares)
