@@ -36,9 +36,10 @@ def test_the_modal_operators_share_the_base(lamp_addon):
         operator = getattr(getattr(lamp_addon, module), name)
         assert issubclass(operator, lamp_addon.jobs.ModalJob), name
         assert operator.job_key == operator.bl_idname
-    # The polling interval is declared once.
+    # The modal jobs' polling interval is declared once (the viewport preview polls at its own rate).
     declared = [p.name for p in ADDON.rglob("*.py") if re.search(r"^POLL_SECONDS\s*=", p.read_text(), re.M)]
-    assert declared == ["jobs.py"]
+    assert "jobs.py" in declared
+    assert not {"render_ops.py", "compare_ops.py", "study_ops.py", "preset_library.py"} & set(declared)
 
 
 def _imports(path) -> set[str]:
