@@ -25,13 +25,10 @@ from ..core_tracer.library import presets as P
 from ..core_tracer.scene.validate import SceneError
 from ..core_tracer.study import definition as st
 from . import design_properties, image_view, jobs, study_settings
+from .study_settings import last_study, sheet_image
 
 # ---------------------------------------------------------------------------------------------
-# The sheet image and its study
-
-
-sheet_image = study_settings.sheet_image
-last_study = study_settings.last_study
+# The sheet image
 
 
 def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
@@ -42,7 +39,7 @@ def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
     image = image_view.image_from_array(study_settings.SHEET_IMAGE, sheet)
     text = study.to_json()
     image[study_settings.STUDY_PROPERTY] = text
-    study_settings.remember_study(text, study)
+    study_settings.remember_study(study, text)
     image_view.show_image(context, image)
     return image
 
@@ -293,9 +290,4 @@ def _openimageio_available() -> bool:
 classes = (LAMP_OT_study_run, LAMP_OT_study_apply_variant, LAMP_OT_study_keep_variant, LAMP_OT_study_save_sheet)
 
 
-register, _unregister_classes = bpy.utils.register_classes_factory(classes)
-
-
-def unregister() -> None:
-    _unregister_classes()
-    study_settings.remember_study(None, None)  # the cached study belongs to this registration
+register, unregister = bpy.utils.register_classes_factory(classes)

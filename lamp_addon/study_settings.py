@@ -83,6 +83,14 @@ def last_study() -> st.Study | None:
     return _cache["study"]  # type: ignore[return-value]
 
 
-def remember_study(text: str | None, study: st.Study | None) -> None:
-    """Cache the study whose JSON ``text`` a sheet image now holds (None, None: forget)."""
+def remember_study(study: st.Study, text: str) -> None:
+    """Cache the study whose JSON ``text`` the sheet image now holds."""
     _cache.update(json=text, study=study)
+
+
+def register() -> None:
+    pass  # nothing to register yet: listed in ``modules()`` for its ``unregister``
+
+
+def unregister() -> None:
+    _cache.update(json=None, study=None)  # the cached study belongs to this registration
