@@ -233,12 +233,17 @@ def _in_design(ob) -> bool:
 
 def objects_outside_design(bl_scene) -> list:
     """Objects that Cycles would render and that are not part of the design: the startup Cube and
-    Light, a car body around the lamp ... Cameras and plain empties render nothing and are not listed."""
+    Light, a car body around the lamp ... Cameras, plain empties and what is already out of the
+    render (hidden, in a collection hidden from render or excluded from every rendered view layer)
+    are not listed."""
+    rendered = {ob.as_pointer(): ob for layer in bl_scene.view_layers if layer.use for ob in layer.objects}
     out = []
-    for ob in bl_scene.objects:
+    for ob in sorted(rendered.values(), key=lambda o: o.name):
         if ob.hide_render or _in_design(ob) or ob.type == "CAMERA":
             continue
         if ob.type == "EMPTY" and ob.instance_type == "NONE":
+            continue
+        if all(c.hide_render for c in ob.users_collection):
             continue
         out.append(ob)
     return out

@@ -94,6 +94,10 @@ def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_sce
     light = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
     bl_scene.collection.objects.link(light)
     light.hide_render = True  # already out of the render: not reported
+    props = bpy.data.collections.new("Props")  # nor what a collection hidden from render holds
+    bl_scene.collection.children.link(props)
+    props.hide_render = True
+    props.objects.link(bpy.data.objects.new("Wheel", bpy.data.meshes.new("Wheel")))
     result = lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES)
     _assert_same_lamp(result, clean_shares)
     assert result["left_out"] == ["Car Body"]

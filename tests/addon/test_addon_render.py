@@ -608,8 +608,11 @@ def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):
 
     lamp_addon.design_properties.scene_to_design(bl_scene, _preset_scene())
     assert not bpy.ops.lamp.render_tracer.poll()
-    with pytest.raises(RuntimeError, match="no camera"):
+    with pytest.raises(RuntimeError, match="no camera; Frame Lamp .* or Build Lamp makes one"):
         bpy.ops.lamp.render_tracer()
+    # ... and both do: Build in a file without a camera makes the Lamp Camera.
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera) and bpy.ops.lamp.render_tracer.poll()
 
 
 def test_tracer_job_runs_on_a_thread_and_equals_core_render(lamp_addon):
