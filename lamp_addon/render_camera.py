@@ -295,9 +295,7 @@ def keep_framed(bl_scene) -> bool:
         camera = parse_scene(doc)["camera"]
     except SceneError:
         return False  # the design is not valid yet: the panel says why
-    render = bl_scene.render
-    size = (doc["image"]["width"], doc["image"]["height"]) if not is_linked(bl_scene) else (
-        render.resolution_x, render.resolution_y)
+    size = (doc["image"]["width"], doc["image"]["height"])
     _write_design_camera(bl_scene, cm.frame_view(camera, cm.body_box(doc), size))
     return True
 
