@@ -37,11 +37,8 @@ def run(preset: str, output: str, *, samples: int = compare_ops.DEFAULT_SAMPLES,
         print(f"{prog}: note: {transform.note}", file=sys.stderr)
     bl_scene = bpy.context.scene
     design_properties.scene_to_design(bl_scene, scene)
-    # The preset fixes the view: its camera becomes the scene camera.
-    if bl_scene.camera is None:
-        render_camera.ensure_scene_camera(bl_scene, scene)
-    else:
-        render_camera.apply_camera(bl_scene.camera, scene["camera"])
+    # The preset fixes the view: the Lamp Camera takes it and becomes the scene camera.
+    bl_scene.camera, _ = render_camera.ensure_lamp_camera(bl_scene, frame=False)
     if size is None:
         size = (scene["image"]["width"], scene["image"]["height"])
     comparison = compare_ops.compare_design(bl_scene, samples=samples, resolution=size)
@@ -73,5 +70,7 @@ def report(comparison: dict, preset: str, output: str) -> str:
         "tracer - Cycles, linear RGB  " + "".join(f"{c:>10}" for c in CHANNELS),
     ]
     lines += [f"  {name:<27}" + "".join(f"{v:10.4f}" for v in values) for name, values in rows]
+    if comparison.get("left_out"):
+        lines.append(compare_ops.left_out_text(comparison["left_out"]))
     lines.append(f"wrote {output}")
     return "\n".join(lines)

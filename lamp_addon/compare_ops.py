@@ -44,21 +44,20 @@ import os
 import shutil
 import tempfile
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import bpy
 import numpy as np
 
-from ..core_tracer.images import bitmap_font, display, labels
+from ..core_tracer.images import display
 from ..core_tracer.scene.validate import SceneError
-from . import design_panels, design_properties, image_view, render_camera
+from . import design_panels, design_properties, image_view, jobs, render_camera
+from .convert.sheet import differences, shown_side_by_side, side_by_side
 from .render_engine import ENGINE_ID
 
 RENDER_RESULT = "Render Result"
 COMPARE_IMAGE = "Lamp Compare"
 DEFAULT_SAMPLES = 64
-POLL_SECONDS = 0.2
 
 MIN_BOUNCES = {"max_bounces": 12, "transmission_bounces": 8, "glossy_bounces": 6}
 CYCLES_SETTINGS = {
@@ -105,67 +104,6 @@ class CompareCancelled(Exception):
 
 # What the operator reports (RuntimeError: bpy.ops.render.render raises an engine's error as one).
 REPORTED_ERRORS = (SceneError, CompareError, CompareCancelled, RuntimeError)
-
-
-# ---------------------------------------------------------------------------------------------
-# Pure parts: the side-by-side image and the differences
-
-
-def differences(tracer: np.ndarray, cycles: np.ndarray) -> dict:
-    """Per-channel statistics of tracer - Cycles over the whole image (linear RGB)."""
-    diff = tracer.astype(np.float64) - cycles.astype(np.float64)
-    return {
-        "tracer_mean": tracer.astype(np.float64).mean(axis=(0, 1)).tolist(),
-        "cycles_mean": cycles.astype(np.float64).mean(axis=(0, 1)).tolist(),
-        "mean_difference": diff.mean(axis=(0, 1)).tolist(),
-        "mean_abs_difference": np.abs(diff).mean(axis=(0, 1)).tolist(),
-        "rms_difference": np.sqrt((diff * diff).mean(axis=(0, 1))).tolist(),
-    }
-
-
-def label_height(image_height: int) -> int:
-    """Height of the label strip: the 7-pixel font at an integer scale, with a margin."""
-    return bitmap_font.GLYPH_H * _label_scale(image_height) + 6
-
-
-def _label_scale(image_height: int) -> int:
-    return max(1, min(4, image_height // 160 + 1))
-
-
-def side_by_side(left: np.ndarray, right: np.ndarray, left_labels: Sequence[str],
-                 right_labels: Sequence[str], *, text: str = "auto") -> np.ndarray:
-    """One (H + strip, 2W + gap, 3) image: ``left`` and ``right`` next to each other below a
-    strip holding their labels. Each label is the first of its alternatives (longest first) that
-    fits above its half, drawn by ``core_tracer.images.labels`` (OpenImageIO's font where it can
-    draw text, else, or with ``text="bitmap"``, the bitmap font, which draws capitals)."""
-    height, width = left.shape[:2]
-    gap = max(2, width // 128)
-    strip = label_height(height)
-    out = np.zeros((height + strip, 2 * width + gap, 3), np.float32)
-    out[strip:, :width] = left
-    out[strip:, width + gap:] = right
-    out[:, width:width + gap] = 0.5
-    oiio_text = labels.use_oiio(text)
-    size, inset = strip - 2, 3 * _label_scale(height)
-    for alternatives, x in ((left_labels, 0), (right_labels, width + gap)):
-        # Each label is drawn into its own half of the strip, so a long one is clipped there.
-        label = labels.fitting(alternatives, width - 2 * inset, lambda t: labels.text_width(t, size, oiio_text))
-        mask = labels.coverage(label, width, strip, size=size, oiio_text=oiio_text, inset=inset, top=3)
-        area = out[:strip, x:x + width]
-        np.maximum(area, mask[..., None], out=area)
-    return out
-
-
-def shown_side_by_side(comparison: dict, view: display.ViewTransform | None, exposure: float) -> np.ndarray:
-    """The side-by-side image of ``comparison`` with both halves at ``exposure`` stops: linear
-    without ``view``, else display values through ``view`` (both halves through the one transform)."""
-    def shown(image: np.ndarray) -> np.ndarray:
-        if view is not None:
-            return view.to_display(image, exposure)
-        return image * np.float32(2.0 ** exposure)
-
-    left, right = comparison["labels"]
-    return side_by_side(shown(comparison["tracer"]), shown(comparison["cycles"]), left, right)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -221,15 +159,15 @@ def _exr_output_values(settings) -> dict:
 # The render handlers: how a render job tells the comparison it has ended
 
 
-_active: list[CompareRun] = []  # the comparison the handlers report to: at most one
+JOB_KEY = "lamp.compare_cycles"  # the comparison under way is jobs.running(JOB_KEY): at most one
 
 
 def _report_end(scene, how: str) -> None:
     # Called by Blender, for a render job on its render thread: plain attributes only.
     pointer = scene.as_pointer() if scene is not None else 0
-    for run in _active:
-        if run.scene_pointer == pointer:
-            run.report_end(how)
+    run = running()
+    if run is not None and run.scene_pointer == pointer:
+        run.report_end(how)
 
 
 @bpy.app.handlers.persistent
@@ -247,9 +185,10 @@ HANDLERS = {"render_complete": _on_render_complete, "render_cancel": _on_render_
 
 def watch(run: CompareRun) -> None:
     """Make ``run`` the comparison the render handlers report to, adding the handlers."""
-    if _active and _active[0] is not run:
-        raise CompareError("A comparison with Cycles is already running")
-    _active[:] = [run]
+    try:
+        jobs.claim(JOB_KEY, run, "A comparison with Cycles is already running")
+    except jobs.JobBusy as e:
+        raise CompareError(str(e)) from None
     for name, handler in HANDLERS.items():
         handlers = getattr(bpy.app.handlers, name)
         if handler not in handlers:
@@ -258,7 +197,7 @@ def watch(run: CompareRun) -> None:
 
 def unwatch() -> None:
     """Stop reporting to any comparison and remove the handlers."""
-    _active.clear()
+    jobs.release(JOB_KEY)
     for name, handler in HANDLERS.items():
         handlers = getattr(bpy.app.handlers, name)
         while handler in handlers:
@@ -267,7 +206,55 @@ def unwatch() -> None:
 
 def running() -> CompareRun | None:
     """The comparison under way, if any."""
-    return _active[0] if _active else None
+    return jobs.running(JOB_KEY)
+
+
+# ---------------------------------------------------------------------------------------------
+# What is compared: the design, whatever else is in the file
+
+
+def needs_build(bl_scene) -> bool:
+    """Whether Compare must build the lamp before rendering: the one place that decides it.
+
+    Always, for now: the objects are rebuilt from the design so that Cycles renders what the tracer
+    renders. (Once the builder can tell that the objects are up to date, this is where to ask it.)"""
+    return True
+
+
+def _in_design(ob) -> bool:
+    """Objects the builder made carry the part key; what the designer parented under the root is
+    part of the lamp too."""
+    from .design_root import PART_KEY
+
+    while ob is not None:
+        if ob.get(PART_KEY):
+            return True
+        ob = ob.parent
+    return False
+
+
+def objects_outside_design(bl_scene) -> list:
+    """Objects that Cycles would render and that are not part of the design: the startup Cube and
+    Light, a car body around the lamp ... Cameras, plain empties and what is already out of the
+    render (hidden, in a collection hidden from render or excluded from every rendered view layer)
+    are not listed."""
+    rendered = {ob.as_pointer(): ob for layer in bl_scene.view_layers if layer.use for ob in layer.objects}
+    out = []
+    for ob in sorted(rendered.values(), key=lambda o: o.name):
+        if ob.hide_render or _in_design(ob) or ob.type == "CAMERA":
+            continue
+        if ob.type == "EMPTY" and ob.instance_type == "NONE":
+            continue
+        if all(c.hide_render for c in ob.users_collection):
+            continue
+        out.append(ob)
+    return out
+
+
+def left_out_text(names: list[str], limit: int = 6) -> str:
+    """"left out of the Cycles half: Cube, Light" (at most ``limit`` names, then how many more)."""
+    shown = ", ".join(names[:limit]) + (f" and {len(names) - limit} more" if len(names) > limit else "")
+    return f"left out of the Cycles half: {shown}"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -293,6 +280,9 @@ class CompareRun:
         self.images: dict[str, np.ndarray] = {}
         self.seconds: dict[str, float] = {}
         self.not_restored: list[str] = []
+        self.left_out: list[str] = []  # objects hidden from the Cycles render: not part of the design
+        self.camera_news = ""  # what making the Lamp Camera did, if it was made
+        self._paused = False
         self._settings = SceneSettings()
         self._folder: str | None = None
         self._started_at = self._ended_at = 0.0
@@ -311,17 +301,17 @@ class CompareRun:
             self.ended = how
 
     def prepare(self) -> None:
-        """Build the lamp, make sure there is a scene camera (from the design's when there is none),
-        fix the scene the tracer renders and set the render settings both renders use.
-        Raises ``SceneError``."""
-        from . import design_builder
-
+        """Make sure the Lamp Camera exists (made and framed the first time, ``render_camera``), build
+        the lamp when its objects are out of date, fix the scene the tracer renders, set the render
+        settings both renders use and leave out of the Cycles render every object that is not part of
+        the design (``left_out``). Raises ``SceneError``."""
         bl_scene = self.bl_scene
-        if bl_scene.camera is None:
-            render_camera.ensure_scene_camera(bl_scene, design_properties.design_to_scene(bl_scene))
+        _camera, self.camera_news = render_camera.ensure_lamp_camera(bl_scene)
+        render_camera.pause_link(bl_scene)  # the render size set below is the comparison's, not the user's
+        self._paused = True
+        if self.build and needs_build(bl_scene):
+            self._build()
         self.scene = render_camera.scene_for_render(bl_scene, size=self.resolution)
-        if self.build:
-            design_builder.build_lamp(bl_scene, self.scene)
         width, height = self.scene["image"]["width"], self.scene["image"]["height"]
         cycles = bl_scene.cycles
         settings = self._settings
@@ -332,7 +322,16 @@ class CompareRun:
                      **CYCLES_SETTINGS)
         image_settings = bl_scene.render.image_settings
         settings.set(image_settings, **_exr_output_values(image_settings))
+        for ob in objects_outside_design(bl_scene):
+            settings.set(ob, hide_render=True)
+            self.left_out.append(ob.name)
         self._folder = tempfile.mkdtemp(prefix="lamp-compare-")
+
+    def _build(self) -> None:
+        from . import design_builder
+
+        # Seen through the scene camera: a design camera that is not used cannot block the build.
+        design_builder.build_lamp(self.bl_scene, render_camera.scene_for_render(self.bl_scene, size=self.resolution))
 
     def start(self, stage: Stage, *, invoke: bool = False) -> None:
         """Render ``stage`` into its Render Result slot: a blocking render, or (``invoke``) Blender's
@@ -409,16 +408,23 @@ class CompareRun:
             "samples": self.samples,
             "size": (tracer.shape[1], tracer.shape[0]),
             "differences": differences(tracer, cycles),
+            "left_out": list(self.left_out),
+            "camera_news": self.camera_news,
         }
         return comparison
 
     def close(self) -> None:
         """Put back every setting the comparison changed, stop listening to the render handlers
         and remove the temporary files. Every exit path calls it; calling it again does nothing."""
-        if any(s.as_pointer() == self.scene_pointer for s in bpy.data.scenes):
+        scene_exists = any(s.as_pointer() == self.scene_pointer for s in bpy.data.scenes)
+        if scene_exists:
             self.not_restored += self._settings.restore()
         else:  # Blender ends the operator while loading another file: the scene is gone with its settings
             self._settings = SceneSettings()
+        if self._paused:
+            self._paused = False
+            if scene_exists:
+                render_camera.resume_link(self.bl_scene)
         if running() is self:
             unwatch()
         if self._folder is not None:
@@ -474,13 +480,16 @@ def write_comparison(path: str, comparison: dict, *, view: display.ViewTransform
 # The operator
 
 
-class LAMP_OT_compare_cycles(bpy.types.Operator):
+class LAMP_OT_compare_cycles(jobs.ModalJob, bpy.types.Operator):
     """Render the design with Cycles and with the Lamp Tracer from the scene camera and show them
     side by side (render slots 1 and 2 of Render Result, flip with J, and the "Lamp Compare" image)"""
 
     bl_idname = "lamp.compare_cycles"
     bl_label = "Compare with Cycles"
     bl_options = {"REGISTER", "UNDO"}  # builds the lamp objects
+
+    job_key = JOB_KEY
+    busy_message = "A comparison is running (Esc cancels its render)"
 
     samples: bpy.props.IntProperty(name="Cycles Samples", default=DEFAULT_SAMPLES, min=1, max=65536,
                                    description="Samples per pixel of the Cycles render")
@@ -496,10 +505,7 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
         if not hasattr(context.scene, "cycles"):
             cls.poll_message_set("Cycles is not enabled")
             return False
-        if running() is not None:
-            cls.poll_message_set("A comparison is running (Esc cancels its render)")
-            return False
-        return True
+        return cls.poll_not_running()
 
     def _output_path(self) -> str:
         """The file to write, checked before minutes of rendering (raises ``SceneError``), or "" (also
@@ -540,49 +546,43 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
             run.close()
             raise
         self._run = run
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(POLL_SECONDS, window=context.window)
-        wm.modal_handler_add(self)
-        self._status(context)
-        return {"RUNNING_MODAL"}
+        return self.begin_modal(context, run)
 
-    def modal(self, context, event):
-        if event.type == "ESC" and event.value == "PRESS" and not bpy.app.is_job_running("RENDER"):
-            self._end(context)  # between the two renders: Esc is ours
-            self.report({"WARNING"}, "Compare with Cycles cancelled")
-            return {"CANCELLED"}
-        if event.type != "TIMER":
+    def escape(self, context):
+        if bpy.app.is_job_running("RENDER"):
             return {"PASS_THROUGH"}  # Esc during a render goes on to Blender's render job, which stops
+        self.end_modal(context)  # between the two renders: Esc is ours
+        self.report({"WARNING"}, "Compare with Cycles cancelled")
+        return {"CANCELLED"}
+
+    def step(self, context):
         try:
             if not self._run.advance():
-                self._status(context)
-                return {"PASS_THROUGH"}
+                return None
             comparison = self._run.compose()
         except REPORTED_ERRORS as e:
-            self._end(context)
+            self.end_modal(context)
             return self._failed(e)
         except BaseException:
-            self._end(context)
+            self.end_modal(context)
             raise
-        self._end(context)
+        self.end_modal(context)
         show_comparison(context.scene, comparison)
         return self._finished(context, {**comparison, "not_restored": self._run.not_restored}, self._path)
 
-    def cancel(self, context):
-        # Blender ends the operator (file load, quit): put the settings back, remove the handlers.
-        self._end(context)
+    def abandon(self, context):
+        pass  # nothing runs between the timer ticks but Blender's render job; end_modal puts the settings back
 
-    def _status(self, context) -> None:
+    def status(self) -> str:
         stage = self._run.stage
-        number = STAGES.index(stage) + 1
-        context.workspace.status_text_set(f"Compare with Cycles: {stage.label} render, {number} of {len(STAGES)} "
-                                          "(Esc cancels)")
+        return f"Compare with Cycles: {stage.label} render, {STAGES.index(stage) + 1} of {len(STAGES)} (Esc cancels)"
 
-    def _end(self, context) -> None:
-        context.window_manager.event_timer_remove(self._timer)
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
-        self._run.close()
+    def fraction(self) -> float:
+        return STAGES.index(self._run.stage) / len(STAGES)
+
+    def end_modal(self, context) -> None:
+        super().end_modal(context)
+        self._run.close()  # the settings back, the handlers removed (again: nothing)
 
     def _failed(self, error: Exception):
         """Report why the comparison stopped (one of ``REPORTED_ERRORS``)."""
@@ -607,8 +607,11 @@ class LAMP_OT_compare_cycles(bpy.types.Operator):
         if comparison["not_restored"]:
             self.report({"WARNING"}, "Settings not put back: " + "; ".join(comparison["not_restored"]))
         seconds = comparison["seconds"]
+        notes = [comparison["camera_news"]] if comparison["camera_news"] else []
+        if comparison["left_out"]:
+            notes.append(left_out_text(comparison["left_out"]))
         self.report({"INFO"}, f"Lamp Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
-                              f"({comparison['samples']} samples)")
+                              f"({comparison['samples']} samples)" + "".join(f"; {n}" for n in notes))
         return {"FINISHED"}
 
 

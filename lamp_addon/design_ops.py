@@ -11,7 +11,7 @@ import bpy
 
 from ..core_tracer.scene import spec
 from ..core_tracer.scene.validate import SceneError
-from . import design_properties
+from . import design_properties, render_camera
 from .convert.layout import design_with_new_lamp
 
 
@@ -46,6 +46,7 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
         design.body.center = doc["body"]["center"]
         design.body.size = doc["body"]["size"]
         design.active_lamps_index = len(design.lamps) - 1
+        render_camera.keep_framed(context.scene)
         return {"FINISHED"}
 
 
@@ -91,6 +92,7 @@ class LAMP_OT_lamp_remove(bpy.types.Operator):
         design.lamps.remove(design.active_lamps_index)
         design.active_lamps_index = min(design.active_lamps_index, len(design.lamps) - 1)
         design_properties.notify_edited(context.scene)  # removing from the list calls no update callback
+        render_camera.keep_framed(context.scene)
         return {"FINISHED"}
 
 
@@ -122,9 +124,11 @@ class LAMP_OT_build(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         report = design_builder.build_lamp(context.scene, scene)
+        camera_news = render_camera.camera_after_build(context.scene)
         level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
         self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
-                             f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)")
+                             f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)"
+                             + (f"; {camera_news}" if camera_news else ""))
         if report.not_driven:
             self.report({"WARNING"}, f"Not following the design (your edits kept): {'; '.join(report.not_driven)}")
         return {"FINISHED"}

@@ -25,9 +25,9 @@ from bpy.props import BoolProperty, CollectionProperty, IntProperty, StringPrope
 
 from ..core_tracer.library import presets as P
 from . import image_view, preferences
+from .jobs import POLL_SECONDS  # the thumbnail timer polls as often as the modal jobs
 
 USER_LIBRARY_NAME = "My Presets"
-POLL_SECONDS = 0.25
 
 
 @dataclass

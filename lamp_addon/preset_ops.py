@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import struct
 
 import bpy
@@ -26,7 +25,7 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 from ..core_tracer import fileio
 from ..core_tracer.library import presets as P
 from ..core_tracer.scene.validate import SceneError, normalize, scene_to_json
-from . import design_properties, preset_library, render_camera
+from . import design_properties, design_root, preset_library, render_camera
 
 # Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
 # the camera object that differs from the design's by less than this, relative to the view's size, is
@@ -110,33 +109,36 @@ def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
     return normalize(seen)
 
 
-def is_lamp_camera(ob: bpy.types.Object) -> bool:
-    """Whether ``ob`` is the camera the add-on made (``render_camera.ensure_scene_camera``), not the designer's."""
-    own_name = re.escape(render_camera.CAMERA_NAME) + r"(\.\d{3,})?"
-    return ob.type == "CAMERA" and re.fullmatch(own_name, ob.name) is not None
-
-
 def show_view(bl_scene: bpy.types.Scene, scene: dict) -> str:
-    """Show a normalised scene's camera and image through the scene camera, if it is the add-on's.
+    """Show the design's view (just set from a preset) through the add-on's Lamp Camera.
 
-    No scene camera: the "Lamp Camera" is made. The add-on's camera: moved there. The designer's own
-    camera: kept as it is. Returns what happened, for the report."""
-    ob = bl_scene.camera
-    if ob is None:
-        ob = render_camera.ensure_scene_camera(bl_scene, scene)
-        return f"made the scene camera \"{ob.name}\" at its view"
-    if is_lamp_camera(ob):
-        render_camera.apply_camera(ob, scene["camera"])
-        render_camera.set_render_size(bl_scene, scene["image"])
-        return f"moved \"{ob.name}\" to its view"
-    return (f"kept your camera \"{ob.name}\" (the preset's view is the design's camera; \"Scene Camera from "
-            "Design\" moves your camera there)")
+    The design's camera fields are the Lamp Camera (``render_camera.sync_view``): it takes the
+    preset's view, made when the scene has none. A camera of the designer's stays as it is.
+    Returns what happened, for the report."""
+    mine = bl_scene.camera is not None and not render_camera.is_lamp_camera(bl_scene.camera)
+    if mine and render_camera.find_lamp_camera(bl_scene) is None:
+        return (f"kept your camera \"{bl_scene.camera.name}\" (the preset's view is the design's camera; "
+                "Frame Lamp makes the Lamp Camera)")
+    ob, made = render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    if mine:
+        return (f"kept your camera \"{bl_scene.camera.name}\" (the preset's view is on \"{ob.name}\"; "
+                "Frame Lamp makes it the scene camera)")
+    return made or f"moved \"{ob.name}\" to its view"
 
 
 def apply_preset(bl_scene: bpy.types.Scene, scene: dict) -> str:
-    """Set the design from a preset, all or nothing, then show its view (``show_view``)."""
+    """Set the design from a preset, all or nothing, then show its view (``show_view``) and, when the
+    lamp has been built in this scene, rebuild it so that its objects are the preset's too. Returns
+    what happened, for the report."""
     design_properties.scene_to_design(bl_scene, scene)
-    return show_view(bl_scene, design_properties.design_to_scene(bl_scene))
+    design = design_properties.design_to_scene(bl_scene)
+    view = show_view(bl_scene, design)
+    if not any(ob.get(design_root.PART_KEY) for ob in bl_scene.objects):
+        return view
+    from . import design_builder
+
+    design_builder.build_lamp(bl_scene, design)
+    return f"{view}; rebuilt the lamp objects"
 
 
 # Dynamic enum items must stay referenced from Python while Blender shows them.

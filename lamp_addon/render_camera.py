@@ -13,109 +13,44 @@ Blender keeps no look-at target, only an orientation; the target distance is kep
 camera's focus distance (``dof.focus_distance``, or the distance to ``dof.focus_object`` as
 Blender measures it), which is what "the point the camera looks at" means to a photographer.
 
-The conversion math is in small functions that use no ``bpy``, which the tests check directly.
+The camera is read and written in the design's model space (the root object's local space,
+``design_root.world_from_design``), so a lamp moved or parented to a car is seen the same way.
+
+One source of truth for the view and the size: the design's Camera & Image fields ARE the add-on's
+"Lamp Camera" and the render resolution. ``sync_view`` keeps them equal, the side changed last
+winning (a design edit moves the Lamp Camera and sets the resolution; moving the Lamp Camera in the
+viewport or changing the resolution writes the design). It runs from a depsgraph handler and a
+message-bus subscription in the interface and at the start of every operator that renders or frames.
+The link starts when the add-on makes its camera (``ensure_lamp_camera``), so a file the add-on has
+not been used in is never changed. A camera of the user's made the scene camera is rendered as it
+is and never moved; the panel then says that the design's camera fields are not used.
+
+The mathematics (conversions, projection, framing) is bpy-free in ``convert/camera.py``.
 """
 
 from __future__ import annotations
 
+import json
 import math
-from collections.abc import Sequence
+import re
 
 import bpy
 
-from . import design_panels, design_properties
+from . import design_panels, design_properties, design_root
+from .convert import camera as cm
 from .convert import units
 
 MM_PER_BU = units.MM_PER_BU
 CAMERA_NAME = "Lamp Camera"
+LAMP_CAMERA_KEY = "lamp_camera"  # custom property marking the camera the add-on made (found by it, not by name)
+LINK_KEY = "lamp_view_link"  # scene custom property: the view last seen in the design and in Blender
 
 _FIT_TO_BLENDER = {"auto": "AUTO", "horizontal": "HORIZONTAL", "vertical": "VERTICAL"}
 _FIT_FROM_BLENDER = {v: k for k, v in _FIT_TO_BLENDER.items()}
 
-Vec3 = tuple[float, float, float]
-
 
 # ---------------------------------------------------------------------------------------------
-# Pure conversion math
-
-
-def render_size(resolution_x: int, resolution_y: int, percentage: int) -> tuple[int, int]:
-    """The rendered size in pixels, as Blender computes it (integer division by 100)."""
-    return resolution_x * percentage // 100, resolution_y * percentage // 100
-
-
-def fitted_side(sensor_fit: str, width: float, height: float) -> str:
-    """``"horizontal"`` or ``"vertical"``: the image side the field of view spans.
-
-    ``width`` and ``height`` are the pixel counts times the pixel aspect (Blender's
-    ``BKE_camera_sensor_fit``: AUTO picks horizontal when width >= height)."""
-    if sensor_fit == "auto":
-        return "horizontal" if width >= height else "vertical"
-    return sensor_fit
-
-
-def sensor_size(sensor_fit: str, sensor_width: float, sensor_height: float) -> float:
-    """The sensor size the lens is fitted to (``BKE_camera_sensor_size``: AUTO uses the width)."""
-    return sensor_height if sensor_fit == "vertical" else sensor_width
-
-
-def fov_from_lens(lens_mm: float, sensor_mm: float) -> float:
-    """Full field of view in degrees across a sensor of ``sensor_mm`` for a focal length."""
-    return math.degrees(2.0 * math.atan(sensor_mm / (2.0 * lens_mm)))
-
-
-def lens_from_fov(fov_deg: float, sensor_mm: float) -> float:
-    """Focal length in mm giving ``fov_deg`` across ``sensor_mm``."""
-    return sensor_mm / (2.0 * math.tan(math.radians(fov_deg) / 2.0))
-
-
-def _sub(a: Sequence[float], b: Sequence[float]) -> Vec3:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def _cross(a: Sequence[float], b: Sequence[float]) -> Vec3:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _dot(a: Sequence[float], b: Sequence[float]) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _unit(a: Sequence[float]) -> Vec3:
-    n = math.sqrt(_dot(a, a))
-    return (a[0] / n, a[1] / n, a[2] / n)
-
-
-def look_at_axes(position: Sequence[float], target: Sequence[float], up: Sequence[float]) -> tuple[Vec3, Vec3, Vec3]:
-    """The camera's local X (right), Y (up) and Z (back) axes in world space.
-
-    A Blender camera looks along its local -Z with +Y up in the image."""
-    forward = _unit(_sub(target, position))
-    right = _unit(_cross(forward, up))
-    true_up = _cross(right, forward)
-    back = (-forward[0], -forward[1], -forward[2])
-    return right, true_up, back
-
-
-def view_from_axes(position_mm: Sequence[float], y_axis: Sequence[float], z_axis: Sequence[float],
-                   target_distance_mm: float) -> dict:
-    """Position, target and up of the scene camera from the camera's world axes.
-
-    ``up`` is written as world +Z when the camera has no roll (its right axis is horizontal and
-    its image up points upward), so that a camera made from ``up = [0, 0, 1]`` reads back as
-    such; otherwise it is the camera's own (unit) up axis."""
-    forward = _unit((-z_axis[0], -z_axis[1], -z_axis[2]))
-    cam_up = _unit(y_axis)
-    right = _cross(forward, cam_up)
-    level = abs(right[2]) < 1e-6 and cam_up[2] > 1e-6
-    up = (0.0, 0.0, 1.0) if level else cam_up
-    target = tuple(p + target_distance_mm * f for p, f in zip(position_mm, forward, strict=True))
-    return {"position": [float(x) for x in position_mm], "target": [float(x) for x in target],
-            "up": [float(x) for x in up]}
-
-
-# ---------------------------------------------------------------------------------------------
-# Blender side
+# Reading and writing a Blender camera in model space
 
 
 def _round(values, digits: int):
@@ -125,7 +60,7 @@ def _round(values, digits: int):
 
 
 def scene_camera_to_dict(bl_scene, camera_object=None) -> dict:
-    """``scene["camera"]`` (mm, degrees) read from Blender's scene camera.
+    """``scene["camera"]`` (mm, degrees, model space) read from Blender's scene camera.
 
     ``camera_object`` overrides ``bl_scene.camera`` (the render engine's camera override).
     Raises ``SceneError`` for what the tracer cannot render (no camera, panoramic camera,
@@ -134,7 +69,8 @@ def scene_camera_to_dict(bl_scene, camera_object=None) -> dict:
 
     ob = camera_object if camera_object is not None else bl_scene.camera
     if ob is None:
-        raise SceneError("camera", "the scene has no camera; add one or build the lamp to create it")
+        raise SceneError("camera", "the scene has no camera; press Frame Lamp (Camera & Image) or Build Lamp "
+                                   "to make the Lamp Camera")
     if ob.type != "CAMERA":
         raise SceneError("camera", f'the scene camera "{ob.name}" is a {ob.type.lower()}, not a camera')
     cam = ob.data
@@ -146,24 +82,23 @@ def scene_camera_to_dict(bl_scene, camera_object=None) -> dict:
         raise SceneError("camera", f"pixel aspect {render.pixel_aspect_x:g}:{render.pixel_aspect_y:g} is not "
                                    "supported; the Lamp Tracer renders square pixels (set both to 1)")
 
-    matrix = ob.matrix_world
+    matrix = design_root.world_from_design(bl_scene).inverted() @ ob.matrix_world
     position = [matrix[i][3] * MM_PER_BU for i in range(3)]
     y_axis = [matrix[i][1] for i in range(3)]
     z_axis = [matrix[i][2] for i in range(3)]
-    view = view_from_axes(position, y_axis, z_axis, focus_distance(ob) * MM_PER_BU)
+    view = cm.view_from_axes(position, y_axis, z_axis, focus_distance(ob) * MM_PER_BU)
 
     fit = _FIT_FROM_BLENDER[cam.sensor_fit]
-    out = {
+    return {
         "type": "perspective" if cam.type == "PERSP" else "orthographic",
         "position": _round(view["position"], 6),
         "target": _round(view["target"], 6),
         "up": _round(view["up"], 7),
-        "fov_deg": _round(fov_from_lens(cam.lens, sensor_size(fit, cam.sensor_width, cam.sensor_height)), 5),
+        "fov_deg": _round(cm.fov_from_lens(cam.lens, cm.sensor_size(fit, cam.sensor_width, cam.sensor_height)), 5),
         "width": _round(cam.ortho_scale * MM_PER_BU, 6),
         "sensor_fit": fit,
         "shift": _round((cam.shift_x, cam.shift_y), 6),
     }
-    return out
 
 
 def focus_distance(ob) -> float:
@@ -176,24 +111,26 @@ def focus_distance(ob) -> float:
     return max(dof.focus_distance, 1e-5)
 
 
-def apply_camera(ob, cam_dict: dict) -> None:
-    """Set a Blender camera object from ``scene["camera"]`` (a normalised scene's camera)."""
+def apply_camera(ob, cam_dict: dict, bl_scene=None) -> None:
+    """Set a Blender camera object from ``scene["camera"]`` (a normalised scene's camera) in the model
+    space of ``bl_scene``'s design (world space when ``bl_scene`` is None or has no design root)."""
     from mathutils import Matrix
 
     cam = ob.data
-    right, up, back = look_at_axes(cam_dict["position"], cam_dict["target"], cam_dict["up"])
+    right, up, back = cm.look_at_axes(cam_dict["position"], cam_dict["target"], cam_dict["up"])
     loc = [x / MM_PER_BU for x in cam_dict["position"]]
-    ob.matrix_world = Matrix((
+    model = Matrix((
         (right[0], up[0], back[0], loc[0]),
         (right[1], up[1], back[1], loc[1]),
         (right[2], up[2], back[2], loc[2]),
         (0.0, 0.0, 0.0, 1.0),
     ))
+    ob.matrix_world = model if bl_scene is None else design_root.world_from_design(bl_scene) @ model
     fit = cam_dict["sensor_fit"]
     cam.sensor_fit = _FIT_TO_BLENDER[fit]
     cam.type = "PERSP" if cam_dict["type"] == "perspective" else "ORTHO"
     cam.lens_unit = "MILLIMETERS"
-    cam.lens = lens_from_fov(cam_dict["fov_deg"], sensor_size(fit, cam.sensor_width, cam.sensor_height))
+    cam.lens = cm.lens_from_fov(cam_dict["fov_deg"], cm.sensor_size(fit, cam.sensor_width, cam.sensor_height))
     cam.ortho_scale = cam_dict["width"] / MM_PER_BU
     cam.shift_x, cam.shift_y = cam_dict["shift"]
     distance = math.dist(cam_dict["position"], cam_dict["target"]) / MM_PER_BU
@@ -203,20 +140,6 @@ def apply_camera(ob, cam_dict: dict) -> None:
     # leaves room for the whole body behind the target.
     cam.clip_start = 0.001
     cam.clip_end = max(100.0, 10.0 * distance)
-
-
-def ensure_scene_camera(bl_scene, scene: dict):
-    """The scene camera; when the Blender scene has none, create one matching ``scene["camera"]``
-    and set the render resolution from ``scene["image"]``. Returns the camera object."""
-    if bl_scene.camera is not None:
-        return bl_scene.camera
-    data = bpy.data.cameras.new(CAMERA_NAME)
-    ob = bpy.data.objects.new(CAMERA_NAME, data)
-    bl_scene.collection.objects.link(ob)
-    apply_camera(ob, scene["camera"])
-    bl_scene.camera = ob
-    set_render_size(bl_scene, scene["image"])
-    return ob
 
 
 def set_render_size(bl_scene, image: dict) -> None:
@@ -247,21 +170,300 @@ def scene_for_render(bl_scene, *, camera_object=None, size: tuple[int, int] | No
     if camera_object is None:
         camera_object = evaluated_camera(bl_scene)
     render = bl_scene.render
-    width, height = size if size is not None else render_size(
+    width, height = size if size is not None else cm.render_size(
         render.resolution_x, render.resolution_y, render.resolution_percentage)
     return design_properties.design_to_scene(bl_scene, camera=scene_camera_to_dict(bl_scene, camera_object),
-                                      image={"width": int(width), "height": int(height)})
+                                             image={"width": int(width), "height": int(height)})
 
 
 # ---------------------------------------------------------------------------------------------
-# Operators: the design's camera section and the scene camera, either way
+# The add-on's own camera
 
 
-class LAMP_OT_camera_from_design(bpy.types.Operator):
-    """Set the scene camera (created if there is none) and the render size from the design's camera and image"""
+def is_lamp_camera(ob) -> bool:
+    """Whether ``ob`` is the camera the add-on made, not a camera of the user's. Files of earlier
+    versions marked it by its name only ("Lamp Camera", "Lamp Camera.001", ...)."""
+    if ob is None or ob.type != "CAMERA":
+        return False
+    mark = ob.get(LAMP_CAMERA_KEY)
+    if mark is not None:
+        return bool(mark)
+    return re.fullmatch(re.escape(CAMERA_NAME) + r"(\.\d{3,})?", ob.name) is not None
 
-    bl_idname = "lamp.camera_from_design"
-    bl_label = "Scene Camera from Design"
+
+def find_lamp_camera(bl_scene):
+    """The add-on's camera in ``bl_scene`` (the scene camera first), or None."""
+    if is_lamp_camera(bl_scene.camera):
+        return bl_scene.camera
+    return next((ob for ob in bl_scene.objects if is_lamp_camera(ob)), None)
+
+
+def _design_view(bl_scene) -> tuple[dict, dict]:
+    """The design's camera and image sections as the properties hold them (unchecked)."""
+    doc = design_properties.design_document(bl_scene)
+    return doc["camera"], doc["image"]
+
+
+def _usable_view(bl_scene) -> dict:
+    """The design's camera if it is a valid view, else the default camera that frames its body."""
+    from ..core_tracer.scene.validate import SceneError, default_camera, parse_scene
+
+    doc = design_properties.design_document(bl_scene)
+    try:
+        return parse_scene({**doc, "lamps": doc["lamps"] or [{}]})["camera"]
+    except SceneError:
+        return default_camera({"body": doc["body"], "image": doc["image"]})
+
+
+def ensure_lamp_camera(bl_scene, *, frame: bool = False) -> tuple[object, str]:
+    """The add-on's "Lamp Camera", made when the scene has none at the design's view (which
+    ``keep_framed`` keeps framed; a preset's own view), framed there when ``frame``; the
+    first time it is made it becomes the scene camera, the user's camera left as it was. Starts the
+    link between the design's view and Blender (``sync_view``). Returns the camera and what
+    happened, for the operator's report ("" when nothing changed)."""
+    ob = find_lamp_camera(bl_scene)
+    if ob is not None:
+        if is_linked(bl_scene):
+            sync_view(bl_scene)
+        else:  # a camera an earlier version made: the design's view is the truth
+            _push_design(bl_scene, ob)
+        return ob, ""
+    data = bpy.data.cameras.new(CAMERA_NAME)
+    ob = bpy.data.objects.new(CAMERA_NAME, data)
+    ob[LAMP_CAMERA_KEY] = True
+    bl_scene.collection.objects.link(ob)
+    previous = bl_scene.camera
+    bl_scene.camera = ob
+    _, image = _design_view(bl_scene)
+    set_render_size(bl_scene, image)
+    if frame:
+        _frame(bl_scene, ob, _usable_view(bl_scene))
+    else:
+        _push_design(bl_scene, ob)
+    what = f'made the scene camera "{ob.name}"' + (", framed on the lamp" if frame else " at its view")
+    if previous is not None:
+        what += f' (your "{previous.name}" is kept as it was; make it the scene camera again in the Scene properties)'
+    return ob, what
+
+
+def camera_after_build(bl_scene) -> str:
+    """What Build does about the camera, for its report: a scene without a camera gets the Lamp Camera
+    (at the design's view, which ``keep_framed`` keeps framed); a camera of the user's stays the scene
+    camera, and the report says how to see the lamp framed."""
+    if bl_scene.camera is None:
+        return ensure_lamp_camera(bl_scene)[1]
+    if not is_lamp_camera(bl_scene.camera):
+        return f'rendering through your "{bl_scene.camera.name}"; Frame Lamp shows the lamp through the Lamp Camera'
+    sync_view(bl_scene)
+    return ""
+
+
+def _push_design(bl_scene, ob) -> None:
+    """The design's view onto camera ``ob`` and the render size; starts (or renews) the link."""
+    _, image = _design_view(bl_scene)
+    set_render_size(bl_scene, image)
+    apply_camera(ob, _usable_view(bl_scene), bl_scene)
+    _remember(bl_scene)
+
+
+def _frame(bl_scene, ob, view: dict) -> None:
+    """Frame the body with camera ``ob`` from ``view``'s direction; the design's camera fields follow."""
+    doc = design_properties.design_document(bl_scene)
+    render = bl_scene.render
+    framed = cm.frame_view(view, cm.body_box(doc), (render.resolution_x, render.resolution_y))
+    apply_camera(ob, framed, bl_scene)
+    _write_design_camera(bl_scene, framed)
+    _remember(bl_scene)
+
+
+def keep_framed(bl_scene) -> bool:
+    """Re-frame the add-on's own view on the design's body (after lamps are added or removed or the
+    body is resized), from its current direction: the Lamp Camera and the design's camera fields,
+    or the design's camera fields alone before the Lamp Camera is made. A camera of the user's is
+    never moved. Returns whether the view was framed (not when the design's camera is not a view)."""
+    ob = find_lamp_camera(bl_scene)
+    if ob is not None and ob.data.type not in {"PERSP", "ORTHO"}:
+        return False
+    if ob is not None:
+        sync_view(bl_scene)
+        _frame(bl_scene, ob, scene_camera_to_dict(bl_scene, ob))
+        return True
+    from ..core_tracer.scene.validate import SceneError, parse_scene
+
+    doc = design_properties.design_document(bl_scene)
+    try:
+        camera = parse_scene(doc)["camera"]
+    except SceneError:
+        return False  # the design is not valid yet: the panel says why
+    size = (doc["image"]["width"], doc["image"]["height"])
+    _write_design_camera(bl_scene, cm.frame_view(camera, cm.body_box(doc), size))
+    return True
+
+
+# ---------------------------------------------------------------------------------------------
+# One source of truth: the design's Camera & Image fields and the Lamp Camera / render size
+
+
+def _write_design_camera(bl_scene, camera: dict) -> None:
+    group = bl_scene.lamp_design.camera
+    for key, value in camera.items():
+        if hasattr(group, key) and getattr(group, key) != value:
+            setattr(group, key, value)
+
+
+def _blender_view(bl_scene) -> dict:
+    ob = find_lamp_camera(bl_scene)
+    render = bl_scene.render
+    camera = None
+    if ob is not None and ob.data.type in {"PERSP", "ORTHO"}:
+        camera = scene_camera_to_dict(bl_scene, ob)
+    return {"camera": camera, "image": {"width": render.resolution_x, "height": render.resolution_y}}
+
+
+def _remember(bl_scene) -> None:
+    camera, image = _design_view(bl_scene)
+    bl_scene[LINK_KEY] = json.dumps({"design": {"camera": camera, "image": image}, "blender": _blender_view(bl_scene)})
+
+
+def _same(a, b) -> bool:
+    """Equal up to Blender's single precision: a camera's matrix is recomputed from its location and
+    rotation when the depsgraph evaluates it, which moves a target 1 m away by about 0.1 µm."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, float) or isinstance(b, float):
+        return isinstance(a, (int, float)) and isinstance(b, (int, float)) and abs(a - b) <= 1e-3 + 1e-6 * abs(a)
+    return a == b
+
+
+def is_linked(bl_scene) -> bool:
+    """Whether the design's view and Blender's are linked in this scene (the add-on made its camera)."""
+    return isinstance(bl_scene.get(LINK_KEY), str)
+
+
+_paused: set[int] = set()  # scenes whose link waits (a comparison changes the resolution for its renders)
+
+
+def pause_link(bl_scene) -> None:
+    """Stop ``sync_view`` for ``bl_scene`` until ``resume_link``: settings changed for a while and put
+    back afterwards (Compare's render size) must not be taken for the user's edits."""
+    _paused.add(bl_scene.as_pointer())
+
+
+def resume_link(bl_scene) -> None:
+    _paused.discard(bl_scene.as_pointer())
+
+
+def sync_view(bl_scene) -> str:
+    """Make the design's Camera & Image fields and the Lamp Camera & render resolution equal again,
+    the side changed since the last call winning (Blender's when both changed: what the user sees).
+    Returns "design", "blender" or "" (which side was written). Does nothing before the link starts."""
+    if not is_linked(bl_scene) or not hasattr(bl_scene, "lamp_design") or bl_scene.as_pointer() in _paused:
+        return ""
+    last = json.loads(bl_scene[LINK_KEY])
+    camera, image = _design_view(bl_scene)
+    design = {"camera": camera, "image": image}
+    blender = _blender_view(bl_scene)
+    written = ""
+    if not _same(blender, last["blender"]):
+        if blender["camera"] is not None and not _same(blender["camera"], last["blender"]["camera"]):
+            _write_design_camera(bl_scene, blender["camera"])
+        if blender["image"] != last["blender"]["image"]:
+            bl_scene.lamp_design.image.width = blender["image"]["width"]
+            bl_scene.lamp_design.image.height = blender["image"]["height"]
+        written = "design"
+    elif not _same(design, last["design"]):
+        ob = find_lamp_camera(bl_scene)
+        if ob is not None and not _same(camera, last["design"]["camera"]):
+            try:
+                apply_camera(ob, camera, bl_scene)
+            except (ZeroDivisionError, ValueError):
+                pass  # target = position or up along the view: the panel shows the design's error
+        if image != last["design"]["image"]:
+            set_render_size(bl_scene, image)
+        written = "blender"
+    if written:
+        _remember(bl_scene)
+    return written
+
+
+def view_status(bl_scene) -> tuple[str, str]:
+    """What the panel says about the view: (text, icon)."""
+    ob = bl_scene.camera
+    if ob is None:
+        return "No scene camera: Frame Lamp makes the Lamp Camera", "INFO"
+    if is_lamp_camera(ob):
+        return f'Rendering through "{ob.name}": the fields below are its view', "CHECKMARK"
+    return f'Rendering through your "{ob.name}": the camera fields below are not used', "ERROR"
+
+
+# ---------------------------------------------------------------------------------------------
+# Keeping the link live in the interface
+
+
+_syncing: list[bool] = []  # re-entrancy guard: writing one side triggers the handlers again
+
+
+def _sync_quietly(bl_scene) -> None:
+    if _syncing or bl_scene is None:
+        return
+    _syncing.append(True)
+    try:
+        sync_view(bl_scene)
+    except Exception as e:  # a handler must never break Blender's update loop; say it once
+        print(f"Lamp Styling: the design's view and the Lamp Camera could not be synchronised: {e}")
+    finally:
+        _syncing.clear()
+
+
+@bpy.app.handlers.persistent
+def _on_depsgraph_update(scene, depsgraph) -> None:
+    # Blender's side changed: the Lamp Camera moved or its lens changed, or the resolution (the Scene).
+    # Other objects moving (every step of a drag) are not looked at.
+    if not is_linked(scene):
+        return
+    ob = find_lamp_camera(scene)
+    watched = {scene.as_pointer()}
+    if ob is not None:
+        watched |= {ob.as_pointer(), ob.data.as_pointer()}
+    if any(u.id.original.as_pointer() in watched for u in depsgraph.updates):
+        _sync_quietly(scene)
+
+
+_MSGBUS_OWNER = object()
+
+
+def _on_design_view_edit(*_args) -> None:
+    _sync_quietly(bpy.context.scene)
+
+
+def _subscribe() -> None:
+    # Edits of the design's properties do not reach the depsgraph; the message bus reports them.
+    properties = design_properties.LampDesign.bl_rna.properties
+    wanted = {properties[key].fixed_type.identifier for key in ("camera", "image")}
+    for group in design_properties.classes:
+        if group.bl_rna.identifier in wanted:
+            bpy.msgbus.subscribe_rna(key=group, owner=_MSGBUS_OWNER, args=(), notify=_on_design_view_edit)
+
+
+@bpy.app.handlers.persistent
+def _on_load_post(*_args) -> None:
+    bpy.msgbus.clear_by_owner(_MSGBUS_OWNER)  # a loaded file starts with no subscriptions
+    _subscribe()
+
+
+# ---------------------------------------------------------------------------------------------
+# Operators and the camera area of the panel
+
+
+class LAMP_OT_frame_design(bpy.types.Operator):
+    """Point the Lamp Camera at the whole lamp body with a margin, from the current viewing direction
+    (the 3D View's when used there, else the Lamp Camera's own); makes it the scene camera.
+    A camera of yours is never moved"""
+
+    bl_idname = "lamp.frame_design"
+    bl_label = "Frame Lamp"
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
@@ -269,28 +471,40 @@ class LAMP_OT_camera_from_design(bpy.types.Operator):
         return design_properties.poll_design(cls, context)
 
     def execute(self, context):
-        from ..core_tracer.scene.validate import SceneError
+        return self._frame(context, None)
 
+    def invoke(self, context, event):
+        region = context.region_data
+        direction = None
+        if region is not None and getattr(region, "view_perspective", "CAMERA") != "CAMERA":
+            direction = region.view_rotation.to_matrix()  # the 3D View's axes: look along -Z, +Y up
+        return self._frame(context, direction)
+
+    def _frame(self, context, view_axes):
         bl_scene = context.scene
-        try:
-            design = design_properties.design_to_scene(bl_scene)
-        except SceneError as e:
-            self.report({"ERROR"}, str(e))
+        ob, made = ensure_lamp_camera(bl_scene)
+        if ob.data.type not in {"PERSP", "ORTHO"}:
+            self.report({"ERROR"}, f'"{ob.name}" is a panoramic camera; set it to Perspective or Orthographic')
             return {"CANCELLED"}
-        if bl_scene.camera is None or bl_scene.camera.type != "CAMERA":
-            bl_scene.camera = None
-            ensure_scene_camera(bl_scene, design)
-        else:
-            apply_camera(bl_scene.camera, design["camera"])
-            set_render_size(bl_scene, design["image"])
+        view = scene_camera_to_dict(bl_scene, ob)
+        if view_axes is not None:  # the 3D View's axes in the design's model space
+            model = design_root.world_from_design(bl_scene).to_3x3().inverted() @ view_axes
+            view = cm.looking_along(view, [-model[i][2] for i in range(3)], [model[i][1] for i in range(3)])
+        previous = bl_scene.camera
+        bl_scene.camera = ob
+        _frame(bl_scene, ob, view)
+        if not made and previous is not ob and previous is not None:
+            made = f'"{ob.name}" is the scene camera again (your "{previous.name}" was not moved)'
+        self.report({"INFO"}, f'Framed the lamp with "{ob.name}"' + (f"; {made}" if made else ""))
         return {"FINISHED"}
 
 
 class LAMP_OT_camera_to_design(bpy.types.Operator):
-    """Store the scene camera's view and the render size in the design (what a saved preset records)"""
+    """Copy your scene camera's view and the render size into the design's camera fields (what a saved
+    preset records); the Lamp Camera takes that view. Your camera is not changed"""
 
     bl_idname = "lamp.camera_to_design"
-    bl_label = "Design Camera from Scene Camera"
+    bl_label = "Copy Scene Camera to Design"
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
@@ -300,23 +514,65 @@ class LAMP_OT_camera_to_design(bpy.types.Operator):
         if context.scene.camera is None:
             cls.poll_message_set("The scene has no camera")
             return False
+        if is_lamp_camera(context.scene.camera):
+            cls.poll_message_set("The scene camera is the Lamp Camera: the design's fields already are its view")
+            return False
         return True
 
     def execute(self, context):
         from ..core_tracer.scene.validate import SceneError
 
+        bl_scene = context.scene
         try:
-            design_properties.scene_to_design(context.scene, scene_for_render(context.scene))
+            seen = scene_for_render(bl_scene)
         except SceneError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
+        sync_view(bl_scene)
+        _write_design_camera(bl_scene, seen["camera"])
+        bl_scene.lamp_design.image.width, bl_scene.lamp_design.image.height = (
+            bl_scene.render.resolution_x, bl_scene.render.resolution_y)
+        sync_view(bl_scene)  # the design changed: the Lamp Camera, if any, follows
         return {"FINISHED"}
 
 
-classes = (LAMP_OT_camera_from_design, LAMP_OT_camera_to_design)
+class LAMP_PT_camera_view(bpy.types.Panel):
+    """In the design's Camera & Image panel: which camera renders, and the camera actions."""
+
+    bl_label = "Scene Camera"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Lamp"
+    bl_parent_id = "LAMP_PT_camera"
+    bl_order = 0
+
+    def draw(self, context):
+        layout = self.layout
+        text, icon = view_status(context.scene)
+        layout.label(text=text, icon=icon)
+        row = layout.row(align=True)
+        row.operator("lamp.frame_design", icon="VIEW_CAMERA")
+        if context.scene.camera is not None and not is_lamp_camera(context.scene.camera):
+            row.operator("lamp.camera_to_design", icon="OUTLINER_OB_CAMERA")
 
 
-register, unregister = design_panels.register_actions_factory(classes, (
-    ("lamp.camera_from_design", "Scene Camera from Design", "CAMERA_DATA"),
-    ("lamp.camera_to_design", "Design Camera from Scene Camera", "OUTLINER_OB_CAMERA"),
-))
+classes = (LAMP_OT_frame_design, LAMP_OT_camera_to_design, LAMP_PT_camera_view)
+
+_register_classes, _unregister_classes = design_panels.register_actions_factory(
+    classes, (("lamp.frame_design", "Frame Lamp", "VIEW_CAMERA"),))
+
+
+def register() -> None:
+    _register_classes()
+    bpy.app.handlers.depsgraph_update_post.append(_on_depsgraph_update)
+    bpy.app.handlers.load_post.append(_on_load_post)
+    _subscribe()
+
+
+def unregister() -> None:
+    bpy.msgbus.clear_by_owner(_MSGBUS_OWNER)
+    for handlers, handler in ((bpy.app.handlers.load_post, _on_load_post),
+                              (bpy.app.handlers.depsgraph_update_post, _on_depsgraph_update)):
+        while handler in handlers:
+            handlers.remove(handler)
+    _unregister_classes()

@@ -21,10 +21,9 @@ import numpy as np
 
 from ..core_tracer.images import display
 from ..core_tracer.scene.validate import SceneError
-from . import design_panels, image_view, render_camera
+from . import design_panels, image_view, jobs, render_camera
 
 IMAGE_NAME = "Lamp Tracer"
-POLL_SECONDS = 0.2
 
 
 class TracerJob:
@@ -82,6 +81,7 @@ def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
     Returns the image and the render time in seconds. Raises ``SceneError``."""
     from .. import core_tracer
 
+    render_camera.sync_view(bl_scene)
     scene = render_camera.scene_for_render(bl_scene)
     start = time.perf_counter()
     rgb = core_tracer.render(scene)
@@ -90,25 +90,22 @@ def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
     return image_view.show_linear(IMAGE_NAME, rgb * np.float32(2.0 ** exposure), exposure, bl_scene), seconds
 
 
-class LAMP_OT_render_tracer(bpy.types.Operator):
+class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
     """Render the lamp design with the paper's tracer into the "Lamp Tracer" image"""
 
     bl_idname = "lamp.render_tracer"
     bl_label = "Render with Lamp Tracer"
     bl_options = {"REGISTER"}
 
-    _active: TracerJob | None = None  # one interactive render at a time
+    job_key = bl_idname
+    busy_message = "A Lamp Tracer render is running (Esc cancels it)"
 
     @classmethod
     def poll(cls, context):
         if context.scene is None or context.scene.camera is None:
-            cls.poll_message_set("The scene has no camera; build the lamp or add a camera")
+            cls.poll_message_set("The scene has no camera; Frame Lamp (Camera & Image) or Build Lamp makes one")
             return False
-        job = LAMP_OT_render_tracer._active
-        if job is not None and not job.done.is_set():
-            cls.poll_message_set("A Lamp Tracer render is running (Esc cancels it)")
-            return False
-        return True
+        return cls.poll_not_running()
 
     def execute(self, context):
         try:
@@ -123,6 +120,7 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
             return self.execute(context)
+        render_camera.sync_view(context.scene)
         try:
             scene = render_camera.scene_for_render(context.scene)
         except SceneError as e:
@@ -134,28 +132,21 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
         self._image = image_view.show_linear(IMAGE_NAME, self._job.rows, exposure, context.scene)
         image_view.show_image(context, self._image)
         self._shown_rows = 0
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(POLL_SECONDS, window=context.window)
-        wm.modal_handler_add(self)
-        wm.progress_begin(0, 100)
-        LAMP_OT_render_tracer._active = self._job.start()
-        self._status(context)
+        outcome = self.begin_modal(context, self._job)
+        self._job.start()
+        return outcome
+
+    def escape(self, context):
+        self._job.stop()  # the worker stops between bands; the timer then ends the operator
         return {"RUNNING_MODAL"}
 
-    def modal(self, context, event):
+    def step(self, context):
         job = self._job
-        if event.type == "ESC" and event.value == "PRESS":
-            job.stop()
-            self._status(context)
-            return {"RUNNING_MODAL"}
-        if event.type != "TIMER":
-            return {"PASS_THROUGH"}
         self._show_rows(context)
         if not job.done.is_set():
-            context.window_manager.progress_update(int(100 * job.progress))
-            self._status(context)
-            return {"PASS_THROUGH"}
-        self._finish(context)
+            return None
+        self.end_modal(context)
+        self._show_rows(context)
         if job.error is not None:
             self.report({"ERROR"}, f"Lamp Tracer failed: {job.error}")
             return {"CANCELLED"}
@@ -165,11 +156,17 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
         self.report({"INFO"}, f"Lamp Tracer: {self._image.size[0]}x{self._image.size[1]} in {job.seconds:.2f} s")
         return {"FINISHED"}
 
-    def cancel(self, context):
-        # Blender ends the operator (file load, quit): stop the worker and clean up.
+    def abandon(self, context):
         self._job.stop()
         self._job.wait(5.0)
-        self._finish(context)
+
+    def status(self) -> str:
+        if self._job.stop_requested:
+            return "Lamp Tracer: cancelling..."
+        return f"Lamp Tracer: {100 * self._job.progress:.0f}% (Esc to cancel)"
+
+    def fraction(self) -> float:
+        return self._job.progress
 
     def _show_rows(self, context) -> None:
         if self._job.rows_done != self._shown_rows:
@@ -177,21 +174,6 @@ class LAMP_OT_render_tracer(bpy.types.Operator):
             self._image.pixels.foreach_set(image_view.rgba_rows(self._job.rows * self._gain))
             self._image.update()
             image_view.redraw_image_editors(context, self._image)
-
-    def _status(self, context) -> None:
-        if self._job.stop_requested:
-            text = "Lamp Tracer: cancelling..."
-        else:
-            text = f"Lamp Tracer: {100 * self._job.progress:.0f}% (Esc to cancel)"
-        context.workspace.status_text_set(text)
-
-    def _finish(self, context) -> None:
-        wm = context.window_manager
-        wm.event_timer_remove(self._timer)
-        wm.progress_end()
-        context.workspace.status_text_set(None)
-        self._show_rows(context)
-        LAMP_OT_render_tracer._active = None
 
 
 classes = (LAMP_OT_render_tracer,)

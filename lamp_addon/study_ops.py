@@ -24,33 +24,11 @@ from bpy_extras.io_utils import ExportHelper
 from ..core_tracer.library import presets as P
 from ..core_tracer.scene.validate import SceneError
 from ..core_tracer.study import definition as st
-from . import design_properties, image_view, study_panel
-
-POLL_SECONDS = 0.1
-_cache: dict[str, object] = {"json": None, "study": None}
-
+from . import design_properties, image_view, jobs, study_settings
+from .study_settings import last_study, sheet_image
 
 # ---------------------------------------------------------------------------------------------
-# The sheet image and its study
-
-
-def sheet_image() -> bpy.types.Image | None:
-    return bpy.data.images.get(study_panel.SHEET_IMAGE)
-
-
-def last_study() -> st.Study | None:
-    """The study of the "Lamp Study" image (parsed once per study, then cached)."""
-    image = sheet_image()
-    text = image.get(study_panel.STUDY_PROPERTY) if image is not None else None
-    if not isinstance(text, str):
-        return None
-    if _cache["json"] != text:
-        try:
-            study = st.Study.from_json(text, study_panel.STUDY_PROPERTY)
-        except SceneError:
-            study = None
-        _cache.update(json=text, study=study)
-    return _cache["study"]  # type: ignore[return-value]
+# The sheet image
 
 
 def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
@@ -60,10 +38,10 @@ def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
 
     exposure = display.auto_exposure(list(images))  # one for every variant, so the cells compare
     sheet = study_sheet.compose(study, images, exposure=exposure)
-    image = image_view.show_linear(study_panel.SHEET_IMAGE, sheet, exposure, context.scene)
+    image = image_view.show_linear(study_settings.SHEET_IMAGE, sheet, exposure, context.scene)
     text = study.to_json()
-    image[study_panel.STUDY_PROPERTY] = text
-    _cache.update(json=text, study=study)
+    image[study_settings.STUDY_PROPERTY] = text
+    study_settings.remember_study(study, text)
     image_view.show_image(context, image)
     return image
 
@@ -73,7 +51,7 @@ def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, 
     and the render time. Raises ``SceneError`` for a bad setting or design."""
     from ..core_tracer.study import run as study_run
 
-    study = study_panel.study_from_settings(context.scene)
+    study = study_settings.study_from_settings(context.scene)
     if workers is None:
         workers = context.scene.lamp_study.workers or None
     start = time.perf_counter()
@@ -92,24 +70,22 @@ def _summary(study: st.Study, seconds: float) -> str:
 # Operators
 
 
-class LAMP_OT_study_run(bpy.types.Operator):
+class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
     """Render variants of the design (one or two parameters varied) on a contact sheet"""
 
     bl_idname = "lamp.study_run"
     bl_label = "Run Study"
     bl_options = {"REGISTER"}
 
-    _running = False  # one interactive study at a time
+    job_key = bl_idname
+    busy_message = "A study is running (Esc cancels it)"
 
     @classmethod
     def poll(cls, context):
         if context.scene is None or not hasattr(context.scene, "lamp_study"):
             cls.poll_message_set("No scene")
             return False
-        if LAMP_OT_study_run._running:
-            cls.poll_message_set("A study is running (Esc cancels it)")
-            return False
-        return True
+        return cls.poll_not_running()
 
     def execute(self, context):
         from ..core_tracer.study.run import StudyError
@@ -131,7 +107,7 @@ class LAMP_OT_study_run(bpy.types.Operator):
         from ..core_tracer.study.run import StudyRun
 
         try:
-            self._study = study_panel.study_from_settings(context.scene)
+            self._study = study_settings.study_from_settings(context.scene)
         except SceneError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -142,58 +118,45 @@ class LAMP_OT_study_run(bpy.types.Operator):
             self.report({"ERROR"}, f"Lamp Study cannot start its workers: {e}")
             return {"CANCELLED"}
         self._start = time.perf_counter()
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(POLL_SECONDS, window=context.window)
-        wm.modal_handler_add(self)
-        wm.progress_begin(0, 100)
-        LAMP_OT_study_run._running = True
-        self._status(context)
-        return {"RUNNING_MODAL"}
+        return self.begin_modal(context, self._run)
 
-    def modal(self, context, event):
+    def escape(self, context):
+        self.abandon(context)
+        self.end_modal(context)
+        self.report({"WARNING"}, "Lamp Study cancelled")
+        return {"CANCELLED"}
+
+    def step(self, context):
         from ..core_tracer.study.run import StudyError
 
-        if event.type == "ESC" and event.value == "PRESS":
-            self._run.cancel()
-            self._finish(context)
-            self.report({"WARNING"}, "Lamp Study cancelled")
-            return {"CANCELLED"}
-        if event.type != "TIMER":
-            return {"PASS_THROUGH"}
         try:
             finished = self._run.poll()
         except StudyError as e:
-            self._finish(context)
+            self.end_modal(context)
             self.report({"ERROR"}, f"Lamp Study failed: {e}")
             return {"CANCELLED"}
         if not finished:
-            context.window_manager.progress_update(int(100 * self._run.fraction))
-            self._status(context)
-            return {"PASS_THROUGH"}
+            return None
         seconds = time.perf_counter() - self._start
         images = list(self._run.images)
-        self._finish(context)
+        self.end_modal(context)
         show_sheet(context, self._study, images)
         self.report({"INFO"}, _summary(self._study, seconds))
         return {"FINISHED"}
 
-    def cancel(self, context):
-        # Blender ends the operator (file load, quit): stop the workers and clean up.
+    def abandon(self, context):
         self._run.cancel()
-        self._finish(context)
 
-    def _status(self, context) -> None:
-        run = self._run
-        context.workspace.status_text_set(f"Lamp Study: {run.done}/{run.total} variants, "
-                                          f"{100 * run.fraction:.0f}% (Esc to cancel)")
-
-    def _finish(self, context) -> None:
+    def end_modal(self, context) -> None:
+        super().end_modal(context)
         self._run.close()
-        wm = context.window_manager
-        wm.event_timer_remove(self._timer)
-        wm.progress_end()
-        context.workspace.status_text_set(None)
-        LAMP_OT_study_run._running = False
+
+    def status(self) -> str:
+        run = self._run
+        return f"Lamp Study: {run.done}/{run.total} variants, {100 * run.fraction:.0f}% (Esc to cancel)"
+
+    def fraction(self) -> float:
+        return self._run.fraction
 
 
 def _chosen_variant(operator, context) -> tuple[st.Study, int] | None:
@@ -319,9 +282,4 @@ class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
 classes = (LAMP_OT_study_run, LAMP_OT_study_apply_variant, LAMP_OT_study_keep_variant, LAMP_OT_study_save_sheet)
 
 
-register, _unregister_classes = bpy.utils.register_classes_factory(classes)
-
-
-def unregister() -> None:
-    _unregister_classes()
-    _cache.update(json=None, study=None)  # the cached study belongs to this registration
+register, unregister = bpy.utils.register_classes_factory(classes)

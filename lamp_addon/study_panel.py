@@ -5,7 +5,7 @@ The settings live on the scene (``Scene.lamp_study``): for each axis a parameter
 that ``core_tracer.study`` can vary, lamp fields for all lamps or for one), and its values as a range
 with a number of steps or as a list written as on the command line (``1.45, 1.5`` or, for colours and
 other vectors, ``0.9/0.1/0.1, 0.9/0.5/0.05``); the size of each variant and the number of worker
-processes. ``study_from_settings`` turns them into a ``core_tracer.study.Study`` of the current design;
+processes. ``study_settings.study_from_settings`` turns them into a ``core_tracer.study.Study`` of the current design;
 the operators (``study_ops``) render it and show the contact sheet.
 """
 
@@ -15,14 +15,11 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from ..core_tracer.scene import spec as S
-from ..core_tracer.scene.validate import SceneError
 from ..core_tracer.study import definition as st
-from . import design_properties
+from . import design_properties, study_settings
+from .study_settings import ALL_LAMPS, is_lamp_parameter, is_single_number
 
 LENS_COLOUR = "lens.transmitted_color"
-ALL_LAMPS = "ALL"
-SHEET_IMAGE = "Lamp Study"
-STUDY_PROPERTY = "lamp_study"  # custom property of the sheet image: the study's JSON, so it can be re-run
 
 
 def _parameter_label(path: str) -> str:
@@ -51,15 +48,6 @@ LAMP_ITEMS = ((ALL_LAMPS, "All Lamps", "Change the parameter of every lamp"),
               *((str(i), f"Lamp {i + 1}", f"Change the parameter of lamp {i + 1} only") for i in range(S.MAX_LAMPS)))
 MODE_ITEMS = (("RANGE", "Range", "From a first to a last value in a number of equal steps"),
               ("LIST", "List", "Values separated by commas; vectors and colours as a/b/c"))
-
-
-def is_single_number(path: str) -> bool:
-    spec = S.lookup(path)
-    return isinstance(spec, S.Num) and spec.size == 1
-
-
-def is_lamp_parameter(path: str) -> bool:
-    return path.split(".")[0] in S.LAMP.fields
 
 
 def _suggest_range(self, context) -> None:
@@ -127,38 +115,6 @@ class LAMP_PG_study(bpy.types.PropertyGroup):
         del bpy.types.Scene.lamp_study
 
 
-def axis_doc(axis) -> dict:
-    """One axis of the settings as a ``lamp-study/1`` axis document (checked when the study is built)."""
-    path = axis.parameter
-    if axis.lamp != ALL_LAMPS and is_lamp_parameter(path):
-        path = f"lamps[{axis.lamp}].{path}"
-    if axis.mode == "RANGE":
-        if not is_single_number(axis.parameter):
-            raise SceneError(path, "is a vector or a switch; give its values as a list (e.g. 0.9/0.1/0.1, 0.5/0.5/0.5)")
-        return {"parameter": path, "range": [axis.start, axis.stop], "steps": axis.steps}
-    if not axis.values.strip():
-        raise SceneError(path, "has no values; write them separated by commas")
-    return st.parse_vary(f"{path}={axis.values}")
-
-
-def study_from_settings(bl_scene) -> st.Study:
-    """The study the settings describe, of the scene's current design seen through its camera.
-    Raises ``SceneError`` (with the parameter, value and range) for a bad setting or design."""
-    from . import render_camera
-
-    settings = bl_scene.lamp_study
-    size = (settings.width, settings.height)
-    if bl_scene.camera is not None:
-        base = render_camera.scene_for_render(bl_scene, size=size)
-    else:  # no scene camera: the design's own camera section
-        base = design_properties.design_to_scene(bl_scene)
-        base["image"] = {"width": size[0], "height": size[1]}
-    axes = [axis_doc(settings.axis_1)]
-    if settings.use_axis_2:
-        axes.append(axis_doc(settings.axis_2))
-    return st.Study.build(base, axes, size)
-
-
 # ---------------------------------------------------------------------------------------------
 # The panel
 
@@ -193,8 +149,6 @@ class LAMP_PT_study(bpy.types.Panel):
     bl_order = 20
 
     def draw(self, context):
-        from . import study_ops
-
         layout = self.layout
         settings = context.scene.lamp_study
         _draw_axis(layout, settings.axis_1, "Columns")
@@ -209,7 +163,7 @@ class LAMP_PT_study(bpy.types.Panel):
         col.prop(settings, "workers")
         layout.operator("lamp.study_run", icon="IMGDISPLAY")
 
-        study = study_ops.last_study()
+        study = study_settings.last_study()
         if study is None:
             return
         box = layout.box()

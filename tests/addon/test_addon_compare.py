@@ -64,7 +64,7 @@ def _region_mean(image: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
 
 
 def test_side_by_side_layout_and_labels(lamp_addon):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.convert.sheet
     left = np.full((40, 30, 3), 0.25, np.float32)
     right = np.full((40, 30, 3), 0.75, np.float32)
     out = compare.side_by_side(left, right, ("Lamp Tracer",), ("Cycles",))
@@ -77,7 +77,7 @@ def test_side_by_side_layout_and_labels(lamp_addon):
 
 
 def test_side_by_side_picks_the_label_that_fits(lamp_addon, addon_core):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.convert.sheet
     fitting = addon_core.images.labels.fitting  # the one label module, shared with study sheets
     assert compare.labels.fitting is fitting
     measure = lambda t: len(t) * addon_core.images.bitmap_font.ADVANCE_W  # noqa: E731
@@ -86,7 +86,7 @@ def test_side_by_side_picks_the_label_that_fits(lamp_addon, addon_core):
 
 
 def test_bitmap_labels_use_core_tracers_font(lamp_addon, addon_core):
-    compare, font = lamp_addon.compare_ops, addon_core.images.bitmap_font
+    compare, font = lamp_addon.convert.sheet, addon_core.images.bitmap_font
     assert compare.bitmap_font is font  # one font in the project, core_tracer's
     labels = ("Lamp Tracer  12.34 s", "Tracer", "Cycles  64 spp  56.7 s", "Cycles  56.7 s", "Cycles")
     assert all(c.upper() in font.GLYPHS for label in labels for c in label)  # no character drawn as a box
@@ -113,7 +113,7 @@ def test_differences(lamp_addon):
     a[0, 0] = (1.0, 2.0, 0.0)
     b[0, 0] = (0.0, 0.0, 0.0)
     b[1, 1] = (0.0, 0.0, 2.0)
-    d = lamp_addon.compare_ops.differences(a, b)
+    d = lamp_addon.convert.sheet.differences(a, b)
     assert d["mean_difference"] == pytest.approx([0.25, 0.5, -0.5])
     assert d["mean_abs_difference"] == pytest.approx([0.25, 0.5, 0.5])
     assert d["rms_difference"] == pytest.approx([0.5, 1.0, 1.0])
@@ -159,7 +159,7 @@ def _handlers_installed(compare) -> list[str]:
 def _design_and_user_settings(lamp_addon, bl_scene, size=(24, 16)) -> dict:
     """The baseline design with its scene camera and the user's settings; returns those settings."""
     lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=size))
-    lamp_addon.render_camera.ensure_scene_camera(bl_scene, _scene())
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
     return _settings(lamp_addon.compare_ops, bl_scene)
 
@@ -170,7 +170,7 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     compare = lamp_addon.compare_ops
     scene = _scene(size=(40, 24))
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_scene_camera(bl_scene, scene)
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
     before = _settings(compare, bl_scene)
     result = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
@@ -209,9 +209,10 @@ def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
     assert bl_scene.camera is None
     result = lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
-    assert bl_scene.camera is not None  # the design's camera became the scene camera
+    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)  # the Lamp Camera, at the design's view
     assert result["size"] == (24, 16) and result["scene"]["camera"]["position"] == pytest.approx(
         scene["camera"]["position"], abs=1e-3)
+    assert result["left_out"] == []
 
 
 # ---------------------------------------------------------------------------------------------

@@ -26,7 +26,7 @@ def no_openimageio(monkeypatch):
 def _design(lamp_addon, bl_scene) -> None:
     scene = scene_with(image={"width": 24, "height": 16})
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_scene_camera(bl_scene, scene)
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def test_openimageio_is_missing_as_blender_sees_it(lamp_addon, no_openimageio):
@@ -49,7 +49,7 @@ def test_compare_runs_and_says_once_that_it_cannot_save(lamp_addon, bl_scene, tm
     assert not out.exists() and list(tmp_path.iterdir()) == []
     # The comparison itself is there, labelled with the bitmap font.
     shown = lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Compare"])
-    strip = lamp_addon.compare_ops.label_height(16)
+    strip = lamp_addon.convert.sheet.label_height(16)
     assert shown.shape == (16 + strip, 2 * 24 + 2, 3) and shown[:strip].max() > 0.5
 
 

@@ -55,41 +55,11 @@ def _preset_scene(camera: dict | None = None, size=(48, 32)) -> dict:
 
 def _load_design(lamp_addon, bl_scene, scene: dict) -> None:
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_scene_camera(bl_scene, scene)
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def _axes(cam, camera_module):
-    return np.array(camera_module.look_at_axes(cam["position"], cam["target"], cam["up"]))
-
-
-# ---------------------------------------------------------------------------------------------
-# Camera: the pure formulas
-
-
-def test_camera_formulas(lamp_addon):
-    cam = lamp_addon.render_camera
-    assert cam.render_size(1920, 1080, 50) == (960, 540)
-    assert cam.render_size(101, 33, 33) == (33, 10)  # Blender divides integers
-    assert cam.fitted_side("auto", 48, 32) == "horizontal"
-    assert cam.fitted_side("auto", 32, 48) == "vertical"
-    assert cam.fitted_side("auto", 40, 40) == "horizontal"  # a tie fits horizontally, as Blender
-    assert cam.fitted_side("vertical", 48, 32) == "vertical"
-    assert cam.sensor_size("auto", 36.0, 24.0) == 36.0  # AUTO uses the sensor width for either side
-    assert cam.sensor_size("vertical", 36.0, 24.0) == 24.0
-    assert cam.fov_from_lens(50.0, 36.0) == pytest.approx(39.5977, abs=1e-4)  # Blender's default camera
-    for fov in (0.5, 16.0, 90.0, 169.0):
-        assert cam.fov_from_lens(cam.lens_from_fov(fov, 36.0), 36.0) == pytest.approx(fov, abs=1e-9)
-
-
-def test_view_from_axes_keeps_world_up_when_level(lamp_addon):
-    cam = lamp_addon.render_camera
-    right, up, back = cam.look_at_axes((0, -800, 100), (0, 0, 0), (0, 0, 1))
-    view = cam.view_from_axes((0, -800, 100), up, back, math.dist((0, -800, 100), (0, 0, 0)))
-    assert view["up"] == [0.0, 0.0, 1.0]
-    assert view["target"] == pytest.approx([0, 0, 0], abs=1e-9)
-    right, up, back = cam.look_at_axes((0, -800, 0), (0, 0, 0), (0.3, 0, 1))  # rolled
-    view = cam.view_from_axes((0, -800, 0), up, back, 800.0)
-    assert view["up"] == pytest.approx(list(up), abs=1e-12)
+    return np.array(camera_module.convert.camera.look_at_axes(cam["position"], cam["target"], cam["up"]))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -109,7 +79,7 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
     assert back["position"] == pytest.approx(want["position"], abs=1e-4)
     # Orientation to 1e-4 degrees; the target keeps its distance to 1e-4 mm. The target point itself
     # is only as exact as a float32 rotation at ~1 m allows (1e-7 rad is 1e-4 mm at 800 mm).
-    for got, wanted in zip(_axes(back, lamp_addon.render_camera), _axes(want, lamp_addon.render_camera), strict=True):
+    for got, wanted in zip(_axes(back, lamp_addon), _axes(want, lamp_addon), strict=True):
         assert math.degrees(math.acos(min(1.0, float(np.dot(got, wanted))))) < 1e-4
     assert math.dist(back["position"], back["target"]) == pytest.approx(
         math.dist(want["position"], want["target"]), abs=1e-4)
@@ -167,27 +137,89 @@ def test_camera_refuses_what_the_tracer_cannot_render(lamp_addon, addon_core, bl
         lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
 
 
-def test_camera_operators(lamp_addon, bl_scene):
+def _user_camera(lamp_addon, bl_scene, scene: dict):
+    """A camera of the user's ("My Camera") at the scene's view, made the scene camera."""
     import bpy
 
+    ob = bpy.data.objects.new("My Camera", bpy.data.cameras.new("My Camera"))
+    bl_scene.collection.objects.link(ob)
+    lamp_addon.render_camera.apply_camera(ob, scene["camera"], bl_scene)
+    lamp_addon.render_camera.set_render_size(bl_scene, scene["image"])
+    bl_scene.camera = ob
+    return ob
+
+
+def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_scene):
+    """Editing the design's Camera & Image fields moves the Lamp Camera and sets the resolution;
+    moving the Lamp Camera or changing the resolution writes the design: one view, one size."""
+    import bpy
+
+    rc = lamp_addon.render_camera
     scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    assert bpy.ops.lamp.camera_from_design() == {"FINISHED"}
-    assert bl_scene.camera is not None and (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (40, 30)
-    assert lamp_addon.render_camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(31.25, abs=1e-4)
-    bl_scene.camera.location.x += 0.05  # the user moves the camera 50 mm to the right ...
-    bl_scene.render.resolution_x = 64
-    assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # ... and stores the view in the design
+    ob, made = rc.ensure_lamp_camera(bl_scene, frame=False)
+    assert bl_scene.camera == ob and rc.is_lamp_camera(ob) and "Lamp Camera" in made
+    assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (40, 30)
+    assert rc.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(31.25, abs=1e-4)
+    # The design's FOV reaches the render (16 -> 40 in the issue; here 31.25 -> 40).
+    bl_scene.lamp_design.camera.fov_deg = 40.0
+    assert rc.sync_view(bl_scene) == "blender"
+    assert rc.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
+    assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
+    image = bpy.data.images["Lamp Tracer"]
+    # What renders is the design's view up to Blender's single-precision camera (the image's pixels
+    # carry the exposure it is shown at).
+    gain = np.float32(2.0 ** lamp_addon.image_view.image_exposure(image))
+    rendered = lamp_addon.image_view.image_to_array(image) / gain
+    np.testing.assert_allclose(rendered, core_tracer.render(lamp_addon.design_properties.design_to_scene(bl_scene)),
+                               atol=1e-4, rtol=1e-5)
+    # The design's image size is the render size.
+    bl_scene.lamp_design.image.width = 48
+    rc.sync_view(bl_scene)
+    assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (48, 30)
+    # The user moves the Lamp Camera 50 mm to the right and sets the resolution: the design follows.
+    ob.location.x += 0.05
+    bl_scene.render.resolution_y = 36
+    bpy.context.view_layer.update()  # Blender's depsgraph update: the add-on's handler writes the design
     design = lamp_addon.design_properties.design_to_scene(bl_scene)
-    assert design["camera"]["position"][0] == pytest.approx(-40.0 + 50.0, abs=1e-3)
-    assert design["image"] == {"width": 64, "height": 30}
+    assert design["camera"]["position"][0] == pytest.approx(scene["camera"]["position"][0] + 50.0, abs=1e-3)
+    assert design["image"] == {"width": 48, "height": 36}
+    assert rc.sync_view(bl_scene) == ""  # both sides agree now
+
+
+def test_a_users_camera_is_rendered_as_it_is_and_never_moved(lamp_addon, bl_scene):
+    import bpy
+
+    rc = lamp_addon.render_camera
+    scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    rc.ensure_lamp_camera(bl_scene, frame=False)
+    lamp = bl_scene.camera
+    mine = _user_camera(lamp_addon, bl_scene, _preset_scene({"position": [60.0, -700.0, 40.0]}, (40, 30)))
+    before = tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens
+    assert "not used" in rc.view_status(bl_scene)[0] and "My Camera" in rc.view_status(bl_scene)[0]
+    bl_scene.lamp_design.camera.fov_deg = 20.0  # drives the Lamp Camera, not mine
+    rc.sync_view(bl_scene)
+    assert rc.keep_framed(bl_scene)  # frames the Lamp Camera ...
+    assert (tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens) == before  # ... never mine
+    assert rc.scene_camera_to_dict(bl_scene, lamp)["fov_deg"] == pytest.approx(20.0, abs=1e-4)
+    assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # my view into the design: the Lamp Camera takes it
+    assert (tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens) == before
+    design = lamp_addon.design_properties.design_to_scene(bl_scene)
+    assert design["camera"]["position"] == pytest.approx([60.0, -700.0, 40.0], abs=1e-3)
+    assert rc.scene_camera_to_dict(bl_scene, lamp)["position"] == pytest.approx([60.0, -700.0, 40.0], abs=1e-3)
+    bl_scene.camera = lamp
+    assert not bpy.ops.lamp.camera_to_design.poll()  # the Lamp Camera's view already is the design's
 
 
 def test_an_out_of_date_design_camera_does_not_block_a_render(lamp_addon, addon_core, bl_scene):
+    """Through a camera of the user's, the design's own camera fields are not used: an invalid one
+    does not stop the render."""
     import bpy
 
     scene = _preset_scene(size=(24, 16))
-    _load_design(lamp_addon, bl_scene, scene)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    _user_camera(lamp_addon, bl_scene, scene)
     bl_scene.lamp_design.camera.position = (0.0, 500.0, 0.0)  # the design's own camera: behind the lamp
     with pytest.raises(addon_core.SceneError, match=r"camera\.position: y = 500"):
         lamp_addon.design_properties.design_to_scene(bl_scene)
@@ -586,8 +618,11 @@ def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):
 
     lamp_addon.design_properties.scene_to_design(bl_scene, _preset_scene())
     assert not bpy.ops.lamp.render_tracer.poll()
-    with pytest.raises(RuntimeError, match="no camera"):
+    with pytest.raises(RuntimeError, match="no camera; Frame Lamp .* or Build Lamp makes one"):
         bpy.ops.lamp.render_tracer()
+    # ... and both do: Build in a file without a camera makes the Lamp Camera.
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera) and bpy.ops.lamp.render_tracer.poll()
 
 
 def test_tracer_job_runs_on_a_thread_and_equals_core_render(lamp_addon):

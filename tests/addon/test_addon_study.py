@@ -25,7 +25,7 @@ def design(lamp_addon, bl_scene):
     with open(PRESET, encoding="utf-8") as f:
         scene = core_tracer.parse_scene(json.load(f))
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_scene_camera(bl_scene, scene)
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
     settings = bl_scene.lamp_study
     settings.width, settings.height = 32, 32
     settings.workers = 2
@@ -79,7 +79,7 @@ def test_range_settings_and_one_lamp(design, lamp_addon):
     settings.axis_2.parameter = "lens.transmitted_color"
     assert settings.axis_2.mode == "LIST"
     settings.axis_2.values = "0.9/0.1/0.1, 0.9/0.5/0.05"
-    study = lamp_addon.study_panel.study_from_settings(design)
+    study = lamp_addon.study_settings.study_from_settings(design)
     assert [a.parameter.text for a in study.axes] == ["lamps[0].cuts.height", "lens.transmitted_color"]
     assert (study.columns, study.rows) == (4, 2)
 
