@@ -48,16 +48,31 @@ def register_actions_factory(classes: tuple[type, ...], actions: tuple[tuple[str
 
 
 def leaf_keys(section: S.Section) -> list[str]:
-    """The keys of ``section`` drawn as plain properties: leaves that are not constants."""
+    """The keys of ``section`` drawn as plain properties: leaves that are not constants and belong
+    to no either/or rule (those are drawn by ``draw_rule``)."""
     return [key for key, spec in section.fields.items()
-            if not isinstance(spec, (S.Section, S.ListOf)) and not design_properties.is_constant(spec)]
+            if not isinstance(spec, (S.Section, S.ListOf)) and not design_properties.is_constant(spec)
+            and section.rule_of(key) is None]
 
 
 def draw_section(layout, group, section: S.Section, kinds: tuple[type, ...] | None = None) -> None:
-    """One ``prop`` per leaf field of ``section`` (only of the given spec ``kinds`` if set)."""
+    """One ``prop`` per leaf field of ``section`` (only of the given spec ``kinds`` if set), then
+    each either/or rule of the section."""
     for key in leaf_keys(section):
         if kinds is None or isinstance(section.fields[key], kinds):
             layout.prop(group, key)
+    if kinds is None:
+        for rule in section.one_of:
+            draw_rule(layout, group, rule)
+
+
+def draw_rule(layout, group, rule: S.OneOf) -> None:
+    """An either/or rule: its forms as a row of buttons, then the fields of the form in use."""
+    box = layout.box()
+    mode = design_properties.mode_property(rule)
+    box.row().prop(group, mode, expand=True)
+    for key in rule.alternative(getattr(group, mode)).keys:
+        box.prop(group, key)
 
 
 def active_lamp(context):
@@ -177,32 +192,13 @@ class _LampPartPanel(_LampTab):
         draw_section(self._split(self.layout), getattr(active_lamp(context), self.part), S.LAMP.fields[self.part])
 
 
-class LAMP_PT_lens(_LampPartPanel, bpy.types.Panel):
-    bl_label = "Lens"
-    part = "lens"
-    bl_order = list(S.LAMP.fields).index("lens")
-
-    def draw(self, context):
-        layout = self._split(self.layout)
-        lens = active_lamp(context).lens
-        for key in leaf_keys(S.LENS):
-            if key not in S.LENS.optional:
-                layout.prop(lens, key)
-        box = layout.box()
-        box.row().prop(lens, "color_mode", expand=True)
-        for key in design_properties.LENS_COLOR_MODES[lens.color_mode]:
-            box.prop(lens, key)
-
-
 def _make_part_panel(key: str, order: int) -> type:
     return type(f"LAMP_PT_{key}", (_LampPartPanel, bpy.types.Panel),
                 {"bl_label": design_properties.display_name(key), "part": key, "bl_order": order})
 
 
-_part_panels = tuple(
-    LAMP_PT_lens if key == "lens" else _make_part_panel(key, order)
-    for order, (key, spec) in enumerate(S.LAMP.fields.items()) if isinstance(spec, S.Section)
-)
+_part_panels = tuple(_make_part_panel(key, order) for order, (key, spec) in enumerate(S.LAMP.fields.items())
+                     if isinstance(spec, S.Section))
 
 classes = (
     LAMP_UL_lamps,

@@ -19,9 +19,11 @@ Lengths are kept in millimetres exactly as in the JSON (the property name carrie
 32 bits; reading one back takes the shortest decimal that gives the same 32-bit float, which turns
 every JSON value of at most 6 significant digits back into itself (``design_to_scene``).
 
-The lens colour is the designer's choice of two forms (``LENS_COLOR_MODES``): a transmitted colour at
-a reference thickness (set with a colour picker) or absorption coefficients. Both sets of properties
-exist; ``color_mode`` says which one the design uses and only that one is written to the scene.
+An either/or rule of the spec (``spec.OneOf``, the lens colour: a transmitted colour at a reference
+thickness, or absorption coefficients) becomes an ``EnumProperty`` ``<rule>_mode`` (``color_mode``)
+whose items are the rule's forms and whose default is its preferred form (the colour picker). The
+properties of every form exist; the mode says which form the design uses, and only that form's fields
+are written to the scene.
 """
 
 from __future__ import annotations
@@ -46,17 +48,6 @@ from ..core_tracer.scene import validate as lamp_scene
 OPEN_BOUND_MARGIN = 1.0e-6  # an open bound lo < x becomes lo + margin * max(1, |lo|) <= x
 TAG_SEPARATOR = ","
 
-# The lens colour: mode identifier -> the optional lens fields that mode writes.
-LENS_COLOR_MODES = {
-    "TRANSMITTED": ("transmitted_color", "reference_thickness"),
-    "ABSORPTION": ("absorption",),
-}
-LENS_COLOR_MODE_ITEMS = (
-    ("TRANSMITTED", "Transmitted Colour", "Colour seen through the reference thickness of lens (colour picker)"),
-    ("ABSORPTION", "Absorption", "RGB absorption coefficients A per mm (eq. 2)"),
-)
-assert all(k in S.LENS.optional for keys in LENS_COLOR_MODES.values() for k in keys)
-
 _ACRONYMS = {"fov": "FOV", "ior": "IOR", "rgb": "RGB"}
 
 
@@ -71,6 +62,25 @@ def display_name(key: str, unit: str = "") -> str:
         words = words[:-1]
     text = " ".join(_ACRONYMS.get(w, w.capitalize()) for w in words)
     return f"{text} ({unit})" if unit else text
+
+
+def mode_property(rule: S.OneOf) -> str:
+    """The name of the ``EnumProperty`` that says which form of ``rule`` a section uses."""
+    return f"{rule.name}_mode"
+
+
+def form_used(group, section: S.Section, key: str) -> bool:
+    """Whether the field ``key`` of ``group`` (a ``section``) is part of the design: always,
+    unless it belongs to a form of an either/or rule that the group does not use."""
+    rule = section.rule_of(key)
+    return rule is None or key in rule.alternative(getattr(group, mode_property(rule))).keys
+
+
+def _mode_enum(rule: S.OneOf) -> EnumProperty:
+    # Items in the rule's order: Blender stores the index, so the order is part of saved files.
+    return EnumProperty(name=display_name(rule.name) + " Mode",
+                        items=tuple((alt.name, alt.label, alt.doc) for alt in rule.alternatives),
+                        default=rule.preferred, description=rule.doc)
 
 
 def is_constant(spec: S.Spec) -> bool:
@@ -150,10 +160,8 @@ def _make_groups(section: S.Section, class_name: str, out: list[type], extra: di
             annotations[f"active_{key}_index"] = IntProperty(name=f"Active {display_name(key)} Index", min=0)
         else:
             annotations[key] = _leaf_property(key, spec)
-    if section is S.LENS:
-        annotations["color_mode"] = EnumProperty(
-            name="Colour Mode", items=LENS_COLOR_MODE_ITEMS, default="ABSORPTION",
-            description="How the lens colour is given: transmitted colour at a thickness, or absorption")
+    for rule in section.one_of:
+        annotations[mode_property(rule)] = _mode_enum(rule)
     namespace = {"__annotations__": annotations, "__doc__": section.doc or class_name, **(extra or {})}
     cls = type(class_name, (bpy.types.PropertyGroup,), namespace)
     out.append(cls)
@@ -210,10 +218,7 @@ def _read_section(group, section: S.Section) -> dict:
             out[key] = _read_section(getattr(group, key), spec)
         elif isinstance(spec, S.ListOf):
             out[key] = [_read_section(item, spec.item) for item in getattr(group, key)]
-        elif section is S.LENS and key in S.LENS.optional:
-            if key in LENS_COLOR_MODES[group.color_mode]:
-                out[key] = _read_leaf(getattr(group, key), spec)
-        else:
+        elif form_used(group, section, key):
             out[key] = _read_leaf(getattr(group, key), spec)
     return out
 
@@ -290,8 +295,9 @@ def _write_section(group, section: S.Section, data: dict) -> None:
             setattr(group, key, f"{TAG_SEPARATOR} ".join(value))
         else:
             setattr(group, key, value)
-    if section is S.LENS:
-        group.color_mode = next(mode for mode, keys in LENS_COLOR_MODES.items() if keys[0] in data)
+    for rule in section.one_of:
+        if rule.given(data):  # a partial write (a lamp function's defaults) may leave the form alone
+            setattr(group, mode_property(rule), rule.chosen(data).name)
 
 
 def set_lamp(item, lamp: dict) -> None:

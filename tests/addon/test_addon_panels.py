@@ -138,7 +138,7 @@ def test_panels_are_in_the_lamp_tab(lamp_addon):
 
 def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
     shown = set()
-    for mode in ("TRANSMITTED", "ABSORPTION"):
+    for mode in ("transmitted_color", "absorption"):
         design.lamps[2].lens.color_mode = mode
         for cls in _panels(lamp_addon):
             shown |= draw(cls, bl_scene).spec_paths()
@@ -182,12 +182,12 @@ def test_lens_colour_mode(lamp_addon, bl_scene, design):
     import bpy
 
     lens = design.lamps[2].lens
-    lens.color_mode = "TRANSMITTED"
+    lens.color_mode = "transmitted_color"
     layout = draw(bpy.types.LAMP_PT_lens, bl_scene)
     drawn = [prop for _, _, prop, _ in layout.props()]
     assert "color_mode" in drawn
     assert {"transmitted_color", "reference_thickness"} <= set(drawn) and "absorption" not in drawn
-    lens.color_mode = "ABSORPTION"
+    lens.color_mode = "absorption"
     drawn = [prop for _, _, prop, _ in draw(bpy.types.LAMP_PT_lens, bl_scene).props()]
     assert "absorption" in drawn and "transmitted_color" not in drawn
 
