@@ -29,6 +29,7 @@ def modules() -> tuple:
         render_ops,
         study_ops,
         study_panel,
+        study_settings,
     )
 
     return (
@@ -37,7 +38,7 @@ def modules() -> tuple:
         design_panels,
         render_camera, render_engine, render_ops, compare_ops,
         preferences, preset_library, preset_ops, preset_panel,
-        study_panel, study_ops,
+        study_settings, study_panel, study_ops,
     )
 
 

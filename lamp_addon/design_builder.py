@@ -21,6 +21,7 @@ import numpy as np
 from mathutils import Vector
 from mathutils.geometry import tessellate_polygon
 
+from ..core_tracer.scene import functions
 from ..core_tracer.scene import validate as lamp_scene
 from . import design_materials
 from .convert import meshes, units
@@ -43,10 +44,6 @@ class BuildReport:
     @property
     def worst_deviation(self) -> float:
         return max(self.max_deviation.values(), default=0.0)
-
-
-def lamp_label(index: int) -> str:
-    return f"Lamp {index + 1}"
 
 
 def build_lamp(bl_scene: bpy.types.Scene, scene: dict) -> BuildReport:
@@ -123,7 +120,7 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict) -> BuildReport:
 
     for (i, lamp, g, reflector_data), n in zip(lamp_objects, segments, strict=True):
         base = f"lamps[{i}]"
-        label = lamp_label(i)
+        label = functions.lamp_label(scene["lamps"], i)  # "Stop" for a stop lamp, else "Lamp 2"
         cx, cz = lamp["center"]
         axis = (cx * MM, 0.0, cz * MM)
 

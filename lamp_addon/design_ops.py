@@ -13,7 +13,7 @@ import copy
 import bpy
 
 from ..core_tracer.scene import spec
-from ..core_tracer.scene.validate import SceneError, parse_scene
+from ..core_tracer.scene.validate import SceneError, new_lamp, parse_scene
 from . import design_properties
 
 MARGIN_MM = 5.0  # between a new lens and its neighbour, and at least between it and the body's edge
@@ -30,9 +30,6 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
     def poll(cls, context):
         if not design_properties.poll_design(cls, context):
             return False
-        if len(context.scene.lamp_design.lamps) >= spec.MAX_LAMPS:
-            cls.poll_message_set(f"A design has at most {spec.MAX_LAMPS} lamps")
-            return False
         refusal = _add_refusal(context.scene)
         if refusal is not None:
             cls.poll_message_set(refusal)
@@ -41,11 +38,15 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
 
     def execute(self, context):
         design = context.scene.lamp_design
-        try:
-            doc = design_with_new_lamp(design_properties.design_document(context.scene), design.active_lamps_index)
-        except SceneError as e:
-            self.report({"ERROR"}, f"Cannot add a lamp: {e}")
+        refusal = _add_refusal(context.scene)
+        if refusal is not None:
+            self.report({"ERROR"}, refusal)
             return {"CANCELLED"}
+        doc = design_properties.design_document(context.scene)
+        try:
+            doc = design_with_new_lamp(doc, design.active_lamps_index)
+        except SceneError:  # the design has an error of its own, which the panel shows: add the lamp anyway
+            doc = _with_new_lamp_unchecked(doc, design.active_lamps_index)
         design_properties.set_lamp(design.lamps.add(), doc["lamps"][-1])
         design.body.center = doc["body"]["center"]
         design.body.size = doc["body"]["size"]
@@ -57,18 +58,46 @@ _refusal_memo: dict = {"key": None, "refusal": None}  # the last design poll che
 
 
 def _add_refusal(bl_scene) -> str | None:
-    """Why a lamp cannot be added to the scene's design, or None. Checking a design takes
+    """Why a lamp cannot be added to the scene's design, or None: only reasons of adding itself
+    (four lamps already, no room for a body that holds the new lamp); an error the design has
+    anyway is the panel's to show, not a reason to grey out Add Lamp. Checking a design takes
     milliseconds and poll runs at every redraw of the panel, so the answer is kept until the
     design changes."""
-    key = (design_properties.design_document(bl_scene), bl_scene.lamp_design.active_lamps_index)
+    doc = design_properties.design_document(bl_scene)
+    if len(doc["lamps"]) >= spec.MAX_LAMPS:
+        return f"A design has at most {spec.MAX_LAMPS} lamps"
+    key = (doc, bl_scene.lamp_design.active_lamps_index)
     if _refusal_memo["key"] != key:
-        try:
-            design_with_new_lamp(*key)
-            refusal = None
-        except SceneError as e:
-            refusal = f"Cannot add a lamp: {e}"
-        _refusal_memo.update(key=key, refusal=refusal)
+        _refusal_memo.update(key=key, refusal=_refusal_of(*key))
     return _refusal_memo["refusal"]
+
+
+def _refusal_of(doc: dict, active_index: int) -> str | None:
+    try:
+        parse_scene({key: value for key, value in doc.items() if key != "camera"})
+    except SceneError:
+        # An error of the design itself, which the panel shows, is no reason to refuse; only the
+        # new lamp's own place is.
+        body = _with_new_lamp_unchecked(doc, active_index)["body"]
+        limit = spec.BODY.fields["size"].hi
+        if max(body["size"]) > limit:
+            return (f"Cannot add a lamp: the body would need {max(body['size']):g} mm; body.size allows up "
+                    f"to {limit:g} mm (make the lenses smaller or remove a lamp)")
+        return None
+    try:
+        design_with_new_lamp(doc, active_index)
+    except SceneError as e:
+        return f"Cannot add a lamp: {e}"
+    return None
+
+
+def _with_new_lamp_unchecked(doc: dict, active_index: int) -> dict:
+    """``design_with_new_lamp`` without the check: a copy of the active lamp placed beside the others."""
+    doc = copy.deepcopy(doc)
+    lamps = doc["lamps"]
+    lamps.append(copy.deepcopy(lamps[active_index]) if 0 <= active_index < len(lamps) else new_lamp())
+    place_new_lamp(doc)
+    return doc
 
 
 def design_with_new_lamp(doc: dict, active_index: int) -> dict:
@@ -82,7 +111,7 @@ def design_with_new_lamp(doc: dict, active_index: int) -> dict:
     if 0 <= active_index < len(lamps):
         lamps.append(copy.deepcopy(lamps[active_index]))
     else:
-        lamps.append(parse_scene({"schema": spec.SCHEMA, "lamps": [{}]})["lamps"][0])
+        lamps.append(new_lamp())
     place_new_lamp(doc)
     parse_scene({key: value for key, value in doc.items() if key != "camera"})
     return doc

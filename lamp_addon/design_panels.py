@@ -1,7 +1,10 @@
 """The "Lamp" tab of the 3D Viewport sidebar: every field of the design, the lamp list and the actions.
 
 Fields are drawn by walking ``core_tracer.spec`` sections, so a field added to the spec shows up
-without touching this file. Lengths carry their unit in the property name ("Radius (mm)").
+without touching this file; an either/or rule of a section (the lens colour) is drawn as a row of
+its forms and the fields of the form in use. Lengths carry their unit in the property name
+("Radius (mm)"). The top of the panel says whether the design is valid; the field its first error
+names is highlighted where it is drawn, with the message under it (``design_validity``).
 
 Other modules add buttons to the actions area at register time with ``add_action(idname, text,
 icon)`` and take them away with ``remove_action(idname)``; ``ACTION_OPERATORS`` holds them in order.
@@ -12,7 +15,7 @@ from __future__ import annotations
 import bpy
 
 from ..core_tracer.scene import spec as S
-from . import design_properties
+from . import design_properties, design_validity
 
 # (operator idname, button text, icon) drawn in the actions area, in order.
 ACTION_OPERATORS: list[tuple[str, str, str]] = [("lamp.build", "Build Lamp", "MESH_CYLINDER")]
@@ -60,7 +63,7 @@ def draw_section(layout, group, section: S.Section, kinds: tuple[type, ...] | No
     each either/or rule of the section."""
     for key in leaf_keys(section):
         if kinds is None or isinstance(section.fields[key], kinds):
-            layout.prop(group, key)
+            design_validity.draw_field(layout, group, design_properties.property_id(key))
     if kinds is None:
         for rule in section.one_of:
             draw_rule(layout, group, rule)
@@ -72,7 +75,7 @@ def draw_rule(layout, group, rule: S.OneOf) -> None:
     mode = design_properties.mode_property(rule)
     box.row().prop(group, mode, expand=True)
     for key in rule.alternative(getattr(group, mode)).keys:
-        box.prop(group, key)
+        design_validity.draw_field(box, group, key)
 
 
 def active_lamp(context):
@@ -107,6 +110,7 @@ class LAMP_PT_design(_LampTab, bpy.types.Panel):
     bl_label = "Lamp Design"
 
     def draw(self, context):
+        design_validity.draw_status(self.layout, context.scene)
         col = self.layout.column(align=True)
         for idname, text, icon in ACTION_OPERATORS:
             col.operator(idname, text=text, icon=icon)

@@ -42,6 +42,7 @@ from bpy.props import (
     StringProperty,
 )
 
+from ..core_tracer.scene import functions
 from ..core_tracer.scene import spec as S
 from ..core_tracer.scene import validate as lamp_scene
 
@@ -62,6 +63,35 @@ def display_name(key: str, unit: str = "") -> str:
         words = words[:-1]
     text = " ".join(_ACRONYMS.get(w, w.capitalize()) for w in words)
     return f"{text} ({unit})" if unit else text
+
+
+# Keys that name a built-in property of every PropertyGroup: Blender shows the built-in's tooltip
+# ("Unique name used in the code and scripting"), so the field gets its own identifier, stored in
+# the same place (the "name" ID property), which keeps the names of files saved before.
+RESERVED_KEYS = {"name": "design_name"}
+
+
+def property_id(key: str) -> str:
+    """The identifier of the property of spec field ``key``: the key itself, unless it is reserved."""
+    return RESERVED_KEYS.get(key, key)
+
+
+def spec_key(identifier: str) -> str:
+    """The spec field of a property identifier (the inverse of ``property_id``)."""
+    return next((key for key, ident in RESERVED_KEYS.items() if ident == identifier), identifier)
+
+
+def _stored_in(key: str, spec: S.Text) -> StringProperty:
+    """A string property kept in the ID property ``key`` (a built-in's place), with the spec's
+    name, description and default."""
+    def get(self) -> str:
+        return self.get(key, spec.default)
+
+    def set(self, value: str) -> None:
+        self[key] = value
+
+    return StringProperty(name=display_name(key), description=_description(spec), get=get, set=set,
+                          maxlen=spec.max_len)
 
 
 def mode_property(rule: S.OneOf) -> str:
@@ -128,13 +158,27 @@ def _num_property(key: str, spec: S.Num):
     return FloatProperty(default=float(spec.default), **kw)
 
 
-def _leaf_property(key: str, spec: S.Spec):
+def _function_chosen(self, context) -> None:
+    """Picking a lamp's function sets the lens colour and bulb it goes with (``scene.functions``);
+    writing a whole design (a preset) sets the function without touching the rest."""
+    if _writing[0]:
+        return
+    lamp = _read_section(self, S.LAMP)
+    functions.apply_function(lamp, self.function)
+    set_lamp(self, lamp)
+
+
+_writing = [0]  # > 0 while a design is being written: update callbacks leave the values alone
+
+
+def _leaf_property(key: str, spec: S.Spec, section: S.Section):
     if isinstance(spec, S.Num):
         return _num_property(key, spec)
     if isinstance(spec, S.Choice):
         items = tuple((c, display_name(c), "") for c in spec.choices)
+        update = _function_chosen if section is S.LAMP and key == "function" else None
         return EnumProperty(name=display_name(key), description=_description(spec), items=items,
-                            default=spec.default)
+                            default=spec.default, update=update)
     if isinstance(spec, S.Flag):
         return BoolProperty(name=display_name(key), description=_description(spec), default=spec.default)
     if isinstance(spec, S.Text):
@@ -159,7 +203,8 @@ def _make_groups(section: S.Section, class_name: str, out: list[type], extra: di
             annotations[key] = CollectionProperty(type=item, name=display_name(key), description=spec.doc)
             annotations[f"active_{key}_index"] = IntProperty(name=f"Active {display_name(key)} Index", min=0)
         else:
-            annotations[key] = _leaf_property(key, spec)
+            annotations[property_id(key)] = (_stored_in(key, spec) if key in RESERVED_KEYS
+                                             else _leaf_property(key, spec, section))
     for rule in section.one_of:
         annotations[mode_property(rule)] = _mode_enum(rule)
     namespace = {"__annotations__": annotations, "__doc__": section.doc or class_name, **(extra or {})}
@@ -219,7 +264,7 @@ def _read_section(group, section: S.Section) -> dict:
         elif isinstance(spec, S.ListOf):
             out[key] = [_read_section(item, spec.item) for item in getattr(group, key)]
         elif form_used(group, section, key):
-            out[key] = _read_leaf(getattr(group, key), spec)
+            out[key] = _read_leaf(getattr(group, property_id(key)), spec)
     return out
 
 
@@ -294,7 +339,7 @@ def _write_section(group, section: S.Section, data: dict) -> None:
         elif isinstance(spec, S.Tags):
             setattr(group, key, f"{TAG_SEPARATOR} ".join(value))
         else:
-            setattr(group, key, value)
+            setattr(group, property_id(key), value)
     for rule in section.one_of:
         if rule.given(data):  # a partial write (a lamp function's defaults) may leave the form alone
             setattr(group, mode_property(rule), rule.chosen(data).name)
@@ -303,7 +348,11 @@ def _write_section(group, section: S.Section, data: dict) -> None:
 def set_lamp(item, lamp: dict) -> None:
     """Set one lamp of the design (an item of ``lamp_design.lamps``) from a lamp of a checked design
     document or scene."""
-    _write_section(item, S.LAMP, lamp)
+    _writing[0] += 1
+    try:
+        _write_section(item, S.LAMP, lamp)
+    finally:
+        _writing[0] -= 1
 
 
 def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
@@ -313,7 +362,11 @@ def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
     """
     scene = lamp_scene.normalize(scene_dict)
     _check_section(scene, S.SCENE, "")
-    _write_section(bl_scene.lamp_design, S.SCENE, scene)
+    _writing[0] += 1
+    try:
+        _write_section(bl_scene.lamp_design, S.SCENE, scene)
+    finally:
+        _writing[0] -= 1
 
 
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -24,33 +24,14 @@ from bpy_extras.io_utils import ExportHelper
 from ..core_tracer.library import presets as P
 from ..core_tracer.scene.validate import SceneError
 from ..core_tracer.study import definition as st
-from . import design_properties, image_view, study_panel
+from . import design_properties, image_view, study_settings
+from .study_settings import last_study, sheet_image
 
 POLL_SECONDS = 0.1
-_cache: dict[str, object] = {"json": None, "study": None}
 
 
 # ---------------------------------------------------------------------------------------------
-# The sheet image and its study
-
-
-def sheet_image() -> bpy.types.Image | None:
-    return bpy.data.images.get(study_panel.SHEET_IMAGE)
-
-
-def last_study() -> st.Study | None:
-    """The study of the "Lamp Study" image (parsed once per study, then cached)."""
-    image = sheet_image()
-    text = image.get(study_panel.STUDY_PROPERTY) if image is not None else None
-    if not isinstance(text, str):
-        return None
-    if _cache["json"] != text:
-        try:
-            study = st.Study.from_json(text, study_panel.STUDY_PROPERTY)
-        except SceneError:
-            study = None
-        _cache.update(json=text, study=study)
-    return _cache["study"]  # type: ignore[return-value]
+# The sheet image
 
 
 def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
@@ -58,10 +39,10 @@ def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
     from ..core_tracer.study import sheet as study_sheet
 
     sheet = study_sheet.compose(study, images)
-    image = image_view.image_from_array(study_panel.SHEET_IMAGE, sheet)
+    image = image_view.image_from_array(study_settings.SHEET_IMAGE, sheet)
     text = study.to_json()
-    image[study_panel.STUDY_PROPERTY] = text
-    _cache.update(json=text, study=study)
+    image[study_settings.STUDY_PROPERTY] = text
+    study_settings.remember_study(study, text)
     image_view.show_image(context, image)
     return image
 
@@ -71,7 +52,7 @@ def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, 
     and the render time. Raises ``SceneError`` for a bad setting or design."""
     from ..core_tracer.study import run as study_run
 
-    study = study_panel.study_from_settings(context.scene)
+    study = study_settings.study_from_settings(context.scene)
     if workers is None:
         workers = context.scene.lamp_study.workers or None
     start = time.perf_counter()
@@ -129,7 +110,7 @@ class LAMP_OT_study_run(bpy.types.Operator):
         from ..core_tracer.study.run import StudyRun
 
         try:
-            self._study = study_panel.study_from_settings(context.scene)
+            self._study = study_settings.study_from_settings(context.scene)
         except SceneError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -327,9 +308,4 @@ def _openimageio_available() -> bool:
 classes = (LAMP_OT_study_run, LAMP_OT_study_apply_variant, LAMP_OT_study_keep_variant, LAMP_OT_study_save_sheet)
 
 
-register, _unregister_classes = bpy.utils.register_classes_factory(classes)
-
-
-def unregister() -> None:
-    _unregister_classes()
-    _cache.update(json=None, study=None)  # the cached study belongs to this registration
+register, unregister = bpy.utils.register_classes_factory(classes)

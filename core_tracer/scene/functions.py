@@ -60,3 +60,15 @@ def lamp_label(lamps: list[dict], index: int) -> str:
     same = [i for i, lamp in enumerate(lamps) if lamp.get("function", "custom") == function]
     name = function.capitalize()
     return name if len(same) == 1 else f"{name} {same.index(index) + 1}"
+
+
+def suggested_values(path: str) -> list:
+    """The values the lamp functions give the lamp field ``path`` (``lens.transmitted_color``,
+    ``bulb.intensity``), each once in function order: a study's first guess for a vector."""
+    part, _, key = path.partition(".")
+    out: list = []
+    for lens_fields, intensity in DEFAULTS.values():
+        value = lens_fields.get(key) if part == "lens" else intensity if path == "bulb.intensity" else None
+        if value is not None and value not in out:
+            out.append(list(value))
+    return out

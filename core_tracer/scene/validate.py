@@ -485,6 +485,30 @@ def _check_bulb(lamp: dict, g: dict, where: str) -> None:
                      f"(at y = {y_mid - g['focus']:.4g} mm)")
 
 
+def lamp_limits(scene: dict, i: int) -> dict[str, str]:
+    """The limits of lamps[i]'s fields that depend on other fields, in words with their current
+    values (``{"cuts.height": "at most 6.363 mm for pitch 9 mm (pitch / sqrt 2)", ...}``), for a
+    panel to show beside the sliders whose fixed range cannot say them. ``scene`` is a checked or
+    unchecked document whose fields are present."""
+    body, lamp = scene["body"], scene["lamps"][i]
+    (bx, bz), (w, h) = body["center"], body["size"]
+    R, pitch = lamp["lens"]["radius"], lamp["cuts"]["pitch"]
+    limits = {
+        "cuts.height": f"at most {_rounded(pitch / math.sqrt(2.0), False)} mm for pitch {pitch:g} mm "
+                       "(pitch / sqrt 2)",
+        "cuts.pitch": f"at most {2 * R:g} mm, the lens diameter",
+        "socket.radius": f"less than {R:g} mm, the lens radius",
+    }
+    cx, cz = lamp["center"]
+    room = min(w / 2 - abs(cx - bx), h / 2 - abs(cz - bz))
+    if room > 0:
+        limits["lens.radius"] = f"at most {room:g} mm at this centre in the body"
+    if 2 * R <= min(w, h):
+        limits["center"] = (f"x in [{bx - w / 2 + R:g}, {bx + w / 2 - R:g}], z in [{bz - h / 2 + R:g}, "
+                            f"{bz + h / 2 - R:g}] mm inside the body")
+    return limits
+
+
 def default_camera(scene: dict) -> dict:
     """A perspective camera on the -Y side that frames the whole body (16 degree lens)."""
     cam = _section({}, S.CAMERA, "camera.")

@@ -32,12 +32,11 @@ def _group_rna(lamp_addon, path: str):
     parts = path.replace("[]", "").split(".")
     for part in parts[:-1]:
         cls = _rna(cls, part).fixed_type
-    return _rna(cls, parts[-1])
+    return _rna(cls, props.property_id(parts[-1]))
 
 
 def _rna(cls, key: str):
-    # The last one: a PropertyGroup has a built-in "name" that the design's own "name" follows.
-    return [p for p in cls.bl_rna.properties if p.identifier == key][-1]
+    return cls.bl_rna.properties[key]
 
 
 def test_every_spec_field_is_a_property(lamp_addon, S):
