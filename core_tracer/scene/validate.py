@@ -369,11 +369,7 @@ def check_geometry(scene: dict) -> None:
                              f"allowed [0, {_rounded(c, False)}] mm (pitch / sqrt 2)")
         g = lamp_geometry(lamp)
         if g["vertex"] > body["depth"]:
-            raise SceneError(f"{where}.reflector.focal_length",
-                             f"{lamp['reflector']['focal_length']:g} makes the reflector {g['vertex']:.4g} mm "
-                             f"deep, deeper than the body ({body['depth']:g} mm); allowed at least "
-                             f"{R * R / (4 * (body['depth'] - g['rim'])):.4g} mm" if body["depth"] > g["rim"]
-                             else f"the lens and cuts ({g['rim']:.4g} mm) are deeper than the body")
+            _reflector_too_deep(scene, i, g)
         _check_bulb(lamp, g, where)
         rs = lamp["socket"]["radius"]
         if rs >= R:
@@ -402,6 +398,26 @@ def _lens_outside_body(scene: dict, i: int) -> None:
                      f"(0, {min(w, h) / 2:g}] mm")
 
 
+def _reflector_too_deep(scene: dict, i: int, g: dict) -> None:
+    """Raise for lamps[i]'s reflector reaching behind the body: blame the focal length when a longer
+    one fits (a shallower bowl), else the body's depth."""
+    depth, lamp = scene["body"]["depth"], scene["lamps"][i]
+    R, f = lamp["lens"]["radius"], lamp["reflector"]["focal_length"]
+    f_hi = S.REFLECTOR.fields["focal_length"].hi
+    d_hi = S.BODY.fields["depth"].hi
+    f_lo = R * R / (4 * (depth - g["rim"])) if depth > g["rim"] else math.inf
+    if f_lo <= f_hi:
+        raise SceneError(f"lamps[{i}].reflector.focal_length",
+                         f"{f:g} makes the reflector {g['vertex']:.4g} mm deep, deeper than the body ({depth:g} mm); "
+                         f"allowed [{_rounded(f_lo, True)}, {f_hi:g}] mm, or body.depth at least "
+                         f"{_rounded(g['vertex'], True)} mm")
+    raise SceneError("body.depth", f"{depth:g} is shallower than the reflector of lamps[{i}] ({g['vertex']:.4g} mm "
+                     f"deep); allowed [{_rounded(g['vertex'], True)}, {d_hi:g}] mm")
+
+
+_HALVINGS = 30  # bisection steps for the bulb's limits: 2^-30 of the span, far below the digits shown
+
+
 def _wall_distance(lamp: dict, g: dict, rho: float, y: float) -> float:
     """Distance from the point at radius ``rho`` from the axis and depth ``y`` to the reflector's
     paraboloid y = y_vertex - r^2/(4f), r <= R (the closest point lies in the plane through the axis)."""
@@ -410,10 +426,10 @@ def _wall_distance(lamp: dict, g: dict, rho: float, y: float) -> float:
     def dist(r: float) -> float:
         return math.hypot(r - rho, g["vertex"] - r * r / (4 * f) - y)
 
-    n = 180
+    n = 60
     k = min(range(-n, n + 1), key=lambda j: dist(R * j / n))
     lo, hi = R * max(k - 1, -n) / n, R * min(k + 1, n) / n
-    for _ in range(40):  # golden-section refinement around the best sample
+    for _ in range(30):  # golden-section refinement around the best sample
         a, b = lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo)
         if dist(a) < dist(b):
             hi = b
@@ -437,7 +453,7 @@ def _bulb_y_range(lamp: dict, g: dict, rho: float, rb: float) -> tuple[float, fl
     if not _bulb_fits(lamp, g, rho, lo, rb):
         return None
     hi = g["vertex"]
-    for _ in range(50):
+    for _ in range(_HALVINGS):
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if _bulb_fits(lamp, g, rho, mid, rb) else (lo, mid)
     return g["plane_b"] + rb, lo
@@ -463,7 +479,7 @@ def _check_bulb(lamp: dict, g: dict, where: str) -> None:
     on_axis = _bulb_y_range(lamp, g, 0.0, rb)
     if on_axis is None:  # too big anywhere: the largest bulb that fits on the axis, found by bisection
         lo, hi = 0.0, rb
-        for _ in range(50):
+        for _ in range(_HALVINGS):
             mid = (lo + hi) / 2
             lo, hi = (mid, hi) if _bulb_y_range(lamp, g, 0.0, mid) is not None else (lo, mid)
         raise SceneError(f"{where}.bulb.radius", f"{rb:g} does not fit inside the reflector (focal length "
@@ -477,7 +493,7 @@ def _check_bulb(lamp: dict, g: dict, where: str) -> None:
                          f"{_rounded(y_hi, False)}] mm")
     y_mid = sum(on_axis) / 2
     lo, hi = 0.0, lamp["lens"]["radius"]
-    for _ in range(50):
+    for _ in range(_HALVINGS):
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if _bulb_fits(lamp, g, mid, y_mid, rb) else (lo, mid)
     raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) outside the "

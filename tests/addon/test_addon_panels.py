@@ -376,6 +376,8 @@ INVALID_EDITS = {
                        "for pitch 9"),
     "lens outside the body": (lambda d: setattr(d.lamps[0], "center", (80.0, 0.0)), "lamps[0].center",
                               "outside the body"),
+    "reflector deeper than the body": (lambda d: setattr(d.lamps[0].reflector, "focal_length", 5.0),
+                                       "lamps[0].reflector.focal_length", "deeper than the body"),
 }
 
 

@@ -121,3 +121,26 @@ def test_a_cut_height_above_the_hemisphere_states_the_limit_of_this_pitch():
     assert hi == pytest.approx(9 / 2 ** 0.5, abs=1e-3) and "pitch 9" in err.message
     doc["lamps"][0]["cuts"]["height"] = hi
     parse_scene(doc)
+
+
+def test_a_reflector_deeper_than_the_body_blames_the_focal_length_with_its_range():
+    doc = _doc()
+    doc["lamps"][0]["reflector"]["focal_length"] = 5
+    err = _error(doc)
+    assert err.path == "lamps[0].reflector.focal_length"
+    (lo, hi), = _assert_not_empty(err)
+    assert "or body.depth at least" in err.message
+    doc["lamps"][0]["reflector"]["focal_length"] = lo  # the reflector fits; a deep bowl moves the focus
+    assert _error(doc).path == "lamps[0].bulb.offset"  # toward the vertex: the bulb is next to move
+    doc["lamps"][0]["reflector"]["focal_length"] = 12
+    parse_scene(doc)
+
+
+def test_a_body_shallower_than_the_lens_blames_its_depth():
+    doc = _doc()
+    doc["body"]["depth"] = 3  # shallower than lens and cuts: no focal length helps
+    err = _error(doc)
+    assert err.path == "body.depth"
+    (lo, hi), = _assert_not_empty(err)
+    doc["body"]["depth"] = lo
+    parse_scene(doc)
