@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import bpy
 
+from ..core_tracer.scene import functions
 from ..core_tracer.scene import spec as S
 from . import design_properties, design_validity
 
@@ -86,11 +87,13 @@ def active_lamp(context):
 
 
 class LAMP_UL_lamps(bpy.types.UIList):
-    """The design's lamps, at most ``MAX_LAMPS``; the bulb switch on each row."""
+    """The design's lamps, at most ``MAX_LAMPS``, named as their parts are; the bulb switch on each row."""
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0, flt_flag=0):
         row = layout.row(align=True)
-        row.label(text=f"Lamp {index + 1}", icon="LIGHT_POINT")
+        # The name its parts are built with: "Stop", "Turn 2", or "Lamp 3" for a custom lamp.
+        label = functions.lamp_label([{"function": lamp.function} for lamp in data.lamps], index)
+        row.label(text=label, icon="LIGHT_POINT")
         row.prop(item.bulb, "on", text="", emboss=False, icon="OUTLINER_OB_LIGHT" if item.bulb.on else "LIGHT")
 
 

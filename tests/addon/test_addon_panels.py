@@ -488,6 +488,10 @@ def test_choosing_a_function_sets_its_defaults_and_names(lamp_addon, addon_core,
     lamp.function = "reversing"
     assert min(lamp.lens.transmitted_color) > 0.9  # clear
     lamp.function = "stop"
+    row = RecordingLayout()
+    bpy.types.LAMP_UL_lamps.draw_item(None, SimpleNamespace(scene=bl_scene), row, design, lamp, 0, design,
+                                      "active_lamps_index", 0)
+    assert ("label", "Stop", "LIGHT_POINT") in row.log  # the list names the lamp as its parts are named
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert "Stop Lens" in bpy.data.objects and "Stop Bulb" in bpy.data.objects
     lamp.bulb.intensity = (1.0, 2.0, 3.0)
