@@ -90,8 +90,7 @@ def _stored_in(key: str, spec: S.Text) -> StringProperty:
     def set(self, value: str) -> None:
         self[key] = value
 
-    return StringProperty(name=display_name(key), description=_description(spec), get=get, set=set,
-                          maxlen=spec.max_len)
+    return StringProperty(name=display_name(key), description=_description(spec), get=get, set=set)
 
 
 def mode_property(rule: S.OneOf) -> str:

@@ -113,10 +113,10 @@ def draw_status(layout, bl_scene) -> None:
         col.label(text=line)
 
 
-def draw_field(layout, group, key: str, **kw) -> None:
+def draw_field(layout, group, key: str, st: Status) -> None:
     """``layout.prop(group, key)``, highlighted with the message under it when it is the field the
-    design's first error names, and with the limit other fields set on it."""
-    st = status(group.id_data)
+    design's first error (in ``st``, the design's ``status``) names, and with the limit other fields
+    set on it."""
     path = field_path(group, key)
     problem = st.problem if st.problem is not None and st.problem.property_path == path else None
     col = layout.column(align=True)
@@ -125,9 +125,9 @@ def draw_field(layout, group, key: str, **kw) -> None:
     if isinstance(spec, S.Num) and spec.subtype == "rgb":  # per-channel numbers: R, G, B, not X, Y, Z
         name = group.bl_rna.properties[key].name
         for index, channel in enumerate("RGB"):
-            col.prop(group, key, index=index, text=f"{name} {channel}" if index == 0 else channel, **kw)
+            col.prop(group, key, index=index, text=f"{name} {channel}" if index == 0 else channel)
     else:
-        col.prop(group, key, **kw)
+        col.prop(group, key)
     if problem is not None:
         for line in problem.lines():
             col.label(text=line)
