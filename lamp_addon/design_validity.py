@@ -65,23 +65,24 @@ _memo: dict = {"key": None, "status": None}
 
 
 def status(bl_scene) -> Status:
-    """The design's status, checked again only when the design changed."""
+    """The design's status, checked again only when the design (or the active lamp) changed."""
     doc = design_properties.design_document(bl_scene)
-    key = json.dumps(doc, sort_keys=True)
+    active = bl_scene.lamp_design.active_lamps_index
+    key = (json.dumps(doc, sort_keys=True), active)
     if _memo["key"] != key:
-        _memo.update(key=key, status=_check(doc))
+        _memo.update(key=key, status=_check(doc, active))
     return _memo["status"]
 
 
-def _check(doc: dict) -> Status:
+def _check(doc: dict, active: int) -> Status:
     try:
         parse_scene(doc)
         problem = None
     except SceneError as e:
         problem = Problem(e.path, e.message)
     limits = {}
-    for i in range(len(doc["lamps"])):
-        limits.update({f"lamps[{i}].{path}": text for path, text in lamp_limits(doc, i).items()})
+    if 0 <= active < len(doc["lamps"]):  # the lamp the panel shows; the bulb's limits take a few ms
+        limits = {f"lamps[{active}].{path}": text for path, text in lamp_limits(doc, active).items()}
     return Status(problem, limits)
 
 

@@ -522,7 +522,26 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     if 2 * R <= min(w, h):
         limits["center"] = (f"x in [{bx - w / 2 + R:g}, {bx + w / 2 - R:g}], z in [{bz - h / 2 + R:g}, "
                             f"{bz + h / 2 - R:g}] mm inside the body")
+    limits.update(_bulb_limits(lamp))
     return limits
+
+
+def _bulb_limits(lamp: dict) -> dict[str, str]:
+    """The bulb's radius where it sits and the depths (offset y) at which it fits, in words."""
+    g = lamp_geometry(lamp)
+    rb, (x, _, z) = lamp["bulb"]["radius"], lamp["bulb"]["offset"]
+    by, rho = g["bulb_center"][1], math.hypot(x, z)
+    f, R = lamp["reflector"]["focal_length"], lamp["lens"]["radius"]
+    out = {}
+    if rho < R and by < g["vertex"] - rho * rho / (4 * f):
+        room = min(_wall_distance(lamp, g, rho, by), by - g["plane_b"])
+        if room > 0:
+            out["bulb.radius"] = f"at most {_rounded(room, False)} mm where the bulb sits"
+    ys = _bulb_y_range(lamp, g, rho, rb)
+    if ys is not None:
+        y_lo, y_hi = (y - g["focus"] for y in ys)
+        out["bulb.offset"] = f"y in [{_rounded(y_lo, True)}, {_rounded(y_hi, False)}] mm with x = {x:g} and z = {z:g}"
+    return out
 
 
 def default_camera(scene: dict) -> dict:

@@ -425,7 +425,7 @@ def test_validity_is_checked_once_per_design(lamp_addon, addon_core, bl_scene, m
     design = _baseline(lamp_addon, addon_core, bl_scene)
     calls = []
     real = validity._check
-    monkeypatch.setattr(validity, "_check", lambda doc: calls.append(1) or real(doc))
+    monkeypatch.setattr(validity, "_check", lambda doc, active: calls.append(1) or real(doc, active))
     validity._memo.update(key=None, status=None)
     for _ in range(5):
         _status(bl_scene)
@@ -530,3 +530,22 @@ def test_tooltips_say_what_a_field_does_first(lamp_addon, bl_scene):
     body = bl_scene.lamp_design.body.bl_rna.properties
     assert body["specular"].description.startswith(
         "How strongly the body reflects the light as a highlight (w in eq. 1)")
+
+
+def test_the_bulb_panel_states_where_the_bulb_fits(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    design = _baseline(lamp_addon, addon_core, bl_scene)
+    labels = draw(bpy.types.LAMP_PT_bulb, bl_scene).labels()
+    radius = next(t for t in labels if t.startswith("At most") and "where the bulb sits" in t)
+    depth = next(t for t in labels if t.startswith("Y in ["))
+    lo, hi = (float(v) for v in re.search(rf"\[({NUMBER}), ({NUMBER})\]", depth).groups())
+    assert lo < 0 < hi  # the focus, where the bulb sits, is inside the range
+    design.lamps[0].bulb.offset = (0.0, hi, 0.0)  # the stated limit is allowed ...
+    assert ("label", "Design is valid", "CHECKMARK") in _status(bl_scene).log
+    design.lamps[0].bulb.offset = (0.0, hi + 0.01, 0.0)  # ... and just past it is not
+    assert _status(bl_scene).alerts()[0] == ["lamps[0].bulb.offset"]
+    design.lamps[0].bulb.offset = (0.0, 0.0, 0.0)
+    r = float(re.search(rf"At most ({NUMBER}) mm", radius)[1])
+    design.lamps[0].bulb.radius = r
+    assert ("label", "Design is valid", "CHECKMARK") in _status(bl_scene).log
