@@ -89,8 +89,9 @@ class Parameter:
     @property
     def section(self) -> S.Section:
         """The section that holds the field (the lens for ``lens.ior``)."""
-        parent = ".".join(("lamps[]",) + self.keys[:-1]) if self.lamp_scope else ".".join(self.keys[:-1])
-        return S.lookup(parent) if parent else S.SCENE
+        if self.lamp_scope:
+            return S.lookup(".".join(("lamps[]",) + self.keys[:-1])) if len(self.keys) > 1 else S.LAMP
+        return S.lookup(".".join(self.keys[:-1])) if len(self.keys) > 1 else S.SCENE
 
     @property
     def form(self) -> S.Alternative | None:
