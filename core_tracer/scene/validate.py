@@ -385,17 +385,17 @@ def _lens_outside_body(scene: dict, i: int) -> None:
     R = lamp["lens"]["radius"]
     if 2 * R <= w + 1e-9 and 2 * R <= h + 1e-9:
         raise SceneError(f"lamps[{i}].center", f"{_show(lamp['center'])} with lens radius {R:g} mm puts "
-                         f"the lens outside the body; allowed x in [{bx - w / 2 + R:g}, {bx + w / 2 - R:g}], "
-                         f"z in [{bz - h / 2 + R:g}, {bz + h / 2 - R:g}] mm")
+                         f"the lens outside the body; allowed x in {_interval(bx - w / 2 + R, bx + w / 2 - R)}, "
+                         f"z in {_interval(bz - h / 2 + R, bz + h / 2 - R)} mm")
     need_w = max(2 * (abs(lp["center"][0] - bx) + lp["lens"]["radius"]) for lp in scene["lamps"])
     need_h = max(2 * (abs(lp["center"][1] - bz) + lp["lens"]["radius"]) for lp in scene["lamps"])
     hi = S.BODY.fields["size"].hi
     if need_w <= hi and need_h <= hi:
         raise SceneError("body.size", f"{_show(body['size'])} cannot hold the lens of lamps[{i}] (radius {R:g} mm); "
-                         f"allowed width in [{need_w:g}, {hi:g}] and height in [{need_h:g}, {hi:g}] mm, or a "
-                         f"smaller lamps[{i}].lens.radius, at most {min(w, h) / 2:g} mm")
+                         f"allowed width in {_interval(need_w, hi)} and height in {_interval(need_h, hi)} mm, or a "
+                         f"smaller lamps[{i}].lens.radius, at most {_rounded(min(w, h) / 2, False)} mm")
     raise SceneError(f"lamps[{i}].lens.radius", f"{R:g} does not fit in the body {w:g} x {h:g} mm; allowed "
-                     f"(0, {min(w, h) / 2:g}] mm")
+                     f"(0, {_rounded(min(w, h) / 2, False)}] mm")
 
 
 def _reflector_too_deep(scene: dict, i: int, g: dict) -> None:
@@ -409,10 +409,10 @@ def _reflector_too_deep(scene: dict, i: int, g: dict) -> None:
     if f_lo <= f_hi:
         raise SceneError(f"lamps[{i}].reflector.focal_length",
                          f"{f:g} makes the reflector {g['vertex']:.4g} mm deep, deeper than the body ({depth:g} mm); "
-                         f"allowed [{_rounded(f_lo, True)}, {f_hi:g}] mm, or body.depth at least "
+                         f"allowed {_interval(f_lo, f_hi)} mm, or body.depth at least "
                          f"{_rounded(g['vertex'], True)} mm")
     raise SceneError("body.depth", f"{depth:g} is shallower than the reflector of lamps[{i}] ({g['vertex']:.4g} mm "
-                     f"deep); allowed [{_rounded(g['vertex'], True)}, {d_hi:g}] mm")
+                     f"deep); allowed {_interval(g['vertex'], d_hi)} mm")
 
 
 _HALVINGS = 30  # bisection steps for the bulb's limits: 2^-30 of the span, far below the digits shown
@@ -443,7 +443,7 @@ def _bulb_fits(lamp: dict, g: dict, rho: float, y: float, rb: float) -> bool:
     inside the paraboloid."""
     f, R = lamp["reflector"]["focal_length"], lamp["lens"]["radius"]
     inside = y < g["vertex"] - rho * rho / (4 * f) and rho < R
-    return inside and y - rb >= g["plane_b"] and _wall_distance(lamp, g, rho, y) >= rb
+    return inside and y - rb >= g["plane_b"] - 1e-9 and _wall_distance(lamp, g, rho, y) >= rb - 1e-9
 
 
 def _bulb_y_range(lamp: dict, g: dict, rho: float, rb: float) -> tuple[float, float] | None:
@@ -457,6 +457,13 @@ def _bulb_y_range(lamp: dict, g: dict, rho: float, rb: float) -> tuple[float, fl
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if _bulb_fits(lamp, g, rho, mid, rb) else (lo, mid)
     return g["plane_b"] + rb, lo
+
+
+def _interval(lo: float, hi: float) -> str:
+    """``[lo, hi]`` with both ends rounded inward to 4 significant digits (so the values shown are
+    allowed), or to 12 when the interval is too narrow for that."""
+    a, b = _rounded(lo, True), _rounded(hi, False)
+    return f"[{a}, {b}]" if float(a) <= float(b) else f"[{lo:.12g}, {hi:.12g}]"
 
 
 def _rounded(x: float, up: bool) -> str:
@@ -489,16 +496,16 @@ def _check_bulb(lamp: dict, g: dict, where: str) -> None:
     if ys is not None:
         y_lo, y_hi = (y - g["focus"] for y in ys)
         raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) outside the "
-                         f"reflector; with x = {off[0]:g} and z = {off[2]:g}, allowed y in [{_rounded(y_lo, True)}, "
-                         f"{_rounded(y_hi, False)}] mm")
-    y_mid = sum(on_axis) / 2
+                         f"reflector; with x = {off[0]:g} and z = {off[2]:g}, allowed y in {_interval(y_lo, y_hi)} mm")
+    y_shown = float(f"{sum(on_axis) / 2 - g['focus']:.4g}")  # mid-depth on the axis, as printed
+    y_mid = y_shown + g["focus"]
     lo, hi = 0.0, lamp["lens"]["radius"]
     for _ in range(_HALVINGS):
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if _bulb_fits(lamp, g, mid, y_mid, rb) else (lo, mid)
     raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) outside the "
                      f"reflector; allowed a distance from the axis sqrt(x^2 + z^2) up to {_rounded(lo, False)} mm "
-                     f"(at y = {y_mid - g['focus']:.4g} mm)")
+                     f"(at y = {y_shown:g} mm)")
 
 
 def lamp_limits(scene: dict, i: int) -> dict[str, str]:
@@ -518,10 +525,10 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     cx, cz = lamp["center"]
     room = min(w / 2 - abs(cx - bx), h / 2 - abs(cz - bz))
     if room > 0:
-        limits["lens.radius"] = f"at most {room:g} mm at this centre in the body"
+        limits["lens.radius"] = f"at most {_rounded(room, False)} mm at this centre in the body"
     if 2 * R <= min(w, h):
-        limits["center"] = (f"x in [{bx - w / 2 + R:g}, {bx + w / 2 - R:g}], z in [{bz - h / 2 + R:g}, "
-                            f"{bz + h / 2 - R:g}] mm inside the body")
+        limits["center"] = (f"x in {_interval(bx - w / 2 + R, bx + w / 2 - R)}, "
+                            f"z in {_interval(bz - h / 2 + R, bz + h / 2 - R)} mm inside the body")
     limits.update(_bulb_limits(lamp))
     return limits
 
@@ -540,7 +547,7 @@ def _bulb_limits(lamp: dict) -> dict[str, str]:
     ys = _bulb_y_range(lamp, g, rho, rb)
     if ys is not None:
         y_lo, y_hi = (y - g["focus"] for y in ys)
-        out["bulb.offset"] = f"y in [{_rounded(y_lo, True)}, {_rounded(y_hi, False)}] mm with x = {x:g} and z = {z:g}"
+        out["bulb.offset"] = f"y in {_interval(y_lo, y_hi)} mm with x = {x:g} and z = {z:g}"
     return out
 
 
