@@ -1,9 +1,10 @@
 """Operators that edit the design: add and remove lamps, build the lamp as objects.
 
 Add Lamp keeps a valid design valid: the new lamp is a copy of the active one (the spec's default
-lamp in an empty design), placed right of the others with a small margin, and the body grows to
-hold it. When the result would not be a valid design (a body wider than the spec allows), poll and
-execute refuse, naming the field and its allowed range.
+lamp in an empty design, in the preferred forms: the lens colour picker), placed right of the
+others with a small margin, and the body grows to hold it. Only adding itself is refused (four
+lamps already, a body wider than the spec allows), by poll and execute alike, naming the field and
+its allowed range; an error the design has anyway is the panel's to show and does not block it.
 """
 
 from __future__ import annotations
