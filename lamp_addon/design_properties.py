@@ -174,8 +174,9 @@ def _leaf_property(key: str, spec: S.Spec, section: S.Section):
     if isinstance(spec, S.Num):
         return _num_property(key, spec)
     if isinstance(spec, S.Choice):
-        items = tuple((c, display_name(c), "") for c in spec.choices)
-        update = _function_chosen if section is S.LAMP and key == "function" else None
+        is_function = section is S.LAMP and key == "function"
+        items = tuple((c, display_name(c), functions.describe(c) if is_function else "") for c in spec.choices)
+        update = _function_chosen if is_function else None
         return EnumProperty(name=display_name(key), description=_description(spec), items=items,
                             default=spec.default, update=update)
     if isinstance(spec, S.Flag):

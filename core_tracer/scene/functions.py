@@ -12,20 +12,30 @@ a tail lamp). The red and amber values are those of the four-lamp preset.
 from __future__ import annotations
 
 import copy
+from dataclasses import dataclass, field
 
 from . import spec as S
 from .validate import use_form
 
-_RED = {"transmitted_color": [0.94, 0.011, 0.008], "diffuse_color": [0.05, 0.0, 0.0],
-        "side_wall_color": [0.05, 0.02, 0.02]}
-_AMBER = {"transmitted_color": [0.92, 0.12, 0.005], "diffuse_color": [0.05, 0.02, 0.0],
-          "side_wall_color": [0.05, 0.02, 0.02]}
-_CLEAR = {"transmitted_color": [0.97, 0.97, 0.97], "diffuse_color": [0.03, 0.03, 0.03],
-          "side_wall_color": [0.03, 0.03, 0.03]}
+
+@dataclass(frozen=True)
+class Lens:
+    """A signal colour: its name and the lens fields that give it."""
+
+    colour: str
+    fields: dict = field(default_factory=dict)
+
+
+_RED = Lens("red", {"transmitted_color": [0.94, 0.011, 0.008], "diffuse_color": [0.05, 0.0, 0.0],
+                    "side_wall_color": [0.05, 0.02, 0.02]})
+_AMBER = Lens("amber", {"transmitted_color": [0.92, 0.12, 0.005], "diffuse_color": [0.05, 0.02, 0.0],
+                        "side_wall_color": [0.05, 0.02, 0.02]})
+_CLEAR = Lens("clear", {"transmitted_color": [0.97, 0.97, 0.97], "diffuse_color": [0.03, 0.03, 0.03],
+                        "side_wall_color": [0.03, 0.03, 0.03]})
 _DIM, _BRIGHT, _WHITE = [8.0, 7.0, 6.0], [20.0, 17.5, 15.0], [8.0, 8.0, 8.0]
 
-# function -> (lens fields, bulb intensity)
-DEFAULTS: dict[str, tuple[dict, list[float]]] = {
+# function -> (lens, bulb intensity)
+DEFAULTS: dict[str, tuple[Lens, list[float]]] = {
     "tail": (_RED, _DIM),
     "stop": (_RED, _BRIGHT),
     "turn": (_AMBER, _BRIGHT),
@@ -36,6 +46,14 @@ DEFAULTS: dict[str, tuple[dict, list[float]]] = {
 assert set(DEFAULTS) | {"custom"} == set(S.LAMP_FUNCTIONS)
 
 
+def describe(function: str) -> str:
+    """What choosing ``function`` sets, in words ("Red lens, bulb 20/17.5/15"), for a tooltip."""
+    if function not in DEFAULTS:
+        return "Set the lens colour and the bulb yourself"
+    lens, intensity = DEFAULTS[function]
+    return f"{lens.colour.capitalize()} lens, bulb intensity {'/'.join(f'{x:g}' for x in intensity)}"
+
+
 def apply_function(lamp: dict, function: str) -> None:
     """Set ``function`` and its defaults on a normalised lamp (in place): the lens colour as a
     transmitted colour seen through the lens's thickness, its surface colours, the bulb's
@@ -43,10 +61,10 @@ def apply_function(lamp: dict, function: str) -> None:
     lamp["function"] = function
     if function not in DEFAULTS:
         return
-    lens_fields, intensity = DEFAULTS[function]
+    look, intensity = DEFAULTS[function]
     lens = lamp["lens"]
     use_form(lens, S.LENS, "transmitted_color")
-    lens.update(copy.deepcopy(lens_fields))
+    lens.update(copy.deepcopy(look.fields))
     lens["reference_thickness"] = lens["thickness"]
     lamp["bulb"]["intensity"] = list(intensity)
 
@@ -67,8 +85,8 @@ def suggested_values(path: str) -> list:
     ``bulb.intensity``), each once in function order: a study's first guess for a vector."""
     part, _, key = path.partition(".")
     out: list = []
-    for lens_fields, intensity in DEFAULTS.values():
-        value = lens_fields.get(key) if part == "lens" else intensity if path == "bulb.intensity" else None
+    for look, intensity in DEFAULTS.values():
+        value = look.fields.get(key) if part == "lens" else intensity if path == "bulb.intensity" else None
         if value is not None and value not in out:
             out.append(list(value))
     return out

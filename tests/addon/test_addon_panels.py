@@ -474,6 +474,8 @@ def test_choosing_a_function_sets_its_defaults_and_names(lamp_addon, addon_core,
     lamp = design.lamps[0]
     assert lamp.function == "custom" and lamp.lens.color_mode == "absorption"  # the old preset, unchanged
     assert "function" in {p for _, _, p, _ in draw(bpy.types.LAMP_PT_lamps, bl_scene).props()}
+    items = {item.identifier: item.description for item in lamp.bl_rna.properties["function"].enum_items}
+    assert items["stop"] == "Red lens, bulb intensity 20/17.5/15"  # each choice says what it sets
     lamp.function = "stop"
     assert lamp.lens.color_mode == "transmitted_color"
     red = tuple(lamp.lens.transmitted_color)

@@ -66,3 +66,9 @@ def test_suggested_study_values_come_from_the_functions():
     assert F.suggested_values("lens.transmitted_color") == [[0.94, 0.011, 0.008], [0.92, 0.12, 0.005],
                                                             [0.97, 0.97, 0.97]]
     assert F.suggested_values("lens.ior") == []
+
+
+def test_function_descriptions():
+    assert F.describe("stop") == "Red lens, bulb intensity 20/17.5/15"
+    assert F.describe("turn").startswith("Amber lens") and F.describe("reversing").startswith("Clear lens")
+    assert F.describe("custom") == "Set the lens colour and the bulb yourself"
