@@ -5,8 +5,9 @@ Choosing a function is a starting point, not a constraint: it sets the fields be
 designer may change any of them afterwards. A lamp whose function is "custom" is set by hand.
 The colours follow the automotive signal colours (red for tail, stop and rear fog, amber for
 turn, white for reversing and position) as transmitted colours seen through the lens's own
-thickness; brightness follows their order in the regulations (a stop or turn lamp several times
-a tail lamp). The red and amber values are those of the four-lamp preset.
+thickness; a stop, turn or rear fog lamp is brighter than a tail lamp (by the four-lamp preset's
+ratio, 2.5) and a position lamp dimmer. The red, amber and clear values and the tail, stop and
+reversing bulbs are those of the four-lamp preset.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ assert set(DEFAULTS) | {"custom"} == set(S.LAMP_FUNCTIONS)
 
 
 def describe(function: str) -> str:
-    """What choosing ``function`` sets, in words ("Red lens, bulb 20/17.5/15"), for a tooltip."""
+    """What choosing ``function`` sets, in words ("Red lens, bulb intensity 20/17.5/15"), for a tooltip."""
     if function not in DEFAULTS:
         return "Set the lens colour and the bulb yourself"
     lens, intensity = DEFAULTS[function]
