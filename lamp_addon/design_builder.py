@@ -39,6 +39,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
+from ..core_tracer.scene import functions
 from ..core_tracer.scene import validate as lamp_scene
 from . import design_materials, design_parts, design_properties, design_root
 from .convert import meshes, units
@@ -135,7 +136,8 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False)
     ``preview``: lenses with fewer quads per cut cell, where that is lighter (Auto Build while dragging)."""
     _free_parts_whose_collection_was_deleted()
     build = _Build(bl_scene)
-    lamps = [design_parts.lamp_parts(i, lamp, preview) for i, lamp in enumerate(scene["lamps"])]
+    lamps = [design_parts.lamp_parts(i, lamp, preview, functions.lamp_label(scene["lamps"], i))
+             for i, lamp in enumerate(scene["lamps"])]
     build.mesh_part(design_parts.body_part(scene, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps]))
     for parts, _, _, lens_preview in lamps:
         for part in parts:

@@ -1,8 +1,10 @@
 """Operators that edit the design: add and remove lamps, build the lamp as objects.
 
-Add Lamp keeps a valid design valid (``convert.layout``: a copy of the active lamp right of the
-others, the body grown to hold it). When the result would not be a valid design (a body wider than
-the spec allows), poll and execute refuse, naming the field and its allowed range.
+Add Lamp keeps a valid design valid (``convert.layout``): the new lamp is a copy of the active one
+(the spec's default lamp in an empty design, in the preferred forms: the lens colour picker), placed
+right of the others with a small margin, and the body grows to hold it. Only adding itself is refused (four
+lamps already, a body wider than the spec allows), by poll and execute alike, naming the field and
+its allowed range; an error the design has anyway is the panel's to show and does not block it.
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ import bpy
 from ..core_tracer.scene import spec
 from ..core_tracer.scene.validate import SceneError
 from . import design_properties, render_camera
-from .convert.layout import design_with_new_lamp
+from .convert.layout import design_with_new_lamp, refusal_of_new_lamp, with_new_lamp_unchecked
 
 
 class LAMP_OT_lamp_add(bpy.types.Operator):
@@ -26,9 +28,6 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
     def poll(cls, context):
         if not design_properties.poll_design(cls, context):
             return False
-        if len(context.scene.lamp_design.lamps) >= spec.MAX_LAMPS:
-            cls.poll_message_set(f"A design has at most {spec.MAX_LAMPS} lamps")
-            return False
         refusal = _add_refusal(context.scene)
         if refusal is not None:
             cls.poll_message_set(refusal)
@@ -37,11 +36,15 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
 
     def execute(self, context):
         design = context.scene.lamp_design
-        try:
-            doc = design_with_new_lamp(design_properties.design_document(context.scene), design.active_lamps_index)
-        except SceneError as e:
-            self.report({"ERROR"}, f"Cannot add a lamp: {e}")
+        refusal = _add_refusal(context.scene)
+        if refusal is not None:
+            self.report({"ERROR"}, refusal)
             return {"CANCELLED"}
+        doc = design_properties.design_document(context.scene)
+        try:
+            doc = design_with_new_lamp(doc, design.active_lamps_index)
+        except SceneError:  # the design has an error of its own, which the panel shows: add the lamp anyway
+            doc = with_new_lamp_unchecked(doc, design.active_lamps_index)
         design_properties.set_lamp(design.lamps.add(), doc["lamps"][-1])
         design.body.center = doc["body"]["center"]
         design.body.size = doc["body"]["size"]
@@ -54,17 +57,17 @@ _refusal_memo: dict = {"key": None, "refusal": None}  # the last design poll che
 
 
 def _add_refusal(bl_scene) -> str | None:
-    """Why a lamp cannot be added to the scene's design, or None. Checking a design takes
+    """Why a lamp cannot be added to the scene's design, or None: only reasons of adding itself
+    (four lamps already, no room for a body that holds the new lamp); an error the design has
+    anyway is the panel's to show, not a reason to grey out Add Lamp. Checking a design takes
     milliseconds and poll runs at every redraw of the panel, so the answer is kept until the
     design changes."""
-    key = (design_properties.design_document(bl_scene), bl_scene.lamp_design.active_lamps_index)
+    doc = design_properties.design_document(bl_scene)
+    if len(doc["lamps"]) >= spec.MAX_LAMPS:
+        return f"A design has at most {spec.MAX_LAMPS} lamps"
+    key = (doc, bl_scene.lamp_design.active_lamps_index)
     if _refusal_memo["key"] != key:
-        try:
-            design_with_new_lamp(*key)
-            refusal = None
-        except SceneError as e:
-            refusal = f"Cannot add a lamp: {e}"
-        _refusal_memo.update(key=key, refusal=refusal)
+        _refusal_memo.update(key=key, refusal=refusal_of_new_lamp(*key))
     return _refusal_memo["refusal"]
 
 

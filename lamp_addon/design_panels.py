@@ -1,7 +1,10 @@
 """The "Lamp" tab of the 3D Viewport sidebar: every field of the design, the lamp list and the actions.
 
 Fields are drawn by walking ``core_tracer.spec`` sections, so a field added to the spec shows up
-without touching this file. Lengths carry their unit in the property name ("Radius (mm)").
+without touching this file; an either/or rule of a section (the lens colour) is drawn as a row of
+its forms and the fields of the form in use. Lengths carry their unit in the property name
+("Radius (mm)"). The top of the panel says whether the design is valid; the field its first error
+names is highlighted where it is drawn, with the message under it (``design_validity``).
 
 Other modules add buttons to the actions area at register time with ``add_action(idname, text,
 icon)`` and take them away with ``remove_action(idname)``; ``ACTION_OPERATORS`` holds them in order.
@@ -11,8 +14,9 @@ from __future__ import annotations
 
 import bpy
 
+from ..core_tracer.scene import functions
 from ..core_tracer.scene import spec as S
-from . import design_properties
+from . import design_properties, design_validity
 
 # (operator idname, button text, icon) drawn in the actions area, in order.
 ACTION_OPERATORS: list[tuple[str, str, str]] = [("lamp.build", "Build Lamp", "MESH_CYLINDER")]
@@ -48,16 +52,32 @@ def register_actions_factory(classes: tuple[type, ...], actions: tuple[tuple[str
 
 
 def leaf_keys(section: S.Section) -> list[str]:
-    """The keys of ``section`` drawn as plain properties: leaves that are not constants."""
+    """The keys of ``section`` drawn as plain properties: leaves that are not constants and belong
+    to no either/or rule (those are drawn by ``draw_rule``)."""
     return [key for key, spec in section.fields.items()
-            if not isinstance(spec, (S.Section, S.ListOf)) and not design_properties.is_constant(spec)]
+            if not isinstance(spec, (S.Section, S.ListOf)) and not design_properties.is_constant(spec)
+            and section.rule_of(key) is None]
 
 
 def draw_section(layout, group, section: S.Section, kinds: tuple[type, ...] | None = None) -> None:
-    """One ``prop`` per leaf field of ``section`` (only of the given spec ``kinds`` if set)."""
+    """One ``prop`` per leaf field of ``section`` (only of the given spec ``kinds`` if set), then
+    each either/or rule of the section."""
+    status = design_validity.status(group.id_data)  # once per section: reading the design costs ~0.5 ms
     for key in leaf_keys(section):
         if kinds is None or isinstance(section.fields[key], kinds):
-            layout.prop(group, key)
+            design_validity.draw_field(layout, group, design_properties.property_id(key), status)
+    if kinds is None:
+        for rule in section.one_of:
+            draw_rule(layout, group, rule, status)
+
+
+def draw_rule(layout, group, rule: S.OneOf, status: design_validity.Status) -> None:
+    """An either/or rule: its forms as a row of buttons, then the fields of the form in use."""
+    box = layout.box()
+    mode = design_properties.mode_property(rule)
+    box.row().prop(group, mode, expand=True)
+    for key in rule.alternative(getattr(group, mode)).keys:
+        design_validity.draw_field(box, group, key, status)
 
 
 def active_lamp(context):
@@ -68,11 +88,13 @@ def active_lamp(context):
 
 
 class LAMP_UL_lamps(bpy.types.UIList):
-    """The design's lamps, at most ``MAX_LAMPS``; the bulb switch on each row."""
+    """The design's lamps, at most ``MAX_LAMPS``, named as their parts are; the bulb switch on each row."""
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0, flt_flag=0):
         row = layout.row(align=True)
-        row.label(text=f"Lamp {index + 1}", icon="LIGHT_POINT")
+        # The name its parts are built with: "Stop", "Turn 2", or "Lamp 3" for a custom lamp.
+        label = functions.lamp_label([{"function": lamp.function} for lamp in data.lamps], index)
+        row.label(text=label, icon="LIGHT_POINT")
         row.prop(item.bulb, "on", text="", emboss=False, icon="OUTLINER_OB_LIGHT" if item.bulb.on else "LIGHT")
 
 
@@ -92,6 +114,7 @@ class LAMP_PT_design(_LampTab, bpy.types.Panel):
     bl_label = "Lamp Design"
 
     def draw(self, context):
+        design_validity.draw_status(self.layout, context.scene)
         col = self.layout.column(align=True)
         for idname, text, icon in ACTION_OPERATORS:
             col.operator(idname, text=text, icon=icon)
@@ -177,32 +200,13 @@ class _LampPartPanel(_LampTab):
         draw_section(self._split(self.layout), getattr(active_lamp(context), self.part), S.LAMP.fields[self.part])
 
 
-class LAMP_PT_lens(_LampPartPanel, bpy.types.Panel):
-    bl_label = "Lens"
-    part = "lens"
-    bl_order = list(S.LAMP.fields).index("lens")
-
-    def draw(self, context):
-        layout = self._split(self.layout)
-        lens = active_lamp(context).lens
-        for key in leaf_keys(S.LENS):
-            if key not in S.LENS.optional:
-                layout.prop(lens, key)
-        box = layout.box()
-        box.row().prop(lens, "color_mode", expand=True)
-        for key in design_properties.LENS_COLOR_MODES[lens.color_mode]:
-            box.prop(lens, key)
-
-
 def _make_part_panel(key: str, order: int) -> type:
     return type(f"LAMP_PT_{key}", (_LampPartPanel, bpy.types.Panel),
                 {"bl_label": design_properties.display_name(key), "part": key, "bl_order": order})
 
 
-_part_panels = tuple(
-    LAMP_PT_lens if key == "lens" else _make_part_panel(key, order)
-    for order, (key, spec) in enumerate(S.LAMP.fields.items()) if isinstance(spec, S.Section)
-)
+_part_panels = tuple(_make_part_panel(key, order) for order, (key, spec) in enumerate(S.LAMP.fields.items())
+                     if isinstance(spec, S.Section))
 
 classes = (
     LAMP_UL_lamps,

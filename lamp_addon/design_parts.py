@@ -21,6 +21,7 @@ import numpy as np
 from mathutils import Matrix
 from mathutils.geometry import tessellate_polygon
 
+from ..core_tracer.scene import functions
 from ..core_tracer.scene import validate as lamp_scene
 from . import design_materials
 from .convert import meshes, units
@@ -30,10 +31,6 @@ CHORD_TOLERANCE_MM = meshes.CHORD_TOLERANCE_MM
 # A preview lens has at most about this many cut-surface quads: a deep cut at full tolerance has up
 # to ~190,000 faces and takes 1-4 s to make, its preview 0.03-0.25 s (benchmarks/bench_build.py).
 PREVIEW_CUT_QUADS = 5000
-
-
-def lamp_label(index: int) -> str:
-    return f"Lamp {index + 1}"
 
 
 @dataclass
@@ -87,10 +84,10 @@ def _translation(x_mm: float, y_mm: float, z_mm: float) -> Matrix:
     return Matrix.Translation((x_mm * MM, y_mm * MM, z_mm * MM))
 
 
-def lamp_parts(i: int, lamp: dict, preview: bool) -> tuple[list[MeshPart], np.ndarray, tuple, bool]:
-    """Lamp i's mesh parts, its rim polygon in scene [x, z] and its bore (for the body's opening), and
-    whether its lens is a preview."""
-    base, label = f"lamps[{i}]", lamp_label(i)
+def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[MeshPart], np.ndarray, tuple, bool]:
+    """Lamp i's mesh parts, named after ``label`` ("Stop" makes "Stop Lens"), its rim polygon in scene
+    [x, z] and its bore (for the body's opening), and whether its lens is a preview."""
+    base = f"lamps[{i}]"
     g = lamp_scene.lamp_geometry(lamp)
     R = lamp["lens"]["radius"]
     reflector_shape = ("reflector", R, lamp["reflector"]["focal_length"], g["vertex"], CHORD_TOLERANCE_MM)
@@ -170,5 +167,5 @@ def make_lenses(scene: dict) -> None:
     written, so Auto Build runs this in a worker thread, and the ``build_lamp`` that follows only
     copies the meshes into Blender (a deep cut's lens takes seconds to make, 0.3 s to copy)."""
     for i, lamp in enumerate(scene["lamps"]):
-        lens = lamp_parts(i, lamp, preview=False)[0][0]
+        lens = lamp_parts(i, lamp, False, functions.lamp_label(scene["lamps"], i))[0][0]
         shapes.get(lens.shape, lens.make)

@@ -19,9 +19,11 @@ Lengths are kept in millimetres exactly as in the JSON (the property name carrie
 32 bits; reading one back takes the shortest decimal that gives the same 32-bit float, which turns
 every JSON value of at most 6 significant digits back into itself (``design_to_scene``).
 
-The lens colour is the designer's choice of two forms (``LENS_COLOR_MODES``): a transmitted colour at
-a reference thickness (set with a colour picker) or absorption coefficients. Both sets of properties
-exist; ``color_mode`` says which one the design uses and only that one is written to the scene.
+An either/or rule of the spec (``spec.OneOf``, the lens colour: a transmitted colour at a reference
+thickness, or absorption coefficients) becomes an ``EnumProperty`` ``<rule>_mode`` (``color_mode``)
+whose items are the rule's forms and whose default is its preferred form (the colour picker). The
+properties of every form exist; the mode says which form the design uses, and only that form's fields
+are written to the scene.
 """
 
 from __future__ import annotations
@@ -40,22 +42,12 @@ from bpy.props import (
     StringProperty,
 )
 
+from ..core_tracer.scene import functions
 from ..core_tracer.scene import spec as S
 from ..core_tracer.scene import validate as lamp_scene
 
 OPEN_BOUND_MARGIN = 1.0e-6  # an open bound lo < x becomes lo + margin * max(1, |lo|) <= x
 TAG_SEPARATOR = ","
-
-# The lens colour: mode identifier -> the optional lens fields that mode writes.
-LENS_COLOR_MODES = {
-    "TRANSMITTED": ("transmitted_color", "reference_thickness"),
-    "ABSORPTION": ("absorption",),
-}
-LENS_COLOR_MODE_ITEMS = (
-    ("TRANSMITTED", "Transmitted Colour", "Colour seen through the reference thickness of lens (colour picker)"),
-    ("ABSORPTION", "Absorption", "RGB absorption coefficients A per mm (eq. 2)"),
-)
-assert all(k in S.LENS.optional for keys in LENS_COLOR_MODES.values() for k in keys)
 
 _ACRONYMS = {"fov": "FOV", "ior": "IOR", "rgb": "RGB"}
 
@@ -85,6 +77,53 @@ def display_name(key: str, unit: str = "") -> str:
         words = words[:-1]
     text = " ".join(_ACRONYMS.get(w, w.capitalize()) for w in words)
     return f"{text} ({unit})" if unit else text
+
+
+# Keys that name a built-in property of every PropertyGroup: Blender shows the built-in's tooltip
+# ("Unique name used in the code and scripting"), so the field gets its own identifier, stored in
+# the same place (the "name" ID property), which keeps the names of files saved before.
+RESERVED_KEYS = {"name": "design_name"}
+
+
+def property_id(key: str) -> str:
+    """The identifier of the property of spec field ``key``: the key itself, unless it is reserved."""
+    return RESERVED_KEYS.get(key, key)
+
+
+def spec_key(identifier: str) -> str:
+    """The spec field of a property identifier (the inverse of ``property_id``)."""
+    return next((key for key, ident in RESERVED_KEYS.items() if ident == identifier), identifier)
+
+
+def _stored_in(key: str, spec: S.Text) -> StringProperty:
+    """A string property kept in the ID property ``key`` (a built-in's place), with the spec's
+    name, description and default."""
+    def get(self) -> str:
+        return self.get(key, spec.default)
+
+    def set(self, value: str) -> None:
+        self[key] = value
+
+    return StringProperty(name=display_name(key), description=_description(spec), get=get, set=set)
+
+
+def mode_property(rule: S.OneOf) -> str:
+    """The name of the ``EnumProperty`` that says which form of ``rule`` a section uses."""
+    return f"{rule.name}_mode"
+
+
+def form_used(group, section: S.Section, key: str) -> bool:
+    """Whether the field ``key`` of ``group`` (a ``section``) is part of the design: always,
+    unless it belongs to a form of an either/or rule that the group does not use."""
+    rule = section.rule_of(key)
+    return rule is None or key in rule.alternative(getattr(group, mode_property(rule))).keys
+
+
+def _mode_enum(rule: S.OneOf) -> EnumProperty:
+    # Items in the rule's order: Blender stores the index, so the order is part of saved files.
+    return EnumProperty(name=display_name(rule.name) + " Mode",
+                        items=tuple((alt.name, alt.label, alt.doc) for alt in rule.alternatives),
+                        default=rule.preferred, description=rule.doc, update=_edited)
 
 
 def is_constant(spec: S.Spec) -> bool:
@@ -132,13 +171,28 @@ def _num_property(key: str, spec: S.Num):
     return FloatProperty(default=float(spec.default), **kw)
 
 
-def _leaf_property(key: str, spec: S.Spec):
+def _function_chosen(self, context) -> None:
+    """Picking a lamp's function sets the lens colour and bulb it goes with (``scene.functions``);
+    writing a whole design (a preset) sets the function without touching the rest."""
+    if _writing[0]:
+        return
+    lamp = _read_section(self, S.LAMP)
+    functions.apply_function(lamp, self.function)
+    set_lamp(self, lamp)
+
+
+_writing = [0]  # > 0 while a design is being written: update callbacks leave the values alone
+
+
+def _leaf_property(key: str, spec: S.Spec, section: S.Section):
     if isinstance(spec, S.Num):
         return _num_property(key, spec)
     if isinstance(spec, S.Choice):
-        items = tuple((c, display_name(c), "") for c in spec.choices)
+        is_function = section is S.LAMP and key == "function"
+        items = tuple((c, display_name(c), functions.describe(c) if is_function else "") for c in spec.choices)
+        update = _function_chosen if is_function else _edited
         return EnumProperty(name=display_name(key), description=_description(spec), items=items,
-                            default=spec.default, update=_edited)
+                            default=spec.default, update=update)
     if isinstance(spec, S.Flag):
         return BoolProperty(name=display_name(key), description=_description(spec), default=spec.default,
                             update=_edited)
@@ -165,11 +219,10 @@ def _make_groups(section: S.Section, class_name: str, out: list[type], extra: di
             annotations[key] = CollectionProperty(type=item, name=display_name(key), description=spec.doc)
             annotations[f"active_{key}_index"] = IntProperty(name=f"Active {display_name(key)} Index", min=0)
         else:
-            annotations[key] = _leaf_property(key, spec)
-    if section is S.LENS:
-        annotations["color_mode"] = EnumProperty(
-            name="Colour Mode", items=LENS_COLOR_MODE_ITEMS, default="ABSORPTION", update=_edited,
-            description="How the lens colour is given: transmitted colour at a thickness, or absorption")
+            annotations[property_id(key)] = (_stored_in(key, spec) if key in RESERVED_KEYS
+                                             else _leaf_property(key, spec, section))
+    for rule in section.one_of:
+        annotations[mode_property(rule)] = _mode_enum(rule)
     if section is S.SCENE:
         # Not a design field (never written to a scene document): how the built objects follow the design.
         annotations["auto_build"] = BoolProperty(
@@ -231,11 +284,8 @@ def _read_section(group, section: S.Section) -> dict:
             out[key] = _read_section(getattr(group, key), spec)
         elif isinstance(spec, S.ListOf):
             out[key] = [_read_section(item, spec.item) for item in getattr(group, key)]
-        elif section is S.LENS and key in S.LENS.optional:
-            if key in LENS_COLOR_MODES[group.color_mode]:
-                out[key] = _read_leaf(getattr(group, key), spec)
-        else:
-            out[key] = _read_leaf(getattr(group, key), spec)
+        elif form_used(group, section, key):
+            out[key] = _read_leaf(getattr(group, property_id(key)), spec)
     return out
 
 
@@ -310,15 +360,20 @@ def _write_section(group, section: S.Section, data: dict) -> None:
         elif isinstance(spec, S.Tags):
             setattr(group, key, f"{TAG_SEPARATOR} ".join(value))
         else:
-            setattr(group, key, value)
-    if section is S.LENS:
-        group.color_mode = next(mode for mode, keys in LENS_COLOR_MODES.items() if keys[0] in data)
+            setattr(group, property_id(key), value)
+    for rule in section.one_of:
+        if rule.given(data):  # a partial write (a lamp function's defaults) may leave the form alone
+            setattr(group, mode_property(rule), rule.chosen(data).name)
 
 
 def set_lamp(item, lamp: dict) -> None:
     """Set one lamp of the design (an item of ``lamp_design.lamps``) from a lamp of a checked design
     document or scene."""
-    _write_section(item, S.LAMP, lamp)
+    _writing[0] += 1
+    try:
+        _write_section(item, S.LAMP, lamp)
+    finally:
+        _writing[0] -= 1
 
 
 def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
@@ -328,7 +383,11 @@ def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
     """
     scene = lamp_scene.normalize(scene_dict)
     _check_section(scene, S.SCENE, "")
-    _write_section(bl_scene.lamp_design, S.SCENE, scene)
+    _writing[0] += 1
+    try:
+        _write_section(bl_scene.lamp_design, S.SCENE, scene)
+    finally:
+        _writing[0] -= 1
 
 
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -13,11 +13,14 @@ from bpy.props import BoolProperty, CollectionProperty, IntProperty, StringPrope
 ADDON_PACKAGE = __package__.rpartition(".")[0]  # "bl_ext.<repository>.lamp_styling"
 
 
-def _libraries_changed(self, context) -> None:
-    # Imported here: preset_library imports this module.
-    from . import preset_library
+# Called with no arguments when the library folders change; the preset library adds its listener
+# when it registers (it sits above this module, which never imports it).
+library_listeners: list = []
 
-    preset_library.mark_stale()
+
+def _libraries_changed(self, context) -> None:
+    for listener in library_listeners:
+        listener()
 
 
 class LAMP_PG_library_folder(bpy.types.PropertyGroup):

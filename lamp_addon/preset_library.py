@@ -343,11 +343,14 @@ def register() -> None:
     _listing = Listing()
     _thumbnails = Thumbnails()
     bpy.app.handlers.load_post.append(_file_loaded)
+    preferences.library_listeners.append(mark_stale)
     bpy.app.timers.register(_sync_timer, first_interval=0.5)  # list once the UI runs, never in register
 
 
 def unregister() -> None:
     global _thumbnails
+    if mark_stale in preferences.library_listeners:
+        preferences.library_listeners.remove(mark_stale)
     for timer in (_poll_timer, _sync_timer):
         if bpy.app.timers.is_registered(timer):
             bpy.app.timers.unregister(timer)

@@ -235,7 +235,7 @@ class LAMP_OT_preset_save(bpy.types.Operator):
 
     def invoke(self, context, event):
         design = context.scene.lamp_design
-        self.name, self.author, self.description, self.tags = design.name, design.author, design.description, \
+        self.name, self.author, self.description, self.tags = design.design_name, design.author, design.description, \
             design.tags
         lib = _default_library()
         if lib is not None:
@@ -408,7 +408,7 @@ class LAMP_OT_preset_export(bpy.types.Operator, ExportHelper):
 
     def invoke(self, context, event):
         if not self.filepath:
-            self.filepath = P.slug(context.scene.lamp_design.name) + self.filename_ext
+            self.filepath = P.slug(context.scene.lamp_design.design_name) + self.filename_ext
         return ExportHelper.invoke(self, context, event)
 
     def execute(self, context):

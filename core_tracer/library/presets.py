@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from .. import fileio
 from ..images import display
 from ..images.display import ViewTransform
-from ..scene.validate import SceneError, normalize, parse_scene, read_json, scene_to_json
+from ..scene.validate import SceneError, normalize, parse_scene, read_json, scene_to_json, without_defaults
 
 SUFFIX = ".json"
 THUMBNAIL_FOLDER = ".thumbnails"  # made on demand beside the presets of a writable library
@@ -166,7 +166,9 @@ def load_preset(path: str | os.PathLike) -> dict:
 
 
 def digest(scene: dict) -> str:
-    return hashlib.sha256(scene_to_json(scene).encode("utf-8")).hexdigest()[:16]
+    """The hash of a normalised scene that names its thumbnail. Fields at their defaults are left
+    out, so a field added to the spec with a default leaves every existing hash as it was."""
+    return hashlib.sha256(scene_to_json(without_defaults(scene)).encode("utf-8")).hexdigest()[:16]
 
 
 def _entry(library: Library, path: str, scene: dict) -> PresetEntry:

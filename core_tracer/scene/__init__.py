@@ -12,6 +12,7 @@ from .validate import (
     lamp_geometry,
     lens_absorption,
     load_scene,
+    new_lamp,
     normalize,
     parse_json_text,
     parse_scene,
@@ -21,5 +22,5 @@ from .validate import (
 
 __all__ = [
     "SceneError", "cut_sphere_radius", "default_camera", "lamp_geometry", "lens_absorption", "load_scene",
-    "normalize", "parse_json_text", "parse_scene", "read_json", "scene_to_json",
+    "new_lamp", "normalize", "parse_json_text", "parse_scene", "read_json", "scene_to_json",
 ]

@@ -28,18 +28,36 @@ def _default(sp: S.Spec) -> str:
     return f'"{d}"' if isinstance(d, str) else str(d)
 
 
+def _rule_default(sp: S.Spec, key: str, rule: S.OneOf) -> str:
+    """The default column of a field of an either/or rule: it depends on the form used."""
+    alt = rule.of_key(key)
+    same_as = dict(alt.same_as)
+    if key in same_as:
+        return f"`{same_as[key]}`"
+    if alt.name == rule.default:
+        return f"{_default(sp)} if no form is given"
+    return "none: giving it picks this form"
+
+
 def field_table() -> str:
+    """The Markdown table of every field, then the either/or rules, from ``spec``."""
     rows = ["| field | unit | allowed | default | meaning |", "|---|---|---|---|---|"]
+    sections = dict(S.iter_sections())
     for info in S.iter_fields():
         sp = info.spec
         unit = getattr(sp, "unit", "") or ""
         allowed = sp.range_text()
         if unit and allowed.endswith(unit):
             allowed = allowed[: -len(unit)].rstrip()
-        default = _default(sp)
-        if info.path.startswith("lamps[].lens.") and info.path.rsplit(".", 1)[1] in S.LENS.optional:
-            default = f"{default} (see below)"
+        parent, _, key = info.path.rpartition(".")
+        rule = sections[parent].rule_of(key)
+        default = _default(sp) if rule is None else _rule_default(sp, key, rule)
         rows.append(f"| `{info.path}` | {unit} | {allowed} | {default} | {sp.doc} |")
+    rules = [(path, rule) for path, sec in sections.items() for rule in sec.one_of]
+    if rules:
+        rows += ["", "Either/or rules (a field of one form may not be given with a field of another):", ""]
+        rows += [f"- `{path}`: {rule.doc.lower()}: {rule.range_text()}; a document that gives neither uses "
+                 f"`{rule.default}`." for path, rule in rules]
     return "\n".join(rows)
 
 

@@ -40,7 +40,8 @@ class Num:
     size: int = 1
     integer: bool = False
     nonzero: bool = False  # a direction: length at least MIN_DIRECTION_LENGTH
-    subtype: str = ""  # a hint for user interfaces: "color", "distance", "direction", "xyz"
+    subtype: str = ""  # a hint for user interfaces: "color", "rgb" (per-channel numbers, not a colour),
+    # "distance", "direction", "xyz"
 
     def range_text(self) -> str:
         """The allowed range as the error messages and the README print it."""
@@ -109,10 +110,75 @@ class Flag:
 
 
 @dataclass(frozen=True)
+class Alternative:
+    """One form of an either/or rule: the fields written in that form.
+
+    The first key selects the form (a document that gives it uses this form); the other keys
+    may be left out and then take the value of the field named in ``same_as``, or their
+    own default."""
+
+    keys: tuple[str, ...]
+    label: str
+    doc: str = ""
+    same_as: tuple[tuple[str, str], ...] = ()  # (key, field of the section whose value it takes)
+
+    @property
+    def name(self) -> str:
+        return self.keys[0]
+
+
+@dataclass(frozen=True)
+class OneOf:
+    """An either/or rule of a section: exactly one alternative's fields are present.
+
+    ``default`` is the form a document means when it gives none (what earlier versions wrote);
+    ``preferred`` is the form an editor starts a new design with."""
+
+    name: str
+    alternatives: tuple[Alternative, ...]
+    default: str
+    preferred: str
+    doc: str = ""
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return tuple(k for alt in self.alternatives for k in alt.keys)
+
+    def alternative(self, name: str) -> Alternative:
+        return next(alt for alt in self.alternatives if alt.name == name)
+
+    def of_key(self, key: str) -> Alternative | None:
+        """The alternative that writes ``key``, or None."""
+        return next((alt for alt in self.alternatives if key in alt.keys), None)
+
+    def given(self, data: dict) -> list[Alternative]:
+        """The alternatives of which ``data`` holds at least one field."""
+        return [alt for alt in self.alternatives if any(k in data for k in alt.keys)]
+
+    def chosen(self, data: dict) -> Alternative:
+        """The alternative a normalised section uses."""
+        given = self.given(data)
+        return given[0] if given else self.alternative(self.default)
+
+    def range_text(self) -> str:
+        return "either " + " or ".join(
+            alt.keys[0] + (f" (with {', '.join(alt.keys[1:])})" if alt.keys[1:] else "")
+            for alt in self.alternatives) + ", never both"
+
+
+@dataclass(frozen=True)
 class Section:
     fields: dict[str, Spec]
     doc: str = ""
     optional: tuple[str, ...] = ()  # keys that have no default and may be absent
+    one_of: tuple[OneOf, ...] = ()  # either/or rules; their keys are absent unless their form is used
+
+    def may_be_absent(self, key: str) -> bool:
+        return key in self.optional or any(key in rule.keys for rule in self.one_of)
+
+    def rule_of(self, key: str) -> OneOf | None:
+        """The either/or rule ``key`` belongs to, or None."""
+        return next((rule for rule in self.one_of if key in rule.keys), None)
 
 
 @dataclass(frozen=True)
@@ -175,9 +241,11 @@ IMAGE = Section(
 LIGHT = Section(
     {
         "direction": Num((0.3, -1.0, 0.6), -1.0e3, 1.0e3, size=3, nonzero=True, subtype="direction",
-                         doc="Direction from the lamp toward the light (eq. 1)"),
-        "color": _color((1, 1, 1), "Light colour: the specular colour R1G1B1 of eq. 1", hi=1000.0),
-        "ambient": Num(0.25, 0.0, 1.0, doc="Ambient fraction d of eq. 1"),
+                         doc="Where the light comes from: the direction from the lamp toward it (L in eq. 1)"),
+        "color": _color((1, 1, 1),
+                        "Colour and strength of the light's highlights on body and lens (R1G1B1 in eq. 1)", hi=1000.0),
+        "ambient": Num(0.25, 0.0, 1.0,
+                       doc="How bright surfaces facing away from the light still look (ambient d in eq. 1)"),
     },
     "The directional light of equation (1)",
 )
@@ -188,39 +256,55 @@ BODY = Section(
         "size": Num((220.0, 120.0), 0.0, 1.0e4, lo_open=True, unit="mm", size=2, subtype="xyz",
                     doc="Width (x) and height (z) of the front face"),
         "depth": _length(80.0, "Depth of the box into +y"),
-        "color": _color((0.6, 0.6, 0.62), "Diffuse colour R0G0B0 of the body (eq. 1)"),
-        "specular": Num(0.5, 0.0, 1.0, doc="Specular reflectance w of the body (eq. 1)"),
-        "shininess": Num(30.0, 0.0, 1.0e4, doc="Specular spread n of the body (eq. 1)"),
+        "color": _color((0.6, 0.6, 0.62), "Colour of the body's paint (diffuse R0G0B0 in eq. 1)"),
+        "specular": Num(0.5, 0.0, 1.0, doc="How strongly the body reflects the light as a highlight (w in eq. 1)"),
+        "shininess": Num(30.0, 0.0, 1.0e4,
+                         doc="How small and sharp the body's highlight is: higher is glossier (n in eq. 1)"),
     },
     "The opaque box that holds the lamps",
 )
 
 LENS = Section(
     {
-        "radius": _length(45.0, "Lens radius R", hi=1000.0),
-        "thickness": _length(3.0, "Lens thickness t: outer face y = 0, base of the cuts y = t", hi=100.0),
-        "ior": Num(1.49, 1.0, 3.0, doc="Refractive index n of the lens"),
-        "absorption": Num((0.02, 1.5, 1.6), 0.0, 100.0, unit="1/mm", size=3,
-                          doc="RGB absorption coefficients A (eq. 2)"),
+        "radius": _length(45.0, "Size of the round lens (radius R)", hi=1000.0),
+        "thickness": _length(3.0,
+                             "Thickness of the lens plate before the cuts: thicker looks deeper in colour (t)",
+                             hi=100.0),
+        "ior": Num(1.49, 1.0, 3.0,
+                   doc="How strongly the lens bends light: higher makes the cut pattern stronger (refractive index n)"),
+        "absorption": Num((0.02, 1.5, 1.6), 0.0, 100.0, unit="1/mm", size=3, subtype="rgb",
+                          doc="How much red, green and blue the lens absorbs per mm: 0 is clear (A in eq. 2)"),
         "transmitted_color": Num((0.9, 0.05, 0.05), 0.0, 1.0, lo_open=True, size=3, subtype="color",
-                                 doc="Colour seen through reference_thickness of lens "
-                                     "(instead of absorption)"),
-        "reference_thickness": _length(3.0, "Thickness at which transmitted_color is seen", hi=100.0),
-        "diffuse_color": _color((0.05, 0.0, 0.0), "Diffuse colour of the lens surface (eq. 1)"),
-        "specular": Num(0.8, 0.0, 1.0, doc="Specular reflectance w of the lens surface (eq. 1)"),
-        "shininess": Num(60.0, 0.0, 1.0e4, doc="Specular spread n of the lens surface (eq. 1)"),
-        "side_wall_color": _color((0.05, 0.02, 0.02), "Colour of the opaque lens side wall"),
+                                 doc="Colour of the lens as seen through reference_thickness of it, with a colour "
+                                     "picker (instead of absorption)"),
+        "reference_thickness": _length(3.0, "Thickness of lens through which transmitted_color is seen", hi=100.0),
+        "diffuse_color": _color((0.05, 0.0, 0.0), "Colour of the lens surface itself, seen unlit (diffuse, eq. 1)"),
+        "specular": Num(0.8, 0.0, 1.0, doc="How strongly the lens reflects the light as a highlight (w in eq. 1)"),
+        "shininess": Num(60.0, 0.0, 1.0e4,
+                         doc="How small and sharp the lens's highlight is: higher is glossier (n in eq. 1)"),
+        "side_wall_color": _color((0.05, 0.02, 0.02), "Colour of the lens's opaque rim"),
     },
     "The lens disk; its colour is given by absorption, or by transmitted_color at "
     "reference_thickness (never both)",
-    optional=("absorption", "transmitted_color", "reference_thickness"),
+    one_of=(OneOf(
+        "color",
+        (Alternative(("transmitted_color", "reference_thickness"), "Transmitted Colour",
+                     "The colour seen through the lens, picked with a colour picker",
+                     same_as=(("reference_thickness", "thickness"),)),
+         Alternative(("absorption",), "Absorption", "How strongly the lens absorbs red, green and blue "
+                                                    "per mm (A in eq. 2)")),
+        default="absorption", preferred="transmitted_color",
+        doc="How the lens colour is given"),),
 )
 
 CUTS = Section(
     {
-        "pitch": _length(9.0, "Cut size p: side of the square lenslet cells", hi=1000.0),
+        "pitch": _length(9.0,
+                         "Size of the fish-eye cuts: the side of each square cell, at most the lens diameter "
+                         "(pitch p)", hi=1000.0),
         "height": Num(1.5, 0.0, 100.0, unit="mm",
-                      doc="Cut height h (sag of each spherical lenslet); 0 is a flat inner face",
+                      doc="Depth of each fish-eye cut: deeper spreads the light more; 0 is a flat inner face; "
+                          "at most pitch / sqrt 2, a hemisphere (h)",
                       subtype="distance"),
     },
     "Fish-eye (spherical) cuts on the inner face of the lens",
@@ -228,39 +312,48 @@ CUTS = Section(
 
 REFLECTOR = Section(
     {
-        "focal_length": _length(18.0, "Focal length f of the paraboloid", hi=1000.0),
+        "focal_length": _length(18.0,
+                                "Depth of the reflector bowl: shorter is deeper (focal length f of the paraboloid)",
+                                hi=1000.0),
         "gap": Num(0.0, 0.0, 1000.0, unit="mm", subtype="distance",
-                   doc="Gap between the cut apex plane and the reflector rim"),
-        "color": _color((0.3, 0.3, 0.3), "Constant colour seen on the first reflector hit"),
-        "reflectance": Num(0.8, 0.0, 1.0, doc="Specular (mirror) reflectance of the reflector"),
-        "scatter": Num(0.8, 0.0, 1.0, doc="Scatter reflectance w of the Blinn term (eq. 3)"),
-        "shininess": Num(20.0, 0.0, 1.0e4, doc="Scatter spread n of the Blinn term (eq. 3)"),
+                   doc="Space between the back of the cuts and the reflector's rim"),
+        "color": _color((0.3, 0.3, 0.3), "Colour of the reflector seen unlit (constant on the first hit)"),
+        "reflectance": Num(0.8, 0.0, 1.0,
+                           doc="How much of the bulb's light the reflector mirrors (mirror reflectance)"),
+        "scatter": Num(0.8, 0.0, 1.0, doc="How much light the reflector scatters as a soft glow (w in eq. 3)"),
+        "shininess": Num(20.0, 0.0, 1.0e4, doc="How tight the reflector's glow is: higher is tighter (n in eq. 3)"),
     },
     "The paraboloid reflector behind the lens",
 )
 
 BULB = Section(
     {
-        "radius": _length(8.0, "Bulb radius", hi=1000.0),
+        "radius": _length(8.0, "Size of the bulb; it must fit inside the reflector", hi=1000.0),
         "offset": Num((0.0, 0.0, 0.0), -1000.0, 1000.0, unit="mm", size=3, subtype="xyz",
-                      doc="Bulb centre relative to the reflector focus [x, y, z]"),
-        "intensity": _color((8.0, 7.0, 6.0), "Bulb intensity I0 (RGB)", hi=1.0e4),
-        "on": Flag(True, "Whether the bulb is lit"),
+                      doc="Where the bulb sits, from the reflector's focus [x, y, z]: at the focus the lamp "
+                          "lights most evenly"),
+        "intensity": _color((8.0, 7.0, 6.0), "Brightness and colour of the bulb's light (I0 per R, G, B)", hi=1.0e4),
+        "on": Flag(True, "Whether the lamp is switched on"),
     },
     "The spherical bulb, the light source",
 )
 
 SOCKET = Section(
     {
-        "radius": _length(5.0, "Socket radius", hi=1000.0),
-        "color": _color((0.1, 0.1, 0.1), "Socket colour"),
+        "radius": _length(5.0, "Size of the bulb socket behind the bulb", hi=1000.0),
+        "color": _color((0.1, 0.1, 0.1), "Colour of the bulb socket"),
     },
     "The cylindrical socket from the reflector vertex to the bulb centre",
 )
 
+LAMP_FUNCTIONS = ("custom", "tail", "stop", "turn", "reversing", "position", "fog")
+
 LAMP = Section(
     {
         "center": _position((0, 0), "Centre [x, z] of the lens in the plane y = 0", size=2),
+        "function": Choice("custom", LAMP_FUNCTIONS,
+                           "What the lamp is for; choosing one in Blender sets its lens colour and bulb "
+                           "brightness and names its parts (custom: set them yourself)"),
         "lens": LENS,
         "cuts": CUTS,
         "reflector": REFLECTOR,
@@ -273,14 +366,14 @@ LAMP = Section(
 SCENE = Section(
     {
         "schema": Choice(SCHEMA, (SCHEMA,), "Format and version of the document"),
-        "name": Text("Untitled lamp", "Name of the design"),
-        "author": Text("", "Who made the design"),
-        "description": Text("", "Free text", max_len=2000),
-        "tags": Tags("Keywords for finding the design"),
+        "name": Text("Untitled lamp", "The design's name, shown in the preset browser and on study sheets"),
+        "author": Text("", "Who made the design, shown in the preset browser"),
+        "description": Text("", "Notes on the design, shown in the preset browser", max_len=2000),
+        "tags": Tags("Keywords the preset browser's search finds the design by"),
         "camera": CAMERA,
         "image": IMAGE,
         "light": LIGHT,
-        "background": _color((0, 0, 0), "Colour of rays that leave the scene (0 in the paper)"),
+        "background": _color((0, 0, 0), "Colour seen around the lamp, where rays leave the scene (0 in the paper)"),
         "body": BODY,
         "lamps": ListOf(LAMP, 1, MAX_LAMPS, "The lamps, 1 to 4"),
     },
@@ -307,6 +400,16 @@ def iter_fields(section: Section = SCENE, prefix: str = "") -> Iterator[FieldInf
             yield from iter_fields(spec.item, path + "[].")
         else:
             yield FieldInfo(path, spec)
+
+
+def iter_sections(section: Section = SCENE, prefix: str = "") -> Iterator[tuple[str, Section]]:
+    """``(path, section)`` of ``section`` and every section below it, lamps as ``lamps[]``."""
+    yield prefix.rstrip("."), section
+    for key, spec in section.fields.items():
+        if isinstance(spec, Section):
+            yield from iter_sections(spec, f"{prefix}{key}.")
+        elif isinstance(spec, ListOf):
+            yield from iter_sections(spec.item, f"{prefix}{key}[].")
 
 
 def lookup(path: str) -> Spec:

@@ -105,7 +105,6 @@ def parse_scene(doc: Any) -> dict:
     scene = _section(doc, S.SCENE, "")
     if "camera" not in scene:
         scene["camera"] = default_camera(scene)
-    _lens_color_rules(doc, scene)
     check_geometry(scene)
     return scene
 
@@ -126,11 +125,12 @@ def _section(doc: Any, sec: S.Section, path: str) -> dict:
     for key, spec in sec.fields.items():
         where = f"{path}{key}"
         if key not in doc:
-            if key in sec.optional:
+            if sec.may_be_absent(key):
                 continue
             out[key] = _default(spec, where)
             continue
         out[key] = _value(doc[key], spec, where)
+    _either_or(out, sec, path)
     return out
 
 
@@ -209,22 +209,33 @@ def _num_out(default: Any, spec: S.Num) -> Any:
     return int(default) if spec.integer else float(default)
 
 
-def _lens_color_rules(doc: dict, scene: dict) -> None:
-    for i, lamp in enumerate(scene["lamps"]):
-        lens = lamp["lens"]
-        where = f"lamps[{i}].lens"
-        has_a = "absorption" in lens
-        has_t = "transmitted_color" in lens
-        if has_a and (has_t or "reference_thickness" in lens):
-            raise SceneError(f"{where}.transmitted_color",
-                             "give either absorption or transmitted_color (with reference_thickness), "
-                             "not both")
-        if "reference_thickness" in lens and not has_t:
-            raise SceneError(f"{where}.reference_thickness", "only allowed with transmitted_color")
-        if has_t and "reference_thickness" not in lens:
-            lens["reference_thickness"] = lens["thickness"]
-        if not has_a and not has_t:
-            lens["absorption"] = _num_out(S.LENS.fields["absorption"].default, S.LENS.fields["absorption"])
+def _either_or(out: dict, sec: S.Section, path: str) -> None:
+    """Apply the section's either/or rules (``spec.OneOf``) to the fields read into ``out``:
+    one form at most, its selecting field present, its missing fields filled in; no form given
+    means the rule's default form with its defaults (what earlier versions wrote)."""
+    for rule in sec.one_of:
+        given = rule.given(out)
+        if len(given) > 1:
+            first, other = given[0], given[1]
+            raise SceneError(f"{path}{other.name}", f"cannot be given with {first.name}; allowed "
+                                                    f"{rule.range_text()}")
+        alt = given[0] if given else rule.alternative(rule.default)
+        if given and alt.name not in out:
+            stray = next(k for k in alt.keys if k in out)
+            raise SceneError(f"{path}{stray}", f"only allowed with {alt.name}; allowed {rule.range_text()}")
+        fill_alternative(out, sec, alt)
+
+
+def fill_alternative(data: dict, sec: S.Section, alt: S.Alternative) -> None:
+    """Give ``data`` every field of the form ``alt`` it lacks: the value of its ``same_as``
+    field, else its default (in place)."""
+    same_as = dict(alt.same_as)
+    for key in alt.keys:
+        if key not in data:
+            if key in same_as:
+                data[key] = copy.deepcopy(data[same_as[key]])
+            else:
+                data[key] = _default(sec.fields[key], key)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -237,6 +248,63 @@ def lens_absorption(lens: dict) -> list[float]:
         return list(lens["absorption"])
     t_ref = lens["reference_thickness"]
     return [-math.log(c) / t_ref for c in lens["transmitted_color"]]
+
+
+def without_defaults(data: dict, sec: S.Section = S.SCENE) -> dict:
+    """A normalised ``sec`` with every field that holds its default left out (recursively): the
+    same design whatever defaulted fields the spec gains later, so a hash of it (a thumbnail's
+    name) stays the same when a field is added."""
+    out: dict = {}
+    for key, value in data.items():
+        spec = sec.fields[key]
+        if isinstance(spec, S.Section):
+            value = without_defaults(value, spec)
+            if not value and key not in sec.optional:  # an absent optional section is computed
+                continue
+        elif isinstance(spec, S.ListOf):
+            value = [without_defaults(item, spec.item) for item in value]
+        elif sec.rule_of(key) is None and key != "schema" and value == _default(spec, key):
+            continue  # (a form of an either/or rule is kept: leaving it out would mean the default form)
+        out[key] = value
+    return out
+
+
+def preferred_forms(sec: S.Section) -> dict:
+    """A partial document of ``sec`` that picks the preferred form of every either/or rule in it
+    (the colour picker for a lens): what an editor starts a new design with, where a document
+    that says nothing means the rule's default form."""
+    out: dict = {}
+    for key, spec in sec.fields.items():
+        if isinstance(spec, S.Section) and (sub := preferred_forms(spec)):
+            out[key] = sub
+    for rule in sec.one_of:
+        name = rule.preferred
+        out[name] = _default(sec.fields[name], name)
+    return out
+
+
+def new_lamp() -> dict:
+    """The normalised lamp a new design starts with: the spec's defaults in the preferred forms."""
+    return parse_scene({"schema": S.SCHEMA, "lamps": [preferred_forms(S.LAMP)]})["lamps"][0]
+
+
+def use_form(data: dict, sec: S.Section, key: str) -> None:
+    """Make ``data`` (a normalised ``sec``) use the form of the either/or rule that writes ``key``
+    (in place); nothing changes for a key in no rule or a form already used. The lens colour
+    keeps its absorption through the change (MODEL.md §6): a transmitted colour is the one seen
+    through the lens's own thickness."""
+    rule = sec.rule_of(key)
+    if rule is None or rule.chosen(data) is rule.of_key(key):
+        return
+    alt = rule.of_key(key)
+    absorption = lens_absorption(data) if sec is S.LENS else None
+    for k in rule.keys:
+        data.pop(k, None)
+    if absorption is not None and alt.name == "absorption":
+        data["absorption"] = absorption
+    elif absorption is not None:
+        data["transmitted_color"] = [math.exp(-a * data["thickness"]) for a in absorption]
+    fill_alternative(data, sec, alt)
 
 
 def cut_sphere_radius(pitch: float, height: float) -> float:
@@ -285,9 +353,7 @@ def check_geometry(scene: dict) -> None:
         R = lamp["lens"]["radius"]
         cx, cz = lamp["center"]
         if abs(cx - bx) + R > half_w + 1e-9 or abs(cz - bz) + R > half_h + 1e-9:
-            raise SceneError(f"{where}.center", f"{_show(lamp['center'])} with lens radius {R:g} mm puts "
-                             f"the lens outside the body; allowed x in [{bx - half_w + R:g}, "
-                             f"{bx + half_w - R:g}], z in [{bz - half_h + R:g}, {bz + half_h - R:g}] mm")
+            _lens_outside_body(scene, i)
         for j in range(i):
             other = scene["lamps"][j]
             d = math.hypot(cx - other["center"][0], cz - other["center"][1])
@@ -304,45 +370,189 @@ def check_geometry(scene: dict) -> None:
         c = pitch / math.sqrt(2.0)
         if h > c:
             raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "
-                             f"allowed [0, {c:.4g}] mm (pitch / sqrt 2)")
+                             f"allowed [0, {_rounded(c, False)}] mm (pitch / sqrt 2)")
         g = lamp_geometry(lamp)
         if g["vertex"] > body["depth"]:
-            raise SceneError(f"{where}.reflector.focal_length",
-                             f"{lamp['reflector']['focal_length']:g} makes the reflector {g['vertex']:.4g} mm "
-                             f"deep, deeper than the body ({body['depth']:g} mm); allowed at least "
-                             f"{R * R / (4 * (body['depth'] - g['rim'])):.4g} mm" if body["depth"] > g["rim"]
-                             else f"the lens and cuts ({g['rim']:.4g} mm) are deeper than the body")
+            _reflector_too_deep(scene, i, g)
         _check_bulb(lamp, g, where)
         rs = lamp["socket"]["radius"]
         if rs >= R:
             raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {R:g}) mm")
 
 
+def _lens_outside_body(scene: dict, i: int) -> None:
+    """Raise for lamps[i]'s lens reaching outside the body: blame its centre when the lens fits
+    the body somewhere, else the body's size (the size that holds every lens where it is)."""
+    body = scene["body"]
+    (bx, bz), (w, h) = body["center"], body["size"]
+    lamp = scene["lamps"][i]
+    R = lamp["lens"]["radius"]
+    if 2 * R <= w + 1e-9 and 2 * R <= h + 1e-9:
+        raise SceneError(f"lamps[{i}].center", f"{_show(lamp['center'])} with lens radius {R:g} mm puts "
+                         f"the lens outside the body; allowed x in {_interval(bx - w / 2 + R, bx + w / 2 - R)}, "
+                         f"z in {_interval(bz - h / 2 + R, bz + h / 2 - R)} mm")
+    need_w = max(2 * (abs(lp["center"][0] - bx) + lp["lens"]["radius"]) for lp in scene["lamps"])
+    need_h = max(2 * (abs(lp["center"][1] - bz) + lp["lens"]["radius"]) for lp in scene["lamps"])
+    hi = S.BODY.fields["size"].hi
+    if need_w <= hi and need_h <= hi:
+        raise SceneError("body.size", f"{_show(body['size'])} cannot hold the lens of lamps[{i}] (radius {R:g} mm); "
+                         f"allowed width in {_interval(need_w, hi)} and height in {_interval(need_h, hi)} mm, or a "
+                         f"smaller lamps[{i}].lens.radius, at most {_rounded(min(w, h) / 2, False)} mm")
+    raise SceneError(f"lamps[{i}].lens.radius", f"{R:g} does not fit in the body {w:g} x {h:g} mm; allowed "
+                     f"(0, {_rounded(min(w, h) / 2, False)}] mm")
+
+
+def _reflector_too_deep(scene: dict, i: int, g: dict) -> None:
+    """Raise for lamps[i]'s reflector reaching behind the body: blame the focal length when a longer
+    one fits (a shallower bowl), else the body's depth."""
+    depth, lamp = scene["body"]["depth"], scene["lamps"][i]
+    R, f = lamp["lens"]["radius"], lamp["reflector"]["focal_length"]
+    f_hi = S.REFLECTOR.fields["focal_length"].hi
+    d_hi = S.BODY.fields["depth"].hi
+    f_lo = R * R / (4 * (depth - g["rim"])) if depth > g["rim"] else math.inf
+    if f_lo <= f_hi:
+        raise SceneError(f"lamps[{i}].reflector.focal_length",
+                         f"{f:g} makes the reflector {g['vertex']:.4g} mm deep, deeper than the body ({depth:g} mm); "
+                         f"allowed {_interval(f_lo, f_hi)} mm, or body.depth at least "
+                         f"{_rounded(g['vertex'], True)} mm")
+    raise SceneError("body.depth", f"{depth:g} is shallower than the reflector of lamps[{i}] ({g['vertex']:.4g} mm "
+                     f"deep); allowed {_interval(g['vertex'], d_hi)} mm")
+
+
+_HALVINGS = 30  # bisection steps for the bulb's limits: 2^-30 of the span, far below the digits shown
+
+
+def _wall_distance(lamp: dict, g: dict, rho: float, y: float) -> float:
+    """Distance from the point at radius ``rho`` from the axis and depth ``y`` to the reflector's
+    paraboloid y = y_vertex - r^2/(4f), r <= R (the closest point lies in the plane through the axis)."""
+    f, R = lamp["reflector"]["focal_length"], lamp["lens"]["radius"]
+
+    def dist(r: float) -> float:
+        return math.hypot(r - rho, g["vertex"] - r * r / (4 * f) - y)
+
+    n = 60
+    k = min(range(-n, n + 1), key=lambda j: dist(R * j / n))
+    lo, hi = R * max(k - 1, -n) / n, R * min(k + 1, n) / n
+    for _ in range(30):  # golden-section refinement around the best sample
+        a, b = lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo)
+        if dist(a) < dist(b):
+            hi = b
+        else:
+            lo = a
+    return min(dist(R * k / n), dist((lo + hi) / 2))
+
+
+def _bulb_fits(lamp: dict, g: dict, rho: float, y: float, rb: float) -> bool:
+    """The bulb sphere (centre at radius ``rho``, depth ``y``) lies behind the cut apex plane and
+    inside the paraboloid."""
+    f, R = lamp["reflector"]["focal_length"], lamp["lens"]["radius"]
+    inside = y < g["vertex"] - rho * rho / (4 * f) and rho < R
+    return inside and y - rb >= g["plane_b"] - 1e-9 and _wall_distance(lamp, g, rho, y) >= rb - 1e-9
+
+
+def _bulb_y_range(lamp: dict, g: dict, rho: float, rb: float) -> tuple[float, float] | None:
+    """The depths at which the bulb fits at radius ``rho``: from the cut apex plane back to where it
+    touches the paraboloid (the clearance shrinks toward the vertex), or None."""
+    lo = g["plane_b"] + rb
+    if not _bulb_fits(lamp, g, rho, lo, rb):
+        return None
+    hi = g["vertex"]
+    for _ in range(_HALVINGS):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if _bulb_fits(lamp, g, rho, mid, rb) else (lo, mid)
+    return g["plane_b"] + rb, lo
+
+
+def _interval(lo: float, hi: float) -> str:
+    """``[lo, hi]`` with both ends rounded inward to 4 significant digits (so the values shown are
+    allowed), or to 12 when the interval is too narrow for that."""
+    a, b = _rounded(lo, True), _rounded(hi, False)
+    return f"[{a}, {b}]" if float(a) <= float(b) else f"[{lo:.12g}, {hi:.12g}]"
+
+
+def _rounded(x: float, up: bool) -> str:
+    """``x`` to 4 significant digits, rounded up or down so that the value shown is allowed."""
+    if x == 0:
+        return "0"
+    step = 10.0 ** (math.floor(math.log10(abs(x))) - 3)
+    return f"{(math.ceil(x / step) if up else math.floor(x / step)) * step:.4g}"
+
+
 def _check_bulb(lamp: dict, g: dict, where: str) -> None:
-    """The bulb sphere must lie inside the paraboloid, behind the cut apex plane."""
+    """The bulb sphere must lie inside the paraboloid, behind the cut apex plane. The message
+    blames the radius when the bulb fits nowhere, else the offset with the depths that fit."""
     rb = lamp["bulb"]["radius"]
     bx, by, bz = g["bulb_center"]
-    f = lamp["reflector"]["focal_length"]
-    R = lamp["lens"]["radius"]
-    if by - rb < g["plane_b"]:
-        raise SceneError(f"{where}.bulb.offset", f"the bulb (radius {rb:g} mm) reaches {by - rb:.4g} mm, in front "
-                         f"of the cuts at y = {g['plane_b']:.4g} mm; move it back or make it smaller")
-    # Distance from the centre to the paraboloid y = y_v - r^2/(4f), sampled finely around it.
-    rho0 = math.hypot(bx, bz)
-    best = math.inf
-    n = 720
-    for k in range(n + 1):
-        r = R * k / n
-        for sign in (-1.0, 1.0):
-            # the closest point lies in the plane through the axis and the centre
-            px = sign * r
-            dy = (g["vertex"] - r * r / (4 * f)) - by
-            d = math.hypot(px - rho0, dy)
-            best = min(best, d)
-    inside = by < g["vertex"] - rho0 * rho0 / (4 * f) and rho0 < R
-    if not inside or best < rb:
-        raise SceneError(f"{where}.bulb.radius", f"{rb:g} with offset {_show(lamp['bulb']['offset'])} does not fit "
-                         f"inside the reflector; allowed up to {max(best, 0) if inside else 0:.4g} mm here")
+    rho = math.hypot(bx, bz)
+    if _bulb_fits(lamp, g, rho, by, rb):
+        return
+    off = lamp["bulb"]["offset"]
+    on_axis = _bulb_y_range(lamp, g, 0.0, rb)
+    if on_axis is None:  # too big anywhere: the largest bulb that fits on the axis, found by bisection
+        lo, hi = 0.0, rb
+        for _ in range(_HALVINGS):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if _bulb_y_range(lamp, g, 0.0, mid) is not None else (lo, mid)
+        raise SceneError(f"{where}.bulb.radius", f"{rb:g} does not fit inside the reflector (focal length "
+                         f"{lamp['reflector']['focal_length']:g} mm, lens radius {lamp['lens']['radius']:g} mm); "
+                         f"allowed (0, {_rounded(lo, False)}] mm")
+    ys = _bulb_y_range(lamp, g, rho, rb)
+    if ys is not None:
+        y_lo, y_hi = (y - g["focus"] for y in ys)
+        raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) outside the "
+                         f"reflector; with x = {off[0]:g} and z = {off[2]:g}, allowed y in {_interval(y_lo, y_hi)} mm")
+    y_shown = float(f"{sum(on_axis) / 2 - g['focus']:.4g}")  # mid-depth on the axis, as printed
+    y_mid = y_shown + g["focus"]
+    lo, hi = 0.0, lamp["lens"]["radius"]
+    for _ in range(_HALVINGS):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if _bulb_fits(lamp, g, mid, y_mid, rb) else (lo, mid)
+    raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) outside the "
+                     f"reflector; allowed a distance from the axis sqrt(x^2 + z^2) up to {_rounded(lo, False)} mm "
+                     f"(at y = {y_shown:g} mm)")
+
+
+def lamp_limits(scene: dict, i: int) -> dict[str, str]:
+    """The limits of lamps[i]'s fields that depend on other fields, in words with their current
+    values (``{"cuts.height": "at most 6.363 mm for pitch 9 mm (pitch / sqrt 2)", ...}``), for a
+    panel to show beside the sliders whose fixed range cannot say them. ``scene`` is a checked or
+    unchecked document whose fields are present."""
+    body, lamp = scene["body"], scene["lamps"][i]
+    (bx, bz), (w, h) = body["center"], body["size"]
+    R, pitch = lamp["lens"]["radius"], lamp["cuts"]["pitch"]
+    limits = {
+        "cuts.height": f"at most {_rounded(pitch / math.sqrt(2.0), False)} mm for pitch {pitch:g} mm "
+                       "(pitch / sqrt 2)",
+        "cuts.pitch": f"at most {2 * R:g} mm, the lens diameter",
+        "socket.radius": f"less than {R:g} mm, the lens radius",
+    }
+    cx, cz = lamp["center"]
+    room = min(w / 2 - abs(cx - bx), h / 2 - abs(cz - bz))
+    if room > 0:
+        limits["lens.radius"] = f"at most {_rounded(room, False)} mm at this centre in the body"
+    if 2 * R <= min(w, h):
+        limits["center"] = (f"x in {_interval(bx - w / 2 + R, bx + w / 2 - R)}, "
+                            f"z in {_interval(bz - h / 2 + R, bz + h / 2 - R)} mm inside the body")
+    limits.update(_bulb_limits(lamp))
+    return limits
+
+
+def _bulb_limits(lamp: dict) -> dict[str, str]:
+    """The bulb's radius where it sits and the depths (offset y) at which it fits, in words."""
+    g = lamp_geometry(lamp)
+    rb, (x, _, z) = lamp["bulb"]["radius"], lamp["bulb"]["offset"]
+    by, rho = g["bulb_center"][1], math.hypot(x, z)
+    f, R = lamp["reflector"]["focal_length"], lamp["lens"]["radius"]
+    out = {}
+    if rho < R and by < g["vertex"] - rho * rho / (4 * f):
+        room = min(_wall_distance(lamp, g, rho, by), by - g["plane_b"])
+        if room > 0:
+            out["bulb.radius"] = f"at most {_rounded(room, False)} mm where the bulb sits"
+    ys = _bulb_y_range(lamp, g, rho, rb)
+    if ys is not None:
+        y_lo, y_hi = (y - g["focus"] for y in ys)
+        out["bulb.offset"] = f"y in {_interval(y_lo, y_hi)} mm with x = {x:g} and z = {z:g}"
+    return out
 
 
 def default_camera(scene: dict) -> dict:

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..scene import spec as S
-from ..scene.validate import SceneError, lens_absorption, parse_json_text, parse_scene, read_json, scene_to_json
+from ..scene.validate import SceneError, parse_json_text, parse_scene, read_json, scene_to_json, use_form
 
 SCHEMA = "lamp-study/1"
 STUDY_ATTRIBUTE = "lamp:study"  # the header attribute of a contact sheet that holds the study
@@ -85,6 +85,29 @@ class Parameter:
     @property
     def is_vector(self) -> bool:
         return isinstance(self.spec, S.Num) and self.spec.size > 1 and self.component is None
+
+    @property
+    def section(self) -> S.Section:
+        """The section that holds the field (the lens for ``lens.ior``)."""
+        if self.lamp_scope:
+            return S.lookup(".".join(("lamps[]",) + self.keys[:-1])) if len(self.keys) > 1 else S.LAMP
+        return S.lookup(".".join(self.keys[:-1])) if len(self.keys) > 1 else S.SCENE
+
+    @property
+    def form(self) -> S.Alternative | None:
+        """The form of an either/or rule the field belongs to (``lens.absorption``), or None."""
+        rule = self.section.rule_of(self.keys[-1])
+        return rule.of_key(self.keys[-1]) if rule is not None else None
+
+    def nodes(self, scene: dict) -> list[dict]:
+        """The dicts of ``scene`` that hold the field: one per lamp it applies to."""
+        roots = [scene] if not self.lamp_scope else scene["lamps"] if self.lamp is None else [scene["lamps"][self.lamp]]
+        out = []
+        for node in roots:
+            for key in self.keys[:-1]:
+                node = node[key]
+            out.append(node)
+        return out
 
 
 def study_parameters() -> list[str]:
@@ -182,40 +205,18 @@ def _check_scalar(param: Parameter, x: Any, sp: S.Num) -> float | int:
 
 
 def apply_value(scene: dict, param: Parameter, value: Any) -> None:
-    """Set ``param`` to ``value`` in ``scene`` (a normalised scene, edited in place)."""
-    if not param.lamp_scope:
-        _set(scene, param, value)
-        return
-    lamps = scene["lamps"] if param.lamp is None else [scene["lamps"][param.lamp]]
-    for lamp in lamps:
-        if param.keys[0] == "lens" and len(param.keys) == 2:
-            _prepare_lens_colour(lamp["lens"], param.keys[1])
-        _set(lamp, param, value)
-
-
-def _set(node: dict, param: Parameter, value: Any) -> None:
-    for key in param.keys[:-1]:
-        node = node[key]
+    """Set ``param`` to ``value`` in ``scene`` (a normalised scene, edited in place). A field of
+    one form of an either/or rule (the lens colour) switches the section to that form first,
+    keeping what it describes, so a component edit keeps the other components."""
     last = param.keys[-1]
-    if param.component is None:
-        node[last] = copy.deepcopy(value)
-    else:
-        vector = list(node[last])
-        vector[param.component] = value
-        node[last] = vector
-
-
-def _prepare_lens_colour(lens: dict, key: str) -> None:
-    """Keep one lens colour form (scene.py allows absorption or transmitted_color, never both)."""
-    if key == "transmitted_color" and "absorption" in lens:
-        # The colour seen through the lens's own thickness, so a component edit keeps the others.
-        t = lens["thickness"]
-        lens["transmitted_color"] = [math.exp(-a * t) for a in lens.pop("absorption")]
-        lens["reference_thickness"] = t
-    elif key == "absorption" and "transmitted_color" in lens:
-        lens["absorption"] = lens_absorption(lens)
-        del lens["transmitted_color"]
-        lens.pop("reference_thickness", None)
+    for node in param.nodes(scene):
+        use_form(node, param.section, last)
+        if param.component is None:
+            node[last] = copy.deepcopy(value)
+        else:
+            vector = list(node[last])
+            vector[param.component] = value
+            node[last] = vector
 
 
 # ---------------------------------------------------------------------------------------------
@@ -241,11 +242,14 @@ def parse_axis(doc: Any, base: dict, where: str) -> Axis:
     if "parameter" not in doc:
         raise SceneError(f"{where}.parameter", "is required (e.g. \"lens.ior\")")
     param = resolve_parameter(doc["parameter"], base)
-    if param.lamp_scope and param.keys == ("lens", "reference_thickness"):
-        lamps = base["lamps"] if param.lamp is None else [base["lamps"][param.lamp]]
-        if any("transmitted_color" not in lamp["lens"] for lamp in lamps):
-            raise SceneError(param.text, "only applies to a lens coloured by transmitted_color; this base "
-                                         "gives absorption coefficients (vary lens.transmitted_color instead)")
+    form = param.form
+    if form is not None and param.keys[-1] != form.name:  # a field that only goes with its form's first
+        rule = param.section.rule_of(form.name)
+        used = {rule.chosen(node).name for node in param.nodes(base)} - {form.name}
+        if used:
+            prefix = ".".join(param.keys[:-1])
+            raise SceneError(param.text, f"only applies where {prefix}.{form.name} is given; this base gives "
+                                         f"{prefix}.{min(used)} (vary {prefix}.{form.name} instead)")
     has_values, has_range = "values" in doc, "range" in doc
     if has_values == has_range:
         raise SceneError(param.text, "give either values (a list) or range [lo, hi] with steps, not "
@@ -491,10 +495,10 @@ def _overlap(a: Parameter, b: Parameter) -> bool:
     """Whether two axes would set the same number (or the two exclusive forms of one lens colour)."""
     lamps_meet = a.lamp_scope == b.lamp_scope and (a.lamp is None or b.lamp is None or a.lamp == b.lamp)
     if a.keys != b.keys:
-        forms = {a.keys, b.keys}
-        absorption = ("lens", "absorption")
-        return lamps_meet and absorption in forms and bool(forms & {("lens", "transmitted_color"),
-                                                                   ("lens", "reference_thickness")})
+        # Two forms of one either/or rule (absorption against a transmitted colour) exclude each other.
+        same_section = a.keys[:-1] == b.keys[:-1]
+        return lamps_meet and same_section and a.form is not None and b.form is not None and a.form is not b.form \
+            and a.section.rule_of(a.keys[-1]) is b.section.rule_of(b.keys[-1])
     comps_meet = a.component is None or b.component is None or a.component == b.component
     return lamps_meet and comps_meet
 

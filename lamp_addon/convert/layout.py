@@ -10,7 +10,7 @@ from __future__ import annotations
 import copy
 
 from ...core_tracer.scene import spec
-from ...core_tracer.scene.validate import parse_scene
+from ...core_tracer.scene.validate import SceneError, new_lamp, parse_scene
 
 MARGIN_MM = 5.0  # between a new lens and its neighbour, and at least between it and the body's edge
 
@@ -21,14 +21,37 @@ def design_with_new_lamp(doc: dict, active_index: int) -> dict:
     spec's default lamp in an empty design. Raises ``SceneError`` (field and allowed range) when
     the result is not a valid design, checked as ``parse_scene`` does, camera aside (a new lamp
     does not change what the camera may be)."""
+    doc = with_new_lamp_unchecked(doc, active_index)
+    parse_scene({key: value for key, value in doc.items() if key != "camera"})
+    return doc
+
+
+def refusal_of_new_lamp(doc: dict, active_index: int) -> str | None:
+    """Why Add Lamp cannot add a lamp to ``doc``, or None. Only the new lamp's own place is a
+    reason: an error the design has anyway is the panel's to show and does not block adding."""
+    try:
+        parse_scene({key: value for key, value in doc.items() if key != "camera"})
+    except SceneError:
+        body = with_new_lamp_unchecked(doc, active_index)["body"]
+        limit = spec.BODY.fields["size"].hi
+        if max(body["size"]) > limit:
+            return (f"Cannot add a lamp: the body would need {max(body['size']):g} mm; body.size allows up "
+                    f"to {limit:g} mm (make the lenses smaller or remove a lamp)")
+        return None
+    try:
+        design_with_new_lamp(doc, active_index)
+    except SceneError as e:
+        return f"Cannot add a lamp: {e}"
+    return None
+
+
+def with_new_lamp_unchecked(doc: dict, active_index: int) -> dict:
+    """A copy of ``doc`` with a copy of the active lamp (the spec's default lamp, in the preferred
+    forms, in an empty design) placed beside the others; not checked."""
     doc = copy.deepcopy(doc)
     lamps = doc["lamps"]
-    if 0 <= active_index < len(lamps):
-        lamps.append(copy.deepcopy(lamps[active_index]))
-    else:
-        lamps.append(parse_scene({"schema": spec.SCHEMA, "lamps": [{}]})["lamps"][0])
+    lamps.append(copy.deepcopy(lamps[active_index]) if 0 <= active_index < len(lamps) else new_lamp())
     place_new_lamp(doc)
-    parse_scene({key: value for key, value in doc.items() if key != "camera"})
     return doc
 
 

@@ -17,6 +17,9 @@ pytestmark = pytest.mark.blender
 
 
 
+SPEC_KEYS = {"design_name": "name"}
+
+
 class RecordingLayout:
     def __init__(self, log: list | None = None):
         self.log = [] if log is None else log
@@ -25,9 +28,12 @@ class RecordingLayout:
         self.enabled = True
         self.active = True
         self.alert = False
+        self.alignment = "EXPAND"
 
     def _child(self) -> RecordingLayout:
-        return RecordingLayout(self.log)
+        child = RecordingLayout(self.log)
+        child.alert = self.alert  # as in Blender, a sub-layout starts with its parent's alert state
+        return child
 
     def row(self, **_kw):
         return self._child()
@@ -46,10 +52,19 @@ class RecordingLayout:
 
     def label(self, *, text="", icon="NONE", **_kw):
         self.log.append(("label", text, icon))
+        if self.alert:
+            self.log.append(("alert label", text))
 
     def prop(self, data, prop, **kw):
         assert prop in data.bl_rna.properties.keys(), f"{data} has no property {prop!r}"
+        if "index" in kw:
+            assert 0 <= kw["index"] < data.bl_rna.properties[prop].array_length
         self.log.append(("prop", data, prop, kw))
+        if self.alert:
+            self.log.append(("alert prop", data, prop))
+
+    def template_icon(self, *, icon_value, scale=1.0):
+        self.log.append(("template_icon", icon_value))
 
     def operator(self, idname, **kw):
         import bpy
@@ -78,11 +93,21 @@ class RecordingLayout:
         for _, data, prop, _kw in self.props():
             path = data.path_from_id(prop)
             if path.startswith("lamp_design."):
-                out.add(re.sub(r"\[\d+\]", "[]", path[len("lamp_design."):]))
+                owner, _, ident = re.sub(r"\[\d+\]", "[]", path[len("lamp_design."):]).rpartition(".")
+                key = SPEC_KEYS.get(ident, ident)  # a property named apart from its field ("design_name")
+                out.add(f"{owner}.{key}" if owner else key)
         return out
 
     def operators(self) -> list[str]:
         return [entry[1] for entry in self.log if entry[0] == "operator"]
+
+    def alerts(self) -> tuple[list[str], list[str]]:
+        """The highlighted properties (paths below ``lamp_design``) and the highlighted label texts."""
+        props = [e[1].path_from_id(e[2]).removeprefix("lamp_design.") for e in self.log if e[0] == "alert prop"]
+        return props, [entry[1] for entry in self.log if entry[0] == "alert label"]
+
+    def labels(self) -> list[str]:
+        return [entry[1] for entry in self.log if entry[0] == "label"]
 
 
 class PanelProxy:
@@ -97,8 +122,11 @@ class PanelProxy:
 
 
 def draw(cls, bl_scene) -> RecordingLayout:
+    import bpy
+
     layout = RecordingLayout()
-    context = SimpleNamespace(scene=bl_scene)
+    context = SimpleNamespace(scene=bl_scene, window_manager=bpy.context.window_manager,
+                              engine=bl_scene.render.engine, view_layer=bl_scene.view_layers[0])
     if hasattr(cls, "poll"):
         assert cls.poll(context)
     cls.draw(PanelProxy(cls, layout), context)
@@ -138,7 +166,7 @@ def test_panels_are_in_the_lamp_tab(lamp_addon):
 
 def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
     shown = set()
-    for mode in ("TRANSMITTED", "ABSORPTION"):
+    for mode in ("transmitted_color", "absorption"):
         design.lamps[2].lens.color_mode = mode
         for cls in _panels(lamp_addon):
             shown |= draw(cls, bl_scene).spec_paths()
@@ -182,17 +210,19 @@ def test_lens_colour_mode(lamp_addon, bl_scene, design):
     import bpy
 
     lens = design.lamps[2].lens
-    lens.color_mode = "TRANSMITTED"
+    lens.color_mode = "transmitted_color"
     layout = draw(bpy.types.LAMP_PT_lens, bl_scene)
     drawn = [prop for _, _, prop, _ in layout.props()]
     assert "color_mode" in drawn
     assert {"transmitted_color", "reference_thickness"} <= set(drawn) and "absorption" not in drawn
-    lens.color_mode = "ABSORPTION"
+    lens.color_mode = "absorption"
     drawn = [prop for _, _, prop, _ in draw(bpy.types.LAMP_PT_lens, bl_scene).props()]
     assert "absorption" in drawn and "transmitted_color" not in drawn
 
 
-def test_lengths_are_labelled_in_mm(lamp_addon, S, bl_scene, design):
+@pytest.mark.parametrize("mode", ["transmitted_color", "absorption"])
+def test_lengths_are_labelled_in_mm(lamp_addon, S, bl_scene, design, mode):
+    design.lamps[2].lens.color_mode = mode
     for cls in _panels(lamp_addon):
         for _, data, prop, kw in draw(cls, bl_scene).props():
             rna = [p for p in data.bl_rna.properties if p.identifier == prop][-1]
@@ -201,7 +231,10 @@ def test_lengths_are_labelled_in_mm(lamp_addon, S, bl_scene, design):
                 spec = S.lookup(path)
             except KeyError:
                 continue  # not a scene field (the colour mode)
-            assert "text" not in kw, path  # the property's own name (with its unit) is shown
+            if "index" in kw:  # one channel of absorption: "Absorption (1/mm) R", "G", "B"
+                assert kw["text"] in (f"{rna.name} R", "G", "B"), (path, kw["text"])
+            else:
+                assert "text" not in kw, path  # the property's own name (with its unit) is shown
             if getattr(spec, "unit", "") == "mm":
                 assert rna.name.endswith("(mm)"), (path, rna.name)
 
@@ -246,3 +279,275 @@ def test_empty_design(lamp_addon, bl_scene):
     assert bpy.ops.lamp.lamp_add.poll() and not bpy.ops.lamp.lamp_remove.poll()
     hints = [e for e in draw(lamp_addon.design_panels.LAMP_PT_lamps, bl_scene).log if e[0] == "label"]
     assert any("Add a lamp" in e[1] for e in hints)  # the empty list says how to start
+
+
+def test_absorption_is_labelled_rgb(lamp_addon, bl_scene, design):
+    import bpy
+
+    design.lamps[2].lens.color_mode = "absorption"
+    drawn = [kw for _, _, prop, kw in draw(bpy.types.LAMP_PT_lens, bl_scene).props() if prop == "absorption"]
+    assert [kw["index"] for kw in drawn] == [0, 1, 2]
+    assert [kw["text"] for kw in drawn] == ["Absorption (1/mm) R", "G", "B"]
+
+
+# ---------------------------------------------------------------------------------------------
+# Every panel of the add-on
+
+
+def _addon_panels(addon) -> list[type]:
+    """Every registered Panel class that comes from the add-on, found through Blender's class tree."""
+    import bpy
+
+    def subclasses(cls):
+        for sub in cls.__subclasses__():
+            yield sub
+            yield from subclasses(sub)
+
+    return sorted({cls for cls in subclasses(bpy.types.Panel) if cls.__module__.startswith(addon + ".")
+                   and getattr(bpy.types, cls.__name__, None) is cls}, key=lambda c: c.__name__)
+
+
+def test_every_panel_of_the_addon_is_drawn(addon, lamp_addon, bl_scene, design):
+    import bpy
+
+    assert bpy.ops.lamp.preset_refresh() == {"FINISHED"}  # the preset browser lists (no listing: one line)
+    bl_scene.render.engine = lamp_addon.render_engine.ENGINE_ID  # the passes panel shows for this engine
+    wm = bpy.context.window_manager
+    wm.lamp_presets_index = 0
+    panels = _addon_panels(addon)
+    names = {cls.__name__ for cls in panels}
+    assert {"LAMP_PT_design", "LAMP_PT_presets", "LAMP_PT_study", "LAMP_PT_lens"} <= names
+    drawn = set()
+    for cls in panels:
+        layout = draw(cls, bl_scene)
+        assert layout.log, f"{cls.__name__} drew nothing"
+        drawn.add(cls.__name__)
+    assert drawn == names
+    presets = draw(bpy.types.LAMP_PT_presets, bl_scene)
+    assert ("template_list", "LAMP_UL_presets", "lamp_presets", "lamp_presets_index") in presets.log
+    assert "lamp.preset_apply" in presets.operators()
+    study = draw(bpy.types.LAMP_PT_study, bl_scene)
+    assert "lamp.study_run" in study.operators()
+    assert {p for _, _, p, _ in study.props()} >= {"parameter", "use_axis_2", "width", "height", "workers"}
+
+
+def test_preferences_draw(addon, lamp_addon):
+    import bpy
+
+    prefs = bpy.context.preferences.addons[addon].preferences
+    layout = RecordingLayout()
+    type(prefs).draw(PanelProxy(type(prefs), layout), bpy.context)
+    assert ("template_list", "LAMP_UL_library_folders", "library_folders", "active_library_folder_index") in layout.log
+
+
+# ---------------------------------------------------------------------------------------------
+# The design's validity, as the panel shows it
+
+
+def _status(bl_scene):
+    import bpy
+
+    return draw(bpy.types.LAMP_PT_design, bl_scene)
+
+
+def test_a_valid_design_says_so(lamp_addon, bl_scene, design):
+    layout = _status(bl_scene)
+    assert ("label", "Design is valid", "CHECKMARK") in layout.log
+    assert layout.alerts() == ([], [])
+
+
+def _baseline(lamp_addon, addon_core, bl_scene):
+    scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    return bl_scene.lamp_design
+
+
+NUMBER = r"-?[0-9.]+(?:e[-+]?[0-9]+)?"
+
+# Issue 10's invalid edits: (edit, the property the panel must highlight, words of the message).
+INVALID_EDITS = {
+    "shrunk body": (lambda d: setattr(d.body, "size", (80.0, 30.0)), "body.size", "cannot hold the lens"),
+    "bulb moved back": (lambda d: setattr(d.lamps[0].bulb, "offset", (0.0, 30.0, 0.0)), "lamps[0].bulb.offset",
+                        "outside the reflector"),
+    "bulb moved sideways": (lambda d: setattr(d.lamps[0].bulb, "offset", (40.0, 0.0, 0.0)),
+                            "lamps[0].bulb.offset", "up to"),
+    "bulb too big": (lambda d: setattr(d.lamps[0].bulb, "radius", 30.0), "lamps[0].bulb.radius", "does not fit"),
+    "cut height 100": (lambda d: setattr(d.lamps[0].cuts, "height", 100.0), "lamps[0].cuts.height",
+                       "for pitch 9"),
+    "lens outside the body": (lambda d: setattr(d.lamps[0], "center", (80.0, 0.0)), "lamps[0].center",
+                              "outside the body"),
+    "reflector deeper than the body": (lambda d: setattr(d.lamps[0].reflector, "focal_length", 5.0),
+                                       "lamps[0].reflector.focal_length", "deeper than the body"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(INVALID_EDITS))
+def test_an_invalid_edit_names_the_field_with_a_range_that_is_not_empty(lamp_addon, addon_core, bl_scene, case):
+    import bpy
+
+    edit, field, words = INVALID_EDITS[case]
+    design = _baseline(lamp_addon, addon_core, bl_scene)
+    edit(design)
+    props, labels = _status(bl_scene).alerts()
+    assert props == [field]  # the field to change, drawn highlighted under the message
+    message = " ".join(labels[1:])
+    assert words in message
+    allowed = message[message.index("allowed"):]
+    ranges = re.findall(rf"[\[(]({NUMBER}), ({NUMBER})[\])]", allowed) + re.findall(rf"up to ({NUMBER})()", allowed)
+    assert ranges, message
+    for lo, hi in ranges:
+        assert not hi or float(lo) <= float(hi), message
+    # The same field is highlighted where the lamp's or the body's panel draws it.
+    design.active_lamps_index = 0
+    panel = {"body": "LAMP_PT_body", "center": "LAMP_PT_lamps"}.get(field.split(".")[-1] if "center" in field
+                                                                   else field.split(".")[0], None)
+    if panel is None:
+        panel = f"LAMP_PT_{field.split('.')[1]}"
+    sub_props, sub_labels = draw(getattr(bpy.types, panel), bl_scene).alerts()
+    assert sub_props == [field] and " ".join(sub_labels) == message
+
+
+def test_the_cut_height_panel_states_the_limit_of_the_pitch(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    design = _baseline(lamp_addon, addon_core, bl_scene)
+    height = design.lamps[0].cuts.bl_rna.properties["height"]
+    assert height.hard_max == 100.0  # a property's range is fixed: the panel states the real limit
+    labels = draw(bpy.types.LAMP_PT_cuts, bl_scene).labels()
+    assert "At most 6.363 mm for pitch 9 mm (pitch / sqrt 2)" in labels
+    design.lamps[0].cuts.pitch = 4.0
+    assert "At most 2.828 mm for pitch 4 mm (pitch / sqrt 2)" in draw(bpy.types.LAMP_PT_cuts, bl_scene).labels()
+    assert "at most pitch / sqrt 2" in height.description
+
+
+def test_validity_is_checked_once_per_design(lamp_addon, addon_core, bl_scene, monkeypatch):
+    validity = lamp_addon.design_validity
+    design = _baseline(lamp_addon, addon_core, bl_scene)
+    calls = []
+    real = validity._check
+    monkeypatch.setattr(validity, "_check", lambda doc, active: calls.append(1) or real(doc, active))
+    validity._memo.update(key=None, status=None)
+    for _ in range(5):
+        _status(bl_scene)
+    assert len(calls) == 1
+    design.lamps[0].cuts.height = 2.0
+    _status(bl_scene)
+    assert len(calls) == 2
+
+
+def test_add_lamp_is_not_greyed_out_by_another_error(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    design = _baseline(lamp_addon, addon_core, bl_scene)
+    design.lamps[0].cuts.height = 100.0  # invalid, but nothing to do with adding a lamp
+    assert bpy.ops.lamp.lamp_add.poll()
+    assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
+    assert len(design.lamps) == 2
+    props, _ = _status(bl_scene).alerts()
+    assert props == ["lamps[0].cuts.height"]  # the design's own error is still the one shown
+    for _ in range(2):
+        assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
+    assert not bpy.ops.lamp.lamp_add.poll()
+    with pytest.raises(RuntimeError, match="at most 4 lamps"):
+        bpy.ops.lamp.lamp_add()
+
+
+def test_add_lamp_says_when_the_body_cannot_grow(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    design = _baseline(lamp_addon, addon_core, bl_scene)
+    design.lamps[0].cuts.height = 100.0  # another error as well
+    design.body.size = (9990.0, 120.0)
+    assert not bpy.ops.lamp.lamp_add.poll()
+    with pytest.raises(RuntimeError, match=r"the body would need 10085 mm; body\.size allows up to 10000"):
+        bpy.ops.lamp.lamp_add()
+
+
+# ---------------------------------------------------------------------------------------------
+# The lamp's function
+
+
+def test_choosing_a_function_sets_its_defaults_and_names(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    design = _baseline(lamp_addon, addon_core, bl_scene)
+    lamp = design.lamps[0]
+    assert lamp.function == "custom" and lamp.lens.color_mode == "absorption"  # the old preset, unchanged
+    assert "function" in {p for _, _, p, _ in draw(bpy.types.LAMP_PT_lamps, bl_scene).props()}
+    items = {item.identifier: item.description for item in lamp.bl_rna.properties["function"].enum_items}
+    assert items["stop"] == "Red lens, bulb intensity 20/17.5/15"  # each choice says what it sets
+    lamp.function = "stop"
+    assert lamp.lens.color_mode == "transmitted_color"
+    red = tuple(lamp.lens.transmitted_color)
+    assert red[0] > 0.9 and max(red[1:]) < 0.02
+    assert lamp.lens.reference_thickness == pytest.approx(lamp.lens.thickness)
+    stop = tuple(lamp.bulb.intensity)
+    lamp.function = "tail"
+    assert sum(lamp.bulb.intensity) < sum(stop)  # a stop lamp is brighter than a tail lamp
+    lamp.function = "turn"
+    r, g, b = lamp.lens.transmitted_color
+    assert r > g > b  # amber
+    lamp.function = "reversing"
+    assert min(lamp.lens.transmitted_color) > 0.9  # clear
+    lamp.function = "stop"
+    row = RecordingLayout()
+    bpy.types.LAMP_UL_lamps.draw_item(None, SimpleNamespace(scene=bl_scene), row, design, lamp, 0, design,
+                                      "active_lamps_index", 0)
+    assert ("label", "Stop", "LIGHT_POINT") in row.log  # the list names the lamp as its parts are named
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    assert "Stop Lens" in bpy.data.objects and "Stop Bulb" in bpy.data.objects
+    lamp.bulb.intensity = (1.0, 2.0, 3.0)
+    lamp.function = "custom"  # custom keeps what is there
+    assert tuple(lamp.bulb.intensity) == (1.0, 2.0, 3.0)
+
+
+def test_a_preset_with_a_function_keeps_its_own_values(lamp_addon, addon_core, bl_scene):
+    scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
+    scene["lamps"][0]["function"] = "stop"
+    scene["lamps"][0]["bulb"]["intensity"] = [1.0, 2.0, 3.0]
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp = bl_scene.lamp_design.lamps[0]
+    assert lamp.function == "stop" and tuple(lamp.bulb.intensity) == (1.0, 2.0, 3.0)
+    assert lamp.lens.color_mode == "absorption"
+    assert lamp_addon.design_properties.design_to_scene(bl_scene) == addon_core.scene.normalize(scene)
+
+
+def test_a_new_design_starts_with_the_colour_picker(lamp_addon, bl_scene):
+    import bpy
+
+    assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
+    assert bl_scene.lamp_design.lamps[0].lens.color_mode == "transmitted_color"
+
+
+def test_tooltips_say_what_a_field_does_first(lamp_addon, bl_scene):
+
+    assert lamp_addon.design_properties.RESERVED_KEYS == {v: k for k, v in SPEC_KEYS.items()}
+    design = bl_scene.lamp_design.bl_rna.properties
+    assert design["design_name"].description.startswith("The design's name")  # not Blender's generic text
+    info = draw(lamp_addon.design_panels.LAMP_PT_info, bl_scene)
+    assert "design_name" in [p for _, _, p, _ in info.props()]
+    bl_scene.lamp_design["name"] = "Saved before"  # where a file of an earlier version keeps the name
+    assert bl_scene.lamp_design.design_name == "Saved before"
+    assert lamp_addon.design_properties.design_document(bl_scene)["name"] == "Saved before"
+    body = bl_scene.lamp_design.body.bl_rna.properties
+    assert body["specular"].description.startswith(
+        "How strongly the body reflects the light as a highlight (w in eq. 1)")
+
+
+def test_the_bulb_panel_states_where_the_bulb_fits(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    design = _baseline(lamp_addon, addon_core, bl_scene)
+    labels = draw(bpy.types.LAMP_PT_bulb, bl_scene).labels()
+    radius = next(t for t in labels if t.startswith("At most") and "where the bulb sits" in t)
+    depth = next(t for t in labels if t.startswith("Y in ["))
+    lo, hi = (float(v) for v in re.search(rf"\[({NUMBER}), ({NUMBER})\]", depth).groups())
+    assert lo < 0 < hi  # the focus, where the bulb sits, is inside the range
+    design.lamps[0].bulb.offset = (0.0, hi, 0.0)  # the stated limit is allowed ...
+    assert ("label", "Design is valid", "CHECKMARK") in _status(bl_scene).log
+    design.lamps[0].bulb.offset = (0.0, hi + 0.01, 0.0)  # ... and just past it is not
+    assert _status(bl_scene).alerts()[0] == ["lamps[0].bulb.offset"]
+    design.lamps[0].bulb.offset = (0.0, 0.0, 0.0)
+    r = float(re.search(rf"At most ({NUMBER}) mm", radius)[1])
+    design.lamps[0].bulb.radius = r
+    assert ("label", "Design is valid", "CHECKMARK") in _status(bl_scene).log

@@ -32,12 +32,11 @@ def _group_rna(lamp_addon, path: str):
     parts = path.replace("[]", "").split(".")
     for part in parts[:-1]:
         cls = _rna(cls, part).fixed_type
-    return _rna(cls, parts[-1])
+    return _rna(cls, props.property_id(parts[-1]))
 
 
 def _rna(cls, key: str):
-    # The last one: a PropertyGroup has a built-in "name" that the design's own "name" follows.
-    return [p for p in cls.bl_rna.properties if p.identifier == key][-1]
+    return cls.bl_rna.properties[key]
 
 
 def test_every_spec_field_is_a_property(lamp_addon, S):
@@ -131,19 +130,19 @@ def test_lens_colour_modes(lamp_addon, bl_scene, S, scene_mod):
     ]})
     props.scene_to_design(bl_scene, scene)
     lens = bl_scene.lamp_design.lamps[0].lens
-    assert lens.color_mode == "TRANSMITTED"
+    assert lens.color_mode == "transmitted_color"
     assert tuple(round(c, 6) for c in lens.transmitted_color) == (0.9, 0.4, 0.1)
     out = props.design_to_scene(bl_scene)["lamps"][0]["lens"]
     assert "absorption" not in out
     assert out["transmitted_color"] == [0.9, 0.4, 0.1] and out["reference_thickness"] == 2.5
 
     # Switching the mode writes the other form only; both sets of values are kept on the lens.
-    lens.color_mode = "ABSORPTION"
+    lens.color_mode = "absorption"
     out = props.design_to_scene(bl_scene)["lamps"][0]["lens"]
     assert "transmitted_color" not in out and "reference_thickness" not in out
     assert out["absorption"] == list(S.LENS.fields["absorption"].default)
     lens.absorption = (0.1, 0.2, 0.3)
-    lens.color_mode = "TRANSMITTED"
+    lens.color_mode = "transmitted_color"
     assert props.design_to_scene(bl_scene)["lamps"][0]["lens"]["transmitted_color"] == [0.9, 0.4, 0.1]
 
     # The two forms describe the same absorption when they should.
@@ -190,11 +189,14 @@ def test_design_to_scene_reports_the_field(lamp_addon, addon_core, bl_scene):
 
 
 def test_default_design_is_valid_and_matches_the_spec(lamp_addon, bl_scene, S, scene_mod):
-    """Fresh properties hold the spec defaults; with one lamp they are a valid scene."""
+    """Fresh properties hold the spec defaults, every either/or rule in its preferred form (the lens
+    colour picker); with one lamp they are a valid scene."""
     bl_scene.lamp_design.lamps.add()
     scene = lamp_addon.design_properties.design_to_scene(bl_scene)
-    expected = scene_mod.parse_scene({"schema": S.SCHEMA, "camera": {}, "lamps": [{}]})
+    expected = scene_mod.parse_scene({"schema": S.SCHEMA, "camera": {}, "lamps": [{"lens": {
+        "transmitted_color": list(S.LENS.fields["transmitted_color"].default)}}]})
     assert scene == expected
+    assert scene["lamps"][0] == scene_mod.new_lamp()
 
 
 def test_tags_and_text(lamp_addon, bl_scene, S, scene_mod):

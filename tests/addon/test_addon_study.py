@@ -40,7 +40,7 @@ def _two_by_one(settings) -> None:
 
 
 def test_every_study_parameter_is_offered(lamp_addon):
-    offered = [item[0] for item in lamp_addon.study_panel.PARAMETER_ITEMS]
+    offered = [item[0] for item in lamp_addon.study_settings.PARAMETER_ITEMS]
     assert offered == st.study_parameters()
     assert "lens.transmitted_color" in offered and "cuts.height" in offered
 
@@ -51,7 +51,7 @@ def test_run_study_operator_makes_the_sheet_image(design, lamp_addon):
     _two_by_one(design.lamp_study)
     assert bpy.ops.lamp.study_run() == {"FINISHED"}
     image = bpy.data.images["Lamp Study"]
-    study = lamp_addon.study_ops.last_study()
+    study = lamp_addon.study_settings.last_study()
     assert len(study) == 2 and study.size == (32, 32)
     # The sheet in Blender has the layout core_tracer computes, and each cell is the variant's render.
     lay = study_sheet.layout(st.Study.from_json(study.to_json()))
@@ -117,7 +117,7 @@ def test_save_sheet_writes_the_study_into_the_file(design, lamp_addon, tmp_path)
     path = tmp_path / "sheet.exr"
     assert bpy.ops.lamp.study_save_sheet(filepath=str(path)) == {"FINISHED"}
     again = st.Study.load(path)
-    assert again.to_json() == lamp_addon.study_ops.last_study().to_json()
+    assert again.to_json() == lamp_addon.study_settings.last_study().to_json()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.exr"]
 
 

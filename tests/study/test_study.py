@@ -491,3 +491,9 @@ def test_cli_lists_the_parameters():
     proc = run_cli("study", "--list")
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == st.study_parameters()
+
+
+def test_one_lamps_centre_is_a_parameter():
+    base = scene.load_scene(FOUR_LAMPS)
+    s = st.Study.build(base, [st.parse_vary("lamps[0].center=-185/0,-180/5")])
+    assert [v.scene["lamps"][0]["center"] for v in s.variants] == [[-185.0, 0.0], [-180.0, 5.0]]
