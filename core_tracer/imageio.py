@@ -25,9 +25,25 @@ RGB = ("R", "G", "B")
 
 def _oiio():
     # Imported on use: core_tracer renders without OpenImageIO; only files need it.
-    import OpenImageIO
-
+    try:
+        import OpenImageIO
+    except ImportError as e:
+        # pybind11 turns a Ctrl-C or SIGTERM that lands during the module's initialisation into
+        # "ImportError: initialization failed": it is the interrupt, not a broken installation.
+        if isinstance(e.__cause__, KeyboardInterrupt):
+            raise e.__cause__ from None
+        raise
     return OpenImageIO
+
+
+oiio_module = _oiio  # for the modules that compose images with it
+
+
+def load_writer() -> None:
+    """Import OpenImageIO now, before long work: an interrupt that lands while it is half imported
+    ends the program cleanly here, rather than breaking a later import of it (pybind11 refuses to
+    register its types twice)."""
+    _oiio()
 
 
 EXPOSURE_ATTRIBUTE = "lamp:exposure"  # stops applied to a PNG before encoding; read_image undoes it
@@ -55,9 +71,23 @@ def srgb_decode(encoded: np.ndarray) -> np.ndarray:
     return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4))
 
 
-def to_srgb8(linear: np.ndarray) -> np.ndarray:
-    """Linear RGB to 8-bit sRGB codes, rounded to nearest."""
-    return np.rint(srgb_encode(linear) * 255.0).astype(np.uint8)
+SRGB_CHUNK = 1 << 20  # values encoded at a time: the float64 temporaries stay a few MB at any size
+
+
+def to_srgb8(linear: np.ndarray, scale: float = 1.0) -> np.ndarray:
+    """Linear RGB (times ``scale``, in float32 as the image) to 8-bit sRGB codes, rounded to nearest.
+
+    Encoded in chunks: whole-image float64 temporaries of an 8192 x 8192 image would need about
+    8 GB; the codes are the same either way."""
+    a = np.asarray(linear)
+    flat = a.reshape(-1)
+    out = np.empty(flat.shape, dtype=np.uint8)
+    for start in range(0, flat.size, SRGB_CHUNK):
+        part = flat[start:start + SRGB_CHUNK]
+        if scale != 1.0:
+            part = part * np.float32(scale)
+        out[start:start + SRGB_CHUNK] = np.rint(srgb_encode(part) * 255.0)
+    return out.reshape(a.shape)
 
 
 def _check_image(image: np.ndarray, what: str) -> np.ndarray:
@@ -109,7 +139,7 @@ def write_image(
         spec.channelnames = tuple(names)
         spec.attribute("compression", "zip")
     else:
-        pixels = np.ascontiguousarray(to_srgb8(rgb * np.float32(2.0**exposure) if exposure else rgb))
+        pixels = to_srgb8(rgb, 2.0**exposure if exposure else 1.0)
         spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
         if exposure:

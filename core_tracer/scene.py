@@ -20,6 +20,7 @@ import stat
 from typing import Any
 
 from . import spec as S
+from .safe_text import has_surrogate, printable, show_key
 
 MAX_FILE_BYTES = 1_000_000  # a lamp design is a few kB; refuse anything absurd before parsing
 
@@ -69,15 +70,58 @@ def read_json(path: str | os.PathLike, max_bytes: int = MAX_FILE_BYTES) -> Any:
 
 def parse_json_text(text: str, name: str = "") -> Any:
     """Decode JSON text. NaN and Infinity (which Python's json accepts) decode to floats so that
-    validation can name the field that holds them."""
+    validation can name the field that holds them. A key given twice in one object is refused
+    (json would keep the last silently, so a file could say two things and mean one)."""
+    duplicates: list[bool] = []
+
+    def pairs_hook(pairs: list[tuple[str, Any]]) -> dict:
+        obj = dict(pairs)
+        if len(obj) == len(pairs):
+            return obj
+        duplicates.append(True)
+        seen: set[str] = set()
+        repeated = next(k for k, _ in pairs if k in seen or seen.add(k))
+        return _Repeated(obj, repeated)
+
     try:
-        return json.loads(text, parse_constant=float)
+        doc = json.loads(text, parse_constant=float, object_pairs_hook=pairs_hook)
     except RecursionError:
         raise SceneError(name, "not valid JSON: nested too deeply") from None
     except json.JSONDecodeError as e:
         raise SceneError(name, f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
     except ValueError as e:  # json's own limits, e.g. an integer of more than 4300 digits
         raise SceneError(name, f"not valid JSON: {str(e)[:120]}") from None
+    if duplicates:
+        where = _first_repeated(doc)
+        prefix = f"{name}: " if name else ""
+        raise SceneError(f"{prefix}{where}", "is given twice in one object; allowed once (which one is meant?)")
+    return doc
+
+
+class _Repeated(dict):
+    """A JSON object in which a key appeared more than once (the first such key is kept)."""
+
+    def __init__(self, items: dict, repeated: str):
+        super().__init__(items)
+        self.repeated = repeated
+
+
+def _first_repeated(doc: Any) -> str:
+    """The field path of the first repeated key, in document order (iterative: depth is unbounded)."""
+    stack: list[tuple[Any, str]] = [(doc, "")]
+    while stack:
+        node, path = stack.pop()
+        if isinstance(node, _Repeated):
+            return _join(path, node.repeated)
+        if isinstance(node, dict):
+            stack.extend((v, _join(path, k)) for k, v in reversed(list(node.items())))
+        elif isinstance(node, list):
+            stack.extend((v, f"{path}[{i}]") for i, v in reversed(list(enumerate(node))))
+    return ""  # pragma: no cover - only called when the hook saw a repeated key
+
+
+def _join(path: str, key: str) -> str:
+    return f"{path}.{show_key(key)}" if path else show_key(key)
 
 
 def scene_to_json(scene: dict) -> str:
@@ -117,11 +161,12 @@ def normalize(scene: dict) -> dict:
 
 def _section(doc: Any, sec: S.Section, path: str) -> dict:
     if not isinstance(doc, dict):
-        raise SceneError(path.rstrip("."), f"expected an object, got {_kind(doc)}")
+        raise SceneError(path.rstrip("."), f"expected an object, got {_kind(doc)}; allowed an object with "
+                                           f"the keys {', '.join(sec.fields)}")
     for key in doc:
         if key not in sec.fields:
             allowed = ", ".join(sec.fields)
-            raise SceneError(f"{path}{key}", f"unknown key; allowed keys here: {allowed}")
+            raise SceneError(f"{path}{show_key(str(key))}", f"unknown key; allowed keys here: {allowed}")
     out: dict = {}
     for key, spec in sec.fields.items():
         where = f"{path}{key}"
@@ -161,9 +206,10 @@ def _value(v: Any, spec: S.Spec, where: str) -> Any:
         return v
     if isinstance(spec, S.Text):
         if not isinstance(v, str):
-            raise SceneError(where, f"expected a string, got {_kind(v)}")
+            raise SceneError(where, f"expected a string, got {_kind(v)}; allowed {spec.range_text()}")
         if len(v) > spec.max_len:
             raise SceneError(where, f"has {len(v)} characters; allowed at most {spec.max_len}")
+        _check_characters(v, where, spec.range_text())
         return v
     if isinstance(spec, S.Flag):
         if not isinstance(v, bool):
@@ -171,9 +217,11 @@ def _value(v: Any, spec: S.Spec, where: str) -> Any:
         return v
     if isinstance(spec, S.Tags):
         if not isinstance(v, list) or not all(isinstance(t, str) for t in v):
-            raise SceneError(where, f"expected a list of strings, got {_show(v)}")
+            raise SceneError(where, f"expected a list of strings, got {_show(v)}; allowed {spec.range_text()}")
         if len(v) > spec.max_items or any(len(t) > spec.max_len for t in v):
             raise SceneError(where, f"too long; allowed {spec.range_text()}")
+        for i, t in enumerate(v):
+            _check_characters(t, f"{where}[{i}]", spec.range_text())
         return list(v)
     raise AssertionError(spec)  # pragma: no cover - every spec kind is handled above
 
@@ -181,7 +229,8 @@ def _value(v: Any, spec: S.Spec, where: str) -> Any:
 def _num(v: Any, spec: S.Num, where: str) -> Any:
     if spec.size > 1:
         if not isinstance(v, list) or len(v) != spec.size:
-            raise SceneError(where, f"expected a list of {spec.size} numbers, got {_show(v)}")
+            raise SceneError(where, f"expected a list of {spec.size} numbers, got {_show(v)}; "
+                                    f"allowed {spec.range_text()}")
         items = [_scalar(x, spec, f"{where}[{i}]") for i, x in enumerate(v)]
         if spec.nonzero and all(x == 0 for x in items):
             raise SceneError(where, f"{_show(v)} is a zero vector; allowed {spec.range_text()}")
@@ -190,17 +239,34 @@ def _num(v: Any, spec: S.Num, where: str) -> Any:
 
 
 def _scalar(x: Any, spec: S.Num, where: str) -> float | int:
+    return check_number(x, spec, where, spec.range_text())
+
+
+def check_number(x: Any, spec: S.Num, where: str, allowed: str) -> float | int:
+    """One number checked against ``spec``'s range (``allowed`` is that range as the message says it).
+
+    A JSON integer may have thousands of digits; it is compared exactly and never converted to a
+    float before it is known to be in range (the conversion would overflow)."""
     if isinstance(x, bool) or not isinstance(x, (int, float)):
-        raise SceneError(where, f"expected a number, got {_show(x)}")
-    if not math.isfinite(x):
-        raise SceneError(where, f"{_show(x)} is not a finite number; allowed {spec.range_text()}")
-    if spec.integer and x != int(x):
-        raise SceneError(where, f"{_show(x)} is not a whole number; allowed {spec.range_text()}")
+        raise SceneError(where, f"expected a number, got {_show(x)}; allowed {allowed}")
+    if isinstance(x, float) and not math.isfinite(x):
+        raise SceneError(where, f"{_show(x)} is not a finite number; allowed {allowed}")
+    if spec.integer and isinstance(x, float) and not x.is_integer():
+        raise SceneError(where, f"{_show(x)} is not a whole number; allowed {allowed}")
     lo_bad = spec.lo is not None and (x < spec.lo or (spec.lo_open and x == spec.lo))
     hi_bad = spec.hi is not None and (x > spec.hi or (spec.hi_open and x == spec.hi))
-    if lo_bad or hi_bad:
-        raise SceneError(where, f"{_show(x)} is out of range; allowed {spec.range_text()}")
+    if lo_bad or hi_bad or (isinstance(x, int) and abs(x) > _LARGEST_FLOAT):
+        raise SceneError(where, f"{_show(x)} is out of range; allowed {allowed}")
     return int(x) if spec.integer else float(x)
+
+
+_LARGEST_FLOAT = int(1.7976931348623157e308)
+
+
+def _check_characters(text: str, where: str, allowed: str) -> None:
+    if has_surrogate(text):
+        raise SceneError(where, f"\"{printable(text, 40)}\" holds a lone surrogate (\\ud800-\\udfff), which is "
+                                f"not a character; allowed Unicode text only, {allowed}")
 
 
 def _num_out(default: Any, spec: S.Num) -> Any:
@@ -366,9 +432,15 @@ def _kind(v: Any) -> str:
             type(None): "null"}.get(type(v), "a number" if isinstance(v, (int, float)) else type(v).__name__)
 
 
-def _show(v: Any) -> str:
+def show_value(v: Any) -> str:
+    """A value as a message quotes it: JSON, escaped, at most 60 characters."""
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10**60:
+        return "a number of more than 60 digits"  # and str() of one beyond 4300 digits fails
     try:
         text = json.dumps(v, allow_nan=True)
-    except (TypeError, ValueError):
-        text = repr(v)
-    return text if len(text) <= 60 else text[:57] + "..."
+    except (TypeError, ValueError, RecursionError):
+        text = _kind(v)
+    return printable(text, 60)
+
+
+_show = show_value

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import bitmap_font
-from .imageio import write_image
+from .imageio import load_writer, oiio_module, write_image
 from .study import STUDY_ATTRIBUTE, Study, format_value
 
 BACKGROUND = (0.018, 0.018, 0.02)  # linear; a dark grey that sets off the black of each render
@@ -131,10 +131,9 @@ def layout(study: Study) -> SheetLayout:
 
 def _oiio():
     try:
-        import OpenImageIO
+        return oiio_module()
     except ImportError:
         return None
-    return OpenImageIO
 
 
 _render_text_works: bool | None = None
@@ -155,6 +154,12 @@ def render_text_available() -> bool:
             ok = ok and float(np.asarray(probe.get_pixels(oiio.FLOAT)).max()) > 0.0
         _render_text_works = ok
     return _render_text_works
+
+
+def preload_writers() -> None:
+    """Load what composing and writing a sheet need, before a study renders (``imageio.load_writer``)."""
+    load_writer()
+    render_text_available()
 
 
 def _fit(text: str, width: int, char_width: int) -> str:

@@ -6,9 +6,11 @@ import argparse
 import os
 import time
 
+from .. import budget
+from ..checkpoints import checkpoint
 from ..imageio import image_format
-from ..scene import SceneError
-from . import add_exposure_argument, ctrl_c_sets, load_scene_file
+from ..safe_text import printable
+from . import add_exposure_argument, check_output, check_output_folder, ctrl_c_sets, load_scene_file
 
 HELP = "render a scene to an .exr (linear, scene in the header) or .png (sRGB) image"
 
@@ -23,32 +25,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_exposure_argument(parser)
 
 
-def _check_folder(path: str, what: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise SceneError(path, f"the {what} folder {folder} does not exist")
-
-
 def run(args: argparse.Namespace) -> int:
-    # Every check on the user's input happens before the (long) render.
-    image_format(args.output)
-    _check_folder(args.output, "output")
-    if args.passes is not None and os.path.exists(args.passes) and not os.path.isdir(args.passes):
-        raise SceneError(args.passes, "--passes must name a folder; this is a file")
+    # Every check on the user's input happens before the (long) render: the files can be written,
+    # the scene is valid, and the render fits the memory budget.
+    file_format = image_format(args.output)
+    check_output(args.output, "output")
+    if args.passes is not None:
+        check_output_folder(args.passes, "--passes")
     scene = load_scene_file(args.scene, args.width, args.height)
+    keep_passes = args.passes is not None
+    budget.check_render(scene["image"]["width"], scene["image"]["height"], keep_passes, file_format)
+    checkpoint("render:checked")
 
     from .. import RenderCancelled, render_passes  # the tracer loads only when it is needed
-    from ..imageio import write_image
+    from ..imageio import load_writer, write_image
+
+    load_writer()
 
     start = time.perf_counter()
     with ctrl_c_sets() as stop:
         try:
-            result = render_passes(scene, should_stop=stop.is_set)
+            result = render_passes(scene, should_stop=stop.is_set, keep_passes=keep_passes,
+                                   progress=lambda fraction: checkpoint("render:band"))
         except RenderCancelled:
-            raise KeyboardInterrupt from None
-    if stop.is_set():  # Ctrl-C after the last band: still nothing is written
-        raise KeyboardInterrupt
+            raise stop.interrupt() from None
     seconds = time.perf_counter() - start
+    checkpoint("render:rendered")
 
     if args.passes is not None:
         os.makedirs(args.passes, exist_ok=True)
@@ -59,5 +61,5 @@ def run(args: argparse.Namespace) -> int:
     h, w = result.image.shape[:2]
     segments = result.stats.get("segments")
     traced = f", {segments} ray segments" if segments is not None else ""
-    print(f"{args.output}: {w}x{h} px in {seconds:.2f} s{traced}")
+    print(f"{printable(args.output)}: {w}x{h} px in {seconds:.2f} s{traced}")
     return 0

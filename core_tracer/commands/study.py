@@ -7,14 +7,16 @@ carries its study in its header), and ``study --list`` prints the parameters a s
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 
+from .. import budget
 from .. import study as st
+from ..checkpoints import checkpoint
 from ..imageio import image_format
+from ..safe_text import printable
 from ..scene import SceneError
-from . import add_exposure_argument, ctrl_c_sets, in_file
+from . import add_exposure_argument, check_output, check_output_folder, ctrl_c_sets, in_file
 
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
 
@@ -47,12 +49,6 @@ def _size(text: str) -> tuple[int, int]:
     if len(size) != 2:
         raise SceneError("--size", f"{text!r} is not WIDTHxHEIGHT (e.g. 256x256)")
     return st.parse_size(size, "--size")
-
-
-def _check_folder(path: str, what: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise SceneError(path, f"the {what} folder {folder} does not exist")
 
 
 def _build(args: argparse.Namespace) -> st.Study:
@@ -110,11 +106,11 @@ def run(args: argparse.Namespace) -> int:
         raise SceneError("--output", "is required: the contact sheet to write (.png or .exr)")
     if args.output is not None:
         image_format(args.output)
-        _check_folder(args.output, "output")
+        check_output(args.output, "output")
     if args.save_study:
-        _check_folder(args.save_study, "--save-study")
-    if args.save_variants and os.path.exists(args.save_variants) and not os.path.isdir(args.save_variants):
-        raise SceneError(args.save_variants, "--save-variants must name a folder; this is a file")
+        check_output(args.save_study, "--save-study")
+    if args.save_variants:
+        check_output_folder(args.save_variants, "--save-variants")
     study = _build(args)
 
     if args.save_study:
@@ -127,20 +123,33 @@ def run(args: argparse.Namespace) -> int:
 
     from .. import study_run, study_sheet  # the tracer loads only when it is needed
 
+    sheet_layout = study_sheet.layout(study)
+    budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height))
+    study_sheet.preload_writers()
+    checkpoint("study:checked")
     start = time.perf_counter()
+    progress = _progress_printer()
+
+    def on_progress(done: int, total: int) -> None:
+        if progress is not None:
+            progress(done, total)
+        if done:
+            checkpoint("study:variant")
+
     with ctrl_c_sets() as stop:
         try:
-            images = study_run.run_study(study, args.workers, progress=_progress_printer(), should_stop=stop.is_set)
+            images = study_run.run_study(study, args.workers, progress=on_progress, should_stop=stop.is_set,
+                                         on_start=lambda run: checkpoint("study:started"))
         except study_run.Cancelled:
-            raise KeyboardInterrupt from None
-    if stop.is_set():
-        raise KeyboardInterrupt
+            raise stop.interrupt() from None
+        checkpoint("study:rendered")
     seconds = time.perf_counter() - start
     sheet = study_sheet.compose(study, images)
+    checkpoint("study:composed")
     study_sheet.write_sheet(args.output, study, sheet, exposure=args.exposure)
     workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
     how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
     w, h = study.size
     shape = " x ".join(str(len(a.values)) for a in study.axes)
-    print(f"{args.output}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}")
+    print(f"{printable(args.output)}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}")
     return 0
