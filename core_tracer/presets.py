@@ -134,8 +134,9 @@ def _parse(path: str) -> dict:
     """Validate a preset file; the error's ``path`` is the field ('' for the file as a whole)."""
     try:
         doc = read_json(path)
-    except SceneError as e:
-        raise SceneError("", e.message) from None
+    except SceneError as e:  # named by the file; a repeated key also by its field
+        field = e.path[len(path) + 2:] if e.path.startswith(path + ": ") else ""
+        raise SceneError(field, e.message) from None
     return parse_scene(doc)
 
 

@@ -69,9 +69,11 @@ def read_json(path: str | os.PathLike, max_bytes: int = MAX_FILE_BYTES) -> Any:
 
 
 def parse_json_text(text: str, name: str = "") -> Any:
-    """Decode JSON text. NaN and Infinity (which Python's json accepts) decode to floats so that
-    validation can name the field that holds them. A key given twice in one object is refused
-    (json would keep the last silently, so a file could say two things and mean one)."""
+    """Decode JSON text. NaN and Infinity (which Python's json accepts) decode to floats, and a
+    number too large for a float (``1e400``, or an integer of more than 4300 digits, which
+    Python's int() refuses) to a ``HugeNumber``, so that validation can name the field that holds
+    them. A key given twice in one object is refused (json would keep the last silently, so a
+    file could say two things and mean one)."""
     duplicates: list[bool] = []
 
     def pairs_hook(pairs: list[tuple[str, Any]]) -> dict:
@@ -84,7 +86,8 @@ def parse_json_text(text: str, name: str = "") -> Any:
         return _Repeated(obj, repeated)
 
     try:
-        doc = json.loads(text, parse_constant=float, object_pairs_hook=pairs_hook)
+        doc = json.loads(text, parse_constant=float, parse_int=_parse_int, parse_float=_parse_float,
+                         object_pairs_hook=pairs_hook)
     except RecursionError:
         raise SceneError(name, "not valid JSON: nested too deeply") from None
     except json.JSONDecodeError as e:
@@ -96,6 +99,34 @@ def parse_json_text(text: str, name: str = "") -> Any:
         prefix = f"{name}: " if name else ""
         raise SceneError(f"{prefix}{where}", "is given twice in one object; allowed once (which one is meant?)")
     return doc
+
+
+class HugeNumber(float):
+    """A JSON number beyond the float range, as written: infinite in value, shown by its digits."""
+
+    text: str
+
+    def __new__(cls, text: str) -> HugeNumber:
+        number = super().__new__(cls, "-inf" if text.startswith("-") else "inf")
+        number.text = text
+        return number
+
+    def shown(self) -> str:
+        if len(self.text) <= 40:
+            return self.text
+        return f"a number of {sum(ch.isdigit() for ch in self.text)} digits"
+
+
+_MAX_INT_DIGITS = 4300  # Python's default limit for int() of a decimal string
+
+
+def _parse_int(text: str) -> int | float:
+    return int(text) if len(text) <= _MAX_INT_DIGITS else HugeNumber(text)
+
+
+def _parse_float(text: str) -> float:
+    value = float(text)
+    return HugeNumber(text) if math.isinf(value) else value
 
 
 class _Repeated(dict):
@@ -249,6 +280,8 @@ def check_number(x: Any, spec: S.Num, where: str, allowed: str) -> float | int:
     float before it is known to be in range (the conversion would overflow)."""
     if isinstance(x, bool) or not isinstance(x, (int, float)):
         raise SceneError(where, f"expected a number, got {_show(x)}; allowed {allowed}")
+    if isinstance(x, HugeNumber):
+        raise SceneError(where, f"{x.shown()} is out of range; allowed {allowed}")
     if isinstance(x, float) and not math.isfinite(x):
         raise SceneError(where, f"{_show(x)} is not a finite number; allowed {allowed}")
     if spec.integer and isinstance(x, float) and not x.is_integer():
@@ -434,8 +467,13 @@ def _kind(v: Any) -> str:
 
 def show_value(v: Any) -> str:
     """A value as a message quotes it: JSON, escaped, at most 60 characters."""
+    if isinstance(v, HugeNumber):
+        return v.shown()
     if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10**60:
-        return "a number of more than 60 digits"  # and str() of one beyond 4300 digits fails
+        try:
+            return f"a number of {len(str(abs(v)))} digits"
+        except ValueError:  # str() refuses more than 4300 digits
+            return "a number of more than 4300 digits"
     try:
         text = json.dumps(v, allow_nan=True)
     except (TypeError, ValueError, RecursionError):
