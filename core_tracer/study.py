@@ -130,15 +130,15 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
     explicit_lamp = m["lamp"] is not None
     lamp_scope = explicit_lamp or (keys[0] in S.LAMP.fields and keys[0] not in S.SCENE.fields)
     if not lamp_scope and keys[0] not in _SCENE_PARTS:
-        raise SceneError(text, f"unknown parameter; a study varies {', '.join(_SCENE_PARTS)} fields "
+        raise SceneError(show_key(text), f"unknown parameter; a study varies {', '.join(_SCENE_PARTS)} fields "
                                "or lamp fields (lens, cuts, reflector, bulb, socket)")
     try:
         field_spec = S.lookup(".".join(("lamps[]",) + keys) if lamp_scope else ".".join(keys))
     except KeyError:
-        raise SceneError(text, "unknown parameter; see `python -m core_tracer study --list` "
+        raise SceneError(show_key(text), "unknown parameter; see `python -m core_tracer study --list` "
                                "for the names") from None
     if not isinstance(field_spec, S.Num | S.Flag):
-        raise SceneError(text, "is not a numeric field a study can vary")
+        raise SceneError(show_key(text), "is not a numeric field a study can vary")
     lamp = None
     if explicit_lamp and m["lamp"] != "":
         n = len(base["lamps"]) if base is not None else S.MAX_LAMPS
@@ -151,9 +151,10 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
         component = _index(m["component"])
         size = field_spec.size if isinstance(field_spec, S.Num) else 1
         if size == 1:
-            raise SceneError(text, "is a single number; a component [k] only applies to vectors")
+            raise SceneError(show_key(text), "is a single number; a component [k] only applies to vectors")
         if component >= size:
-            raise SceneError(text, f"component {component} does not exist; allowed 0 to {size - 1}")
+            raise SceneError(show_key(text), f"component {show_key(m['component'])} does not exist; "
+                                             f"allowed 0 to {size - 1}")
     return Parameter(text, keys, field_spec, lamp_scope, lamp, component)
 
 
@@ -278,7 +279,7 @@ def _expand_range(param: Parameter, rng: Any, steps: Any) -> tuple[Any, ...]:
     if isinstance(steps, bool) or not isinstance(steps, int):
         raise SceneError(param.text, f"steps must be a whole number, got {_show(steps)}; allowed 1 to {MAX_VARIANTS}")
     if not 1 <= steps <= MAX_VARIANTS:
-        raise SceneError(param.text, f"steps {steps} is out of range; allowed 1 to {MAX_VARIANTS}")
+        raise SceneError(param.text, f"steps {_show(steps)} is out of range; allowed 1 to {MAX_VARIANTS}")
     lo, hi = (check_value(param, v) for v in rng)
     if steps == 1 and lo != hi:
         raise SceneError(param.text, f"steps 1 would give only {format_value(lo)}, not {format_value(hi)}; "
@@ -514,7 +515,7 @@ def parse_size(value: Any, where: str = "size") -> tuple[int, int]:
         raise SceneError(where, f"expected [width, height] in pixels, got {_show(value)}")
     for v in value:
         if not 1 <= v <= MAX_SIZE:
-            raise SceneError(where, f"{v} is out of range; allowed [1, {MAX_SIZE}] px")
+            raise SceneError(where, f"{_show(v)} is out of range; allowed [1, {MAX_SIZE}] px")
     return int(value[0]), int(value[1])
 
 

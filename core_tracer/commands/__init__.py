@@ -12,7 +12,7 @@ from collections.abc import Iterator
 
 from .. import spec as S
 from ..fileio import check_writable
-from ..scene import SceneError, parse_scene, read_json
+from ..scene import SceneError, parse_scene, read_json, show_value
 
 
 def in_file(error: SceneError, file: str | os.PathLike) -> SceneError:
@@ -29,7 +29,7 @@ def check_image_side(option: str, value: int | None) -> None:
         return
     side = S.IMAGE.fields["width"]
     if not side.lo <= value <= side.hi:
-        raise SceneError(option, f"{value} is out of range; allowed {side.range_text()}")
+        raise SceneError(option, f"{show_value(value)} is out of range; allowed {side.range_text()}")
 
 
 def load_scene_file(path: str | os.PathLike, width: int | None = None, height: int | None = None) -> dict:
