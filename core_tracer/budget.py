@@ -32,7 +32,8 @@ def render_bytes(width: int, height: int, passes: bool, file_format: str) -> int
     pixels = width * height
     image = pixels * RGB_BYTES
     kept = pixels * RGB_BYTES * PASS_COUNT if passes else 0
-    writer = pixels * RGB_BYTES if file_format == "exr" else pixels * 3  # float32 copy / 8-bit codes
+    # EXR: a float32 copy; PNG: the 8-bit codes and OpenImageIO's copy of them
+    writer = pixels * RGB_BYTES if file_format == "exr" else pixels * 3 * 2
     return BASE_BYTES + image + kept + writer
 
 

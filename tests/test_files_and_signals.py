@@ -314,3 +314,40 @@ def test_a_signal_at_any_step_leaves_nothing_behind(tmp_path, command, point, si
     assert all(_gone(pid) for pid in workers)
     if command == "study" and point in ("study:started", "study:variant"):
         assert workers  # the workers ran when the signal came, and are gone now
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
+def test_the_folder_of_a_study_killed_with_sigkill_is_removed_by_the_next_study(tmp_path):
+    """SIGKILL leaves no chance to clean up; the next study removes what the dead one left."""
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    marker = tmp_path / "reached"
+    env = dict(os.environ, TMPDIR=str(temp), **{ENV_POINT: "study:variant", ENV_MARKER: str(marker)})
+    args = ["study", BASELINE, "--vary", "lens.ior=1.4,1.5,1.6", "--size", "16x16", "--workers", "1",
+            "-o", tmp_path / "sheet.png"]
+    proc = subprocess.Popen([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not marker.exists():
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        workers = _children(proc.pid)
+        proc.kill()
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    (left,) = os.listdir(temp)
+    assert left.startswith(f"lamp-study-{proc.pid}-")
+    # A live process's folder is never touched (this test's own pid stands in for a running study).
+    (temp / f"lamp-study-{os.getpid()}-running").mkdir()
+    deadline = time.monotonic() + 60
+    while not all(_gone(pid) for pid in workers):  # the orphaned worker notices and stops
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    env = dict(os.environ, TMPDIR=str(temp))
+    proc = run_cli(*args, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert os.listdir(temp) == [f"lamp-study-{os.getpid()}-running"]
