@@ -437,7 +437,7 @@ def make_shipped_thumbnails(library: Library,
     made = []
     for entry in state.missing:
         path = make_thumbnail(entry, os.path.join(state.folder, thumbnail_name(entry)), size)
-        os.chmod(path, 0o644)  # shipped to everyone who installs the library (the temporary file was private)
+        os.chmod(path, 0o644)  # shipped to everyone who installs the library, whatever this umask is
         made.append(path)
     removed = []
     for name in state.stale:

@@ -388,3 +388,23 @@ def test_cli_presets_list_a_folder_of_generated_hostile_files(tmp_path_factory, 
         assert f"{name}: {expected[name]}" in line, line
     proc = run_cli("presets", "validate", folder)
     assert proc.returncode == 2 and f"1 valid, {len(cases)} not valid" in proc.stderr.decode()
+
+
+def test_cli_echoes_a_hostile_key_escaped_and_short(tmp_path):
+    scene = tmp_path / "scene.json"
+    doc = copy.deepcopy(DESIGNS["paper-baseline"])
+    doc["lamps"][0]["lens"]["\x1b[2J\rpwned" + "k" * 900_000] = 1
+    scene.write_text(json.dumps(doc))
+    line = assert_refused(run_cli("validate", scene), "lamps[0].lens.\\x1b[2J\\rpwnedkkk", "unknown key")
+    assert len(line) < 600
+
+
+def test_cli_lists_a_library_whose_folder_and_file_names_are_not_utf8(tmp_path):
+    folder = os.path.join(os.fsencode(tmp_path), b"team \xff")
+    os.mkdir(folder)
+    with open(os.path.join(folder, b"red \xfe.json"), "w") as f:
+        f.write(json.dumps(DESIGNS["paper-baseline"]))
+    proc = subprocess.run([sys.executable.encode(), b"-m", b"core_tracer", b"presets", b"list", folder], cwd=ROOT,
+                          capture_output=True, timeout=120, env=dict(os.environ, PYTHONIOENCODING="utf-8"))
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.decode("utf-8").rstrip().endswith("(team \\xff: red \\xfe.json)")
