@@ -351,3 +351,9 @@ def test_the_folder_of_a_study_killed_with_sigkill_is_removed_by_the_next_study(
     proc = run_cli(*args, env=env)
     assert proc.returncode == 0, proc.stderr
     assert os.listdir(temp) == [f"lamp-study-{os.getpid()}-running"]
+
+
+def test_a_study_sheet_is_held_within_the_memory_budget():
+    budget.check_study((512, 512), 64, (4500, 4700))  # the largest study: about 1.3 GB
+    with pytest.raises(st.SceneError, match=r"size: the study needs about 8\.\d GB of memory; allowed at most 4\.0 GB"):
+        budget.check_study((64, 64), 4, (20000, 9000))  # a sheet made enormous by its labels

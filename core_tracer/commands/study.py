@@ -112,6 +112,11 @@ def run(args: argparse.Namespace) -> int:
     if args.save_variants:
         check_output_folder(args.save_variants, "--save-variants")
     study = _build(args)
+    if args.output is not None:
+        from .. import study_sheet  # numpy: only for a sheet
+
+        sheet_layout = study_sheet.layout(study)
+        budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height))
 
     if args.save_study:
         study.save(args.save_study)
@@ -121,10 +126,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"study of {len(study)} variants saved")
         return 0
 
-    from .. import study_run, study_sheet  # the tracer loads only when it is needed
+    from .. import study_run  # the tracer loads only when it is needed
 
-    sheet_layout = study_sheet.layout(study)
-    budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height))
     study_sheet.preload_writers()
     checkpoint("study:checked")
     start = time.perf_counter()
