@@ -47,9 +47,10 @@ def _split_tags(text: str) -> list[str]:
 
 
 def _error_text(e: Exception) -> str:
+    """One printable line: a file's name or content may hold line breaks or escape sequences."""
     if isinstance(e, OSError) and e.strerror:
-        return f"{e.filename}: {e.strerror}" if e.filename else e.strerror
-    return str(e)
+        return P.printable(f"{e.filename}: {e.strerror}" if e.filename else e.strerror, 1000)
+    return P.printable(str(e), 1000)
 
 
 def _failed(operator: bpy.types.Operator, message: str, error: Exception | None = None) -> set[str]:

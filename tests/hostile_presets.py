@@ -63,7 +63,23 @@ def make_hostile_folder(folder: Path) -> tuple[set[str], dict[str, tuple[str, ..
     write("nan.json", json.dumps(base).replace('"ior": 1.49', '"ior": NaN'), "NaN")
     write("range.json", json.dumps(base).replace('"ior": 1.49', '"ior": 0.5'),
           "lamps[0].lens.ior: 0.5 is out of range; allowed [1, 3]")
-    write("big-int.json", json.dumps(base).replace('"ior": 1.49', '"ior": ' + "9" * 5000), "not valid JSON")
+    text = json.dumps(base)
+    for name, number, shown in (("big-int.json", "9" * 5000, "a number of 5000 digits"),
+                                ("int-310.json", "9" * 310, "a number of 310 digits"),
+                                ("int-4300.json", "-" + "9" * 4300, "a number of 4300 digits"),
+                                ("float-400.json", "9" * 400 + ".5", "a number of 401 digits"),
+                                ("exponent.json", "1e400", "1e400")):
+        write(name, text.replace('"ior": 1.49', '"ior": ' + number), f"lamps[0].lens.ior: {shown} is out of range")
+    write("huge-width.json", text.replace('"width": 512', '"width": ' + "1" * 400),
+          "image.width: a number of 400 digits is out of range; allowed [1, 8192] px")
+    surrogate = "lone surrogate"
+    write("surrogate-name.json", text.replace('"name": "', '"name": "\\ud800'), "name:", surrogate)
+    write("surrogate-description.json", json.dumps({**base, "description": "a \udfff b"}), "description:",
+          surrogate)
+    write("surrogate-tag.json", json.dumps({**base, "tags": ["red", "\udbff"]}), "tags[1]:", surrogate)
+    write("repeated-key.json", text.replace('"ior": 1.49', '"ior": 99, "ior": 1.49'),
+          "lamps[0].lens.ior: is given twice in one object")
+    write("escape-key.json", json.dumps({**base, "x\x1b[2J\ry": 1}), "x\\x1b[2J\\ry: unknown key")
     write("huge-key.json", '{"schema": "lamp-scene/1", "' + "k" * 900_000 + '": 1}', "unknown key")
     write("array.json", "[1, 2, 3]", "JSON object")
     write("line\nbreak.json", "nope", "not valid JSON")

@@ -11,9 +11,10 @@ import sys
 import threading
 from collections.abc import Iterator
 
+from ..fileio import check_writable
 from ..images import display
 from ..scene import spec as S
-from ..scene.validate import SceneError, parse_scene, read_json
+from ..scene.validate import SceneError, parse_scene, read_json, show_value
 
 
 def in_file(error: SceneError, file: str | os.PathLike) -> SceneError:
@@ -30,7 +31,7 @@ def check_image_side(option: str, value: int | None) -> None:
         return
     side = S.IMAGE.fields["width"]
     if not side.lo <= value <= side.hi:
-        raise SceneError(option, f"{value} is out of range; allowed {side.range_text()}")
+        raise SceneError(option, f"{show_value(value)} is out of range; allowed {side.range_text()}")
 
 
 def load_scene_file(path: str | os.PathLike, width: int | None = None, height: int | None = None) -> dict:
@@ -57,19 +58,66 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
         raise in_file(e, path) from None
 
 
+class StopEvent(threading.Event):
+    """Set by Ctrl-C or SIGTERM; remembers which, so the program ends as that signal asks."""
+
+    signum: int = 0
+
+    def interrupt(self) -> KeyboardInterrupt:
+        from .main import Terminated
+
+        return Terminated() if self.signum == signal.SIGTERM else KeyboardInterrupt()
+
+
 @contextlib.contextmanager
-def ctrl_c_sets(stop: threading.Event | None = None) -> Iterator[threading.Event]:
-    """While rendering, Ctrl-C sets an event that the work polls between bands or variants,
-    instead of interrupting numpy, the tracer's threads or the study's workers wherever they are."""
-    stop = stop or threading.Event()
+def ctrl_c_sets(stop: StopEvent | None = None) -> Iterator[StopEvent]:
+    """While rendering, Ctrl-C (or SIGTERM) sets an event that the work polls between bands or
+    variants, instead of interrupting numpy, the tracer's threads or the study's workers wherever
+    they are. A signal that arrived is raised again as it leaves (``StopEvent.interrupt``)."""
+    stop = stop or StopEvent()
+
+    def handler(signum, frame) -> None:
+        stop.signum = stop.signum or signum
+        stop.set()
+
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return
-    previous = signal.signal(signal.SIGINT, lambda signum, frame: stop.set())
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield stop
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for s, h in previous.items():
+            signal.signal(s, h)
+    if stop.is_set():  # after the last band or variant: still nothing is written
+        raise stop.interrupt()
+
+
+def check_output(path: str, what: str) -> None:
+    """Before any rendering: the file ``path`` can be written (its folder exists and is writable,
+    and it is not a folder). The message names the user's path."""
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise SceneError(path, f"the {what} folder {folder} does not exist")
+    try:
+        check_writable(path)
+    except OSError as e:
+        raise SceneError(path, f"cannot write the {what} here ({e.strerror or e}); allowed a new or "
+                               "existing file in a folder you may write to") from None
+
+
+def check_output_folder(folder: str, what: str) -> None:
+    """Before any rendering: files can be written into ``folder`` (or into the folder that will hold it)."""
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise SceneError(folder, f"{what} must name a folder; this is a file")
+    parent = folder if os.path.isdir(folder) else os.path.dirname(os.path.abspath(folder))
+    if not os.path.isdir(parent):
+        raise SceneError(folder, f"the folder {parent} that would hold {what} does not exist")
+    try:
+        check_writable(os.path.join(parent, "probe"))
+    except OSError as e:
+        raise SceneError(folder, f"cannot write {what} here ({e.strerror or e}); allowed a folder you may write "
+                                 "to") from None
 
 
 def add_display_arguments(parser: argparse.ArgumentParser) -> None:

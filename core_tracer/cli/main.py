@@ -2,17 +2,22 @@
 
 Each command is a module ``commands/<name>.py`` with a one-line ``HELP``, ``add_arguments(parser)``
 and ``run(args) -> int``. Bad user input (a ``SceneError`` or an ``OSError`` on a user's file)
-ends with exit status 2 and one line on stderr; Ctrl-C ends with 130. Outputs are written
-atomically, so neither leaves a partial file. Anything else is a bug and keeps its traceback.
+ends with exit status 2 and one line on stderr; Ctrl-C ends with 130 and SIGTERM, handled the
+same way, with 143. Outputs are written atomically, so neither leaves a partial file. Anything
+else is a bug and keeps its traceback.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
 
+from ..safe_text import printable
 from ..scene.validate import SceneError
 
 COMMANDS = ("render", "validate", "presets", "study")
@@ -20,6 +25,8 @@ COMMANDS = ("render", "validate", "presets", "study")
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143  # 128 + SIGTERM, as a shell reports a program ended by it
+MAX_ERROR = 2000  # characters of one error line; a hostile file cannot flood the terminal
 PROG = "python -m core_tracer"
 
 
@@ -42,7 +49,31 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def one_line(text: str) -> str:
-    return " ".join(str(text).split("\n"))
+    """A message as one printable line: control characters (a file's carriage returns, terminal
+    escape sequences) and lone surrogates escaped, the length bounded."""
+    return printable(" ".join(str(text).split("\n")), MAX_ERROR)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM arrived: stop as for Ctrl-C (temporary files removed, nothing half-written)."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """While the command runs, SIGTERM raises ``Terminated`` wherever the program is, as Ctrl-C
+    raises KeyboardInterrupt, instead of ending the process on the spot with its temporary files."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _os_error_text(e: OSError) -> str:
@@ -53,14 +84,19 @@ def _os_error_text(e: OSError) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     try:
-        args = build_parser().parse_args(argv)
-        return int(args.run(args))
-    except SceneError as e:
-        print(f"error: {one_line(e)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except OSError as e:
-        print(f"error: {one_line(_os_error_text(e))}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        with sigterm_as_interrupt():
+            try:
+                args = build_parser().parse_args(argv)
+                return int(args.run(args))
+            except SceneError as e:
+                print(f"error: {one_line(e)}", file=sys.stderr)
+                return EXIT_BAD_INPUT
+            except OSError as e:
+                print(f"error: {one_line(_os_error_text(e))}", file=sys.stderr)
+                return EXIT_BAD_INPUT
+    except Terminated:
+        print("terminated", file=sys.stderr)
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

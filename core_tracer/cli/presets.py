@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
                 tags = ", ".join(e.tags)
                 author = f" by {P.printable(e.author, 60)}" if e.author else ""
                 print(f"{P.printable(e.name, 60):<{width}}  [{P.printable(tags, 80)}]{author}  "
-                      f"({e.library.name}: {P.printable(os.path.basename(e.file))})")
+                      f"({P.printable(e.library.name, 60)}: {P.printable(os.path.basename(e.file))})")
         _print_warnings(warnings)
         return 0
     if args.action == "validate":

@@ -6,9 +6,11 @@ import argparse
 import os
 import time
 
+from .. import budget
+from ..checkpoints import checkpoint
 from ..images.imageio import image_format
-from ..scene.validate import SceneError
-from .common import add_display_arguments, ctrl_c_sets, load_scene_file, view_for
+from ..safe_text import printable
+from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, load_scene_file, view_for
 
 HELP = "render a scene to an .exr (linear, scene in the header) or .png (view transform, exposure) image"
 
@@ -23,33 +25,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_display_arguments(parser)
 
 
-def _check_folder(path: str, what: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise SceneError(path, f"the {what} folder {folder} does not exist")
-
-
 def run(args: argparse.Namespace) -> int:
-    # Every check on the user's input happens before the (long) render.
-    fmt = image_format(args.output)
-    _check_folder(args.output, "output")
-    view = view_for(args) if fmt == "png" else None
-    if args.passes is not None and os.path.exists(args.passes) and not os.path.isdir(args.passes):
-        raise SceneError(args.passes, "--passes must name a folder; this is a file")
+    # Every check on the user's input happens before the (long) render: the files can be written,
+    # the scene is valid, and the render fits the memory budget.
+    file_format = image_format(args.output)
+    check_output(args.output, "output")
+    view = view_for(args) if file_format == "png" else None
+    if args.passes is not None:
+        check_output_folder(args.passes, "--passes")
     scene = load_scene_file(args.scene, args.width, args.height)
+    keep_passes = args.passes is not None
+    budget.check_render(scene["image"]["width"], scene["image"]["height"], keep_passes, file_format)
+    checkpoint("render:checked")
 
     from .. import RenderCancelled, render_passes  # the tracer loads only when it is needed
-    from ..images.imageio import write_image
+    from ..images.imageio import load_writer, write_image
+
+    load_writer()
 
     start = time.perf_counter()
     with ctrl_c_sets() as stop:
         try:
-            result = render_passes(scene, should_stop=stop.is_set)
+            result = render_passes(scene, should_stop=stop.is_set, keep_passes=keep_passes,
+                                   progress=lambda fraction: checkpoint("render:band"))
         except RenderCancelled:
-            raise KeyboardInterrupt from None
-    if stop.is_set():  # Ctrl-C after the last band: still nothing is written
-        raise KeyboardInterrupt
+            raise stop.interrupt() from None
     seconds = time.perf_counter() - start
+    checkpoint("render:rendered")
 
     if args.passes is not None:
         os.makedirs(args.passes, exist_ok=True)
@@ -61,5 +63,5 @@ def run(args: argparse.Namespace) -> int:
     segments = result.stats.get("segments")
     traced = f", {segments} ray segments" if segments is not None else ""
     shown = f", {view.view} at {ev:+.1f} EV" if view is not None else ""
-    print(f"{args.output}: {w}x{h} px in {seconds:.2f} s{traced}{shown}")
+    print(f"{printable(args.output)}: {w}x{h} px in {seconds:.2f} s{traced}{shown}")
     return 0

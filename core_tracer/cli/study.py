@@ -7,14 +7,16 @@ carries its study in its header), and ``study --list`` prints the parameters a s
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 
+from .. import budget
+from ..checkpoints import checkpoint
 from ..images.imageio import image_format
+from ..safe_text import printable
 from ..scene.validate import SceneError
 from ..study import definition as st
-from .common import add_display_arguments, ctrl_c_sets, in_file, view_for
+from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, in_file, view_for
 
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
 
@@ -48,12 +50,6 @@ def _size(text: str) -> tuple[int, int]:
     if len(size) != 2:
         raise SceneError("--size", f"{text!r} is not WIDTHxHEIGHT (e.g. 256x256)")
     return st.parse_size(size, "--size")
-
-
-def _check_folder(path: str, what: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise SceneError(path, f"the {what} folder {folder} does not exist")
 
 
 def _build(args: argparse.Namespace) -> st.Study:
@@ -113,12 +109,17 @@ def run(args: argparse.Namespace) -> int:
     if args.output is not None:
         if image_format(args.output) == "png":
             view = view_for(args)
-        _check_folder(args.output, "output")
+        check_output(args.output, "output")
     if args.save_study:
-        _check_folder(args.save_study, "--save-study")
-    if args.save_variants and os.path.exists(args.save_variants) and not os.path.isdir(args.save_variants):
-        raise SceneError(args.save_variants, "--save-variants must name a folder; this is a file")
+        check_output(args.save_study, "--save-study")
+    if args.save_variants:
+        check_output_folder(args.save_variants, "--save-variants")
     study = _build(args)
+    if args.output is not None:
+        from ..study import sheet as study_sheet  # numpy: only for a sheet
+
+        sheet_layout = study_sheet.layout(study)
+        budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height))
 
     if args.save_study:
         study.save(args.save_study)
@@ -129,22 +130,32 @@ def run(args: argparse.Namespace) -> int:
         return 0
 
     from ..study import run as study_run  # the tracer loads only when it is needed
-    from ..study import sheet as study_sheet
 
+    study_sheet.preload_writers()
+    checkpoint("study:checked")
     start = time.perf_counter()
+    progress = _progress_printer()
+
+    def on_progress(done: int, total: int) -> None:
+        if progress is not None:
+            progress(done, total)
+        if done:
+            checkpoint("study:variant")
+
     with ctrl_c_sets() as stop:
         try:
-            images = study_run.run_study(study, args.workers, progress=_progress_printer(), should_stop=stop.is_set)
+            images = study_run.run_study(study, args.workers, progress=on_progress, should_stop=stop.is_set,
+                                         on_start=lambda run: checkpoint("study:started"))
         except study_run.Cancelled:
-            raise KeyboardInterrupt from None
-    if stop.is_set():
-        raise KeyboardInterrupt
+            raise stop.interrupt() from None
+        checkpoint("study:rendered")
     seconds = time.perf_counter() - start
+    checkpoint("study:composed")
     ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure)
     workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
     how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
     w, h = study.size
     shape = " x ".join(str(len(a.values)) for a in study.axes)
     shown = f", {view.view} at {ev:+.1f} EV" if view is not None else ""
-    print(f"{args.output}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}{shown}")
+    print(f"{printable(args.output)}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}{shown}")
     return 0

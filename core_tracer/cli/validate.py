@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..safe_text import printable
 from .common import load_scene_file
 
 HELP = "check a lamp-scene/1 file and report the first problem"
@@ -17,6 +18,7 @@ def run(args: argparse.Namespace) -> int:
     scene = load_scene_file(args.scene)
     lamps = len(scene["lamps"])
     image = scene["image"]
-    print(f"{args.scene}: valid {scene['schema']}, \"{scene['name']}\", {lamps} lamp{'s' if lamps > 1 else ''}, "
+    print(f"{printable(args.scene)}: valid {scene['schema']}, \"{printable(scene['name'])}\", "
+          f"{lamps} lamp{'s' if lamps > 1 else ''}, "
           f"{image['width']}x{image['height']} px")
     return 0

@@ -29,9 +29,25 @@ RGB = ("R", "G", "B")
 
 def _oiio():
     # Imported on use: core_tracer renders without OpenImageIO; only files need it.
-    import OpenImageIO
-
+    try:
+        import OpenImageIO
+    except ImportError as e:
+        # pybind11 turns a Ctrl-C or SIGTERM that lands during the module's initialisation into
+        # "ImportError: initialization failed": it is the interrupt, not a broken installation.
+        if isinstance(e.__cause__, KeyboardInterrupt):
+            raise e.__cause__ from None
+        raise
     return OpenImageIO
+
+
+oiio_module = _oiio  # for the modules that compose images with it
+
+
+def load_writer() -> None:
+    """Import OpenImageIO now, before long work: an interrupt that lands while it is half imported
+    ends the program cleanly here, rather than breaking a later import of it (pybind11 refuses to
+    register its types twice)."""
+    _oiio()
 
 
 

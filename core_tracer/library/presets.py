@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from .. import fileio
 from ..images import display
 from ..images.display import ViewTransform
+from ..safe_text import printable
 from ..scene.validate import SceneError, normalize, parse_scene, read_json, scene_to_json, without_defaults
 
 SUFFIX = ".json"
@@ -93,21 +94,6 @@ def builtin_library() -> Library:
 # Names and paths
 
 
-def printable(text: str, limit: int = MAX_MESSAGE) -> str:
-    """One line of plain text: control characters and undecodable bytes escaped, length bounded."""
-    out = []
-    for ch in text[: limit + 1]:
-        code = ord(ch)
-        if 0xDC80 <= code <= 0xDCFF:  # an undecodable byte of a file name (surrogateescape)
-            out.append(f"\\x{code - 0xDC00:02x}")
-        elif ch.isprintable():
-            out.append(ch)
-        else:
-            out.append(ch.encode("unicode_escape").decode("ascii"))
-    line = "".join(out)
-    return line if len(line) <= limit else line[: limit - 3] + "..."
-
-
 def slug(name: str) -> str:
     """A safe file stem for a preset name: lower case letters and digits joined by '-'."""
     text = unicodedata.normalize("NFKC", name).casefold()
@@ -151,8 +137,9 @@ def _parse(path: str) -> dict:
     """Validate a preset file; the error's ``path`` is the field ('' for the file as a whole)."""
     try:
         doc = read_json(path)
-    except SceneError as e:
-        raise SceneError("", e.message) from None
+    except SceneError as e:  # named by the file; a repeated key also by its field
+        field = e.path[len(path) + 2:] if e.path.startswith(path + ": ") else ""
+        raise SceneError(field, e.message) from None
     return parse_scene(doc)
 
 
@@ -242,8 +229,8 @@ def save_preset(library: Library, name: str, scene: dict, *, overwrite: bool = F
 
     The scene is validated first (nothing is written if it is invalid) and saved in canonical
     form with ``name`` as its name. An existing file is replaced only with ``overwrite=True``,
-    otherwise ``PresetExistsError`` names it. The write is atomic: the old file stays intact
-    until the new one is complete.
+    otherwise ``PresetExistsError`` names it, even when another process saves the same name at
+    the same moment. The write is atomic: the old file stays intact until the new one is complete.
     """
     _require_writable(library)
     doc = copy.deepcopy(scene)
@@ -253,10 +240,16 @@ def save_preset(library: Library, name: str, scene: dict, *, overwrite: bool = F
     path = preset_file(library, slug(name) + SUFFIX)
     if not os.path.isdir(library.folder):
         raise PresetError(printable(library.folder), f"the library \"{printable(library.name)}\" folder does not exist")
+    exists = PresetExistsError(printable(path), "a preset with this file name exists already; "
+                               "confirm to replace it (overwrite=True)")
     if os.path.lexists(path) and not overwrite:
-        raise PresetExistsError(printable(path), "a preset with this file name exists already; "
-                                "confirm to replace it (overwrite=True)")
-    fileio.atomic_write_text(path, scene_to_json(checked))
+        raise exists
+    try:
+        # Without overwrite the name is taken atomically: of two designers saving the same new
+        # name at the same moment, exactly one succeeds and the other is told it is taken.
+        fileio.atomic_write_text(path, scene_to_json(checked), overwrite=overwrite)
+    except fileio.TargetExistsError:
+        raise exists from None
     return _entry(library, path, checked)
 
 
@@ -351,9 +344,14 @@ def thumbnail_path(entry: PresetEntry, cache_dir: str | os.PathLike) -> str:
     if shipped is not None:
         return shipped
     beside = _own_subfolder(entry.library, THUMBNAIL_FOLDER)
-    if beside is not None and entry.library.writable and os.access(entry.library.folder, os.W_OK):
-        return os.path.join(beside, thumbnail_name(entry))
     made = _thumbnail_in(entry, THUMBNAIL_FOLDER)
+    if beside is not None and entry.library.writable and os.access(entry.library.folder, os.W_OK):
+        path = os.path.join(beside, thumbnail_name(entry))
+        # Made here (or to be made here); anything else under that name (a link out of the
+        # library, a huge file, a folder) is neither opened nor replaced: the cache is used.
+        if made == path or not os.path.lexists(path):
+            return path
+        return os.path.join(os.fspath(cache_dir), thumbnail_name(entry))
     return made if made is not None else os.path.join(os.fspath(cache_dir), thumbnail_name(entry))
 
 
@@ -463,7 +461,7 @@ def make_shipped_thumbnails(library: Library,
     made = []
     for entry in state.missing:
         path = make_thumbnail(entry, os.path.join(state.folder, thumbnail_name(entry)), size, view=view)
-        os.chmod(path, 0o644)  # shipped to everyone who installs the library (the temporary file was private)
+        os.chmod(path, 0o644)  # shipped to everyone who installs the library, whatever this umask is
         made.append(path)
     removed = []
     for name in state.stale:

@@ -19,6 +19,7 @@ import re
 import stat
 from typing import Any
 
+from ..safe_text import has_surrogate, printable, show_key
 from . import spec as S
 
 MAX_FILE_BYTES = 1_000_000  # a lamp design is a few kB; refuse anything absurd before parsing
@@ -68,16 +69,90 @@ def read_json(path: str | os.PathLike, max_bytes: int = MAX_FILE_BYTES) -> Any:
 
 
 def parse_json_text(text: str, name: str = "") -> Any:
-    """Decode JSON text. NaN and Infinity (which Python's json accepts) decode to floats so that
-    validation can name the field that holds them."""
+    """Decode JSON text. NaN and Infinity (which Python's json accepts) decode to floats, and a
+    number too large for a float (``1e400``, or an integer of more than 4300 digits, which
+    Python's int() refuses) to a ``HugeNumber``, so that validation can name the field that holds
+    them. A key given twice in one object is refused (json would keep the last silently, so a
+    file could say two things and mean one)."""
+    duplicates: list[bool] = []
+
+    def pairs_hook(pairs: list[tuple[str, Any]]) -> dict:
+        obj = dict(pairs)
+        if len(obj) == len(pairs):
+            return obj
+        duplicates.append(True)
+        seen: set[str] = set()
+        repeated = next(k for k, _ in pairs if k in seen or seen.add(k))
+        return _Repeated(obj, repeated)
+
     try:
-        return json.loads(text, parse_constant=float)
+        doc = json.loads(text, parse_constant=float, parse_int=_parse_int, parse_float=_parse_float,
+                         object_pairs_hook=pairs_hook)
     except RecursionError:
         raise SceneError(name, "not valid JSON: nested too deeply") from None
     except json.JSONDecodeError as e:
         raise SceneError(name, f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
     except ValueError as e:  # json's own limits, e.g. an integer of more than 4300 digits
         raise SceneError(name, f"not valid JSON: {str(e)[:120]}") from None
+    if duplicates:
+        where = _first_repeated(doc)
+        prefix = f"{name}: " if name else ""
+        raise SceneError(f"{prefix}{where}", "is given twice in one object; allowed once (which one is meant?)")
+    return doc
+
+
+class HugeNumber(float):
+    """A JSON number beyond the float range, as written: infinite in value, shown by its digits."""
+
+    text: str
+
+    def __new__(cls, text: str) -> HugeNumber:
+        number = super().__new__(cls, "-inf" if text.startswith("-") else "inf")
+        number.text = text
+        return number
+
+    def shown(self) -> str:
+        if len(self.text) <= 40:
+            return self.text
+        return f"a number of {sum(ch.isdigit() for ch in self.text)} digits"
+
+
+_MAX_INT_DIGITS = 4300  # Python's default limit for int() of a decimal string
+
+
+def _parse_int(text: str) -> int | float:
+    return int(text) if len(text) <= _MAX_INT_DIGITS else HugeNumber(text)
+
+
+def _parse_float(text: str) -> float:
+    value = float(text)
+    return HugeNumber(text) if math.isinf(value) else value
+
+
+class _Repeated(dict):
+    """A JSON object in which a key appeared more than once (the first such key is kept)."""
+
+    def __init__(self, items: dict, repeated: str):
+        super().__init__(items)
+        self.repeated = repeated
+
+
+def _first_repeated(doc: Any) -> str:
+    """The field path of the first repeated key, in document order (iterative: depth is unbounded)."""
+    stack: list[tuple[Any, str]] = [(doc, "")]
+    while stack:
+        node, path = stack.pop()
+        if isinstance(node, _Repeated):
+            return _join(path, node.repeated)
+        if isinstance(node, dict):
+            stack.extend((v, _join(path, k)) for k, v in reversed(list(node.items())))
+        elif isinstance(node, list):
+            stack.extend((v, f"{path}[{i}]") for i, v in reversed(list(enumerate(node))))
+    return ""  # pragma: no cover - only called when the hook saw a repeated key
+
+
+def _join(path: str, key: str) -> str:
+    return f"{path}.{show_key(key)}" if path else show_key(key)
 
 
 def scene_to_json(scene: dict) -> str:
@@ -116,11 +191,12 @@ def normalize(scene: dict) -> dict:
 
 def _section(doc: Any, sec: S.Section, path: str) -> dict:
     if not isinstance(doc, dict):
-        raise SceneError(path.rstrip("."), f"expected an object, got {_kind(doc)}")
+        raise SceneError(path.rstrip("."), f"expected an object, got {_kind(doc)}; allowed an object with "
+                                           f"the keys {', '.join(sec.fields)}")
     for key in doc:
         if key not in sec.fields:
             allowed = ", ".join(sec.fields)
-            raise SceneError(f"{path}{key}", f"unknown key; allowed keys here: {allowed}")
+            raise SceneError(f"{path}{show_key(str(key))}", f"unknown key; allowed keys here: {allowed}")
     out: dict = {}
     for key, spec in sec.fields.items():
         where = f"{path}{key}"
@@ -161,9 +237,10 @@ def _value(v: Any, spec: S.Spec, where: str) -> Any:
         return v
     if isinstance(spec, S.Text):
         if not isinstance(v, str):
-            raise SceneError(where, f"expected a string, got {_kind(v)}")
+            raise SceneError(where, f"expected a string, got {_kind(v)}; allowed {spec.range_text()}")
         if len(v) > spec.max_len:
             raise SceneError(where, f"has {len(v)} characters; allowed at most {spec.max_len}")
+        _check_characters(v, where, spec.range_text())
         return v
     if isinstance(spec, S.Flag):
         if not isinstance(v, bool):
@@ -171,9 +248,11 @@ def _value(v: Any, spec: S.Spec, where: str) -> Any:
         return v
     if isinstance(spec, S.Tags):
         if not isinstance(v, list) or not all(isinstance(t, str) for t in v):
-            raise SceneError(where, f"expected a list of strings, got {_show(v)}")
+            raise SceneError(where, f"expected a list of strings, got {_show(v)}; allowed {spec.range_text()}")
         if len(v) > spec.max_items or any(len(t) > spec.max_len for t in v):
             raise SceneError(where, f"too long; allowed {spec.range_text()}")
+        for i, t in enumerate(v):
+            _check_characters(t, f"{where}[{i}]", spec.range_text())
         return list(v)
     raise AssertionError(spec)  # pragma: no cover - every spec kind is handled above
 
@@ -181,7 +260,8 @@ def _value(v: Any, spec: S.Spec, where: str) -> Any:
 def _num(v: Any, spec: S.Num, where: str) -> Any:
     if spec.size > 1:
         if not isinstance(v, list) or len(v) != spec.size:
-            raise SceneError(where, f"expected a list of {spec.size} numbers, got {_show(v)}")
+            raise SceneError(where, f"expected a list of {spec.size} numbers, got {_show(v)}; "
+                                    f"allowed {spec.range_text()}")
         items = [_scalar(x, spec, f"{where}[{i}]") for i, x in enumerate(v)]
         if spec.too_short(items):
             raise SceneError(where, f"{_show(v)} is too short to give a direction; allowed {spec.range_text()}")
@@ -190,17 +270,36 @@ def _num(v: Any, spec: S.Num, where: str) -> Any:
 
 
 def _scalar(x: Any, spec: S.Num, where: str) -> float | int:
+    return check_number(x, spec, where, spec.range_text())
+
+
+def check_number(x: Any, spec: S.Num, where: str, allowed: str) -> float | int:
+    """One number checked against ``spec``'s range (``allowed`` is that range as the message says it).
+
+    A JSON integer may have thousands of digits; it is compared exactly and never converted to a
+    float before it is known to be in range (the conversion would overflow)."""
     if isinstance(x, bool) or not isinstance(x, (int, float)):
-        raise SceneError(where, f"expected a number, got {_show(x)}")
-    if not math.isfinite(x):
-        raise SceneError(where, f"{_show(x)} is not a finite number; allowed {spec.range_text()}")
-    if spec.integer and x != int(x):
-        raise SceneError(where, f"{_show(x)} is not a whole number; allowed {spec.range_text()}")
+        raise SceneError(where, f"expected a number, got {_show(x)}; allowed {allowed}")
+    if isinstance(x, HugeNumber):
+        raise SceneError(where, f"{x.shown()} is out of range; allowed {allowed}")
+    if isinstance(x, float) and not math.isfinite(x):
+        raise SceneError(where, f"{_show(x)} is not a finite number; allowed {allowed}")
+    if spec.integer and isinstance(x, float) and not x.is_integer():
+        raise SceneError(where, f"{_show(x)} is not a whole number; allowed {allowed}")
     lo_bad = spec.lo is not None and (x < spec.lo or (spec.lo_open and x == spec.lo))
     hi_bad = spec.hi is not None and (x > spec.hi or (spec.hi_open and x == spec.hi))
-    if lo_bad or hi_bad:
-        raise SceneError(where, f"{_show(x)} is out of range; allowed {spec.range_text()}")
+    if lo_bad or hi_bad or (isinstance(x, int) and abs(x) > _LARGEST_FLOAT):
+        raise SceneError(where, f"{_show(x)} is out of range; allowed {allowed}")
     return int(x) if spec.integer else float(x)
+
+
+_LARGEST_FLOAT = int(1.7976931348623157e308)
+
+
+def _check_characters(text: str, where: str, allowed: str) -> None:
+    if has_surrogate(text):
+        raise SceneError(where, f"\"{printable(text, 40)}\" holds a lone surrogate (\\ud800-\\udfff), which is "
+                                f"not a character; allowed Unicode text only, {allowed}")
 
 
 def _num_out(default: Any, spec: S.Num) -> Any:
@@ -580,9 +679,20 @@ def _kind(v: Any) -> str:
             type(None): "null"}.get(type(v), "a number" if isinstance(v, (int, float)) else type(v).__name__)
 
 
-def _show(v: Any) -> str:
+def show_value(v: Any) -> str:
+    """A value as a message quotes it: JSON, escaped, at most 60 characters."""
+    if isinstance(v, HugeNumber):
+        return v.shown()
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10**60:
+        try:
+            return f"a number of {len(str(abs(v)))} digits"
+        except ValueError:  # str() refuses more than 4300 digits
+            return "a number of more than 4300 digits"
     try:
         text = json.dumps(v, allow_nan=True)
-    except (TypeError, ValueError):
-        text = repr(v)
-    return text if len(text) <= 60 else text[:57] + "..."
+    except (TypeError, ValueError, RecursionError):
+        text = _kind(v)
+    return printable(text, 60)
+
+
+_show = show_value

@@ -37,15 +37,25 @@ from __future__ import annotations
 
 import copy
 import itertools
-import json
 import math
 import os
 import re
 from dataclasses import dataclass
 from typing import Any
 
+from .. import budget
+from ..safe_text import has_surrogate, show_key
 from ..scene import spec as S
-from ..scene.validate import SceneError, parse_json_text, parse_scene, read_json, scene_to_json, use_form
+from ..scene.validate import (
+    SceneError,
+    check_number,
+    parse_json_text,
+    parse_scene,
+    read_json,
+    scene_to_json,
+    show_value,
+    use_form,
+)
 
 SCHEMA = "lamp-study/1"
 STUDY_ATTRIBUTE = "lamp:study"  # the header attribute of a contact sheet that holds the study
@@ -137,37 +147,44 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
         raise SceneError("parameter", f"expected a parameter name such as \"lens.ior\", got {_show(text)}")
     m = _PARAMETER.match(text)
     if m is None:
-        raise SceneError(text, "is not a parameter name; write e.g. lens.ior, lamps[1].cuts.height, "
-                               "body.color or bulb.offset[1]")
+        raise SceneError(show_key(text), "is not a parameter name; write e.g. lens.ior, lamps[1].cuts.height, "
+                                         "body.color or bulb.offset[1]")
     keys = tuple(m["path"].split("."))
     explicit_lamp = m["lamp"] is not None
     lamp_scope = explicit_lamp or (keys[0] in S.LAMP.fields and keys[0] not in S.SCENE.fields)
     if not lamp_scope and keys[0] not in _SCENE_PARTS:
-        raise SceneError(text, f"unknown parameter; a study varies {', '.join(_SCENE_PARTS)} fields "
+        raise SceneError(show_key(text), f"unknown parameter; a study varies {', '.join(_SCENE_PARTS)} fields "
                                "or lamp fields (lens, cuts, reflector, bulb, socket)")
     try:
         field_spec = S.lookup(".".join(("lamps[]",) + keys) if lamp_scope else ".".join(keys))
     except KeyError:
-        raise SceneError(text, "unknown parameter; see `python -m core_tracer study --list` "
+        raise SceneError(show_key(text), "unknown parameter; see `python -m core_tracer study --list` "
                                "for the names") from None
     if not isinstance(field_spec, S.Num | S.Flag):
-        raise SceneError(text, "is not a numeric field a study can vary")
+        raise SceneError(show_key(text), "is not a numeric field a study can vary")
     lamp = None
     if explicit_lamp and m["lamp"] != "":
-        lamp = int(m["lamp"])
-        if base is not None and lamp >= len(base["lamps"]):
-            n = len(base["lamps"])
-            raise SceneError(text, f"lamp index {lamp} does not exist; the base design has {n} "
-                                   f"lamp{'s' if n != 1 else ''} (allowed 0 to {n - 1})")
+        n = len(base["lamps"]) if base is not None else S.MAX_LAMPS
+        lamp = _index(m["lamp"])
+        if lamp >= n:
+            raise SceneError(show_key(text), f"lamp index {show_key(m['lamp'])} does not exist; the base design has "
+                                             f"{n} lamp{'s' if n != 1 else ''} (allowed 0 to {n - 1})")
     component = None
     if m["component"] is not None:
-        component = int(m["component"])
+        component = _index(m["component"])
         size = field_spec.size if isinstance(field_spec, S.Num) else 1
         if size == 1:
-            raise SceneError(text, "is a single number; a component [k] only applies to vectors")
+            raise SceneError(show_key(text), "is a single number; a component [k] only applies to vectors")
         if component >= size:
-            raise SceneError(text, f"component {component} does not exist; allowed 0 to {size - 1}")
+            raise SceneError(show_key(text), f"component {show_key(m['component'])} does not exist; "
+                                             f"allowed 0 to {size - 1}")
     return Parameter(text, keys, field_spec, lamp_scope, lamp, component)
+
+
+def _index(digits: str) -> int:
+    """An index written in a parameter name; thousands of digits are simply too large (int() of
+    them would fail), and every index allowed has one digit."""
+    return int(digits) if len(digits) <= 3 else 10**3
 
 
 def check_value(param: Parameter, value: Any) -> Any:
@@ -190,18 +207,8 @@ def check_value(param: Parameter, value: Any) -> Any:
 
 
 def _check_scalar(param: Parameter, x: Any, sp: S.Num) -> float | int:
-    if isinstance(x, bool) or not isinstance(x, int | float):
-        raise SceneError(param.text, f"expected a number, got {_show(x)}")
     one = S.Num(None, sp.lo, sp.hi, sp.lo_open, sp.hi_open, sp.unit)  # the range of one component
-    if not math.isfinite(x):
-        raise SceneError(param.text, f"{_show(x)} is not a finite number; allowed {one.range_text()}")
-    if sp.integer and x != int(x):
-        raise SceneError(param.text, f"{_show(x)} is not a whole number; allowed {one.range_text()}")
-    lo_bad = sp.lo is not None and (x < sp.lo or (sp.lo_open and x == sp.lo))
-    hi_bad = sp.hi is not None and (x > sp.hi or (sp.hi_open and x == sp.hi))
-    if lo_bad or hi_bad:
-        raise SceneError(param.text, f"{_show(x)} is out of range; allowed {one.range_text()}")
-    return int(x) if sp.integer else float(x)
+    return check_number(x, sp, param.text, one.range_text())
 
 
 def apply_value(scene: dict, param: Parameter, value: Any) -> None:
@@ -238,7 +245,8 @@ def parse_axis(doc: Any, base: dict, where: str) -> Axis:
         raise SceneError(where, f"expected an object with parameter and values or range, got {_show(doc)}")
     unknown = [k for k in doc if k not in ("parameter", "values", "range", "steps")]
     if unknown:
-        raise SceneError(f"{where}.{unknown[0]}", "unknown key; allowed keys here: parameter, values, range, steps")
+        raise SceneError(f"{where}.{show_key(unknown[0])}",
+                         "unknown key; allowed keys here: parameter, values, range, steps")
     if "parameter" not in doc:
         raise SceneError(f"{where}.parameter", "is required (e.g. \"lens.ior\")")
     param = resolve_parameter(doc["parameter"], base)
@@ -276,7 +284,7 @@ def _expand_range(param: Parameter, rng: Any, steps: Any) -> tuple[Any, ...]:
     if isinstance(steps, bool) or not isinstance(steps, int):
         raise SceneError(param.text, f"steps must be a whole number, got {_show(steps)}; allowed 1 to {MAX_VARIANTS}")
     if not 1 <= steps <= MAX_VARIANTS:
-        raise SceneError(param.text, f"steps {steps} is out of range; allowed 1 to {MAX_VARIANTS}")
+        raise SceneError(param.text, f"steps {_show(steps)} is out of range; allowed 1 to {MAX_VARIANTS}")
     lo, hi = (check_value(param, v) for v in rng)
     if steps == 1 and lo != hi:
         raise SceneError(param.text, f"steps 1 would give only {format_value(lo)}, not {format_value(hi)}; "
@@ -341,7 +349,7 @@ class Study:
         allowed = ("schema", "title", "base", "axes", "size")
         for key in doc:
             if key not in allowed:
-                raise SceneError(key, f"unknown key; allowed keys here: {', '.join(allowed)}")
+                raise SceneError(show_key(key), f"unknown key; allowed keys here: {', '.join(allowed)}")
         if "base" not in doc:
             raise SceneError("base", "is required: the lamp-scene/1 design the study varies")
         size = parse_size(doc.get("size", list(DEFAULT_SIZE)))
@@ -355,8 +363,9 @@ class Study:
         except SceneError as e:
             raise SceneError(f"base.{e.path}" if e.path else "base", e.message) from None
         title = doc.get("title", "")
-        if not isinstance(title, str) or len(title) > 200:
-            raise SceneError("title", f"expected a string of at most 200 characters, got {_show(title)}")
+        if not isinstance(title, str) or len(title) > 200 or has_surrogate(title):
+            # A lone surrogate cannot be stored in the sheet's header: refused now, not after rendering.
+            raise SceneError("title", f"expected a string of at most 200 Unicode characters, got {_show(title)}")
         axes_doc = doc.get("axes")
         if not isinstance(axes_doc, list) or not 1 <= len(axes_doc) <= MAX_AXES:
             raise SceneError("axes", f"expected a list of 1 or {MAX_AXES} axes, got {_show(axes_doc)}")
@@ -369,6 +378,7 @@ class Study:
         if count > MAX_VARIANTS:
             shape = " x ".join(str(len(a.values)) for a in axes)
             raise SceneError("axes", f"{shape} = {count} variants; allowed at most {MAX_VARIANTS}")
+        budget.check_study_pixels(size, count)
         study = cls(base, axes, size, title)
         object.__setattr__(study, "_variants", study._build_variants())
         return study
@@ -510,7 +520,7 @@ def parse_size(value: Any, where: str = "size") -> tuple[int, int]:
         raise SceneError(where, f"expected [width, height] in pixels, got {_show(value)}")
     for v in value:
         if not 1 <= v <= MAX_SIZE:
-            raise SceneError(where, f"{v} is out of range; allowed [1, {MAX_SIZE}] px")
+            raise SceneError(where, f"{_show(v)} is out of range; allowed [1, {MAX_SIZE}] px")
     return int(value[0]), int(value[1])
 
 
@@ -570,9 +580,4 @@ def _parse_number(name: str, text: str) -> float:
     return x
 
 
-def _show(v: Any) -> str:
-    try:
-        text = json.dumps(v)
-    except (TypeError, ValueError):
-        text = repr(v)
-    return text if len(text) <= 60 else text[:57] + "..."
+_show = show_value

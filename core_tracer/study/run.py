@@ -58,6 +58,45 @@ class StudyError(RuntimeError):
     """A worker failed (a tracer bug or a broken installation, never a user's mistake)."""
 
 
+FOLDER_PREFIX = "lamp-study-"  # <temp>/lamp-study-<pid of the run's process>-<random>
+
+
+def remove_orphaned_folders(temp: str | None = None) -> list[str]:
+    """Remove the temporary folders of studies whose process is gone (killed with SIGKILL, or by a
+    power cut: no cleanup could run); returns them. Only this user's folders whose process id no
+    longer exists are touched."""
+    temp = temp or tempfile.gettempdir()
+    removed = []
+    try:
+        names = os.listdir(temp)
+    except OSError:
+        return removed
+    for name in names:
+        pid_text = name[len(FOLDER_PREFIX):].split("-", 1)[0]
+        if not name.startswith(FOLDER_PREFIX) or not pid_text.isdigit() or len(pid_text) > 10:
+            continue
+        path = os.path.join(temp, name)
+        try:
+            st = os.lstat(path)
+        except OSError:
+            continue
+        if not os.path.isdir(path) or os.path.islink(path) or st.st_uid != os.getuid() or _alive(int(pid_text)):
+            continue
+        shutil.rmtree(path, ignore_errors=True)
+        removed.append(path)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True  # someone else's process, or a number no process has: leave the folder
+    return True
+
+
 def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
@@ -138,7 +177,8 @@ class StudyRun:
         count = min(self.workers or default_workers(), self.total)
         if self.threads is None:
             self.threads = max(1, default_workers() // count)
-        self._folder = tempfile.mkdtemp(prefix="lamp-study-")
+        remove_orphaned_folders()
+        self._folder = tempfile.mkdtemp(prefix=f"{FOLDER_PREFIX}{os.getpid()}-")
         self._pending = list(range(self.total))
         try:
             for k in range(count):

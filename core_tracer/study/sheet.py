@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..images import bitmap_font, display, labels
-from ..images.imageio import EXPOSURE_ATTRIBUTE, image_format, write_display, write_image
+from ..images.imageio import EXPOSURE_ATTRIBUTE, image_format, load_writer, write_display, write_image
 from .definition import STUDY_ATTRIBUTE, Study, format_value
 
 BACKGROUND = (0.018, 0.018, 0.02)  # linear; a dark grey that sets off the black of each render
@@ -129,6 +129,13 @@ def layout(study: Study) -> SheetLayout:
 
 # ---------------------------------------------------------------------------------------------
 # Composition
+
+
+def preload_writers() -> None:
+    """Load what composing and writing a sheet need before a study renders (``imageio.load_writer``):
+    an interrupt that lands while OpenImageIO is half imported then ends the program cleanly."""
+    load_writer()
+    labels.render_text_available()
 
 
 def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float = 0.0,

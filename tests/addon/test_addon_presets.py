@@ -439,3 +439,34 @@ def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(bro
     assert bpy.ops.lamp.preset_save(name="Seen", library=team) == {"FINISHED"}
     saved = addon_core.library.presets.load_preset(tmp_path / "seen.json")
     assert saved["camera"]["position"] == pytest.approx([0.0, -800.0, 0.0], abs=1e-4)  # where Studio is
+
+
+def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene, tmp_path):
+    """Huge numbers, lone surrogates, repeated keys...: each import is refused with the field named, and
+    the design stays as it was."""
+    import bpy
+
+    good, bad = make_hostile_folder(tmp_path / "hostile")
+    wm = refresh()
+    select(wm, "paper-baseline.json")
+    bpy.ops.lamp.preset_apply()
+    before = _design(browser.design_properties, bl_scene)
+    user = browser.preset_library.user_library()[0]
+    printable = browser.preset_library.P.printable
+    tried = 0
+    for name, needles in bad.items():
+        path = tmp_path / "hostile" / name
+        if not path.is_file() or path.is_symlink() or name == "huge.json":
+            continue
+        with pytest.raises(RuntimeError) as info:
+            bpy.ops.lamp.preset_import(filepath=str(path))
+        text = str(info.value)
+        assert "Not imported" in text and "Traceback" not in text, text
+        assert printable(name) in text
+        for needle in needles:
+            if "bytes" not in needle:
+                assert needle in text, (name, needle, text)
+        tried += 1
+    assert tried >= 20
+    assert _design(browser.design_properties, bl_scene) == before
+    assert os.listdir(user.folder) == []

@@ -359,6 +359,8 @@ def test_a_library_cannot_pass_off_other_files_as_thumbnails(tmp_path, hostile):
     assert P.shipped_thumbnail(entry) is None
     assert P.thumbnail_path(entry, tmp_path / "cache") == str(tmp_path / "cache" / name)
     writable = dataclasses.replace(entry, library=dataclasses.replace(lib, writable=True))
+    # A writable library is no different: the file there is never opened, the cache is used.
+    assert P.thumbnail_path(writable, tmp_path / "cache") == str(tmp_path / "cache" / name)
     if hostile == "folder-link-out":  # neither made, removed nor listed through the link
         assert Path(P.thumbnail_path(writable, tmp_path / "cache")).parent == tmp_path / "cache"
         (outside / "stale-0123456789abcdef.png").write_bytes(b"someone else's")

@@ -1,0 +1,70 @@
+"""How much memory a render or a study needs, estimated before it starts, and the budget it must fit.
+
+The figures are what this program holds at its peak, measured (``benchmarks/bench_memory.py``):
+the image and, with ``--passes``, the eight contribution passes as float32 RGB; the copy a file
+writer makes; the tracer's bands, which are bounded whatever the image size; and a study's
+variant images and its contact sheet. A request above ``MEMORY_BUDGET`` is refused before any
+work starts, with the estimate and the budget in the message (README, "Memory and time").
+"""
+
+from __future__ import annotations
+
+from .scene.validate import SceneError
+
+MEMORY_BUDGET = 4 * 2**30  # bytes; README "Memory and time"
+BASE_BYTES = 160 * 2**20  # the interpreter, numpy and OpenImageIO loaded, the tracer's bands in flight
+RGB_BYTES = 3 * 4  # float32 RGB per pixel
+PASS_COUNT = 8
+# A study's sheet is held up to four times while it is composed (OpenImageIO's buffer, its copy to
+# numpy, a writable copy, the writer's copy); the variant images stay in memory until then.
+SHEET_COPIES = 4
+# A study renders at most this many pixels in all, the pixels of one 4096 x 4096 image: 64
+# variants of 512 x 512, or 4 of 2048 x 2048 (an hour or so of CPU time at most, README).
+MAX_STUDY_PIXELS = 4096 * 4096
+
+
+def gib(n: int) -> str:
+    return f"{n / 2**30:.1f} GB"
+
+
+def render_bytes(width: int, height: int, passes: bool, file_format: str) -> int:
+    """Peak bytes of ``render``: the image, the passes if kept, and the file writer's copy."""
+    pixels = width * height
+    image = pixels * RGB_BYTES
+    kept = pixels * RGB_BYTES * PASS_COUNT if passes else 0
+    # EXR: a float32 copy; PNG: the 8-bit codes and OpenImageIO's copy of them
+    writer = pixels * RGB_BYTES if file_format == "exr" else pixels * 3 * 2
+    return BASE_BYTES + image + kept + writer
+
+
+def check_render(width: int, height: int, passes: bool, file_format: str, what: str = "the render") -> None:
+    need = render_bytes(width, height, passes, file_format)
+    if need > MEMORY_BUDGET:
+        hint = " without --passes, or" if passes else ""
+        raise SceneError("image", f"{width}x{height} px{' with --passes' if passes else ''}: {what} needs about "
+                         f"{gib(need)} of memory; allowed at most {gib(MEMORY_BUDGET)} (render{hint} smaller)")
+
+
+def study_bytes(variant_pixels: int, count: int, sheet_pixels: int) -> int:
+    return BASE_BYTES + variant_pixels * count * RGB_BYTES + sheet_pixels * RGB_BYTES * SHEET_COPIES
+
+
+def check_study_pixels(size: tuple[int, int], count: int, where: str = "size") -> None:
+    """A study renders at most ``MAX_STUDY_PIXELS`` pixels in all."""
+    w, h = size
+    total = w * h * count
+    if total > MAX_STUDY_PIXELS:
+        largest = int((MAX_STUDY_PIXELS // count) ** 0.5)
+        raise SceneError(where, f"{count} variants of {w}x{h} px are {total:,} pixels; allowed at most "
+                                f"{MAX_STUDY_PIXELS:,} in one study (here at most {largest}x{largest} px each, "
+                                "or fewer variants)")
+
+
+def check_study(size: tuple[int, int], count: int, sheet_size: tuple[int, int], where: str = "size") -> None:
+    """A study must stay within ``MAX_STUDY_PIXELS`` rendered pixels and the memory budget."""
+    check_study_pixels(size, count, where)
+    w, h = size
+    need = study_bytes(w * h, count, sheet_size[0] * sheet_size[1])
+    if need > MEMORY_BUDGET:
+        raise SceneError(where, f"the study needs about {gib(need)} of memory; allowed at most "
+                                f"{gib(MEMORY_BUDGET)} (smaller variants or fewer of them)")
