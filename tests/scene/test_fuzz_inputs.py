@@ -315,7 +315,8 @@ def test_cli_validate_and_render_refuse_a_wrong_field(tmp_path_factory, case):
     scene.write_text(json.dumps(set_path(DESIGNS[stem], path, value)))
     assert_refused(run_cli("validate", scene), f"{scene}: {path}")
     out = folder / "out.png"
-    assert_refused(run_cli("render", scene, "-o", out, "--width", "8", "--height", "8"), f"{scene}: {path}")
+    size = () if path.startswith("image.") else ("--width", "8", "--height", "8")  # (those would replace it)
+    assert_refused(run_cli("render", scene, "-o", out, *size), f"{scene}: {path}")
     assert sorted(p.name for p in folder.iterdir()) == ["scene.json"]
 
 
