@@ -44,6 +44,11 @@ KNOWN_VIEWS = ("AgX", "Standard", "Filmic", "Filmic Log", "Khronos PBR Neutral",
                "ACES 1.3", "ACES 2.0", "Raw")
 CONFIG_ENV = "LAMP_OCIO_CONFIG"  # a config.ocio to use instead of Blender's
 MAX_EXPOSURE = 16.0
+# Memory stays bounded whatever the image size: the view transform works on strips of rows of at
+# most this many pixels, and the automatic exposure measures an evenly strided sample of at most
+# AUTO_SAMPLE_PIXELS pixels (every pixel of an image up to 2048 x 2048).
+STRIP_PIXELS = 1 << 20
+AUTO_SAMPLE_PIXELS = 2048 * 2048
 
 # Automatic exposure: where the lit lens's bright end is put (linear value after exposure) and
 # how that bright end is found. 0.7 is half a stop below display white in Standard (code 219)
@@ -169,8 +174,17 @@ class ViewTransform:
         return np.clip(shown, 0.0, 1.0)
 
     def to_display8(self, linear: np.ndarray, exposure: float = 0.0) -> np.ndarray:
-        """8-bit display codes (uint8, H, W, 3), rounded to nearest, of ``linear`` at ``exposure`` stops."""
-        return np.rint(self.to_display(linear, exposure) * 255.0).astype(np.uint8)
+        """8-bit display codes (uint8, H, W, 3), rounded to nearest, of ``linear`` at ``exposure`` stops.
+
+        Strip by strip (views work pixel by pixel, so the codes are those of the whole image at once):
+        the float temporaries stay a few MB at any image size."""
+        image = np.asarray(linear)
+        height, width = image.shape[:2]
+        codes = np.empty((height, width, 3), dtype=np.uint8)
+        rows = max(1, STRIP_PIXELS // max(1, width))
+        for y in range(0, height, rows):
+            codes[y:y + rows] = np.rint(self.to_display(image[y:y + rows], exposure) * 255.0)
+        return codes
 
     def to_linear(self, shown: np.ndarray, exposure: float = 0.0) -> np.ndarray:
         """The inverse of ``to_display`` (exact up to quantisation where the view did not clip)."""
@@ -243,7 +257,7 @@ def auto_exposure(linear: np.ndarray | list[np.ndarray]) -> float:
     are measured together, so they share one exposure. A black image gets 0.
     """
     images = linear if isinstance(linear, list) else [linear]
-    m = np.concatenate([np.asarray(a, dtype=np.float32).max(axis=-1).ravel() for a in images])
+    m = np.concatenate([_sample(np.asarray(a)).max(axis=-1).astype(np.float32).ravel() for a in images])
     m = m[np.isfinite(m) & (m > 0.0)]
     if m.size == 0:
         return 0.0
@@ -254,6 +268,13 @@ def auto_exposure(linear: np.ndarray | list[np.ndarray]) -> float:
         return 0.0
     ev = math.log2(AUTO_TARGET / key)
     return round(max(-MAX_EXPOSURE, min(MAX_EXPOSURE, ev)), 1)
+
+
+def _sample(image: np.ndarray) -> np.ndarray:
+    """``image`` itself up to ``AUTO_SAMPLE_PIXELS`` pixels, else every k-th row and column of it."""
+    pixels = image.shape[0] * image.shape[1]
+    step = math.ceil(math.sqrt(pixels / AUTO_SAMPLE_PIXELS)) if pixels > AUTO_SAMPLE_PIXELS else 1
+    return image[::step, ::step]
 
 
 def resolve_exposure(exposure: float | str | None, linear: np.ndarray | list[np.ndarray]) -> float:

@@ -94,7 +94,8 @@ def write_image(
         return 0.0
     view = view or display.view_transform()
     ev = display.resolve_exposure(exposure, rgb)
-    write_display(name, view.to_display(rgb, ev), scene, attributes=attributes, view=view.view, exposure=ev)
+    extra = {VIEW_ATTRIBUTE: view.view, EXPOSURE_ATTRIBUTE: f"{ev:g}", **(attributes or {})}
+    _write(name, view.to_display8(rgb, ev), scene, extra)
     return ev
 
 
