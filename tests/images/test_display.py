@@ -245,3 +245,27 @@ def test_study_sheet_png_shares_one_exposure_and_keeps_labels_readable(tmp_path)
     assert (bright == 255).any(axis=2).mean() < MAX_CLIPPED
     title = lay.texts[0].rect
     assert codes[title.y:title.y + title.h, title.x:title.x + title.w].max() > 200  # labels drawn on the display side
+
+
+
+def test_png_through_a_view_holds_a_few_bytes_per_pixel(tmp_path, monkeypatch):
+    """The memory budget (core_tracer/budget.py) counts 6 bytes a pixel for a PNG: its 8-bit codes and
+    the writer's copy. The view transform works strip by strip and the automatic exposure measures a
+    bounded sample, so the float temporaries do not grow with the image (they were 36 bytes a pixel);
+    the codes are those of the whole image transformed at once."""
+    import tracemalloc
+
+    height, width = 2048, 4096
+    image = np.random.default_rng(1).random((height, width, 3), dtype=np.float32) * 8
+    agx = display.view_transform("AgX")
+    tracemalloc.start()
+    try:
+        imageio.write_image(tmp_path / "strips.png", image, None, view=agx, exposure=-2.0)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak / (height * width) < 10, peak
+    monkeypatch.setattr(display, "STRIP_PIXELS", height * width)
+    imageio.write_image(tmp_path / "whole.png", image, None, view=agx, exposure=-2.0)
+    strips, whole = (oiio.ImageBuf(str(tmp_path / f"{n}.png")).get_pixels(oiio.UINT8) for n in ("strips", "whole"))
+    np.testing.assert_array_equal(strips, whole)
