@@ -13,7 +13,7 @@ import bpy
 
 from ..core_tracer.scene import spec
 from ..core_tracer.scene.validate import SceneError
-from . import design_properties, render_camera
+from . import design_properties, render_camera, render_setup
 from .convert.layout import design_with_new_lamp, refusal_of_new_lamp, with_new_lamp_unchecked
 
 
@@ -50,6 +50,10 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
         design.body.size = doc["body"]["size"]
         design.active_lamps_index = len(design.lamps) - 1
         render_camera.keep_framed(context.scene)
+        if len(design.lamps) == 1 and design.auto_build and not render_setup.is_set_up(context.scene):
+            # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now.
+            news = render_setup.set_up(context.scene)
+            self.report({"INFO"}, "Added the first lamp" + render_setup.news_text(news))
         return {"FINISHED"}
 
 
@@ -127,11 +131,12 @@ class LAMP_OT_build(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         report = design_builder.build_lamp(context.scene, scene)
-        camera_news = render_camera.camera_after_build(context.scene)
+        render_camera.sync_view(context.scene)
+        news = render_setup.set_up(context.scene)
         level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
         self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
                              f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)"
-                             + (f"; {camera_news}" if camera_news else ""))
+                             + render_setup.news_text(news))
         if report.not_driven:
             self.report({"WARNING"}, f"Not following the design (your edits kept): {'; '.join(report.not_driven)}")
         return {"FINISHED"}

@@ -15,7 +15,7 @@ from __future__ import annotations
 import bpy
 
 from ..core_tracer.scene.validate import SceneError
-from . import design_panels, design_properties, image_view, render_camera
+from . import design_panels, design_properties, render_camera, render_setup
 
 
 class LAMP_OT_exposure_from_design(bpy.types.Operator):
@@ -37,14 +37,14 @@ class LAMP_OT_exposure_from_design(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            scene = render_camera.scene_for_render(context.scene)
+            render_camera.scene_for_render(context.scene)
         except SceneError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        exposure = image_view.design_exposure(scene)
-        context.scene.view_settings.exposure = exposure
-        view = context.scene.view_settings.view_transform
-        self.report({"INFO"}, f"Exposure {exposure:+.1f} EV ({view}): the lit lens shows its cut pattern")
+        render_setup.follow_design_exposure(context.scene, force=True)
+        settings = context.scene.view_settings
+        self.report({"INFO"}, f"Exposure {settings.exposure:+.1f} EV ({settings.view_transform}): the lit lens "
+                              "shows its cut pattern; builds keep it at the design's until you set your own")
         return {"FINISHED"}
 
 

@@ -43,6 +43,7 @@ from .convert import units
 MM_PER_BU = units.MM_PER_BU
 CAMERA_NAME = "Lamp Camera"
 LAMP_CAMERA_KEY = "lamp_camera"  # custom property marking the camera the add-on made (found by it, not by name)
+CARRIED_KEY = "lamp_carried"  # the Lamp Camera was parented to the design's root once (``carry_with_root``)
 LINK_KEY = "lamp_view_link"  # scene custom property: the view last seen in the design and in Blender
 
 _FIT_TO_BLENDER = {"auto": "AUTO", "horizontal": "HORIZONTAL", "vertical": "VERTICAL"}
@@ -232,6 +233,7 @@ def ensure_lamp_camera(bl_scene, *, frame: bool = False) -> tuple[object, str]:
     ob = bpy.data.objects.new(CAMERA_NAME, data)
     ob[LAMP_CAMERA_KEY] = True
     bl_scene.collection.objects.link(ob)
+    carry_with_root(bl_scene, ob)
     previous = bl_scene.camera
     bl_scene.camera = ob
     _, image = _design_view(bl_scene)
@@ -246,16 +248,22 @@ def ensure_lamp_camera(bl_scene, *, frame: bool = False) -> tuple[object, str]:
     return ob, what
 
 
-def camera_after_build(bl_scene) -> str:
-    """What Build does about the camera, for its report: a scene without a camera gets the Lamp Camera
-    (at the design's view, which ``keep_framed`` keeps framed); a camera of the user's stays the scene
-    camera, and the report says how to see the lamp framed."""
-    if bl_scene.camera is None:
-        return ensure_lamp_camera(bl_scene)[1]
-    if not is_lamp_camera(bl_scene.camera):
-        return f'rendering through your "{bl_scene.camera.name}"; Frame Lamp shows the lamp through the Lamp Camera'
-    sync_view(bl_scene)
-    return ""
+def carry_with_root(bl_scene, ob) -> bool:
+    """Parent the Lamp Camera ``ob`` to the design's root, where it is in the world, so that moving the
+    root (or parenting it to a car body) carries the lamp's own view along: the lamp stays framed and
+    the design's camera, which is in the root's space, stays valid. Only a camera without a parent is
+    attached, and only once (one the user parented elsewhere, or took off the root, stays so).
+    Returns whether it was attached."""
+    if ob.get(CARRIED_KEY) or ob.parent is not None or not is_lamp_camera(ob):
+        return False
+    root = design_root.find_root(bl_scene)
+    if root is None:
+        return False
+    world = ob.matrix_world.copy()
+    ob.parent = root
+    ob.matrix_world = world
+    ob[CARRIED_KEY] = True
+    return True
 
 
 def _push_design(bl_scene, ob) -> None:
@@ -428,6 +436,8 @@ def _on_depsgraph_update(scene, depsgraph) -> None:
     if ob is not None:
         watched |= {ob.as_pointer(), ob.data.as_pointer()}
     if any(u.id.original.as_pointer() in watched for u in depsgraph.updates):
+        if ob is not None and not ob.get(CARRIED_KEY) and not _syncing:
+            carry_with_root(scene, ob)  # the first build by Auto Build made the root the camera goes with
         _sync_quietly(scene)
 
 
