@@ -347,13 +347,23 @@ def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_s
 
 
 def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_scene):
+    """The viewport's text line gives the design's state, its objects' state and the field to change."""
     session = _design_session(lamp_addon, bl_scene)
     bl_scene.lamp_design.lamps[0].bulb.radius = 1000.0  # far outside its reflector
     session.update(bl_scene)
     ob = _blender_camera("PERSP")
     session.sync(bl_scene, 64, 48, _window_matrix(ob, 64, 48), ob.matrix_world.inverted())
     assert session.preview.generation == 0 and session.preview.frame() is None
-    assert session.status().startswith("Lamp Tracer: ") and "bulb" in session.status()
+    status = session.status()
+    assert status.startswith("Lamp Tracer: design not valid (not built); Lamp 1 Bulb: Radius: "), status
+    assert "mm" in status.split("Radius: ", 1)[1]  # the allowed range, in mm
+
+    lamp_addon.design_builder.build_lamp(bl_scene, _four_lamps())  # built before the bad edit
+    session.update(bl_scene)
+    assert session.status().startswith("Lamp Tracer: design not valid (objects as last built); Lamp 1 Bulb")
+    bl_scene.lamp_design.lamps.clear()
+    session.update(bl_scene)
+    assert session.status() == "Lamp Tracer: no lamp yet: Add Lamp (Lamp tab, Lamps) or apply a preset"
 
 
 # ---------------------------------------------------------------------------------------------
