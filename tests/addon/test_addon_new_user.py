@@ -141,9 +141,7 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):  # n
         print(f"Compare {name} half: lit lens mean {lens_mean:.2f}, elsewhere {body_mean:.2f}")
         assert lens_mean > 3.0 * body_mean
     assert not bl_scene.objects["Cube"].hide_render  # put back after the comparison
-    # The viewport orbited to a three-quarter view: the draw path into an offscreen shows the lamp. Last:
-    # the test's draw probe (a registered subclass of the engine) leaves Blender unable to find the
-    # Lamp Tracer's Python class for later renders in this process ("unable to get Python class").
+    # The viewport orbited to a three-quarter view: the draw path into an offscreen shows the lamp.
     render = bl_scene.render
     kept = bl_scene.camera, render.resolution_x, render.resolution_y
     lamp_addon.render_camera.pause_link(bl_scene)  # the probe's 4 x 4 render is not the user's size

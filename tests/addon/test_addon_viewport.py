@@ -405,7 +405,9 @@ def gpu_context(bl_scene):
 def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) -> np.ndarray:
     """What the engine's viewport path draws for this view, read back from an offscreen: the
     session as view_draw drives it (update, sync, both stages, draw_frame), drawn by a real engine
-    instance (Blender makes engine instances only to render, so a subclass draws from render())."""
+    instance (Blender makes engine instances only to render, so a probe engine draws from render()).
+    The probe is a plain ``RenderEngine``: a registered subclass of the Lamp Tracer's class, once
+    unregistered, leaves Blender without the Lamp Tracer's Python class for later renders."""
     import bpy
     import gpu
     from mathutils import Matrix
@@ -413,7 +415,7 @@ def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) 
     offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
     out = {}
 
-    class DrawProbe(lamp_addon.render_engine.LampTracerEngine):
+    class DrawProbe(bpy.types.RenderEngine):
         bl_idname = "LAMP_TRACER_DRAW_PROBE"
         bl_label = "Lamp Tracer draw probe"
 
