@@ -39,6 +39,7 @@ import bpy
 from . import design_panels, design_properties, design_root
 from .convert import camera as cm
 from .convert import units
+from .design_operator import DesignOperator
 
 MM_PER_BU = units.MM_PER_BU
 CAMERA_NAME = "Lamp Camera"
@@ -467,7 +468,7 @@ def _on_load_post(*_args) -> None:
 # Operators and the camera area of the panel
 
 
-class LAMP_OT_frame_design(bpy.types.Operator):
+class LAMP_OT_frame_design(DesignOperator, bpy.types.Operator):
     """Point the Lamp Camera at the whole lamp body with a margin, from the current viewing direction
     (the 3D View's when used there, else the Lamp Camera's own); makes it the scene camera.
     A camera of yours is never moved"""
@@ -475,10 +476,6 @@ class LAMP_OT_frame_design(bpy.types.Operator):
     bl_idname = "lamp.frame_design"
     bl_label = "Frame Lamp"
     bl_options = {"REGISTER", "UNDO"}
-
-    @classmethod
-    def poll(cls, context):
-        return design_properties.poll_design(cls, context)
 
     def execute(self, context):
         return self._frame(context, None)
@@ -494,8 +491,7 @@ class LAMP_OT_frame_design(bpy.types.Operator):
         bl_scene = context.scene
         ob, made = ensure_lamp_camera(bl_scene)
         if ob.data.type not in {"PERSP", "ORTHO"}:
-            self.report({"ERROR"}, f'"{ob.name}" is a panoramic camera; set it to Perspective or Orthographic')
-            return {"CANCELLED"}
+            return self.cancelled(f'"{ob.name}" is a panoramic camera; set it to Perspective or Orthographic')
         view = scene_camera_to_dict(bl_scene, ob)
         if view_axes is not None:  # the 3D View's axes in the design's model space
             model = design_root.world_from_design(bl_scene).to_3x3().inverted() @ view_axes
@@ -509,7 +505,7 @@ class LAMP_OT_frame_design(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class LAMP_OT_camera_to_design(bpy.types.Operator):
+class LAMP_OT_camera_to_design(DesignOperator, bpy.types.Operator):
     """Copy your scene camera's view and the render size into the design's camera fields (what a saved
     preset records); the Lamp Camera takes that view. Your camera is not changed"""
 
@@ -518,16 +514,12 @@ class LAMP_OT_camera_to_design(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
-    def poll(cls, context):
-        if not design_properties.poll_design(cls, context):
-            return False
+    def refusal(cls, context):
         if context.scene.camera is None:
-            cls.poll_message_set("The scene has no camera")
-            return False
+            return "The scene has no camera"
         if is_lamp_camera(context.scene.camera):
-            cls.poll_message_set("The scene camera is the Lamp Camera: the design's fields already are its view")
-            return False
-        return True
+            return "The scene camera is the Lamp Camera: the design's fields already are its view"
+        return None
 
     def execute(self, context):
         from ..core_tracer.scene.validate import SceneError
@@ -536,8 +528,7 @@ class LAMP_OT_camera_to_design(bpy.types.Operator):
         try:
             seen = scene_for_render(bl_scene)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
+            return self.cancelled(e)
         sync_view(bl_scene)
         _write_design_camera(bl_scene, seen["camera"])
         bl_scene.lamp_design.image.width, bl_scene.lamp_design.image.height = (
