@@ -99,7 +99,7 @@ def viewport_picture(bpy, addon, bl_scene, path: str) -> None:
     bl_scene.view_layers[0].update()
     window = ob.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=width, y=height)
     started = time.perf_counter()
-    rgba = draw_viewport(bpy, addon, bl_scene, width, height, window, ob.matrix_world.inverted())
+    rgba = draw_viewport(bpy, addon, bl_scene, width, height, window, ob.matrix_world.inverted())["pixels"]
     _timed("viewport draw path (coarse + full stages)", started)
     bpy.data.objects.remove(ob)
     bpy.data.cameras.remove(view)
@@ -112,11 +112,15 @@ def viewport_picture(bpy, addon, bl_scene, path: str) -> None:
     print(f"viewport ({bl_scene.view_settings.view_transform}, {bl_scene.view_settings.exposure:+.1f} EV) -> {path}")
 
 
-def draw_viewport(bpy, addon, bl_scene, width: int, height: int, window, view):
-    """What the Lamp Tracer's ``view_draw`` draws for this view, read back (bottom row first, RGBA).
+def draw_viewport(bpy, addon, bl_scene, width: int, height: int, window, view) -> dict:
+    """What the Lamp Tracer's ``view_draw`` draws for this view: ``pixels`` read back (bottom row
+    first, RGBA), the viewport's ``status`` line and the ``scene`` the tracer rendered.
 
     Blender makes engine instances only to render, so a probe engine draws from ``render()``: the
-    viewport session as ``view_draw`` drives it, both stages, then ``draw_frame`` into an offscreen."""
+    viewport session as ``view_draw`` drives it, both stages, then ``draw_frame`` into an offscreen.
+    The probe is a plain ``RenderEngine``: a registered subclass of the Lamp Tracer's class, once
+    unregistered, leaves Blender without the Lamp Tracer's Python class for later renders. The scene's
+    camera, engine and size are put back afterwards (the tests and this tool share it)."""
     import gpu
     import numpy as np
     from mathutils import Matrix
@@ -146,22 +150,31 @@ def draw_viewport(bpy, addon, bl_scene, width: int, height: int, window, view):
                     session.draw_frame(self, scene, width, height)
                 out["pixels"] = np.array(offscreen.texture_color.read().to_list(), np.float32)
             out["status"] = session.status()
+            out["scene"] = session.scene
 
     render = bl_scene.render
-    kept = render.engine, render.resolution_x, render.resolution_y
+    kept = bl_scene.camera, render.engine, render.resolution_x, render.resolution_y
     addon.render_camera.pause_link(bl_scene)  # the probe's tiny render is not the user's size
     bpy.utils.register_class(DocsDrawProbe)
+    stand_in = None
     try:
+        if bl_scene.camera is None:  # a render needs a camera, even one that draws nothing of it
+            stand_in = bpy.data.objects.new("Probe Camera", bpy.data.cameras.new("Probe Camera"))
+            bl_scene.collection.objects.link(stand_in)
+            bl_scene.camera = stand_in
         render.engine = DocsDrawProbe.bl_idname
         render.resolution_x = render.resolution_y = 4
         bpy.ops.render.render()
     finally:
-        render.engine, render.resolution_x, render.resolution_y = kept
+        bl_scene.camera, render.engine, render.resolution_x, render.resolution_y = kept
+        if stand_in is not None:
+            camera_data = stand_in.data
+            bpy.data.objects.remove(stand_in)
+            bpy.data.cameras.remove(camera_data)
         bpy.utils.unregister_class(DocsDrawProbe)
         addon.render_camera.resume_link(bl_scene)
         offscreen.free()
-    print(out["status"])
-    return out["pixels"]
+    return out
 
 
 def _start_gpu(bpy, bl_scene) -> None:

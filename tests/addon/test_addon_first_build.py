@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 from helpers import BASELINE
+from test_addon_framing import rims_in_image
 
 import core_tracer
 
@@ -38,22 +39,6 @@ def startup(addon):
     assert {"Cube", "Camera", "Light"} <= set(scene.objects.keys()) and hasattr(scene, "lamp_design")
     assert scene.render.engine == "BLENDER_EEVEE" and scene.view_settings.exposure == 0.0
     return scene
-
-
-def rims_in_image(lamp_addon, bl_scene) -> list[bool]:
-    """For each lamp: whether its whole lens rim (73 points) projects inside the image the scene
-    camera renders (the tracer's projection, ``convert.camera.project``)."""
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
-    size = (seen["image"]["width"], seen["image"]["height"])
-    inside = []
-    for lamp in seen["lamps"]:
-        (x, z), r = lamp["center"], lamp["lens"]["radius"]
-        rim = [(x + r * math.cos(a), 0.0, z + r * math.sin(a)) for a in np.linspace(0, 2 * math.pi, 73)]
-        points = np.array(lamp_addon.convert.camera.project(seen["camera"], size, rim))
-        inside.append(bool((points[:, 0] > 0).all() and (points[:, 0] < size[0]).all()
-                           and (points[:, 1] > 0).all() and (points[:, 1] < size[1]).all()
-                           and (points[:, 2] > 0).all()))
-    return inside
 
 
 def _object_state(ob) -> tuple:

@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 import pytest
-from test_addon_first_build import rims_in_image
+from test_addon_framing import rims_in_image
 from test_addon_viewport import _display, _draw_viewport, _three_quarter_view, gpu_context  # noqa: F401 (a fixture)
 
 import core_tracer
@@ -142,15 +142,9 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):  # n
         assert lens_mean > 3.0 * body_mean
     assert not bl_scene.objects["Cube"].hide_render  # put back after the comparison
     # The viewport orbited to a three-quarter view: the draw path into an offscreen shows the lamp.
-    render = bl_scene.render
-    kept = bl_scene.camera, render.resolution_x, render.resolution_y
-    lamp_addon.render_camera.pause_link(bl_scene)  # the probe's 4 x 4 render is not the user's size
-    try:
-        window, view = _three_quarter_view(*VIEWPORT)  # around the origin: orbit where the root now is
-        drawn = _draw_viewport(lamp_addon, bl_scene, *VIEWPORT, window, view @ root.matrix_world.inverted())
-    finally:
-        bl_scene.camera, render.resolution_x, render.resolution_y = kept
-        lamp_addon.render_camera.resume_link(bl_scene)
+    window, view = _three_quarter_view(*VIEWPORT)  # around the origin: orbit where the root now is
+    drawn = _draw_viewport(lamp_addon, bl_scene, *VIEWPORT, window, view @ root.matrix_world.inverted())
+    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera) and bl_scene.render.resolution_x == SIZE[0]
     watch.lap("viewport: coarse + full stages, drawn")
     pixels = drawn["pixels"][::-1, :, :3]  # top row first
     background = np.asarray(drawn["scene"]["background"], np.float32)

@@ -402,56 +402,15 @@ def gpu_context(bl_scene):
     return gpu
 
 
-def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) -> np.ndarray:
+def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) -> dict:
     """What the engine's viewport path draws for this view, read back from an offscreen: the
     session as view_draw drives it (update, sync, both stages, draw_frame), drawn by a real engine
-    instance (Blender makes engine instances only to render, so a probe engine draws from render()).
-    The probe is a plain ``RenderEngine``: a registered subclass of the Lamp Tracer's class, once
-    unregistered, leaves Blender without the Lamp Tracer's Python class for later renders."""
+    instance (``tools/make_docs_images.draw_viewport``, which the docs' picture is made with)."""
     import bpy
-    import gpu
-    from mathutils import Matrix
 
-    offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
-    out = {}
+    from tools.make_docs_images import draw_viewport
 
-    class DrawProbe(bpy.types.RenderEngine):
-        bl_idname = "LAMP_TRACER_DRAW_PROBE"
-        bl_label = "Lamp Tracer draw probe"
-
-        def render(self, depsgraph):
-            scene = depsgraph.scene
-            session = lamp_addon.render_viewport.ViewportSession(self, in_background=False)
-            session.update(scene)
-            session.sync(scene, width, height, window, view)
-            while session.preview.step():
-                pass
-            out["status"] = session.status()
-            with offscreen.bind():
-                gpu.state.active_framebuffer_get().clear(color=(0.0, 0.0, 0.0, 0.0))
-                with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
-                    # Pixel coordinates, as Blender sets them up before view_draw
-                    gpu.matrix.load_matrix(Matrix.Identity(4))
-                    gpu.matrix.load_projection_matrix(Matrix.Identity(4))
-                    gpu.matrix.translate((-1.0, -1.0))
-                    gpu.matrix.scale((2.0 / width, 2.0 / height))
-                    session.draw_frame(self, scene, width, height)
-                out["pixels"] = np.array(offscreen.texture_color.read().to_list(), np.float32)
-            out["scene"] = session.scene
-
-    bpy.utils.register_class(DrawProbe)
-    camera = bpy.data.objects.new("F12", bpy.data.cameras.new("F12"))
-    bl_scene.collection.objects.link(camera)
-    bl_scene.camera = camera
-    engine = bl_scene.render.engine
-    try:
-        bl_scene.render.engine = DrawProbe.bl_idname
-        bl_scene.render.resolution_x, bl_scene.render.resolution_y = 4, 4
-        bpy.ops.render.render()
-    finally:
-        bl_scene.render.engine = engine
-        bpy.utils.unregister_class(DrawProbe)
-        offscreen.free()
+    out = draw_viewport(bpy, lamp_addon, bl_scene, width, height, window, view)
     assert out["status"] == "Lamp Tracer: full resolution"
     return out
 
