@@ -89,7 +89,7 @@ def viewport_picture(bpy, addon, bl_scene, path: str) -> None:
     width, height = VIEWPORT_SIZE
     root = addon.design_root.find_root(bl_scene)
     centre = root.matrix_world @ Vector((0.0425, 0.04, 0.0))  # the four-lamp body's centre, in metres
-    eye = centre + Vector((-0.42, -0.62, 0.24))
+    eye = centre + Vector((-0.33, -0.48, 0.19))
     view = bpy.data.cameras.new("Docs View")
     view.lens, view.sensor_fit = 30.0, "HORIZONTAL"
     ob = bpy.data.objects.new("Docs View", view)
