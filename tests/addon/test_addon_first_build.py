@@ -201,3 +201,29 @@ def test_compare_rebuilds_out_of_date_objects(lamp_addon, bl_scene):
     lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
     assert _lens_ior_input(lamp_addon, bl_scene).default_value == pytest.approx(1.6)
     assert lamp_addon.design_builder.is_up_to_date(bl_scene)
+
+
+def test_the_first_build_keeps_a_view_that_shows_the_body_and_frames_one_that_does_not(lamp_addon, startup):
+    import bpy
+
+    scene = _baseline()
+    lamp_addon.design_properties.scene_to_design(startup, scene)
+    assert lamp_addon.render_setup.design_view_shows_body(startup)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    seen = lamp_addon.render_camera.scene_for_render(startup)["camera"]
+    np.testing.assert_allclose(seen["position"], scene["camera"]["position"], atol=1e-3)  # the preset's view
+    np.testing.assert_allclose(seen["target"], scene["camera"]["target"], atol=1e-3)
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    startup = bpy.context.scene
+    close = {**scene, "camera": {**scene["camera"], "position": [60.0, -150.0, 20.0]}}  # too close to hold the body
+    lamp_addon.design_properties.scene_to_design(startup, close)
+    assert not lamp_addon.render_setup.design_view_shows_body(startup)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    assert rims_in_image(lamp_addon, startup) == [True]
+    seen = lamp_addon.render_camera.scene_for_render(startup)["camera"]
+    assert lamp_addon.render_setup.design_view_shows_body(startup)  # the design's fields follow the framing
+    direction = np.subtract(seen["target"], seen["position"])
+    wanted = np.subtract(close["camera"]["target"], close["camera"]["position"])
+    cosine = direction @ wanted / np.linalg.norm(direction) / np.linalg.norm(wanted)
+    assert cosine > 0.999  # framed from the design's own direction
