@@ -39,7 +39,7 @@ class LAMP_OT_exposure_from_design(DesignOperator, bpy.types.Operator):
         render_setup.follow_design_exposure(context.scene, force=True)
         settings = context.scene.view_settings
         self.report({"INFO"}, f"Exposure {settings.exposure:+.1f} EV ({settings.view_transform}): the lit lens "
-                              "shows its cut pattern; builds keep it at the design's until you set your own")
+                              "shows its cut pattern; Build Lamp keeps it at the design's until you set your own")
         return {"FINISHED"}
 
 

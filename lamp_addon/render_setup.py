@@ -12,9 +12,10 @@ more times display white) is a flat pale disk under AgX. So the first build of a
 - **engine**: Lamp Tracer, when the scene still renders with EEVEE (the engine of a new file): F12
   and the viewport's Rendered shading then show the paper's model. Another engine is a choice.
 - **exposure**: the scene's exposure (Color Management) is set to the design's automatic exposure
-  (``image_view.design_exposure``), when it is still 0 (the default). Later builds keep it at the
-  design's exposure (a brighter bulb gets a lower exposure) for as long as it holds the value the
-  add-on set; once the user sets their own, it is theirs.
+  (``image_view.design_exposure``), when it is still 0 (the default). Each later Build Lamp keeps it
+  at the design's exposure (a brighter bulb gets a lower exposure) for as long as it holds the value
+  the add-on set; once the user sets their own, it is theirs. Auto Build's builds leave it: the
+  picture is not re-exposed at every step of a drag.
 
 The scene remembers that it was set up (``SETUP_KEY``), so a camera or an engine the user chose
 afterwards is never changed again by a build.
