@@ -214,11 +214,13 @@ def running() -> CompareRun | None:
 
 
 def needs_build(bl_scene) -> bool:
-    """Whether Compare must build the lamp before rendering: the one place that decides it.
+    """Whether Compare must build the lamp before rendering, so that Cycles renders what the tracer
+    renders: when the objects are not up to date with the design (not built, out of date, a preview
+    lens, a part deleted). Objects that are up to date are rendered as they are, with the
+    designer's edits."""
+    from . import design_builder
 
-    Always, for now: the objects are rebuilt from the design so that Cycles renders what the tracer
-    renders. (Once the builder can tell that the objects are up to date, this is where to ask it.)"""
-    return True
+    return not design_builder.is_up_to_date(bl_scene)
 
 
 def _in_design(ob) -> bool:

@@ -13,11 +13,12 @@ import bpy
 
 from ..core_tracer.scene import spec
 from ..core_tracer.scene.validate import SceneError
-from . import design_properties, render_camera
+from . import design_properties, render_camera, render_setup
 from .convert.layout import design_with_new_lamp, refusal_of_new_lamp, with_new_lamp_unchecked
+from .design_operator import DesignOperator
 
 
-class LAMP_OT_lamp_add(bpy.types.Operator):
+class LAMP_OT_lamp_add(DesignOperator, bpy.types.Operator):
     bl_idname = "lamp.lamp_add"
     bl_label = "Add Lamp"
     bl_description = (f"Add a copy of the active lamp right of the others (at most {spec.MAX_LAMPS} lamps; the "
@@ -25,21 +26,14 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
-    def poll(cls, context):
-        if not design_properties.poll_design(cls, context):
-            return False
-        refusal = _add_refusal(context.scene)
-        if refusal is not None:
-            cls.poll_message_set(refusal)
-            return False
-        return True
+    def refusal(cls, context):
+        return _add_refusal(context.scene)
 
     def execute(self, context):
         design = context.scene.lamp_design
-        refusal = _add_refusal(context.scene)
+        refusal = self.refusal(context)
         if refusal is not None:
-            self.report({"ERROR"}, refusal)
-            return {"CANCELLED"}
+            return self.cancelled(refusal)
         doc = design_properties.design_document(context.scene)
         try:
             doc = design_with_new_lamp(doc, design.active_lamps_index)
@@ -50,6 +44,10 @@ class LAMP_OT_lamp_add(bpy.types.Operator):
         design.body.size = doc["body"]["size"]
         design.active_lamps_index = len(design.lamps) - 1
         render_camera.keep_framed(context.scene)
+        if len(design.lamps) == 1 and design.auto_build and not render_setup.is_set_up(context.scene):
+            # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now.
+            news = render_setup.set_up(context.scene)
+            self.report({"INFO"}, "Added the first lamp" + render_setup.news_text(news))
         return {"FINISHED"}
 
 
@@ -71,24 +69,20 @@ def _add_refusal(bl_scene) -> str | None:
     return _refusal_memo["refusal"]
 
 
-class LAMP_OT_lamp_remove(bpy.types.Operator):
+class LAMP_OT_lamp_remove(DesignOperator, bpy.types.Operator):
     bl_idname = "lamp.lamp_remove"
     bl_label = "Remove Lamp"
     bl_description = "Remove the selected lamp from the design"
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
-    def poll(cls, context):
-        if not design_properties.poll_design(cls, context):
-            return False
+    def refusal(cls, context):
         design = context.scene.lamp_design
         if not 0 <= design.active_lamps_index < len(design.lamps):
-            cls.poll_message_set("No lamp is selected")
-            return False
+            return "No lamp is selected"
         if len(design.lamps) <= 1:
-            cls.poll_message_set("A design needs at least one lamp")
-            return False
-        return True
+            return "A design needs at least one lamp"
+        return None
 
     def execute(self, context):
         design = context.scene.lamp_design
@@ -99,7 +93,7 @@ class LAMP_OT_lamp_remove(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class LAMP_OT_build(bpy.types.Operator):
+class LAMP_OT_build(DesignOperator, bpy.types.Operator):
     bl_idname = "lamp.build"
     bl_label = "Build Lamp"
     bl_description = ("Build the design as objects under the \"Lamp Design\" root object, updating the previous "
@@ -107,16 +101,12 @@ class LAMP_OT_build(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
-    def poll(cls, context):
-        if not design_properties.poll_design(cls, context):
-            return False
+    def refusal(cls, context):
         if context.mode != "OBJECT":
-            cls.poll_message_set("Switch to Object Mode first")
-            return False
+            return "Switch to Object Mode first"
         if not context.scene.lamp_design.lamps:
-            cls.poll_message_set("Add a lamp first")
-            return False
-        return True
+            return "Add a lamp first"
+        return None
 
     def execute(self, context):
         from . import design_builder
@@ -124,14 +114,14 @@ class LAMP_OT_build(bpy.types.Operator):
         try:
             scene = design_properties.design_to_scene(context.scene)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
+            return self.cancelled(e)
         report = design_builder.build_lamp(context.scene, scene)
-        camera_news = render_camera.camera_after_build(context.scene)
+        render_camera.sync_view(context.scene)
+        news = render_setup.set_up(context.scene)
         level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
         self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
                              f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)"
-                             + (f"; {camera_news}" if camera_news else ""))
+                             + render_setup.news_text(news))
         if report.not_driven:
             self.report({"WARNING"}, f"Not following the design (your edits kept): {'; '.join(report.not_driven)}")
         return {"FINISHED"}

@@ -15,10 +15,11 @@ from __future__ import annotations
 import bpy
 
 from ..core_tracer.scene.validate import SceneError
-from . import design_panels, design_properties, image_view, render_camera
+from . import design_panels, render_camera, render_setup
+from .design_operator import DesignOperator
 
 
-class LAMP_OT_exposure_from_design(bpy.types.Operator):
+class LAMP_OT_exposure_from_design(DesignOperator, bpy.types.Operator):
     """Set the scene's exposure so the lit lens shows its cut pattern instead of a flat disk (measured
     on a small render of the design from the scene camera)"""
 
@@ -27,24 +28,18 @@ class LAMP_OT_exposure_from_design(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}  # changes the scene's colour management
 
     @classmethod
-    def poll(cls, context):
-        if not design_properties.poll_design(cls, context):
-            return False
-        if context.scene.camera is None:
-            cls.poll_message_set("The scene has no camera to measure the design from")
-            return False
-        return True
+    def refusal(cls, context):
+        return "The scene has no camera to measure the design from" if context.scene.camera is None else None
 
     def execute(self, context):
         try:
-            scene = render_camera.scene_for_render(context.scene)
+            render_camera.scene_for_render(context.scene)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
-        exposure = image_view.design_exposure(scene)
-        context.scene.view_settings.exposure = exposure
-        view = context.scene.view_settings.view_transform
-        self.report({"INFO"}, f"Exposure {exposure:+.1f} EV ({view}): the lit lens shows its cut pattern")
+            return self.cancelled(e)
+        render_setup.follow_design_exposure(context.scene, force=True)
+        settings = context.scene.view_settings
+        self.report({"INFO"}, f"Exposure {settings.exposure:+.1f} EV ({settings.view_transform}): the lit lens "
+                              "shows its cut pattern; Build Lamp keeps it at the design's until you set your own")
         return {"FINISHED"}
 
 

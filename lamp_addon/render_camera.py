@@ -39,10 +39,12 @@ import bpy
 from . import design_panels, design_properties, design_root
 from .convert import camera as cm
 from .convert import units
+from .design_operator import DesignOperator
 
 MM_PER_BU = units.MM_PER_BU
 CAMERA_NAME = "Lamp Camera"
 LAMP_CAMERA_KEY = "lamp_camera"  # custom property marking the camera the add-on made (found by it, not by name)
+CARRIED_KEY = "lamp_carried"  # the Lamp Camera was parented to the design's root once (``carry_with_root``)
 LINK_KEY = "lamp_view_link"  # scene custom property: the view last seen in the design and in Blender
 
 _FIT_TO_BLENDER = {"auto": "AUTO", "horizontal": "HORIZONTAL", "vertical": "VERTICAL"}
@@ -232,6 +234,7 @@ def ensure_lamp_camera(bl_scene, *, frame: bool = False) -> tuple[object, str]:
     ob = bpy.data.objects.new(CAMERA_NAME, data)
     ob[LAMP_CAMERA_KEY] = True
     bl_scene.collection.objects.link(ob)
+    carry_with_root(bl_scene, ob)
     previous = bl_scene.camera
     bl_scene.camera = ob
     _, image = _design_view(bl_scene)
@@ -246,16 +249,22 @@ def ensure_lamp_camera(bl_scene, *, frame: bool = False) -> tuple[object, str]:
     return ob, what
 
 
-def camera_after_build(bl_scene) -> str:
-    """What Build does about the camera, for its report: a scene without a camera gets the Lamp Camera
-    (at the design's view, which ``keep_framed`` keeps framed); a camera of the user's stays the scene
-    camera, and the report says how to see the lamp framed."""
-    if bl_scene.camera is None:
-        return ensure_lamp_camera(bl_scene)[1]
-    if not is_lamp_camera(bl_scene.camera):
-        return f'rendering through your "{bl_scene.camera.name}"; Frame Lamp shows the lamp through the Lamp Camera'
-    sync_view(bl_scene)
-    return ""
+def carry_with_root(bl_scene, ob) -> bool:
+    """Parent the Lamp Camera ``ob`` to the design's root, where it is in the world, so that moving the
+    root (or parenting it to a car body) carries the lamp's own view along: the lamp stays framed and
+    the design's camera, which is in the root's space, stays valid. Only a camera without a parent is
+    attached, and only once (one the user parented elsewhere, or took off the root, stays so).
+    Returns whether it was attached."""
+    if ob.get(CARRIED_KEY) or ob.parent is not None or not is_lamp_camera(ob):
+        return False
+    root = design_root.find_root(bl_scene)
+    if root is None:
+        return False
+    world = ob.matrix_world.copy()
+    ob.parent = root
+    ob.matrix_world = world
+    ob[CARRIED_KEY] = True
+    return True
 
 
 def _push_design(bl_scene, ob) -> None:
@@ -428,6 +437,8 @@ def _on_depsgraph_update(scene, depsgraph) -> None:
     if ob is not None:
         watched |= {ob.as_pointer(), ob.data.as_pointer()}
     if any(u.id.original.as_pointer() in watched for u in depsgraph.updates):
+        if ob is not None and not ob.get(CARRIED_KEY) and not _syncing:
+            carry_with_root(scene, ob)  # the first build by Auto Build made the root the camera goes with
         _sync_quietly(scene)
 
 
@@ -457,7 +468,7 @@ def _on_load_post(*_args) -> None:
 # Operators and the camera area of the panel
 
 
-class LAMP_OT_frame_design(bpy.types.Operator):
+class LAMP_OT_frame_design(DesignOperator, bpy.types.Operator):
     """Point the Lamp Camera at the whole lamp body with a margin, from the current viewing direction
     (the 3D View's when used there, else the Lamp Camera's own); makes it the scene camera.
     A camera of yours is never moved"""
@@ -465,10 +476,6 @@ class LAMP_OT_frame_design(bpy.types.Operator):
     bl_idname = "lamp.frame_design"
     bl_label = "Frame Lamp"
     bl_options = {"REGISTER", "UNDO"}
-
-    @classmethod
-    def poll(cls, context):
-        return design_properties.poll_design(cls, context)
 
     def execute(self, context):
         return self._frame(context, None)
@@ -484,8 +491,7 @@ class LAMP_OT_frame_design(bpy.types.Operator):
         bl_scene = context.scene
         ob, made = ensure_lamp_camera(bl_scene)
         if ob.data.type not in {"PERSP", "ORTHO"}:
-            self.report({"ERROR"}, f'"{ob.name}" is a panoramic camera; set it to Perspective or Orthographic')
-            return {"CANCELLED"}
+            return self.cancelled(f'"{ob.name}" is a panoramic camera; set it to Perspective or Orthographic')
         view = scene_camera_to_dict(bl_scene, ob)
         if view_axes is not None:  # the 3D View's axes in the design's model space
             model = design_root.world_from_design(bl_scene).to_3x3().inverted() @ view_axes
@@ -499,7 +505,7 @@ class LAMP_OT_frame_design(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class LAMP_OT_camera_to_design(bpy.types.Operator):
+class LAMP_OT_camera_to_design(DesignOperator, bpy.types.Operator):
     """Copy your scene camera's view and the render size into the design's camera fields (what a saved
     preset records); the Lamp Camera takes that view. Your camera is not changed"""
 
@@ -508,16 +514,12 @@ class LAMP_OT_camera_to_design(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
-    def poll(cls, context):
-        if not design_properties.poll_design(cls, context):
-            return False
+    def refusal(cls, context):
         if context.scene.camera is None:
-            cls.poll_message_set("The scene has no camera")
-            return False
+            return "The scene has no camera"
         if is_lamp_camera(context.scene.camera):
-            cls.poll_message_set("The scene camera is the Lamp Camera: the design's fields already are its view")
-            return False
-        return True
+            return "The scene camera is the Lamp Camera: the design's fields already are its view"
+        return None
 
     def execute(self, context):
         from ..core_tracer.scene.validate import SceneError
@@ -526,8 +528,7 @@ class LAMP_OT_camera_to_design(bpy.types.Operator):
         try:
             seen = scene_for_render(bl_scene)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
+            return self.cancelled(e)
         sync_view(bl_scene)
         _write_design_camera(bl_scene, seen["camera"])
         bl_scene.lamp_design.image.width, bl_scene.lamp_design.image.height = (

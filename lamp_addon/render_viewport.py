@@ -39,6 +39,18 @@ def _rows(matrix) -> list[list[float]]:
     return [list(row) for row in matrix]
 
 
+def invalid_design_text(bl_scene: bpy.types.Scene, error: SceneError) -> str:
+    """Why the viewport shows nothing, in the panel's words: the design's state, the state of its
+    objects, and the field to change with its allowed range (``design_validity``)."""
+    from . import design_validity
+
+    if not bl_scene.lamp_design.lamps:
+        return "no lamp yet: Add Lamp (Lamp tab, Lamps) or apply a preset"
+    built = "objects as last built" if design_root.find_root(bl_scene) is not None else "not built"
+    problem = design_validity.Problem(error.path, error.message)
+    return f"design not valid ({built}); {problem.label()}: {problem.message}"
+
+
 class ViewportSession:
     """What one viewport engine keeps between redraws: the design, the preview, the texture."""
 
@@ -67,7 +79,7 @@ class ViewportSession:
                                                             image=_STAND_IN_IMAGE)
             self.error = None
         except SceneError as e:
-            self.design, self.error = None, str(e)
+            self.design, self.error = None, invalid_design_text(bl_scene, e)
 
     def sync(self, bl_scene: bpy.types.Scene, width: int, height: int, window_matrix, view_matrix) -> None:
         """The view of a region of ``width`` x ``height`` with these matrices: restart the preview

@@ -232,6 +232,7 @@ def test_smooth_caps_with_sharp_creases(lamp_addon, bl_scene, scene_mod):
 
 def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     import bpy
+    from mathutils import Matrix
 
     cam_data = bpy.data.cameras.new("My Camera")
     cam = bpy.data.objects.new("My Camera", cam_data)
@@ -256,7 +257,10 @@ def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     assert all(m.users > 0 for m in bpy.data.materials)  # no orphan materials
     assert len(bpy.data.materials) == 6  # body; lens, side wall, reflector, bulb, socket of one lamp
     assert len(bpy.data.lights) == 1 and len(bpy.data.worlds) == 1
-    assert bl_scene.camera == cam and cam.name in bl_scene.objects  # the user's camera is kept
+    # The user's camera object is kept as it was; the first build made the Lamp Camera the scene camera
+    # (test_addon_first_build.py: a camera the user picks afterwards stays the scene camera).
+    assert cam.name in bl_scene.objects and cam.matrix_world == Matrix.Identity(4) and cam.data == cam_data
+    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)
 
 
 def test_two_scenes_keep_their_own_lamps(lamp_addon, bl_scene, scene_mod):

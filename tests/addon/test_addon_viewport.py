@@ -347,13 +347,23 @@ def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_s
 
 
 def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_scene):
+    """The viewport's text line gives the design's state, its objects' state and the field to change."""
     session = _design_session(lamp_addon, bl_scene)
     bl_scene.lamp_design.lamps[0].bulb.radius = 1000.0  # far outside its reflector
     session.update(bl_scene)
     ob = _blender_camera("PERSP")
     session.sync(bl_scene, 64, 48, _window_matrix(ob, 64, 48), ob.matrix_world.inverted())
     assert session.preview.generation == 0 and session.preview.frame() is None
-    assert session.status().startswith("Lamp Tracer: ") and "bulb" in session.status()
+    status = session.status()
+    assert status.startswith("Lamp Tracer: design not valid (not built); Lamp 1 Bulb: Radius: "), status
+    assert "mm" in status.split("Radius: ", 1)[1]  # the allowed range, in mm
+
+    lamp_addon.design_builder.build_lamp(bl_scene, _four_lamps())  # built before the bad edit
+    session.update(bl_scene)
+    assert session.status().startswith("Lamp Tracer: design not valid (objects as last built); Lamp 1 Bulb")
+    bl_scene.lamp_design.lamps.clear()
+    session.update(bl_scene)
+    assert session.status() == "Lamp Tracer: no lamp yet: Add Lamp (Lamp tab, Lamps) or apply a preset"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -392,54 +402,15 @@ def gpu_context(bl_scene):
     return gpu
 
 
-def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) -> np.ndarray:
+def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) -> dict:
     """What the engine's viewport path draws for this view, read back from an offscreen: the
     session as view_draw drives it (update, sync, both stages, draw_frame), drawn by a real engine
-    instance (Blender makes engine instances only to render, so a subclass draws from render())."""
+    instance (``tools/make_docs_images.draw_viewport``, which the docs' picture is made with)."""
     import bpy
-    import gpu
-    from mathutils import Matrix
 
-    offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
-    out = {}
+    from tools.make_docs_images import draw_viewport
 
-    class DrawProbe(lamp_addon.render_engine.LampTracerEngine):
-        bl_idname = "LAMP_TRACER_DRAW_PROBE"
-        bl_label = "Lamp Tracer draw probe"
-
-        def render(self, depsgraph):
-            scene = depsgraph.scene
-            session = lamp_addon.render_viewport.ViewportSession(self, in_background=False)
-            session.update(scene)
-            session.sync(scene, width, height, window, view)
-            while session.preview.step():
-                pass
-            out["status"] = session.status()
-            with offscreen.bind():
-                gpu.state.active_framebuffer_get().clear(color=(0.0, 0.0, 0.0, 0.0))
-                with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
-                    # Pixel coordinates, as Blender sets them up before view_draw
-                    gpu.matrix.load_matrix(Matrix.Identity(4))
-                    gpu.matrix.load_projection_matrix(Matrix.Identity(4))
-                    gpu.matrix.translate((-1.0, -1.0))
-                    gpu.matrix.scale((2.0 / width, 2.0 / height))
-                    session.draw_frame(self, scene, width, height)
-                out["pixels"] = np.array(offscreen.texture_color.read().to_list(), np.float32)
-            out["scene"] = session.scene
-
-    bpy.utils.register_class(DrawProbe)
-    camera = bpy.data.objects.new("F12", bpy.data.cameras.new("F12"))
-    bl_scene.collection.objects.link(camera)
-    bl_scene.camera = camera
-    engine = bl_scene.render.engine
-    try:
-        bl_scene.render.engine = DrawProbe.bl_idname
-        bl_scene.render.resolution_x, bl_scene.render.resolution_y = 4, 4
-        bpy.ops.render.render()
-    finally:
-        bl_scene.render.engine = engine
-        bpy.utils.unregister_class(DrawProbe)
-        offscreen.free()
+    out = draw_viewport(bpy, lamp_addon, bl_scene, width, height, window, view)
     assert out["status"] == "Lamp Tracer: full resolution"
     return out
 
