@@ -25,7 +25,7 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 from ..core_tracer import fileio
 from ..core_tracer.library import presets as P
 from ..core_tracer.scene.validate import SceneError, normalize, scene_to_json
-from . import design_properties, design_root, preset_library, render_camera
+from . import design_properties, design_root, preset_library, render_camera, render_setup
 
 # Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
 # the camera object that differs from the design's by less than this, relative to the view's size, is
@@ -135,6 +135,10 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict) -> str:
     design = design_properties.design_to_scene(bl_scene)
     view = show_view(bl_scene, design)
     if not any(ob.get(design_root.PART_KEY) for ob in bl_scene.objects):
+        if bl_scene.lamp_design.auto_build and not render_setup.is_set_up(bl_scene):
+            # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now
+            # (the Lamp Camera at the preset's view, Lamp Tracer, the design's exposure), as the first Add Lamp does.
+            view += render_setup.news_text(render_setup.set_up(bl_scene))
         return view
     from . import design_builder
 

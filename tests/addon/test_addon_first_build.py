@@ -227,3 +227,20 @@ def test_the_first_build_keeps_a_view_that_shows_the_body_and_frames_one_that_do
     wanted = np.subtract(close["camera"]["target"], close["camera"]["position"])
     cosine = direction @ wanted / np.linalg.norm(direction) / np.linalg.norm(wanted)
     assert cosine > 0.999  # framed from the design's own direction
+
+
+def test_a_preset_applied_in_the_startup_file_sets_the_scene_up(lamp_addon, startup):
+    """A new user's other first step: a built-in preset applied in the startup file (Auto Build makes
+    its lamp a moment later) shows the preset's view through the Lamp Camera, with Lamp Tracer and the
+    design's exposure; the startup Camera object is untouched."""
+    import bpy
+
+    camera_before = _object_state(startup.objects["Camera"])
+    wm = bpy.context.window_manager
+    bpy.ops.lamp.preset_refresh()
+    wm.lamp_presets_index = next(i for i, item in enumerate(wm.lamp_presets) if item.file.endswith(BASELINE.name))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    assert lamp_addon.render_camera.is_lamp_camera(startup.camera)
+    assert startup.render.engine == "LAMP_TRACER" and startup.view_settings.exposure < -1.0
+    assert rims_in_image(lamp_addon, startup) == [True]
+    assert _object_state(startup.objects["Camera"]) == camera_before
