@@ -21,7 +21,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from core_tracer.scene.validate import read_json  # noqa: E402
+from core_tracer.scene.reading import read_json  # noqa: E402
 from core_tracer.study import definition as st  # noqa: E402
 from core_tracer.study import run as study_run  # noqa: E402
 from core_tracer.study import sheet as study_sheet  # noqa: E402

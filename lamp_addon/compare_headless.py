@@ -11,7 +11,8 @@ import sys
 import bpy
 
 from ..core_tracer.images import display, imageio
-from ..core_tracer.scene.validate import SceneError, load_scene
+from ..core_tracer.scene.reading import SceneError
+from ..core_tracer.scene.validate import load_scene
 from . import compare_ops, design_properties, render_camera
 
 CHANNELS = ("R", "G", "B")

@@ -24,7 +24,8 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..core_tracer import fileio
 from ..core_tracer.library import presets as P
-from ..core_tracer.scene.validate import SceneError, normalize, scene_to_json
+from ..core_tracer.scene.reading import SceneError, scene_to_json
+from ..core_tracer.scene.validate import normalize
 from . import design_properties, design_root, preset_library, render_camera
 
 # Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from

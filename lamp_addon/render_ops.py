@@ -20,7 +20,7 @@ import bpy
 import numpy as np
 
 from ..core_tracer.images import display
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from . import design_panels, image_view, jobs, render_camera
 
 IMAGE_NAME = "Lamp Tracer"

@@ -22,7 +22,7 @@ from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
 from ..core_tracer.library import presets as P
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from ..core_tracer.study import definition as st
 from . import design_properties, image_view, jobs, study_settings
 from .study_settings import last_study, sheet_image

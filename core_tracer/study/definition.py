@@ -44,18 +44,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from .. import budget
-from ..safe_text import has_surrogate, show_key
 from ..scene import spec as S
-from ..scene.validate import (
-    SceneError,
-    check_number,
-    parse_json_text,
-    parse_scene,
-    read_json,
-    scene_to_json,
-    show_value,
-    use_form,
-)
+from ..scene.derived import use_form
+from ..scene.reading import SceneError, parse_json_text, read_json, scene_to_json
+from ..scene.safe_text import has_surrogate, show_key
+from ..scene.validate import check_number, parse_scene, show_value
 
 SCHEMA = "lamp-study/1"
 STUDY_ATTRIBUTE = "lamp:study"  # the header attribute of a contact sheet that holds the study

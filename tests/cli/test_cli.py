@@ -16,7 +16,7 @@ from helpers import BASELINE, ROOT, assert_bad_input, baseline_doc, run_cli
 
 from core_tracer import PASS_NAMES
 from core_tracer.images import imageio
-from core_tracer.scene import validate as scene
+from core_tracer.scene.validate import load_scene
 
 # ---------------------------------------------------------------------------------------------
 # Bad scenes: every case gives exit 2, one line naming the field, the value and the range, and
@@ -186,7 +186,7 @@ def test_render_exr_with_passes(tmp_path):
     assert image.shape == (24, 40, 3)
     assert np.isfinite(image).all() and (image >= 0).all() and image.max() > 0
     assert sc["image"] == {"width": 40, "height": 24}
-    expected = scene.load_scene(BASELINE)
+    expected = load_scene(BASELINE)
     expected["image"] = {"width": 40, "height": 24}
     assert sc["lamps"] == expected["lamps"] and sc["body"] == expected["body"]
     assert sorted(p.name for p in passes.iterdir()) == sorted(f"{n}.exr" for n in PASS_NAMES)

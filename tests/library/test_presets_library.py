@@ -19,7 +19,8 @@ from hostile_presets import leaves, make_hostile_folder
 from core_tracer import fileio
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
-from core_tracer.scene.validate import SceneError, parse_scene, read_json, scene_to_json
+from core_tracer.scene.reading import SceneError, read_json, scene_to_json
+from core_tracer.scene.validate import parse_scene
 
 BUILTIN = ROOT / "presets"
 

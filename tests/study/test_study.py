@@ -18,8 +18,9 @@ from helpers import BASELINE, FOUR_LAMPS, ROOT, baseline_doc, run_cli
 from core_tracer import render
 from core_tracer.cli import main as cli
 from core_tracer.images import display
-from core_tracer.scene import validate as scene
-from core_tracer.scene.validate import SceneError
+from core_tracer.scene.derived import lens_absorption
+from core_tracer.scene.reading import SceneError, read_json
+from core_tracer.scene.validate import load_scene, parse_scene
 from core_tracer.study import definition as st
 from core_tracer.study import run as study_run
 from core_tracer.study import sheet as study_sheet
@@ -72,13 +73,13 @@ def test_variants_are_row_major_with_the_edited_values():
         lamp = v.scene["lamps"][0]
         assert (lamp["lens"]["ior"], lamp["cuts"]["height"]) == v.values
     # The base is the design at the study's size, and everything else in a variant equals the base.
-    assert s.base == scene.parse_scene({**baseline_doc(), "image": {"width": 256, "height": 256}})
+    assert s.base == parse_scene({**baseline_doc(), "image": {"width": 256, "height": 256}})
     other = s.variants[5].scene
     assert other["body"] == s.base["body"] and other["camera"] == s.base["camera"]
 
 
 def test_lamp_index_edits_one_lamp_and_no_index_edits_all():
-    base = scene.read_json(FOUR_LAMPS)
+    base = read_json(FOUR_LAMPS)
     one = st.Study.build(base, [st.parse_vary("lamps[2].lens.ior=1.6")])
     every = st.Study.build(base, [st.parse_vary("lens.ior=1.6")])
     iors = [lamp["lens"]["ior"] for lamp in one.variants[0].scene["lamps"]]
@@ -95,7 +96,7 @@ def test_lens_colour_replaces_absorption():
     assert "absorption" not in lens
     assert lens["transmitted_color"] == [0.9, 0.5, 0.05]
     assert lens["reference_thickness"] == lens["thickness"]
-    assert scene.lens_absorption(lens) == pytest.approx([-np.log(c) / 3.0 for c in (0.9, 0.5, 0.05)])
+    assert lens_absorption(lens) == pytest.approx([-np.log(c) / 3.0 for c in (0.9, 0.5, 0.05)])
     # One component: the others keep the colour the base's absorption gives through its thickness.
     s = st.Study.build(baseline_doc(), [st.parse_vary("lens.transmitted_color[1]=0.2,0.4")])
     base_a = s.base["lamps"][0]["lens"]["absorption"]
@@ -112,13 +113,13 @@ def test_a_default_camera_frames_the_body_at_the_study_size():
     doc = baseline_doc()
     del doc["camera"]
     wide = st.Study.build(doc, [st.parse_vary("lens.ior=1.5")], (96, 32))
-    expected = scene.parse_scene({**doc, "image": {"width": 96, "height": 32}})
-    assert wide.base["camera"] == expected["camera"] != scene.parse_scene(doc)["camera"]
+    expected = parse_scene({**doc, "image": {"width": 96, "height": 32}})
+    assert wide.base["camera"] == expected["camera"] != parse_scene(doc)["camera"]
     assert wide.variants[0].scene["image"] == {"width": 96, "height": 32}
 
 
 def test_two_axes_on_one_field_differ_by_lamp_or_component():
-    base = scene.read_json(FOUR_LAMPS)
+    base = read_json(FOUR_LAMPS)
     s = st.Study.build(base, [st.parse_vary("lamps[0].lens.ior=1.5,1.6"), st.parse_vary("lamps[1].lens.ior=1.4,1.7")])
     assert [[lamp["lens"]["ior"] for lamp in v.scene["lamps"][:2]] for v in s.variants] == [
         [1.5, 1.4], [1.6, 1.4], [1.5, 1.7], [1.6, 1.7]]
@@ -155,7 +156,7 @@ def test_variants_saved_as_presets(tmp_path):
     paths = s.save_variants(tmp_path / "variants")
     assert [Path(p).name for p in paths] == [f"variant-0{i}.json" for i in range(4)]
     for v, path in zip(s.variants, paths, strict=True):
-        loaded = scene.load_scene(path)
+        loaded = load_scene(path)
         assert loaded["name"] == s.variant_name(v.index)
         assert "lens.ior=" in loaded["name"] and "cuts.height=" in loaded["name"]
         assert {**loaded, "name": v.scene["name"]} == v.scene
@@ -494,6 +495,6 @@ def test_cli_lists_the_parameters():
 
 
 def test_one_lamps_centre_is_a_parameter():
-    base = scene.load_scene(FOUR_LAMPS)
+    base = load_scene(FOUR_LAMPS)
     s = st.Study.build(base, [st.parse_vary("lamps[0].center=-185/0,-180/5")])
     assert [v.scene["lamps"][0]["center"] for v in s.variants] == [[-185.0, 0.0], [-180.0, 5.0]]
