@@ -329,6 +329,7 @@ class Study:
     axes: tuple[Axis, ...]
     size: tuple[int, int]  # (width, height) of each variant image
     title: str = ""
+    variants: tuple[Variant, ...] = ()  # built and checked by ``from_doc``, row-major
 
     # -- construction ------------------------------------------------------------------------
 
@@ -372,9 +373,7 @@ class Study:
             shape = " x ".join(str(len(a.values)) for a in axes)
             raise SceneError("axes", f"{shape} = {count} variants; allowed at most {MAX_VARIANTS}")
         budget.check_study_pixels(size, count)
-        study = cls(base, axes, size, title)
-        object.__setattr__(study, "_variants", study._build_variants())
-        return study
+        return cls(base, axes, size, title, _build_variants(base, axes))
 
     @classmethod
     def from_json(cls, text: str, name: str = "") -> Study:
@@ -405,31 +404,7 @@ class Study:
             doc["title"] = title
         return cls.from_doc(doc)
 
-    def _build_variants(self) -> tuple[Variant, ...]:
-        columns = len(self.axes[0].values)
-        out = []
-        grids = [range(len(a.values)) for a in self.axes]
-        # Row-major, axis 1 varying fastest: itertools.product varies the last factor fastest.
-        for position in itertools.product(*reversed(grids)):
-            index_per_axis = tuple(reversed(position))
-            values = tuple(a.values[k] for a, k in zip(self.axes, index_per_axis, strict=True))
-            column = index_per_axis[0]
-            row = index_per_axis[1] if len(self.axes) > 1 else 0
-            scene = copy.deepcopy(self.base)
-            for axis, value in zip(self.axes, values, strict=True):
-                apply_value(scene, axis.parameter, value)
-            try:
-                scene = parse_scene(scene)
-            except SceneError as e:
-                raise SceneError(e.path, f"{e.message} (in the variant {_setting(self.axes, values)})") from None
-            out.append(Variant(row * columns + column, column, row, values, scene))
-        return tuple(out)
-
     # -- queries ------------------------------------------------------------------------------
-
-    @property
-    def variants(self) -> tuple[Variant, ...]:
-        return self._variants  # type: ignore[attr-defined]
 
     @property
     def columns(self) -> int:
@@ -488,6 +463,28 @@ class Study:
             atomic_write_text(path, scene_to_json(self.variant_scene(v.index)))
             paths.append(path)
         return paths
+
+
+def _build_variants(base: dict, axes: tuple[Axis, ...]) -> tuple[Variant, ...]:
+    """Every variant of ``base`` along ``axes``, each scene checked (``SceneError`` names the variant)."""
+    columns = len(axes[0].values)
+    out = []
+    grids = [range(len(a.values)) for a in axes]
+    # Row-major, axis 1 varying fastest: itertools.product varies the last factor fastest.
+    for position in itertools.product(*reversed(grids)):
+        index_per_axis = tuple(reversed(position))
+        values = tuple(a.values[k] for a, k in zip(axes, index_per_axis, strict=True))
+        column = index_per_axis[0]
+        row = index_per_axis[1] if len(axes) > 1 else 0
+        scene = copy.deepcopy(base)
+        for axis, value in zip(axes, values, strict=True):
+            apply_value(scene, axis.parameter, value)
+        try:
+            scene = parse_scene(scene)
+        except SceneError as e:
+            raise SceneError(e.path, f"{e.message} (in the variant {_setting(axes, values)})") from None
+        out.append(Variant(row * columns + column, column, row, values, scene))
+    return tuple(out)
 
 
 def _setting(axes: tuple[Axis, ...], values: tuple[Any, ...]) -> str:
