@@ -1,4 +1,4 @@
-"""The time of a 6x6 design study (issue 5): target <= 30 s at 256x256 on a 2-core machine.
+"""The time of a 6x6 design study: target <= 30 s at 256x256 on a 2-core machine.
 
     .venv/bin/python benchmarks/bench_study.py [--preset FILE] [--size 256x256] [--workers N]
 

@@ -1,4 +1,4 @@
-"""Render with Lamp Tracer: the tracer into an image shown in an Image Editor (issue 3, item 6).
+"""Render with Lamp Tracer: the tracer into an image shown in an Image Editor.
 
 From the interface the tracer runs on a worker thread (numpy releases the GIL) while a modal
 operator polls it on a timer: the image fills in band by band, the progress shows in the

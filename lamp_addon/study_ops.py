@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Running a design study from Blender and using its contact sheet (issue 5).
+"""Running a design study from Blender and using its contact sheet.
 
 From the interface the variants render in worker processes (``core_tracer.study_run``) while a
 modal operator polls them on a timer: the interface keeps responding, the progress shows in the

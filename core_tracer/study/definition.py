@@ -1,4 +1,4 @@
-"""Design studies (issue 5): one design turned into a grid of variants.
+"""Design studies: one design turned into a grid of variants.
 
 A *study* (``lamp-study/1``) varies one or two parameters of a base design, each over a list of
 values or over a range with a number of steps, at most ``MAX_VARIANTS`` variants in all::

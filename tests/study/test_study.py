@@ -1,4 +1,4 @@
-"""Design studies (issue 5): definitions, parallel rendering, cancel, contact sheets, the CLI."""
+"""Design studies: definitions, parallel rendering, cancel, contact sheets, the CLI."""
 
 from __future__ import annotations
 
