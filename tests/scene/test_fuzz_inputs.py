@@ -18,6 +18,7 @@ import re
 import subprocess
 import sys
 
+import helpers
 import pytest
 from helpers import ROOT
 from hypothesis import HealthCheck, assume, given, settings
@@ -289,9 +290,8 @@ def test_a_study_title_with_a_surrogate_is_refused(title):
 # The command line, in a subprocess (its real stdout and stderr encodings)
 
 
-def run_cli(*args, **kw) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT, capture_output=True,
-                          timeout=120, **kw)
+def run_cli(*args) -> subprocess.CompletedProcess:
+    return helpers.run_cli(*args, text=False)  # bytes: the test decodes stderr strictly
 
 
 def assert_refused(proc: subprocess.CompletedProcess, *needles: str) -> str:

@@ -5,15 +5,13 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import OpenImageIO as oiio
 import pytest
-from helpers import BASELINE, FOUR_LAMPS, ROOT, baseline_doc, run_cli
+from helpers import BASELINE, FOUR_LAMPS, baseline_doc, child_pids, process_gone, run_cli, signal_and_wait, start_cli_at
 
 from core_tracer import render
 from core_tracer.cli import main as cli
@@ -35,32 +33,6 @@ def two_by_two(size=SIZE) -> st.Study:
                                        {"parameter": "cuts.height", "range": [0.5, 2.0], "steps": 2}], size)
 
 
-
-
-def _children(pid: int) -> list[int]:
-    """Process ids whose parent is ``pid`` (Linux /proc)."""
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                stat = Path(f"/proc/{entry}/stat").read_text()
-            except OSError:
-                continue
-            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
-                out.append(int(entry))
-    return out
-
-
-def _gone(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    return False
-
-
-# ---------------------------------------------------------------------------------------------
-# The definition
 
 
 def test_variants_are_row_major_with_the_edited_values():
@@ -260,7 +232,7 @@ def test_cancel_stops_the_workers_and_removes_the_temporary_files():
     run = runs[0]
     assert 1 <= run.done < len(s)  # stopped mid-study
     assert len(state["pids"]) == 2
-    assert all(_gone(pid) for pid in state["pids"])
+    assert all(process_gone(pid) for pid in state["pids"])
     assert all(w.process.returncode is not None for w in run._pool)
     assert not os.path.exists(state["folder"])
 
@@ -278,7 +250,7 @@ def test_a_worker_that_dies_stops_the_study_with_an_error():
                 assert time.monotonic() < deadline
     finally:
         run.close()
-    assert all(_gone(pid) for pid in run.process_ids())
+    assert all(process_gone(pid) for pid in run.process_ids())
     assert not os.path.exists(folder)
 
 
@@ -442,28 +414,17 @@ def test_cli_study_of_a_missing_sheet_exits_2(tmp_path):
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
 def test_cli_ctrl_c_exits_130_and_writes_nothing(tmp_path):
     out = tmp_path / "sheet.png"
-    cmd = [sys.executable, "-m", "core_tracer", "study", str(BASELINE), "--vary", "lens.ior=1.4:1.6:8",
-           "--vary", "cuts.height=0.5:2:8", "-o", str(out), "--size", "128x128", "--workers", "2"]
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        # Wait until both workers run (the 64 variants then take far longer than this test waits).
-        deadline = time.monotonic() + 30
-        workers: list[int] = []
-        while len(workers) < 2 and time.monotonic() < deadline and proc.poll() is None:
-            time.sleep(0.1)
-            workers = _children(proc.pid)
-        time.sleep(0.5)
-        assert proc.poll() is None, proc.communicate()
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
+    args = ["study", BASELINE, "--vary", "lens.ior=1.4:1.6:8", "--vary", "cuts.height=0.5:2:8", "-o", out,
+            "--size", "128x128", "--workers", "2"]
+    # The signal lands once both workers have started, before the first variant is done.
+    proc = start_cli_at("study:started", tmp_path.parent / f"{tmp_path.name}-started", *args)
+    workers = child_pids(proc.pid)
+    _, err = signal_and_wait(proc, signal.SIGINT)
     assert proc.returncode == 130, err
     assert "Traceback" not in err
     assert list(tmp_path.iterdir()) == []
     assert len(workers) == 2
-    assert all(_gone(pid) for pid in workers)
+    assert all(process_gone(pid) for pid in workers)
 
 
 def test_study_run_driven_by_polling_like_a_modal_operator():
@@ -484,7 +445,7 @@ def test_study_run_driven_by_polling_like_a_modal_operator():
     assert fractions == sorted(fractions) and all(0 <= f <= 1 for f in fractions)
     for v, image in zip(s.variants, run.images, strict=True):
         assert np.array_equal(image, render(v.scene, 48, 48))
-    assert all(_gone(pid) for pid in run.process_ids())
+    assert all(process_gone(pid) for pid in run.process_ids())
     assert not os.path.exists(folder)
 
 
