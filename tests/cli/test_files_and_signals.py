@@ -24,7 +24,7 @@ from core_tracer import budget, fileio
 from core_tracer.cli import main as cli
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
-from core_tracer.scene import load_scene
+from core_tracer.scene.validate import load_scene
 from core_tracer.study import definition as st
 
 BASELINE = ROOT / "presets" / "paper-baseline.json"

@@ -24,9 +24,10 @@ from helpers import ROOT
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from core_tracer.scene import SceneError, parse_json_text, parse_scene
 from core_tracer.scene import spec as S
+from core_tracer.scene.reading import SceneError, parse_json_text
 from core_tracer.scene.safe_text import has_surrogate, printable
+from core_tracer.scene.validate import parse_scene
 from core_tracer.study import definition as study_mod
 
 BUILTIN = ROOT / "presets"
