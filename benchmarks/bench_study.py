@@ -1,4 +1,4 @@
-"""The time of a 6x6 design study (issue 5): target <= 30 s at 256x256 on a 2-core machine.
+"""The time of a 6x6 design study: target <= 30 s at 256x256 on a 2-core machine.
 
     .venv/bin/python benchmarks/bench_study.py [--preset FILE] [--size 256x256] [--workers N]
 
@@ -21,7 +21,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from core_tracer.scene.validate import read_json  # noqa: E402
+from core_tracer.scene.reading import read_json  # noqa: E402
 from core_tracer.study import definition as st  # noqa: E402
 from core_tracer.study import run as study_run  # noqa: E402
 from core_tracer.study import sheet as study_sheet  # noqa: E402

@@ -3,7 +3,7 @@ renders, the ray segments traced per second, and the peak memory of a 2048x2048 
 
     .venv/bin/python benchmarks/bench_tracer.py [--runs 5] [--preset presets/four-lamp-rear-combination.json]
 
-Targets (issue 2): <= 1.0 s at 512x512 on a 2-core machine; <= 1 GB peak memory at 2048x2048.
+Targets of the tracer's speed and memory: <= 1.0 s at 512x512 on a 2-core machine; <= 1 GB peak memory at 2048x2048.
 """
 
 from __future__ import annotations

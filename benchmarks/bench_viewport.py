@@ -5,7 +5,7 @@ the preset's own camera (the lamp fills the view) and from a three-quarter viewp
 
     .venv/bin/python benchmarks/bench_viewport.py [--runs 5] [--threads 2] [--size 1024x768]
 
-Targets (issue 10): first image <= 0.1 s; full resolution <= 0.4 s. Also prints the time of each
+Targets of the viewport preview: first image <= 0.1 s; full resolution <= 0.4 s. Also prints the time of each
 candidate coarse divisor, the figure the coarse stage's divisor is chosen from.
 """
 

@@ -4,7 +4,8 @@ Never imports bpy: the Blender add-on (``lamp_addon``) depends on this package, 
 """
 
 from .raytrace.tracer import PASS_NAMES, RenderCancelled, RenderResult, render, render_passes
-from .scene.validate import SceneError, load_scene, normalize, parse_scene, scene_to_json
+from .scene.reading import SceneError, scene_to_json
+from .scene.validate import load_scene, normalize, parse_scene
 
 __all__ = [
     "PASS_NAMES", "RenderCancelled", "RenderResult", "SceneError", "load_scene", "normalize", "parse_scene",

@@ -9,7 +9,7 @@ work starts, with the estimate and the budget in the message (README, "Memory an
 
 from __future__ import annotations
 
-from .scene.validate import SceneError
+from .scene.reading import SceneError
 
 MEMORY_BUDGET = 4 * 2**30  # bytes; README "Memory and time"
 BASE_BYTES = 160 * 2**20  # the interpreter, numpy and OpenImageIO loaded, the tracer's bands in flight

@@ -1,5 +1,5 @@
 """The headless main job: a preset rendered by the tracer and by Cycles, written side by side
-(issue 3, item 8). ``tools/compare_preset.py`` starts Blender (or the bpy module), enables the
+(the command-line comparison). ``tools/compare_preset.py`` starts Blender (or the bpy module), enables the
 extension and calls ``run``; this module is the part that needs the extension.
 """
 
@@ -11,7 +11,8 @@ import sys
 import bpy
 
 from ..core_tracer.images import display, imageio
-from ..core_tracer.scene.validate import SceneError, load_scene
+from ..core_tracer.scene.reading import SceneError
+from ..core_tracer.scene.validate import load_scene
 from . import compare_ops, design_properties, render_camera
 
 CHANNELS = ("R", "G", "B")

@@ -50,7 +50,7 @@ import bpy
 import numpy as np
 
 from ..core_tracer.images import display
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from . import design_panels, design_properties, image_view, jobs, render_camera
 from .convert.sheet import differences, shown_side_by_side, side_by_side
 from .render_engine import ENGINE_ID

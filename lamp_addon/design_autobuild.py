@@ -32,7 +32,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import bpy
 from bpy.app.handlers import persistent
 
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from . import design_builder, design_parts, design_properties, design_root
 
 TICK_SECONDS = 0.1

@@ -40,7 +40,8 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 from ..core_tracer.scene import functions
-from ..core_tracer.scene import validate as lamp_scene
+from ..core_tracer.scene.reading import SceneError
+from ..core_tracer.scene.validate import parse_scene
 from . import design_materials, design_parts, design_properties, design_root
 from .convert import meshes, units
 
@@ -115,8 +116,8 @@ def _current_digest(bl_scene: bpy.types.Scene) -> str | None:
     document = json.dumps(design_properties.design_document(bl_scene), sort_keys=True)
     if _last_design["document"] != document:
         try:
-            digest = design_digest(lamp_scene.parse_scene(json.loads(document)))
-        except lamp_scene.SceneError:
+            digest = design_digest(parse_scene(json.loads(document)))
+        except SceneError:
             digest = None
         _last_design.update(document=document, digest=digest)
     return _last_design["digest"]

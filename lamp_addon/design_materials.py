@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import bpy
 
-from ..core_tracer.scene import validate as lamp_scene
+from ..core_tracer.scene.derived import lens_absorption
 from .convert import cycles
 
 
@@ -99,7 +99,7 @@ def lens_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
         tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
         tree.links.new(vol.outputs["Volume"], out.inputs["Volume"])
     lens = lamp["lens"]
-    a = lamp_scene.lens_absorption(lens)
+    a = lens_absorption(lens)
     density, color = cycles.absorption_volume(a)
     missing: list[str] = []
     _drive(tree, "Lens BSDF", missing, IOR=lens["ior"])

@@ -12,7 +12,7 @@ from __future__ import annotations
 import bpy
 
 from ..core_tracer.scene import spec
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from . import design_properties, render_camera, render_setup
 from .convert.layout import design_with_new_lamp, refusal_of_new_lamp, with_new_lamp_unchecked
 from .design_operator import DesignOperator

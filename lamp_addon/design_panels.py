@@ -98,7 +98,9 @@ class LAMP_UL_lamps(bpy.types.UIList):
         row.prop(item.bulb, "on", text="", emboss=False, icon="OUTLINER_OB_LIGHT" if item.bulb.on else "LIGHT")
 
 
-class _LampTab:
+class LampTab:
+    """Where the design's panels are: the 3D Viewport's sidebar, tab "Lamp"."""
+
     bl_space_type = "VIEW_3D"
     bl_region_type = "UI"
     bl_category = "Lamp"
@@ -110,7 +112,7 @@ class _LampTab:
         return layout
 
 
-class LAMP_PT_design(_LampTab, bpy.types.Panel):
+class LAMP_PT_design(LampTab, bpy.types.Panel):
     bl_label = "Lamp Design"
 
     def draw(self, context):
@@ -120,9 +122,14 @@ class LAMP_PT_design(_LampTab, bpy.types.Panel):
             col.operator(idname, text=text, icon=icon)
 
 
-class LAMP_PT_info(_LampTab, bpy.types.Panel):
-    bl_label = "Design"
+class DesignSection(LampTab):
+    """A sub-panel of the Lamp Design panel (its place among the others is its ``bl_order``)."""
+
     bl_parent_id = "LAMP_PT_design"
+
+
+class LAMP_PT_info(DesignSection, bpy.types.Panel):
+    bl_label = "Design"
     bl_options = {"DEFAULT_CLOSED"}
     bl_order = 0
 
@@ -130,18 +137,16 @@ class LAMP_PT_info(_LampTab, bpy.types.Panel):
         draw_section(self._split(self.layout), context.scene.lamp_design, S.SCENE, (S.Text, S.Tags))
 
 
-class LAMP_PT_body(_LampTab, bpy.types.Panel):
+class LAMP_PT_body(DesignSection, bpy.types.Panel):
     bl_label = "Body"
-    bl_parent_id = "LAMP_PT_design"
     bl_order = 1
 
     def draw(self, context):
         draw_section(self._split(self.layout), context.scene.lamp_design.body, S.BODY)
 
 
-class LAMP_PT_light(_LampTab, bpy.types.Panel):
+class LAMP_PT_light(DesignSection, bpy.types.Panel):
     bl_label = "Light"
-    bl_parent_id = "LAMP_PT_design"
     bl_order = 2
 
     def draw(self, context):
@@ -151,9 +156,8 @@ class LAMP_PT_light(_LampTab, bpy.types.Panel):
         draw_section(layout, design, S.SCENE, (S.Num,))  # the background colour
 
 
-class LAMP_PT_camera(_LampTab, bpy.types.Panel):
+class LAMP_PT_camera(DesignSection, bpy.types.Panel):
     bl_label = "Camera & Image"
-    bl_parent_id = "LAMP_PT_design"
     bl_options = {"DEFAULT_CLOSED"}
     bl_order = 3
 
@@ -165,9 +169,8 @@ class LAMP_PT_camera(_LampTab, bpy.types.Panel):
         draw_section(layout.column(), design.image, S.IMAGE)
 
 
-class LAMP_PT_lamps(_LampTab, bpy.types.Panel):
+class LAMP_PT_lamps(DesignSection, bpy.types.Panel):
     bl_label = "Lamps"
-    bl_parent_id = "LAMP_PT_design"
     bl_order = 4
 
     def draw(self, context):
@@ -186,7 +189,7 @@ class LAMP_PT_lamps(_LampTab, bpy.types.Panel):
             layout.label(text="Add a lamp with + or apply a preset below", icon="INFO")
 
 
-class _LampPartPanel(_LampTab):
+class _LampPartPanel(LampTab):
     """A sub-panel of the active lamp showing one section of ``spec.LAMP``."""
 
     bl_parent_id = "LAMP_PT_lamps"

@@ -22,7 +22,7 @@ from mathutils import Matrix
 from mathutils.geometry import tessellate_polygon
 
 from ..core_tracer.scene import functions
-from ..core_tracer.scene import validate as lamp_scene
+from ..core_tracer.scene.derived import cut_sphere_radius, lamp_geometry
 from . import design_materials
 from .convert import meshes, units
 
@@ -88,7 +88,7 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     """Lamp i's mesh parts, named after ``label`` ("Stop" makes "Stop Lens"), its rim polygon in scene
     [x, z] and its bore (for the body's opening), and whether its lens is a preview."""
     base = f"lamps[{i}]"
-    g = lamp_scene.lamp_geometry(lamp)
+    g = lamp_geometry(lamp)
     R = lamp["lens"]["radius"]
     reflector_shape = ("reflector", R, lamp["reflector"]["focal_length"], g["vertex"], CHORD_TOLERANCE_MM)
     reflector = shapes.get(reflector_shape,
@@ -146,7 +146,7 @@ def body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> MeshPa
 
 
 def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:
-    rho = None if height == 0 else lamp_scene.cut_sphere_radius(pitch, height)
+    rho = None if height == 0 else cut_sphere_radius(pitch, height)
     return meshes.cut_subdivision(meshes.CutSurface(thickness, pitch, height, rho), most=most)[0]
 
 

@@ -44,7 +44,8 @@ from bpy.props import (
 
 from ..core_tracer.scene import functions
 from ..core_tracer.scene import spec as S
-from ..core_tracer.scene import validate as lamp_scene
+from ..core_tracer.scene.reading import SceneError
+from ..core_tracer.scene.validate import normalize, parse_scene
 
 OPEN_BOUND_MARGIN = 1.0e-6  # an open bound lo < x becomes lo + margin * max(1, |lo|) <= x
 TAG_SEPARATOR = ","
@@ -314,7 +315,7 @@ def design_to_scene(bl_scene: bpy.types.Scene, *, camera: dict | None = None, im
         doc["camera"] = camera
     if image is not None:
         doc["image"] = image
-    return lamp_scene.parse_scene(doc)
+    return parse_scene(doc)
 
 
 def _check_section(data: dict, section: S.Section, path: str) -> None:
@@ -332,7 +333,7 @@ def _check_section(data: dict, section: S.Section, path: str) -> None:
         elif isinstance(spec, S.Tags):
             for tag in value:
                 if TAG_SEPARATOR in tag or tag != tag.strip() or not tag:
-                    raise lamp_scene.SceneError(where, f'"{tag}" cannot be kept in the comma-separated tag field; '
+                    raise SceneError(where, f'"{tag}" cannot be kept in the comma-separated tag field; '
                                                        "allowed tags without commas or surrounding spaces")
         elif isinstance(spec, S.Num):
             lo, hi = blender_range(spec)
@@ -340,7 +341,7 @@ def _check_section(data: dict, section: S.Section, path: str) -> None:
                 if (lo is not None and x < lo) or (hi is not None and x > hi):
                     low = "-inf" if lo is None else f"{lo:g}"
                     high = "inf" if hi is None else f"{hi:g}"
-                    raise lamp_scene.SceneError(where, f"{x:g} is too close to the open bound; allowed "
+                    raise SceneError(where, f"{x:g} is too close to the open bound; allowed "
                                                        f"[{low}, {high}] in Blender")
 
 
@@ -381,7 +382,7 @@ def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
 
     Raises ``SceneError`` (and changes nothing) when ``scene_dict`` is not a valid scene.
     """
-    scene = lamp_scene.normalize(scene_dict)
+    scene = normalize(scene_dict)
     _check_section(scene, S.SCENE, "")
     _writing[0] += 1
     try:

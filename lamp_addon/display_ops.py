@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import bpy
 
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from . import design_panels, render_camera, render_setup
 from .design_operator import DesignOperator
 

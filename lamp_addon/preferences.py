@@ -10,6 +10,8 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, CollectionProperty, IntProperty, StringProperty
 
+from . import reports
+
 ADDON_PACKAGE = __package__.rpartition(".")[0]  # "bl_ext.<repository>.lamp_styling"
 
 
@@ -59,8 +61,7 @@ class LAMP_OT_library_folder_add(bpy.types.Operator):
     def execute(self, context):
         prefs = get(context)
         if prefs is None:
-            self.report({"ERROR"}, "The Lamp Styling add-on is not enabled")
-            return {"CANCELLED"}
+            return reports.cancelled(self, "The Lamp Styling add-on is not enabled")
         folder = bpy.path.abspath(self.directory).rstrip("/\\") if self.directory else ""
         item = prefs.library_folders.add()
         item.directory = folder

@@ -24,8 +24,9 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..core_tracer import fileio
 from ..core_tracer.library import presets as P
-from ..core_tracer.scene.validate import SceneError, normalize, scene_to_json
-from . import design_properties, design_root, preset_library, render_camera, render_setup
+from ..core_tracer.scene.reading import SceneError, scene_to_json
+from ..core_tracer.scene.validate import normalize
+from . import design_properties, design_root, preset_library, render_camera, render_setup, reports
 
 # Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
 # the camera object that differs from the design's by less than this, relative to the view's size, is
@@ -55,8 +56,7 @@ def _error_text(e: Exception) -> str:
 
 def _failed(operator: bpy.types.Operator, message: str, error: Exception | None = None) -> set[str]:
     """Report why ``operator`` did nothing (``message: error``) and cancel it."""
-    operator.report({"ERROR"}, message if error is None else f"{message}: {_error_text(error)}")
-    return {"CANCELLED"}
+    return reports.cancelled(operator, message if error is None else f"{message}: {_error_text(error)}")
 
 
 def _exists(operator: bpy.types.Operator, path: str) -> set[str]:
@@ -204,8 +204,7 @@ class LAMP_OT_preset_apply(bpy.types.Operator):
             view = apply_preset(context.scene, P.load_preset(entry.file))
         except SceneError as e:
             return _failed(self, "Preset not applied, the design is unchanged", e)
-        self.report({"INFO"}, f"Applied \"{entry.name}\" from {entry.library.name}; {view}")
-        return {"FINISHED"}
+        return reports.finished(self, f"Applied \"{entry.name}\" from {entry.library.name}; {view}")
 
 
 class LAMP_OT_preset_save(bpy.types.Operator):
@@ -274,8 +273,7 @@ class LAMP_OT_preset_save(bpy.types.Operator):
         except (SceneError, OSError) as e:
             return _failed(self, "Preset not saved", e)
         preset_library.sync(context, select=entry.file)
-        self.report({"INFO"}, f"Saved \"{entry.name}\" to {entry.file}")
-        return {"FINISHED"}
+        return reports.finished(self, f"Saved \"{entry.name}\" to {entry.file}")
 
 
 class _WritableSelected:
@@ -310,8 +308,7 @@ class LAMP_OT_preset_delete(_WritableSelected, bpy.types.Operator):
         except (SceneError, OSError) as e:
             return _failed(self, "Preset not deleted", e)
         preset_library.sync(context)
-        self.report({"INFO"}, f"Deleted \"{entry.name}\"")
-        return {"FINISHED"}
+        return reports.finished(self, f"Deleted \"{entry.name}\"")
 
 
 class LAMP_OT_preset_rename(_WritableSelected, bpy.types.Operator):
@@ -398,8 +395,7 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
                 self.report({"WARNING"}, f"Applied, but not added to {lib.name}: {_error_text(e)}")
                 return {"FINISHED"}
             preset_library.sync(context, select=entry.file)
-        self.report({"INFO"}, f"Imported \"{scene['name']}\"{view}")
-        return {"FINISHED"}
+        return reports.finished(self, f"Imported \"{scene['name']}\"{view}")
 
 
 class LAMP_OT_preset_export(bpy.types.Operator, ExportHelper):
@@ -422,8 +418,7 @@ class LAMP_OT_preset_export(bpy.types.Operator, ExportHelper):
             fileio.atomic_write_text(self.filepath, scene_to_json(scene))
         except (SceneError, OSError) as e:
             return _failed(self, "Not exported", e)
-        self.report({"INFO"}, f"Exported \"{scene['name']}\" to {self.filepath}")
-        return {"FINISHED"}
+        return reports.finished(self, f"Exported \"{scene['name']}\" to {self.filepath}")
 
 
 class LAMP_FH_preset(bpy.types.FileHandler):

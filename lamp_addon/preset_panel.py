@@ -12,6 +12,7 @@ import textwrap
 import bpy
 
 from . import preset_library
+from .design_panels import DesignSection
 
 MAX_WARNINGS_SHOWN = 30
 
@@ -44,12 +45,8 @@ class LAMP_UL_presets(bpy.types.UIList):
         return flags, []
 
 
-class LAMP_PT_presets(bpy.types.Panel):
+class LAMP_PT_presets(DesignSection, bpy.types.Panel):
     bl_label = "Presets"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Lamp"
-    bl_parent_id = "LAMP_PT_design"
     bl_order = 100
 
     def draw(self, context):

@@ -67,7 +67,7 @@ def scene_camera_to_dict(bl_scene, camera_object=None) -> dict:
     ``camera_object`` overrides ``bl_scene.camera`` (the render engine's camera override).
     Raises ``SceneError`` for what the tracer cannot render (no camera, panoramic camera,
     non-square pixels)."""
-    from ..core_tracer.scene.validate import SceneError
+    from ..core_tracer.scene.reading import SceneError
 
     ob = camera_object if camera_object is not None else bl_scene.camera
     if ob is None:
@@ -208,7 +208,9 @@ def _design_view(bl_scene) -> tuple[dict, dict]:
 
 def _usable_view(bl_scene) -> dict:
     """The design's camera if it is a valid view, else the default camera that frames its body."""
-    from ..core_tracer.scene.validate import SceneError, default_camera, parse_scene
+    from ..core_tracer.scene.derived import default_camera
+    from ..core_tracer.scene.reading import SceneError
+    from ..core_tracer.scene.validate import parse_scene
 
     doc = design_properties.design_document(bl_scene)
     try:
@@ -297,7 +299,8 @@ def keep_framed(bl_scene) -> bool:
         sync_view(bl_scene)
         _frame(bl_scene, ob, scene_camera_to_dict(bl_scene, ob))
         return True
-    from ..core_tracer.scene.validate import SceneError, parse_scene
+    from ..core_tracer.scene.reading import SceneError
+    from ..core_tracer.scene.validate import parse_scene
 
     doc = design_properties.design_document(bl_scene)
     try:
@@ -522,7 +525,7 @@ class LAMP_OT_camera_to_design(DesignOperator, bpy.types.Operator):
         return None
 
     def execute(self, context):
-        from ..core_tracer.scene.validate import SceneError
+        from ..core_tracer.scene.reading import SceneError
 
         bl_scene = context.scene
         try:

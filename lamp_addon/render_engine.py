@@ -12,7 +12,7 @@ import bpy
 import numpy as np
 
 from ..core_tracer.raytrace.tracer import PASS_NAMES
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from . import render_camera, render_viewport
 
 ENGINE_ID = "LAMP_TRACER"

@@ -1,4 +1,4 @@
-"""Render with Lamp Tracer: the tracer into an image shown in an Image Editor (issue 3, item 6).
+"""Render with Lamp Tracer: the tracer into an image shown in an Image Editor.
 
 From the interface the tracer runs on a worker thread (numpy releases the GIL) while a modal
 operator polls it on a timer: the image fills in band by band, the progress shows in the
@@ -20,8 +20,8 @@ import bpy
 import numpy as np
 
 from ..core_tracer.images import display
-from ..core_tracer.scene.validate import SceneError
-from . import design_panels, image_view, jobs, render_camera
+from ..core_tracer.scene.reading import SceneError
+from . import design_panels, image_view, jobs, render_camera, reports
 
 IMAGE_NAME = "Lamp Tracer"
 
@@ -111,11 +111,9 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
         try:
             image, seconds = render_to_image(context.scene)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
+            return reports.cancelled(self, str(e))
         image_view.show_image(context, image)
-        self.report({"INFO"}, f"Lamp Tracer: {image.size[0]}x{image.size[1]} in {seconds:.2f} s")
-        return {"FINISHED"}
+        return reports.finished(self, f"Lamp Tracer: {image.size[0]}x{image.size[1]} in {seconds:.2f} s")
 
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
@@ -124,8 +122,7 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
         try:
             scene = render_camera.scene_for_render(context.scene)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
+            return reports.cancelled(self, str(e))
         self._job = TracerJob(scene)
         exposure = image_view.design_exposure(scene)  # known before the rows arrive
         self._gain = image_view.shown_gain(context.scene, exposure)
@@ -148,13 +145,12 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
         self.end_modal(context)
         self._show_rows(context)
         if job.error is not None:
-            self.report({"ERROR"}, f"Lamp Tracer failed: {job.error}")
-            return {"CANCELLED"}
+            return reports.cancelled(self, f"Lamp Tracer failed: {job.error}")
         if job.cancelled:
             self.report({"WARNING"}, "Lamp Tracer render cancelled")
             return {"CANCELLED"}
-        self.report({"INFO"}, f"Lamp Tracer: {self._image.size[0]}x{self._image.size[1]} in {job.seconds:.2f} s")
-        return {"FINISHED"}
+        width, height = self._image.size
+        return reports.finished(self, f"Lamp Tracer: {width}x{height} in {job.seconds:.2f} s")
 
     def abandon(self, context):
         self._job.stop()

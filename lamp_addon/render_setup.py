@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import json
 
-from ..core_tracer.scene.validate import SceneError, parse_scene
+from ..core_tracer.scene.reading import SceneError
+from ..core_tracer.scene.validate import parse_scene
 from . import design_properties, image_view, render_camera
 from .convert import camera as cm
 

@@ -20,7 +20,7 @@ import weakref
 import bpy
 import numpy as np
 
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from . import design_properties, design_root
 from .convert import viewport
 from .render_preview import ProgressivePreview

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Running a design study from Blender and using its contact sheet (issue 5).
+"""Running a design study from Blender and using its contact sheet.
 
 From the interface the variants render in worker processes (``core_tracer.study_run``) while a
 modal operator polls them on a timer: the interface keeps responding, the progress shows in the
@@ -22,9 +22,9 @@ from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
 from ..core_tracer.library import presets as P
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from ..core_tracer.study import definition as st
-from . import design_properties, image_view, jobs, study_settings
+from . import design_properties, image_view, jobs, reports, study_settings
 from .study_settings import last_study, sheet_image
 
 # ---------------------------------------------------------------------------------------------
@@ -93,13 +93,10 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
         try:
             image, study, seconds = render_study(context)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
+            return reports.cancelled(self, str(e))
         except (StudyError, OSError) as e:
-            self.report({"ERROR"}, f"Lamp Study failed: {e}")
-            return {"CANCELLED"}
-        self.report({"INFO"}, _summary(study, seconds))
-        return {"FINISHED"}
+            return reports.cancelled(self, f"Lamp Study failed: {e}")
+        return reports.finished(self, _summary(study, seconds))
 
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
@@ -109,14 +106,12 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
         try:
             self._study = study_settings.study_from_settings(context.scene)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
+            return reports.cancelled(self, str(e))
         self._run = StudyRun(self._study, context.scene.lamp_study.workers or None)
         try:
             self._run.start()
         except OSError as e:
-            self.report({"ERROR"}, f"Lamp Study cannot start its workers: {e}")
-            return {"CANCELLED"}
+            return reports.cancelled(self, f"Lamp Study cannot start its workers: {e}")
         self._start = time.perf_counter()
         return self.begin_modal(context, self._run)
 
@@ -133,16 +128,14 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
             finished = self._run.poll()
         except StudyError as e:
             self.end_modal(context)
-            self.report({"ERROR"}, f"Lamp Study failed: {e}")
-            return {"CANCELLED"}
+            return reports.cancelled(self, f"Lamp Study failed: {e}")
         if not finished:
             return None
         seconds = time.perf_counter() - self._start
         images = list(self._run.images)
         self.end_modal(context)
         show_sheet(context, self._study, images)
-        self.report({"INFO"}, _summary(self._study, seconds))
-        return {"FINISHED"}
+        return reports.finished(self, _summary(self._study, seconds))
 
     def abandon(self, context):
         self._run.cancel()
@@ -201,10 +194,8 @@ class LAMP_OT_study_apply_variant(_OnLastStudy, bpy.types.Operator):
                 st.apply_value(design, parameter, value)
             design_properties.scene_to_design(context.scene, design)
         except SceneError as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"Design set to {study.variants[index].label(study)}")
-        return {"FINISHED"}
+            return reports.cancelled(self, str(e))
+        return reports.finished(self, f"Design set to {study.variants[index].label(study)}")
 
 
 class LAMP_OT_study_keep_variant(_OnLastStudy, bpy.types.Operator):
@@ -225,17 +216,14 @@ class LAMP_OT_study_keep_variant(_OnLastStudy, bpy.types.Operator):
         writable = [lib for lib in libraries if lib.writable]
         writable.sort(key=lambda lib: lib.name != preset_library.USER_LIBRARY_NAME)
         if not writable:
-            self.report({"ERROR"}, notes[0] if notes else "No writable preset library; add a preset folder "
-                                                          "in the add-on preferences")
-            return {"CANCELLED"}
+            return reports.cancelled(self, notes[0] if notes else "No writable preset library; add a preset folder "
+                                           "in the add-on preferences")
         try:
             entry = P.save_preset(writable[0], study.variant_name(index), study.variant_scene(index))
         except (SceneError, OSError) as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
+            return reports.cancelled(self, str(e))
         preset_library.mark_stale()
-        self.report({"INFO"}, f"Saved \"{entry.name}\" in {writable[0].name}")
-        return {"FINISHED"}
+        return reports.finished(self, f"Saved \"{entry.name}\" in {writable[0].name}")
 
 
 class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
@@ -261,22 +249,18 @@ class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
         study = last_study()
         image = sheet_image()
         if study is None or image is None:
-            self.report({"ERROR"}, "There is no study sheet; run a study first")
-            return {"CANCELLED"}
+            return reports.cancelled(self, "There is no study sheet; run a study first")
         if not image_view.openimageio_available():
-            self.report({"ERROR"}, f"Sheet not saved: {image_view.NO_OPENIMAGEIO}; save the image from the "
-                                   "Image Editor")
-            return {"CANCELLED"}
+            return reports.cancelled(self, f"Sheet not saved: {image_view.NO_OPENIMAGEIO}; save the image from the "
+                                           "Image Editor")
         try:
             study_sheet.write_composed(self.filepath, study, image_view.image_to_array(image),
                                        view=image_view.scene_view(context.scene),
                                        exposure=image_view.image_exposure(image),
                                        view_exposure=context.scene.view_settings.exposure)
         except (SceneError, OSError) as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"Saved {self.filepath}")
-        return {"FINISHED"}
+            return reports.cancelled(self, str(e))
+        return reports.finished(self, f"Saved {self.filepath}")
 
 
 classes = (LAMP_OT_study_run, LAMP_OT_study_apply_variant, LAMP_OT_study_keep_variant, LAMP_OT_study_save_sheet)

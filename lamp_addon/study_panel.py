@@ -7,6 +7,7 @@ from __future__ import annotations
 import bpy
 
 from . import study_settings
+from .design_panels import DesignSection
 
 # ---------------------------------------------------------------------------------------------
 # The panel
@@ -32,12 +33,8 @@ def _draw_axis(layout, axis, title: str) -> None:
         col.prop(axis, "values", text="Values")
 
 
-class LAMP_PT_study(bpy.types.Panel):
+class LAMP_PT_study(DesignSection, bpy.types.Panel):
     bl_label = "Study"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Lamp"
-    bl_parent_id = "LAMP_PT_design"
     bl_options = {"DEFAULT_CLOSED"}
     bl_order = 20
 

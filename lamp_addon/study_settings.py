@@ -16,7 +16,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, Po
 
 from ..core_tracer.scene import spec as S
 from ..core_tracer.scene.functions import suggested_values
-from ..core_tracer.scene.validate import SceneError
+from ..core_tracer.scene.reading import SceneError
 from ..core_tracer.study import definition as st
 from . import design_properties
 

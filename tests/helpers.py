@@ -3,12 +3,16 @@ built for the tracer's tests (each isolates one part of the model)."""
 
 from __future__ import annotations
 
+import ast
 import copy
 import json
+import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
+from core_tracer.checkpoints import ENV_MARKER, ENV_POINT
 from core_tracer.scene.validate import parse_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -17,10 +21,67 @@ BASELINE = PRESETS / "paper-baseline.json"
 FOUR_LAMPS = PRESETS / "four-lamp-rear-combination.json"
 
 
-def run_cli(*args: str | Path, timeout: float = 120) -> subprocess.CompletedProcess:
-    """``python -m core_tracer ARGS`` from the repository root, output captured as text."""
-    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=timeout)
+def cli_command(*args: str | Path) -> list[str]:
+    """The command line of ``python -m core_tracer ARGS``."""
+    return [sys.executable, "-m", "core_tracer", *map(str, args)]
+
+
+def run_cli(*args: str | Path, timeout: float = 300, env: dict | None = None, prefix: tuple[str, ...] = (),
+            text: bool = True) -> subprocess.CompletedProcess:
+    """``python -m core_tracer ARGS`` from the repository root, output captured (as text unless
+    ``text`` is false); ``prefix`` goes before the interpreter (``prlimit ...``)."""
+    return subprocess.run([*prefix, *cli_command(*args)], cwd=ROOT, capture_output=True, text=text,
+                          timeout=timeout, env=env)
+
+
+def start_cli_at(point: str, marker: Path, *args: str | Path, env: dict | None = None) -> subprocess.Popen:
+    """Start ``python -m core_tracer ARGS`` and return once it has reached the checkpoint ``point``
+    (``core_tracer/checkpoints.py``), where it waits for the test's SIGINT or SIGTERM: a signal then
+    lands at that point however fast or slow the machine is. ``marker`` is the file it creates there."""
+    env = dict(os.environ if env is None else env, **{ENV_POINT: point, ENV_MARKER: str(marker)})
+    proc = subprocess.Popen(cli_command(*args), cwd=ROOT, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    try:
+        while not marker.exists():
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "the program never reached " + point
+            time.sleep(0.01)
+    except BaseException:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+        raise
+    return proc
+
+
+def signal_and_wait(proc: subprocess.Popen, sig: int) -> tuple[str, str]:
+    """Send ``sig`` to a program started by ``start_cli_at`` and wait for it to end (killed if it
+    has not within two minutes); its (stdout, stderr)."""
+    try:
+        proc.send_signal(sig)
+        return proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
+def child_pids(pid: int) -> list[int]:
+    """Process ids whose parent is ``pid`` (Linux /proc)."""
+    out = []
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        out += [int(c) for c in (task / "children").read_text().split()]
+    return out
+
+
+def process_gone(pid: int) -> bool:
+    """Whether the process ``pid`` has ended (a zombie waiting for its parent has)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except FileNotFoundError:
+        return True
+    return state == "Z"
 
 
 def assert_bad_input(proc: subprocess.CompletedProcess, *needles: str) -> str:
@@ -70,3 +131,16 @@ def flat_lens_on_axis(ior: float = 1.49, absorption=(0.0, 0.0, 0.0), intensity=(
         "lamps[0].lens.diffuse_color": [0.0, 0.0, 0.0],
         "lamps[0].bulb.intensity": list(intensity),
     })
+
+
+def sibling_imports(path: Path) -> set[str]:
+    """The sibling modules a module imports, at the top or inside functions (``from . import x``,
+    ``from .x import y``)."""
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.level == 1:
+            if node.module:
+                out.add(node.module.split(".")[0])
+            else:
+                out.update(alias.name for alias in node.names)
+    return out

@@ -1,4 +1,4 @@
-"""Shared by the preset tests with and without Blender: a folder of hostile presets (issue 4, item 6), and
+"""Shared by the preset tests with and without Blender: a folder of hostile presets, and
 designs flattened to compare them parameter for parameter."""
 
 from __future__ import annotations

@@ -14,7 +14,8 @@ from collections.abc import Iterator
 from ..fileio import check_writable
 from ..images import display
 from ..scene import spec as S
-from ..scene.validate import SceneError, parse_scene, read_json, show_value
+from ..scene.reading import SceneError, read_json
+from ..scene.validate import parse_scene, show_value
 
 
 def in_file(error: SceneError, file: str | os.PathLike) -> SceneError:

@@ -17,8 +17,8 @@ import sys
 import threading
 from collections.abc import Iterator, Sequence
 
-from ..safe_text import printable
-from ..scene.validate import SceneError
+from ..scene.reading import SceneError
+from ..scene.safe_text import printable
 
 COMMANDS = ("render", "validate", "presets", "study")
 

@@ -8,7 +8,7 @@ import os
 import sys
 
 from ..library import presets as P
-from ..scene.validate import SceneError, scene_to_json
+from ..scene.reading import SceneError, scene_to_json
 
 HELP = ("list, show or validate the presets of a library folder (default: the built-in presets), or make "
         "its shipped thumbnails")

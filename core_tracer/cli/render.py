@@ -9,7 +9,7 @@ import time
 from .. import budget
 from ..checkpoints import checkpoint
 from ..images.imageio import image_format
-from ..safe_text import printable
+from ..scene.safe_text import printable
 from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, load_scene_file, view_for
 
 HELP = "render a scene to an .exr (linear, scene in the header) or .png (view transform, exposure) image"

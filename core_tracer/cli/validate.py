@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..safe_text import printable
+from ..scene.safe_text import printable
 from .common import load_scene_file
 
 HELP = "check a lamp-scene/1 file and report the first problem"

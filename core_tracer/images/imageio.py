@@ -17,7 +17,8 @@ from collections.abc import Iterator, Mapping
 import numpy as np
 
 from .. import fileio
-from ..scene.validate import SceneError, normalize, parse_json_text, parse_scene, scene_to_json
+from ..scene.reading import SceneError, parse_json_text, scene_to_json
+from ..scene.validate import normalize, parse_scene
 from . import display
 
 SCENE_ATTRIBUTE = "lamp:scene"

@@ -27,8 +27,10 @@ from dataclasses import dataclass, field
 from .. import fileio
 from ..images import display
 from ..images.display import ViewTransform
-from ..safe_text import printable
-from ..scene.validate import SceneError, normalize, parse_scene, read_json, scene_to_json, without_defaults
+from ..scene.derived import without_defaults
+from ..scene.reading import SceneError, read_json, scene_to_json
+from ..scene.safe_text import printable
+from ..scene.validate import normalize, parse_scene
 
 SUFFIX = ".json"
 THUMBNAIL_FOLDER = ".thumbnails"  # made on demand beside the presets of a writable library

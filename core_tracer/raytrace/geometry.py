@@ -13,8 +13,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..scene.derived import cut_sphere_radius, lamp_geometry, lens_absorption
 from ..scene.spec import MAX_CUTS_ACROSS
-from ..scene.validate import cut_sphere_radius, lamp_geometry, lens_absorption
 from . import optics
 
 T_MIN = 1e-6  # mm: a hit closer than this to the ray's origin is the origin's own surface

@@ -16,7 +16,7 @@ import copy
 from dataclasses import dataclass, field
 
 from . import spec as S
-from .validate import use_form
+from .derived import use_form
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,8 @@
 """The field declarations of a ``lamp-scene/1`` document.
 
 Every parameter of a lamp design is declared here once, with its unit, allowed range, default
-and description. The validator (``scene.py``), the README's field table, the JSON presets and
-the Blender properties (``lamp_addon/properties.py``) all follow from these declarations.
+and description. The validator (``validate``), the README's field table, the JSON presets and
+the Blender properties (``lamp_addon/design_properties.py``) all follow from these declarations.
 
 Lengths are millimetres, absorption coefficients per millimetre, angles degrees, colours
 linear RGB (MODEL.md §2).

@@ -1,4 +1,4 @@
-"""Reading, validating and normalising ``lamp-scene/1`` documents.
+"""Validating and normalising ``lamp-scene/1`` documents (read by ``reading``).
 
 A *scene* is the normalised document: a plain JSON-compatible dict in which every field of
 ``spec.SCENE`` is present (defaults filled in, the default camera computed), numbers are
@@ -15,153 +15,17 @@ import copy
 import json
 import math
 import os
-import re
-import stat
 from typing import Any
 
-from ..safe_text import has_surrogate, printable, show_key
 from . import spec as S
-
-MAX_FILE_BYTES = 1_000_000  # a lamp design is a few kB; refuse anything absurd before parsing
-
-
-class SceneError(ValueError):
-    """A user's mistake in a scene document; ``str()`` is the one-line message to show."""
-
-    def __init__(self, path: str, message: str):
-        self.path = path
-        self.message = message
-        super().__init__(f"{path}: {message}" if path else message)
-
-
-# ---------------------------------------------------------------------------------------------
-# Loading
+from .derived import default_camera, default_value, fill_alternative, lamp_geometry
+from .reading import HugeNumber, SceneError, read_json
+from .safe_text import has_surrogate, printable, show_key
 
 
 def load_scene(path: str | os.PathLike) -> dict:
     """Read, validate and normalise a scene file."""
     return parse_scene(read_json(path))
-
-
-def read_json(path: str | os.PathLike, max_bytes: int = MAX_FILE_BYTES) -> Any:
-    """Read a JSON file with a size limit, turning every failure into a ``SceneError``.
-
-    Only regular files are opened: a pipe or a device could block or never end."""
-    name = os.fspath(path)
-    try:
-        st = os.stat(name)
-        if not stat.S_ISREG(st.st_mode):
-            raise SceneError(name, "not a regular file")
-        size = st.st_size
-        if size > max_bytes:
-            raise SceneError(name, f"file is {size} bytes; allowed at most {max_bytes} bytes")
-        with open(name, "rb") as f:
-            raw = f.read(max_bytes + 1)
-    except SceneError:
-        raise
-    except OSError as e:
-        raise SceneError(name, f"cannot read the file ({e.strerror or e})") from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise SceneError(name, "not UTF-8 text") from None
-    return parse_json_text(text, name)
-
-
-def parse_json_text(text: str, name: str = "") -> Any:
-    """Decode JSON text. NaN and Infinity (which Python's json accepts) decode to floats, and a
-    number too large for a float (``1e400``, or an integer of more than 4300 digits, which
-    Python's int() refuses) to a ``HugeNumber``, so that validation can name the field that holds
-    them. A key given twice in one object is refused (json would keep the last silently, so a
-    file could say two things and mean one)."""
-    duplicates: list[bool] = []
-
-    def pairs_hook(pairs: list[tuple[str, Any]]) -> dict:
-        obj = dict(pairs)
-        if len(obj) == len(pairs):
-            return obj
-        duplicates.append(True)
-        seen: set[str] = set()
-        repeated = next(k for k, _ in pairs if k in seen or seen.add(k))
-        return _Repeated(obj, repeated)
-
-    try:
-        doc = json.loads(text, parse_constant=float, parse_int=_parse_int, parse_float=_parse_float,
-                         object_pairs_hook=pairs_hook)
-    except RecursionError:
-        raise SceneError(name, "not valid JSON: nested too deeply") from None
-    except json.JSONDecodeError as e:
-        raise SceneError(name, f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
-    except ValueError as e:  # json's own limits, e.g. an integer of more than 4300 digits
-        raise SceneError(name, f"not valid JSON: {str(e)[:120]}") from None
-    if duplicates:
-        where = _first_repeated(doc)
-        prefix = f"{name}: " if name else ""
-        raise SceneError(f"{prefix}{where}", "is given twice in one object; allowed once (which one is meant?)")
-    return doc
-
-
-class HugeNumber(float):
-    """A JSON number beyond the float range, as written: infinite in value, shown by its digits."""
-
-    text: str
-
-    def __new__(cls, text: str) -> HugeNumber:
-        number = super().__new__(cls, "-inf" if text.startswith("-") else "inf")
-        number.text = text
-        return number
-
-    def shown(self) -> str:
-        if len(self.text) <= 40:
-            return self.text
-        return f"a number of {sum(ch.isdigit() for ch in self.text)} digits"
-
-
-_MAX_INT_DIGITS = 4300  # Python's default limit for int() of a decimal string
-
-
-def _parse_int(text: str) -> int | float:
-    return int(text) if len(text) <= _MAX_INT_DIGITS else HugeNumber(text)
-
-
-def _parse_float(text: str) -> float:
-    value = float(text)
-    return HugeNumber(text) if math.isinf(value) else value
-
-
-class _Repeated(dict):
-    """A JSON object in which a key appeared more than once (the first such key is kept)."""
-
-    def __init__(self, items: dict, repeated: str):
-        super().__init__(items)
-        self.repeated = repeated
-
-
-def _first_repeated(doc: Any) -> str:
-    """The field path of the first repeated key, in document order (iterative: depth is unbounded)."""
-    stack: list[tuple[Any, str]] = [(doc, "")]
-    while stack:
-        node, path = stack.pop()
-        if isinstance(node, _Repeated):
-            return _join(path, node.repeated)
-        if isinstance(node, dict):
-            stack.extend((v, _join(path, k)) for k, v in reversed(list(node.items())))
-        elif isinstance(node, list):
-            stack.extend((v, f"{path}[{i}]") for i, v in reversed(list(enumerate(node))))
-    return ""  # pragma: no cover - only called when the hook saw a repeated key
-
-
-def _join(path: str, key: str) -> str:
-    return f"{path}.{show_key(key)}" if path else show_key(key)
-
-
-def scene_to_json(scene: dict) -> str:
-    """The canonical JSON text of a scene: stable key order, 2-space indent, number lists on one line."""
-    text = json.dumps(scene, indent=2, ensure_ascii=False)
-    return _NUMBER_LIST.sub(lambda m: "[" + ", ".join(x.strip() for x in m.group(1).split(",")) + "]", text) + "\n"
-
-
-_NUMBER_LIST = re.compile(r"\[\s*(-?[0-9][-+0-9.eE]*(?:,\s*-?[0-9][-+0-9.eE]*)*)\s*\]")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -211,13 +75,9 @@ def _section(doc: Any, sec: S.Section, path: str) -> dict:
 
 
 def _default(spec: S.Spec, where: str) -> Any:
-    if isinstance(spec, S.Section):
-        return _section({}, spec, where + ".")
     if isinstance(spec, S.ListOf):
         raise SceneError(where, f"is required; {spec.range_text()}")
-    if isinstance(spec, S.Num):
-        return _num_out(spec.default, spec)
-    return copy.deepcopy(spec.default)
+    return default_value(spec)
 
 
 def _value(v: Any, spec: S.Spec, where: str) -> Any:
@@ -302,12 +162,6 @@ def _check_characters(text: str, where: str, allowed: str) -> None:
                                 f"not a character; allowed Unicode text only, {allowed}")
 
 
-def _num_out(default: Any, spec: S.Num) -> Any:
-    if spec.size > 1:
-        return [float(x) for x in default]
-    return int(default) if spec.integer else float(default)
-
-
 def _either_or(out: dict, sec: S.Section, path: str) -> None:
     """Apply the section's either/or rules (``spec.OneOf``) to the fields read into ``out``:
     one form at most, its selecting field present, its missing fields filled in; no form given
@@ -325,108 +179,6 @@ def _either_or(out: dict, sec: S.Section, path: str) -> None:
         fill_alternative(out, sec, alt)
 
 
-def fill_alternative(data: dict, sec: S.Section, alt: S.Alternative) -> None:
-    """Give ``data`` every field of the form ``alt`` it lacks: the value of its ``same_as``
-    field, else its default (in place)."""
-    same_as = dict(alt.same_as)
-    for key in alt.keys:
-        if key not in data:
-            if key in same_as:
-                data[key] = copy.deepcopy(data[same_as[key]])
-            else:
-                data[key] = _default(sec.fields[key], key)
-
-
-# ---------------------------------------------------------------------------------------------
-# Geometry: derived quantities and the checks that involve several fields
-
-
-def lens_absorption(lens: dict) -> list[float]:
-    """Absorption coefficients per mm (MODEL.md §6: A = -ln(T) / t_ref)."""
-    if "absorption" in lens:
-        return list(lens["absorption"])
-    t_ref = lens["reference_thickness"]
-    return [-math.log(c) / t_ref for c in lens["transmitted_color"]]
-
-
-def without_defaults(data: dict, sec: S.Section = S.SCENE) -> dict:
-    """A normalised ``sec`` with every field that holds its default left out (recursively): the
-    same design whatever defaulted fields the spec gains later, so a hash of it (a thumbnail's
-    name) stays the same when a field is added."""
-    out: dict = {}
-    for key, value in data.items():
-        spec = sec.fields[key]
-        if isinstance(spec, S.Section):
-            value = without_defaults(value, spec)
-            if not value and key not in sec.optional:  # an absent optional section is computed
-                continue
-        elif isinstance(spec, S.ListOf):
-            value = [without_defaults(item, spec.item) for item in value]
-        elif sec.rule_of(key) is None and key != "schema" and value == _default(spec, key):
-            continue  # (a form of an either/or rule is kept: leaving it out would mean the default form)
-        out[key] = value
-    return out
-
-
-def preferred_forms(sec: S.Section) -> dict:
-    """A partial document of ``sec`` that picks the preferred form of every either/or rule in it
-    (the colour picker for a lens): what an editor starts a new design with, where a document
-    that says nothing means the rule's default form."""
-    out: dict = {}
-    for key, spec in sec.fields.items():
-        if isinstance(spec, S.Section) and (sub := preferred_forms(spec)):
-            out[key] = sub
-    for rule in sec.one_of:
-        name = rule.preferred
-        out[name] = _default(sec.fields[name], name)
-    return out
-
-
-def new_lamp() -> dict:
-    """The normalised lamp a new design starts with: the spec's defaults in the preferred forms."""
-    return parse_scene({"schema": S.SCHEMA, "lamps": [preferred_forms(S.LAMP)]})["lamps"][0]
-
-
-def use_form(data: dict, sec: S.Section, key: str) -> None:
-    """Make ``data`` (a normalised ``sec``) use the form of the either/or rule that writes ``key``
-    (in place); nothing changes for a key in no rule or a form already used. The lens colour
-    keeps its absorption through the change (MODEL.md §6): a transmitted colour is the one seen
-    through the lens's own thickness."""
-    rule = sec.rule_of(key)
-    if rule is None or rule.chosen(data) is rule.of_key(key):
-        return
-    alt = rule.of_key(key)
-    absorption = lens_absorption(data) if sec is S.LENS else None
-    for k in rule.keys:
-        data.pop(k, None)
-    if absorption is not None and alt.name == "absorption":
-        data["absorption"] = absorption
-    elif absorption is not None:
-        data["transmitted_color"] = [math.exp(-a * data["thickness"]) for a in absorption]
-    fill_alternative(data, sec, alt)
-
-
-def cut_sphere_radius(pitch: float, height: float) -> float:
-    """Radius rho of a lenslet sphere (MODEL.md §3.1): (c^2 + h^2) / 2h with c = p / sqrt 2."""
-    c = pitch / math.sqrt(2.0)
-    return (c * c + height * height) / (2.0 * height)
-
-
-def lamp_geometry(lamp: dict) -> dict:
-    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3)."""
-    R = lamp["lens"]["radius"]
-    t = lamp["lens"]["thickness"]
-    h = lamp["cuts"]["height"]
-    f = lamp["reflector"]["focal_length"]
-    y_apex = t + h
-    y_rim = y_apex + lamp["reflector"]["gap"]
-    y_vertex = y_rim + R * R / (4.0 * f)
-    y_focus = y_vertex - f
-    off = lamp["bulb"]["offset"]
-    return {
-        "plane_a": t, "plane_b": y_apex, "rim": y_rim, "vertex": y_vertex, "focus": y_focus,
-        "bulb_center": (off[0], y_focus + off[1], off[2]),
-    }
 
 
 def check_geometry(scene: dict) -> None:
@@ -652,26 +404,6 @@ def _bulb_limits(lamp: dict) -> dict[str, str]:
         y_lo, y_hi = (y - g["focus"] for y in ys)
         out["bulb.offset"] = f"y in {_interval(y_lo, y_hi)} mm with x = {x:g} and z = {z:g}"
     return out
-
-
-def default_camera(scene: dict) -> dict:
-    """A perspective camera on the -Y side that frames the whole body (16 degree lens)."""
-    cam = _section({}, S.CAMERA, "camera.")
-    body = scene["body"]
-    bx, bz = body["center"]
-    w, h = body["size"]
-    img = scene["image"]
-    aspect = img["width"] / img["height"]
-    half_fov = math.radians(cam["fov_deg"]) / 2
-    # The fov spans the larger image side (sensor fit auto); fit both body sides with a 10 % margin.
-    if aspect >= 1:
-        half_x, half_z = math.tan(half_fov), math.tan(half_fov) / aspect
-    else:
-        half_x, half_z = math.tan(half_fov) * aspect, math.tan(half_fov)
-    dist = 1.1 * max(w / 2 / half_x, h / 2 / half_z)
-    cam["position"] = [float(bx), -round(dist, 3), float(bz)]
-    cam["target"] = [float(bx), 0.0, float(bz)]
-    return cam
 
 
 def _kind(v: Any) -> str:

@@ -1,4 +1,4 @@
-"""Design studies (issue 5): one design turned into a grid of variants.
+"""Design studies: one design turned into a grid of variants.
 
 A *study* (``lamp-study/1``) varies one or two parameters of a base design, each over a list of
 values or over a range with a number of steps, at most ``MAX_VARIANTS`` variants in all::
@@ -44,18 +44,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from .. import budget
-from ..safe_text import has_surrogate, show_key
 from ..scene import spec as S
-from ..scene.validate import (
-    SceneError,
-    check_number,
-    parse_json_text,
-    parse_scene,
-    read_json,
-    scene_to_json,
-    show_value,
-    use_form,
-)
+from ..scene.derived import use_form
+from ..scene.reading import SceneError, parse_json_text, read_json, scene_to_json
+from ..scene.safe_text import has_surrogate, show_key
+from ..scene.validate import check_number, parse_scene, show_value
 
 SCHEMA = "lamp-study/1"
 STUDY_ATTRIBUTE = "lamp:study"  # the header attribute of a contact sheet that holds the study
@@ -336,6 +329,7 @@ class Study:
     axes: tuple[Axis, ...]
     size: tuple[int, int]  # (width, height) of each variant image
     title: str = ""
+    variants: tuple[Variant, ...] = ()  # built and checked by ``from_doc``, row-major
 
     # -- construction ------------------------------------------------------------------------
 
@@ -379,9 +373,7 @@ class Study:
             shape = " x ".join(str(len(a.values)) for a in axes)
             raise SceneError("axes", f"{shape} = {count} variants; allowed at most {MAX_VARIANTS}")
         budget.check_study_pixels(size, count)
-        study = cls(base, axes, size, title)
-        object.__setattr__(study, "_variants", study._build_variants())
-        return study
+        return cls(base, axes, size, title, _build_variants(base, axes))
 
     @classmethod
     def from_json(cls, text: str, name: str = "") -> Study:
@@ -412,31 +404,7 @@ class Study:
             doc["title"] = title
         return cls.from_doc(doc)
 
-    def _build_variants(self) -> tuple[Variant, ...]:
-        columns = len(self.axes[0].values)
-        out = []
-        grids = [range(len(a.values)) for a in self.axes]
-        # Row-major, axis 1 varying fastest: itertools.product varies the last factor fastest.
-        for position in itertools.product(*reversed(grids)):
-            index_per_axis = tuple(reversed(position))
-            values = tuple(a.values[k] for a, k in zip(self.axes, index_per_axis, strict=True))
-            column = index_per_axis[0]
-            row = index_per_axis[1] if len(self.axes) > 1 else 0
-            scene = copy.deepcopy(self.base)
-            for axis, value in zip(self.axes, values, strict=True):
-                apply_value(scene, axis.parameter, value)
-            try:
-                scene = parse_scene(scene)
-            except SceneError as e:
-                raise SceneError(e.path, f"{e.message} (in the variant {_setting(self.axes, values)})") from None
-            out.append(Variant(row * columns + column, column, row, values, scene))
-        return tuple(out)
-
     # -- queries ------------------------------------------------------------------------------
-
-    @property
-    def variants(self) -> tuple[Variant, ...]:
-        return self._variants  # type: ignore[attr-defined]
 
     @property
     def columns(self) -> int:
@@ -495,6 +463,28 @@ class Study:
             atomic_write_text(path, scene_to_json(self.variant_scene(v.index)))
             paths.append(path)
         return paths
+
+
+def _build_variants(base: dict, axes: tuple[Axis, ...]) -> tuple[Variant, ...]:
+    """Every variant of ``base`` along ``axes``, each scene checked (``SceneError`` names the variant)."""
+    columns = len(axes[0].values)
+    out = []
+    grids = [range(len(a.values)) for a in axes]
+    # Row-major, axis 1 varying fastest: itertools.product varies the last factor fastest.
+    for position in itertools.product(*reversed(grids)):
+        index_per_axis = tuple(reversed(position))
+        values = tuple(a.values[k] for a, k in zip(axes, index_per_axis, strict=True))
+        column = index_per_axis[0]
+        row = index_per_axis[1] if len(axes) > 1 else 0
+        scene = copy.deepcopy(base)
+        for axis, value in zip(axes, values, strict=True):
+            apply_value(scene, axis.parameter, value)
+        try:
+            scene = parse_scene(scene)
+        except SceneError as e:
+            raise SceneError(e.path, f"{e.message} (in the variant {_setting(axes, values)})") from None
+        out.append(Variant(row * columns + column, column, row, values, scene))
+    return tuple(out)
 
 
 def _setting(axes: tuple[Axis, ...], values: tuple[Any, ...]) -> str:

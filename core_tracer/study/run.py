@@ -119,7 +119,6 @@ class _Worker:
     log_path: str
     reader: threading.Thread
     job: int | None = None  # the variant being rendered
-    ready: bool = False
     closed: bool = False  # stdin closed: no more jobs
 
 
@@ -252,9 +251,6 @@ class StudyRun:
                 raise self._failure(worker, "stopped unexpectedly")
             return
         message = json.loads(line)
-        if message.get("ready"):
-            worker.ready = True
-            return
         index = message["index"]
         if "error" in message:
             raise self._failure(worker, f"failed on variant {index}: {message['error']}")

@@ -57,10 +57,6 @@ class SheetLayout:
     texts: tuple[TextBox, ...]
 
     @property
-    def line_height(self) -> int:
-        return (bitmap_font.LINE_H + 2) * self.scale
-
-    @property
     def char_width(self) -> int:
         return bitmap_font.ADVANCE_W * self.scale
 

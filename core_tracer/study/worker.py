@@ -8,7 +8,7 @@ Protocol, one JSON object per line:
 
 - stdin, a job: ``{"index": i, "scene": {...}, "width": w, "height": h, "threads": t, "out": path}``;
   end of input means no more work;
-- stdout: ``{"ready": true}`` once imported, ``{"index": i, "progress": f}`` now and then,
+- stdout: ``{"index": i, "progress": f}`` now and then,
   ``{"index": i, "done": true, "seconds": s}`` when the image is in ``out`` (a ``.npy`` file,
   renamed into place when complete), or ``{"index": i, "error": "..."}``.
 
@@ -45,7 +45,6 @@ def main() -> int:
     def orphaned() -> bool:
         return os.getppid() != parent  # the parent died: stop instead of rendering for nobody
 
-    send({"ready": True})
     for line in sys.stdin:
         if not line.strip():
             continue

@@ -10,7 +10,9 @@ from __future__ import annotations
 import copy
 
 from ...core_tracer.scene import spec
-from ...core_tracer.scene.validate import SceneError, new_lamp, parse_scene
+from ...core_tracer.scene.derived import new_lamp
+from ...core_tracer.scene.reading import SceneError
+from ...core_tracer.scene.validate import parse_scene
 
 MARGIN_MM = 5.0  # between a new lens and its neighbour, and at least between it and the body's edge
 

@@ -59,6 +59,12 @@ def _region_mean(image: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
     return image[rows, cols].reshape(-1, 3).astype(np.float64).mean(axis=0)
 
 
+def _compared_region(lamp_addon, bl_scene, scene, samples, region: tuple[slice, slice]):
+    """The mean colour of ``region`` rendered by the tracer and by Cycles, and the seconds it took."""
+    result = _compare(lamp_addon, bl_scene, scene, samples)
+    return _region_mean(result["tracer"], *region), _region_mean(result["cycles"], *region), result["seconds"]
+
+
 # ---------------------------------------------------------------------------------------------
 # Pure parts
 
@@ -381,10 +387,8 @@ def _flat_lens(doc):
 
 def test_bulb_through_a_flat_coloured_lens_agrees_with_cycles(lamp_addon, bl_scene):
     scene = _scene(_flat_lens, size=(32, 32))
-    result = _compare(lamp_addon, bl_scene, scene, BULB_SAMPLES)
-    centre = (slice(12, 20), slice(12, 20))
-    tracer = _region_mean(result["tracer"], *centre)
-    cycles = _region_mean(result["cycles"], *centre)
+    tracer, cycles, seconds = _compared_region(lamp_addon, bl_scene, scene, BULB_SAMPLES,
+                                               (slice(12, 20), slice(12, 20)))  # the 8x8 centre
     # The tracer gives the slab formula (normal incidence, all internal reflections).
     lens = scene["lamps"][0]["lens"]
     r = ((lens["ior"] - 1) / (lens["ior"] + 1)) ** 2
@@ -393,7 +397,7 @@ def test_bulb_through_a_flat_coloured_lens_agrees_with_cycles(lamp_addon, bl_sce
     assert tracer == pytest.approx(slab, rel=1e-4)
     relative = (cycles - tracer) / tracer
     print(f"\nbulb through flat lens, {BULB_SAMPLES} spp, 32x32, 8x8 centre: tracer {tracer}, Cycles {cycles}, "
-          f"relative difference {relative}, seconds {result['seconds']}")
+          f"relative difference {relative}, seconds {seconds}")
     assert np.abs(relative).max() < BULB_TOLERANCE
 
 
@@ -403,11 +407,9 @@ def _no_body_specular(doc):
 
 def test_lit_body_without_specular_agrees_with_cycles(lamp_addon, bl_scene):
     scene = _scene(_no_body_specular, size=(64, 64))
-    result = _compare(lamp_addon, bl_scene, scene, BODY_SAMPLES)
     # Left part of the body, clear of the lens (radius 45 mm) and of the body's edges: 3.5 mm per pixel.
-    region = (slice(24, 40), slice(4, 14))
-    tracer = _region_mean(result["tracer"], *region)
-    cycles = _region_mean(result["cycles"], *region)
+    tracer, cycles, seconds = _compared_region(lamp_addon, bl_scene, scene, BODY_SAMPLES,
+                                               (slice(24, 40), slice(4, 14)))
     light = scene["light"]
     direction = np.asarray(light["direction"]) / np.linalg.norm(light["direction"])
     cos_theta = max(0.0, -direction[1])  # the body's front faces -Y
@@ -416,6 +418,6 @@ def test_lit_body_without_specular_agrees_with_cycles(lamp_addon, bl_scene):
     assert tracer == pytest.approx(eq1, rel=1e-5)
     relative = (cycles - tracer) / tracer
     print(f"\nlit body, no specular, {BODY_SAMPLES} spp, 64x64, 16x10 region: tracer {tracer}, Cycles {cycles}, "
-          f"relative difference {relative}, seconds {result['seconds']}")
+          f"relative difference {relative}, seconds {seconds}")
     assert np.abs(relative).max() < BODY_TOLERANCE
     assert math.isclose(cos_theta, 1 / math.sqrt(0.3**2 + 1 + 0.6**2))

@@ -1,30 +1,16 @@
 """The add-on's modules import each other in one direction: no import circles (settings modules sit
 below the panels and operators that use them)."""
 
-import ast
 
-from helpers import ROOT
+from helpers import ROOT, sibling_imports
 
 ADDON = ROOT / "lamp_addon"
-
-
-def _imports(path) -> set[str]:
-    """The sibling modules a module imports, at the top or inside functions (``from . import x``,
-    ``from .x import y``)."""
-    out = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.ImportFrom) and node.level == 1:
-            if node.module:
-                out.add(node.module.split(".")[0])
-            else:
-                out.update(alias.name for alias in node.names)
-    return out
 
 
 def _graph() -> dict[str, set[str]]:
     modules = {p.stem: p for p in ADDON.glob("*.py") if p.stem != "__init__"}
     modules.update({p.name: p / "__init__.py" for p in ADDON.iterdir() if (p / "__init__.py").exists()})
-    return {name: _imports(path) & set(modules) for name, path in modules.items()}
+    return {name: sibling_imports(path) & set(modules) for name, path in modules.items()}
 
 
 def _circle(graph: dict[str, set[str]]) -> list[str] | None:

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import ast
 import re
 
 import pytest
-from helpers import ROOT
+from helpers import ROOT, sibling_imports
 
 from lamp_addon import jobs
 
@@ -42,20 +41,8 @@ def test_the_modal_operators_share_the_base(lamp_addon):
     assert not {"render_ops.py", "compare_ops.py", "study_ops.py", "preset_library.py"} & set(declared)
 
 
-def _imports(path) -> set[str]:
-    """The sibling modules of lamp_addon that ``path`` imports, anywhere in the file."""
-    out = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.ImportFrom) and node.level == 1:
-            if node.module:
-                out.add(node.module.split(".")[0])
-            else:
-                out.update(alias.name for alias in node.names)
-    return out
-
-
 def test_no_import_circle_through_the_study_camera_and_compare_modules():
-    graph = {p.stem: _imports(p) for p in ADDON.glob("*.py")}
+    graph = {p.stem: sibling_imports(p) for p in ADDON.glob("*.py")}
 
     def reaches(start: str, goal: str) -> bool:
         seen, todo = set(), [start]

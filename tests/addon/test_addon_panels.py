@@ -364,7 +364,7 @@ def _baseline(lamp_addon, addon_core, bl_scene):
 
 NUMBER = r"-?[0-9.]+(?:e[-+]?[0-9]+)?"
 
-# Issue 10's invalid edits: (edit, the property the panel must highlight, words of the message).
+# Invalid edits a designer makes in the panel: (edit, the property the panel must highlight, words of the message).
 INVALID_EDITS = {
     "shrunk body": (lambda d: setattr(d.body, "size", (80.0, 30.0)), "body.size", "cannot hold the lens"),
     "bulb moved back": (lambda d: setattr(d.lamps[0].bulb, "offset", (0.0, 30.0, 0.0)), "lamps[0].bulb.offset",

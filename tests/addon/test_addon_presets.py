@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import time
 from pathlib import Path
 
 import pytest
@@ -174,9 +173,7 @@ def test_an_invalid_design_is_not_saved(browser, add_library, tmp_path):
 def test_hostile_folder_is_listed_with_warnings(browser, add_library, tmp_path):
     good, bad = make_hostile_folder(tmp_path / "hostile")
     add_library(tmp_path / "hostile", "Hostile", read_only=True)
-    start = time.perf_counter()
     wm = refresh()
-    assert time.perf_counter() - start < 0.1 * (len(good) + len(bad) + 12)
     listing = browser.preset_library.listing()
     assert {os.path.basename(i.file) for i in wm.lamp_presets if i.library == "Hostile"} == good
     assert len(listing.warnings) == len(bad)

@@ -319,6 +319,17 @@ def _design_session(lamp_addon, bl_scene):
     return session
 
 
+def _design_session_with_root(lamp_addon, bl_scene):
+    """A viewport session of the four-lamp design, and the design's root empty (not yet moved)."""
+    import bpy
+
+    session = _design_session(lamp_addon, bl_scene)
+    root = bpy.data.objects.new("Lamp Design", None)
+    root[lamp_addon.design_root.PART_KEY] = lamp_addon.design_root.ROOT_PART
+    bl_scene.collection.objects.link(root)
+    return session, root
+
+
 def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_scene):
     session = _design_session(lamp_addon, bl_scene)
     ob = _blender_camera("PERSP")
@@ -537,12 +548,7 @@ def test_stages_on_the_worker_thread(lamp_addon):
 def test_moving_the_design_root_moves_the_view_of_the_lamp(lamp_addon, bl_scene):
     """The tracer's camera is the viewport in the root's local space: a root moved 0.2 m to the
     right shows the lamp 200 mm further right, i.e. the camera 200 mm to the left in model space."""
-    import bpy
-
-    session = _design_session(lamp_addon, bl_scene)
-    root = bpy.data.objects.new("Lamp Design", None)
-    root[lamp_addon.design_root.PART_KEY] = lamp_addon.design_root.ROOT_PART
-    bl_scene.collection.objects.link(root)
+    session, root = _design_session_with_root(lamp_addon, bl_scene)
     ob = _blender_camera("PERSP")
     window, view = _window_matrix(ob, 64, 48), ob.matrix_world.inverted()
     session.update(bl_scene)
@@ -568,12 +574,8 @@ def test_the_coarse_stage_keeps_to_its_pixel_budget(lamp_addon, size, divisor):
 
 
 def test_an_unevenly_scaled_root_is_said_and_undone(lamp_addon, bl_scene):
-    import bpy
 
-    session = _design_session(lamp_addon, bl_scene)
-    root = bpy.data.objects.new("Lamp Design", None)
-    root[lamp_addon.design_root.PART_KEY] = lamp_addon.design_root.ROOT_PART
-    bl_scene.collection.objects.link(root)
+    session, root = _design_session_with_root(lamp_addon, bl_scene)
     ob = _blender_camera("PERSP")
     window, view = _window_matrix(ob, 64, 48), ob.matrix_world.inverted()
     root.scale = (1.0, 2.0, 1.0)

@@ -6,17 +6,16 @@ import copy
 import json
 import os
 import signal
-import subprocess
-import sys
-import time
 
 import numpy as np
 import pytest
-from helpers import BASELINE, ROOT, assert_bad_input, baseline_doc, run_cli
+from helpers import BASELINE, assert_bad_input, baseline_doc, run_cli, signal_and_wait, start_cli_at
 
 from core_tracer import PASS_NAMES
 from core_tracer.images import imageio
-from core_tracer.scene import validate as scene
+from core_tracer.scene import reading
+from core_tracer.scene.reading import SceneError
+from core_tracer.scene.validate import load_scene
 
 # ---------------------------------------------------------------------------------------------
 # Bad scenes: every case gives exit 2, one line naming the field, the value and the range, and
@@ -125,13 +124,16 @@ def test_integer_beyond_json_limits(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.json"]
 
 
-def test_oversized_file_is_refused_before_reading(tmp_path):
+def test_oversized_file_is_refused_before_reading(tmp_path, monkeypatch):
     big = tmp_path / "big.json"
     with open(big, "wb") as f:
         f.truncate(100 * 1024 * 1024)  # sparse: costs no disk
-    start = time.perf_counter()
     assert_bad_input(run_cli("validate", big), "big.json", "104857600 bytes", "at most 1000000 bytes")
-    assert time.perf_counter() - start < 10
+    opened = []
+    monkeypatch.setattr(reading, "open", lambda *a, **kw: opened.append(a) or open(*a, **kw), raising=False)
+    with pytest.raises(SceneError, match="104857600 bytes; allowed at most 1000000 bytes"):
+        reading.read_json(big)
+    assert opened == []  # refused by its size, never opened
 
 
 @pytest.mark.parametrize("option,value", [("--width", "100000"), ("--height", "0"), ("--width", "-5")])
@@ -186,7 +188,7 @@ def test_render_exr_with_passes(tmp_path):
     assert image.shape == (24, 40, 3)
     assert np.isfinite(image).all() and (image >= 0).all() and image.max() > 0
     assert sc["image"] == {"width": 40, "height": 24}
-    expected = scene.load_scene(BASELINE)
+    expected = load_scene(BASELINE)
     expected["image"] = {"width": 40, "height": 24}
     assert sc["lamps"] == expected["lamps"] and sc["body"] == expected["body"]
     assert sorted(p.name for p in passes.iterdir()) == sorted(f"{n}.exr" for n in PASS_NAMES)
@@ -204,14 +206,11 @@ def test_render_png(tmp_path):
 
 
 def test_ctrl_c_exits_130_without_a_file(tmp_path):
-    out = tmp_path / "big.exr"
-    # large enough that the render is still running when the signal arrives
-    proc = subprocess.Popen([sys.executable, "-m", "core_tracer", "render", str(BASELINE), "-o", str(out),
-                             "--width", "2048", "--height", "2048"], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(2.0)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    out = tmp_path / "lamp.exr"
+    # The signal lands after the first band of the image is traced, in the middle of the render.
+    proc = start_cli_at("render:band", tmp_path.parent / f"{tmp_path.name}-band", "render", BASELINE, "-o", out,
+                        "--width", "96", "--height", "400")
+    _, err = signal_and_wait(proc, signal.SIGINT)
     assert proc.returncode == 130, err
     assert "Traceback" not in err and err.strip() == "interrupted"
     assert list(tmp_path.iterdir()) == []

@@ -18,30 +18,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 import save_race
-from helpers import ROOT
+from helpers import ROOT, assert_bad_input, child_pids, process_gone, run_cli, signal_and_wait, start_cli_at
 
 from core_tracer import budget, fileio
-from core_tracer.checkpoints import ENV_MARKER, ENV_POINT
 from core_tracer.cli import main as cli
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
-from core_tracer.scene import load_scene
+from core_tracer.scene.validate import load_scene
 from core_tracer.study import definition as st
 
 BASELINE = ROOT / "presets" / "paper-baseline.json"
 
 
-def run_cli(*args, env=None, prefix=()) -> subprocess.CompletedProcess:
-    return subprocess.run([*prefix, sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=300, env=env)
-
-
 def assert_refused(proc: subprocess.CompletedProcess, *needles: str) -> None:
-    assert proc.returncode == 2, proc.stderr
-    assert "Traceback" not in proc.stderr and proc.stdout == ""
-    (line,) = proc.stderr.strip().splitlines()
-    for needle in needles:
-        assert needle in line, (needle, line)
+    assert_bad_input(proc, *needles)
+    assert proc.stdout == ""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -259,22 +250,6 @@ CASES = [("render", "render:checked", TERM), ("render", "render:band", INT), ("r
          ("study", "study:composed", TERM), ("study", "write:created", TERM), ("study", "write:written", INT)]
 
 
-def _children(pid: int) -> list[int]:
-    out = []
-    for task in Path(f"/proc/{pid}/task").iterdir():
-        text = (task / "children").read_text().split()
-        out += [int(c) for c in text]
-    return out
-
-
-def _gone(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except FileNotFoundError:
-        return True
-    return state == "Z"
-
-
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
 @pytest.mark.parametrize("command, point, sig", CASES, ids=[f"{c}-{p}-{s.name}" for c, p, s in CASES])
 def test_a_signal_at_any_step_leaves_nothing_behind(tmp_path, command, point, sig):
@@ -283,28 +258,16 @@ def test_a_signal_at_any_step_leaves_nothing_behind(tmp_path, command, point, si
     temp = tmp_path / "tmp"  # the temporary folder of the program: lamp-study-* folders go here
     temp.mkdir()
     marker = tmp_path / "reached"
-    env = dict(os.environ, TMPDIR=str(temp), **{ENV_POINT: point, ENV_MARKER: str(marker)})
+    env = dict(os.environ, TMPDIR=str(temp))
     if command == "render":
         args = ["render", BASELINE, "-o", out_dir / "lamp.exr", "--width", "96", "--height", "400",
                 "--passes", out_dir / "passes"]
     else:
         args = ["study", BASELINE, "--vary", "lens.ior=1.4,1.5,1.6", "--size", "16x16", "--workers", "2",
                 "-o", out_dir / "sheet.png", "--save-variants", out_dir / "variants"]
-    proc = subprocess.Popen([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        deadline = time.monotonic() + 120
-        while not marker.exists():  # the program reached the point and waits there for the signal
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline, "the program never reached " + point
-            time.sleep(0.01)
-        workers = _children(proc.pid)
-        proc.send_signal(sig)
-        out, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+    proc = start_cli_at(point, marker, *args, env=env)  # waits there for the signal
+    workers = child_pids(proc.pid)
+    out, err = signal_and_wait(proc, sig)
     expected = (130, "interrupted") if sig == signal.SIGINT else (143, "terminated")
     assert (proc.returncode, err.strip()) == expected, err
     assert out == ""
@@ -313,7 +276,7 @@ def test_a_signal_at_any_step_leaves_nothing_behind(tmp_path, command, point, si
     leftovers = [p for p in leftovers if not (p == "variants" or p.startswith("variants/variant-"))]
     assert leftovers == [] or leftovers == ["passes"] and command == "render", leftovers
     assert os.listdir(temp) == []
-    assert all(_gone(pid) for pid in workers)
+    assert all(process_gone(pid) for pid in workers)
     if command == "study" and point in ("study:started", "study:variant"):
         assert workers  # the workers ran when the signal came, and are gone now
 
@@ -324,29 +287,18 @@ def test_the_folder_of_a_study_killed_with_sigkill_is_removed_by_the_next_study(
     temp = tmp_path / "tmp"
     temp.mkdir()
     marker = tmp_path / "reached"
-    env = dict(os.environ, TMPDIR=str(temp), **{ENV_POINT: "study:variant", ENV_MARKER: str(marker)})
+    env = dict(os.environ, TMPDIR=str(temp))
     args = ["study", BASELINE, "--vary", "lens.ior=1.4,1.5,1.6", "--size", "16x16", "--workers", "1",
             "-o", tmp_path / "sheet.png"]
-    proc = subprocess.Popen([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        deadline = time.monotonic() + 120
-        while not marker.exists():
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline
-            time.sleep(0.01)
-        workers = _children(proc.pid)
-        proc.kill()
-        proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
+    proc = start_cli_at("study:variant", marker, *args, env=env)
+    workers = child_pids(proc.pid)
+    signal_and_wait(proc, signal.SIGKILL)
     (left,) = os.listdir(temp)
     assert left.startswith(f"lamp-study-{proc.pid}-")
     # A live process's folder is never touched (this test's own pid stands in for a running study).
     (temp / f"lamp-study-{os.getpid()}-running").mkdir()
     deadline = time.monotonic() + 60
-    while not all(_gone(pid) for pid in workers):  # the orphaned worker notices and stops
+    while not all(process_gone(pid) for pid in workers):  # the orphaned worker notices and stops
         assert time.monotonic() < deadline
         time.sleep(0.05)
     env = dict(os.environ, TMPDIR=str(temp))

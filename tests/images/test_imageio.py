@@ -11,8 +11,8 @@ import pytest
 from helpers import BASELINE
 
 from core_tracer.images import display, imageio
-from core_tracer.scene import validate as scene
-from core_tracer.scene.validate import SceneError
+from core_tracer.scene.reading import SceneError, read_json, scene_to_json
+from core_tracer.scene.validate import load_scene, parse_scene
 
 
 def _random_image(rng: np.random.Generator, h: int = 7, w: int = 11) -> np.ndarray:
@@ -45,12 +45,12 @@ def test_exr_round_trip_is_exact(tmp_path):
 
 
 def test_exr_carries_the_normalised_scene(tmp_path):
-    doc = scene.read_json(BASELINE)
-    expected = scene.parse_scene(doc)
+    doc = read_json(BASELINE)
+    expected = parse_scene(doc)
     path = tmp_path / "scene.exr"
     imageio.write_image(path, np.zeros((4, 5, 3), np.float32), expected)
     text = oiio.ImageInput.open(str(path)).spec().getattribute(imageio.SCENE_ATTRIBUTE)
-    assert text == scene.scene_to_json(expected)
+    assert text == scene_to_json(expected)
     _, back = imageio.read_image(path)
     assert back == expected
 
@@ -65,7 +65,7 @@ def test_png_is_8_bit_srgb(tmp_path):
     values = np.array([0.0, 0.001, 0.0031308, 0.01, 0.05, 0.18, 0.2140, 0.5, 0.9, 1.0, 1.5, 40.0, -0.3],
                       dtype=np.float32)
     img = np.stack([values, values[::-1], np.full_like(values, 0.18)], axis=1)[None, :, :]
-    sc = scene.load_scene(BASELINE)
+    sc = load_scene(BASELINE)
     path = tmp_path / "out.png"
     imageio.write_image(path, img, sc, view=display.view_transform("Standard"), exposure=0)
 
@@ -78,7 +78,7 @@ def test_png_is_8_bit_srgb(tmp_path):
     assert np.array_equal(codes, expected)
     # 18 % grey is sRGB code 118; the linear midpoint 0.5 is 188
     assert codes[0, 5, 2] == 118 and codes[0, 7, 0] == 188
-    assert spec.getattribute(imageio.SCENE_ATTRIBUTE) == scene.scene_to_json(sc)
+    assert spec.getattribute(imageio.SCENE_ATTRIBUTE) == scene_to_json(sc)
 
     back, back_scene = imageio.read_image(path)
     assert back_scene == sc
@@ -107,7 +107,7 @@ def test_unknown_suffix_is_refused_clearly(tmp_path, name):
 
 
 def test_bad_scene_is_refused_before_writing(tmp_path):
-    sc = scene.load_scene(BASELINE)
+    sc = load_scene(BASELINE)
     sc["lamps"][0]["lens"]["ior"] = 0.5
     with pytest.raises(SceneError, match=r"lamps\[0\]\.lens\.ior"):
         imageio.write_image(tmp_path / "a.exr", np.zeros((2, 2, 3), np.float32), sc)

@@ -13,7 +13,9 @@ from hostile_presets import leaves
 from core_tracer import render
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
-from core_tracer.scene.validate import lamp_geometry, lens_absorption, parse_scene, read_json
+from core_tracer.scene.derived import lamp_geometry, lens_absorption
+from core_tracer.scene.reading import read_json
+from core_tracer.scene.validate import parse_scene
 
 FILES = sorted(PRESETS.glob("*.json"))
 AUTHOR = "Lamp Styling (after Nishio et al. 1990)"

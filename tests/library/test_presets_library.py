@@ -8,7 +8,6 @@ import json
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +18,9 @@ from hostile_presets import leaves, make_hostile_folder
 from core_tracer import fileio
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
-from core_tracer.scene.validate import SceneError, parse_scene, read_json, scene_to_json
+from core_tracer.scene import reading
+from core_tracer.scene.reading import SceneError, read_json, scene_to_json
+from core_tracer.scene.validate import parse_scene
 
 BUILTIN = ROOT / "presets"
 
@@ -180,14 +181,19 @@ def test_names_never_leave_the_library(tmp_path):
 # A folder of hostile presets
 
 
-def test_hostile_folder_through_the_api(tmp_path):
+def test_hostile_folder_through_the_api(tmp_path, monkeypatch):
     folder = tmp_path / "hostile"
     good, bad = make_hostile_folder(folder)
     lib = P.Library("hostile", str(folder), writable=False)
-    start = time.perf_counter()
+    opened = []
+
+    def recording_open(name, *args, **kw):
+        opened.append(os.path.basename(name))
+        return open(name, *args, **kw)
+
+    monkeypatch.setattr(reading, "open", recording_open, raising=False)
     entries, warnings = P.list_presets([lib, P.builtin_library()])
-    seconds = time.perf_counter() - start
-    assert seconds < 0.1 * (len(good) + len(bad) + 12)  # well under a second per file, on a shared machine
+    assert "huge.json" not in opened and "many-lamps.json" in opened  # refused by its size, unread
     assert {Path(e.file).name for e in entries if e.library == lib} == good
     assert len([e for e in entries if e.library != lib]) == len(list(BUILTIN.glob("*.json")))
     by_file = {Path(w.file).name: w for w in warnings}
@@ -203,11 +209,10 @@ def test_hostile_folder_through_the_api(tmp_path):
 
 def test_ten_to_the_six_lamps_stop_validation_at_once():
     doc = builtin_doc()
-    doc["lamps"] = [copy.deepcopy(doc["lamps"][0]) for _ in range(10)] * 100_000  # 10^6 lamps
-    start = time.perf_counter()
-    with pytest.raises(SceneError, match="lamps: has 1000000 items; allowed 1 to 4"):
+    # Lamps that are each wrong: the count is refused before any lamp is looked at.
+    doc["lamps"] = [{"bogus": 1}] * 1_000_000
+    with pytest.raises(SceneError, match="^lamps: has 1000000 items; allowed 1 to 4$"):
         parse_scene(doc)
-    assert time.perf_counter() - start < 0.05
 
 
 
@@ -215,9 +220,7 @@ def test_ten_to_the_six_lamps_stop_validation_at_once():
 def test_hostile_folder_through_the_cli(tmp_path):
     folder = tmp_path / "hostile"
     good, bad = make_hostile_folder(folder)
-    start = time.perf_counter()
     proc = run_cli("presets", "list", folder)
-    assert time.perf_counter() - start < 10
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr
     listed = proc.stdout.splitlines()

@@ -15,7 +15,8 @@ from reference_tracer import Lamp, compare
 from core_tracer import render, render_passes
 from core_tracer.raytrace import geometry as G
 from core_tracer.raytrace import tracer
-from core_tracer.scene import SceneError, spec
+from core_tracer.scene import spec
+from core_tracer.scene.reading import SceneError
 
 HEMISPHERE_9MM = 9.0 / math.sqrt(2.0)  # the highest cut a 9 mm pitch allows (MODEL.md §3.1)
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from core_tracer.raytrace import geometry as G
-from core_tracer.scene.validate import cut_sphere_radius
+from core_tracer.scene.derived import cut_sphere_radius
 
 R, T, P_, H = 45.0, 3.0, 9.0, 1.5
 RHO = cut_sphere_radius(P_, H)

@@ -8,7 +8,9 @@ from helpers import BASELINE, ROOT
 
 from core_tracer.scene import fields_doc
 from core_tracer.scene import spec as S
-from core_tracer.scene.validate import SceneError, parse_scene, without_defaults
+from core_tracer.scene.derived import without_defaults
+from core_tracer.scene.reading import SceneError
+from core_tracer.scene.validate import parse_scene
 from core_tracer.study import definition as st
 
 RULE = S.LENS.one_of[0]

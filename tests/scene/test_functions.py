@@ -8,7 +8,8 @@ from helpers import BASELINE, PRESETS
 
 from core_tracer.scene import functions as F
 from core_tracer.scene import spec as S
-from core_tracer.scene.validate import lens_absorption, load_scene, normalize, parse_scene
+from core_tracer.scene.derived import lens_absorption
+from core_tracer.scene.validate import load_scene, normalize, parse_scene
 
 
 def _scene() -> dict:

@@ -18,14 +18,16 @@ import re
 import subprocess
 import sys
 
+import helpers
 import pytest
 from helpers import ROOT
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from core_tracer.safe_text import has_surrogate, printable
-from core_tracer.scene import SceneError, parse_json_text, parse_scene
 from core_tracer.scene import spec as S
+from core_tracer.scene.reading import SceneError, parse_json_text
+from core_tracer.scene.safe_text import has_surrogate, printable
+from core_tracer.scene.validate import parse_scene
 from core_tracer.study import definition as study_mod
 
 BUILTIN = ROOT / "presets"
@@ -289,9 +291,8 @@ def test_a_study_title_with_a_surrogate_is_refused(title):
 # The command line, in a subprocess (its real stdout and stderr encodings)
 
 
-def run_cli(*args, **kw) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT, capture_output=True,
-                          timeout=120, **kw)
+def run_cli(*args) -> subprocess.CompletedProcess:
+    return helpers.run_cli(*args, text=False)  # bytes: the test decodes stderr strictly
 
 
 def assert_refused(proc: subprocess.CompletedProcess, *needles: str) -> str:

@@ -8,7 +8,8 @@ import re
 import pytest
 from helpers import BASELINE, FOUR_LAMPS
 
-from core_tracer.scene.validate import SceneError, parse_scene
+from core_tracer.scene.reading import SceneError
+from core_tracer.scene.validate import parse_scene
 
 NUMBER = r"-?[0-9.]+(?:e[-+]?[0-9]+)?"
 
@@ -17,9 +18,12 @@ def _doc(path=BASELINE) -> dict:
     return json.loads(path.read_text())
 
 
-def _error(doc: dict) -> SceneError:
+def _error(doc: dict, path: str | None = None) -> SceneError:
+    """The error ``doc`` is refused with; it names the field ``path`` when given."""
     with pytest.raises(SceneError) as info:
         parse_scene(doc)
+    if path is not None:
+        assert info.value.path == path, str(info.value)
     return info.value
 
 
@@ -40,8 +44,7 @@ def _assert_not_empty(err: SceneError) -> list[tuple[float, float]]:
 def test_a_shrunk_body_blames_its_size_with_a_range_that_holds_the_lens():
     doc = _doc()
     doc["body"]["size"] = [80, 30]
-    err = _error(doc)
-    assert err.path == "body.size"
+    err = _error(doc, "body.size")
     (w_lo, w_hi), (h_lo, h_hi) = _assert_not_empty(err)
     assert "at most 15 mm" in err.message  # or the lens radius that fits the body as it is
     doc["body"]["size"] = [w_lo, h_lo]
@@ -51,8 +54,7 @@ def test_a_shrunk_body_blames_its_size_with_a_range_that_holds_the_lens():
 def test_a_shrunk_body_of_four_lamps_blames_its_size():
     doc = _doc(FOUR_LAMPS)
     doc["body"]["size"][1] = 60  # the 90 mm lenses no longer fit in height
-    err = _error(doc)
-    assert err.path == "body.size"
+    err = _error(doc, "body.size")
     (w_lo, _), (h_lo, _) = _assert_not_empty(err)
     doc["body"]["size"] = [max(w_lo, doc["body"]["size"][0]), h_lo]
     parse_scene(doc)
@@ -61,8 +63,7 @@ def test_a_shrunk_body_of_four_lamps_blames_its_size():
 def test_a_lens_moved_out_of_the_body_blames_its_centre():
     doc = _doc()
     doc["lamps"][0]["center"] = [80, 0]
-    err = _error(doc)
-    assert err.path == "lamps[0].center"
+    err = _error(doc, "lamps[0].center")
     (x_lo, x_hi), (z_lo, z_hi) = _assert_not_empty(err)
     doc["lamps"][0]["center"] = [x_hi, z_lo]
     parse_scene(doc)
@@ -72,8 +73,7 @@ def test_a_lens_moved_out_of_the_body_blames_its_centre():
 def test_a_bulb_moved_along_the_axis_blames_the_offset(y):
     doc = _doc()
     doc["lamps"][0]["bulb"]["offset"] = [0, y, 0]
-    err = _error(doc)
-    assert err.path == "lamps[0].bulb.offset"
+    err = _error(doc, "lamps[0].bulb.offset")
     (lo, hi), = _assert_not_empty(err)
     for value in (lo, hi, (lo + hi) / 2):
         ok = copy.deepcopy(doc)
@@ -82,14 +82,13 @@ def test_a_bulb_moved_along_the_axis_blames_the_offset(y):
     # the limits are tight: 1 % outside either end the bulb leaves the reflector
     for value in (lo - 0.01 * abs(hi - lo), hi + 0.01 * abs(hi - lo)):
         doc["lamps"][0]["bulb"]["offset"] = [0, value, 0]
-        assert _error(doc).path == "lamps[0].bulb.offset"
+        _error(doc, "lamps[0].bulb.offset")
 
 
 def test_a_bulb_moved_sideways_blames_the_offset_with_the_distance_that_fits():
     doc = _doc()
     doc["lamps"][0]["bulb"]["offset"] = [40, 0, 0]
-    err = _error(doc)
-    assert err.path == "lamps[0].bulb.offset"
+    err = _error(doc, "lamps[0].bulb.offset")
     limit = float(re.search(rf"up to ({NUMBER}) mm", err.message)[1])
     y = float(re.search(rf"at y = ({NUMBER}) mm", err.message)[1])
     assert 0 < limit < 40
@@ -100,13 +99,12 @@ def test_a_bulb_moved_sideways_blames_the_offset_with_the_distance_that_fits():
 def test_a_bulb_too_big_for_its_reflector_blames_the_radius():
     doc = _doc()
     doc["lamps"][0]["bulb"]["radius"] = 30
-    err = _error(doc)
-    assert err.path == "lamps[0].bulb.radius"
+    err = _error(doc, "lamps[0].bulb.radius")
     (lo, hi), = _assert_not_empty(err)
     assert lo == 0 and 8 < hi < 30
     doc["lamps"][0]["bulb"]["radius"] = hi
-    err = _error(doc)  # it fits on the axis, deeper than the focus: the offset says where
-    assert err.path == "lamps[0].bulb.offset"
+    # It fits on the axis, deeper than the focus: the offset says where.
+    err = _error(doc, "lamps[0].bulb.offset")
     (y_lo, y_hi), = _assert_not_empty(err)
     doc["lamps"][0]["bulb"]["offset"] = [0, (y_lo + y_hi) / 2, 0]
     parse_scene(doc)
@@ -115,8 +113,7 @@ def test_a_bulb_too_big_for_its_reflector_blames_the_radius():
 def test_a_cut_height_above_the_hemisphere_states_the_limit_of_this_pitch():
     doc = _doc()
     doc["lamps"][0]["cuts"]["height"] = 100
-    err = _error(doc)
-    assert err.path == "lamps[0].cuts.height"
+    err = _error(doc, "lamps[0].cuts.height")
     (lo, hi), = _assert_not_empty(err)
     assert hi == pytest.approx(9 / 2 ** 0.5, abs=1e-3) and "pitch 9" in err.message
     doc["lamps"][0]["cuts"]["height"] = hi
@@ -126,12 +123,11 @@ def test_a_cut_height_above_the_hemisphere_states_the_limit_of_this_pitch():
 def test_a_reflector_deeper_than_the_body_blames_the_focal_length_with_its_range():
     doc = _doc()
     doc["lamps"][0]["reflector"]["focal_length"] = 5
-    err = _error(doc)
-    assert err.path == "lamps[0].reflector.focal_length"
+    err = _error(doc, "lamps[0].reflector.focal_length")
     (lo, hi), = _assert_not_empty(err)
     assert "or body.depth at least" in err.message
     doc["lamps"][0]["reflector"]["focal_length"] = lo  # the reflector fits; a deep bowl moves the focus
-    assert _error(doc).path == "lamps[0].bulb.offset"  # toward the vertex: the bulb is next to move
+    _error(doc, "lamps[0].bulb.offset")  # toward the vertex: the bulb is next to move
     doc["lamps"][0]["reflector"]["focal_length"] = 12
     parse_scene(doc)
 
@@ -139,8 +135,7 @@ def test_a_reflector_deeper_than_the_body_blames_the_focal_length_with_its_range
 def test_a_body_shallower_than_the_lens_blames_its_depth():
     doc = _doc()
     doc["body"]["depth"] = 3  # shallower than lens and cuts: no focal length helps
-    err = _error(doc)
-    assert err.path == "body.depth"
+    err = _error(doc, "body.depth")
     (lo, hi), = _assert_not_empty(err)
     doc["body"]["depth"] = lo
     parse_scene(doc)

@@ -1,4 +1,4 @@
-"""The README documents every scene field, as declared in core_tracer/spec.py."""
+"""The README documents every scene field, as declared in core_tracer/scene/spec.py."""
 
 
 from helpers import ROOT

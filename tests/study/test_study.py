@@ -1,25 +1,24 @@
-"""Design studies (issue 5): definitions, parallel rendering, cancel, contact sheets, the CLI."""
+"""Design studies: definitions, parallel rendering, cancel, contact sheets, the CLI."""
 
 from __future__ import annotations
 
 import json
 import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import OpenImageIO as oiio
 import pytest
-from helpers import BASELINE, FOUR_LAMPS, ROOT, baseline_doc, run_cli
+from helpers import BASELINE, FOUR_LAMPS, baseline_doc, child_pids, process_gone, run_cli, signal_and_wait, start_cli_at
 
 from core_tracer import render
 from core_tracer.cli import main as cli
 from core_tracer.images import display
-from core_tracer.scene import validate as scene
-from core_tracer.scene.validate import SceneError
+from core_tracer.scene.derived import lens_absorption
+from core_tracer.scene.reading import SceneError, read_json
+from core_tracer.scene.validate import load_scene, parse_scene
 from core_tracer.study import definition as st
 from core_tracer.study import run as study_run
 from core_tracer.study import sheet as study_sheet
@@ -36,32 +35,6 @@ def two_by_two(size=SIZE) -> st.Study:
 
 
 
-def _children(pid: int) -> list[int]:
-    """Process ids whose parent is ``pid`` (Linux /proc)."""
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                stat = Path(f"/proc/{entry}/stat").read_text()
-            except OSError:
-                continue
-            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
-                out.append(int(entry))
-    return out
-
-
-def _gone(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    return False
-
-
-# ---------------------------------------------------------------------------------------------
-# The definition
-
-
 def test_variants_are_row_major_with_the_edited_values():
     s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.45:1.60:4"), st.parse_vary("cuts.height=0.5,1,2")])
     assert (s.columns, s.rows, len(s)) == (4, 3, 12)
@@ -72,13 +45,13 @@ def test_variants_are_row_major_with_the_edited_values():
         lamp = v.scene["lamps"][0]
         assert (lamp["lens"]["ior"], lamp["cuts"]["height"]) == v.values
     # The base is the design at the study's size, and everything else in a variant equals the base.
-    assert s.base == scene.parse_scene({**baseline_doc(), "image": {"width": 256, "height": 256}})
+    assert s.base == parse_scene({**baseline_doc(), "image": {"width": 256, "height": 256}})
     other = s.variants[5].scene
     assert other["body"] == s.base["body"] and other["camera"] == s.base["camera"]
 
 
 def test_lamp_index_edits_one_lamp_and_no_index_edits_all():
-    base = scene.read_json(FOUR_LAMPS)
+    base = read_json(FOUR_LAMPS)
     one = st.Study.build(base, [st.parse_vary("lamps[2].lens.ior=1.6")])
     every = st.Study.build(base, [st.parse_vary("lens.ior=1.6")])
     iors = [lamp["lens"]["ior"] for lamp in one.variants[0].scene["lamps"]]
@@ -95,7 +68,7 @@ def test_lens_colour_replaces_absorption():
     assert "absorption" not in lens
     assert lens["transmitted_color"] == [0.9, 0.5, 0.05]
     assert lens["reference_thickness"] == lens["thickness"]
-    assert scene.lens_absorption(lens) == pytest.approx([-np.log(c) / 3.0 for c in (0.9, 0.5, 0.05)])
+    assert lens_absorption(lens) == pytest.approx([-np.log(c) / 3.0 for c in (0.9, 0.5, 0.05)])
     # One component: the others keep the colour the base's absorption gives through its thickness.
     s = st.Study.build(baseline_doc(), [st.parse_vary("lens.transmitted_color[1]=0.2,0.4")])
     base_a = s.base["lamps"][0]["lens"]["absorption"]
@@ -112,13 +85,13 @@ def test_a_default_camera_frames_the_body_at_the_study_size():
     doc = baseline_doc()
     del doc["camera"]
     wide = st.Study.build(doc, [st.parse_vary("lens.ior=1.5")], (96, 32))
-    expected = scene.parse_scene({**doc, "image": {"width": 96, "height": 32}})
-    assert wide.base["camera"] == expected["camera"] != scene.parse_scene(doc)["camera"]
+    expected = parse_scene({**doc, "image": {"width": 96, "height": 32}})
+    assert wide.base["camera"] == expected["camera"] != parse_scene(doc)["camera"]
     assert wide.variants[0].scene["image"] == {"width": 96, "height": 32}
 
 
 def test_two_axes_on_one_field_differ_by_lamp_or_component():
-    base = scene.read_json(FOUR_LAMPS)
+    base = read_json(FOUR_LAMPS)
     s = st.Study.build(base, [st.parse_vary("lamps[0].lens.ior=1.5,1.6"), st.parse_vary("lamps[1].lens.ior=1.4,1.7")])
     assert [[lamp["lens"]["ior"] for lamp in v.scene["lamps"][:2]] for v in s.variants] == [
         [1.5, 1.4], [1.6, 1.4], [1.5, 1.7], [1.6, 1.7]]
@@ -155,7 +128,7 @@ def test_variants_saved_as_presets(tmp_path):
     paths = s.save_variants(tmp_path / "variants")
     assert [Path(p).name for p in paths] == [f"variant-0{i}.json" for i in range(4)]
     for v, path in zip(s.variants, paths, strict=True):
-        loaded = scene.load_scene(path)
+        loaded = load_scene(path)
         assert loaded["name"] == s.variant_name(v.index)
         assert "lens.ior=" in loaded["name"] and "cuts.height=" in loaded["name"]
         assert {**loaded, "name": v.scene["name"]} == v.scene
@@ -259,7 +232,7 @@ def test_cancel_stops_the_workers_and_removes_the_temporary_files():
     run = runs[0]
     assert 1 <= run.done < len(s)  # stopped mid-study
     assert len(state["pids"]) == 2
-    assert all(_gone(pid) for pid in state["pids"])
+    assert all(process_gone(pid) for pid in state["pids"])
     assert all(w.process.returncode is not None for w in run._pool)
     assert not os.path.exists(state["folder"])
 
@@ -277,7 +250,7 @@ def test_a_worker_that_dies_stops_the_study_with_an_error():
                 assert time.monotonic() < deadline
     finally:
         run.close()
-    assert all(_gone(pid) for pid in run.process_ids())
+    assert all(process_gone(pid) for pid in run.process_ids())
     assert not os.path.exists(folder)
 
 
@@ -441,28 +414,17 @@ def test_cli_study_of_a_missing_sheet_exits_2(tmp_path):
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
 def test_cli_ctrl_c_exits_130_and_writes_nothing(tmp_path):
     out = tmp_path / "sheet.png"
-    cmd = [sys.executable, "-m", "core_tracer", "study", str(BASELINE), "--vary", "lens.ior=1.4:1.6:8",
-           "--vary", "cuts.height=0.5:2:8", "-o", str(out), "--size", "128x128", "--workers", "2"]
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        # Wait until both workers run (the 64 variants then take far longer than this test waits).
-        deadline = time.monotonic() + 30
-        workers: list[int] = []
-        while len(workers) < 2 and time.monotonic() < deadline and proc.poll() is None:
-            time.sleep(0.1)
-            workers = _children(proc.pid)
-        time.sleep(0.5)
-        assert proc.poll() is None, proc.communicate()
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
+    args = ["study", BASELINE, "--vary", "lens.ior=1.4:1.6:8", "--vary", "cuts.height=0.5:2:8", "-o", out,
+            "--size", "128x128", "--workers", "2"]
+    # The signal lands once both workers have started, before the first variant is done.
+    proc = start_cli_at("study:started", tmp_path.parent / f"{tmp_path.name}-started", *args)
+    workers = child_pids(proc.pid)
+    _, err = signal_and_wait(proc, signal.SIGINT)
     assert proc.returncode == 130, err
     assert "Traceback" not in err
     assert list(tmp_path.iterdir()) == []
     assert len(workers) == 2
-    assert all(_gone(pid) for pid in workers)
+    assert all(process_gone(pid) for pid in workers)
 
 
 def test_study_run_driven_by_polling_like_a_modal_operator():
@@ -483,7 +445,7 @@ def test_study_run_driven_by_polling_like_a_modal_operator():
     assert fractions == sorted(fractions) and all(0 <= f <= 1 for f in fractions)
     for v, image in zip(s.variants, run.images, strict=True):
         assert np.array_equal(image, render(v.scene, 48, 48))
-    assert all(_gone(pid) for pid in run.process_ids())
+    assert all(process_gone(pid) for pid in run.process_ids())
     assert not os.path.exists(folder)
 
 
@@ -494,6 +456,6 @@ def test_cli_lists_the_parameters():
 
 
 def test_one_lamps_centre_is_a_parameter():
-    base = scene.load_scene(FOUR_LAMPS)
+    base = load_scene(FOUR_LAMPS)
     s = st.Study.build(base, [st.parse_vary("lamps[0].center=-185/0,-180/5")])
     assert [v.scene["lamps"][0]["center"] for v in s.variants] == [[-185.0, 0.0], [-180.0, 5.0]]
