@@ -1,5 +1,5 @@
 """Compare with Cycles: the same design, camera and resolution rendered by the paper's tracer and
-by Cycles, side by side (issue 3, item 7).
+by Cycles, side by side.
 
 Both renders go through ``bpy.ops.render.render`` into the "Render Result" image, Cycles into
 render slot 1 and the tracer (the Lamp Tracer render engine) into slot 2 (slot indices 0 and 1),

@@ -1,4 +1,4 @@
-"""The scene camera: the one view both renderers use (issue 3, item 5).
+"""The scene camera: the one view both renderers use.
 
 The scene description's camera (``scene["camera"]``, millimetres, MODEL.md §2) and Blender's
 camera object are converted into each other here. The projection follows Blender's own camera

@@ -1,4 +1,4 @@
-"""The "Lamp Tracer" render engine: the paper's renderer behind F12 (issue 3, item 6).
+"""The "Lamp Tracer" render engine: the paper's renderer behind F12.
 
 As a ``RenderEngine`` the tracer gets everything Blender gives any engine: F12, render slots,
 Image > Save, ``bpy.ops.render.render(write_still=True)`` headless, the output and colour
