@@ -51,7 +51,7 @@ import numpy as np
 
 from ..core_tracer.images import display
 from ..core_tracer.scene.reading import SceneError
-from . import design_panels, design_properties, image_view, jobs, render_camera
+from . import actions, design_properties, image_view, jobs, render_camera
 from .convert.sheet import differences, shown_side_by_side, side_by_side
 from .render_engine import ENGINE_ID
 
@@ -619,7 +619,7 @@ class LAMP_OT_compare_cycles(jobs.ModalJob, bpy.types.Operator):
 
 classes = (LAMP_OT_compare_cycles,)
 
-register, _unregister = design_panels.register_actions_factory(
+register, _unregister = actions.register_actions_factory(
     classes, (("lamp.compare_cycles", "Compare with Cycles", "IMAGE_REFERENCE"),))
 
 

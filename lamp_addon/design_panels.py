@@ -6,8 +6,8 @@ its forms and the fields of the form in use. Lengths carry their unit in the pro
 ("Radius (mm)"). The top of the panel says whether the design is valid; the field its first error
 names is highlighted where it is drawn, with the message under it (``design_validity``).
 
-Other modules add buttons to the actions area at register time with ``add_action(idname, text,
-icon)`` and take them away with ``remove_action(idname)``; ``ACTION_OPERATORS`` holds them in order.
+Other modules add buttons to the actions area at register time (``actions.add_action(idname, text,
+icon)``, taken away with ``remove_action``); the panel draws ``actions.ACTION_OPERATORS`` in order.
 """
 
 from __future__ import annotations
@@ -17,40 +17,10 @@ import bpy
 from ..core_tracer.scene import functions
 from ..core_tracer.scene import spec as S
 from . import design_properties, design_validity
+from .actions import ACTION_OPERATORS
+
 
 # (operator idname, button text, icon) drawn in the actions area, in order.
-ACTION_OPERATORS: list[tuple[str, str, str]] = [("lamp.build", "Build Lamp", "MESH_CYLINDER")]
-
-
-def add_action(idname: str, text: str, icon: str = "NONE") -> None:
-    """Show operator ``idname`` as a button in the actions area (call from a module's ``register``)."""
-    remove_action(idname)
-    ACTION_OPERATORS.append((idname, text, icon))
-
-
-def remove_action(idname: str) -> None:
-    ACTION_OPERATORS[:] = [entry for entry in ACTION_OPERATORS if entry[0] != idname]
-
-
-def register_actions_factory(classes: tuple[type, ...], actions: tuple[tuple[str, str, str], ...]):
-    """``register``/``unregister`` of a module whose operators show as buttons in the actions area:
-    ``bpy.utils.register_classes_factory(classes)`` plus ``add_action`` of each (idname, text, icon)
-    of ``actions`` (in order), taken away again in reverse."""
-    register_classes, unregister_classes = bpy.utils.register_classes_factory(classes)
-
-    def register() -> None:
-        register_classes()
-        for action in actions:
-            add_action(*action)
-
-    def unregister() -> None:
-        for idname, _text, _icon in reversed(actions):
-            remove_action(idname)
-        unregister_classes()
-
-    return register, unregister
-
-
 def leaf_keys(section: S.Section) -> list[str]:
     """The keys of ``section`` drawn as plain properties: leaves that are not constants and belong
     to no either/or rule (those are drawn by ``draw_rule``)."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 import bpy
 
 from ..core_tracer.scene.reading import SceneError
-from . import design_panels, render_camera, render_setup
+from . import actions, render_camera, render_setup
 from .design_operator import DesignOperator
 
 
@@ -45,5 +45,5 @@ class LAMP_OT_exposure_from_design(DesignOperator, bpy.types.Operator):
 
 classes = (LAMP_OT_exposure_from_design,)
 
-register, unregister = design_panels.register_actions_factory(
+register, unregister = actions.register_actions_factory(
     classes, (("lamp.exposure_from_design", "Exposure from Design", "LIGHT_SUN"),))

@@ -36,7 +36,7 @@ import re
 
 import bpy
 
-from . import design_panels, design_properties, design_root
+from . import actions, design_properties, design_root
 from .convert import camera as cm
 from .convert import units
 from .design_operator import DesignOperator
@@ -562,7 +562,7 @@ class LAMP_PT_camera_view(bpy.types.Panel):
 
 classes = (LAMP_OT_frame_design, LAMP_OT_camera_to_design, LAMP_PT_camera_view)
 
-_register_classes, _unregister_classes = design_panels.register_actions_factory(
+_register_classes, _unregister_classes = actions.register_actions_factory(
     classes, (("lamp.frame_design", "Frame Lamp", "VIEW_CAMERA"),))
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..core_tracer.images import display
 from ..core_tracer.scene.reading import SceneError
-from . import design_panels, image_view, jobs, render_camera, reports
+from . import actions, image_view, jobs, render_camera, reports
 
 IMAGE_NAME = "Lamp Tracer"
 
@@ -175,5 +175,5 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
 classes = (LAMP_OT_render_tracer,)
 
 
-register, unregister = design_panels.register_actions_factory(
+register, unregister = actions.register_actions_factory(
     classes, (("lamp.render_tracer", "Render with Lamp Tracer", "RENDER_STILL"),))

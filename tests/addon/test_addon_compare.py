@@ -323,9 +323,9 @@ def test_a_setting_the_user_changes_during_the_comparison_is_kept(lamp_addon, bl
 def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
     import bpy
 
-    compare, panels = lamp_addon.compare_ops, lamp_addon.design_panels
+    compare = lamp_addon.compare_ops
     before = _design_and_user_settings(lamp_addon, bl_scene)
-    actions = list(panels.ACTION_OPERATORS)
+    actions = list(lamp_addon.actions.ACTION_OPERATORS)
     _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     compare.unregister()
     try:
@@ -334,7 +334,7 @@ def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
         assert not hasattr(bpy.types, "LAMP_OT_compare_cycles")
     finally:
         compare.register()
-        panels.ACTION_OPERATORS[:] = actions  # the button back in its place
+        lamp_addon.actions.ACTION_OPERATORS[:] = actions  # the button back in its place
     assert bpy.ops.lamp.compare_cycles.poll()
 
 

@@ -268,4 +268,4 @@ def test_the_camera_area_says_which_camera_renders(lamp_addon, bl_scene):
     layout = draw(panel, bl_scene)
     assert layout.operators() == ["lamp.frame_design", "lamp.camera_to_design"]
     assert any('"Mine"' in entry[1] and "not used" in entry[1] for entry in layout.log if entry[0] == "label")
-    assert "lamp.frame_design" in [idname for idname, *_ in lamp_addon.design_panels.ACTION_OPERATORS]
+    assert "lamp.frame_design" in [idname for idname, *_ in lamp_addon.actions.ACTION_OPERATORS]

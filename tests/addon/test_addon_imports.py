@@ -57,3 +57,21 @@ def test_library_folders_changed_marks_the_listing_stale(addon, lamp_addon):
         assert listing.stale  # the preferences told the library through its listener
     finally:
         prefs.library_folders.remove(len(prefs.library_folders) - 1)
+
+
+def test_the_render_side_does_not_depend_on_a_panel():
+    """The render engine, its camera and the operators reach no sidebar panel module, directly or
+    through another module: the actions area's registry (``actions``) sits below both."""
+    graph = _graph()
+
+    def reached(start: str) -> set[str]:
+        seen, todo = set(), [start]
+        while todo:
+            for nxt in graph[todo.pop()] - seen:
+                seen.add(nxt)
+                todo.append(nxt)
+        return seen
+
+    panels = {name for name in graph if name.endswith("_panel") or name.endswith("_panels")}
+    for module in ("render_engine", "render_camera", "render_ops", "compare_ops", "display_ops"):
+        assert not reached(module) & panels, (module, reached(module) & panels)

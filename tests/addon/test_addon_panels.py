@@ -253,15 +253,15 @@ def test_lamp_list_and_actions(lamp_addon, bl_scene, design):
     assert ("label", "Lamp 2", "LIGHT_POINT") in row.log
     assert [p[2] for p in row.props()] == ["on"]
 
-    panels = lamp_addon.design_panels
+    actions = lamp_addon.actions
     ops = draw(bpy.types.LAMP_PT_design, bl_scene).operators()
     assert ops[0] == "lamp.build"
-    assert ops == [idname for idname, _, _ in panels.ACTION_OPERATORS]
-    panels.add_action("lamp.lamp_add", "Another Action", "ADD")
+    assert ops == [idname for idname, _, _ in actions.ACTION_OPERATORS]
+    actions.add_action("lamp.lamp_add", "Another Action", "ADD")
     try:
         assert draw(bpy.types.LAMP_PT_design, bl_scene).operators()[-1] == "lamp.lamp_add"
     finally:
-        panels.remove_action("lamp.lamp_add")
+        actions.remove_action("lamp.lamp_add")
     assert "lamp.lamp_add" not in draw(bpy.types.LAMP_PT_design, bl_scene).operators()
 
 

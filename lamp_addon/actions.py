@@ -1,0 +1,41 @@
+"""The buttons of the Lamp tab's actions area (Build, Frame, Render, Compare, ...).
+
+A module whose operators show there registers them with ``register_actions_factory`` (or
+``add_action``); the design panel draws ``ACTION_OPERATORS`` in order. This module sits below both
+the panels and the operators, so an operator module never depends on a panel module.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+ACTION_OPERATORS: list[tuple[str, str, str]] = [("lamp.build", "Build Lamp", "MESH_CYLINDER")]
+
+
+def add_action(idname: str, text: str, icon: str = "NONE") -> None:
+    """Show operator ``idname`` as a button in the actions area (call from a module's ``register``)."""
+    remove_action(idname)
+    ACTION_OPERATORS.append((idname, text, icon))
+
+
+def remove_action(idname: str) -> None:
+    ACTION_OPERATORS[:] = [entry for entry in ACTION_OPERATORS if entry[0] != idname]
+
+
+def register_actions_factory(classes: tuple[type, ...], actions: tuple[tuple[str, str, str], ...]):
+    """``register``/``unregister`` of a module whose operators show as buttons in the actions area:
+    ``bpy.utils.register_classes_factory(classes)`` plus ``add_action`` of each (idname, text, icon)
+    of ``actions`` (in order), taken away again in reverse."""
+    register_classes, unregister_classes = bpy.utils.register_classes_factory(classes)
+
+    def register() -> None:
+        register_classes()
+        for action in actions:
+            add_action(*action)
+
+    def unregister() -> None:
+        for idname, _text, _icon in reversed(actions):
+            remove_action(idname)
+        unregister_classes()
+
+    return register, unregister
