@@ -1,10 +1,6 @@
-"""Ray-surface intersections of the simplified lamp (MODEL.md §3, paper §3.2.4).
-
-Inside a lamp everything is in the lamp's local frame: x and z measured from the lamp axis,
-y as in the world (outer lens face y = 0, interior y > 0). Each function takes ray origins
-``o`` and unit directions ``d`` (N, 3) and per-ray parameters (N,), and returns the ray
-parameter of the first hit beyond ``T_MIN`` (``inf`` for a miss).
-"""
+"""The fish-eye cuts (MODEL.md §3.1, paper §3.2.4, Fig. 9): a square grid of spherical caps on
+the lens's inner face, found by walking the cells crossed between plane A (the base) and plane
+B (the apexes); a Fresnel surface met from inside the lens and from the air."""
 
 from __future__ import annotations
 
@@ -13,157 +9,27 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..scene.spec import MAX_CUTS_ACROSS
-from ..scene.validate import cut_sphere_radius, lamp_geometry, lens_absorption
-from . import optics
+from ...scene.spec import MAX_CUTS_ACROSS
+from .. import optics
+from .. import paths as P
+from ..lamp_table import LampTable
+from .base import T_MIN, Segments
 
-T_MIN = 1e-6  # mm: a hit closer than this to the ray's origin is the origin's own surface
+SURFACE = P.CUT
+MEDIA = (P.IN_LENS, P.IN_AIR)
 # The cell walk's bound: before the side wall a ray's path across the cut slab is at most a
 # diameter 2R long in x-z, so it visits at most (|dx| + |dz|) / p + 3 <= sqrt 2 * 2R/p + 3 cells,
 # and validation keeps 2R/p <= MAX_CUTS_ACROSS.
 MAX_CELL_STEPS = math.ceil(math.sqrt(2.0) * MAX_CUTS_ACROSS) + 3
 
 
-@dataclass(frozen=True)
-class LampTable:
-    """Every lamp's parameters as arrays indexed by lamp number (gathered per ray)."""
-
-    center: np.ndarray  # (L, 2) [x, z] of the axis in the world
-    radius: np.ndarray
-    plane_a: np.ndarray  # y of the cut base (= lens thickness)
-    plane_b: np.ndarray  # y of the cut apexes
-    pitch: np.ndarray
-    cut_radius: np.ndarray  # rho of the lenslet spheres (inf for a flat inner face)
-    ior: np.ndarray
-    absorption: np.ndarray  # (L, 3) per mm
-    wall_color: np.ndarray  # (L, 3)
-    lens_diffuse: np.ndarray  # (L, 3)
-    lens_specular: np.ndarray
-    lens_shininess: np.ndarray
-    focal: np.ndarray
-    rim: np.ndarray
-    vertex: np.ndarray
-    reflector_color: np.ndarray  # (L, 3)
-    reflectance: np.ndarray
-    scatter: np.ndarray
-    scatter_shininess: np.ndarray
-    bulb_center: np.ndarray  # (L, 3) local
-    bulb_radius: np.ndarray
-    bulb_intensity: np.ndarray  # (L, 3), zero when the bulb is off
-    socket_radius: np.ndarray
-    socket_color: np.ndarray  # (L, 3)
-
-    @classmethod
-    def from_scene(cls, scene: dict) -> LampTable:
-        rows = []
-        for lamp in scene["lamps"]:
-            g = lamp_geometry(lamp)
-            lens, cuts, refl, bulb = lamp["lens"], lamp["cuts"], lamp["reflector"], lamp["bulb"]
-            h = cuts["height"]
-            rows.append(dict(
-                center=lamp["center"], radius=lens["radius"], plane_a=g["plane_a"], plane_b=g["plane_b"],
-                pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 else np.inf,
-                ior=lens["ior"], absorption=lens_absorption(lens), wall_color=lens["side_wall_color"],
-                lens_diffuse=lens["diffuse_color"], lens_specular=lens["specular"],
-                lens_shininess=lens["shininess"], focal=refl["focal_length"], rim=g["rim"], vertex=g["vertex"],
-                reflector_color=refl["color"], reflectance=refl["reflectance"], scatter=refl["scatter"],
-                scatter_shininess=refl["shininess"], bulb_center=g["bulb_center"], bulb_radius=bulb["radius"],
-                bulb_intensity=bulb["intensity"] if bulb["on"] else [0.0, 0.0, 0.0],
-                socket_radius=lamp["socket"]["radius"], socket_color=lamp["socket"]["color"],
-            ))
-        return cls(**{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
-
-
-def _solve_quadratic(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Roots (small, large) of a t^2 + b t + c = 0 by the stable formula; NaN where none.
-    Handles a == 0 (a linear equation) with both roots equal."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        disc = b * b - 4.0 * a * c
-        sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
-        q = -0.5 * (b + np.copysign(sq, b))
-        r1 = q / a
-        r2 = c / q
-        linear = np.abs(a) < 1e-15
-        lin = np.where(linear, -c / b, np.nan)
-        lo = np.where(linear, lin, np.fmin(r1, r2))
-        hi = np.where(linear, lin, np.fmax(r1, r2))
-    return lo, hi
-
-
-def _first_beyond(lo: np.ndarray, hi: np.ndarray, ok_lo: np.ndarray, ok_hi: np.ndarray) -> np.ndarray:
-    lo_ok = (lo > T_MIN) & ok_lo
-    hi_ok = (hi > T_MIN) & ok_hi
-    return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
-
-
-def hit_outer_face(o: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """The plane y = 0, reached from inside the lens (d_y < 0)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = -o[:, 1] / d[:, 1]
-    return np.where((d[:, 1] < 0) & (t > T_MIN), t, np.inf)
-
-
-def hit_side_wall(o: np.ndarray, d: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """The cylinder r = R, left from inside (the far root)."""
-    a = d[:, 0] ** 2 + d[:, 2] ** 2
-    b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
-    c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
-    _, hi = _solve_quadratic(a, b, c)
-    return np.where((a > 1e-15) & (hi > T_MIN), hi, np.inf)
-
-
-def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.ndarray, rim: np.ndarray,
-                  leaving: np.ndarray | None = None) -> np.ndarray:
-    """The paraboloid y = y_v - (x^2 + z^2) / 4f between the rim and the vertex.
-
-    For rays that start on the reflector (``leaving``) the root nearer 0 is the start itself:
-    only the other one can be a hit, whatever its distance (see ``hit_cuts``)."""
-    inv4f = 0.25 / focal
-    a = (d[:, 0] ** 2 + d[:, 2] ** 2) * inv4f
-    b = d[:, 1] + 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2]) * inv4f
-    c = o[:, 1] + (o[:, 0] ** 2 + o[:, 2] ** 2) * inv4f - vertex
-    lo, hi = _solve_quadratic(a, b, c)
-    if leaving is not None:
-        own_is_lo = np.abs(lo) <= np.abs(hi)
-        lo = np.where(leaving & own_is_lo, np.nan, lo)
-        hi = np.where(leaving & ~own_is_lo, np.nan, hi)
-    y_lo = o[:, 1] + lo * d[:, 1]
-    y_hi = o[:, 1] + hi * d[:, 1]
-    return _first_beyond(lo, hi, y_lo >= rim - 1e-9, y_hi >= rim - 1e-9)
-
-
-def reflector_normal(p: np.ndarray, focal: np.ndarray) -> np.ndarray:
-    """Unit normal of the paraboloid facing the lamp interior."""
-    n = np.stack([-p[:, 0] / (2.0 * focal), -np.ones(len(p)), -p[:, 2] / (2.0 * focal)], axis=1)
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
-
-
-def hit_sphere(o: np.ndarray, d: np.ndarray, center: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """A sphere reached from outside (the near root)."""
-    oc = o - center
-    b = np.einsum("ij,ij->i", oc, d)
-    c = np.einsum("ij,ij->i", oc, oc) - radius**2
-    with np.errstate(invalid="ignore"):
-        t = -b - np.sqrt(b * b - c)
-    return np.where(t > T_MIN, t, np.inf)
-
-
-def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.ndarray,
-               y_end: np.ndarray) -> np.ndarray:
-    """The socket (MODEL.md §3): a solid cylinder of ``radius`` about the axis from the plane of the
-    bulb centre ``y_start`` back to the reflector vertex ``y_end``, closed at ``y_start`` by a flat
-    disk. Its far end lies behind the reflector, so it needs no cap."""
-    a = d[:, 0] ** 2 + d[:, 2] ** 2
-    b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
-    c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
-    lo, _ = _solve_quadratic(a, b, c)
-    y = o[:, 1] + lo * d[:, 1]
-    side = np.where((a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end), lo, np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):  # rays parallel to the disk miss it (NaN, inf)
-        t = (y_start - o[:, 1]) / d[:, 1]
-        x, z = o[:, 0] + t * d[:, 0], o[:, 2] + t * d[:, 2]
-    end = np.where((t > T_MIN) & (x * x + z * z <= radius**2), t, np.inf)
-    return np.minimum(side, end)
+def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    # A ray that starts on a cut knows it: its own cap is excluded by geometry, not by distance.
+    on_cap = np.where(rays.src != P.CUT, OFF_CAP, np.where(rays.medium == P.IN_AIR, INTO_AIR, INTO_LENS))
+    on_cap = on_cap.astype(np.int8)
+    li = rays.lamp
+    return hit_cuts(rays.o, rays.d, lamps.plane_a[li], lamps.plane_b[li], lamps.pitch[li], lamps.cut_radius[li],
+                    t_limit, on_cap)
 
 
 # How a ray starts relative to the cut surface (the ``on_cap`` argument of ``hit_cuts``).
@@ -342,25 +208,3 @@ def cut_surface_height(x: np.ndarray, z: np.ndarray, plane_b: float, pitch: floa
     r2 = (x - i * pitch) ** 2 + (z - j * pitch) ** 2
     # the sag below the apex, rho - sqrt(rho^2 - r^2), written without cancellation for huge rho
     return plane_b - r2 / (rho + np.sqrt(np.maximum(rho * rho - r2, 0.0)))
-
-
-def body_box(body: dict) -> tuple[np.ndarray, np.ndarray]:
-    """The body's box (MODEL.md §3): its lowest and highest corners; the front face lies in y = 0
-    and the depth runs into +y."""
-    (cx, cz), (sx, sz) = body["center"], body["size"]
-    return np.array([cx - sx / 2, 0.0, cz - sz / 2]), np.array([cx + sx / 2, body["depth"], cz + sz / 2])
-
-
-def hit_box(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rays against the axis-aligned box [lo, hi] (the slab test): per ray, the entry distance, the
-    exit distance and the axis (0, 1, 2) of the entry face. A ray from outside hits the box where
-    ``t_near <= t_far`` and ``t_near > 0``."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1 = (lo - o) / d
-        t2 = (hi - o) / d
-    # A ray parallel to a slab is inside it (−inf, inf) or outside it (inf, −inf).
-    inside = (o >= lo) & (o <= hi)
-    t_lo = np.where(d == 0, np.where(inside, -np.inf, np.inf), np.fmin(t1, t2))
-    t_hi = np.where(d == 0, np.where(inside, np.inf, -np.inf), np.fmax(t1, t2))
-    face = np.argmax(t_lo, axis=1)
-    return t_lo[np.arange(len(o)), face], np.min(t_hi, axis=1), face
