@@ -27,7 +27,7 @@ from .parts.base import Segments
 
 CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
 MAX_DEPTH = 64  # safety net on the number of segments along one branch
-TILE_RAYS = 32768  # eye rays per band of rows: bounds memory whatever the image size
+TILE_RAYS = 65536  # eye rays per band of rows: bounds memory whatever the image size (benchmarks/bench_tracer.py)
 
 PASS_NAMES = ("lens_surface", "bulb", "reflector_constant", "reflector_scatter", "socket", "side_wall",
               "body", "background")
@@ -308,10 +308,9 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
 
 def _reaching(rays: _Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, Segments]:
     """The rays travelling in one of ``media``: their indices (None for all) and their segments."""
-    inside = np.isin(rays.medium, media)
-    if inside.all():
+    idx = None if {P.IN_LENS, P.IN_AIR} <= set(media) else np.nonzero(rays.medium == media[0])[0]
+    if idx is None or len(idx) == len(rays):
         return None, Segments(rays.o, rays.d, rays.lamp, rays.src, rays.medium)
-    idx = np.nonzero(inside)[0]
     return idx, Segments(rays.o[idx], rays.d[idx], rays.lamp[idx], rays.src[idx], rays.medium[idx])
 
 

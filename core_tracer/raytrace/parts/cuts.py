@@ -5,7 +5,6 @@ B (the apexes); a Fresnel surface met from inside the lens and from the air."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -55,8 +54,6 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
     """
     n = len(o)
     t_hit = np.full(n, np.inf)
-    normal = np.zeros((n, 3))
-    normal[:, 1] = 1.0
     on_cap = np.zeros(n, np.int8) if on_cap is None else on_cap
 
     flat = np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0]
@@ -66,43 +63,61 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
         ok = (t > T_MIN) & (t < t_limit[flat])
         t_hit[flat[ok]] = t[ok]
 
+    # The walk keeps only the cell each ray's hit lies in; the normals follow after the walk.
+    cell_i, cell_j = np.zeros(n), np.zeros(n)
     walk = _CellWalk.enter(o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap)
     for _ in range(MAX_CELL_STEPS):
         if len(walk.ray) == 0:
             break
-        t, cap_normal = walk.cap_hits()
+        t = walk.cap_hits()
         found = np.isfinite(t)
-        t_hit[walk.ray[found]] = t[found]
-        normal[walk.ray[found]] = cap_normal[found]
+        if found.any():
+            ray = walk.ray[found]
+            t_hit[ray] = t[found]
+            cell_i[ray], cell_j[ray] = walk.row("i")[found], walk.row("j")[found]
         walk.advance()
-        walk = walk.take(~found & (walk.t_cell <= walk.t_out))
+        walk.keep(~found & (walk.row("t_cell") <= walk.row("t_out")))
+
+    normal = np.zeros((n, 3))
+    normal[:, 1] = 1.0
+    capped = np.nonzero(np.isfinite(t_hit) & np.isfinite(rho))[0]
+    if len(capped):
+        oc, dc, tc, pc = o[capped], d[capped], t_hit[capped], pitch[capped]
+        ax, ay, az = oc[:, 0] - cell_i[capped] * pc, oc[:, 1] - plane_b[capped], oc[:, 2] - cell_j[capped] * pc
+        normal[capped] = _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2], rho[capped])
     return t_hit, normal
 
 
-@dataclass
 class _CellWalk:
-    """The rays still walking the cut cells (a 2-D grid traversal), one entry per ray.
+    """The rays still walking the cut cells (a 2-D grid traversal), one column per ray of a
+    single (rows, K) array so that dropping the finished rays is one gather.
 
     Cell (i, j) covers [(i - 1/2) p, (i + 1/2) p] in x and likewise in z (one cell on the axis);
     its cap's apex is at (i p, plane B, j p)."""
 
-    ray: np.ndarray  # index of the ray in the caller's arrays
-    o: np.ndarray  # (K, 3) origin
-    d: np.ndarray  # (K, 3) unit direction
-    top: np.ndarray  # plane B, the apexes
-    p: np.ndarray  # pitch
-    rho: np.ndarray  # cap sphere radius
-    on_cap: np.ndarray  # how the ray leaves the cap of its first cell (cleared after that cell)
-    i: np.ndarray  # current cell
-    j: np.ndarray
-    t_cell: np.ndarray  # where the ray enters the current cell
-    t_out: np.ndarray  # where it leaves the slab (or meets the side wall)
-    t_next_i: np.ndarray  # where it crosses the next cell border in x, and in z
-    t_next_j: np.ndarray
-    dt_i: np.ndarray  # ray length across one cell in x, and in z
-    dt_j: np.ndarray
+    ROWS = (
+        "ox", "oz", "dx", "dz", "p",  # origin and direction in x and z, pitch
+        "si", "sj",  # sign of dx, dz: the step to the next cell
+        # Per-ray constants of the cap roots (``cap_hits``): a_y = o_y - plane B, and the terms
+        # of b and c that do not depend on the cell, computed once in the same order.
+        "ay_dy", "rho_dy", "ay_ay", "two_rho_ay", "rho",
+        "i", "j",  # current cell
+        "t_cell",  # where the ray enters the current cell
+        "t_out",  # where it leaves the slab (or meets the side wall)
+        "t_next_i", "t_next_j",  # where it crosses the next cell border in x, and in z
+        "dt_i", "dt_j",  # ray length across one cell in x, and in z
+    )
+    _ROW = {name: k for k, name in enumerate(ROWS)}
 
     TOL = 1e-9  # mm of ray parameter: a root on a cell border belongs to both cells
+
+    def __init__(self, ray: np.ndarray, state: np.ndarray, on_cap: np.ndarray):
+        self.ray = ray  # index of the ray in the caller's arrays
+        self.state = state  # (len(ROWS), K)
+        self.on_cap = on_cap  # how the ray leaves the cap of its first cell; None after that cell
+
+    def row(self, name: str) -> np.ndarray:
+        return self.state[self._ROW[name]]
 
     @classmethod
     def enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
@@ -122,73 +137,73 @@ class _CellWalk:
         live = t_in <= t_out
         ray, t_in, t_out = ray[live], t_in[live], t_out[live]
 
-        oo, dd, p = o[ray], d[ray], pitch[ray]
-        ox, oz, dx, dz = oo[:, 0], oo[:, 2], dd[:, 0], dd[:, 2]
-        i = np.floor((ox + t_in * dx) / p + 0.5)
-        j = np.floor((oz + t_in * dz) / p + 0.5)
-        si, sj = np.sign(dx), np.sign(dz)
+        state = np.empty((len(cls.ROWS), len(ray)))
+        row = dict(zip(cls.ROWS, state, strict=True))
+        oo, dd = o[ray], d[ray]
+        ox, oz, dx, dz, p, r = row["ox"], row["oz"], row["dx"], row["dz"], row["p"], row["rho"]
+        ox[:], oz[:], dx[:], dz[:], p[:], r[:] = oo[:, 0], oo[:, 2], dd[:, 0], dd[:, 2], pitch[ray], rho[ray]
+        ay, dy = oo[:, 1] - plane_b[ray], dd[:, 1]
+        row["ay_dy"][:], row["rho_dy"][:] = ay * dy, r * dy
+        row["ay_ay"][:], row["two_rho_ay"][:] = ay * ay, 2.0 * r * ay
+        i = np.floor((ox + t_in * dx) / p + 0.5, out=row["i"])
+        j = np.floor((oz + t_in * dz) / p + 0.5, out=row["j"])
+        si, sj = np.sign(dx, out=row["si"]), np.sign(dz, out=row["sj"])
+        row["t_cell"][:], row["t_out"][:] = t_in, t_out
         with np.errstate(divide="ignore", invalid="ignore"):
-            t_next_i = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
-            t_next_j = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
-            dt_i = np.where(si != 0, p / np.abs(dx), np.inf)
-            dt_j = np.where(sj != 0, p / np.abs(dz), np.inf)
-        return cls(ray, oo, dd, plane_b[ray], p, rho[ray], on_cap[ray], i, j, t_in, t_out, t_next_i, t_next_j,
-                   dt_i, dt_j)
+            row["t_next_i"][:] = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
+            row["t_next_j"][:] = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
+            row["dt_i"][:] = np.where(si != 0, p / np.abs(dx), np.inf)
+            row["dt_j"][:] = np.where(sj != 0, p / np.abs(dz), np.inf)
+        on_cap = on_cap[ray]
+        return cls(ray, state, on_cap if on_cap.any() else None)
 
-    def take(self, keep: np.ndarray) -> _CellWalk:
+    def keep(self, keep: np.ndarray) -> None:
+        """Drop the rays not in ``keep``."""
         if keep.all():
-            return self
-        return _CellWalk(*(getattr(self, f.name)[keep] for f in fields(self)))
+            return
+        idx = np.nonzero(keep)[0]
+        self.ray = self.ray[idx]
+        self.state = self.state.take(idx, axis=1)
 
-    def cap_hits(self) -> tuple[np.ndarray, np.ndarray]:
-        """Each ray's hit on the cap of its current cell within the cell (inf if none), and the
-        unit normal there."""
-        o, d = self.o, self.d
-        ax, ay, az = o[:, 0] - self.i * self.p, o[:, 1] - self.top, o[:, 2] - self.j * self.p
-        dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
-        lo, hi = _cap_roots(ax, ay, az, dx, dy, dz, self.rho)
-        if self.on_cap.any():  # only in a ray's first cell: the cap it starts on
+    def cap_hits(self) -> np.ndarray:
+        """Each ray's hit on the cap of its current cell within the cell (inf if none).
+
+        With the ray's origin a taken relative to the cap's apex, the sphere of radius rho hangs
+        below the apex, so |a + t d + rho y|^2 = rho^2 becomes t^2 + 2 (a.d + rho d_y) t + |a|^2 +
+        2 rho a_y = 0: no rho^2 term left to cancel. For very low cuts rho reaches 1e11 mm, and the
+        textbook |o - c|^2 - rho^2 loses every digit. The small root is taken as c / q so that it
+        stays exact when the cap is nearly flat (it tends to the plane)."""
+        row = self.row
+        p, dx, dz = row("p"), row("dx"), row("dz")
+        ax, az = row("ox") - row("i") * p, row("oz") - row("j") * p
+        # b = a.d + rho d_y and c = |a|^2 + 2 rho a_y, the cell-independent terms from the rows
+        b = ax * dx + row("ay_dy") + az * dz + row("rho_dy")
+        c = ax * ax + row("ay_ay") + az * az + row("two_rho_ay")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            q = -(b + np.copysign(np.sqrt(b * b - c), b))
+            r2 = c / q
+        lo, hi = np.fmin(q, r2), np.fmax(q, r2)
+        if self.on_cap is not None:  # only in a ray's first cell: the cap it starts on
             lo = np.where(self.on_cap == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
             hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
-        t_end = np.minimum(np.minimum(self.t_next_i, self.t_next_j), self.t_out)
-        lo_ok = (lo > T_MIN) & (lo >= self.t_cell - self.TOL) & (lo <= t_end + self.TOL)
-        hi_ok = (hi > T_MIN) & (hi >= self.t_cell - self.TOL) & (hi <= t_end + self.TOL)
-        t = np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
-        found = np.isfinite(t)
-        normal = np.zeros((len(t), 3))
-        if found.any():
-            tf = t[found]
-            normal[found] = _cap_normal(ax[found] + tf * dx[found], ay[found] + tf * dy[found],
-                                        az[found] + tf * dz[found], self.rho[found])
-        return t, normal
+        t_cell = row("t_cell")
+        t_end = np.minimum(np.minimum(row("t_next_i"), row("t_next_j")), row("t_out"))
+        lo_ok = (lo > T_MIN) & (lo >= t_cell - self.TOL) & (lo <= t_end + self.TOL)
+        hi_ok = (hi > T_MIN) & (hi >= t_cell - self.TOL) & (hi <= t_end + self.TOL)
+        return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
 
     def advance(self) -> None:
         """Step every ray to the neighbouring cell it enters next."""
-        step_i = self.t_next_i < self.t_next_j
-        self.t_cell = np.where(step_i, self.t_next_i, self.t_next_j)
-        self.i = np.where(step_i, self.i + np.sign(self.d[:, 0]), self.i)
-        self.j = np.where(step_i, self.j, self.j + np.sign(self.d[:, 2]))
-        self.t_next_i = np.where(step_i, self.t_next_i + self.dt_i, self.t_next_i)
-        self.t_next_j = np.where(step_i, self.t_next_j, self.t_next_j + self.dt_j)
-        if self.on_cap.any():
-            self.on_cap = np.zeros_like(self.on_cap)
-
-
-def _cap_roots(ax: np.ndarray, ay: np.ndarray, az: np.ndarray, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray,
-               rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Both roots (near, far; NaN for a miss) of a ray with a lenslet sphere; the ray's origin
-    (ax, ay, az) is given relative to the cap's apex.
-
-    The sphere of radius rho hangs below its apex, so |a + t d + rho y|^2 = rho^2 becomes
-    t^2 + 2 (a.d + rho d_y) t + |a|^2 + 2 rho a_y = 0: no rho^2 term left to cancel. For very low
-    cuts rho reaches 1e11 mm, and the textbook |o - c|^2 - rho^2 loses every digit. The small root
-    is taken as c / q so that it stays exact when the cap is nearly flat (it tends to the plane)."""
-    b = ax * dx + ay * dy + az * dz + rho * dy
-    c = ax * ax + ay * ay + az * az + 2.0 * rho * ay
-    with np.errstate(invalid="ignore", divide="ignore"):
-        q = -(b + np.copysign(np.sqrt(b * b - c), b))
-        r1, r2 = q, c / q
-    return np.fmin(r1, r2), np.fmax(r1, r2)
+        row = self.row
+        t_next_i, t_next_j = row("t_next_i"), row("t_next_j")
+        step_i = t_next_i < t_next_j
+        step_j = ~step_i
+        row("t_cell")[:] = np.where(step_i, t_next_i, t_next_j)
+        np.add(row("i"), row("si"), out=row("i"), where=step_i)
+        np.add(row("j"), row("sj"), out=row("j"), where=step_j)
+        np.add(t_next_i, row("dt_i"), out=t_next_i, where=step_i)
+        np.add(t_next_j, row("dt_j"), out=t_next_j, where=step_j)
+        self.on_cap = None
 
 
 def _cap_normal(hx: np.ndarray, hy: np.ndarray, hz: np.ndarray, rho: np.ndarray) -> np.ndarray:
