@@ -109,10 +109,13 @@ class _Band:
     def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
         if len(pix) == 0:
             return
-        # One count over (pixel, channel) bins: each bin still sums its values in ray order.
-        bins = (3 * pix)[:, None] + np.arange(3)
+        # One count over the (pixel, channel) bins of the pixels spanned, each bin summing its
+        # values in ray order, then added to the pass: the same sums as one count per channel.
+        first, last = int(pix.min()), int(pix.max()) + 1
+        bins = (3 * (pix - first))[:, None] + np.arange(3)
         weights = np.broadcast_to(values, bins.shape)
-        self.acc[pass_id].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * self.n)
+        self.acc[pass_id, first:last].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(),
+                                                                    minlength=3 * (last - first))
 
     def note(self, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
         if self.ctx.record and len(child):

@@ -123,18 +123,22 @@ class _CellWalk:
     def enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
         """The rays with curved cuts whose path crosses the slab between planes A and B before
         ``t_limit``, each placed in the cell where it enters the slab."""
-        ray = np.nonzero(np.isfinite(rho))[0]
-        oy, dy = o[ray, 1], d[ray, 1]
+        curved = np.isfinite(rho)
+        every = bool(curved.all())  # the usual case: no gather needed to find the slab
+        ray = np.arange(len(rho)) if every else np.nonzero(curved)[0]
+        pick = (lambda a: a) if every else (lambda a: a[ray])
+        oy, dy = pick(o[:, 1]), pick(d[:, 1])
+        a_plane, b_plane = pick(plane_a), pick(plane_b)
         with np.errstate(divide="ignore", invalid="ignore"):
-            ta = (plane_a[ray] - oy) / dy
-            tb = (plane_b[ray] - oy) / dy
-        in_slab = (oy >= plane_a[ray]) & (oy <= plane_b[ray])
+            ta = (a_plane - oy) / dy
+            tb = (b_plane - oy) / dy
+        in_slab = (oy >= a_plane) & (oy <= b_plane)
         parallel = dy == 0
         t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), np.fmin(ta, tb))
         t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), np.fmax(ta, tb))
         t_in = np.maximum(t_in, 0.0)
-        t_out = np.minimum(t_out, t_limit[ray])
-        live = t_in <= t_out
+        t_out = np.minimum(t_out, pick(t_limit))
+        live = np.nonzero(t_in <= t_out)[0]
         ray, t_in, t_out = ray[live], t_in[live], t_out[live]
 
         state = np.empty((len(cls.ROWS), len(ray)))
