@@ -344,7 +344,6 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
         children.extend(_dielectric(ctx, band, rays, m, k[m], hit[m], cls[m], surface[m], normal[m]))
-    children = [child.take(_alive(child.k)) for child in children]
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]
@@ -357,7 +356,8 @@ def _alive(k: np.ndarray) -> np.ndarray:
 
 def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
                cls: np.ndarray) -> _Rays:
-    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter (eq. 3), then the mirror ray."""
+    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter (eq. 3), then the mirror ray
+    where it stays above the cut-off."""
     L = ctx.lamps
     li = rays.lamp[m]
     d = rays.d[m]
@@ -367,16 +367,19 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     to_bulb = optics.normalize(L.bulb_center[li] - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
     band.add(REFLECTOR_SCATTER, rays.pix[m], k * scatter[:, None] * L.bulb_intensity[li])
-    n = len(m)
-    return _Rays(pix=rays.pix[m], lamp=li, o=hit, d=optics.reflect(d, normal), k=k * L.reflectance[li, None],
-                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls,
+    k = k * L.reflectance[li, None]
+    go = np.nonzero(_alive(k))[0]
+    n = len(go)
+    return _Rays(pix=rays.pix[m[go]], lamp=li[go], o=hit[go], d=optics.reflect(d[go], normal[go]), k=k[go],
+                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls[go],
                  branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
 
 def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
                 cls: np.ndarray, surface: np.ndarray, out_normal: np.ndarray) -> list[_Rays]:
-    """A lens surface hit from either side: Fresnel split into reflected and transmitted rays;
-    ``out_normal`` points out of the lens material (-y on the outer face, the cap's on the cuts)."""
+    """A lens surface hit from either side: Fresnel split into the reflected and transmitted rays
+    that stay above the cut-off; ``out_normal`` points out of the lens material (-y on the outer
+    face, the cap's on the cuts)."""
     L = ctx.lamps
     li = rays.lamp[m]
     d = rays.d[m]
@@ -388,11 +391,12 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     n2 = np.where(from_lens, 1.0, L.ior[li])
     r = optics.fresnel_reflectance(cos_i, n1, n2)
     src = np.where(surface == P.OUTER, P.OUTER, P.CUT).astype(np.int8)
-    n = len(m)
     pix, seen = rays.pix[m], rays.seen_reflector[m]
-    reflected = _Rays(pix=pix, lamp=li, o=hit, d=optics.reflect(d, facing), k=k * r[:, None], medium=medium,
-                      src=src, parent=cls, branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=seen)
-    out = [reflected]
+    k_r = k * r[:, None]
+    go = np.nonzero(_alive(k_r))[0]
+    out = [_Rays(pix=pix[go], lamp=li[go], o=hit[go], d=optics.reflect(d[go], facing[go]), k=k_r[go],
+                 medium=medium[go], src=src[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
+                 seen_reflector=seen[go])]
     trans = np.nonzero(r < 1.0)[0]
     leaving = (surface[trans] == P.OUTER)
     # ⑩: out through the outer face, to the background (ends).
@@ -400,10 +404,13 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
     band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
+    k_t = k[tc] * (1.0 - r[tc, None])
+    go = np.nonzero(_alive(k_t))[0]
+    tc, k_t = tc[go], k_t[go]
     if len(tc):
         eta = n1[tc] / n2[tc]
         out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
-                         k=k[tc] * (1.0 - r[tc, None]), medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
+                         k=k_t, medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
                          .astype(np.int8), src=src[tc], parent=cls[tc],
                          branch=np.full(len(tc), P.TRANSMITTED, np.int8), seen_reflector=seen[tc]))
     return out
