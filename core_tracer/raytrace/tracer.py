@@ -92,6 +92,7 @@ class _Context:
         self.light_color = np.asarray(light["color"], dtype=np.float64)
         self.ambient = light["ambient"]
         self.background = np.asarray(scene["background"], dtype=np.float64)
+        self.background_seen = bool(self.background.any())  # adding a black background adds exactly 0
         self.record = record_transitions
 
 
@@ -234,12 +235,16 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     t_near, t_far, face = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     hit_box = (t_near <= t_far) & (t_near > 0)
 
-    band.add(BACKGROUND_PASS, pix[~hit_box], np.broadcast_to(ctx.background, (int((~hit_box).sum()), 3)))
+    if ctx.background_seen:
+        band.add(BACKGROUND_PASS, pix[~hit_box], np.broadcast_to(ctx.background, (int((~hit_box).sum()), 3)))
 
-    p = o + t_near[:, None] * d
-    front = hit_box & (face == 1) & (d[:, 1] > 0)
+    # Only rays entering the front face can reach a lens: find their points there.
+    front = np.nonzero(hit_box & (face == 1) & (d[:, 1] > 0))[0]
+    p = o[front] + t_near[front, None] * d[front]
     L = ctx.lamps
-    lamp = np.where(front, outer_face.lens_at(p[:, 0], p[:, 2], L), -1)
+    lamp_front = outer_face.lens_at(p[:, 0], p[:, 2], L)
+    lamp = np.full(n, -1)
+    lamp[front] = lamp_front
     on_lens = lamp >= 0
     on_body = hit_box & ~on_lens
 
@@ -262,12 +267,13 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     surface = optics.phong(face_normal, -ds, ctx.light_dir, L.lens_diffuse[li], ctx.light_color, ctx.ambient,
                            L.lens_specular[li], L.lens_shininess[li])
     band.add(LENS_SURFACE, s, r[:, None] * surface)
-    band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
+    if ctx.background_seen:
+        band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
     ones = np.ones(len(s), dtype=np.int8)
     band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
 
     k = np.repeat((1.0 - r)[:, None], 3, axis=1)
-    local = p[s] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
+    local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     local[:, 1] = 0.0
     d_in = optics.refract(ds, face_normal, 1.0 / ior)
     rays = _Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
@@ -401,7 +407,8 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     leaving = (surface[trans] == P.OUTER)
     # ⑩: out through the outer face, to the background (ends).
     lv = trans[leaving]
-    band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
+    if ctx.background_seen:
+        band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
     band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
     k_t = k[tc] * (1.0 - r[tc, None])

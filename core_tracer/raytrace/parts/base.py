@@ -59,6 +59,16 @@ def solve_quadratic(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.nda
     return lo, hi
 
 
+def quadratic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two roots q / a and c / q of ``solve_quadratic`` (unordered), for callers that only use
+    rays with a != 0 (there ``solve_quadratic`` returns exactly their min and max)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        disc = b * b - 4.0 * a * c
+        sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
+        q = -0.5 * (b + np.copysign(sq, b))
+        return q / a, c / q
+
+
 def first_beyond(lo: np.ndarray, hi: np.ndarray, ok_lo: np.ndarray, ok_hi: np.ndarray) -> np.ndarray:
     """The nearer of two roots that lies beyond ``T_MIN`` and passes its test; ``inf`` if none."""
     lo_ok = (lo > T_MIN) & ok_lo

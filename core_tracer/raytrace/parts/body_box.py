@@ -24,5 +24,4 @@ def hit_box(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tup
     inside = (o >= lo) & (o <= hi)
     t_lo = np.where(d == 0, np.where(inside, -np.inf, np.inf), np.fmin(t1, t2))
     t_hi = np.where(d == 0, np.where(inside, np.inf, -np.inf), np.fmax(t1, t2))
-    face = np.argmax(t_lo, axis=1)
-    return t_lo[np.arange(len(o)), face], np.min(t_hi, axis=1), face
+    return np.max(t_lo, axis=1), np.min(t_hi, axis=1), np.argmax(t_lo, axis=1)

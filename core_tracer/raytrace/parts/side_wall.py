@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments, solve_quadratic
+from .base import T_MIN, Segments, quadratic_roots
 
 SURFACE = P.WALL
 MEDIA = (P.IN_LENS, P.IN_AIR)
@@ -18,7 +18,8 @@ def hit_side_wall(o: np.ndarray, d: np.ndarray, radius: np.ndarray) -> np.ndarra
     a = d[:, 0] ** 2 + d[:, 2] ** 2
     b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
     c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
-    _, hi = solve_quadratic(a, b, c)
+    r1, r2 = quadratic_roots(a, b, c)  # a <= 1e-15 (parallel to the axis) misses the wall
+    hi = np.fmax(r1, r2)
     return np.where((a > 1e-15) & (hi > T_MIN), hi, np.inf)
 
 

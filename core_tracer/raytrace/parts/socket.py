@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments, solve_quadratic
+from .base import T_MIN, Segments, quadratic_roots
 
 SURFACE = P.SOCKET
 MEDIA = (P.IN_AIR,)
@@ -21,9 +21,11 @@ def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.nda
     a = d[:, 0] ** 2 + d[:, 2] ** 2
     b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
     c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
-    lo, _ = solve_quadratic(a, b, c)
+    r1, r2 = quadratic_roots(a, b, c)  # a <= 1e-15 (parallel to the axis) misses the side
+    lo = np.fmin(r1, r2)
     y = o[:, 1] + lo * d[:, 1]
-    side = np.where((a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end), lo, np.inf)
+    with np.errstate(invalid="ignore"):
+        side = np.where((a > 1e-15) & (lo > T_MIN) & (y >= y_start) & (y <= y_end), lo, np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):  # rays parallel to the disk miss it (NaN, inf)
         t = (y_start - o[:, 1]) / d[:, 1]
         x, z = o[:, 0] + t * d[:, 0], o[:, 2] + t * d[:, 2]
