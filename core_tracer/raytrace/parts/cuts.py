@@ -132,12 +132,15 @@ class _CellWalk:
         with np.errstate(divide="ignore", invalid="ignore"):
             ta = (a_plane - oy) / dy
             tb = (b_plane - oy) / dy
-        in_slab = (oy >= a_plane) & (oy <= b_plane)
-        parallel = dy == 0
-        t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), np.fmin(ta, tb))
-        t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), np.fmax(ta, tb))
-        t_in = np.maximum(t_in, 0.0)
-        t_out = np.minimum(t_out, pick(t_limit))
+        t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
+        parallel = np.nonzero(dy == 0)[0]
+        if len(parallel):  # a ray parallel to the planes is in the slab for ever or never
+            y = oy[parallel]
+            in_slab = (y >= a_plane[parallel]) & (y <= b_plane[parallel])
+            t_in[parallel] = np.where(in_slab, 0.0, np.inf)
+            t_out[parallel] = np.where(in_slab, np.inf, -np.inf)
+        np.maximum(t_in, 0.0, out=t_in)
+        np.minimum(t_out, pick(t_limit), out=t_out)
         live = np.nonzero(t_in <= t_out)[0]
         ray, t_in, t_out = ray[live], t_in[live], t_out[live]
 
