@@ -11,12 +11,7 @@ meet it.
 
 from __future__ import annotations
 
-from .. import paths as P
 from . import bulb, cuts, outer_face, reflector, side_wall, socket
 from .base import Part
 
 PARTS: tuple[Part, ...] = (side_wall, cuts, outer_face, reflector, bulb, socket)
-
-BY_MEDIUM: dict[int, tuple[Part, ...]] = {
-    medium: tuple(part for part in PARTS if medium in part.MEDIA) for medium in (P.IN_LENS, P.IN_AIR)
-}
