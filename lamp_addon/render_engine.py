@@ -48,7 +48,7 @@ def body_coverage(scene: dict, row_start: int, row_stop: int) -> np.ndarray:
     Shape (row_stop - row_start, width), rows top-based like the tracer's. The lenses lie in
     the body's front face, so the box is the whole lamp seen from outside."""
     from ..core_tracer.raytrace.camera import eye_rays, make_camera
-    from ..core_tracer.raytrace.geometry import body_box, hit_box
+    from ..core_tracer.raytrace.parts.body_box import body_box, hit_box
 
     width, height = scene["image"]["width"], scene["image"]["height"]
     cam = make_camera(scene["camera"], width, height)

@@ -61,5 +61,6 @@ def eye_rays(camera: Camera, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray
     else:
         origins = np.broadcast_to(camera.position, offset.shape).copy()
         directions = camera.forward + offset
-        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+        x, y, z = directions[:, 0], directions[:, 1], directions[:, 2]
+        directions /= np.sqrt(x * x + y * y + z * z)[:, None]  # = np.linalg.norm's sum, without its slow reduction
     return origins, directions

@@ -71,7 +71,9 @@ def phong(normal: np.ndarray, view: np.ndarray, light_dir: np.ndarray, diffuse: 
     ``view`` points from the surface to the eye, ``light_dir`` from the surface to the light.
     ``diffuse`` is (N, 3) or (3,); returns (N, 3).
     """
-    cos_theta = normal @ light_dir
+    # Not ``normal @ light_dir``: a matrix product wakes BLAS's own threads, which spin on the
+    # cores the tracer's bands run on.
+    cos_theta = normal[:, 0] * light_dir[0] + normal[:, 1] * light_dir[1] + normal[:, 2] * light_dir[2]
     half = normalize(view + light_dir)
     cos_beta = np.maximum(0.0, dot(normal, half))
     diffuse_term = (ambient + (1.0 - ambient) * np.maximum(0.0, cos_theta))[:, None] * diffuse

@@ -18,14 +18,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import geometry as G
 from . import optics
 from . import paths as P
 from .camera import Camera, eye_rays, make_camera
+from .lamp_table import LampTable
+from .parts import PARTS, body_box, outer_face, reflector
+from .parts.base import Segments
 
 CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
 MAX_DEPTH = 64  # safety net on the number of segments along one branch
-TILE_RAYS = 32768  # eye rays per band of rows: bounds memory whatever the image size
+TILE_RAYS = 65536  # eye rays per band of rows: bounds memory whatever the image size (benchmarks/bench_tracer.py)
 
 PASS_NAMES = ("lens_surface", "bulb", "reflector_constant", "reflector_scatter", "socket", "side_wall",
               "body", "background")
@@ -63,6 +65,8 @@ class _Rays:
         return len(self.pix)
 
     def take(self, sel: np.ndarray) -> _Rays:
+        if sel.dtype == bool and sel.all():
+            return self
         return _Rays(*(getattr(self, f)[sel] for f in _RAY_FIELDS))
 
 
@@ -78,9 +82,9 @@ class _Context:
 
     def __init__(self, scene: dict, camera: Camera, record_transitions: bool):
         self.camera = camera
-        self.lamps = G.LampTable.from_scene(scene)
+        self.lamps = LampTable.from_scene(scene)
         body = scene["body"]
-        self.box_lo, self.box_hi = G.body_box(body)
+        self.box_lo, self.box_hi = body_box.body_box(body)
         self.body = body
         light = scene["light"]
         self.light_dir = np.asarray(light["direction"], dtype=np.float64)
@@ -88,6 +92,7 @@ class _Context:
         self.light_color = np.asarray(light["color"], dtype=np.float64)
         self.ambient = light["ambient"]
         self.background = np.asarray(scene["background"], dtype=np.float64)
+        self.background_seen = bool(self.background.any())  # adding a black background adds exactly 0
         self.record = record_transitions
 
 
@@ -105,8 +110,13 @@ class _Band:
     def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
         if len(pix) == 0:
             return
-        for c in range(3):
-            self.acc[pass_id, :, c] += np.bincount(pix, weights=values[:, c], minlength=self.n)
+        # One count over the (pixel, channel) bins of the pixels spanned, each bin summing its
+        # values in ray order, then added to the pass: the same sums as one count per channel.
+        first, last = int(pix.min()), int(pix.max()) + 1
+        bins = (3 * (pix - first))[:, None] + np.arange(3)
+        weights = np.broadcast_to(values, bins.shape)
+        self.acc[pass_id, first:last].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(),
+                                                                    minlength=3 * (last - first))
 
     def note(self, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
         if self.ctx.record and len(child):
@@ -222,19 +232,19 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     """Classify the eye rays (paper §3.1): background, body, or lens (①)."""
     n = len(o)
     pix = np.arange(n)
-    t_near, t_far, face = G.hit_box(o, d, ctx.box_lo, ctx.box_hi)
+    t_near, t_far, face = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     hit_box = (t_near <= t_far) & (t_near > 0)
 
-    band.add(BACKGROUND_PASS, pix[~hit_box], np.broadcast_to(ctx.background, (int((~hit_box).sum()), 3)))
+    if ctx.background_seen:
+        band.add(BACKGROUND_PASS, pix[~hit_box], np.broadcast_to(ctx.background, (int((~hit_box).sum()), 3)))
 
-    p = o + t_near[:, None] * d
-    lamp = np.full(n, -1)
-    front = hit_box & (face == 1) & (d[:, 1] > 0)
+    # Only rays entering the front face can reach a lens: find their points there.
+    front = np.nonzero(hit_box & (face == 1) & (d[:, 1] > 0))[0]
+    p = o[front] + t_near[front, None] * d[front]
     L = ctx.lamps
-    for li in range(len(L.radius)):
-        dx = p[:, 0] - L.center[li, 0]
-        dz = p[:, 2] - L.center[li, 1]
-        lamp[front & (dx * dx + dz * dz <= L.radius[li] ** 2)] = li
+    lamp_front = outer_face.lens_at(p[:, 0], p[:, 2], L)
+    lamp = np.full(n, -1)
+    lamp[front] = lamp_front
     on_lens = lamp >= 0
     on_body = hit_box & ~on_lens
 
@@ -253,67 +263,70 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     ior = L.ior[li]
     cos_i = ds[:, 1]
     r = optics.fresnel_reflectance(cos_i, 1.0, ior)
-    face_normal = np.tile([0.0, -1.0, 0.0], (len(s), 1))
+    face_normal = np.tile(outer_face.NORMAL, (len(s), 1))
     surface = optics.phong(face_normal, -ds, ctx.light_dir, L.lens_diffuse[li], ctx.light_color, ctx.ambient,
                            L.lens_specular[li], L.lens_shininess[li])
     band.add(LENS_SURFACE, s, r[:, None] * surface)
-    band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
+    if ctx.background_seen:
+        band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
     ones = np.ones(len(s), dtype=np.int8)
     band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
 
     k = np.repeat((1.0 - r)[:, None], 3, axis=1)
-    local = p[s] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
+    local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     local[:, 1] = 0.0
     d_in = optics.refract(ds, face_normal, 1.0 / ior)
     rays = _Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
                  src=np.full(len(s), P.OUTER, np.int8), parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8),
                  branch=np.full(len(s), P.TRANSMITTED, np.int8), seen_reflector=np.zeros(len(s), bool))
-    return rays.take(k.max(axis=1) >= CUTOFF)
+    return rays.take(_alive(k))
 
 
 def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nearest surface of every ray: (t, surface id, normal at cut hits)."""
-    L = ctx.lamps
-    li = rays.lamp
-    o, d = rays.o, rays.d
-    t_wall = G.hit_side_wall(o, d, L.radius[li])
-    # A ray that starts on a cut knows it: its own cap is excluded by geometry, not by distance.
-    on_cap = np.where(rays.src != P.CUT, G.OFF_CAP, np.where(rays.medium == P.IN_AIR, G.INTO_AIR, G.INTO_LENS))
-    t_cut, cut_normal = G.hit_cuts(o, d, L.plane_a[li], L.plane_b[li], L.pitch[li], L.cut_radius[li], t_wall,
-                                   on_cap.astype(np.int8))
-    t_best = np.minimum(t_wall, t_cut)
-    surface = np.where(t_cut < t_wall, P.CUT, P.WALL).astype(np.int8)
-
-    lens = rays.medium == P.IN_LENS
-    idx = np.nonzero(lens)[0]
-    if len(idx):
-        t_o = G.hit_outer_face(o[idx], d[idx])
-        nearer = t_o < t_best[idx]
-        t_best[idx[nearer]] = t_o[nearer]
-        surface[idx[nearer]] = P.OUTER
-
-    idx = np.nonzero(~lens)[0]
-    if len(idx):
-        lj = li[idx]
-        oa, da = o[idx], d[idx]
-        candidates = (
-            (P.REFLECTOR, G.hit_reflector(oa, da, L.focal[lj], L.vertex[lj], L.rim[lj],
-                                          rays.src[idx] == P.REFLECTOR)),
-            (P.BULB, G.hit_sphere(oa, da, L.bulb_center[lj], L.bulb_radius[lj])),
-            (P.SOCKET, G.hit_socket(oa, da, L.socket_radius[lj], L.bulb_center[lj, 1], L.vertex[lj])),
-        )
-        for sid, t in candidates:
+    """Nearest surface of every ray among the parts its medium can reach (``parts.PARTS``, in
+    order; ties keep the earlier part): (t, surface id, normal out of the lens material where the
+    part gives one: the lens faces)."""
+    n = len(rays)
+    t_best = np.full(n, np.inf)
+    surface = np.full(n, P.NOTHING, np.int8)
+    normal = np.zeros((n, 3))
+    reaching: dict[tuple[int, ...], tuple[np.ndarray | None, Segments]] = {}
+    for part in PARTS:
+        if part.MEDIA not in reaching:
+            reaching[part.MEDIA] = _reaching(rays, part.MEDIA)
+        idx, seg = reaching[part.MEDIA]
+        if len(seg.o) == 0:
+            continue
+        if idx is None:  # every ray: no gather, no scatter
+            t, part_normal = part.intersect(seg, ctx.lamps, t_best)
+            nearer = t < t_best
+            t_best[nearer] = t[nearer]
+            surface[nearer] = part.SURFACE
+            if part_normal is not None:
+                normal[nearer] = part_normal[nearer]
+        else:
+            t, part_normal = part.intersect(seg, ctx.lamps, t_best[idx])
             nearer = t < t_best[idx]
-            t_best[idx[nearer]] = t[nearer]
-            surface[idx[nearer]] = sid
-    surface[~np.isfinite(t_best)] = P.NOTHING
-    return t_best, surface, cut_normal
+            hit = idx[nearer]
+            t_best[hit] = t[nearer]
+            surface[hit] = part.SURFACE
+            if part_normal is not None:
+                normal[hit] = part_normal[nearer]
+    return t_best, surface, normal
+
+
+def _reaching(rays: _Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, Segments]:
+    """The rays travelling in one of ``media``: their indices (None for all) and their segments."""
+    idx = None if {P.IN_LENS, P.IN_AIR} <= set(media) else np.nonzero(rays.medium == media[0])[0]
+    if idx is None or len(idx) == len(rays):
+        return None, Segments(rays.o, rays.d, rays.lamp, rays.src, rays.medium)
+    return idx, Segments(rays.o[idx], rays.d[idx], rays.lamp[idx], rays.src[idx], rays.medium[idx])
 
 
 def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     """Trace one generation: find each segment's end, add its luminance, spawn the children."""
     L = ctx.lamps
-    t, surface, cut_normal = _intersect(ctx, rays)
+    t, surface, normal = _intersect(ctx, rays)
     cls = P.CLASS_OF[rays.medium, rays.src, surface]
     band.note(rays.parent, rays.branch, cls)
 
@@ -336,63 +349,75 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
         children.append(_reflector(ctx, band, rays, m, k[m], hit[m], cls[m]))
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
-        children.extend(_dielectric(ctx, band, rays, m, k[m], hit[m], cls[m], surface[m], cut_normal[m]))
+        children.extend(_dielectric(ctx, band, rays, m, k[m], hit[m], cls[m], surface[m], normal[m]))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
-    out = _concat(children) if len(children) > 1 else children[0]
-    return out.take(out.k.max(axis=1) >= CUTOFF)
+    return _concat(children) if len(children) > 1 else children[0]
+
+
+def _alive(k: np.ndarray) -> np.ndarray:
+    """The branches whose accumulated attenuation is still above the cut-off in some channel."""
+    return np.maximum(np.maximum(k[:, 0], k[:, 1]), k[:, 2]) >= CUTOFF
 
 
 def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
                cls: np.ndarray) -> _Rays:
-    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter (eq. 3), then the mirror ray."""
+    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter (eq. 3), then the mirror ray
+    where it stays above the cut-off."""
     L = ctx.lamps
     li = rays.lamp[m]
     d = rays.d[m]
     first = ~rays.seen_reflector[m]
     band.add(REFLECTOR_CONSTANT, rays.pix[m][first], k[first] * L.reflector_color[li[first]])
-    normal = G.reflector_normal(hit, L.focal[li])
+    normal = reflector.reflector_normal(hit, L.focal[li])
     to_bulb = optics.normalize(L.bulb_center[li] - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
     band.add(REFLECTOR_SCATTER, rays.pix[m], k * scatter[:, None] * L.bulb_intensity[li])
-    n = len(m)
-    return _Rays(pix=rays.pix[m], lamp=li, o=hit, d=optics.reflect(d, normal), k=k * L.reflectance[li, None],
-                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls,
+    k = k * L.reflectance[li, None]
+    go = np.nonzero(_alive(k))[0]
+    n = len(go)
+    return _Rays(pix=rays.pix[m[go]], lamp=li[go], o=hit[go], d=optics.reflect(d[go], normal[go]), k=k[go],
+                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls[go],
                  branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
 
 def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
-                cls: np.ndarray, surface: np.ndarray, cut_normal: np.ndarray) -> list[_Rays]:
-    """A lens surface hit from either side: Fresnel split into reflected and transmitted rays."""
+                cls: np.ndarray, surface: np.ndarray, out_normal: np.ndarray) -> list[_Rays]:
+    """A lens surface hit from either side: Fresnel split into the reflected and transmitted rays
+    that stay above the cut-off; ``out_normal`` points out of the lens material (-y on the outer
+    face, the cap's on the cuts)."""
     L = ctx.lamps
     li = rays.lamp[m]
     d = rays.d[m]
     medium = rays.medium[m]
     from_lens = medium == P.IN_LENS
-    # Normal pointing out of the lens material: -y on the outer face, the cap normal on the cuts.
-    out_normal = np.where((surface == P.OUTER)[:, None], np.array([0.0, -1.0, 0.0]), cut_normal)
     facing = np.where(from_lens[:, None], -out_normal, out_normal)  # toward the incident side
     cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
     n1 = np.where(from_lens, L.ior[li], 1.0)
     n2 = np.where(from_lens, 1.0, L.ior[li])
     r = optics.fresnel_reflectance(cos_i, n1, n2)
     src = np.where(surface == P.OUTER, P.OUTER, P.CUT).astype(np.int8)
-    n = len(m)
     pix, seen = rays.pix[m], rays.seen_reflector[m]
-    reflected = _Rays(pix=pix, lamp=li, o=hit, d=optics.reflect(d, facing), k=k * r[:, None], medium=medium,
-                      src=src, parent=cls, branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=seen)
-    out = [reflected]
+    k_r = k * r[:, None]
+    go = np.nonzero(_alive(k_r))[0]
+    out = [_Rays(pix=pix[go], lamp=li[go], o=hit[go], d=optics.reflect(d[go], facing[go]), k=k_r[go],
+                 medium=medium[go], src=src[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
+                 seen_reflector=seen[go])]
     trans = np.nonzero(r < 1.0)[0]
     leaving = (surface[trans] == P.OUTER)
     # ⑩: out through the outer face, to the background (ends).
     lv = trans[leaving]
-    band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
+    if ctx.background_seen:
+        band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
     band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
+    k_t = k[tc] * (1.0 - r[tc, None])
+    go = np.nonzero(_alive(k_t))[0]
+    tc, k_t = tc[go], k_t[go]
     if len(tc):
         eta = n1[tc] / n2[tc]
         out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
-                         k=k[tc] * (1.0 - r[tc, None]), medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
+                         k=k_t, medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
                          .astype(np.int8), src=src[tc], parent=cls[tc],
                          branch=np.full(len(tc), P.TRANSMITTED, np.int8), seen_reflector=seen[tc]))
     return out

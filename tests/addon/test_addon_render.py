@@ -644,7 +644,8 @@ def test_tracer_job_cancels_through_should_stop(lamp_addon):
     assert job.rows_done < 256
 
 
-def test_render_passes_stops_between_bands():
+def test_render_passes_stops_between_bands(monkeypatch):
+    monkeypatch.setattr(core_tracer.raytrace.tracer, "TILE_RAYS", 256 * 64)  # 64 rows a band: 4 bands
     scene = _preset_scene(size=(256, 256))
     bands = []
 

@@ -13,8 +13,8 @@ from helpers import scene_with
 from reference_tracer import Lamp, compare
 
 from core_tracer import render, render_passes
-from core_tracer.raytrace import geometry as G
 from core_tracer.raytrace import tracer
+from core_tracer.raytrace.parts import cuts, side_wall
 from core_tracer.scene import spec
 from core_tracer.scene.reading import SceneError
 
@@ -103,7 +103,7 @@ def test_low_cap_intersection_is_the_plane_to_rounding():
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     h = 1e-9
     rho = (40.5 + h * h) / (2 * h)
-    t, normal = G.hit_cuts(o, d, np.full(n, 3.0), np.full(n, 3.0 + h), np.full(n, 9.0), np.full(n, rho),
+    t, normal = cuts.hit_cuts(o, d, np.full(n, 3.0), np.full(n, 3.0 + h), np.full(n, 9.0), np.full(n, rho),
                            np.full(n, np.inf))
     t_plane = (3.0 - o[:, 1]) / d[:, 1]
     assert np.all(np.isfinite(t))
@@ -192,9 +192,9 @@ def test_cell_walk_is_exact_at_the_finest_pitch():
     d = rng.normal(size=(n, 3))
     d[:, 1] *= rng.choice([1.0, 0.02], n)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    t_wall = G.hit_side_wall(o, d, np.full(n, R))
+    t_wall = side_wall.hit_side_wall(o, d, np.full(n, R))
     rho = (pitch * pitch / 2 + h * h) / (2 * h)
-    t, _ = G.hit_cuts(o, d, np.full(n, 3.0), np.full(n, 3.0 + h), np.full(n, pitch), np.full(n, rho), t_wall)
+    t, _ = cuts.hit_cuts(o, d, np.full(n, 3.0), np.full(n, 3.0 + h), np.full(n, pitch), np.full(n, rho), t_wall)
     found = 0
     for k in range(n):
         ref = lamp.cuts(o[k], d[k], t_wall[k], None, False)  # a fresh ray: no surface of its own
@@ -204,4 +204,4 @@ def test_cell_walk_is_exact_at_the_finest_pitch():
             found += 1
             assert t[k] == pytest.approx(ref[0], rel=1e-9, abs=1e-9), k
     assert found > n // 3
-    assert G.MAX_CELL_STEPS <= 2 * spec.MAX_CUTS_ACROSS
+    assert cuts.MAX_CELL_STEPS <= 2 * spec.MAX_CUTS_ACROSS

@@ -1,0 +1,76 @@
+"""What every part of a lamp offers the tracer, and the root-finding the parts share.
+
+A part is a module with three names (see ``Part``): the surface it is in Table 1's terms
+(``paths.OUTER``, ``paths.CUT`` …), the media a ray can reach it from, and ``intersect``. Inside
+a lamp everything is in the lamp's local frame: x and z measured from the lamp axis, y as in the
+world (outer lens face y = 0, interior y > 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from ..lamp_table import LampTable
+
+T_MIN = 1e-6  # mm: a hit closer than this to the ray's origin is the origin's own surface
+
+
+@dataclass(frozen=True)
+class Segments:
+    """Rays inside their lamps, in each lamp's local frame, that can reach a part."""
+
+    o: np.ndarray  # (N, 3) origins
+    d: np.ndarray  # (N, 3) unit directions
+    lamp: np.ndarray  # (N,) lamp number, the row of the ``LampTable``
+    src: np.ndarray  # (N,) surface each ray starts on (``paths.OUTER`` …)
+    medium: np.ndarray  # (N,) ``paths.IN_LENS`` or ``paths.IN_AIR``, one of the part's ``MEDIA``
+
+
+class Part(Protocol):
+    """One part type of the lamp (a module satisfies this)."""
+
+    SURFACE: int  # the surface id of paths.CLASS_OF
+    MEDIA: tuple[int, ...]  # the media from which a ray can reach it
+
+    def intersect(self, rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """Per ray, the parameter of its first hit on this part (``inf`` for none) and, for a
+        surface whose normal is only known while finding the hit, the unit normal there (else
+        None). ``t_limit`` is the nearest hit on the parts before this one; a hit beyond it may
+        be reported as ``inf``."""
+        ...
+
+
+def solve_quadratic(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Roots (small, large) of a t^2 + b t + c = 0 by the stable formula; NaN where none.
+    Handles a == 0 (a linear equation) with both roots equal."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        disc = b * b - 4.0 * a * c
+        sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
+        q = -0.5 * (b + np.copysign(sq, b))
+        r1 = q / a
+        r2 = c / q
+        linear = np.abs(a) < 1e-15
+        lin = np.where(linear, -c / b, np.nan)
+        lo = np.where(linear, lin, np.fmin(r1, r2))
+        hi = np.where(linear, lin, np.fmax(r1, r2))
+    return lo, hi
+
+
+def quadratic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two roots q / a and c / q of ``solve_quadratic`` (unordered), for callers that only use
+    rays with a != 0 (there ``solve_quadratic`` returns exactly their min and max)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        disc = b * b - 4.0 * a * c
+        sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
+        q = -0.5 * (b + np.copysign(sq, b))
+        return q / a, c / q
+
+
+def first_beyond(lo: np.ndarray, hi: np.ndarray, ok_lo: np.ndarray, ok_hi: np.ndarray) -> np.ndarray:
+    """The nearer of two roots that lies beyond ``T_MIN`` and passes its test; ``inf`` if none."""
+    lo_ok = (lo > T_MIN) & ok_lo
+    hi_ok = (hi > T_MIN) & ok_hi
+    return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))

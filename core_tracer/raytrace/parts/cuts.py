@@ -1,0 +1,232 @@
+"""The fish-eye cuts (MODEL.md §3.1, paper §3.2.4, Fig. 9): a square grid of spherical caps on
+the lens's inner face, found by walking the cells crossed between plane A (the base) and plane
+B (the apexes); a Fresnel surface met from inside the lens and from the air."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...scene.spec import MAX_CUTS_ACROSS
+from .. import optics
+from .. import paths as P
+from ..lamp_table import LampTable
+from .base import T_MIN, Segments
+
+SURFACE = P.CUT
+MEDIA = (P.IN_LENS, P.IN_AIR)
+# The cell walk's bound: before the side wall a ray's path across the cut slab is at most a
+# diameter 2R long in x-z, so it visits at most (|dx| + |dz|) / p + 3 <= sqrt 2 * 2R/p + 3 cells,
+# and validation keeps 2R/p <= MAX_CUTS_ACROSS.
+MAX_CELL_STEPS = math.ceil(math.sqrt(2.0) * MAX_CUTS_ACROSS) + 3
+
+
+def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    # A ray that starts on a cut knows it: its own cap is excluded by geometry, not by distance.
+    on_cap = np.where(rays.src != P.CUT, OFF_CAP, np.where(rays.medium == P.IN_AIR, INTO_AIR, INTO_LENS))
+    on_cap = on_cap.astype(np.int8)
+    li = rays.lamp
+    return hit_cuts(rays.o, rays.d, lamps.plane_a[li], lamps.plane_b[li], lamps.pitch[li], lamps.cut_radius[li],
+                    t_limit, on_cap)
+
+
+# How a ray starts relative to the cut surface (the ``on_cap`` argument of ``hit_cuts``).
+OFF_CAP, INTO_AIR, INTO_LENS = 0, 1, -1
+
+
+def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndarray, pitch: np.ndarray,
+             rho: np.ndarray, t_limit: np.ndarray, on_cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The cut surface (MODEL.md §3.1): returns the hit parameter and the unit normal pointing
+    out of the lens material (toward the air), for hits nearer than ``t_limit``.
+
+    Intersect the ray with plane A (cut base) and plane B (apexes); the true hit lies on a cell
+    crossed between them. Walk those cells from the entry side (a 2-D grid traversal) and test
+    each cell's sphere; the first root that lies inside its own cell is the hit (paper Fig. 9).
+    Cost: the few cells the ray crosses in the slab, whatever the number of cuts.
+
+    ``on_cap`` (per ray, default ``OFF_CAP``) says that a ray starts on the cut surface itself,
+    heading ``INTO_AIR`` or ``INTO_LENS``. Its own surface is then excluded by geometry rather than
+    by distance: a ray leaving a sphere outward never meets it again, one leaving it inward only
+    at the far root, and a plane is never met again. A distance threshold alone fails for grazing
+    rays, whose own cap, met again from a start a rounding error on the wrong side, lies farther
+    away than any safe threshold.
+    """
+    n = len(o)
+    t_hit = np.full(n, np.inf)
+    on_cap = np.zeros(n, np.int8) if on_cap is None else on_cap
+
+    flat = np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0]
+    if len(flat):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (plane_a[flat] - o[flat, 1]) / d[flat, 1]
+        ok = (t > T_MIN) & (t < t_limit[flat])
+        t_hit[flat[ok]] = t[ok]
+
+    # The walk keeps only the cell each ray's hit lies in; the normals follow after the walk.
+    cell_i, cell_j = np.zeros(n), np.zeros(n)
+    walk = _CellWalk.enter(o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap)
+    for _ in range(MAX_CELL_STEPS):
+        if len(walk.ray) == 0:
+            break
+        t = walk.cap_hits()
+        found = np.isfinite(t)
+        if found.any():
+            ray = walk.ray[found]
+            t_hit[ray] = t[found]
+            cell_i[ray], cell_j[ray] = walk.row("i")[found], walk.row("j")[found]
+        walk.advance()
+        walk.keep(~found & (walk.row("t_cell") <= walk.row("t_out")))
+
+    normal = np.zeros((n, 3))
+    normal[:, 1] = 1.0
+    capped = np.nonzero(np.isfinite(t_hit) & np.isfinite(rho))[0]
+    if len(capped):
+        oc, dc, tc, pc = o[capped], d[capped], t_hit[capped], pitch[capped]
+        ax, ay, az = oc[:, 0] - cell_i[capped] * pc, oc[:, 1] - plane_b[capped], oc[:, 2] - cell_j[capped] * pc
+        normal[capped] = _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2], rho[capped])
+    return t_hit, normal
+
+
+class _CellWalk:
+    """The rays still walking the cut cells (a 2-D grid traversal), one column per ray of a
+    single (rows, K) array so that dropping the finished rays is one gather.
+
+    Cell (i, j) covers [(i - 1/2) p, (i + 1/2) p] in x and likewise in z (one cell on the axis);
+    its cap's apex is at (i p, plane B, j p)."""
+
+    ROWS = (
+        "ox", "oz", "dx", "dz", "p",  # origin and direction in x and z, pitch
+        "si", "sj",  # sign of dx, dz: the step to the next cell
+        # Per-ray constants of the cap roots (``cap_hits``): a_y = o_y - plane B, and the terms
+        # of b and c that do not depend on the cell, computed once in the same order.
+        "ay_dy", "rho_dy", "ay_ay", "two_rho_ay", "rho",
+        "i", "j",  # current cell
+        "t_cell",  # where the ray enters the current cell
+        "t_out",  # where it leaves the slab (or meets the side wall)
+        "t_next_i", "t_next_j",  # where it crosses the next cell border in x, and in z
+        "dt_i", "dt_j",  # ray length across one cell in x, and in z
+    )
+    _ROW = {name: k for k, name in enumerate(ROWS)}
+
+    TOL = 1e-9  # mm of ray parameter: a root on a cell border belongs to both cells
+
+    def __init__(self, ray: np.ndarray, state: np.ndarray, on_cap: np.ndarray):
+        self.ray = ray  # index of the ray in the caller's arrays
+        self.state = state  # (len(ROWS), K)
+        self.on_cap = on_cap  # how the ray leaves the cap of its first cell; None after that cell
+
+    def row(self, name: str) -> np.ndarray:
+        return self.state[self._ROW[name]]
+
+    @classmethod
+    def enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
+        """The rays with curved cuts whose path crosses the slab between planes A and B before
+        ``t_limit``, each placed in the cell where it enters the slab."""
+        curved = np.isfinite(rho)
+        every = bool(curved.all())  # the usual case: no gather needed to find the slab
+        ray = np.arange(len(rho)) if every else np.nonzero(curved)[0]
+        pick = (lambda a: a) if every else (lambda a: a[ray])
+        oy, dy = pick(o[:, 1]), pick(d[:, 1])
+        a_plane, b_plane = pick(plane_a), pick(plane_b)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ta = (a_plane - oy) / dy
+            tb = (b_plane - oy) / dy
+        t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
+        parallel = np.nonzero(dy == 0)[0]
+        if len(parallel):  # a ray parallel to the planes is in the slab for ever or never
+            y = oy[parallel]
+            in_slab = (y >= a_plane[parallel]) & (y <= b_plane[parallel])
+            t_in[parallel] = np.where(in_slab, 0.0, np.inf)
+            t_out[parallel] = np.where(in_slab, np.inf, -np.inf)
+        np.maximum(t_in, 0.0, out=t_in)
+        np.minimum(t_out, pick(t_limit), out=t_out)
+        live = np.nonzero(t_in <= t_out)[0]
+        ray, t_in, t_out = ray[live], t_in[live], t_out[live]
+
+        state = np.empty((len(cls.ROWS), len(ray)))
+        row = dict(zip(cls.ROWS, state, strict=True))
+        oo, dd = o[ray], d[ray]
+        ox, oz, dx, dz, p, r = row["ox"], row["oz"], row["dx"], row["dz"], row["p"], row["rho"]
+        ox[:], oz[:], dx[:], dz[:], p[:], r[:] = oo[:, 0], oo[:, 2], dd[:, 0], dd[:, 2], pitch[ray], rho[ray]
+        ay, dy = oo[:, 1] - plane_b[ray], dd[:, 1]
+        row["ay_dy"][:], row["rho_dy"][:] = ay * dy, r * dy
+        row["ay_ay"][:], row["two_rho_ay"][:] = ay * ay, 2.0 * r * ay
+        i = np.floor((ox + t_in * dx) / p + 0.5, out=row["i"])
+        j = np.floor((oz + t_in * dz) / p + 0.5, out=row["j"])
+        si, sj = np.sign(dx, out=row["si"]), np.sign(dz, out=row["sj"])
+        row["t_cell"][:], row["t_out"][:] = t_in, t_out
+        with np.errstate(divide="ignore", invalid="ignore"):
+            row["t_next_i"][:] = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
+            row["t_next_j"][:] = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
+            row["dt_i"][:] = np.where(si != 0, p / np.abs(dx), np.inf)
+            row["dt_j"][:] = np.where(sj != 0, p / np.abs(dz), np.inf)
+        on_cap = on_cap[ray]
+        return cls(ray, state, on_cap if on_cap.any() else None)
+
+    def keep(self, keep: np.ndarray) -> None:
+        """Drop the rays not in ``keep``."""
+        if keep.all():
+            return
+        idx = np.nonzero(keep)[0]
+        self.ray = self.ray[idx]
+        self.state = self.state.take(idx, axis=1)
+
+    def cap_hits(self) -> np.ndarray:
+        """Each ray's hit on the cap of its current cell within the cell (inf if none).
+
+        With the ray's origin a taken relative to the cap's apex, the sphere of radius rho hangs
+        below the apex, so |a + t d + rho y|^2 = rho^2 becomes t^2 + 2 (a.d + rho d_y) t + |a|^2 +
+        2 rho a_y = 0: no rho^2 term left to cancel. For very low cuts rho reaches 1e11 mm, and the
+        textbook |o - c|^2 - rho^2 loses every digit. The small root is taken as c / q so that it
+        stays exact when the cap is nearly flat (it tends to the plane)."""
+        row = self.row
+        p, dx, dz = row("p"), row("dx"), row("dz")
+        ax, az = row("ox") - row("i") * p, row("oz") - row("j") * p
+        # b = a.d + rho d_y and c = |a|^2 + 2 rho a_y, the cell-independent terms from the rows
+        b = ax * dx + row("ay_dy") + az * dz + row("rho_dy")
+        c = ax * ax + row("ay_ay") + az * az + row("two_rho_ay")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            q = -(b + np.copysign(np.sqrt(b * b - c), b))
+            r2 = c / q
+        lo, hi = np.fmin(q, r2), np.fmax(q, r2)
+        if self.on_cap is not None:  # only in a ray's first cell: the cap it starts on
+            lo = np.where(self.on_cap == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
+            hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
+        t_cell = row("t_cell")
+        t_end = np.minimum(np.minimum(row("t_next_i"), row("t_next_j")), row("t_out"))
+        lo_ok = (lo > T_MIN) & (lo >= t_cell - self.TOL) & (lo <= t_end + self.TOL)
+        hi_ok = (hi > T_MIN) & (hi >= t_cell - self.TOL) & (hi <= t_end + self.TOL)
+        return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
+
+    def advance(self) -> None:
+        """Step every ray to the neighbouring cell it enters next."""
+        row = self.row
+        t_next_i, t_next_j = row("t_next_i"), row("t_next_j")
+        step_i = t_next_i < t_next_j
+        step_j = ~step_i
+        row("t_cell")[:] = np.where(step_i, t_next_i, t_next_j)
+        np.add(row("i"), row("si"), out=row("i"), where=step_i)
+        np.add(row("j"), row("sj"), out=row("j"), where=step_j)
+        np.add(t_next_i, row("dt_i"), out=t_next_i, where=step_i)
+        np.add(t_next_j, row("dt_j"), out=t_next_j, where=step_j)
+        self.on_cap = None
+
+
+def _cap_normal(hx: np.ndarray, hy: np.ndarray, hz: np.ndarray, rho: np.ndarray) -> np.ndarray:
+    """Unit normal, out of the lens, at a point (hx, hy, hz) given relative to the cap's apex.
+
+    Normalised explicitly: the hit is on the sphere only to rounding, so (hit - centre) / rho is
+    not of unit length, and the error would grow at every later bounce."""
+    return optics.normalize(np.stack([hx, hy + rho, hz], axis=1))
+
+
+def cut_surface_height(x: np.ndarray, z: np.ndarray, plane_b: float, pitch: float, rho: float) -> np.ndarray:
+    """Height y of the cut surface above (x, z): the cap of the cell containing the point."""
+    if not np.isfinite(rho):
+        return np.full(np.shape(x), plane_b)
+    i = np.floor(np.asarray(x) / pitch + 0.5)
+    j = np.floor(np.asarray(z) / pitch + 0.5)
+    r2 = (x - i * pitch) ** 2 + (z - j * pitch) ** 2
+    # the sag below the apex, rho - sqrt(rho^2 - r^2), written without cancellation for huge rho
+    return plane_b - r2 / (rho + np.sqrt(np.maximum(rho * rho - r2, 0.0)))

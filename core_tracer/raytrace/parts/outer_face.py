@@ -1,0 +1,36 @@
+"""The lens's outer face (MODEL.md §3): the disk of radius R in the plane y = 0, a Fresnel
+surface reached from inside the lens (eye rays meet it from outside in ``lens_at``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import paths as P
+from ..lamp_table import LampTable
+from .base import T_MIN, Segments
+
+SURFACE = P.OUTER
+MEDIA = (P.IN_LENS,)
+NORMAL = np.array([0.0, -1.0, 0.0])  # out of the lens material, toward the viewer
+
+
+def hit_outer_face(o: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """The plane y = 0, reached from inside the lens (d_y < 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = -o[:, 1] / d[:, 1]
+    return np.where((d[:, 1] < 0) & (t > T_MIN), t, np.inf)
+
+
+def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return hit_outer_face(rays.o, rays.d), np.broadcast_to(NORMAL, rays.o.shape)
+
+
+def lens_at(x: np.ndarray, z: np.ndarray, lamps: LampTable) -> np.ndarray:
+    """For world points (x, z) on the body's front plane, the lamp whose lens contains each
+    point, or -1 (the lens outline: a circle of the lens radius about the lamp axis)."""
+    lamp = np.full(len(x), -1)
+    for li in range(len(lamps.radius)):
+        dx = x - lamps.center[li, 0]
+        dz = z - lamps.center[li, 1]
+        lamp[dx * dx + dz * dz <= lamps.radius[li] ** 2] = li
+    return lamp

@@ -1,0 +1,47 @@
+"""The reflector (MODEL.md §3.2): the paraboloid y = y_v - (x^2 + z^2) / 4f between its rim and
+its vertex, met from the air inside the lamp; shaded by eq. (3) and mirror-reflecting."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import paths as P
+from ..lamp_table import LampTable
+from .base import Segments, first_beyond, solve_quadratic
+
+SURFACE = P.REFLECTOR
+MEDIA = (P.IN_AIR,)
+
+
+def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.ndarray, rim: np.ndarray,
+                  leaving: np.ndarray | None = None) -> np.ndarray:
+    """The paraboloid y = y_v - (x^2 + z^2) / 4f between the rim and the vertex.
+
+    For rays that start on the reflector (``leaving``) the root nearer 0 is the start itself:
+    only the other one can be a hit, whatever its distance (see ``cuts.hit_cuts``)."""
+    inv4f = 0.25 / focal
+    a = (d[:, 0] ** 2 + d[:, 2] ** 2) * inv4f
+    b = d[:, 1] + 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2]) * inv4f
+    c = o[:, 1] + (o[:, 0] ** 2 + o[:, 2] ** 2) * inv4f - vertex
+    lo, hi = solve_quadratic(a, b, c)
+    if leaving is not None:
+        own_is_lo = np.abs(lo) <= np.abs(hi)
+        lo = np.where(leaving & own_is_lo, np.nan, lo)
+        hi = np.where(leaving & ~own_is_lo, np.nan, hi)
+    y_lo = o[:, 1] + lo * d[:, 1]
+    y_hi = o[:, 1] + hi * d[:, 1]
+    return first_beyond(lo, hi, y_lo >= rim - 1e-9, y_hi >= rim - 1e-9)
+
+
+def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
+    li = rays.lamp
+    return hit_reflector(rays.o, rays.d, lamps.focal[li], lamps.vertex[li], lamps.rim[li],
+                         rays.src == P.REFLECTOR), None
+
+
+def reflector_normal(p: np.ndarray, focal: np.ndarray) -> np.ndarray:
+    """Unit normal of the paraboloid facing the lamp interior."""
+    nx, nz = -p[:, 0] / (2.0 * focal), -p[:, 2] / (2.0 * focal)
+    # the length as np.linalg.norm sums it, (x^2 + y^2) + z^2, without its slow reduction over rows
+    length = np.sqrt(nx * nx + 1.0 + nz * nz)
+    return np.stack([nx / length, -1.0 / length, nz / length], axis=1)
