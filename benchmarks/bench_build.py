@@ -28,7 +28,6 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
 
 PRESET = ROOT / "presets" / "four-lamp-rear-combination.json"
 TARGET_SECONDS = 0.2
@@ -84,10 +83,11 @@ def main() -> int:
     os.environ["BLENDER_USER_RESOURCES"] = resources
     try:
         import bpy
-        import compare_preset  # tools/: enables this source tree as a development extension
+
+        from tools import dev_extension  # enables this source tree as a development extension
 
         bpy.ops.wm.read_homefile(use_empty=True)
-        with compare_preset.extension(bpy) as package:
+        with dev_extension.enabled_from_source(bpy, "lamp_bench") as package:
             return run(bpy, package, args.repeat)
     finally:
         shutil.rmtree(resources, ignore_errors=True)
