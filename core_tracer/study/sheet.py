@@ -97,15 +97,16 @@ def layout(study: Study) -> SheetLayout:
 
     grid_x = pad + row_header
     grid_w = study.columns * cell_w + (study.columns - 1) * gap
-    width = max(grid_x + grid_w + pad, 2 * pad + MIN_TEXT_CHARS * adv)
+    axes_text = f"columns: {axes[0].parameter.text}"
+    if len(axes) > 1:
+        axes_text += f"   rows: {axes[1].parameter.text}"
+    # wide enough for the axes line (what the sheet shows is named in full) and a short title
+    width = max(grid_x + grid_w + pad, 2 * pad + max(MIN_TEXT_CHARS, len(axes_text)) * adv)
     top = pad + 2 * line + pad  # title line and axes line
     grid_y = top + line  # the column header strip
     height = grid_y + study.rows * cell_h + (study.rows - 1) * gap + pad
 
     texts = [TextBox(study.heading(), Rect(pad, pad, width - 2 * pad, line), "title")]
-    axes_text = f"columns: {axes[0].parameter.text}"
-    if len(axes) > 1:
-        axes_text += f"   rows: {axes[1].parameter.text}"
     texts.append(TextBox(axes_text, Rect(pad, pad + line, width - 2 * pad, line), "axes"))
     for c, label in enumerate(column_labels):
         texts.append(TextBox(label, Rect(grid_x + c * (cell_w + gap), top, cell_w, line), "column"))

@@ -459,3 +459,15 @@ def test_one_lamps_centre_is_a_parameter():
     base = load_scene(FOUR_LAMPS)
     s = st.Study.build(base, [st.parse_vary("lamps[0].center=-185/0,-180/5")])
     assert [v.scene["lamps"][0]["center"] for v in s.variants] == [[-185.0, 0.0], [-180.0, 5.0]]
+
+
+def test_the_axes_line_names_both_parameters_in_full():
+    """Small variants make a narrow sheet: the line naming the columns' and rows' parameters still
+    fits in full (it was cut to "rows: cut..." at 128 px cells)."""
+    study = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.45,1.6"),
+                                            st.parse_vary("cuts.height=0.5,2")], (128, 128))
+    lay = study_sheet.layout(study)
+    adv = study_sheet.bitmap_font.ADVANCE_W * study_sheet.text_scale(study.size)
+    (axes,) = [box for box in lay.texts if box.kind == "axes"]
+    assert axes.text == "columns: lens.ior   rows: cuts.height"
+    assert len(axes.text) * adv <= axes.rect.w
