@@ -40,6 +40,8 @@ import math
 
 import numpy as np
 
+from .. import budget
+
 # Spencer et al. 1995, photopic PSF: weights of f0, f1, f2.
 PHOTOPIC = (0.384, 0.478, 0.138)
 F0_PEAK, F0_WIDTH_DEG = 2.61e6, 0.02
@@ -50,7 +52,7 @@ NEAR_PIXELS = 2
 SUBSAMPLE_DEG = 0.004
 MAX_SUBSAMPLES = 256
 # Peak bytes per image pixel: a few float64/complex128 arrays of the padded (2H x 2W) size.
-BYTES_PER_PIXEL = 200
+BYTES_PER_PIXEL = budget.GLARE_BYTES_PER_PIXEL
 
 
 def scatter(theta_deg: np.ndarray) -> np.ndarray:

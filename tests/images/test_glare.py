@@ -119,3 +119,44 @@ def test_validation_names_the_field_and_range(tmp_path, field, value, needle):
 def test_scene_with_glare_validates():
     scene = scene_with(**{"glare.on": True, "glare.strength": 0.5})
     assert scene["glare"] == {"on": True, "threshold": 1.0, "strength": 0.5}
+
+
+def test_glare_is_in_the_memory_budget(tmp_path):
+    doc = json.loads(FOUR_LAMPS.read_text())
+    doc["glare"] = {"on": True}
+    path = tmp_path / "glare.json"
+    path.write_text(json.dumps(doc))
+    out = tmp_path / "big.exr"
+    # 8192 x 8192 renders without glare; with it the FFT arrays do not fit: refused before rendering.
+    assert_bad_input(run_cli("render", path, "-o", out, "--width", "8192", "--height", "8192"),
+                     "image", "without glare", "allowed at most 4.0 GB")
+    assert not out.exists()
+
+
+def test_cli_render_and_study_hold_the_glare(tmp_path):
+    from core_tracer import render
+    from core_tracer.images.imageio import read_image
+    from core_tracer.study import run as study_run
+    from core_tracer.study.definition import Study
+
+    doc = json.loads(FOUR_LAMPS.read_text())
+    doc["glare"] = {"on": True, "threshold": 1.5}
+    doc["image"] = {"width": 40, "height": 30}
+    path = tmp_path / "glare.json"
+    path.write_text(json.dumps(doc))
+    scene = load_scene(path)
+    expected = glare.apply(render(scene), scene)
+    proc = run_cli("render", path, "-o", tmp_path / "out.exr")
+    assert proc.returncode == 0, proc.stderr
+    image, header = read_image(tmp_path / "out.exr")
+    assert header["glare"]["on"]
+    np.testing.assert_array_equal(image, expected)  # the EXR holds the glared linear image
+    assert not np.array_equal(image, render(scene))
+
+    study = Study.from_doc({"schema": "lamp-study/1", "base": scene, "size": [40, 30],
+                            "axes": [{"parameter": "lamps[0].lens.ior", "values": [1.45, 1.6]}]})
+    here = study_run.run_study(study, workers=0)
+    workers = study_run.run_study(study, workers=1)
+    variant = study.variants[0].scene
+    np.testing.assert_array_equal(here[0], glare.apply(render(variant, 40, 30), variant))
+    np.testing.assert_array_equal(workers[0], here[0])
