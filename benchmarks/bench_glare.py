@@ -49,7 +49,8 @@ def main() -> int:
     glare.apply(image, scene)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    print(f"{n}x{n}: render {render_seconds:.3f} s; glare median {statistics.median(times):.3f} s over {args.runs} runs")
+    median = statistics.median(times)
+    print(f"{n}x{n}: render {render_seconds:.3f} s; glare median {median:.3f} s over {args.runs} runs")
     print("energy error per channel (relative): " + ", ".join(f"{e:+.1e}" for e in after / before - 1.0))
     print(f"glare peak {peak / n / n:.0f} bytes/pixel (budget's estimate {budget.GLARE_BYTES_PER_PIXEL})")
     return 0
