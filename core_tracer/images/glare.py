@@ -144,7 +144,8 @@ def spread(image: np.ndarray, threshold: float, strength: float, deg_per_px: flo
     for c in range(image.shape[2]):
         if excess[..., c].any():
             out[..., c] += convolve(excess[..., c] / inside)
-    return out.astype(np.float32)
+    # FFT rounding (about 1e-16 of the spread light) must not make a dark pixel negative.
+    return np.maximum(out, 0.0).astype(np.float32)
 
 
 def apply(image: np.ndarray, scene: dict) -> np.ndarray:

@@ -160,3 +160,16 @@ def test_cli_render_and_study_hold_the_glare(tmp_path):
     variant = study.variants[0].scene
     np.testing.assert_array_equal(here[0], glare.apply(render(variant, 40, 30), variant))
     np.testing.assert_array_equal(workers[0], here[0])
+
+
+def test_a_point_spreads_by_the_psf_centred_on_it():
+    image = np.zeros((101, 101, 3), np.float32)
+    image[50, 50] = (1001.0, 1.0, 1.0)  # only red is above the threshold
+    out = glare.spread(image, 1.0, 1.0, DEG_PER_PX).astype(np.float64)
+    red = out[..., 0]
+    assert red[50, 70] == pytest.approx(red[70, 50], rel=1e-9) == pytest.approx(red[50, 30], rel=1e-9)
+    k = glare.kernel(101, 101, DEG_PER_PX)
+    # a source in the middle keeps a constant share of its PSF: the glow has the kernel's shape
+    assert red[50, 70] / red[50, 90] == pytest.approx(k[100, 120] / k[100, 140], rel=1e-6)
+    assert red[50, 50] < 1001.0 and red.sum() == pytest.approx(1001.0, rel=1e-6)
+    np.testing.assert_array_equal(out[..., 1:], image[..., 1:])  # green and blue untouched
