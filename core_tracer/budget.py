@@ -18,6 +18,8 @@ PASS_COUNT = 8
 # A study's sheet is held up to four times while it is composed (OpenImageIO's buffer, its copy to
 # numpy, a writable copy, the writer's copy); the variant images stay in memory until then.
 SHEET_COPIES = 4
+# The glare's peak (images/glare.py): float64 and complex128 arrays of the padded 2H x 2W size.
+GLARE_BYTES_PER_PIXEL = 300  # measured 280 (tracemalloc, 512² and 1024²)
 # A study renders at most this many pixels in all, the pixels of one 4096 x 4096 image: 64
 # variants of 512 x 512, or 4 of 2048 x 2048 (an hour or so of CPU time at most, README).
 MAX_STUDY_PIXELS = 4096 * 4096
@@ -27,20 +29,24 @@ def gib(n: int) -> str:
     return f"{n / 2**30:.1f} GB"
 
 
-def render_bytes(width: int, height: int, passes: bool, file_format: str) -> int:
-    """Peak bytes of ``render``: the image, the passes if kept, and the file writer's copy."""
+def render_bytes(width: int, height: int, passes: bool, file_format: str, glare: bool = False) -> int:
+    """Peak bytes of ``render``: the image, the passes if kept, the file writer's copy, and the
+    glare's FFT arrays if it is on (``images.glare.BYTES_PER_PIXEL``)."""
     pixels = width * height
     image = pixels * RGB_BYTES
     kept = pixels * RGB_BYTES * PASS_COUNT if passes else 0
     # EXR: a float32 copy; PNG: the 8-bit codes and OpenImageIO's copy of them
     writer = pixels * RGB_BYTES if file_format == "exr" else pixels * 3 * 2
-    return BASE_BYTES + image + kept + writer
+    spread = pixels * GLARE_BYTES_PER_PIXEL if glare else 0
+    return BASE_BYTES + image + kept + max(writer, spread)  # the glare is done before the file is written
 
 
-def check_render(width: int, height: int, passes: bool, file_format: str, what: str = "the render") -> None:
-    need = render_bytes(width, height, passes, file_format)
+def check_render(width: int, height: int, passes: bool, file_format: str, what: str = "the render",
+                 glare: bool = False) -> None:
+    need = render_bytes(width, height, passes, file_format, glare)
     if need > MEMORY_BUDGET:
         hint = " without --passes, or" if passes else ""
+        hint += " without glare, or" if glare else ""
         raise SceneError("image", f"{width}x{height} px{' with --passes' if passes else ''}: {what} needs about "
                          f"{gib(need)} of memory; allowed at most {gib(MEMORY_BUDGET)} (render{hint} smaller)")
 

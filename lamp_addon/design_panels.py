@@ -137,6 +137,8 @@ class LAMP_PT_camera(DesignSection, bpy.types.Panel):
         draw_section(layout.column(), design.camera, S.CAMERA)
         layout.separator()
         draw_section(layout.column(), design.image, S.IMAGE)
+        layout.separator()
+        draw_section(layout.column(), design.glare, S.GLARE)
 
 
 class LAMP_PT_lamps(DesignSection, bpy.types.Panel):

@@ -99,6 +99,7 @@ class LampTracerEngine(bpy.types.RenderEngine):
 
     def render(self, depsgraph):
         from .. import core_tracer
+        from ..core_tracer.images import glare
 
         width, height = self.resolution_x, self.resolution_y
         self._region = render_region(depsgraph.scene.render, width, height)
@@ -135,12 +136,17 @@ class LampTracerEngine(bpy.types.RenderEngine):
                             for name, values in (passes or {}).items()})
 
         try:
-            core_tracer.render_passes(scene, width, height, progress=self.update_progress,
+            result = core_tracer.render_passes(scene, width, height, progress=self.update_progress,
                                                should_stop=self.test_break, on_band=write_rows,
                                                threads=depsgraph.scene.render.threads,  # Blender's count
                                                keep_passes=with_passes)
         except core_tracer.RenderCancelled:
             return  # Esc: Blender keeps the bands finished so far, with their passes
+        # Glare needs the whole image: the bands shown while rendering are replaced by the glared
+        # image (Combined only; the contribution passes stay the tracer's, without glare).
+        shown = glare.apply(result.image, scene)
+        if shown is not result.image:
+            write_rows(0, height, shown)
 
     def _fill(self, rows: np.ndarray, row_start: int, alpha: np.ndarray,
               passes: dict[str, np.ndarray] | None = None) -> None:

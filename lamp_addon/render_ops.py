@@ -19,7 +19,7 @@ import time
 import bpy
 import numpy as np
 
-from ..core_tracer.images import display
+from ..core_tracer.images import display, glare
 from ..core_tracer.scene.reading import SceneError
 from . import actions, image_view, jobs, render_camera, reports
 
@@ -36,6 +36,7 @@ class TracerJob:
         self.rows = np.zeros((height, width, 3), np.float32)
         self.progress = 0.0
         self.rows_done = 0
+        self.updates = 0  # how often ``rows`` changed: the main thread shows it again when this grows
         self.stop_requested = False
         self.cancelled = False
         self.error: str | None = None
@@ -56,6 +57,7 @@ class TracerJob:
     def _on_rows(self, row_start: int, row_stop: int, rows: np.ndarray) -> None:
         self.rows[row_start:row_stop] = rows
         self.rows_done += row_stop - row_start
+        self.updates += 1
 
     def _set_progress(self, fraction: float) -> None:
         self.progress = fraction
@@ -67,6 +69,10 @@ class TracerJob:
         try:
             core_tracer.render_passes(self.scene, progress=self._set_progress,
                                       should_stop=lambda: self.stop_requested, on_rows=self._on_rows)
+            shown = glare.apply(self.rows, self.scene)  # as render_to_image: the same pixels
+            if shown is not self.rows:
+                self.rows[:] = shown
+                self.updates += 1
         except core_tracer.RenderCancelled:
             self.cancelled = True
         except Exception as e:  # a tracer bug: shown to the user by the main thread, not lost in a thread
@@ -84,7 +90,7 @@ def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
     render_camera.sync_view(bl_scene)
     scene = render_camera.scene_for_render(bl_scene)
     start = time.perf_counter()
-    rgb = core_tracer.render(scene)
+    rgb = glare.apply(core_tracer.render(scene), scene)
     seconds = time.perf_counter() - start
     exposure = display.auto_exposure(rgb)
     return image_view.show_linear(IMAGE_NAME, rgb * np.float32(2.0 ** exposure), exposure, bl_scene), seconds
@@ -128,7 +134,7 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
         self._gain = image_view.shown_gain(context.scene, exposure)
         self._image = image_view.show_linear(IMAGE_NAME, self._job.rows, exposure, context.scene)
         image_view.show_image(context, self._image)
-        self._shown_rows = 0
+        self._shown_updates = 0
         outcome = self.begin_modal(context, self._job)
         self._job.start()
         return outcome
@@ -165,8 +171,8 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
         return self._job.progress
 
     def _show_rows(self, context) -> None:
-        if self._job.rows_done != self._shown_rows:
-            self._shown_rows = self._job.rows_done
+        if self._job.updates != self._shown_updates:
+            self._shown_updates = self._job.updates
             self._image.pixels.foreach_set(image_view.rgba_rows(self._job.rows * self._gain))
             self._image.update()
             image_view.redraw_image_editors(context, self._image)

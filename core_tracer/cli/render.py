@@ -35,10 +35,12 @@ def run(args: argparse.Namespace) -> int:
         check_output_folder(args.passes, "--passes")
     scene = load_scene_file(args.scene, args.width, args.height)
     keep_passes = args.passes is not None
-    budget.check_render(scene["image"]["width"], scene["image"]["height"], keep_passes, file_format)
+    budget.check_render(scene["image"]["width"], scene["image"]["height"], keep_passes, file_format,
+                        glare=scene["glare"]["on"])
     checkpoint("render:checked")
 
     from .. import RenderCancelled, render_passes  # the tracer loads only when it is needed
+    from ..images import glare
     from ..images.imageio import load_writer, write_image
 
     load_writer()
@@ -50,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
                                    progress=lambda fraction: checkpoint("render:band"))
         except RenderCancelled:
             raise stop.interrupt() from None
+        image = glare.apply(result.image, scene)  # the image file holds the glare; the passes do not
     seconds = time.perf_counter() - start
     checkpoint("render:rendered")
 
@@ -57,9 +60,9 @@ def run(args: argparse.Namespace) -> int:
         os.makedirs(args.passes, exist_ok=True)
         for name, data in result.passes.items():
             write_image(os.path.join(args.passes, f"{name}.exr"), data, scene)
-    ev = write_image(args.output, result.image, scene, view=view, exposure=args.exposure)
+    ev = write_image(args.output, image, scene, view=view, exposure=args.exposure)
 
-    h, w = result.image.shape[:2]
+    h, w = image.shape[:2]
     segments = result.stats.get("segments")
     traced = f", {segments} ray segments" if segments is not None else ""
     shown = f", {view.view} at {ev:+.1f} EV" if view is not None else ""

@@ -238,6 +238,17 @@ IMAGE = Section(
     "Image size",
 )
 
+GLARE = Section(
+    {
+        "on": Flag(False, "Spread the light of the brightest pixels by the eye's glare (off in the paper)"),
+        "threshold": Num(1.0, 0.0, 1.0e6, lo_open=True,
+                         doc="Linear level above which a pixel's light spreads (1 = display white at 0 EV)"),
+        "strength": Num(1.0, 0.0, 1.0,
+                        doc="Fraction of the light above the threshold that spreads (1 = the eye's glare)"),
+    },
+    "Glare of the eye around bright pixels (Spencer et al. 1995, photopic bloom), applied to the linear image",
+)
+
 LIGHT = Section(
     {
         "direction": Num((0.3, -1.0, 0.6), -1.0e3, 1.0e3, size=3, nonzero=True, subtype="direction",
@@ -374,6 +385,7 @@ SCENE = Section(
         "image": IMAGE,
         "light": LIGHT,
         "background": _color((0, 0, 0), "Colour seen around the lamp, where rays leave the scene (0 in the paper)"),
+        "glare": GLARE,
         "body": BODY,
         "lamps": ListOf(LAMP, 1, MAX_LAMPS, "The lamps, 1 to 4"),
     },

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..fileio import EXTENSION_ROOT
+from ..images import glare
 from ..raytrace.tracer import RenderCancelled, render_passes
 from .definition import Study
 
@@ -364,8 +365,9 @@ def _run_here(study: Study, threads: int | None, progress, should_stop) -> list[
         progress(0, len(study))
     for v in study.variants:
         try:
-            images.append(render_passes(v.scene, width, height, should_stop=should_stop, threads=threads,
-                                        keep_passes=False).image)
+            image = render_passes(v.scene, width, height, should_stop=should_stop, threads=threads,
+                                  keep_passes=False).image
+            images.append(glare.apply(image, v.scene))
         except RenderCancelled:
             raise Cancelled() from None
         if progress is not None:

@@ -35,6 +35,7 @@ def main() -> int:
 
     import numpy as np
 
+    from ..images import glare
     from ..raytrace.tracer import RenderCancelled, render_passes
 
     parent = os.getppid()
@@ -63,7 +64,7 @@ def main() -> int:
             result = render_passes(job["scene"], job["width"], job["height"], progress=progress,
                                    should_stop=orphaned, threads=job.get("threads", 1), keep_passes=False)
             partial = job["out"] + ".part.npy"
-            np.save(partial, result.image)
+            np.save(partial, glare.apply(result.image, job["scene"]))
             os.replace(partial, job["out"])
         except RenderCancelled:
             return 1
