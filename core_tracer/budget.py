@@ -21,6 +21,11 @@ SHEET_COPIES = 4
 # A study renders at most this many pixels in all, the pixels of one 4096 x 4096 image: 64
 # variants of 512 x 512, or 4 of 2048 x 2048 (an hour or so of CPU time at most, README).
 MAX_STUDY_PIXELS = 4096 * 4096
+# Samples per pixel cost time, not memory (the tracer's bands hold a bounded number of rays,
+# whatever the samples): a render traces at most this many eye rays, those of an 8192 x 8192
+# image at 16 samples or a 4096 x 4096 one at 64 (about a quarter of an hour on two cores,
+# benchmarks/bench_tracer.py). A 4096 x 4096 image at 256 samples, four times that, is refused.
+MAX_EYE_RAYS = 2**30
 
 
 def gib(n: int) -> str:
@@ -37,7 +42,18 @@ def render_bytes(width: int, height: int, passes: bool, file_format: str) -> int
     return BASE_BYTES + image + kept + writer
 
 
-def check_render(width: int, height: int, passes: bool, file_format: str, what: str = "the render") -> None:
+def check_rays(width: int, height: int, samples: int, where: str = "image.samples") -> None:
+    """A render traces at most ``MAX_EYE_RAYS`` eye rays: pixels times samples per pixel."""
+    rays = width * height * samples
+    if rays > MAX_EYE_RAYS:
+        most = max(1, MAX_EYE_RAYS // (width * height))
+        raise SceneError(where, f"{width}x{height} px at {samples} samples are {rays:,} eye rays; allowed at most "
+                                f"{MAX_EYE_RAYS:,} in one render (here 1 to {most} samples, or a smaller image)")
+
+
+def check_render(width: int, height: int, passes: bool, file_format: str, what: str = "the render",
+                 samples: int = 1) -> None:
+    check_rays(width, height, samples)
     need = render_bytes(width, height, passes, file_format)
     if need > MEMORY_BUDGET:
         hint = " without --passes, or" if passes else ""

@@ -90,7 +90,7 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
     else:
         assert back["width"] == pytest.approx(want["width"], abs=1e-4)
     rendered = lamp_addon.render_camera.scene_for_render(bl_scene)
-    assert rendered["image"] == {"width": size[0], "height": size[1]}
+    assert rendered["image"] == {"width": size[0], "height": size[1], "samples": 1}
     assert rendered["camera"] == back
 
 
@@ -183,7 +183,7 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     bpy.context.view_layer.update()  # Blender's depsgraph update: the add-on's handler writes the design
     design = lamp_addon.design_properties.design_to_scene(bl_scene)
     assert design["camera"]["position"][0] == pytest.approx(scene["camera"]["position"][0] + 50.0, abs=1e-3)
-    assert design["image"] == {"width": 48, "height": 36}
+    assert design["image"] == {"width": 48, "height": 36, "samples": 1}
     assert rc.sync_view(bl_scene) == ""  # both sides agree now
 
 
@@ -675,7 +675,7 @@ def test_headless_job_writes_the_side_by_side_image(tmp_path):
     assert done.returncode == 0, done.stderr
     image, scene = imageio.read_image(out)
     assert image.shape[1] == 2 * 40 + 2 and image.shape[0] > 32
-    assert scene["image"] == {"width": 40, "height": 32}
+    assert scene["image"] == {"width": 40, "height": 32, "samples": 1}
     assert "Lamp Tracer:  40x32 in" in done.stdout and "2 samples per pixel" in done.stdout
     assert "mean difference" in done.stdout
 

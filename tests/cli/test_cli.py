@@ -187,7 +187,7 @@ def test_render_exr_with_passes(tmp_path):
     image, sc = imageio.read_image(out)
     assert image.shape == (24, 40, 3)
     assert np.isfinite(image).all() and (image >= 0).all() and image.max() > 0
-    assert sc["image"] == {"width": 40, "height": 24}
+    assert sc["image"] == {"width": 40, "height": 24, "samples": 1}
     expected = load_scene(BASELINE)
     expected["image"] = {"width": 40, "height": 24}
     assert sc["lamps"] == expected["lamps"] and sc["body"] == expected["body"]

@@ -87,7 +87,7 @@ def test_a_default_camera_frames_the_body_at_the_study_size():
     wide = st.Study.build(doc, [st.parse_vary("lens.ior=1.5")], (96, 32))
     expected = parse_scene({**doc, "image": {"width": 96, "height": 32}})
     assert wide.base["camera"] == expected["camera"] != parse_scene(doc)["camera"]
-    assert wide.variants[0].scene["image"] == {"width": 96, "height": 32}
+    assert wide.variants[0].scene["image"] == {"width": 96, "height": 32, "samples": 1}
 
 
 def test_two_axes_on_one_field_differ_by_lamp_or_component():
