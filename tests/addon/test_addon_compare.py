@@ -421,3 +421,12 @@ def test_lit_body_without_specular_agrees_with_cycles(lamp_addon, bl_scene):
           f"relative difference {relative}, seconds {seconds}")
     assert np.abs(relative).max() < BODY_TOLERANCE
     assert math.isclose(cos_theta, 1 / math.sqrt(0.3**2 + 1 + 0.6**2))
+
+
+def test_cycles_filters_as_the_tracer_samples(lamp_addon):
+    # One tracer sample is the pixel centre: Cycles samples a 0.01 px box. More samples are spread by
+    # Cycles' default Blackman-Harris 1.5 px (core_tracer.raytrace.pixel_filter): Cycles keeps it.
+    one = lamp_addon.compare_ops.cycles_settings(1)
+    assert (one["pixel_filter_type"], one["filter_width"]) == ("BOX", 0.01)
+    many = lamp_addon.compare_ops.cycles_settings(16)
+    assert (many["pixel_filter_type"], many["filter_width"]) == ("BLACKMAN_HARRIS", 1.5)
