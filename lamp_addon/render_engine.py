@@ -11,6 +11,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
+from ..core_tracer.budget import check_rays
 from ..core_tracer.raytrace.tracer import PASS_NAMES
 from ..core_tracer.scene.reading import SceneError
 from . import render_camera, render_viewport
@@ -110,6 +111,7 @@ class LampTracerEngine(bpy.types.RenderEngine):
         try:
             scene = render_camera.scene_for_render(depsgraph.scene, camera_object=self.camera_override,
                                             size=(width, height))
+            check_rays(width, height, scene["image"]["samples"])  # as the CLI: not an hour-long F12
         except SceneError as e:
             black = np.zeros((height, width, 3), np.float32)
             self._fill(black, 0, np.ones((height, width), np.float32),

@@ -690,3 +690,22 @@ def test_headless_job_bad_input_is_one_line_and_exit_2(tmp_path, args, message):
     assert done.stderr.strip().splitlines() == [done.stderr.strip()]
     assert done.stderr.startswith(message)
     assert "Traceback" not in done.stderr + done.stdout
+
+
+def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
+    import bpy
+
+    scene = _preset_scene(size=(32, 24))
+    _load_design(lamp_addon, bl_scene, scene)
+    bl_scene.lamp_design.image.samples = 4
+    bl_scene.render.engine = "LAMP_TRACER"
+    rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
+    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    assert seen["image"]["samples"] == 4
+    np.testing.assert_array_equal(rgba[:, :, :3], core_tracer.render(seen))
+    assert not np.array_equal(rgba[:, :, :3], core_tracer.render({**seen, "image": {**seen["image"], "samples": 1}}))
+    # Too many eye rays for one render: refused with the field and the range, as in the CLI.
+    bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4096
+    bl_scene.lamp_design.image.samples = 256
+    with pytest.raises(RuntimeError, match=r"image\.samples: .* 1 to 64 samples"):
+        bpy.ops.render.render()
