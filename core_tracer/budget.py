@@ -61,6 +61,16 @@ def check_render(width: int, height: int, passes: bool, file_format: str, what: 
                          f"{gib(need)} of memory; allowed at most {gib(MEMORY_BUDGET)} (render{hint} smaller)")
 
 
+def check_study_rays(size: tuple[int, int], samples: list[int], where: str = "image.samples") -> None:
+    """A study's variants trace at most ``MAX_EYE_RAYS`` eye rays in all, as one render."""
+    w, h = size
+    rays = w * h * sum(samples)
+    if rays > MAX_EYE_RAYS:
+        raise SceneError(where, f"{len(samples)} variants of {w}x{h} px at {min(samples)} to {max(samples)} samples "
+                                f"are {rays:,} eye rays; allowed at most {MAX_EYE_RAYS:,} in one study (fewer "
+                                "samples, smaller variants or fewer of them)")
+
+
 def study_bytes(variant_pixels: int, count: int, sheet_pixels: int) -> int:
     return BASE_BYTES + variant_pixels * count * RGB_BYTES + sheet_pixels * RGB_BYTES * SHEET_COPIES
 

@@ -378,7 +378,9 @@ class Study:
             shape = " x ".join(str(len(a.values)) for a in axes)
             raise SceneError("axes", f"{shape} = {count} variants; allowed at most {MAX_VARIANTS}")
         budget.check_study_pixels(size, count)
-        return cls(base, axes, size, title, _build_variants(base, axes))
+        variants = _build_variants(base, axes)
+        budget.check_study_rays(size, [v.scene["image"]["samples"] for v in variants])
+        return cls(base, axes, size, title, variants)
 
     @classmethod
     def from_json(cls, text: str, name: str = "") -> Study:

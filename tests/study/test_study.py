@@ -459,3 +459,17 @@ def test_one_lamps_centre_is_a_parameter():
     base = load_scene(FOUR_LAMPS)
     s = st.Study.build(base, [st.parse_vary("lamps[0].center=-185/0,-180/5")])
     assert [v.scene["lamps"][0]["center"] for v in s.variants] == [[-185.0, 0.0], [-180.0, 5.0]]
+
+
+def test_samples_vary_like_any_parameter_and_count_in_the_budget():
+    assert "image.samples" in st.study_parameters()
+    doc = {**baseline_doc(), "image": {"width": 9, "height": 9, "samples": 4}}
+    s = st.Study.build(doc, [st.parse_vary("image.samples=1,16")], SIZE)
+    assert s.base["image"] == {"width": SIZE[0], "height": SIZE[1], "samples": 4}  # the design's, at the study's size
+    one, many = (v.scene for v in s.variants)
+    assert (one["image"]["samples"], many["image"]["samples"]) == (1, 16)
+    assert not np.array_equal(render(one), render(many))
+    # 64 variants of 512 x 512 px at 256 samples: refused before any work, naming samples.
+    with pytest.raises(SceneError, match=r"image\.samples: .* eye rays; allowed at most"):
+        st.Study.build({**doc, "image": {"width": 9, "height": 9, "samples": 256}},
+                       [st.parse_vary("lens.ior=1.4:1.6:8"), st.parse_vary("cuts.height=0.5:2:8")], (512, 512))
