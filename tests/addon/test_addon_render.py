@@ -709,3 +709,26 @@ def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
     bl_scene.lamp_design.image.samples = 256
     with pytest.raises(RuntimeError, match=r"image\.samples: .* 1 to 64 samples"):
         bpy.ops.render.render()
+
+
+def test_engine_film_transparent_alpha_is_the_covered_fraction_with_samples(lamp_addon, bl_scene, tmp_path):
+    # With samples the silhouette is smooth: alpha is the fraction of the pixel's rays that hit the
+    # body, and the rays that miss leave the (premultiplied) colour, background and all.
+    scene = _preset_scene(size=(48, 32))
+    scene["background"] = [0.2, 0.3, 0.4]
+    _load_design(lamp_addon, bl_scene, scene)
+    bl_scene.lamp_design.image.samples = 16
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.render.film_transparent = True
+    rgba = _render_engine_exr(bl_scene, tmp_path / "alpha.exr")
+    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    alpha = rgba[:, :, 3]
+    edge = (alpha > 0) & (alpha < 1)
+    assert edge.sum() > 40  # the outline's pixels
+    assert alpha[16, 24] == 1.0 and alpha[0, 0] == 0.0
+    np.testing.assert_allclose(rgba[alpha == 0, :3], 0.0, atol=1e-6)
+    full = core_tracer.render(seen)
+    np.testing.assert_allclose(rgba[:, :, :3], full - (1 - alpha)[:, :, None] * np.float32([0.2, 0.3, 0.4]),
+                               atol=1e-6)
+    # Where all a pixel's rays hit the body, nothing is taken away.
+    np.testing.assert_array_equal(rgba[alpha == 1, :3], full[alpha == 1])
