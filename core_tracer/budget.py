@@ -23,6 +23,11 @@ GLARE_BYTES_PER_PIXEL = 300  # measured 280 (tracemalloc, 512² and 1024²)
 # A study renders at most this many pixels in all, the pixels of one 4096 x 4096 image: 64
 # variants of 512 x 512, or 4 of 2048 x 2048 (an hour or so of CPU time at most, README).
 MAX_STUDY_PIXELS = 4096 * 4096
+# Samples per pixel cost time, not memory (the tracer's bands hold a bounded number of rays,
+# whatever the samples): a render traces at most this many eye rays, those of an 8192 x 8192
+# image at 16 samples or a 4096 x 4096 one at 64 (about a quarter of an hour on two cores,
+# benchmarks/bench_tracer.py). A 4096 x 4096 image at 256 samples, four times that, is refused.
+MAX_EYE_RAYS = 2**30
 
 
 def gib(n: int) -> str:
@@ -41,14 +46,34 @@ def render_bytes(width: int, height: int, passes: bool, file_format: str, glare:
     return BASE_BYTES + image + kept + max(writer, spread)  # the glare is done before the file is written
 
 
+def check_rays(width: int, height: int, samples: int, where: str = "image.samples") -> None:
+    """A render traces at most ``MAX_EYE_RAYS`` eye rays: pixels times samples per pixel."""
+    rays = width * height * samples
+    if rays > MAX_EYE_RAYS:
+        most = max(1, MAX_EYE_RAYS // (width * height))
+        raise SceneError(where, f"{width}x{height} px at {samples} samples are {rays:,} eye rays; allowed at most "
+                                f"{MAX_EYE_RAYS:,} in one render (here 1 to {most} samples, or a smaller image)")
+
+
 def check_render(width: int, height: int, passes: bool, file_format: str, what: str = "the render",
-                 glare: bool = False) -> None:
+                 glare: bool = False, samples: int = 1) -> None:
+    check_rays(width, height, samples)
     need = render_bytes(width, height, passes, file_format, glare)
     if need > MEMORY_BUDGET:
         hint = " without --passes, or" if passes else ""
         hint += " without glare, or" if glare else ""
         raise SceneError("image", f"{width}x{height} px{' with --passes' if passes else ''}: {what} needs about "
                          f"{gib(need)} of memory; allowed at most {gib(MEMORY_BUDGET)} (render{hint} smaller)")
+
+
+def check_study_rays(size: tuple[int, int], samples: list[int], where: str = "image.samples") -> None:
+    """A study's variants trace at most ``MAX_EYE_RAYS`` eye rays in all, as one render."""
+    w, h = size
+    rays = w * h * sum(samples)
+    if rays > MAX_EYE_RAYS:
+        raise SceneError(where, f"{len(samples)} variants of {w}x{h} px at {min(samples)} to {max(samples)} samples "
+                                f"are {rays:,} eye rays; allowed at most {MAX_EYE_RAYS:,} in one study (fewer "
+                                "samples, smaller variants or fewer of them)")
 
 
 def study_bytes(variant_pixels: int, count: int, sheet_pixels: int) -> int:

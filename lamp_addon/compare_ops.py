@@ -74,6 +74,17 @@ CYCLES_SETTINGS = {
     "seed": 0,
     "use_animated_seed": False,
 }
+# With more than one sample per pixel the tracer spreads them by Cycles' own default pixel filter
+# (core_tracer.raytrace.pixel_filter), so Cycles keeps that filter instead of sampling the centre.
+ANTIALIASED_FILTER = {"pixel_filter_type": "BLACKMAN_HARRIS", "filter_width": 1.5}
+
+
+def cycles_settings(tracer_samples: int) -> dict:
+    """Cycles' settings for a comparison with the tracer at ``tracer_samples`` per pixel: one
+    sample is the pixel centre (a box 0.01 px wide), more are Blackman-Harris 1.5 px as the tracer's."""
+    return {**CYCLES_SETTINGS, **(ANTIALIASED_FILTER if tracer_samples > 1 else {})}
+
+
 # Renders shown as their linear values map to the display: Standard, no look, no exposure.
 STANDARD_VIEW = {"view_transform": "Standard", "look": "None", "exposure": 0.0, "gamma": 1.0,
                  "use_curve_mapping": False}
@@ -321,7 +332,7 @@ class CompareRun:
         settings.set(bl_scene.render, resolution_x=width, resolution_y=height, resolution_percentage=100,
                      use_border=False)
         settings.set(cycles, samples=self.samples, **{k: max(v, getattr(cycles, k)) for k, v in MIN_BOUNCES.items()},
-                     **CYCLES_SETTINGS)
+                     **cycles_settings(self.scene["image"]["samples"]))
         image_settings = bl_scene.render.image_settings
         settings.set(image_settings, **_exr_output_values(image_settings))
         for ob in objects_outside_design(bl_scene):

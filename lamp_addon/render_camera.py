@@ -174,8 +174,10 @@ def scene_for_render(bl_scene, *, camera_object=None, size: tuple[int, int] | No
     render = bl_scene.render
     width, height = size if size is not None else cm.render_size(
         render.resolution_x, render.resolution_y, render.resolution_percentage)
+    # The design's samples per pixel go with it (F12 renders them); only the size is Blender's.
+    image = {"width": int(width), "height": int(height), "samples": int(bl_scene.lamp_design.image.samples)}
     return design_properties.design_to_scene(bl_scene, camera=scene_camera_to_dict(bl_scene, camera_object),
-                                             image={"width": int(width), "height": int(height)})
+                                             image=image)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -11,6 +11,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
+from ..core_tracer.budget import check_rays
 from ..core_tracer.raytrace.tracer import PASS_NAMES
 from ..core_tracer.scene.reading import SceneError
 from . import render_camera, render_viewport
@@ -42,20 +43,36 @@ BAND_ROWS = 16  # rows per result update when the tracer reports rows in larger 
 
 
 def body_coverage(scene: dict, row_start: int, row_stop: int) -> np.ndarray:
-    """1 where the eye ray of a pixel hits the body box (the lamp's silhouette), else 0, decided
-    as the tracer decides it.
+    """The fraction of a pixel's eye rays that hit the body box (the lamp's silhouette), decided
+    as the tracer decides it: 1 or 0 at one sample, the mean over the same sample rays as the
+    tracer's with more.
 
     Shape (row_stop - row_start, width), rows top-based like the tracer's. The lenses lie in
     the body's front face, so the box is the whole lamp seen from outside."""
+    from ..core_tracer.raytrace import pixel_filter
     from ..core_tracer.raytrace.camera import eye_rays, make_camera
     from ..core_tracer.raytrace.parts.body_box import body_box, hit_box
+    from ..core_tracer.raytrace.tracer import TILE_RAYS
 
     width, height = scene["image"]["width"], scene["image"]["height"]
+    samples = scene["image"].get("samples", 1)
     cam = make_camera(scene["camera"], width, height)
-    origins, directions = eye_rays(cam, np.arange(row_start * width, row_stop * width))
-    t_near, t_far, _ = hit_box(origins, directions, *body_box(scene["body"]))
-    hit = (t_near <= t_far) & (t_near > 0)
-    return hit.reshape(row_stop - row_start, width).astype(np.float32)
+    box = body_box(scene["body"])
+    pixels = np.arange(row_start * width, row_stop * width)
+    if samples == 1:
+        t_near, t_far, _ = hit_box(*eye_rays(cam, pixels), *box)
+        hit = (t_near <= t_far) & (t_near > 0)
+        return hit.reshape(row_stop - row_start, width).astype(np.float32)
+    hits = np.zeros(len(pixels))
+    per_group = max(1, TILE_RAYS // len(pixels))  # bounded memory, as the tracer's bands
+    for s0 in range(0, samples, per_group):
+        count = min(samples, s0 + per_group) - s0
+        ray_pixels = np.repeat(pixels, count)
+        offsets = pixel_filter.sample_offsets(pixel_filter.DEFAULT_FILTER, ray_pixels,
+                                              np.tile(np.arange(s0, s0 + count), len(pixels)), samples)
+        t_near, t_far, _ = hit_box(*eye_rays(cam, ray_pixels, offsets), *box)
+        hits += ((t_near <= t_far) & (t_near > 0)).reshape(len(pixels), count).sum(axis=1)
+    return (hits / samples).reshape(row_stop - row_start, width).astype(np.float32)
 
 
 class LampTracerEngine(bpy.types.RenderEngine):
@@ -111,6 +128,7 @@ class LampTracerEngine(bpy.types.RenderEngine):
         try:
             scene = render_camera.scene_for_render(depsgraph.scene, camera_object=self.camera_override,
                                             size=(width, height))
+            check_rays(width, height, scene["image"]["samples"])  # as the CLI: not an hour-long F12
         except SceneError as e:
             black = np.zeros((height, width, 3), np.float32)
             self._fill(black, 0, np.ones((height, width), np.float32),
@@ -119,6 +137,8 @@ class LampTracerEngine(bpy.types.RenderEngine):
             return
 
         transparent = depsgraph.scene.render.film_transparent
+        samples = scene["image"]["samples"]
+        background = np.asarray(scene["background"], np.float32)
 
         def write_rows(row_start: int, row_stop: int, rows: np.ndarray,
                        passes: dict[str, np.ndarray] | None = None) -> None:
@@ -126,6 +146,15 @@ class LampTracerEngine(bpy.types.RenderEngine):
             for start in range(row_start, row_stop, BAND_ROWS):
                 stop = min(start + BAND_ROWS, row_stop)
                 band = slice(start - row_start, stop - row_start)
+                if transparent and samples > 1:
+                    # The rays that miss the body add exactly the background each, so their share,
+                    # (1 - coverage) x background, leaves the image and the background pass.
+                    alpha = body_coverage(scene, start, stop)
+                    missed = (1.0 - alpha)[:, :, None] * background
+                    self._fill(rows[band] - missed, start, alpha,
+                               {PASS_LABELS[name]: values[band] - missed if name == "background" else values[band]
+                                for name, values in (passes or {}).items()})
+                    continue
                 if transparent:  # premultiplied; the passes too, so that they still sum to Combined
                     alpha = body_coverage(scene, start, stop)
                     weight = alpha[:, :, None]

@@ -156,7 +156,7 @@ def study_from_settings(bl_scene) -> st.Study:
         base = render_camera.scene_for_render(bl_scene, size=size)
     else:  # no scene camera: the design's own camera section
         base = design_properties.design_to_scene(bl_scene)
-        base["image"] = {"width": size[0], "height": size[1]}
+        base["image"] = {**base["image"], "width": size[0], "height": size[1]}
     axes = [axis_doc(settings.axis_1)]
     if settings.use_axis_2:
         axes.append(axis_doc(settings.axis_2))

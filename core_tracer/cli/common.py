@@ -26,25 +26,27 @@ def in_file(error: SceneError, file: str | os.PathLike) -> SceneError:
     return SceneError(f"{name}: {error.path}" if error.path else name, error.message)
 
 
-def check_image_side(option: str, value: int | None) -> None:
-    """``--width``/``--height`` follow the same range as ``image.width``/``image.height``."""
+def check_image_side(option: str, value: int | None, field: str = "width") -> None:
+    """``--width``/``--height``/``--samples`` follow the same range as ``image.width``/``height``/``samples``."""
     if value is None:
         return
-    side = S.IMAGE.fields["width"]
+    side = S.IMAGE.fields[field]
     if not side.lo <= value <= side.hi:
         raise SceneError(option, f"{show_value(value)} is out of range; allowed {side.range_text()}")
 
 
-def load_scene_file(path: str | os.PathLike, width: int | None = None, height: int | None = None) -> dict:
-    """Read and validate a scene file, with the image size optionally overridden.
+def load_scene_file(path: str | os.PathLike, width: int | None = None, height: int | None = None,
+                    samples: int | None = None) -> dict:
+    """Read and validate a scene file, with the image size and samples optionally overridden.
 
     The override goes into the document before validation, so a default camera frames the body
     for the image actually rendered and the stored scene says what was rendered.
     """
     check_image_side("--width", width)
     check_image_side("--height", height)
+    check_image_side("--samples", samples, "samples")
     doc = read_json(path)
-    if isinstance(doc, dict) and (width or height):
+    if isinstance(doc, dict) and (width or height or samples):
         image = doc.get("image", {})
         if isinstance(image, dict):
             image = dict(image)
@@ -52,6 +54,8 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
                 image["width"] = width
             if height:
                 image["height"] = height
+            if samples:
+                image["samples"] = samples
             doc["image"] = image
     try:
         return parse_scene(doc)

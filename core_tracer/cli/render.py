@@ -20,6 +20,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="image file, .exr or .png")
     parser.add_argument("--width", type=int, metavar="W", help="image width in pixels (overrides the scene)")
     parser.add_argument("--height", type=int, metavar="H", help="image height in pixels (overrides the scene)")
+    parser.add_argument("--samples", type=int, metavar="N",
+                        help="samples per pixel, 1 (the pixel centre, the paper's setting) or more for smooth "
+                             "edges (overrides the scene)")
     parser.add_argument("--passes", metavar="DIR",
                         help="also write one .exr per contribution pass (lens surface, bulb, ...) into DIR")
     add_display_arguments(parser)
@@ -33,10 +36,11 @@ def run(args: argparse.Namespace) -> int:
     view = view_for(args) if file_format == "png" else None
     if args.passes is not None:
         check_output_folder(args.passes, "--passes")
-    scene = load_scene_file(args.scene, args.width, args.height)
+    scene = load_scene_file(args.scene, args.width, args.height, args.samples)
     keep_passes = args.passes is not None
-    budget.check_render(scene["image"]["width"], scene["image"]["height"], keep_passes, file_format,
-                        glare=scene["glare"]["on"])
+    size = scene["image"]
+    budget.check_render(size["width"], size["height"], keep_passes, file_format, glare=scene["glare"]["on"],
+                        samples=size["samples"])
     checkpoint("render:checked")
 
     from .. import RenderCancelled, render_passes  # the tracer loads only when it is needed
@@ -66,5 +70,6 @@ def run(args: argparse.Namespace) -> int:
     segments = result.stats.get("segments")
     traced = f", {segments} ray segments" if segments is not None else ""
     shown = f", {view.view} at {ev:+.1f} EV" if view is not None else ""
-    print(f"{printable(args.output)}: {w}x{h} px in {seconds:.2f} s{traced}{shown}")
+    samples = f" at {size['samples']} samples" if size["samples"] > 1 else ""
+    print(f"{printable(args.output)}: {w}x{h} px{samples} in {seconds:.2f} s{traced}{shown}")
     return 0

@@ -1,4 +1,4 @@
-"""Eye rays: one ray per pixel through its centre, top row first.
+"""Eye rays: one ray per pixel through its centre (or per sample around it), top row first.
 
 The camera follows Blender's conventions so that the tracer and Cycles see the same picture:
 ``fov_deg`` (perspective) or ``width`` (orthographic) spans the *fitted* image side —
@@ -48,12 +48,18 @@ def make_camera(cam: dict, width: int, height: int) -> Camera:
     return Camera(position, forward, right, up, orthographic, half_w, half_h, shift, width, height)
 
 
-def eye_rays(camera: Camera, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def eye_rays(camera: Camera, pixels: np.ndarray,
+             offsets: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Origins and unit directions (N, 3) of the eye rays through the given pixel indices
-    (row-major, top row first)."""
+    (row-major, top row first): through the pixel centres, or moved from them by ``offsets``
+    (dx right, dy down, in pixels; the samples of anti-aliasing)."""
     row, col = np.divmod(pixels, camera.width)
-    u = ((col + 0.5) / camera.width * 2.0 - 1.0) * camera.half_width + camera.shift[0]
-    v = (1.0 - (row + 0.5) / camera.height * 2.0) * camera.half_height + camera.shift[1]
+    if offsets is None:
+        x, y = col + 0.5, row + 0.5
+    else:
+        x, y = col + 0.5 + offsets[0], row + 0.5 + offsets[1]
+    u = (x / camera.width * 2.0 - 1.0) * camera.half_width + camera.shift[0]
+    v = (1.0 - y / camera.height * 2.0) * camera.half_height + camera.shift[1]
     offset = u[:, None] * camera.right + v[:, None] * camera.up
     if camera.orthographic:
         origins = camera.position + offset

@@ -1,6 +1,8 @@
 """The improved ray tracing of the paper as a numpy wavefront.
 
-Rays are traced backward from the eye, one per pixel through its centre. At every dielectric
+Rays are traced backward from the eye, one per pixel through its centre (the paper's setting),
+or, with ``image.samples`` N > 1, N per pixel placed by the pixel filter (``pixel_filter``),
+the pixel being their mean. At every dielectric
 surface a ray branches into a reflected and a transmitted ray (the ray-tracing tree of Fig. 7);
 each carries its accumulated attenuation k, and luminance is added to the pixel as k × the
 value found, so the tree is never stored (MODEL.md §5). All live rays of one generation are
@@ -18,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import optics
+from . import optics, pixel_filter
 from . import paths as P
 from .camera import Camera, eye_rays, make_camera
 from .lamp_table import LampTable
@@ -80,8 +82,10 @@ def _concat(parts: list[_Rays]) -> _Rays:
 class _Context:
     """Everything constant during one render."""
 
-    def __init__(self, scene: dict, camera: Camera, record_transitions: bool):
+    def __init__(self, scene: dict, camera: Camera, record_transitions: bool, samples: int, filter_name: str):
         self.camera = camera
+        self.samples = samples
+        self.filter_name = filter_name
         self.lamps = LampTable.from_scene(scene)
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
@@ -130,7 +134,8 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   on_rows: Callable[[int, int, np.ndarray], None] | None = None,
                   on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
                   threads: int | None = None, record_transitions: bool = False,
-                  keep_passes: bool = True) -> RenderResult:
+                  keep_passes: bool = True, samples: int | None = None,
+                  filter_name: str = pixel_filter.DEFAULT_FILTER) -> RenderResult:
     """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
@@ -138,15 +143,19 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     the GIL); ``progress(fraction)``, ``on_rows(row_start, row_stop, rows)`` and
     ``on_band(row_start, row_stop, rows, pass_rows)`` (the same with each pass's rows, an empty
     dict without ``keep_passes``) are called from the calling thread as bands finish;
-    ``should_stop()`` is polled between bands.
+    ``should_stop()`` is polled between bands. ``samples`` overrides the scene's samples per
+    pixel; ``filter_name`` is the pixel filter of more than one sample (``pixel_filter.FILTERS``).
     """
     width = int(width or scene["image"]["width"])
     height = int(height or scene["image"]["height"])
+    # A document an earlier version wrote, or an image section a caller built, has no samples: 1.
+    samples = int(samples or scene["image"].get("samples", 1))
+    pixel_filter.filter_support(filter_name)  # an unknown filter fails here, before any work
     start = time.perf_counter()
-    ctx = _Context(scene, make_camera(scene["camera"], width, height), record_transitions)
+    ctx = _Context(scene, make_camera(scene["camera"], width, height), record_transitions, samples, filter_name)
     passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
     image = np.zeros((height, width, 3), dtype=np.float32)
-    rows_per_band = max(1, TILE_RAYS // width)
+    rows_per_band = max(1, TILE_RAYS // (width * samples))
     bands = [(y, min(height, y + rows_per_band)) for y in range(0, height, rows_per_band)]
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
     stats = {"segments": 0, "max_depth": 0, "transitions": set()}
@@ -170,7 +179,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
         if progress is not None:
             progress(done / len(bands))
     stats["seconds"] = time.perf_counter() - start
-    stats["width"], stats["height"] = width, height
+    stats["width"], stats["height"], stats["samples"] = width, height, samples
     return RenderResult(image, dict(zip(PASS_NAMES, passes, strict=False)) if keep_passes else {}, stats)
 
 
@@ -216,8 +225,32 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
     cam = ctx.camera
     pixels = np.arange(y0 * cam.width, y1 * cam.width)
     band = _Band(len(pixels), ctx)
-    o, d = eye_rays(cam, pixels)
-    band.segments += len(pixels)
+    if ctx.samples == 1:  # the paper's setting: one ray through each pixel centre
+        _trace_rays(ctx, band, *eye_rays(cam, pixels))
+        return band
+    # Samples in groups of at most TILE_RAYS rays (a wide row at many samples takes several),
+    # each ray counted in its own slot (pixel-major), summed per pixel in sample order: the same
+    # sums whatever the threads.
+    per_group = max(1, TILE_RAYS // len(pixels))
+    for s0 in range(0, ctx.samples, per_group):
+        count = min(ctx.samples, s0 + per_group) - s0
+        ray_pixels = np.repeat(pixels, count)
+        ray_samples = np.tile(np.arange(s0, s0 + count), len(pixels))
+        offsets = pixel_filter.sample_offsets(ctx.filter_name, ray_pixels, ray_samples, ctx.samples)
+        group = _Band(len(ray_pixels), ctx)
+        _trace_rays(ctx, group, *eye_rays(cam, ray_pixels, offsets))
+        band.acc += group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3).sum(axis=2)
+        band.segments += group.segments
+        band.max_depth = max(band.max_depth, group.max_depth)
+        band.transitions |= group.transitions
+    # The samples are placed by the filter (importance sampling), so the pixel is their plain mean.
+    band.acc /= ctx.samples
+    return band
+
+
+def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> None:
+    """Trace eye rays ``o, d`` (ray i adds to slot i of ``band``) to the end of every branch."""
+    band.segments += len(o)
     rays = _first_hits(ctx, band, o, d)
     depth = 1
     while len(rays) and depth < MAX_DEPTH:
@@ -225,7 +258,6 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
         rays = _step(ctx, band, rays)
         depth += 1
     band.max_depth = depth
-    return band
 
 
 def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Rays:

@@ -60,8 +60,10 @@ MAX_SIZE = 2048  # per variant image side; a study is for comparing, not for fin
 _PARAMETER = re.compile(
     r"^(?:lamps\[(?P<lamp>\d*)\]\.)?(?P<path>[a-z_]+(?:\.[a-z_]+)*)(?:\[(?P<component>\d+)\])?$"
 )
-# Scene-level sections and fields a study may vary; image is the study's own size.
+# Scene-level sections and fields a study may vary; image is the study's own size, but its
+# samples per pixel vary like any parameter.
 _SCENE_PARTS = ("camera", "light", "background", "body")
+_SCENE_FIELDS = ("image.samples",)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -128,7 +130,7 @@ def study_parameters() -> list[str]:
             path = path[len("lamps[]."):]
             if path == "center":
                 continue
-        elif path.split(".")[0] not in _SCENE_PARTS:
+        elif path.split(".")[0] not in _SCENE_PARTS and path not in _SCENE_FIELDS:
             continue
         out.append(path)
     return out
@@ -145,8 +147,9 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
     keys = tuple(m["path"].split("."))
     explicit_lamp = m["lamp"] is not None
     lamp_scope = explicit_lamp or (keys[0] in S.LAMP.fields and keys[0] not in S.SCENE.fields)
-    if not lamp_scope and keys[0] not in _SCENE_PARTS:
-        raise SceneError(show_key(text), f"unknown parameter; a study varies {', '.join(_SCENE_PARTS)} fields "
+    if not lamp_scope and keys[0] not in _SCENE_PARTS and ".".join(keys) not in _SCENE_FIELDS:
+        raise SceneError(show_key(text), f"unknown parameter; a study varies {', '.join(_SCENE_PARTS)} fields, "
+                               f"{', '.join(_SCENE_FIELDS)} "
                                "or lamp fields (lens, cuts, reflector, bulb, socket)")
     try:
         field_spec = S.lookup(".".join(("lamps[]",) + keys) if lamp_scope else ".".join(keys))
@@ -351,7 +354,9 @@ class Study:
         if isinstance(base_doc, dict):
             # The variants are rendered at the study's size: a default camera frames the body for it,
             # and a variant kept as a preset says what was rendered.
-            base_doc = {**base_doc, "image": {"width": size[0], "height": size[1]}}
+            image = base_doc.get("image")
+            image = {**image} if isinstance(image, dict) else {}
+            base_doc = {**base_doc, "image": {**image, "width": size[0], "height": size[1]}}
         try:
             base = parse_scene(base_doc)
         except SceneError as e:
@@ -373,7 +378,9 @@ class Study:
             shape = " x ".join(str(len(a.values)) for a in axes)
             raise SceneError("axes", f"{shape} = {count} variants; allowed at most {MAX_VARIANTS}")
         budget.check_study_pixels(size, count)
-        return cls(base, axes, size, title, _build_variants(base, axes))
+        variants = _build_variants(base, axes)
+        budget.check_study_rays(size, [v.scene["image"]["samples"] for v in variants])
+        return cls(base, axes, size, title, variants)
 
     @classmethod
     def from_json(cls, text: str, name: str = "") -> Study:

@@ -358,7 +358,7 @@ def test_compare_operator(lamp_addon, bl_scene, tmp_path):
     assert not (tmp_path / "c.png").exists()
     assert bpy.ops.lamp.compare_cycles(samples=1, filepath=str(tmp_path / "c.exr")) == {"FINISHED"}
     written, scene = imageio.read_image(tmp_path / "c.exr")
-    assert written.shape == shown.shape and scene["image"] == {"width": 24, "height": 16}
+    assert written.shape == shown.shape and scene["image"] == {"width": 24, "height": 16, "samples": 1}
     with pytest.raises(RuntimeError, match=r"\.jpg is not an image format"):
         bpy.ops.lamp.compare_cycles(samples=1, filepath=str(tmp_path / "c.jpg"))
     assert not (tmp_path / "c.jpg").exists()
@@ -421,3 +421,12 @@ def test_lit_body_without_specular_agrees_with_cycles(lamp_addon, bl_scene):
           f"relative difference {relative}, seconds {seconds}")
     assert np.abs(relative).max() < BODY_TOLERANCE
     assert math.isclose(cos_theta, 1 / math.sqrt(0.3**2 + 1 + 0.6**2))
+
+
+def test_cycles_filters_as_the_tracer_samples(lamp_addon):
+    # One tracer sample is the pixel centre: Cycles samples a 0.01 px box. More samples are spread by
+    # Cycles' default Blackman-Harris 1.5 px (core_tracer.raytrace.pixel_filter): Cycles keeps it.
+    one = lamp_addon.compare_ops.cycles_settings(1)
+    assert (one["pixel_filter_type"], one["filter_width"]) == ("BOX", 0.01)
+    many = lamp_addon.compare_ops.cycles_settings(16)
+    assert (many["pixel_filter_type"], many["filter_width"]) == ("BLACKMAN_HARRIS", 1.5)

@@ -90,7 +90,7 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
     else:
         assert back["width"] == pytest.approx(want["width"], abs=1e-4)
     rendered = lamp_addon.render_camera.scene_for_render(bl_scene)
-    assert rendered["image"] == {"width": size[0], "height": size[1]}
+    assert rendered["image"] == {"width": size[0], "height": size[1], "samples": 1}
     assert rendered["camera"] == back
 
 
@@ -183,7 +183,7 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     bpy.context.view_layer.update()  # Blender's depsgraph update: the add-on's handler writes the design
     design = lamp_addon.design_properties.design_to_scene(bl_scene)
     assert design["camera"]["position"][0] == pytest.approx(scene["camera"]["position"][0] + 50.0, abs=1e-3)
-    assert design["image"] == {"width": 48, "height": 36}
+    assert design["image"] == {"width": 48, "height": 36, "samples": 1}
     assert rc.sync_view(bl_scene) == ""  # both sides agree now
 
 
@@ -675,7 +675,7 @@ def test_headless_job_writes_the_side_by_side_image(tmp_path):
     assert done.returncode == 0, done.stderr
     image, scene = imageio.read_image(out)
     assert image.shape[1] == 2 * 40 + 2 and image.shape[0] > 32
-    assert scene["image"] == {"width": 40, "height": 32}
+    assert scene["image"] == {"width": 40, "height": 32, "samples": 1}
     assert "Lamp Tracer:  40x32 in" in done.stdout and "2 samples per pixel" in done.stdout
     assert "mean difference" in done.stdout
 
@@ -690,3 +690,45 @@ def test_headless_job_bad_input_is_one_line_and_exit_2(tmp_path, args, message):
     assert done.stderr.strip().splitlines() == [done.stderr.strip()]
     assert done.stderr.startswith(message)
     assert "Traceback" not in done.stderr + done.stdout
+
+
+def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
+    import bpy
+
+    scene = _preset_scene(size=(32, 24))
+    _load_design(lamp_addon, bl_scene, scene)
+    bl_scene.lamp_design.image.samples = 4
+    bl_scene.render.engine = "LAMP_TRACER"
+    rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
+    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    assert seen["image"]["samples"] == 4
+    np.testing.assert_array_equal(rgba[:, :, :3], core_tracer.render(seen))
+    assert not np.array_equal(rgba[:, :, :3], core_tracer.render({**seen, "image": {**seen["image"], "samples": 1}}))
+    # Too many eye rays for one render: refused with the field and the range, as in the CLI.
+    bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4096
+    bl_scene.lamp_design.image.samples = 256
+    with pytest.raises(RuntimeError, match=r"image\.samples: .* 1 to 64 samples"):
+        bpy.ops.render.render()
+
+
+def test_engine_film_transparent_alpha_is_the_covered_fraction_with_samples(lamp_addon, bl_scene, tmp_path):
+    # With samples the silhouette is smooth: alpha is the fraction of the pixel's rays that hit the
+    # body, and the rays that miss leave the (premultiplied) colour, background and all.
+    scene = _preset_scene(size=(48, 32))
+    scene["background"] = [0.2, 0.3, 0.4]
+    _load_design(lamp_addon, bl_scene, scene)
+    bl_scene.lamp_design.image.samples = 16
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.render.film_transparent = True
+    rgba = _render_engine_exr(bl_scene, tmp_path / "alpha.exr")
+    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    alpha = rgba[:, :, 3]
+    edge = (alpha > 0) & (alpha < 1)
+    assert edge.sum() > 40  # the outline's pixels
+    assert alpha[16, 24] == 1.0 and alpha[0, 0] == 0.0
+    np.testing.assert_allclose(rgba[alpha == 0, :3], 0.0, atol=1e-6)
+    full = core_tracer.render(seen)
+    np.testing.assert_allclose(rgba[:, :, :3], full - (1 - alpha)[:, :, None] * np.float32([0.2, 0.3, 0.4]),
+                               atol=1e-6)
+    # Where all a pixel's rays hit the body, nothing is taken away.
+    np.testing.assert_array_equal(rgba[alpha == 1, :3], full[alpha == 1])

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from helpers import BASELINE, assert_bad_input, baseline_doc, run_cli, signal_and_wait, start_cli_at
 
-from core_tracer import PASS_NAMES
+from core_tracer import PASS_NAMES, render
 from core_tracer.images import imageio
 from core_tracer.scene import reading
 from core_tracer.scene.reading import SceneError
@@ -187,7 +187,7 @@ def test_render_exr_with_passes(tmp_path):
     image, sc = imageio.read_image(out)
     assert image.shape == (24, 40, 3)
     assert np.isfinite(image).all() and (image >= 0).all() and image.max() > 0
-    assert sc["image"] == {"width": 40, "height": 24}
+    assert sc["image"] == {"width": 40, "height": 24, "samples": 1}
     expected = load_scene(BASELINE)
     expected["image"] = {"width": 40, "height": 24}
     assert sc["lamps"] == expected["lamps"] and sc["body"] == expected["body"]
@@ -232,3 +232,29 @@ def test_exposure_darkens_the_png(tmp_path):
     a, _ = read_image(normal)  # read_image undoes the exposure
     b, _ = read_image(darker)
     assert np.all(a <= 1.0) and b.max() > 1.0  # the darker PNG kept the highlights the plain one clipped
+
+
+def test_render_samples_override_the_scene(tmp_path):
+    out = tmp_path / "out.exr"
+    proc = run_cli("render", BASELINE, "-o", out, "--width", "24", "--height", "16", "--samples", "4")
+    assert proc.returncode == 0, proc.stderr
+    assert "24x16 px at 4 samples" in proc.stdout
+    image, sc = imageio.read_image(out)
+    assert sc["image"] == {"width": 24, "height": 16, "samples": 4}
+    scene = load_scene(BASELINE)
+    scene["image"].update(width=24, height=16, samples=4)
+    np.testing.assert_array_equal(image, render(scene))
+
+
+@pytest.mark.parametrize("value", ["0", "257"])
+def test_render_refuses_bad_samples(tmp_path, value):
+    proc = run_cli("render", BASELINE, "-o", tmp_path / "out.exr", "--samples", value)
+    assert_bad_input(proc, "--samples", "[1, 256]")
+    assert not (tmp_path / "out.exr").exists()
+
+
+def test_render_refuses_too_many_eye_rays(tmp_path):
+    proc = run_cli("render", BASELINE, "-o", tmp_path / "out.exr", "--width", "4096", "--height", "4096",
+                   "--samples", "256")
+    assert_bad_input(proc, "image.samples", "1 to 64 samples")
+    assert not (tmp_path / "out.exr").exists()
