@@ -3,11 +3,14 @@ the tracer (MODEL.md §3: lens, cuts, reflector, bulb, socket of each lamp)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene.derived import cut_sphere_radius, lamp_geometry, lens_absorption
+from ..scene.derived import cut_sphere_radius, lamp_geometry, lens_absorption, lens_cylinder
+
+CYLINDER_KEYS = ("axis_x", "radius", "side", "base", "apex", "phi_center", "corner")
 
 
 @dataclass(frozen=True)
@@ -38,6 +41,24 @@ class LampTable:
     bulb_intensity: np.ndarray  # (L, 3), zero when the bulb is off
     socket_radius: np.ndarray
     socket_color: np.ndarray  # (L, 3)
+    # A cylindrical lens (``scene.derived.lens_cylinder``): 1.0 where the lamp has one, and its
+    # geometry in ``cyl_<key>`` for the keys of CYLINDER_KEYS (NaN for a flat lens).
+    cylindrical: np.ndarray
+    cyl_axis_x: np.ndarray
+    cyl_radius: np.ndarray
+    cyl_side: np.ndarray
+    cyl_base: np.ndarray
+    cyl_apex: np.ndarray
+    cyl_phi_center: np.ndarray
+    cyl_corner: np.ndarray
+
+    @property
+    def any_cylindrical(self) -> bool:
+        return bool(self.cylindrical.any())
+
+    def cylinder_of(self, lamp: np.ndarray) -> dict[str, np.ndarray]:
+        """Per ray, the cylinder geometry of its lamp (keys of CYLINDER_KEYS)."""
+        return {k: getattr(self, "cyl_" + k)[lamp] for k in CYLINDER_KEYS}
 
     @classmethod
     def from_scene(cls, scene: dict) -> LampTable:
@@ -46,6 +67,7 @@ class LampTable:
             g = lamp_geometry(lamp)
             lens, cuts, refl, bulb = lamp["lens"], lamp["cuts"], lamp["reflector"], lamp["bulb"]
             h = cuts["height"]
+            cyl = lens_cylinder(lamp)
             rows.append(dict(
                 center=lamp["center"], radius=lens["radius"], plane_a=g["plane_a"], plane_b=g["plane_b"],
                 pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 else np.inf,
@@ -56,5 +78,6 @@ class LampTable:
                 scatter_shininess=refl["shininess"], bulb_center=g["bulb_center"], bulb_radius=bulb["radius"],
                 bulb_intensity=bulb["intensity"] if bulb["on"] else [0.0, 0.0, 0.0],
                 socket_radius=lamp["socket"]["radius"], socket_color=lamp["socket"]["color"],
+                cylindrical=cyl is not None, **{"cyl_" + k: math.nan if cyl is None else cyl[k] for k in CYLINDER_KEYS},
             ))
         return cls(**{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})

@@ -20,12 +20,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..scene.derived import body_wraps
 from . import optics, pixel_filter
 from . import paths as P
 from .camera import Camera, eye_rays, make_camera
 from .lamp_table import LampTable
 from .parts import PARTS, body_box, outer_face, reflector
 from .parts.base import Segments
+from .parts.cylinder_lens import outward_normal
 
 CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
 MAX_DEPTH = 64  # safety net on the number of segments along one branch
@@ -89,6 +91,7 @@ class _Context:
         self.lamps = LampTable.from_scene(scene)
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
+        self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
         self.body = body
         light = scene["light"]
         self.light_dir = np.asarray(light["direction"], dtype=np.float64)
@@ -264,6 +267,8 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     """Classify the eye rays (paper §3.1): background, body, or lens (①)."""
     n = len(o)
     pix = np.arange(n)
+    if ctx.wraps:
+        return _first_hits_wrapped(ctx, band, o, d)
     t_near, t_far, face = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     hit_box = (t_near <= t_far) & (t_near > 0)
 
@@ -307,6 +312,52 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     k = np.repeat((1.0 - r)[:, None], 3, axis=1)
     local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     local[:, 1] = 0.0
+    d_in = optics.refract(ds, face_normal, 1.0 / ior)
+    rays = _Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
+                 src=np.full(len(s), P.OUTER, np.int8), parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8),
+                 branch=np.full(len(s), P.TRANSMITTED, np.int8), seen_reflector=np.zeros(len(s), bool))
+    return rays.take(_alive(k))
+
+
+def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Rays:
+    """``_first_hits`` for a body whose front curves round to the side (cylindrical lenses): the
+    same classification, with the curved panel's normals and the cylindrical outer faces'."""
+    n = len(o)
+    pix = np.arange(n)
+    t_near, hit_body, face, normal = body_box.hit_body(o, d, ctx.box_lo, ctx.box_hi, ctx.wraps)
+    if ctx.background_seen:
+        band.add(BACKGROUND_PASS, pix[~hit_body], np.broadcast_to(ctx.background, (int((~hit_body).sum()), 3)))
+    front = np.nonzero(hit_body & (((face == 1) & (d[:, 1] > 0)) | (face == body_box.CURVED_FRONT)))[0]
+    p = o[front] + t_near[front, None] * d[front]
+    L = ctx.lamps
+    lamp = np.full(n, -1)
+    lamp[front] = outer_face.lens_at(p[:, 0], p[:, 2], L)
+    on_lens = lamp >= 0
+    b = np.nonzero(hit_body & ~on_lens)[0]
+    body = ctx.body
+    band.add(BODY_PASS, b, optics.phong(normal[b], -d[b], ctx.light_dir, np.asarray(body["color"]), ctx.light_color,
+                                        ctx.ambient, body["specular"], body["shininess"]))
+
+    s = np.nonzero(on_lens)[0]
+    li = lamp[s]
+    ds = d[s]
+    ior = L.ior[li]
+    local = o[s] + t_near[s, None] * ds - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
+    flat = L.cylindrical[li] == 0
+    local[flat, 1] = 0.0
+    face_normal = np.tile(outer_face.NORMAL, (len(s), 1))
+    curved = np.nonzero(~flat)[0]
+    face_normal[curved] = outward_normal(local[curved], L.cyl_axis_x[li[curved]], L.cyl_radius[li[curved]])
+    cos_i = np.clip(-optics.dot(ds, face_normal), 0.0, 1.0)
+    r = optics.fresnel_reflectance(cos_i, 1.0, ior)
+    surface = optics.phong(face_normal, -ds, ctx.light_dir, L.lens_diffuse[li], ctx.light_color, ctx.ambient,
+                           L.lens_specular[li], L.lens_shininess[li])
+    band.add(LENS_SURFACE, s, r[:, None] * surface)
+    if ctx.background_seen:
+        band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
+    ones = np.ones(len(s), dtype=np.int8)
+    band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
+    k = np.repeat((1.0 - r)[:, None], 3, axis=1)
     d_in = optics.refract(ds, face_normal, 1.0 / ior)
     rays = _Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
                  src=np.full(len(s), P.OUTER, np.int8), parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8),

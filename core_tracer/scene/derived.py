@@ -124,12 +124,15 @@ def cut_sphere_radius(pitch: float, height: float) -> float:
 
 
 def lamp_geometry(lamp: dict) -> dict:
-    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3)."""
+    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3). For a
+    cylindrical lens ``plane_b`` is the deepest point of the cut apexes (at the lens's wrap-side
+    edge), so the reflector's rim and the bulb stay behind the whole lens."""
     R = lamp["lens"]["radius"]
     t = lamp["lens"]["thickness"]
     h = lamp["cuts"]["height"]
     f = lamp["reflector"]["focal_length"]
-    y_apex = t + h
+    cyl = lens_cylinder(lamp)
+    y_apex = t + h if cyl is None else cyl["deepest_apex"]
     y_rim = y_apex + lamp["reflector"]["gap"]
     y_vertex = y_rim + R * R / (4.0 * f)
     y_focus = y_vertex - f
@@ -139,6 +142,57 @@ def lamp_geometry(lamp: dict) -> dict:
         "bulb_center": (off[0], y_focus + off[1], off[2]),
     }
 
+
+
+def lens_cylinder(lamp: dict) -> dict | None:
+    """A cylindrical lens's geometry in the lamp's frame (README, "cylindrical lens"), or None for
+    a flat one.
+
+    The outer face is the cylinder of radius ``radius`` about the vertical line x = ``axis_x``,
+    y = ``radius``: it touches the plane y = 0 at the lens's edge opposite the wrap side and curves
+    away toward ``side`` (+1: +x). The cut base lies on the concentric cylinder ``base`` = radius -
+    t, the cut apexes on ``apex`` = base - h. Angles ``phi`` are measured about the axis from the
+    tangent line (phi = 0 at y = 0), growing toward the wrap side; ``phi_center`` is where the
+    lamp axis (x = 0) meets the base, the centre of the cell column i = 0. ``corner`` is the
+    radius at which a cap meets its cell's corner edge: the cuts lie between ``apex`` and it."""
+    lens = lamp["lens"]
+    if lens.get("shape", "flat") != "cylindrical":
+        return None
+    R, t, h, p = lens["radius"], lens["thickness"], lamp["cuts"]["height"], lamp["cuts"]["pitch"]
+    rc = lens["wrap_radius"]
+    side = 1.0 if lens["wrap_toward"] == "+x" else -1.0
+    base, apex = rc - t, rc - t - h
+    out = {"radius": rc, "side": side, "axis_x": -side * R, "base": base, "apex": apex,
+           "phi_center": math.asin(min(1.0, R / base)) if base > 0 else math.nan,
+           "deepest_apex": rc - math.sqrt(max(apex * apex - 4 * R * R, 0.0)), "corner": base}
+    if h > 0:
+        out["corner"] = cap_corner_radius(base, apex, p, cut_sphere_radius(p, h))
+    return out
+
+
+def cap_corner_radius(base: float, apex: float, pitch: float, rho: float) -> float:
+    """Radius (from the cylinder axis) where a cell's cap meets the cell's corner edge on a
+    cylindrical base: the cap is the fish-eye sphere of the cell's tangent plane (MODEL.md §3.1),
+    centred on the cell's radial line at apex + rho; the corner edge is the radial line at the
+    half-cell angle p / 2 base, a half-pitch above or below. NaN if the sphere misses it (the cap
+    would leave a hole at the corner: validation refuses such cuts)."""
+    delta = pitch / (2.0 * base)
+    dist = apex + rho
+    disc = rho * rho - (pitch / 2) ** 2 - (dist * math.sin(delta)) ** 2
+    return dist * math.cos(delta) - math.sqrt(disc) if disc >= 0 else math.nan
+
+
+def body_wraps(scene: dict) -> list[tuple[float, float, float]]:
+    """The curved ends of the body's front (README, "cylindrical lens"): per wrap side, (side,
+    x of the tangent line in the world, radius). The front is the plane y = 0 between the tangent
+    lines and follows each cylindrical lens's outer cylinder beyond its line. Several cylindrical
+    lamps curving to one side share one cylinder (validation checks it)."""
+    wraps: dict[float, tuple[float, float, float]] = {}
+    for lamp in scene["lamps"]:
+        cyl = lens_cylinder(lamp)
+        if cyl is not None and cyl["side"] not in wraps:
+            wraps[cyl["side"]] = (cyl["side"], lamp["center"][0] + cyl["axis_x"], cyl["radius"])
+    return [wraps[k] for k in sorted(wraps)]
 
 
 def default_camera(scene: dict) -> dict:

@@ -282,6 +282,8 @@ BODY = Section(
     "The opaque box that holds the lamps",
 )
 
+LENS_SHAPES = ("flat", "cylindrical")
+
 LENS = Section(
     {
         "radius": _length(45.0, "Size of the round lens (radius R)", hi=1000.0),
@@ -301,6 +303,12 @@ LENS = Section(
         "shininess": Num(60.0, 0.0, 1.0e4,
                          doc="How small and sharp the lens's highlight is: higher is glossier (n in eq. 1)"),
         "side_wall_color": _color((0.05, 0.02, 0.02), "Colour of the lens's opaque rim"),
+        "shape": Choice("flat", LENS_SHAPES,
+                        "Shape of the outer face: flat, or cylindrical (a vertical-axis cylinder of wrap_radius "
+                        "that curves away toward wrap_toward, so the lamp wraps from the tail round to the side)"),
+        "wrap_radius": _length(100.0, "Radius of the cylindrical outer face: smaller wraps further round the side; "
+                                      "at least the lens diameter plus thickness and cuts", hi=10000.0),
+        "wrap_toward": Choice("+x", ("+x", "-x"), "Side toward which a cylindrical lens curves away from the viewer"),
     },
     "The lens disk; its colour is given by absorption, or by transmitted_color at "
     "reference_thickness (never both)",

@@ -18,7 +18,7 @@ import os
 from typing import Any
 
 from . import spec as S
-from .derived import default_camera, default_value, fill_alternative, lamp_geometry
+from .derived import body_wraps, default_camera, default_value, fill_alternative, lamp_geometry, lens_cylinder
 from .reading import HugeNumber, SceneError, read_json
 from .safe_text import has_surrogate, printable, show_key
 
@@ -222,6 +222,7 @@ def check_geometry(scene: dict) -> None:
         if h > c:
             raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "
                              f"allowed [0, {_rounded(c, False)}] mm (pitch / sqrt 2)")
+        _check_cylinder(lamp, where)
         g = lamp_geometry(lamp)
         if g["vertex"] > body["depth"]:
             _reflector_too_deep(scene, i, g)
@@ -229,6 +230,82 @@ def check_geometry(scene: dict) -> None:
         rs = lamp["socket"]["radius"]
         if rs >= R:
             raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {R:g}) mm")
+
+
+    _check_wraps(scene)
+
+
+def _check_cylinder(lamp: dict, where: str) -> None:
+    """A cylindrical lens: the cut apexes' cylinder reaches round the whole lens (less than a half
+    turn), the caps cover their cells' corners and stay inside the lens thickness."""
+    cyl = lens_cylinder(lamp)
+    if cyl is None:
+        return
+    lens, cuts = lamp["lens"], lamp["cuts"]
+    R, t, h = lens["radius"], lens["thickness"], cuts["height"]
+    need = 2 * R + t + h
+    if cyl["apex"] <= 2 * R:
+        raise SceneError(f"{where}.lens.wrap_radius",
+                         f"{cyl['radius']:g} is too small for a lens of radius {R:g} mm with thickness {t:g} and "
+                         f"cut height {h:g} mm; allowed ({_rounded(need, True)}, "
+                         f"{_rounded(S.LENS.fields['wrap_radius'].hi, False)}] mm")
+    if h > 0 and not cyl["corner"] < cyl["radius"]:
+        h_max = _deepest_cylinder_cut(lamp)
+        raise SceneError(f"{where}.cuts.height",
+                         f"{h:g} is too deep for the pitch {cuts['pitch']:g} mm on a cylindrical lens of radius "
+                         f"{cyl['radius']:g} mm (the caps would not cover their cells within the thickness); "
+                         f"allowed [0, {_rounded(h_max, False)}] mm")
+
+
+def _deepest_cylinder_cut(lamp: dict) -> float:
+    """The largest cut height whose caps still cover their cells' corners inside the lens."""
+    lo, hi = 0.0, lamp["cuts"]["pitch"] / math.sqrt(2.0)
+    for _ in range(_HALVINGS):
+        mid = (lo + hi) / 2
+        trial = {**lamp, "cuts": {**lamp["cuts"], "height": mid}}
+        cyl = lens_cylinder(trial)
+        lo, hi = (mid, hi) if cyl["corner"] < cyl["radius"] else (lo, mid)
+    return lo
+
+
+def _check_wraps(scene: dict) -> None:
+    """The body's front follows one cylinder per wrap side (README, "cylindrical lens"): the
+    cylindrical lamps of a side share it, the flat lenses lie on the flat part, the body's side
+    ends before the cylinder turns a quarter, in front of the body's back."""
+    body = scene["body"]
+    half_w = body["size"][0] / 2
+    wraps = body_wraps(scene)
+    for i, lamp in enumerate(scene["lamps"]):
+        cyl = lens_cylinder(lamp)
+        R, cx = lamp["lens"]["radius"], lamp["center"][0]
+        for side, x_t, radius in wraps:
+            if cyl is not None and cyl["side"] == side:
+                mine = cx + cyl["axis_x"]
+                if abs(mine - x_t) > 1e-9 or cyl["radius"] != radius:
+                    raise SceneError(f"lamps[{i}].center",
+                                     f"the cylindrical lens must share the body's curved front with the other lamps "
+                                     f"wrapping toward {lamp['lens']['wrap_toward']}; allowed x = "
+                                     f"{x_t + side * R:.6g} mm and lens.wrap_radius = {radius:g} mm")
+            elif side * (cx - x_t) + R > 1e-9 and (cyl is None or cyl["side"] != side):
+                raise SceneError(f"lamps[{i}].center",
+                                 f"{_show(lamp['center'])} puts the lens on the body's curved front (it starts at "
+                                 f"x = {x_t:.6g} mm); allowed x {'<=' if side > 0 else '>='} "
+                                 f"{x_t - side * R:.6g} mm, or make this lens cylindrical too")
+    if len(wraps) == 2 and wraps[0][1] > wraps[1][1] + 1e-9:
+        raise SceneError("lamps", "the lenses wrapping toward -x and +x overlap on the body's front; allowed "
+                                  "a -x wrap starting left of the +x wrap")
+    for side, x_t, radius in wraps:
+        edge = body["center"][0] + side * half_w
+        u = side * (edge - x_t)
+        if u >= radius:
+            raise SceneError("body.size", f"{_show(body['size'])} reaches past the quarter turn of the curved front "
+                                          f"(radius {radius:g} mm from x = {x_t:.6g}); allowed width below "
+                                          f"{_rounded(2 * (half_w - (u - radius)), False)} mm")
+        y_edge = radius - math.sqrt(radius * radius - u * u)
+        if y_edge >= body["depth"]:
+            allowed = _interval(y_edge * 1.0001, S.BODY.fields["depth"].hi)
+            raise SceneError("body.depth", f"{body['depth']:g} is shallower than the curved front at the body's side "
+                                           f"({y_edge:.4g} mm); allowed {allowed} mm")
 
 
 def _lens_outside_body(scene: dict, i: int) -> None:

@@ -25,3 +25,54 @@ def hit_box(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tup
     t_lo = np.where(d == 0, np.where(inside, -np.inf, np.inf), np.fmin(t1, t2))
     t_hi = np.where(d == 0, np.where(inside, np.inf, -np.inf), np.fmax(t1, t2))
     return np.max(t_lo, axis=1), np.min(t_hi, axis=1), np.argmax(t_lo, axis=1)
+
+
+CURVED_FRONT = 3  # the face code of a curved end of the front (``hit_body``), after the box's 0, 1, 2
+
+
+def hit_body(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+             wraps: list[tuple[float, float, float]]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Rays against a body whose front curves round to the side (``scene.derived.body_wraps``):
+    the box cut by the front panel, the plane y = 0 between the tangent lines and, beyond the
+    line x = x_t of a wrap toward ``side``, the cylinder of its radius about (x_t, radius).
+
+    The body is the box's points on or behind the front panel, y >= f(x) with f convex, so the
+    part of a ray inside it is one interval: where the ray enters the box on or behind the panel
+    it enters there; otherwise it enters through the curved panel, at the first root on the
+    circle's near arc inside the box. Returns per ray the entry distance, whether it hits, the face
+    (0, 1, 2 as ``hit_box``, ``CURVED_FRONT``) and the outward normal."""
+    t_near, t_far, face = hit_box(o, d, lo, hi)
+    hit = (t_near <= t_far) & (t_near > 0)
+    normal = np.zeros((len(o), 3))
+    rows = np.arange(len(o))
+    normal[rows, face] = -np.sign(d[rows, face])
+    p = o + np.where(hit, t_near, 0.0)[:, None] * d
+    behind = np.ones(len(o), bool)
+    for side, x_t, radius in wraps:
+        u = side * (p[:, 0] - x_t)
+        with np.errstate(invalid="ignore"):
+            f = radius - np.sqrt(radius * radius - u * u)
+        behind &= (u <= 0) | (p[:, 1] >= f)
+    through_arc = np.nonzero(hit & ~behind)[0]
+    t_arc = np.full(len(through_arc), np.inf)
+    arc_normal = np.zeros((len(through_arc), 3))
+    oa, da = o[through_arc], d[through_arc]
+    for side, x_t, radius in wraps:
+        X, Y = oa[:, 0] - x_t, oa[:, 1] - radius
+        a = da[:, 0] ** 2 + da[:, 1] ** 2
+        b = X * da[:, 0] + Y * da[:, 1]
+        c = X * X + Y * Y - radius * radius
+        with np.errstate(invalid="ignore", divide="ignore"):
+            t = (-b - np.sqrt(b * b - a * c)) / a  # entering the cylinder: the near root
+            x, y = X + t * da[:, 0], Y + t * da[:, 1]
+            ok = ((t >= t_near[through_arc] - 1e-9) & (t <= t_far[through_arc]) & (side * x >= 0) & (y <= 0)
+                  & (t < t_arc))
+        t_arc = np.where(ok, t, t_arc)
+        arc_normal[ok] = np.stack([x[ok], y[ok], np.zeros(int(ok.sum()))], axis=1) / radius
+    t_near = t_near.copy()
+    t_near[through_arc] = t_arc
+    hit[through_arc] = np.isfinite(t_arc)
+    face = face.copy()
+    face[through_arc] = CURVED_FRONT
+    normal[through_arc] = arc_normal
+    return t_near, hit, face, normal

@@ -8,6 +8,7 @@ import numpy as np
 from .. import paths as P
 from ..lamp_table import LampTable
 from .base import T_MIN, Segments
+from .cylinder_lens import hit_outer_cylinder
 
 SURFACE = P.OUTER
 MEDIA = (P.IN_LENS,)
@@ -22,7 +23,14 @@ def hit_outer_face(o: np.ndarray, d: np.ndarray) -> np.ndarray:
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return hit_outer_face(rays.o, rays.d), np.broadcast_to(NORMAL, rays.o.shape)
+    if not lamps.any_cylindrical:
+        return hit_outer_face(rays.o, rays.d), np.broadcast_to(NORMAL, rays.o.shape)
+    t, normal = hit_outer_face(rays.o, rays.d), np.tile(NORMAL, (len(rays.o), 1))
+    curved = np.nonzero(lamps.cylindrical[rays.lamp] > 0)[0]
+    li = rays.lamp[curved]
+    t[curved], normal[curved] = hit_outer_cylinder(rays.o[curved], rays.d[curved], lamps.cyl_axis_x[li],
+                                                   lamps.cyl_radius[li], rays.src[curved] == P.OUTER)
+    return t, normal
 
 
 def lens_at(x: np.ndarray, z: np.ndarray, lamps: LampTable) -> np.ndarray:
