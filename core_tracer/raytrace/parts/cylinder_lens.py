@@ -127,8 +127,9 @@ def _walk_cells(o, d, X, Y, g, pitch, rho, t_limit, on_cap) -> tuple[np.ndarray,
     a_hi = np.where(along_axis, np.where(in_shell, np.inf, np.nan), a_hi)
     crosses_b = ~along_axis & np.isfinite(b_lo)
     # first piece: from entering A to entering B (or leaving A); second: leaving B to leaving A
-    start1, end1 = np.fmax(a_lo, 0.0), np.fmin(np.where(crosses_b, b_lo, a_hi), t_limit)
-    start2, end2 = np.fmax(np.where(crosses_b, b_hi, np.nan), 0.0), np.fmin(a_hi, t_limit)
+    # (NaN, a line that misses a circle, propagates through maximum/minimum and fails start <= end)
+    start1, end1 = np.maximum(a_lo, 0.0), np.minimum(np.where(crosses_b, b_lo, a_hi), t_limit)
+    start2, end2 = np.maximum(np.where(crosses_b, b_hi, np.nan), 0.0), np.minimum(a_hi, t_limit)
     start_cell = _cell_of(o, d, np.where(on_cap != OFF_CAP, 0.0, np.nan), g, pitch)
 
     t_hit = np.full(n, np.inf)
