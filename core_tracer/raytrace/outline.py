@@ -152,7 +152,8 @@ def wall_exit(o: np.ndarray, d: np.ndarray, half_w: np.ndarray, half_h: np.ndarr
         tx = np.where(dx != 0, (np.copysign(half_w, dx) - ox) / dx, np.inf)
         tz = np.where(dz != 0, (np.copysign(half_h, dz) - oz) / dz, np.inf)
     t = np.minimum(tx, tz)
-    px, pz = ox + t * dx, oz + t * dz
+    with np.errstate(invalid="ignore"):  # inf * 0 for a ray along the axis: no corner, no hit
+        px, pz = ox + t * dx, oz + t * dz
     core_x, core_z = half_w - corner, half_h - corner
     in_corner = (np.abs(px) > core_x) & (np.abs(pz) > core_z) & np.isfinite(t)
     k = np.nonzero(in_corner)[0]
