@@ -11,6 +11,7 @@ import copy
 import math
 from typing import Any
 
+from ..raytrace.outline import Outline
 from . import spec as S
 
 
@@ -124,10 +125,12 @@ def cut_sphere_radius(pitch: float, height: float) -> float:
 
 
 def lamp_geometry(lamp: dict) -> dict:
-    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3). For a
-    cylindrical lens ``plane_b`` is the deepest point of the cut apexes (at the lens's wrap-side
-    edge), so the reflector's rim and the bulb stay behind the whole lens."""
-    R = lamp["lens"]["radius"]
+    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3). The paraboloid meets
+    the rim plane at the outline's reach (its farthest point from the axis, R for a round lens), so
+    that, trimmed to the outline's prism, it lies behind the rim plane everywhere. For a cylindrical
+    lens ``plane_b`` is the deepest point of the cut apexes (at the lens's wrap-side edge), so the
+    reflector's rim and the bulb stay behind the whole lens."""
+    R = lens_reach(lamp["lens"])
     t = lamp["lens"]["thickness"]
     h = lamp["cuts"]["height"]
     f = lamp["reflector"]["focal_length"]
@@ -149,7 +152,8 @@ def lens_cylinder(lamp: dict) -> dict | None:
     a flat one.
 
     The outer face is the cylinder of radius ``radius`` about the vertical line x = ``axis_x``,
-    y = ``radius``: it touches the plane y = 0 at the lens's edge opposite the wrap side and curves
+    y = ``radius``: it touches the plane y = 0 at the lens outline's edge opposite the wrap side
+    (x = -side * half width) and curves
     away toward ``side`` (+1: +x). The cut base lies on the concentric cylinder ``base`` = radius -
     t, the cut apexes on ``apex`` = base - h. Angles ``phi`` are measured about the axis from the
     tangent line (phi = 0 at y = 0), growing toward the wrap side; ``phi_center`` is where the
@@ -158,7 +162,9 @@ def lens_cylinder(lamp: dict) -> dict | None:
     lens = lamp["lens"]
     if lens.get("shape", "flat") != "cylindrical":
         return None
-    R, t, h, p = lens["radius"], lens["thickness"], lamp["cuts"]["height"], lamp["cuts"]["pitch"]
+    # the lens's half width: the tangent line is its edge opposite the wrap side
+    R = Outline.of_lens(lens).half_w
+    t, h, p = lens["thickness"], lamp["cuts"]["height"], lamp["cuts"]["pitch"]
     rc = lens["wrap_radius"]
     side = 1.0 if lens["wrap_toward"] == "+x" else -1.0
     base, apex = rc - t, rc - t - h
@@ -193,6 +199,11 @@ def body_wraps(scene: dict) -> list[tuple[float, float, float]]:
         if cyl is not None and cyl["side"] not in wraps:
             wraps[cyl["side"]] = (cyl["side"], lamp["center"][0] + cyl["axis_x"], cyl["radius"])
     return [wraps[k] for k in sorted(wraps)]
+
+
+def lens_reach(lens: dict) -> float:
+    """Largest distance from the lamp axis to the lens outline (``Outline.reach``: R for a round lens)."""
+    return Outline.of_lens(lens).reach
 
 
 def default_camera(scene: dict) -> dict:

@@ -286,7 +286,15 @@ LENS_SHAPES = ("flat", "cylindrical")
 
 LENS = Section(
     {
+        "outline": Choice("round", ("round", "rectangular"),
+                          "Shape of the lens seen from the front: round (radius), or rectangular (width, height, "
+                          "corner_radius), a square lamp; the side wall, body opening and reflector rim follow it"),
         "radius": _length(45.0, "Size of the round lens (radius R)", hi=1000.0),
+        "width": _length(90.0, "Rectangular lens: width (x) of the outline", hi=2000.0),
+        "height": _length(60.0, "Rectangular lens: height (z) of the outline", hi=2000.0),
+        "corner_radius": Num(8.0, 0.0, 1000.0, unit="mm", subtype="distance",
+                             doc="Rectangular lens: radius of its rounded corners, at most half the smaller side "
+                                 "(0: sharp corners)"),
         "thickness": _length(3.0,
                              "Thickness of the lens plate before the cuts: thicker looks deeper in colour (t)",
                              hi=100.0),

@@ -17,6 +17,7 @@ import math
 import os
 from typing import Any
 
+from ..raytrace.outline import Outline
 from . import spec as S
 from .derived import body_wraps, default_camera, default_value, fill_alternative, lamp_geometry, lens_cylinder
 from .reading import HugeNumber, SceneError, read_json
@@ -242,11 +243,11 @@ def _check_cylinder(lamp: dict, where: str) -> None:
     if cyl is None:
         return
     lens, cuts = lamp["lens"], lamp["cuts"]
-    R, t, h = lens["radius"], lens["thickness"], cuts["height"]
+    R, t, h = -cyl["side"] * cyl["axis_x"], lens["thickness"], cuts["height"]
     need = 2 * R + t + h
     if cyl["apex"] <= 2 * R:
         raise SceneError(f"{where}.lens.wrap_radius",
-                         f"{cyl['radius']:g} is too small for a lens of radius {R:g} mm with thickness {t:g} and "
+                         f"{cyl['radius']:g} is too small for a lens {2 * R:g} mm wide with thickness {t:g} and "
                          f"cut height {h:g} mm; allowed ({_rounded(need, True)}, "
                          f"{_rounded(S.LENS.fields['wrap_radius'].hi, False)}] mm")
     if h > 0 and not cyl["corner"] < cyl["radius"]:
@@ -277,7 +278,7 @@ def _check_wraps(scene: dict) -> None:
     wraps = body_wraps(scene)
     for i, lamp in enumerate(scene["lamps"]):
         cyl = lens_cylinder(lamp)
-        R, cx = lamp["lens"]["radius"], lamp["center"][0]
+        R, cx = Outline.of_lens(lamp["lens"]).half_w, lamp["center"][0]
         for side, x_t, radius in wraps:
             if cyl is not None and cyl["side"] == side:
                 mine = cx + cyl["axis_x"]
