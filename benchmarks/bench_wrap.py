@@ -1,0 +1,67 @@
+"""How much does a cylindrical lens cost? Renders, at 512x512, the four-lamp preset (today's
+benchmark), the same with its right-hand lamp cylindrical (radius 110 mm, wrapping toward +x; the
+body 100 mm deep to hold its deeper reflector), the wrap-around preset, and the wrap-around preset
+with its cylindrical lens made flat (the same lamps on a flat front), and prints for each the
+minimum over several runs of the wall clock and CPU time and the ray segments traced. The machine
+may be shared: the minimum of the repeats is the figure to compare.
+
+    .venv/bin/python benchmarks/bench_wrap.py [--runs 5] [--size 512]
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import os
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import core_tracer  # noqa: E402
+from core_tracer.scene.validate import normalize  # noqa: E402
+
+
+def measure(scene: dict, size: int, runs: int) -> tuple[float, float, int]:
+    core_tracer.render(scene, 64, 64)  # warm up imports and caches
+    walls, cpus, segments = [], [], 0
+    for _ in range(runs):
+        start, cpu_start = time.perf_counter(), time.process_time()
+        result = core_tracer.render_passes(scene, size, size, keep_passes=False)
+        walls.append(time.perf_counter() - start)
+        cpus.append(time.process_time() - cpu_start)
+        segments = result.stats["segments"]
+    return min(walls), min(cpus), segments
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--size", type=int, default=512)
+    args = parser.parse_args()
+    four = core_tracer.load_scene(ROOT / "presets" / "four-lamp-rear-combination.json")
+    wrap = core_tracer.load_scene(ROOT / "presets" / "wrap-around-combination.json")
+    flat = copy.deepcopy(wrap)
+    for lamp in flat["lamps"]:
+        lamp["lens"]["shape"] = "flat"
+    flat = normalize(flat)
+    four_wrapped = copy.deepcopy(four)
+    four_wrapped["body"]["depth"] = 100.0
+    four_wrapped["lamps"][3]["lens"].update(shape="cylindrical", wrap_radius=110.0, wrap_toward="+x")
+    four_wrapped = normalize(four_wrapped)
+    print(f"machine       {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
+    print(f"image         {args.size}x{args.size}, min of {args.runs} runs")
+    base = None
+    cases = (("four-lamp", four), ("four, one wraps", four_wrapped), ("wrap-around", wrap), ("wrap, lens flat", flat))
+    for name, scene in cases:
+        wall, cpu, segments = measure(scene, args.size, args.runs)
+        base = base or wall
+        print(f"{name:16s} wall {wall:.3f} s  CPU {cpu:.3f} s  {segments} segments  "
+              f"{wall / base:.2f}x the four-lamp time")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
