@@ -123,3 +123,31 @@ def test_square_lamp_materials_follow_the_mapping(square):
         lamp["lens"]["side_wall_color"])
     assert bpy.data.materials["Lamp 1 Lens"].node_tree.nodes["Lens BSDF"].inputs["IOR"].default_value == \
         pytest.approx(lamp["lens"]["ior"], rel=1e-6)
+
+
+def test_bulb_through_a_flat_rectangular_lens_agrees_with_cycles(lamp_addon, bl_scene):
+    # The bulb seen on the axis through the flat clear middle of a square lamp's lens (cut height 0):
+    # both renderers give the slab transmittance, whatever the outline around it (test_addon_compare).
+    import json
+
+    import core_tracer
+    from test_addon_compare import BULB_SAMPLES, _compared_region
+
+    doc = json.loads((PRESETS / "square-tail-lamp.json").read_text())
+    lamp = doc["lamps"][0]
+    lamp["cuts"]["height"] = 0.0
+    lamp["lens"].update(diffuse_color=[0.0, 0.0, 0.0], specular=0.0)  # no eq. 1 on the lens surface
+    doc["camera"]["fov_deg"] = 2.0  # 30 mm across at 850 mm: the bulb (8 mm radius) fills the centre
+    doc["image"] = {"width": 32, "height": 32}
+    scene = core_tracer.parse_scene(doc)
+    tracer, cycles, seconds = _compared_region(lamp_addon, bl_scene, scene, BULB_SAMPLES,
+                                               (slice(12, 20), slice(12, 20)))
+    lens = scene["lamps"][0]["lens"]
+    r = ((lens["ior"] - 1) / (lens["ior"] + 1)) ** 2
+    tau = np.exp(-np.asarray(core_tracer.scene.lens_absorption(lens)) * lens["thickness"])
+    slab = np.asarray(scene["lamps"][0]["bulb"]["intensity"]) * (1 - r) ** 2 * tau / (1 - r * r * tau * tau)
+    assert tracer == pytest.approx(slab, rel=1e-4)
+    relative = (cycles - tracer) / tracer
+    print(f"\nbulb through flat rectangular lens, {BULB_SAMPLES} spp, 32x32, 8x8 centre: tracer {tracer}, "
+          f"Cycles {cycles}, relative difference {relative}, seconds {seconds}")
+    assert np.abs(relative).max() < 0.02
