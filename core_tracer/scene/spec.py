@@ -176,6 +176,13 @@ class Section:
     doc: str = ""
     optional: tuple[str, ...] = ()  # keys that have no default and may be absent
     one_of: tuple[OneOf, ...] = ()  # either/or rules; their keys are absent unless their form is used
+    # (key, choice key, choice values): a field that means something only when the section's choice
+    # field holds one of the values (a rectangular lens's width); editors show it only then
+    shown_when: tuple[tuple[str, str, tuple[str, ...]], ...] = ()
+
+    def shown(self, key: str, value_of) -> bool:
+        """Whether field ``key`` means something for a section whose fields ``value_of(key)`` gives."""
+        return all(value_of(choice) in values for k, choice, values in self.shown_when if k == key)
 
     def may_be_absent(self, key: str) -> bool:
         return key in self.optional or any(key in rule.keys for rule in self.one_of)
@@ -329,6 +336,8 @@ LENS = Section(
                                                     "per mm (A in eq. 2)")),
         default="absorption", preferred="transmitted_color",
         doc="How the lens colour is given"),),
+    shown_when=(("radius", "outline", ("round",)), ("width", "outline", ("rectangular",)),
+                ("height", "outline", ("rectangular",)), ("corner_radius", "outline", ("rectangular",))),
 )
 
 CUTS = Section(
