@@ -251,6 +251,7 @@ def check_geometry(scene: dict) -> None:
         if rs >= rs_hi:
             shown = f"{rs_hi:g}" if shape.round else _rounded(rs_hi, False)
             raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {shown}) mm")
+    _check_wraps(scene)
 
 
 def _check_rectangle(lens: dict, where: str) -> None:
@@ -269,9 +270,6 @@ def _check_apart(shape: Outline, other: Outline, dx: float, dz: float, where: st
         raise SceneError(f"{where}.center", f"lens overlaps the lens of lamps[{j}] by {-gap:.4g} mm (centres "
                          f"{abs(dx):g} mm apart in x, {abs(dz):g} mm in z); allowed at least {need_x:g} mm apart "
                          f"in x or {need_z:g} mm in z")
-
-
-    _check_wraps(scene)
 
 
 def _check_cylinder(lamp: dict, where: str) -> None:
