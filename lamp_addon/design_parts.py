@@ -23,9 +23,9 @@ from mathutils.geometry import tessellate_polygon
 
 from ..core_tracer.raytrace.outline import Outline
 from ..core_tracer.scene import functions
-from ..core_tracer.scene.derived import cut_sphere_radius, lamp_geometry
+from ..core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geometry, lens_cylinder
 from . import design_materials
-from .convert import meshes, units
+from .convert import meshes, units, wrap_meshes
 
 MM = units.BU_PER_MM
 CHORD_TOLERANCE_MM = meshes.CHORD_TOLERANCE_MM
@@ -129,10 +129,27 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
                   partial(meshes.socket_mesh, rs, g["vertex"], by),
                   [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
+    if lens_cylinder(lamp) is not None:
+        return _cylindrical(parts, lamp, meshes.rim_polygon(R, n) if outline.round else rim_local, lens_outline, k,
+                            g, lighter)
     if outline.round:
         return parts, meshes.rim_polygon(R, n) + np.array([cx, cz]), (g["plane_b"], g["rim"]), lighter
     # a rectangular lens's collar reaches the reflector's edge: the body's opening needs no bore
     return parts, rim_local + np.array([cx, cz]), (g["plane_b"], g["plane_b"]), lighter
+
+
+def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outline, k: int, g: dict,
+                 lighter: bool) -> tuple[list[MeshPart], np.ndarray, tuple, bool]:
+    """``lamp_parts`` for a cylindrical lens (README, "the cylindrical lens"): the lens mesh on its
+    cylinder, and the body's opening where its outer face meets its side wall."""
+    lens, cuts = lamp["lens"], lamp["cuts"]
+    key = ("cylindrical lens", lens_outline, lens["thickness"], cuts["pitch"], cuts["height"], len(rim),
+           lens["wrap_radius"], lens["wrap_toward"], CHORD_TOLERANCE_MM, k)
+    data = shapes.get(key, partial(wrap_meshes.cylindrical_lens_mesh, lamp, rim, k, CHORD_TOLERANCE_MM))
+    old = parts[0]
+    parts[0] = MeshPart(old.part, old.name, key, lambda: data, old.slots, old.matrix)
+    opening = wrap_meshes.outer_rim(data, lamp) + np.array(lamp["center"])
+    return parts, opening, (g["plane_b"], g["rim"]), lighter
 
 
 def _diffuse_slot(part: str, name: str, color, node: str) -> Slot:
@@ -157,6 +174,11 @@ def body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> MeshPa
     body = scene["body"]
     shape = ("body", tuple(body["center"]), tuple(body["size"]), body["depth"],
              tuple(tuple(map(tuple, rim.round(9).tolist())) for rim in rims), tuple(bores))
+    wraps = body_wraps(scene)
+    if wraps:  # a front that curves round to the side (cylindrical lenses)
+        return MeshPart("body", "Lamp Body", (*shape, tuple(wraps)),
+                        partial(wrap_meshes.body_mesh_wrapped, scene, rims, bores, wraps, tessellate_polygon),
+                        [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
     return MeshPart("body", "Lamp Body", shape, partial(meshes.body_mesh, scene, rims, bores, tessellate_polygon),
                      [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
 
