@@ -337,7 +337,8 @@ LENS = Section(
         default="absorption", preferred="transmitted_color",
         doc="How the lens colour is given"),),
     shown_when=(("radius", "outline", ("round",)), ("width", "outline", ("rectangular",)),
-                ("height", "outline", ("rectangular",)), ("corner_radius", "outline", ("rectangular",))),
+                ("height", "outline", ("rectangular",)), ("corner_radius", "outline", ("rectangular",)),
+                ("wrap_radius", "shape", ("cylindrical",)), ("wrap_toward", "shape", ("cylindrical",))),
 )
 
 CUTS = Section(

@@ -166,9 +166,10 @@ def test_panels_are_in_the_lamp_tab(lamp_addon):
 
 def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
     shown = set()
-    for mode, outline in (("transmitted_color", "round"), ("absorption", "rectangular")):
+    for mode, outline, shape in (("transmitted_color", "round", "flat"), ("absorption", "rectangular", "cylindrical")):
         design.lamps[2].lens.color_mode = mode
         design.lamps[2].lens.outline = outline
+        design.lamps[2].lens.shape = shape
         for cls in _panels(lamp_addon):
             shown |= draw(cls, bl_scene).spec_paths()
     wanted = {info.path for info in S.iter_fields() if not lamp_addon.design_properties.is_constant(info.spec)}
@@ -236,6 +237,20 @@ def test_lens_outline_rows(lamp_addon, bl_scene, design):
     drawn = [prop for _, _, prop, _ in draw(bpy.types.LAMP_PT_lens, bl_scene).props()]
     assert {"outline", "width", "height", "corner_radius"} <= set(drawn) and "radius" not in drawn
     assert drawn.index("outline") < drawn.index("width")
+
+
+def test_lens_shape_rows(lamp_addon, bl_scene, design):
+    # the shape choice, then the cylinder's radius and side only for a cylindrical lens
+    import bpy
+
+    lens = design.lamps[2].lens
+    design.active_lamps_index = 2
+    lens.shape = "flat"
+    drawn = [prop for _, _, prop, _ in draw(bpy.types.LAMP_PT_lens, bl_scene).props()]
+    assert "shape" in drawn and not {"wrap_radius", "wrap_toward"} & set(drawn)
+    lens.shape = "cylindrical"
+    drawn = [prop for _, _, prop, _ in draw(bpy.types.LAMP_PT_lens, bl_scene).props()]
+    assert drawn.index("shape") < drawn.index("wrap_radius") < drawn.index("wrap_toward")
 
 
 @pytest.mark.parametrize("mode", ["transmitted_color", "absorption"])
