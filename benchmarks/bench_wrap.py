@@ -24,22 +24,29 @@ import core_tracer  # noqa: E402
 from core_tracer.scene.validate import normalize  # noqa: E402
 
 
-def measure(scene: dict, size: int, runs: int) -> tuple[float, float, int]:
-    core_tracer.render(scene, 64, 64)  # warm up imports and caches
-    walls, cpus, segments = [], [], 0
+def measure(scenes: dict[str, dict], size: int, runs: int, threads: int) -> dict[str, tuple[float, float, int]]:
+    """Each scene rendered ``runs`` times, the scenes taken in turn (so that a busy spell of the
+    machine falls on all of them): per scene the minimum wall and CPU time and the segments."""
+    for scene in scenes.values():
+        core_tracer.render(scene, 64, 64)  # warm up imports and caches
+    walls = {name: [] for name in scenes}
+    cpus = {name: [] for name in scenes}
+    segments = {}
     for _ in range(runs):
-        start, cpu_start = time.perf_counter(), time.process_time()
-        result = core_tracer.render_passes(scene, size, size, keep_passes=False)
-        walls.append(time.perf_counter() - start)
-        cpus.append(time.process_time() - cpu_start)
-        segments = result.stats["segments"]
-    return min(walls), min(cpus), segments
+        for name, scene in scenes.items():
+            start, cpu_start = time.perf_counter(), time.process_time()
+            result = core_tracer.render_passes(scene, size, size, keep_passes=False, threads=threads)
+            walls[name].append(time.perf_counter() - start)
+            cpus[name].append(time.process_time() - cpu_start)
+            segments[name] = result.stats["segments"]
+    return {name: (min(walls[name]), min(cpus[name]), segments[name]) for name in scenes}
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--size", type=int, default=512)
+    parser.add_argument("--threads", type=int, default=1, help="band threads (default 1: steadier on a busy machine)")
     args = parser.parse_args()
     four = core_tracer.load_scene(ROOT / "presets" / "four-lamp-rear-combination.json")
     wrap = core_tracer.load_scene(ROOT / "presets" / "wrap-around-combination.json")
@@ -52,14 +59,13 @@ def main() -> int:
     four_wrapped["lamps"][3]["lens"].update(shape="cylindrical", wrap_radius=110.0, wrap_toward="+x")
     four_wrapped = normalize(four_wrapped)
     print(f"machine       {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
-    print(f"image         {args.size}x{args.size}, min of {args.runs} runs")
-    base = None
-    cases = (("four-lamp", four), ("four, one wraps", four_wrapped), ("wrap-around", wrap), ("wrap, lens flat", flat))
-    for name, scene in cases:
-        wall, cpu, segments = measure(scene, args.size, args.runs)
-        base = base or wall
+    print(f"image         {args.size}x{args.size}, min of {args.runs} runs, {args.threads} thread(s)")
+    cases = {"four-lamp": four, "four, one wraps": four_wrapped, "wrap-around": wrap, "wrap, lens flat": flat}
+    figures = measure(cases, args.size, args.runs, args.threads)
+    base_wall, base_cpu, _ = figures["four-lamp"]
+    for name, (wall, cpu, segments) in figures.items():
         print(f"{name:16s} wall {wall:.3f} s  CPU {cpu:.3f} s  {segments} segments  "
-              f"{wall / base:.2f}x the four-lamp time")
+              f"{wall / base_wall:.2f}x wall, {cpu / base_cpu:.2f}x CPU of the four-lamp")
     return 0
 
 

@@ -7,6 +7,7 @@ the add-on's mesh code."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -24,6 +25,9 @@ from test_addon_builder import (
     _triangle_samples,
     _world_mm,
 )
+from test_addon_compare import BULB_SAMPLES, _compared_region
+
+import core_tracer
 
 pytestmark = pytest.mark.blender
 
@@ -128,11 +132,6 @@ def test_square_lamp_materials_follow_the_mapping(square):
 def test_bulb_through_a_flat_rectangular_lens_agrees_with_cycles(lamp_addon, bl_scene):
     # The bulb seen on the axis through the flat clear middle of a square lamp's lens (cut height 0):
     # both renderers give the slab transmittance, whatever the outline around it (test_addon_compare).
-    import json
-
-    import core_tracer
-    from test_addon_compare import BULB_SAMPLES, _compared_region
-
     doc = json.loads((PRESETS / "square-tail-lamp.json").read_text())
     lamp = doc["lamps"][0]
     lamp["cuts"]["height"] = 0.0
@@ -151,3 +150,12 @@ def test_bulb_through_a_flat_rectangular_lens_agrees_with_cycles(lamp_addon, bl_
     print(f"\nbulb through flat rectangular lens, {BULB_SAMPLES} spp, 32x32, 8x8 centre: tracer {tracer}, "
           f"Cycles {cycles}, relative difference {relative}, seconds {seconds}")
     assert np.abs(relative).max() < 0.02
+
+
+def test_a_lamp_added_beside_a_square_lamp_fits(lamp_addon, addon_core):
+    layout = lamp_addon.convert.layout
+    scene = addon_core.scene.load_scene(PRESETS / "square-tail-lamp.json")
+    doc = layout.design_with_new_lamp(scene, 0)  # validated: inside the body, not overlapping
+    (x0, z0), (x1, z1) = doc["lamps"][0]["center"], doc["lamps"][1]["center"]
+    assert (x1 - x0, z1 - z0) == (150 + layout.MARGIN_MM, 0)
+    assert doc["body"]["size"][1] == scene["body"]["size"][1]  # 80 mm high lenses need no taller body
