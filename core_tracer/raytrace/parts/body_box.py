@@ -46,14 +46,16 @@ def hit_body(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     normal = np.zeros((len(o), 3))
     rows = np.arange(len(o))
     normal[rows, face] = -np.sign(d[rows, face])
-    p = o + np.where(hit, t_near, 0.0)[:, None] * d
-    behind = np.ones(len(o), bool)
+    entering = np.nonzero(hit)[0]  # only these can meet the curved panel: test them alone
+    x = o[entering, 0] + t_near[entering] * d[entering, 0]
+    y = o[entering, 1] + t_near[entering] * d[entering, 1]
+    in_front = np.zeros(len(entering), bool)
     for side, x_t, radius in wraps:
-        u = side * (p[:, 0] - x_t)
+        u = side * (x - x_t)
+        curved = u > 0
         with np.errstate(invalid="ignore"):
-            f = radius - np.sqrt(radius * radius - u * u)
-        behind &= (u <= 0) | (p[:, 1] >= f)
-    through_arc = np.nonzero(hit & ~behind)[0]
+            in_front[curved] |= y[curved] < radius - np.sqrt(radius * radius - u[curved] ** 2)
+    through_arc = entering[in_front]
     t_arc = np.full(len(through_arc), np.inf)
     arc_normal = np.zeros((len(through_arc), 3))
     oa, da = o[through_arc], d[through_arc]
