@@ -1,6 +1,7 @@
 """How much does a cylindrical lens cost? Renders, at 512x512, the four-lamp preset (today's
 benchmark), the same with its right-hand lamp cylindrical (radius 110 mm, wrapping toward +x; the
-body 100 mm deep to hold its deeper reflector), the wrap-around preset, and the wrap-around preset
+body 100 mm deep to hold its deeper reflector), the same with its left-hand lamp wrapping toward
+-x too, the wrap-around preset, and the wrap-around preset
 with its cylindrical lens made flat (the same lamps on a flat front), and prints for each the
 minimum over several runs of the wall clock and CPU time and the ray segments traced. The machine
 may be shared: the minimum of the repeats is the figure to compare.
@@ -57,10 +58,13 @@ def main() -> int:
     four_wrapped = copy.deepcopy(four)
     four_wrapped["body"]["depth"] = 100.0
     four_wrapped["lamps"][3]["lens"].update(shape="cylindrical", wrap_radius=110.0, wrap_toward="+x")
-    four_wrapped = normalize(four_wrapped)
+    both_ends = copy.deepcopy(four_wrapped)
+    both_ends["lamps"][0]["lens"].update(shape="cylindrical", wrap_radius=110.0, wrap_toward="-x")
+    four_wrapped, both_ends = normalize(four_wrapped), normalize(both_ends)
     print(f"machine       {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
     print(f"image         {args.size}x{args.size}, min of {args.runs} runs, {args.threads} thread(s)")
-    cases = {"four-lamp": four, "four, one wraps": four_wrapped, "wrap-around": wrap, "wrap, lens flat": flat}
+    cases = {"four-lamp": four, "four, one wraps": four_wrapped, "four, both wrap": both_ends, "wrap-around": wrap,
+             "wrap, lens flat": flat}
     figures = measure(cases, args.size, args.runs, args.threads)
     base_wall, base_cpu, _ = figures["four-lamp"]
     for name, (wall, cpu, segments) in figures.items():
