@@ -170,72 +170,90 @@ def _cell_of(o, d, t, g, pitch) -> np.ndarray:
     return np.stack([i, j], axis=1)
 
 
-def _border_time(o, d, g, angle) -> np.ndarray:
-    """Where each ray crosses the half-plane of the radial line at ``angle`` (inf if never)."""
-    side = g["side"]
-    mx, my = np.cos(angle), side * np.sin(angle)  # normal of the radial plane
-    X, Y = o[:, 0] - g["axis_x"], o[:, 1] - g["radius"]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = -(mx * X + my * Y) / (mx * d[:, 0] + my * d[:, 1])
-    ex, ey = side * np.sin(angle), -np.cos(angle)
-    on_half = ex * (X + t * d[:, 0]) + ey * (Y + t * d[:, 1]) > 0
-    return np.where(np.isfinite(t) & on_half, t, np.inf)
+_ROWS = ("X", "Y", "Z", "dX", "dY", "dZ", "side", "apex", "phi_c", "step", "p", "rho", "i", "j", "si", "sj",
+         "t_cell", "t_end", "t_next_i", "t_next_j", "dt_j", "ray", "own", "i0", "j0")
+_ROW = {name: k for k, name in enumerate(_ROWS)}
 
 
 def _walk_piece(o, d, g, pitch, rho, t_start, t_end, on_cap, start_cell) -> tuple[np.ndarray, np.ndarray]:
     """Walk the cells one shell piece [t_start, t_end] crosses, in order, testing each cell's cap
-    (paper Fig. 9 on the curved base); the first root inside its own cell is the hit."""
+    (paper Fig. 9 on the curved base); the first root inside its own cell is the hit. The rays
+    still walking are the columns of one (rows, K) array, so dropping the finished ones is one
+    gather (as ``cuts._CellWalk``)."""
     n = len(o)
     t_hit = np.full(n, np.inf)
     cell_hit = np.zeros((n, 2))
+    state = np.empty((len(_ROWS), n))
+    row = dict(zip(_ROWS, state, strict=True))
+    row["X"][:], row["Y"][:], row["Z"][:] = o[:, 0] - g["axis_x"], o[:, 1] - g["radius"], o[:, 2]
+    row["dX"][:], row["dY"][:], row["dZ"][:] = d[:, 0], d[:, 1], d[:, 2]
+    row["side"][:], row["apex"][:], row["phi_c"][:] = g["side"], g["apex"], g["phi_center"]
+    row["step"][:], row["p"][:], row["rho"][:] = pitch / g["base"], pitch, rho
     ij = _cell_of(o, d, t_start, g, pitch)
-    i, j = ij[:, 0].copy(), ij[:, 1].copy()
-    X, Y = o[:, 0] - g["axis_x"], o[:, 1] - g["radius"]
+    row["i"][:], row["j"][:] = ij[:, 0], ij[:, 1]
     # the angle about the axis changes monotonically along a line: its direction is the sign of
     # the (constant) moment of the line about the axis
-    si = np.sign(g["side"] * (X * d[:, 1] - Y * d[:, 0]))
-    sj = np.sign(d[:, 2])
-    t_cell = t_start.copy()
+    row["si"][:] = np.sign(g["side"] * (row["X"] * d[:, 1] - row["Y"] * d[:, 0]))
+    row["sj"][:] = np.sign(d[:, 2])
+    row["t_cell"][:], row["t_end"][:] = t_start, t_end
     with np.errstate(divide="ignore", invalid="ignore"):
-        t_next_j = np.where(sj != 0, ((j + 0.5 * sj) * pitch - o[:, 2]) / d[:, 2], np.inf)
-        dt_j = np.where(sj != 0, pitch / np.abs(d[:, 2]), np.inf)
-    border = lambda sel: cell_angle(g["phi_center"][sel], g["base"][sel], pitch[sel], i[sel] + 0.5 * si[sel])  # noqa: E731
-    t_next_i = np.where(si != 0, _border_time(o, d, g, border(slice(None))), np.inf)
-    live = np.arange(n)
+        row["t_next_j"][:] = np.where(row["sj"] != 0, ((row["j"] + 0.5 * row["sj"]) * pitch - o[:, 2]) / d[:, 2],
+                                      np.inf)
+        row["dt_j"][:] = np.where(row["sj"] != 0, pitch / np.abs(d[:, 2]), np.inf)
+    row["ray"][:] = np.arange(n)
+    row["own"][:] = on_cap
+    row["i0"][:], row["j0"][:] = start_cell[:, 0], start_cell[:, 1]
+    row["t_next_i"][:] = _next_border(state)
     for _ in range(MAX_CELL_STEPS):
-        if len(live) == 0:
+        if state.shape[1] == 0:
             break
-        sub = {k: v[live] for k, v in g.items()}
-        e, rel = _apex_frame(o[live], sub, pitch[live], i[live], j[live])
-        dl, r = d[live], rho[live]
-        b = np.einsum("ij,ij->i", rel, dl) - r * np.einsum("ij,ij->i", e, dl)
-        c = np.einsum("ij,ij->i", rel, rel) - 2.0 * r * np.einsum("ij,ij->i", rel, e)
+        r = {name: state[k] for name, k in _ROW.items()}
+        phi = r["phi_c"] + r["i"] * r["step"]
+        ex, ey = r["side"] * np.sin(phi), -np.cos(phi)  # the cell's radial direction
+        # the ray's origin relative to the cap's apex; the sphere's centre lies rho beyond it along e
+        ax, ay, az = r["X"] - r["apex"] * ex, r["Y"] - r["apex"] * ey, r["Z"] - r["j"] * r["p"]
+        rho_ = r["rho"]
+        b = ax * r["dX"] + ay * r["dY"] + az * r["dZ"] - rho_ * (ex * r["dX"] + ey * r["dY"])
+        c = ax * ax + ay * ay + az * az - 2.0 * rho_ * (ax * ex + ay * ey)
         with np.errstate(invalid="ignore", divide="ignore"):
             q = -(b + np.copysign(np.sqrt(b * b - c), b))
             r2 = c / q
         lo, hi = np.fmin(q, r2), np.fmax(q, r2)
-        own = (on_cap[live] != OFF_CAP) & (i[live] == start_cell[live, 0]) & (j[live] == start_cell[live, 1])
-        oc = np.where(own, on_cap[live], OFF_CAP)
-        lo = np.where(oc == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
-        hi = np.where(oc == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
-        tc = t_cell[live]
-        t_stop = np.minimum(np.minimum(t_next_i[live], t_next_j[live]), t_end[live])
+        own = np.where((r["i"] == r["i0"]) & (r["j"] == r["j0"]), r["own"], OFF_CAP)
+        lo = np.where(own == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
+        hi = np.where(own == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
+        tc = r["t_cell"]
+        t_stop = np.minimum(np.minimum(r["t_next_i"], r["t_next_j"]), r["t_end"])
         with np.errstate(invalid="ignore"):
             lo_ok = (lo > T_MIN) & (lo >= tc - TOL) & (lo <= t_stop + TOL)
             hi_ok = (hi > T_MIN) & (hi >= tc - TOL) & (hi <= t_stop + TOL)
         t = np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
         found = np.isfinite(t)
-        hit = live[found]
-        t_hit[hit] = t[found]
-        cell_hit[hit, 0], cell_hit[hit, 1] = i[hit], j[hit]
+        if found.any():
+            hit = r["ray"][found].astype(np.int64)
+            t_hit[hit] = t[found]
+            cell_hit[hit, 0], cell_hit[hit, 1] = r["i"][found], r["j"][found]
         # step to the neighbouring cell entered next
-        step_i = t_next_i[live] < t_next_j[live]
-        t_cell[live] = np.where(step_i, t_next_i[live], t_next_j[live])
-        mi, mj = live[step_i], live[~step_i]
-        i[mi] += si[mi]
-        j[mj] += sj[mj]
-        t_next_j[mj] += dt_j[mj]
-        if len(mi):
-            t_next_i[mi] = _border_time(o[mi], d[mi], {k: v[mi] for k, v in g.items()}, border(mi))
-        live = live[~found & (t_cell[live] <= t_end[live])]
+        step_i = r["t_next_i"] < r["t_next_j"]
+        r["t_cell"][:] = np.where(step_i, r["t_next_i"], r["t_next_j"])
+        np.add(r["i"], r["si"], out=r["i"], where=step_i)
+        np.add(r["j"], r["sj"], out=r["j"], where=~step_i)
+        np.add(r["t_next_j"], r["dt_j"], out=r["t_next_j"], where=~step_i)
+        r["t_next_i"][:] = np.where(step_i, _next_border(state), r["t_next_i"])
+        keep = ~found & (r["t_cell"] <= r["t_end"])
+        if not keep.all():
+            state = state.take(np.nonzero(keep)[0], axis=1)
     return t_hit, cell_hit
+
+
+def _next_border(state: np.ndarray) -> np.ndarray:
+    """Where each walking ray crosses the radial half-plane at the far border of its cell column
+    (inf if never: the line's angle stops short of it)."""
+    r = {name: state[k] for name, k in _ROW.items()}
+    angle = r["phi_c"] + (r["i"] + 0.5 * r["si"]) * r["step"]
+    cos_b, sin_b = np.cos(angle), r["side"] * np.sin(angle)  # the plane's normal (cos, side sin)
+    X, Y, dX, dY = r["X"], r["Y"], r["dX"], r["dY"]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = -(cos_b * X + sin_b * Y) / (cos_b * dX + sin_b * dY)
+    on_half = sin_b * (X + t * dX) - cos_b * (Y + t * dY) > 0  # the radial direction is (side sin, -cos)
+    return np.where((r["si"] != 0) & np.isfinite(t) & on_half, t, np.inf)
