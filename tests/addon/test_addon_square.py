@@ -159,3 +159,41 @@ def test_a_lamp_added_beside_a_square_lamp_fits(lamp_addon, addon_core):
     (x0, z0), (x1, z1) = doc["lamps"][0]["center"], doc["lamps"][1]["center"]
     assert (x1 - x0, z1 - z0) == (150 + layout.MARGIN_MM, 0)
     assert doc["body"]["size"][1] == scene["body"]["size"][1]  # 80 mm high lenses need no taller body
+
+
+@pytest.mark.parametrize("edits", [
+    {"lens": {"corner_radius": 0.0}},
+    {"cuts": {"height": 0.0}},
+    {"cuts": {"pitch": 6.0, "height": 4.0}},
+    {"lens": {"width": 150.0, "height": 30.0, "corner_radius": 15.0}},
+], ids=["sharp-corners", "flat-cuts", "deep-cuts", "slot"])
+def test_square_meshes_are_closed_and_within_tolerance(lamp_addon, addon_core, edits):
+    from collections import Counter
+
+    meshes = lamp_addon.convert.meshes
+    doc = json.loads((PRESETS / "square-tail-lamp.json").read_text())
+    for section, values in edits.items():
+        doc["lamps"][0][section].update(values)
+    lamp = core_tracer.parse_scene(doc)["lamps"][0]
+    rim = meshes.outline_rim(lamp)
+    refl = meshes.trimmed_reflector_mesh(lamp, rim)
+    lens = meshes.lens_mesh(lamp, len(rim), rim=rim)
+    assert refl.max_deviation <= TOL_MM and lens.max_deviation <= TOL_MM
+    # The glass is closed: every edge is shared by two faces, except along the cut surface's rim, where
+    # the open collar of the side wall stands on it (three), and the collar's top edge (one).
+    uses = Counter()
+    for face in lens.faces:
+        for k in range(len(face)):
+            a, b = face[k], face[(k + 1) % len(face)]
+            uses[min(a, b), max(a, b)] += 1
+    counts = Counter(uses.values())
+    assert set(counts) <= {1, 2, 3} and counts[1] == counts[3]
+    # The reflector's edge is the collar's top, vertex for vertex: no gap between wall and reflector.
+    g = addon_core.scene.lamp_geometry(lamp)
+    f = lamp["reflector"]["focal_length"]
+    edge = refl.verts[np.abs(_outline_distance(refl.verts[:, 0], refl.verts[:, 2], lamp["lens"])) < 1e-6]
+    assert len(edge) == len(rim)
+    wall = lens.verts[np.unique([i for face, m in zip(lens.faces, lens.material, strict=True) if m == 1
+                                 for i in face])]
+    top = wall[np.abs(wall[:, 1] - (g["vertex"] - (wall[:, 0] ** 2 + wall[:, 2] ** 2) / (4 * f))) < 1e-9]
+    assert np.linalg.norm(edge[:, None, :] - top[None, :, :], axis=2).min(axis=1).max() < 1e-9

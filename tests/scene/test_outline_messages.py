@@ -190,3 +190,14 @@ def test_random_rectangular_designs_get_a_field_and_a_range_a_value_of_which_cle
                     assert after.path != e.path, (before, str(after))
         lamp_limits(doc, 0)
     assert {"valid", "lamps[0].lens.corner_radius", "lamps[0].cuts.pitch", "lamps[0].bulb.offset"} <= seen, seen
+
+
+def test_the_command_line_refuses_a_bad_outline_in_one_line(tmp_path):
+    from helpers import assert_bad_input, run_cli
+
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(_square(corner_radius=45)))
+    proc = run_cli("render", path, "-o", tmp_path / "out.png")
+    line = assert_bad_input(proc, "lamps[0].lens.corner_radius", "allowed [0, 30] mm")
+    assert "45 is more than half the lens's smaller side" in line
+    assert not (tmp_path / "out.png").exists()
