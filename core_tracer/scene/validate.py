@@ -559,6 +559,11 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     if 2 * hw <= w and 2 * hh <= h:
         limits["center"] = (f"x in {_interval(bx - w / 2 + hw, bx + w / 2 - hw)}, "
                             f"z in {_interval(bz - h / 2 + hh, bz + h / 2 - hh)} mm inside the body")
+    if lamp["lens"].get("shape", "flat") == "cylindrical":
+        lens = lamp["lens"]
+        need = 2 * shape.half_w + lens["thickness"] + lamp["cuts"]["height"]
+        limits["lens.wrap_radius"] = (f"more than {_rounded(need, True)} mm for this lens (its width, thickness "
+                                      "and cut height)")
     limits.update(_bulb_limits(lamp))
     return limits
 

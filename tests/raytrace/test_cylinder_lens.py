@@ -290,3 +290,21 @@ def test_every_transition_through_a_cylindrical_lens_is_in_table_1():
     assert {child for _, _, child in seen} >= {2, 3, 6, 8, 9, 10, 11}
     assert [t for t in seen if not paths.allowed(*t)] == []
     assert np.all(np.isfinite(result.image)) and np.all(result.image >= 0)
+
+
+def test_the_panel_hint_gives_the_smallest_wrap_radius_validation_allows():
+    from core_tracer.scene import SceneError
+    from core_tracer.scene.validate import lamp_limits
+    doc = normalize(_wrap_scene())
+    hint = lamp_limits(doc, 0)["lens.wrap_radius"]
+    assert hint.startswith("more than 94.5 mm")
+    for radius, ok in ((94.5, False), (94.51, True)):
+        trial = copy.deepcopy(doc)
+        trial["lamps"][0]["lens"]["wrap_radius"] = radius
+        trial["body"]["size"] = [2 * R + 8, 120]  # the side short of the quarter turn for both
+        trial["body"]["center"] = [-1, 0]
+        if ok:
+            normalize(trial)
+        else:
+            with pytest.raises(SceneError, match=r"^lamps\[0\]\.lens\.wrap_radius"):
+                normalize(trial)
