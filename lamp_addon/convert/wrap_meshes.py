@@ -126,56 +126,57 @@ def cylindrical_lens_mesh(lamp: dict, rim: np.ndarray, k: int, tol: float = CHOR
 
     edges = np.roll(rim, -1, axis=0) - rim
 
-    def inside(xz: np.ndarray) -> np.ndarray:  # points inside the convex rim (to 1e-9 mm)
-        rel = xz[:, None, :] - rim[None, :, :]
-        cross = edges[None, :, 0] * rel[:, :, 1] - edges[None, :, 1] * rel[:, :, 0]
-        return (cross >= -1e-9 * np.hypot(edges[:, 0], edges[:, 1])[None, :]).all(axis=1)
+    # every quad's corners on its cell's cap, at once: (quads, 4, 3)
+    qa, qb = (g.ravel() for g in np.meshgrid(np.arange(len(u_lines) - 1), np.arange(len(z_lines) - 1), indexing="ij"))
+    corner_u = np.stack([u_lines[qa], u_lines[qa + 1], u_lines[qa + 1], u_lines[qa]], axis=1)
+    corner_z = np.stack([z_lines[qb], z_lines[qb], z_lines[qb + 1], z_lines[qb + 1]], axis=1)
+    qi, qj = u_cell[qa], z_cell[qb]
+    all_pts = cuts.point(corner_u, corner_z, qi[:, None], qj[:, None])
+    rel = all_pts[:, :, None, :][..., [0, 2]] - rim[None, None, :, :]
+    cross = edges[None, None, :, 0] * rel[..., 1] - edges[None, None, :, 1] * rel[..., 0]  # (quads, 4, edges)
+    outside = (cross < 0).all(axis=1).any(axis=1)  # wholly outside one edge of the outline
+    inside = (cross >= -1e-9 * np.hypot(edges[:, 0], edges[:, 1])[None, None, :]).all(axis=(1, 2))
 
     mb = _MeshBuilder()
     cut_faces: list[list[int]] = []
-    uu, zz = np.meshgrid(u_lines, z_lines, indexing="ij")
-    for a in range(len(u_lines) - 1):
-        i = u_cell[a]
-        for b in range(len(z_lines) - 1):
-            j = z_cell[b]
-            corners_uz = [(uu[a, b], zz[a, b]), (uu[a + 1, b], zz[a + 1, b]), (uu[a + 1, b + 1], zz[a + 1, b + 1]),
-                          (uu[a, b + 1], zz[a, b + 1])]
-            pts = cuts.point(np.array([c[0] for c in corners_uz]), np.array([c[1] for c in corners_uz]), i, j)
+    for q_index in np.flatnonzero(~outside).tolist():
+        i, j = int(qi[q_index]), int(qj[q_index])
+        pts = all_pts[q_index]
+        if inside[q_index]:
+            poly3 = [tuple(q) for q in pts.tolist()]
+        else:
             xz = pts[:, [0, 2]]
-            rel = xz[:, None, :] - rim[None, :, :]
-            if ((edges[None, :, 0] * rel[:, :, 1] - edges[None, :, 1] * rel[:, :, 0]) < 0).all(axis=0).any():
-                continue  # wholly outside one edge of the outline
-            ins = inside(xz)
-            if ins.all():
-                poly3 = [tuple(q) for q in pts]
-            else:
-                poly = [tuple(q) for q in xz]
-                flip = not _ccw(poly)
-                clipped = _clip_convex(poly[::-1] if flip else poly, rim, range(len(rim)))
-                if len(clipped) < 3:
-                    continue
-                lookup = {(round(x * 1e9), round(z * 1e9)): q for (x, z), q in zip(poly, pts, strict=True)}
-                poly3 = []
-                for x, z in clipped:
-                    q = lookup.get((round(x * 1e9), round(z * 1e9)))
-                    if q is None:
-                        # a point where the outline crosses a quad edge: on a border between cells both
-                        # neighbours must make the same point, so the lower cell's cap decides
-                        ci, cj = _edge_cell(x, z, xz, corners_uz, p)
-                        q = (x, cuts.y_at(x, z, min(i, ci), min(j, cj)), z)
-                    poly3.append(tuple(q))
-            face = [mb.vertex(*q) for q in poly3]
-            face = [v for n, v in enumerate(face) if v != face[n - 1]]
-            if len(face) < 3:
+            corners_uz = list(zip(corner_u[q_index].tolist(), corner_z[q_index].tolist(), strict=True))
+            poly = [tuple(q) for q in xz.tolist()]
+            flip = not _ccw(poly)
+            clipped = _clip_convex(poly[::-1] if flip else poly, rim, range(len(rim)))
+            if len(clipped) < 3:
                 continue
-            # wound so that the normal points out of the glass, toward the cylinder axis (the air)
-            vs = np.array([mb.verts[v] for v in face])
-            normal = np.cross(vs[1:-1] - vs[0], vs[2:] - vs[0]).sum(axis=0)
-            radial = np.array([vs[:, 0].mean() - cuts.ax, vs[:, 1].mean() - cuts.rc, 0.0])
-            if normal @ radial > 0:
-                face.reverse()
-            cut_faces.append(face)
-            mb.face(face, int((i + 1000) * 4096 + j + 1000), LENS_GLASS)
+            lookup = {(round(x * 1e9), round(z * 1e9)): q for (x, z), q in zip(poly, pts.tolist(), strict=True)}
+            poly3 = []
+            for x, z in clipped:
+                q = lookup.get((round(x * 1e9), round(z * 1e9)))
+                if q is None:
+                    # a point where the outline crosses a quad edge: on a border between cells both
+                    # neighbours must make the same point, so the lower cell's cap decides
+                    ci, cj = _edge_cell(x, z, xz, corners_uz, p)
+                    q = (x, cuts.y_at(x, z, min(i, ci), min(j, cj)), z)
+                poly3.append(tuple(q))
+        face = [mb.vertex(*q) for q in poly3]
+        face = [v for n, v in enumerate(face) if v != face[n - 1]]
+        if len(face) < 3:
+            continue
+        # wound so that the normal (Newell's, of the polygon) points out of the glass, toward the
+        # cylinder axis (the air)
+        vs = [mb.verts[v] for v in face]
+        nx = sum((a[1] - b[1]) * (a[2] + b[2]) for a, b in zip(vs, vs[1:] + vs[:1], strict=True))
+        ny = sum((a[2] - b[2]) * (a[0] + b[0]) for a, b in zip(vs, vs[1:] + vs[:1], strict=True))
+        mx = sum(v[0] for v in vs) / len(vs) - cuts.ax
+        my = sum(v[1] for v in vs) / len(vs) - cuts.rc
+        if nx * mx + ny * my > 0:
+            face.reverse()
+        cut_faces.append(face)
+        mb.face(face, int((i + 1000) * 4096 + j + 1000), LENS_GLASS)
 
     # the cut surface's boundary: its points on the outline, counter-clockwise about the axis
     verts = np.array(mb.verts)
