@@ -32,6 +32,7 @@ CHORD_TOLERANCE_MM = meshes.CHORD_TOLERANCE_MM
 # A preview lens has at most about this many cut-surface quads: a deep cut at full tolerance has up
 # to ~190,000 faces and takes 1-4 s to make, its preview 0.03-0.25 s (benchmarks/bench_build.py).
 PREVIEW_CUT_QUADS = 5000
+CYLINDER_PREVIEW_QUADS = 2  # quads per cut cell side of a cylindrical lens's preview (0.2 s to make)
 
 
 @dataclass
@@ -130,6 +131,8 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
                   [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
     if lens_cylinder(lamp) is not None:
+        if preview and k > CYLINDER_PREVIEW_QUADS:  # its mesh is made in Python: 1.5 s at 6 x 6 quads a cell
+            k, lighter = CYLINDER_PREVIEW_QUADS, True
         return _cylindrical(parts, lamp, meshes.rim_polygon(R, n) if outline.round else rim_local, lens_outline, k,
                             g, lighter)
     if outline.round:
