@@ -92,18 +92,18 @@ def open_edges(mesh: MeshData) -> int:
 
 
 def check_lens_volume(mesh: MeshData) -> float:
-    """A lens must be closed and oriented outward with a volume; returns the volume (mm³)."""
+    """A lens must enclose a volume, be closed and face outward; returns the volume (mm³). The
+    volume is checked first: a plane given the lens role needs thickness more than closing."""
+    volume = signed_volume(mesh)
+    extent = np.ptp(mesh.vertices, axis=0)
+    if abs(volume) <= 1e-9 * float(extent.max()) ** 3:
+        raise mesh_error(mesh.name, "encloses no volume; a lens must be a solid with thickness "
+                                    "(Blender: Solidify modifier, applied)")
     edges = open_edges(mesh)
     if edges:
         raise mesh_error(mesh.name, f"is not closed ({edges} open or non-manifold edges); a lens must be a "
                                     "closed surface: fill the holes (Blender: Select > All by Trait > Non "
                                     "Manifold, then F)")
-    volume = signed_volume(mesh)
-    extent = np.ptp(mesh.vertices, axis=0)
-    tiny = 1e-9 * float(np.prod(np.maximum(extent, 1e-9)))
-    if abs(volume) <= max(tiny, 1e-12):
-        raise mesh_error(mesh.name, "encloses no volume; a lens must be a solid with thickness "
-                                    "(Blender: Solidify modifier, applied)")
     if volume < 0:
         raise mesh_error(mesh.name, f"has its normals pointing inward (volume {volume:.4g} mm³); allowed "
                                     "outward normals (Blender: Mesh > Normals > Recalculate Outside)")
