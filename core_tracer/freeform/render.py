@@ -446,6 +446,11 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     geometric = g.normal[tri]
     entering = optics.dot(d, geometric) < 0.0  # the side test: by the geometric (outward) normal
     facing = np.where(entering[:, None], normal, -normal)  # shading normal toward the incident side
+    # Where the smooth normal faces away from the ray (a grazing ray at a coarse silhouette), the
+    # face's own normal decides: the ray does meet the face from the incident side.
+    away = optics.dot(d, facing) >= 0.0
+    if away.any():
+        facing[away] = np.where(entering[away, None], geometric[away], -geometric[away])
     ior = parts.ior[part]
     n1 = np.where(entering, 1.0, ior)
     n2 = np.where(entering, ior, 1.0)
