@@ -407,6 +407,23 @@ def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
     return _concat(children) if len(children) > 1 else children[0]
 
 
+def _on_side(new: np.ndarray, d: np.ndarray, geometric: np.ndarray, by_face: Callable[[np.ndarray], np.ndarray],
+             same: bool) -> np.ndarray:
+    """Child directions ``new`` of rays ``d`` at faces of normal ``geometric``, kept on the side the
+    branch belongs to (``same``: on through the face, as a transmitted ray; else back, as a
+    reflected one). An interpolated normal can tip a grazing child across the face, which would put
+    it on the wrong side of the medium it is said to be in: there ``by_face(selection)``, the same
+    law with the face's own normal, decides."""
+    incoming = optics.dot(d, geometric)
+    outgoing = optics.dot(new, geometric)
+    wrong = (outgoing * incoming <= 0.0) if same else (outgoing * incoming >= 0.0)
+    if wrong.any():
+        sel = np.nonzero(wrong)[0]
+        new = new.copy()
+        new[sel] = by_face(sel)
+    return new
+
+
 def _toward(n: np.ndarray, d: np.ndarray) -> np.ndarray:
     """``n`` turned to face the ray's incident side (against ``d``)."""
     return np.where((optics.dot(n, d) > 0.0)[:, None], -n, n)
@@ -431,7 +448,9 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
         band.add(REFLECTOR_SCATTER, pix[sel], k[sel] * scatter[:, None] * parts.bulb_intensity[b])
     k = k * parts.reflectance[part, None]
     count = len(m)
-    return _spawn(rays, m, p, optics.reflect(d, n), k, np.full(count, -1, np.int32), tri,
+    mirror = _on_side(optics.reflect(d, n), d, ctx.geometry.normal[tri], lambda sel: optics.reflect(
+        d[sel], _toward(ctx.geometry.normal[tri[sel]], d[sel])), same=False)
+    return _spawn(rays, m, p, mirror, k, np.full(count, -1, np.int32), tri,
                   np.full(count, P.REFLECTOR, np.int8), cls, P.REFLECTED, np.ones(count, bool))
 
 
@@ -446,6 +465,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     geometric = g.normal[tri]
     entering = optics.dot(d, geometric) < 0.0  # the side test: by the geometric (outward) normal
     facing = np.where(entering[:, None], normal, -normal)  # shading normal toward the incident side
+    geometric_facing = np.where(entering[:, None], geometric, -geometric)
     # Where the smooth normal faces away from the ray (a grazing ray at a coarse silhouette), the
     # face's own normal decides: the ray does meet the face from the incident side.
     away = optics.dot(d, facing) >= 0.0
@@ -472,14 +492,19 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     traced = np.nonzero(~outer_from_air)[0]
     k_r = k[traced] * r[traced, None]
     out.append(_spawn(rays, m[traced], p[traced],
-                      optics.reflect(d[traced], facing[traced]), k_r,
+                      _on_side(optics.reflect(d[traced], facing[traced]), d[traced], geometric[traced],
+                               lambda sel: optics.reflect(d[traced][sel], geometric_facing[traced][sel]),
+                               same=False), k_r,
                       np.where(entering[traced], -1, part[traced]).astype(np.int32), tri[traced], src[traced],
                       cls[traced], P.REFLECTED, seen[traced]))
 
     tc = np.nonzero(r < 1.0)[0]
     k_t = k[tc] * (1.0 - r[tc, None])
     eta = n1[tc] / n2[tc]
-    out.append(_spawn(rays, m[tc], p[tc], optics.refract(d[tc], facing[tc], eta),
+    out.append(_spawn(rays, m[tc], p[tc],
+                      _on_side(optics.refract(d[tc], facing[tc], eta), d[tc], geometric[tc],
+                               lambda sel: optics.refract(d[tc][sel], geometric_facing[tc][sel], eta[sel]),
+                               same=True),
                       k_t, np.where(entering[tc], part[tc], -1).astype(np.int32), tri[tc], src[tc], cls[tc],
                       P.TRANSMITTED, seen[tc]))
     return out
