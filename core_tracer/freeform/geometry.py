@@ -79,8 +79,9 @@ def fingerprint(scene: dict, mesh_list: list[MeshData]) -> tuple:
     return roles, sums
 
 
-def build_geometry(scene: dict, meshes: dict[str, MeshData]) -> Geometry:
-    """Check every part's mesh and concatenate them; raises ``SceneError`` naming the object."""
+def build_geometry(scene: dict, meshes: dict[str, MeshData], key: tuple | None = None) -> Geometry:
+    """Check every part's mesh and concatenate them; raises ``SceneError`` naming the object.
+    ``key`` is the meshes' ``fingerprint`` when the caller has it already."""
     mesh_list = part_meshes(scene, meshes)
     total = sum(len(m.triangles) for m in mesh_list if m.triangles.ndim == 2)
     if total > MAX_TRIANGLES:
@@ -116,7 +117,7 @@ def build_geometry(scene: dict, meshes: dict[str, MeshData]) -> Geometry:
     extent = float(np.ptp(vertices, axis=0).max())
     geometry = Geometry(vertices, triangles, vertices[triangles], np.concatenate(normals), np.concatenate(cn),
                         np.concatenate(part_of), np.concatenate(surf), max(EPSILON_MIN, EPSILON_RELATIVE * extent),
-                        fingerprint(scene, mesh_list))
+                        key if key is not None else fingerprint(scene, mesh_list))
     return geometry
 
 
@@ -139,7 +140,7 @@ class GeometryCache:
         key = fingerprint(scene, part_meshes(scene, meshes))
         if self.geometry is not None and self.geometry.fingerprint == key:
             return self.geometry, self.embree, False
-        geometry = build_geometry(scene, meshes)
+        geometry = build_geometry(scene, meshes, key)
         embree = EmbreeScene(geometry.vertices, geometry.triangles)
         from .overlap import check_lens_overlap  # needs the Embree scene
         check_lens_overlap(scene, geometry, embree)

@@ -120,3 +120,11 @@ def test_freeform_is_not_part_of_lamp_scene_1():
     doc = {**DESIGN, "schema": "lamp-scene/1"}
     with pytest.raises(SceneError, match="freeform: unknown key"):
         parse_scene(doc)
+
+
+def test_cli_validates_the_pair(tmp_path):
+    path = write_design(tmp_path)
+    proc = run_cli("validate", path)
+    assert proc.returncode == 0, proc.stderr
+    triangles = sum(len(m.triangles) for m in lamp_meshes())
+    assert f'valid lamp-scene/2, "Mesh lamp", 5 free-form parts ({triangles} triangles)' in proc.stdout
