@@ -183,7 +183,10 @@ class _Band:
 def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = None, height: int | None = None,
                   *, progress: Callable[[float], None] | None = None,
                   should_stop: Callable[[], bool] | None = None, samples: int | None = None,
-                  geometry_cache: GeometryCache | None = None, threads: int | None = None,
+                  geometry_cache: GeometryCache | None = None,
+                  on_rows: Callable[[int, int, np.ndarray], None] | None = None,
+                  on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
+                  threads: int | None = None,
                   record_transitions: bool = False,
                   filter_name: str = pixel_filter.DEFAULT_FILTER) -> RenderResult:
     """Render a free-form design (a normalised scene with a ``freeform`` section and its meshes by
@@ -191,8 +194,10 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
 
     ``geometry_cache`` keeps the checked geometry and Embree scene between calls (built again only
     when the meshes or roles change); ``stats["build_seconds"]`` is the build time of this call
-    (0 when reused). Raises ``SceneError`` for a bad mesh or role, ``RenderCancelled`` when
-    ``should_stop()`` (polled between bands) says so."""
+    (0 when reused). ``on_rows(row_start, row_stop, rows)`` and ``on_band(row_start, row_stop, rows,
+    pass_rows)`` are called from the calling thread as bands finish, as in the parametric tracer.
+    Raises ``SceneError`` for a bad mesh or role, ``RenderCancelled`` when ``should_stop()`` (polled
+    between bands) says so."""
     start = time.perf_counter()
     cache = geometry_cache if geometry_cache is not None else GeometryCache()
     geometry, embree, built = cache.get(scene, meshes)
@@ -226,6 +231,12 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
                 if should_stop():
                     raise RenderCancelled("render cancelled")
                 passes[:, y0:y1] = band.acc.reshape(len(PASS_NAMES), y1 - y0, width, 3)
+                if on_rows is not None or on_band is not None:
+                    rows = passes[:, y0:y1].sum(axis=0)
+                    if on_rows is not None:
+                        on_rows(y0, y1, rows)
+                    if on_band is not None:
+                        on_band(y0, y1, rows, {name: passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)})
                 stats["segments"] += band.segments
                 stats["max_depth"] = max(stats["max_depth"], band.max_depth)
                 stats["transitions"] |= band.transitions

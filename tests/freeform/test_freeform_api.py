@@ -55,11 +55,18 @@ def test_geometry_is_built_once_per_geometry_change():
 
 def test_passes_sum_to_the_image_and_progress_reaches_one():
     scene, meshes = small_design()
-    seen = []
-    result = render_passes(scene, meshes, progress=seen.append)
+    seen, bands = [], []
+
+    def on_band(y0, y1, rows, passes):
+        bands.append((y0, y1, rows.copy(), passes["bulb"].copy()))
+
+    result = render_passes(scene, meshes, 2000, 40, progress=seen.append, on_band=on_band)  # 2 bands
     assert set(result.passes) == set(PASS_NAMES)
     np.testing.assert_allclose(sum(result.passes.values()), result.image, rtol=1e-6, atol=1e-7)
-    assert seen and seen[-1] == 1.0 and seen == sorted(seen)
+    assert seen and seen[-1] == 1.0 and seen == sorted(seen) and len(seen) == len(bands) > 1
+    for y0, y1, rows, bulb in bands:
+        np.testing.assert_array_equal(rows, result.image[y0:y1])
+        np.testing.assert_array_equal(bulb, result.passes["bulb"][y0:y1])
     for name in ("lens_surface", "bulb", "reflector_constant", "reflector_scatter", "body"):
         assert result.passes[name].max() > 0, name
 
