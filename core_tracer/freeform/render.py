@@ -122,7 +122,7 @@ class _Parts:
         # bulb: in a multi-lamp design each reflector sees its own bulb, as in the parametric lamp.
         self.bulb_center = np.zeros((len(bulbs), 3))
         for b, i in enumerate(bulbs):
-            c = geometry.corners[geometry.part == i]
+            c = geometry.corners(geometry.part == i)
             area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
             self.bulb_center[b] = (c.mean(axis=1) * area[:, None]).sum(axis=0) / max(area.sum(), 1e-300)
         self.bulb_intensity = self.color[bulbs] if bulbs else np.zeros((0, 3))
@@ -130,7 +130,7 @@ class _Parts:
         for i, part in enumerate(parts):
             if part["role"] != "reflector" or not bulbs:
                 continue
-            c = geometry.corners[geometry.part == i].reshape(-1, 3)
+            c = geometry.corners(geometry.part == i).reshape(-1, 3)
             lo, hi = c.min(axis=0), c.max(axis=0)
             inside = np.all((self.bulb_center >= lo) & (self.bulb_center <= hi), axis=1)
             if inside.any():
@@ -318,7 +318,7 @@ def _hit_point(g: Geometry, o: np.ndarray, d: np.ndarray, t: np.ndarray, tri: np
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The hit in double precision on the triangle's plane (Embree's distance is single precision):
     distance, point and barycentric weights (3 per ray) of the corners there."""
-    c = g.corners[tri]
+    c = g.corners(tri)
     n = g.normal[tri]
     denom = optics.dot(d, n)
     plane_t = optics.dot(c[:, 0] - o, n) / np.where(denom != 0.0, denom, 1.0)
