@@ -28,10 +28,10 @@ from ..raytrace import optics, pixel_filter
 from ..raytrace import paths as P
 from ..raytrace.camera import Camera, eye_rays, make_camera
 from ..raytrace.tracer import CUTOFF, MAX_DEPTH, PASS_NAMES, RenderCancelled, RenderResult
-from ..scene.derived import lens_absorption
 from .embree import EmbreeScene
 from .geometry import BODY, Geometry, GeometryCache
 from .meshes import MeshData
+from .roles import PartTable
 
 (LENS_SURFACE, BULB_PASS, REFLECTOR_CONSTANT, REFLECTOR_SCATTER, SOCKET_PASS, SIDE_WALL_PASS, BODY_PASS,
  BACKGROUND_PASS) = range(len(PASS_NAMES))
@@ -84,68 +84,12 @@ def _concat(parts: list[_Rays]) -> _Rays:
     return _Rays(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
 
 
-class _Parts:
-    """Every part's role values as arrays indexed by part number."""
-
-    def __init__(self, scene: dict, geometry: Geometry):
-        parts = scene["freeform"]["parts"]
-        n = len(parts)
-        self.ior = np.ones(n)
-        self.absorption = np.zeros((n, 3))
-        self.color = np.zeros((n, 3))  # diffuse / constant / terminal colour of the role
-        self.specular = np.zeros(n)
-        self.shininess = np.zeros(n)
-        self.reflectance = np.zeros(n)
-        self.scatter = np.zeros(n)
-        bulbs = []
-        for i, part in enumerate(parts):
-            v = part[part["role"]]
-            role = part["role"]
-            if role == "lens":
-                self.ior[i] = v["ior"]
-                self.absorption[i] = lens_absorption(v)
-                self.color[i] = v["diffuse_color"]
-                self.specular[i], self.shininess[i] = v["specular"], v["shininess"]
-            elif role == "reflector":
-                self.color[i] = v["color"]
-                self.reflectance[i], self.scatter[i], self.shininess[i] = v["reflectance"], v["scatter"], v["shininess"]
-            elif role == "bulb":
-                self.color[i] = v["intensity"] if v["on"] else (0.0, 0.0, 0.0)
-                bulbs.append(i)
-            elif role in ("socket", "side_wall"):
-                self.color[i] = v["color"]
-            elif role == "body":
-                self.color[i] = v["color"]
-                self.specular[i], self.shininess[i] = v["specular"], v["shininess"]
-        # A bulb's centre is its mesh's centroid (area-weighted over the surface). Each reflector
-        # scatters toward the bulbs whose centre lies in its bounding box, else toward the nearest
-        # bulb: in a multi-lamp design each reflector sees its own bulb, as in the parametric lamp.
-        self.bulb_center = np.zeros((len(bulbs), 3))
-        for b, i in enumerate(bulbs):
-            c = geometry.corners(geometry.part == i)
-            area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
-            self.bulb_center[b] = (c.mean(axis=1) * area[:, None]).sum(axis=0) / max(area.sum(), 1e-300)
-        self.bulb_intensity = self.color[bulbs] if bulbs else np.zeros((0, 3))
-        self.bulbs_of = np.zeros((n, max(1, len(bulbs))), bool)  # [reflector part, bulb]
-        for i, part in enumerate(parts):
-            if part["role"] != "reflector" or not bulbs:
-                continue
-            c = geometry.corners(geometry.part == i).reshape(-1, 3)
-            lo, hi = c.min(axis=0), c.max(axis=0)
-            inside = np.all((self.bulb_center >= lo) & (self.bulb_center <= hi), axis=1)
-            if inside.any():
-                self.bulbs_of[i, : len(bulbs)] = inside
-            else:
-                centre = (lo + hi) / 2
-                self.bulbs_of[i, int(np.argmin(np.linalg.norm(self.bulb_center - centre, axis=1)))] = True
-
-
 class _Context:
     def __init__(self, scene: dict, camera: Camera, geometry: Geometry, embree: EmbreeScene, samples: int,
                  filter_name: str, record: bool):
         self.camera, self.geometry, self.embree = camera, geometry, embree
         self.samples, self.filter_name, self.record = samples, filter_name, record
-        self.parts = _Parts(scene, geometry)
+        self.parts = PartTable(scene, geometry)
         light = scene["light"]
         self.light_dir = optics.normalize(np.asarray(light["direction"], np.float64))
         self.light_color = np.asarray(light["color"], np.float64)
