@@ -28,6 +28,7 @@ from .. import fileio
 from ..images import display
 from ..images.display import ViewTransform
 from ..scene.derived import without_defaults
+from ..scene.freeform_section import freeform_without_defaults
 from ..scene.reading import SceneError, read_json, scene_to_json
 from ..scene.safe_text import printable
 from ..scene.validate import normalize, parse_scene
@@ -142,7 +143,10 @@ def _parse(path: str) -> dict:
     except SceneError as e:  # named by the file; a repeated key also by its field
         field = e.path[len(path) + 2:] if e.path.startswith(path + ": ") else ""
         raise SceneError(field, e.message) from None
-    return parse_scene(doc)
+    scene = parse_scene(doc)
+    if "freeform" in scene:
+        _check_mesh_file(path, scene)
+    return scene
 
 
 def load_preset(path: str | os.PathLike) -> dict:
@@ -157,7 +161,15 @@ def load_preset(path: str | os.PathLike) -> dict:
 def digest(scene: dict) -> str:
     """The hash of a normalised scene that names its thumbnail. Fields at their defaults are left
     out, so a field added to the spec with a default leaves every existing hash as it was."""
-    return hashlib.sha256(scene_to_json(without_defaults(scene)).encode("utf-8")).hexdigest()[:16]
+    parametric = {key: value for key, value in scene.items() if key != "freeform"}
+    design = without_defaults(parametric)
+    if "freeform" in scene:
+        design["freeform"] = freeform_without_defaults(scene["freeform"])
+    else:
+        # A design without free-form parts is the lamp-scene/1 document it migrated from: hashed as
+        # that, so every thumbnail made before lamp-scene/2 keeps its name.
+        design["schema"] = "lamp-scene/1"
+    return hashlib.sha256(scene_to_json(design).encode("utf-8")).hexdigest()[:16]
 
 
 def _entry(library: Library, path: str, scene: dict) -> PresetEntry:
@@ -194,6 +206,18 @@ def list_library(library: Library) -> tuple[list[PresetEntry], list[PresetWarnin
             continue
         entries.append(_entry(library, path, scene))
     return entries, warnings
+
+
+def _check_mesh_file(path: str, scene: dict) -> None:
+    """A free-form preset's mesh file is data from whoever shared the library: a plain .glb name
+    beside the preset, not leading out of the library, within the size limit. Its contents are
+    read and checked (triangle limits, closed lenses) only when the preset is used."""
+    from ..freeform.loading import mesh_file_path
+
+    try:
+        mesh_file_path(path, scene["freeform"]["mesh_file"])
+    except SceneError as e:
+        raise SceneError("freeform.mesh_file", e.message) from None
 
 
 def list_presets(libraries: list[Library] | tuple[Library, ...]) -> tuple[list[PresetEntry], list[PresetWarning]]:
@@ -396,7 +420,13 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     target = os.fspath(path)
     scene = copy.deepcopy(entry.scene)
     scene["image"] = {"width": int(size), "height": int(size)}
-    image = render(scene, size, size)
+    if "freeform" in scene:  # the meshes are read and checked now, before they are used
+        from ..freeform import render_passes as render_freeform
+        from ..freeform.loading import load_meshes
+
+        image = render_freeform(scene, load_meshes(entry.file, scene), size, size).image
+    else:
+        image = render(scene, size, size)
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
     write_image(target, image, scene, view=view)
     stem = os.path.splitext(os.path.basename(entry.file))[0]
