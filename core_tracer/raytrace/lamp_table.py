@@ -3,6 +3,7 @@ the tracer (MODEL.md §3: lens, cuts, reflector, bulb, socket of each lamp)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,6 +21,9 @@ class LampTable:
     plane_b: np.ndarray  # y of the cut apexes
     pitch: np.ndarray
     cut_radius: np.ndarray  # rho of the lenslet spheres (inf for a flat inner face)
+    sawtooth: np.ndarray  # 1 where the cuts are saw-tooth ridges (parts.sawtooth), 0 for fish-eye
+    tooth_slope: np.ndarray  # tan of the saw-tooth facets' angle to the lens plane
+    ridge_across: np.ndarray  # (L, 2) [x, z] unit vector across the ridges, the way the facets rise
     ior: np.ndarray
     absorption: np.ndarray  # (L, 3) per mm
     wall_color: np.ndarray  # (L, 3)
@@ -46,9 +50,13 @@ class LampTable:
             g = lamp_geometry(lamp)
             lens, cuts, refl, bulb = lamp["lens"], lamp["cuts"], lamp["reflector"], lamp["bulb"]
             h = cuts["height"]
+            saw = cuts.get("type", "fisheye") == "sawtooth"
+            ridge = math.radians(cuts.get("orientation", 0.0))
             rows.append(dict(
                 center=lamp["center"], radius=lens["radius"], plane_a=g["plane_a"], plane_b=g["plane_b"],
-                pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 else np.inf,
+                pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 and not saw else np.inf,
+                sawtooth=float(saw), tooth_slope=math.tan(math.radians(cuts.get("tooth_angle", 0.0))),
+                ridge_across=[-math.sin(ridge), math.cos(ridge)],
                 ior=lens["ior"], absorption=lens_absorption(lens), wall_color=lens["side_wall_color"],
                 lens_diffuse=lens["diffuse_color"], lens_specular=lens["specular"],
                 lens_shininess=lens["shininess"], focal=refl["focal_length"], rim=g["rim"], vertex=g["vertex"],

@@ -123,11 +123,24 @@ def cut_sphere_radius(pitch: float, height: float) -> float:
     return (c * c + height * height) / (2.0 * height)
 
 
+def tooth_height(pitch: float, tooth_angle_deg: float) -> float:
+    """Height of a saw-tooth ridge: its inclined facet rises at the tooth angle across one pitch
+    to a return facet perpendicular to the lens plane (README, model: where the paper is silent)."""
+    return pitch * math.tan(math.radians(tooth_angle_deg))
+
+
+def cut_depth(cuts: dict) -> float:
+    """Distance from plane A (the cut base) to plane B (the apexes) for either cut type."""
+    if cuts.get("type", "fisheye") == "sawtooth":
+        return tooth_height(cuts["pitch"], cuts["tooth_angle"])
+    return cuts["height"]
+
+
 def lamp_geometry(lamp: dict) -> dict:
     """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3)."""
     R = lamp["lens"]["radius"]
     t = lamp["lens"]["thickness"]
-    h = lamp["cuts"]["height"]
+    h = cut_depth(lamp["cuts"])
     f = lamp["reflector"]["focal_length"]
     y_apex = t + h
     y_rim = y_apex + lamp["reflector"]["gap"]

@@ -315,17 +315,31 @@ LENS = Section(
         doc="How the lens colour is given"),),
 )
 
+CUT_TYPES = ("fisheye", "sawtooth")
+# mm: the highest saw-tooth ridge (pitch x tan(tooth angle)), as for the fish-eye cut height.
+MAX_TOOTH_HEIGHT = 100.0
+
 CUTS = Section(
     {
         "pitch": _length(9.0,
-                         "Size of the fish-eye cuts: the side of each square cell, at most the lens diameter "
-                         "(pitch p)", hi=1000.0),
+                         "Size of the cuts: the side of each fish-eye cell, or the spacing of the saw-tooth "
+                         "ridges; at most the lens diameter (pitch p)", hi=1000.0),
         "height": Num(1.5, 0.0, 100.0, unit="mm",
                       doc="Depth of each fish-eye cut: deeper spreads the light more; 0 is a flat inner face; "
                           "at most pitch / sqrt 2, a hemisphere (h)",
                       subtype="distance"),
+        "type": Choice("fisheye", CUT_TYPES,
+                       "Shape of the cuts: fisheye, a square grid of spherical lenslets (the paper's), or "
+                       "sawtooth, parallel prismatic ridges that bend the light to one side"),
+        "tooth_angle": Num(20.0, 0.0, 60.0, unit="deg",
+                           doc="Saw-tooth: slope of each ridge's inclined facet from the lens plane: steeper "
+                               "bends the light further; 0 is a flat inner face; the ridges stand "
+                               "pitch x tan(angle) high, at most 100 mm"),
+        "orientation": Num(0.0, -180.0, 180.0, unit="deg",
+                           doc="Saw-tooth: direction of the ridges in the lens plane, from +x toward +z "
+                               "(0: horizontal ridges whose facets rise toward +z)"),
     },
-    "Fish-eye (spherical) cuts on the inner face of the lens",
+    "The cuts on the inner face of the lens: fish-eye (spherical) or saw-tooth (prismatic ridges)",
 )
 
 REFLECTOR = Section(

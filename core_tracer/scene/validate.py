@@ -18,7 +18,7 @@ import os
 from typing import Any
 
 from . import spec as S
-from .derived import default_camera, default_value, fill_alternative, lamp_geometry
+from .derived import default_camera, default_value, fill_alternative, lamp_geometry, tooth_height
 from .reading import HugeNumber, SceneError, read_json
 from .safe_text import has_surrogate, printable, show_key
 
@@ -219,7 +219,9 @@ def check_geometry(scene: dict) -> None:
         if pitch < 2 * R / S.MAX_CUTS_ACROSS:
             raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is too fine for lens radius {R:g} mm; {pitch_range}")
         c = pitch / math.sqrt(2.0)
-        if h > c:
+        if lamp["cuts"]["type"] == "sawtooth":
+            _check_teeth(lamp["cuts"], where)
+        elif h > c:
             raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "
                              f"allowed [0, {_rounded(c, False)}] mm (pitch / sqrt 2)")
         g = lamp_geometry(lamp)
@@ -229,6 +231,21 @@ def check_geometry(scene: dict) -> None:
         rs = lamp["socket"]["radius"]
         if rs >= R:
             raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {R:g}) mm")
+
+
+def _max_tooth_angle(pitch: float) -> float:
+    """The steepest tooth angle (deg) whose ridges stand at most ``MAX_TOOTH_HEIGHT`` high."""
+    return min(S.CUTS.fields["tooth_angle"].hi, math.degrees(math.atan(S.MAX_TOOTH_HEIGHT / pitch)))
+
+
+def _check_teeth(cuts: dict, where: str) -> None:
+    """Saw-tooth ridges stand pitch x tan(tooth angle) high, at most ``MAX_TOOTH_HEIGHT``."""
+    pitch, angle = cuts["pitch"], cuts["tooth_angle"]
+    if tooth_height(pitch, angle) > S.MAX_TOOTH_HEIGHT:
+        raise SceneError(f"{where}.cuts.tooth_angle",
+                         f"{angle:g} makes ridges {tooth_height(pitch, angle):.4g} mm high at pitch {pitch:g} mm; "
+                         f"allowed [0, {_rounded(_max_tooth_angle(pitch), False)}] deg (ridges at most "
+                         f"{S.MAX_TOOTH_HEIGHT:g} mm high)")
 
 
 def _lens_outside_body(scene: dict, i: int) -> None:
@@ -374,6 +391,8 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     limits = {
         "cuts.height": f"at most {_rounded(pitch / math.sqrt(2.0), False)} mm for pitch {pitch:g} mm "
                        "(pitch / sqrt 2)",
+        "cuts.tooth_angle": f"at most {_rounded(_max_tooth_angle(pitch), False)} deg for pitch {pitch:g} mm "
+                            f"(ridges at most {S.MAX_TOOTH_HEIGHT:g} mm high)",
         "cuts.pitch": f"at most {2 * R:g} mm, the lens diameter",
         "socket.radius": f"less than {R:g} mm, the lens radius",
     }
