@@ -341,6 +341,8 @@ CUTS = Section(
     },
     "The cuts on the inner face of the lens: fish-eye (spherical) or saw-tooth (prismatic ridges)",
 )
+# The fields of the cuts that each type uses (an editor shows only these).
+CUT_TYPE_FIELDS = {"fisheye": ("pitch", "height"), "sawtooth": ("pitch", "tooth_angle", "orientation")}
 
 REFLECTOR = Section(
     {

@@ -272,6 +272,10 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     surface is the open collar the tracer also has). The glass is closed (watertight). At most
     ``max_subdivision`` quads per cell side (a lighter preview when smaller than the tolerance needs).
     """
+    if lamp["cuts"].get("type", "fisheye") == "sawtooth":  # planar facets, exact: a module of their own
+        from .sawtooth_mesh import sawtooth_lens_mesh
+
+        return sawtooth_lens_mesh(lamp, segments, tol)
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))
