@@ -1,0 +1,116 @@
+"""A saw-tooth lamp in Blender: its lens built on the analytic facets (written out here again from
+the README's model, not taken from the mesh code), the Cuts panel showing the type's fields and
+the tooth angle's limit, and the rebuild when the cut type changes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers import PRESETS
+from test_addon_panels import _status, draw
+
+pytestmark = pytest.mark.blender
+
+VERTEX_TOL_MM = 1e-3  # float32 metres
+
+
+def _lens(bl_scene):
+    coll = next(c for c in bl_scene.collection.children if c.name.startswith("Lamp Design"))
+    return next(obj for obj in coll.objects if obj.name.endswith("Lens"))
+
+
+def _build(lamp_addon, bl_scene, scene: dict) -> None:
+    import bpy
+
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+
+
+@pytest.mark.parametrize("orientation", [0.0, 30.0, -115.0])
+def test_the_lens_is_built_on_the_analytic_facets(lamp_addon, addon_core, bl_scene, orientation):
+    scene = addon_core.scene.load_scene(PRESETS / "sawtooth-stop-lamp.json")
+    lamp = scene["lamps"][0]
+    lamp["cuts"]["orientation"] = orientation
+    _build(lamp_addon, bl_scene, scene)
+    mesh = _lens(bl_scene).data
+    R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
+    p, alpha = lamp["cuts"]["pitch"], math.radians(lamp["cuts"]["tooth_angle"])
+    th = math.radians(orientation)
+    a = np.array([-math.sin(th), math.cos(th)])  # across the ridges, the way the facets rise
+    h = p * math.tan(alpha)
+
+    co = np.array([v.co[:] for v in mesh.vertices]) * 1000.0  # lamp-local mm (the lens sits on the axis)
+    mat = np.array([q.material_index for q in mesh.polygons])
+    normal = np.array([q.normal[:] for q in mesh.polygons])
+    center = np.array([q.center[:] for q in mesh.polygons]) * 1000.0
+    outer = (mat == 0) & (np.abs(center[:, 1]) < 1e-6)
+    facet_n = np.array([-math.sin(alpha) * a[0], math.cos(alpha), -math.sin(alpha) * a[1]])
+    inclined = (mat == 0) & ~outer & np.all(np.abs(normal - facet_n) < 1e-5, axis=1)
+    returns = (mat == 0) & ~outer & np.all(np.abs(normal - [a[0], 0.0, a[1]]) < 1e-5, axis=1)
+    assert outer.sum() == 1 and np.array_equal(inclined | returns | outer, mat == 0)  # nothing else is glass
+
+    s_of = co[:, [0, 2]] @ a
+    for k in np.flatnonzero(inclined):
+        vi = list(mesh.polygons[k].vertices)
+        strip = math.floor(float(center[k, [0, 2]] @ a) / p + 0.5)
+        y = t + math.tan(alpha) * (s_of[vi] - (strip - 0.5) * p)
+        assert np.abs(co[vi, 1] - y).max() < VERTEX_TOL_MM
+    for k in np.flatnonzero(returns):
+        vi = list(mesh.polygons[k].vertices)
+        border = (math.floor(float(s_of[vi].mean()) / p) + 0.5) * p
+        assert np.abs(s_of[vi] - border).max() < VERTEX_TOL_MM
+        assert sorted({round(y, 3) for y in co[vi, 1]}) == pytest.approx([t, t + h], abs=VERTEX_TOL_MM)
+    # The inclined facets cover the lens (the outer face, the rim polygon) once, without gaps or overlaps.
+    area = sum(mesh.polygons[k].area for k in np.flatnonzero(inclined)) * math.cos(alpha)
+    disk = mesh.polygons[int(np.flatnonzero(outer)[0])].area
+    assert area == pytest.approx(disk, rel=1e-6)
+    assert disk * 1e6 == pytest.approx(math.pi * R * R, rel=2e-3)  # a polygon within the chord tolerance
+    strips = math.floor(R / p + 0.5) - math.floor(-R / p + 0.5) + 1
+    assert inclined.sum() == strips and returns.sum() == strips - 1
+    assert not any(mesh.polygons[k].use_smooth for k in np.flatnonzero(mat == 0))  # planar: flat shaded
+    assert co[:, 1].max() == pytest.approx(t + h, abs=VERTEX_TOL_MM)  # the collar up to the apex plane
+
+
+def test_changing_the_cut_type_rebuilds_the_lens_and_back(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
+    _build(lamp_addon, bl_scene, scene)
+    fisheye = np.array([v.co[:] for v in _lens(bl_scene).data.vertices])
+    design = bl_scene.lamp_design
+    design.lamps[0].cuts.type = "sawtooth"
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    saw = _lens(bl_scene).data
+    assert len(saw.vertices) < len(fisheye) / 4  # one polygon per facet
+    design.lamps[0].cuts.tooth_angle = 30.0
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    ys = np.array([v.co[1] for v in _lens(bl_scene).data.vertices]) * 1000.0
+    assert ys.max() == pytest.approx(3.0 + 9.0 * math.tan(math.radians(30.0)), abs=1e-3)
+    design.lamps[0].cuts.type = "fisheye"
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    assert np.array_equal(np.array([v.co[:] for v in _lens(bl_scene).data.vertices]), fisheye)
+
+
+def test_the_cuts_panel_shows_the_saw_tooth_fields_and_the_tooth_angle_limit(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    design = bl_scene.lamp_design
+    shown = draw(bpy.types.LAMP_PT_cuts, bl_scene)
+    assert [e[2] for e in shown.props()] == ["type", "pitch", "height"]
+    design.lamps[0].cuts.type = "sawtooth"
+    design.lamps[0].cuts.pitch = 90.0
+    shown = draw(bpy.types.LAMP_PT_cuts, bl_scene)
+    assert [e[2] for e in shown.props()] == ["type", "pitch", "tooth_angle", "orientation"]
+    assert "At most 48.01 deg for pitch 90 mm (ridges at most 100 mm high)" in shown.labels()
+    assert "ridges" in design.lamps[0].cuts.bl_rna.properties["orientation"].description
+
+    design.lamps[0].cuts.tooth_angle = 55.0  # too steep at this pitch: named, with its range
+    props, labels = _status(bl_scene).alerts()
+    assert props == ["lamps[0].cuts.tooth_angle"]
+    assert "allowed [0, 48.01] deg" in " ".join(labels)
+    sub_props, _ = draw(bpy.types.LAMP_PT_cuts, bl_scene).alerts()
+    assert sub_props == ["lamps[0].cuts.tooth_angle"]
