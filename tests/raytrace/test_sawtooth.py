@@ -15,7 +15,7 @@ from core_tracer.raytrace import paths as P
 from core_tracer.raytrace.lamp_table import LampTable
 from core_tracer.raytrace.parts import base, cut_surface, cuts, sawtooth, side_wall
 from core_tracer.raytrace.parts.base import Segments
-from core_tracer.raytrace.tracer import render
+from core_tracer.raytrace.tracer import render, render_passes
 from core_tracer.scene.validate import parse_scene
 
 R, T = 45.0, 3.0
@@ -197,3 +197,15 @@ def test_cuts_module_is_untouched_by_the_dispatch_without_sawtooth():
     t, nrm = cut_surface.intersect(rays, lamps, np.array([np.inf]))
     assert t[0] == t_fish[0] and np.array_equal(nrm, n_fish)
     assert cut_surface.SURFACE == sawtooth.SURFACE == cuts.SURFACE and sawtooth.MEDIA == cuts.MEDIA
+
+
+def test_steep_teeth_reach_the_cut_to_cut_paths_and_stay_in_table_1():
+    """Between a facet and the next strip's return facet a ray meets the cut twice, in the lens (⑧)
+    and in the air (⑨); every transition is still one of Table 1's."""
+    scene = scene_with(**{"lamps[0].cuts.type": "sawtooth", "lamps[0].cuts.tooth_angle": 35.0,
+                          "lamps[0].cuts.pitch": 5.0, "lamps[0].cuts.orientation": 20.0, "lamps[0].lens.ior": 1.7})
+    result = render_passes(scene, 96, 96, record_transitions=True)
+    seen = result.stats["transitions"]
+    assert not [t for t in seen if not P.allowed(*t)]
+    assert {c for *_, c in seen} >= {2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}
+    assert np.all(np.isfinite(result.image)) and np.all(result.image >= 0)
