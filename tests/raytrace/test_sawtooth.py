@@ -209,3 +209,12 @@ def test_steep_teeth_reach_the_cut_to_cut_paths_and_stay_in_table_1():
     assert not [t for t in seen if not P.allowed(*t)]
     assert {c for *_, c in seen} >= {2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}
     assert np.all(np.isfinite(result.image)) and np.all(result.image >= 0)
+
+
+def test_a_zero_tooth_angle_is_the_flat_inner_face_of_a_zero_cut_height():
+    """Both cut types degenerate to the same flat inner face at plane A: the same image, bit for bit."""
+    size = {"image": {"width": 48, "height": 32}}
+    flat = render(scene_with(**size, **{"lamps[0].cuts.height": 0.0}))
+    saw = render(scene_with(**size, **{"lamps[0].cuts.type": "sawtooth", "lamps[0].cuts.tooth_angle": 0.0,
+                                       "lamps[0].cuts.orientation": 33.0}))
+    assert np.array_equal(saw, flat)
