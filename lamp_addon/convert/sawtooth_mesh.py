@@ -91,17 +91,20 @@ class _Loop:
         self.points.append((x, z, b, top, foot) if rising else (x, z, b, foot, top))
 
 
-def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
+                       rim: np.ndarray | None = None) -> MeshData:
     """The lens solid of a saw-tooth lamp, relative to its axis: outer disk at y = 0, one flat
     polygon per inclined facet and per return facet, the side wall from y = 0 to the cut surface
     and the open collar above it up to the apex plane (material ``LENS_SIDE_WALL``), as
-    ``meshes.lens_mesh`` for fish-eye cuts. ``max_deviation`` is the measured distance of the
-    facets' vertices from their analytic planes and of the side wall from the cylinder."""
+    ``meshes.lens_mesh`` for fish-eye cuts. ``rim`` is the lens outline, any convex polygon
+    counter-clockwise seen from -y (default: the round lens's ``rim_polygon(R, segments)``).
+    ``max_deviation`` is the measured distance of the facets' vertices from their analytic planes
+    and of the side wall from the cylinder of the round lens."""
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     cuts = lamp["cuts"]
     p, across = cuts["pitch"], ridge_across(cuts["orientation"])
     h = tooth_height(p, cuts["tooth_angle"])
-    loop = _Loop(rim_polygon(R, segments), across, t, p, h)
+    loop = _Loop(rim_polygon(R, segments) if rim is None else rim, across, t, p, h)
     mb = _MeshBuilder()
     ids = [(mb.vertex(x, ya, z), mb.vertex(x, yl, z)) for x, z, _, ya, yl in loop.points]
     n = len(ids)

@@ -114,3 +114,49 @@ def test_the_cuts_panel_shows_the_saw_tooth_fields_and_the_tooth_angle_limit(lam
     assert "allowed [0, 48.01] deg" in " ".join(labels)
     sub_props, _ = draw(bpy.types.LAMP_PT_cuts, bl_scene).alerts()
     assert sub_props == ["lamps[0].cuts.tooth_angle"]
+
+
+def _polygon_area(xz: np.ndarray) -> float:
+    x, z = xz[:, 0], xz[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(z, -1)) - np.dot(z, np.roll(x, -1)))
+
+
+@pytest.mark.parametrize("outline", ["round", "square", "hexagon"])
+def test_the_glass_is_closed_and_the_facets_cover_any_convex_outline(lamp_addon, addon_core, outline):
+    """The lens glass (outer face, facets, return facets, side wall below the cuts) is a closed
+    surface: every edge is shared by exactly two of its faces; the inclined facets cover the outline."""
+    import collections
+    import importlib
+
+    mesh_module = importlib.import_module(f"{lamp_addon.__name__}.convert.sawtooth_mesh")
+    lamp = addon_core.scene.load_scene(PRESETS / "sawtooth-stop-lamp.json")["lamps"][0]
+    lamp["cuts"]["orientation"] = 17.0
+    R = lamp["lens"]["radius"]
+    corners = {"round": 64, "square": 4, "hexagon": 6}[outline]
+    a = 2 * np.pi * np.arange(corners) / corners + (0.3 if corners < 64 else 0.0)
+    rim = np.column_stack([R * np.cos(a), R * np.sin(a)])
+    data = mesh_module.sawtooth_lens_mesh(lamp, 64, rim=rim)
+    v = data.verts
+    glass = [f for f, m in zip(data.faces, data.material, strict=True)
+             if m == 0 or v[list(f), 1].min() == 0.0]  # the side wall's glass part reaches y = 0
+    edges = collections.Counter(tuple(sorted((f[i], f[(i + 1) % len(f)]))) for f in glass for i in range(len(f)))
+    assert set(edges.values()) == {2}
+    m = math.tan(math.radians(lamp["cuts"]["tooth_angle"]))
+    inclined = [f for f, mat in zip(data.faces, data.material, strict=True)
+                if mat == 0 and _is_inclined(v[list(f)], m)]
+    area = sum(abs(_polygon_area(v[list(f)][:, [0, 2]])) for f in inclined)
+    assert area == pytest.approx(_polygon_area(rim), rel=1e-9)
+    # every vertex of a facet on its strip's plane y = t + tan(alpha) (s - (k - 1/2) p)
+    t, p, th = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], math.radians(17.0)
+    for f in inclined:
+        q = v[list(f)]
+        s = q[:, 0] * -math.sin(th) + q[:, 2] * math.cos(th)
+        k = math.floor(float(s.mean()) / p + 0.5)
+        assert np.abs(q[:, 1] - t - m * (s - (k - 0.5) * p)).max() < 1e-9
+
+
+def _is_inclined(points: np.ndarray, slope: float) -> bool:
+    """A polygon whose plane rises at the facets' slope (not a vertical return facet)."""
+    n = np.cross(points[1] - points[0], points[2] - points[0])
+    return abs(n[1]) > 1e-9 * np.linalg.norm(n) and math.isclose(math.hypot(n[0], n[2]) / abs(n[1]), slope,
+                                                                   rel_tol=1e-6)
