@@ -127,9 +127,11 @@ def _diffuse_slot(part: str, name: str, color, node: str) -> Slot:
 
 def _cut_shape(cuts: dict) -> float | tuple:
     """What the lens mesh depends on besides pitch: the fish-eye cut height, or the saw-tooth's
-    type, tooth angle and orientation."""
+    type, tooth angle and orientation, or the flutes' height and orientation."""
     if cuts["type"] == "sawtooth":
         return ("sawtooth", cuts["tooth_angle"], cuts["orientation"])
+    if cuts["type"] == "flutes":
+        return ("flutes", cuts["height"], cuts["orientation"])
     return cuts["height"]
 
 
@@ -139,7 +141,7 @@ def cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
     A preview has at most ``preview_subdivision`` quads per side; the search for the full count then
     stops just past that (a deep cut's full search measures cells of up to 48 x 48 quads). Saw-tooth
     facets are planar: one polygon each, exact, the same in a preview."""
-    if lamp["cuts"]["type"] == "sawtooth":
+    if lamp["cuts"]["type"] in ("sawtooth", "flutes"):  # bands along the ridges: few faces, no preview
         return 1, False
     t, p, h = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     light = preview_subdivision(lamp["lens"]["radius"], p) if preview else meshes.MAX_CELL_SUBDIVISION

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene.derived import cut_sphere_radius, lamp_geometry, lens_absorption
+from ..scene.derived import cut_sphere_radius, flute_radius, lamp_geometry, lens_absorption
 
 
 @dataclass(frozen=True)
@@ -21,7 +21,9 @@ class LampTable:
     plane_b: np.ndarray  # y of the cut apexes
     pitch: np.ndarray
     cut_radius: np.ndarray  # rho of the lenslet spheres (inf for a flat inner face)
-    sawtooth: np.ndarray  # 1 where the cuts are saw-tooth ridges (parts.sawtooth), 0 for fish-eye
+    sawtooth: np.ndarray  # 1 where the cuts are saw-tooth ridges (parts.sawtooth), else 0
+    flutes: np.ndarray  # 1 where the cuts are cylindrical flutes (parts.flutes), else 0
+    flute_radius: np.ndarray  # radius of the flutes' cylinders (inf for a flat inner face)
     tooth_slope: np.ndarray  # tan of the saw-tooth facets' angle to the lens plane
     ridge_across: np.ndarray  # (L, 2) [x, z] unit vector across the ridges, the way the facets rise
     ior: np.ndarray
@@ -51,11 +53,15 @@ class LampTable:
             lens, cuts, refl, bulb = lamp["lens"], lamp["cuts"], lamp["reflector"], lamp["bulb"]
             h = cuts["height"]
             saw = cuts.get("type", "fisheye") == "sawtooth"
+            flutes = cuts.get("type", "fisheye") == "flutes"
             ridge = math.radians(cuts.get("orientation", 0.0))
             rows.append(dict(
                 center=lamp["center"], radius=lens["radius"], plane_a=g["plane_a"], plane_b=g["plane_b"],
-                pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 and not saw else np.inf,
-                sawtooth=float(saw), tooth_slope=math.tan(math.radians(cuts.get("tooth_angle", 0.0))),
+                pitch=cuts["pitch"],
+                cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 and not saw and not flutes else np.inf,
+                sawtooth=float(saw), flutes=float(flutes),
+                flute_radius=flute_radius(cuts["pitch"], h) if h > 0 else np.inf,
+                tooth_slope=math.tan(math.radians(cuts.get("tooth_angle", 0.0))),
                 ridge_across=[-math.sin(ridge), math.cos(ridge)],
                 ior=lens["ior"], absorption=lens_absorption(lens), wall_color=lens["side_wall_color"],
                 lens_diffuse=lens["diffuse_color"], lens_specular=lens["specular"],

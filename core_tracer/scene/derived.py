@@ -129,6 +129,11 @@ def tooth_height(pitch: float, tooth_angle_deg: float) -> float:
     return pitch * math.tan(math.radians(tooth_angle_deg))
 
 
+def flute_radius(pitch: float, height: float) -> float:
+    """Radius of a flute's cylinder: a circular arc of sag h across the pitch, (p^2/4 + h^2) / 2h."""
+    return (pitch * pitch / 4.0 + height * height) / (2.0 * height)
+
+
 def cut_depth(cuts: dict) -> float:
     """Distance from plane A (the cut base) to plane B (the apexes) for either cut type."""
     if cuts.get("type", "fisheye") == "sawtooth":

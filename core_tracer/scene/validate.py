@@ -221,6 +221,10 @@ def check_geometry(scene: dict) -> None:
         c = pitch / math.sqrt(2.0)
         if lamp["cuts"]["type"] == "sawtooth":
             _check_teeth(lamp["cuts"], where)
+        elif lamp["cuts"]["type"] == "flutes":
+            if h > pitch / 2:
+                raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a half cylinder for pitch {pitch:g}; "
+                                 f"allowed [0, {_rounded(pitch / 2, False)}] mm (pitch / 2)")
         elif h > c:
             raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "
                              f"allowed [0, {_rounded(c, False)}] mm (pitch / sqrt 2)")
@@ -388,9 +392,10 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     body, lamp = scene["body"], scene["lamps"][i]
     (bx, bz), (w, h) = body["center"], body["size"]
     R, pitch = lamp["lens"]["radius"], lamp["cuts"]["pitch"]
+    flutes = lamp["cuts"].get("type") == "flutes"
     limits = {
-        "cuts.height": f"at most {_rounded(pitch / math.sqrt(2.0), False)} mm for pitch {pitch:g} mm "
-                       "(pitch / sqrt 2)",
+        "cuts.height": f"at most {_rounded(pitch / (2.0 if flutes else math.sqrt(2.0)), False)} mm for pitch "
+                       f"{pitch:g} mm ({'pitch / 2' if flutes else 'pitch / sqrt 2'})",
         "cuts.tooth_angle": f"at most {_rounded(_max_tooth_angle(pitch), False)} deg for pitch {pitch:g} mm "
                             f"(ridges at most {S.MAX_TOOTH_HEIGHT:g} mm high)",
         "cuts.pitch": f"at most {2 * R:g} mm, the lens diameter",

@@ -276,6 +276,10 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
         from .sawtooth_mesh import sawtooth_lens_mesh
 
         return sawtooth_lens_mesh(lamp, segments, tol)
+    if lamp["cuts"].get("type", "fisheye") == "flutes":
+        from .flutes_mesh import flutes_lens_mesh
+
+        return flutes_lens_mesh(lamp, segments, tol)
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))

@@ -1,6 +1,7 @@
-"""A saw-tooth lamp in Blender: its lens built on the analytic facets (written out here again from
-the README's model, not taken from the mesh code), the Cuts panel showing the type's fields and
-the tooth angle's limit, and the rebuild when the cut type changes."""
+"""Saw-tooth and fluted lamps in Blender: their lenses built on the analytic surfaces (written out
+here again from the README's model, not taken from the mesh code) with closed glass, the Cuts
+panel showing the type's fields and the tooth angle's limit, and the rebuild when the cut type
+changes."""
 
 from __future__ import annotations
 
@@ -160,3 +161,63 @@ def _is_inclined(points: np.ndarray, slope: float) -> bool:
     n = np.cross(points[1] - points[0], points[2] - points[0])
     return abs(n[1]) > 1e-9 * np.linalg.norm(n) and math.isclose(math.hypot(n[0], n[2]) / abs(n[1]), slope,
                                                                    rel_tol=1e-6)
+
+
+@pytest.mark.parametrize("orientation", [0.0, 60.0])
+def test_a_fluted_lens_is_built_within_the_chord_tolerance_of_its_cylinders(lamp_addon, addon_core, bl_scene,
+                                                                           orientation):
+    scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
+    lamp = scene["lamps"][0]
+    lamp["cuts"].update(type="flutes", pitch=6.0, height=2.0, orientation=orientation)
+    _build(lamp_addon, bl_scene, scene)
+    mesh = _lens(bl_scene).data
+    t, p, h = lamp["lens"]["thickness"], 6.0, 2.0
+    rho = (p * p / 4 + h * h) / (2 * h)
+    th = math.radians(orientation)
+    a = np.array([-math.sin(th), math.cos(th)])
+    mat = np.array([q.material_index for q in mesh.polygons])
+    center = np.array([q.center[:] for q in mesh.polygons]) * 1000.0
+    cut = (mat == 0) & (np.abs(center[:, 1]) > 1e-6)
+    co = np.array([v.co[:] for v in mesh.vertices]) * 1000.0
+
+    def distance(q):
+        s = q[:, [0, 2]] @ a
+        u = s - np.floor(s / p + 0.5) * p
+        return np.abs(np.hypot(u, q[:, 1] - (t + h - rho)) - rho)
+
+    vi = np.unique(np.concatenate([mesh.polygons[k].vertices[:] for k in np.flatnonzero(cut)]))
+    # The bands span the lens: their corners are where the band lines (on the cylinders) cross the rim,
+    # and between them the rim polygon's corners, on the planar bands.
+    on_cylinder = distance(co[vi]) < VERTEX_TOL_MM
+    assert on_cylinder.mean() > 0.6 and distance(co[vi]).max() <= 0.05
+    mesh.calc_loop_triangles()
+    tris = np.array([tri.vertices[:] for tri in mesh.loop_triangles if cut[tri.polygon_index]])
+    w = np.array([(1 - i / 6 - j / 6, i / 6, j / 6) for i in range(7) for j in range(7 - i)])
+    samples = np.matmul(w, co[tris]).reshape(-1, 3)
+    assert distance(samples).max() <= 0.05  # the chord tolerance
+    assert all(mesh.polygons[k].use_smooth for k in np.flatnonzero(cut))  # smooth across a flute's bands
+    assert co[:, 1].max() == pytest.approx(t + h, abs=VERTEX_TOL_MM)
+
+
+@pytest.mark.parametrize("outline", ["round", "square"])
+def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, addon_core, outline):
+    import collections
+    import importlib
+
+    flutes_mesh = importlib.import_module(f"{lamp_addon.__name__}.convert.flutes_mesh")
+    lamp = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")["lamps"][0]
+    lamp["cuts"].update(type="flutes", pitch=7.0, height=2.5, orientation=-25.0)
+    meshes = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes")
+    corners = {"round": meshes.circle_segments(45.0), "square": 4}[outline]  # the round lens: within the tolerance
+    a = 2 * np.pi * np.arange(corners) / corners + (0.3 if corners == 4 else 0.0)
+    rim = np.column_stack([45.0 * np.cos(a), 45.0 * np.sin(a)])
+    data = flutes_mesh.flutes_lens_mesh(lamp, corners, rim=rim)
+    v = data.verts
+    glass = [f for f, m in zip(data.faces, data.material, strict=True) if m == 0 or v[list(f), 1].min() == 0.0]
+    edges = collections.Counter(tuple(sorted((f[i], f[(i + 1) % len(f)]))) for f in glass for i in range(len(f)))
+    assert set(edges.values()) == {2}
+    bands = [f for f, m in zip(data.faces, data.material, strict=True) if m == 0 and v[list(f), 1].min() > 0]
+    assert sum(abs(_polygon_area(v[list(f)][:, [0, 2]])) for f in bands) == pytest.approx(_polygon_area(rim),
+                                                                                           rel=1e-9)
+    if outline == "round":  # (the side wall is measured against the round lens's cylinder)
+        assert data.max_deviation <= 0.05

@@ -67,3 +67,15 @@ def test_the_command_line_refuses_bad_saw_tooth_fields_in_one_line(tmp_path, edi
     path.write_text(json.dumps(doc))
     assert_bad_input(run_cli("render", path, "-o", tmp_path / "x.png"), *needles)
     assert not (tmp_path / "x.png").exists()
+
+
+def test_flutes_deeper_than_a_half_cylinder_name_the_height_and_its_range():
+    doc = _doc()
+    doc["lamps"][0]["cuts"].update(type="flutes", pitch=8.0, height=4.5)  # fine for fish-eye (< 5.657)
+    with pytest.raises(SceneError) as info:
+        parse_scene(doc)
+    assert info.value.path == "lamps[0].cuts.height" and "allowed [0, 4] mm (pitch / 2)" in info.value.message
+    assert lamp_limits(doc, 0)["cuts.height"] == "at most 4 mm for pitch 8 mm (pitch / 2)"
+    doc["lamps"][0]["cuts"]["height"] = 4.0
+    lamp = parse_scene(doc)["lamps"][0]
+    assert lamp_geometry(lamp)["plane_b"] == lamp["lens"]["thickness"] + 4.0

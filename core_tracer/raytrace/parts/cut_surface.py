@@ -1,14 +1,14 @@
 """The lens's inner face whatever its cut type: each ray goes to the part of its lamp's cuts,
-fish-eye (``cuts``) or saw-tooth (``sawtooth``). Both are Table 1's cut face, so the Fresnel tree
-and the path classes do not depend on the cut type. A scene without saw-tooth lamps is handed
-to the fish-eye walk whole, exactly as before the cut types existed."""
+fish-eye (``cuts``), saw-tooth (``sawtooth``) or flutes (``flutes``). All are Table 1's cut face,
+so the Fresnel tree and the path classes do not depend on the cut type. A scene with fish-eye
+cuts only is handed to the fish-eye walk whole, exactly as before the cut types existed."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ..lamp_table import LampTable
-from . import cuts, sawtooth
+from . import cuts, flutes, sawtooth
 from .base import Segments
 
 SURFACE = cuts.SURFACE
@@ -16,14 +16,14 @@ MEDIA = cuts.MEDIA
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    if not lamps.sawtooth.any():
+    if not (lamps.sawtooth.any() or lamps.flutes.any()):
         return cuts.intersect(rays, lamps, t_limit)
-    saw = lamps.sawtooth[rays.lamp] != 0
-    if saw.all():
-        return sawtooth.intersect(rays, lamps, t_limit)
+    saw, flute = lamps.sawtooth[rays.lamp] != 0, lamps.flutes[rays.lamp] != 0
     t = np.full(len(saw), np.inf)
     normal = np.zeros((len(saw), 3))
-    for part, sel in ((cuts, ~saw), (sawtooth, saw)):
+    for part, sel in ((cuts, ~saw & ~flute), (sawtooth, saw), (flutes, flute)):
+        if sel.all():
+            return part.intersect(rays, lamps, t_limit)
         idx = np.nonzero(sel)[0]
         if len(idx):
             sub = Segments(rays.o[idx], rays.d[idx], rays.lamp[idx], rays.src[idx], rays.medium[idx])
