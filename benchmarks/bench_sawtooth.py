@@ -1,6 +1,7 @@
 """Saw-tooth cuts against fish-eye cuts: the four-lamp preset at 512x512 as shipped (fish-eye), with
 every lamp's cuts turned saw-tooth (its own pitch, tooth angle 20 deg, horizontal ridges), and with
-the two types mixed (lamps 1 and 3 saw-tooth). Renders are interleaved and the minimum of the
+the two types mixed (lamps 1 and 3 saw-tooth), and with cylindrical flutes of each lamp's own pitch
+and height. Renders are interleaved and the minimum of the
 repeats is reported, the steadiest figure on a shared machine; also the ray segments, since the
 saw-tooth optics send the rays on other paths (more total internal reflection), and the time per
 segment, which is what the strip walk itself costs.
@@ -40,8 +41,11 @@ def main() -> int:
 
     fish = core_tracer.load_scene(args.preset)
     n = len(fish["lamps"])
+    fluted = copy.deepcopy(fish)
+    for lamp in fluted["lamps"]:  # each lamp's own pitch and height, as cylindrical flutes
+        lamp["cuts"].update(type="flutes", orientation=0.0)
     cases = {"fish-eye": fish, "saw-tooth": with_sawtooth(fish, list(range(n)), args.angle),
-             "mixed": with_sawtooth(fish, list(range(0, n, 2)), args.angle)}
+             "mixed": with_sawtooth(fish, list(range(0, n, 2)), args.angle), "flutes": fluted}
     for scene in cases.values():
         core_tracer.render(scene, 64, 64)  # warm up
     best = {name: float("inf") for name in cases}
