@@ -239,7 +239,7 @@ def check_geometry(scene: dict) -> None:
 
 def _max_tooth_angle(pitch: float) -> float:
     """The steepest tooth angle (deg) whose ridges stand at most ``MAX_TOOTH_HEIGHT`` high."""
-    return min(S.CUTS.fields["tooth_angle"].hi, math.degrees(math.atan(S.MAX_TOOTH_HEIGHT / pitch)))
+    return min(S.CUTS.fields["tooth_angle"].hi, math.degrees(math.atan2(S.MAX_TOOTH_HEIGHT, pitch)))
 
 
 def _check_teeth(cuts: dict, where: str) -> None:
