@@ -52,6 +52,15 @@ def draw_rule(layout, group, rule: S.OneOf, status: design_validity.Status) -> N
         design_validity.draw_field(box, group, key, status)
 
 
+def draw_cuts(layout, group) -> None:
+    """The cuts: their type as a row of buttons, then only the fields that type uses."""
+    status = design_validity.status(group.id_data)
+    kind = design_properties.property_id("type")
+    layout.row().prop(group, kind, expand=True)
+    for key in S.CUT_TYPE_FIELDS[getattr(group, kind)]:
+        design_validity.draw_field(layout, group, design_properties.property_id(key), status)
+
+
 def active_lamp(context):
     design = context.scene.lamp_design
     if 0 <= design.active_lamps_index < len(design.lamps):
@@ -174,7 +183,11 @@ class _LampPartPanel(LampTab):
         return active_lamp(context) is not None
 
     def draw(self, context):
-        draw_section(self._split(self.layout), getattr(active_lamp(context), self.part), S.LAMP.fields[self.part])
+        group = getattr(active_lamp(context), self.part)
+        if self.part == "cuts":
+            draw_cuts(self._split(self.layout), group)
+        else:
+            draw_section(self._split(self.layout), group, S.LAMP.fields[self.part])
 
 
 def _make_part_panel(key: str, order: int) -> type:

@@ -115,7 +115,8 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     lens, cuts = lamp["lens"], lamp["cuts"]
     parts = [
         MeshPart(f"{base}.lens", f"{label} Lens",
-                  ("lens", lens_outline, lens["thickness"], cuts["pitch"], cuts["height"], n, CHORD_TOLERANCE_MM, k),
+                  ("lens", lens_outline, lens["thickness"], cuts["pitch"], _cut_shape(cuts), n, CHORD_TOLERANCE_MM,
+                   k),
                   partial(meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k, rim_local),
                   [Slot(f"{base}.lens", f"{label} Lens", partial(design_materials.lens_glass, lamp=lamp)),
                    _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
@@ -159,11 +160,24 @@ def _diffuse_slot(part: str, name: str, color, node: str) -> Slot:
     return Slot(part, name, partial(design_materials.diffuse, color=color, node_name=node))
 
 
+def _cut_shape(cuts: dict) -> float | tuple:
+    """What the lens mesh depends on besides pitch: the fish-eye cut height, or the saw-tooth's
+    type, tooth angle and orientation, or the flutes' height and orientation."""
+    if cuts["type"] == "sawtooth":
+        return ("sawtooth", cuts["tooth_angle"], cuts["orientation"])
+    if cuts["type"] == "flutes":
+        return ("flutes", cuts["height"], cuts["orientation"])
+    return cuts["height"]
+
+
 def cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
     """Quads per side of one lenslet cell, and whether that is fewer than the tolerance needs (a preview).
 
     A preview has at most ``preview_subdivision`` quads per side; the search for the full count then
-    stops just past that (a deep cut's full search measures cells of up to 48 x 48 quads)."""
+    stops just past that (a deep cut's full search measures cells of up to 48 x 48 quads). Saw-tooth
+    facets are planar: one polygon each, exact, the same in a preview."""
+    if lamp["cuts"]["type"] in ("sawtooth", "flutes"):  # bands along the ridges: few faces, no preview
+        return 1, False
     t, p, h = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     outline = Outline.of_lens(lamp["lens"])
     area_radius = outline.half_w if outline.round else math.sqrt(outline.area / math.pi)  # same cell count

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene.derived import cut_sphere_radius, lamp_geometry, lens_absorption, lens_cylinder
+from ..scene.derived import cut_sphere_radius, flute_radius, lamp_geometry, lens_absorption, lens_cylinder
 from .outline import Outline
 
 CYLINDER_KEYS = ("axis_x", "radius", "side", "base", "apex", "phi_center", "corner")
@@ -27,6 +27,11 @@ class LampTable:
     plane_b: np.ndarray  # y of the cut apexes
     pitch: np.ndarray
     cut_radius: np.ndarray  # rho of the lenslet spheres (inf for a flat inner face)
+    sawtooth: np.ndarray  # 1 where the cuts are saw-tooth ridges (parts.sawtooth), else 0
+    flutes: np.ndarray  # 1 where the cuts are cylindrical flutes (parts.flutes), else 0
+    flute_radius: np.ndarray  # radius of the flutes' cylinders (inf for a flat inner face)
+    tooth_slope: np.ndarray  # tan of the saw-tooth facets' angle to the lens plane
+    ridge_across: np.ndarray  # (L, 2) [x, z] unit vector across the ridges, the way the facets rise
     ior: np.ndarray
     absorption: np.ndarray  # (L, 3) per mm
     wall_color: np.ndarray  # (L, 3)
@@ -73,10 +78,18 @@ class LampTable:
             h = cuts["height"]
             cyl = lens_cylinder(lamp)
             shape = Outline.of_lens(lens)
+            saw = cuts.get("type", "fisheye") == "sawtooth"
+            flutes = cuts.get("type", "fisheye") == "flutes"
+            ridge = math.radians(cuts.get("orientation", 0.0))
             rows.append(dict(
                 center=lamp["center"], radius=lens["radius"], rectangular=0.0 if shape.round else 1.0,
                 half_size=[shape.half_w, shape.half_h], corner=shape.corner, plane_a=g["plane_a"], plane_b=g["plane_b"],
-                pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 else np.inf,
+                pitch=cuts["pitch"],
+                cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 and not saw and not flutes else np.inf,
+                sawtooth=float(saw), flutes=float(flutes),
+                flute_radius=flute_radius(cuts["pitch"], h) if h > 0 else np.inf,
+                tooth_slope=math.tan(math.radians(cuts.get("tooth_angle", 0.0))),
+                ridge_across=[-math.sin(ridge), math.cos(ridge)],
                 ior=lens["ior"], absorption=lens_absorption(lens), wall_color=lens["side_wall_color"],
                 lens_diffuse=lens["diffuse_color"], lens_specular=lens["specular"],
                 lens_shininess=lens["shininess"], focal=refl["focal_length"], rim=g["rim"], vertex=g["vertex"],

@@ -124,6 +124,24 @@ def cut_sphere_radius(pitch: float, height: float) -> float:
     return (c * c + height * height) / (2.0 * height)
 
 
+def tooth_height(pitch: float, tooth_angle_deg: float) -> float:
+    """Height of a saw-tooth ridge: its inclined facet rises at the tooth angle across one pitch
+    to a return facet perpendicular to the lens plane (README, model: where the paper is silent)."""
+    return pitch * math.tan(math.radians(tooth_angle_deg))
+
+
+def flute_radius(pitch: float, height: float) -> float:
+    """Radius of a flute's cylinder: a circular arc of sag h across the pitch, (p^2/4 + h^2) / 2h."""
+    return (pitch * pitch / 4.0 + height * height) / (2.0 * height)
+
+
+def cut_depth(cuts: dict) -> float:
+    """Distance from plane A (the cut base) to plane B (the apexes) for either cut type."""
+    if cuts.get("type", "fisheye") == "sawtooth":
+        return tooth_height(cuts["pitch"], cuts["tooth_angle"])
+    return cuts["height"]
+
+
 def lamp_geometry(lamp: dict) -> dict:
     """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3). The paraboloid meets
     the rim plane at the outline's reach (its farthest point from the axis, R for a round lens), so
@@ -132,7 +150,7 @@ def lamp_geometry(lamp: dict) -> dict:
     reflector's rim and the bulb stay behind the whole lens."""
     R = lens_reach(lamp["lens"])
     t = lamp["lens"]["thickness"]
-    h = lamp["cuts"]["height"]
+    h = cut_depth(lamp["cuts"])
     f = lamp["reflector"]["focal_length"]
     cyl = lens_cylinder(lamp)
     y_apex = t + h if cyl is None else cyl["deepest_apex"]

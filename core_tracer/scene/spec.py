@@ -344,18 +344,37 @@ LENS = Section(
                 ("wrap_radius", "shape", ("cylindrical",)), ("wrap_toward", "shape", ("cylindrical",))),
 )
 
+CUT_TYPES = ("fisheye", "sawtooth", "flutes")
+# mm: the highest saw-tooth ridge (pitch x tan(tooth angle)), as for the fish-eye cut height.
+MAX_TOOTH_HEIGHT = 100.0
+
 CUTS = Section(
     {
         "pitch": _length(9.0,
-                         "Size of the fish-eye cuts: the side of each square cell, at most the lens diameter "
-                         "(pitch p)", hi=1000.0),
+                         "Size of the cuts: the side of each fish-eye cell, or the spacing of the saw-tooth "
+                         "ridges; at most the lens diameter (pitch p)", hi=1000.0),
         "height": Num(1.5, 0.0, 100.0, unit="mm",
-                      doc="Depth of each fish-eye cut: deeper spreads the light more; 0 is a flat inner face; "
-                          "at most pitch / sqrt 2, a hemisphere (h)",
+                      doc="Depth of each fish-eye cut (or flute): deeper spreads the light more; 0 is a flat inner "
+                          "face; at most pitch / sqrt 2, a hemisphere (flutes: pitch / 2, a half cylinder) (h)",
                       subtype="distance"),
+        "type": Choice("fisheye", CUT_TYPES,
+                       "Shape of the cuts: fisheye, a square grid of spherical lenslets (the paper's); "
+                       "sawtooth, parallel prismatic ridges that bend the light to one side; or flutes, "
+                       "parallel cylindrical ridges that spread it across them"),
+        "tooth_angle": Num(20.0, 0.0, 60.0, unit="deg",
+                           doc="Saw-tooth: slope of each ridge's inclined facet from the lens plane: steeper "
+                               "bends the light further; 0 is a flat inner face; the ridges stand "
+                               "pitch x tan(angle) high, at most 100 mm"),
+        "orientation": Num(0.0, -180.0, 180.0, unit="deg",
+                           doc="Saw-tooth and flutes: direction of the ridges in the lens plane, from +x toward "
+                               "+z (0: horizontal ridges; saw-tooth facets then rise toward +z)"),
     },
-    "Fish-eye (spherical) cuts on the inner face of the lens",
+    "The cuts on the inner face of the lens: fish-eye (spherical), saw-tooth (prismatic ridges) or flutes "
+    "(cylindrical ridges)",
 )
+# The fields of the cuts that each type uses (an editor shows only these).
+CUT_TYPE_FIELDS = {"fisheye": ("pitch", "height"), "sawtooth": ("pitch", "tooth_angle", "orientation"),
+                   "flutes": ("pitch", "height", "orientation")}
 
 REFLECTOR = Section(
     {

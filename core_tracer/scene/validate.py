@@ -22,7 +22,15 @@ from typing import Any
 
 from ..raytrace.outline import Outline
 from . import spec as S
-from .derived import body_wraps, default_camera, default_value, fill_alternative, lamp_geometry, lens_cylinder
+from .derived import (
+    body_wraps,
+    default_camera,
+    default_value,
+    fill_alternative,
+    lamp_geometry,
+    lens_cylinder,
+    tooth_height,
+)
 from .freeform_section import finish_freeform
 from .reading import HugeNumber, SceneError, read_json
 from .safe_text import has_surrogate, printable, show_key
@@ -249,7 +257,13 @@ def check_geometry(scene: dict) -> None:
         if pitch < pitch_lo:
             raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is too fine for {fine}; {pitch_range}")
         c = pitch / math.sqrt(2.0)
-        if h > c:
+        if lamp["cuts"]["type"] == "sawtooth":
+            _check_teeth(lamp["cuts"], where)
+        elif lamp["cuts"]["type"] == "flutes":
+            if h > pitch / 2:
+                raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a half cylinder for pitch {pitch:g}; "
+                                 f"allowed [0, {_rounded(pitch / 2, False)}] mm (pitch / 2)")
+        elif h > c:
             raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "
                              f"allowed [0, {_rounded(c, False)}] mm (pitch / sqrt 2)")
         _check_cylinder(lamp, where)
@@ -290,6 +304,9 @@ def _check_cylinder(lamp: dict, where: str) -> None:
     if cyl is None:
         return
     lens, cuts = lamp["lens"], lamp["cuts"]
+    if cuts["type"] != "fisheye":  # the curved base's cell walk is the fish-eye grid's (README)
+        raise SceneError(f"{where}.cuts.type", f'"{cuts["type"]}" cuts are not made on a cylindrical lens; '
+                         'allowed "fisheye" (or lens.shape "flat")')
     R, t, h = -cyl["side"] * cyl["axis_x"], lens["thickness"], cuts["height"]
     need = 2 * R + t + h
     if cyl["apex"] <= 2 * R:
@@ -354,6 +371,21 @@ def _check_wraps(scene: dict) -> None:
             allowed = _interval(y_edge * 1.0001, S.BODY.fields["depth"].hi)
             raise SceneError("body.depth", f"{body['depth']:g} is shallower than the curved front at the body's side "
                                            f"({y_edge:.4g} mm); allowed {allowed} mm")
+
+
+def _max_tooth_angle(pitch: float) -> float:
+    """The steepest tooth angle (deg) whose ridges stand at most ``MAX_TOOTH_HEIGHT`` high."""
+    return min(S.CUTS.fields["tooth_angle"].hi, math.degrees(math.atan2(S.MAX_TOOTH_HEIGHT, pitch)))
+
+
+def _check_teeth(cuts: dict, where: str) -> None:
+    """Saw-tooth ridges stand pitch x tan(tooth angle) high, at most ``MAX_TOOTH_HEIGHT``."""
+    pitch, angle = cuts["pitch"], cuts["tooth_angle"]
+    if tooth_height(pitch, angle) > S.MAX_TOOTH_HEIGHT:
+        raise SceneError(f"{where}.cuts.tooth_angle",
+                         f"{angle:g} makes ridges {tooth_height(pitch, angle):.4g} mm high at pitch {pitch:g} mm; "
+                         f"allowed [0, {_rounded(_max_tooth_angle(pitch), False)}] deg (ridges at most "
+                         f"{S.MAX_TOOTH_HEIGHT:g} mm high)")
 
 
 def _lens_outside_body(scene: dict, i: int) -> None:
@@ -545,9 +577,12 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     (bx, bz), (w, h) = body["center"], body["size"]
     R, pitch = lamp["lens"]["radius"], lamp["cuts"]["pitch"]
     shape = Outline.of_lens(lamp["lens"])
+    flutes = lamp["cuts"].get("type") == "flutes"
     limits = {
-        "cuts.height": f"at most {_rounded(pitch / math.sqrt(2.0), False)} mm for pitch {pitch:g} mm "
-                       "(pitch / sqrt 2)",
+        "cuts.height": f"at most {_rounded(pitch / (2.0 if flutes else math.sqrt(2.0)), False)} mm for pitch "
+                       f"{pitch:g} mm ({'pitch / 2' if flutes else 'pitch / sqrt 2'})",
+        "cuts.tooth_angle": f"at most {_rounded(_max_tooth_angle(pitch), False)} deg for pitch {pitch:g} mm "
+                            f"(ridges at most {S.MAX_TOOTH_HEIGHT:g} mm high)",
         "cuts.pitch": f"at most {2 * R:g} mm, the lens diameter",
         "socket.radius": f"less than {R:g} mm, the lens radius",
     }

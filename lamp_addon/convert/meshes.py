@@ -326,6 +326,14 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     stands up to the reflector's edge, which lies behind the rim plane along the straight sides (README:
     the lens outline).
     """
+    if lamp["cuts"].get("type", "fisheye") == "sawtooth":  # planar facets, exact: a module of their own
+        from .sawtooth_mesh import sawtooth_lens_mesh
+
+        return sawtooth_lens_mesh(lamp, segments, tol, rim)
+    if lamp["cuts"].get("type", "fisheye") == "flutes":
+        from .flutes_mesh import flutes_lens_mesh
+
+        return flutes_lens_mesh(lamp, segments, tol, rim)
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     shape = Outline.of_lens(lamp["lens"])

@@ -170,8 +170,10 @@ def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
         design.lamps[2].lens.color_mode = mode
         design.lamps[2].lens.outline = outline
         design.lamps[2].lens.shape = shape
-        for cls in _panels(lamp_addon):
-            shown |= draw(cls, bl_scene).spec_paths()
+        for cut_type in S.CUT_TYPES:  # each type shows its own fields
+            design.lamps[2].cuts.type = cut_type
+            for cls in _panels(lamp_addon):
+                shown |= draw(cls, bl_scene).spec_paths()
     wanted = {info.path for info in S.iter_fields() if not lamp_addon.design_properties.is_constant(info.spec)}
     assert wanted - shown == set()
     assert shown - wanted == {"lamps[].lens.color_mode"}  # the only property that is not a scene field
@@ -184,7 +186,6 @@ def test_each_sub_panel_shows_its_section(lamp_addon, S, bl_scene, design):
         "LAMP_PT_body": ("body.", S.BODY),
         "LAMP_PT_light": ("light.", S.LIGHT),
         "LAMP_PT_camera": ("camera.", S.CAMERA),
-        "LAMP_PT_cuts": ("lamps[].cuts.", S.CUTS),
         "LAMP_PT_reflector": ("lamps[].reflector.", S.REFLECTOR),
         "LAMP_PT_bulb": ("lamps[].bulb.", S.BULB),
         "LAMP_PT_socket": ("lamps[].socket.", S.SOCKET),
@@ -192,6 +193,13 @@ def test_each_sub_panel_shows_its_section(lamp_addon, S, bl_scene, design):
     for name, (prefix, section) in sections.items():
         shown = draw(getattr(bpy.types, name), bl_scene).spec_paths()
         assert {prefix + key for key in section.fields} <= shown, name
+    cuts = set()
+    for cut_type in S.CUT_TYPES:  # the cut type, then only the fields that type uses
+        design.lamps[2].cuts.type = cut_type
+        shown = draw(bpy.types.LAMP_PT_cuts, bl_scene).spec_paths()
+        assert shown == {f"lamps[].cuts.{key}" for key in ("type", *S.CUT_TYPE_FIELDS[cut_type])}, cut_type
+        cuts |= shown
+    assert cuts == {f"lamps[].cuts.{key}" for key in S.CUTS.fields}
     assert {"image.width", "image.height"} <= draw(bpy.types.LAMP_PT_camera, bl_scene).spec_paths()
     assert "background" in draw(bpy.types.LAMP_PT_light, bl_scene).spec_paths()
     assert {"name", "author", "description", "tags"} <= draw(bpy.types.LAMP_PT_info, bl_scene).spec_paths()

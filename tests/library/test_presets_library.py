@@ -48,7 +48,7 @@ def test_two_designers_share_a_folder(tmp_path):
     design["tags"] = ["amber", "turn"]
     design["description"] = "My amber turn lamp; try it with your cuts"
     design["lamps"][0]["lens"]["ior"] = 1.4937
-    design["lamps"][0]["cuts"] = {"pitch": 7.3, "height": 0.1 + 0.2}  # a float that must survive exactly
+    design["lamps"][0]["cuts"].update(pitch=7.3, height=0.1 + 0.2)  # a float that must survive exactly
     design["lamps"][0]["bulb"]["offset"] = [0.5, 2.25, -0.125]
     saved = P.save_preset(alice, "Amber turn (Alice)", design)
     assert Path(saved.file).name == "amber-turn-alice.json"

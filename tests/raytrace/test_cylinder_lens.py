@@ -258,6 +258,9 @@ def test_a_large_wrap_radius_converges_to_the_flat_lens_image():
     (lambda d: d["lamps"][0]["lens"].update(wrap_radius=90.0), "lamps[0].lens.wrap_radius", "(94.5, 1e+04] mm"),
     (lambda d: d["lamps"][0]["cuts"].update(pitch=9.0, height=6.3), "lamps[0].cuts.height", "allowed [0, "),
     (lambda d: d["body"].update(size=[124, 120]), "body.size", "allowed width below 120 mm"),
+    # the curved base is walked as the fish-eye grid only: saw-tooth and flutes need a flat lens
+    (lambda d: d["lamps"][0]["cuts"].update(type="sawtooth"), "lamps[0].cuts.type", 'allowed "fisheye"'),
+    (lambda d: d["lamps"][0]["cuts"].update(type="flutes"), "lamps[0].cuts.type", 'allowed "fisheye"'),
 ])
 def test_bad_cylindrical_lenses_are_refused_naming_the_field(edit, field, allowed):
     from core_tracer.scene import SceneError

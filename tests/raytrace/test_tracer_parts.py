@@ -8,7 +8,7 @@ from helpers import scene_with
 
 from core_tracer.raytrace import paths
 from core_tracer.raytrace.lamp_table import LampTable
-from core_tracer.raytrace.parts import PARTS, cuts, side_wall
+from core_tracer.raytrace.parts import PARTS, cut_surface, cuts, side_wall
 from core_tracer.raytrace.parts.base import Segments
 
 
@@ -20,7 +20,7 @@ def test_each_medium_reaches_exactly_the_surfaces_of_table_1():
 
 def test_every_part_is_one_surface_and_the_side_wall_comes_before_the_cuts():
     assert len({part.SURFACE for part in PARTS}) == len(PARTS)
-    assert PARTS.index(side_wall) < PARTS.index(cuts)
+    assert PARTS.index(side_wall) < PARTS.index(cut_surface)
 
 
 def test_a_part_reports_no_hit_beyond_its_limit_for_the_cut_walk():

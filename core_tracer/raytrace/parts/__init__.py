@@ -11,7 +11,8 @@ meet it.
 
 from __future__ import annotations
 
-from . import bulb, cuts, outer_face, reflector, side_wall, socket
+from . import bulb, cut_surface, outer_face, reflector, side_wall, socket
 from .base import Part
 
-PARTS: tuple[Part, ...] = (side_wall, cuts, outer_face, reflector, bulb, socket)
+# ``cut_surface`` hands each ray to its lamp's cut type: ``cuts`` (fish-eye) or ``sawtooth``.
+PARTS: tuple[Part, ...] = (side_wall, cut_surface, outer_face, reflector, bulb, socket)
