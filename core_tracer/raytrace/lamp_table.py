@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.derived import cut_sphere_radius, lamp_geometry, lens_absorption
+from ..scene.prism_profile import ring_slopes
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,18 @@ class LampTable:
     bulb_intensity: np.ndarray  # (L, 3), zero when the bulb is off
     socket_radius: np.ndarray
     socket_color: np.ndarray  # (L, 3)
+    # The prism plate (README, the prism plate): a lamp without one has its planes at +inf, so no
+    # ray meets it; a lamp with one has its reflector's rim at +inf, so no ray meets the reflector.
+    plate_front: np.ndarray  # y of the flat front face
+    plate_base: np.ndarray  # y of the ring bottoms (plane A of the ring walk)
+    plate_peak: np.ndarray  # y of the highest ring top (plane B)
+    plate_pitch: np.ndarray
+    plate_ior: np.ndarray
+    plate_absorption: np.ndarray  # (L, 3) per mm
+    housing_back: np.ndarray  # y of the housing's back
+    housing_color: np.ndarray  # (L, 3)
+    ring_slopes: np.ndarray  # (L, most rings) facet slope of each ring (``prism_profile``), 0 past the last
+    ring_count: np.ndarray  # (L,) rings of each plate (0 without one)
 
     @classmethod
     def from_scene(cls, scene: dict) -> LampTable:
@@ -46,7 +59,7 @@ class LampTable:
             g = lamp_geometry(lamp)
             lens, cuts, refl, bulb = lamp["lens"], lamp["cuts"], lamp["reflector"], lamp["bulb"]
             h = cuts["height"]
-            rows.append(dict(
+            row = dict(
                 center=lamp["center"], radius=lens["radius"], plane_a=g["plane_a"], plane_b=g["plane_b"],
                 pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 else np.inf,
                 ior=lens["ior"], absorption=lens_absorption(lens), wall_color=lens["side_wall_color"],
@@ -56,5 +69,26 @@ class LampTable:
                 scatter_shininess=refl["shininess"], bulb_center=g["bulb_center"], bulb_radius=bulb["radius"],
                 bulb_intensity=bulb["intensity"] if bulb["on"] else [0.0, 0.0, 0.0],
                 socket_radius=lamp["socket"]["radius"], socket_color=lamp["socket"]["color"],
-            ))
-        return cls(**{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
+            )
+            row.update(_plate_row(lamp, g))
+            rows.append(row)
+        slopes = [r.pop("ring_slopes") for r in rows]
+        table = np.zeros((len(rows), max(len(s) for s in slopes)))
+        for row, s in zip(table, slopes, strict=True):
+            row[:len(s)] = s
+        return cls(ring_slopes=table, **{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
+
+
+def _plate_row(lamp: dict, g: dict) -> dict:
+    """The prism plate's entries of one lamp's row, and the reflector's rim moved out of reach."""
+    if lamp.get("collection", "reflector") != "prism_plate":
+        inf = np.inf
+        return dict(plate_front=inf, plate_base=inf, plate_peak=inf, plate_pitch=1.0, plate_ior=1.0,
+                    plate_absorption=[0.0, 0.0, 0.0], housing_back=inf, housing_color=[0.0, 0.0, 0.0],
+                    ring_slopes=np.zeros(1), ring_count=0)
+    plate = lamp["prism_plate"]
+    slopes = ring_slopes(lamp["lens"]["radius"], plate["pitch"], plate["focal_length"], plate["ior"])
+    return dict(rim=np.inf, plate_front=g["plate_front"], plate_base=g["plate_base"], plate_peak=g["plate_peak"],
+                plate_pitch=plate["pitch"], plate_ior=plate["ior"], plate_absorption=plate["absorption"],
+                housing_back=g["vertex"], housing_color=plate["housing_color"], ring_slopes=slopes,
+                ring_count=len(slopes))

@@ -4,14 +4,16 @@ by walking ``PARTS``, each part given the rays of its media, so a new part type 
 and one entry in ``PARTS``; no loop changes.
 
 Order matters in one way: each part is given the nearest hit of the parts before it as a limit,
-and the cut walk stops there, so the side wall, which bounds the cuts, comes first. Ties keep the
-earlier part. The body box (``body_box``) is not in the table: only eye rays, in the world frame,
+and the cut walk stops there, so the side wall, which bounds the cuts, comes first; only the housing of
+a prism-plate lamp precedes it (the same cylinder behind the plate: the tie keeps the housing).
+Ties keep the earlier part. The prism plate's parts see rays of every medium (``paths.IN_PLATE``
+too) and pick their own. The body box (``body_box``) is not in the table: only eye rays, in the world frame,
 meet it.
 """
 
 from __future__ import annotations
 
-from . import bulb, cuts, outer_face, reflector, side_wall, socket
+from . import bulb, cuts, housing, outer_face, plate_front, prism_rings, reflector, side_wall, socket
 from .base import Part
 
-PARTS: tuple[Part, ...] = (side_wall, cuts, outer_face, reflector, bulb, socket)
+PARTS: tuple[Part, ...] = (housing, side_wall, cuts, outer_face, plate_front, prism_rings, reflector, bulb, socket)
