@@ -21,6 +21,7 @@ from . import spec as S
 from .derived import default_camera, default_value, fill_alternative, lamp_geometry
 from .reading import HugeNumber, SceneError, read_json
 from .safe_text import has_surrogate, printable, show_key
+from .validate_prism import check_prism_plate, prism_limits
 
 
 def load_scene(path: str | os.PathLike) -> dict:
@@ -223,9 +224,12 @@ def check_geometry(scene: dict) -> None:
             raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "
                              f"allowed [0, {_rounded(c, False)}] mm (pitch / sqrt 2)")
         g = lamp_geometry(lamp)
-        if g["vertex"] > body["depth"]:
-            _reflector_too_deep(scene, i, g)
-        _check_bulb(lamp, g, where)
+        if lamp["collection"] == "prism_plate":
+            check_prism_plate(scene, i, g)
+        else:
+            if g["vertex"] > body["depth"]:
+                _reflector_too_deep(scene, i, g)
+            _check_bulb(lamp, g, where)
         rs = lamp["socket"]["radius"]
         if rs >= R:
             raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {R:g}) mm")
@@ -384,7 +388,10 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     if 2 * R <= min(w, h):
         limits["center"] = (f"x in {_interval(bx - w / 2 + R, bx + w / 2 - R)}, "
                             f"z in {_interval(bz - h / 2 + R, bz + h / 2 - R)} mm inside the body")
-    limits.update(_bulb_limits(lamp))
+    if lamp.get("collection", "reflector") == "prism_plate":
+        limits.update(prism_limits(lamp, lamp_geometry(lamp)))
+    else:
+        limits.update(_bulb_limits(lamp))
     return limits
 
 
