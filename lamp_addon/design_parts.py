@@ -10,6 +10,7 @@ Auto Build's worker thread.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 from collections import OrderedDict
@@ -24,7 +25,7 @@ from mathutils.geometry import tessellate_polygon
 from ..core_tracer.scene import functions
 from ..core_tracer.scene.derived import cut_sphere_radius, lamp_geometry
 from . import design_materials
-from .convert import meshes, units
+from .convert import meshes, prism_meshes, units
 
 MM = units.BU_PER_MM
 CHORD_TOLERANCE_MM = meshes.CHORD_TOLERANCE_MM
@@ -90,10 +91,18 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     base = f"lamps[{i}]"
     g = lamp_geometry(lamp)
     R = lamp["lens"]["radius"]
-    reflector_shape = ("reflector", R, lamp["reflector"]["focal_length"], g["vertex"], CHORD_TOLERANCE_MM)
-    reflector = shapes.get(reflector_shape,
-                            lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
-    n = ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
+    prism = lamp.get("collection", "reflector") == "prism_plate"
+    if prism:
+        n = meshes.circle_segments(R)
+        collecting = prism_plate_parts(base, label, lamp, n)
+    else:
+        reflector_shape = ("reflector", R, lamp["reflector"]["focal_length"], g["vertex"], CHORD_TOLERANCE_MM)
+        reflector = shapes.get(reflector_shape,
+                                lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
+        n = ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
+        collecting = [MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
+                               [Slot(f"{base}.reflector", f"{label} Reflector",
+                                     partial(design_materials.reflector, lamp=lamp))], None)]
     k, lighter = cut_quads(lamp, preview)
     cx, cz = lamp["center"]
     axis = _translation(cx, 0.0, cz)
@@ -107,9 +116,7 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
                   [Slot(f"{base}.lens", f"{label} Lens", partial(design_materials.lens_glass, lamp=lamp)),
                    _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
                                  "Side Wall BSDF")], axis),
-        MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
-                  [Slot(f"{base}.reflector", f"{label} Reflector", partial(design_materials.reflector, lamp=lamp))],
-                  axis),
+        *(dataclasses.replace(part, matrix=axis) for part in collecting),
         MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM), partial(meshes.sphere_mesh, rb),
                   [Slot(f"{base}.bulb", f"{label} Bulb", partial(design_materials.bulb, lamp=lamp))],
                   _translation(cx + bx, by, cz + bz)),
@@ -119,6 +126,26 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     ]
     rim = meshes.rim_polygon(R, n) + np.array([cx, cz])
     return parts, rim, (g["plane_b"], g["rim"]), lighter
+
+
+def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[MeshPart]:
+    """A prism-plate lamp's plate (glass) and housing (diffuse) in place of the reflector (README, the
+    prism plate); their matrices are set by ``lamp_parts``."""
+    plate = lamp["prism_plate"]
+    g = lamp_geometry(lamp)
+    profile = (lamp["lens"]["radius"], plate["pitch"], plate["focal_length"], plate["ior"], g["plate_front"],
+               g["plate_base"], segments, CHORD_TOLERANCE_MM)
+    return [
+        MeshPart(f"{base}.prism_plate", f"{label} Prism Plate", ("prism_plate", *profile),
+                  partial(prism_meshes.prism_plate_mesh, lamp, segments),
+                  [Slot(f"{base}.prism_plate", f"{label} Prism Plate",
+                        partial(design_materials.prism_plate_glass, lamp=lamp))], None),
+        MeshPart(f"{base}.housing", f"{label} Housing",
+                  ("housing", lamp["lens"]["radius"], g["plate_front"], g["vertex"], segments, CHORD_TOLERANCE_MM),
+                  partial(prism_meshes.housing_mesh, lamp, segments),
+                  [_diffuse_slot(f"{base}.housing", f"{label} Housing", plate["housing_color"], "Housing BSDF")],
+                  None),
+    ]
 
 
 def _diffuse_slot(part: str, name: str, color, node: str) -> Slot:
