@@ -410,6 +410,12 @@ INVALID_EDITS = {
                               "outside the body"),
     "reflector deeper than the body": (lambda d: setattr(d.lamps[0].reflector, "focal_length", 5.0),
                                        "lamps[0].reflector.focal_length", "deeper than the body"),
+    "prism plate focus too near": (lambda d: (setattr(d.lamps[0], "collection", "prism_plate"),
+                                              setattr(d.lamps[0].prism_plate, "focal_length", 30.0)),
+                                   "lamps[0].prism_plate.focal_length", "cannot bend it parallel"),
+    "prism plate housing deeper than the body": (lambda d: (setattr(d.lamps[0], "collection", "prism_plate"),
+                                                            setattr(d.lamps[0].prism_plate, "housing_depth", 75.0)),
+                                                 "lamps[0].prism_plate.housing_depth", "deeper than the body"),
 }
 
 

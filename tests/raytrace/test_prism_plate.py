@@ -240,3 +240,16 @@ def test_geometry_of_a_prism_plate_lamp():
     assert g["focus"] == g["plate_base"] + 50.0 and g["bulb_center"] == (0.0, g["focus"], 0.0)
     assert g["vertex"] == g["plate_base"] + 60.0
     assert g["plate_base"] < g["plate_peak"] < g["plate_base"] + 2.0
+
+
+def test_limits_shown_beside_a_prism_plate_lamps_sliders():
+    from core_tracer.scene.validate import lamp_limits
+
+    scene = _prism_scene()
+    limits = lamp_limits(scene, 0)
+    assert limits["prism_plate.focal_length"] == "at least 49.09 mm for this radius, pitch and ior"
+    g = lamp_geometry(scene["lamps"][0])
+    low, high = (float(x) for x in limits["bulb.offset"][len("y in ["):-len("] mm")].split(", "))
+    assert low == pytest.approx(g["plate_peak"] + 8.0 - g["focus"], abs=0.01)  # 4 digits, rounded inward
+    assert high == pytest.approx(g["vertex"] - 8.0 - g["focus"], abs=0.01)
+    assert "bulb.radius" in limits and "reflector" not in " ".join(limits)

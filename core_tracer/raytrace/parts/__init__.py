@@ -6,9 +6,10 @@ and one entry in ``PARTS``; no loop changes.
 Order matters in one way: each part is given the nearest hit of the parts before it as a limit,
 and the cut walk stops there, so the side wall, which bounds the cuts, comes first; only the housing of
 a prism-plate lamp precedes it (the same cylinder behind the plate: the tie keeps the housing).
-Ties keep the earlier part. The prism plate's parts see rays of every medium (``paths.IN_PLATE``
-too) and pick their own. The body box (``body_box``) is not in the table: only eye rays, in the world frame,
-meet it.
+The prism plate's faces come before the cuts: a ray inside the plate or behind it then
+gives the cut walk a limit short of the cuts, and the walk does nothing for it (the plate and the
+cuts never touch: the plate's gap is > 0). Ties keep the earlier part. The body box (``body_box``)
+is not in the table: only eye rays, in the world frame, meet it.
 """
 
 from __future__ import annotations
@@ -16,4 +17,4 @@ from __future__ import annotations
 from . import bulb, cuts, housing, outer_face, plate_front, prism_rings, reflector, side_wall, socket
 from .base import Part
 
-PARTS: tuple[Part, ...] = (housing, side_wall, cuts, outer_face, plate_front, prism_rings, reflector, bulb, socket)
+PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, cuts, outer_face, reflector, bulb, socket)
