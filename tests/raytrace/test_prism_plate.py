@@ -28,7 +28,7 @@ def _plate(radius=R, pitch=PITCH, focal=FOCAL, ior=IOR):
 def _walk(o, d, slopes, y_b, radius=R, pitch=PITCH, on_rings=None, t_limit=None):
     n = len(o)
     return prism_rings.hit_rings(o, d, np.full(n, Y_A), np.full(n, y_b), np.full(n, pitch), np.full(n, radius),
-                                 np.tile(slopes, (n, 1)), np.full(n, len(slopes)),
+                                 slopes[None, :], np.zeros(n, np.int64), np.full(n, len(slopes)),
                                  np.full(n, np.inf) if t_limit is None else t_limit, on_rings)
 
 

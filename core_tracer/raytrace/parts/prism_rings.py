@@ -48,17 +48,18 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
     if len(sel):
         ls = li[sel]
         t[sel], normal[sel] = hit_rings(rays.o[sel], rays.d[sel], lamps.plate_base[ls], lamps.plate_peak[ls],
-                                        lamps.plate_pitch[ls], lamps.radius[ls], lamps.ring_slopes[ls],
+                                        lamps.plate_pitch[ls], lamps.radius[ls], lamps.ring_slopes, ls,
                                         lamps.ring_count[ls].astype(np.int64), t_limit[sel],
                                         rays.src[sel] == P.RINGS)
     return t, normal
 
 
 def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pitch: np.ndarray,
-              radius: np.ndarray, slopes: np.ndarray, count: np.ndarray, t_limit: np.ndarray,
+              radius: np.ndarray, table: np.ndarray, row: np.ndarray, count: np.ndarray, t_limit: np.ndarray,
               on_rings: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The ring face: per ray the hit parameter (inf for none before ``t_limit``) and the unit
-    normal out of the plate material. ``slopes`` is (N, rings) per ray, ``count`` its rings.
+    normal out of the plate material. Ray i's ring slopes are ``table[row[i]]`` (``LampTable.ring_slopes``),
+    ``count[i]`` its rings.
 
     ``on_rings`` marks rays that start on the ring face: the facet or draft they start on is
     found from their origin, and its root nearest the origin is excluded (by geometry, not
@@ -66,6 +67,7 @@ def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pi
     n = len(o)
     t_hit = np.full(n, np.inf)
     normal = np.zeros((n, 3))
+    slopes = _Slopes(table, row)
     own_facet, own_draft = _own_element(o, y_a, pitch, slopes, count, on_rings)
     walk = _enter(o, d, y_a, y_b, pitch, radius, count, t_limit)
     hit_ring = np.zeros(n, np.int64)
@@ -76,7 +78,7 @@ def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pi
         ray, k = walk["ray"], walk["k"]
         oo, dd = o[ray], d[ray]
         p = pitch[ray]
-        s = slopes[ray, k]
+        s = slopes(ray, k)
         r_out = np.minimum((k + 1) * p, radius[ray])
         t_next, inward = _next_border(walk, oo, dd, k * p, r_out)
         t_end = np.minimum(t_next, walk["t_out"])
@@ -90,10 +92,13 @@ def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pi
         border_ring = np.where(inward, k, k + 1)  # the ring whose draft stands on that border
         at_rim = ~inward & ((k + 1) >= count[ray])  # leaving the plate's rings at its rim
         y = oo[:, 1] + t_next * dd[:, 1]
-        s_border = slopes[ray, np.minimum(border_ring, slopes.shape[1] - 1)]
+        s_border = slopes(ray, np.minimum(border_ring, table.shape[1] - 1))
         in_draft = (y >= y_a[ray]) & (y <= y_a[ray] + s_border * pitch[ray]) & (border_ring > 0) & ~at_rim
-        near_own = (own_draft[ray] == border_ring) & _is_start_root(oo, dd, border_ring * p, t_next)
-        draft = cross & in_draft & ~near_own & (t_next > T_MIN)
+        draft = cross & in_draft & (t_next > T_MIN)
+        maybe_own = np.nonzero(draft & (own_draft[ray] == border_ring))[0]
+        if len(maybe_own):  # a ray leaving its own draft: that crossing is its start
+            m = maybe_own
+            draft[m] = ~_is_start_root(oo[m], dd[m], border_ring[m] * p[m], t_next[m])
         t_hit[ray[draft]] = t_next[draft]
         hit_ring[ray[draft]] = border_ring[draft]
         hit_draft[ray[draft]] = True
@@ -108,11 +113,21 @@ def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pi
         rho = np.hypot(p[:, 0], p[:, 2])
         with np.errstate(invalid="ignore", divide="ignore"):
             ux, uz = np.where(rho > 0, p[:, 0] / rho, 0.0), np.where(rho > 0, p[:, 2] / rho, 0.0)
-        s = slopes[hit, hit_ring[hit]]
+        s = slopes(hit, hit_ring[hit])
         facet = np.stack([s * ux, np.ones(len(hit)), s * uz], axis=1) / np.sqrt(1.0 + s * s)[:, None]
         draft = np.stack([-ux, np.zeros(len(hit)), -uz], axis=1)
         normal[hit] = np.where(hit_draft[hit, None], draft, facet)
     return t_hit, normal
+
+
+class _Slopes:
+    """Ray i's slope of ring k, ``table[row[i], k]``, without a copy of each ray's row."""
+
+    def __init__(self, table: np.ndarray, row: np.ndarray):
+        self.flat, self.width, self.row = table.ravel(), table.shape[1], row
+
+    def __call__(self, ray: np.ndarray, ring: np.ndarray) -> np.ndarray:
+        return self.flat[self.row[ray] * self.width + ring]
 
 
 def _enter(o, d, y_a, y_b, pitch, radius, count, t_limit) -> dict[str, np.ndarray]:
@@ -204,7 +219,7 @@ def _own_element(o, y_a, pitch, slopes, count, on_rings) -> tuple[np.ndarray, np
     best, best_facet, best_draft = np.full(len(idx), np.inf), np.full(len(idx), NONE), np.full(len(idx), NONE)
     for k in (k0 - 1, k0, k0 + 1):
         kk = np.clip(k, 0, last)
-        s = slopes[idx, kk]
+        s = slopes(idx, kk)
         res = np.abs(y - ya - s * ((kk + 1) * p - rho)) / np.sqrt(1.0 + s * s)  # distance to the cone
         better = (k == kk) & (res < best)
         best = np.where(better, res, best)
