@@ -114,6 +114,8 @@ def test_switching_back_to_the_reflector_removes_plate_and_housing(lamp_addon, b
     scene = core_tracer.load_scene(PRESET)
     _build(lamp_addon, bl_scene, scene)
     scene["lamps"][0]["collection"] = "reflector"
+    scene["lamps"][0]["bulb"]["radius"] = 8.0  # a reflector of this lens holds a smaller bulb
+    scene["lamps"][0]["reflector"]["focal_length"] = 16.0
     parts = _build(lamp_addon, bl_scene, core_tracer.normalize(scene))
     assert "lamps[0].reflector" in parts
     assert not {"lamps[0].prism_plate", "lamps[0].housing"} & set(parts)
