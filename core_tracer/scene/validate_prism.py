@@ -62,7 +62,8 @@ def _check_bulb(lamp: dict, g: dict, where: str) -> None:
         raise SceneError(f"{where}.bulb.radius", f"{rb:g} does not fit in the housing between the prism plate's "
                          f"rings and the housing's back ({back - front:.4g} mm deep, radius {R:g} mm); allowed "
                          f"(0, {_rounded(room, False)}) mm")
-    y_lo, y_hi = front + rb - g["focus"], back - rb - g["focus"]
+    # (to a nanometre: the positions are sums of the fields, whose rounding would show as -7e-15)
+    y_lo, y_hi = round(front + rb - g["focus"], 9) + 0.0, round(back - rb - g["focus"], 9) + 0.0
     if not front + rb < by < back - rb:
         raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) "
                          f"{'into the prism plate' if by - rb <= front else 'through the housing'}; allowed y in "
@@ -85,7 +86,7 @@ def prism_limits(lamp: dict, g: dict) -> dict[str, str]:
         out["prism_plate.focal_length"] = f"at least {_rounded(f_lo, True)} mm for this radius, pitch and ior"
     front, back = g["plate_peak"], g["vertex"]
     if back - front > 2 * rb:
-        out["bulb.offset"] = f"y in {_interval(front + rb - g['focus'], back - rb - g['focus'])} mm"
+        out["bulb.offset"] = f"y in {_interval(round(front + rb - g['focus'], 9), round(back - rb - g['focus'], 9))} mm"
     room = min(R, (back - front) / 2)
     if room > 0:
         out["bulb.radius"] = f"less than {_rounded(room, False)} mm in the housing"

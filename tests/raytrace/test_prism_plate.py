@@ -253,3 +253,13 @@ def test_limits_shown_beside_a_prism_plate_lamps_sliders():
     assert low == pytest.approx(g["plate_peak"] + 8.0 - g["focus"], abs=0.01)  # 4 digits, rounded inward
     assert high == pytest.approx(g["vertex"] - 8.0 - g["focus"], abs=0.01)
     assert "bulb.radius" in limits and "reflector" not in " ".join(limits)
+
+
+def test_the_bulb_offset_range_is_shown_without_rounding_noise():
+    # the bulb's back touches the housing's back at offset 0: the range ends at 0, not at -7e-15
+    scene = load_scene(BASELINE)
+    scene["lamps"][0]["collection"] = "prism_plate"
+    scene["lamps"][0]["cuts"]["height"] = 0.6
+    scene["lamps"][0]["prism_plate"]["housing_depth"] = 58.0
+    with pytest.raises(SceneError, match=r"through the housing; allowed y in \(-40\.2, 0\) mm$"):
+        normalize(scene)
