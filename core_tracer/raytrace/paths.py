@@ -1,4 +1,5 @@
-"""The twelve elementary light paths of the paper (§3.2.2, Fig. 8, Table 1).
+"""The twelve elementary light paths of the paper (§3.2.2, Fig. 8, Table 1), and the prism plate's
+seven more (⑬-⑲, ``PLATE_TABLE``, README: the prism plate).
 
 Every ray segment inside a lamp belongs to one class, fixed by the medium it travels in, the
 surface it leaves and the surface it reaches (``CLASS_OF``). What happens at its end follows from
