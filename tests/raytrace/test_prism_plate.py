@@ -263,3 +263,16 @@ def test_the_bulb_offset_range_is_shown_without_rounding_noise():
     scene["lamps"][0]["prism_plate"]["housing_depth"] = 58.0
     with pytest.raises(SceneError, match=r"through the housing; allowed y in \(-40\.2, 0\) mm$"):
         normalize(scene)
+
+
+def test_a_study_varies_the_prism_plates_fields():
+    from core_tracer.study.definition import apply_value, resolve_parameter, study_parameters
+
+    assert {"prism_plate.focal_length", "prism_plate.pitch", "prism_plate.ior"} <= set(study_parameters())
+    base = _prism_scene()
+    means = []
+    for pitch in (1.0, 2.0):
+        scene = normalize(base)
+        apply_value(scene, resolve_parameter("prism_plate.pitch", scene), pitch)
+        means.append(render_passes(normalize(scene), 48, 48).image.mean())
+    assert means[0] != means[1]  # the rings change the image
