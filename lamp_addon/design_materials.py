@@ -108,6 +108,26 @@ def lens_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
     return missing
 
 
+def prism_plate_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+    """The prism plate: glass like the lens's (Principled BSDF transmitting, IOR = the plate's n) with
+    its own Volume Absorption (eq. 2, README: the prism plate)."""
+    tree = _tree(mat, new)
+    if new:
+        out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
+        bsdf = _node(tree, "ShaderNodeBsdfPrincipled", "Prism Plate BSDF", (0, 100), Base_Color=(1, 1, 1, 1),
+                     Metallic=0.0, Roughness=0.0, Transmission_Weight=1.0)
+        vol = _node(tree, "ShaderNodeVolumeAbsorption", "Prism Plate Absorption", (0, -300))
+        tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+        tree.links.new(vol.outputs["Volume"], out.inputs["Volume"])
+    plate = lamp["prism_plate"]
+    density, color = cycles.absorption_volume(plate["absorption"])
+    missing: list[str] = []
+    _drive(tree, "Prism Plate BSDF", missing, IOR=plate["ior"])
+    _drive(tree, "Prism Plate Absorption", missing, Color=(*color, 1.0), Density=density)
+    mat.diffuse_color = (*cycles.transmitted_color(plate["absorption"], plate["thickness"]), 0.3)
+    return missing
+
+
 # ---------------------------------------------------------------------------------------------
 # Body, socket, side wall
 

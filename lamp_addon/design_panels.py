@@ -180,7 +180,8 @@ class _LampPartPanel(LampTab):
 
     @classmethod
     def poll(cls, context):
-        return active_lamp(context) is not None
+        lamp = active_lamp(context)
+        return lamp is not None and section_in_use(lamp, cls.part)
 
     def draw(self, context):
         group = getattr(active_lamp(context), self.part)
@@ -188,6 +189,14 @@ class _LampPartPanel(LampTab):
             draw_cuts(self._split(self.layout), group)
         else:
             draw_section(self._split(self.layout), group, S.LAMP.fields[self.part])
+
+
+def section_in_use(lamp, part: str) -> bool:
+    """Whether the lamp's ``part`` section shapes it: the reflector's and the prism plate's only for
+    the lamp's collection (README, the prism plate); every other section always."""
+    if part in S.COLLECTIONS:
+        return lamp.collection == part
+    return True
 
 
 def _make_part_panel(key: str, order: int) -> type:

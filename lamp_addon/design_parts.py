@@ -10,6 +10,7 @@ Auto Build's worker thread.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 from collections import OrderedDict
@@ -25,7 +26,7 @@ from ..core_tracer.raytrace.outline import Outline
 from ..core_tracer.scene import functions
 from ..core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geometry, lens_cylinder
 from . import design_materials
-from .convert import meshes, units, wrap_meshes
+from .convert import meshes, prism_meshes, units, wrap_meshes
 
 MM = units.BU_PER_MM
 CHORD_TOLERANCE_MM = meshes.CHORD_TOLERANCE_MM
@@ -94,12 +95,16 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     R = lamp["lens"]["radius"]
     outline = Outline.of_lens(lamp["lens"])
     f = lamp["reflector"]["focal_length"]
-    if outline.round:
+    prism = lamp.get("collection", "reflector") == "prism_plate"
+    lens_outline, rim_local = R, None
+    if prism:  # a round lens only (validation)
+        n = meshes.circle_segments(R)
+        collecting = prism_plate_parts(base, label, lamp, n)
+    elif outline.round:
         reflector_shape = ("reflector", R, f, g["vertex"], CHORD_TOLERANCE_MM)
         reflector = shapes.get(reflector_shape,
                                 lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
         n = ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
-        lens_outline, rim_local = R, None
     else:  # one rim polygon for the lens, the trimmed reflector and the body opening
         rim_local = meshes.outline_rim(lamp, CHORD_TOLERANCE_MM)
         lens_outline = ("rectangular", outline.half_w, outline.half_h, outline.corner, f, g["vertex"])
@@ -107,6 +112,10 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
         reflector = shapes.get(reflector_shape,
                                 lambda: meshes.trimmed_reflector_mesh(lamp, rim_local, CHORD_TOLERANCE_MM))
         n = len(rim_local)
+    if not prism:
+        collecting = [MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
+                               [Slot(f"{base}.reflector", f"{label} Reflector",
+                                     partial(design_materials.reflector, lamp=lamp))], None)]
     k, lighter = cut_quads(lamp, preview)
     cx, cz = lamp["center"]
     axis = _translation(cx, 0.0, cz)
@@ -121,9 +130,7 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
                   [Slot(f"{base}.lens", f"{label} Lens", partial(design_materials.lens_glass, lamp=lamp)),
                    _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
                                  "Side Wall BSDF")], axis),
-        MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
-                  [Slot(f"{base}.reflector", f"{label} Reflector", partial(design_materials.reflector, lamp=lamp))],
-                  axis),
+        *(dataclasses.replace(part, matrix=axis) for part in collecting),
         MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM), partial(meshes.sphere_mesh, rb),
                   [Slot(f"{base}.bulb", f"{label} Bulb", partial(design_materials.bulb, lamp=lamp))],
                   _translation(cx + bx, by, cz + bz)),
@@ -154,6 +161,26 @@ def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outlin
     parts[0] = MeshPart(old.part, old.name, key, lambda: data, old.slots, old.matrix)
     opening = wrap_meshes.outer_rim(data, lamp) + np.array(lamp["center"])
     return parts, opening, (g["plane_b"], g["rim"]), lighter
+
+
+def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[MeshPart]:
+    """A prism-plate lamp's plate (glass) and housing (diffuse) in place of the reflector (README, the
+    prism plate); their matrices are set by ``lamp_parts``."""
+    plate = lamp["prism_plate"]
+    g = lamp_geometry(lamp)
+    profile = (lamp["lens"]["radius"], plate["pitch"], plate["focal_length"], plate["ior"], g["plate_front"],
+               g["plate_base"], segments, CHORD_TOLERANCE_MM)
+    return [
+        MeshPart(f"{base}.prism_plate", f"{label} Prism Plate", ("prism_plate", *profile),
+                  partial(prism_meshes.prism_plate_mesh, lamp, segments),
+                  [Slot(f"{base}.prism_plate", f"{label} Prism Plate",
+                        partial(design_materials.prism_plate_glass, lamp=lamp))], None),
+        MeshPart(f"{base}.housing", f"{label} Housing",
+                  ("housing", lamp["lens"]["radius"], g["plate_front"], g["vertex"], segments, CHORD_TOLERANCE_MM),
+                  partial(prism_meshes.housing_mesh, lamp, segments),
+                  [_diffuse_slot(f"{base}.housing", f"{label} Housing", plate["housing_color"], "Housing BSDF")],
+                  None),
+    ]
 
 
 def _diffuse_slot(part: str, name: str, color, node: str) -> Slot:

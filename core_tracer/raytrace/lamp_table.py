@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.derived import cut_sphere_radius, flute_radius, lamp_geometry, lens_absorption, lens_cylinder
+from ..scene.prism_profile import ring_slopes
 from .outline import Outline
 
 CYLINDER_KEYS = ("axis_x", "radius", "side", "base", "apex", "phi_center", "corner")
@@ -68,6 +69,18 @@ class LampTable:
     def cylinder_of(self, lamp: np.ndarray) -> dict[str, np.ndarray]:
         """Per ray, the cylinder geometry of its lamp (keys of CYLINDER_KEYS)."""
         return {k: getattr(self, "cyl_" + k)[lamp] for k in CYLINDER_KEYS}
+    # The prism plate (README, the prism plate): a lamp without one has its planes at +inf, so no
+    # ray meets it; a lamp with one has its reflector's rim at +inf, so no ray meets the reflector.
+    plate_front: np.ndarray  # y of the flat front face
+    plate_base: np.ndarray  # y of the ring bottoms (plane A of the ring walk)
+    plate_peak: np.ndarray  # y of the highest ring top (plane B)
+    plate_pitch: np.ndarray
+    plate_ior: np.ndarray
+    plate_absorption: np.ndarray  # (L, 3) per mm
+    housing_back: np.ndarray  # y of the housing's back
+    housing_color: np.ndarray  # (L, 3)
+    ring_slopes: np.ndarray  # (L, most rings) facet slope of each ring (``prism_profile``), 0 past the last
+    ring_count: np.ndarray  # (L,) rings of each plate (0 without one)
 
     @classmethod
     def from_scene(cls, scene: dict) -> LampTable:
@@ -81,7 +94,7 @@ class LampTable:
             saw = cuts.get("type", "fisheye") == "sawtooth"
             flutes = cuts.get("type", "fisheye") == "flutes"
             ridge = math.radians(cuts.get("orientation", 0.0))
-            rows.append(dict(
+            row = dict(
                 center=lamp["center"], radius=lens["radius"], rectangular=0.0 if shape.round else 1.0,
                 half_size=[shape.half_w, shape.half_h], corner=shape.corner, plane_a=g["plane_a"], plane_b=g["plane_b"],
                 pitch=cuts["pitch"],
@@ -98,5 +111,26 @@ class LampTable:
                 bulb_intensity=bulb["intensity"] if bulb["on"] else [0.0, 0.0, 0.0],
                 socket_radius=lamp["socket"]["radius"], socket_color=lamp["socket"]["color"],
                 cylindrical=cyl is not None, **{"cyl_" + k: math.nan if cyl is None else cyl[k] for k in CYLINDER_KEYS},
-            ))
-        return cls(**{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
+            )
+            row.update(_plate_row(lamp, g))
+            rows.append(row)
+        slopes = [r.pop("ring_slopes") for r in rows]
+        table = np.zeros((len(rows), max(len(s) for s in slopes)))
+        for row, s in zip(table, slopes, strict=True):
+            row[:len(s)] = s
+        return cls(ring_slopes=table, **{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
+
+
+def _plate_row(lamp: dict, g: dict) -> dict:
+    """The prism plate's entries of one lamp's row, and the reflector's rim moved out of reach."""
+    if lamp.get("collection", "reflector") != "prism_plate":
+        inf = np.inf
+        return dict(plate_front=inf, plate_base=inf, plate_peak=inf, plate_pitch=1.0, plate_ior=1.0,
+                    plate_absorption=[0.0, 0.0, 0.0], housing_back=inf, housing_color=[0.0, 0.0, 0.0],
+                    ring_slopes=np.zeros(1), ring_count=0)
+    plate = lamp["prism_plate"]
+    slopes = ring_slopes(lamp["lens"]["radius"], plate["pitch"], plate["focal_length"], plate["ior"])
+    return dict(rim=np.inf, plate_front=g["plate_front"], plate_base=g["plate_base"], plate_peak=g["plate_peak"],
+                plate_pitch=plate["pitch"], plate_ior=plate["ior"], plate_absorption=plate["absorption"],
+                housing_back=g["vertex"], housing_color=plate["housing_color"], ring_slopes=slopes,
+                ring_count=len(slopes))

@@ -1,4 +1,5 @@
-"""The twelve elementary light paths of the paper (§3.2.2, Fig. 8, Table 1).
+"""The twelve elementary light paths of the paper (§3.2.2, Fig. 8, Table 1), and the prism plate's
+seven more (⑬-⑲, ``PLATE_TABLE``, README: the prism plate).
 
 Every ray segment inside a lamp belongs to one class, fixed by the medium it travels in, the
 surface it leaves and the surface it reaches (``CLASS_OF``). What happens at its end follows from
@@ -53,25 +54,70 @@ AIR_SIDE_WALL: dict[int, tuple[frozenset[int], frozenset[int]]] = {
     9: (frozenset({7}), frozenset()),
 }
 
-ENDS = frozenset({7, 10, 11, 12})
+# The prism plate's classes (README, "Where the model is completed": the prism plate), numbered on
+# from the paper's twelve. A prism-plate lamp has no reflector (③ ④ ⑤ never occur); between the
+# lens and the bulb stands a transparent plate, flat toward the lens (its front face) and carrying
+# the prism rings toward the bulb, inside a housing that ends paths like the socket. Rays reach the
+# bulb (⑪) and the socket (⑫) from the air behind the plate, and the lens side wall (⑦) from the
+# air between lens and plate.
+CUT_TO_PLATE = 13  # ⑬ cut face -> plate front face, in the air between lens and plate
+PLATE_TO_CUT = 14  # ⑭ plate front face -> cut face, in that air
+PLATE_FRONT_TO_RINGS = 15  # ⑮ inside the plate
+RINGS_TO_PLATE_FRONT = 16  # ⑯ inside the plate
+RINGS_TO_RINGS_IN_PLATE = 17  # ⑰ from one ring face to another, inside the plate
+RINGS_TO_RINGS_IN_AIR = 18  # ⑱ between the rings, in the air behind the plate
+TO_HOUSING = 19  # ⑲ -> the housing behind the plate (ends)
+
+# Table 1 continued for the plate: for each incident class, the classes its reflected and its
+# transmitted ray can be. For the paper's classes only the children the plate adds are listed
+# (a ray leaving a cut face into the air can now meet the plate: ⑬).
+#
+# | #  | segment                                | reflected ray can be | transmitted ray can be |
+# |----|----------------------------------------|----------------------|------------------------|
+# | ②  | (the paper's)                          |                      | + ⑬                    |
+# | ⑧  | (the paper's)                          |                      | + ⑬                    |
+# | ⑨  | (the paper's)                          | + ⑬                  |                        |
+# | ⑬  | cut face -> plate front (air)          | ⑦ ⑭                  | ⑮ ⑲                    |
+# | ⑭  | plate front -> cut face (air)          | ⑦ ⑨ ⑬                | ⑥ ⑦ ⑧                  |
+# | ⑮  | plate front -> rings, in the plate     | ⑯ ⑰ ⑲                | ⑪ ⑫ ⑱ ⑲                |
+# | ⑯  | rings -> plate front, in the plate     | ⑮ ⑲                  | ⑦ ⑭                    |
+# | ⑰  | rings -> rings, in the plate           | ⑯ ⑰ ⑲                | ⑪ ⑫ ⑱ ⑲                |
+# | ⑱  | rings -> rings, in the air behind      | ⑪ ⑫ ⑱ ⑲              | ⑯ ⑰ ⑲                  |
+# | ⑲  | -> housing                             | ends                 |                        |
+PLATE_TABLE: dict[int, tuple[frozenset[int], frozenset[int]]] = {
+    2: (frozenset(), frozenset({13})),
+    8: (frozenset(), frozenset({13})),
+    9: (frozenset({13}), frozenset()),
+    13: (frozenset({7, 14}), frozenset({15, 19})),
+    14: (frozenset({7, 9, 13}), frozenset({6, 7, 8})),
+    15: (frozenset({16, 17, 19}), frozenset({11, 12, 18, 19})),
+    16: (frozenset({15, 19}), frozenset({7, 14})),
+    17: (frozenset({16, 17, 19}), frozenset({11, 12, 18, 19})),
+    18: (frozenset({11, 12, 18, 19}), frozenset({16, 17, 19})),
+    19: (frozenset(), frozenset()),
+}
+
+ENDS = frozenset({7, 10, 11, 12, 19})
 
 REFLECTED, TRANSMITTED = 0, 1
 
+_NONE = (frozenset(), frozenset())
+
 
 def allowed(parent: int, branch: int, child: int) -> bool:
-    """Whether a transition is one of Table 1's (or the documented air side-wall band)."""
-    extra = AIR_SIDE_WALL.get(parent, (frozenset(), frozenset()))
-    return child in TABLE_1[parent][branch] or child in extra[branch]
+    """Whether a transition is one of Table 1's, the documented air side-wall band's, or the
+    prism plate's continuation of Table 1."""
+    return any(child in table.get(parent, _NONE)[branch] for table in (TABLE_1, AIR_SIDE_WALL, PLATE_TABLE))
 
 
-# Surfaces a segment can start from or reach, used to classify it.
-OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING = range(7)
-IN_LENS, IN_AIR = 0, 1
+# Surfaces a segment can start from or reach, used to classify it (the plate's after the paper's).
+OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING = range(10)
+IN_LENS, IN_AIR, IN_PLATE = 0, 1, 2
 
 
 def _build_lookup() -> np.ndarray:
     """CLASS_OF[medium, source surface, hit surface] -> path class (0 = impossible)."""
-    table = np.zeros((2, 7, 7), dtype=np.int8)
+    table = np.zeros((3, 10, 10), dtype=np.int8)
     table[IN_LENS, OUTER, CUT] = LENS_OUTER_TO_CUT
     table[IN_LENS, OUTER, WALL] = TO_SIDE_WALL
     table[IN_LENS, CUT, OUTER] = CUT_TO_LENS_OUTER
@@ -85,6 +131,18 @@ def _build_lookup() -> np.ndarray:
     table[IN_AIR, REFLECTOR, REFLECTOR] = REFLECTOR_TO_REFLECTOR
     table[IN_AIR, CUT, CUT] = CUT_TO_CUT_IN_AIR
     table[IN_AIR, REFLECTOR, CUT] = REFLECTOR_TO_CUT
+    # the prism plate (PLATE_TABLE)
+    table[IN_AIR, CUT, PLATE_FRONT] = CUT_TO_PLATE
+    table[IN_AIR, PLATE_FRONT, CUT] = PLATE_TO_CUT
+    table[IN_AIR, PLATE_FRONT, WALL] = TO_SIDE_WALL
+    table[IN_PLATE, PLATE_FRONT, RINGS] = PLATE_FRONT_TO_RINGS
+    table[IN_PLATE, RINGS, PLATE_FRONT] = RINGS_TO_PLATE_FRONT
+    table[IN_PLATE, RINGS, RINGS] = RINGS_TO_RINGS_IN_PLATE
+    table[IN_AIR, RINGS, RINGS] = RINGS_TO_RINGS_IN_AIR
+    table[IN_AIR, RINGS, BULB] = TO_BULB
+    table[IN_AIR, RINGS, SOCKET] = TO_SOCKET
+    for medium, src in ((IN_PLATE, PLATE_FRONT), (IN_PLATE, RINGS), (IN_AIR, RINGS)):
+        table[medium, src, HOUSING] = TO_HOUSING
     return table
 
 

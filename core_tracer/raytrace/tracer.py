@@ -400,7 +400,12 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
 
 def _reaching(rays: _Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, Segments]:
     """The rays travelling in one of ``media``: their indices (None for all) and their segments."""
-    idx = None if {P.IN_LENS, P.IN_AIR} <= set(media) else np.nonzero(rays.medium == media[0])[0]
+    if {P.IN_LENS, P.IN_AIR} <= set(media):
+        idx = None
+    elif len(media) == 1:
+        idx = np.nonzero(rays.medium == media[0])[0]
+    else:  # the prism plate's parts: the air and the plate
+        idx = np.nonzero(np.isin(rays.medium, media))[0]
     if idx is None or len(idx) == len(rays):
         return None, Segments(rays.o, rays.d, rays.lamp, rays.src, rays.medium)
     return idx, Segments(rays.o[idx], rays.d[idx], rays.lamp[idx], rays.src[idx], rays.medium[idx])
@@ -418,6 +423,10 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     if lens.any():
         k = k.copy()
         k[lens] *= optics.absorption(L.absorption[rays.lamp[lens]], t[lens])
+    plate = rays.medium == P.IN_PLATE
+    if plate.any():  # eq. (2) inside the prism plate too
+        k = k.copy() if k is rays.k else k
+        k[plate] *= optics.absorption(L.plate_absorption[rays.lamp[plate]], t[plate])
     hit = rays.o + np.where(np.isfinite(t), t, 0.0)[:, None] * rays.d
 
     for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, L.wall_color), (P.BULB, BULB_PASS, L.bulb_intensity),
@@ -426,6 +435,10 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
         if m.any():
             band.add(pass_id, rays.pix[m], k[m] * color[rays.lamp[m]])
 
+    m = surface == P.HOUSING  # a prism-plate lamp's housing ends the path with its colour, as the side wall
+    if m.any():
+        band.add(SIDE_WALL_PASS, rays.pix[m], k[m] * L.housing_color[rays.lamp[m]])
+
     children: list[_Rays] = []
     m = np.nonzero(surface == P.REFLECTOR)[0]
     if len(m):
@@ -433,6 +446,9 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
         children.extend(_dielectric(ctx, band, rays, m, k[m], hit[m], cls[m], surface[m], normal[m]))
+    m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0]
+    if len(m):
+        children.extend(_plate(rays, m, k[m], hit[m], cls[m], surface[m], normal[m], L))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]
@@ -503,4 +519,34 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
                          k=k_t, medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
                          .astype(np.int8), src=src[tc], parent=cls[tc],
                          branch=np.full(len(tc), P.TRANSMITTED, np.int8), seen_reflector=seen[tc]))
+    return out
+
+
+def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray, cls: np.ndarray, surface: np.ndarray,
+           out_normal: np.ndarray, L: LampTable) -> list[_Rays]:
+    """A prism-plate face hit from either side (README, the prism plate): the Fresnel split of
+    the lens's faces (MODEL.md §5) with the plate's index; ``out_normal`` points out of the plate
+    material. Nothing leaves the lamp here, so both branches go on where above the cut-off."""
+    li = rays.lamp[m]
+    d = rays.d[m]
+    medium = rays.medium[m]
+    from_plate = medium == P.IN_PLATE
+    facing = np.where(from_plate[:, None], -out_normal, out_normal)  # toward the incident side
+    cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
+    n1 = np.where(from_plate, L.plate_ior[li], 1.0)
+    n2 = np.where(from_plate, 1.0, L.plate_ior[li])
+    r = optics.fresnel_reflectance(cos_i, n1, n2)
+    pix, seen = rays.pix[m], rays.seen_reflector[m]
+    k_r = k * r[:, None]
+    go = np.nonzero(_alive(k_r))[0]
+    out = [_Rays(pix=pix[go], lamp=li[go], o=hit[go], d=optics.reflect(d[go], facing[go]), k=k_r[go],
+                 medium=medium[go], src=surface[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
+                 seen_reflector=seen[go])]
+    k_t = k * (1.0 - r[:, None])
+    tc = np.nonzero((r < 1.0) & _alive(k_t))[0]
+    if len(tc):
+        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], n1[tc] / n2[tc]),
+                         k=k_t[tc], medium=np.where(from_plate[tc], P.IN_AIR, P.IN_PLATE).astype(np.int8),
+                         src=surface[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
+                         seen_reflector=seen[tc]))
     return out

@@ -13,6 +13,7 @@ from typing import Any
 
 from ..raytrace.outline import Outline
 from . import spec as S
+from .prism_profile import ring_slopes
 
 
 def default_value(spec: S.Spec) -> Any:
@@ -151,6 +152,8 @@ def lamp_geometry(lamp: dict) -> dict:
     R = lens_reach(lamp["lens"])
     t = lamp["lens"]["thickness"]
     h = cut_depth(lamp["cuts"])
+    if lamp.get("collection", "reflector") == "prism_plate":
+        return _prism_plate_geometry(lamp, t + h)
     f = lamp["reflector"]["focal_length"]
     cyl = lens_cylinder(lamp)
     y_apex = t + h if cyl is None else cyl["deepest_apex"]
@@ -161,6 +164,25 @@ def lamp_geometry(lamp: dict) -> dict:
     return {
         "plane_a": t, "plane_b": y_apex, "rim": y_rim, "vertex": y_vertex, "focus": y_focus,
         "bulb_center": (off[0], y_focus + off[1], off[2]),
+    }
+
+
+def _prism_plate_geometry(lamp: dict, y_apex: float) -> dict:
+    """Derived y positions of a prism-plate lamp (README, the prism plate): the plate's flat front
+    face ``plate_front``, its ring bottoms ``plate_base`` and ring tops ``plate_peak``, the focus f
+    behind the ring bottoms, and the housing's back (``vertex``: where the socket ends, as for the
+    reflector). ``rim`` is where the lens side wall gives way to the housing: the plate's front."""
+    plate = lamp["prism_plate"]
+    front = y_apex + plate["gap"]
+    base = front + plate["thickness"]
+    slopes = ring_slopes(lamp["lens"]["radius"], plate["pitch"], plate["focal_length"], plate["ior"])
+    focus = base + plate["focal_length"]
+    off = lamp["bulb"]["offset"]
+    return {
+        "plane_a": lamp["lens"]["thickness"], "plane_b": y_apex, "rim": front, "plate_front": front,
+        "plate_base": base, "plate_peak": base + float(slopes.max()) * plate["pitch"],
+        "vertex": base + plate["housing_depth"], "focus": focus,
+        "bulb_center": (off[0], focus + off[1], off[2]),
     }
 
 

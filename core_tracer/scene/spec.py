@@ -412,6 +412,34 @@ SOCKET = Section(
     "The cylindrical socket from the reflector vertex to the bulb centre",
 )
 
+# At most this many prism rings across the plate's radius: the ring walk then crosses a bounded
+# number of rings and the profile stays a table of a few hundred numbers.
+MAX_RINGS = 500
+
+PRISM_PLATE = Section(
+    {
+        "gap": _length(4.0, "Space between the back of the lens cuts and the plate's flat front face", hi=1000.0),
+        "thickness": _length(2.0, "Thickness of the plate from its flat front face to the bottoms of the rings",
+                             hi=100.0),
+        "focal_length": _length(50.0,
+                                "Distance from the bottoms of the rings back to the plate's focus, where the bulb "
+                                "sits (plus the bulb offset); longer is a flatter plate", hi=1000.0),
+        "pitch": _length(2.0, "Width of each concentric prism ring: finer rings collimate more exactly", hi=1000.0),
+        "ior": Num(1.49, 1.0, 3.0, lo_open=True,
+                   doc="How strongly the plate bends light (refractive index; clear acrylic 1.49)"),
+        "absorption": Num((0.001, 0.001, 0.001), 0.0, 100.0, unit="1/mm", size=3, subtype="rgb",
+                          doc="How much red, green and blue the plate absorbs per mm (clear acrylic: almost 0)"),
+        "housing_depth": _length(60.0, "Depth of the opaque housing behind the plate, from the bottoms of the rings "
+                                       "to its back", hi=1000.0),
+        "housing_color": _color((0.08, 0.08, 0.08), "Colour of the opaque housing behind the plate"),
+    },
+    "A transparent plate between bulb and lens whose back carries concentric prism rings (a Fresnel lens) "
+    "that bend the bulb's light parallel to the lamp axis; used instead of the reflector when the lamp's "
+    "collection is prism_plate",
+)
+
+COLLECTIONS = ("reflector", "prism_plate")
+
 LAMP_FUNCTIONS = ("custom", "tail", "stop", "turn", "reversing", "position", "fog")
 
 LAMP = Section(
@@ -422,7 +450,11 @@ LAMP = Section(
                            "brightness and names its parts (custom: set them yourself)"),
         "lens": LENS,
         "cuts": CUTS,
+        "collection": Choice("reflector", COLLECTIONS,
+                             "How the bulb's light is gathered into a beam: the paraboloid reflector, or a "
+                             "prism plate in front of the bulb with a shallow housing behind"),
         "reflector": REFLECTOR,
+        "prism_plate": PRISM_PLATE,
         "bulb": BULB,
         "socket": SOCKET,
     },

@@ -34,6 +34,7 @@ from .derived import (
 from .freeform_section import finish_freeform
 from .reading import HugeNumber, SceneError, read_json
 from .safe_text import has_surrogate, printable, show_key
+from .validate_prism import check_prism_plate, prism_limits
 
 
 def load_scene(path: str | os.PathLike) -> dict:
@@ -268,15 +269,29 @@ def check_geometry(scene: dict) -> None:
                              f"allowed [0, {_rounded(c, False)}] mm (pitch / sqrt 2)")
         _check_cylinder(lamp, where)
         g = lamp_geometry(lamp)
-        if g["vertex"] > body["depth"]:
-            _reflector_too_deep(scene, i, g)
-        _check_bulb(lamp, g, where)
+        if lamp["collection"] == "prism_plate":
+            _plate_needs_round_flat_lens(lamp, where)
+            check_prism_plate(scene, i, g)
+        else:
+            if g["vertex"] > body["depth"]:
+                _reflector_too_deep(scene, i, g)
+            _check_bulb(lamp, g, where)
         rs = lamp["socket"]["radius"]
         rs_hi = min(shape.half_w, shape.half_h)
         if rs >= rs_hi:
             shown = f"{rs_hi:g}" if shape.round else _rounded(rs_hi, False)
             raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {shown}) mm")
     _check_wraps(scene)
+
+
+def _plate_needs_round_flat_lens(lamp: dict, where: str) -> None:
+    """The prism plate's rings are circles about the lamp axis behind a flat round lens (README)."""
+    if not Outline.of_lens(lamp["lens"]).round:
+        raise SceneError(f"{where}.lens.outline", 'a prism plate sits behind a round lens; allowed "round" '
+                         '(or collection "reflector")')
+    if lamp["lens"].get("shape", "flat") != "flat":
+        raise SceneError(f"{where}.lens.shape", 'a prism plate sits behind a flat lens; allowed "flat" '
+                         '(or collection "reflector")')
 
 
 def _check_rectangle(lens: dict, where: str) -> None:
@@ -610,7 +625,10 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
         need = 2 * shape.half_w + lens["thickness"] + lamp["cuts"]["height"]
         limits["lens.wrap_radius"] = (f"more than {_rounded(need, True)} mm for this lens (its width, thickness "
                                       "and cut height)")
-    limits.update(_bulb_limits(lamp))
+    if lamp.get("collection", "reflector") == "prism_plate":
+        limits.update(prism_limits(lamp, lamp_geometry(lamp)))
+    else:
+        limits.update(_bulb_limits(lamp))
     return limits
 
 

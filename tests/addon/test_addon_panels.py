@@ -164,15 +164,26 @@ def test_panels_are_in_the_lamp_tab(lamp_addon):
     assert [cls.__name__ for cls in roots] == ["LAMP_PT_design"]
 
 
+def _shown_panels(lamp_addon, bl_scene) -> list:
+    import bpy
+
+    context = SimpleNamespace(scene=bl_scene, window_manager=bpy.context.window_manager,
+                              engine=bl_scene.render.engine, view_layer=bl_scene.view_layers[0])
+    return [cls for cls in _panels(lamp_addon) if not hasattr(cls, "poll") or cls.poll(context)]
+
+
 def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
     shown = set()
-    for mode, outline, shape in (("transmitted_color", "round", "flat"), ("absorption", "rectangular", "cylindrical")):
+    for collection, mode, outline, shape in (("reflector", "transmitted_color", "round", "flat"),
+                                             ("reflector", "absorption", "rectangular", "cylindrical"),
+                                             ("prism_plate", "absorption", "round", "flat")):
+        design.lamps[2].collection = collection
         design.lamps[2].lens.color_mode = mode
         design.lamps[2].lens.outline = outline
         design.lamps[2].lens.shape = shape
         for cut_type in S.CUT_TYPES:  # each type shows its own fields
             design.lamps[2].cuts.type = cut_type
-            for cls in _panels(lamp_addon):
+            for cls in _shown_panels(lamp_addon, bl_scene):
                 shown |= draw(cls, bl_scene).spec_paths()
     wanted = {info.path for info in S.iter_fields() if not lamp_addon.design_properties.is_constant(info.spec)}
     assert wanted - shown == set()
@@ -204,6 +215,20 @@ def test_each_sub_panel_shows_its_section(lamp_addon, S, bl_scene, design):
     assert "background" in draw(bpy.types.LAMP_PT_light, bl_scene).spec_paths()
     assert {"name", "author", "description", "tags"} <= draw(bpy.types.LAMP_PT_info, bl_scene).spec_paths()
     assert "lamps[].center" in draw(bpy.types.LAMP_PT_lamps, bl_scene).spec_paths()
+
+
+def test_the_collection_shows_the_reflector_or_the_prism_plate_panel(lamp_addon, bl_scene, design):
+    import bpy
+
+    assert bpy.types.LAMP_PT_reflector in _shown_panels(lamp_addon, bl_scene)
+    assert bpy.types.LAMP_PT_prism_plate not in _shown_panels(lamp_addon, bl_scene)
+    design.lamps[2].collection = "prism_plate"
+    shown = _shown_panels(lamp_addon, bl_scene)
+    assert bpy.types.LAMP_PT_prism_plate in shown and bpy.types.LAMP_PT_reflector not in shown
+    paths = draw(bpy.types.LAMP_PT_prism_plate, bl_scene).spec_paths()
+    assert {f"lamps[].prism_plate.{key}" for key in ("gap", "thickness", "focal_length", "pitch", "ior",
+                                                      "absorption", "housing_depth", "housing_color")} <= paths
+    assert "lamps[].collection" in draw(bpy.types.LAMP_PT_lamps, bl_scene).spec_paths()
 
 
 def test_part_panels_show_the_active_lamp(lamp_addon, bl_scene, design):
@@ -262,9 +287,11 @@ def test_lens_shape_rows(lamp_addon, bl_scene, design):
 
 
 @pytest.mark.parametrize("mode", ["transmitted_color", "absorption"])
-def test_lengths_are_labelled_in_mm(lamp_addon, S, bl_scene, design, mode):
+@pytest.mark.parametrize("collection", ["reflector", "prism_plate"])
+def test_lengths_are_labelled_in_mm(lamp_addon, S, bl_scene, design, mode, collection):
     design.lamps[2].lens.color_mode = mode
-    for cls in _panels(lamp_addon):
+    design.lamps[2].collection = collection
+    for cls in _shown_panels(lamp_addon, bl_scene):
         for _, data, prop, kw in draw(cls, bl_scene).props():
             rna = [p for p in data.bl_rna.properties if p.identifier == prop][-1]
             path = re.sub(r"\[\d+\]", "[]", data.path_from_id(prop)).removeprefix("lamp_design.")
@@ -359,10 +386,16 @@ def test_every_panel_of_the_addon_is_drawn(addon, lamp_addon, bl_scene, design):
     names = {cls.__name__ for cls in panels}
     assert {"LAMP_PT_design", "LAMP_PT_presets", "LAMP_PT_study", "LAMP_PT_lens"} <= names
     drawn = set()
-    for cls in panels:
-        layout = draw(cls, bl_scene)
-        assert layout.log, f"{cls.__name__} drew nothing"
-        drawn.add(cls.__name__)
+    context = SimpleNamespace(scene=bl_scene, window_manager=wm, engine=bl_scene.render.engine,
+                              view_layer=bl_scene.view_layers[0])
+    for collection in ("reflector", "prism_plate"):  # each shows its own sub-panel
+        design.lamps[2].collection = collection
+        for cls in panels:
+            if hasattr(cls, "poll") and not cls.poll(context):
+                continue
+            layout = draw(cls, bl_scene)
+            assert layout.log, f"{cls.__name__} drew nothing"
+            drawn.add(cls.__name__)
     assert drawn == names
     presets = draw(bpy.types.LAMP_PT_presets, bl_scene)
     assert ("template_list", "LAMP_UL_presets", "lamp_presets", "lamp_presets_index") in presets.log
@@ -419,6 +452,12 @@ INVALID_EDITS = {
                               "outside the body"),
     "reflector deeper than the body": (lambda d: setattr(d.lamps[0].reflector, "focal_length", 5.0),
                                        "lamps[0].reflector.focal_length", "deeper than the body"),
+    "prism plate focus too near": (lambda d: (setattr(d.lamps[0], "collection", "prism_plate"),
+                                              setattr(d.lamps[0].prism_plate, "focal_length", 30.0)),
+                                   "lamps[0].prism_plate.focal_length", "cannot bend it parallel"),
+    "prism plate housing deeper than the body": (lambda d: (setattr(d.lamps[0], "collection", "prism_plate"),
+                                                            setattr(d.lamps[0].prism_plate, "housing_depth", 75.0)),
+                                                 "lamps[0].prism_plate.housing_depth", "deeper than the body"),
 }
 
 

@@ -79,6 +79,14 @@ BAD_SCENES = {
                              ("camera.target", "1e-200 mm from camera.position", "at least 1e-06 mm")),
     "cuts-too-fine": (_edit(lambda d: d["lamps"][0]["cuts"].update(pitch=1e-15)),
                       ("lamps[0].cuts.pitch", "1e-15 is too fine", "[0.09, 90] mm")),
+    "prism-plate-focus-too-near": (_edit(lambda d: d["lamps"][0].update(collection="prism_plate",
+                                                                        prism_plate={"focal_length": 20})),
+                                   ("lamps[0].prism_plate.focal_length", "20 is too short", "[49.09, 1000] mm")),
+    "prism-plate-housing-too-deep": (_edit(lambda d: d["lamps"][0].update(collection="prism_plate",
+                                                                          prism_plate={"housing_depth": 90})),
+                                     ("lamps[0].prism_plate.housing_depth", "90", "(0, 69.5] mm")),
+    "unknown-collection": (_edit(lambda d: d["lamps"][0].update(collection="lightguide")),
+                           ("lamps[0].collection", "lightguide", '"reflector", "prism_plate"')),
 }
 
 

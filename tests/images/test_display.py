@@ -163,7 +163,10 @@ def test_auto_exposure_keeps_every_presets_lit_lens_unclipped(preset_renders, pr
         assert preset == "paper-lamp-off"
         assert _lens_reading(image, lens, view, ev)[0] < MAX_CLIPPED
         return
-    assert lit.sum() > 0.9 * lens.sum()
+    # Nearly every lens pixel of a lit lamp sees the bulb or the reflector's glow; a prism-plate lamp has
+    # no glow, and where its cuts bend the view past the bulb the pixel sees the dark housing.
+    prism = any(lamp["collection"] == "prism_plate" for lamp in load_scene(PRESETS / f"{preset}.json")["lamps"])
+    assert lit.sum() > (0.8 if prism else 0.9) * lens.sum()
     clipped, spread = _lens_reading(image, lit, view, ev)
     assert clipped < MAX_CLIPPED, (preset, view_name, ev, clipped)
     assert spread >= MIN_SPREAD, (preset, view_name, ev, spread)

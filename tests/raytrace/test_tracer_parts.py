@@ -13,7 +13,7 @@ from core_tracer.raytrace.parts.base import Segments
 
 
 def test_each_medium_reaches_exactly_the_surfaces_of_table_1():
-    for medium in (paths.IN_LENS, paths.IN_AIR):
+    for medium in (paths.IN_LENS, paths.IN_AIR, paths.IN_PLATE):
         reachable = {int(s) for s in np.nonzero(paths.CLASS_OF[medium].any(axis=0))[0]}
         assert {part.SURFACE for part in PARTS if medium in part.MEDIA} == reachable, medium
 
