@@ -37,8 +37,8 @@ from .roles import PartTable
  BACKGROUND_PASS) = range(len(PASS_NAMES))
 
 TILE_RAYS = 65536  # eye rays per band of rows, as the parametric tracer
-EYE = 8  # the source "surface" of an eye ray
-TO_BODY = 13  # a class beyond Table 1: a segment that reaches a body (housing) and ends there
+EYE = BODY + 1  # the source "surface" of an eye ray
+TO_BODY = 20  # a class beyond Table 1 and the prism plate's ⑬-⑲: a segment that reaches a body (housing) and ends there
 NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (README, "Free-form")
 SELF_HIT_RETRIES = 2
 
@@ -46,8 +46,9 @@ SELF_HIT_RETRIES = 2
 def _class_table() -> np.ndarray:
     """CLASS[medium, source surface, hit surface]: Table 1's classes (paths.CLASS_OF) for the
     surfaces the roles give, plus the segments that only meshes have."""
-    table = np.zeros((2, 9, 8), np.int8)
-    table[:, :7, :7] = P.CLASS_OF
+    table = np.zeros((2, EYE + 1, BODY + 1), np.int8)
+    lens_and_air = P.CLASS_OF[[P.IN_LENS, P.IN_AIR]]  # meshes have no prism plate medium
+    table[:, :lens_and_air.shape[1], :lens_and_air.shape[2]] = lens_and_air
     for src in (P.OUTER, P.CUT, P.REFLECTOR, EYE):
         table[P.IN_AIR, src, BODY] = TO_BODY
         table[P.IN_AIR, src, P.NOTHING] = P.LENS_OUTER_TO_OUTSIDE if src == P.OUTER else NOT_IN_TABLE

@@ -1,5 +1,5 @@
 """Table 1 on meshes: every transition the free-form tracer records is one of the paper's, or one
-of the documented additions (⑬ a body reached, 0 a segment only meshes allow). A ray said to be in
+of the documented additions (class 20, a body reached, 0 a segment only meshes allow). A ray said to be in
 the lens must be in it: an interpolated normal that tipped a child across its face would show as
 a lens class followed by an air class (⑧ reflected to ③)."""
 
