@@ -56,7 +56,7 @@ def make_hostile_folder(folder: Path) -> tuple[set[str], dict[str, tuple[str, ..
     write("deep-name.json", '{"schema": "lamp-scene/1", "name": ' + "[" * 5000 + "]" * 5000 + "}",
           "nested too deeply")
     write("not-utf8.json", b'{"name": "\xff\xfe\xfa"}', "not UTF-8")
-    write("future.json", json.dumps({**base, "schema": "lamp-scene/2"}), "schema:", '"lamp-scene/2" is not supported')
+    write("future.json", json.dumps({**base, "schema": "lamp-scene/3"}), "schema:", '"lamp-scene/3" is not supported')
     write("not-json.json", "{{", "not valid JSON")
     write("empty.json", "", "not valid JSON")
     write("unknown-key.json", json.dumps({**base, "bulb_power": 3}), "bulb_power: unknown key")

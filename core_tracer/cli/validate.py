@@ -7,7 +7,7 @@ import argparse
 from ..scene.safe_text import printable
 from .common import load_scene_file
 
-HELP = "check a lamp-scene/1 file and report the first problem"
+HELP = "check a lamp-scene file and report the first problem"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

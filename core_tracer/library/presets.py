@@ -28,6 +28,7 @@ from .. import fileio
 from ..images import display
 from ..images.display import ViewTransform
 from ..scene.derived import without_defaults
+from ..scene.freeform_section import freeform_without_defaults
 from ..scene.reading import SceneError, read_json, scene_to_json
 from ..scene.safe_text import printable
 from ..scene.validate import normalize, parse_scene
@@ -157,7 +158,15 @@ def load_preset(path: str | os.PathLike) -> dict:
 def digest(scene: dict) -> str:
     """The hash of a normalised scene that names its thumbnail. Fields at their defaults are left
     out, so a field added to the spec with a default leaves every existing hash as it was."""
-    return hashlib.sha256(scene_to_json(without_defaults(scene)).encode("utf-8")).hexdigest()[:16]
+    parametric = {key: value for key, value in scene.items() if key != "freeform"}
+    design = without_defaults(parametric)
+    if "freeform" in scene:
+        design["freeform"] = freeform_without_defaults(scene["freeform"])
+    else:
+        # A design without free-form parts is the lamp-scene/1 document it migrated from: hashed as
+        # that, so every thumbnail made before lamp-scene/2 keeps its name.
+        design["schema"] = "lamp-scene/1"
+    return hashlib.sha256(scene_to_json(design).encode("utf-8")).hexdigest()[:16]
 
 
 def _entry(library: Library, path: str, scene: dict) -> PresetEntry:

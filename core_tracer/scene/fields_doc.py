@@ -42,8 +42,9 @@ def _rule_default(sp: S.Spec, key: str, rule: S.OneOf) -> str:
 def field_table() -> str:
     """The Markdown table of every field, then the either/or rules, from ``spec``."""
     rows = ["| field | unit | allowed | default | meaning |", "|---|---|---|---|---|"]
-    sections = dict(S.iter_sections())
-    for info in S.iter_fields():
+    # The optional freeform section is declared apart from SCENE (spec.py says why); listed after it.
+    sections = {**dict(S.iter_sections()), **dict(S.iter_sections(S.FREEFORM, "freeform."))}
+    for info in (*S.iter_fields(), *S.iter_fields(S.FREEFORM, "freeform.")):
         sp = info.spec
         unit = getattr(sp, "unit", "") or ""
         allowed = sp.range_text()

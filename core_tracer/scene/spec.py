@@ -1,4 +1,4 @@
-"""The field declarations of a ``lamp-scene/1`` document.
+"""The field declarations of a ``lamp-scene/2`` document.
 
 Every parameter of a lamp design is declared here once, with its unit, allowed range, default
 and description. The validator (``validate``), the README's field table, the JSON presets and
@@ -14,7 +14,10 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-SCHEMA = "lamp-scene/1"
+SCHEMA = "lamp-scene/2"
+# Earlier versions this one reads: a lamp-scene/1 document is a lamp-scene/2 one without "freeform"
+# (``validate.parse_scene`` migrates it on load).
+OLDER_SCHEMAS = ("lamp-scene/1",)
 MAX_LAMPS = 4
 MAX_IMAGE_SIDE = 8192
 # Rays per pixel at most: 256 brings an edge to within a fraction of a percent of its converged
@@ -396,8 +399,59 @@ SCENE = Section(
         "body": BODY,
         "lamps": ListOf(LAMP, 1, MAX_LAMPS, "The lamps, 1 to 4"),
     },
-    "A lamp-scene/1 document",
+    "A lamp-scene/2 document",
     optional=("camera",),
+)
+
+# ---------------------------------------------------------------------------------------------
+# The optional top-level "freeform" section: the designer's own meshes, read from a glTF binary
+# beside the document, each with a lamp role. It is declared apart from SCENE (``validate`` reads
+# it as its own section) because it is a list of meshes, not design properties: the Blender
+# properties generated from SCENE keep to the parametric lamp. Role values reuse the
+# parametric fields where they mean the same, with the same defaults.
+
+FREEFORM_ROLES = ("lens", "reflector", "bulb", "socket", "side_wall", "body")
+MAX_FREEFORM_PARTS = 256
+MAX_MESH_NAME = 63  # Blender's longest object name
+
+FREEFORM_ROLE_SECTIONS = {
+    "lens": Section(
+        {key: LENS.fields[key] for key in ("ior", "absorption", "transmitted_color", "reference_thickness",
+                                           "diffuse_color", "specular", "shininess")},
+        "A closed lens mesh: refracts (Fresnel, Snell), absorbs over the path inside it (eq. 2)",
+        one_of=(OneOf("color",
+                      (Alternative(("transmitted_color", "reference_thickness"), "Transmitted Colour",
+                                   "The colour seen through reference_thickness of the lens"),
+                       Alternative(("absorption",), "Absorption", "Absorption per mm (A in eq. 2)")),
+                      default="absorption", preferred="transmitted_color", doc="How the lens colour is given"),),
+    ),
+    "reflector": Section({key: REFLECTOR.fields[key] for key in ("color", "reflectance", "scatter", "shininess")},
+                         "A mirror: constant colour on the first hit, Blinn scatter toward the bulbs (eq. 3)"),
+    "bulb": Section({key: BULB.fields[key] for key in ("intensity", "on")},
+                    "A light source; rays that reach it end with its intensity"),
+    "socket": Section({"color": SOCKET.fields["color"]}, "Opaque, ends a ray with its colour"),
+    "side_wall": Section({"color": LENS.fields["side_wall_color"]}, "Opaque, ends a ray with its colour"),
+    "body": Section({key: BODY.fields[key] for key in ("color", "specular", "shininess")},
+                    "Opaque housing shaded by equation (1)"),
+}
+
+FREEFORM_PART = Section(
+    {
+        "object": Text("", "Name of the mesh in the mesh file (the Blender object's name)", max_len=MAX_MESH_NAME),
+        "role": Choice("body", FREEFORM_ROLES, "What the mesh is in the lamp"),
+        **FREEFORM_ROLE_SECTIONS,
+    },
+    "One mesh with its role and the role's values (only the key named by the role)",
+    optional=FREEFORM_ROLES,
+)
+
+FREEFORM = Section(
+    {
+        "mesh_file": Text("", "The glTF binary (.glb) beside the document holding the meshes by name",
+                          max_len=120),
+        "parts": ListOf(FREEFORM_PART, 1, MAX_FREEFORM_PARTS, "The meshes and their roles"),
+    },
+    "Free-form parts: the designer's own meshes traced with the paper's model",
 )
 
 

@@ -1,4 +1,4 @@
-"""Validating and normalising ``lamp-scene/1`` documents (read by ``reading``).
+"""Validating and normalising ``lamp-scene`` documents (read by ``reading``).
 
 A *scene* is the normalised document: a plain JSON-compatible dict in which every field of
 ``spec.SCENE`` is present (defaults filled in, the default camera computed), numbers are
@@ -7,6 +7,9 @@ gave it: ``absorption`` or ``transmitted_color`` with ``reference_thickness``.
 
 Every problem raises ``SceneError`` whose text names the field, the value and the allowed
 range, e.g. ``lamps[0].lens.radius: -3 is out of range; allowed (0, 1000] mm``.
+
+A ``lamp-scene/1`` document (what earlier versions wrote) is migrated on load: it is the
+``lamp-scene/2`` document with the same fields and no ``freeform`` section, so it renders the same.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from typing import Any
 
 from . import spec as S
 from .derived import default_camera, default_value, fill_alternative, lamp_geometry
+from .freeform_section import finish_freeform
 from .reading import HugeNumber, SceneError, read_json
 from .safe_text import has_surrogate, printable, show_key
 
@@ -35,16 +39,23 @@ def load_scene(path: str | os.PathLike) -> dict:
 def parse_scene(doc: Any) -> dict:
     """Validate a decoded JSON document and return the normalised scene."""
     if not isinstance(doc, dict):
-        raise SceneError("", f"a lamp-scene/1 document is a JSON object, not {_kind(doc)}")
+        raise SceneError("", f"a lamp-scene document is a JSON object, not {_kind(doc)}")
     schema = doc.get("schema")
-    if schema != S.SCHEMA:
+    readable = (S.SCHEMA, *S.OLDER_SCHEMAS)
+    if schema not in readable:
+        allowed = " or ".join(f'"{s}"' for s in readable)
         if isinstance(schema, str) and schema.startswith("lamp-scene/"):
-            raise SceneError("schema", f'"{schema}" is not supported; this version reads "{S.SCHEMA}"')
-        raise SceneError("schema", f"{_show(schema)} is missing or wrong; allowed \"{S.SCHEMA}\"")
-    scene = _section(doc, S.SCENE, "")
+            raise SceneError("schema", f'"{printable(schema, 40)}" is not supported; this version reads {allowed}')
+        raise SceneError("schema", f"{_show(schema)} is missing or wrong; allowed {allowed}")
+    raw_freeform = doc.get("freeform") if schema == S.SCHEMA else None  # lamp-scene/1 knew no freeform
+    if raw_freeform is not None:
+        doc = {key: value for key, value in doc.items() if key != "freeform"}
+    scene = _section({**doc, "schema": S.SCHEMA}, S.SCENE, "")
     if "camera" not in scene:
         scene["camera"] = default_camera(scene)
     check_geometry(scene)
+    if raw_freeform is not None:
+        scene["freeform"] = finish_freeform(raw_freeform, _section(raw_freeform, S.FREEFORM, "freeform."))
     return scene
 
 

@@ -296,7 +296,7 @@ def test_export_then_import(browser, bl_scene, tmp_path, addon_core):
         bpy.ops.lamp.preset_import(filepath=str(tmp_path / "other.json"))
     assert _design(props, bl_scene) == before
 
-    (tmp_path / "bad.json").write_text('{"schema": "lamp-scene/2"}')
+    (tmp_path / "bad.json").write_text('{"schema": "lamp-scene/3"}')
     with pytest.raises(RuntimeError, match="bad.json: schema"):
         bpy.ops.lamp.preset_import(filepath=str(tmp_path / "bad.json"))
     assert _design(props, bl_scene) == before

@@ -39,9 +39,9 @@ def _edit(fn):
 BAD_SCENES = {
     "not-json": (lambda: '{"schema": "lamp-scene/1", "lamps": [', ("not valid JSON", "line 1")),
     "not-utf8": (lambda: b'{"name": "\xff\xfe"}', ("not UTF-8",)),
-    "wrong-schema": (_edit(lambda d: d.update(schema="lamp-scene/2")),
-                     ("schema", '"lamp-scene/2"', '"lamp-scene/1"')),
-    "no-schema": (_edit(lambda d: d.pop("schema")), ("schema", '"lamp-scene/1"')),
+    "wrong-schema": (_edit(lambda d: d.update(schema="lamp-scene/3")),
+                     ("schema", '"lamp-scene/3"', '"lamp-scene/2"', '"lamp-scene/1"')),
+    "no-schema": (_edit(lambda d: d.pop("schema")), ("schema", '"lamp-scene/2"')),
     "unknown-key": (_edit(lambda d: d["lamps"][0]["lens"].update(colour=[1, 0, 0])),
                     ("lamps[0].lens.colour", "unknown key", "transmitted_color")),
     "nan": (lambda: BASELINE.read_text().replace('"ior": 1.49', '"ior": NaN'), ("lamps[0].lens.ior", "NaN", "[1, 3]")),
@@ -173,7 +173,7 @@ def test_usage_errors_are_one_line():
 def test_validate_ok():
     proc = run_cli("validate", BASELINE)
     assert proc.returncode == 0, proc.stderr
-    assert "valid lamp-scene/1" in proc.stdout and "Round red tail lamp" in proc.stdout
+    assert "valid lamp-scene/2" in proc.stdout and "Round red tail lamp" in proc.stdout
 
 
 def test_render_exr_with_passes(tmp_path):

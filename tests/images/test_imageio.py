@@ -157,14 +157,14 @@ def test_read_errors_name_the_file(tmp_path):
 def test_header_with_a_broken_scene_is_reported(tmp_path):
     path = tmp_path / "odd.exr"
     spec = oiio.ImageSpec(2, 2, 3, oiio.FLOAT)
-    spec.attribute(imageio.SCENE_ATTRIBUTE, '{"schema": "lamp-scene/2"}')
+    spec.attribute(imageio.SCENE_ATTRIBUTE, '{"schema": "lamp-scene/3"}')
     out = oiio.ImageOutput.create(str(path))
     assert out.open(str(path), spec)
     out.write_image(np.zeros((2, 2, 3), np.float32))
     out.close()
     with pytest.raises(SceneError) as err:
         imageio.read_image(path)
-    assert "odd.exr" in str(err.value) and "lamp-scene/2" in str(err.value)
+    assert "odd.exr" in str(err.value) and "lamp-scene/3" in str(err.value)
     assert os.path.exists(path)
 
 

@@ -117,7 +117,7 @@ def test_study_json_round_trip(tmp_path):
     doc = json.loads(path.read_text())
     assert doc["schema"] == "lamp-study/1" and doc["size"] == [32, 32]
     assert doc["axes"][1] == {"parameter": "cuts.height", "range": [0.5, 2.0], "steps": 2}
-    assert doc["base"]["schema"] == "lamp-scene/1"  # embedded: the study travels alone
+    assert doc["base"]["schema"] == "lamp-scene/2"  # embedded: the study travels alone
     again = st.Study.load(path)
     assert again.to_json() == s.to_json()
     assert [v.scene for v in again.variants] == [v.scene for v in s.variants]
