@@ -21,6 +21,9 @@ from .design_operator import DesignOperator
 from .freeform_properties import NONE, ROLES, role_label
 
 
+_ROLE_ITEMS = tuple((role, role_label(role), "") for role in ROLES)
+
+
 def _candidates(context) -> list[bpy.types.Object]:
     objects = list(context.selected_objects or ())
     if context.active_object is not None and context.active_object not in objects and context.active_object.select_get():
@@ -34,7 +37,7 @@ class LAMP_OT_role_assign(bpy.types.Operator):
     bl_description = "Make the selected mesh objects a free-form part of the lamp with this role"
     bl_options = {"REGISTER", "UNDO"}
 
-    role: EnumProperty(name="Role", items=tuple((r, role_label(r), "") for r in ROLES), default="lens")
+    role: EnumProperty(name="Role", items=_ROLE_ITEMS, default="lens")
     material: BoolProperty(name="Cycles Material", default=True,
                            description="Add the role's Cycles material (a slot of its own, used by every face), so "
                                        "that Cycles and Compare render the part as the Lamp Tracer does")

@@ -38,7 +38,8 @@ def test_every_role_field_is_a_property_with_the_spec_default(lamp_addon, addon_
             prop = values[key]
             if isinstance(spec, S.Num) and spec.size == 1:
                 assert prop.default == pytest.approx(spec.default), (role, key)
-                assert prop.hard_min == pytest.approx(spec.lo) and prop.hard_max == pytest.approx(spec.hi)
+                lo, hi = lamp_addon.design_properties.blender_range(spec)
+                assert (prop.hard_min, prop.hard_max) == pytest.approx((lo, hi)), (role, key)
             elif isinstance(spec, S.Num):
                 assert tuple(prop.default_array) == pytest.approx(spec.default), (role, key)
             elif isinstance(spec, S.Flag):
@@ -104,6 +105,11 @@ def test_role_value_out_of_range_is_named_with_the_object(lamp_addon, addon_core
 
 
 class _Layout(RecordingLayout):
+    def _child(self):
+        child = _Layout(self.log)
+        child.alert = self.alert
+        return child
+
     def operator_menu_enum(self, idname, prop, **kw):
         self.operator(idname)
         self.log.append(("menu", idname, prop))
