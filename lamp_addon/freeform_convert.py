@@ -68,7 +68,7 @@ def _keep_faces(mesh: bpy.types.Mesh, keep: np.ndarray) -> None:
     bm = bmesh.new()
     bm.from_mesh(mesh)
     bm.faces.ensure_lookup_table()
-    doomed = [f for f, k in zip(bm.faces, keep) if not k]
+    doomed = [f for f, k in zip(bm.faces, keep, strict=False) if not k]
     bmesh.ops.delete(bm, geom=doomed, context="FACES")
     bm.to_mesh(mesh)
     bm.free()

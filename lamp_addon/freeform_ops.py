@@ -20,14 +20,14 @@ from . import design_root, freeform_materials, freeform_properties, reports
 from .design_operator import DesignOperator
 from .freeform_properties import NONE, ROLES, role_label
 
-
 _ROLE_ITEMS = tuple((role, role_label(role), "") for role in ROLES)
 
 
 def _candidates(context) -> list[bpy.types.Object]:
     objects = list(context.selected_objects or ())
-    if context.active_object is not None and context.active_object not in objects and context.active_object.select_get():
-        objects.append(context.active_object)
+    active = context.active_object
+    if active is not None and active not in objects and active.select_get():
+        objects.append(active)
     return objects
 
 

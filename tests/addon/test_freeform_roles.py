@@ -77,7 +77,6 @@ def test_assign_and_clear(lamp_addon, bl_scene):
 
 def test_built_parts_and_non_meshes_are_refused(lamp_addon, addon_core, bl_scene):
     import bpy
-
     from helpers import BASELINE
 
     lamp_addon.design_properties.scene_to_design(bl_scene, addon_core.scene.load_scene(BASELINE))
@@ -116,8 +115,9 @@ class _Layout(RecordingLayout):
 
 
 def _draw_panel(bl_scene):
-    import bpy
     from types import SimpleNamespace
+
+    import bpy
 
     layout = _Layout()
     context = SimpleNamespace(scene=bl_scene, window_manager=bpy.context.window_manager)
@@ -139,15 +139,17 @@ def test_panel_lists_parts_and_shows_the_selected_role(lamp_addon, addon_core, b
     for mode in ("transmitted_color", "absorption"):
         obj.lamp_role.lens.color_mode = mode
         shown = {prop for _, data, prop, _kw in _draw_panel(bl_scene).props() if data == obj.lamp_role.lens}
-        form = S.FREEFORM_ROLE_SECTIONS["lens"].one_of[0].alternative(mode).keys
-        always = {k for k in S.FREEFORM_ROLE_SECTIONS["lens"].fields if S.FREEFORM_ROLE_SECTIONS["lens"].rule_of(k) is None}
+        lens = S.FREEFORM_ROLE_SECTIONS["lens"]
+        form = lens.one_of[0].alternative(mode).keys
+        always = {k for k in lens.fields if lens.rule_of(k) is None}
         assert shown == always | set(form) | {"color_mode"}
 
 
 def test_role_list_filters_to_parts(lamp_addon, bl_scene):
     import bpy
 
-    a, b = _mesh("Zed"), _mesh("Alpha")
+    a = _mesh("Zed")
+    _mesh("Alpha")
     lamp_addon.freeform_properties.set_role(a, "body")
     ui_list = bpy.types.LAMP_UL_role_objects
     flags, _order = ui_list.filter_items(ui_list, bpy.context, bl_scene, "objects")
