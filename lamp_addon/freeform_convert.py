@@ -132,7 +132,6 @@ def convert_to_freeform(bl_scene: bpy.types.Scene) -> ConvertReport:
     for obj in parts:
         roles = _roles_of(obj[design_root.PART_KEY], scene)
         mesh = bpy.data.meshes.new_from_object(obj.evaluated_get(depsgraph))
-        mesh.materials.clear()
         if roles[0][0] == "lens":
             glass, wall = _split_lens(mesh)
             bpy.data.meshes.remove(mesh)
@@ -140,6 +139,7 @@ def convert_to_freeform(bl_scene: bpy.types.Scene) -> ConvertReport:
         else:
             made = [(mesh, obj.name)]
         for (data, name), (role, values) in zip(made, roles, strict=True):
+            data.materials.clear()  # after the split, which reads the faces' material indices
             data.name = name + SUFFIX
             copy = bpy.data.objects.new(name + SUFFIX, data)
             coll.objects.link(copy)

@@ -1,11 +1,12 @@
 """The free-form parts' geometry, made once per geometry change and reused by every render.
 
-For each Blender scene the meshes of its parts (``freeform_meshes``) and the acceleration structure
-built from them (``core_tracer.freeform.GeometryCache``) are kept with a key: the parts' names and
-roles. A depsgraph update that changes the geometry or transform of a part, or moves the design
-root, marks the scene's entry stale (``_on_depsgraph_update``); the next render or viewport redraw
-rebuilds it, and every other render reuses it: F12 after F12, each refinement stage of the viewport,
-Compare. A role's values are not geometry: editing them reuses the structure.
+For each Blender scene the meshes of its parts (``freeform_meshes``) are kept with a key (the parts'
+names and roles) beside one ``core_tracer.freeform.GeometryCache``, which holds the acceleration
+structure and rebuilds it only when the meshes or roles it is given differ from the last ones. A
+depsgraph update that changes the geometry or transform of a part, or moves the design root, marks
+the scene's meshes stale (``_on_depsgraph_update``); the next render or viewport redraw reads them
+again, and every other render reuses them and the structure: F12 after F12, each refinement stage
+of the viewport, Compare. A role's values are not geometry: editing them reuses both.
 
 Renders run on other threads (F12's render thread, the viewport's worker) while the main thread
 marks entries stale; one lock guards the table.
@@ -26,8 +27,8 @@ from . import design_root, freeform_meshes, freeform_properties
 class Geometry:
     key: tuple  # ((object name, role), ...) of the parts, in document order
     meshes: dict  # object name -> MeshData
-    cache: object  # core_tracer.freeform.GeometryCache over the meshes
-    generation: int  # counts rebuilds: a changed generation means changed geometry
+    cache: object  # the scene's core_tracer.freeform.GeometryCache (shared by its Geometry entries)
+    generation: int  # counts mesh reads: a changed generation means changed geometry
 
     @property
     def triangles(self) -> int:
@@ -37,7 +38,7 @@ class Geometry:
 _lock = threading.Lock()
 _entries: dict[str, Geometry] = {}
 _stale: set[str] = set()
-_builds = [0]  # how many structures were built (tests and the benchmark read it)
+_reads = [0]  # how many times parts' meshes were read from Blender
 
 
 def parts_in(depsgraph: bpy.types.Depsgraph) -> list[bpy.types.Object]:
@@ -51,9 +52,9 @@ def part_key(objects) -> tuple:
 
 
 def geometry(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, objects) -> Geometry:
-    """The geometry of ``objects`` (parts of ``bl_scene`` as ``depsgraph`` evaluates them): the kept
-    one when nothing it was made from changed, else made now. Raises ``SceneError`` for a mesh the
-    tracer cannot use (an open lens, inward normals, too many triangles)."""
+    """The meshes of ``objects`` (parts of ``bl_scene`` as ``depsgraph`` evaluates them) and the
+    scene's acceleration-structure cache: the kept meshes when nothing they were made from changed,
+    else read now."""
     from ..core_tracer.freeform import GeometryCache
 
     key = part_key(objects)
@@ -63,18 +64,17 @@ def geometry(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, objects)
             return entry
         _stale.discard(bl_scene.name)
     meshes = freeform_meshes.scene_meshes(bl_scene, depsgraph, objects)
-    roles = {name: role for name, role in key}
-    cache = GeometryCache(meshes, roles)
     with _lock:
-        _builds[0] += 1
-        entry = Geometry(key, meshes, cache, _builds[0])
+        _reads[0] += 1
+        cache = entry.cache if entry is not None else GeometryCache()
+        entry = Geometry(key, meshes, cache, _reads[0])
         _entries[bl_scene.name] = entry
     return entry
 
 
-def builds() -> int:
-    """How many acceleration structures have been built in this session."""
-    return _builds[0]
+def reads() -> int:
+    """How many times parts' meshes were read from Blender in this session."""
+    return _reads[0]
 
 
 def forget(scene_name: str | None = None) -> None:
@@ -96,11 +96,17 @@ def _touches_parts(update) -> bool:
     return freeform_properties.has_role(obj) or obj.get(design_root.PART_KEY) == design_root.ROOT_PART
 
 
+def note_updates(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph) -> None:
+    """Mark the scene's meshes stale if ``depsgraph``'s updates touch a part (the viewport engine
+    calls it too: its ``view_update`` may come before the handlers run)."""
+    if bl_scene.name in _entries and any(_touches_parts(update) for update in depsgraph.updates):
+        with _lock:
+            _stale.add(bl_scene.name)
+
+
 @persistent
 def _on_depsgraph_update(scene, depsgraph) -> None:
-    if scene.name in _entries and any(_touches_parts(update) for update in depsgraph.updates):
-        with _lock:
-            _stale.add(scene.name)
+    note_updates(scene, depsgraph)
 
 
 @persistent

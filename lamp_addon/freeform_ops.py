@@ -16,7 +16,7 @@ from bpy_extras.io_utils import ExportHelper
 
 from ..core_tracer import fileio
 from ..core_tracer.scene.reading import SceneError
-from . import design_root, freeform_materials, freeform_properties, reports
+from . import design_root, freeform_convert, freeform_export, freeform_materials, freeform_properties, reports
 from .design_operator import DesignOperator
 from .freeform_properties import NONE, ROLES, role_label
 
@@ -121,10 +121,8 @@ class LAMP_OT_freeform_convert(DesignOperator, bpy.types.Operator):
         return None
 
     def execute(self, context):
-        from .freeform_convert import convert_to_freeform
-
         try:
-            report = convert_to_freeform(context.scene)
+            report = freeform_convert.convert_to_freeform(context.scene)
         except SceneError as e:
             return self.cancelled(f"Not converted: {e}")
         built = "built the lamp, then " if report.built else ""
@@ -152,10 +150,8 @@ class LAMP_OT_freeform_export(bpy.types.Operator, ExportHelper):
         return True
 
     def execute(self, context):
-        from .freeform_export import export_pair
-
         try:
-            report = export_pair(context.scene, self.filepath, overwrite=self.replace)
+            report = freeform_export.export_pair(context.scene, self.filepath, overwrite=self.replace)
         except fileio.TargetExistsError as e:
             return reports.cancelled(self, f"Not exported: {e.filename} exists already; tick Replace Existing")
         except (SceneError, OSError) as e:

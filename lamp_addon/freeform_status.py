@@ -87,5 +87,6 @@ def panel_lines(bl_scene: bpy.types.Scene) -> list[Line]:
     return lines
 
 
-# What the Lamp Tracer renders when parts have roles (core_tracer.freeform.render_passes).
-RENDERED_TEXT = "Lamp Tracer: the parts below and the lamps"
+# What the Lamp Tracer renders when parts have roles: core_tracer.freeform.render_passes traces the
+# parts alone (with the design's camera, light and background), not the parametric lamps and body.
+RENDERED_TEXT = "The Lamp Tracer renders these parts only, not the parametric lamps"

@@ -60,8 +60,11 @@ class PreviewJob:
     """The stages of one view of one design, run in order until done or cancelled."""
 
     def __init__(self, scene: dict, width: int, height: int, generation: int,
-                 divisors: tuple[int, ...] | None = None, threads: int | None = None):
+                 divisors: tuple[int, ...] | None = None, threads: int | None = None, renderer=None):
         self.scene = scene
+        # render_passes' stand-in for a scene it does not trace itself (free-form parts,
+        # lamp_addon.freeform_render), called with the same arguments
+        self.renderer = renderer or render_passes
         self.width, self.height = width, height
         self.generation = generation
         self.divisors = divisors if divisors is not None else stages_for(width, height)
@@ -88,7 +91,7 @@ class PreviewJob:
         divisor = self.divisors[stage]
         width, height = stage_size(self.width, self.height, divisor)
         try:
-            result = render_passes(self.scene, width, height, should_stop=self._cancel.is_set,
+            result = self.renderer(self.scene, width, height, should_stop=self._cancel.is_set,
                                    threads=self.threads, keep_passes=False)
         except RenderCancelled:
             return None
@@ -111,14 +114,15 @@ class ProgressivePreview:
         self._news = False
         self._worker: threading.Thread | None = None
 
-    def restart(self, scene: dict, width: int, height: int) -> None:
-        """Cancel the running job and make a new one for ``scene`` seen in a region of this size.
-        The newest frame stays available until the new job's first stage replaces it."""
+    def restart(self, scene: dict, width: int, height: int, renderer=None) -> None:
+        """Cancel the running job and make a new one for ``scene`` seen in a region of this size
+        (rendered by ``renderer`` when given, see ``PreviewJob``). The newest frame stays available
+        until the new job's first stage replaces it."""
         with self._lock:
             if self._job is not None:
                 self._job.cancel()
             self._generation += 1
-            self._job = PreviewJob(scene, width, height, self._generation, self.divisors, self.threads)
+            self._job = PreviewJob(scene, width, height, self._generation, self.divisors, self.threads, renderer)
             self.error = None
 
     def cancel(self) -> None:
