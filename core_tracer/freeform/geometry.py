@@ -1,0 +1,150 @@
+"""The meshes of a free-form design as one set of triangles with their roles, checked, and the
+Embree scene over them, built once per geometry change (``GeometryCache``).
+
+Each triangle knows its part, the surface it is in Table 1's terms and, for a lens, which lens
+volume it bounds. Table 1's surfaces follow from the roles (README, "Free-form"):
+
+- lens triangles facing the viewer (outward normal with y < 0) are the outer face, every other
+  lens triangle the inner (cut) face;
+- reflector, bulb, socket and side wall are the paper's parts; body is the housing (eq. 1).
+"""
+
+from __future__ import annotations
+
+import zlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..raytrace import paths as P
+from ..scene.reading import SceneError
+from ..scene.safe_text import printable
+from .embree import EmbreeScene, embree_missing
+from .meshes import MAX_TRIANGLES, MeshData, check_lens_volume, check_mesh, face_normals
+
+BODY = 7  # a surface beyond Table 1's: the housing, shaded by eq. (1), ends the path
+SURFACE_OF_ROLE = {"reflector": P.REFLECTOR, "bulb": P.BULB, "socket": P.SOCKET, "side_wall": P.WALL, "body": BODY}
+
+# Rays leave a surface this far along its geometric normal (relative to the design's size, at
+# least 0.1 µm), and a ray never takes its own triangle as its next hit: Embree intersects in
+# single precision, so a ray starting exactly on a surface could find it again at t ≈ 0.
+EPSILON_MIN = 1e-4  # mm
+EPSILON_RELATIVE = 2e-6
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """All triangles of the design's parts, concatenated in the order of ``freeform.parts``."""
+
+    vertices: np.ndarray  # (V, 3) float64 mm
+    triangles: np.ndarray  # (T, 3) int64 into vertices
+    corners: np.ndarray  # (T, 3, 3) float64 vertex positions per triangle
+    normal: np.ndarray  # (T, 3) unit geometric normal (outward for a lens)
+    corner_normals: np.ndarray  # (T, 3, 3) unit shading normals per corner (the face normal when flat)
+    part: np.ndarray  # (T,) index into freeform.parts
+    surface: np.ndarray  # (T,) int8 surface id (paths.OUTER, CUT, REFLECTOR … or BODY)
+    epsilon: float  # mm, the offset of a ray's origin off its surface
+    fingerprint: tuple
+
+    @property
+    def extent(self) -> float:
+        return float(np.ptp(self.vertices, axis=0).max()) if len(self.vertices) else 0.0
+
+
+def part_meshes(scene: dict, meshes: dict[str, MeshData]) -> list[MeshData]:
+    """The mesh of every part, in order; a part naming no mesh is the user's mistake."""
+    section = scene.get("freeform")
+    if not section:
+        raise SceneError("freeform", "is missing; a free-form render needs the freeform section with its parts")
+    out = []
+    for i, part in enumerate(section["parts"]):
+        mesh = meshes.get(part["object"])
+        if mesh is None:
+            names = ", ".join(f'"{printable(n, 30)}"' for n in list(meshes)[:8]) or "none"
+            raise SceneError(f"freeform.parts[{i}].object", f'"{printable(part["object"], 40)}" is not a mesh of '
+                                                            f"{section['mesh_file'] or 'the mesh file'}; allowed one "
+                                                            f"of {names}{' …' if len(meshes) > 8 else ''}")
+        out.append(mesh)
+    return out
+
+
+def fingerprint(scene: dict, mesh_list: list[MeshData]) -> tuple:
+    """What the acceleration structure depends on: the parts' roles and the meshes' contents (a
+    checksum, so that arrays edited in place count as a change)."""
+    roles = tuple(part["role"] for part in scene["freeform"]["parts"])
+    sums = tuple((m.name, m.vertices.shape, m.triangles.shape, zlib.crc32(np.ascontiguousarray(m.vertices)),
+                  zlib.crc32(np.ascontiguousarray(m.triangles)),
+                  None if m.corner_normals is None else zlib.crc32(np.ascontiguousarray(m.corner_normals)))
+                 for m in mesh_list)
+    return roles, sums
+
+
+def build_geometry(scene: dict, meshes: dict[str, MeshData]) -> Geometry:
+    """Check every part's mesh and concatenate them; raises ``SceneError`` naming the object."""
+    mesh_list = part_meshes(scene, meshes)
+    total = sum(len(m.triangles) for m in mesh_list if m.triangles.ndim == 2)
+    if total > MAX_TRIANGLES:
+        raise SceneError("freeform.parts", f"the meshes have {total} triangles together; allowed at most "
+                                           f"{MAX_TRIANGLES} (decimate the largest)")
+    parts = scene["freeform"]["parts"]
+    verts, tris, cn, part_of, surf = [], [], [], [], []
+    base = 0
+    for i, (part, mesh) in enumerate(zip(parts, mesh_list, strict=True)):
+        check_mesh(mesh)
+        if part["role"] == "lens":
+            check_lens_volume(mesh)
+        v = np.asarray(mesh.vertices, np.float64)
+        t = np.asarray(mesh.triangles, np.int64)
+        n = face_normals(mesh)
+        verts.append(v)
+        tris.append(t + base)
+        base += len(v)
+        if mesh.corner_normals is None:
+            cn.append(np.repeat(n[:, None, :], 3, axis=1))
+        else:
+            c = np.asarray(mesh.corner_normals, np.float64)
+            cn.append(c / np.maximum(np.linalg.norm(c, axis=2, keepdims=True), 1e-300))
+        part_of.append(np.full(len(t), i, np.int32))
+        if part["role"] == "lens":
+            surf.append(np.where(n[:, 1] < 0.0, P.OUTER, P.CUT).astype(np.int8))
+        else:
+            surf.append(np.full(len(t), SURFACE_OF_ROLE[part["role"]], np.int8))
+    vertices = np.concatenate(verts)
+    triangles = np.concatenate(tris)
+    corners = vertices[triangles]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(normal, axis=1)
+    normal /= np.where(length > 0, length, 1.0)[:, None]
+    extent = float(np.ptp(vertices, axis=0).max())
+    geometry = Geometry(vertices, triangles, corners, normal, np.concatenate(cn), np.concatenate(part_of),
+                        np.concatenate(surf), max(EPSILON_MIN, EPSILON_RELATIVE * extent),
+                        fingerprint(scene, mesh_list))
+    return geometry
+
+
+class GeometryCache:
+    """The checked geometry and its Embree scene, rebuilt only when the meshes or roles change.
+
+    Keep one per design (a viewport, a render job) and pass it to every ``render_passes``: the
+    build (``stats["build_seconds"]``) is paid once per geometry change."""
+
+    def __init__(self) -> None:
+        self.geometry: Geometry | None = None
+        self.embree: EmbreeScene | None = None
+        self.builds = 0
+
+    def get(self, scene: dict, meshes: dict[str, MeshData]) -> tuple[Geometry, EmbreeScene, bool]:
+        """(geometry, Embree scene, whether it was built now)."""
+        reason = embree_missing()
+        if reason is not None:
+            raise SceneError("freeform", reason)
+        key = fingerprint(scene, part_meshes(scene, meshes))
+        if self.geometry is not None and self.geometry.fingerprint == key:
+            return self.geometry, self.embree, False
+        geometry = build_geometry(scene, meshes)
+        embree = EmbreeScene(geometry.vertices, geometry.triangles)
+        from .overlap import check_lens_overlap  # needs the Embree scene
+        check_lens_overlap(scene, geometry, embree)
+        self.geometry, self.embree = geometry, embree
+        self.builds += 1
+        return geometry, embree, True

@@ -1,0 +1,470 @@
+"""The paper's model on triangle meshes: a world-space numpy wavefront over Embree queries.
+
+The same improved ray tracing as ``raytrace.tracer`` (MODEL.md §5): rays from the eye branch at
+every lens surface into a reflected and a transmitted ray (Fresnel, Snell, total internal
+reflection), each carrying its accumulated attenuation k; luminance is added as k × the value
+found; absorption over the path length inside a lens (eq. 2); the reflector's constant on the
+first hit and Blinn's scatter toward its bulbs on every hit (eq. 3); bulb, socket and side wall
+end a path; bodies are shaded by eq. (1). Branches below 0.1 % are dropped; ``MAX_DEPTH`` caps a
+branch. Where a lens is entered from outside through its outer face (①), the reflected branch
+is the lens surface's own eq. (1) times the Fresnel reflectance, as for the parametric lens.
+
+Normals: the side a ray meets a lens from is told by the triangle's geometric normal (outward);
+Fresnel, Snell, mirror and shading use the normal interpolated from the corner normals (smooth
+shading), turned toward the incident side.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..raytrace import optics, pixel_filter
+from ..raytrace import paths as P
+from ..raytrace.camera import Camera, eye_rays, make_camera
+from ..raytrace.tracer import CUTOFF, MAX_DEPTH, PASS_NAMES, RenderCancelled, RenderResult
+from ..scene.derived import lens_absorption
+from .embree import EmbreeScene
+from .geometry import BODY, Geometry, GeometryCache
+from .meshes import MeshData
+
+(LENS_SURFACE, BULB_PASS, REFLECTOR_CONSTANT, REFLECTOR_SCATTER, SOCKET_PASS, SIDE_WALL_PASS, BODY_PASS,
+ BACKGROUND_PASS) = range(len(PASS_NAMES))
+
+TILE_RAYS = 65536  # eye rays per band of rows, as the parametric tracer
+EYE = 8  # the source "surface" of an eye ray
+TO_BODY = 13  # a class beyond Table 1: a segment that reaches a body (housing) and ends there
+NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (README, "Free-form")
+SELF_HIT_RETRIES = 2
+
+
+def _class_table() -> np.ndarray:
+    """CLASS[medium, source surface, hit surface]: Table 1's classes (paths.CLASS_OF) for the
+    surfaces the roles give, plus the segments that only meshes have."""
+    table = np.zeros((2, 9, 8), np.int8)
+    table[:, :7, :7] = P.CLASS_OF
+    for src in (P.OUTER, P.CUT, P.REFLECTOR, EYE):
+        table[P.IN_AIR, src, BODY] = TO_BODY
+        table[P.IN_AIR, src, P.NOTHING] = P.LENS_OUTER_TO_OUTSIDE if src == P.OUTER else NOT_IN_TABLE
+    table[P.IN_AIR, EYE, P.OUTER] = P.OUTSIDE_TO_LENS
+    table[P.IN_AIR, P.OUTER, P.OUTER] = P.OUTSIDE_TO_LENS  # out of one lens and into another
+    table[P.IN_AIR, P.REFLECTOR, P.OUTER] = P.REFLECTOR_TO_CUT  # no cut between them: the lens seen directly
+    return table
+
+
+CLASS = _class_table()
+
+
+@dataclass
+class _Rays:
+    pix: np.ndarray
+    o: np.ndarray
+    d: np.ndarray
+    k: np.ndarray
+    lens: np.ndarray  # part index of the lens the ray travels in, -1 in the air
+    src_tri: np.ndarray  # triangle the segment starts on, -1 for an eye ray
+    src: np.ndarray  # surface id the segment starts on (EYE for an eye ray)
+    parent: np.ndarray
+    branch: np.ndarray
+    seen_reflector: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.pix)
+
+
+_FIELDS = ("pix", "o", "d", "k", "lens", "src_tri", "src", "parent", "branch", "seen_reflector")
+
+
+def _concat(parts: list[_Rays]) -> _Rays:
+    return _Rays(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
+
+
+class _Parts:
+    """Every part's role values as arrays indexed by part number."""
+
+    def __init__(self, scene: dict, geometry: Geometry):
+        parts = scene["freeform"]["parts"]
+        n = len(parts)
+        self.ior = np.ones(n)
+        self.absorption = np.zeros((n, 3))
+        self.color = np.zeros((n, 3))  # diffuse / constant / terminal colour of the role
+        self.specular = np.zeros(n)
+        self.shininess = np.zeros(n)
+        self.reflectance = np.zeros(n)
+        self.scatter = np.zeros(n)
+        bulbs = []
+        for i, part in enumerate(parts):
+            v = part[part["role"]]
+            role = part["role"]
+            if role == "lens":
+                self.ior[i] = v["ior"]
+                self.absorption[i] = lens_absorption(v)
+                self.color[i] = v["diffuse_color"]
+                self.specular[i], self.shininess[i] = v["specular"], v["shininess"]
+            elif role == "reflector":
+                self.color[i] = v["color"]
+                self.reflectance[i], self.scatter[i], self.shininess[i] = v["reflectance"], v["scatter"], v["shininess"]
+            elif role == "bulb":
+                self.color[i] = v["intensity"] if v["on"] else (0.0, 0.0, 0.0)
+                bulbs.append(i)
+            elif role in ("socket", "side_wall"):
+                self.color[i] = v["color"]
+            elif role == "body":
+                self.color[i] = v["color"]
+                self.specular[i], self.shininess[i] = v["specular"], v["shininess"]
+        # A bulb's centre is its mesh's centroid (area-weighted over the surface). Each reflector
+        # scatters toward the bulbs whose centre lies in its bounding box, else toward the nearest
+        # bulb: in a multi-lamp design each reflector sees its own bulb, as in the parametric lamp.
+        self.bulb_center = np.zeros((len(bulbs), 3))
+        for b, i in enumerate(bulbs):
+            c = geometry.corners[geometry.part == i]
+            area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
+            self.bulb_center[b] = (c.mean(axis=1) * area[:, None]).sum(axis=0) / max(area.sum(), 1e-300)
+        self.bulb_intensity = self.color[bulbs] if bulbs else np.zeros((0, 3))
+        self.bulbs_of = np.zeros((n, max(1, len(bulbs))), bool)  # [reflector part, bulb]
+        for i, part in enumerate(parts):
+            if part["role"] != "reflector" or not bulbs:
+                continue
+            c = geometry.corners[geometry.part == i].reshape(-1, 3)
+            lo, hi = c.min(axis=0), c.max(axis=0)
+            inside = np.all((self.bulb_center >= lo) & (self.bulb_center <= hi), axis=1)
+            if inside.any():
+                self.bulbs_of[i, : len(bulbs)] = inside
+            else:
+                centre = (lo + hi) / 2
+                self.bulbs_of[i, int(np.argmin(np.linalg.norm(self.bulb_center - centre, axis=1)))] = True
+
+
+class _Context:
+    def __init__(self, scene: dict, camera: Camera, geometry: Geometry, embree: EmbreeScene, samples: int,
+                 filter_name: str, record: bool):
+        self.camera, self.geometry, self.embree = camera, geometry, embree
+        self.samples, self.filter_name, self.record = samples, filter_name, record
+        self.parts = _Parts(scene, geometry)
+        light = scene["light"]
+        self.light_dir = optics.normalize(np.asarray(light["direction"], np.float64))
+        self.light_color = np.asarray(light["color"], np.float64)
+        self.ambient = light["ambient"]
+        self.background = np.asarray(scene["background"], np.float64)
+        self.background_seen = bool(self.background.any())
+
+
+class _Band:
+    """The passes of one band of rays and its statistics (as the parametric tracer's)."""
+
+    def __init__(self, n: int, record: bool):
+        self.acc = np.zeros((len(PASS_NAMES), n, 3))
+        self.segments = 0
+        self.max_depth = 0
+        self.transitions: set[tuple[int, int, int]] = set()
+        self.record = record
+
+    def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
+        if len(pix) == 0:
+            return
+        values = np.broadcast_to(values, (len(pix), 3))
+        for c in range(3):
+            self.acc[pass_id, :, c] += np.bincount(pix, weights=values[:, c], minlength=self.acc.shape[1])
+
+    def note(self, parent: np.ndarray, branch: np.ndarray | int, child: np.ndarray | int) -> None:
+        if not self.record or len(parent) == 0:
+            return
+        branch = np.broadcast_to(branch, parent.shape)
+        child = np.broadcast_to(child, parent.shape)
+        codes = np.unique(parent.astype(np.int64) * 10000 + branch.astype(np.int64) * 100 + child)
+        self.transitions.update((int(c) // 10000, (int(c) // 100) % 100, int(c) % 100) for c in codes)
+
+
+def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = None, height: int | None = None,
+                  *, progress: Callable[[float], None] | None = None,
+                  should_stop: Callable[[], bool] | None = None, samples: int | None = None,
+                  geometry_cache: GeometryCache | None = None, threads: int | None = None,
+                  record_transitions: bool = False,
+                  filter_name: str = pixel_filter.DEFAULT_FILTER) -> RenderResult:
+    """Render a free-form design (a normalised scene with a ``freeform`` section and its meshes by
+    name): the image and the contribution passes, as ``raytrace.tracer.render_passes``.
+
+    ``geometry_cache`` keeps the checked geometry and Embree scene between calls (built again only
+    when the meshes or roles change); ``stats["build_seconds"]`` is the build time of this call
+    (0 when reused). Raises ``SceneError`` for a bad mesh or role, ``RenderCancelled`` when
+    ``should_stop()`` (polled between bands) says so."""
+    start = time.perf_counter()
+    cache = geometry_cache if geometry_cache is not None else GeometryCache()
+    geometry, embree, built = cache.get(scene, meshes)
+    build_seconds = time.perf_counter() - start if built else 0.0
+    width = int(width or scene["image"]["width"])
+    height = int(height or scene["image"]["height"])
+    samples = int(samples or scene["image"].get("samples", 1))
+    pixel_filter.filter_support(filter_name)
+    ctx = _Context(scene, make_camera(scene["camera"], width, height), geometry, embree, samples, filter_name,
+                   record_transitions)
+    should_stop = should_stop or (lambda: False)
+    rows_per_band = max(1, TILE_RAYS // (width * samples))
+    bands = [(y, min(height, y + rows_per_band)) for y in range(0, height, rows_per_band)]
+    threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
+    passes = np.zeros((len(PASS_NAMES), height, width, 3), np.float32)
+    stats = {"segments": 0, "max_depth": 0, "transitions": set()}
+    trace_start = time.perf_counter()
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        pending = list(bands)
+        running = []
+        done = 0
+        try:
+            while pending or running:
+                while pending and len(running) < threads:
+                    if should_stop():
+                        raise RenderCancelled("render cancelled")
+                    y0, y1 = pending.pop(0)
+                    running.append((y0, y1, pool.submit(_trace_band, ctx, y0, y1)))
+                y0, y1, future = running.pop(0)
+                band = future.result()
+                if should_stop():
+                    raise RenderCancelled("render cancelled")
+                passes[:, y0:y1] = band.acc.reshape(len(PASS_NAMES), y1 - y0, width, 3)
+                stats["segments"] += band.segments
+                stats["max_depth"] = max(stats["max_depth"], band.max_depth)
+                stats["transitions"] |= band.transitions
+                done += 1
+                if progress is not None:
+                    progress(done / len(bands))
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+    stats["seconds"] = time.perf_counter() - start
+    stats["trace_seconds"] = time.perf_counter() - trace_start
+    stats["build_seconds"] = build_seconds
+    stats["triangles"] = len(geometry.triangles)
+    stats["width"], stats["height"], stats["samples"] = width, height, samples
+    return RenderResult(passes.sum(axis=0), dict(zip(PASS_NAMES, passes, strict=True)), stats)
+
+
+def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
+    cam = ctx.camera
+    pixels = np.arange(y0 * cam.width, y1 * cam.width)
+    band = _Band(len(pixels), ctx.record)
+    if ctx.samples == 1:  # the paper's setting: one ray through each pixel centre
+        _trace_rays(ctx, band, *eye_rays(cam, pixels))
+        return band
+    per_group = max(1, TILE_RAYS // len(pixels))
+    for s0 in range(0, ctx.samples, per_group):
+        count = min(ctx.samples, s0 + per_group) - s0
+        ray_pixels = np.repeat(pixels, count)
+        ray_samples = np.tile(np.arange(s0, s0 + count), len(pixels))
+        offsets = pixel_filter.sample_offsets(ctx.filter_name, ray_pixels, ray_samples, ctx.samples)
+        group = _Band(len(ray_pixels), ctx.record)
+        _trace_rays(ctx, group, *eye_rays(cam, ray_pixels, offsets))
+        band.acc += group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3).sum(axis=2)
+        band.segments += group.segments
+        band.max_depth = max(band.max_depth, group.max_depth)
+        band.transitions |= group.transitions
+    band.acc /= ctx.samples  # the filter placed the samples: the pixel is their mean
+    return band
+
+
+def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> None:
+    n = len(o)
+    rays = _Rays(pix=np.arange(n), o=o, d=d, k=np.ones((n, 3)), lens=np.full(n, -1, np.int32),
+                 src_tri=np.full(n, -1, np.int64), src=np.full(n, EYE, np.int8), parent=np.zeros(n, np.int8),
+                 branch=np.zeros(n, np.int8), seen_reflector=np.zeros(n, bool))
+    depth = 0
+    while len(rays) and depth < MAX_DEPTH:
+        band.segments += len(rays)
+        rays = _step(ctx, band, rays, depth == 0)
+        depth += 1
+    band.max_depth = max(band.max_depth, depth)
+
+
+def _nearest(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray]:
+    """Each ray's next triangle (-1 for none) and the distance to it, never its own triangle:
+    a self-hit is skipped by asking again from just beyond it."""
+    t, tri = ctx.embree.nearest(rays.o, rays.d)
+    for _ in range(SELF_HIT_RETRIES):
+        again = np.nonzero((tri == rays.src_tri) & (tri >= 0))[0]
+        if len(again) == 0:
+            break
+        skip = t[again] + ctx.geometry.epsilon
+        t2, tri2 = ctx.embree.nearest(rays.o[again] + skip[:, None] * rays.d[again], rays.d[again])
+        t[again] = t2 + skip
+        tri[again] = tri2
+    return t, tri
+
+
+def _hit_point(g: Geometry, o: np.ndarray, d: np.ndarray, t: np.ndarray, tri: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The hit in double precision on the triangle's plane (Embree's distance is single precision):
+    distance, point and barycentric weights (3 per ray) of the corners there."""
+    c = g.corners[tri]
+    n = g.normal[tri]
+    denom = optics.dot(d, n)
+    plane_t = optics.dot(c[:, 0] - o, n) / np.where(denom != 0.0, denom, 1.0)
+    t = np.where((denom != 0.0) & np.isfinite(plane_t), plane_t, t)
+    p = o + t[:, None] * d
+    e1, e2, w = c[:, 1] - c[:, 0], c[:, 2] - c[:, 0], p - c[:, 0]
+    d11, d12, d22 = optics.dot(e1, e1), optics.dot(e1, e2), optics.dot(e2, e2)
+    w1, w2 = optics.dot(w, e1), optics.dot(w, e2)
+    det = d11 * d22 - d12 * d12
+    det = np.where(det > 0, det, 1.0)
+    u = np.clip((d22 * w1 - d12 * w2) / det, 0.0, 1.0)
+    v = np.clip((d11 * w2 - d12 * w1) / det, 0.0, 1.0 - u)
+    return t, p, np.stack([1.0 - u - v, u, v], axis=1)
+
+
+def _shading_normal(g: Geometry, tri: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """The corner normals interpolated at the hit, unit, on the geometric normal's side (a smooth
+    normal that disagrees with the face, at a silhouette of a coarse mesh, gives way to it)."""
+    n = np.einsum("ij,ijk->ik", bary, g.corner_normals[tri])
+    length = np.linalg.norm(n, axis=1)
+    geometric = g.normal[tri]
+    ok = (length > 1e-12) & (optics.dot(n, geometric) > 0.0)
+    n = np.where(ok[:, None], n / np.where(length > 1e-12, length, 1.0)[:, None], geometric)
+    return n
+
+
+def _alive(k: np.ndarray) -> np.ndarray:
+    return np.max(k, axis=1) >= CUTOFF
+
+
+def _spawn(rays: _Rays, sel: np.ndarray, o: np.ndarray, d: np.ndarray, k: np.ndarray, lens: np.ndarray,
+           tri: np.ndarray, src: np.ndarray, cls: np.ndarray, branch: int, seen: np.ndarray) -> _Rays:
+    """Child rays of the rays ``sel`` (indices into the generation) that stay above the cut-off."""
+    go = np.nonzero(_alive(k))[0]
+    return _Rays(pix=rays.pix[sel][go], o=o[go], d=d[go], k=k[go], lens=lens[go], src_tri=tri[go], src=src[go],
+                 parent=cls[go], branch=np.full(len(go), branch, np.int8), seen_reflector=seen[go])
+
+
+def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
+    """One generation: find each segment's end, add its luminance, spawn the children."""
+    g, parts = ctx.geometry, ctx.parts
+    t, tri = _nearest(ctx, rays)
+    hit_any = tri >= 0
+    surface = np.where(hit_any, g.surface[np.maximum(tri, 0)], P.NOTHING).astype(np.int8)
+    medium = np.where(rays.lens >= 0, P.IN_LENS, P.IN_AIR)
+    cls = CLASS[medium, rays.src, surface]
+    if not first:
+        band.note(rays.parent, rays.branch, cls)
+
+    k = rays.k
+    inside = np.nonzero(rays.lens >= 0)[0]
+    if len(inside):
+        k = k.copy()
+        length = np.where(np.isfinite(t[inside]), t[inside], 0.0)
+        k[inside] *= optics.absorption(parts.absorption[rays.lens[inside]], length)
+
+    miss = np.nonzero(~hit_any)[0]
+    if ctx.background_seen and len(miss):
+        band.add(BACKGROUND_PASS, rays.pix[miss], k[miss] * ctx.background)
+
+    h = np.nonzero(hit_any)[0]
+    tri_h = tri[h]
+    t_h, p_h, bary = _hit_point(g, rays.o[h], rays.d[h], t[h], tri_h)
+    normal = _shading_normal(g, tri_h, bary)
+    part_h = g.part[tri_h]
+    surf_h = surface[h]
+    k_h = k[h]
+    d_h = rays.d[h]
+
+    for sid, pass_id in ((P.WALL, SIDE_WALL_PASS), (P.BULB, BULB_PASS), (P.SOCKET, SOCKET_PASS)):
+        m = surf_h == sid
+        if m.any():
+            band.add(pass_id, rays.pix[h[m]], k_h[m] * parts.color[part_h[m]])
+
+    m = np.nonzero(surf_h == BODY)[0]
+    if len(m):
+        facing = _toward(normal[m], d_h[m])
+        pm = part_h[m]
+        band.add(BODY_PASS, rays.pix[h[m]],
+                 k_h[m] * optics.phong(facing, -d_h[m], ctx.light_dir, parts.color[pm], ctx.light_color,
+                                       ctx.ambient, parts.specular[pm], parts.shininess[pm]))
+
+    children: list[_Rays] = []
+    m = np.nonzero(surf_h == P.REFLECTOR)[0]
+    if len(m):
+        children.append(_reflector(ctx, band, rays, h[m], k_h[m], p_h[m], normal[m], tri_h[m], part_h[m],
+                                   cls[h[m]]))
+    m = np.nonzero((surf_h == P.OUTER) | (surf_h == P.CUT))[0]
+    if len(m):
+        children.extend(_dielectric(ctx, band, rays, h[m], k_h[m], p_h[m], normal[m], tri_h[m], part_h[m],
+                                    cls[h[m]], surf_h[m]))
+    if not children:
+        return _concat([_Rays(*(getattr(rays, f)[:0] for f in _FIELDS))])
+    return _concat(children) if len(children) > 1 else children[0]
+
+
+def _toward(n: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``n`` turned to face the ray's incident side (against ``d``)."""
+    return np.where((optics.dot(n, d) > 0.0)[:, None], -n, n)
+
+
+def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, p: np.ndarray,
+               normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray) -> _Rays:
+    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter toward its bulbs (eq. 3),
+    then the mirror ray (k × reflectance) where it stays above the cut-off."""
+    parts, g = ctx.parts, ctx.geometry
+    d = rays.d[m]
+    pix = rays.pix[m]
+    first = ~rays.seen_reflector[m]
+    band.add(REFLECTOR_CONSTANT, pix[first], k[first] * parts.color[part[first]])
+    n = _toward(normal, d)
+    for b in range(len(parts.bulb_center)):
+        sel = np.nonzero(parts.bulbs_of[part, b])[0]
+        if len(sel) == 0:
+            continue
+        to_bulb = optics.normalize(parts.bulb_center[b] - p[sel])
+        scatter = optics.blinn(n[sel], -d[sel], to_bulb, parts.scatter[part[sel]], parts.shininess[part[sel]])
+        band.add(REFLECTOR_SCATTER, pix[sel], k[sel] * scatter[:, None] * parts.bulb_intensity[b])
+    k = k * parts.reflectance[part, None]
+    side = _toward(g.normal[tri], d)
+    o = p + ctx.geometry.epsilon * side
+    count = len(m)
+    return _spawn(rays, m, o, optics.reflect(d, n), k, np.full(count, -1, np.int32), tri,
+                  np.full(count, P.REFLECTOR, np.int8), cls, P.REFLECTED, np.ones(count, bool))
+
+
+def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, p: np.ndarray,
+                normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray,
+                surface: np.ndarray) -> list[_Rays]:
+    """A lens surface hit from either side: Fresnel split (TIR gives r = 1). Entering through the
+    outer face from the air (①), the reflected branch is the lens surface's eq. (1) × r."""
+    parts, g = ctx.parts, ctx.geometry
+    d = rays.d[m]
+    pix, seen = rays.pix[m], rays.seen_reflector[m]
+    geometric = g.normal[tri]
+    entering = optics.dot(d, geometric) < 0.0  # the side test: by the geometric (outward) normal
+    facing = np.where(entering[:, None], normal, -normal)  # shading normal toward the incident side
+    ior = parts.ior[part]
+    n1 = np.where(entering, 1.0, ior)
+    n2 = np.where(entering, ior, 1.0)
+    cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
+    r = optics.fresnel_reflectance(cos_i, n1, n2)
+    src = surface.astype(np.int8)
+    incident_side = np.where(entering[:, None], geometric, -geometric)
+    out = []
+
+    outer_from_air = entering & (surface == P.OUTER)
+    s = np.nonzero(outer_from_air)[0]
+    if len(s):  # ①: the surface's own eq. (1) in the reflected direction, no further tracing
+        ps = part[s]
+        shade = optics.phong(facing[s], -d[s], ctx.light_dir, parts.color[ps], ctx.light_color, ctx.ambient,
+                             parts.specular[ps], parts.shininess[ps])
+        band.add(LENS_SURFACE, pix[s], k[s] * r[s, None] * shade)
+        if ctx.background_seen:
+            band.add(BACKGROUND_PASS, pix[s], k[s] * r[s, None] * ctx.background)
+        band.note(cls[s], P.REFLECTED, P.LENS_OUTER_TO_OUTSIDE)
+    traced = np.nonzero(~outer_from_air)[0]
+    k_r = k[traced] * r[traced, None]
+    out.append(_spawn(rays, m[traced], p[traced] + g.epsilon * incident_side[traced],
+                      optics.reflect(d[traced], facing[traced]), k_r,
+                      np.where(entering[traced], -1, part[traced]).astype(np.int32), tri[traced], src[traced],
+                      cls[traced], P.REFLECTED, seen[traced]))
+
+    tc = np.nonzero(r < 1.0)[0]
+    k_t = k[tc] * (1.0 - r[tc, None])
+    eta = n1[tc] / n2[tc]
+    out.append(_spawn(rays, m[tc], p[tc] - g.epsilon * incident_side[tc], optics.refract(d[tc], facing[tc], eta),
+                      k_t, np.where(entering[tc], part[tc], -1).astype(np.int32), tri[tc], src[tc], cls[tc],
+                      P.TRANSMITTED, seen[tc]))
+    return out
