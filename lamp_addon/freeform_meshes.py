@@ -9,7 +9,9 @@ exactly its 32-bit positions and normals; the tracer inside Blender reads the ve
 (``mesh_data``), which is why a render of the exported pair outside Blender matches the one inside.
 
 Corner normals are Blender's (``Mesh.corner_normals``: auto smooth, sharp edges and custom normals
-included); a mesh whose normals are all per face (``normals_domain`` FACE) is flat and carries none.
+included), for flat faces too (their face normal), taken as the exporter writes them and the glb reader
+reads them (``exported_normals``): so the tracer shades the very same normals inside Blender and from
+the file, and the two renders agree pixel for pixel.
 A mirroring transform (negative determinant) would turn the faces inside out, so their winding is
 flipped back (``Mesh.flip_normals``) and the triangles stay counter-clockwise seen from outside.
 """
@@ -56,15 +58,31 @@ def mesh_data(mesh: bpy.types.Mesh, name: str) -> MeshData:
     triangles = np.empty(n_tri * 3, dtype=np.int32)
     mesh.loop_triangles.foreach_get("vertices", triangles)
     normals = None
-    if mesh.normals_domain != "FACE" and n_tri:
+    if n_tri:
         loops = np.empty(n_tri * 3, dtype=np.int32)
         mesh.loop_triangles.foreach_get("loops", loops)
         corner = np.empty(len(mesh.corner_normals) * 3, dtype=np.float32)
         mesh.corner_normals.foreach_get("vector", corner)
-        n = corner.reshape(-1, 3).astype(np.float64)[loops]
-        length = np.linalg.norm(n, axis=1, keepdims=True)
-        normals = (n / np.where(length > 0, length, 1.0)).reshape(-1, 3, 3)
+        normals = exported_normals(corner.reshape(-1, 3))[loops].reshape(-1, 3, 3)
     return MeshData(name, vertices, triangles.reshape(-1, 3), normals)
+
+
+def exported_normals(corner: np.ndarray) -> np.ndarray:
+    """Blender's corner normals (float32, (N, 3)) as the ``.glb`` gives them to the tracer: Blender's
+    glTF exporter rounds them to ``ROUNDING_DIGIT`` (4) decimals and normalises them in 32 bits
+    (``primitive_extract.__get_normals``); ``core_tracer.freeform.gltf`` scales them to millimetres with
+    the axes (a rotation times 1000) and normalises them in 64 bits. The same operations here give
+    the same bits. (Rounding to 1e-4 turns a normal by at most about 1e-4 rad.)"""
+    try:
+        from io_scene_gltf2.io.com.constants import ROUNDING_DIGIT
+    except ImportError:  # pragma: no cover - the glTF add-on ships with Blender
+        ROUNDING_DIGIT = 4
+    n = np.round(np.asarray(corner, np.float32), ROUNDING_DIGIT)
+    norms = np.linalg.norm(n, axis=1, keepdims=True)
+    np.divide(n, norms, out=n, where=norms != 0)
+    n = n.astype(np.float64) * units.MM_PER_BU
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    return n
 
 
 def scene_meshes(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, objects) -> dict[str, MeshData]:
