@@ -1,7 +1,8 @@
 """Export a free-form design for headless use: a ``lamp-scene/2`` JSON and a ``.glb`` beside it.
 
-The JSON is the design as F12 sees it (``preset_ops.design_as_seen``: the scene camera at the render
-size) with a ``freeform`` section: the mesh file's name and each part's object name, role and values.
+The JSON is the design as F12 renders it (``render_camera.scene_for_render``: the scene camera's
+numbers as F12 reads them, at the render size; so the file renders what F12 shows, bit for bit) with
+a ``freeform`` section: the mesh file's name and each part's object name, role and values.
 The ``.glb`` is written by Blender's own glTF exporter (``export_scene.gltf``, GLB, +Y up, no
 materials) and holds only the parts, in the design root's frame: what it exports are temporary
 objects with no transform carrying the parts' meshes already in that frame (``freeform_meshes

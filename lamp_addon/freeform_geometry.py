@@ -6,7 +6,9 @@ structure and rebuilds it only when the meshes or roles it is given differ from 
 depsgraph update that changes the geometry or transform of a part, or moves the design root, marks
 the scene's meshes stale (``_on_depsgraph_update``); the next render or viewport redraw reads them
 again, and every other render reuses them and the structure: F12 after F12, each refinement stage
-of the viewport, Compare. A role's values are not geometry: editing them reuses both.
+of the viewport, Compare. A role's values are not geometry, but Blender tags an object's geometry on
+any edit of its properties: the meshes are then read again (milliseconds) and, being the same, the
+structure is kept (the cache compares their contents).
 
 Renders run on other threads (F12's render thread, the viewport's worker) while the main thread
 marks entries stale; one lock guards the table.

@@ -30,13 +30,14 @@ def with_freeform(scene: dict, objects, mesh_file: str = IN_BLENDER_MESH_FILE) -
 
 
 def design_for_export(bl_scene: bpy.types.Scene, mesh_file: str, objects) -> tuple[dict, dict]:
-    """The checked scene of an export (the design as F12 sees it, with the parts) and the parts'
-    meshes; raises ``SceneError`` when there are no parts or something is not allowed."""
-    from .preset_ops import design_as_seen
+    """The checked scene of an export (the design as F12 renders it: the scene camera's numbers as F12
+    reads them, at the render size, with the parts) and the parts' meshes; raises ``SceneError`` when
+    there are no parts or something is not allowed."""
+    from .render_camera import scene_for_render
 
     if not objects:
         raise SceneError("freeform.parts", "no object has a lamp role; allowed 1 or more mesh objects with a role "
                                            "(Lamp tab, Free-form Parts, +)")
-    scene = with_freeform(design_as_seen(bl_scene), objects, mesh_file)
+    scene = with_freeform(scene_for_render(bl_scene), objects, mesh_file)
     meshes = freeform_meshes.scene_meshes(bl_scene, bpy.context.evaluated_depsgraph_get(), objects)
     return scene, meshes
