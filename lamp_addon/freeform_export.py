@@ -24,7 +24,7 @@ import bpy
 from ..core_tracer import fileio
 from ..core_tracer.scene.reading import SceneError, scene_to_json
 from ..core_tracer.scene.validate import parse_scene
-from . import freeform_meshes, freeform_properties, freeform_scene
+from . import freeform_meshes, freeform_properties, freeform_scene, freeform_status
 
 _ASIDE = ".lamp-export-aside"
 
@@ -85,14 +85,18 @@ def export_pair(bl_scene: bpy.types.Scene, json_path: str, *, overwrite: bool = 
     """Write the scene's free-form design to ``json_path`` and the ``.glb`` beside it. Raises
     ``SceneError`` (the design or a part is not valid), ``fileio.TargetExistsError`` or ``OSError``;
     nothing is written then."""
-    from ..core_tracer.freeform import meshes as core_meshes
+    from ..core_tracer.freeform import geometry
 
     json_path = os.path.abspath(json_path)
     glb_path = glb_path_for(json_path)
     objects = freeform_properties.role_objects(bl_scene)
     scene, meshes = freeform_scene.design_for_export(bl_scene, os.path.basename(glb_path), objects)
-    for data in meshes.values():
-        core_meshes.check_mesh(data)
+    # The checks the tracer makes before rendering (closed outward lenses, limits; overlapping lenses
+    # where Embree is here to find them): a colleague never receives a pair that cannot render.
+    if freeform_status.available()[0]:
+        geometry.GeometryCache().get(scene, meshes)
+    else:
+        geometry.build_geometry(scene, meshes)
     if not overwrite:
         for path in (json_path, glb_path):
             if os.path.exists(path):

@@ -50,7 +50,7 @@ def prepare(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, scene: di
     try:
         with_parts = freeform_scene.with_freeform(scene, parts)
     except freeform_scene.SceneError as e:
-        raise freeform_scene.SceneError("freeform", freeform_status.part_error_text(e, parts)) from None
+        raise freeform_scene.SceneError("free-form part", freeform_status.part_error_text(e, parts)) from None
     return Prepared(with_parts, freeform_geometry.geometry(bl_scene, depsgraph, parts))
 
 
