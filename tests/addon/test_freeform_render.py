@@ -132,3 +132,40 @@ def test_export_never_replaces_without_being_asked(lamp_addon, addon_core, bl_sc
     names = {o.name for o in bpy.data.objects}
     assert all(o.name in names for o in lamp_addon.freeform_properties.role_objects(bl_scene))
     assert not any(".lamp-export-aside" in n for n in names) and len(bpy.data.scenes) == 1
+
+
+def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    camera = bl_scene.camera
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=SIZE[0], y=SIZE[1])]
+    view = [list(r) for r in camera.matrix_world.inverted()]
+    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    session.update(bl_scene, depsgraph)
+    assert session.freeform is not None and session.freeform.geometry is not None
+    session.sync(bl_scene, SIZE[0], SIZE[1], window, view)
+    while session.preview.step():
+        pass
+    assert session.status() == "Lamp Tracer: full resolution"
+    shown = session.preview.frame().image
+    cache = session.freeform.geometry.cache
+    assert cache.builds == 1  # both stages on one structure
+    # The viewport's view is the scene camera's: its image is the F12 image up to the camera's
+    # float32 round trip through the view matrices.
+    expected = _expected(lamp_addon, bl_scene)
+    close = np.abs(shown - expected).max(axis=2) <= 1e-3 * max(1.0, float(expected.max()))
+    assert close.mean() > 0.97
+    session.sync(bl_scene, SIZE[0], SIZE[1], window, view)  # a redraw: the same job
+    generation = session.preview.generation
+    lens = next(o for o in lamp_addon.freeform_properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
+    lens.location.z += 0.01
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    depsgraph.update()
+    session.update(bl_scene, depsgraph)
+    session.sync(bl_scene, SIZE[0], SIZE[1], window, view)
+    assert session.preview.generation == generation + 1
+    while session.preview.step():
+        pass
+    assert cache.builds == 2 and not np.array_equal(session.preview.frame().image, shown)

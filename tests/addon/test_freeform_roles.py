@@ -103,23 +103,12 @@ def test_role_value_out_of_range_is_named_with_the_object(lamp_addon, addon_core
     assert problem.startswith('"My Lens" lens.ior: 0.5') and "allowed [1, 3]" in problem
 
 
-class _Layout(RecordingLayout):
-    def _child(self):
-        child = _Layout(self.log)
-        child.alert = self.alert
-        return child
-
-    def operator_menu_enum(self, idname, prop, **kw):
-        self.operator(idname)
-        self.log.append(("menu", idname, prop))
-
-
 def _draw_panel(bl_scene):
     from types import SimpleNamespace
 
     import bpy
 
-    layout = _Layout()
+    layout = RecordingLayout()
     context = SimpleNamespace(scene=bl_scene, window_manager=bpy.context.window_manager)
     cls = bpy.types.LAMP_PT_freeform
     cls.draw(PanelProxy(cls, layout), context)
