@@ -94,6 +94,18 @@ def make_hostile_folder(folder: Path) -> tuple[set[str], dict[str, tuple[str, ..
     bad["zero.json"] = ("leads out of the library",)
     os.symlink("loop.json", folder / "loop.json")
     bad["loop.json"] = ("cannot read",)
+    # Free-form presets whose mesh file is not plain data beside them.
+    mesh_lamp = {**base, "schema": "lamp-scene/2",
+                 "freeform": {"mesh_file": "x.glb", "parts": [{"object": "Lens", "role": "lens"}]}}
+
+    def with_mesh_file(name: str) -> str:
+        return json.dumps({**mesh_lamp, "freeform": {**mesh_lamp["freeform"], "mesh_file": name}})
+
+    write("mesh-folder.json", with_mesh_file("../outside.glb"), "freeform.mesh_file", "without folders")
+    write("mesh-missing.json", with_mesh_file("gone.glb"), "freeform.mesh_file", "is missing")
+    (folder.parent / "outside.glb").write_bytes(b"glTF")
+    os.symlink("../outside.glb", folder / "escape.glb")
+    write("mesh-escape.json", with_mesh_file("escape.glb"), "freeform.mesh_file", "leads outside")
     (folder / "notes.txt").write_text("not a preset, not listed")
     os.symlink("..", folder / "thumbnails")  # a thumbnail folder leading out: neither listed nor opened
     (folder / ".hidden.json").write_text("hidden, not listed")

@@ -37,6 +37,7 @@ def run(args: argparse.Namespace) -> int:
     if args.passes is not None:
         check_output_folder(args.passes, "--passes")
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
+    meshes, geometry = _freeform_meshes(args.scene, scene)
     keep_passes = args.passes is not None
     size = scene["image"]
     budget.check_render(size["width"], size["height"], keep_passes, file_format, glare=scene["glare"]["on"],
@@ -52,8 +53,14 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     with ctrl_c_sets() as stop:
         try:
-            result = render_passes(scene, should_stop=stop.is_set, keep_passes=keep_passes,
-                                   progress=lambda fraction: checkpoint("render:band"))
+            if meshes is None:
+                result = render_passes(scene, should_stop=stop.is_set, keep_passes=keep_passes,
+                                       progress=lambda fraction: checkpoint("render:band"))
+            else:
+                from ..freeform import render_passes as render_freeform
+
+                result = render_freeform(scene, meshes, should_stop=stop.is_set, geometry_cache=geometry,
+                                         progress=lambda fraction: checkpoint("render:band"))
         except RenderCancelled:
             raise stop.interrupt() from None
         image = glare.apply(result.image, scene)  # the image file holds the glare; the passes do not
@@ -73,3 +80,25 @@ def run(args: argparse.Namespace) -> int:
     samples = f" at {size['samples']} samples" if size["samples"] > 1 else ""
     print(f"{printable(args.output)}: {w}x{h} px{samples} in {seconds:.2f} s{traced}{shown}")
     return 0
+
+
+def _freeform_meshes(scene_path: str, scene: dict) -> tuple[dict | None, object]:
+    """The meshes of a free-form design and its geometry, checked before the render (the meshes,
+    their roles, the lens volumes), or (None, None) for a parametric design."""
+    if "freeform" not in scene:
+        return None, None
+    from ..freeform import available
+    from ..freeform.geometry import GeometryCache
+    from ..freeform.loading import load_meshes
+    from ..scene.reading import SceneError
+
+    ok, reason = available()
+    if not ok:
+        raise SceneError(printable(scene_path), reason)
+    meshes = load_meshes(scene_path, scene)
+    cache = GeometryCache()
+    try:
+        cache.get(scene, meshes)
+    except SceneError as e:
+        raise SceneError(f"{printable(scene_path)}: {e.path}" if e.path else printable(scene_path), e.message) from None
+    return meshes, cache

@@ -28,6 +28,8 @@ class EmbreeScene:
         self._scene = rtcore_scene.EmbreeScene()
         self._mesh = mesh_construction.TriangleMesh(self._scene, np.ascontiguousarray(vertices, np.float32),
                                                     np.ascontiguousarray(triangles, np.int32))
+        # Embree builds its hierarchy on the first query: make that part of the build, not of a render.
+        self._scene.run(np.zeros((1, 3), np.float32), np.array([[0.0, 0.0, 1.0]], np.float32))
 
     def nearest(self, o: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distance along each ray (inf for a miss) and the triangle hit (-1 for a miss)."""

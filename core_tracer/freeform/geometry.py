@@ -20,7 +20,7 @@ from ..raytrace import paths as P
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .embree import EmbreeScene, embree_missing
-from .meshes import MAX_TRIANGLES, MeshData, check_lens_volume, check_mesh, face_normals
+from .meshes import MAX_TRIANGLES, MeshData, area_normals, check_lens_volume, check_mesh, face_normals
 
 BODY = 7  # a surface beyond Table 1's: the housing, shaded by eq. (1), ends the path
 SURFACE_OF_ROLE = {"reflector": P.REFLECTOR, "bulb": P.BULB, "socket": P.SOCKET, "side_wall": P.WALL, "body": BODY}
@@ -87,23 +87,25 @@ def build_geometry(scene: dict, meshes: dict[str, MeshData]) -> Geometry:
         raise SceneError("freeform.parts", f"the meshes have {total} triangles together; allowed at most "
                                            f"{MAX_TRIANGLES} (decimate the largest)")
     parts = scene["freeform"]["parts"]
-    verts, tris, cn, part_of, surf = [], [], [], [], []
+    verts, tris, cn, normals, part_of, surf = [], [], [], [], [], []
     base = 0
     for i, (part, mesh) in enumerate(zip(parts, mesh_list, strict=True)):
         check_mesh(mesh)
+        area = area_normals(mesh)
         if part["role"] == "lens":
-            check_lens_volume(mesh)
+            check_lens_volume(mesh, area)
+        n = face_normals(mesh, area)
         v = np.asarray(mesh.vertices, np.float64)
         t = np.asarray(mesh.triangles, np.int64)
-        n = face_normals(mesh)
         verts.append(v)
         tris.append(t + base)
+        normals.append(n)
         base += len(v)
         if mesh.corner_normals is None:
             cn.append(np.repeat(n[:, None, :], 3, axis=1))
         else:
             c = np.asarray(mesh.corner_normals, np.float64)
-            cn.append(c / np.maximum(np.linalg.norm(c, axis=2, keepdims=True), 1e-300))
+            cn.append(c / np.maximum(np.sqrt(np.einsum("ijk,ijk->ij", c, c))[..., None], 1e-300))
         part_of.append(np.full(len(t), i, np.int32))
         if part["role"] == "lens":
             surf.append(np.where(n[:, 1] < 0.0, P.OUTER, P.CUT).astype(np.int8))
@@ -111,13 +113,9 @@ def build_geometry(scene: dict, meshes: dict[str, MeshData]) -> Geometry:
             surf.append(np.full(len(t), SURFACE_OF_ROLE[part["role"]], np.int8))
     vertices = np.concatenate(verts)
     triangles = np.concatenate(tris)
-    corners = vertices[triangles]
-    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    length = np.linalg.norm(normal, axis=1)
-    normal /= np.where(length > 0, length, 1.0)[:, None]
     extent = float(np.ptp(vertices, axis=0).max())
-    geometry = Geometry(vertices, triangles, corners, normal, np.concatenate(cn), np.concatenate(part_of),
-                        np.concatenate(surf), max(EPSILON_MIN, EPSILON_RELATIVE * extent),
+    geometry = Geometry(vertices, triangles, vertices[triangles], np.concatenate(normals), np.concatenate(cn),
+                        np.concatenate(part_of), np.concatenate(surf), max(EPSILON_MIN, EPSILON_RELATIVE * extent),
                         fingerprint(scene, mesh_list))
     return geometry
 

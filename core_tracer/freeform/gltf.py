@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import os
 import stat
+import struct
+import warnings
 
 import numpy as np
 
@@ -46,13 +48,14 @@ def read_glb(path: str | os.PathLike, max_bytes: int = MAX_MESH_FILE_BYTES) -> d
         raise
     except OSError as e:
         raise _error(name, f"cannot be read ({e.strerror or e}); allowed a readable .glb beside the design") from None
-    if data[:4] != b"glTF":
-        raise _error(name, "is not a glTF binary (no glTF header); allowed a .glb exported by Blender's glTF exporter")
+    _check_header(name, data)
     from pygltflib import GLTF2
 
     try:
-        gltf = GLTF2.load_from_bytes(data)
-        blob = gltf.binary_blob() or b""
+        with warnings.catch_warnings():  # its warnings about odd chunks would be a second line
+            warnings.simplefilter("ignore")
+            gltf = GLTF2.load_from_bytes(data)
+            blob = gltf.binary_blob() or b""
     except Exception as e:  # noqa: BLE001 - pygltflib raises anything on a corrupt file
         raise _error(name, f"is not a readable glTF binary ({type(e).__name__}); export it again") from None
     try:
@@ -61,6 +64,21 @@ def read_glb(path: str | os.PathLike, max_bytes: int = MAX_MESH_FILE_BYTES) -> d
         raise _error(name, e.message if not e.path else f"{e.path}: {e.message}") from None
     except (IndexError, KeyError, TypeError, ValueError, AttributeError) as e:
         raise _error(name, f"has an inconsistent glTF structure ({type(e).__name__}); export it again") from None
+
+
+def _check_header(name: str, data: bytes) -> None:
+    """The GLB container (glTF 2.0 §4.4): magic, version 2, the length of the file, a JSON chunk first."""
+    if data[:4] != b"glTF":
+        raise _error(name, "is not a glTF binary (no glTF header); allowed a .glb exported by Blender's glTF exporter")
+    if len(data) < 20:
+        raise _error(name, f"is cut short ({len(data)} bytes); export it again")
+    version, length, chunk_length, chunk_type = struct.unpack_from("<IIII", data, 4)
+    if version != 2:
+        raise _error(name, f"is glTF binary version {version}; allowed version 2 (Blender's exporter writes it)")
+    if length != len(data):
+        raise _error(name, f"says it is {length} bytes but is {len(data)}: the file is cut or corrupt; export it again")
+    if chunk_type != 0x4E4F534A or 20 + chunk_length > len(data):
+        raise _error(name, "is not a readable glTF binary (no JSON chunk); export it again")
 
 
 def _meshes(gltf, blob: bytes) -> dict[str, MeshData]:

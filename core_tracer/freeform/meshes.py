@@ -62,57 +62,75 @@ def check_mesh(mesh: MeshData) -> None:
         raise mesh_error(mesh.name, "has corner normals of the wrong shape or not finite; allowed (T, 3, 3)")
 
 
-def signed_volume(mesh: MeshData) -> float:
-    """The enclosed volume in mm³ (divergence theorem): positive when the faces point outward."""
-    p = mesh.vertices[mesh.triangles]
-    centre = mesh.vertices.mean(axis=0)  # about the centre: fewer digits lost far from the origin
-    a, b, c = p[:, 0] - centre, p[:, 1] - centre, p[:, 2] - centre
-    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+def area_normals(mesh: MeshData) -> np.ndarray:
+    """(p1 - p0) × (p2 - p0) of every triangle (T, 3): twice its area along its outward normal."""
+    v, t = mesh.vertices, mesh.triangles
+    p0, p1, p2 = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    a, b = p1 - p0, p2 - p0
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+
+
+def signed_volume(mesh: MeshData, normals: np.ndarray | None = None) -> float:
+    """The enclosed volume in mm³ (divergence theorem, Σ p0 · N / 6): positive when the faces point
+    outward. Measured about the vertices' mean: fewer digits lost far from the origin."""
+    n = area_normals(mesh) if normals is None else normals
+    centre = mesh.vertices.mean(axis=0)
+    p0 = mesh.vertices[mesh.triangles[:, 0]] - centre
+    return float(np.einsum("ij,ij->", p0, n) / 6.0)
+
+
+def _welded(mesh: MeshData) -> np.ndarray:
+    """Every vertex index replaced by the first of the vertices at its position (to about 1e-6 of
+    the mesh's size): glTF splits vertices along seams and creases of the normals."""
+    v = mesh.vertices
+    lo = v.min(axis=0)
+    quantum = max(float(np.ptp(v, axis=0).max()), 1e-300) / (2**20 - 2)
+    q = np.rint((v - lo) / quantum).astype(np.int64)
+    key = (q[:, 0] << 42) | (q[:, 1] << 21) | q[:, 2]
+    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    return first[inverse]
 
 
 def open_edges(mesh: MeshData) -> int:
-    """The number of edges not shared by exactly two triangles in opposite directions (0 for a
-    closed, consistently oriented surface). Vertices at the same position count as one: glTF
-    splits vertices along creases and seams of the normals."""
-    _, weld = np.unique(np.round(mesh.vertices, 9), axis=0, return_inverse=True)
-    tri = weld.reshape(-1)[mesh.triangles]
+    """The number of directed edges that are not matched by exactly one edge in the opposite
+    direction (0 for a closed, consistently oriented, manifold surface); vertices at the same
+    position count as one."""
+    weld = _welded(mesh)
+    tri = weld[mesh.triangles]
     a = tri.reshape(-1)
     b = tri[:, [1, 2, 0]].reshape(-1)
-    keep = a != b  # degenerate edges of collapsed triangles say nothing about closure
+    keep = a != b  # the edges of collapsed triangles say nothing about closure
     a, b = a[keep].astype(np.int64), b[keep].astype(np.int64)
-    n = int(tri.max()) + 1
-    forward = np.unique(a * n + b, return_counts=True)
-    backward = np.unique(b * n + a, return_counts=True)
-    f_keys, f_counts = forward
-    b_keys, b_counts = backward
-    # Each directed edge must appear once, and its reverse once.
-    if (f_counts > 1).any():
-        return int((f_counts > 1).sum()) + int(np.setxor1d(f_keys, b_keys).size)
-    return int(np.setxor1d(f_keys, b_keys).size)
+    n = len(mesh.vertices)
+    forward = np.sort(a * n + b)
+    backward = np.sort(b * n + a)
+    # Closed and oriented: the directed edges, each once, are exactly the reversed ones.
+    repeated = int(np.count_nonzero(forward[1:] == forward[:-1]))
+    return repeated + int(np.count_nonzero(forward != backward))
 
 
-def check_lens_volume(mesh: MeshData) -> float:
-    """A lens must be closed and oriented outward with a volume; returns the volume (mm³)."""
+def check_lens_volume(mesh: MeshData, normals: np.ndarray | None = None) -> float:
+    """A lens must enclose a volume, be closed and face outward; returns the volume (mm³). The
+    volume is checked first: a plane given the lens role needs thickness more than closing."""
+    volume = signed_volume(mesh, normals)
+    extent = np.ptp(mesh.vertices, axis=0)
+    if abs(volume) <= 1e-9 * float(extent.max()) ** 3:
+        raise mesh_error(mesh.name, "encloses no volume; a lens must be a solid with thickness "
+                                    "(Blender: Solidify modifier, applied)")
     edges = open_edges(mesh)
     if edges:
         raise mesh_error(mesh.name, f"is not closed ({edges} open or non-manifold edges); a lens must be a "
                                     "closed surface: fill the holes (Blender: Select > All by Trait > Non "
                                     "Manifold, then F)")
-    volume = signed_volume(mesh)
-    extent = np.ptp(mesh.vertices, axis=0)
-    tiny = 1e-9 * float(np.prod(np.maximum(extent, 1e-9)))
-    if abs(volume) <= max(tiny, 1e-12):
-        raise mesh_error(mesh.name, "encloses no volume; a lens must be a solid with thickness "
-                                    "(Blender: Solidify modifier, applied)")
     if volume < 0:
         raise mesh_error(mesh.name, f"has its normals pointing inward (volume {volume:.4g} mm³); allowed "
                                     "outward normals (Blender: Mesh > Normals > Recalculate Outside)")
     return volume
 
 
-def face_normals(mesh: MeshData) -> np.ndarray:
+def face_normals(mesh: MeshData, normals: np.ndarray | None = None) -> np.ndarray:
     """Unit geometric normals (T, 3) by the triangles' winding (zero for degenerate triangles)."""
-    p = mesh.vertices[mesh.triangles]
-    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    length = np.linalg.norm(n, axis=1)
+    n = area_normals(mesh) if normals is None else normals
+    length = np.sqrt(np.einsum("ij,ij->i", n, n))
     return n / np.where(length > 0, length, 1.0)[:, None]

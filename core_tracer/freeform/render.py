@@ -281,13 +281,23 @@ def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> Non
 def _nearest(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray]:
     """Each ray's next triangle (-1 for none) and the distance to it, never its own triangle:
     a self-hit is skipped by asking again from just beyond it."""
-    t, tri = ctx.embree.nearest(rays.o, rays.d)
+    g = ctx.geometry
+    o = rays.o
+    on_surface = np.nonzero(rays.src_tri >= 0)[0]
+    if len(on_surface):
+        # Query from just off the surface, on the side the ray leaves to; the segment itself
+        # starts on the surface (``_hit_point`` measures from there: exact path lengths).
+        n = g.normal[rays.src_tri[on_surface]]
+        side = np.where((optics.dot(rays.d[on_surface], n) >= 0.0)[:, None], n, -n)
+        o = o.copy()
+        o[on_surface] += g.epsilon * side
+    t, tri = ctx.embree.nearest(o, rays.d)
     for _ in range(SELF_HIT_RETRIES):
         again = np.nonzero((tri == rays.src_tri) & (tri >= 0))[0]
         if len(again) == 0:
             break
-        skip = t[again] + ctx.geometry.epsilon
-        t2, tri2 = ctx.embree.nearest(rays.o[again] + skip[:, None] * rays.d[again], rays.d[again])
+        skip = t[again] + g.epsilon
+        t2, tri2 = ctx.embree.nearest(o[again] + skip[:, None] * rays.d[again], rays.d[again])
         t[again] = t2 + skip
         tri[again] = tri2
     return t, tri
@@ -347,6 +357,13 @@ def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
     if not first:
         band.note(rays.parent, rays.branch, cls)
 
+    h = np.nonzero(hit_any)[0]
+    tri_h = tri[h]
+    t_h, p_h, bary = _hit_point(g, rays.o[h], rays.d[h], t[h], tri_h)
+    t = t.copy()
+    t[h] = t_h  # from the segment's true start, in double precision
+    normal = _shading_normal(g, tri_h, bary)
+
     k = rays.k
     inside = np.nonzero(rays.lens >= 0)[0]
     if len(inside):
@@ -358,10 +375,6 @@ def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
     if ctx.background_seen and len(miss):
         band.add(BACKGROUND_PASS, rays.pix[miss], k[miss] * ctx.background)
 
-    h = np.nonzero(hit_any)[0]
-    tri_h = tri[h]
-    t_h, p_h, bary = _hit_point(g, rays.o[h], rays.d[h], t[h], tri_h)
-    normal = _shading_normal(g, tri_h, bary)
     part_h = g.part[tri_h]
     surf_h = surface[h]
     k_h = k[h]
@@ -403,7 +416,7 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
                normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray) -> _Rays:
     """A reflector hit (③ ④): the first-hit constant, Blinn's scatter toward its bulbs (eq. 3),
     then the mirror ray (k × reflectance) where it stays above the cut-off."""
-    parts, g = ctx.parts, ctx.geometry
+    parts = ctx.parts
     d = rays.d[m]
     pix = rays.pix[m]
     first = ~rays.seen_reflector[m]
@@ -417,10 +430,8 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
         scatter = optics.blinn(n[sel], -d[sel], to_bulb, parts.scatter[part[sel]], parts.shininess[part[sel]])
         band.add(REFLECTOR_SCATTER, pix[sel], k[sel] * scatter[:, None] * parts.bulb_intensity[b])
     k = k * parts.reflectance[part, None]
-    side = _toward(g.normal[tri], d)
-    o = p + ctx.geometry.epsilon * side
     count = len(m)
-    return _spawn(rays, m, o, optics.reflect(d, n), k, np.full(count, -1, np.int32), tri,
+    return _spawn(rays, m, p, optics.reflect(d, n), k, np.full(count, -1, np.int32), tri,
                   np.full(count, P.REFLECTOR, np.int8), cls, P.REFLECTED, np.ones(count, bool))
 
 
@@ -435,13 +446,17 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     geometric = g.normal[tri]
     entering = optics.dot(d, geometric) < 0.0  # the side test: by the geometric (outward) normal
     facing = np.where(entering[:, None], normal, -normal)  # shading normal toward the incident side
+    # Where the smooth normal faces away from the ray (a grazing ray at a coarse silhouette), the
+    # face's own normal decides: the ray does meet the face from the incident side.
+    away = optics.dot(d, facing) >= 0.0
+    if away.any():
+        facing[away] = np.where(entering[away, None], geometric[away], -geometric[away])
     ior = parts.ior[part]
     n1 = np.where(entering, 1.0, ior)
     n2 = np.where(entering, ior, 1.0)
     cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
     r = optics.fresnel_reflectance(cos_i, n1, n2)
     src = surface.astype(np.int8)
-    incident_side = np.where(entering[:, None], geometric, -geometric)
     out = []
 
     outer_from_air = entering & (surface == P.OUTER)
@@ -456,7 +471,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
         band.note(cls[s], P.REFLECTED, P.LENS_OUTER_TO_OUTSIDE)
     traced = np.nonzero(~outer_from_air)[0]
     k_r = k[traced] * r[traced, None]
-    out.append(_spawn(rays, m[traced], p[traced] + g.epsilon * incident_side[traced],
+    out.append(_spawn(rays, m[traced], p[traced],
                       optics.reflect(d[traced], facing[traced]), k_r,
                       np.where(entering[traced], -1, part[traced]).astype(np.int32), tri[traced], src[traced],
                       cls[traced], P.REFLECTED, seen[traced]))
@@ -464,7 +479,28 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     tc = np.nonzero(r < 1.0)[0]
     k_t = k[tc] * (1.0 - r[tc, None])
     eta = n1[tc] / n2[tc]
-    out.append(_spawn(rays, m[tc], p[tc] - g.epsilon * incident_side[tc], optics.refract(d[tc], facing[tc], eta),
+    out.append(_spawn(rays, m[tc], p[tc], optics.refract(d[tc], facing[tc], eta),
                       k_t, np.where(entering[tc], part[tc], -1).astype(np.int32), tri[tc], src[tc], cls[tc],
                       P.TRANSMITTED, seen[tc]))
     return out
+
+
+def surface_hits(scene: dict, meshes: dict[str, MeshData], o: np.ndarray, d: np.ndarray,
+                 geometry_cache: GeometryCache | None = None) -> dict[str, np.ndarray]:
+    """The first surface each ray (``o``, unit ``d``, (N, 3) mm) meets, as the tracer finds it:
+    ``t`` (inf for none), ``triangle`` (-1), ``part`` (index into freeform.parts, -1), ``point``
+    and the smooth ``normal`` there (outward for a lens)."""
+    cache = geometry_cache if geometry_cache is not None else GeometryCache()
+    geometry, embree, _ = cache.get(scene, meshes)
+    o = np.asarray(o, np.float64)
+    d = np.asarray(d, np.float64)
+    t, tri = embree.nearest(o, d)
+    hit = np.nonzero(tri >= 0)[0]
+    point = np.full((len(o), 3), np.nan)
+    normal = np.full((len(o), 3), np.nan)
+    th, point[hit], bary = _hit_point(geometry, o[hit], d[hit], t[hit], tri[hit])
+    t = t.copy()
+    t[hit] = th
+    normal[hit] = _shading_normal(geometry, tri[hit], bary)
+    part = np.where(tri >= 0, geometry.part[np.maximum(tri, 0)], -1)
+    return {"t": t, "triangle": tri, "part": part, "point": point, "normal": normal}

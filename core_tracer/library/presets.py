@@ -197,12 +197,26 @@ def list_library(library: Library) -> tuple[list[PresetEntry], list[PresetWarnin
             continue
         try:
             scene = _parse(path)
+            if "freeform" in scene:
+                _check_mesh_file(path, scene)
         except SceneError as e:
             field = f"{printable(e.path, 120)}: " if e.path else ""
             warnings.append(PresetWarning(shown, library, field + printable(e.message)))
             continue
         entries.append(_entry(library, path, scene))
     return entries, warnings
+
+
+def _check_mesh_file(path: str, scene: dict) -> None:
+    """A free-form preset's mesh file is data from whoever shared the library: a plain .glb name
+    beside the preset, not leading out of the library, within the size limit. Its contents are
+    read and checked (triangle limits, closed lenses) only when the preset is used."""
+    from ..freeform.loading import mesh_file_path
+
+    try:
+        mesh_file_path(path, scene["freeform"]["mesh_file"])
+    except SceneError as e:
+        raise SceneError("freeform.mesh_file", e.message) from None
 
 
 def list_presets(libraries: list[Library] | tuple[Library, ...]) -> tuple[list[PresetEntry], list[PresetWarning]]:
@@ -405,7 +419,13 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     target = os.fspath(path)
     scene = copy.deepcopy(entry.scene)
     scene["image"] = {"width": int(size), "height": int(size)}
-    image = render(scene, size, size)
+    if "freeform" in scene:  # the meshes are read and checked now, before they are used
+        from ..freeform import render_passes as render_freeform
+        from ..freeform.loading import load_meshes
+
+        image = render_freeform(scene, load_meshes(entry.file, scene), size, size).image
+    else:
+        image = render(scene, size, size)
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
     write_image(target, image, scene, view=view)
     stem = os.path.splitext(os.path.basename(entry.file))[0]
