@@ -24,6 +24,16 @@ def _part(lamp_addon, kind: str, name: str, role: str = "lens"):
 
     if kind == "plane":
         bpy.ops.mesh.primitive_plane_add(size=0.05)
+    elif kind == "open box":  # a cube without its top face
+        import bmesh
+
+        bpy.ops.mesh.primitive_cube_add(size=0.02, location=(0.0, 0.01, 0.0))
+        bm = bmesh.new()
+        bm.from_mesh(bpy.context.active_object.data)
+        top = max(bm.faces, key=lambda f: f.calc_center_median().z)
+        bmesh.ops.delete(bm, geom=[top], context="FACES_ONLY")
+        bm.to_mesh(bpy.context.active_object.data)
+        bm.free()
     elif kind == "grid":
         bpy.ops.mesh.primitive_grid_add(x_subdivisions=40, y_subdivisions=40, size=0.05)
     else:
@@ -53,7 +63,8 @@ def _f12_message(bl_scene) -> str:
 
 
 CASES = {
-    "open lens": ("plane", None, r'mesh "Open Lens": is not closed \(\d+ open or non-manifold edges\)'),
+    "open lens": ("open box", None, r'mesh "Open Lens": is not closed \(\d+ open or non-manifold edges\)'),
+    "flat lens": ("plane", None, r'mesh "Flat Lens": encloses no volume.*Solidify'),
     "flipped normals": ("cube", _flip, r'mesh "Flipped Lens": has its normals pointing inward.*Recalculate Outside'),
 }
 
@@ -65,7 +76,7 @@ def test_a_bad_lens_mesh_is_named_in_f12_the_panel_and_export(lamp_addon, addon_
 
     kind, edit, message = CASES[case]
     _scene(lamp_addon, addon_core, bl_scene)
-    name = {"open lens": "Open Lens", "flipped normals": "Flipped Lens"}[case]
+    name = {"open lens": "Open Lens", "flat lens": "Flat Lens", "flipped normals": "Flipped Lens"}[case]
     obj = _part(lamp_addon, kind, name)
     if edit is not None:
         edit(obj)
