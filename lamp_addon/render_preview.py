@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core_tracer.raytrace.tracer import RenderCancelled, render_passes
+from ..core_tracer.scene.reading import SceneError
 
 # The coarse stage's pixel budget: 128x96, 1/8 of a 1024x768 region, renders the four-lamp preset
 # in about 0.05 s on 2 idle cores (0.1 s on a loaded machine), the first image wanted within 0.1 s;
@@ -189,7 +190,8 @@ class ProgressivePreview:
         except Exception as e:  # noqa: BLE001 (shown in the viewport instead of lost on a thread)
             with self._lock:
                 if job is self._job:
-                    self.error = f"{type(e).__name__}: {e}"
+                    # A user's mistake (a free-form part's mesh the tracer refuses) in its own words.
+                    self.error = str(e) if isinstance(e, SceneError) else f"{type(e).__name__}: {e}"
                     self._news = True
 
     def publish(self, job: PreviewJob, frame: Frame) -> None:

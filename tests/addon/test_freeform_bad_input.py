@@ -136,3 +136,20 @@ def test_without_embree_the_feature_says_so_once_and_the_lamp_renders(lamp_addon
     assert "Traceback" not in printed.err
     # Everything else works: building, exporting the preset.
     assert bpy.ops.lamp.build() == {"FINISHED"}
+
+
+def test_the_viewport_says_which_part_is_wrong(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    _scene(lamp_addon, addon_core, bl_scene)
+    obj = _part(lamp_addon, "cube", "Flipped Lens")
+    _flip(obj)
+    camera = bl_scene.camera
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=24, y=16)]
+    view = [list(r) for r in camera.matrix_world.inverted()]
+    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    session.update(bl_scene, depsgraph)
+    session.sync(bl_scene, 24, 16, window, view)
+    session.preview._run(session.preview.job)  # the worker's loop, in this thread
+    assert re.match(r'Lamp Tracer: mesh "Flipped Lens": has its normals pointing inward', session.status())

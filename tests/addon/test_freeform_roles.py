@@ -144,3 +144,26 @@ def test_role_list_filters_to_parts(lamp_addon, bl_scene):
     flags, _order = ui_list.filter_items(ui_list, bpy.context, bl_scene, "objects")
     shown = [obj.name for obj, flag in zip(bl_scene.objects, flags, strict=True) if flag]
     assert shown == ["Zed"]
+
+
+def test_registration_is_symmetric_and_keeps_the_roles(lamp_addon, bl_scene):
+    import bpy
+
+    obj = _mesh("Kept")
+    lamp_addon.freeform_properties.set_role(obj, "reflector")
+    obj.lamp_role.reflector.scatter = 0.3
+    handler = lamp_addon.freeform_geometry._on_depsgraph_update
+
+    def registered():
+        return (hasattr(bpy.types.Object, "lamp_role"), hasattr(bpy.types, "LAMP_PT_freeform"),
+                hasattr(bpy.types, "LAMP_OT_role_assign"), handler in bpy.app.handlers.depsgraph_update_post)
+
+    assert registered() == (True, True, True, True)
+    for _ in range(2):
+        lamp_addon.unregister()
+        try:
+            assert registered() == (False, False, False, False)
+        finally:
+            lamp_addon.register()
+        assert registered() == (True, True, True, True)
+        assert obj.lamp_role.role == "reflector" and obj.lamp_role.reflector.scatter == pytest.approx(0.3)
