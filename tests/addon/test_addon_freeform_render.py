@@ -169,3 +169,44 @@ def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_ad
     while session.preview.step():
         pass
     assert cache.builds == 2 and not np.array_equal(session.preview.frame().image, shown)
+
+
+def test_an_exported_pair_imports_back_as_parts_with_roles(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    exported = _f12(bl_scene, tmp_path / "exported.exr")
+    json_path = tmp_path / "shared.json"
+    assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
+    parts_before = {o.name: lamp_addon.freeform_properties.part_document(o)
+                    for o in lamp_addon.freeform_properties.role_objects(bl_scene)}
+    bpy.ops.wm.read_homefile(use_empty=True)  # a colleague's empty file
+    bl_scene = bpy.context.scene
+    with pytest.raises(RuntimeError, match="not added to a library"):
+        bpy.ops.lamp.preset_import(filepath=str(json_path))
+    assert bpy.ops.lamp.preset_import(filepath=str(json_path), add_to_library=False) == {"FINISHED"}
+    parts = lamp_addon.freeform_properties.role_objects(bl_scene)
+    assert {o.name: lamp_addon.freeform_properties.part_document(o) for o in parts} == parts_before
+    assert all(lamp_addon.freeform_materials.role_material(o) is not None for o in parts)
+    bl_scene.render.engine = "LAMP_TRACER"
+    imported = _f12(bl_scene, tmp_path / "imported.exr")
+    # Blender keeps positions in 32 bits and custom normals in its own compressed form: the same
+    # picture up to those roundings.
+    value = np.maximum(exported[:, :, :3].max(axis=2), 1e-3 * exported.max())
+    error = np.abs(imported[:, :, :3] - exported[:, :, :3]).max(axis=2) / value
+    print(f"\nimported pair vs Blender's own render: {(error == 0).mean():.1%} of the pixels equal, "
+          f"{(error <= 0.01).mean():.1%} within 1 %, largest {error.max():.2%}")
+    assert (error <= 0.01).mean() >= 0.99
+
+
+def test_a_freeform_preset_with_a_missing_mesh_file_changes_nothing(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    json_path = tmp_path / "shared.json"
+    assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
+    (tmp_path / "shared.glb").unlink()
+    bpy.ops.wm.read_homefile(use_empty=True)
+    with pytest.raises(RuntimeError, match=r'freeform\.mesh_file: "shared\.glb" is missing'):
+        bpy.ops.lamp.preset_import(filepath=str(json_path), add_to_library=False)
+    assert list(bpy.context.scene.objects) == [] and len(bpy.context.scene.lamp_design.lamps) == 0
