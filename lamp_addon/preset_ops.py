@@ -59,6 +59,17 @@ def _failed(operator: bpy.types.Operator, message: str, error: Exception | None 
     return reports.cancelled(operator, message if error is None else f"{message}: {_error_text(error)}")
 
 
+def _parts_left_out(bl_scene) -> str:
+    """What a preset of the scene's design leaves out: its free-form parts (a preset is the JSON only)."""
+    from .freeform_properties import role_objects
+
+    count = len(role_objects(bl_scene))
+    if not count:
+        return ""
+    return (f" (the parametric design only: the {count} free-form parts are not in it; Export Free-form "
+            "Design writes them with the design)")
+
+
 def _exists(operator: bpy.types.Operator, path: str) -> set[str]:
     return _failed(operator, f"{path} exists already; tick \"Replace Existing\" to overwrite it")
 
@@ -284,7 +295,7 @@ class LAMP_OT_preset_save(bpy.types.Operator):
         except (SceneError, OSError) as e:
             return _failed(self, "Preset not saved", e)
         preset_library.sync(context, select=entry.file)
-        return reports.finished(self, f"Saved \"{entry.name}\" to {entry.file}")
+        return reports.finished(self, f"Saved \"{entry.name}\" to {entry.file}{_parts_left_out(context.scene)}")
 
 
 class _WritableSelected:
@@ -437,7 +448,8 @@ class LAMP_OT_preset_export(bpy.types.Operator, ExportHelper):
             fileio.atomic_write_text(self.filepath, scene_to_json(scene))
         except (SceneError, OSError) as e:
             return _failed(self, "Not exported", e)
-        return reports.finished(self, f"Exported \"{scene['name']}\" to {self.filepath}")
+        left_out = _parts_left_out(context.scene)
+        return reports.finished(self, f"Exported \"{scene['name']}\" to {self.filepath}{left_out}")
 
 
 class LAMP_FH_preset(bpy.types.FileHandler):

@@ -167,3 +167,16 @@ def test_registration_is_symmetric_and_keeps_the_roles(lamp_addon, bl_scene):
             lamp_addon.register()
         assert registered() == (True, True, True, True)
         assert obj.lamp_role.role == "reflector" and obj.lamp_role.reflector.scatter == pytest.approx(0.3)
+
+
+def test_a_preset_of_a_design_with_parts_says_it_leaves_them_out(lamp_addon, addon_core, bl_scene, tmp_path, capfd):
+    import bpy
+    from helpers import BASELINE
+
+    lamp_addon.design_properties.scene_to_design(bl_scene, addon_core.scene.load_scene(BASELINE))
+    capfd.readouterr()
+    assert bpy.ops.lamp.preset_export(filepath=str(tmp_path / "a.json")) == {"FINISHED"}
+    assert "free-form parts" not in capfd.readouterr().out
+    lamp_addon.freeform_properties.set_role(_mesh("Glass"), "lens")
+    assert bpy.ops.lamp.preset_export(filepath=str(tmp_path / "b.json")) == {"FINISHED"}
+    assert "the 1 free-form parts are not in it; Export Free-form Design writes them" in capfd.readouterr().out
