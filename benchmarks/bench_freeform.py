@@ -200,7 +200,10 @@ def main() -> int:
     print(f"  render {args.size}x{args.size}: {shown(renders)}; {result.stats['segments']} segments, "
           f"max depth {result.stats['max_depth']}")
     from core_tracer import render
-    parametric = render(load_scene(Path(args.preset)), args.size, args.size)
+    preset = load_scene(Path(args.preset))
+    parametric = render(preset, args.size, args.size)
+    print(f"  the parametric tracer on the same preset, same load: "
+          f"{shown([timed(lambda: render(preset, args.size, args.size)) for _ in range(args.runs)])}")
     lum = lambda im: im @ np.array([0.2126, 0.7152, 0.0722])  # noqa: E731
     a, b = lum(result.image), lum(parametric)
     seen = np.maximum(a, b) > 1e-3 * b.max()

@@ -12,7 +12,9 @@ Public API (used by the Blender side):
 - ``load(json_path) -> (scene, meshes)``: the JSON and its .glb, validated.
 - ``render_passes(scene, meshes, width, height, *, progress, should_stop, samples,
   geometry_cache) -> RenderResult``: as ``core_tracer.raytrace.tracer.render_passes``.
-- ``GeometryCache``: the acceleration structure, built once per geometry change and reused.
+- ``GeometryCache``: the checked geometry and its acceleration structure, built once per geometry
+  change and reused (keep one per design and pass it to every render).
+- ``surface_hits(scene, meshes, o, d, geometry_cache)``: the first surface along given rays.
 """
 
 from __future__ import annotations
@@ -31,13 +33,16 @@ def available() -> tuple[bool, str]:
 def __getattr__(name: str):
     # The tracer, loader and cache are imported on first use: importing this package must work
     # (and stay cheap) where embreex is missing.
-    if name in ("render_passes", "GeometryCache", "prepare"):
+    if name in ("render_passes", "surface_hits"):
         from . import render
         return getattr(render, name)
+    if name == "GeometryCache":
+        from .geometry import GeometryCache
+        return GeometryCache
     if name == "load":
         from .loading import load
         return load
     raise AttributeError(name)
 
 
-__all__ = ["GeometryCache", "MeshData", "available", "load", "prepare", "render_passes"]
+__all__ = ["GeometryCache", "MeshData", "available", "load", "render_passes", "surface_hits"]

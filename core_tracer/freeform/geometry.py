@@ -38,17 +38,17 @@ class Geometry:
 
     vertices: np.ndarray  # (V, 3) float64 mm
     triangles: np.ndarray  # (T, 3) int64 into vertices
-    corners: np.ndarray  # (T, 3, 3) float64 vertex positions per triangle
     normal: np.ndarray  # (T, 3) unit geometric normal (outward for a lens)
-    corner_normals: np.ndarray  # (T, 3, 3) unit shading normals per corner (the face normal when flat)
+    corner_normals: np.ndarray  # (T, 3, 3) shading normals per corner (the face normal when flat),
+    # as the mesh gives them: normalised where they are interpolated
     part: np.ndarray  # (T,) index into freeform.parts
     surface: np.ndarray  # (T,) int8 surface id (paths.OUTER, CUT, REFLECTOR … or BODY)
     epsilon: float  # mm, the offset of a ray's origin off its surface
     fingerprint: tuple
 
-    @property
-    def extent(self) -> float:
-        return float(np.ptp(self.vertices, axis=0).max()) if len(self.vertices) else 0.0
+    def corners(self, which: np.ndarray) -> np.ndarray:
+        """The vertex positions (N, 3, 3) of the triangles ``which`` (indices or a mask)."""
+        return self.vertices[self.triangles[which]]
 
 
 def part_meshes(scene: dict, meshes: dict[str, MeshData]) -> list[MeshData]:
@@ -79,8 +79,9 @@ def fingerprint(scene: dict, mesh_list: list[MeshData]) -> tuple:
     return roles, sums
 
 
-def build_geometry(scene: dict, meshes: dict[str, MeshData]) -> Geometry:
-    """Check every part's mesh and concatenate them; raises ``SceneError`` naming the object."""
+def build_geometry(scene: dict, meshes: dict[str, MeshData], key: tuple | None = None) -> Geometry:
+    """Check every part's mesh and concatenate them; raises ``SceneError`` naming the object.
+    ``key`` is the meshes' ``fingerprint`` when the caller has it already."""
     mesh_list = part_meshes(scene, meshes)
     total = sum(len(m.triangles) for m in mesh_list if m.triangles.ndim == 2)
     if total > MAX_TRIANGLES:
@@ -102,22 +103,25 @@ def build_geometry(scene: dict, meshes: dict[str, MeshData]) -> Geometry:
         normals.append(n)
         base += len(v)
         if mesh.corner_normals is None:
-            cn.append(np.repeat(n[:, None, :], 3, axis=1))
+            cn.append(np.broadcast_to(n[:, None, :], (len(n), 3, 3)))
         else:
-            c = np.asarray(mesh.corner_normals, np.float64)
-            cn.append(c / np.maximum(np.sqrt(np.einsum("ijk,ijk->ij", c, c))[..., None], 1e-300))
+            cn.append(np.asarray(mesh.corner_normals, np.float64))
         part_of.append(np.full(len(t), i, np.int32))
         if part["role"] == "lens":
             surf.append(np.where(n[:, 1] < 0.0, P.OUTER, P.CUT).astype(np.int8))
         else:
             surf.append(np.full(len(t), SURFACE_OF_ROLE[part["role"]], np.int8))
-    vertices = np.concatenate(verts)
-    triangles = np.concatenate(tris)
+    vertices, triangles = _joined(verts), _joined(tris)
     extent = float(np.ptp(vertices, axis=0).max())
-    geometry = Geometry(vertices, triangles, vertices[triangles], np.concatenate(normals), np.concatenate(cn),
-                        np.concatenate(part_of), np.concatenate(surf), max(EPSILON_MIN, EPSILON_RELATIVE * extent),
-                        fingerprint(scene, mesh_list))
+    geometry = Geometry(vertices, triangles, _joined(normals), _joined(cn), _joined(part_of), _joined(surf),
+                        max(EPSILON_MIN, EPSILON_RELATIVE * extent),
+                        key if key is not None else fingerprint(scene, mesh_list))
     return geometry
+
+
+def _joined(arrays: list[np.ndarray]) -> np.ndarray:
+    """The arrays one after another (one part's own array, not a copy: a large lens is not copied)."""
+    return np.asarray(arrays[0]) if len(arrays) == 1 else np.concatenate(arrays)
 
 
 class GeometryCache:
@@ -139,7 +143,7 @@ class GeometryCache:
         key = fingerprint(scene, part_meshes(scene, meshes))
         if self.geometry is not None and self.geometry.fingerprint == key:
             return self.geometry, self.embree, False
-        geometry = build_geometry(scene, meshes)
+        geometry = build_geometry(scene, meshes, key)
         embree = EmbreeScene(geometry.vertices, geometry.triangles)
         from .overlap import check_lens_overlap  # needs the Embree scene
         check_lens_overlap(scene, geometry, embree)

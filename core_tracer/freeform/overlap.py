@@ -46,14 +46,14 @@ def check_lens_overlap(scene: dict, geometry: Geometry, embree: EmbreeScene) -> 
         return
     boxes = {}
     for i in lenses:
-        v = geometry.corners[geometry.part == i].reshape(-1, 3)
+        v = geometry.corners(geometry.part == i).reshape(-1, 3)
         boxes[i] = (v.min(axis=0), v.max(axis=0))
     rng = np.random.default_rng(0)
     for i in lenses:
         tris = np.nonzero(geometry.part == i)[0]
         pick = tris if len(tris) <= SAMPLES_PER_LENS else rng.choice(tris, SAMPLES_PER_LENS, replace=False)
         # Triangle centres moved just inside lens i: inside another lens only if the volumes overlap.
-        points = geometry.corners[pick].mean(axis=1) - 4 * geometry.epsilon * geometry.normal[pick]
+        points = geometry.corners(pick).mean(axis=1) - 4 * geometry.epsilon * geometry.normal[pick]
         for j in lenses:
             if j == i:
                 continue

@@ -122,7 +122,7 @@ class _Parts:
         # bulb: in a multi-lamp design each reflector sees its own bulb, as in the parametric lamp.
         self.bulb_center = np.zeros((len(bulbs), 3))
         for b, i in enumerate(bulbs):
-            c = geometry.corners[geometry.part == i]
+            c = geometry.corners(geometry.part == i)
             area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
             self.bulb_center[b] = (c.mean(axis=1) * area[:, None]).sum(axis=0) / max(area.sum(), 1e-300)
         self.bulb_intensity = self.color[bulbs] if bulbs else np.zeros((0, 3))
@@ -130,7 +130,7 @@ class _Parts:
         for i, part in enumerate(parts):
             if part["role"] != "reflector" or not bulbs:
                 continue
-            c = geometry.corners[geometry.part == i].reshape(-1, 3)
+            c = geometry.corners(geometry.part == i).reshape(-1, 3)
             lo, hi = c.min(axis=0), c.max(axis=0)
             inside = np.all((self.bulb_center >= lo) & (self.bulb_center <= hi), axis=1)
             if inside.any():
@@ -183,7 +183,10 @@ class _Band:
 def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = None, height: int | None = None,
                   *, progress: Callable[[float], None] | None = None,
                   should_stop: Callable[[], bool] | None = None, samples: int | None = None,
-                  geometry_cache: GeometryCache | None = None, threads: int | None = None,
+                  geometry_cache: GeometryCache | None = None,
+                  on_rows: Callable[[int, int, np.ndarray], None] | None = None,
+                  on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
+                  threads: int | None = None,
                   record_transitions: bool = False,
                   filter_name: str = pixel_filter.DEFAULT_FILTER) -> RenderResult:
     """Render a free-form design (a normalised scene with a ``freeform`` section and its meshes by
@@ -191,8 +194,10 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
 
     ``geometry_cache`` keeps the checked geometry and Embree scene between calls (built again only
     when the meshes or roles change); ``stats["build_seconds"]`` is the build time of this call
-    (0 when reused). Raises ``SceneError`` for a bad mesh or role, ``RenderCancelled`` when
-    ``should_stop()`` (polled between bands) says so."""
+    (0 when reused). ``on_rows(row_start, row_stop, rows)`` and ``on_band(row_start, row_stop, rows,
+    pass_rows)`` are called from the calling thread as bands finish, as in the parametric tracer.
+    Raises ``SceneError`` for a bad mesh or role, ``RenderCancelled`` when ``should_stop()`` (polled
+    between bands) says so."""
     start = time.perf_counter()
     cache = geometry_cache if geometry_cache is not None else GeometryCache()
     geometry, embree, built = cache.get(scene, meshes)
@@ -226,6 +231,12 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
                 if should_stop():
                     raise RenderCancelled("render cancelled")
                 passes[:, y0:y1] = band.acc.reshape(len(PASS_NAMES), y1 - y0, width, 3)
+                if on_rows is not None or on_band is not None:
+                    rows = passes[:, y0:y1].sum(axis=0)
+                    if on_rows is not None:
+                        on_rows(y0, y1, rows)
+                    if on_band is not None:
+                        on_band(y0, y1, rows, {name: passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)})
                 stats["segments"] += band.segments
                 stats["max_depth"] = max(stats["max_depth"], band.max_depth)
                 stats["transitions"] |= band.transitions
@@ -307,7 +318,7 @@ def _hit_point(g: Geometry, o: np.ndarray, d: np.ndarray, t: np.ndarray, tri: np
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The hit in double precision on the triangle's plane (Embree's distance is single precision):
     distance, point and barycentric weights (3 per ray) of the corners there."""
-    c = g.corners[tri]
+    c = g.corners(tri)
     n = g.normal[tri]
     denom = optics.dot(d, n)
     plane_t = optics.dot(c[:, 0] - o, n) / np.where(denom != 0.0, denom, 1.0)
@@ -407,6 +418,23 @@ def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
     return _concat(children) if len(children) > 1 else children[0]
 
 
+def _on_side(new: np.ndarray, d: np.ndarray, geometric: np.ndarray, by_face: Callable[[np.ndarray], np.ndarray],
+             same: bool) -> np.ndarray:
+    """Child directions ``new`` of rays ``d`` at faces of normal ``geometric``, kept on the side the
+    branch belongs to (``same``: on through the face, as a transmitted ray; else back, as a
+    reflected one). An interpolated normal can tip a grazing child across the face, which would put
+    it on the wrong side of the medium it is said to be in: there ``by_face(selection)``, the same
+    law with the face's own normal, decides."""
+    incoming = optics.dot(d, geometric)
+    outgoing = optics.dot(new, geometric)
+    wrong = (outgoing * incoming <= 0.0) if same else (outgoing * incoming >= 0.0)
+    if wrong.any():
+        sel = np.nonzero(wrong)[0]
+        new = new.copy()
+        new[sel] = by_face(sel)
+    return new
+
+
 def _toward(n: np.ndarray, d: np.ndarray) -> np.ndarray:
     """``n`` turned to face the ray's incident side (against ``d``)."""
     return np.where((optics.dot(n, d) > 0.0)[:, None], -n, n)
@@ -431,7 +459,9 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
         band.add(REFLECTOR_SCATTER, pix[sel], k[sel] * scatter[:, None] * parts.bulb_intensity[b])
     k = k * parts.reflectance[part, None]
     count = len(m)
-    return _spawn(rays, m, p, optics.reflect(d, n), k, np.full(count, -1, np.int32), tri,
+    mirror = _on_side(optics.reflect(d, n), d, ctx.geometry.normal[tri], lambda sel: optics.reflect(
+        d[sel], _toward(ctx.geometry.normal[tri[sel]], d[sel])), same=False)
+    return _spawn(rays, m, p, mirror, k, np.full(count, -1, np.int32), tri,
                   np.full(count, P.REFLECTOR, np.int8), cls, P.REFLECTED, np.ones(count, bool))
 
 
@@ -446,6 +476,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     geometric = g.normal[tri]
     entering = optics.dot(d, geometric) < 0.0  # the side test: by the geometric (outward) normal
     facing = np.where(entering[:, None], normal, -normal)  # shading normal toward the incident side
+    geometric_facing = np.where(entering[:, None], geometric, -geometric)
     # Where the smooth normal faces away from the ray (a grazing ray at a coarse silhouette), the
     # face's own normal decides: the ray does meet the face from the incident side.
     away = optics.dot(d, facing) >= 0.0
@@ -472,14 +503,19 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     traced = np.nonzero(~outer_from_air)[0]
     k_r = k[traced] * r[traced, None]
     out.append(_spawn(rays, m[traced], p[traced],
-                      optics.reflect(d[traced], facing[traced]), k_r,
+                      _on_side(optics.reflect(d[traced], facing[traced]), d[traced], geometric[traced],
+                               lambda sel: optics.reflect(d[traced][sel], geometric_facing[traced][sel]),
+                               same=False), k_r,
                       np.where(entering[traced], -1, part[traced]).astype(np.int32), tri[traced], src[traced],
                       cls[traced], P.REFLECTED, seen[traced]))
 
     tc = np.nonzero(r < 1.0)[0]
     k_t = k[tc] * (1.0 - r[tc, None])
     eta = n1[tc] / n2[tc]
-    out.append(_spawn(rays, m[tc], p[tc], optics.refract(d[tc], facing[tc], eta),
+    out.append(_spawn(rays, m[tc], p[tc],
+                      _on_side(optics.refract(d[tc], facing[tc], eta), d[tc], geometric[tc],
+                               lambda sel: optics.refract(d[tc][sel], geometric_facing[tc][sel], eta[sel]),
+                               same=True),
                       k_t, np.where(entering[tc], part[tc], -1).astype(np.int32), tri[tc], src[tc], cls[tc],
                       P.TRANSMITTED, seen[tc]))
     return out

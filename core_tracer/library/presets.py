@@ -143,7 +143,10 @@ def _parse(path: str) -> dict:
     except SceneError as e:  # named by the file; a repeated key also by its field
         field = e.path[len(path) + 2:] if e.path.startswith(path + ": ") else ""
         raise SceneError(field, e.message) from None
-    return parse_scene(doc)
+    scene = parse_scene(doc)
+    if "freeform" in scene:
+        _check_mesh_file(path, scene)
+    return scene
 
 
 def load_preset(path: str | os.PathLike) -> dict:
@@ -197,8 +200,6 @@ def list_library(library: Library) -> tuple[list[PresetEntry], list[PresetWarnin
             continue
         try:
             scene = _parse(path)
-            if "freeform" in scene:
-                _check_mesh_file(path, scene)
         except SceneError as e:
             field = f"{printable(e.path, 120)}: " if e.path else ""
             warnings.append(PresetWarning(shown, library, field + printable(e.message)))

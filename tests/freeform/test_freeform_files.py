@@ -120,3 +120,27 @@ def test_freeform_is_not_part_of_lamp_scene_1():
     doc = {**DESIGN, "schema": "lamp-scene/1"}
     with pytest.raises(SceneError, match="freeform: unknown key"):
         parse_scene(doc)
+
+
+def test_cli_validates_the_pair(tmp_path):
+    path = write_design(tmp_path)
+    proc = run_cli("validate", path)
+    assert proc.returncode == 0, proc.stderr
+    triangles = sum(len(m.triangles) for m in lamp_meshes())
+    assert f'valid lamp-scene/2, "Mesh lamp", 5 free-form parts ({triangles} triangles)' in proc.stdout
+
+
+def test_a_free_form_preset_is_listed_and_gets_its_thumbnail(tmp_path):
+    from core_tracer.library.presets import Library, list_library, make_thumbnail
+
+    folder = tmp_path / "team"
+    folder.mkdir()
+    write_design(folder)
+    entries, warnings = list_library(Library("Team", str(folder), writable=True))
+    assert not warnings and [e.name for e in entries] == ["Mesh lamp"]
+    png = make_thumbnail(entries[0], tmp_path / "thumb.png", 24)
+    image, _ = read_image(png)
+    assert image.shape == (24, 24, 3) and image.max() > 0.05  # the lamp is seen
+    (folder / "lamp.glb").unlink()
+    entries, warnings = list_library(Library("Team", str(folder), writable=True))
+    assert not entries and 'freeform.mesh_file: "lamp.glb" is missing' in str(warnings[0])

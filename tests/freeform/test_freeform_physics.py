@@ -174,7 +174,7 @@ def test_embree_hits_agree_with_brute_force_moller_trumbore():
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     cache = GeometryCache()
     hits = surface_hits(scene, meshes, o, d, cache)
-    corners = cache.geometry.corners
+    corners = cache.geometry.corners(np.arange(len(cache.geometry.triangles)))
     t_ref, tri_ref = moller_trumbore(o, d, corners)
     both = np.isfinite(t_ref) & (hits["triangle"] >= 0)
     assert both.sum() > n // 3  # the rays do hit the meshes
