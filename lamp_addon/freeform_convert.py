@@ -42,6 +42,7 @@ class ConvertReport:
     objects: list[str] = field(default_factory=list)
     hidden: list[str] = field(default_factory=list)
     built: bool = False  # the lamp was built (or brought up to date) first
+    earlier_parts: int = 0  # parts with roles the scene had already (traced too)
 
 
 def _values(role: str, source: dict) -> dict:
@@ -116,7 +117,7 @@ def _collection(bl_scene: bpy.types.Scene) -> bpy.types.Collection:
 def convert_to_freeform(bl_scene: bpy.types.Scene) -> ConvertReport:
     """Copy the built parametric lamp of ``bl_scene`` into free-form parts; raises ``SceneError`` when the
     design is not valid (nothing is changed then)."""
-    report = ConvertReport()
+    report = ConvertReport(earlier_parts=len(freeform_properties.role_objects(bl_scene)))
     scene = design_properties.design_to_scene(bl_scene)  # raises SceneError before anything changes
     if not design_builder.is_up_to_date(bl_scene):
         design_builder.build_lamp(bl_scene, scene)

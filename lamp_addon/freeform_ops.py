@@ -126,8 +126,13 @@ class LAMP_OT_freeform_convert(DesignOperator, bpy.types.Operator):
         except SceneError as e:
             return self.cancelled(f"Not converted: {e}")
         built = "built the lamp, then " if report.built else ""
-        return reports.finished(self, f"Converted: {built}made {len(report.objects)} free-form parts; "
-                                      f"hid the {len(report.hidden)} parametric parts they stand in for")
+        text = (f"Converted: {built}made {len(report.objects)} free-form parts; hid the {len(report.hidden)} "
+                "parametric parts they stand in for")
+        if report.earlier_parts:
+            self.report({"WARNING"}, f"{text}; the {report.earlier_parts} parts the scene had already are traced "
+                                     "too (take their roles away if they are an earlier copy)")
+            return {"FINISHED"}
+        return reports.finished(self, text)
 
 
 class LAMP_OT_freeform_export(bpy.types.Operator, ExportHelper):

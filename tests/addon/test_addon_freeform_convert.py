@@ -101,3 +101,14 @@ def test_convert_makes_closed_lenses_with_roles_and_hides_the_parametric_parts(l
     # Every part has its role material, so Cycles renders what the tracer traces.
     assert all(lamp_addon.freeform_materials.role_material(o) is not None for o in parts)
     assert {"REGISTER", "UNDO"} <= bpy.types.LAMP_OT_freeform_convert.bl_options
+
+
+def test_converting_again_says_the_earlier_parts_are_traced_too(lamp_addon, addon_core, bl_scene, capfd):
+    import bpy
+
+    _design(lamp_addon, addon_core, bl_scene, BASELINE)
+    assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
+    capfd.readouterr()
+    assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
+    assert "the 6 parts the scene had already are traced too" in capfd.readouterr().out
+    assert len(lamp_addon.freeform_properties.role_objects(bl_scene)) == 12  # nothing of the first was changed
