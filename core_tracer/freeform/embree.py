@@ -31,11 +31,12 @@ class EmbreeScene:
         # Embree builds its hierarchy on the first query: make that part of the build, not of a render.
         self._scene.run(np.zeros((1, 3), np.float32), np.array([[0.0, 0.0, 1.0]], np.float32))
 
-    def nearest(self, o: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Distance along each ray (inf for a miss) and the triangle hit (-1 for a miss)."""
+    def nearest(self, o: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Distance along each ray (inf for a miss), the triangle hit (-1 for a miss) and the
+        barycentric weights (u, v) of its second and third corners at the hit, (N, 2)."""
         if len(o) == 0:
-            return np.zeros(0), np.zeros(0, np.int64)
+            return np.zeros(0), np.zeros(0, np.int64), np.zeros((0, 2))
         out = self._scene.run(np.ascontiguousarray(o, np.float32), np.ascontiguousarray(d, np.float32), output=1)
         prim = out["primID"].astype(np.int64)
         t = np.where(prim >= 0, out["tfar"].astype(np.float64), np.inf)
-        return t, prim
+        return t, prim, np.stack([out["u"], out["v"]], axis=1).astype(np.float64)

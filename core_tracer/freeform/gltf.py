@@ -82,6 +82,11 @@ def _check_header(name: str, data: bytes) -> None:
 
 
 def _meshes(gltf, blob: bytes) -> dict[str, MeshData]:
+    required = [e for e in (gltf.extensionsRequired or []) if isinstance(e, str)]
+    if required:
+        raise SceneError("extensionsRequired", f"the file needs {', '.join(printable(e, 40) for e in required[:4])}; "
+                                               "allowed a .glb without required extensions (export without Draco "
+                                               "compression or quantisation)")
     nodes = gltf.nodes or []
     world = _world_matrices(gltf)
     out: dict[str, MeshData] = {}

@@ -28,7 +28,7 @@ def winding(points: np.ndarray, geometry: Geometry, embree: EmbreeScene, part: i
     for _ in range(MAX_CROSSINGS):
         if len(live) == 0:
             break
-        t, tri = embree.nearest(o[live], d[live])
+        t, tri, _ = embree.nearest(o[live], d[live])
         hit = tri >= 0
         live, t, tri = live[hit], t[hit], tri[hit]
         mine = geometry.part[tri] == part

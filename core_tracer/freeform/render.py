@@ -28,10 +28,10 @@ from ..raytrace import optics, pixel_filter
 from ..raytrace import paths as P
 from ..raytrace.camera import Camera, eye_rays, make_camera
 from ..raytrace.tracer import CUTOFF, MAX_DEPTH, PASS_NAMES, RenderCancelled, RenderResult
-from ..scene.derived import lens_absorption
 from .embree import EmbreeScene
 from .geometry import BODY, Geometry, GeometryCache
 from .meshes import MeshData
+from .roles import PartTable
 
 (LENS_SURFACE, BULB_PASS, REFLECTOR_CONSTANT, REFLECTOR_SCATTER, SOCKET_PASS, SIDE_WALL_PASS, BODY_PASS,
  BACKGROUND_PASS) = range(len(PASS_NAMES))
@@ -84,68 +84,12 @@ def _concat(parts: list[_Rays]) -> _Rays:
     return _Rays(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
 
 
-class _Parts:
-    """Every part's role values as arrays indexed by part number."""
-
-    def __init__(self, scene: dict, geometry: Geometry):
-        parts = scene["freeform"]["parts"]
-        n = len(parts)
-        self.ior = np.ones(n)
-        self.absorption = np.zeros((n, 3))
-        self.color = np.zeros((n, 3))  # diffuse / constant / terminal colour of the role
-        self.specular = np.zeros(n)
-        self.shininess = np.zeros(n)
-        self.reflectance = np.zeros(n)
-        self.scatter = np.zeros(n)
-        bulbs = []
-        for i, part in enumerate(parts):
-            v = part[part["role"]]
-            role = part["role"]
-            if role == "lens":
-                self.ior[i] = v["ior"]
-                self.absorption[i] = lens_absorption(v)
-                self.color[i] = v["diffuse_color"]
-                self.specular[i], self.shininess[i] = v["specular"], v["shininess"]
-            elif role == "reflector":
-                self.color[i] = v["color"]
-                self.reflectance[i], self.scatter[i], self.shininess[i] = v["reflectance"], v["scatter"], v["shininess"]
-            elif role == "bulb":
-                self.color[i] = v["intensity"] if v["on"] else (0.0, 0.0, 0.0)
-                bulbs.append(i)
-            elif role in ("socket", "side_wall"):
-                self.color[i] = v["color"]
-            elif role == "body":
-                self.color[i] = v["color"]
-                self.specular[i], self.shininess[i] = v["specular"], v["shininess"]
-        # A bulb's centre is its mesh's centroid (area-weighted over the surface). Each reflector
-        # scatters toward the bulbs whose centre lies in its bounding box, else toward the nearest
-        # bulb: in a multi-lamp design each reflector sees its own bulb, as in the parametric lamp.
-        self.bulb_center = np.zeros((len(bulbs), 3))
-        for b, i in enumerate(bulbs):
-            c = geometry.corners(geometry.part == i)
-            area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
-            self.bulb_center[b] = (c.mean(axis=1) * area[:, None]).sum(axis=0) / max(area.sum(), 1e-300)
-        self.bulb_intensity = self.color[bulbs] if bulbs else np.zeros((0, 3))
-        self.bulbs_of = np.zeros((n, max(1, len(bulbs))), bool)  # [reflector part, bulb]
-        for i, part in enumerate(parts):
-            if part["role"] != "reflector" or not bulbs:
-                continue
-            c = geometry.corners(geometry.part == i).reshape(-1, 3)
-            lo, hi = c.min(axis=0), c.max(axis=0)
-            inside = np.all((self.bulb_center >= lo) & (self.bulb_center <= hi), axis=1)
-            if inside.any():
-                self.bulbs_of[i, : len(bulbs)] = inside
-            else:
-                centre = (lo + hi) / 2
-                self.bulbs_of[i, int(np.argmin(np.linalg.norm(self.bulb_center - centre, axis=1)))] = True
-
-
 class _Context:
     def __init__(self, scene: dict, camera: Camera, geometry: Geometry, embree: EmbreeScene, samples: int,
                  filter_name: str, record: bool):
         self.camera, self.geometry, self.embree = camera, geometry, embree
         self.samples, self.filter_name, self.record = samples, filter_name, record
-        self.parts = _Parts(scene, geometry)
+        self.parts = PartTable(scene, geometry)
         light = scene["light"]
         self.light_dir = optics.normalize(np.asarray(light["direction"], np.float64))
         self.light_color = np.asarray(light["color"], np.float64)
@@ -167,9 +111,12 @@ class _Band:
     def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
         if len(pix) == 0:
             return
-        values = np.broadcast_to(values, (len(pix), 3))
-        for c in range(3):
-            self.acc[pass_id, :, c] += np.bincount(pix, weights=values[:, c], minlength=self.acc.shape[1])
+        # One count over the (pixel, channel) bins of the pixels spanned, as the parametric tracer.
+        first, last = int(pix.min()), int(pix.max()) + 1
+        bins = (3 * (pix - first))[:, None] + np.arange(3)
+        weights = np.broadcast_to(values, bins.shape)
+        self.acc[pass_id, first:last].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(),
+                                                                    minlength=3 * (last - first))
 
     def note(self, parent: np.ndarray, branch: np.ndarray | int, child: np.ndarray | int) -> None:
         if not self.record or len(parent) == 0:
@@ -289,9 +236,9 @@ def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> Non
     band.max_depth = max(band.max_depth, depth)
 
 
-def _nearest(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray]:
-    """Each ray's next triangle (-1 for none) and the distance to it, never its own triangle:
-    a self-hit is skipped by asking again from just beyond it."""
+def _nearest(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each ray's next triangle (-1 for none), the distance to it and the barycentric (u, v) of
+    the hit, never its own triangle: a self-hit is skipped by asking again from just beyond it."""
     g = ctx.geometry
     o = rays.o
     on_surface = np.nonzero(rays.src_tri >= 0)[0]
@@ -302,42 +249,38 @@ def _nearest(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray]:
         side = np.where((optics.dot(rays.d[on_surface], n) >= 0.0)[:, None], n, -n)
         o = o.copy()
         o[on_surface] += g.epsilon * side
-    t, tri = ctx.embree.nearest(o, rays.d)
+    t, tri, uv = ctx.embree.nearest(o, rays.d)
     for _ in range(SELF_HIT_RETRIES):
         again = np.nonzero((tri == rays.src_tri) & (tri >= 0))[0]
         if len(again) == 0:
             break
         skip = t[again] + g.epsilon
-        t2, tri2 = ctx.embree.nearest(o[again] + skip[:, None] * rays.d[again], rays.d[again])
+        t2, tri2, uv2 = ctx.embree.nearest(o[again] + skip[:, None] * rays.d[again], rays.d[again])
         t[again] = t2 + skip
         tri[again] = tri2
-    return t, tri
+        uv[again] = uv2
+    return t, tri, uv
 
 
 def _hit_point(g: Geometry, o: np.ndarray, d: np.ndarray, t: np.ndarray, tri: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+               ) -> tuple[np.ndarray, np.ndarray]:
     """The hit in double precision on the triangle's plane (Embree's distance is single precision):
-    distance, point and barycentric weights (3 per ray) of the corners there."""
-    c = g.corners(tri)
+    distance and point."""
     n = g.normal[tri]
+    p0 = g.vertices[g.triangles[tri, 0]]
     denom = optics.dot(d, n)
-    plane_t = optics.dot(c[:, 0] - o, n) / np.where(denom != 0.0, denom, 1.0)
+    plane_t = optics.dot(p0 - o, n) / np.where(denom != 0.0, denom, 1.0)
     t = np.where((denom != 0.0) & np.isfinite(plane_t), plane_t, t)
-    p = o + t[:, None] * d
-    e1, e2, w = c[:, 1] - c[:, 0], c[:, 2] - c[:, 0], p - c[:, 0]
-    d11, d12, d22 = optics.dot(e1, e1), optics.dot(e1, e2), optics.dot(e2, e2)
-    w1, w2 = optics.dot(w, e1), optics.dot(w, e2)
-    det = d11 * d22 - d12 * d12
-    det = np.where(det > 0, det, 1.0)
-    u = np.clip((d22 * w1 - d12 * w2) / det, 0.0, 1.0)
-    v = np.clip((d11 * w2 - d12 * w1) / det, 0.0, 1.0 - u)
-    return t, p, np.stack([1.0 - u - v, u, v], axis=1)
+    return t, o + t[:, None] * d
 
 
-def _shading_normal(g: Geometry, tri: np.ndarray, bary: np.ndarray) -> np.ndarray:
-    """The corner normals interpolated at the hit, unit, on the geometric normal's side (a smooth
-    normal that disagrees with the face, at a silhouette of a coarse mesh, gives way to it)."""
-    n = np.einsum("ij,ijk->ik", bary, g.corner_normals[tri])
+def _shading_normal(g: Geometry, tri: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """The corner normals interpolated at the hit (barycentric ``uv`` of the second and third
+    corners), unit, on the geometric normal's side (a smooth normal that disagrees with the face,
+    at a silhouette of a coarse mesh, gives way to it)."""
+    c = g.corner_normals[tri]
+    u, v = uv[:, 0:1], uv[:, 1:2]
+    n = (1.0 - u - v) * c[:, 0] + u * c[:, 1] + v * c[:, 2]
     length = np.linalg.norm(n, axis=1)
     geometric = g.normal[tri]
     ok = (length > 1e-12) & (optics.dot(n, geometric) > 0.0)
@@ -360,7 +303,7 @@ def _spawn(rays: _Rays, sel: np.ndarray, o: np.ndarray, d: np.ndarray, k: np.nda
 def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
     """One generation: find each segment's end, add its luminance, spawn the children."""
     g, parts = ctx.geometry, ctx.parts
-    t, tri = _nearest(ctx, rays)
+    t, tri, uv = _nearest(ctx, rays)
     hit_any = tri >= 0
     surface = np.where(hit_any, g.surface[np.maximum(tri, 0)], P.NOTHING).astype(np.int8)
     medium = np.where(rays.lens >= 0, P.IN_LENS, P.IN_AIR)
@@ -370,10 +313,10 @@ def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
 
     h = np.nonzero(hit_any)[0]
     tri_h = tri[h]
-    t_h, p_h, bary = _hit_point(g, rays.o[h], rays.d[h], t[h], tri_h)
+    t_h, p_h = _hit_point(g, rays.o[h], rays.d[h], t[h], tri_h)
     t = t.copy()
     t[h] = t_h  # from the segment's true start, in double precision
-    normal = _shading_normal(g, tri_h, bary)
+    normal = _shading_normal(g, tri_h, uv[h])
 
     k = rays.k
     inside = np.nonzero(rays.lens >= 0)[0]
@@ -425,13 +368,19 @@ def _on_side(new: np.ndarray, d: np.ndarray, geometric: np.ndarray, by_face: Cal
     reflected one). An interpolated normal can tip a grazing child across the face, which would put
     it on the wrong side of the medium it is said to be in: there ``by_face(selection)``, the same
     law with the face's own normal, decides."""
-    incoming = optics.dot(d, geometric)
-    outgoing = optics.dot(new, geometric)
-    wrong = (outgoing * incoming <= 0.0) if same else (outgoing * incoming >= 0.0)
+    want = np.sign(optics.dot(d, geometric)) * (1.0 if same else -1.0)  # the side, along the face normal
+    wrong = optics.dot(new, geometric) * want <= 0.0
     if wrong.any():
         sel = np.nonzero(wrong)[0]
         new = new.copy()
         new[sel] = by_face(sel)
+        # Grazing (refraction at the critical angle): the face's own law gives a direction in the
+        # face's plane, or a rounding off it; tip it just onto the right side.
+        still = sel[optics.dot(new[sel], geometric[sel]) * want[sel] <= 1e-9]
+        if len(still):
+            n = geometric[still]
+            along = optics.dot(new[still], n) - 1e-6 * want[still]
+            new[still] = optics.normalize(new[still] - along[:, None] * n)
     return new
 
 
@@ -530,13 +479,13 @@ def surface_hits(scene: dict, meshes: dict[str, MeshData], o: np.ndarray, d: np.
     geometry, embree, _ = cache.get(scene, meshes)
     o = np.asarray(o, np.float64)
     d = np.asarray(d, np.float64)
-    t, tri = embree.nearest(o, d)
+    t, tri, uv = embree.nearest(o, d)
     hit = np.nonzero(tri >= 0)[0]
     point = np.full((len(o), 3), np.nan)
     normal = np.full((len(o), 3), np.nan)
-    th, point[hit], bary = _hit_point(geometry, o[hit], d[hit], t[hit], tri[hit])
+    th, point[hit] = _hit_point(geometry, o[hit], d[hit], t[hit], tri[hit])
     t = t.copy()
     t[hit] = th
-    normal[hit] = _shading_normal(geometry, tri[hit], bary)
+    normal[hit] = _shading_normal(geometry, tri[hit], uv[hit])
     part = np.where(tri >= 0, geometry.part[np.maximum(tri, 0)], -1)
     return {"t": t, "triangle": tri, "part": part, "point": point, "normal": normal}

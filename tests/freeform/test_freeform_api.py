@@ -98,3 +98,49 @@ def test_flat_and_smooth_meshes_are_both_accepted():
     flat_bulb = MeshData("Bulb", meshes["Bulb"].vertices, meshes["Bulb"].triangles, None)
     image = render_passes(scene, {**meshes, "Bulb": flat_bulb}).image
     assert np.isfinite(image).all()
+
+
+@pytest.mark.parametrize("role,pass_name,values,expected", [
+    ("side_wall", "side_wall", {"color": [0.2, 0.3, 0.4]}, [0.2, 0.3, 0.4]),
+    ("socket", "socket", {"color": [0.5, 0.1, 0.0]}, [0.5, 0.1, 0.0]),
+    ("bulb", "bulb", {"intensity": [3.0, 2.0, 1.0]}, [3.0, 2.0, 1.0]),
+    ("bulb", "bulb", {"intensity": [3.0, 2.0, 1.0], "on": False}, [0.0, 0.0, 0.0]),
+])
+def test_terminal_parts_end_a_ray_with_their_colour(role, pass_name, values, expected):
+    # Seen straight on by the eye (k = 1): the pixel is the part's colour, in its own pass.
+    scene = parse_scene({"schema": "lamp-scene/2", "lamps": [{}], "image": {"width": 5, "height": 5},
+                         "camera": {"type": "orthographic", "position": [0, -500, 0], "target": [0, 0, 0],
+                                    "width": 10.0},
+                         "freeform": {"mesh_file": "t.glb", "parts": [{"object": "Part", "role": role, role: values}]}})
+    result = render_passes(scene, {"Part": shapes.box("Part", (-20, 10, -20), (20, 20, 20))})
+    np.testing.assert_allclose(result.passes[pass_name][2, 2], expected, rtol=1e-6)
+    np.testing.assert_allclose(result.image[2, 2], expected, rtol=1e-6)
+
+
+def test_reflector_adds_its_constant_and_blinn_scatter_toward_the_bulb():
+    # A flat mirror facing the eye, the bulb off to the side: constant + w (cos β)^n I0 (eq. 3); the
+    # mirror ray goes back out to the black background.
+    # Counter-clockwise seen from -y: the plate faces the eye.
+    plate = MeshData("Mirror", np.array([[-40, 50, -40], [40, 50, -40], [40, 50, 40], [-40, 50, 40]], float),
+                     np.array([[0, 1, 2], [0, 2, 3]], np.int32))
+    assert np.cross(*(plate.vertices[[1, 2]] - plate.vertices[0]))[1] < 0
+    bulb = shapes.uv_sphere("Bulb", (30.0, 20.0, 0.0), 3.0, 32)
+    scene = parse_scene({"schema": "lamp-scene/2", "lamps": [{}], "image": {"width": 5, "height": 5},
+                         "camera": {"type": "orthographic", "position": [0, -500, 0], "target": [0, 0, 0],
+                                    "width": 10.0},
+                         "freeform": {"mesh_file": "r.glb", "parts": [
+                             {"object": "Mirror", "role": "reflector",
+                              "reflector": {"color": [0.3, 0.2, 0.1], "scatter": 0.7, "shininess": 12}},
+                             {"object": "Bulb", "role": "bulb", "bulb": {"intensity": [8.0, 7.0, 6.0]}}]}})
+    result = render_passes(scene, {"Mirror": plate, "Bulb": bulb})
+    centroid = bulb.vertices[bulb.triangles].mean(axis=1)
+    p = bulb.vertices[bulb.triangles]
+    area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    centre = (centroid * area[:, None]).sum(axis=0) / area.sum()  # the bulb's centre as the tracer takes it
+    to_bulb = (centre - [0, 50, 0]) / np.linalg.norm(centre - [0, 50, 0])
+    half = (np.array([0, -1.0, 0]) + to_bulb) / np.linalg.norm(np.array([0, -1.0, 0]) + to_bulb)
+    cos_beta = -half[1]
+    np.testing.assert_allclose(result.passes["reflector_constant"][2, 2], [0.3, 0.2, 0.1], rtol=1e-6)
+    np.testing.assert_allclose(result.passes["reflector_scatter"][2, 2],
+                               0.7 * cos_beta**12 * np.array([8.0, 7.0, 6.0]), rtol=1e-5)
+    assert abs(centre[1] - 20.0) < 1e-9 and abs(centre[0] - 30.0) < 1e-9

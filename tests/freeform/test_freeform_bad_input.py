@@ -166,6 +166,7 @@ def good_glb(folder) -> bytes:
     ("truncated", ("says it is", "bytes but is 300: the file is cut or corrupt")),
     ("bad-json", ("is not a readable glTF binary",)),
     ("accessor-out", ("an accessor reaches outside the file's data",)),
+    ("draco", ("needs KHR_draco_mesh_compression", "export without Draco compression")),
 ])
 def test_missing_or_corrupt_glb(tmp_path, case, needles):
     data = {"missing": None, "not-gltf": b"PK\x03\x04 a zip file", "garbage": b"glTF" + bytes(range(256)) * 4,
@@ -174,7 +175,9 @@ def test_missing_or_corrupt_glb(tmp_path, case, needles):
                 "asset": {"version": "2.0"}, "nodes": [{"name": "Lens", "mesh": 0}],
                 "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
                 "accessors": [{"bufferView": 0, "componentType": 5126, "count": 10**9, "type": "VEC3"}],
-                "bufferViews": [{"buffer": 0, "byteLength": 36}], "buffers": [{"byteLength": 36}]}).encode())}[case]
+                "bufferViews": [{"buffer": 0, "byteLength": 36}], "buffers": [{"byteLength": 36}]}).encode()),
+            "draco": glb_with_json(json.dumps({"asset": {"version": "2.0"}, "extensionsUsed": [
+                "KHR_draco_mesh_compression"], "extensionsRequired": ["KHR_draco_mesh_compression"]}).encode())}[case]
     path = write_pair(tmp_path, data)
     with pytest.raises(SceneError) as err:
         load(path)
