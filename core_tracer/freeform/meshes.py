@@ -93,9 +93,8 @@ def _welded(mesh: MeshData) -> np.ndarray:
 
 
 def open_edges(mesh: MeshData) -> int:
-    """The number of directed edges that are not matched by exactly one edge in the opposite
-    direction (0 for a closed, consistently oriented, manifold surface); vertices at the same
-    position count as one."""
+    """The number of edges not used by exactly two triangles in opposite directions (0 for a
+    closed, consistently oriented, manifold surface); vertices at the same position count as one."""
     weld = _welded(mesh)
     tri = weld[mesh.triangles]
     a = tri.reshape(-1)
@@ -103,11 +102,19 @@ def open_edges(mesh: MeshData) -> int:
     keep = a != b  # the edges of collapsed triangles say nothing about closure
     a, b = a[keep].astype(np.int64), b[keep].astype(np.int64)
     n = len(mesh.vertices)
-    forward = np.sort(a * n + b)
-    backward = np.sort(b * n + a)
-    # Closed and oriented: the directed edges, each once, are exactly the reversed ones.
-    repeated = int(np.count_nonzero(forward[1:] == forward[:-1]))
-    return repeated + int(np.count_nonzero(forward != backward))
+    # Closed and oriented: every undirected edge is used exactly twice, once in each direction.
+    # Sorted by the undirected edge, the two uses lie side by side.
+    # One sort of the undirected edge with the direction in its lowest bit.
+    both = np.sort((np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b))
+    key, forward = both >> 1, (both & 1).astype(bool)
+    if len(key) == 0:
+        return 0
+    start = np.flatnonzero(np.concatenate([[True], key[1:] != key[:-1]]))
+    uses = np.diff(np.append(start, len(key)))
+    twice = uses == 2
+    opposite = forward[start[twice]] != forward[start[twice] + 1]
+    # The undirected edges used other than once in each direction.
+    return int(np.count_nonzero(~twice) + np.count_nonzero(~opposite))
 
 
 def check_lens_volume(mesh: MeshData, normals: np.ndarray | None = None) -> float:

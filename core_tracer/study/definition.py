@@ -348,7 +348,7 @@ class Study:
             if key not in allowed:
                 raise SceneError(show_key(key), f"unknown key; allowed keys here: {', '.join(allowed)}")
         if "base" not in doc:
-            raise SceneError("base", "is required: the lamp-scene/1 design the study varies")
+            raise SceneError("base", "is required: the lamp-scene design the study varies")
         size = parse_size(doc.get("size", list(DEFAULT_SIZE)))
         base_doc = doc["base"]
         if isinstance(base_doc, dict):
@@ -361,6 +361,9 @@ class Study:
             base = parse_scene(base_doc)
         except SceneError as e:
             raise SceneError(f"base.{e.path}" if e.path else "base", e.message) from None
+        if "freeform" in base:  # a study renders the parametric lamp: it would silently drop the meshes
+            raise SceneError("base.freeform", "a free-form design cannot be studied; allowed a design without "
+                                              "freeform (vary the parametric lamp)")
         title = doc.get("title", "")
         if not isinstance(title, str) or len(title) > 200 or has_surrogate(title):
             # A lone surrogate cannot be stored in the sheet's header: refused now, not after rendering.

@@ -46,7 +46,7 @@ def slab(name="Lens", lo=(-20, 0, -20), hi=(20, 3, 20)) -> MeshData:
 def test_open_lens_mesh():
     m = slab()
     text = lens_error(MeshData("Lens", m.vertices, m.triangles[:-1]))
-    assert text.startswith('mesh "Lens": is not closed') and "fill the holes" in text
+    assert text.startswith('mesh "Lens": is not closed (3 open or non-manifold edges)') and "fill the holes" in text
 
 
 def test_flipped_lens_normals():
