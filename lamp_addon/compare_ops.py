@@ -51,7 +51,16 @@ import numpy as np
 
 from ..core_tracer.images import display
 from ..core_tracer.scene.reading import SceneError
-from . import actions, design_properties, image_view, jobs, render_camera
+from . import (
+    actions,
+    design_properties,
+    design_root,
+    freeform_materials,
+    freeform_properties,
+    image_view,
+    jobs,
+    render_camera,
+)
 from .convert.sheet import differences, shown_side_by_side, side_by_side
 from .render_engine import ENGINE_ID
 
@@ -236,9 +245,12 @@ def needs_build(bl_scene) -> bool:
 
 def _in_design(ob) -> bool:
     """Objects the builder made carry the part key; what the designer parented under the root is
-    part of the lamp too."""
+    part of the lamp too, and so is every free-form part (a mesh with a lamp role)."""
     from .design_root import PART_KEY
+    from .freeform_properties import has_role
 
+    if has_role(ob):
+        return True
     while ob is not None:
         if ob.get(PART_KEY):
             return True
@@ -322,7 +334,8 @@ class CompareRun:
         _camera, self.camera_news = render_camera.ensure_lamp_camera(bl_scene)
         render_camera.pause_link(bl_scene)  # the render size set below is the comparison's, not the user's
         self._paused = True
-        if self.build and needs_build(bl_scene):
+        parts = freeform_properties.role_objects(bl_scene)
+        if self.build and needs_build(bl_scene) and not parts:  # with parts, the lamp is the parts
             self._build()
         self.scene = render_camera.scene_for_render(bl_scene, size=self.resolution)
         width, height = self.scene["image"]["width"], self.scene["image"]["height"]
@@ -338,6 +351,14 @@ class CompareRun:
         for ob in objects_outside_design(bl_scene):
             settings.set(ob, hide_render=True)
             self.left_out.append(ob.name)
+        if parts:
+            # The tracer traces the free-form parts alone (freeform_render): so does Cycles, with the
+            # parts' role materials brought up to date and the parametric lamp's objects left out.
+            freeform_materials.sync(bl_scene)
+            for ob in bl_scene.objects:
+                if ob.get(design_root.PART_KEY) not in (None, design_root.ROOT_PART) and ob.type == "MESH" \
+                        and not ob.hide_render and not freeform_properties.has_role(ob):
+                    settings.set(ob, hide_render=True)
         self._folder = tempfile.mkdtemp(prefix="lamp-compare-")
 
     def _build(self) -> None:

@@ -392,3 +392,26 @@ def scene_to_design(bl_scene: bpy.types.Scene, scene_dict: dict) -> None:
 
 
 register, unregister = bpy.utils.register_classes_factory(classes)
+
+
+# ---------------------------------------------------------------------------------------------
+# For other property owners (the free-form roles on objects): the same generation and conversion
+
+
+def make_groups(section: S.Section, class_name: str, out: list[type]) -> type:
+    """The PropertyGroup of ``section`` (nested groups first into ``out``, then the group itself)."""
+    return _make_groups(section, class_name, out)
+
+
+def read_section(group, section: S.Section) -> dict:
+    """The values of ``group`` (a group made from ``section``) as a document section."""
+    return _read_section(group, section)
+
+
+def write_section(group, section: S.Section, data: dict) -> None:
+    """Set ``group`` from the document section ``data`` (keys it lacks are left alone)."""
+    _writing[0] += 1
+    try:
+        _write_section(group, section, data)
+    finally:
+        _writing[0] -= 1

@@ -59,6 +59,17 @@ def _failed(operator: bpy.types.Operator, message: str, error: Exception | None 
     return reports.cancelled(operator, message if error is None else f"{message}: {_error_text(error)}")
 
 
+def _parts_left_out(bl_scene) -> str:
+    """What a preset of the scene's design leaves out: its free-form parts (a preset is the JSON only)."""
+    from .freeform_properties import role_objects
+
+    count = len(role_objects(bl_scene))
+    if not count:
+        return ""
+    return (f" (the parametric design only: the {count} free-form parts are not in it; Export Free-form "
+            "Design writes them with the design)")
+
+
 def _exists(operator: bpy.types.Operator, path: str) -> set[str]:
     return _failed(operator, f"{path} exists already; tick \"Replace Existing\" to overwrite it")
 
@@ -127,13 +138,24 @@ def show_view(bl_scene: bpy.types.Scene, scene: dict) -> str:
     return made or f"moved \"{ob.name}\" to its view"
 
 
-def apply_preset(bl_scene: bpy.types.Scene, scene: dict) -> str:
+def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None) -> str:
     """Set the design from a preset, all or nothing, then show its view (``show_view``) and, when the
-    lamp has been built in this scene, rebuild it so that its objects are the preset's too. Returns
-    what happened, for the report."""
+    lamp has been built in this scene, rebuild it so that its objects are the preset's too. A free-form
+    preset (read from ``path``) also brings its parts in as objects with roles (``freeform_import``),
+    its meshes read and checked first. Returns what happened, for the report."""
+    from . import freeform_import
+
+    parts = None
+    if "freeform" in scene:
+        if path is None:
+            raise SceneError("freeform", "a free-form design needs its file, to find its .glb beside it")
+        parts = freeform_import.read_parts(path, scene)  # before any change: all or nothing
     design_properties.scene_to_design(bl_scene, scene)
     design = design_properties.design_to_scene(bl_scene)
     view = show_view(bl_scene, design)
+    if parts is not None:
+        made = freeform_import.make_parts(bl_scene, scene, parts)
+        view += f"; made {len(made)} free-form parts"
     if not any(ob.get(design_root.PART_KEY) for ob in bl_scene.objects):
         if bl_scene.lamp_design.auto_build and not render_setup.is_set_up(bl_scene):
             # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now
@@ -201,7 +223,7 @@ class LAMP_OT_preset_apply(bpy.types.Operator):
             return _failed(self, "Not a preset of the listed libraries; refresh the preset list")
         try:
             # Read again: the file may have changed since it was listed.
-            view = apply_preset(context.scene, P.load_preset(entry.file))
+            view = apply_preset(context.scene, P.load_preset(entry.file), entry.file)
         except SceneError as e:
             return _failed(self, "Preset not applied, the design is unchanged", e)
         return reports.finished(self, f"Applied \"{entry.name}\" from {entry.library.name}; {view}")
@@ -273,7 +295,7 @@ class LAMP_OT_preset_save(bpy.types.Operator):
         except (SceneError, OSError) as e:
             return _failed(self, "Preset not saved", e)
         preset_library.sync(context, select=entry.file)
-        return reports.finished(self, f"Saved \"{entry.name}\" to {entry.file}")
+        return reports.finished(self, f"Saved \"{entry.name}\" to {entry.file}{_parts_left_out(context.scene)}")
 
 
 class _WritableSelected:
@@ -364,8 +386,16 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
             return _failed(self, "Nothing to do: tick Apply to Design or Add to My Presets")
         try:
             scene = P.load_preset(self.filepath)
+            if "freeform" in scene:  # its meshes are part of it: a missing or bad .glb refuses it
+                from . import freeform_import
+
+                freeform_import.read_parts(self.filepath, scene)
         except SceneError as e:
             return _failed(self, "Not imported", e)
+        if "freeform" in scene and self.add_to_library:
+            # The library keeps JSON files; its .glb would have to travel with it under its own name.
+            return _failed(self, "A free-form design is not added to a library here: untick Add to My "
+                                 "Presets, or copy its .json and .glb into a library folder")
         lib = _default_library() if self.add_to_library else None
         overwrite = self.overwrite
         if self.add_to_library:
@@ -385,7 +415,7 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
         view = ""
         if self.apply:
             try:
-                view = f"; {apply_preset(context.scene, scene)}"
+                view = f"; {apply_preset(context.scene, scene, self.filepath)}"
             except SceneError as e:
                 return _failed(self, "Not imported, the design is unchanged", e)
         if lib is not None:
@@ -418,7 +448,8 @@ class LAMP_OT_preset_export(bpy.types.Operator, ExportHelper):
             fileio.atomic_write_text(self.filepath, scene_to_json(scene))
         except (SceneError, OSError) as e:
             return _failed(self, "Not exported", e)
-        return reports.finished(self, f"Exported \"{scene['name']}\" to {self.filepath}")
+        left_out = _parts_left_out(context.scene)
+        return reports.finished(self, f"Exported \"{scene['name']}\" to {self.filepath}{left_out}")
 
 
 class LAMP_FH_preset(bpy.types.FileHandler):

@@ -3,7 +3,8 @@
 As a ``RenderEngine`` the tracer gets everything Blender gives any engine: F12, render slots,
 Image > Save, ``bpy.ops.render.render(write_still=True)`` headless, the output and colour
 management panels. The scene it renders is the design from the Lamp panel seen through the
-scene camera at the render resolution (``render_camera.scene_for_render``).
+scene camera at the render resolution (``render_camera.scene_for_render``), with the free-form
+parts the depsgraph shows (``freeform_render``).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import numpy as np
 from ..core_tracer.budget import check_rays
 from ..core_tracer.raytrace.tracer import PASS_NAMES
 from ..core_tracer.scene.reading import SceneError
-from . import render_camera, render_viewport
+from . import freeform_render, freeform_status, render_camera, render_viewport
 
 ENGINE_ID = "LAMP_TRACER"
 
@@ -96,7 +97,7 @@ class LampTracerEngine(bpy.types.RenderEngine):
     def view_update(self, context, depsgraph):
         if self._viewport is None:
             self._viewport = render_viewport.ViewportSession(self)
-        self._viewport.update(depsgraph.scene)
+        self._viewport.update(depsgraph.scene, depsgraph)
 
     def view_draw(self, context, depsgraph):
         if self._viewport is None:
@@ -129,11 +130,18 @@ class LampTracerEngine(bpy.types.RenderEngine):
             scene = render_camera.scene_for_render(depsgraph.scene, camera_object=self.camera_override,
                                             size=(width, height))
             check_rays(width, height, scene["image"]["samples"])  # as the CLI: not an hour-long F12
+            prepared = freeform_render.prepare(depsgraph.scene, depsgraph, scene)
         except SceneError as e:
             black = np.zeros((height, width, 3), np.float32)
             self._fill(black, 0, np.ones((height, width), np.float32),
                        dict.fromkeys(PASS_LABELS.values(), black) if with_passes else {})
             self.report({"ERROR"}, f"Lamp Tracer: {e}")
+            return
+
+        if prepared.note is not None:
+            self.report({"WARNING"}, f"Lamp Tracer: {prepared.note}")
+        if prepared.geometry is not None:
+            self._render_freeform(depsgraph.scene, prepared, width, height, with_passes)
             return
 
         transparent = depsgraph.scene.render.film_transparent
@@ -176,6 +184,32 @@ class LampTracerEngine(bpy.types.RenderEngine):
         shown = glare.apply(result.image, scene)
         if shown is not result.image:
             write_rows(0, height, shown)
+
+    def _render_freeform(self, bl_scene, prepared, width: int, height: int, with_passes: bool) -> None:
+        """The free-form tracer's image (and passes), written once it is complete. A mesh it cannot
+        use (an open lens, inward normals, ...) is reported, naming the object, on a black image."""
+        from .. import core_tracer
+        from ..core_tracer.images import glare
+
+        black = np.zeros((height, width, 3), np.float32)
+        opaque = np.ones((height, width), np.float32)
+        try:
+            result = freeform_render.render_passes(prepared, width, height, progress=self.update_progress,
+                                                   should_stop=self.test_break,
+                                                   threads=bl_scene.render.threads)  # Blender's count
+        except core_tracer.RenderCancelled:
+            return
+        except SceneError as e:
+            freeform_status.note_mesh_problem(bl_scene, str(e))
+            self._fill(black, 0, opaque, dict.fromkeys(PASS_LABELS.values(), black) if with_passes else {})
+            self.report({"ERROR"}, f"Lamp Tracer: {e}")
+            return
+        freeform_status.note_mesh_problem(bl_scene, None)
+        passes = {}
+        if with_passes:
+            passes = {PASS_LABELS[name]: np.asarray(result.passes[name], np.float32) for name in PASS_NAMES
+                      if name in (result.passes or {})}
+        self._fill(np.asarray(glare.apply(result.image, prepared.scene), np.float32), 0, opaque, passes)
 
     def _fill(self, rows: np.ndarray, row_start: int, alpha: np.ndarray,
               passes: dict[str, np.ndarray] | None = None) -> None:

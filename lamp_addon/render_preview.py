@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core_tracer.raytrace.tracer import RenderCancelled, render_passes
+from ..core_tracer.scene.reading import SceneError
 
 # The coarse stage's pixel budget: 128x96, 1/8 of a 1024x768 region, renders the four-lamp preset
 # in about 0.05 s on 2 idle cores (0.1 s on a loaded machine), the first image wanted within 0.1 s;
@@ -60,8 +61,11 @@ class PreviewJob:
     """The stages of one view of one design, run in order until done or cancelled."""
 
     def __init__(self, scene: dict, width: int, height: int, generation: int,
-                 divisors: tuple[int, ...] | None = None, threads: int | None = None):
+                 divisors: tuple[int, ...] | None = None, threads: int | None = None, renderer=None):
         self.scene = scene
+        # render_passes' stand-in for a scene it does not trace itself (free-form parts,
+        # lamp_addon.freeform_render), called with the same arguments
+        self.renderer = renderer or render_passes
         self.width, self.height = width, height
         self.generation = generation
         self.divisors = divisors if divisors is not None else stages_for(width, height)
@@ -88,7 +92,7 @@ class PreviewJob:
         divisor = self.divisors[stage]
         width, height = stage_size(self.width, self.height, divisor)
         try:
-            result = render_passes(self.scene, width, height, should_stop=self._cancel.is_set,
+            result = self.renderer(self.scene, width, height, should_stop=self._cancel.is_set,
                                    threads=self.threads, keep_passes=False)
         except RenderCancelled:
             return None
@@ -111,14 +115,15 @@ class ProgressivePreview:
         self._news = False
         self._worker: threading.Thread | None = None
 
-    def restart(self, scene: dict, width: int, height: int) -> None:
-        """Cancel the running job and make a new one for ``scene`` seen in a region of this size.
-        The newest frame stays available until the new job's first stage replaces it."""
+    def restart(self, scene: dict, width: int, height: int, renderer=None) -> None:
+        """Cancel the running job and make a new one for ``scene`` seen in a region of this size
+        (rendered by ``renderer`` when given, see ``PreviewJob``). The newest frame stays available
+        until the new job's first stage replaces it."""
         with self._lock:
             if self._job is not None:
                 self._job.cancel()
             self._generation += 1
-            self._job = PreviewJob(scene, width, height, self._generation, self.divisors, self.threads)
+            self._job = PreviewJob(scene, width, height, self._generation, self.divisors, self.threads, renderer)
             self.error = None
 
     def cancel(self) -> None:
@@ -185,7 +190,8 @@ class ProgressivePreview:
         except Exception as e:  # noqa: BLE001 (shown in the viewport instead of lost on a thread)
             with self._lock:
                 if job is self._job:
-                    self.error = f"{type(e).__name__}: {e}"
+                    # A user's mistake (a free-form part's mesh the tracer refuses) in its own words.
+                    self.error = str(e) if isinstance(e, SceneError) else f"{type(e).__name__}: {e}"
                     self._news = True
 
     def publish(self, job: PreviewJob, frame: Frame) -> None:

@@ -63,14 +63,17 @@ class ViewportSession:
         self.view_error: str | None = None  # why this view cannot be (a root scaled unevenly)
         self.scene: dict | None = None  # the scene of the current preview job
         self.world_from_model = viewport.model_matrix()  # model mm -> world: the design root's matrix
+        self.freeform = None  # freeform_render.Prepared when the view shows parts with roles
+        self._freeform_generation = None  # the geometry generation of the current preview job
         self._texture = None
         self._texture_frame = None
         self._poll = self._make_poll()
 
     # -- main thread: Blender's callbacks ------------------------------------------------------
 
-    def update(self, bl_scene: bpy.types.Scene) -> None:
-        """Read the design (after any depsgraph update: an edited property, a moved root)."""
+    def update(self, bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph | None = None) -> None:
+        """Read the design (after any depsgraph update: an edited property, a moved root), with the
+        free-form parts ``depsgraph`` shows."""
         self.preview.threads = bl_scene.render.threads  # Blender's thread count, as for F12
         # Read here, not at every redraw: finding the root walks the scene's objects.
         self.world_from_model = viewport.model_matrix(_rows(design_root.world_from_design(bl_scene)))
@@ -80,6 +83,31 @@ class ViewportSession:
             self.error = None
         except SceneError as e:
             self.design, self.error = None, invalid_design_text(bl_scene, e)
+        self.freeform = None
+        if depsgraph is not None and self.design is not None:
+            from . import freeform_geometry, freeform_render
+
+            freeform_geometry.note_updates(bl_scene, depsgraph)
+            try:
+                self.freeform = freeform_render.prepare(bl_scene, depsgraph, self.design)
+            except SceneError as e:
+                self.design, self.error = None, str(e)
+                return
+            self.design = self.freeform.scene
+
+    def _renderer(self):
+        """What renders the preview: the free-form tracer over the kept geometry, or None (the
+        parametric tracer)."""
+        prepared = self.freeform
+        if prepared is None or prepared.geometry is None:
+            return None
+        from . import freeform_render
+
+        def render(scene, width, height, **options):
+            return freeform_render.render_passes(freeform_render.Prepared(scene, prepared.geometry), width,
+                                                 height, **options)
+
+        return render
 
     def sync(self, bl_scene: bpy.types.Scene, width: int, height: int, window_matrix, view_matrix) -> None:
         """The view of a region of ``width`` x ``height`` with these matrices: restart the preview
@@ -99,10 +127,13 @@ class ViewportSession:
             return
         self.view_error = None
         scene = {**self.design, "camera": camera, "image": {"width": int(width), "height": int(height)}}
-        if scene == self.scene:
+        geometry = self.freeform.geometry if self.freeform is not None else None
+        generation = geometry.generation if geometry is not None else None  # new meshes: a new preview
+        if scene == self.scene and generation == self._freeform_generation:
             return
         self.scene = scene
-        self.preview.restart(scene, int(width), int(height))
+        self._freeform_generation = generation
+        self.preview.restart(scene, int(width), int(height), self._renderer())
         if self.in_background:
             self.preview.start()
             if not bpy.app.timers.is_registered(self._poll):

@@ -74,6 +74,15 @@ class RecordingLayout:
         self.log.append(("operator", idname, kw))
         return SimpleNamespace()
 
+    def operator_menu_enum(self, idname, property, **kw):
+        import bpy
+
+        module, name = idname.split(".")
+        rna = getattr(getattr(bpy.ops, module), name).get_rna_type()  # raises KeyError when not registered
+        assert property in rna.properties.keys(), f"{idname} has no property {property!r}"
+        self.log.append(("operator", idname, kw))
+        self.log.append(("menu", idname, property))
+
     def template_list(self, listtype_name, list_id, dataptr, propname, active_dataptr, active_propname, **kw):
         import bpy
 

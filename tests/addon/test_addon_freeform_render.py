@@ -1,0 +1,212 @@
+"""Designs with free-form parts in Blender: F12 through the free-form tracer, the geometry read and
+built once per geometry change, and the exported JSON + .glb rendering the same from the command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from helpers import BASELINE, run_cli
+
+pytestmark = pytest.mark.blender
+
+SIZE = (48, 40)
+
+
+def _converted(lamp_addon, addon_core, bl_scene, path=BASELINE, size=SIZE) -> dict:
+    scene = addon_core.scene.load_scene(path)
+    scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.freeform_convert.convert_to_freeform(bl_scene)
+    bl_scene.render.engine = "LAMP_TRACER"
+    return scene
+
+
+def _f12(bl_scene, path) -> np.ndarray:
+    import bpy
+    import OpenImageIO as oiio
+
+    settings = bl_scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "32"
+    assert bpy.ops.render.render() == {"FINISHED"}
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    buf = oiio.ImageBuf(str(path))
+    return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
+
+
+def _expected(lamp_addon, bl_scene) -> np.ndarray:
+    import bpy
+
+    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    prepared = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(), seen)
+    return lamp_addon.freeform_render.render_passes(prepared, seen["image"]["width"], seen["image"]["height"]).image
+
+
+def test_f12_renders_the_parts_with_the_freeform_tracer(lamp_addon, addon_core, bl_scene, tmp_path):
+    _converted(lamp_addon, addon_core, bl_scene)
+    rgba = _f12(bl_scene, tmp_path / "f12.exr")
+    expected = _expected(lamp_addon, bl_scene)
+    assert rgba.shape == (SIZE[1], SIZE[0], 4)
+    np.testing.assert_array_equal(rgba[:, :, :3], expected)
+    # A real lamp: the red lens glows in the middle, the grey body around it.
+    centre, corner = rgba[SIZE[1] // 2, SIZE[0] // 2], rgba[SIZE[1] // 2, 3]
+    assert centre[0] > 3 * centre[1] and corner[0] == pytest.approx(corner[1], rel=0.1) and corner[0] > 0.05
+    # Taking the roles away renders the parametric lamp again (its objects' visibility does not matter).
+    for obj in lamp_addon.freeform_properties.role_objects(bl_scene):
+        lamp_addon.freeform_properties.set_role(obj, "NONE")
+    parametric = _f12(bl_scene, tmp_path / "parametric.exr")
+    np.testing.assert_array_equal(parametric[:, :, :3],
+                                  addon_core.render(lamp_addon.render_camera.scene_for_render(bl_scene)))
+
+
+def test_geometry_is_built_once_per_geometry_change(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    geometry = lamp_addon.freeform_geometry
+    first = _f12(bl_scene, tmp_path / "1.exr")
+    reads = geometry.reads()
+    cache = geometry._entries[bl_scene.name].cache
+    assert cache.builds == 1
+    _f12(bl_scene, tmp_path / "2.exr")  # nothing changed: the meshes and the structure are reused
+    assert geometry.reads() == reads and cache.builds == 1
+    lens = next(o for o in lamp_addon.freeform_properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
+    lens.lamp_role.lens.specular = 0.0  # a role value is not geometry
+    bpy.context.view_layer.update()
+    no_highlight = _f12(bl_scene, tmp_path / "3.exr")
+    # Blender tags the object's geometry on any edit of its properties, so the meshes are read again,
+    # but they are the same: the structure is not built again.
+    assert cache.builds == 1
+    assert not np.array_equal(first, no_highlight)
+    lens.location.x += 0.005  # 5 mm to the right: new geometry
+    bpy.context.view_layer.update()
+    moved = _f12(bl_scene, tmp_path / "4.exr")
+    assert cache.builds == 2
+    assert not np.array_equal(moved, no_highlight)
+    np.testing.assert_array_equal(moved[:, :, :3], _expected(lamp_addon, bl_scene))
+
+
+def test_exported_pair_renders_the_same_from_the_command_line(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+    import OpenImageIO as oiio
+
+    _converted(lamp_addon, addon_core, bl_scene, size=(64, 48))
+    root = lamp_addon.design_root.find_root(bl_scene)
+    root.location = (0.3, -0.2, 0.1)  # the lamp stands anywhere: the file holds it in the root's frame
+    root.rotation_euler = (0.1, 0.2, 0.3)
+    lens = next(o for o in lamp_addon.freeform_properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
+    lens.modifiers.new("Bend", "SIMPLE_DEFORM").deform_axis = "Z"  # reshaped: modifiers are applied
+    lens.modifiers["Bend"].angle = 0.2
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    bpy.context.view_layer.update()
+    in_blender = _f12(bl_scene, tmp_path / "blender.exr")
+    json_path = tmp_path / "my lamp.json"
+    assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blender.exr", "my lamp.glb", "my lamp.json"]
+    doc = json.loads(json_path.read_text())
+    assert doc["schema"] == "lamp-scene/2" and doc["freeform"]["mesh_file"] == "my lamp.glb"
+    assert len(doc["freeform"]["parts"]) == 6
+    proc = run_cli("render", json_path, "-o", tmp_path / "cli.exr")
+    assert proc.returncode == 0, proc.stderr
+    buf = oiio.ImageBuf(str(tmp_path / "cli.exr"))
+    cli = np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
+    np.testing.assert_array_equal(cli[:, :, :3], in_blender[:, :, :3])  # pixel for pixel
+    assert in_blender[:, :, :3].max() > 1.0  # the bulb seen through the lens
+
+
+def test_export_never_replaces_without_being_asked(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    json_path = tmp_path / "lamp.json"
+    (tmp_path / "lamp.glb").write_bytes(b"someone else's file")
+    with pytest.raises(RuntimeError, match="exists already; tick Replace Existing"):
+        bpy.ops.lamp.freeform_export(filepath=str(json_path))
+    assert (tmp_path / "lamp.glb").read_bytes() == b"someone else's file" and not json_path.exists()
+    assert bpy.ops.lamp.freeform_export(filepath=str(json_path), replace=True) == {"FINISHED"}
+    assert (tmp_path / "lamp.glb").read_bytes()[:4] == b"glTF"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lamp.glb", "lamp.json"]  # no temporary left
+    names = {o.name for o in bpy.data.objects}
+    assert all(o.name in names for o in lamp_addon.freeform_properties.role_objects(bl_scene))
+    assert not any(".lamp-export-aside" in n for n in names) and len(bpy.data.scenes) == 1
+
+
+def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    camera = bl_scene.camera
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=SIZE[0], y=SIZE[1])]
+    view = [list(r) for r in camera.matrix_world.inverted()]
+    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    session.update(bl_scene, depsgraph)
+    assert session.freeform is not None and session.freeform.geometry is not None
+    session.sync(bl_scene, SIZE[0], SIZE[1], window, view)
+    while session.preview.step():
+        pass
+    assert session.status() == "Lamp Tracer: full resolution"
+    shown = session.preview.frame().image
+    cache = session.freeform.geometry.cache
+    assert cache.builds == 1  # both stages on one structure
+    # The viewport's view is the scene camera's: its image is the F12 image up to the camera's
+    # float32 round trip through the view matrices.
+    expected = _expected(lamp_addon, bl_scene)
+    close = np.abs(shown - expected).max(axis=2) <= 1e-3 * max(1.0, float(expected.max()))
+    assert close.mean() > 0.97
+    session.sync(bl_scene, SIZE[0], SIZE[1], window, view)  # a redraw: the same job
+    generation = session.preview.generation
+    lens = next(o for o in lamp_addon.freeform_properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
+    lens.location.z += 0.01
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    depsgraph.update()
+    session.update(bl_scene, depsgraph)
+    session.sync(bl_scene, SIZE[0], SIZE[1], window, view)
+    assert session.preview.generation == generation + 1
+    while session.preview.step():
+        pass
+    assert cache.builds == 2 and not np.array_equal(session.preview.frame().image, shown)
+
+
+def test_an_exported_pair_imports_back_as_parts_with_roles(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    exported = _f12(bl_scene, tmp_path / "exported.exr")
+    json_path = tmp_path / "shared.json"
+    assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
+    parts_before = {o.name: lamp_addon.freeform_properties.part_document(o)
+                    for o in lamp_addon.freeform_properties.role_objects(bl_scene)}
+    bpy.ops.wm.read_homefile(use_empty=True)  # a colleague's empty file
+    bl_scene = bpy.context.scene
+    with pytest.raises(RuntimeError, match="not added to a library"):
+        bpy.ops.lamp.preset_import(filepath=str(json_path))
+    assert bpy.ops.lamp.preset_import(filepath=str(json_path), add_to_library=False) == {"FINISHED"}
+    parts = lamp_addon.freeform_properties.role_objects(bl_scene)
+    assert {o.name: lamp_addon.freeform_properties.part_document(o) for o in parts} == parts_before
+    assert all(lamp_addon.freeform_materials.role_material(o) is not None for o in parts)
+    bl_scene.render.engine = "LAMP_TRACER"
+    imported = _f12(bl_scene, tmp_path / "imported.exr")
+    # Blender keeps positions in 32 bits and custom normals in its own compressed form: the same
+    # picture up to those roundings.
+    value = np.maximum(exported[:, :, :3].max(axis=2), 1e-3 * exported.max())
+    error = np.abs(imported[:, :, :3] - exported[:, :, :3]).max(axis=2) / value
+    print(f"\nimported pair vs Blender's own render: {(error == 0).mean():.1%} of the pixels equal, "
+          f"{(error <= 0.01).mean():.1%} within 1 %, largest {error.max():.2%}")
+    assert (error <= 0.01).mean() >= 0.99
+
+
+def test_a_freeform_preset_with_a_missing_mesh_file_changes_nothing(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    json_path = tmp_path / "shared.json"
+    assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
+    (tmp_path / "shared.glb").unlink()
+    bpy.ops.wm.read_homefile(use_empty=True)
+    with pytest.raises(RuntimeError, match=r'freeform\.mesh_file: "shared\.glb" is missing'):
+        bpy.ops.lamp.preset_import(filepath=str(json_path), add_to_library=False)
+    assert list(bpy.context.scene.objects) == [] and len(bpy.context.scene.lamp_design.lamps) == 0
