@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import optics, pixel_filter
+from . import environment, optics, pixel_filter, sunlight
 from . import paths as P
 from .camera import Camera, eye_rays, make_camera
 from .lamp_table import LampTable
@@ -90,14 +90,28 @@ class _Context:
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
         self.body = body
-        light = scene["light"]
-        self.light_dir = np.asarray(light["direction"], dtype=np.float64)
-        self.light_dir /= np.linalg.norm(self.light_dir)
-        self.light_color = np.asarray(light["color"], dtype=np.float64)
-        self.ambient = light["ambient"]
+        self.environment = environment.from_scene(scene)  # None: the paper's background colour
+        following = self.environment is not None and scene["light"].get("follow_environment", False)
+        self.sun = sunlight.from_scene(scene, self.environment.sun_direction() if following else None)
+        in_lens = sunlight.sun_transmittance(self.sun, self.lamps, np.arange(len(self.lamps.ior)))
+        self.phantom = scene["light"].get("phantom", False) and bool(in_lens.any())
         self.background = np.asarray(scene["background"], dtype=np.float64)
-        self.background_seen = bool(self.background.any())  # adding a black background adds exactly 0
+        # adding a black background adds exactly 0
+        self.background_seen = bool(self.background.any()) or self.environment is not None
         self.record = record_transitions
+
+    def sky(self, d: np.ndarray) -> np.ndarray:
+        """What a ray leaving the scene along unit ``d`` (N, 3) sees: the environment or the background."""
+        if self.environment is not None:
+            return self.environment.radiance(d)
+        return np.broadcast_to(self.background, (len(d), 3))
+
+    def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
+        """Equation (1) under the sun, plus the environment's light on a Lambertian surface."""
+        out = self.sun.shade(normal, view, diffuse, specular, shininess)
+        if self.environment is not None:
+            out = out + diffuse * self.environment.irradiance(normal) / np.pi
+        return out
 
 
 class _Band:
@@ -268,7 +282,7 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     hit_box = (t_near <= t_far) & (t_near > 0)
 
     if ctx.background_seen:
-        band.add(BACKGROUND_PASS, pix[~hit_box], np.broadcast_to(ctx.background, (int((~hit_box).sum()), 3)))
+        band.add(BACKGROUND_PASS, pix[~hit_box], ctx.sky(d[~hit_box]))
 
     # Only rays entering the front face can reach a lens: find their points there.
     front = np.nonzero(hit_box & (face == 1) & (d[:, 1] > 0))[0]
@@ -285,8 +299,7 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     normal = np.zeros((len(b), 3))
     normal[np.arange(len(b)), face[b]] = -np.sign(d[b, face[b]])
     body = ctx.body
-    band.add(BODY_PASS, b, optics.phong(normal, -d[b], ctx.light_dir, np.asarray(body["color"]), ctx.light_color,
-                                        ctx.ambient, body["specular"], body["shininess"]))
+    band.add(BODY_PASS, b, ctx.shade(normal, -d[b], np.asarray(body["color"]), body["specular"], body["shininess"]))
 
     # Lens outer face (①): Fresnel split; the reflected branch is shaded by eq. (1) (§3.2.3).
     s = np.nonzero(on_lens)[0]
@@ -296,10 +309,11 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     cos_i = ds[:, 1]
     r = optics.fresnel_reflectance(cos_i, 1.0, ior)
     face_normal = np.tile(outer_face.NORMAL, (len(s), 1))
-    surface = optics.phong(face_normal, -ds, ctx.light_dir, L.lens_diffuse[li], ctx.light_color, ctx.ambient,
-                           L.lens_specular[li], L.lens_shininess[li])
+    surface = ctx.shade(face_normal, -ds, L.lens_diffuse[li], L.lens_specular[li], L.lens_shininess[li])
+    if ctx.environment is not None:  # the outer face mirrors the surroundings
+        surface = surface + ctx.sky(optics.reflect(ds, face_normal))
     band.add(LENS_SURFACE, s, r[:, None] * surface)
-    if ctx.background_seen:
+    if ctx.background_seen and ctx.environment is None:
         band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
     ones = np.ones(len(s), dtype=np.int8)
     band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
@@ -405,6 +419,8 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     to_bulb = optics.normalize(L.bulb_center[li] - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
     band.add(REFLECTOR_SCATTER, rays.pix[m], k * scatter[:, None] * L.bulb_intensity[li])
+    if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
+        band.add(REFLECTOR_SCATTER, rays.pix[m], k * sunlight.phantom(ctx.sun, L, li, hit, normal, -d))
     k = k * L.reflectance[li, None]
     go = np.nonzero(_alive(k))[0]
     n = len(go)
@@ -440,7 +456,8 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     # ⑩: out through the outer face, to the background (ends).
     lv = trans[leaving]
     if ctx.background_seen:
-        band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
+        out_d = optics.refract(d[lv], facing[lv], n1[lv] / n2[lv]) if ctx.environment is not None else d[lv]
+        band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.sky(out_d))
     band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
     k_t = k[tc] * (1.0 - r[tc, None])
