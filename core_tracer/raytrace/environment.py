@@ -24,6 +24,7 @@ import functools
 import importlib.util
 import math
 import os
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -40,8 +41,11 @@ LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec. 709, Blender's scene-line
 
 
 def bundled_folder() -> Path | None:
-    """Blender's folder of world images from the installed ``bpy`` module (or inside Blender, its
-    own), or None where neither is on this machine."""
+    """Blender's folder of world images: inside Blender its own, else the installed ``bpy`` module's;
+    None where neither is on this machine."""
+    running = _running_blender_folder()
+    if running is not None:
+        return running
     try:
         spec = importlib.util.find_spec("bpy")  # finds the package without importing it
     except (ImportError, ValueError):
@@ -53,6 +57,18 @@ def bundled_folder() -> Path | None:
             if folder.is_dir():
                 return folder
     return None
+
+
+def _running_blender_folder() -> Path | None:
+    # Inside Blender bpy is already loaded: ask it for its own data files (never import it here).
+    utils = getattr(sys.modules.get("bpy"), "utils", None)
+    if utils is None or not hasattr(utils, "system_resource"):
+        return None
+    try:
+        folder = utils.system_resource("DATAFILES", path="/".join(WORLD_FOLDER[1:]))
+    except (TypeError, ValueError, AttributeError):
+        return None
+    return Path(folder) if folder and os.path.isdir(folder) else None
 
 
 def image_path(env: dict) -> str:

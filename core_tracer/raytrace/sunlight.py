@@ -106,3 +106,12 @@ def phantom(sun: Sun, lamps: LampTable, lamp: np.ndarray, hit: np.ndarray, norma
     facing = optics.dot(toward_view, sun_dir) > 0.0
     scatter = optics.blinn(toward_view, view, sun_dir, lamps.scatter[lamp], lamps.scatter_shininess[lamp])
     return np.where((inside & facing)[:, None], scatter[:, None] * transmit * sun.light, 0.0)
+
+
+def sun_direction(scene: dict) -> np.ndarray:
+    """The unit direction toward the sun of a normalised scene: ``light.direction``, or the
+    environment's sun when the light follows it (reads the environment image)."""
+    from . import environment  # the image is read only when the light follows it
+
+    env = environment.from_scene(scene) if scene["light"].get("follow_environment", False) else None
+    return from_scene(scene, env.sun_direction() if env is not None else None).direction
