@@ -113,9 +113,13 @@ def _read(path: str, mtime_ns: int, size: int) -> np.ndarray:
     return pixels
 
 
-def read_image(path: str) -> np.ndarray:
+def _image_key(path: str) -> tuple[str, int, int]:
     st = os.stat(path)
-    return _read(path, st.st_mtime_ns, st.st_size)
+    return path, st.st_mtime_ns, st.st_size
+
+
+def read_image(path: str) -> np.ndarray:
+    return _read(*_image_key(path))
 
 
 @dataclass(frozen=True)
@@ -123,6 +127,7 @@ class Environment:
     pixels: np.ndarray  # (H, W, 3) float32, top row first
     strength: float
     rotation: float  # radians about +z, the Mapping node's
+    key: tuple = ()  # the image file's (path, mtime, size): what it holds is computed once per image and turn
 
     # -- looking up radiance ------------------------------------------------------------------
 
@@ -174,9 +179,9 @@ class Environment:
     @functools.cached_property
     def _irradiance_sh(self) -> np.ndarray:
         """The environment's radiance on the first nine spherical harmonics, (9, 3)."""
-        d, solid = self._pixel_directions()
-        radiance = self.strength * self.pixels.reshape(-1, 3).astype(np.float64)
-        return _sh9(d).T @ (radiance * solid[:, None])
+        if self.key:
+            return self.strength * _cached_sh(self.key, self.rotation)
+        return self.strength * _radiance_sh(self.pixels, self.rotation)
 
     def irradiance(self, normal: np.ndarray) -> np.ndarray:
         """Irradiance (N, 3) on surfaces of unit ``normal`` (N, 3) from the whole environment."""
@@ -187,12 +192,37 @@ class Environment:
     def sun_direction(self) -> np.ndarray:
         """Unit direction toward the image's sun: the solid-angle weighted centroid of its pixels of at
         least ``SUN_FRACTION`` of the brightest luminance."""
-        d, solid = self._pixel_directions()
-        lum = self.pixels.reshape(-1, 3).astype(np.float64) @ LUMINANCE
-        sun = lum >= SUN_FRACTION * lum.max()
-        centre = ((lum * solid)[sun, None] * d[sun]).sum(axis=0)
-        norm = float(np.linalg.norm(centre))
-        return centre / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
+        if self.key:
+            return _cached_sun(self.key, self.rotation).copy()
+        return _sun_direction(self.pixels, self.rotation)
+
+
+def _pixel_directions(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray]:
+    return Environment(pixels, 1.0, rotation)._pixel_directions()
+
+
+def _radiance_sh(pixels: np.ndarray, rotation: float) -> np.ndarray:
+    d, solid = _pixel_directions(pixels, rotation)
+    return _sh9(d).T @ (pixels.reshape(-1, 3).astype(np.float64) * solid[:, None])
+
+
+def _sun_direction(pixels: np.ndarray, rotation: float) -> np.ndarray:
+    d, solid = _pixel_directions(pixels, rotation)
+    lum = pixels.reshape(-1, 3).astype(np.float64) @ LUMINANCE
+    sun = lum >= SUN_FRACTION * lum.max()
+    centre = ((lum * solid)[sun, None] * d[sun]).sum(axis=0)
+    norm = float(np.linalg.norm(centre))
+    return centre / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_sh(key: tuple, rotation: float) -> np.ndarray:
+    return _radiance_sh(_read(*key), rotation)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_sun(key: tuple, rotation: float) -> np.ndarray:
+    return _sun_direction(_read(*key), rotation)
 
 
 def _sh9(d: np.ndarray) -> np.ndarray:
@@ -210,4 +240,5 @@ def from_scene(scene: dict) -> Environment | None:
     env = scene.get("environment")  # a scene an earlier version built in code has none
     if env is None or env["world"] == "none":
         return None
-    return Environment(read_image(image_path(env)), float(env["strength"]), math.radians(env["rotation_deg"]))
+    key = _image_key(image_path(env))
+    return Environment(_read(*key), float(env["strength"]), math.radians(env["rotation_deg"]), key)

@@ -9,13 +9,14 @@ The expected values are computed here from Cycles' own formulas, written indepen
 from __future__ import annotations
 
 import importlib.util
+import json
 import math
 import subprocess
 import sys
 
 import numpy as np
 import pytest
-from helpers import scene_with
+from helpers import assert_bad_input, baseline_doc, run_cli, scene_with
 
 from core_tracer import render_passes
 from core_tracer.images import imageio
@@ -212,3 +213,21 @@ def test_bundled_worlds_are_found_without_importing_bpy(repo_root):
     assert imported == "False"
     if importlib.util.find_spec("bpy") is not None:
         assert found == "True"
+
+
+def test_without_blenders_worlds_the_render_says_so_and_names_the_alternative(monkeypatch):
+    monkeypatch.setitem(sys.modules, "bpy", None)  # as on a machine without the bpy module
+    assert environment.bundled_folder() is None
+    scene = scene_with(**{"environment": {"world": "sunset"}})
+    with pytest.raises(SceneError, match=r'^environment\.world: "sunset" is one of Blender\'s bundled world images, '
+                                         r'which are not on this machine .*allowed "none", or "file"'):
+        tracer.render(scene, 4, 4)
+
+
+def test_cli_reports_a_missing_environment_file_in_one_line(tmp_path):
+    doc = baseline_doc()
+    doc["environment"] = {"world": "file", "file": str(tmp_path / "sky.hdr")}
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(doc))
+    proc = run_cli("render", path, "-o", tmp_path / "out.png")
+    assert_bad_input(proc, "environment.file", "does not exist; allowed an existing .exr or .hdr file")
