@@ -99,6 +99,7 @@ class _Context:
         # adding a black background adds exactly 0
         self.background_seen = bool(self.background.any()) or self.environment is not None
         self.record = record_transitions
+        self.world_seen = True  # eye rays that miss see the background or surroundings
 
     def sky(self, d: np.ndarray) -> np.ndarray:
         """What a ray leaving the scene along unit ``d`` (N, 3) sees: the environment or the background."""
@@ -149,7 +150,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
                   threads: int | None = None, record_transitions: bool = False,
                   keep_passes: bool = True, samples: int | None = None,
-                  filter_name: str = pixel_filter.DEFAULT_FILTER) -> RenderResult:
+                  filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True) -> RenderResult:
     """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
@@ -159,6 +160,8 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     dict without ``keep_passes``) are called from the calling thread as bands finish;
     ``should_stop()`` is polled between bands. ``samples`` overrides the scene's samples per
     pixel; ``filter_name`` is the pixel filter of more than one sample (``pixel_filter.FILTERS``).
+    ``world_seen=False`` leaves out what eye rays that miss everything see (a transparent film):
+    the surroundings still light the lamp and show in it.
     """
     width = int(width or scene["image"]["width"])
     height = int(height or scene["image"]["height"])
@@ -167,6 +170,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     pixel_filter.filter_support(filter_name)  # an unknown filter fails here, before any work
     start = time.perf_counter()
     ctx = _Context(scene, make_camera(scene["camera"], width, height), record_transitions, samples, filter_name)
+    ctx.world_seen = world_seen
     passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
     image = np.zeros((height, width, 3), dtype=np.float32)
     rows_per_band = max(1, TILE_RAYS // (width * samples))
@@ -281,7 +285,7 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     t_near, t_far, face = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     hit_box = (t_near <= t_far) & (t_near > 0)
 
-    if ctx.background_seen:
+    if ctx.background_seen and ctx.world_seen:
         band.add(BACKGROUND_PASS, pix[~hit_box], ctx.sky(d[~hit_box]))
 
     # Only rays entering the front face can reach a lens: find their points there.

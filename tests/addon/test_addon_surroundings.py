@@ -83,3 +83,38 @@ def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon
     print(f"\nflat clear lens mirroring courtyard (rotation 40 deg), {SAMPLES} spp Cycles, 48x32, 8x8 lens block: "
           f"tracer {t}, Cycles {c}, relative difference {relative}, seconds {result['seconds']}")
     assert np.abs(relative).max() < TOLERANCE
+
+
+def _engine_rgba(bl_scene, path) -> np.ndarray:
+    import bpy
+    import OpenImageIO as oiio
+
+    settings = bl_scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "32"
+    bpy.ops.render.render()
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    buf = oiio.ImageBuf(str(path))
+    return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
+
+
+@pytest.mark.parametrize("samples", [1, 4])
+def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp_addon, bl_scene, tmp_path, samples):
+    if environment.bundled_folder() is None:
+        pytest.skip("Blender's world images are not on this machine")
+    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
+    doc["environment"] = {"world": "sunset", "strength": 1.0, "rotation_deg": 0.0}
+    doc["image"] = {"width": 48, "height": 32, "samples": samples}
+    scene = core_tracer.parse_scene(doc)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.render.film_transparent = True
+    rgba = _engine_rgba(bl_scene, tmp_path / "film.exr")
+    alpha = rgba[:, :, 3]
+    assert (alpha == 0).sum() > 100 and (alpha == 1).sum() > 100
+    np.testing.assert_allclose(rgba[alpha == 0, :3], 0.0, atol=1e-7)  # no sky where nothing is
+    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    full = core_tracer.render(seen)
+    # Where every ray hits the lamp, the sky still shows in the lens and lights the body.
+    np.testing.assert_allclose(rgba[alpha == 1, :3], full[alpha == 1], rtol=1e-6, atol=1e-7)
