@@ -17,6 +17,11 @@ part:
 - **Light** (the diffuse part of eq. 1, ``[d + (1 - d) cos theta] R0``): a sun of strength ``pi (1 - d)``
   shining along ``-light.direction`` and a world of colour d seen by diffuse rays only (adds ``R0 d``).
   Every other ray that leaves the scene sees the scene's ``background`` colour (black in the paper).
+  The sun's ``strength`` s and ``sun_color`` S make it strength ``pi (1 - d) s`` of colour S.
+- **Surroundings** (``environment``): the image in an Environment Texture (Linear, equirectangular) after
+  a Mapping node turning it about Z, into a Background of the environment's strength, seen by every ray
+  and added to the ambient for diffuse rays (the tracer's C0 E(n) / pi); switched by two Mix Shaders, so
+  a design without surroundings keeps the paper's world exactly.
 
 A designer may edit these materials. So a tree is laid out once, when the builder makes the material
 (``new=True``); every later build only writes the sockets a design parameter drives, on the nodes it

@@ -118,3 +118,23 @@ def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp
     full = core_tracer.render(seen)
     # Where every ray hits the lamp, the sky still shows in the lens and lights the body.
     np.testing.assert_allclose(rgba[alpha == 1, :3], full[alpha == 1], rtol=1e-6, atol=1e-7)
+
+
+def test_the_lamp_sun_follows_the_sun_of_the_design_and_of_the_environment(lamp_addon, bl_scene):
+    if environment.bundled_folder() is None:
+        pytest.skip("Blender's world images are not on this machine")
+    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
+    doc["light"] = {"direction": [0.3, -1.0, 0.6], "color": [1, 1, 1], "ambient": 0.2, "strength": 2.5,
+                    "sun_color": [1.0, 0.6, 0.3], "follow_environment": True}
+    doc["environment"] = {"world": "sunset", "strength": 1.0, "rotation_deg": 30.0}
+    scene = core_tracer.parse_scene(doc)
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    sun = next(ob for ob in bl_scene.objects if ob.type == "LIGHT" and ob.data.type == "SUN")
+    assert sun.data.energy == pytest.approx(np.pi * 0.8 * 2.5, rel=1e-6)
+    assert tuple(sun.data.color) == pytest.approx((1.0, 0.6, 0.3))
+    # The sun shines along its -Z toward the lamp, from the environment's sun (not light.direction).
+    toward_sun = np.array(sun.matrix_world.col[2][:3])
+    expected = environment.from_scene(scene).sun_direction()
+    np.testing.assert_allclose(toward_sun, expected, atol=1e-5)
+    assert abs(expected[2]) < 0.1  # the low sun of the sunset world
