@@ -9,9 +9,11 @@ tracer's model frame is Blender's world frame (the lamp faces -Y in both), so th
 give the same radiance.
 
 The body is lit by the environment as a Lambertian surface: C0 E(n) / pi with E the irradiance
-of the environment, from its projection on the first nine spherical harmonics (Ramamoorthi and
-Hanrahan 2001: E is a smooth function of n whose three first bands hold all but ~1 % of it),
-computed once per image. Occlusion of the environment by the body itself is not modelled.
+of the environment, the cosine-weighted integral of its radiance over the hemisphere about n. E is
+a smooth function of n, so it is computed once per image and turn on a grid of normals (nodes every
+360/64 degrees of longitude and 180/32 of latitude, the six axis directions among them; the image
+area-averaged to at most 128 x 64 for the integral) and interpolated bilinearly between the nodes.
+Occlusion of the environment by the body itself is not modelled.
 
 Blender's own world images (``spec.BUNDLED_WORLDS``) ship with the ``bpy`` module at
 ``bpy/<version>/datafiles/studiolights/world``; the folder is found from the installed package
@@ -35,6 +37,9 @@ from ..scene.spec import BUNDLED_WORLDS
 
 SUFFIXES = (".exr", ".hdr")
 WORLD_FOLDER = ("datafiles", "studiolights", "world")
+# The irradiance map: nodes every 2 pi / IRRADIANCE_LON in longitude, pi / IRRADIANCE_LAT in latitude.
+IRRADIANCE_LON, IRRADIANCE_LAT = 64, 32
+IRRADIANCE_SOURCE = (128, 64)  # the image is area-averaged to at most this for the integral
 # The sun of an image: the pixels at least this fraction of the brightest one (luminance).
 SUN_FRACTION = 0.5
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec. 709, Blender's scene-linear primaries
@@ -173,21 +178,31 @@ class Environment:
         t = np.stack([np.cos(lat) * np.cos(phi), np.cos(lat) * np.sin(phi), np.sin(lat)], axis=-1).reshape(-1, 3)
         c, s = math.cos(self.rotation), math.sin(self.rotation)
         world = np.stack([c * t[:, 0] + s * t[:, 1], -s * t[:, 0] + c * t[:, 1], t[:, 2]], axis=1)  # R_z(-phi) t
-        solid = (np.cos(lat) * (2.0 * math.pi / w) * (math.pi / h)).reshape(-1)
+        # The exact solid angle of each pixel's band of latitude: the pixels sum to 4 pi.
+        half = 0.5 * math.pi / h
+        solid = ((np.sin(lat + half) - np.sin(lat - half)) * (2.0 * math.pi / w)).reshape(-1)
         return world, solid
 
     @functools.cached_property
-    def _irradiance_sh(self) -> np.ndarray:
-        """The environment's radiance on the first nine spherical harmonics, (9, 3)."""
-        if self.key:
-            return self.strength * _cached_sh(self.key, self.rotation)
-        return self.strength * _radiance_sh(self.pixels, self.rotation)
+    def _irradiance_map(self) -> np.ndarray:
+        """Irradiance at the grid's nodes, (IRRADIANCE_LAT + 1, IRRADIANCE_LON, 3)."""
+        unit = _cached_irradiance(self.key, self.rotation) if self.key else _irradiance(self.pixels, self.rotation)
+        return self.strength * unit
 
     def irradiance(self, normal: np.ndarray) -> np.ndarray:
         """Irradiance (N, 3) on surfaces of unit ``normal`` (N, 3) from the whole environment."""
-        # Convolution with the clamped cosine: A_l = pi, 2 pi / 3, pi / 4 (Ramamoorthi & Hanrahan).
-        band = np.array([math.pi] + [2.0 * math.pi / 3.0] * 3 + [math.pi / 4.0] * 5)
-        return np.maximum(0.0, _sh9(normal) @ (band[:, None] * self._irradiance_sh))
+        x = (np.arctan2(normal[:, 1], normal[:, 0]) + math.pi) / (2.0 * math.pi) * IRRADIANCE_LON
+        y = (np.arcsin(np.clip(normal[:, 2], -1.0, 1.0)) + 0.5 * math.pi) / math.pi * IRRADIANCE_LAT
+        i0 = np.floor(x)
+        j0 = np.minimum(np.floor(y), IRRADIANCE_LAT - 1)
+        tx = (x - i0)[:, None]
+        ty = (y - j0)[:, None]
+        i0 = i0.astype(np.int64) % IRRADIANCE_LON
+        i1 = (i0 + 1) % IRRADIANCE_LON
+        j0 = j0.astype(np.int64)
+        m = self._irradiance_map
+        return ((m[j0, i0] * (1.0 - tx) + m[j0, i1] * tx) * (1.0 - ty)
+                + (m[j0 + 1, i0] * (1.0 - tx) + m[j0 + 1, i1] * tx) * ty)
 
     def sun_direction(self) -> np.ndarray:
         """Unit direction toward the image's sun: the solid-angle weighted centroid of its pixels of at
@@ -201,9 +216,33 @@ def _pixel_directions(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, 
     return Environment(pixels, 1.0, rotation)._pixel_directions()
 
 
-def _radiance_sh(pixels: np.ndarray, rotation: float) -> np.ndarray:
+def _irradiance(pixels: np.ndarray, rotation: float) -> np.ndarray:
+    """Irradiance of ``pixels`` at strength 1 at the nodes of the irradiance map (module docstring)."""
     d, solid = _pixel_directions(pixels, rotation)
-    return _sh9(d).T @ (pixels.reshape(-1, 3).astype(np.float64) * solid[:, None])
+    h, w = pixels.shape[:2]
+    weighted = pixels.reshape(-1, 3).astype(np.float64) * solid[:, None]
+    # Area-average to at most IRRADIANCE_SOURCE: sums of radiance x solid angle.
+    cols = np.linspace(0, w, min(w, IRRADIANCE_SOURCE[0]) + 1).astype(np.int64)[:-1]
+    rows = np.linspace(0, h, min(h, IRRADIANCE_SOURCE[1]) + 1).astype(np.int64)[:-1]
+
+    def blocks(a: np.ndarray) -> np.ndarray:
+        a = a.reshape(h, w, -1)
+        return np.add.reduceat(np.add.reduceat(a, rows, axis=0), cols, axis=1).reshape(-1, a.shape[-1])
+
+    power = blocks(weighted)
+    # Each block's light comes from its luminance-weighted mean direction: a sun keeps its place.
+    weight = (weighted @ LUMINANCE) + 1e-12 * solid
+    mean_dir = blocks(d * weight[:, None])
+    mean_dir /= np.linalg.norm(mean_dir, axis=1)[:, None]
+    lon = -math.pi + np.arange(IRRADIANCE_LON) * (2.0 * math.pi / IRRADIANCE_LON)
+    lat = -0.5 * math.pi + np.arange(IRRADIANCE_LAT + 1) * (math.pi / IRRADIANCE_LAT)
+    lat, lon = np.meshgrid(lat, lon, indexing="ij")
+    normals = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], axis=-1).reshape(-1, 3)
+    out = np.empty((len(normals), 3))
+    for start in range(0, len(normals), 256):  # bounded memory: 256 normals x the source's directions
+        cos = np.maximum(0.0, normals[start:start + 256] @ mean_dir.T)
+        out[start:start + 256] = cos @ power
+    return out.reshape(IRRADIANCE_LAT + 1, IRRADIANCE_LON, 3)
 
 
 def _sun_direction(pixels: np.ndarray, rotation: float) -> np.ndarray:
@@ -216,23 +255,13 @@ def _sun_direction(pixels: np.ndarray, rotation: float) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=8)
-def _cached_sh(key: tuple, rotation: float) -> np.ndarray:
-    return _radiance_sh(_read(*key), rotation)
+def _cached_irradiance(key: tuple, rotation: float) -> np.ndarray:
+    return _irradiance(_read(*key), rotation)
 
 
 @functools.lru_cache(maxsize=8)
 def _cached_sun(key: tuple, rotation: float) -> np.ndarray:
     return _sun_direction(_read(*key), rotation)
-
-
-def _sh9(d: np.ndarray) -> np.ndarray:
-    """The nine real spherical harmonics up to l = 2 at unit directions ``d`` (N, 3): (N, 9)."""
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    return np.stack([
-        np.full(len(d), 0.282095),
-        0.488603 * y, 0.488603 * z, 0.488603 * x,
-        1.092548 * x * y, 1.092548 * y * z, 0.315392 * (3.0 * z * z - 1.0), 1.092548 * x * z,
-        0.546274 * (x * x - y * y)], axis=1)
 
 
 def from_scene(scene: dict) -> Environment | None:
