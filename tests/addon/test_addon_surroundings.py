@@ -161,3 +161,26 @@ def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
     print(f"\nbody lit by courtyard, {BODY_SAMPLES} spp Cycles, 64x64, 16x10 region: tracer {t}, Cycles {c}, "
           f"relative difference {relative}, seconds {result['seconds']}")
     assert np.abs(relative).max() < TOLERANCE
+
+
+def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_nodes(lamp_addon, bl_scene):
+    if environment.bundled_folder() is None:
+        pytest.skip("Blender's world images are not on this machine")
+    scene = _mirror_scene()
+    scene["environment"]["world"] = "none"
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    tree = bl_scene.world.node_tree
+    assert tree.nodes.get("Surroundings") is None  # the paper's world, as earlier versions built it
+    extra = tree.nodes.new("ShaderNodeValue")
+    extra.name = "Designer's Value"
+    scene["environment"]["world"] = "city"
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    report = lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    assert report.not_driven == []
+    assert tree.nodes.get("Designer's Value") is not None
+    assert tree.nodes["Environment"].image.filepath.endswith("city.exr")
+    mix = tree.nodes["Ambient For Diffuse Rays"]
+    assert mix.inputs[1].links[0].from_node.name == "Background Or Surroundings"
+    assert mix.inputs[2].links[0].from_node.name == "Ambient Or Ambient And Surroundings"
+    assert tree.nodes["Background Or Surroundings"].inputs[0].default_value == 1.0
