@@ -149,7 +149,7 @@ class Environment:
         """Radiance (N, 3) arriving from unit directions ``d`` (N, 3): bilinear, repeated borders."""
         u, v = self.texture_coordinates(d)
         h, w = self.pixels.shape[:2]
-        # Cycles' bilinear lookup: pixel i covers [i, i + 1) of u W; rows count from the bottom.
+        # Cycles' bilinear lookup: pixel i covers [i, i + 1) of u W; v counts rows from the bottom.
         x = u * w - 0.5
         y = (1.0 - v) * h - 0.5
         x0 = np.floor(x)

@@ -219,6 +219,11 @@ def test_a_missing_file_is_named(tmp_path):
     scene["environment"]["file"] = str(tmp_path / "sky.png")
     with pytest.raises(SceneError, match=r"^environment\.file: .*allowed an \.exr or \.hdr file"):
         tracer.render(scene, 4, 4)
+    garbage = tmp_path / "garbage.exr"
+    garbage.write_text("not an image")
+    scene["environment"]["file"] = str(garbage)
+    with pytest.raises(SceneError, match=r"^environment\.file: .*cannot be read as an image .*allowed an \.exr"):
+        tracer.render(scene, 4, 4)
 
 
 def test_bundled_worlds_are_found_without_importing_bpy(repo_root):
