@@ -3,6 +3,7 @@ renders (wall clock, and the CPU time of all threads: on a busy machine the CPU 
 steadier figure), the ray segments traced per second, and the peak memory of a 2048x2048 render.
 
     .venv/bin/python benchmarks/bench_tracer.py [--runs 5] [--preset presets/four-lamp-rear-combination.json]
+        [--rectangular]
 
 Targets of the tracer's speed and memory: <= 1.0 s at 512x512 on a 2-core machine; <= 1 GB peak memory at 2048x2048.
 """
@@ -40,9 +41,16 @@ def main() -> int:
     parser.add_argument("--size", type=int, default=512)
     parser.add_argument("--threads", type=int, default=None, help="band threads (default: one per core)")
     parser.add_argument("--skip-memory", action="store_true", help="skip the 2048x2048 peak-memory run")
+    parser.add_argument("--rectangular", action="store_true",
+                        help="make every lens a square of the round lens's diameter with 10 mm corners")
     args = parser.parse_args()
 
     scene = core_tracer.load_scene(args.preset)
+    if args.rectangular:
+        for lamp in scene["lamps"]:
+            side = 2 * lamp["lens"]["radius"]
+            lamp["lens"].update(outline="rectangular", width=side, height=side, corner_radius=10.0)
+        scene = core_tracer.normalize(scene)
     core_tracer.render(scene, 64, 64)  # warm up imports and caches
     times, cpu_times, segments = [], [], 0
     for _ in range(args.runs):

@@ -34,6 +34,8 @@ def draw_section(layout, group, section: S.Section, kinds: tuple[type, ...] | No
     each either/or rule of the section."""
     status = design_validity.status(group.id_data)  # once per section: reading the design costs ~0.5 ms
     for key in leaf_keys(section):
+        if not section.shown(key, lambda k: getattr(group, design_properties.property_id(k))):
+            continue  # a field of another choice (a round lens's width)
         if kinds is None or isinstance(section.fields[key], kinds):
             design_validity.draw_field(layout, group, design_properties.property_id(key), status)
     if kinds is None:

@@ -21,6 +21,7 @@ import numpy as np
 from mathutils import Matrix
 from mathutils.geometry import tessellate_polygon
 
+from ..core_tracer.raytrace.outline import Outline
 from ..core_tracer.scene import functions
 from ..core_tracer.scene.derived import cut_sphere_radius, lamp_geometry
 from . import design_materials
@@ -90,10 +91,21 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     base = f"lamps[{i}]"
     g = lamp_geometry(lamp)
     R = lamp["lens"]["radius"]
-    reflector_shape = ("reflector", R, lamp["reflector"]["focal_length"], g["vertex"], CHORD_TOLERANCE_MM)
-    reflector = shapes.get(reflector_shape,
-                            lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
-    n = ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
+    outline = Outline.of_lens(lamp["lens"])
+    f = lamp["reflector"]["focal_length"]
+    if outline.round:
+        reflector_shape = ("reflector", R, f, g["vertex"], CHORD_TOLERANCE_MM)
+        reflector = shapes.get(reflector_shape,
+                                lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
+        n = ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
+        lens_outline, rim_local = R, None
+    else:  # one rim polygon for the lens, the trimmed reflector and the body opening
+        rim_local = meshes.outline_rim(lamp, CHORD_TOLERANCE_MM)
+        lens_outline = ("rectangular", outline.half_w, outline.half_h, outline.corner, f, g["vertex"])
+        reflector_shape = ("reflector", lens_outline, CHORD_TOLERANCE_MM)
+        reflector = shapes.get(reflector_shape,
+                                lambda: meshes.trimmed_reflector_mesh(lamp, rim_local, CHORD_TOLERANCE_MM))
+        n = len(rim_local)
     k, lighter = cut_quads(lamp, preview)
     cx, cz = lamp["center"]
     axis = _translation(cx, 0.0, cz)
@@ -102,8 +114,8 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     lens, cuts = lamp["lens"], lamp["cuts"]
     parts = [
         MeshPart(f"{base}.lens", f"{label} Lens",
-                  ("lens", R, lens["thickness"], cuts["pitch"], cuts["height"], n, CHORD_TOLERANCE_MM, k),
-                  partial(meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k),
+                  ("lens", lens_outline, lens["thickness"], cuts["pitch"], cuts["height"], n, CHORD_TOLERANCE_MM, k),
+                  partial(meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k, rim_local),
                   [Slot(f"{base}.lens", f"{label} Lens", partial(design_materials.lens_glass, lamp=lamp)),
                    _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
                                  "Side Wall BSDF")], axis),
@@ -117,8 +129,10 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
                   partial(meshes.socket_mesh, rs, g["vertex"], by),
                   [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
-    rim = meshes.rim_polygon(R, n) + np.array([cx, cz])
-    return parts, rim, (g["plane_b"], g["rim"]), lighter
+    if outline.round:
+        return parts, meshes.rim_polygon(R, n) + np.array([cx, cz]), (g["plane_b"], g["rim"]), lighter
+    # a rectangular lens's collar reaches the reflector's edge: the body's opening needs no bore
+    return parts, rim_local + np.array([cx, cz]), (g["plane_b"], g["plane_b"]), lighter
 
 
 def _diffuse_slot(part: str, name: str, color, node: str) -> Slot:
@@ -131,7 +145,9 @@ def cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
     A preview has at most ``preview_subdivision`` quads per side; the search for the full count then
     stops just past that (a deep cut's full search measures cells of up to 48 x 48 quads)."""
     t, p, h = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], lamp["cuts"]["height"]
-    light = preview_subdivision(lamp["lens"]["radius"], p) if preview else meshes.MAX_CELL_SUBDIVISION
+    outline = Outline.of_lens(lamp["lens"])
+    area_radius = outline.half_w if outline.round else math.sqrt(outline.area / math.pi)  # same cell count
+    light = preview_subdivision(area_radius, p) if preview else meshes.MAX_CELL_SUBDIVISION
     most = light + 1 if preview else meshes.MAX_CELL_SUBDIVISION
     k = subdivisions.get((t, p, h, most), partial(_cut_subdivision, t, p, h, most))
     return min(k, light), k > light

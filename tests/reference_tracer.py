@@ -92,7 +92,14 @@ class Lamp:
         self.rho = (c * c + self.h * self.h) / (2 * self.h) if self.h > 0 else math.inf
         self.f = L["reflector"]["focal_length"]
         self.rim = self.t + self.h + L["reflector"]["gap"]
-        self.vertex = self.rim + self.R**2 / (4 * self.f)
+        self.rect = lens.get("outline", "round") == "rectangular"
+        if self.rect:  # a rounded rectangle: half sizes and the corner circles' radius
+            self.hw, self.hh, self.rc = lens["width"] / 2, lens["height"] / 2, lens["corner_radius"]
+            # the paraboloid meets the rim plane at the outline's farthest point, a corner circle's
+            reach = math.hypot(self.hw - self.rc, self.hh - self.rc) + self.rc
+        else:
+            reach = self.R
+        self.vertex = self.rim + reach**2 / (4 * self.f)
         off = L["bulb"]["offset"]
         self.bulb = np.array([off[0], self.vertex - self.f + off[1], off[2]])
         self.rb = L["bulb"]["radius"]
@@ -101,13 +108,47 @@ class Lamp:
 
     # -- surfaces: (t, normal) or None ---------------------------------------------------------
 
+    def inside_outline(self, x: float, z: float) -> bool:
+        if not self.rect:
+            return x * x + z * z <= self.R**2
+        qx, qz = abs(x) - (self.hw - self.rc), abs(z) - (self.hh - self.rc)
+        if qx <= 0 or qz <= 0:
+            return abs(x) <= self.hw and abs(z) <= self.hh
+        return qx * qx + qz * qz <= self.rc**2
+
     def wall(self, o, d):
         a = d[0] ** 2 + d[2] ** 2
         if a == 0:
             return None
+        if self.rect:
+            return self._rect_wall(o, d)
         roots = _roots(a, 2 * (o[0] * d[0] + o[2] * d[2]), o[0] ** 2 + o[2] ** 2 - self.R**2)
         t = max(roots) if roots else -1
         return (t, None) if t > 0 else None
+
+    def _rect_wall(self, o, d):
+        """The extruded rounded rectangle left from inside: every one of its eight pieces (four
+        planes, four quarter cylinders) tested, the nearest hit beyond the origin kept."""
+        hw, hh, r = self.hw, self.hh, self.rc
+        a, b = hw - r, hh - r
+        ts = []
+        for axis, half, other, span in ((0, hw, 2, b), (2, hh, 0, a)):
+            for side in (-1.0, 1.0):
+                if d[axis] != 0:
+                    t = (side * half - o[axis]) / d[axis]
+                    if abs(o[other] + t * d[other]) <= span + 1e-12:
+                        ts.append(t)
+        if r > 0:
+            for sx in (-1.0, 1.0):
+                for sz in (-1.0, 1.0):
+                    cx, cz = sx * a, sz * b
+                    ax, az = o[0] - cx, o[2] - cz
+                    for t in _roots(d[0] ** 2 + d[2] ** 2, 2 * (ax * d[0] + az * d[2]), ax * ax + az * az - r * r):
+                        x, z = o[0] + t * d[0], o[2] + t * d[2]
+                        if sx * (x - cx) >= -1e-12 and sz * (z - cz) >= -1e-12:
+                            ts.append(t)
+        ts = [t for t in ts if t > 0]
+        return (min(ts), None) if ts else None
 
     def outer(self, o, d, src):
         if d[1] >= 0 or src == "outer":
@@ -162,6 +203,8 @@ class Lamp:
         if src == "reflector":  # leaving the mirror: the root nearest 0 is the mirror itself
             roots = [max(roots, key=abs)] if len(roots) == 2 else []
         ts = sorted(t for t in roots if t > 0 and o[1] + t * d[1] >= self.rim - 1e-9)
+        if self.rect:  # the paraboloid trimmed to the outline's prism
+            ts = [t for t in ts if self.inside_outline(*(o[[0, 2]] + t * d[[0, 2]]) / (1 + 1e-12))]
         if not ts:
             return None
         hit = o + ts[0] * d
@@ -223,7 +266,7 @@ class Reference:
         if face == 1 and d[1] > 0:
             for L, lamp in zip(self.lamps, self.scene["lamps"], strict=True):
                 local = np.array([p[0] - lamp["center"][0], 0.0, p[2] - lamp["center"][1]])
-                if local[0] ** 2 + local[2] ** 2 <= L.R**2:
+                if L.inside_outline(local[0], local[2]):
                     return self._lens(L, local, d), True
         normal = np.zeros(3)
         normal[face] = -math.copysign(1.0, d[face])

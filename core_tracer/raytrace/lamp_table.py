@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.derived import cut_sphere_radius, lamp_geometry, lens_absorption
+from .outline import Outline
 
 
 @dataclass(frozen=True)
@@ -16,6 +17,9 @@ class LampTable:
 
     center: np.ndarray  # (L, 2) [x, z] of the axis in the world
     radius: np.ndarray
+    rectangular: np.ndarray  # 1.0 for a rectangular outline (``outline``), 0.0 for a round one
+    half_size: np.ndarray  # (L, 2) half width and half height of the outline (R, R when round)
+    corner: np.ndarray  # corner radius of the outline (R when round)
     plane_a: np.ndarray  # y of the cut base (= lens thickness)
     plane_b: np.ndarray  # y of the cut apexes
     pitch: np.ndarray
@@ -46,8 +50,10 @@ class LampTable:
             g = lamp_geometry(lamp)
             lens, cuts, refl, bulb = lamp["lens"], lamp["cuts"], lamp["reflector"], lamp["bulb"]
             h = cuts["height"]
+            shape = Outline.of_lens(lens)
             rows.append(dict(
-                center=lamp["center"], radius=lens["radius"], plane_a=g["plane_a"], plane_b=g["plane_b"],
+                center=lamp["center"], radius=lens["radius"], rectangular=0.0 if shape.round else 1.0,
+                half_size=[shape.half_w, shape.half_h], corner=shape.corner, plane_a=g["plane_a"], plane_b=g["plane_b"],
                 pitch=cuts["pitch"], cut_radius=cut_sphere_radius(cuts["pitch"], h) if h > 0 else np.inf,
                 ior=lens["ior"], absorption=lens_absorption(lens), wall_color=lens["side_wall_color"],
                 lens_diffuse=lens["diffuse_color"], lens_specular=lens["specular"],

@@ -16,7 +16,7 @@ sun's transmittance into the lamp: the lens taken as a flat plate of its mean th
 (t + h / 2), so the sun's direction inside is the same as outside, with Fresnel transmission at
 both faces and absorption (eq. 2) along the refracted path, (1 - r)^2 exp(-A t_mean / cos theta_t).
 A reflector point is lit only when the sun is in front of the lamp and the line from the point
-toward the sun passes through the lens opening (radius R at the apex plane); the socket's and the
+toward the sun passes through the lens opening (its outline at the apex plane); the socket's and the
 bulb's shadows are not modelled. The mirror paths of the reflector that leave the lamp through
 the lens reach the sun where the environment image holds it (``environment``, path 10).
 """
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import optics
+from . import optics, outline
 from .lamp_table import LampTable
 
 FRONT = np.array([0.0, -1.0, 0.0])  # the outward normal of the lens's outer face (MODEL.md §2)
@@ -99,7 +99,9 @@ def phantom(sun: Sun, lamps: LampTable, lamp: np.ndarray, hit: np.ndarray, norma
     # The line toward the sun crosses the apex plane inside the lens opening.
     to_plane = (lamps.plane_b[lamp] - hit[:, 1]) / sun.direction[1]
     cross = hit + to_plane[:, None] * sun.direction
-    inside = cross[:, 0] ** 2 + cross[:, 2] ** 2 <= lamps.radius[lamp] ** 2
+    half, corner = lamps.half_size[lamp], lamps.corner[lamp]
+    inside = outline.signed_distance(cross[:, 0], cross[:, 2], half[:, 0] - corner, half[:, 1] - corner,
+                                     corner) <= 0.0
     sun_dir = np.broadcast_to(sun.direction, hit.shape)
     # Lit on the side the eye ray came from only (the normal turned toward the viewer).
     toward_view = np.where((optics.dot(normal, view) < 0.0)[:, None], -normal, normal)

@@ -11,6 +11,7 @@ import copy
 import math
 from typing import Any
 
+from ..raytrace.outline import Outline
 from . import spec as S
 
 
@@ -124,8 +125,10 @@ def cut_sphere_radius(pitch: float, height: float) -> float:
 
 
 def lamp_geometry(lamp: dict) -> dict:
-    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3)."""
-    R = lamp["lens"]["radius"]
+    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3). The paraboloid meets
+    the rim plane at the outline's reach (its farthest point from the axis, R for a round lens), so
+    that, trimmed to the outline's prism, it lies behind the rim plane everywhere."""
+    R = lens_reach(lamp["lens"])
     t = lamp["lens"]["thickness"]
     h = lamp["cuts"]["height"]
     f = lamp["reflector"]["focal_length"]
@@ -139,6 +142,11 @@ def lamp_geometry(lamp: dict) -> dict:
         "bulb_center": (off[0], y_focus + off[1], off[2]),
     }
 
+
+
+def lens_reach(lens: dict) -> float:
+    """Largest distance from the lamp axis to the lens outline (``Outline.reach``: R for a round lens)."""
+    return Outline.of_lens(lens).reach
 
 
 def default_camera(scene: dict) -> dict:

@@ -176,6 +176,13 @@ class Section:
     doc: str = ""
     optional: tuple[str, ...] = ()  # keys that have no default and may be absent
     one_of: tuple[OneOf, ...] = ()  # either/or rules; their keys are absent unless their form is used
+    # (key, choice key, choice values): a field that means something only when the section's choice
+    # field holds one of the values (a rectangular lens's width); editors show it only then
+    shown_when: tuple[tuple[str, str, tuple[str, ...]], ...] = ()
+
+    def shown(self, key: str, value_of) -> bool:
+        """Whether field ``key`` means something for a section whose fields ``value_of(key)`` gives."""
+        return all(value_of(choice) in values for k, choice, values in self.shown_when if k == key)
 
     def may_be_absent(self, key: str) -> bool:
         return key in self.optional or any(key in rule.keys for rule in self.one_of)
@@ -308,7 +315,15 @@ BODY = Section(
 
 LENS = Section(
     {
+        "outline": Choice("round", ("round", "rectangular"),
+                          "Shape of the lens seen from the front: round (radius), or rectangular (width, height, "
+                          "corner_radius), a square lamp; the side wall, body opening and reflector rim follow it"),
         "radius": _length(45.0, "Size of the round lens (radius R)", hi=1000.0),
+        "width": _length(90.0, "Rectangular lens: width (x) of the outline", hi=2000.0),
+        "height": _length(60.0, "Rectangular lens: height (z) of the outline", hi=2000.0),
+        "corner_radius": Num(8.0, 0.0, 1000.0, unit="mm", subtype="distance",
+                             doc="Rectangular lens: radius of its rounded corners, at most half the smaller side "
+                                 "(0: sharp corners)"),
         "thickness": _length(3.0,
                              "Thickness of the lens plate before the cuts: thicker looks deeper in colour (t)",
                              hi=100.0),
@@ -337,6 +352,8 @@ LENS = Section(
                                                     "per mm (A in eq. 2)")),
         default="absorption", preferred="transmitted_color",
         doc="How the lens colour is given"),),
+    shown_when=(("radius", "outline", ("round",)), ("width", "outline", ("rectangular",)),
+                ("height", "outline", ("rectangular",)), ("corner_radius", "outline", ("rectangular",))),
 )
 
 CUTS = Section(

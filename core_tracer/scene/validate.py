@@ -17,6 +17,7 @@ import math
 import os
 from typing import Any
 
+from ..raytrace.outline import Outline
 from . import spec as S
 from .derived import default_camera, default_value, fill_alternative, lamp_geometry
 from .reading import HugeNumber, SceneError, read_json
@@ -202,22 +203,40 @@ def check_geometry(scene: dict) -> None:
     for i, lamp in enumerate(scene["lamps"]):
         where = f"lamps[{i}]"
         R = lamp["lens"]["radius"]
+        shape = Outline.of_lens(lamp["lens"])
+        if not shape.round:
+            _check_rectangle(lamp["lens"], where)
         cx, cz = lamp["center"]
-        if abs(cx - bx) + R > half_w + 1e-9 or abs(cz - bz) + R > half_h + 1e-9:
+        if abs(cx - bx) + shape.half_w > half_w + 1e-9 or abs(cz - bz) + shape.half_h > half_h + 1e-9:
             _lens_outside_body(scene, i)
         for j in range(i):
             other = scene["lamps"][j]
-            d = math.hypot(cx - other["center"][0], cz - other["center"][1])
-            if d < R + other["lens"]["radius"] - 1e-9:
-                raise SceneError(f"{where}.center", f"lens overlaps the lens of lamps[{j}] (centres "
-                                 f"{d:g} mm apart); allowed at least {R + other['lens']['radius']:g} mm")
+            other_shape = Outline.of_lens(other["lens"])
+            if shape.round and other_shape.round:
+                d = math.hypot(cx - other["center"][0], cz - other["center"][1])
+                if d < R + other["lens"]["radius"] - 1e-9:
+                    raise SceneError(f"{where}.center", f"lens overlaps the lens of lamps[{j}] (centres "
+                                     f"{d:g} mm apart); allowed at least {R + other['lens']['radius']:g} mm")
+            else:
+                _check_apart(shape, other_shape, cx - other["center"][0], cz - other["center"][1], where, j)
         pitch, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
-        pitch_range = f"allowed [{2 * R / S.MAX_CUTS_ACROSS:g}, {2 * R:g}] mm (at most {S.MAX_CUTS_ACROSS} cuts " \
-                      "across the lens diameter)"
-        if pitch > 2 * R:
+        if shape.round:
+            pitch_lo, pitch_hi, across = 2 * R / S.MAX_CUTS_ACROSS, 2 * R, "across the lens diameter"
+            fine = f"lens radius {R:g} mm"
+        else:
+            # The cut walk's bound (cuts.MAX_CELL_STEPS) holds for a path of |dx| + |dz| <= w + h
+            # in x-z when (w + h) / p <= sqrt 2 * MAX_CUTS_ACROSS.
+            w, hgt = 2 * shape.half_w, 2 * shape.half_h
+            pitch_lo, pitch_hi = (w + hgt) / (math.sqrt(2.0) * S.MAX_CUTS_ACROSS), min(w, hgt)
+            across, fine = "along (width + height) / sqrt 2", f"lens {w:g} x {hgt:g} mm"
+        lo_text, hi_text = (f"{pitch_lo:g}", f"{pitch_hi:g}") if shape.round else \
+            (_rounded(pitch_lo, True), _rounded(pitch_hi, False))
+        pitch_range = f"allowed [{lo_text}, {hi_text}] mm (at most {S.MAX_CUTS_ACROSS} cuts " \
+                      f"{across})"
+        if pitch > pitch_hi:
             raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is larger than the lens; {pitch_range}")
-        if pitch < 2 * R / S.MAX_CUTS_ACROSS:
-            raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is too fine for lens radius {R:g} mm; {pitch_range}")
+        if pitch < pitch_lo:
+            raise SceneError(f"{where}.cuts.pitch", f"{pitch:g} is too fine for {fine}; {pitch_range}")
         c = pitch / math.sqrt(2.0)
         if h > c:
             raise SceneError(f"{where}.cuts.height", f"{h:g} is more than a hemisphere for pitch {pitch:g}; "
@@ -227,8 +246,28 @@ def check_geometry(scene: dict) -> None:
             _reflector_too_deep(scene, i, g)
         _check_bulb(lamp, g, where)
         rs = lamp["socket"]["radius"]
-        if rs >= R:
-            raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {R:g}) mm")
+        rs_hi = min(shape.half_w, shape.half_h)
+        if rs >= rs_hi:
+            shown = f"{rs_hi:g}" if shape.round else _rounded(rs_hi, False)
+            raise SceneError(f"{where}.socket.radius", f"{rs:g} is not inside the lens; allowed (0, {shown}) mm")
+
+
+def _check_rectangle(lens: dict, where: str) -> None:
+    """A rectangular outline's corners fit its sides: corner radius at most half the smaller side."""
+    w, h, r = lens["width"], lens["height"], lens["corner_radius"]
+    if r > min(w, h) / 2 + 1e-12:
+        raise SceneError(f"{where}.lens.corner_radius", f"{r:g} is more than half the lens's smaller side "
+                         f"({w:g} x {h:g} mm); allowed [0, {_rounded(min(w, h) / 2, False)}] mm")
+
+
+def _check_apart(shape: Outline, other: Outline, dx: float, dz: float, where: str, j: int) -> None:
+    """Two lens outlines, one rectangular at least, must not overlap."""
+    gap = shape.gap_to(other, dx, dz)
+    if gap < -1e-9:
+        need_x, need_z = shape.half_w + other.half_w, shape.half_h + other.half_h
+        raise SceneError(f"{where}.center", f"lens overlaps the lens of lamps[{j}] by {-gap:.4g} mm (centres "
+                         f"{abs(dx):g} mm apart in x, {abs(dz):g} mm in z); allowed at least {need_x:g} mm apart "
+                         f"in x or {need_z:g} mm in z")
 
 
 def _lens_outside_body(scene: dict, i: int) -> None:
@@ -237,13 +276,14 @@ def _lens_outside_body(scene: dict, i: int) -> None:
     body = scene["body"]
     (bx, bz), (w, h) = body["center"], body["size"]
     lamp = scene["lamps"][i]
+    if lamp["lens"].get("outline", "round") != "round":
+        _rectangle_outside_body(scene, i)
     R = lamp["lens"]["radius"]
     if 2 * R <= w + 1e-9 and 2 * R <= h + 1e-9:
         raise SceneError(f"lamps[{i}].center", f"{_show(lamp['center'])} with lens radius {R:g} mm puts "
                          f"the lens outside the body; allowed x in {_interval(bx - w / 2 + R, bx + w / 2 - R)}, "
                          f"z in {_interval(bz - h / 2 + R, bz + h / 2 - R)} mm")
-    need_w = max(2 * (abs(lp["center"][0] - bx) + lp["lens"]["radius"]) for lp in scene["lamps"])
-    need_h = max(2 * (abs(lp["center"][1] - bz) + lp["lens"]["radius"]) for lp in scene["lamps"])
+    need_w, need_h = _body_needs(scene)
     hi = S.BODY.fields["size"].hi
     if need_w <= hi and need_h <= hi:
         raise SceneError("body.size", f"{_show(body['size'])} cannot hold the lens of lamps[{i}] (radius {R:g} mm); "
@@ -253,11 +293,39 @@ def _lens_outside_body(scene: dict, i: int) -> None:
                      f"(0, {_rounded(min(w, h) / 2, False)}] mm")
 
 
+def _body_needs(scene: dict) -> tuple[float, float]:
+    """The body width and height that hold every lens where it is."""
+    (bx, bz), shapes = scene["body"]["center"], [Outline.of_lens(lp["lens"]) for lp in scene["lamps"]]
+    need_w = max(2 * (abs(lp["center"][0] - bx) + o.half_w) for lp, o in zip(scene["lamps"], shapes, strict=True))
+    need_h = max(2 * (abs(lp["center"][1] - bz) + o.half_h) for lp, o in zip(scene["lamps"], shapes, strict=True))
+    return need_w, need_h
+
+
+def _rectangle_outside_body(scene: dict, i: int) -> None:
+    """``_lens_outside_body`` for a rectangular lens: its centre, else the body's size, else its own size."""
+    body = scene["body"]
+    (bx, bz), (w, h) = body["center"], body["size"]
+    lamp = scene["lamps"][i]
+    lw, lh = lamp["lens"]["width"], lamp["lens"]["height"]
+    if lw <= w + 1e-9 and lh <= h + 1e-9:
+        raise SceneError(f"lamps[{i}].center", f"{_show(lamp['center'])} with a {lw:g} x {lh:g} mm lens puts the "
+                         f"lens outside the body; allowed x in {_interval(bx - (w - lw) / 2, bx + (w - lw) / 2)}, "
+                         f"z in {_interval(bz - (h - lh) / 2, bz + (h - lh) / 2)} mm")
+    need_w, need_h = _body_needs(scene)
+    hi = S.BODY.fields["size"].hi
+    if need_w <= hi and need_h <= hi:
+        raise SceneError("body.size", f"{_show(body['size'])} cannot hold the lens of lamps[{i}] ({lw:g} x {lh:g} mm); "
+                         f"allowed width in {_interval(need_w, hi)} and height in {_interval(need_h, hi)} mm")
+    key, size, room = ("width", lw, w) if lw > w else ("height", lh, h)
+    raise SceneError(f"lamps[{i}].lens.{key}", f"{size:g} does not fit in the body {w:g} x {h:g} mm; allowed "
+                     f"(0, {_rounded(room, False)}] mm")
+
+
 def _reflector_too_deep(scene: dict, i: int, g: dict) -> None:
     """Raise for lamps[i]'s reflector reaching behind the body: blame the focal length when a longer
     one fits (a shallower bowl), else the body's depth."""
     depth, lamp = scene["body"]["depth"], scene["lamps"][i]
-    R, f = lamp["lens"]["radius"], lamp["reflector"]["focal_length"]
+    R, f = Outline.of_lens(lamp["lens"]).reach, lamp["reflector"]["focal_length"]
     f_hi = S.REFLECTOR.fields["focal_length"].hi
     d_hi = S.BODY.fields["depth"].hi
     f_lo = R * R / (4 * (depth - g["rim"])) if depth > g["rim"] else math.inf
@@ -275,8 +343,11 @@ _HALVINGS = 30  # bisection steps for the bulb's limits: 2^-30 of the span, far 
 
 def _wall_distance(lamp: dict, g: dict, rho: float, y: float) -> float:
     """Distance from the point at radius ``rho`` from the axis and depth ``y`` to the reflector's
-    paraboloid y = y_vertex - r^2/(4f), r <= R (the closest point lies in the plane through the axis)."""
-    f, R = lamp["reflector"]["focal_length"], lamp["lens"]["radius"]
+    paraboloid y = y_vertex - r^2/(4f), r <= R (the closest point lies in the plane through the axis).
+    R is the outline's reach: for a rectangular lens this is the whole paraboloid up to the rim plane,
+    of which the trimmed reflector is a part; what lies outside the outline's prism is farther than
+    the side wall, which ``_bulb_fits`` checks apart."""
+    f, R = lamp["reflector"]["focal_length"], Outline.of_lens(lamp["lens"]).reach
 
     def dist(r: float) -> float:
         return math.hypot(r - rho, g["vertex"] - r * r / (4 * f) - y)
@@ -293,24 +364,29 @@ def _wall_distance(lamp: dict, g: dict, rho: float, y: float) -> float:
     return min(dist(R * k / n), dist((lo + hi) / 2))
 
 
-def _bulb_fits(lamp: dict, g: dict, rho: float, y: float, rb: float) -> bool:
-    """The bulb sphere (centre at radius ``rho``, depth ``y``) lies behind the cut apex plane and
-    inside the paraboloid."""
-    f, R = lamp["reflector"]["focal_length"], lamp["lens"]["radius"]
+def _bulb_fits(lamp: dict, g: dict, rho: float, y: float, rb: float, toward: tuple[float, float] = (1.0, 0.0)) -> bool:
+    """The bulb sphere (centre at radius ``rho`` from the axis in the unit direction ``toward`` [x, z],
+    depth ``y``) lies behind the cut apex plane and inside the paraboloid, and for a rectangular lens
+    inside the side wall (the outline's prism)."""
+    shape = Outline.of_lens(lamp["lens"])
+    f, R = lamp["reflector"]["focal_length"], shape.reach
     inside = y < g["vertex"] - rho * rho / (4 * f) and rho < R
+    if inside and not shape.round:
+        inside = float(shape.signed_distance(rho * toward[0], rho * toward[1])) <= -rb + 1e-9
     return inside and y - rb >= g["plane_b"] - 1e-9 and _wall_distance(lamp, g, rho, y) >= rb - 1e-9
 
 
-def _bulb_y_range(lamp: dict, g: dict, rho: float, rb: float) -> tuple[float, float] | None:
+def _bulb_y_range(lamp: dict, g: dict, rho: float, rb: float,
+                  toward: tuple[float, float] = (1.0, 0.0)) -> tuple[float, float] | None:
     """The depths at which the bulb fits at radius ``rho``: from the cut apex plane back to where it
     touches the paraboloid (the clearance shrinks toward the vertex), or None."""
     lo = g["plane_b"] + rb
-    if not _bulb_fits(lamp, g, rho, lo, rb):
+    if not _bulb_fits(lamp, g, rho, lo, rb, toward):
         return None
     hi = g["vertex"]
     for _ in range(_HALVINGS):
         mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if _bulb_fits(lamp, g, rho, mid, rb) else (lo, mid)
+        lo, hi = (mid, hi) if _bulb_fits(lamp, g, rho, mid, rb, toward) else (lo, mid)
     return g["plane_b"] + rb, lo
 
 
@@ -335,7 +411,8 @@ def _check_bulb(lamp: dict, g: dict, where: str) -> None:
     rb = lamp["bulb"]["radius"]
     bx, by, bz = g["bulb_center"]
     rho = math.hypot(bx, bz)
-    if _bulb_fits(lamp, g, rho, by, rb):
+    toward = (bx / rho, bz / rho) if rho > 0 else (1.0, 0.0)
+    if _bulb_fits(lamp, g, rho, by, rb, toward):
         return
     off = lamp["bulb"]["offset"]
     on_axis = _bulb_y_range(lamp, g, 0.0, rb)
@@ -345,22 +422,32 @@ def _check_bulb(lamp: dict, g: dict, where: str) -> None:
             mid = (lo + hi) / 2
             lo, hi = (mid, hi) if _bulb_y_range(lamp, g, 0.0, mid) is not None else (lo, mid)
         raise SceneError(f"{where}.bulb.radius", f"{rb:g} does not fit inside the reflector (focal length "
-                         f"{lamp['reflector']['focal_length']:g} mm, lens radius {lamp['lens']['radius']:g} mm); "
+                         f"{lamp['reflector']['focal_length']:g} mm, {_lens_size(lamp['lens'])}); "
                          f"allowed (0, {_rounded(lo, False)}] mm")
-    ys = _bulb_y_range(lamp, g, rho, rb)
+    ys = _bulb_y_range(lamp, g, rho, rb, toward)
     if ys is not None:
         y_lo, y_hi = (y - g["focus"] for y in ys)
         raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) outside the "
                          f"reflector; with x = {off[0]:g} and z = {off[2]:g}, allowed y in {_interval(y_lo, y_hi)} mm")
     y_shown = float(f"{sum(on_axis) / 2 - g['focus']:.4g}")  # mid-depth on the axis, as printed
+    if not on_axis[0] <= y_shown + g["focus"] <= on_axis[1]:  # a range too narrow for 4 digits
+        y_shown = float(f"{sum(on_axis) / 2 - g['focus']:.12g}")
     y_mid = y_shown + g["focus"]
-    lo, hi = 0.0, lamp["lens"]["radius"]
+    lo, hi = 0.0, Outline.of_lens(lamp["lens"]).reach
     for _ in range(_HALVINGS):
         mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if _bulb_fits(lamp, g, mid, y_mid, rb) else (lo, mid)
+        lo, hi = (mid, hi) if _bulb_fits(lamp, g, mid, y_mid, rb, toward) else (lo, mid)
+    along = "" if lamp["lens"].get("outline", "round") == "round" else " in the direction of x, z"
     raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) outside the "
-                     f"reflector; allowed a distance from the axis sqrt(x^2 + z^2) up to {_rounded(lo, False)} mm "
-                     f"(at y = {y_shown:g} mm)")
+                     f"reflector; allowed a distance from the axis sqrt(x^2 + z^2) up to {_rounded(lo, False)} mm"
+                     f"{along} (at y = {y_shown:.12g} mm)")
+
+
+def _lens_size(lens: dict) -> str:
+    """The lens's size in words, for messages."""
+    if lens.get("outline", "round") == "round":
+        return f"lens radius {lens['radius']:g} mm"
+    return f"lens {lens['width']:g} x {lens['height']:g} mm"
 
 
 def lamp_limits(scene: dict, i: int) -> dict[str, str]:
@@ -371,6 +458,7 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     body, lamp = scene["body"], scene["lamps"][i]
     (bx, bz), (w, h) = body["center"], body["size"]
     R, pitch = lamp["lens"]["radius"], lamp["cuts"]["pitch"]
+    shape = Outline.of_lens(lamp["lens"])
     limits = {
         "cuts.height": f"at most {_rounded(pitch / math.sqrt(2.0), False)} mm for pitch {pitch:g} mm "
                        "(pitch / sqrt 2)",
@@ -378,12 +466,24 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
         "socket.radius": f"less than {R:g} mm, the lens radius",
     }
     cx, cz = lamp["center"]
-    room = min(w / 2 - abs(cx - bx), h / 2 - abs(cz - bz))
-    if room > 0:
-        limits["lens.radius"] = f"at most {_rounded(room, False)} mm at this centre in the body"
-    if 2 * R <= min(w, h):
-        limits["center"] = (f"x in {_interval(bx - w / 2 + R, bx + w / 2 - R)}, "
-                            f"z in {_interval(bz - h / 2 + R, bz + h / 2 - R)} mm inside the body")
+    if shape.round:
+        room = min(w / 2 - abs(cx - bx), h / 2 - abs(cz - bz))
+        if room > 0:
+            limits["lens.radius"] = f"at most {_rounded(room, False)} mm at this centre in the body"
+    else:
+        side = 2 * min(shape.half_w, shape.half_h)
+        limits["cuts.pitch"] = f"at most {side:g} mm, the lens's smaller side"
+        limits["socket.radius"] = f"less than {side / 2:g} mm, half the lens's smaller side"
+        limits["lens.corner_radius"] = f"at most {side / 2:g} mm, half the lens's smaller side"
+        room_w, room_h = w - 2 * abs(cx - bx), h - 2 * abs(cz - bz)
+        if room_w > 0:
+            limits["lens.width"] = f"at most {_rounded(room_w, False)} mm at this centre in the body"
+        if room_h > 0:
+            limits["lens.height"] = f"at most {_rounded(room_h, False)} mm at this centre in the body"
+    hw, hh = shape.half_w, shape.half_h
+    if 2 * hw <= w and 2 * hh <= h:
+        limits["center"] = (f"x in {_interval(bx - w / 2 + hw, bx + w / 2 - hw)}, "
+                            f"z in {_interval(bz - h / 2 + hh, bz + h / 2 - hh)} mm inside the body")
     limits.update(_bulb_limits(lamp))
     return limits
 
@@ -393,13 +493,17 @@ def _bulb_limits(lamp: dict) -> dict[str, str]:
     g = lamp_geometry(lamp)
     rb, (x, _, z) = lamp["bulb"]["radius"], lamp["bulb"]["offset"]
     by, rho = g["bulb_center"][1], math.hypot(x, z)
-    f, R = lamp["reflector"]["focal_length"], lamp["lens"]["radius"]
+    shape = Outline.of_lens(lamp["lens"])
+    f, R = lamp["reflector"]["focal_length"], shape.reach
+    toward = (x / rho, z / rho) if rho > 0 else (1.0, 0.0)
     out = {}
     if rho < R and by < g["vertex"] - rho * rho / (4 * f):
         room = min(_wall_distance(lamp, g, rho, by), by - g["plane_b"])
+        if not shape.round:
+            room = min(room, -float(shape.signed_distance(x, z)))
         if room > 0:
             out["bulb.radius"] = f"at most {_rounded(room, False)} mm where the bulb sits"
-    ys = _bulb_y_range(lamp, g, rho, rb)
+    ys = _bulb_y_range(lamp, g, rho, rb, toward)
     if ys is not None:
         y_lo, y_hi = (y - g["focus"] for y in ys)
         out["bulb.offset"] = f"y in {_interval(y_lo, y_hi)} mm with x = {x:g} and z = {z:g}"

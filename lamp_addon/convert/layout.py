@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 
+from ...core_tracer.raytrace.outline import Outline
 from ...core_tracer.scene import spec
 from ...core_tracer.scene.derived import new_lamp
 from ...core_tracer.scene.reading import SceneError
@@ -65,18 +66,24 @@ def place_new_lamp(doc: dict, margin: float = MARGIN_MM) -> None:
     new lens needs, leaving beside it the free border the body has left of its leftmost lens (at
     least ``margin``), so the body's centre moves as it grows."""
     *others, new = doc["lamps"]
-    radius = new["lens"]["radius"]
+    half_w, half_h = _half_size(new)
     body = doc["body"]
     (bx, bz), (width, height) = body["center"], body["size"]
     left, right, bottom, top = bx - width / 2, bx + width / 2, bz - height / 2, bz + height / 2
     if others:
-        x = max(o["center"][0] + o["lens"]["radius"] for o in others) + margin + radius
+        x = max(o["center"][0] + _half_size(o)[0] for o in others) + margin + half_w
         z = new["center"][1]
-        border = max(margin, min(o["center"][0] - o["lens"]["radius"] for o in others) - left)
+        border = max(margin, min(o["center"][0] - _half_size(o)[0] for o in others) - left)
     else:
         x, z, border = bx, bz, margin
     new["center"] = [x, z]
-    left, right = min(left, x - radius - border), max(right, x + radius + border)
-    bottom, top = min(bottom, z - radius - margin), max(top, z + radius + margin)
+    left, right = min(left, x - half_w - border), max(right, x + half_w + border)
+    bottom, top = min(bottom, z - half_h - margin), max(top, z + half_h + margin)
     body["center"] = [(left + right) / 2, (bottom + top) / 2]
     body["size"] = [right - left, top - bottom]
+
+
+def _half_size(lamp: dict) -> tuple[float, float]:
+    """Half the width and height of a lamp's lens outline (its radius twice for a round lens)."""
+    outline = Outline.of_lens(lamp["lens"])
+    return outline.half_w, outline.half_h

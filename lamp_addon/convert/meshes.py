@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...core_tracer.raytrace.outline import Outline
 from ...core_tracer.scene.derived import cut_sphere_radius, lamp_geometry
 
 CHORD_TOLERANCE_MM = 0.05
@@ -231,6 +232,31 @@ def _rim_edges_near(quad: list[tuple[float, float]], rim: np.ndarray, holds_axis
     return [e % n for e in range(first, last + 1)]
 
 
+def _sector_edges(rim: np.ndarray) -> Callable[[list[tuple[float, float]], bool], list[int]]:
+    """``_rim_edges_near`` for any convex rim polygon around the axis starting at angle 0 (a
+    rectangular outline's): the edges whose angular sectors overlap the quad's, one more each side
+    (a further edge's half-plane holds the whole rim, so clipping by it too changes nothing)."""
+    n = len(rim)
+    angles = np.mod(np.arctan2(rim[:, 1], rim[:, 0]), 2.0 * math.pi)
+    angles[0] = 0.0
+
+    def edges(quad: list[tuple[float, float]], holds_axis: bool) -> list[int]:
+        if holds_axis:
+            return list(range(n))
+        mid = math.atan2(sum(z for _, z in quad), sum(x for x, _ in quad))
+        rel = [math.remainder(math.atan2(z, x) - mid, 2.0 * math.pi) for x, z in quad]
+        lo = (mid + min(rel)) % (2.0 * math.pi)
+        hi = lo + max(rel) - min(rel)
+        first = int(np.searchsorted(angles, lo, side="right")) - 1
+        if hi >= 2.0 * math.pi:
+            last = int(np.searchsorted(angles, hi - 2.0 * math.pi, side="right")) - 1 + n
+        else:
+            last = int(np.searchsorted(angles, hi, side="right")) - 1
+        return sorted({e % n for e in range(first - 1, last + 2)})
+
+    return edges
+
+
 def _clip_convex(poly: list[tuple[float, float]], clip: np.ndarray, edge_list: Sequence[int]) -> list:
     """Sutherland-Hodgman: the part of convex polygon ``poly`` inside edges ``edge_list`` of CCW polygon ``clip``."""
     out = poly
@@ -258,12 +284,35 @@ def _clip_convex(poly: list[tuple[float, float]], clip: np.ndarray, edge_list: S
     return out
 
 
+def _with_rim_vertices(poly: list, rim: np.ndarray, edge_list: Sequence[int]) -> list:
+    """``poly`` (clipped by ``rim``) with the rim's vertices that lie inside its edges added: clipping
+    by two collinear rim edges (a straight side split in pieces) leaves out the vertex between them,
+    which the side wall and the reflector's edge share."""
+    n = len(rim)
+    candidates = {tuple(rim[e]) for e in edge_list} | {tuple(rim[(e + 1) % n]) for e in edge_list}
+    out = []
+    for i, p in enumerate(poly):
+        out.append(p)
+        q = poly[(i + 1) % len(poly)]
+        ex, ez = q[0] - p[0], q[1] - p[1]
+        length2 = ex * ex + ez * ez
+        if length2 < 1e-18:
+            continue
+        between = []
+        for v in candidates:
+            u = ((v[0] - p[0]) * ex + (v[1] - p[1]) * ez) / length2
+            if 1e-9 < u < 1 - 1e-9 and abs((v[0] - p[0]) * ez - (v[1] - p[1]) * ex) < 1e-9 * math.sqrt(length2):
+                between.append((u, v))
+        out += [v for _, v in sorted(between)]
+    return out
+
+
 def _lerp(a, b, f):
     return (a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f)
 
 
 def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
-              max_subdivision: int = MAX_CELL_SUBDIVISION) -> MeshData:
+              max_subdivision: int = MAX_CELL_SUBDIVISION, rim: np.ndarray | None = None) -> MeshData:
     """The lens solid of one lamp, relative to its axis.
 
     Outer disk at y = 0 (flat), the cut surface (a grid of k x k quads per lenslet cell, clipped by the
@@ -271,24 +320,41 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     from y = 0 up to the cut apex plane y = t + h (material ``LENS_SIDE_WALL``; the part above the cut
     surface is the open collar the tracer also has). The glass is closed (watertight). At most
     ``max_subdivision`` quads per cell side (a lighter preview when smaller than the tolerance needs).
+
+    A rectangular lens (``outline``) is clipped by its rim polygon ``rim`` (``outline_rim``, shared with
+    the reflector and the body) instead of the regular ``segments``-gon, and its side wall's collar
+    stands up to the reflector's edge, which lies behind the rim plane along the straight sides (README:
+    the lens outline).
     """
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
+    shape = Outline.of_lens(lamp["lens"])
     surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))
     k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
-    grid = _CutGrid(surface, k, R)
-    rim = rim_polygon(R, segments)
-    cut = grid.polygons(rim, R * math.cos(math.pi / segments))
+    g = lamp_geometry(lamp)
+    if shape.round:
+        grid = _CutGrid(surface, k, R)
+        rim = rim_polygon(R, segments)
+        cut = grid.polygons(rim, R * math.cos(math.pi / segments))
+    else:
+        rim = outline_rim(lamp, tol) if rim is None else rim
+        grid = _CutGrid(surface, k, max(shape.half_w, shape.half_h))
+        cut = grid.polygons_in(rim, shape, tol)
     xz, cut_faces, cut_groups = cut.welded()
     verts = np.column_stack([xz[:, 0], surface.height(xz[:, 0], xz[:, 1]), xz[:, 1]])
-    ring = _rim_ring(verts, R, segments)
+    ring = _rim_ring(verts, R, segments) if shape.round else _polygon_ring(verts, rim, shape, tol)
 
     mb = _MeshBuilder()
     mb.add_vertices(verts, weld=ring)  # the side wall welds to the rim ring (a cell apex on the rim is its top)
     mb.faces += cut_faces
     mb.material += [LENS_GLASS] * len(cut_faces)
     mb.group += cut_groups
-    bottom = _side_wall(mb, ring, lamp_geometry(lamp)["plane_b"])
+    if shape.round:
+        bottom = _side_wall(mb, ring, g["plane_b"])
+    else:
+        f = lamp["reflector"]["focal_length"]
+        bottom = _side_wall(mb, ring, lambda x, z: g["vertex"] - (x * x + z * z) / (4.0 * f),
+                            group=1 if shape.corner > 0 else FLAT)
     side_faces = mb.faces[len(cut_faces):]
     mb.face(bottom, FLAT, LENS_GLASS)  # outer face, counter-clockwise seen from -y
 
@@ -301,8 +367,12 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     touches = np.logical_or.reduceat(on_rim[flat], np.concatenate([[0], np.cumsum(sizes)[:-1]]))
     clipped = [cut_faces[i] for i in np.flatnonzero(touches)]
     dev_cut = max(dev_cell, triangle_deviation(data.verts, fan_triangles(clipped), surface.distance))
-    dev_side = triangle_deviation(data.verts, fan_triangles(side_faces),
-                                  lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - R))
+    if shape.round:
+        dev_side = triangle_deviation(data.verts, fan_triangles(side_faces),
+                                      lambda q: np.abs(np.hypot(q[:, 0], q[:, 2]) - R))
+    else:
+        dev_side = triangle_deviation(data.verts, fan_triangles(side_faces),
+                                      lambda q: np.abs(shape.signed_distance(q[:, 0], q[:, 2])))
     data.max_deviation = max(dev_cut, dev_side)
     return data
 
@@ -348,6 +418,26 @@ class _CutGrid:
         return out
 
 
+    def polygons_in(self, rim: np.ndarray, shape: Outline, tol: float) -> _CutPolygons:
+        """``polygons`` for any convex rim polygon inscribed in ``shape`` within ``tol``: quads whose
+        corners lie deeper inside the outline than ``tol`` are whole, those that reach its bounding
+        box otherwise are clipped (one still whole comes back unchanged)."""
+        gx, gz = np.meshgrid(self.lines, self.lines, indexing="ij")
+        deep = shape.signed_distance(gx, gz) < -1.01 * tol
+        inside = deep[:-1, :-1] & deep[1:, :-1] & deep[1:, 1:] & deep[:-1, 1:]
+        lo, hi = self.lines[:-1], self.lines[1:]
+        reach_x, reach_z = (hi > -shape.half_w) & (lo < shape.half_w), (hi > -shape.half_h) & (lo < shape.half_h)
+        across = ~inside & reach_x[:, None] & reach_z[None, :]
+        a_idx, b_idx = np.meshgrid(np.arange(self.size - 1), np.arange(self.size - 1), indexing="ij")
+        a, b, s = a_idx[inside], b_idx[inside], self.size
+        quads = np.column_stack([a * s + b + 1, (a + 1) * s + b + 1, (a + 1) * s + b, a * s + b])
+        out = _CutPolygons(self, quads, self.group(a, b).tolist())
+        edges = _sector_edges(rim)
+        for a, b in zip(a_idx[across].tolist(), b_idx[across].tolist(), strict=True):
+            out.add_clipped(a, b, rim, holds_axis=self.near[a] == 0.0 and self.near[b] == 0.0, edges_near=edges)
+        return out
+
+
 class _CutPolygons:
     """Cut-surface polygons over grid vertices and, after them, the points where the rim cuts the grid:
     the whole quads (an (n, 4) array), then the clipped polygons (a list)."""
@@ -358,12 +448,18 @@ class _CutPolygons:
         self.rim_points: list[tuple[float, float]] = []
         self._rim_index: dict[tuple[int, int], int] = {}
 
-    def add_clipped(self, a: int, b: int, rim: np.ndarray, holds_axis: bool) -> None:
-        """Quad (a, b) clipped by the rim polygon, if anything of it is left."""
+    def add_clipped(self, a: int, b: int, rim: np.ndarray, holds_axis: bool,
+                    edges_near: Callable | None = None) -> None:
+        """Quad (a, b) clipped by the rim polygon, if anything of it is left (``edges_near``: the rim
+        edges that can cut a quad, ``_rim_edges_near`` of a regular rim by default)."""
         x, s = self.grid.lines, self.grid.size
         corners = {(x[a], x[b]): a * s + b, (x[a + 1], x[b]): (a + 1) * s + b,
                    (x[a + 1], x[b + 1]): (a + 1) * s + b + 1, (x[a], x[b + 1]): a * s + b + 1}
-        poly = _clip_convex(list(corners), rim, _rim_edges_near(list(corners), rim, holds_axis))
+        near = edges_near(list(corners), holds_axis) if edges_near is not None else \
+            _rim_edges_near(list(corners), rim, holds_axis)
+        poly = _clip_convex(list(corners), rim, near)
+        if edges_near is not None:
+            poly = _with_rim_vertices(poly, rim, near)
         if len(poly) < 3 or _area(poly) < 1e-9:
             return
         face: list[int] = []
@@ -440,12 +536,32 @@ def _rim_ring(verts: np.ndarray, radius: float, segments: int) -> list[int]:
     return np.flatnonzero(on_rim)[np.argsort(angle[on_rim], kind="stable")].tolist()
 
 
-def _side_wall(mb: _MeshBuilder, ring: list[int], y_top: float) -> list[int]:
+def _polygon_ring(verts: np.ndarray, rim: np.ndarray, shape: Outline, tol: float) -> list[int]:
+    """``_rim_ring`` for any convex rim polygon: the cut-surface vertices on it, counter-clockwise."""
+    x, z = verts[:, 0], verts[:, 2]
+    near = np.flatnonzero(shape.signed_distance(x, z) > -1.01 * tol - 1e-6)  # the polygon is within tol
+    px, pz = x[near], z[near]
+    dist = np.full(len(near), np.inf)
+    for (ax, az), (bx, bz) in zip(rim, np.roll(rim, -1, axis=0), strict=True):
+        ex, ez = bx - ax, bz - az
+        u = np.clip(((px - ax) * ex + (pz - az) * ez) / (ex * ex + ez * ez), 0.0, 1.0)
+        np.minimum(dist, np.hypot(px - ax - u * ex, pz - az - u * ez), out=dist)
+    on_rim = near[dist < 1e-6]
+    angle = np.arctan2(z[on_rim], x[on_rim])
+    return on_rim[np.argsort(angle, kind="stable")].tolist()
+
+
+def _side_wall(mb: _MeshBuilder, ring: list[int], y_top: float | Callable[[float, float], float],
+               group: int = 1) -> list[int]:
     """The side wall from the outer face (y = 0) to the cut surface's rim ``ring``, and the open collar
-    from there up to the apex plane ``y_top``; returns the outer face's rim vertices."""
+    from there up to ``y_top`` (the apex plane, or a function of x and z: the reflector's edge); returns
+    the outer face's rim vertices."""
+    def top_of(x: float, z: float) -> float:
+        return y_top(x, z) if callable(y_top) else y_top
+
     bottom = [mb.vertex(mb.verts[i][0], 0.0, mb.verts[i][2]) for i in ring]
-    top = [mb.vertex(mb.verts[i][0], y_top, mb.verts[i][2]) for i in ring]
-    side_group = 1  # the side wall is smooth around; cut cells use groups >= 4096
+    top = [mb.vertex(mb.verts[i][0], top_of(mb.verts[i][0], mb.verts[i][2]), mb.verts[i][2]) for i in ring]
+    side_group = group  # smooth around (flat when its corners are sharp); cut cells use groups >= 4096
     for j in range(len(ring)):
         j1 = (j + 1) % len(ring)
         mb.face([bottom[j], ring[j], ring[j1], bottom[j1]], side_group, LENS_SIDE_WALL)  # glass side
@@ -498,6 +614,52 @@ def reflector_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -
             return data
         rings = math.ceil(rings * 1.25)
         n = min(MAX_SEGMENTS, n + 4 * max(1, n // 16))
+
+
+def outline_rim(lamp: dict, tol: float = CHORD_TOLERANCE_MM) -> np.ndarray:
+    """The rim polygon of a rectangular lens (``Outline.perimeter``), shared by its lens, reflector and
+    body opening: corners within ``tol``, and no edge longer than the chord of the reflector's edge that
+    sags ``tol`` (along a straight side the edge is the parabola y = y_v - (x^2 + z^2) / 4f, whose chord
+    of length L sags L^2 / 16f), over sqrt 2 so that a quad's diagonal is no longer than that chord."""
+    f = lamp["reflector"]["focal_length"]
+    return Outline.of_lens(lamp["lens"]).perimeter(tol, max_edge=math.sqrt(16.0 * f * tol) / math.sqrt(2.0))
+
+
+def trimmed_reflector_mesh(lamp: dict, rim: np.ndarray, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+    """The paraboloid trimmed to a rectangular lens's prism (README: the lens outline): rows of points
+    s P_k for the rim polygon's vertices P_k and fractions s from 0 (the vertex) to 1 (the rim, on the
+    side wall), spaced evenly in arc length along the longest profile; refined until measured."""
+    f = lamp["reflector"]["focal_length"]
+    yv = lamp_geometry(lamp)["vertex"]
+    distance = paraboloid_distance(yv, f)
+    reach = float(np.hypot(rim[:, 0], rim[:, 1]).max())
+    chord = math.sqrt(16.0 * f * tol)
+    r_dense = np.linspace(0.0, reach, 2049)
+    s_dense = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(r_dense), np.diff(r_dense ** 2) / (4 * f)))])
+    rings = max(2, math.ceil(s_dense[-1] / (chord / math.sqrt(2.0))))
+    for _ in range(12):
+        fractions = np.interp(np.linspace(0.0, s_dense[-1], rings + 1), s_dense, r_dense) / reach
+        data = _fan(rim, fractions, lambda x, z: yv - (x * x + z * z) / (4.0 * f))
+        data.max_deviation = triangle_deviation(data.verts, fan_triangles(data.faces), distance)
+        if data.max_deviation <= SAMPLED_MARGIN * tol:
+            break
+        rings = math.ceil(rings * 1.25)
+    return data
+
+
+def _fan(rim: np.ndarray, fractions: np.ndarray, height: Callable) -> MeshData:
+    """The surface y = height(x, z) over a star-shaped polygon: rows fractions[j] * rim from the pole
+    (fractions[0] = 0) out to the rim, wound as ``_revolve(inward=True)``: normals toward the lamp interior."""
+    mb = _MeshBuilder()
+    pole = mb.vertex(0.0, float(height(0.0, 0.0)), 0.0)
+    rows = [[mb.vertex(s * x, float(height(s * x, s * z)), s * z) for x, z in rim.tolist()] for s in fractions[1:]]
+    n = len(rim)
+    for k in range(n):
+        k1 = (k + 1) % n
+        mb.face([pole, rows[0][k], rows[0][k1]], 0)
+        for j in range(len(rows) - 1):
+            mb.face([rows[j][k], rows[j + 1][k], rows[j + 1][k1], rows[j][k1]], 0)
+    return mb.result()
 
 
 def _revolve(radii: np.ndarray, profile: Callable[[np.ndarray], np.ndarray], segments: int,

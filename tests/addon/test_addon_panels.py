@@ -166,8 +166,9 @@ def test_panels_are_in_the_lamp_tab(lamp_addon):
 
 def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
     shown = set()
-    for mode in ("transmitted_color", "absorption"):
+    for mode, outline in (("transmitted_color", "round"), ("absorption", "rectangular")):
         design.lamps[2].lens.color_mode = mode
+        design.lamps[2].lens.outline = outline
         for cls in _panels(lamp_addon):
             shown |= draw(cls, bl_scene).spec_paths()
     wanted = {info.path for info in S.iter_fields() if not lamp_addon.design_properties.is_constant(info.spec)}
@@ -218,6 +219,23 @@ def test_lens_colour_mode(lamp_addon, bl_scene, design):
     lens.color_mode = "absorption"
     drawn = [prop for _, _, prop, _ in draw(bpy.types.LAMP_PT_lens, bl_scene).props()]
     assert "absorption" in drawn and "transmitted_color" not in drawn
+
+
+def test_lens_outline_rows(lamp_addon, bl_scene, design):
+    # the outline choice, then the radius of a round lens or the width, height and corner radius of a
+    # rectangular one, never both
+    import bpy
+
+    lens = design.lamps[2].lens
+    design.active_lamps_index = 2
+    lens.outline = "round"
+    drawn = [prop for _, _, prop, _ in draw(bpy.types.LAMP_PT_lens, bl_scene).props()]
+    assert "outline" in drawn and "radius" in drawn
+    assert not {"width", "height", "corner_radius"} & set(drawn)
+    lens.outline = "rectangular"
+    drawn = [prop for _, _, prop, _ in draw(bpy.types.LAMP_PT_lens, bl_scene).props()]
+    assert {"outline", "width", "height", "corner_radius"} <= set(drawn) and "radius" not in drawn
+    assert drawn.index("outline") < drawn.index("width")
 
 
 @pytest.mark.parametrize("mode", ["transmitted_color", "absorption"])

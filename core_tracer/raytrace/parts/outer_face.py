@@ -1,10 +1,11 @@
-"""The lens's outer face (MODEL.md §3): the disk of radius R in the plane y = 0, a Fresnel
+"""The lens's outer face (MODEL.md §3): the lens outline's inside in the plane y = 0, a Fresnel
 surface reached from inside the lens (eye rays meet it from outside in ``lens_at``)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .. import outline
 from .. import paths as P
 from ..lamp_table import LampTable
 from .base import T_MIN, Segments
@@ -27,10 +28,15 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
 
 def lens_at(x: np.ndarray, z: np.ndarray, lamps: LampTable) -> np.ndarray:
     """For world points (x, z) on the body's front plane, the lamp whose lens contains each
-    point, or -1 (the lens outline: a circle of the lens radius about the lamp axis)."""
+    point, or -1 (the lens outline, ``outline``: a circle of the lens radius about the lamp axis, or
+    a rounded rectangle)."""
     lamp = np.full(len(x), -1)
     for li in range(len(lamps.radius)):
         dx = x - lamps.center[li, 0]
         dz = z - lamps.center[li, 1]
-        lamp[dx * dx + dz * dz <= lamps.radius[li] ** 2] = li
+        if lamps.rectangular[li]:
+            (hw, hh), r = lamps.half_size[li], lamps.corner[li]
+            lamp[outline.signed_distance(dx, dz, hw - r, hh - r, r) <= 0.0] = li
+        else:
+            lamp[dx * dx + dz * dz <= lamps.radius[li] ** 2] = li
     return lamp

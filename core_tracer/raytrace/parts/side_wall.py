@@ -1,10 +1,14 @@
-"""The lens side wall (MODEL.md §3): the cylinder r = R about the lamp axis between the outer
-face and the cut apex plane, met from inside; opaque and not reflecting, a ray ends there (⑦)."""
+"""The lens side wall (MODEL.md §3): the lens outline (``outline``) extruded along the lamp axis,
+met from inside: for a round lens the cylinder r = R, for a rectangular one four planes and four
+quarter cylinders. It stands from the outer face back to the reflector's edge (the prism holds the
+trimmed paraboloid: a ray in the lamp meets the wall before any part of the paraboloid outside it);
+opaque and not reflecting, a ray ends there (⑦)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .. import outline
 from .. import paths as P
 from ..lamp_table import LampTable
 from .base import T_MIN, Segments, quadratic_roots
@@ -23,5 +27,20 @@ def hit_side_wall(o: np.ndarray, d: np.ndarray, radius: np.ndarray) -> np.ndarra
     return np.where((a > 1e-15) & (hi > T_MIN), hi, np.inf)
 
 
+def hit_outline_wall(o: np.ndarray, d: np.ndarray, half_size: np.ndarray, corner: np.ndarray) -> np.ndarray:
+    """The extruded rectangular outline, left from inside (``outline.wall_exit``)."""
+    t = outline.wall_exit(o, d, half_size[:, 0], half_size[:, 1], corner)
+    return np.where(t > T_MIN, t, np.inf)
+
+
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
-    return hit_side_wall(rays.o, rays.d, lamps.radius[rays.lamp]), None
+    rect = lamps.rectangular[rays.lamp] > 0
+    if not rect.any():
+        return hit_side_wall(rays.o, rays.d, lamps.radius[rays.lamp]), None
+    t = np.empty(len(rect))
+    rnd = ~rect
+    if rnd.any():
+        t[rnd] = hit_side_wall(rays.o[rnd], rays.d[rnd], lamps.radius[rays.lamp[rnd]])
+    li = rays.lamp[rect]
+    t[rect] = hit_outline_wall(rays.o[rect], rays.d[rect], lamps.half_size[li], lamps.corner[li])
+    return t, None
