@@ -297,6 +297,7 @@ ENVIRONMENT = Section(
                             doc="Turn of the environment about the vertical axis (a Mapping node's Z rotation)"),
     },
     "The world around the lamp: seen around it, mirrored by the lens and lighting the body",
+    shown_when=(("file", "world", ("file",)),),
 )
 
 BODY = Section(
