@@ -39,6 +39,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
+from ..core_tracer.raytrace import environment, sunlight
 from ..core_tracer.scene import functions
 from ..core_tracer.scene.reading import SceneError
 from ..core_tracer.scene.validate import parse_scene
@@ -222,7 +223,11 @@ class _Build:
             light.type = "SUN"
             light = bpy.data.lights[light.name]  # the type change gives the datablock its SunLight type
         design_materials.sun(light, scene, new=new)
-        direction = Vector(scene["light"]["direction"]).normalized()
+        try:
+            direction = Vector(sunlight.sun_direction(scene).tolist())
+        except SceneError as e:  # an environment image that cannot be read: the tracer reports it too
+            self.report.not_driven.append(f"Lamp Sun direction ({e})")
+            direction = Vector(scene["light"]["direction"]).normalized()
         # Half a metre out along the light direction, shining along its -Z toward the lamp.
         matrix = Matrix.Translation(direction * 0.5) @ direction.to_track_quat("Z", "Y").to_matrix().to_4x4()
         self._place(self._object("sun", "Lamp Sun", obj, light), matrix)
@@ -236,7 +241,14 @@ class _Build:
             wld = bpy.data.worlds.new(WORLD_NAME)
             wld[PART_KEY] = "world"
             self.bl_scene.world = wld
-        self.report.not_driven += [f"{wld.name}: {node}" for node in design_materials.world(wld, scene, new=new)]
+        image = None
+        if scene["environment"]["world"] != "none":
+            try:
+                image = environment.image_path(scene["environment"])
+            except SceneError as e:
+                self.report.not_driven.append(f"{wld.name}: surroundings ({e})")
+        self.report.not_driven += [f"{wld.name}: {node}"
+                                   for node in design_materials.world(wld, scene, new=new, image_path=image)]
 
     def _existing(self, part: str, kind: str) -> bpy.types.Object | None:
         obj = self.owned.get(part)

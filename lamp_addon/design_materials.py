@@ -17,6 +17,11 @@ part:
 - **Light** (the diffuse part of eq. 1, ``[d + (1 - d) cos theta] R0``): a sun of strength ``pi (1 - d)``
   shining along ``-light.direction`` and a world of colour d seen by diffuse rays only (adds ``R0 d``).
   Every other ray that leaves the scene sees the scene's ``background`` colour (black in the paper).
+  The sun's ``strength`` s and ``sun_color`` S make it strength ``pi (1 - d) s`` of colour S.
+- **Surroundings** (``environment``): the image in an Environment Texture (Linear, equirectangular) after
+  a Mapping node turning it about Z, into a Background of the environment's strength, seen by every ray
+  and added to the ambient for diffuse rays (the tracer's C0 E(n) / pi); switched by two Mix Shaders, so
+  a design without surroundings keeps the paper's world exactly.
 
 A designer may edit these materials. So a tree is laid out once, when the builder makes the material
 (``new=True``); every later build only writes the sockets a design parameter drives, on the nodes it
@@ -27,6 +32,8 @@ reports them.
 """
 
 from __future__ import annotations
+
+import math
 
 import bpy
 
@@ -206,8 +213,11 @@ def _lay_out_reflector(tree) -> None:
 # Light: world and sun
 
 
-def world(wld: bpy.types.World, scene: dict, *, new: bool) -> list[str]:
-    """Background ``d`` for diffuse rays (ambient of eq. 1), the scene's background colour for all others."""
+def world(wld: bpy.types.World, scene: dict, *, new: bool, image_path: str | None = None) -> list[str]:
+    """Background ``d`` for diffuse rays (ambient of eq. 1), the scene's background colour for all others;
+    with surroundings (``image_path``, ``environment``) their image is the world for every ray, as the
+    tracer sees it: Environment Texture (Linear) after a Mapping node turning about Z, into a Background of
+    the environment's strength, seen by all rays and added to the ambient for diffuse rays."""
     tree = _tree(wld, new)
     if new:
         out = _node(tree, "ShaderNodeOutputWorld", "Output", (600, 0))
@@ -219,18 +229,68 @@ def world(wld: bpy.types.World, scene: dict, *, new: bool) -> list[str]:
         tree.links.new(seen.outputs["Background"], mix.inputs[1])
         tree.links.new(ambient.outputs["Background"], mix.inputs[2])
         tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    if tree is not None and image_path is not None and tree.nodes.get("Surroundings") is None:
+        _add_surroundings(tree)  # a world built before surroundings existed, or a new one
     missing: list[str] = []
     _drive(tree, "Background", missing, Color=_rgba(scene["background"]))
     _drive(tree, "Ambient", missing, Color=_grey(scene["light"]["ambient"]))
+    if tree is not None and tree.nodes.get("Surroundings") is not None:
+        env = scene["environment"]
+        on = 1.0 if image_path is not None else 0.0
+        _drive(tree, "Surroundings", missing, Strength=float(env["strength"]))
+        _drive(tree, "Background Or Surroundings", missing, Fac=on)
+        _drive(tree, "Ambient Or Ambient And Surroundings", missing, Fac=on)
+        mapping = tree.nodes.get("Environment Mapping")
+        if mapping is not None:
+            _drive(tree, "Environment Mapping", missing, Rotation=(0.0, 0.0, math.radians(env["rotation_deg"])))
+        texture = tree.nodes.get("Environment")
+        if texture is None:
+            missing.append("Environment")
+        elif image_path is not None and (texture.image is None
+                                         or bpy.path.abspath(texture.image.filepath) != image_path):
+            texture.image = bpy.data.images.load(image_path, check_existing=True)
     wld.color = tuple(float(c) for c in scene["background"])
     return missing
 
 
+def _add_surroundings(tree) -> None:
+    """The environment's nodes, put between the background and ambient and the diffuse-ray mix."""
+    coords = _node(tree, "ShaderNodeTexCoord", "Texture Coordinate", (-900, 700))
+    mapping = _node(tree, "ShaderNodeMapping", "Environment Mapping", (-700, 700))
+    mapping.vector_type = "POINT"
+    texture = _node(tree, "ShaderNodeTexEnvironment", "Environment", (-500, 700))
+    texture.interpolation = "Linear"
+    texture.projection = "EQUIRECTANGULAR"
+    surroundings = _node(tree, "ShaderNodeBackground", "Surroundings", (-200, 700), Strength=1.0)
+    tree.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    tree.links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
+    tree.links.new(texture.outputs["Color"], surroundings.inputs["Color"])
+    pick = _node(tree, "ShaderNodeMixShader", "Background Or Surroundings", (150, 500), Fac=0.0)
+    both = _node(tree, "ShaderNodeAddShader", "Ambient And Surroundings", (150, 300))
+    pick_diffuse = _node(tree, "ShaderNodeMixShader", "Ambient Or Ambient And Surroundings", (150, -250), Fac=0.0)
+    seen, ambient = tree.nodes.get("Background"), tree.nodes.get("Ambient")
+    mix = tree.nodes.get("Ambient For Diffuse Rays")
+    if seen is not None:
+        tree.links.new(seen.outputs["Background"], pick.inputs[1])
+    tree.links.new(surroundings.outputs["Background"], pick.inputs[2])
+    if ambient is not None:
+        tree.links.new(ambient.outputs["Background"], both.inputs[0])
+        tree.links.new(ambient.outputs["Background"], pick_diffuse.inputs[1])
+    tree.links.new(surroundings.outputs["Background"], both.inputs[1])
+    tree.links.new(both.outputs["Shader"], pick_diffuse.inputs[2])
+    if mix is not None:
+        tree.links.new(pick.outputs["Shader"], mix.inputs[1])
+        tree.links.new(pick_diffuse.outputs["Shader"], mix.inputs[2])
+
+
 def sun(light: bpy.types.SunLight, scene: dict, *, new: bool) -> list[str]:
+    """The sun of eq. (1): strength pi (1 - d) s (``cycles.sun_strength``) and colour S."""
     if new:
-        light.color = (1.0, 1.0, 1.0)  # eq. 1's diffuse part carries no light colour
         light.angle = 0.0  # a directional light, as in the paper
-    energy = cycles.sun_strength(scene["light"]["ambient"])
+    color = tuple(float(c) for c in scene["light"].get("sun_color", (1.0, 1.0, 1.0)))
+    if not _same(light.color, color):
+        light.color = color
+    energy = cycles.sun_strength(scene["light"]["ambient"]) * scene["light"].get("strength", 1.0)
     if not _same(light.energy, energy):
         light.energy = energy
     return []

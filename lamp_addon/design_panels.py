@@ -135,6 +135,8 @@ class LAMP_PT_light(DesignSection, bpy.types.Panel):
         design = context.scene.lamp_design
         draw_section(layout, design.light, S.LIGHT)
         draw_section(layout, design, S.SCENE, (S.Num,))  # the background colour
+        layout.separator()
+        draw_section(layout.column(heading="Surroundings"), design.environment, S.ENVIRONMENT)
 
 
 class LAMP_PT_camera(DesignSection, bpy.types.Panel):

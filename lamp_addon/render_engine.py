@@ -147,6 +147,11 @@ class LampTracerEngine(bpy.types.RenderEngine):
         transparent = depsgraph.scene.render.film_transparent
         samples = scene["image"]["samples"]
         background = np.asarray(scene["background"], np.float32)
+        # Surroundings vary with the direction: with a transparent film the tracer leaves out what the
+        # missing rays see (they still light the lamp and show in the lens), so nothing is taken away.
+        surroundings = scene["environment"]["world"] != "none"
+        if surroundings:
+            background = np.zeros(3, np.float32)
 
         def write_rows(row_start: int, row_stop: int, rows: np.ndarray,
                        passes: dict[str, np.ndarray] | None = None) -> None:
@@ -176,7 +181,8 @@ class LampTracerEngine(bpy.types.RenderEngine):
             result = core_tracer.render_passes(scene, width, height, progress=self.update_progress,
                                                should_stop=self.test_break, on_band=write_rows,
                                                threads=depsgraph.scene.render.threads,  # Blender's count
-                                               keep_passes=with_passes)
+                                               keep_passes=with_passes,
+                                               world_seen=not (transparent and surroundings))
         except core_tracer.RenderCancelled:
             return  # Esc: Blender keeps the bands finished so far, with their passes
         # Glare needs the whole image: the bands shown while rendering are replaced by the glared

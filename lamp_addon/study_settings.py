@@ -79,6 +79,8 @@ def _suggest_range(self, context) -> None:
         self.mode = "LIST"
         if isinstance(spec, S.Flag):
             self.values = "on, off"
+        elif isinstance(spec, S.Choice):  # the surroundings: by day, in the evening, at night
+            self.values = "city, sunset, night"
         else:  # a vector: the values the lamp functions give it (red, amber, clear lenses), else its default
             values = suggested_values(self.parameter) or [list(spec.default)]
             self.values = ", ".join(st.format_value(v) for v in values)

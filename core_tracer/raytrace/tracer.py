@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene.derived import body_wraps
-from . import optics, pixel_filter
+from . import environment, optics, pixel_filter, sunlight
 from . import paths as P
 from .camera import Camera, eye_rays, make_camera
 from .lamp_table import LampTable
@@ -93,14 +93,29 @@ class _Context:
         self.box_lo, self.box_hi = body_box.body_box(body)
         self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
         self.body = body
-        light = scene["light"]
-        self.light_dir = np.asarray(light["direction"], dtype=np.float64)
-        self.light_dir /= np.linalg.norm(self.light_dir)
-        self.light_color = np.asarray(light["color"], dtype=np.float64)
-        self.ambient = light["ambient"]
+        self.environment = environment.from_scene(scene)  # None: the paper's background colour
+        following = self.environment is not None and scene["light"].get("follow_environment", False)
+        self.sun = sunlight.from_scene(scene, self.environment.sun_direction() if following else None)
+        in_lens = sunlight.sun_transmittance(self.sun, self.lamps, np.arange(len(self.lamps.ior)))
+        self.phantom = scene["light"].get("phantom", False) and bool(in_lens.any())
         self.background = np.asarray(scene["background"], dtype=np.float64)
-        self.background_seen = bool(self.background.any())  # adding a black background adds exactly 0
+        # adding a black background adds exactly 0
+        self.background_seen = bool(self.background.any()) or self.environment is not None
         self.record = record_transitions
+        self.world_seen = True  # eye rays that miss see the background or surroundings
+
+    def sky(self, d: np.ndarray) -> np.ndarray:
+        """What a ray leaving the scene along unit ``d`` (N, 3) sees: the environment or the background."""
+        if self.environment is not None:
+            return self.environment.radiance(d)
+        return np.broadcast_to(self.background, (len(d), 3))
+
+    def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
+        """Equation (1) under the sun, plus the environment's light on a Lambertian surface."""
+        out = self.sun.shade(normal, view, diffuse, specular, shininess)
+        if self.environment is not None:
+            out = out + diffuse * self.environment.irradiance(normal) / np.pi
+        return out
 
 
 class _Band:
@@ -138,7 +153,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
                   threads: int | None = None, record_transitions: bool = False,
                   keep_passes: bool = True, samples: int | None = None,
-                  filter_name: str = pixel_filter.DEFAULT_FILTER) -> RenderResult:
+                  filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True) -> RenderResult:
     """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
@@ -148,6 +163,8 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     dict without ``keep_passes``) are called from the calling thread as bands finish;
     ``should_stop()`` is polled between bands. ``samples`` overrides the scene's samples per
     pixel; ``filter_name`` is the pixel filter of more than one sample (``pixel_filter.FILTERS``).
+    ``world_seen=False`` leaves out what eye rays that miss everything see (a transparent film):
+    the surroundings still light the lamp and show in it.
     """
     width = int(width or scene["image"]["width"])
     height = int(height or scene["image"]["height"])
@@ -156,6 +173,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     pixel_filter.filter_support(filter_name)  # an unknown filter fails here, before any work
     start = time.perf_counter()
     ctx = _Context(scene, make_camera(scene["camera"], width, height), record_transitions, samples, filter_name)
+    ctx.world_seen = world_seen
     passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
     image = np.zeros((height, width, 3), dtype=np.float32)
     rows_per_band = max(1, TILE_RAYS // (width * samples))
@@ -272,8 +290,8 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     t_near, t_far, face = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     hit_box = (t_near <= t_far) & (t_near > 0)
 
-    if ctx.background_seen:
-        band.add(BACKGROUND_PASS, pix[~hit_box], np.broadcast_to(ctx.background, (int((~hit_box).sum()), 3)))
+    if ctx.background_seen and ctx.world_seen:
+        band.add(BACKGROUND_PASS, pix[~hit_box], ctx.sky(d[~hit_box]))
 
     # Only rays entering the front face can reach a lens: find their points there.
     front = np.nonzero(hit_box & (face == 1) & (d[:, 1] > 0))[0]
@@ -290,8 +308,7 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     normal = np.zeros((len(b), 3))
     normal[np.arange(len(b)), face[b]] = -np.sign(d[b, face[b]])
     body = ctx.body
-    band.add(BODY_PASS, b, optics.phong(normal, -d[b], ctx.light_dir, np.asarray(body["color"]), ctx.light_color,
-                                        ctx.ambient, body["specular"], body["shininess"]))
+    band.add(BODY_PASS, b, ctx.shade(normal, -d[b], np.asarray(body["color"]), body["specular"], body["shininess"]))
 
     # Lens outer face (①): Fresnel split; the reflected branch is shaded by eq. (1) (§3.2.3).
     s = np.nonzero(on_lens)[0]
@@ -301,10 +318,11 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     cos_i = ds[:, 1]
     r = optics.fresnel_reflectance(cos_i, 1.0, ior)
     face_normal = np.tile(outer_face.NORMAL, (len(s), 1))
-    surface = optics.phong(face_normal, -ds, ctx.light_dir, L.lens_diffuse[li], ctx.light_color, ctx.ambient,
-                           L.lens_specular[li], L.lens_shininess[li])
+    surface = ctx.shade(face_normal, -ds, L.lens_diffuse[li], L.lens_specular[li], L.lens_shininess[li])
+    if ctx.environment is not None:  # the outer face mirrors the surroundings
+        surface = surface + ctx.sky(optics.reflect(ds, face_normal))
     band.add(LENS_SURFACE, s, r[:, None] * surface)
-    if ctx.background_seen:
+    if ctx.background_seen and ctx.environment is None:
         band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
     ones = np.ones(len(s), dtype=np.int8)
     band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
@@ -325,8 +343,8 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     n = len(o)
     pix = np.arange(n)
     t_near, hit_body, face, normal = body_box.hit_body(o, d, ctx.box_lo, ctx.box_hi, ctx.wraps)
-    if ctx.background_seen:
-        band.add(BACKGROUND_PASS, pix[~hit_body], np.broadcast_to(ctx.background, (int((~hit_body).sum()), 3)))
+    if ctx.background_seen and ctx.world_seen:
+        band.add(BACKGROUND_PASS, pix[~hit_body], ctx.sky(d[~hit_body]))
     front = np.nonzero(hit_body & (((face == 1) & (d[:, 1] > 0)) | (face == body_box.CURVED_FRONT)))[0]
     p = o[front] + t_near[front, None] * d[front]
     L = ctx.lamps
@@ -335,8 +353,7 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     on_lens = lamp >= 0
     b = np.nonzero(hit_body & ~on_lens)[0]
     body = ctx.body
-    band.add(BODY_PASS, b, optics.phong(normal[b], -d[b], ctx.light_dir, np.asarray(body["color"]), ctx.light_color,
-                                        ctx.ambient, body["specular"], body["shininess"]))
+    band.add(BODY_PASS, b, ctx.shade(normal[b], -d[b], np.asarray(body["color"]), body["specular"], body["shininess"]))
 
     s = np.nonzero(on_lens)[0]
     li = lamp[s]
@@ -350,10 +367,11 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     face_normal[curved] = outward_normal(local[curved], L.cyl_axis_x[li[curved]], L.cyl_radius[li[curved]])
     cos_i = np.clip(-optics.dot(ds, face_normal), 0.0, 1.0)
     r = optics.fresnel_reflectance(cos_i, 1.0, ior)
-    surface = optics.phong(face_normal, -ds, ctx.light_dir, L.lens_diffuse[li], ctx.light_color, ctx.ambient,
-                           L.lens_specular[li], L.lens_shininess[li])
+    surface = ctx.shade(face_normal, -ds, L.lens_diffuse[li], L.lens_specular[li], L.lens_shininess[li])
+    if ctx.environment is not None:  # the outer face mirrors the surroundings
+        surface = surface + ctx.sky(optics.reflect(ds, face_normal))
     band.add(LENS_SURFACE, s, r[:, None] * surface)
-    if ctx.background_seen:
+    if ctx.background_seen and ctx.environment is None:
         band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
     ones = np.ones(len(s), dtype=np.int8)
     band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
@@ -472,6 +490,8 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     to_bulb = optics.normalize(L.bulb_center[li] - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
     band.add(REFLECTOR_SCATTER, rays.pix[m], k * scatter[:, None] * L.bulb_intensity[li])
+    if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
+        band.add(REFLECTOR_SCATTER, rays.pix[m], k * sunlight.phantom(ctx.sun, L, li, hit, normal, -d))
     k = k * L.reflectance[li, None]
     go = np.nonzero(_alive(k))[0]
     n = len(go)
@@ -507,7 +527,8 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     # ⑩: out through the outer face, to the background (ends).
     lv = trans[leaving]
     if ctx.background_seen:
-        band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
+        out_d = optics.refract(d[lv], facing[lv], n1[lv] / n2[lv]) if ctx.environment is not None else d[lv]
+        band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.sky(out_d))
     band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
     k_t = k[tc] * (1.0 - r[tc, None])

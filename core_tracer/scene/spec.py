@@ -274,8 +274,33 @@ LIGHT = Section(
                         "Colour and strength of the light's highlights on body and lens (R1G1B1 in eq. 1)", hi=1000.0),
         "ambient": Num(0.25, 0.0, 1.0,
                        doc="How bright surfaces facing away from the light still look (ambient d in eq. 1)"),
+        "strength": Num(1.0, 0.0, 1000.0,
+                        doc="Strength of the sun: scales its light on body and lens (the (1 - d) cos term and the "
+                            "highlight of eq. 1) and its phantom light in the reflectors; 0 is no sun (night)"),
+        "sun_color": _color((1, 1, 1), "Colour of the sunlight on the paint (scales the (1 - d) cos term of eq. 1; "
+                                       "the highlight's colour is color)", hi=1000.0),
+        "phantom": Flag(False, "Sunlight entering through the lens lights the reflector, so an unlit lamp facing a "
+                               "low sun looks lit (phantom light; off in the paper)"),
+        "follow_environment": Flag(False, "Take the sun's direction from the environment image: the direction of "
+                                          "its brightest region (direction is then ignored)"),
     },
-    "The directional light of equation (1)",
+    "The sun: the directional light of equation (1)",
+)
+
+BUNDLED_WORLDS = ("city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset")
+
+ENVIRONMENT = Section(
+    {
+        "world": Choice("none", ("none", *BUNDLED_WORLDS, "file"),
+                        "What surrounds the lamp: none (the background colour, as in the paper), one of Blender's "
+                        "bundled world images by name, or the image in file"),
+        "file": Text("", "An equirectangular .exr or .hdr image (used when world is \"file\")", max_len=1000),
+        "strength": Num(1.0, 0.0, 1.0e4, doc="Brightness of the environment (the Background node's Strength)"),
+        "rotation_deg": Num(0.0, -360.0, 360.0, unit="deg",
+                            doc="Turn of the environment about the vertical axis (a Mapping node's Z rotation)"),
+    },
+    "The world around the lamp: seen around it, mirrored by the lens and lighting the body",
+    shown_when=(("file", "world", ("file",)),),
 )
 
 BODY = Section(
@@ -472,6 +497,7 @@ SCENE = Section(
         "image": IMAGE,
         "light": LIGHT,
         "background": _color((0, 0, 0), "Colour seen around the lamp, where rays leave the scene (0 in the paper)"),
+        "environment": ENVIRONMENT,
         "glare": GLARE,
         "body": BODY,
         "lamps": ListOf(LAMP, 1, MAX_LAMPS, "The lamps, 1 to 4"),

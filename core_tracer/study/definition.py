@@ -13,13 +13,14 @@ values or over a range with a number of steps, at most ``MAX_VARIANTS`` variants
 The base is embedded, so a study file (or a contact sheet carrying one) can be handed to another
 machine and re-run. A *parameter* is a dotted path of ``spec.py``:
 
-- ``body.…``, ``light.…``, ``camera.…``, ``background``: scene fields;
+- ``body.…``, ``light.…``, ``camera.…``, ``environment.…``, ``background``: scene fields;
 - ``lens.ior``, ``cuts.height``, ``bulb.intensity`` …: a lamp field, applied to every lamp;
 - ``lamps[2].lens.ior``: the same field of one lamp (the index is checked against the base);
 - a trailing ``[k]`` picks one component of a vector: ``bulb.offset[1]`` is the bulb's y offset.
 
 Every numeric field (``spec.Num``) can be varied, scalar or vector (vector values are lists;
-a vector range is interpolated per component), and ``bulb.on`` over ``[true, false]``. Varying
+a vector range is interpolated per component), ``bulb.on`` over ``[true, false]`` and the
+surroundings ``environment.world`` over a list of names (``["city", "sunset", "night"]``). Varying
 the lens colour (``lens.transmitted_color``) replaces the lens's absorption coefficients, as the
 scene format allows only one of the two (MODEL.md §6); varying ``lens.absorption`` replaces a
 transmitted colour.
@@ -62,8 +63,10 @@ _PARAMETER = re.compile(
 )
 # Scene-level sections and fields a study may vary; image is the study's own size, but its
 # samples per pixel vary like any parameter.
-_SCENE_PARTS = ("camera", "light", "background", "body")
+_SCENE_PARTS = ("camera", "light", "background", "body", "environment")
 _SCENE_FIELDS = ("image.samples",)
+# The choices a study may vary (over a list of names): the surroundings.
+_CHOICE_FIELDS = ("environment.world",)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -76,7 +79,7 @@ class Parameter:
 
     text: str  # as the user wrote it, e.g. "lamps[1].lens.ior"
     keys: tuple[str, ...]  # path inside the scene (or inside each lamp when lamp_scope)
-    spec: S.Num | S.Flag
+    spec: S.Num | S.Flag | S.Choice
     lamp_scope: bool  # a lamp field
     lamp: int | None  # one lamp; None = every lamp
     component: int | None  # one component of a vector field
@@ -123,7 +126,7 @@ def study_parameters() -> list[str]:
     """
     out = []
     for info in S.iter_fields():
-        if not isinstance(info.spec, S.Num | S.Flag):
+        if not isinstance(info.spec, S.Num | S.Flag) and info.path not in _CHOICE_FIELDS:
             continue
         path = info.path
         if path.startswith("lamps[]."):
@@ -156,7 +159,7 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
     except KeyError:
         raise SceneError(show_key(text), "unknown parameter; see `python -m core_tracer study --list` "
                                "for the names") from None
-    if not isinstance(field_spec, S.Num | S.Flag):
+    if not isinstance(field_spec, S.Num | S.Flag) and ".".join(keys) not in _CHOICE_FIELDS:
         raise SceneError(show_key(text), "is not a numeric field a study can vary")
     lamp = None
     if explicit_lamp and m["lamp"] != "":
@@ -186,6 +189,10 @@ def _index(digits: str) -> int:
 def check_value(param: Parameter, value: Any) -> Any:
     """One axis value, checked against the field's range; returns it as the scene stores it."""
     sp = param.spec
+    if isinstance(sp, S.Choice):
+        if value not in sp.choices:
+            raise SceneError(param.text, f"{_show(value)} is not allowed; allowed {sp.range_text()}")
+        return value
     if isinstance(sp, S.Flag):
         if not isinstance(value, bool):
             raise SceneError(param.text, f"{_show(value)} is not allowed; allowed true or false")
@@ -275,6 +282,8 @@ def parse_axis(doc: Any, base: dict, where: str) -> Axis:
 def _expand_range(param: Parameter, rng: Any, steps: Any) -> tuple[Any, ...]:
     if isinstance(param.spec, S.Flag):
         raise SceneError(param.text, "is true or false; give values [true, false] instead of a range")
+    if isinstance(param.spec, S.Choice):
+        raise SceneError(param.text, f"is a name; give values (a list) instead of a range, {param.spec.range_text()}")
     if not isinstance(rng, list) or len(rng) != 2:
         raise SceneError(param.text, f"range must be [lo, hi], got {_show(rng)}")
     if isinstance(steps, bool) or not isinstance(steps, int):
@@ -307,6 +316,8 @@ def format_value(value: Any) -> str:
         return "on" if value else "off"
     if isinstance(value, list):
         return "/".join(format_value(v) for v in value)
+    if isinstance(value, str):
+        return value
     return f"{value:.6g}"
 
 
@@ -546,6 +557,9 @@ def parse_vary(text: str) -> dict:
     if not sep or not name or not spec_text.strip():
         raise SceneError("--vary", f"{text!r} is not PARAMETER=LO:HI:STEPS or PARAMETER=V1,V2,...")
     spec_text = spec_text.strip()
+    if ":" in spec_text and _is_choice(name):
+        raise SceneError(name, f"is a name; give values (a list) instead of a range, "
+                               f"{S.lookup(name).range_text()}")
     if ":" in spec_text:
         parts = spec_text.split(":")
         if len(parts) != 3:
@@ -556,7 +570,14 @@ def parse_vary(text: str) -> dict:
         except ValueError:
             raise SceneError(name, f"steps {parts[2]!r} is not a whole number; allowed 1 to {MAX_VARIANTS}") from None
         return {"parameter": name, "range": [lo, hi], "steps": steps}
+    if _is_choice(name):
+        return {"parameter": name, "values": [item.strip() for item in spec_text.split(",")]}
     return {"parameter": name, "values": [_parse_item(name, item) for item in spec_text.split(",")]}
+
+
+def _is_choice(name: str) -> bool:
+    """Whether ``name`` is one of the choices a study varies by name (``environment.world``)."""
+    return name in _CHOICE_FIELDS
 
 
 def _parse_item(name: str, item: str) -> Any:

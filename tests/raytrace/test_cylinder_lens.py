@@ -330,3 +330,32 @@ def test_a_lens_wrapping_toward_minus_x_renders_the_mirror_image_of_one_wrapping
     diff = np.abs(a - b[:, ::-1])
     assert float(np.mean(diff)) < 1e-3 * float(np.mean(a))
     assert float(np.mean(diff > 1e-3 * float(a.max()))) < 0.01
+
+
+def test_surroundings_light_and_surround_a_wrapped_body(tmp_path):
+    # Under a uniform world W with the sun off, a Lambertian body shows rho W on its flat and its
+    # curved front alike, and the rays that miss see W (README: surroundings; cylindrical lens).
+    from core_tracer import render_passes
+    from core_tracer.images import imageio
+
+    oiio = imageio.oiio_module()
+    path = str(tmp_path / "grey.exr")
+    out = oiio.ImageOutput.create(path)
+    assert out.open(path, oiio.ImageSpec(128, 64, 3, oiio.FLOAT))  # the irradiance integral's full grid
+    assert out.write_image(np.full((64, 128, 3), 0.3, np.float32))
+    out.close()
+    doc = _wrap_scene()
+    doc["environment"] = {"world": "file", "file": path}
+    doc["light"].update(ambient=0.0, strength=0.0)
+    doc["body"]["specular"] = 0.0
+    doc["camera"] = {"position": [300.0, -500.0, 80.0], "target": [0.0, 0.0, 0.0], "fov_deg": 30.0}
+    scene = normalize(doc)
+    result = render_passes(scene)
+    body = result.passes["body"].reshape(-1, 3)
+    seen = body[body.max(axis=1) > 0]
+    assert len(seen) > 500
+    np.testing.assert_allclose(seen, np.broadcast_to(0.3 * np.array(scene["body"]["color"]), seen.shape), rtol=1e-3)
+    others = sum(v for name, v in result.passes.items() if name != "background").reshape(-1, 3)
+    missed = result.image.reshape(-1, 3)[others.max(axis=1) == 0]
+    assert len(missed) > 500
+    np.testing.assert_allclose(missed, 0.3, rtol=1e-6)

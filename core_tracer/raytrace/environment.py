@@ -1,0 +1,275 @@
+"""The world around the lamp: an equirectangular image looked up as Blender's Environment Texture.
+
+Cycles maps a direction to the image by ``direction_to_equirectangular`` (intern/cycles/kernel/
+geom/.. util: range (-2 pi, pi, -pi, pi)): u = -atan2(y, x) / 2 pi + 0.5, v = atan2(z, hypot(x, y))
+/ pi + 0.5, v = 1 the zenith, the image's top row; 'Linear' interpolation is bilinear between pixel
+centres with the image repeated at its borders. A Mapping node (Point) with Z rotation phi in
+front of it looks the image up at R_z(phi) d. The Background node multiplies by its strength. The
+tracer's model frame is Blender's world frame (the lamp faces -Y in both), so the same directions
+give the same radiance.
+
+The body is lit by the environment as a Lambertian surface: C0 E(n) / pi with E the irradiance
+of the environment, the cosine-weighted integral of its radiance over the hemisphere about n. E is
+a smooth function of n, so it is computed once per image and turn on a grid of normals (nodes every
+360/64 degrees of longitude and 180/32 of latitude, the six axis directions among them; the image
+area-averaged to at most 128 x 64 for the integral) and interpolated bilinearly between the nodes.
+Occlusion of the environment by the body itself is not modelled.
+
+Blender's own world images (``spec.BUNDLED_WORLDS``) ship with the ``bpy`` module at
+``bpy/<version>/datafiles/studiolights/world``; the folder is found from the installed package
+without importing it.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.util
+import math
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..scene.reading import SceneError
+from ..scene.spec import BUNDLED_WORLDS
+
+SUFFIXES = (".exr", ".hdr")
+WORLD_FOLDER = ("datafiles", "studiolights", "world")
+# The irradiance map: nodes every 2 pi / IRRADIANCE_LON in longitude, pi / IRRADIANCE_LAT in latitude.
+IRRADIANCE_LON, IRRADIANCE_LAT = 64, 32
+IRRADIANCE_SOURCE = (128, 64)  # the image is area-averaged to at most this for the integral
+# The sun of an image: the pixels at least this fraction of the brightest one (luminance).
+SUN_FRACTION = 0.5
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec. 709, Blender's scene-linear primaries
+
+
+def bundled_folder() -> Path | None:
+    """Blender's folder of world images: inside Blender its own, else the installed ``bpy`` module's;
+    None where neither is on this machine."""
+    running = _running_blender_folder()
+    if running is not None:
+        return running
+    try:
+        spec = importlib.util.find_spec("bpy")  # finds the package without importing it
+    except (ImportError, ValueError):
+        spec = None
+    roots = list(spec.submodule_search_locations or []) if spec is not None else []
+    for root in roots:
+        for version in sorted(Path(root).glob("[0-9]*"), reverse=True):
+            folder = version.joinpath(*WORLD_FOLDER)
+            if folder.is_dir():
+                return folder
+    return None
+
+
+def _running_blender_folder() -> Path | None:
+    # Inside Blender bpy is already loaded: ask it for its own data files (never import it here).
+    utils = getattr(sys.modules.get("bpy"), "utils", None)
+    if utils is None or not hasattr(utils, "system_resource"):
+        return None
+    try:
+        folder = utils.system_resource("DATAFILES", path="/".join(WORLD_FOLDER[1:]))
+    except (TypeError, ValueError, AttributeError):
+        return None
+    return Path(folder) if folder and os.path.isdir(folder) else None
+
+
+def image_path(env: dict) -> str:
+    """The file of a normalised ``environment`` section; a ``SceneError`` naming the field when it
+    cannot be read."""
+    world = env["world"]
+    if world in BUNDLED_WORLDS:
+        folder = bundled_folder()
+        if folder is None or not (folder / f"{world}.exr").is_file():
+            raise SceneError("environment.world", f'"{world}" is one of Blender\'s bundled world images, which are '
+                                                  'not on this machine (no bpy module found); allowed "none", or '
+                                                  '"file" with an .exr or .hdr image in environment.file')
+        return str(folder / f"{world}.exr")
+    path = os.path.expanduser(env["file"])
+    if not path:
+        raise SceneError("environment.file", 'is empty while world is "file"; allowed the path of an .exr or .hdr '
+                                             'image')
+    if os.path.splitext(path)[1].lower() not in SUFFIXES:
+        raise SceneError("environment.file", f"{path!r} is not an environment image; allowed an .exr or .hdr file")
+    if not os.path.isfile(path):
+        raise SceneError("environment.file", f"{path!r} does not exist; allowed an existing .exr or .hdr file")
+    return path
+
+
+@functools.lru_cache(maxsize=4)
+def _read(path: str, mtime_ns: int, size: int) -> np.ndarray:
+    """RGB float32 pixels (H, W, 3), top row first (``mtime_ns`` and ``size`` key the cache)."""
+    from ..images.imageio import oiio_module  # OpenImageIO only when an environment is used
+
+    oiio = oiio_module()
+    buf = oiio.ImageBuf(path)
+    pixels = buf.get_pixels(oiio.FLOAT) if not buf.has_error else None
+    if pixels is None or buf.has_error or pixels.ndim != 3 or pixels.shape[2] < 1:
+        raise SceneError("environment.file", f"{path!r} cannot be read as an image ({buf.geterror() or 'no pixels'}); "
+                                             "allowed an .exr or .hdr file")
+    if pixels.shape[2] < 3:
+        pixels = np.repeat(pixels[..., :1], 3, axis=2)
+    pixels = np.ascontiguousarray(pixels[..., :3], dtype=np.float32)
+    if not np.isfinite(pixels).all():
+        pixels = np.nan_to_num(pixels, nan=0.0, posinf=0.0, neginf=0.0)
+    pixels.setflags(write=False)
+    return pixels
+
+
+def _image_key(path: str) -> tuple[str, int, int]:
+    st = os.stat(path)
+    return path, st.st_mtime_ns, st.st_size
+
+
+def read_image(path: str) -> np.ndarray:
+    return _read(*_image_key(path))
+
+
+@dataclass(frozen=True)
+class Environment:
+    pixels: np.ndarray  # (H, W, 3) float32, top row first
+    strength: float
+    rotation: float  # radians about +z, the Mapping node's
+    key: tuple = ()  # the image file's (path, mtime, size): what it holds is computed once per image and turn
+
+    # -- looking up radiance ------------------------------------------------------------------
+
+    def texture_coordinates(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """u, v of unit directions ``d`` (N, 3) in the image, as Cycles (module docstring)."""
+        c, s = math.cos(self.rotation), math.sin(self.rotation)
+        x = c * d[:, 0] - s * d[:, 1]
+        y = s * d[:, 0] + c * d[:, 1]
+        u = -np.arctan2(y, x) / (2.0 * math.pi) + 0.5
+        v = np.arctan2(d[:, 2], np.hypot(x, y)) / math.pi + 0.5
+        return u, v
+
+    def radiance(self, d: np.ndarray) -> np.ndarray:
+        """Radiance (N, 3) arriving from unit directions ``d`` (N, 3): bilinear, repeated borders."""
+        u, v = self.texture_coordinates(d)
+        h, w = self.pixels.shape[:2]
+        # Cycles' bilinear lookup: pixel i covers [i, i + 1) of u W; v counts rows from the bottom.
+        x = u * w - 0.5
+        y = (1.0 - v) * h - 0.5
+        x0 = np.floor(x)
+        y0 = np.floor(y)
+        tx = (x - x0)[:, None]
+        ty = (y - y0)[:, None]
+        x0 = x0.astype(np.int64) % w
+        y0 = y0.astype(np.int64) % h
+        x1 = (x0 + 1) % w
+        y1 = (y0 + 1) % h
+        flat = self.pixels.reshape(-1, 3)  # take() on the flat rows: the same values as p[y, x], faster
+        y0 *= w
+        y1 *= w
+        top = flat.take(y0 + x0, axis=0) * (1.0 - tx) + flat.take(y0 + x1, axis=0) * tx
+        bottom = flat.take(y1 + x0, axis=0) * (1.0 - tx) + flat.take(y1 + x1, axis=0) * tx
+        return self.strength * (top * (1.0 - ty) + bottom * ty)
+
+    # -- what the image holds ------------------------------------------------------------------
+
+    def _pixel_directions(self) -> tuple[np.ndarray, np.ndarray]:
+        """World directions of the pixel centres (H*W, 3) and their solid angles (H*W,)."""
+        h, w = self.pixels.shape[:2]
+        u = (np.arange(w) + 0.5) / w
+        v = 1.0 - (np.arange(h) + 0.5) / h
+        phi = (0.5 - u) * 2.0 * math.pi  # texture azimuth: atan2(y, x) in the texture's frame
+        lat = (v - 0.5) * math.pi
+        lat, phi = np.meshgrid(lat, phi, indexing="ij")
+        t = np.stack([np.cos(lat) * np.cos(phi), np.cos(lat) * np.sin(phi), np.sin(lat)], axis=-1).reshape(-1, 3)
+        c, s = math.cos(self.rotation), math.sin(self.rotation)
+        world = np.stack([c * t[:, 0] + s * t[:, 1], -s * t[:, 0] + c * t[:, 1], t[:, 2]], axis=1)  # R_z(-phi) t
+        # The exact solid angle of each pixel's band of latitude: the pixels sum to 4 pi.
+        half = 0.5 * math.pi / h
+        solid = ((np.sin(lat + half) - np.sin(lat - half)) * (2.0 * math.pi / w)).reshape(-1)
+        return world, solid
+
+    @functools.cached_property
+    def _irradiance_map(self) -> np.ndarray:
+        """Irradiance at the grid's nodes, (IRRADIANCE_LAT + 1, IRRADIANCE_LON, 3)."""
+        unit = _cached_irradiance(self.key, self.rotation) if self.key else _irradiance(self.pixels, self.rotation)
+        return self.strength * unit
+
+    def irradiance(self, normal: np.ndarray) -> np.ndarray:
+        """Irradiance (N, 3) on surfaces of unit ``normal`` (N, 3) from the whole environment."""
+        x = (np.arctan2(normal[:, 1], normal[:, 0]) + math.pi) / (2.0 * math.pi) * IRRADIANCE_LON
+        y = (np.arcsin(np.clip(normal[:, 2], -1.0, 1.0)) + 0.5 * math.pi) / math.pi * IRRADIANCE_LAT
+        i0 = np.floor(x)
+        j0 = np.minimum(np.floor(y), IRRADIANCE_LAT - 1)
+        tx = (x - i0)[:, None]
+        ty = (y - j0)[:, None]
+        i0 = i0.astype(np.int64) % IRRADIANCE_LON
+        i1 = (i0 + 1) % IRRADIANCE_LON
+        j0 = j0.astype(np.int64)
+        m = self._irradiance_map
+        return ((m[j0, i0] * (1.0 - tx) + m[j0, i1] * tx) * (1.0 - ty)
+                + (m[j0 + 1, i0] * (1.0 - tx) + m[j0 + 1, i1] * tx) * ty)
+
+    def sun_direction(self) -> np.ndarray:
+        """Unit direction toward the image's sun: the solid-angle weighted centroid of its pixels of at
+        least ``SUN_FRACTION`` of the brightest luminance."""
+        if self.key:
+            return _cached_sun(self.key, self.rotation).copy()
+        return _sun_direction(self.pixels, self.rotation)
+
+
+def _pixel_directions(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray]:
+    return Environment(pixels, 1.0, rotation)._pixel_directions()
+
+
+def _irradiance(pixels: np.ndarray, rotation: float) -> np.ndarray:
+    """Irradiance of ``pixels`` at strength 1 at the nodes of the irradiance map (module docstring)."""
+    d, solid = _pixel_directions(pixels, rotation)
+    h, w = pixels.shape[:2]
+    weighted = pixels.reshape(-1, 3).astype(np.float64) * solid[:, None]
+    # Area-average to at most IRRADIANCE_SOURCE: sums of radiance x solid angle.
+    cols = np.linspace(0, w, min(w, IRRADIANCE_SOURCE[0]) + 1).astype(np.int64)[:-1]
+    rows = np.linspace(0, h, min(h, IRRADIANCE_SOURCE[1]) + 1).astype(np.int64)[:-1]
+
+    def blocks(a: np.ndarray) -> np.ndarray:
+        a = a.reshape(h, w, -1)
+        return np.add.reduceat(np.add.reduceat(a, rows, axis=0), cols, axis=1).reshape(-1, a.shape[-1])
+
+    power = blocks(weighted)
+    # Each block's light comes from its luminance-weighted mean direction: a sun keeps its place.
+    weight = (weighted @ LUMINANCE) + 1e-12 * solid
+    mean_dir = blocks(d * weight[:, None])
+    mean_dir /= np.linalg.norm(mean_dir, axis=1)[:, None]
+    lon = -math.pi + np.arange(IRRADIANCE_LON) * (2.0 * math.pi / IRRADIANCE_LON)
+    lat = -0.5 * math.pi + np.arange(IRRADIANCE_LAT + 1) * (math.pi / IRRADIANCE_LAT)
+    lat, lon = np.meshgrid(lat, lon, indexing="ij")
+    normals = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], axis=-1).reshape(-1, 3)
+    out = np.empty((len(normals), 3))
+    for start in range(0, len(normals), 256):  # bounded memory: 256 normals x the source's directions
+        cos = np.maximum(0.0, normals[start:start + 256] @ mean_dir.T)
+        out[start:start + 256] = cos @ power
+    return out.reshape(IRRADIANCE_LAT + 1, IRRADIANCE_LON, 3)
+
+
+def _sun_direction(pixels: np.ndarray, rotation: float) -> np.ndarray:
+    d, solid = _pixel_directions(pixels, rotation)
+    lum = pixels.reshape(-1, 3).astype(np.float64) @ LUMINANCE
+    sun = lum >= SUN_FRACTION * lum.max()
+    centre = ((lum * solid)[sun, None] * d[sun]).sum(axis=0)
+    norm = float(np.linalg.norm(centre))
+    return centre / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_irradiance(key: tuple, rotation: float) -> np.ndarray:
+    return _irradiance(_read(*key), rotation)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_sun(key: tuple, rotation: float) -> np.ndarray:
+    return _sun_direction(_read(*key), rotation)
+
+
+def from_scene(scene: dict) -> Environment | None:
+    """The environment of a normalised scene, or None for the paper's plain background."""
+    env = scene.get("environment")  # a scene an earlier version built in code has none
+    if env is None or env["world"] == "none":
+        return None
+    key = _image_key(image_path(env))
+    return Environment(_read(*key), float(env["strength"]), math.radians(env["rotation_deg"]), key)

@@ -1,0 +1,119 @@
+"""The sun: the light of equation (1) with a strength and a colour, and its phantom light.
+
+Equation (1) with the sun's strength s and colour S (the paper's light is s = 1, S = white):
+
+    [d + (1 - d) s S cos theta] C0 + s w (cos beta)^n C1
+
+computed by ``optics.phong`` itself when s = 1 and S = white, so that a scene an earlier version
+wrote renders bit for bit as before. Where an environment surrounds the lamp, the surfaces of eq.
+(1) are also lit by it as Lambertian surfaces, C0 E(n) / pi (``environment``).
+
+**Phantom light** (where the paper is silent): sunlight that enters through the lens and is
+scattered back by the reflector. At every reflector hit of an eye path the reflector's scatter of
+eq. (3) is added with the sun as the light: k w (cos beta_sun)^n I_sun T_sun, with I_sun = s S,
+beta_sun between the normal and the half vector of the sun and view directions, and T_sun the
+sun's transmittance into the lamp: the lens taken as a flat plate of its mean thickness
+(t + h / 2), so the sun's direction inside is the same as outside, with Fresnel transmission at
+both faces and absorption (eq. 2) along the refracted path, (1 - r)^2 exp(-A t_mean / cos theta_t).
+A reflector point is lit only when the sun is in front of the lamp and the line from the point
+toward the sun passes through the lens opening (its outline at the apex plane); the socket's and the
+bulb's shadows are not modelled. The mirror paths of the reflector that leave the lamp through
+the lens reach the sun where the environment image holds it (``environment``, path 10).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import optics, outline
+from .lamp_table import LampTable
+
+FRONT = np.array([0.0, -1.0, 0.0])  # the outward normal of the lens's outer face (MODEL.md §2)
+
+
+@dataclass(frozen=True)
+class Sun:
+    direction: np.ndarray  # unit, from the lamp toward the sun
+    highlight: np.ndarray  # C1 of eq. (1)
+    ambient: float
+    strength: float
+    color: np.ndarray  # S
+    paper: bool  # s = 1 and S = white: eq. (1) exactly as the paper's light
+
+    def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
+        """Equation (1) under the sun (module docstring); ``view`` and the sun's direction point away
+        from the surface. Returns (N, 3)."""
+        if self.paper:
+            return optics.phong(normal, view, self.direction, diffuse, self.highlight, self.ambient, specular,
+                                shininess)
+        L = self.direction
+        cos_theta = np.maximum(0.0, normal[:, 0] * L[0] + normal[:, 1] * L[1] + normal[:, 2] * L[2])
+        cos_beta = np.maximum(0.0, optics.dot(normal, optics.normalize(view + L)))
+        lit = self.ambient + (1.0 - self.ambient) * self.strength * cos_theta[:, None] * self.color
+        spec = np.where(cos_theta > 0.0, self.strength * np.asarray(specular) * np.power(cos_beta, shininess), 0.0)
+        return lit * diffuse + spec[:, None] * self.highlight
+
+    @property
+    def light(self) -> np.ndarray:
+        """I_sun of the phantom light: s S."""
+        return self.strength * self.color
+
+
+def from_scene(scene: dict, environment_sun: np.ndarray | None) -> Sun:
+    """The sun of a normalised scene; ``environment_sun`` is the direction of the environment's sun
+    when the light follows the environment."""
+    light = scene["light"]
+    if environment_sun is not None and light.get("follow_environment", False):
+        direction = np.asarray(environment_sun, dtype=np.float64)
+    else:
+        direction = np.asarray(light["direction"], dtype=np.float64)
+    direction = direction / np.linalg.norm(direction)
+    strength = float(light.get("strength", 1.0))
+    color = np.asarray(light.get("sun_color", (1.0, 1.0, 1.0)), dtype=np.float64)
+    return Sun(direction, np.asarray(light["color"], dtype=np.float64), light["ambient"], strength, color,
+               strength == 1.0 and bool((color == 1.0).all()))
+
+
+def sun_transmittance(sun: Sun, lamps: LampTable, lamp: np.ndarray) -> np.ndarray:
+    """T_sun (N, 3) of the lenses ``lamp`` (module docstring); 0 with the sun behind the lamp."""
+    cos_i = float(sun.direction @ FRONT)  # the angle of incidence on the outer face; > 0 in front
+    if cos_i <= 0.0 or sun.strength == 0.0:
+        return np.zeros((len(lamp), 3))
+    ior = lamps.ior[lamp]
+    r = optics.fresnel_reflectance(np.full(len(lamp), cos_i), 1.0, ior)
+    sin_t = np.sqrt(1.0 - cos_i * cos_i) / ior
+    cos_t = np.sqrt(1.0 - sin_t * sin_t)
+    thickness = 0.5 * (lamps.plane_a[lamp] + lamps.plane_b[lamp])
+    return ((1.0 - r) ** 2)[:, None] * optics.absorption(lamps.absorption[lamp], thickness / cos_t)
+
+
+def phantom(sun: Sun, lamps: LampTable, lamp: np.ndarray, hit: np.ndarray, normal: np.ndarray,
+            view: np.ndarray) -> np.ndarray:
+    """The phantom light (N, 3) per unit accumulated attenuation at reflector points ``hit`` (local
+    lamp coordinates) of normal ``normal`` seen from ``view`` (module docstring)."""
+    transmit = sun_transmittance(sun, lamps, lamp)
+    if not transmit.any():
+        return transmit
+    # The line toward the sun crosses the apex plane inside the lens opening.
+    to_plane = (lamps.plane_b[lamp] - hit[:, 1]) / sun.direction[1]
+    cross = hit + to_plane[:, None] * sun.direction
+    half, corner = lamps.half_size[lamp], lamps.corner[lamp]
+    inside = outline.signed_distance(cross[:, 0], cross[:, 2], half[:, 0] - corner, half[:, 1] - corner,
+                                     corner) <= 0.0
+    sun_dir = np.broadcast_to(sun.direction, hit.shape)
+    # Lit on the side the eye ray came from only (the normal turned toward the viewer).
+    toward_view = np.where((optics.dot(normal, view) < 0.0)[:, None], -normal, normal)
+    facing = optics.dot(toward_view, sun_dir) > 0.0
+    scatter = optics.blinn(toward_view, view, sun_dir, lamps.scatter[lamp], lamps.scatter_shininess[lamp])
+    return np.where((inside & facing)[:, None], scatter[:, None] * transmit * sun.light, 0.0)
+
+
+def sun_direction(scene: dict) -> np.ndarray:
+    """The unit direction toward the sun of a normalised scene: ``light.direction``, or the
+    environment's sun when the light follows it (reads the environment image)."""
+    from . import environment  # the image is read only when the light follows it
+
+    env = environment.from_scene(scene) if scene["light"].get("follow_environment", False) else None
+    return from_scene(scene, env.sun_direction() if env is not None else None).direction
