@@ -337,8 +337,9 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
             if part_normal is not None:
                 normal[nearer] = part_normal[nearer]
         else:
-            t, part_normal = part.intersect(seg, ctx.lamps, t_best[idx])
-            nearer = t < t_best[idx]
+            t_limit = t_best[idx]
+            t, part_normal = part.intersect(seg, ctx.lamps, t_limit)
+            nearer = t < t_limit
             hit = idx[nearer]
             t_best[hit] = t[nearer]
             surface[hit] = part.SURFACE
@@ -363,25 +364,27 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     band.note(rays.parent, rays.branch, cls)
 
     k = rays.k
-    lens = rays.medium == P.IN_LENS
-    if lens.any():
+    lens = np.nonzero(rays.medium == P.IN_LENS)[0]
+    if len(lens):
         k = k.copy()
         k[lens] *= optics.absorption(L.absorption[rays.lamp[lens]], t[lens])
-    hit = rays.o + np.where(np.isfinite(t), t, 0.0)[:, None] * rays.d
 
     for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, L.wall_color), (P.BULB, BULB_PASS, L.bulb_intensity),
                                 (P.SOCKET, SOCKET_PASS, L.socket_color)):
-        m = surface == sid
-        if m.any():
+        m = np.nonzero(surface == sid)[0]
+        if len(m):
             band.add(pass_id, rays.pix[m], k[m] * color[rays.lamp[m]])
 
+    # Only the rays that go on need their end point (their t is finite).
     children: list[_Rays] = []
     m = np.nonzero(surface == P.REFLECTOR)[0]
     if len(m):
-        children.append(_reflector(ctx, band, rays, m, k[m], hit[m], cls[m]))
+        hit = rays.o[m] + t[m, None] * rays.d[m]
+        children.append(_reflector(ctx, band, rays, m, k[m], hit, cls[m]))
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
-        children.extend(_dielectric(ctx, band, rays, m, k[m], hit[m], cls[m], surface[m], normal[m]))
+        hit = rays.o[m] + t[m, None] * rays.d[m]
+        children.extend(_dielectric(ctx, band, rays, m, k[m], hit, cls[m], surface[m], normal[m]))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]
@@ -399,16 +402,17 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     L = ctx.lamps
     li = rays.lamp[m]
     d = rays.d[m]
-    first = ~rays.seen_reflector[m]
-    band.add(REFLECTOR_CONSTANT, rays.pix[m][first], k[first] * L.reflector_color[li[first]])
+    pix = rays.pix[m]
+    first = np.nonzero(~rays.seen_reflector[m])[0]
+    band.add(REFLECTOR_CONSTANT, pix[first], k[first] * L.reflector_color[li[first]])
     normal = reflector.reflector_normal(hit, L.focal[li])
     to_bulb = optics.normalize(L.bulb_center[li] - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
-    band.add(REFLECTOR_SCATTER, rays.pix[m], k * scatter[:, None] * L.bulb_intensity[li])
+    band.add(REFLECTOR_SCATTER, pix, k * scatter[:, None] * L.bulb_intensity[li])
     k = k * L.reflectance[li, None]
     go = np.nonzero(_alive(k))[0]
     n = len(go)
-    return _Rays(pix=rays.pix[m[go]], lamp=li[go], o=hit[go], d=optics.reflect(d[go], normal[go]), k=k[go],
+    return _Rays(pix=pix[go], lamp=li[go], o=hit[go], d=optics.reflect(d[go], normal[go]), k=k[go],
                  medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls[go],
                  branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
@@ -423,24 +427,26 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     d = rays.d[m]
     medium = rays.medium[m]
     from_lens = medium == P.IN_LENS
-    facing = np.where(from_lens[:, None], -out_normal, out_normal)  # toward the incident side
+    # Toward the incident side: the normal negated for rays inside the lens (a sign flip is exact).
+    facing = out_normal * np.where(from_lens, -1.0, 1.0)[:, None]
     cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
-    n1 = np.where(from_lens, L.ior[li], 1.0)
-    n2 = np.where(from_lens, 1.0, L.ior[li])
+    ior = L.ior[li]
+    n1 = np.where(from_lens, ior, 1.0)
+    n2 = np.where(from_lens, 1.0, ior)
     r = optics.fresnel_reflectance(cos_i, n1, n2)
-    src = np.where(surface == P.OUTER, P.OUTER, P.CUT).astype(np.int8)
-    pix, seen = rays.pix[m], rays.seen_reflector[m]
+    src = surface  # OUTER or CUT: the surface hit is where the children start
     k_r = k * r[:, None]
     go = np.nonzero(_alive(k_r))[0]
-    out = [_Rays(pix=pix[go], lamp=li[go], o=hit[go], d=optics.reflect(d[go], facing[go]), k=k_r[go],
+    gm = m[go]
+    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=hit[go], d=optics.reflect(d[go], facing[go]), k=k_r[go],
                  medium=medium[go], src=src[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
-                 seen_reflector=seen[go])]
+                 seen_reflector=rays.seen_reflector[gm])]
     trans = np.nonzero(r < 1.0)[0]
     leaving = (surface[trans] == P.OUTER)
     # ⑩: out through the outer face, to the background (ends).
     lv = trans[leaving]
     if ctx.background_seen:
-        band.add(BACKGROUND_PASS, pix[lv], k[lv] * (1.0 - r[lv, None]) * ctx.background)
+        band.add(BACKGROUND_PASS, rays.pix[m[lv]], k[lv] * (1.0 - r[lv, None]) * ctx.background)
     band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
     k_t = k[tc] * (1.0 - r[tc, None])
@@ -448,8 +454,9 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     tc, k_t = tc[go], k_t[go]
     if len(tc):
         eta = n1[tc] / n2[tc]
-        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
-                         k=k_t, medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS)
-                         .astype(np.int8), src=src[tc], parent=cls[tc],
-                         branch=np.full(len(tc), P.TRANSMITTED, np.int8), seen_reflector=seen[tc]))
+        tm = m[tc]
+        out.append(_Rays(pix=rays.pix[tm], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
+                         k=k_t, medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS).astype(np.int8),
+                         src=src[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
+                         seen_reflector=rays.seen_reflector[tm]))
     return out

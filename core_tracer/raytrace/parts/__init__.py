@@ -4,8 +4,10 @@ by walking ``PARTS``, each part given the rays of its media, so a new part type 
 and one entry in ``PARTS``; no loop changes.
 
 Order matters in one way: each part is given the nearest hit of the parts before it as a limit,
-and the cut walk stops there, so the side wall, which bounds the cuts, comes first. Ties keep the
-earlier part. The body box (``body_box``) is not in the table: only eye rays, in the world frame,
+and the cut walk stops there, so the side wall, which bounds the cuts, comes first, and the cheap
+closed-form parts of the air (reflector, bulb, socket) come before the walk: an air ray bound for
+the bulb or the reflector then never walks the cells. Ties keep the earlier part (the cuts touch
+none of those three). The body box (``body_box``) is not in the table: only eye rays, in the world frame,
 meet it.
 """
 
@@ -14,4 +16,4 @@ from __future__ import annotations
 from . import bulb, cuts, outer_face, reflector, side_wall, socket
 from .base import Part
 
-PARTS: tuple[Part, ...] = (side_wall, cuts, outer_face, reflector, bulb, socket)
+PARTS: tuple[Part, ...] = (side_wall, reflector, bulb, socket, cuts, outer_face)
