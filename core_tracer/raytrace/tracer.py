@@ -259,7 +259,8 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
         offsets = pixel_filter.sample_offsets(ctx.filter_name, ray_pixels, ray_samples, ctx.samples)
         group = _Band(len(ray_pixels), ctx)
         _trace_rays(ctx, group, *eye_rays(cam, ray_pixels, offsets))
-        band.acc += _over_samples(np.add, group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3))
+        per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3)
+        band.acc += _over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
         band.transitions |= group.transitions
@@ -278,19 +279,21 @@ def pilot_samples(samples: int) -> np.ndarray:
 
 def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray, sample_ids: np.ndarray) -> np.ndarray:
     """Trace the samples ``sample_ids`` of every pixel (groups of at most TILE_RAYS rays, whole
-    pixels to a group): each ray's passes (passes, pixels, samples, 3); the band's statistics
-    take the rays' counts."""
+    pixels to a group): each ray's passes, sample-major (samples, passes, pixels, 3), so that one
+    sample of every pixel is one contiguous block; the band's statistics take the rays' counts.
+    Every ray has its own slot, so the order of the rays changes no value."""
     count = len(sample_ids)
-    values = np.empty((len(PASS_NAMES), len(pixels), count, 3))
+    values = np.empty((count, len(PASS_NAMES), len(pixels), 3))
     per_group = max(1, TILE_RAYS // count)
     for i0 in range(0, len(pixels), per_group):
         group_pixels = pixels[i0:i0 + per_group]
-        ray_pixels = np.repeat(group_pixels, count)
-        offsets = pixel_filter.sample_offsets(ctx.filter_name, ray_pixels, np.tile(sample_ids, len(group_pixels)),
+        ray_pixels = np.tile(group_pixels, count)
+        offsets = pixel_filter.sample_offsets(ctx.filter_name, ray_pixels, np.repeat(sample_ids, len(group_pixels)),
                                               ctx.samples)
         group = _Band(len(ray_pixels), ctx)
         _trace_rays(ctx, group, *eye_rays(ctx.camera, ray_pixels, offsets))
-        values[:, i0:i0 + len(group_pixels)] = group.acc.reshape(len(PASS_NAMES), len(group_pixels), count, 3)
+        values[:, :, i0:i0 + len(group_pixels)] = (group.acc.reshape(len(PASS_NAMES), count, len(group_pixels), 3)
+                                                   .transpose(1, 0, 2, 3))
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
         band.transitions |= group.transitions
@@ -316,7 +319,7 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
     low = _neighbourhood(_over_samples(np.minimum, pilot_values).transpose(1, 0, 2).reshape(shape), np.minimum)
     high = _neighbourhood(_over_samples(np.maximum, pilot_values).transpose(1, 0, 2).reshape(shape), np.maximum)
     inner = slice((y0 - top) * width, (y1 - top) * width)
-    pilot_values = pilot_values[:, inner]
+    pilot_values = pilot_values[:, :, inner]
     pilot_mean = _over_samples(np.add, pilot_values) / len(pilot)
     brightness = pilot_mean.sum(axis=0).max(axis=1)
     spread = (high - low).reshape(-1, len(PASS_NAMES) * 3)[inner]
@@ -328,19 +331,22 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
     chunk = max(1, TILE_RAYS // ctx.samples)
     for c0 in range(0, len(busy), chunk):
         idx = busy[c0:c0 + chunk]
-        values = np.empty((len(PASS_NAMES), len(idx), ctx.samples, 3))
-        values[:, :, pilot] = pilot_values[:, idx]
-        values[:, :, rest] = _per_sample(ctx, band, pixels[idx], rest)
-        band.acc[:, idx] = _over_samples(np.add, values) / ctx.samples
+        traced = _per_sample(ctx, band, pixels[idx], rest)
+        by_sample = {int(k): traced[i] for i, k in enumerate(rest)}
+        by_sample.update({int(k): pilot_values[i][:, idx] for i, k in enumerate(pilot)})
+        total = by_sample[0].copy()
+        for k in range(1, ctx.samples):  # in sample order, as ``_over_samples`` and the full path
+            total += by_sample[k]
+        band.acc[:, idx] = total / ctx.samples
 
 
 def _over_samples(combine: np.ufunc, values: np.ndarray) -> np.ndarray:
-    """``combine`` (np.add, np.minimum, np.maximum) of (passes, pixels, samples, 3) values over
-    the samples, in sample order: what ``values.sum(axis=2)`` gives, bit for bit, without numpy's
-    slow reduction over a middle axis."""
-    out = values[:, :, 0].copy()
-    for k in range(1, values.shape[2]):
-        combine(out, values[:, :, k], out=out)
+    """``combine`` (np.add, np.minimum, np.maximum) of sample-major (samples, passes, pixels, 3)
+    values over the samples, in sample order: bit for bit what the full path's sum over the
+    samples gives."""
+    out = values[0].copy()
+    for k in range(1, len(values)):
+        combine(out, values[k], out=out)
     return out
 
 
