@@ -169,9 +169,14 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                    adaptive_threshold)
     passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
     image = np.zeros((height, width, 3), dtype=np.float32)
-    # Adaptive sampling traces the pilot samples of a band at once, then all samples of its busy pixels.
-    rays_per_pixel = len(pilot_samples(samples)) if adaptive_threshold > 0 else samples
-    rows_per_band = max(1, TILE_RAYS // (width * rays_per_pixel))
+    # Adaptive sampling traces the pilot samples of a band at once, then the rest of its busy pixels;
+    # it also traces the row above and below its band: the band and those two rows
+    # fit one group of rays, since every call of the wavefront pays for its tail of deep branches.
+    adaptive = adaptive_threshold > 0 and len(pilot_samples(samples)) < samples
+    if adaptive:
+        rows_per_band = max(1, TILE_RAYS // (width * len(pilot_samples(samples))) - 2)
+    else:
+        rows_per_band = max(1, TILE_RAYS // (width * samples))
     bands = [(y, min(height, y + rows_per_band)) for y in range(0, height, rows_per_band)]
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
     stats = {"segments": 0, "max_depth": 0, "transitions": set(), "busy_pixels": 0}
@@ -328,7 +333,7 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
     band.busy = len(busy)
     pixels = np.arange(y0 * width, y1 * width)
     rest = np.setdiff1d(np.arange(ctx.samples), pilot)
-    chunk = max(1, TILE_RAYS // ctx.samples)
+    chunk = max(1, TILE_RAYS // len(rest))
     for c0 in range(0, len(busy), chunk):
         idx = busy[c0:c0 + chunk]
         traced = _per_sample(ctx, band, pixels[idx], rest)
