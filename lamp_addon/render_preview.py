@@ -1,11 +1,14 @@
-"""The viewport preview's stages: a coarse image first, then full resolution, off the main thread.
+"""The viewport preview's stages: a coarse image first, then full resolution, then full resolution
+with more samples per pixel (smooth edges), off the main thread.
 
 One ``PreviewJob`` renders one view of one design: its stages in order, each a whole image at
-1/divisor of the region's size. ``ProgressivePreview`` keeps the current job: ``restart`` cancels
-it (the tracer polls ``should_stop`` between bands, so a stale job stops within a band) and starts
-the new one; each finished stage of the current job is published as a ``Frame``. Stages run
-either on a worker thread (``start``, what the engine does: numpy releases the GIL, so Blender's
-UI keeps running) or in the caller's thread one at a time (``step``, what the tests do).
+1/divisor of the region's size and some samples per pixel (the refined stage uses the tracer's
+adaptive sampling, so its samples go to edges, creases and bulb images). ``ProgressivePreview``
+keeps the current job: ``restart`` cancels it (the tracer polls ``should_stop`` between bands,
+so a stale job stops within a band) and starts the new one; each finished stage of the current
+job is published as a ``Frame``. Stages run either on a worker thread (``start``, what the
+engine does: numpy releases the GIL, so Blender's UI keeps running) or in the caller's thread
+one at a time (``step``, what the tests do).
 
 No ``bpy`` here: the engine reads Blender on the main thread and hands this module plain scene
 dicts; the worker never touches Blender.
@@ -27,6 +30,10 @@ from ..core_tracer.scene.reading import SceneError
 # 1/4 of that region takes 2-3 times as long (benchmarks/bench_viewport.py). A budget rather than
 # a fixed fraction keeps the first image as quick in a full-screen 4K viewport.
 COARSE_PIXELS = 128 * 96
+# The refined stage's samples per pixel: as many as an F12 render with smooth edges takes; with
+# adaptive sampling a 1024x768 region costs about 3 to 5 full-resolution stages
+# (benchmarks/bench_viewport.py). Edits and view changes restart from the coarse stage as before.
+REFINE_SAMPLES = 16
 
 
 def coarse_divisor(width: int, height: int) -> int:
@@ -38,8 +45,15 @@ def coarse_divisor(width: int, height: int) -> int:
 
 
 def stages_for(width: int, height: int) -> tuple[int, ...]:
-    """The divisors of a region's stages: coarse, then full resolution."""
+    """The divisors of a region's one-sample stages: coarse, then full resolution."""
     return (coarse_divisor(width, height), 1)
+
+
+def stage_plan(divisors: tuple[int, ...], refine_samples: int) -> tuple[tuple[int, int], ...]:
+    """(divisor, samples per pixel) of each stage in order: the one-sample ``divisors``, then the
+    full resolution at ``refine_samples`` when that is more than one."""
+    plan = tuple((divisor, 1) for divisor in divisors)
+    return plan + ((1, refine_samples),) if refine_samples > 1 else plan
 
 
 @dataclass(frozen=True)
@@ -50,6 +64,7 @@ class Frame:
     stage: int  # index into the job's stages
     divisor: int  # the image is 1/divisor of the region's size
     image: np.ndarray
+    samples: int = 1  # samples per pixel it was rendered with
 
 
 def stage_size(width: int, height: int, divisor: int) -> tuple[int, int]:
@@ -61,14 +76,16 @@ class PreviewJob:
     """The stages of one view of one design, run in order until done or cancelled."""
 
     def __init__(self, scene: dict, width: int, height: int, generation: int,
-                 divisors: tuple[int, ...] | None = None, threads: int | None = None, renderer=None):
+                 divisors: tuple[int, ...] | None = None, threads: int | None = None,
+                 refine_samples: int = REFINE_SAMPLES, renderer=None):
         self.scene = scene
         # render_passes' stand-in for a scene it does not trace itself (free-form parts,
         # lamp_addon.freeform_render), called with the same arguments
         self.renderer = renderer or render_passes
         self.width, self.height = width, height
         self.generation = generation
-        self.divisors = divisors if divisors is not None else stages_for(width, height)
+        self.stages = stage_plan(divisors if divisors is not None else stages_for(width, height), refine_samples)
+        self.divisors = tuple(divisor for divisor, _ in self.stages)
         self.threads = threads
         self.next_stage = 0
         self._cancel = threading.Event()
@@ -89,23 +106,25 @@ class PreviewJob:
         if self.done or self.cancelled:
             return None
         stage = self.next_stage
-        divisor = self.divisors[stage]
+        divisor, samples = self.stages[stage]
         width, height = stage_size(self.width, self.height, divisor)
         try:
             result = self.renderer(self.scene, width, height, should_stop=self._cancel.is_set,
-                                   threads=self.threads, keep_passes=False)
+                                   threads=self.threads, keep_passes=False, samples=samples)
         except RenderCancelled:
             return None
         self.next_stage += 1
-        return Frame(self.generation, stage, divisor, result.image)
+        return Frame(self.generation, stage, divisor, result.image, samples)
 
 
 class ProgressivePreview:
     """The current preview job and the newest frame it (or an earlier job) finished."""
 
-    def __init__(self, divisors: tuple[int, ...] | None = None, threads: int | None = None):
+    def __init__(self, divisors: tuple[int, ...] | None = None, threads: int | None = None,
+                 refine_samples: int = REFINE_SAMPLES):
         self.divisors = divisors  # None: ``stages_for`` the region of each restart
         self.threads = threads
+        self.refine_samples = refine_samples  # of the last stage; 1: no refined stage
         self.history: list[tuple[int, int]] = []  # (generation, stage) of each published frame
         self.error: str | None = None  # what stopped the last job, if it failed
         self._lock = threading.Lock()
@@ -123,7 +142,8 @@ class ProgressivePreview:
             if self._job is not None:
                 self._job.cancel()
             self._generation += 1
-            self._job = PreviewJob(scene, width, height, self._generation, self.divisors, self.threads, renderer)
+            self._job = PreviewJob(scene, width, height, self._generation, self.divisors, self.threads,
+                                   self.refine_samples, renderer)
             self.error = None
 
     def cancel(self) -> None:

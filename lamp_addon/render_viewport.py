@@ -3,9 +3,9 @@
 One ``ViewportSession`` per viewport engine instance. On every depsgraph update (``update``) it
 reads the design from the scene's properties; on every redraw (``sync``) it makes the tracer's
 camera from the region's own matrices (``convert.viewport``) in the design's model space, and
-restarts the progressive preview (``render_preview``) when the design, the view or the region
-changed. The preview renders on a worker thread; a timer on the main thread asks for a redraw
-when a stage finishes, and ``draw_frame`` draws the newest image.
+restarts the progressive preview (``render_preview``: coarse, full resolution, then more samples
+per pixel) when the design, the view or the region changed. The preview renders on a worker
+thread; a timer on the main thread asks for a redraw when a stage finishes, and ``draw_frame`` draws the newest image.
 
 The image is drawn as a float texture of scene-linear values inside the engine's
 ``bind_display_space_shader``, as Blender's API asks of viewport engines; Blender then applies the
@@ -147,8 +147,10 @@ class ViewportSession:
         frame = self.preview.frame()
         if frame is None or frame.generation != self.preview.generation:
             return "Lamp Tracer: rendering"
+        if frame.divisor == 1 and frame.samples > 1:
+            return f"Lamp Tracer: full resolution, {frame.samples} samples per pixel"
         if frame.divisor == 1:
-            return "Lamp Tracer: full resolution"
+            return "Lamp Tracer: full resolution" + (", refining" if self.preview.busy() else "")
         return f"Lamp Tracer: 1/{frame.divisor} resolution, refining"
 
     def draw_frame(self, engine: bpy.types.RenderEngine, bl_scene: bpy.types.Scene, width: int, height: int) -> None:

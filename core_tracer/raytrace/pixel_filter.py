@@ -14,6 +14,8 @@ threads, and no repeating pattern from pixel to pixel that could show as moiré.
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 # Cycles' default pixel filter is Blackman-Harris of width 1.5 px; its filter table doubles the
@@ -45,8 +47,10 @@ def filter_weight(name: str, offset: np.ndarray) -> np.ndarray:
     return np.where(inside, w, 0.0)
 
 
+@cache
 def _inverse_cdf_table(name: str) -> tuple[np.ndarray, np.ndarray]:
-    """(cumulative distribution, offset) of the normalised 1-D filter, for ``np.interp``."""
+    """(cumulative distribution, offset) of the normalised 1-D filter, for ``np.interp``; made once
+    per filter (the arrays are shared: never written)."""
     half = filter_support(name)
     x = np.linspace(-half, half, _TABLE_POINTS)
     f = filter_weight(name, x)

@@ -248,7 +248,13 @@ def _four_lamps() -> dict:
     return core_tracer.parse_scene(_four_lamps_doc())
 
 
-def test_stages_run_coarse_then_full(lamp_addon):
+def _refined(lamp_addon, scene: dict, width: int, height: int) -> np.ndarray:
+    """The refined stage's image: full resolution at the preview's samples per pixel."""
+    samples = lamp_addon.render_preview.REFINE_SAMPLES
+    return core_tracer.render_passes(scene, width, height, samples=samples, keep_passes=False).image
+
+
+def test_stages_run_coarse_then_full_then_refined(lamp_addon):
     scene = _four_lamps()
     preview = lamp_addon.render_preview.ProgressivePreview(divisors=(8, 1), threads=1)
     assert not preview.step() and preview.frame() is None  # nothing to do before a restart
@@ -261,10 +267,42 @@ def test_stages_run_coarse_then_full(lamp_addon):
     assert preview.take_news() and not preview.take_news()  # one redraw per finished stage
     assert preview.step()
     full = preview.frame()
-    assert (full.stage, full.divisor) == (1, 1)
+    assert (full.stage, full.divisor, full.samples) == (1, 1, 1)
     np.testing.assert_array_equal(full.image, core_tracer.render(scene, 64, 48))
+    assert preview.busy()  # more samples per pixel to come
+    assert preview.step()
+    refined = preview.frame()
+    assert (refined.stage, refined.divisor, refined.samples) == (2, 1, lamp_addon.render_preview.REFINE_SAMPLES)
+    np.testing.assert_array_equal(refined.image, _refined(lamp_addon, scene, 64, 48))
     assert not preview.step() and not preview.busy()
-    assert preview.history == [(1, 0), (1, 1)]
+    assert preview.history == [(1, 0), (1, 1), (1, 2)]
+
+
+def test_an_edit_during_refinement_restarts_from_the_coarse_stage(lamp_addon):
+    scene = _four_lamps()
+    edited = core_tracer.parse_scene({**_four_lamps_doc(), "background": [0.2, 0.3, 0.4]})
+    preview = lamp_addon.render_preview.ProgressivePreview(divisors=(8, 1), threads=1)
+    preview.restart(scene, 64, 48)
+    preview.step()
+    preview.step()  # full resolution; the refined stage is next
+    refining = preview.job
+    preview.restart(edited, 64, 48)
+    assert refining.cancelled and refining.run_next_stage() is None  # its refined stage never runs
+    while preview.step():
+        pass
+    assert preview.history == [(1, 0), (1, 1), (2, 0), (2, 1), (2, 2)]
+    np.testing.assert_array_equal(preview.frame().image, _refined(lamp_addon, edited, 64, 48))
+
+
+def test_without_refinement_the_stages_end_at_full_resolution(lamp_addon):
+    rp = lamp_addon.render_preview
+    assert rp.stage_plan((8, 1), 16) == ((8, 1), (1, 1), (1, 16))
+    assert rp.stage_plan((8, 1), 1) == ((8, 1), (1, 1))
+    preview = rp.ProgressivePreview(divisors=(8, 1), threads=1, refine_samples=1)
+    preview.restart(_four_lamps(), 64, 48)
+    while preview.step():
+        pass
+    assert preview.history == [(1, 0), (1, 1)] and preview.frame().samples == 1
 
 
 def test_an_edit_restarts_from_the_coarse_stage(lamp_addon):
@@ -352,8 +390,8 @@ def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_s
     assert session.preview.generation == 4
     while session.preview.step():
         pass
-    assert session.preview.history == [(1, 0), (4, 0), (4, 1)]
-    assert session.status() == "Lamp Tracer: full resolution"
+    assert session.preview.history == [(1, 0), (4, 0), (4, 1), (4, 2)]
+    assert session.status() == "Lamp Tracer: full resolution, 16 samples per pixel"
     assert session.preview.frame().image.shape == (48, 80, 3)
 
 
@@ -422,7 +460,7 @@ def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) 
     from tools.make_docs_images import draw_viewport
 
     out = draw_viewport(bpy, lamp_addon, bl_scene, width, height, window, view)
-    assert out["status"] == "Lamp Tracer: full resolution"
+    assert out["status"] == "Lamp Tracer: full resolution, 16 samples per pixel"
     return out
 
 
@@ -466,7 +504,7 @@ def test_drawn_pixels_are_the_tracers_image_under_the_view_transform(lamp_addon,
     lamp_addon.design_properties.scene_to_design(bl_scene, _four_lamps())
     window, view = _three_quarter_view(width, height)
     drawn = _draw_viewport(lamp_addon, bl_scene, width, height, window, view)
-    traced = core_tracer.render(drawn["scene"], width, height)
+    traced = _refined(lamp_addon, drawn["scene"], width, height)
     assert traced.max() > 5.0  # lit lenses in view, far above display white
 
     pixels = drawn["pixels"]  # bottom row first, as the GPU stores it
@@ -493,7 +531,7 @@ def test_drawn_pixels_under_agx_match_the_tracers_image_under_agx(lamp_addon, bl
     lamp_addon.design_properties.scene_to_design(bl_scene, _four_lamps())
     window, view = _three_quarter_view(width, height)
     drawn = _draw_viewport(lamp_addon, bl_scene, width, height, window, view)
-    traced = core_tracer.render(drawn["scene"], width, height)
+    traced = _refined(lamp_addon, drawn["scene"], width, height)
     settings = bl_scene.view_settings
     settings.view_transform, settings.look, settings.exposure = "AgX", "None", 0.0
     shown = _display(bl_scene, drawn["pixels"], tmp_path / "agx-drawn.png")
@@ -532,8 +570,8 @@ def test_stages_on_the_worker_thread(lamp_addon):
     preview.restart(scene, 64, 48)
     preview.start()
     preview.wait()
-    assert preview.history == [(1, 0), (1, 1)] and not preview.busy() and preview.take_news()
-    np.testing.assert_array_equal(preview.frame().image, core_tracer.render(scene, 64, 48))
+    assert preview.history == [(1, 0), (1, 1), (1, 2)] and not preview.busy() and preview.take_news()
+    np.testing.assert_array_equal(preview.frame().image, _refined(lamp_addon, scene, 64, 48))
 
     preview.restart(scene, 640, 480)
     preview.start()
@@ -541,7 +579,7 @@ def test_stages_on_the_worker_thread(lamp_addon):
     published_before = len(preview.history)
     preview.start()
     preview.wait()
-    assert preview.history[published_before:] == [(3, 0), (3, 1)]
+    assert preview.history[published_before:] == [(3, 0), (3, 1), (3, 2)]
     assert preview.frame().image.shape == (40, 64, 3)
 
 

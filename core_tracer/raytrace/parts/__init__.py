@@ -6,10 +6,12 @@ and one entry in ``PARTS``; no loop changes.
 Order matters in one way: each part is given the nearest hit of the parts before it as a limit,
 and the cut walk stops there, so the side wall, which bounds the cuts, comes first; only the housing of
 a prism-plate lamp precedes it (the same cylinder behind the plate: the tie keeps the housing).
-The prism plate's faces come before the cuts: a ray inside the plate or behind it then
-gives the cut walk a limit short of the cuts, and the walk does nothing for it (the plate and the
-cuts never touch: the plate's gap is > 0). Ties keep the earlier part. The body box (``body_box``)
-is not in the table: only eye rays, in the world frame, meet it.
+The prism plate's faces come before the cuts: a ray inside the plate or behind it then gives the cut
+walk a limit short of the cuts, and the walk does nothing for it (the plate and the cuts never touch:
+the plate's gap is > 0). The cheap closed-form parts of the air (reflector, bulb, socket) come before
+the walk too: an air ray bound for the bulb or the reflector then never walks the cells. Ties keep the
+earlier part (the cuts touch none of those). The body box (``body_box``) is not in the table: only
+eye rays, in the world frame, meet it.
 """
 
 from __future__ import annotations
@@ -18,5 +20,5 @@ from . import bulb, cut_surface, housing, outer_face, plate_front, prism_rings, 
 from .base import Part
 
 # ``cut_surface`` hands each ray to its lamp's cut type: ``cuts`` (fish-eye), ``sawtooth`` or ``flutes``.
-PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, cut_surface, outer_face, reflector, bulb,
-                           socket)
+PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, reflector, bulb, socket, cut_surface,
+                           outer_face)

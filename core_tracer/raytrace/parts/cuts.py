@@ -116,7 +116,7 @@ class _CellWalk:
         "si", "sj",  # sign of dx, dz: the step to the next cell
         # Per-ray constants of the cap roots (``cap_hits``): a_y = o_y - plane B, and the terms
         # of b and c that do not depend on the cell, computed once in the same order.
-        "ay_dy", "rho_dy", "ay_ay", "two_rho_ay", "rho",
+        "ay_dy", "rho_dy", "ay_ay", "two_rho_ay",
         "i", "j",  # current cell
         "t_cell",  # where the ray enters the current cell
         "t_out",  # where it leaves the slab (or meets the side wall)
@@ -157,15 +157,19 @@ class _CellWalk:
             t_out[parallel] = np.where(in_slab, np.inf, -np.inf)
         np.maximum(t_in, 0.0, out=t_in)
         np.minimum(t_out, pick(t_limit), out=t_out)
-        live = np.nonzero(t_in <= t_out)[0]
-        ray, t_in, t_out = ray[live], t_in[live], t_out[live]
+        live = t_in <= t_out
+        all_live = every and bool(live.all())  # every ray crosses the slab: no gathers at all
+        if not all_live:
+            live = np.nonzero(live)[0]
+            ray, t_in, t_out = ray[live], t_in[live], t_out[live]
+        take = (lambda a: a) if all_live else (lambda a: a[ray])
 
         state = np.empty((len(cls.ROWS), len(ray)))
         row = dict(zip(cls.ROWS, state, strict=True))
-        oo, dd = o[ray], d[ray]
-        ox, oz, dx, dz, p, r = row["ox"], row["oz"], row["dx"], row["dz"], row["p"], row["rho"]
-        ox[:], oz[:], dx[:], dz[:], p[:], r[:] = oo[:, 0], oo[:, 2], dd[:, 0], dd[:, 2], pitch[ray], rho[ray]
-        ay, dy = oo[:, 1] - plane_b[ray], dd[:, 1]
+        ox, oz, dx, dz, p = row["ox"], row["oz"], row["dx"], row["dz"], row["p"]
+        ox[:], oz[:], dx[:], dz[:], p[:] = take(o[:, 0]), take(o[:, 2]), take(d[:, 0]), take(d[:, 2]), take(pitch)
+        r = take(rho)
+        ay, dy = take(o[:, 1]) - take(plane_b), take(d[:, 1])
         row["ay_dy"][:], row["rho_dy"][:] = ay * dy, r * dy
         row["ay_ay"][:], row["two_rho_ay"][:] = ay * ay, 2.0 * r * ay
         i = np.floor((ox + t_in * dx) / p + 0.5, out=row["i"])

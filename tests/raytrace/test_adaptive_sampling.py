@@ -1,0 +1,68 @@
+"""Adaptive sampling (tracer._trace_adaptive): samples spent where the image changes, the result
+within a stated tolerance of tracing every sample, the same on every run and with any threads."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import PRESETS
+
+from core_tracer import load_scene
+from core_tracer.raytrace import tracer
+from core_tracer.raytrace.tracer import pilot_samples, render_passes
+
+# Measured at 96 x 64 and 16 samples: at most 8e-5 of the peak, 7e-5 of the mean (README).
+MAX_OF_PEAK = 5e-4
+MEAN_OF_MEAN = 3e-4
+
+
+def _render(case: str, threshold: float | None, size=(96, 64), **kw):
+    return render_passes(load_scene(PRESETS / f"{case}.json"), *size, samples=16, keep_passes=False,
+                         adaptive_threshold=threshold, **kw)
+
+
+@pytest.mark.parametrize("case", ["four-lamp-rear-combination", "paper-baseline"])
+def test_adaptive_agrees_with_every_sample_and_traces_less(case):
+    full, adaptive = _render(case, 0.0), _render(case, None)
+    error = np.abs(adaptive.image.astype(np.float64) - full.image)
+    assert error.max() <= MAX_OF_PEAK * full.image.max()
+    assert error.mean() <= MEAN_OF_MEAN * full.image.mean()
+    pixels = 96 * 64
+    assert full.stats["busy_pixels"] == 0 and 0 < adaptive.stats["busy_pixels"] < pixels
+    assert adaptive.stats["segments"] < 0.9 * full.stats["segments"]
+
+
+def test_a_lax_threshold_is_visibly_wrong():
+    """The tolerance above tells adaptive sampling from a careless one: at a threshold of one
+    whole brightness, pixels across lens rims keep their few pilot samples."""
+    full, lax = _render("four-lamp-rear-combination", 0.0), _render("four-lamp-rear-combination", 1.0)
+    assert np.abs(lax.image.astype(np.float64) - full.image).max() > 10 * MAX_OF_PEAK * full.image.max()
+
+
+def test_pixels_taking_every_sample_are_the_full_render():
+    """With the smallest threshold every pixel whose pilot samples differ at all takes every
+    sample, summed as without adaptive sampling; the others are flat, their mean of 4 equal
+    values rounding as the mean of 16 does at most."""
+    full, strict = _render("four-lamp-rear-combination", 0.0), _render("four-lamp-rear-combination", 1e-300)
+    np.testing.assert_allclose(strict.image, full.image, rtol=1e-6, atol=0)
+
+
+def test_adaptive_is_the_same_whatever_the_threads_and_bands(monkeypatch):
+    one = _render("four-lamp-rear-combination", None, size=(40, 30), threads=1).image
+    monkeypatch.setattr(tracer, "TILE_RAYS", 300)  # bands of 1-2 rows, pilot groups split mid-row
+    many = _render("four-lamp-rear-combination", None, size=(40, 30), threads=2).image
+    np.testing.assert_array_equal(one, many)
+
+
+def test_one_sample_is_never_adaptive():
+    scene = load_scene(PRESETS / "four-lamp-rear-combination.json")
+    a = render_passes(scene, 40, 30, keep_passes=False, adaptive_threshold=0.5).image
+    b = render_passes(scene, 40, 30, keep_passes=False, adaptive_threshold=0.0).image
+    np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("samples", [5, 16, 64])
+def test_pilot_samples_spread_over_the_pixel(samples):
+    pilot = pilot_samples(samples)
+    assert len(pilot) == 4 and pilot[0] == 0 and pilot[-1] == samples - 1
+    assert len(set(pilot.tolist())) == 4
