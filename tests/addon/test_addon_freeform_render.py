@@ -146,12 +146,15 @@ def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_ad
     session.update(bl_scene, depsgraph)
     assert session.freeform is not None and session.freeform.geometry is not None
     session.sync(bl_scene, SIZE[0], SIZE[1], window, view)
-    while session.preview.step():
+    while session.preview.step() and session.preview.frame().divisor != 1:
         pass
-    assert session.status() == "Lamp Tracer: full resolution"
+    assert session.status() == "Lamp Tracer: full resolution, refining"  # 16 samples per pixel next
     shown = session.preview.frame().image
+    while session.preview.step():  # the refined stage, more samples per pixel
+        pass
+    assert session.status() == "Lamp Tracer: full resolution, 16 samples per pixel"
     cache = session.freeform.geometry.cache
-    assert cache.builds == 1  # both stages on one structure
+    assert cache.builds == 1  # every stage on one structure
     # The viewport's view is the scene camera's: its image is the F12 image up to the camera's
     # float32 round trip through the view matrices.
     expected = _expected(lamp_addon, bl_scene)
