@@ -26,7 +26,7 @@ from . import environment, optics, pixel_filter, sunlight
 from . import paths as P
 from .camera import Camera, eye_rays, make_camera
 from .lamp_table import LampTable
-from .parts import PARTS, body_box, outer_face, reflector
+from .parts import body_box, outer_face, parts_for, reflector
 from .parts.base import Segments
 from .parts.cylinder_lens import outward_normal
 
@@ -98,6 +98,7 @@ class _Context:
         self.filter_name = filter_name
         self.adaptive_threshold = adaptive_threshold
         self.lamps = LampTable.from_scene(scene)
+        self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
         self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
@@ -512,7 +513,7 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
     surface = np.full(n, P.NOTHING, np.int8)
     normal = np.zeros((n, 3))
     reaching: dict[tuple[int, ...], tuple[np.ndarray | None, Segments]] = {}
-    for part in PARTS:
+    for part in ctx.parts:
         if part.MEDIA not in reaching:
             reaching[part.MEDIA] = _reaching(rays, part.MEDIA)
         idx, seg = reaching[part.MEDIA]

@@ -22,3 +22,11 @@ from .base import Part
 # ``cut_surface`` hands each ray to its lamp's cut type: ``cuts`` (fish-eye), ``sawtooth`` or ``flutes``.
 PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, reflector, bulb, socket, cut_surface,
                            outer_face)
+
+
+def parts_for(lamps) -> tuple[Part, ...]:
+    """``PARTS`` for these lamps: without the prism plate's parts when no lamp has a plate (every
+    ray would only find ``inf`` there, at the cost of their gathers)."""
+    if lamps.ring_count.any():
+        return PARTS
+    return tuple(part for part in PARTS if part not in (housing, plate_front, prism_rings))
