@@ -86,6 +86,8 @@ def flutes_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
 
     for m in range(len(lines) - 1):
         inside = np.flatnonzero((s_pts >= lines[m] - ON_LINE) & (s_pts <= lines[m + 1] + ON_LINE))
+        if len(inside) == 0 or np.ptp(s_pts[inside]) <= 2 * ON_LINE:
+            continue  # no band: the rim only touches its line (a side lying on a crease between flutes)
         face = [ring[i] for i in inside]
         flute = math.floor((lines[m] + lines[m + 1]) / 2 / p + 0.5)
         mb.face(face[::-1], FLAT if h == 0 else 4096 + flute - k_lo, LENS_GLASS)

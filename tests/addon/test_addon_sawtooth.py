@@ -199,7 +199,7 @@ def test_a_fluted_lens_is_built_within_the_chord_tolerance_of_its_cylinders(lamp
     assert co[:, 1].max() == pytest.approx(t + h, abs=VERTEX_TOL_MM)
 
 
-@pytest.mark.parametrize("outline", ["round", "square"])
+@pytest.mark.parametrize("outline", ["round", "square", "flush"])
 def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, addon_core, outline):
     import collections
     import importlib
@@ -208,9 +208,19 @@ def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, ad
     lamp = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")["lamps"][0]
     lamp["cuts"].update(type="flutes", pitch=7.0, height=2.5, orientation=-25.0)
     meshes = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes")
-    corners = {"round": meshes.circle_segments(45.0), "square": 4}[outline]  # the round lens: within the tolerance
+    # the round lens: within the tolerance
+    corners = {"round": meshes.circle_segments(45.0), "square": 4, "flush": 4}[outline]
     a = 2 * np.pi * np.arange(corners) / corners + (0.3 if corners == 4 else 0.0)
     rim = np.column_stack([45.0 * np.cos(a), 45.0 * np.sin(a)])
+    if outline == "flush":  # two sides on the creases between flutes, as a 150 mm lens of 6 mm flutes has
+        across = np.array(flutes_mesh.ridge_across(-25.0))
+        along = np.array([-across[1], across[0]])
+        s, w = 4.5 * 7.0, 30.0
+        ends = np.array([[-s, -w], [s, -w], [s, w], [-s, w]])
+        f = np.arange(6)[:, None] / 6  # points along the sides, as a rectangular lens's rim has
+        st = np.concatenate([ends[i] + f * (ends[(i + 1) % 4] - ends[i]) for i in range(4)])
+        rim = st[:, :1] * across + st[:, 1:] * along
+        corners = len(rim)
     data = flutes_mesh.flutes_lens_mesh(lamp, corners, rim=rim)
     v = data.verts
     glass = [f for f, m in zip(data.faces, data.material, strict=True) if m == 0 or v[list(f), 1].min() == 0.0]
