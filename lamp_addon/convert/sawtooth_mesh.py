@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ...core_tracer.scene.derived import lamp_geometry, tooth_height
+from ...core_tracer.scene.derived import tooth_height
 from .meshes import (
     CHORD_TOLERANCE_MM,
     FLAT,
@@ -24,6 +24,7 @@ from .meshes import (
     LENS_SIDE_WALL,
     MeshData,
     _MeshBuilder,
+    collar_top,
     fan_triangles,
     rim_polygon,
     triangle_deviation,
@@ -146,7 +147,7 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_M
 
     # Side wall below the cut surface, collar above it: between consecutive rim points, taking in
     # the other vertex of a crossing where it lies on the face's vertical edge (no T-junctions).
-    y_top = lamp_geometry(lamp)["plane_b"]
+    top = collar_top(lamp)
     bottom = []
     for j in range(n):
         x, z, _, _, _ = loop.points[j]
@@ -159,7 +160,8 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_M
         left_mid = [left_other] if ya_a < yl_a else []  # under the used (higher) vertex
         right_mid = [right_other] if yl_b < ya_b else []
         mb.face([bottom[j], *left_mid, left_used, right_used, *right_mid, bottom[j1]], 1, LENS_SIDE_WALL)
-        top_a, top_b = mb.vertex(xa, y_top, za), mb.vertex(xb, y_top, zb)
+        top_a = mb.vertex(xa, top(xa, za) if callable(top) else top, za)
+        top_b = mb.vertex(xb, top(xb, zb) if callable(top) else top, zb)
         left_up = [left_other] if ya_a > yl_a else []  # between the used (lower) vertex and the top
         right_up = [right_other] if yl_b > ya_b else []
         mb.face([left_used, *left_up, top_a, top_b, *right_up, right_used], 1, LENS_SIDE_WALL)

@@ -240,3 +240,30 @@ def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, ad
                                                                                            rel=1e-9)
     if outline == "round":  # (the side wall is measured against the round lens's cylinder)
         assert data.max_deviation <= 0.05
+
+
+@pytest.mark.parametrize("cut_type", ["fisheye", "sawtooth", "flutes"])
+def test_a_rectangular_lens_s_side_wall_reaches_the_reflector_edge(lamp_addon, addon_core, cut_type):
+    """The side wall of a rectangular lens stands up to the trimmed reflector's edge, whatever the
+    cuts: no gap between them through which rays would leave the lamp (MODEL.md §3, the tracer's
+    side wall reaches the reflector's edge)."""
+    import importlib
+    import json
+
+    meshes = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes")
+    doc = json.loads((PRESETS / "square-tail-lamp.json").read_text())
+    doc["lamps"][0]["cuts"] = {"fisheye": {"pitch": 8.0, "height": 1.2},
+                               "sawtooth": {"type": "sawtooth", "pitch": 6.0, "tooth_angle": 20.0, "orientation": 0.0},
+                               "flutes": {"type": "flutes", "pitch": 6.0, "height": 1.0, "orientation": 90.0}}[cut_type]
+    lamp = addon_core.scene.parse_scene(doc)["lamps"][0]
+    rim = meshes.outline_rim(lamp)
+    lens = meshes.lens_mesh(lamp, len(rim), rim=rim)
+    wall = np.unique([i for f, m in zip(lens.faces, lens.material, strict=True) if m == meshes.LENS_SIDE_WALL
+                      for i in f])
+    reflector = meshes.trimmed_reflector_mesh(lamp, rim).verts
+    r = np.hypot(reflector[:, 0], reflector[:, 2])
+    edge = reflector[r > 0.999 * np.hypot(rim[:, 0], rim[:, 1]).min()]
+    edge = edge[np.abs(meshes.Outline.of_lens(lamp["lens"]).signed_distance(edge[:, 0], edge[:, 2])) < 1e-9]
+    assert len(edge) == len(rim)
+    gap = np.linalg.norm(edge[:, None, :] - lens.verts[wall][None, :, :], axis=2).min(axis=1)
+    assert gap.max() < 1e-9
