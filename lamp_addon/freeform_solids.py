@@ -83,7 +83,13 @@ def close_plate(mesh: bpy.types.Mesh) -> None:
     bm = bmesh.new()
     bm.from_mesh(mesh)
     rim = [e for e in bm.edges if e.is_boundary]
-    bmesh.ops.bridge_loops(bm, edges=rim)
+    try:
+        bmesh.ops.bridge_loops(bm, edges=rim)
+    except RuntimeError:
+        # A plate reshaped by the designer's modifiers into other than two rims stays as it is: the
+        # free-form checks then name it as an open lens, with how to close it.
+        bm.free()
+        return
     bm.to_mesh(mesh)
     bm.free()
     mesh.update()
