@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from ...core_tracer.scene.derived import flute_radius, lamp_geometry
+from ...core_tracer.scene.derived import flute_radius
 from .meshes import (
     CHORD_TOLERANCE_MM,
     FLAT,
@@ -24,6 +24,7 @@ from .meshes import (
     MeshData,
     _MeshBuilder,
     _side_wall,
+    collar_top,
     fan_triangles,
     rim_polygon,
     triangle_deviation,
@@ -86,11 +87,13 @@ def flutes_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
 
     for m in range(len(lines) - 1):
         inside = np.flatnonzero((s_pts >= lines[m] - ON_LINE) & (s_pts <= lines[m + 1] + ON_LINE))
+        if len(inside) == 0 or np.ptp(s_pts[inside]) <= 2 * ON_LINE:
+            continue  # no band: the rim only touches its line (a side lying on a crease between flutes)
         face = [ring[i] for i in inside]
         flute = math.floor((lines[m] + lines[m + 1]) / 2 / p + 0.5)
         mb.face(face[::-1], FLAT if h == 0 else 4096 + flute - k_lo, LENS_GLASS)
     cut_faces = list(mb.faces)
-    bottom = _side_wall(mb, ring, lamp_geometry(lamp)["plane_b"])
+    bottom = _side_wall(mb, ring, collar_top(lamp))
     side = mb.faces[len(cut_faces):]
     mb.face(bottom, FLAT, LENS_GLASS)
 

@@ -339,7 +339,6 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     shape = Outline.of_lens(lamp["lens"])
     surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))
     k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
-    g = lamp_geometry(lamp)
     if shape.round:
         grid = _CutGrid(surface, k, R)
         rim = rim_polygon(R, segments)
@@ -357,12 +356,7 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     mb.faces += cut_faces
     mb.material += [LENS_GLASS] * len(cut_faces)
     mb.group += cut_groups
-    if shape.round:
-        bottom = _side_wall(mb, ring, g["plane_b"])
-    else:
-        f = lamp["reflector"]["focal_length"]
-        bottom = _side_wall(mb, ring, lambda x, z: g["vertex"] - (x * x + z * z) / (4.0 * f),
-                            group=1 if shape.corner > 0 else FLAT)
+    bottom = _side_wall(mb, ring, collar_top(lamp), group=1 if shape.round or shape.corner > 0 else FLAT)
     side_faces = mb.faces[len(cut_faces):]
     mb.face(bottom, FLAT, LENS_GLASS)  # outer face, counter-clockwise seen from -y
 
@@ -557,6 +551,17 @@ def _polygon_ring(verts: np.ndarray, rim: np.ndarray, shape: Outline, tol: float
     on_rim = near[dist < 1e-6]
     angle = np.arctan2(z[on_rim], x[on_rim])
     return on_rim[np.argsort(angle, kind="stable")].tolist()
+
+
+def collar_top(lamp: dict) -> float | Callable[[float, float], float]:
+    """Where the lens side wall's collar ends behind the cuts: the apex plane y = t + h of a round
+    lens; for a rectangular one the reflector's edge at (x, z), which lies behind the apex plane
+    along the straight sides (README: the lens outline), so that no gap opens between them."""
+    g = lamp_geometry(lamp)
+    if Outline.of_lens(lamp["lens"]).round:
+        return g["plane_b"]
+    f = lamp["reflector"]["focal_length"]
+    return lambda x, z: g["vertex"] - (x * x + z * z) / (4.0 * f)
 
 
 def _side_wall(mb: _MeshBuilder, ring: list[int], y_top: float | Callable[[float, float], float],

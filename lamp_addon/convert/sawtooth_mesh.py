@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ...core_tracer.scene.derived import lamp_geometry, tooth_height
+from ...core_tracer.scene.derived import tooth_height
 from .meshes import (
     CHORD_TOLERANCE_MM,
     FLAT,
@@ -24,6 +24,7 @@ from .meshes import (
     LENS_SIDE_WALL,
     MeshData,
     _MeshBuilder,
+    collar_top,
     fan_triangles,
     rim_polygon,
     triangle_deviation,
@@ -83,7 +84,11 @@ class _Loop:
             return
         else:  # the rim touches the border here from one side: the vertex belongs to that side's strip
             kb = round(b / self.p - 0.5)  # the border between strips kb and kb + 1
-            y = self.height(b, kb + 1 if max(s_prev, s_next) > b else kb)
+            # (a point along a side lying on the border has the lens on one side only: above the
+            # lowest border, below the highest)
+            above = max(s_prev, s_next) > b + ON_BORDER or (min(s_prev, s_next) >= b - ON_BORDER
+                                                             and b <= self.s_lo + ON_BORDER)
+            y = self.height(b, kb + 1 if above else kb)
         self.points.append((float(xz[0]), float(xz[1]), float(s), y, y))
 
     def _crossing(self, x: float, z: float, b: float, rising: bool) -> None:
@@ -113,12 +118,15 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_M
     # strip below it, the foot for the strip above), reversed to face +y, out of the glass.
     for k in range(loop.strip(loop.s_lo), loop.strip(loop.s_hi) + 1):
         lo, hi = (k - 0.5) * p, (k + 0.5) * p
-        face = []
+        face, span = [], []
         for (_, _, s, ya, _), (arrive, leave) in zip(loop.points, ids, strict=True):
             if lo - ON_BORDER <= s <= hi + ON_BORDER:
                 on_hi, on_lo = abs(s - hi) <= ON_BORDER, abs(s - lo) <= ON_BORDER
                 want = t + h if on_hi else t if on_lo else None
                 face.append(arrive if want is None or ya == want else leave)
+                span.append(s)
+        if not span or max(span) - min(span) <= 2 * ON_BORDER:
+            continue  # no facet: the rim only touches the strip's border (a side lying on it)
         mb.face(face[::-1], FLAT, LENS_GLASS)
     facets = len(mb.faces)
 
@@ -139,7 +147,7 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_M
 
     # Side wall below the cut surface, collar above it: between consecutive rim points, taking in
     # the other vertex of a crossing where it lies on the face's vertical edge (no T-junctions).
-    y_top = lamp_geometry(lamp)["plane_b"]
+    top = collar_top(lamp)
     bottom = []
     for j in range(n):
         x, z, _, _, _ = loop.points[j]
@@ -152,7 +160,8 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_M
         left_mid = [left_other] if ya_a < yl_a else []  # under the used (higher) vertex
         right_mid = [right_other] if yl_b < ya_b else []
         mb.face([bottom[j], *left_mid, left_used, right_used, *right_mid, bottom[j1]], 1, LENS_SIDE_WALL)
-        top_a, top_b = mb.vertex(xa, y_top, za), mb.vertex(xb, y_top, zb)
+        top_a = mb.vertex(xa, top(xa, za) if callable(top) else top, za)
+        top_b = mb.vertex(xb, top(xb, zb) if callable(top) else top, zb)
         left_up = [left_other] if ya_a > yl_a else []  # between the used (lower) vertex and the top
         right_up = [right_other] if yl_b > ya_b else []
         mb.face([left_used, *left_up, top_a, top_b, *right_up, right_used], 1, LENS_SIDE_WALL)

@@ -122,7 +122,19 @@ def _polygon_area(xz: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.roll(z, -1)) - np.dot(z, np.roll(x, -1)))
 
 
-@pytest.mark.parametrize("outline", ["round", "square", "hexagon"])
+def _flush_rectangle(across: tuple[float, float], pitch: float) -> np.ndarray:
+    """A rectangle whose two sides lie on the borders s = ±4.5 pitch, with points along its sides
+    as a rectangular lens's rim has (the strips or flutes beyond a side only touch it)."""
+    across = np.array(across)
+    along = np.array([-across[1], across[0]])
+    s, w = 4.5 * pitch, 30.0
+    ends = np.array([[-s, -w], [s, -w], [s, w], [-s, w]])
+    f = np.arange(6)[:, None] / 6
+    st = np.concatenate([ends[i] + f * (ends[(i + 1) % 4] - ends[i]) for i in range(4)])
+    return st[:, :1] * across + st[:, 1:] * along
+
+
+@pytest.mark.parametrize("outline", ["round", "square", "hexagon", "flush"])
 def test_the_glass_is_closed_and_the_facets_cover_any_convex_outline(lamp_addon, addon_core, outline):
     """The lens glass (outer face, facets, return facets, side wall below the cuts) is a closed
     surface: every edge is shared by exactly two of its faces; the inclined facets cover the outline."""
@@ -131,11 +143,14 @@ def test_the_glass_is_closed_and_the_facets_cover_any_convex_outline(lamp_addon,
 
     mesh_module = importlib.import_module(f"{lamp_addon.__name__}.convert.sawtooth_mesh")
     lamp = addon_core.scene.load_scene(PRESETS / "sawtooth-stop-lamp.json")["lamps"][0]
-    lamp["cuts"]["orientation"] = 17.0
+    orientation = 0.0 if outline == "flush" else 17.0  # ridges along x: s = z exactly, on the border
+    lamp["cuts"]["orientation"] = orientation
     R = lamp["lens"]["radius"]
-    corners = {"round": 64, "square": 4, "hexagon": 6}[outline]
+    corners = {"round": 64, "square": 4, "hexagon": 6, "flush": 4}[outline]
     a = 2 * np.pi * np.arange(corners) / corners + (0.3 if corners < 64 else 0.0)
     rim = np.column_stack([R * np.cos(a), R * np.sin(a)])
+    if outline == "flush":
+        rim = _flush_rectangle(mesh_module.ridge_across(orientation), lamp["cuts"]["pitch"])
     data = mesh_module.sawtooth_lens_mesh(lamp, 64, rim=rim)
     v = data.verts
     glass = [f for f, m in zip(data.faces, data.material, strict=True)
@@ -148,7 +163,7 @@ def test_the_glass_is_closed_and_the_facets_cover_any_convex_outline(lamp_addon,
     area = sum(abs(_polygon_area(v[list(f)][:, [0, 2]])) for f in inclined)
     assert area == pytest.approx(_polygon_area(rim), rel=1e-9)
     # every vertex of a facet on its strip's plane y = t + tan(alpha) (s - (k - 1/2) p)
-    t, p, th = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], math.radians(17.0)
+    t, p, th = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], math.radians(orientation)
     for f in inclined:
         q = v[list(f)]
         s = q[:, 0] * -math.sin(th) + q[:, 2] * math.cos(th)
@@ -158,7 +173,7 @@ def test_the_glass_is_closed_and_the_facets_cover_any_convex_outline(lamp_addon,
 
 def _is_inclined(points: np.ndarray, slope: float) -> bool:
     """A polygon whose plane rises at the facets' slope (not a vertical return facet)."""
-    n = np.cross(points[1] - points[0], points[2] - points[0])
+    n = np.cross(points, np.roll(points, -1, axis=0)).sum(axis=0)  # Newell's: collinear corners are fine
     return abs(n[1]) > 1e-9 * np.linalg.norm(n) and math.isclose(math.hypot(n[0], n[2]) / abs(n[1]), slope,
                                                                    rel_tol=1e-6)
 
@@ -199,7 +214,7 @@ def test_a_fluted_lens_is_built_within_the_chord_tolerance_of_its_cylinders(lamp
     assert co[:, 1].max() == pytest.approx(t + h, abs=VERTEX_TOL_MM)
 
 
-@pytest.mark.parametrize("outline", ["round", "square"])
+@pytest.mark.parametrize("outline", ["round", "square", "flush"])
 def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, addon_core, outline):
     import collections
     import importlib
@@ -208,9 +223,13 @@ def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, ad
     lamp = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")["lamps"][0]
     lamp["cuts"].update(type="flutes", pitch=7.0, height=2.5, orientation=-25.0)
     meshes = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes")
-    corners = {"round": meshes.circle_segments(45.0), "square": 4}[outline]  # the round lens: within the tolerance
+    # the round lens: within the tolerance
+    corners = {"round": meshes.circle_segments(45.0), "square": 4, "flush": 4}[outline]
     a = 2 * np.pi * np.arange(corners) / corners + (0.3 if corners == 4 else 0.0)
     rim = np.column_stack([45.0 * np.cos(a), 45.0 * np.sin(a)])
+    if outline == "flush":  # two sides on the creases between flutes, as a 150 mm lens of 6 mm flutes has
+        rim = _flush_rectangle(flutes_mesh.ridge_across(-25.0), 7.0)
+        corners = len(rim)
     data = flutes_mesh.flutes_lens_mesh(lamp, corners, rim=rim)
     v = data.verts
     glass = [f for f, m in zip(data.faces, data.material, strict=True) if m == 0 or v[list(f), 1].min() == 0.0]
@@ -221,3 +240,30 @@ def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, ad
                                                                                            rel=1e-9)
     if outline == "round":  # (the side wall is measured against the round lens's cylinder)
         assert data.max_deviation <= 0.05
+
+
+@pytest.mark.parametrize("cut_type", ["fisheye", "sawtooth", "flutes"])
+def test_a_rectangular_lens_s_side_wall_reaches_the_reflector_edge(lamp_addon, addon_core, cut_type):
+    """The side wall of a rectangular lens stands up to the trimmed reflector's edge, whatever the
+    cuts: no gap between them through which rays would leave the lamp (MODEL.md §3, the tracer's
+    side wall reaches the reflector's edge)."""
+    import importlib
+    import json
+
+    meshes = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes")
+    doc = json.loads((PRESETS / "square-tail-lamp.json").read_text())
+    doc["lamps"][0]["cuts"] = {"fisheye": {"pitch": 8.0, "height": 1.2},
+                               "sawtooth": {"type": "sawtooth", "pitch": 6.0, "tooth_angle": 20.0, "orientation": 0.0},
+                               "flutes": {"type": "flutes", "pitch": 6.0, "height": 1.0, "orientation": 90.0}}[cut_type]
+    lamp = addon_core.scene.parse_scene(doc)["lamps"][0]
+    rim = meshes.outline_rim(lamp)
+    lens = meshes.lens_mesh(lamp, len(rim), rim=rim)
+    wall = np.unique([i for f, m in zip(lens.faces, lens.material, strict=True) if m == meshes.LENS_SIDE_WALL
+                      for i in f])
+    reflector = meshes.trimmed_reflector_mesh(lamp, rim).verts
+    r = np.hypot(reflector[:, 0], reflector[:, 2])
+    edge = reflector[r > 0.999 * np.hypot(rim[:, 0], rim[:, 1]).min()]
+    edge = edge[np.abs(meshes.Outline.of_lens(lamp["lens"]).signed_distance(edge[:, 0], edge[:, 2])) < 1e-9]
+    assert len(edge) == len(rim)
+    gap = np.linalg.norm(edge[:, None, :] - lens.verts[wall][None, :, :], axis=2).min(axis=1)
+    assert gap.max() < 1e-9
