@@ -8,8 +8,11 @@ most ε: 2 % of the 2.3 mm a pixel covers on the lamp at 96² (the design camera
 value (its largest channel; at least 0.1 % of the image's brightest pixel, so that near-black pixels
 are not held to a relative bound). Silhouettes and creases (the rim, the cut cells' edges) are where
 an ε shift moves a whole pixel from one surface to another: pixels whose value differs from a
-neighbour's by more than 10 % in the parametric image are excepted and counted. The figures are
-printed (``pytest -s``); measured: 99.5-100 % of the other pixels within τ, 13-21 % excepted.
+neighbour's by more than 10 % in the parametric image are excepted, and those of them outside τ
+(the pixels the exception excuses) counted. A textured world seen around the lamp has such contrast
+everywhere, yet both tracers look it up alike: only the excused pixels are bounded. The figures are
+printed (``pytest -s``); measured: 99.5-100 % of the other pixels within τ, 13-45 % excepted, of
+which at most 7 % of the image excused.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ SIZE = 96
 TAU = 0.02
 EDGE_CONTRAST = 0.10
 MIN_SHARE_WITHIN = 0.99
-MAX_SHARE_EXCEPTED = 0.25
+MAX_SHARE_EXCEPTED = 0.10  # of the whole image: excepted and outside TAU
 
 
 def _design(lamp_addon, addon_core, bl_scene, path) -> dict:
@@ -43,7 +46,8 @@ def _freeform_image(lamp_addon, bl_scene, design: dict) -> np.ndarray:
 
 
 def agreement(parametric: np.ndarray, freeform: np.ndarray) -> tuple[float, float]:
-    """(share of the pixels away from silhouettes and creases within ``TAU``, share excepted)."""
+    """(share of the pixels away from silhouettes and creases within ``TAU``, share excused: at
+    silhouettes and creases and outside ``TAU``)."""
     value = np.maximum(parametric.max(axis=2), 1e-3 * parametric.max())
     error = np.abs(freeform - parametric).max(axis=2) / value
     padded = np.pad(parametric, ((1, 1), (1, 1), (0, 0)), mode="edge")
@@ -54,7 +58,7 @@ def agreement(parametric: np.ndarray, freeform: np.ndarray) -> tuple[float, floa
             neighbour = padded[1 + dy:h + 1 + dy, 1 + dx:w + 1 + dx]
             contrast = np.maximum(contrast, np.abs(neighbour - parametric).max(axis=2) / value)
     edge = contrast > EDGE_CONTRAST
-    return float((error[~edge] <= TAU).mean()), float(edge.mean())
+    return float((error[~edge] <= TAU).mean()), float((edge & (error > TAU)).mean())
 
 
 def test_agreement_measure_fails_on_a_different_lamp():
@@ -71,8 +75,8 @@ def test_parametric_equals_freeform(lamp_addon, addon_core, bl_scene, path):
     lamp_addon.freeform_convert.convert_to_freeform(bl_scene)
     freeform = _freeform_image(lamp_addon, bl_scene, design)
     within, excepted = agreement(parametric, freeform)
-    print(f"\n{path.stem}: {within:.2%} of the pixels within {TAU:.0%} (silhouettes and creases excepted: "
-          f"{excepted:.1%})")
+    print(f"\n{path.stem}: {within:.2%} of the pixels within {TAU:.0%} (at silhouettes and creases, "
+          f"excused: {excepted:.1%} of the image)")
     assert within >= MIN_SHARE_WITHIN and excepted <= MAX_SHARE_EXCEPTED
 
 
