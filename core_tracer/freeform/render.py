@@ -9,6 +9,12 @@ end a path; bodies are shaded by eq. (1). Branches below 0.1 % are dropped; ``MA
 branch. Where a lens is entered from outside through its outer face (①), the reflected branch
 is the lens surface's own eq. (1) times the Fresnel reflectance, as for the parametric lens.
 
+Surroundings, sun and phantom light are the parametric tracer's (``raytrace.environment``,
+``raytrace.sunlight``; README, "Free-form designs"): rays leaving into nothing see the environment,
+① also mirrors it, bodies and ① are lit by the sun and the environment's irradiance, and a
+reflector hit whose line to the sun meets a lens first (bulbs and sockets passed through) gets the
+sun's scatter through that lens's flat plate of its mean thickness (``mean_thickness``).
+
 Normals: the side a ray meets a lens from is told by the triangle's geometric normal (outward);
 Fresnel, Snell, mirror and shading use the normal interpolated from the corner normals (smooth
 shading), turned toward the incident side.
