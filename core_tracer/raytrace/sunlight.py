@@ -19,6 +19,8 @@ A reflector point is lit only when the sun is in front of the lamp and the line 
 toward the sun passes through the lens opening (its outline at the apex plane); the socket's and the
 bulb's shadows are not modelled. The mirror paths of the reflector that leave the lamp through
 the lens reach the sun where the environment image holds it (``environment``, path 10).
+The free-form tracer uses the same plate (``plate_transmittance``) and scatter (``scattered``) with
+its own test of the line to the sun on the meshes (``freeform.render``).
 """
 
 from __future__ import annotations
