@@ -12,7 +12,7 @@ is the lens surface's own eq. (1) times the Fresnel reflectance, as for the para
 Surroundings, sun and phantom light are the parametric tracer's (``raytrace.environment``,
 ``raytrace.sunlight``; README, "Free-form designs"): rays leaving into nothing see the environment,
 ① also mirrors it, bodies and ① are lit by the sun and the environment's irradiance, and a
-reflector hit whose line to the sun meets a lens first (bulbs and sockets passed through) gets the
+reflector hit whose line to the sun passes a lens and nothing opaque but bulbs and sockets gets the
 sun's scatter through that lens's flat plate of its mean thickness (``mean_thickness``).
 
 Normals: the side a ray meets a lens from is told by the triangle's geometric normal (outward);
@@ -47,7 +47,7 @@ EYE = BODY + 1  # the source "surface" of an eye ray
 TO_BODY = 20  # a class beyond Table 1 and the prism plate's ⑬-⑲: a segment that reaches a body (housing) and ends there
 NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (README, "Free-form")
 SELF_HIT_RETRIES = 2
-SUN_PASSES = 8  # surfaces a phantom-light ray toward the sun may pass through (bulbs, sockets) plus one
+SUN_PASSES = 16  # surfaces a phantom-light ray toward the sun may pass through (lens faces, bulbs, sockets)
 
 
 def _class_table() -> np.ndarray:
@@ -463,8 +463,9 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
 def _lens_toward_sun(ctx: _Context, p: np.ndarray, tri: np.ndarray, n: np.ndarray) -> np.ndarray:
     """The lens part (-1 for none) through which the line from reflector points ``p`` (on
     triangles ``tri``, normal ``n`` toward the viewer's side) toward the sun leaves the lamp: the
-    first surface it meets, bulbs and sockets passed through (their shadows are not modelled, as
-    in the parametric lamp), is a lens's."""
+    first lens the line meets, where it then reaches the open sky through lenses, bulbs and sockets
+    only (their shadows are not modelled, as in the parametric lamp); any other surface on the
+    way (a reflector, a side wall, a body) shades the point."""
     g = ctx.geometry
     lens = np.full(len(p), -1, np.int64)
     todo = np.nonzero(optics.dot(n, ctx.sun.direction[None, :]) > 0.0)[0]  # the sun on the lit side
@@ -476,9 +477,11 @@ def _lens_toward_sun(ctx: _Context, p: np.ndarray, tri: np.ndarray, n: np.ndarra
             break
         t, hit, _uv = ctx.embree.nearest(o, d)
         surface = np.where(hit >= 0, g.surface[np.maximum(hit, 0)], P.NOTHING)
-        through = ((surface == P.BULB) | (surface == P.SOCKET) | (hit == skip)) & (hit >= 0)
         at_lens = (surface == P.OUTER) | (surface == P.CUT)
-        lens[todo[at_lens]] = g.part[hit[at_lens]]
+        first_lens = at_lens & (lens[todo] < 0)
+        lens[todo[first_lens]] = g.part[hit[first_lens]]
+        through = (at_lens | (surface == P.BULB) | (surface == P.SOCKET) | (hit == skip)) & (hit >= 0)
+        lens[todo[(hit >= 0) & ~through]] = -1  # in the shade of an opaque surface
         o = o[through] + (t[through] + g.epsilon)[:, None] * d[through]
         todo, d, skip = todo[through], d[through], hit[through]
     return lens

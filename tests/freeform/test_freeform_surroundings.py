@@ -224,3 +224,30 @@ def test_parametric_and_free_form_agree_under_surroundings_and_sun(sky_exr, bulb
         print(f"phantom: {(phantom_error <= 0.02).mean():.2%} within 2 %")
         assert (phantom_error <= 0.02).mean() >= 0.95, f"{(phantom_error <= 0.02).mean():.2%} within 2 %"
     np.testing.assert_allclose(freeform.passes["lens_surface"], parametric.passes["lens_surface"], rtol=2e-3)
+
+
+def test_a_body_between_the_lamp_and_the_sun_takes_the_phantom_light_where_it_shades(sky_exr):
+    # The line toward the sun must pass a lens and nothing opaque: a plate up and to the right, in the sun's way
+    # for the lower left reflector points but out of the camera's view, shades those points only.
+    _, freeform_scene, meshes = _lamp_pair(sky_exr, bulb_on=False)
+    open_sky = render_passes(freeform_scene, meshes).passes["reflector_scatter"].max(axis=2)
+    shaded_scene = copy.deepcopy(freeform_scene)
+    shaded_scene["freeform"]["parts"].append({"object": "Awning", "role": "body",
+                                              "body": {"color": [0.2, 0.2, 0.2], "specular": 0.0, "shininess": 10}})
+    awning = shapes.box("Awning", (60, -200, 70), (400, -150, 400))
+    result = render_passes(shaded_scene, {**meshes, "Awning": awning})
+    shaded = result.passes["reflector_scatter"].max(axis=2)
+    assert not result.passes["body"].any()  # the camera does not see the plate
+    lit = open_sky > 0
+    # A shade only takes light away; the plate makes the design larger, and with it the offset of a
+    # ray off its surface (2e-6 of the size): the points move by a micrometre, the light by 3e-5.
+    assert np.all(shaded <= open_sky * (1 + 1e-4))
+    # A pixel sums several reflector points (the eye ray's and its reflections'): most of its light
+    # goes where its first point is shaded; the others keep it.
+    taken = lit & (shaded < 0.5 * open_sky)
+    assert 0.1 < taken.sum() / lit.sum() < 0.9, taken.sum() / lit.sum()
+    assert (lit & (np.abs(shaded - open_sky) <= 1e-4 * open_sky)).sum() / lit.sum() > 0.1
+    # Shaded points are the ones whose line toward the sun the plate crosses: up and to the right of
+    # the lamp axis as seen on the image (z up is row 0; x right is the last column).
+    rows, cols = np.nonzero(taken)
+    assert rows.mean() < SIZE / 2 and cols.mean() > SIZE / 2
