@@ -63,6 +63,7 @@ def render_passes(prepared: Prepared, width: int, height: int, **options):
         return parametric(prepared.scene, width, height, **options)
     from ..core_tracer import freeform
 
-    known = {key: options[key] for key in ("progress", "should_stop", "samples", "threads") if key in options}
+    known = {key: options[key] for key in ("progress", "should_stop", "samples", "threads", "world_seen")
+             if key in options}
     return freeform.render_passes(prepared.scene, prepared.geometry.meshes, width, height,
                                   geometry_cache=prepared.geometry.cache, **known)

@@ -9,6 +9,12 @@ end a path; bodies are shaded by eq. (1). Branches below 0.1 % are dropped; ``MA
 branch. Where a lens is entered from outside through its outer face (①), the reflected branch
 is the lens surface's own eq. (1) times the Fresnel reflectance, as for the parametric lens.
 
+Surroundings, sun and phantom light are the parametric tracer's (``raytrace.environment``,
+``raytrace.sunlight``; README, "Free-form designs"): rays leaving into nothing see the environment,
+① also mirrors it, bodies and ① are lit by the sun and the environment's irradiance, and a
+reflector hit whose line to the sun passes a lens and nothing opaque but bulbs and sockets gets the
+sun's scatter through that lens's flat plate of its mean thickness (``mean_thickness``).
+
 Normals: the side a ray meets a lens from is told by the triangle's geometric normal (outward);
 Fresnel, Snell, mirror and shading use the normal interpolated from the corner normals (smooth
 shading), turned toward the incident side.
@@ -24,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..raytrace import optics, pixel_filter
+from ..raytrace import environment, optics, pixel_filter, sunlight
 from ..raytrace import paths as P
 from ..raytrace.camera import Camera, eye_rays, make_camera
 from ..raytrace.tracer import CUTOFF, MAX_DEPTH, PASS_NAMES, RenderCancelled, RenderResult
@@ -41,6 +47,7 @@ EYE = BODY + 1  # the source "surface" of an eye ray
 TO_BODY = 20  # a class beyond Table 1 and the prism plate's ⑬-⑲: a segment that reaches a body (housing) and ends there
 NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (README, "Free-form")
 SELF_HIT_RETRIES = 2
+SUN_PASSES = 16  # surfaces a phantom-light ray toward the sun may pass through (lens faces, bulbs, sockets)
 
 
 def _class_table() -> np.ndarray:
@@ -91,12 +98,42 @@ class _Context:
         self.camera, self.geometry, self.embree = camera, geometry, embree
         self.samples, self.filter_name, self.record = samples, filter_name, record
         self.parts = PartTable(scene, geometry)
-        light = scene["light"]
-        self.light_dir = optics.normalize(np.asarray(light["direction"], np.float64))
-        self.light_color = np.asarray(light["color"], np.float64)
-        self.ambient = light["ambient"]
+        # The surroundings, the sun and its phantom light exactly as the parametric tracer's
+        # (raytrace.tracer._Context): the same modules, the same numbers.
+        self.environment = environment.from_scene(scene)  # None: the paper's background colour
+        following = self.environment is not None and scene["light"].get("follow_environment", False)
+        self.sun = sunlight.from_scene(scene, self.environment.sun_direction() if following else None)
+        self.sun_transmit = sunlight.plate_transmittance(self.sun, self.parts.ior, self.parts.absorption,
+                                                         mean_thickness(geometry, len(self.parts.ior)))
+        self.phantom = scene["light"].get("phantom", False) and bool(self.sun_transmit.any())
         self.background = np.asarray(scene["background"], np.float64)
-        self.background_seen = bool(self.background.any())
+        self.background_seen = bool(self.background.any()) or self.environment is not None
+        self.world_seen = True  # eye rays that miss see the background or surroundings
+
+    def sky(self, d: np.ndarray) -> np.ndarray:
+        """What a ray leaving the scene along unit ``d`` (N, 3) sees: the environment or the background."""
+        if self.environment is not None:
+            return self.environment.radiance(d)
+        return np.broadcast_to(self.background, (len(d), 3))
+
+    def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
+        """Equation (1) under the sun, plus the environment's light on a Lambertian surface."""
+        out = self.sun.shade(normal, view, diffuse, specular, shininess)
+        if self.environment is not None:
+            out = out + diffuse * self.environment.irradiance(normal) / np.pi
+        return out
+
+
+def mean_thickness(g: Geometry, parts: int) -> np.ndarray:
+    """Each part's mean thickness seen from the front (mm; 0 for a part with no outer face): its
+    volume over the area of its outer face, the flat plate the sun's transmittance takes
+    (``sunlight``, as the parametric lens's t + h / 2)."""
+    c = g.vertices[g.triangles]
+    volume = np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])) / 6.0  # divergence theorem
+    area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
+    volumes = np.bincount(g.part, weights=volume, minlength=parts)
+    outer = np.bincount(g.part, weights=np.where(g.surface == P.OUTER, area, 0.0), minlength=parts)
+    return np.where(outer > 0.0, volumes / np.where(outer > 0.0, outer, 1.0), 0.0)
 
 
 class _Band:
@@ -136,14 +173,15 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
                   on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
                   threads: int | None = None,
                   record_transitions: bool = False,
-                  filter_name: str = pixel_filter.DEFAULT_FILTER) -> RenderResult:
+                  filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True) -> RenderResult:
     """Render a free-form design (a normalised scene with a ``freeform`` section and its meshes by
     name): the image and the contribution passes, as ``raytrace.tracer.render_passes``.
 
     ``geometry_cache`` keeps the checked geometry and Embree scene between calls (built again only
     when the meshes or roles change); ``stats["build_seconds"]`` is the build time of this call
     (0 when reused). ``on_rows(row_start, row_stop, rows)`` and ``on_band(row_start, row_stop, rows,
-    pass_rows)`` are called from the calling thread as bands finish, as in the parametric tracer.
+    pass_rows)`` are called from the calling thread as bands finish, as in the parametric tracer;
+    ``world_seen=False`` leaves out what eye rays that miss everything see (a transparent film).
     Raises ``SceneError`` for a bad mesh or role, ``RenderCancelled`` when ``should_stop()`` (polled
     between bands) says so."""
     start = time.perf_counter()
@@ -156,6 +194,7 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
     pixel_filter.filter_support(filter_name)
     ctx = _Context(scene, make_camera(scene["camera"], width, height), geometry, embree, samples, filter_name,
                    record_transitions)
+    ctx.world_seen = world_seen
     should_stop = should_stop or (lambda: False)
     rows_per_band = max(1, TILE_RAYS // (width * samples))
     bands = [(y, min(height, y + rows_per_band)) for y in range(0, height, rows_per_band)]
@@ -327,8 +366,9 @@ def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
         k[inside] *= optics.absorption(parts.absorption[rays.lens[inside]], length)
 
     miss = np.nonzero(~hit_any)[0]
-    if ctx.background_seen and len(miss):
-        band.add(BACKGROUND_PASS, rays.pix[miss], k[miss] * ctx.background)
+    if not (first and not ctx.world_seen) and ctx.background_seen and len(miss):
+        # Out of the lamp: the surroundings along the ray (through an outer face, ⑩: refracted)
+        band.add(BACKGROUND_PASS, rays.pix[miss], k[miss] * ctx.sky(rays.d[miss]))
 
     part_h = g.part[tri_h]
     surf_h = surface[h]
@@ -345,8 +385,7 @@ def _step(ctx: _Context, band: _Band, rays: _Rays, first: bool) -> _Rays:
         facing = _toward(normal[m], d_h[m])
         pm = part_h[m]
         band.add(BODY_PASS, rays.pix[h[m]],
-                 k_h[m] * optics.phong(facing, -d_h[m], ctx.light_dir, parts.color[pm], ctx.light_color,
-                                       ctx.ambient, parts.specular[pm], parts.shininess[pm]))
+                 k_h[m] * ctx.shade(facing, -d_h[m], parts.color[pm], parts.specular[pm], parts.shininess[pm]))
 
     children: list[_Rays] = []
     m = np.nonzero(surf_h == P.REFLECTOR)[0]
@@ -407,12 +446,45 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
         to_bulb = optics.normalize(parts.bulb_center[b] - p[sel])
         scatter = optics.blinn(n[sel], -d[sel], to_bulb, parts.scatter[part[sel]], parts.shininess[part[sel]])
         band.add(REFLECTOR_SCATTER, pix[sel], k[sel] * scatter[:, None] * parts.bulb_intensity[b])
+    if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
+        lens = _lens_toward_sun(ctx, p, tri, n)
+        lit = lens >= 0
+        band.add(REFLECTOR_SCATTER, pix, k * sunlight.scattered(ctx.sun, n, -d, parts.scatter[part],
+                                                                parts.shininess[part],
+                                                                ctx.sun_transmit[np.maximum(lens, 0)], lit))
     k = k * parts.reflectance[part, None]
     count = len(m)
     mirror = _on_side(optics.reflect(d, n), d, ctx.geometry.normal[tri], lambda sel: optics.reflect(
         d[sel], _toward(ctx.geometry.normal[tri[sel]], d[sel])), same=False)
     return _spawn(rays, m, p, mirror, k, np.full(count, -1, np.int32), tri,
                   np.full(count, P.REFLECTOR, np.int8), cls, P.REFLECTED, np.ones(count, bool))
+
+
+def _lens_toward_sun(ctx: _Context, p: np.ndarray, tri: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """The lens part (-1 for none) through which the line from reflector points ``p`` (on
+    triangles ``tri``, normal ``n`` toward the viewer's side) toward the sun leaves the lamp: the
+    first lens the line meets, where it then reaches the open sky through lenses, bulbs and sockets
+    only (their shadows are not modelled, as in the parametric lamp); any other surface on the
+    way (a reflector, a side wall, a body) shades the point."""
+    g = ctx.geometry
+    lens = np.full(len(p), -1, np.int64)
+    todo = np.nonzero(optics.dot(n, ctx.sun.direction[None, :]) > 0.0)[0]  # the sun on the lit side
+    d = np.broadcast_to(ctx.sun.direction, (len(todo), 3))
+    o = p[todo] + g.epsilon * n[todo]
+    skip = tri[todo]
+    for _ in range(SUN_PASSES):
+        if len(todo) == 0:
+            break
+        t, hit, _uv = ctx.embree.nearest(o, d)
+        surface = np.where(hit >= 0, g.surface[np.maximum(hit, 0)], P.NOTHING)
+        at_lens = (surface == P.OUTER) | (surface == P.CUT)
+        first_lens = at_lens & (lens[todo] < 0)
+        lens[todo[first_lens]] = g.part[hit[first_lens]]
+        through = (at_lens | (surface == P.BULB) | (surface == P.SOCKET) | (hit == skip)) & (hit >= 0)
+        lens[todo[(hit >= 0) & ~through]] = -1  # in the shade of an opaque surface
+        o = o[through] + (t[through] + g.epsilon)[:, None] * d[through]
+        todo, d, skip = todo[through], d[through], hit[through]
+    return lens
 
 
 def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, p: np.ndarray,
@@ -444,10 +516,11 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     s = np.nonzero(outer_from_air)[0]
     if len(s):  # ①: the surface's own eq. (1) in the reflected direction, no further tracing
         ps = part[s]
-        shade = optics.phong(facing[s], -d[s], ctx.light_dir, parts.color[ps], ctx.light_color, ctx.ambient,
-                             parts.specular[ps], parts.shininess[ps])
+        shade = ctx.shade(facing[s], -d[s], parts.color[ps], parts.specular[ps], parts.shininess[ps])
+        if ctx.environment is not None:  # the outer face mirrors the surroundings
+            shade = shade + ctx.sky(optics.reflect(d[s], facing[s]))
         band.add(LENS_SURFACE, pix[s], k[s] * r[s, None] * shade)
-        if ctx.background_seen:
+        if ctx.background_seen and ctx.environment is None:
             band.add(BACKGROUND_PASS, pix[s], k[s] * r[s, None] * ctx.background)
         band.note(cls[s], P.REFLECTED, P.LENS_OUTER_TO_OUTSIDE)
     traced = np.nonzero(~outer_from_air)[0]

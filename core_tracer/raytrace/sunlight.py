@@ -19,6 +19,8 @@ A reflector point is lit only when the sun is in front of the lamp and the line 
 toward the sun passes through the lens opening (its outline at the apex plane); the socket's and the
 bulb's shadows are not modelled. The mirror paths of the reflector that leave the lamp through
 the lens reach the sun where the environment image holds it (``environment``, path 10).
+The free-form tracer uses the same plate (``plate_transmittance``) and scatter (``scattered``) with
+its own test of the line to the sun on the meshes (``freeform.render``).
 """
 
 from __future__ import annotations
@@ -78,15 +80,20 @@ def from_scene(scene: dict, environment_sun: np.ndarray | None) -> Sun:
 
 def sun_transmittance(sun: Sun, lamps: LampTable, lamp: np.ndarray) -> np.ndarray:
     """T_sun (N, 3) of the lenses ``lamp`` (module docstring); 0 with the sun behind the lamp."""
+    return plate_transmittance(sun, lamps.ior[lamp], lamps.absorption[lamp],
+                               0.5 * (lamps.plane_a[lamp] + lamps.plane_b[lamp]))
+
+
+def plate_transmittance(sun: Sun, ior: np.ndarray, absorption: np.ndarray, thickness: np.ndarray) -> np.ndarray:
+    """T_sun (N, 3) of flat plates of index ``ior`` (N,), absorption (N, 3) and mean ``thickness``
+    (N,) facing the viewer (module docstring); 0 with the sun behind the lamp."""
     cos_i = float(sun.direction @ FRONT)  # the angle of incidence on the outer face; > 0 in front
     if cos_i <= 0.0 or sun.strength == 0.0:
-        return np.zeros((len(lamp), 3))
-    ior = lamps.ior[lamp]
-    r = optics.fresnel_reflectance(np.full(len(lamp), cos_i), 1.0, ior)
+        return np.zeros((len(ior), 3))
+    r = optics.fresnel_reflectance(np.full(len(ior), cos_i), 1.0, ior)
     sin_t = np.sqrt(1.0 - cos_i * cos_i) / ior
     cos_t = np.sqrt(1.0 - sin_t * sin_t)
-    thickness = 0.5 * (lamps.plane_a[lamp] + lamps.plane_b[lamp])
-    return ((1.0 - r) ** 2)[:, None] * optics.absorption(lamps.absorption[lamp], thickness / cos_t)
+    return ((1.0 - r) ** 2)[:, None] * optics.absorption(absorption, thickness / cos_t)
 
 
 def phantom(sun: Sun, lamps: LampTable, lamp: np.ndarray, hit: np.ndarray, normal: np.ndarray,
@@ -102,12 +109,20 @@ def phantom(sun: Sun, lamps: LampTable, lamp: np.ndarray, hit: np.ndarray, norma
     half, corner = lamps.half_size[lamp], lamps.corner[lamp]
     inside = outline.signed_distance(cross[:, 0], cross[:, 2], half[:, 0] - corner, half[:, 1] - corner,
                                      corner) <= 0.0
-    sun_dir = np.broadcast_to(sun.direction, hit.shape)
+    return scattered(sun, normal, view, lamps.scatter[lamp], lamps.scatter_shininess[lamp], transmit, inside)
+
+
+def scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, scatter: np.ndarray, shininess: np.ndarray,
+              transmit: np.ndarray, lit: np.ndarray) -> np.ndarray:
+    """The reflector's scatter of eq. (3) with the sun as the light (module docstring), (N, 3): at
+    points of ``normal`` seen from ``view`` whose line to the sun passes through the lens (``lit``),
+    the lens letting ``transmit`` (N, 3) through."""
+    sun_dir = np.broadcast_to(sun.direction, normal.shape)
     # Lit on the side the eye ray came from only (the normal turned toward the viewer).
     toward_view = np.where((optics.dot(normal, view) < 0.0)[:, None], -normal, normal)
     facing = optics.dot(toward_view, sun_dir) > 0.0
-    scatter = optics.blinn(toward_view, view, sun_dir, lamps.scatter[lamp], lamps.scatter_shininess[lamp])
-    return np.where((inside & facing)[:, None], scatter[:, None] * transmit * sun.light, 0.0)
+    value = optics.blinn(toward_view, view, sun_dir, scatter, shininess)
+    return np.where((lit & facing)[:, None], value[:, None] * transmit * sun.light, 0.0)
 
 
 def sun_direction(scene: dict) -> np.ndarray:

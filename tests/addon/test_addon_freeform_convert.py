@@ -8,17 +8,11 @@ most ε: 2 % of the 2.3 mm a pixel covers on the lamp at 96² (the design camera
 value (its largest channel; at least 0.1 % of the image's brightest pixel, so that near-black pixels
 are not held to a relative bound). Silhouettes and creases (the rim, the cut cells' edges) are where
 an ε shift moves a whole pixel from one surface to another: pixels whose value differs from a
-neighbour's by more than 10 % in the parametric image are excepted and counted. The figures are
-printed (``pytest -s``); measured: 99.5-100 % of the other pixels within τ, 12-21 % excepted, and
-78-97 % of the excepted pixels within τ all the same.
-
-One preset has more creases than the bound allows for: square-tail-lamp's 150 x 80 mm lens covers
-21 % of the image (the paper's round lens 12.6 %) and its 8 mm cells are 3.2 pixels wide, so nearly
-every lens pixel borders a crease between cells (87 % of them are excepted, 65 % for the paper's
-lens); measured 26.6 % excepted, 91 % of those within τ. The excepted pixels were looked at (the
-mask lies on the body's silhouette, the lens rim and the cell grid; the errors above τ on the
-grid lines only); its bound is raised to 30 % (``EXCEPTED_BOUND``), on condition that 85 % of the
-excepted pixels agree within τ all the same.
+neighbour's by more than 10 % in the parametric image are excepted, and those of them outside τ
+(the pixels the exception excuses) counted. A textured world seen around the lamp has such contrast
+everywhere, yet both tracers look it up alike: only the excused pixels are bounded. The figures are
+printed (``pytest -s``); measured: 99.5-100 % of the other pixels within τ, 13-45 % excepted, of
+which at most 7 % of the image excused.
 """
 
 from __future__ import annotations
@@ -33,9 +27,7 @@ SIZE = 96
 TAU = 0.02
 EDGE_CONTRAST = 0.10
 MIN_SHARE_WITHIN = 0.99
-MAX_SHARE_EXCEPTED = 0.25
-EXCEPTED_BOUND = {"square-tail-lamp": 0.30}  # a large lens of fine cells: see the module's docstring
-MIN_EXCEPTED_WITHIN = 0.85  # where the bound is raised (measured 91 %)
+MAX_SHARE_EXCEPTED = 0.10  # of the whole image: excepted and outside TAU
 
 
 def _design(lamp_addon, addon_core, bl_scene, path) -> dict:
@@ -54,19 +46,8 @@ def _freeform_image(lamp_addon, bl_scene, design: dict) -> np.ndarray:
 
 
 def agreement(parametric: np.ndarray, freeform: np.ndarray) -> tuple[float, float]:
-    """(share of the pixels away from silhouettes and creases within ``TAU``, share excepted)."""
-    error, edge = _errors(parametric, freeform)
-    return float((error[~edge] <= TAU).mean()), float(edge.mean())
-
-
-def excepted_within(parametric: np.ndarray, freeform: np.ndarray) -> float:
-    """Share of the excepted pixels (silhouettes and creases) within ``TAU`` all the same."""
-    error, edge = _errors(parametric, freeform)
-    return float((error[edge] <= TAU).mean()) if edge.any() else 1.0
-
-
-def _errors(parametric: np.ndarray, freeform: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each pixel's relative error, and where a neighbour differs by more than ``EDGE_CONTRAST``."""
+    """(share of the pixels away from silhouettes and creases within ``TAU``, share excused: at
+    silhouettes and creases and outside ``TAU``)."""
     value = np.maximum(parametric.max(axis=2), 1e-3 * parametric.max())
     error = np.abs(freeform - parametric).max(axis=2) / value
     padded = np.pad(parametric, ((1, 1), (1, 1), (0, 0)), mode="edge")
@@ -76,7 +57,8 @@ def _errors(parametric: np.ndarray, freeform: np.ndarray) -> tuple[np.ndarray, n
         for dx in (-1, 0, 1):
             neighbour = padded[1 + dy:h + 1 + dy, 1 + dx:w + 1 + dx]
             contrast = np.maximum(contrast, np.abs(neighbour - parametric).max(axis=2) / value)
-    return error, contrast > EDGE_CONTRAST
+    edge = contrast > EDGE_CONTRAST
+    return float((error[~edge] <= TAU).mean()), float((edge & (error > TAU)).mean())
 
 
 def test_agreement_measure_fails_on_a_different_lamp():
@@ -93,12 +75,9 @@ def test_parametric_equals_freeform(lamp_addon, addon_core, bl_scene, path):
     lamp_addon.freeform_convert.convert_to_freeform(bl_scene)
     freeform = _freeform_image(lamp_addon, bl_scene, design)
     within, excepted = agreement(parametric, freeform)
-    agreeing_anyway = excepted_within(parametric, freeform)
-    print(f"\n{path.stem}: {within:.2%} of the pixels within {TAU:.0%} (silhouettes and creases excepted: "
-          f"{excepted:.1%}, {agreeing_anyway:.0%} of them within {TAU:.0%})")
-    assert within >= MIN_SHARE_WITHIN and excepted <= EXCEPTED_BOUND.get(path.stem, MAX_SHARE_EXCEPTED)
-    if path.stem in EXCEPTED_BOUND:  # a raised bound is no licence: most of those pixels agree too
-        assert agreeing_anyway >= MIN_EXCEPTED_WITHIN
+    print(f"\n{path.stem}: {within:.2%} of the pixels within {TAU:.0%} (at silhouettes and creases, "
+          f"excused: {excepted:.1%} of the image)")
+    assert within >= MIN_SHARE_WITHIN and excepted <= MAX_SHARE_EXCEPTED
 
 
 def test_convert_makes_closed_lenses_with_roles_and_hides_the_parametric_parts(lamp_addon, addon_core, bl_scene):
