@@ -144,3 +144,30 @@ def sibling_imports(path: Path) -> set[str]:
             else:
                 out.update(alias.name for alias in node.names)
     return out
+
+
+def fresnel_unpolarised(cos_i: float, n: float) -> float:
+    """Fresnel reflectance of unpolarised light from air into index ``n``, written out here
+    independently of ``optics`` (the mean of the s and p reflectances)."""
+    import math
+
+    sin_t = math.sqrt(1 - cos_i * cos_i) / n
+    cos_t = math.sqrt(1 - sin_t * sin_t)
+    rs = (cos_i - n * cos_t) / (cos_i + n * cos_t)
+    rp = (n * cos_i - cos_t) / (n * cos_i + cos_t)
+    return 0.5 * (rs * rs + rp * rp)
+
+
+def write_exr(path, pixels) -> str:
+    """An RGB float EXR of ``pixels`` (H, W, 3), written with OpenImageIO; returns its path."""
+    import numpy as np
+
+    from core_tracer.images import imageio
+
+    oiio = imageio.oiio_module()
+    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], 3, oiio.FLOAT)
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), spec)
+    assert out.write_image(np.asarray(pixels, np.float32))
+    out.close()
+    return str(path)

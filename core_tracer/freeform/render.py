@@ -30,10 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..raytrace import environment, optics, pixel_filter, sunlight
+from ..raytrace import optics, pixel_filter, sunlight
 from ..raytrace import paths as P
 from ..raytrace.camera import Camera, eye_rays, make_camera
-from ..raytrace.tracer import CUTOFF, MAX_DEPTH, PASS_NAMES, RenderCancelled, RenderResult
+from ..raytrace.lighting import Lighting
+from ..raytrace.tracer import CUTOFF, MAX_DEPTH, PASS_NAMES, RenderCancelled, RenderResult, add_to_pass
 from .embree import EmbreeScene
 from .geometry import BODY, Geometry, GeometryCache
 from .meshes import MeshData
@@ -92,36 +93,16 @@ def _concat(parts: list[_Rays]) -> _Rays:
     return _Rays(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
 
 
-class _Context:
+class _Context(Lighting):
     def __init__(self, scene: dict, camera: Camera, geometry: Geometry, embree: EmbreeScene, samples: int,
                  filter_name: str, record: bool):
+        super().__init__(scene)  # the surroundings and the sun as the parametric tracer's
         self.camera, self.geometry, self.embree = camera, geometry, embree
         self.samples, self.filter_name, self.record = samples, filter_name, record
         self.parts = PartTable(scene, geometry)
-        # The surroundings, the sun and its phantom light exactly as the parametric tracer's
-        # (raytrace.tracer._Context): the same modules, the same numbers.
-        self.environment = environment.from_scene(scene)  # None: the paper's background colour
-        following = self.environment is not None and scene["light"].get("follow_environment", False)
-        self.sun = sunlight.from_scene(scene, self.environment.sun_direction() if following else None)
         self.sun_transmit = sunlight.plate_transmittance(self.sun, self.parts.ior, self.parts.absorption,
                                                          mean_thickness(geometry, len(self.parts.ior)))
         self.phantom = scene["light"].get("phantom", False) and bool(self.sun_transmit.any())
-        self.background = np.asarray(scene["background"], np.float64)
-        self.background_seen = bool(self.background.any()) or self.environment is not None
-        self.world_seen = True  # eye rays that miss see the background or surroundings
-
-    def sky(self, d: np.ndarray) -> np.ndarray:
-        """What a ray leaving the scene along unit ``d`` (N, 3) sees: the environment or the background."""
-        if self.environment is not None:
-            return self.environment.radiance(d)
-        return np.broadcast_to(self.background, (len(d), 3))
-
-    def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
-        """Equation (1) under the sun, plus the environment's light on a Lambertian surface."""
-        out = self.sun.shade(normal, view, diffuse, specular, shininess)
-        if self.environment is not None:
-            out = out + diffuse * self.environment.irradiance(normal) / np.pi
-        return out
 
 
 def mean_thickness(g: Geometry, parts: int) -> np.ndarray:
@@ -147,14 +128,7 @@ class _Band:
         self.record = record
 
     def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
-        if len(pix) == 0:
-            return
-        # One count over the (pixel, channel) bins of the pixels spanned, as the parametric tracer.
-        first, last = int(pix.min()), int(pix.max()) + 1
-        bins = (3 * (pix - first))[:, None] + np.arange(3)
-        weights = np.broadcast_to(values, bins.shape)
-        self.acc[pass_id, first:last].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(),
-                                                                    minlength=3 * (last - first))
+        add_to_pass(self.acc[pass_id], pix, values)
 
     def note(self, parent: np.ndarray, branch: np.ndarray | int, child: np.ndarray | int) -> None:
         if not self.record or len(parent) == 0:

@@ -22,10 +22,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene.derived import body_wraps
-from . import environment, optics, pixel_filter, sunlight
+from . import optics, pixel_filter, sunlight
 from . import paths as P
 from .camera import Camera, eye_rays, make_camera
 from .lamp_table import LampTable
+from .lighting import Lighting
 from .parts import body_box, outer_face, parts_for, reflector
 from .parts.base import Segments
 from .parts.cylinder_lens import outward_normal
@@ -88,11 +89,12 @@ def _concat(parts: list[_Rays]) -> _Rays:
     return _Rays(*(np.concatenate([getattr(p, f) for p in parts]) for f in _RAY_FIELDS))
 
 
-class _Context:
+class _Context(Lighting):
     """Everything constant during one render."""
 
     def __init__(self, scene: dict, camera: Camera, record_transitions: bool, samples: int, filter_name: str,
                  adaptive_threshold: float = 0.0):
+        super().__init__(scene)
         self.camera = camera
         self.samples = samples
         self.filter_name = filter_name
@@ -103,29 +105,22 @@ class _Context:
         self.box_lo, self.box_hi = body_box.body_box(body)
         self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
         self.body = body
-        self.environment = environment.from_scene(scene)  # None: the paper's background colour
-        following = self.environment is not None and scene["light"].get("follow_environment", False)
-        self.sun = sunlight.from_scene(scene, self.environment.sun_direction() if following else None)
         in_lens = sunlight.sun_transmittance(self.sun, self.lamps, np.arange(len(self.lamps.ior)))
         self.phantom = scene["light"].get("phantom", False) and bool(in_lens.any())
-        self.background = np.asarray(scene["background"], dtype=np.float64)
-        # adding a black background adds exactly 0
-        self.background_seen = bool(self.background.any()) or self.environment is not None
         self.record = record_transitions
-        self.world_seen = True  # eye rays that miss see the background or surroundings
 
-    def sky(self, d: np.ndarray) -> np.ndarray:
-        """What a ray leaving the scene along unit ``d`` (N, 3) sees: the environment or the background."""
-        if self.environment is not None:
-            return self.environment.radiance(d)
-        return np.broadcast_to(self.background, (len(d), 3))
 
-    def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
-        """Equation (1) under the sun, plus the environment's light on a Lambertian surface."""
-        out = self.sun.shade(normal, view, diffuse, specular, shininess)
-        if self.environment is not None:
-            out = out + diffuse * self.environment.irradiance(normal) / np.pi
-        return out
+def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:
+    """Add ``values`` (N, 3) to the pixels ``pix`` of one pass ``acc`` (pixels, 3), repeats summed.
+
+    One count over the (pixel, channel) bins of the pixels spanned, each bin summing its values in
+    ray order, then added to the pass: the same sums as one count per channel."""
+    if len(pix) == 0:
+        return
+    first, last = int(pix.min()), int(pix.max()) + 1
+    bins = (3 * (pix - first))[:, None] + np.arange(3)
+    weights = np.broadcast_to(values, bins.shape)
+    acc[first:last].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * (last - first))
 
 
 class _Band:
@@ -141,15 +136,7 @@ class _Band:
         self.ctx = ctx
 
     def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
-        if len(pix) == 0:
-            return
-        # One count over the (pixel, channel) bins of the pixels spanned, each bin summing its
-        # values in ray order, then added to the pass: the same sums as one count per channel.
-        first, last = int(pix.min()), int(pix.max()) + 1
-        bins = (3 * (pix - first))[:, None] + np.arange(3)
-        weights = np.broadcast_to(values, bins.shape)
-        self.acc[pass_id, first:last].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(),
-                                                                    minlength=3 * (last - first))
+        add_to_pass(self.acc[pass_id], pix, values)
 
     def note(self, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
         if self.ctx.record and len(child):
@@ -435,10 +422,19 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     s = np.nonzero(on_lens)[0]
     li = lamp[s]
     ds = d[s]
+    local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
+    local[:, 1] = 0.0
+    return _into_lenses(ctx, band, s, li, ds, np.tile(outer_face.NORMAL, (len(s), 1)), ds[:, 1], local)
+
+
+def _into_lenses(ctx: _Context, band: _Band, s: np.ndarray, li: np.ndarray, ds: np.ndarray,
+                 face_normal: np.ndarray, cos_i: np.ndarray, local: np.ndarray) -> _Rays:
+    """Eye rays ``s`` meeting the outer face of lamps ``li`` (①) at ``local`` (lamp frame) with the
+    face's outward ``face_normal``: the Fresnel split, the reflected branch shaded by eq. (1) and
+    mirroring the surroundings (§3.2.3), the transmitted rays into the lens."""
+    L = ctx.lamps
     ior = L.ior[li]
-    cos_i = ds[:, 1]
     r = optics.fresnel_reflectance(cos_i, 1.0, ior)
-    face_normal = np.tile(outer_face.NORMAL, (len(s), 1))
     surface = ctx.shade(face_normal, -ds, L.lens_diffuse[li], L.lens_specular[li], L.lens_shininess[li])
     if ctx.environment is not None:  # the outer face mirrors the surroundings
         surface = surface + ctx.sky(optics.reflect(ds, face_normal))
@@ -449,8 +445,6 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
 
     k = np.repeat((1.0 - r)[:, None], 3, axis=1)
-    local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
-    local[:, 1] = 0.0
     d_in = optics.refract(ds, face_normal, 1.0 / ior)
     rays = _Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
                  src=np.full(len(s), P.OUTER, np.int8), parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8),
@@ -479,7 +473,6 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     s = np.nonzero(on_lens)[0]
     li = lamp[s]
     ds = d[s]
-    ior = L.ior[li]
     local = o[s] + t_near[s, None] * ds - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     flat = L.cylindrical[li] == 0
     local[flat, 1] = 0.0
@@ -487,21 +480,7 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     curved = np.nonzero(~flat)[0]
     face_normal[curved] = outward_normal(local[curved], L.cyl_axis_x[li[curved]], L.cyl_radius[li[curved]])
     cos_i = np.clip(-optics.dot(ds, face_normal), 0.0, 1.0)
-    r = optics.fresnel_reflectance(cos_i, 1.0, ior)
-    surface = ctx.shade(face_normal, -ds, L.lens_diffuse[li], L.lens_specular[li], L.lens_shininess[li])
-    if ctx.environment is not None:  # the outer face mirrors the surroundings
-        surface = surface + ctx.sky(optics.reflect(ds, face_normal))
-    band.add(LENS_SURFACE, s, r[:, None] * surface)
-    if ctx.background_seen and ctx.environment is None:
-        band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
-    ones = np.ones(len(s), dtype=np.int8)
-    band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
-    k = np.repeat((1.0 - r)[:, None], 3, axis=1)
-    d_in = optics.refract(ds, face_normal, 1.0 / ior)
-    rays = _Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
-                 src=np.full(len(s), P.OUTER, np.int8), parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8),
-                 branch=np.full(len(s), P.TRANSMITTED, np.int8), seen_reflector=np.zeros(len(s), bool))
-    return rays.take(_alive(k))
+    return _into_lenses(ctx, band, s, li, ds, face_normal, cos_i, local)
 
 
 def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

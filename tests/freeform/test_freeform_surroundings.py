@@ -11,12 +11,11 @@ import math
 
 import numpy as np
 import pytest
-from helpers import scene_with
+from helpers import fresnel_unpolarised, scene_with, write_exr
 
 from core_tracer import render_passes as parametric_passes
 from core_tracer.freeform import render_passes, shapes
 from core_tracer.freeform.render import surface_hits
-from core_tracer.images import imageio
 from core_tracer.raytrace import environment
 from core_tracer.raytrace.camera import eye_rays, make_camera
 from core_tracer.scene.derived import lamp_geometry
@@ -28,23 +27,13 @@ W, H = 64, 32
 IOR = 1.49
 
 
-def _write_exr(path, pixels: np.ndarray) -> str:
-    oiio = imageio.oiio_module()
-    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], 3, oiio.FLOAT)
-    out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), spec)
-    assert out.write_image(pixels.astype(np.float32))
-    out.close()
-    return str(path)
-
-
 @pytest.fixture
 def sky_exr(tmp_path) -> str:
     """A smooth, everywhere-different sky."""
     cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
     lon, lat = cols / W * 2 * np.pi, (0.5 - rows / H) * np.pi
     sky = np.stack([1.0 + 0.5 * np.sin(lon), 1.0 + 0.5 * np.cos(lon) * np.cos(lat), 1.2 + 0.6 * np.sin(lat)], -1)
-    return _write_exr(tmp_path / "sky.exr", sky)
+    return write_exr(tmp_path / "sky.exr", sky)
 
 
 def _cycles_radiance(path: str, d: np.ndarray, strength: float, rotation_deg: float) -> np.ndarray:
@@ -65,14 +54,6 @@ def _cycles_radiance(path: str, d: np.ndarray, strength: float, rotation_deg: fl
         out.append(sum(pixels[(j + dj) % h, (i + di) % w] * (fx if di else 1 - fx) * (fy if dj else 1 - fy)
                        for di in (0, 1) for dj in (0, 1)))
     return strength * np.array(out)
-
-
-def _fresnel(cos_i: float, n: float) -> float:
-    sin_t = math.sqrt(1 - cos_i * cos_i) / n
-    cos_t = math.sqrt(1 - sin_t * sin_t)
-    rs = (cos_i - n * cos_t) / (cos_i + n * cos_t)
-    rp = (n * cos_i - cos_t) / (n * cos_i + cos_t)
-    return 0.5 * (rs * rs + rp * rp)
 
 
 def _slab_design(world: dict, camera: dict, size: int = 24) -> tuple[dict, dict]:
@@ -98,7 +79,7 @@ def test_flat_clear_slab_mesh_mirrors_the_environment_by_its_fresnel_reflectance
     assert len(lens_pixels) > 300  # the slab's front face fills most of the view
     _, d = eye_rays(make_camera(scene["camera"], 24, 24), lens_pixels)
     mirrored = d * np.array([1.0, -1.0, 1.0])  # the outer face is the plane y = 0
-    r = np.array([_fresnel(float(cos), IOR) for cos in d[:, 1]])
+    r = np.array([fresnel_unpolarised(float(cos), IOR) for cos in d[:, 1]])
     expected = r[:, None] * _cycles_radiance(sky_exr, mirrored, 1.5, 20.0)
     np.testing.assert_allclose(surface[lens_pixels], expected, rtol=1e-5)
 
@@ -119,7 +100,7 @@ def test_rays_that_miss_see_the_environment_and_a_transparent_film_leaves_them_o
     through = np.nonzero((result.passes["lens_surface"].reshape(-1, 3).max(axis=1) > 0) & inner)[0]
     assert len(through) > 30
     seen = result.passes["background"].reshape(-1, 3)[through]
-    r = np.array([_fresnel(float(cos), IOR) for cos in d[through, 1]])[:, None]
+    r = np.array([fresnel_unpolarised(float(cos), IOR) for cos in d[through, 1]])[:, None]
     mirrored = d[through] * np.array([1.0, -1.0, 1.0])
     series = (1 - r) / (1 + r) * (_cycles_radiance(sky_exr, d[through], 1.5, 20.0)
                                   + r * _cycles_radiance(sky_exr, mirrored, 1.5, 20.0))
@@ -131,7 +112,7 @@ def test_rays_that_miss_see_the_environment_and_a_transparent_film_leaves_them_o
 
 def test_a_uniform_world_lights_a_body_mesh_as_rho_w(tmp_path):
     # A Lambertian surface under a uniform world W shows rho W (BLENDER-NOTES: Cycles gave 0.150 for 0.5, 0.3).
-    grey = _write_exr(tmp_path / "grey.exr", np.full((H, W, 3), 0.3, np.float32))
+    grey = write_exr(tmp_path / "grey.exr", np.full((H, W, 3), 0.3, np.float32))
     meshes = {"Block": shapes.box("Block", (-40, 0, -25), (40, 30, 25)),
               "Ball": shapes.uv_sphere("Ball", (0, -60, 0), 15.0, 64)}
     color = [0.5, 0.4, 0.2]

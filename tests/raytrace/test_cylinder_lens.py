@@ -336,14 +336,10 @@ def test_surroundings_light_and_surround_a_wrapped_body(tmp_path):
     # Under a uniform world W with the sun off, a Lambertian body shows rho W on its flat and its
     # curved front alike, and the rays that miss see W (README: surroundings; cylindrical lens).
     from core_tracer import render_passes
-    from core_tracer.images import imageio
+    from tests.helpers import write_exr
 
-    oiio = imageio.oiio_module()
-    path = str(tmp_path / "grey.exr")
-    out = oiio.ImageOutput.create(path)
-    assert out.open(path, oiio.ImageSpec(128, 64, 3, oiio.FLOAT))  # the irradiance integral's full grid
-    assert out.write_image(np.full((64, 128, 3), 0.3, np.float32))
-    out.close()
+    # the irradiance integral's full grid: a uniform world of 128 x 64 pixels
+    path = write_exr(tmp_path / "grey.exr", np.full((64, 128, 3), 0.3))
     doc = _wrap_scene()
     doc["environment"] = {"world": "file", "file": path}
     doc["light"].update(ambient=0.0, strength=0.0)

@@ -16,10 +16,9 @@ import sys
 
 import numpy as np
 import pytest
-from helpers import assert_bad_input, baseline_doc, run_cli, scene_with
+from helpers import assert_bad_input, baseline_doc, fresnel_unpolarised, run_cli, scene_with, write_exr
 
 from core_tracer import render_passes
-from core_tracer.images import imageio
 from core_tracer.raytrace import environment, tracer
 from core_tracer.raytrace.camera import eye_rays, make_camera
 from core_tracer.scene.reading import SceneError
@@ -27,21 +26,11 @@ from core_tracer.scene.reading import SceneError
 W, H = 64, 32
 
 
-def _write_exr(path, pixels: np.ndarray) -> str:
-    oiio = imageio.oiio_module()
-    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], 3, oiio.FLOAT)
-    out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), spec)
-    assert out.write_image(pixels.astype(np.float32))
-    out.close()
-    return str(path)
-
-
 @pytest.fixture
 def ramp_exr(tmp_path) -> str:
     """R = column, G = row (from the top), B = 1: a bilinear lookup gives the continuous pixel coordinates."""
     cols, rows = np.meshgrid(np.arange(W, dtype=np.float32), np.arange(H, dtype=np.float32))
-    return _write_exr(tmp_path / "ramp.exr", np.stack([cols, rows, np.ones_like(cols)], axis=-1))
+    return write_exr(tmp_path / "ramp.exr", np.stack([cols, rows, np.ones_like(cols)], axis=-1))
 
 
 @pytest.fixture
@@ -50,7 +39,7 @@ def smooth_exr(tmp_path) -> str:
     cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
     lon, lat = cols / W * 2 * np.pi, (0.5 - rows / H) * np.pi
     sky = np.stack([1.0 + 0.5 * np.sin(lon), 1.0 + 0.5 * np.cos(lon) * np.cos(lat), 1.2 + 0.6 * np.sin(lat)], -1)
-    return _write_exr(tmp_path / "sky.exr", sky)
+    return write_exr(tmp_path / "sky.exr", sky)
 
 
 def _cycles_uv(d: np.ndarray, rotation_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -108,7 +97,7 @@ def test_radiance_is_cycles_bilinear_lookup_times_strength(smooth_exr):
 
 
 def test_uniform_environment_gives_pi_times_its_radiance_as_irradiance(tmp_path):
-    env = _env(_write_exr(tmp_path / "grey.exr", np.full((H, W, 3), 0.3, np.float32)), strength=2.0)
+    env = _env(write_exr(tmp_path / "grey.exr", np.full((H, W, 3), 0.3, np.float32)), strength=2.0)
     normals = np.array([[0, -1, 0], [0, 0, 1], [1, 0, 0], [0.6, 0.0, -0.8]], dtype=np.float64)
     # Pixel solid angles are exact; the cosine taken at each 5.6-degree band's centre leaves 0.12 % on the zenith.
     np.testing.assert_allclose(env.irradiance(normals), np.full((4, 3), math.pi * 0.6), rtol=1.5e-3)
@@ -120,7 +109,7 @@ def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path):
     lon, lat = cols / (4 * W) * 2 * np.pi, (0.5 - rows / (4 * H)) * np.pi
     sky = np.stack([1 + 0.5 * np.sin(lon), 1 + 0.4 * np.cos(lat), 1.2 + 0.6 * np.sin(lat)], -1).astype(np.float32)
     sky[40, 200] = 5000.0
-    env = _env(_write_exr(tmp_path / "sun_sky.exr", sky), strength=1.3, rotation_deg=25.0)
+    env = _env(write_exr(tmp_path / "sun_sky.exr", sky), strength=1.3, rotation_deg=25.0)
     d, solid = env._pixel_directions()
     rng = np.random.default_rng(11)
     normals = np.concatenate([np.eye(3), -np.eye(3), rng.normal(size=(30, 3))])
@@ -133,7 +122,7 @@ def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path):
 def test_sun_direction_is_the_brightest_region(tmp_path):
     sky = np.full((H, W, 3), 0.5, np.float32)
     sky[5, 40] = 1000.0  # row 5 from the top, column 40
-    env = _env(_write_exr(tmp_path / "sun.exr", sky))
+    env = _env(write_exr(tmp_path / "sun.exr", sky))
     u, v = (40 + 0.5) / W, 1 - (5 + 0.5) / H
     phi, lat = (0.5 - u) * 2 * math.pi, (v - 0.5) * math.pi
     expected = [math.cos(lat) * math.cos(phi), math.cos(lat) * math.sin(phi), math.sin(lat)]
@@ -155,14 +144,6 @@ def _flat_clear_lens_oblique(path: str, rotation_deg: float = 20.0) -> dict:
     })
 
 
-def _fresnel(cos_i: float, n: float) -> float:
-    sin_t = math.sqrt(1 - cos_i * cos_i) / n
-    cos_t = math.sqrt(1 - sin_t * sin_t)
-    rs = (cos_i - n * cos_t) / (cos_i + n * cos_t)
-    rp = (n * cos_i - cos_t) / (n * cos_i + cos_t)
-    return 0.5 * (rs * rs + rp * rp)
-
-
 def test_flat_clear_lens_mirrors_the_environment_by_its_fresnel_reflectance(smooth_exr):
     scene = _flat_clear_lens_oblique(smooth_exr)
     result = render_passes(scene)
@@ -172,7 +153,7 @@ def test_flat_clear_lens_mirrors_the_environment_by_its_fresnel_reflectance(smoo
     cam = make_camera(scene["camera"], 24, 24)
     _, d = eye_rays(cam, lens_pixels)
     mirrored = d * np.array([1.0, -1.0, 1.0])  # the outer face is the plane y = 0
-    r = np.array([_fresnel(float(cos), 1.49) for cos in d[:, 1]])
+    r = np.array([fresnel_unpolarised(float(cos), 1.49) for cos in d[:, 1]])
     pixels = environment.read_image(smooth_exr).astype(np.float64)
     expected = r[:, None] * 1.5 * _bilinear(pixels, *_cycles_uv(mirrored, 20.0))
     np.testing.assert_allclose(surface[lens_pixels], expected, rtol=1e-5)
@@ -195,7 +176,7 @@ def test_eye_rays_that_miss_see_the_environment(smooth_exr):
 
 def test_body_under_a_uniform_environment_shows_its_colour_times_the_radiance(tmp_path):
     # A Lambertian surface under a uniform world W shows rho W (BLENDER-NOTES: Cycles gave 0.150 for 0.5, 0.3).
-    grey = _write_exr(tmp_path / "grey.exr", np.full((H, W, 3), 0.3, np.float32))
+    grey = write_exr(tmp_path / "grey.exr", np.full((H, W, 3), 0.3, np.float32))
     scene = scene_with(**{"environment": {"world": "file", "file": grey},
                           "light": {"direction": [0.3, -1, 0.6], "color": [1, 1, 1], "ambient": 0.0, "strength": 0.0},
                           "body.specular": 0.0, "image": {"width": 16, "height": 16}})

@@ -3,24 +3,15 @@
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
-from helpers import PRESETS, scene_with
+from helpers import PRESETS, fresnel_unpolarised, scene_with
 
 from core_tracer import parse_scene, render_passes
 from core_tracer.raytrace import optics, sunlight
 from core_tracer.raytrace.camera import eye_rays, make_camera
 from core_tracer.scene.derived import lamp_geometry
-
-
-def _fresnel(cos_i: float, n: float) -> float:
-    sin_t = math.sqrt(1 - cos_i * cos_i) / n
-    cos_t = math.sqrt(1 - sin_t * sin_t)
-    rs = (cos_i - n * cos_t) / (cos_i + n * cos_t)
-    rp = (n * cos_i - cos_t) / (n * cos_i + cos_t)
-    return 0.5 * (rs * rs + rp * rp)
 
 
 def test_the_general_sun_at_strength_1_and_white_is_the_papers_light():
@@ -84,8 +75,8 @@ def test_phantom_light_of_a_flat_clear_lens_is_the_closed_form():
     f, n = lamp["reflector"]["focal_length"], lamp["lens"]["ior"]
     w, shininess = lamp["reflector"]["scatter"], lamp["reflector"]["shininess"]
     sun = np.array(SUN) / np.linalg.norm(SUN)
-    r0 = _fresnel(1.0, n)
-    r_sun = _fresnel(-sun[1], n)
+    r0 = fresnel_unpolarised(1.0, n)
+    r_sun = fresnel_unpolarised(-sun[1], n)
     cam = make_camera(scene["camera"], 21, 21)
     origins, _ = eye_rays(cam, np.arange(21 * 21))
     checked = 0
