@@ -213,3 +213,106 @@ def test_a_freeform_preset_with_a_missing_mesh_file_changes_nothing(lamp_addon, 
     with pytest.raises(RuntimeError, match=r'freeform\.mesh_file: "shared\.glb" is missing'):
         bpy.ops.lamp.preset_import(filepath=str(json_path), add_to_library=False)
     assert list(bpy.context.scene.objects) == [] and len(bpy.context.scene.lamp_design.lamps) == 0
+
+
+def _add_my_lamp(lamp_addon, bl_scene) -> list:
+    """The designer's own small lamp beside the parametric one: a flat 25 × 4 × 25 mm slab of glass
+    with the lens role in front of the body, 75 mm right of the lamp axis, and a bulb-role sphere
+    (r = 3 mm) between it and the body. Placed in the world through the design root's matrix."""
+    import bmesh
+    import bpy
+    from mathutils import Matrix
+
+    to_world = lamp_addon.design_root.world_from_design(bl_scene)
+    made = []
+    for name, make, where, scale, role, values in (
+            ("My Slab", lambda bm: bmesh.ops.create_cube(bm, size=1.0), (0.075, -0.010, 0.0),
+             (0.025, 0.004, 0.025), "lens", {"ior": 1.5, "absorption": (0.5, 0.5, 0.02)}),
+            ("My Bulb", lambda bm: bmesh.ops.create_uvsphere(bm, u_segments=24, v_segments=12, radius=0.003),
+             (0.075, -0.004, 0.0), (1.0, 1.0, 1.0), "bulb", {"intensity": (8.0, 7.0, 6.0), "on": True})):
+        mesh = bpy.data.meshes.new(name)
+        bm = bmesh.new()
+        make(bm)
+        bm.to_mesh(mesh)
+        bm.free()
+        obj = bpy.data.objects.new(name, mesh)
+        bl_scene.collection.objects.link(obj)
+        obj.matrix_world = to_world @ Matrix.LocRotScale(where, None, scale)
+        lamp_addon.freeform_properties.set_role(obj, role, values)
+        made.append(obj)
+    bpy.context.view_layer.update()
+    return made
+
+
+def _mixed(lamp_addon, addon_core, bl_scene, size=SIZE) -> tuple[dict, list]:
+    """The paper's lamp built (not converted) and the designer's own slab and bulb beside it."""
+    scene = addon_core.scene.load_scene(BASELINE)
+    scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design_builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    bl_scene.render.engine = "LAMP_TRACER"
+    return scene, _add_my_lamp(lamp_addon, bl_scene)
+
+
+def _state(objects) -> list:
+    return [(o.name, o.data.name, tuple(map(tuple, o.matrix_world)), tuple(v.co[:] for v in o.data.vertices),
+             o.lamp_role.role, o.hide_render, o.hide_get()) for o in objects]
+
+
+def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _, mine = _mixed(lamp_addon, addon_core, bl_scene)
+    built = [o for o in bl_scene.objects if o.get("lamp_part") not in (None, "root", "sun")]
+    before = _state(mine) + _state(built)
+    names = sorted(o.name for o in bpy.data.objects)
+    meshes = len(bpy.data.meshes)
+    status = lamp_addon.freeform_status
+    assert status.rendered_text(bl_scene) == status.MIXED_TEXT
+    rgba = _f12(bl_scene, tmp_path / "mixed.exr")
+    np.testing.assert_array_equal(rgba[:, :, :3], _expected(lamp_addon, bl_scene))
+    prepared = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
+                                                  lamp_addon.render_camera.scene_for_render(bl_scene))
+    roles = sorted(p["role"] for p in prepared.scene["freeform"]["parts"])
+    assert roles == ["body", "bulb", "bulb", "lens", "lens", "reflector", "side_wall", "socket"]
+    # Both lamps are in the picture: the red lens in the middle, the designer's bulb through their slab.
+    h, w = SIZE[1], SIZE[0]
+    centre = rgba[h // 2, w // 2]
+    assert centre[0] > 3 * centre[1]
+    right = rgba[:, w // 2 + 1:, :3]
+    assert right.max() > 1.0  # only a bulb is brighter than 1 here; the parametric bulb is behind the lens
+    # Nothing of Blender's was made or changed.
+    assert _state(mine) + _state(built) == before
+    assert sorted(o.name for o in bpy.data.objects) == names and len(bpy.data.meshes) == meshes
+    # The parametric lamp out of date: the parts alone, and the panel says so.
+    bl_scene.lamp_design.lamps[0].lens.thickness = 4.0
+    assert status.rendered_text(bl_scene) == status.NOT_BUILT_TEXT
+    parts_only = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
+                                                    lamp_addon.render_camera.scene_for_render(bl_scene))
+    assert sorted(p["role"] for p in parts_only.scene["freeform"]["parts"]) == ["bulb", "lens"]
+
+
+def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+    import OpenImageIO as oiio
+
+    _mixed(lamp_addon, addon_core, bl_scene, size=(64, 48))
+    root = lamp_addon.design_root.find_root(bl_scene)
+    root.location = (0.3, -0.2, 0.1)  # the lamp stands anywhere: the file holds it in the root's frame
+    root.rotation_euler = (0.1, 0.2, 0.3)
+    for obj in (bpy.data.objects["My Slab"], bpy.data.objects["My Bulb"]):
+        obj.parent = root  # the designer's parts move with the lamp
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    bpy.context.view_layer.update()
+    in_blender = _f12(bl_scene, tmp_path / "blender.exr")
+    json_path = tmp_path / "mixed.json"
+    assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
+    doc = json.loads(json_path.read_text())
+    assert len(doc["freeform"]["parts"]) == 8  # the designer's 2 and the parametric lamp's 6
+    proc = run_cli("render", json_path, "-o", tmp_path / "cli.exr")
+    assert proc.returncode == 0, proc.stderr
+    buf = oiio.ImageBuf(str(tmp_path / "cli.exr"))
+    cli = np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
+    np.testing.assert_array_equal(cli[:, :, :3], in_blender[:, :, :3])  # pixel for pixel
+    assert not any(".lamp-export-aside" in o.name or "(Parametric)" in o.name for o in bpy.data.objects)
