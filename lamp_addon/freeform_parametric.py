@@ -11,7 +11,8 @@ here with numpy, in the design root's frame (mm), the numbers ``freeform_meshes`
 The glass is the faces Convert keeps (``freeform_solids.glass_faces``) with the corner normals
 Blender computed on the whole lens; the walls are moved ``freeform_solids.INSET_MM`` toward the lamp
 axis as Convert moves them. A lamp that is not built at its current design is left out (the panel
-says so): its meshes would not be the design the values come from.
+says so): its meshes would not be the design the values come from. A preview build is traced: it is
+the current design, with a coarser lens.
 """
 
 from __future__ import annotations
@@ -32,8 +33,8 @@ SUFFIX = " (Parametric)"
 def built_parts(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph | None) -> list[bpy.types.Object]:
     """The built lamp parts the design still uses: not hidden from renders (Convert hides the parts it
     copied) and shown by ``depsgraph`` (any, when None), by part key. Empty when the lamp is not built
-    up to date."""
-    if not design_builder.is_up_to_date(bl_scene):
+    at its current design (a preview build, Auto Build's lighter lens while a value is dragged, is)."""
+    if design_builder.build_status(bl_scene) not in (design_builder.UP_TO_DATE, design_builder.PREVIEW):
         return []
     return used_parts(bl_scene, depsgraph)
 

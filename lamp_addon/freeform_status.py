@@ -105,6 +105,7 @@ def rendered_text(bl_scene: bpy.types.Scene) -> str:
         return MIXED_TEXT
     status = design_builder.build_status(bl_scene)
     never_built = status == design_builder.NOT_BUILT and len(bl_scene.lamp_design.lamps) > 0
-    if status != design_builder.UP_TO_DATE and (never_built or freeform_parametric.used_parts(bl_scene, None)):
+    stale = status not in (design_builder.UP_TO_DATE, design_builder.PREVIEW)
+    if stale and (never_built or freeform_parametric.used_parts(bl_scene, None)):
         return NOT_BUILT_TEXT
     return PARTS_ONLY_TEXT

@@ -107,6 +107,10 @@ def test_convert_makes_closed_lenses_with_roles_and_hides_the_parametric_parts(l
     # Every part has its role material, so Cycles renders what the tracer traces.
     assert all(lamp_addon.freeform_materials.role_material(o) is not None for o in parts)
     assert {"REGISTER", "UNDO"} <= bpy.types.LAMP_OT_freeform_convert.bl_options
+    # The parametric lamp is hidden now: the copies are traced alone, and the panel says so.
+    status = lamp_addon.freeform_status
+    assert status.rendered_text(bl_scene) == status.PARTS_ONLY_TEXT
+    assert lamp_addon.freeform_parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get()) == []
 
 
 def test_converting_again_says_the_earlier_parts_are_traced_too(lamp_addon, addon_core, bl_scene, capfd):

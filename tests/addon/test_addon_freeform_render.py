@@ -316,3 +316,23 @@ def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, 
     cli = np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
     np.testing.assert_array_equal(cli[:, :, :3], in_blender[:, :, :3])  # pixel for pixel
     assert not any(".lamp-export-aside" in o.name or "(Parametric)" in o.name for o in bpy.data.objects)
+
+
+def test_rebuilding_the_parametric_lamp_of_a_mixed_design_is_rendered(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _mixed(lamp_addon, addon_core, bl_scene)
+    first = _f12(bl_scene, tmp_path / "1.exr")
+    cache = lamp_addon.freeform_geometry._entries[bl_scene.name].cache
+    assert cache.builds == 1
+    bl_scene.lamp_design.lamps[0].center = (-20.0, 0.0)  # the lamp 20 mm to the left, built again
+    lamp_addon.design_builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    bpy.context.view_layer.update()
+    moved = _f12(bl_scene, tmp_path / "2.exr")
+    assert cache.builds == 2
+    np.testing.assert_array_equal(moved[:, :, :3], _expected(lamp_addon, bl_scene))
+    columns = lambda image: np.nonzero(image[:, :, 0] > 2 * image[:, :, 1])[1]  # noqa: E731 - the red lens
+    # 20 mm is about 4 pixels here (48 pixels across about 225 mm)
+    shift = columns(first).mean() - columns(moved).mean()
+    print(f"\nthe lens moved {shift:.2f} pixels left")
+    assert 3 <= shift <= 6
