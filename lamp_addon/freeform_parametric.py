@@ -17,6 +17,7 @@ the current design, with a coarser lens.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 
 import bmesh
@@ -183,7 +184,8 @@ def part_documents(objects, scene: dict) -> list[dict]:
     for obj in objects:
         roles = freeform_convert.roles_of(obj[design_root.PART_KEY], scene)
         for name, (role, values) in zip(part_names(obj), roles, strict=True):
-            docs.append({"object": name, "role": role, role: values})
+            # as the JSON document holds them (lists, not tuples), and not shared with the design
+            docs.append({"object": name, "role": role, role: json.loads(json.dumps(values))})
     return docs
 
 
