@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from helpers import BASELINE, run_cli
+from helpers import BASELINE, PRESETS, run_cli
 
 pytestmark = pytest.mark.blender
 
@@ -244,9 +244,10 @@ def _add_my_lamp(lamp_addon, bl_scene) -> list:
     return made
 
 
-def _mixed(lamp_addon, addon_core, bl_scene, size=SIZE) -> tuple[dict, list]:
-    """The paper's lamp built (not converted) and the designer's own slab and bulb beside it."""
-    scene = addon_core.scene.load_scene(BASELINE)
+def _mixed(lamp_addon, addon_core, bl_scene, size=SIZE, path=BASELINE) -> tuple[dict, list]:
+    """The paper's lamp (or ``path``'s) built, not converted, and the designer's own slab and bulb
+    beside it."""
+    scene = addon_core.scene.load_scene(path)
     scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
     lamp_addon.design_builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
@@ -293,11 +294,13 @@ def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, ad
     assert sorted(p["role"] for p in parts_only.scene["freeform"]["parts"]) == ["bulb", "lens"]
 
 
-def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, addon_core, bl_scene, tmp_path):
+@pytest.mark.parametrize("path", [BASELINE, PRESETS / "prism-plate-stop-lamp.json"], ids=lambda p: p.stem)
+def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, addon_core, bl_scene, tmp_path,
+                                                                    path):
     import bpy
     import OpenImageIO as oiio
 
-    _mixed(lamp_addon, addon_core, bl_scene, size=(64, 48))
+    _mixed(lamp_addon, addon_core, bl_scene, size=(64, 48), path=path)
     root = lamp_addon.design_root.find_root(bl_scene)
     root.location = (0.3, -0.2, 0.1)  # the lamp stands anywhere: the file holds it in the root's frame
     root.rotation_euler = (0.1, 0.2, 0.3)
@@ -309,7 +312,10 @@ def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, 
     json_path = tmp_path / "mixed.json"
     assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
     doc = json.loads(json_path.read_text())
-    assert len(doc["freeform"]["parts"]) == 8  # the designer's 2 and the parametric lamp's 6
+    built = lamp_addon.freeform_parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get())
+    parametric = lamp_addon.freeform_parametric.part_documents(built, lamp_addon.render_camera.scene_for_render(
+        bl_scene))
+    assert len(doc["freeform"]["parts"]) == 2 + len(parametric) >= 8  # the designer's 2 and the lamp's
     proc = run_cli("render", json_path, "-o", tmp_path / "cli.exr")
     assert proc.returncode == 0, proc.stderr
     buf = oiio.ImageBuf(str(tmp_path / "cli.exr"))
@@ -336,3 +342,27 @@ def test_rebuilding_the_parametric_lamp_of_a_mixed_design_is_rendered(lamp_addon
     shift = columns(first).mean() - columns(moved).mean()
     print(f"\nthe lens moved {shift:.2f} pixels left")
     assert 3 <= shift <= 6
+
+
+def test_the_viewport_renders_a_mixed_design(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    _mixed(lamp_addon, addon_core, bl_scene)
+    camera = bl_scene.camera
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=SIZE[0], y=SIZE[1])]
+    view = [list(r) for r in camera.matrix_world.inverted()]
+    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    session.update(bl_scene, depsgraph)
+    geometry = session.freeform.geometry
+    parametric = sorted(name for name in geometry.meshes if name.endswith(" (Parametric)"))
+    assert len(parametric) == 6 and "Lamp 1 Side Wall (Parametric)" in parametric
+    assert sorted(set(geometry.meshes) - set(parametric)) == ["My Bulb", "My Slab"]
+    session.sync(bl_scene, SIZE[0], SIZE[1], window, view)
+    while session.preview.step() and session.preview.frame().divisor != 1:
+        pass
+    shown = session.preview.frame().image  # full resolution, one sample per pixel as F12
+    expected = _expected(lamp_addon, bl_scene)
+    close = np.abs(shown - expected).max(axis=2) <= 1e-3 * max(1.0, float(expected.max()))
+    print(f"\nviewport vs F12 on a mixed design: {close.mean():.1%} of the pixels within 0.1 %")
+    assert close.mean() > 0.97 and geometry.cache.builds == 1
