@@ -271,6 +271,8 @@ def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, ad
     meshes = len(bpy.data.meshes)
     status = lamp_addon.freeform_status
     assert status.rendered_text(bl_scene) == status.MIXED_TEXT
+    panel = " ".join(line.text for line in status.panel_lines(bl_scene))
+    assert status.MIXED_TEXT in panel and "only" not in panel
     rgba = _f12(bl_scene, tmp_path / "mixed.exr")
     np.testing.assert_array_equal(rgba[:, :, :3], _expected(lamp_addon, bl_scene))
     prepared = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
@@ -289,6 +291,7 @@ def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, ad
     # The parametric lamp out of date: the parts alone, and the panel says so.
     bl_scene.lamp_design.lamps[0].lens.thickness = 4.0
     assert status.rendered_text(bl_scene) == status.NOT_BUILT_TEXT
+    assert "Build Lamp" in " ".join(line.text for line in status.panel_lines(bl_scene))
     parts_only = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
                                                     lamp_addon.render_camera.scene_for_render(bl_scene))
     assert sorted(p["role"] for p in parts_only.scene["freeform"]["parts"]) == ["bulb", "lens"]
