@@ -45,7 +45,12 @@ def _values(role: str, source: dict) -> dict:
     return {key: source[key] for key in S.FREEFORM_ROLE_SECTIONS[role].fields if key in source}
 
 
-def _roles_of(part: str, scene: dict) -> list[tuple[str, dict]]:
+def is_convertible(part: str) -> bool:
+    """Whether built part ``part`` (its ``PART_KEY``) becomes free-form parts."""
+    return part == "body" or _PART.match(part) is not None
+
+
+def roles_of(part: str, scene: dict) -> list[tuple[str, dict]]:
     """(role, values) of the copies of built part ``part``: two for a lens, one otherwise."""
     if part == "body":
         return [("body", _values("body", scene["body"]))]
@@ -82,13 +87,13 @@ def convert_to_freeform(bl_scene: bpy.types.Scene) -> ConvertReport:
     root = design_root.find_root(bl_scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
     parts = sorted((obj for obj in bl_scene.objects
-                    if obj.type == "MESH" and _roles_of(obj.get(design_root.PART_KEY, ""), scene)),
+                    if obj.type == "MESH" and roles_of(obj.get(design_root.PART_KEY, ""), scene)),
                    key=lambda obj: obj.get(design_root.PART_KEY))
     if not parts:
         raise SceneError("lamps", "no built lamp part was found to convert; allowed a design built with Build Lamp")
     coll = _collection(bl_scene)
     for obj in parts:
-        roles = _roles_of(obj[design_root.PART_KEY], scene)
+        roles = roles_of(obj[design_root.PART_KEY], scene)
         mesh = bpy.data.meshes.new_from_object(obj.evaluated_get(depsgraph))
         kind = obj[design_root.PART_KEY].rsplit(".", 1)[-1]
         if kind == "lens":

@@ -4,7 +4,8 @@ The JSON is the design as F12 renders it (``render_camera.scene_for_render``: th
 numbers as F12 reads them, at the render size; so the file renders what F12 shows, bit for bit) with
 a ``freeform`` section: the mesh file's name and each part's object name, role and values.
 The ``.glb`` is written by Blender's own glTF exporter (``export_scene.gltf``, GLB, +Y up, no
-materials) and holds only the parts, in the design root's frame: what it exports are temporary
+materials) and holds the parts, and the parametric lamps the design still uses as meshes with their
+roles (``freeform_parametric``, the numbers F12 traces), in the design root's frame: what it exports are temporary
 objects with no transform carrying the parts' meshes already in that frame (``freeform_meshes
 .frame_mesh``, modifiers applied), in a temporary scene. Node names are the object names, which the
 JSON refers to; the temporary objects need those names for the length of the export, so the parts
@@ -24,7 +25,7 @@ import bpy
 from ..core_tracer import fileio
 from ..core_tracer.scene.reading import SceneError, scene_to_json
 from ..core_tracer.scene.validate import parse_scene
-from . import freeform_meshes, freeform_properties, freeform_scene, freeform_status
+from . import freeform_meshes, freeform_parametric, freeform_properties, freeform_scene, freeform_status
 
 _ASIDE = ".lamp-export-aside"
 
@@ -42,9 +43,10 @@ def glb_path_for(json_path: str) -> str:
     return stem + ".glb"
 
 
-def write_glb(bl_scene: bpy.types.Scene, objects: list, path: str) -> None:
-    """Write ``objects`` (parts of ``bl_scene``) to ``path`` with Blender's glTF exporter, in the
-    design's frame, modifiers applied."""
+def write_glb(bl_scene: bpy.types.Scene, objects: list, path: str, built: list = ()) -> None:
+    """Write ``objects`` (parts of ``bl_scene``) and the meshes of the built parametric parts
+    ``built`` (``freeform_parametric``) to ``path`` with Blender's glTF exporter, in the design's
+    frame, modifiers applied."""
     depsgraph = bpy.context.evaluated_depsgraph_get()
     to_design = freeform_meshes.design_from_world(bl_scene)
     names = [obj.name for obj in objects]
@@ -56,9 +58,11 @@ def write_glb(bl_scene: bpy.types.Scene, objects: list, path: str) -> None:
         for obj in objects:
             meshes.append(freeform_meshes.frame_mesh(obj, depsgraph, to_design))
             framed.append(meshes[-1])
+        parametric = freeform_parametric.blender_meshes(bl_scene, depsgraph, built)
+        meshes += parametric.values()
         for obj in objects:
             obj.name = obj.name + _ASIDE
-        for name, mesh in zip(names, framed, strict=True):
+        for name, mesh in zip([*names, *parametric], [*framed, *parametric.values()], strict=True):
             tmp = bpy.data.objects.new(name, mesh)
             made.append(tmp)
             if tmp.name != name:  # pragma: no cover - the names were just freed
@@ -90,7 +94,8 @@ def export_pair(bl_scene: bpy.types.Scene, json_path: str, *, overwrite: bool = 
     json_path = os.path.abspath(json_path)
     glb_path = glb_path_for(json_path)
     objects = freeform_properties.role_objects(bl_scene)
-    scene, meshes = freeform_scene.design_for_export(bl_scene, os.path.basename(glb_path), objects)
+    built = freeform_parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get())
+    scene, meshes = freeform_scene.design_for_export(bl_scene, os.path.basename(glb_path), objects, built)
     # The checks the tracer makes before rendering (closed outward lenses, limits; overlapping lenses
     # where Embree is here to find them): a colleague never receives a pair that cannot render.
     if freeform_status.available()[0]:
@@ -103,6 +108,7 @@ def export_pair(bl_scene: bpy.types.Scene, json_path: str, *, overwrite: bool = 
                 raise fileio.TargetExistsError(17, "exists already; tick Replace Existing to replace it", path)
     fileio.check_writable(json_path)
     with fileio.atomic_path(glb_path, overwrite=overwrite) as tmp:
-        write_glb(bl_scene, objects, tmp)
+        write_glb(bl_scene, objects, tmp, built)
     fileio.atomic_write_text(json_path, scene_to_json(parse_scene(scene)), overwrite=overwrite)
-    return ExportReport(json_path, glb_path, len(objects), sum(m.triangle_count for m in meshes.values()))
+    return ExportReport(json_path, glb_path, len(scene["freeform"]["parts"]),
+                        sum(m.triangle_count for m in meshes.values()))

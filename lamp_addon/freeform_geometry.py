@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import bpy
 from bpy.app.handlers import persistent
 
-from . import design_root, freeform_meshes, freeform_properties
+from . import design_root, freeform_meshes, freeform_parametric, freeform_properties
 
 
 @dataclass(frozen=True)
@@ -53,19 +53,20 @@ def part_key(objects) -> tuple:
     return tuple((obj.name, obj.lamp_role.role) for obj in objects)
 
 
-def geometry(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, objects) -> Geometry:
-    """The meshes of ``objects`` (parts of ``bl_scene`` as ``depsgraph`` evaluates them) and the
-    scene's acceleration-structure cache: the kept meshes when nothing they were made from changed,
-    else read now."""
+def geometry(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, objects, built=()) -> Geometry:
+    """The meshes of ``objects`` (parts of ``bl_scene`` as ``depsgraph`` evaluates them) and of the
+    built parametric parts ``built`` (``freeform_parametric``), and the scene's acceleration-structure
+    cache: the kept meshes when nothing they were made from changed, else read now."""
     from ..core_tracer.freeform import GeometryCache
 
-    key = part_key(objects)
+    key = part_key(objects) + tuple((obj.name, obj[design_root.PART_KEY]) for obj in built)
     with _lock:
         entry = _entries.get(bl_scene.name)
         if entry is not None and entry.key == key and bl_scene.name not in _stale:
             return entry
         _stale.discard(bl_scene.name)
     meshes = freeform_meshes.scene_meshes(bl_scene, depsgraph, objects)
+    meshes.update(freeform_parametric.part_meshes(bl_scene, depsgraph, built))
     with _lock:
         _reads[0] += 1
         cache = entry.cache if entry is not None else GeometryCache()
@@ -95,7 +96,8 @@ def _touches_parts(update) -> bool:
     if not (update.is_updated_geometry or update.is_updated_transform):
         return False
     obj = obj.original
-    return freeform_properties.has_role(obj) or obj.get(design_root.PART_KEY) == design_root.ROOT_PART
+    # the designer's parts, the design root, and the built parametric parts traced with them
+    return freeform_properties.has_role(obj) or obj.get(design_root.PART_KEY) is not None
 
 
 def note_updates(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph) -> None:

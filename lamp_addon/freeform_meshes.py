@@ -32,7 +32,7 @@ def design_from_world(bl_scene: bpy.types.Scene) -> Matrix:
     return design_root.world_from_design(bl_scene).inverted_safe()
 
 
-def _to_frame(mesh: bpy.types.Mesh, matrix: Matrix) -> None:
+def to_frame(mesh: bpy.types.Mesh, matrix: Matrix) -> None:
     mesh.transform(matrix)
     if matrix.to_3x3().determinant() < 0:
         mesh.flip_normals()
@@ -44,7 +44,7 @@ def frame_mesh(obj: bpy.types.Object, depsgraph: bpy.types.Depsgraph, to_design:
     design's frame (BU). The caller removes it (``bpy.data.meshes.remove``)."""
     obj_eval = obj.evaluated_get(depsgraph)
     mesh = bpy.data.meshes.new_from_object(obj_eval, preserve_all_data_layers=False, depsgraph=depsgraph)
-    _to_frame(mesh, to_design @ obj_eval.matrix_world)
+    to_frame(mesh, to_design @ obj_eval.matrix_world)
     return mesh
 
 
@@ -95,7 +95,7 @@ def scene_meshes(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, obje
         obj_eval = obj.evaluated_get(depsgraph)
         mesh = obj_eval.to_mesh()
         try:
-            _to_frame(mesh, to_design @ obj_eval.matrix_world)
+            to_frame(mesh, to_design @ obj_eval.matrix_world)
             out[obj.name] = mesh_data(mesh, obj.name)
         finally:
             obj_eval.to_mesh_clear()

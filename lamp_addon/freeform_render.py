@@ -4,10 +4,11 @@
 free-form scene when the depsgraph shows parts with roles: the ``freeform`` section added, the parts'
 meshes and the acceleration-structure cache from ``freeform_geometry``. ``render_passes`` then calls
 ``core_tracer.freeform.render_passes`` for such a scene and the parametric tracer otherwise, so
-F12, the viewport and Compare all decide the same way. The free-form tracer traces the parts alone
-(with the design's camera, light and background): a design with parts is rendered without its
-parametric lamps and body, and the panel says so. Where Embree is missing, the parts are left
-out and the parametric lamp is rendered as before; the reason is said once per session
+F12, the viewport and Compare all decide the same way. The free-form tracer traces the parts with
+the parametric lamps the design still uses (``freeform_parametric``: the built parts a Convert did
+not hide, as meshes with the roles Convert would give them), with the design's camera, light and
+background; a lamp that is not built up to date is left out, and the panel says so. Where Embree
+is missing, the parts are left out and the parametric lamp is rendered as before; the reason is said once per session
 (``missing_embree_note``), and the Free-form Parts panel says it always.
 """
 
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 
 import bpy
 
-from . import freeform_geometry, freeform_scene, freeform_status
+from . import freeform_geometry, freeform_parametric, freeform_scene, freeform_status
 
 
 @dataclass(frozen=True)
@@ -47,11 +48,12 @@ def prepare(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, scene: di
     ok, reason = freeform_status.available()
     if not ok:
         return Prepared(scene, None, missing_embree_note(reason))
+    built = freeform_parametric.built_parts(bl_scene, depsgraph)
     try:
-        with_parts = freeform_scene.with_freeform(scene, parts)
+        with_parts = freeform_scene.with_freeform(scene, parts, built=freeform_parametric.part_documents(built, scene))
     except freeform_scene.SceneError as e:
         raise freeform_scene.SceneError("free-form part", freeform_status.part_error_text(e, parts)) from None
-    return Prepared(with_parts, freeform_geometry.geometry(bl_scene, depsgraph, parts))
+    return Prepared(with_parts, freeform_geometry.geometry(bl_scene, depsgraph, parts, built))
 
 
 def render_passes(prepared: Prepared, width: int, height: int, **options):

@@ -11,33 +11,39 @@ import bpy
 
 from ..core_tracer.scene.reading import SceneError
 from ..core_tracer.scene.validate import parse_scene
-from . import freeform_meshes, freeform_properties
+from . import freeform_meshes, freeform_parametric, freeform_properties
 
 IN_BLENDER_MESH_FILE = "blender-objects.glb"  # the section needs a name; nothing is read from it
 
 
-def freeform_section(objects, mesh_file: str = IN_BLENDER_MESH_FILE) -> dict:
-    """The ``freeform`` section of ``objects`` (mesh objects with a role)."""
-    return {"mesh_file": mesh_file, "parts": [freeform_properties.part_document(obj) for obj in objects]}
+def freeform_section(objects, mesh_file: str = IN_BLENDER_MESH_FILE, built: tuple = ()) -> dict:
+    """The ``freeform`` section of ``objects`` (mesh objects with a role) followed by the entries
+    ``built`` of the parametric lamps traced with them (``freeform_parametric.part_documents``)."""
+    return {"mesh_file": mesh_file,
+            "parts": [freeform_properties.part_document(obj) for obj in objects] + list(built)}
 
 
-def with_freeform(scene: dict, objects, mesh_file: str = IN_BLENDER_MESH_FILE) -> dict:
-    """``scene`` (a normalised design) with the free-form parts of ``objects``, checked; raises
-    ``SceneError`` naming the part's field when a role value is not allowed."""
+def with_freeform(scene: dict, objects, mesh_file: str = IN_BLENDER_MESH_FILE, built: tuple = ()) -> dict:
+    """``scene`` (a normalised design) with the free-form parts of ``objects`` and the entries ``built``
+    of its parametric lamps, checked; raises ``SceneError`` naming the part's field when a role value
+    is not allowed."""
     if not objects:
         return scene
-    return parse_scene({**scene, "freeform": freeform_section(objects, mesh_file)})
+    return parse_scene({**scene, "freeform": freeform_section(objects, mesh_file, built)})
 
 
-def design_for_export(bl_scene: bpy.types.Scene, mesh_file: str, objects) -> tuple[dict, dict]:
+def design_for_export(bl_scene: bpy.types.Scene, mesh_file: str, objects, built=()) -> tuple[dict, dict]:
     """The checked scene of an export (the design as F12 renders it: the scene camera's numbers as F12
-    reads them, at the render size, with the parts) and the parts' meshes; raises ``SceneError`` when
-    there are no parts or something is not allowed."""
+    reads them, at the render size, with the parts and the built parametric parts ``built``) and their
+    meshes; raises ``SceneError`` when there are no parts or something is not allowed."""
     from .render_camera import scene_for_render
 
     if not objects:
         raise SceneError("freeform.parts", "no object has a lamp role; allowed 1 or more mesh objects with a role "
                                            "(Lamp tab, Free-form Parts, +)")
-    scene = with_freeform(scene_for_render(bl_scene), objects, mesh_file)
-    meshes = freeform_meshes.scene_meshes(bl_scene, bpy.context.evaluated_depsgraph_get(), objects)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    design = scene_for_render(bl_scene)
+    scene = with_freeform(design, objects, mesh_file, freeform_parametric.part_documents(built, design))
+    meshes = freeform_meshes.scene_meshes(bl_scene, depsgraph, objects)
+    meshes.update(freeform_parametric.part_meshes(bl_scene, depsgraph, built))
     return scene, meshes

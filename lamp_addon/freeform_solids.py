@@ -47,6 +47,18 @@ def split_lens(mesh: bpy.types.Mesh) -> tuple[bpy.types.Mesh, bpy.types.Mesh]:
     from the collar by its corners: every corner of a band face lies on a glass face (the outer
     face's rim, the cut surface's rim), while a collar face reaches up to corners no glass face has.
     This holds for every outer face: flat, or the cylinder of a wrap-around lens."""
+    keep, walls = glass_faces(mesh)
+    glass = mesh.copy()
+    keep_faces(glass, keep)
+    wall = mesh.copy()
+    keep_faces(wall, walls)
+    inset(wall)
+    return glass, wall
+
+
+def glass_faces(mesh: bpy.types.Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Per face of the lens mesh: whether it belongs to the closed glass, and to the side wall
+    (``split_lens``)."""
     material = np.empty(len(mesh.polygons), np.int32)
     mesh.polygons.foreach_get("material_index", material)
     corner_vertex, starts = _face_vertices(mesh)
@@ -54,12 +66,7 @@ def split_lens(mesh: bpy.types.Mesh) -> tuple[bpy.types.Mesh, bpy.types.Mesh]:
     on_glass = np.zeros(len(mesh.vertices), bool)
     on_glass[corner_vertex[material[corner_face] == meshes.LENS_GLASS]] = True
     band = (material == meshes.LENS_SIDE_WALL) & np.logical_and.reduceat(on_glass[corner_vertex], starts)
-    glass = mesh.copy()
-    keep_faces(glass, (material == meshes.LENS_GLASS) | band)
-    wall = mesh.copy()
-    keep_faces(wall, material == meshes.LENS_SIDE_WALL)
-    inset(wall)
-    return glass, wall
+    return (material == meshes.LENS_GLASS) | band, material == meshes.LENS_SIDE_WALL
 
 
 def inset(mesh: bpy.types.Mesh) -> None:

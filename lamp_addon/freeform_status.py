@@ -80,13 +80,32 @@ def panel_lines(bl_scene: bpy.types.Scene) -> list[Line]:
     if not ok:
         return [Line(text, "ERROR" if i == 0 else "NONE") for i, text in enumerate(textwrap.wrap(reason, WRAP))]
     if freeform_properties.role_objects(bl_scene):
-        lines.append(Line(RENDERED_TEXT, "INFO"))
+        lines += [Line(text, "INFO" if i == 0 else "NONE")
+                  for i, text in enumerate(textwrap.wrap(rendered_text(bl_scene), WRAP))]
     problem = part_problem(bl_scene)
     if problem is not None:
         lines += [Line(text, "ERROR" if i == 0 else "NONE") for i, text in enumerate(textwrap.wrap(problem, WRAP))]
     return lines
 
 
-# What the Lamp Tracer renders when parts have roles: core_tracer.freeform.render_passes traces the
-# parts alone (with the design's camera, light and background), not the parametric lamps and body.
-RENDERED_TEXT = "The Lamp Tracer renders these parts only, not the parametric lamps"
+# What the Lamp Tracer renders when parts have roles (freeform_render.prepare): the parts, with the
+# parametric lamps the design still uses as meshes (freeform_parametric); a lamp that is not built at
+# its current design is left out, and Build Lamp brings it in.
+MIXED_TEXT = "The Lamp Tracer renders these parts with the parametric lamps"
+PARTS_ONLY_TEXT = "The Lamp Tracer renders these parts only (no parametric lamp is built and shown)"
+NOT_BUILT_TEXT = ("The Lamp Tracer renders these parts only: the parametric lamps are not built at "
+                  "their current design (Build Lamp)")
+
+
+def rendered_text(bl_scene: bpy.types.Scene) -> str:
+    """What the Lamp Tracer renders of a scene with parts."""
+    from . import design_builder, freeform_parametric
+
+    if freeform_parametric.built_parts(bl_scene, None):
+        return MIXED_TEXT
+    status = design_builder.build_status(bl_scene)
+    never_built = status == design_builder.NOT_BUILT and len(bl_scene.lamp_design.lamps) > 0
+    stale = status not in (design_builder.UP_TO_DATE, design_builder.PREVIEW)
+    if stale and (never_built or freeform_parametric.used_parts(bl_scene, None)):
+        return NOT_BUILT_TEXT
+    return PARTS_ONLY_TEXT

@@ -45,9 +45,9 @@ def _freeform_image(lamp_addon, bl_scene, design: dict) -> np.ndarray:
     return lamp_addon.freeform_render.render_passes(prepared, SIZE, SIZE).image
 
 
-def agreement(parametric: np.ndarray, freeform: np.ndarray) -> tuple[float, float]:
+def agreement(parametric: np.ndarray, freeform: np.ndarray, mask: np.ndarray | None = None) -> tuple[float, float]:
     """(share of the pixels away from silhouettes and creases within ``TAU``, share excused: at
-    silhouettes and creases and outside ``TAU``)."""
+    silhouettes and creases and outside ``TAU``, of the image), of the pixels ``mask`` (all when None)."""
     value = np.maximum(parametric.max(axis=2), 1e-3 * parametric.max())
     error = np.abs(freeform - parametric).max(axis=2) / value
     padded = np.pad(parametric, ((1, 1), (1, 1), (0, 0)), mode="edge")
@@ -58,7 +58,9 @@ def agreement(parametric: np.ndarray, freeform: np.ndarray) -> tuple[float, floa
             neighbour = padded[1 + dy:h + 1 + dy, 1 + dx:w + 1 + dx]
             contrast = np.maximum(contrast, np.abs(neighbour - parametric).max(axis=2) / value)
     edge = contrast > EDGE_CONTRAST
-    return float((error[~edge] <= TAU).mean()), float((edge & (error > TAU)).mean())
+    if mask is None:
+        mask = np.ones((h, w), bool)
+    return float((error[~edge & mask] <= TAU).mean()), float((edge & (error > TAU) & mask).mean())
 
 
 def test_agreement_measure_fails_on_a_different_lamp():
@@ -105,6 +107,10 @@ def test_convert_makes_closed_lenses_with_roles_and_hides_the_parametric_parts(l
     # Every part has its role material, so Cycles renders what the tracer traces.
     assert all(lamp_addon.freeform_materials.role_material(o) is not None for o in parts)
     assert {"REGISTER", "UNDO"} <= bpy.types.LAMP_OT_freeform_convert.bl_options
+    # The parametric lamp is hidden now: the copies are traced alone, and the panel says so.
+    status = lamp_addon.freeform_status
+    assert status.rendered_text(bl_scene) == status.PARTS_ONLY_TEXT
+    assert lamp_addon.freeform_parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get()) == []
 
 
 def test_converting_again_says_the_earlier_parts_are_traced_too(lamp_addon, addon_core, bl_scene, capfd):
@@ -170,3 +176,56 @@ def test_convert_closes_the_glass_of_a_wrap_around_lens(lamp_addon, addon_core, 
     assert volumes["Lamp 3 Lens (Free-form)"] > outline.area * lens["thickness"] * 0.9
     walls = [o for o in parts if o.lamp_role.role == "side_wall"]
     assert sorted(o.name for o in walls) == [f"Lamp {i} Side Wall (Free-form)" for i in (1, 2, 3)]
+
+
+def test_a_mixed_design_renders_the_parametric_lamp_as_the_parametric_tracer(lamp_addon, addon_core, bl_scene):
+    """The built paper lamp, not converted, with the designer's own slab and bulb beside it: its lens
+    pixels as the parametric tracer renders the lamp alone, within the chord tolerance."""
+    from test_addon_freeform_render import _add_my_lamp
+
+    design = _design(lamp_addon, addon_core, bl_scene, BASELINE)
+    lamp_addon.design_builder.build_lamp(bl_scene, design)
+    parametric = addon_core.render_passes(design, SIZE, SIZE).image
+    _add_my_lamp(lamp_addon, bl_scene)
+    mixed = _freeform_image(lamp_addon, bl_scene, design)
+    lens = parametric[:, :, 0] > 2 * parametric[:, :, 1]  # the red lens; the body is grey
+    within, excepted = agreement(parametric, mixed, lens)
+    print(f"\nmixed design, parametric lens pixels ({lens.sum()}): {within:.2%} within {TAU:.0%} (at "
+          f"silhouettes and creases, excused: {excepted:.1%} of the image)")
+    assert lens.mean() > 0.1 and within >= MIN_SHARE_WITHIN and excepted <= MAX_SHARE_EXCEPTED
+    # The designer's slab is there too, with their bulb seen through it, where the parametric lamp
+    # shows the body.
+    beside = np.arange(SIZE) > np.nonzero(lens.any(axis=0))[0].max()  # the columns right of the lens
+    mine = (np.abs(mixed - parametric).max(axis=2) > TAU * parametric.max(axis=2)) & beside
+    print(f"the slab: {mine.sum()} pixels, brightest {mixed[mine].max():.2f} (the body there: "
+          f"{parametric[mine].max():.2f})")
+    assert mine.sum() >= 50 and mixed[mine].max() > 1.0 and parametric[mine].max() < 1.0
+
+
+@pytest.mark.parametrize("path", sorted(PRESETS.glob("*.json")), ids=lambda p: p.stem)
+def test_parametric_equals_mixed(lamp_addon, addon_core, bl_scene, path):
+    """Every preset built, not converted, traced by the free-form tracer beside a part of the
+    designer's (a small body-role block hidden behind the body): the meshes made of the parametric
+    lamps without Convert agree with the parametric tracer as Convert's do."""
+    import bmesh
+    import bpy
+    from mathutils import Matrix
+
+    design = _design(lamp_addon, addon_core, bl_scene, path)
+    lamp_addon.design_builder.build_lamp(bl_scene, design)
+    parametric = addon_core.render_passes(design, SIZE, SIZE).image
+    block = bpy.data.objects.new("My Block", bpy.data.meshes.new("My Block"))
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=0.01)
+    bm.to_mesh(block.data)
+    bm.free()
+    bl_scene.collection.objects.link(block)
+    behind = design["body"]["depth"] + 50.0 if design.get("body") else 500.0
+    block.matrix_world = lamp_addon.design_root.world_from_design(bl_scene) @ Matrix.Translation((0, behind / 1000, 0))
+    lamp_addon.freeform_properties.set_role(block, "body")
+    bpy.context.view_layer.update()
+    mixed = _freeform_image(lamp_addon, bl_scene, design)
+    within, excepted = agreement(parametric, mixed)
+    print(f"\n{path.stem}, mixed: {within:.2%} of the pixels within {TAU:.0%} (at silhouettes and creases, "
+          f"excused: {excepted:.1%} of the image)")
+    assert within >= MIN_SHARE_WITHIN and excepted <= MAX_SHARE_EXCEPTED

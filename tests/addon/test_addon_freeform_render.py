@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from helpers import BASELINE, run_cli
+from helpers import BASELINE, PRESETS, run_cli
 
 pytestmark = pytest.mark.blender
 
@@ -213,3 +213,159 @@ def test_a_freeform_preset_with_a_missing_mesh_file_changes_nothing(lamp_addon, 
     with pytest.raises(RuntimeError, match=r'freeform\.mesh_file: "shared\.glb" is missing'):
         bpy.ops.lamp.preset_import(filepath=str(json_path), add_to_library=False)
     assert list(bpy.context.scene.objects) == [] and len(bpy.context.scene.lamp_design.lamps) == 0
+
+
+def _add_my_lamp(lamp_addon, bl_scene) -> list:
+    """The designer's own small lamp beside the parametric one: a flat 25 × 4 × 25 mm slab of glass
+    with the lens role in front of the body, 75 mm right of the lamp axis, and a bulb-role sphere
+    (r = 3 mm) between it and the body. Placed in the world through the design root's matrix."""
+    import bmesh
+    import bpy
+    from mathutils import Matrix
+
+    to_world = lamp_addon.design_root.world_from_design(bl_scene)
+    made = []
+    for name, make, where, scale, role, values in (
+            ("My Slab", lambda bm: bmesh.ops.create_cube(bm, size=1.0), (0.075, -0.010, 0.0),
+             (0.025, 0.004, 0.025), "lens", {"ior": 1.5, "absorption": (0.5, 0.5, 0.02)}),
+            ("My Bulb", lambda bm: bmesh.ops.create_uvsphere(bm, u_segments=24, v_segments=12, radius=0.003),
+             (0.075, -0.004, 0.0), (1.0, 1.0, 1.0), "bulb", {"intensity": (8.0, 7.0, 6.0), "on": True})):
+        mesh = bpy.data.meshes.new(name)
+        bm = bmesh.new()
+        make(bm)
+        bm.to_mesh(mesh)
+        bm.free()
+        obj = bpy.data.objects.new(name, mesh)
+        bl_scene.collection.objects.link(obj)
+        obj.matrix_world = to_world @ Matrix.LocRotScale(where, None, scale)
+        lamp_addon.freeform_properties.set_role(obj, role, values)
+        made.append(obj)
+    bpy.context.view_layer.update()
+    return made
+
+
+def _mixed(lamp_addon, addon_core, bl_scene, size=SIZE, path=BASELINE) -> tuple[dict, list]:
+    """The paper's lamp (or ``path``'s) built, not converted, and the designer's own slab and bulb
+    beside it."""
+    scene = addon_core.scene.load_scene(path)
+    scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
+    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design_builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    bl_scene.render.engine = "LAMP_TRACER"
+    return scene, _add_my_lamp(lamp_addon, bl_scene)
+
+
+def _state(objects) -> list:
+    return [(o.name, o.data.name, tuple(map(tuple, o.matrix_world)), tuple(v.co[:] for v in o.data.vertices),
+             o.lamp_role.role, o.hide_render, o.hide_get()) for o in objects]
+
+
+def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _, mine = _mixed(lamp_addon, addon_core, bl_scene)
+    built = [o for o in bl_scene.objects if o.get("lamp_part") not in (None, "root", "sun")]
+    before = _state(mine) + _state(built)
+    names = sorted(o.name for o in bpy.data.objects)
+    meshes = len(bpy.data.meshes)
+    status = lamp_addon.freeform_status
+    assert status.rendered_text(bl_scene) == status.MIXED_TEXT
+    panel = " ".join(line.text for line in status.panel_lines(bl_scene))
+    assert status.MIXED_TEXT in panel and "only" not in panel
+    rgba = _f12(bl_scene, tmp_path / "mixed.exr")
+    np.testing.assert_array_equal(rgba[:, :, :3], _expected(lamp_addon, bl_scene))
+    prepared = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
+                                                  lamp_addon.render_camera.scene_for_render(bl_scene))
+    roles = sorted(p["role"] for p in prepared.scene["freeform"]["parts"])
+    assert roles == ["body", "bulb", "bulb", "lens", "lens", "reflector", "side_wall", "socket"]
+    # Both lamps are in the picture: the red lens in the middle, the designer's bulb through their slab.
+    h, w = SIZE[1], SIZE[0]
+    centre = rgba[h // 2, w // 2]
+    assert centre[0] > 3 * centre[1]
+    right = rgba[:, w // 2 + 1:, :3]
+    assert right.max() > 1.0  # only a bulb is brighter than 1 here; the parametric bulb is behind the lens
+    # Nothing of Blender's was made or changed.
+    assert _state(mine) + _state(built) == before
+    assert sorted(o.name for o in bpy.data.objects) == names and len(bpy.data.meshes) == meshes
+    # The parametric lamp out of date: the parts alone, and the panel says so.
+    bl_scene.lamp_design.lamps[0].lens.thickness = 4.0
+    assert status.rendered_text(bl_scene) == status.NOT_BUILT_TEXT
+    assert "Build Lamp" in " ".join(line.text for line in status.panel_lines(bl_scene))
+    parts_only = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
+                                                    lamp_addon.render_camera.scene_for_render(bl_scene))
+    assert sorted(p["role"] for p in parts_only.scene["freeform"]["parts"]) == ["bulb", "lens"]
+
+
+@pytest.mark.parametrize("path", [BASELINE, PRESETS / "prism-plate-stop-lamp.json"], ids=lambda p: p.stem)
+def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, addon_core, bl_scene, tmp_path,
+                                                                    path):
+    import bpy
+    import OpenImageIO as oiio
+
+    _mixed(lamp_addon, addon_core, bl_scene, size=(64, 48), path=path)
+    root = lamp_addon.design_root.find_root(bl_scene)
+    root.location = (0.3, -0.2, 0.1)  # the lamp stands anywhere: the file holds it in the root's frame
+    root.rotation_euler = (0.1, 0.2, 0.3)
+    for obj in (bpy.data.objects["My Slab"], bpy.data.objects["My Bulb"]):
+        obj.parent = root  # the designer's parts move with the lamp
+    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    bpy.context.view_layer.update()
+    in_blender = _f12(bl_scene, tmp_path / "blender.exr")
+    json_path = tmp_path / "mixed.json"
+    assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
+    doc = json.loads(json_path.read_text())
+    built = lamp_addon.freeform_parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get())
+    parametric = lamp_addon.freeform_parametric.part_documents(built, lamp_addon.render_camera.scene_for_render(
+        bl_scene))
+    assert len(doc["freeform"]["parts"]) == 2 + len(parametric) >= 8  # the designer's 2 and the lamp's
+    proc = run_cli("render", json_path, "-o", tmp_path / "cli.exr")
+    assert proc.returncode == 0, proc.stderr
+    buf = oiio.ImageBuf(str(tmp_path / "cli.exr"))
+    cli = np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
+    np.testing.assert_array_equal(cli[:, :, :3], in_blender[:, :, :3])  # pixel for pixel
+    assert not any(".lamp-export-aside" in o.name or "(Parametric)" in o.name for o in bpy.data.objects)
+
+
+def test_rebuilding_the_parametric_lamp_of_a_mixed_design_is_rendered(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _mixed(lamp_addon, addon_core, bl_scene)
+    first = _f12(bl_scene, tmp_path / "1.exr")
+    cache = lamp_addon.freeform_geometry._entries[bl_scene.name].cache
+    assert cache.builds == 1
+    bl_scene.lamp_design.lamps[0].center = (-20.0, 0.0)  # the lamp 20 mm to the left, built again
+    lamp_addon.design_builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    bpy.context.view_layer.update()
+    moved = _f12(bl_scene, tmp_path / "2.exr")
+    assert cache.builds == 2
+    np.testing.assert_array_equal(moved[:, :, :3], _expected(lamp_addon, bl_scene))
+    columns = lambda image: np.nonzero(image[:, :, 0] > 2 * image[:, :, 1])[1]  # noqa: E731 - the red lens
+    # 20 mm is about 4 pixels here (48 pixels across about 225 mm)
+    shift = columns(first).mean() - columns(moved).mean()
+    print(f"\nthe lens moved {shift:.2f} pixels left")
+    assert 3 <= shift <= 6
+
+
+def test_the_viewport_renders_a_mixed_design(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    _mixed(lamp_addon, addon_core, bl_scene)
+    camera = bl_scene.camera
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=SIZE[0], y=SIZE[1])]
+    view = [list(r) for r in camera.matrix_world.inverted()]
+    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    session.update(bl_scene, depsgraph)
+    geometry = session.freeform.geometry
+    parametric = sorted(name for name in geometry.meshes if name.endswith(" (Parametric)"))
+    assert len(parametric) == 6 and "Lamp 1 Side Wall (Parametric)" in parametric
+    assert sorted(set(geometry.meshes) - set(parametric)) == ["My Bulb", "My Slab"]
+    session.sync(bl_scene, SIZE[0], SIZE[1], window, view)
+    while session.preview.step() and session.preview.frame().divisor != 1:
+        pass
+    shown = session.preview.frame().image  # full resolution, one sample per pixel as F12
+    expected = _expected(lamp_addon, bl_scene)
+    close = np.abs(shown - expected).max(axis=2) <= 1e-3 * max(1.0, float(expected.max()))
+    print(f"\nviewport vs F12 on a mixed design: {close.mean():.1%} of the pixels within 0.1 %")
+    assert close.mean() > 0.97 and geometry.cache.builds == 1
