@@ -56,6 +56,7 @@ from . import (
     design_properties,
     design_root,
     freeform_materials,
+    freeform_parametric,
     freeform_properties,
     image_view,
     jobs,
@@ -352,12 +353,14 @@ class CompareRun:
             settings.set(ob, hide_render=True)
             self.left_out.append(ob.name)
         if parts:
-            # The tracer traces the free-form parts alone (freeform_render): so does Cycles, with the
-            # parts' role materials brought up to date and the parametric lamp's objects left out.
+            # The tracer traces the free-form parts with the parametric lamps still in use, built at
+            # the current design (freeform_render, freeform_parametric): so does Cycles, with the
+            # parts' role materials brought up to date and every other built object left out.
             freeform_materials.sync(bl_scene)
+            traced = {ob.name for ob in freeform_parametric.built_parts(bl_scene, None)}
             for ob in bl_scene.objects:
                 if ob.get(design_root.PART_KEY) not in (None, design_root.ROOT_PART) and ob.type == "MESH" \
-                        and not ob.hide_render and not freeform_properties.has_role(ob):
+                        and not ob.hide_render and not freeform_properties.has_role(ob) and ob.name not in traced:
                     settings.set(ob, hide_render=True)
         self._folder = tempfile.mkdtemp(prefix="lamp-compare-")
 

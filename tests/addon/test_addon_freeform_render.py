@@ -369,3 +369,21 @@ def test_the_viewport_renders_a_mixed_design(lamp_addon, addon_core, bl_scene):
     close = np.abs(shown - expected).max(axis=2) <= 1e-3 * max(1.0, float(expected.max()))
     print(f"\nviewport vs F12 on a mixed design: {close.mean():.1%} of the pixels within 0.1 %")
     assert close.mean() > 0.97 and geometry.cache.builds == 1
+
+
+def test_compare_keeps_the_traced_parametric_lamp_in_the_cycles_half(lamp_addon, addon_core, bl_scene):
+    # Cycles renders what the tracer traces: the designer's parts and the parametric lamp still in
+    # use; once the design is edited without rebuilding, the tracer leaves the lamp out, so does Cycles.
+    compare = lamp_addon.compare_ops
+    _, mine = _mixed(lamp_addon, addon_core, bl_scene)
+    built = [o for o in bl_scene.objects if o.get("lamp_part") not in (None, "root", "sun") and o.type == "MESH"]
+    assert built
+    with compare.CompareRun(bl_scene, samples=1, resolution=(24, 24), build=False) as run:
+        run.prepare()
+        assert not any(o.hide_render for o in built + mine)
+    assert not any(o.hide_render for o in built)
+    bl_scene.lamp_design.lamps[0].lens.ior = 1.6  # the built lamp is now out of date
+    with compare.CompareRun(bl_scene, samples=1, resolution=(24, 24), build=False) as run:
+        run.prepare()
+        assert all(o.hide_render for o in built) and not any(o.hide_render for o in mine)
+    assert not any(o.hide_render for o in built)  # put back
