@@ -97,20 +97,9 @@ def _grey(value: float) -> tuple[float, float, float, float]:
 
 
 def lens_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
-    tree = _tree(mat, new)
-    if new:
-        out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
-        bsdf = _node(tree, "ShaderNodeBsdfPrincipled", "Lens BSDF", (0, 100), Base_Color=(1, 1, 1, 1),
-                     Metallic=0.0, Roughness=0.0, Transmission_Weight=1.0)
-        vol = _node(tree, "ShaderNodeVolumeAbsorption", "Lens Absorption", (0, -300))
-        tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
-        tree.links.new(vol.outputs["Volume"], out.inputs["Volume"])
     lens = lamp["lens"]
     a = lens_absorption(lens)
-    density, color = cycles.absorption_volume(a)
-    missing: list[str] = []
-    _drive(tree, "Lens BSDF", missing, IOR=lens["ior"])
-    _drive(tree, "Lens Absorption", missing, Color=(*color, 1.0), Density=density)
+    missing = _glass(mat, new, "Lens", lens["ior"], a)
     mat.diffuse_color = (*cycles.transmitted_color(a, lens["thickness"]), 0.5)  # solid view: seen through
     return missing
 
@@ -118,20 +107,27 @@ def lens_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
 def prism_plate_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
     """The prism plate: glass like the lens's (Principled BSDF transmitting, IOR = the plate's n) with
     its own Volume Absorption (eq. 2, README: the prism plate)."""
+    plate = lamp["prism_plate"]
+    missing = _glass(mat, new, "Prism Plate", plate["ior"], plate["absorption"])
+    mat.diffuse_color = (*cycles.transmitted_color(plate["absorption"], plate["thickness"]), 0.3)
+    return missing
+
+
+def _glass(mat: bpy.types.Material, new: bool, label: str, ior: float, absorption) -> list[str]:
+    """A clear dielectric (Principled BSDF transmitting, "<label> BSDF") with a Volume Absorption of
+    eq. (2)'s coefficients ("<label> Absorption"); the nodes are made only in a new material."""
     tree = _tree(mat, new)
     if new:
         out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
-        bsdf = _node(tree, "ShaderNodeBsdfPrincipled", "Prism Plate BSDF", (0, 100), Base_Color=(1, 1, 1, 1),
+        bsdf = _node(tree, "ShaderNodeBsdfPrincipled", f"{label} BSDF", (0, 100), Base_Color=(1, 1, 1, 1),
                      Metallic=0.0, Roughness=0.0, Transmission_Weight=1.0)
-        vol = _node(tree, "ShaderNodeVolumeAbsorption", "Prism Plate Absorption", (0, -300))
+        vol = _node(tree, "ShaderNodeVolumeAbsorption", f"{label} Absorption", (0, -300))
         tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
         tree.links.new(vol.outputs["Volume"], out.inputs["Volume"])
-    plate = lamp["prism_plate"]
-    density, color = cycles.absorption_volume(plate["absorption"])
+    density, color = cycles.absorption_volume(absorption)
     missing: list[str] = []
-    _drive(tree, "Prism Plate BSDF", missing, IOR=plate["ior"])
-    _drive(tree, "Prism Plate Absorption", missing, Color=(*color, 1.0), Density=density)
-    mat.diffuse_color = (*cycles.transmitted_color(plate["absorption"], plate["thickness"]), 0.3)
+    _drive(tree, f"{label} BSDF", missing, IOR=ior)
+    _drive(tree, f"{label} Absorption", missing, Color=(*color, 1.0), Density=density)
     return missing
 
 

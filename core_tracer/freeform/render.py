@@ -34,7 +34,16 @@ from ..raytrace import optics, pixel_filter, sunlight
 from ..raytrace import paths as P
 from ..raytrace.camera import Camera, eye_rays, make_camera
 from ..raytrace.lighting import Lighting
-from ..raytrace.tracer import CUTOFF, MAX_DEPTH, PASS_NAMES, RenderCancelled, RenderResult, add_to_pass
+from ..raytrace.tracer import (
+    CUTOFF,
+    MAX_DEPTH,
+    PASS_NAMES,
+    TILE_RAYS,
+    RenderCancelled,
+    RenderResult,
+    add_to_pass,
+    sample_groups,
+)
 from .embree import EmbreeScene
 from .geometry import BODY, Geometry, GeometryCache
 from .meshes import MeshData
@@ -43,7 +52,6 @@ from .roles import PartTable
 (LENS_SURFACE, BULB_PASS, REFLECTOR_CONSTANT, REFLECTOR_SCATTER, SOCKET_PASS, SIDE_WALL_PASS, BODY_PASS,
  BACKGROUND_PASS) = range(len(PASS_NAMES))
 
-TILE_RAYS = 65536  # eye rays per band of rows, as the parametric tracer
 EYE = BODY + 1  # the source "surface" of an eye ray
 TO_BODY = 20  # a class beyond Table 1 and the prism plate's ⑬-⑲: a segment that reaches a body (housing) and ends there
 NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (README, "Free-form")
@@ -221,14 +229,9 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
     if ctx.samples == 1:  # the paper's setting: one ray through each pixel centre
         _trace_rays(ctx, band, *eye_rays(cam, pixels))
         return band
-    per_group = max(1, TILE_RAYS // len(pixels))
-    for s0 in range(0, ctx.samples, per_group):
-        count = min(ctx.samples, s0 + per_group) - s0
-        ray_pixels = np.repeat(pixels, count)
-        ray_samples = np.tile(np.arange(s0, s0 + count), len(pixels))
-        offsets = pixel_filter.sample_offsets(ctx.filter_name, ray_pixels, ray_samples, ctx.samples)
-        group = _Band(len(ray_pixels), ctx.record)
-        _trace_rays(ctx, group, *eye_rays(cam, ray_pixels, offsets))
+    for count, o, d in sample_groups(cam, pixels, ctx.samples, ctx.filter_name):
+        group = _Band(len(o), ctx.record)
+        _trace_rays(ctx, group, o, d)
         band.acc += group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3).sum(axis=2)
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)

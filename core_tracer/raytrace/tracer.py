@@ -266,14 +266,9 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
     # Samples in groups of at most TILE_RAYS rays (a wide row at many samples takes several),
     # each ray counted in its own slot (pixel-major), summed per pixel in sample order: the same
     # sums whatever the threads.
-    per_group = max(1, TILE_RAYS // len(pixels))
-    for s0 in range(0, ctx.samples, per_group):
-        count = min(ctx.samples, s0 + per_group) - s0
-        ray_pixels = np.repeat(pixels, count)
-        ray_samples = np.tile(np.arange(s0, s0 + count), len(pixels))
-        offsets = pixel_filter.sample_offsets(ctx.filter_name, ray_pixels, ray_samples, ctx.samples)
-        group = _Band(len(ray_pixels), ctx)
-        _trace_rays(ctx, group, *eye_rays(cam, ray_pixels, offsets))
+    for count, o, d in sample_groups(cam, pixels, ctx.samples, ctx.filter_name):
+        group = _Band(len(o), ctx)
+        _trace_rays(ctx, group, o, d)
         per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3)
         band.acc += _over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
         band.segments += group.segments
@@ -282,6 +277,20 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
     # The samples are placed by the filter (importance sampling), so the pixel is their plain mean.
     band.acc /= ctx.samples
     return band
+
+
+def sample_groups(cam: Camera, pixels: np.ndarray, samples: int,
+                  filter_name: str) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """Every sample of ``pixels`` as eye rays, in groups of at most ``TILE_RAYS`` rays (a wide row at
+    many samples takes several): per group its sample count and the rays' origins and directions,
+    pixel-major (ray i * count + s is sample s0 + s of pixel i), placed by the pixel filter."""
+    per_group = max(1, TILE_RAYS // len(pixels))
+    for s0 in range(0, samples, per_group):
+        count = min(samples, s0 + per_group) - s0
+        ray_pixels = np.repeat(pixels, count)
+        ray_samples = np.tile(np.arange(s0, s0 + count), len(pixels))
+        offsets = pixel_filter.sample_offsets(filter_name, ray_pixels, ray_samples, samples)
+        yield (count, *eye_rays(cam, ray_pixels, offsets))
 
 
 def pilot_samples(samples: int) -> np.ndarray:

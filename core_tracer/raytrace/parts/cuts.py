@@ -51,6 +51,17 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
 OFF_CAP, INTO_AIR, INTO_LENS = 0, 1, -1
 
 
+def flat_base_hits(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, t_limit: np.ndarray, flat: np.ndarray,
+                   t_hit: np.ndarray) -> None:
+    """The rays ``flat`` of lamps whose inner face is flat (no cuts) meet it as the plane A: their
+    hits closer than ``t_limit`` go into ``t_hit`` (the normal is the plane's, +y)."""
+    if len(flat):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (plane_a[flat] - o[flat, 1]) / d[flat, 1]
+        ok = (t > T_MIN) & (t < t_limit[flat])
+        t_hit[flat[ok]] = t[ok]
+
+
 def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndarray, pitch: np.ndarray,
              rho: np.ndarray, t_limit: np.ndarray, on_cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The cut surface (MODEL.md §3.1): returns the hit parameter and the unit normal pointing
@@ -72,12 +83,7 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
     t_hit = np.full(n, np.inf)
     on_cap = np.zeros(n, np.int8) if on_cap is None else on_cap
 
-    flat = np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0]
-    if len(flat):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (plane_a[flat] - o[flat, 1]) / d[flat, 1]
-        ok = (t > T_MIN) & (t < t_limit[flat])
-        t_hit[flat[ok]] = t[ok]
+    flat_base_hits(o, d, plane_a, t_limit, np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0], t_hit)
 
     # The walk keeps only the cell each ray's hit lies in; the normals follow after the walk.
     cell_i, cell_j = np.zeros(n), np.zeros(n)

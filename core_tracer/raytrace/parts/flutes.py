@@ -20,7 +20,7 @@ from .. import optics
 from .. import paths as P
 from ..lamp_table import LampTable
 from .base import T_MIN, Segments
-from .cuts import INTO_AIR, INTO_LENS, OFF_CAP
+from .cuts import INTO_AIR, INTO_LENS, OFF_CAP, flat_base_hits
 
 SURFACE = P.CUT
 MEDIA = (P.IN_LENS, P.IN_AIR)
@@ -47,12 +47,7 @@ def hit_flutes(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.nd
     normal[:, 1] = 1.0
     on_cap = np.zeros(n, np.int8) if on_cap is None else on_cap
 
-    flat = np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0]
-    if len(flat):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (plane_a[flat] - o[flat, 1]) / d[flat, 1]
-        ok = (t > T_MIN) & (t < t_limit[flat])
-        t_hit[flat[ok]] = t[ok]
+    flat_base_hits(o, d, plane_a, t_limit, np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0], t_hit)
 
     ray = np.nonzero(np.isfinite(rho))[0]
     if len(ray) == 0:
