@@ -17,7 +17,8 @@ part:
 - **Light** (the diffuse part of eq. 1, ``[d + (1 - d) cos theta] R0``): a sun of strength ``pi (1 - d)``
   shining along ``-light.direction`` and a world of colour d seen by diffuse rays only (adds ``R0 d``).
   Every other ray that leaves the scene sees the scene's ``background`` colour (black in the paper).
-  The sun's ``strength`` s and ``sun_color`` S make it strength ``pi (1 - d) s`` of colour S.
+  The sun's ``strength`` s and ``sun_color`` S make it strength ``pi (1 - d) s`` of colour S (the
+  environment sun's colour when ``follow_environment_color`` is on, as in the tracer).
 - **Surroundings** (``environment``): the image in an Environment Texture (Linear, equirectangular) after
   a Mapping node turning it about Z, into a Background of the environment's strength, seen by every ray
   and added to the ambient for diffuse rays (the tracer's C0 E(n) / pi); switched by two Mix Shaders, so
@@ -37,7 +38,9 @@ import math
 
 import bpy
 
+from ..core_tracer.raytrace import sunlight
 from ..core_tracer.scene.derived import lens_absorption
+from ..core_tracer.scene.reading import SceneError
 from .convert import cycles
 
 
@@ -280,10 +283,14 @@ def _add_surroundings(tree) -> None:
 
 
 def sun(light: bpy.types.SunLight, scene: dict, *, new: bool) -> list[str]:
-    """The sun of eq. (1): strength pi (1 - d) s (``cycles.sun_strength``) and colour S."""
+    """The sun of eq. (1): strength pi (1 - d) s (``cycles.sun_strength``) and colour S, the tracer's
+    (``sunlight.sun_color``: the environment sun's when the light follows its colour)."""
     if new:
         light.angle = 0.0  # a directional light, as in the paper
-    color = tuple(float(c) for c in scene["light"].get("sun_color", (1.0, 1.0, 1.0)))
+    try:
+        color = tuple(float(c) for c in sunlight.sun_color(scene))
+    except SceneError:  # an environment image that cannot be read: the builder reports it with the direction
+        color = tuple(float(c) for c in scene["light"].get("sun_color", (1.0, 1.0, 1.0)))
     if not _same(light.color, color):
         light.color = color
     energy = cycles.sun_strength(scene["light"]["ambient"]) * scene["light"].get("strength", 1.0)

@@ -5,8 +5,10 @@ Equation (1) with the sun's strength s and colour S (the paper's light is s = 1,
     [d + (1 - d) s S cos theta] C0 + s w (cos beta)^n C1
 
 computed by ``optics.phong`` itself when s = 1 and S = white, so that a scene an earlier version
-wrote renders bit for bit as before. Where an environment surrounds the lamp, the surfaces of eq.
-(1) are also lit by it as Lambertian surfaces, C0 E(n) / pi (``environment``).
+wrote renders bit for bit as before. S is ``sun_color``, or, where the light follows the
+environment's colour, the colour of the environment's sun at luminance 1 (``followed_color``).
+Where an environment surrounds the lamp, the surfaces of eq. (1) are also lit by it as Lambertian
+surfaces, C0 E(n) / pi (``environment``).
 
 **Phantom light** (where the paper is silent): sunlight that enters through the lens and is
 scattered back by the reflector. At every reflector hit of an eye path the reflector's scatter of
@@ -29,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import optics, outline
+from . import environment, optics, outline
 from .lamp_table import LampTable
 
 FRONT = np.array([0.0, -1.0, 0.0])  # the outward normal of the lens's outer face (MODEL.md §2)
@@ -65,7 +67,8 @@ class Sun:
 
 def from_scene(scene: dict, environment_sun: np.ndarray | None) -> Sun:
     """The sun of a normalised scene; ``environment_sun`` is the direction of the environment's sun
-    when the light follows the environment."""
+    when the light follows the environment. Its colour is ``sun_color``, or the environment sun's
+    (``followed_color``) when the light follows the environment's colour."""
     light = scene["light"]
     if environment_sun is not None and light.get("follow_environment", False):
         direction = np.asarray(environment_sun, dtype=np.float64)
@@ -73,7 +76,7 @@ def from_scene(scene: dict, environment_sun: np.ndarray | None) -> Sun:
         direction = np.asarray(light["direction"], dtype=np.float64)
     direction = direction / np.linalg.norm(direction)
     strength = float(light.get("strength", 1.0))
-    color = np.asarray(light.get("sun_color", (1.0, 1.0, 1.0)), dtype=np.float64)
+    color = sun_color(scene)
     return Sun(direction, np.asarray(light["color"], dtype=np.float64), light["ambient"], strength, color,
                strength == 1.0 and bool((color == 1.0).all()))
 
@@ -128,7 +131,41 @@ def scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, scatter: np.ndarra
 def sun_direction(scene: dict) -> np.ndarray:
     """The unit direction toward the sun of a normalised scene: ``light.direction``, or the
     environment's sun when the light follows it (reads the environment image)."""
-    from . import environment  # the image is read only when the light follows it
-
     env = environment.from_scene(scene) if scene["light"].get("follow_environment", False) else None
     return from_scene(scene, env.sun_direction() if env is not None else None).direction
+
+
+def sun_color(scene: dict) -> np.ndarray:
+    """The colour S of the sun of a normalised scene: ``light.sun_color``, or the colour of the
+    environment's sun (``followed_color``) when ``light.follow_environment_color`` is on and the
+    scene has surroundings (reads the environment image)."""
+    light = scene["light"]
+    if light.get("follow_environment_color", False):
+        env = environment.from_scene(scene)  # the image is read only when the light follows it
+        if env is not None:
+            return followed_color(env)
+    return np.asarray(light.get("sun_color", (1.0, 1.0, 1.0)), dtype=np.float64)
+
+
+def followed_color(env: environment.Environment) -> np.ndarray:
+    """The colour of the environment's sun at luminance 1 (Rec. 709), independent of the
+    environment's strength and turn (where the paper is silent, README "The sun").
+
+    The sun is the pixels ``environment.sun_direction`` takes (at least ``SUN_FRACTION`` of the
+    brightest luminance); its colour is that of their light, sum(L_c omega) over those pixels of
+    radiance L and solid angle omega, divided by its luminance. Negative values (out of gamut in
+    some HDR images) count as 0; an image without light gives white."""
+    pixels = env.pixels
+    h, w = pixels.shape[:2]
+    rgb = pixels.reshape(-1, 3).astype(np.float64)
+    lum = rgb @ environment.LUMINANCE
+    sun = lum >= environment.SUN_FRACTION * lum.max()
+    # The solid angle of a pixel is its row's band of latitude over its width (the turn does not
+    # change it): rows from the top, latitude pi/2 - (i + 1/2) pi/h at the centre.
+    lat = 0.5 * np.pi - (np.arange(h) + 0.5) * np.pi / h
+    half = 0.5 * np.pi / h
+    solid = np.repeat((np.sin(lat + half) - np.sin(lat - half)) * (2.0 * np.pi / w), w)
+    light = np.maximum((rgb[sun] * solid[sun, None]).sum(axis=0), 0.0)
+    luminance = float(light @ environment.LUMINANCE)
+    return light / luminance if luminance > 0.0 else np.ones(3)
+

@@ -283,6 +283,9 @@ LIGHT = Section(
                                "low sun looks lit (phantom light; off in the paper)"),
         "follow_environment": Flag(False, "Take the sun's direction from the environment image: the direction of "
                                           "its brightest region (direction is then ignored)"),
+        "follow_environment_color": Flag(False, "Take the sun's colour from the environment image: the colour of its "
+                                                "brightest region at luminance 1 (sun_color is then ignored; strength "
+                                                "still sets how bright the sun is)"),
     },
     "The sun: the directional light of equation (1)",
 )
