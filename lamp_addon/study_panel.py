@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import bpy
 
+from ..core_tracer.scene import spec as S
 from . import study_settings
 from .design_panels import DesignSection
 
@@ -31,6 +32,9 @@ def _draw_axis(layout, axis, title: str) -> None:
         sub.prop(axis, "steps")
     else:
         col.prop(axis, "values", text="Values")
+        spec = S.lookup(axis.parameter)
+        if isinstance(spec, S.Choice):  # the names the list may hold
+            col.label(text=spec.range_text().capitalize())
 
 
 class LAMP_PT_study(DesignSection, bpy.types.Panel):

@@ -1,9 +1,10 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """The settings of a design study (``Scene.lamp_study``) and the study they describe.
 
-For each axis a parameter (every numeric field that ``core_tracer.study`` can vary, lamp fields for
-all lamps or for one), and its values as a range with a number of steps or as a list written as on
-the command line (``1.45, 1.5`` or, for colours and other vectors, ``0.9/0.1/0.1, 0.9/0.5/0.05``);
+For each axis a parameter (every field that ``core_tracer.study`` can vary: numbers, switches and
+choices such as the cut type, lamp fields for all lamps or for one), and its values as a range with
+a number of steps or as a list written as on the command line (``1.45, 1.5``; for colours and other
+vectors ``0.9/0.1/0.1, 0.9/0.5/0.05``; for choices their names, ``fisheye, sawtooth``);
 the size of each variant and the number of worker processes. ``study_from_settings`` turns them into
 a ``core_tracer.study.Study`` of the current design; ``last_study`` is the study of the sheet shown.
 Both the panel (``study_panel``) and the operators (``study_ops``) sit above this module.
@@ -44,7 +45,8 @@ def _parameter_items() -> tuple[tuple[str, str, str], ...]:
     for path in st.study_parameters():
         spec = S.lookup(path)
         vector = isinstance(spec, S.Num) and spec.size > 1
-        how = "a list of values written a/b/c" if vector else "a range or a list"
+        how = "a list of values written a/b/c" if vector else "a list of names" if isinstance(spec, S.Choice) \
+            else "a range or a list"
         items.append((path, _parameter_label(path), f"{spec.doc}. Allowed: {spec.range_text()}; {how}"))
     return tuple(items)
 
@@ -79,8 +81,10 @@ def _suggest_range(self, context) -> None:
         self.mode = "LIST"
         if isinstance(spec, S.Flag):
             self.values = "on, off"
-        elif isinstance(spec, S.Choice):  # the surroundings: by day, in the evening, at night
+        elif self.parameter == "environment.world":  # the surroundings: by day, in the evening, at night
             self.values = "city, sunset, night"
+        elif isinstance(spec, S.Choice):  # the kinds of lamp side by side: every name the field allows
+            self.values = ", ".join(spec.choices)
         else:  # a vector: the values the lamp functions give it (red, amber, clear lenses), else its default
             values = suggested_values(self.parameter) or [list(spec.default)]
             self.values = ", ".join(st.format_value(v) for v in values)
@@ -138,9 +142,8 @@ def axis_doc(axis) -> dict:
     path = axis.parameter
     if axis.lamp != ALL_LAMPS and is_lamp_parameter(path):
         path = f"lamps[{axis.lamp}].{path}"
-    if axis.mode == "RANGE":
-        if not is_single_number(axis.parameter):
-            raise SceneError(path, "is a vector or a switch; give its values as a list (e.g. 0.9/0.1/0.1, 0.5/0.5/0.5)")
+    # Only a single number has a range; the others take the list the panel shows for them.
+    if axis.mode == "RANGE" and is_single_number(axis.parameter):
         return {"parameter": path, "range": [axis.start, axis.stop], "steps": axis.steps}
     if not axis.values.strip():
         raise SceneError(path, "has no values; write them separated by commas")

@@ -19,15 +19,20 @@ machine and re-run. A *parameter* is a dotted path of ``spec.py``:
 - a trailing ``[k]`` picks one component of a vector: ``bulb.offset[1]`` is the bulb's y offset.
 
 Every numeric field (``spec.Num``) can be varied, scalar or vector (vector values are lists;
-a vector range is interpolated per component), ``bulb.on`` over ``[true, false]`` and the
-surroundings ``environment.world`` over a list of names (``["city", "sunset", "night"]``). Varying
-the lens colour (``lens.transmitted_color``) replaces the lens's absorption coefficients, as the
-scene format allows only one of the two (MODEL.md §6); varying ``lens.absorption`` replaces a
-transmitted colour.
+a vector range is interpolated per component), ``bulb.on`` over ``[true, false]``, and every
+choice of the scene (``spec.Choice``) over a list of its names: the surroundings
+``environment.world`` (``["city", "sunset", "night"]``), the camera's projection, and the kind of
+lamp, ``cuts.type`` (fisheye, sawtooth, flutes), ``lens.outline``, ``lens.shape``,
+``lens.wrap_toward`` and ``collection`` (reflector, prism_plate), so lamp types stand side by side
+on one sheet. A lamp's ``function`` is varied as choosing it in Blender does: it sets the lens
+colour and the bulb that go with it (``scene.functions``). Varying the lens colour
+(``lens.transmitted_color``) replaces the lens's absorption coefficients, as the scene format allows
+only one of the two (MODEL.md §6); varying ``lens.absorption`` replaces a transmitted colour.
 
 Everything is checked when the study is built, before anything renders: the parameter names,
 each value against its field's range, the number of variants, and every variant scene with
-``scene.parse_scene`` (a cut height too large for the pitch, a bulb outside its reflector…).
+``scene.parse_scene`` (a cut height too large for the pitch, a bulb outside its reflector, a
+combination of types the scene refuses such as saw-tooth cuts on a cylindrical lens…).
 Errors are ``SceneError``s naming the parameter, the value and the allowed range.
 
 This module is bpy-free and numpy-free; rendering is ``study_run``, the contact sheet
@@ -45,6 +50,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from .. import budget
+from ..scene import functions
 from ..scene import spec as S
 from ..scene.derived import use_form
 from ..scene.reading import SceneError, parse_json_text, read_json, scene_to_json
@@ -65,8 +71,12 @@ _PARAMETER = re.compile(
 # samples per pixel vary like any parameter.
 _SCENE_PARTS = ("camera", "light", "background", "body", "environment")
 _SCENE_FIELDS = ("image.samples",)
-# The choices a study may vary (over a list of names): the surroundings.
-_CHOICE_FIELDS = ("environment.world",)
+# A lamp's function sets these lamp fields (``functions.apply_function``): an axis over the function
+# and an axis over one of them would set the same thing.
+# Both forms of the lens colour count: the function switches the lens to a transmitted colour.
+_FUNCTION_SETS = frozenset(
+    {("lens", key) for look, _ in functions.DEFAULTS.values() for key in look.fields}
+    | {("lens", key) for key in S.LENS.rule_of("transmitted_color").keys} | {("bulb", "intensity")})
 
 
 # ---------------------------------------------------------------------------------------------
@@ -86,8 +96,9 @@ class Parameter:
 
     @property
     def short(self) -> str:
-        """The name printed next to each cell's value: the last key (and component)."""
-        name = self.keys[-1]
+        """The name printed next to each cell's value: the last key (and component); a choice named
+        only "type" keeps its section, ``cuts.type``, so a cell says what kind of thing it shows."""
+        name = ".".join(self.keys[-2:]) if self.keys[-1] == "type" else self.keys[-1]
         return name if self.component is None else f"{name}[{self.component}]"
 
     @property
@@ -126,7 +137,7 @@ def study_parameters() -> list[str]:
     """
     out = []
     for info in S.iter_fields():
-        if not isinstance(info.spec, S.Num | S.Flag) and info.path not in _CHOICE_FIELDS:
+        if not isinstance(info.spec, S.Num | S.Flag | S.Choice):
             continue
         path = info.path
         if path.startswith("lamps[]."):
@@ -159,8 +170,9 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
     except KeyError:
         raise SceneError(show_key(text), "unknown parameter; see `python -m core_tracer study --list` "
                                "for the names") from None
-    if not isinstance(field_spec, S.Num | S.Flag) and ".".join(keys) not in _CHOICE_FIELDS:
-        raise SceneError(show_key(text), "is not a numeric field a study can vary")
+    if not isinstance(field_spec, S.Num | S.Flag | S.Choice):
+        raise SceneError(show_key(text), "is not a field a study can vary; allowed numbers, switches and choices "
+                                         "(see `python -m core_tracer study --list`)")
     lamp = None
     if explicit_lamp and m["lamp"] != "":
         n = len(base["lamps"]) if base is not None else S.MAX_LAMPS
@@ -219,6 +231,10 @@ def apply_value(scene: dict, param: Parameter, value: Any) -> None:
     one form of an either/or rule (the lens colour) switches the section to that form first,
     keeping what it describes, so a component edit keeps the other components."""
     last = param.keys[-1]
+    if param.lamp_scope and param.keys == ("function",):
+        for lamp in param.nodes(scene):  # as choosing it in Blender: its lens colour and bulb
+            functions.apply_function(lamp, value)
+        return
     for node in param.nodes(scene):
         use_form(node, param.section, last)
         if param.component is None:
@@ -385,8 +401,9 @@ class Study:
         axes = tuple(parse_axis(a, base, f"axes[{i}]") for i, a in enumerate(axes_doc))
         if len(axes) == 2 and _overlap(axes[0].parameter, axes[1].parameter):
             raise SceneError(axes[1].parameter.text, f"sets what {axes[0].parameter.text} sets (the same field, "
-                                                     "or the other form of the lens colour); a study's two axes "
-                                                     "must vary different things")
+                                                     "the other form of the lens colour, or the lens colour and "
+                                                     "bulb a lamp function sets); a study's two axes must vary "
+                                                     "different things")
         count = math.prod(len(a.values) for a in axes)
         if count > MAX_VARIANTS:
             shape = " x ".join(str(len(a.values)) for a in axes)
@@ -515,6 +532,9 @@ def _setting(axes: tuple[Axis, ...], values: tuple[Any, ...]) -> str:
 def _overlap(a: Parameter, b: Parameter) -> bool:
     """Whether two axes would set the same number (or the two exclusive forms of one lens colour)."""
     lamps_meet = a.lamp_scope == b.lamp_scope and (a.lamp is None or b.lamp is None or a.lamp == b.lamp)
+    if lamps_meet and a.lamp_scope and {a.keys[:1], b.keys[:1]} & {("function",)} and a.keys != b.keys:
+        other = b if a.keys == ("function",) else a
+        return other.keys in _FUNCTION_SETS  # a function sets its lens colour and bulb
     if a.keys != b.keys:
         # Two forms of one either/or rule (absorption against a transmitted colour) exclude each other.
         same_section = a.keys[:-1] == b.keys[:-1]
@@ -559,7 +579,7 @@ def parse_vary(text: str) -> dict:
     spec_text = spec_text.strip()
     if ":" in spec_text and _is_choice(name):
         raise SceneError(name, f"is a name; give values (a list) instead of a range, "
-                               f"{S.lookup(name).range_text()}")
+                               f"{resolve_parameter(name).spec.range_text()}")
     if ":" in spec_text:
         parts = spec_text.split(":")
         if len(parts) != 3:
@@ -576,8 +596,11 @@ def parse_vary(text: str) -> dict:
 
 
 def _is_choice(name: str) -> bool:
-    """Whether ``name`` is one of the choices a study varies by name (``environment.world``)."""
-    return name in _CHOICE_FIELDS
+    """Whether ``name`` is a choice a study varies by name (``environment.world``, ``lamps[1].cuts.type``)."""
+    try:
+        return isinstance(resolve_parameter(name).spec, S.Choice)
+    except SceneError:  # not a parameter at all: said when the study is built
+        return False
 
 
 def _parse_item(name: str, item: str) -> Any:

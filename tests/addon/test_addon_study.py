@@ -141,3 +141,44 @@ def test_keep_variant_saves_a_preset_in_the_user_library(design, lamp_addon, add
     finally:
         for name in set(os.listdir(library.folder)) - before:
             os.unlink(os.path.join(library.folder, name))
+
+
+def test_a_study_of_lamp_types_runs_in_blender(design, lamp_addon):
+    import bpy
+    from test_addon_panels import draw
+
+    settings = design.lamp_study
+    settings.axis_1.parameter = "cuts.type"  # a choice: the list of every name it allows is suggested
+    settings.use_axis_2 = True
+    settings.axis_2.parameter = "collection"
+    assert (settings.axis_1.mode, settings.axis_1.values) == ("LIST", "fisheye, sawtooth, flutes")
+    assert (settings.axis_2.mode, settings.axis_2.values) == ("LIST", "reflector, prism_plate")
+    log = draw(lamp_addon.study_panel.LAMP_PT_study, design).log
+    assert ("label", 'One of "fisheye", "sawtooth", "flutes"', "NONE") in log  # the names the list may hold
+    assert bpy.ops.lamp.study_run() == {"FINISHED"}
+    study = lamp_addon.study_settings.last_study()
+    assert (study.columns, study.rows) == (3, 2)
+    assert study.variants[5].label(study) == "cuts.type=flutes  collection=prism_plate"
+    # The cells of the sheet differ from each other (mean absolute difference over 5 % of their mean).
+    pixels = lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Study"])
+    cells = [pixels[r.y:r.y + r.h, r.x:r.x + r.w] for r in study_sheet.layout(study).cells]
+    for a in range(len(cells)):
+        for b in range(a):
+            assert np.abs(cells[a] - cells[b]).mean() > 0.05 * 0.5 * (cells[a].mean() + cells[b].mean()), (a, b)
+    design.lamp_study.variant = 5
+    assert bpy.ops.lamp.study_apply_variant() == {"FINISHED"}
+    lamp = lamp_addon.design_properties.design_to_scene(design)["lamps"][0]
+    assert (lamp["cuts"]["type"], lamp["collection"]) == ("sawtooth", "prism_plate")
+
+
+def test_a_combination_the_scene_refuses_is_reported_without_rendering(design, lamp_addon):
+    import bpy
+
+    settings = design.lamp_study
+    settings.axis_1.parameter = "collection"
+    settings.use_axis_2 = True
+    settings.axis_2.parameter = "lens.outline"
+    with pytest.raises(RuntimeError, match=r"lamps\[0\]\.lens\.outline: a prism plate sits behind a round lens; "
+                                           r"allowed \"round\".*collection=prism_plate, lens\.outline=rectangular"):
+        bpy.ops.lamp.study_run()
+    assert "Lamp Study" not in bpy.data.images
