@@ -189,9 +189,9 @@ class LAMP_OT_study_apply_variant(_OnLastStudy, bpy.types.Operator):
         study, index = chosen
         try:
             design = design_properties.design_to_scene(context.scene)
-            for axis, value in zip(study.axes, study.variants[index].values, strict=True):
-                parameter = st.resolve_parameter(axis.parameter.text, design)  # the design may have changed
-                st.apply_value(design, parameter, value)
+            # The design may have changed since the study: its lamps are checked again.
+            parameters = tuple(st.resolve_parameter(axis.parameter.text, design) for axis in study.axes)
+            st.apply_values(design, parameters, study.variants[index].values)
             design_properties.scene_to_design(context.scene, design)
         except SceneError as e:
             return reports.cancelled(self, str(e))

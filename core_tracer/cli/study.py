@@ -26,7 +26,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--vary", action="append", default=[], metavar="PARAM=SPEC",
                         help="a parameter and its values: lens.ior=1.45:1.6:4 (lo:hi:steps), "
                              "cuts.height=0.5,1,2 (a list), lens.transmitted_color=0.9/0.1/0.1,0.9/0.5/0.05 "
-                             "(colours); lamps[1].lens.ior names one lamp; once or twice")
+                             "(colours), cuts.type=fisheye,sawtooth,flutes (names of a choice); "
+                             "lamps[1].lens.ior names one lamp; once or twice")
     parser.add_argument("--study", metavar="STUDY", help="re-run a study: a .json definition or a sheet .exr/.png")
     parser.add_argument("-o", "--output", metavar="SHEET",
                         help="the contact sheet, .png (view transform) or .exr (linear)")

@@ -226,6 +226,15 @@ def _check_scalar(param: Parameter, x: Any, sp: S.Num) -> float | int:
     return check_number(x, sp, param.text, one.range_text())
 
 
+def apply_values(scene: dict, params: tuple[Parameter, ...], values: tuple[Any, ...]) -> None:
+    """Set each parameter to its value (``apply_value``), a lamp's function first: it sets the lens
+    colour seen through the lens's thickness as it is then, so a thickness varied with it still
+    makes the lens look deeper, whichever axis comes first."""
+    pairs = sorted(zip(params, values, strict=True), key=lambda pv: pv[0].keys != ("function",))
+    for param, value in pairs:
+        apply_value(scene, param, value)
+
+
 def apply_value(scene: dict, param: Parameter, value: Any) -> None:
     """Set ``param`` to ``value`` in ``scene`` (a normalised scene, edited in place). A field of
     one form of an either/or rule (the lens colour) switches the section to that form first,
@@ -515,8 +524,7 @@ def _build_variants(base: dict, axes: tuple[Axis, ...]) -> tuple[Variant, ...]:
         column = index_per_axis[0]
         row = index_per_axis[1] if len(axes) > 1 else 0
         scene = copy.deepcopy(base)
-        for axis, value in zip(axes, values, strict=True):
-            apply_value(scene, axis.parameter, value)
+        apply_values(scene, tuple(a.parameter for a in axes), values)
         try:
             scene = parse_scene(scene)
         except SceneError as e:

@@ -122,3 +122,12 @@ def test_choice_axes_round_trip_and_apply_to_one_lamp():
     again = st.Study.from_json(s.to_json())
     assert [v.scene for v in again.variants] == [v.scene for v in s.variants]
     assert st.resolve_parameter("lamps[1].cuts.type").short == "cuts.type"
+
+
+@pytest.mark.parametrize("function_first", [True, False])
+def test_a_function_goes_first_so_a_thicker_lens_still_looks_deeper(function_first):
+    axes = [st.parse_vary("function=stop"), st.parse_vary("lens.thickness=3,6")]
+    s = st.Study.build(baseline_doc(), axes if function_first else axes[::-1], (32, 24))
+    lenses = [v.scene["lamps"][0]["lens"] for v in s.variants]
+    assert {lens["reference_thickness"] for lens in lenses} == {baseline_doc()["lamps"][0]["lens"]["thickness"]}
+    assert sorted(lens["thickness"] for lens in lenses) == [3, 6]
