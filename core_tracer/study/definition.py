@@ -72,8 +72,8 @@ _PARAMETER = re.compile(
 _SCENE_PARTS = ("camera", "light", "background", "body", "environment")
 _SCENE_FIELDS = ("image.samples",)
 # A lamp's function sets these lamp fields (``functions.apply_function``): an axis over the function
-# and an axis over one of them would set the same thing.
-# Both forms of the lens colour count: the function switches the lens to a transmitted colour.
+# and an axis over one of them would set the same thing. Both forms of the lens colour count: the
+# function switches the lens to a transmitted colour.
 _FUNCTION_SETS = frozenset(
     {("lens", key) for look, _ in functions.DEFAULTS.values() for key in look.fields}
     | {("lens", key) for key in S.LENS.rule_of("transmitted_color").keys} | {("bulb", "intensity")})
@@ -538,11 +538,12 @@ def _setting(axes: tuple[Axis, ...], values: tuple[Any, ...]) -> str:
 
 
 def _overlap(a: Parameter, b: Parameter) -> bool:
-    """Whether two axes would set the same number (or the two exclusive forms of one lens colour)."""
+    """Whether two axes would set the same number (or the two exclusive forms of one lens colour, or
+    a lamp's function and a field it sets)."""
     lamps_meet = a.lamp_scope == b.lamp_scope and (a.lamp is None or b.lamp is None or a.lamp == b.lamp)
-    if lamps_meet and a.lamp_scope and {a.keys[:1], b.keys[:1]} & {("function",)} and a.keys != b.keys:
+    if lamps_meet and a.lamp_scope and ("function",) in (a.keys, b.keys) and a.keys != b.keys:
         other = b if a.keys == ("function",) else a
-        return other.keys in _FUNCTION_SETS  # a function sets its lens colour and bulb
+        return other.keys in _FUNCTION_SETS
     if a.keys != b.keys:
         # Two forms of one either/or rule (absorption against a transmitted colour) exclude each other.
         same_section = a.keys[:-1] == b.keys[:-1]
