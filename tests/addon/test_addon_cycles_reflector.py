@@ -5,7 +5,7 @@ The case: a flat clear lens over a reflector with a mirror (reflectance 0.8), no
 constant colour, bulb off, black socket, side wall and body, no sun, the paper's black background,
 seen obliquely so that most eye rays meet the reflector two or three times before they leave. The
 tracer's lens pixel is then T·C (T the lens's Fresnel transmission on the way in) and nothing else;
-a Cycles emission seen on every hit adds ρ·T·C for each further hit (measured +25 % here). Measured
+a Cycles emission seen on every hit adds ρ·T·C for each further hit (measured +33 % here). Measured
 figures are printed (``pytest -s``).
 """
 
@@ -22,9 +22,10 @@ import core_tracer
 pytestmark = pytest.mark.blender
 
 SIZE = (48, 32)
-SAMPLES = 64  # Cycles' only noise is its choice of reflection or transmission at the glass: ~0.5 % here
-# Relative, per channel: the Glossy Depth gate misses the few paths that reflect inside the lens first.
-TOLERANCE = 0.03
+SAMPLES = 64  # Cycles' only noise is its choice of reflection or transmission at the glass: ~0.2 % here
+# Relative, per channel: the Glossy Depth gate also hides C from the rare paths that reflect inside the
+# lens before their first reflector hit (about r squared, 0.2 %).
+TOLERANCE = 0.01
 
 
 def _constant_scene() -> dict:
@@ -51,10 +52,15 @@ def test_the_reflector_constant_is_seen_once_per_path_as_in_the_model(lamp_addon
     tracer, cycles = result["tracer"].astype(np.float64), result["cycles"].astype(np.float64)
     passes = core_tracer.render_passes(scene, *SIZE, samples=1).passes
     # Only the constant lights this lamp: the pixels where the reflector is seen (not the bulb or
-    # socket). Both renderers sample the pixel centres (one sample; Cycles' 0.01 px box).
-    seen = passes["reflector_constant"].max(axis=2) > 0
+    # socket), away from the outlines, where Cycles' tessellated bulb, socket and rim cover a few pixels
+    # differently. Both renderers sample the pixel centres (one sample; Cycles' 0.01 px box).
+    reflector = passes["reflector_constant"].max(axis=2) > 0
+    np.testing.assert_allclose(tracer[reflector], passes["reflector_constant"][reflector], rtol=1e-6)  # nothing else
+    seen = reflector.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            seen &= np.roll(reflector, (dy, dx), axis=(0, 1))
     assert seen.sum() > 300
-    np.testing.assert_allclose(tracer[seen], passes["reflector_constant"][seen], rtol=1e-6)  # nothing else
     t = tracer[seen].mean(axis=0)
     c = cycles[seen].mean(axis=0)
     relative = (c - t) / t
