@@ -67,80 +67,190 @@ def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pi
     n = len(o)
     t_hit = np.full(n, np.inf)
     normal = np.zeros((n, 3))
-    slopes = _Slopes(table, row)
-    own_facet, own_draft = _own_element(o, y_a, pitch, slopes, count, on_rings)
-    walk = _enter(o, d, y_a, y_b, pitch, radius, count, t_limit)
-    hit_ring = np.zeros(n, np.int64)
-    hit_draft = np.zeros(n, bool)
+    ray, k, t_a, t_out = _enter(o, d, y_a, y_b, pitch, radius, count, t_limit)
+    if len(ray) == 0:
+        return t_hit, normal
+    w = _Walk(o[ray], d[ray], y_a[ray], pitch[ray], radius[ray], count[ray], row[ray] * table.shape[1],
+              table.ravel(), None if on_rings is None else on_rings[ray])
+    last = table.shape[1] - 1
+    t_ray = np.full(len(ray), np.inf)
+    hit_ring = np.zeros(len(ray), np.int64)
+    hit_draft = np.zeros(len(ray), bool)
+    at = None  # the walking rays' places among w's (None: all of them, in order)
     for _ in range(MAX_RING_STEPS):
-        if len(walk["ray"]) == 0:
+        if len(k) == 0:
             break
-        ray, k = walk["ray"], walk["k"]
-        oo, dd = o[ray], d[ray]
-        p = pitch[ray]
-        s = slopes(ray, k)
-        r_out = np.minimum((k + 1) * p, radius[ray])
-        t_next, inward = _next_border(walk, oo, dd, k * p, r_out)
-        t_end = np.minimum(t_next, walk["t_out"])
+        v = w if at is None else _Subset(w, at)
+        r_in = k * v.p
+        r_foot = (k + 1) * v.p
+        r_out = np.minimum(r_foot, v.radius)
+        t_next, inward = _next_border(v, w.all_moving, r_in, r_out, t_a)
         # the facet within the stretch over this ring
-        tf = _facet_hit(oo, dd, y_a[ray], s, (k + 1) * p, k * p, r_out, walk["t_a"], t_end, own_facet[ray] == k)
-        found = np.isfinite(tf)
-        t_hit[ray[found]] = tf[found]
-        hit_ring[ray[found]] = k[found]
-        # the border into the next ring, before the slab ends: a draft face there?
-        cross = ~found & (t_next <= walk["t_out"])
+        tf = _facet_hit(v, w.slopes[v.row + k], r_foot, r_in, r_out, t_a, np.minimum(t_next, t_out), k)
+        missed = ~np.isfinite(tf)
+        found = np.nonzero(~missed)[0]
+        here = found if at is None else at[found]
+        t_ray[here], hit_ring[here] = tf[found], k[found]
+        # the border into the next ring, before the slab ends: a draft face there? (the rest only)
+        cross = np.nonzero(missed & (t_next <= t_out))[0]
+        at = cross if at is None else at[cross]
+        k, t_next, inward, t_out = k[cross], t_next[cross], inward[cross], t_out[cross]
+        v = _Subset(w, at)
         border_ring = np.where(inward, k, k + 1)  # the ring whose draft stands on that border
-        at_rim = ~inward & ((k + 1) >= count[ray])  # leaving the plate's rings at its rim
-        y = oo[:, 1] + t_next * dd[:, 1]
-        s_border = slopes(ray, np.minimum(border_ring, table.shape[1] - 1))
-        in_draft = (y >= y_a[ray]) & (y <= y_a[ray] + s_border * pitch[ray]) & (border_ring > 0) & ~at_rim
-        draft = cross & in_draft & (t_next > T_MIN)
-        maybe_own = np.nonzero(draft & (own_draft[ray] == border_ring))[0]
+        at_rim = ~inward & ((k + 1) >= v.count)  # leaving the plate's rings at its rim
+        y = v.oy + t_next * v.dy
+        s_border = w.slopes[v.row + np.minimum(border_ring, last)]
+        draft = (y >= v.y_a) & (y <= v.y_a + s_border * v.p) & (border_ring > 0) & ~at_rim & (t_next > T_MIN)
+        maybe_own = np.nonzero(draft & (v.own_draft == border_ring))[0]
         if len(maybe_own):  # a ray leaving its own draft: that crossing is its start
             m = maybe_own
-            draft[m] = ~_is_start_root(oo[m], dd[m], border_ring[m] * p[m], t_next[m])
-        t_hit[ray[draft]] = t_next[draft]
-        hit_ring[ray[draft]] = border_ring[draft]
-        hit_draft[ray[draft]] = True
-        go = cross & ~draft & ~at_rim
-        walk["k"] = np.where(inward, k - 1, k + 1)
-        walk["t_a"] = t_next
-        walk = {key: value[go] for key, value in walk.items()}
+            draft[m] = ~_is_start_root(v.o[m], v.d[m], border_ring[m] * v.p[m], t_next[m])
+        here = at[draft]
+        t_ray[here], hit_ring[here], hit_draft[here] = t_next[draft], border_ring[draft], True
+        go = np.nonzero(~draft & ~at_rim)[0]
+        at = at[go]
+        k = np.where(inward, k - 1, k + 1)[go]
+        t_a, t_out = t_next[go], t_out[go]
 
-    hit = np.nonzero(np.isfinite(t_hit))[0]
-    if len(hit):
-        p = o[hit] + t_hit[hit, None] * d[hit]
-        rho = np.hypot(p[:, 0], p[:, 2])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ux, uz = np.where(rho > 0, p[:, 0] / rho, 0.0), np.where(rho > 0, p[:, 2] / rho, 0.0)
-        s = slopes(hit, hit_ring[hit])
-        facet = np.stack([s * ux, np.ones(len(hit)), s * uz], axis=1) / np.sqrt(1.0 + s * s)[:, None]
-        draft = np.stack([-ux, np.zeros(len(hit)), -uz], axis=1)
-        normal[hit] = np.where(hit_draft[hit, None], draft, facet)
+    t_hit[ray] = t_ray
+    _normals(normal, ray, t_ray, hit_ring, hit_draft, w)
     return t_hit, normal
 
 
-class _Slopes:
-    """Ray i's slope of ring k, ``table[row[i], k]``, without a copy of each ray's row."""
+def _normals(normal, ray, t_ray, hit_ring, hit_draft, w) -> None:
+    """Into ``normal[ray]``, where the walk found a hit: the unit normal out of the plate, the
+    cone's on a facet, -r on a draft (the radial direction at the hit point)."""
+    hit = np.nonzero(np.isfinite(t_ray))[0]
+    if len(hit) == 0:
+        return
+    t = t_ray[hit]
+    x = w.o[hit, 0] + t * w.d[hit, 0]
+    z = w.o[hit, 2] + t * w.d[hit, 2]
+    rho = np.hypot(x, z)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ux, uz = np.where(rho > 0, x / rho, 0.0), np.where(rho > 0, z / rho, 0.0)
+    out = np.empty((len(hit), 3))
+    on_draft = hit_draft[hit]
+    facet = np.nonzero(~on_draft)[0]
+    s = w.slopes[w.row[hit[facet]] + hit_ring[hit[facet]]]
+    length = np.sqrt(1.0 + s * s)
+    out[facet, 0] = s * ux[facet] / length
+    out[facet, 1] = 1.0 / length
+    out[facet, 2] = s * uz[facet] / length
+    draft = np.nonzero(on_draft)[0]
+    out[draft, 0] = -ux[draft]
+    out[draft, 1] = 0.0
+    out[draft, 2] = -uz[draft]
+    normal[ray[hit]] = out
 
-    def __init__(self, table: np.ndarray, row: np.ndarray):
-        self.flat, self.width, self.row = table.ravel(), table.shape[1], row
 
-    def __call__(self, ray: np.ndarray, ring: np.ndarray) -> np.ndarray:
-        return self.flat[self.row[ray] * self.width + ring]
+class _Walk:
+    """What the walk needs of each walking ray, worked out once (not at every ring it visits).
+    Every number is computed by the same expression as when each step worked it out afresh, so
+    the hits are the same bits."""
+
+    def __init__(self, o, d, y_a, p, radius, count, row, slopes, on_rings):
+        self.o, self.d, self.y_a, self.p, self.radius, self.count, self.row = o, d, y_a, p, radius, count, row
+        self.slopes = slopes
+        ox, oz, dx, dz = o[:, 0], o[:, 2], d[:, 0], d[:, 2]
+        self.oy, self.dy = o[:, 1], d[:, 1]
+        self.a = dx**2 + dz**2
+        self.b = ox * dx + oz * dz  # half the linear coefficient of r^2 along the ray
+        self.oo = ox**2 + oz**2
+        with np.errstate(invalid="ignore", divide="ignore"):
+            self.t_near = -self.b / self.a  # nearest approach to the axis
+            self.rho2_near = np.maximum(self.oo - self.b * self.b / self.a, 0.0)
+        self.moving = self.a > 1e-30
+        self.all_moving = bool(self.moving.all())
+        self.height = self.oy - y_a
+        self.fall = -self.dy
+        self.own_facet, self.own_draft = _own_element(o, y_a, p, slopes, row, count, on_rings)
 
 
-def _enter(o, d, y_a, y_b, pitch, radius, count, t_limit) -> dict[str, np.ndarray]:
+class _Subset:
+    """The rays ``at`` of a ``_Walk``: each of its per-ray arrays gathered when first used (after
+    the first ring most rays have found their hit, and a step uses only some of the arrays)."""
+
+    def __init__(self, walk: _Walk, at: np.ndarray):
+        self._walk, self._at = walk, at
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        value = getattr(self._walk, name)[self._at]
+        setattr(self, name, value)
+        return value
+
+
+def _next_border(v, all_moving: bool, r_in, r_out, t_a) -> tuple[np.ndarray, np.ndarray]:
+    """Where the ray, inside the ring r_in <= r <= r_out from ``t_a`` on, next crosses one of its
+    borders, and whether inward (r_in) or outward (r_out). Never before ``t_a``."""
+    t_near, rho2_near, a = v.t_near, v.rho2_near, v.a
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = t_near + np.sqrt(np.maximum(r_out**2 - rho2_near, 0.0) / a)
+        inner = t_near - np.sqrt((r_in**2 - rho2_near) / a)
+        inner_ok = (r_in > 0) & (rho2_near < r_in**2) & (inner >= t_a - TOL) & (t_near > t_a)
+    if all_moving:
+        t_inner = np.where(inner_ok, np.maximum(inner, t_a), np.inf)
+        t_outer = np.maximum(out, t_a)
+    else:
+        t_inner = np.where(v.moving & inner_ok, np.maximum(inner, t_a), np.inf)
+        t_outer = np.where(v.moving, np.maximum(out, t_a), np.inf)
+    inward = t_inner < t_outer
+    return np.where(inward, t_inner, t_outer), inward
+
+
+def _facet_hit(v, s, r_foot, r_in, r_out, t_a, t_b, k) -> np.ndarray:
+    """The cone r = r_foot - (y - y_a) / s between radii r_in and r_out, for roots in [t_a, t_b];
+    for a ray starting on this facet (``v.own_facet == k``) the root nearest 0 is the start itself."""
+    e = r_foot - v.height / s  # r on the cone as a linear function of t: e + g t
+    g = v.fall / s
+    lo, hi = _roots(v.a - g * g, 2.0 * (v.b - e * g), v.oo - e * e)
+    own = v.own_facet == k
+    if own.any():
+        own_is_lo = np.abs(lo) <= np.abs(hi)
+        lo = np.where(own & own_is_lo, np.nan, lo)
+        hi = np.where(own & ~own_is_lo, np.nan, hi)
+    # t > T_MIN and t >= t_a - TOL in one comparison (NaN fails both)
+    lower = np.maximum(_ABOVE_T_MIN, t_a - TOL)
+    upper = t_b + TOL
+    r_lo, r_hi = r_in - 1e-9, r_out + 1e-9
+    with np.errstate(invalid="ignore"):
+        r = e + g * lo
+        ok_lo = (lo >= lower) & (lo <= upper) & (r >= r_lo) & (r <= r_hi)
+        r = e + g * hi
+        ok_hi = (hi >= lower) & (hi <= upper) & (r >= r_lo) & (r <= r_hi)
+    return np.where(ok_lo, lo, np.where(ok_hi, hi, np.inf))
+
+
+_ABOVE_T_MIN = np.nextafter(T_MIN, np.inf)  # t > T_MIN exactly when t >= this
+
+
+def _roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``base.solve_quadratic``, the same bits, without its linear case where no ray needs it."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        linear = np.abs(a) < 1e-15
+        if linear.any():
+            return solve_quadratic(a, b, c)
+        disc = b * b - 4.0 * a * c
+        sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
+        q = -0.5 * (b + np.copysign(sq, b))
+        r1 = q / a
+        r2 = c / q
+    return np.fmin(r1, r2), np.fmax(r1, r2)
+
+
+def _enter(o, d, y_a, y_b, pitch, radius, count, t_limit):
     """The rays whose path crosses the slab between planes A and B before ``t_limit``, each in
-    the ring where it enters the slab (or where it starts, inside it)."""
+    the ring where it enters the slab (or where it starts, inside it): the rays, their rings and
+    where they enter and leave the slab."""
     with np.errstate(divide="ignore", invalid="ignore"):
         ta = (y_a - o[:, 1]) / d[:, 1]
         tb = (y_b - o[:, 1]) / d[:, 1]
     t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
     parallel = d[:, 1] == 0
-    in_slab = (o[:, 1] >= y_a) & (o[:, 1] <= y_b)
-    t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), t_in)
-    t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), t_out)
+    if parallel.any():
+        in_slab = (o[:, 1] >= y_a) & (o[:, 1] <= y_b)
+        t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), t_in)
+        t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), t_out)
     t_in = np.maximum(t_in, 0.0)
     t_out = np.minimum(t_out, t_limit)
     ray = np.nonzero(t_in <= t_out)[0]
@@ -148,26 +258,7 @@ def _enter(o, d, y_a, y_b, pitch, radius, count, t_limit) -> dict[str, np.ndarra
     x, z = o[ray, 0] + t_in * d[ray, 0], o[ray, 2] + t_in * d[ray, 2]
     k = np.floor(np.hypot(x, z) / pitch[ray]).astype(np.int64)
     k = np.clip(k, 0, count[ray] - 1)
-    return {"ray": ray, "k": k, "t_a": t_in, "t_out": t_out[ray]}
-
-
-def _next_border(walk, o, d, r_in, r_out) -> tuple[np.ndarray, np.ndarray]:
-    """Where the ray, inside the ring r_in <= r <= r_out from walk["t_a"] on, next crosses one
-    of its borders, and whether inward (r_in) or outward (r_out). Never before walk["t_a"]."""
-    a = d[:, 0] ** 2 + d[:, 2] ** 2
-    b = o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2]  # half the linear coefficient
-    oo = o[:, 0] ** 2 + o[:, 2] ** 2
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t_near = -b / a  # nearest approach to the axis
-        rho2_near = np.maximum(oo - b * b / a, 0.0)
-        out = t_near + np.sqrt(np.maximum(r_out**2 - rho2_near, 0.0) / a)
-        inner = t_near - np.sqrt((r_in**2 - rho2_near) / a)
-    moving = a > 1e-30
-    inner_ok = moving & (r_in > 0) & (rho2_near < r_in**2) & (inner >= walk["t_a"] - TOL) & (t_near > walk["t_a"])
-    t_inner = np.where(inner_ok, np.maximum(inner, walk["t_a"]), np.inf)
-    t_outer = np.where(moving, np.maximum(out, walk["t_a"]), np.inf)
-    inward = t_inner < t_outer
-    return np.where(inward, t_inner, t_outer), inward
+    return ray, k, t_in, t_out[ray]
 
 
 def _is_start_root(o, d, r, t) -> np.ndarray:
@@ -183,7 +274,7 @@ def _is_start_root(o, d, r, t) -> np.ndarray:
         return np.abs(t - own) < np.abs(t - other)
 
 
-def _facet_hit(o, d, y_a, s, r_foot, r_in, r_out, t_a, t_b, own) -> np.ndarray:
+def _facet_hit_alone(o, d, y_a, s, r_foot, r_in, r_out, t_a, t_b, own) -> np.ndarray:
     """The cone r = r_foot - (y - y_a) / s between radii r_in and r_out, for roots in [t_a, t_b];
     for ``own`` rays (starting on this facet) the root nearest 0 is the start itself."""
     e = r_foot - (o[:, 1] - y_a) / s  # r on the cone as a linear function of t: e + g t
@@ -204,22 +295,23 @@ def _facet_hit(o, d, y_a, s, r_foot, r_in, r_out, t_a, t_b, own) -> np.ndarray:
     return np.where(ok(lo), lo, np.where(ok(hi), hi, np.inf))
 
 
-def _own_element(o, y_a, pitch, slopes, count, on_rings) -> tuple[np.ndarray, np.ndarray]:
+def _own_element(o, y_a, pitch, slopes, row, count, on_rings) -> tuple[np.ndarray, np.ndarray]:
     """For rays starting on the ring face: the ring whose facet, or whose draft, they start on
-    (the element whose equation the origin satisfies best); NONE elsewhere."""
+    (the element whose equation the origin satisfies best); NONE elsewhere. Ray i's slope of
+    ring k is ``slopes[row[i] + k]``."""
     n = len(o)
     own_facet, own_draft = np.full(n, NONE), np.full(n, NONE)
     if on_rings is None or not on_rings.any():
         return own_facet, own_draft
     idx = np.nonzero(on_rings)[0]
-    p, ya, last = pitch[idx], y_a[idx], count[idx] - 1
+    p, ya, last, row = pitch[idx], y_a[idx], count[idx] - 1, row[idx]
     rho = np.hypot(o[idx, 0], o[idx, 2])
     y = o[idx, 1]
     k0 = np.clip(np.floor(rho / p).astype(np.int64), 0, last)
-    best, best_facet, best_draft = np.full(len(idx), np.inf), np.full(len(idx), NONE), np.full(len(idx), NONE)
+    best, best_facet = np.full(len(idx), np.inf), np.full(len(idx), NONE)
     for k in (k0 - 1, k0, k0 + 1):
         kk = np.clip(k, 0, last)
-        s = slopes(idx, kk)
+        s = slopes[row + kk]
         res = np.abs(y - ya - s * ((kk + 1) * p - rho)) / np.sqrt(1.0 + s * s)  # distance to the cone
         better = (k == kk) & (res < best)
         best = np.where(better, res, best)
@@ -240,7 +332,7 @@ def brute_force_rings(o: np.ndarray, d: np.ndarray, y_a: float, pitch: float, ra
     best = np.full(n, np.inf)
     for k, s in enumerate(slopes):
         r_in, r_out = k * pitch, min((k + 1) * pitch, radius)
-        tf = _facet_hit(o, d, np.full(n, y_a), np.full(n, s), np.full(n, (k + 1) * pitch), np.full(n, r_in),
+        tf = _facet_hit_alone(o, d, np.full(n, y_a), np.full(n, s), np.full(n, (k + 1) * pitch), np.full(n, r_in),
                         np.full(n, r_out), np.zeros(n), np.full(n, t_limit), np.zeros(n, bool))
         best = np.minimum(best, tf)
         if k == 0:
