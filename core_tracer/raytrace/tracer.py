@@ -669,10 +669,12 @@ def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray, cls: np.n
     d = rays.d[m]
     medium = rays.medium[m]
     from_plate = medium == P.IN_PLATE
-    facing = np.where(from_plate[:, None], -out_normal, out_normal)  # toward the incident side
+    # toward the incident side: the normal negated for rays inside the plate (a sign flip is exact)
+    facing = out_normal * np.where(from_plate, -1.0, 1.0)[:, None]
     cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
-    n1 = np.where(from_plate, L.plate_ior[li], 1.0)
-    n2 = np.where(from_plate, 1.0, L.plate_ior[li])
+    ior = L.plate_ior[li]
+    n1 = np.where(from_plate, ior, 1.0)
+    n2 = np.where(from_plate, 1.0, ior)
     r = optics.fresnel_reflectance(cos_i, n1, n2)
     pix, seen = rays.pix[m], rays.seen_reflector[m]
     k_r = k * r[:, None]
@@ -683,8 +685,10 @@ def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray, cls: np.n
     k_t = k * (1.0 - r[:, None])
     tc = np.nonzero((r < 1.0) & _alive(k_t))[0]
     if len(tc):
-        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], n1[tc] / n2[tc]),
-                         k=k_t[tc], medium=np.where(from_plate[tc], P.IN_AIR, P.IN_PLATE).astype(np.int8),
+        into = ~from_plate[tc]
+        eta = np.where(into, 1.0 / ior[tc], ior[tc])  # n1 / n2: 1 / n into the plate, n / 1 out of it
+        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
+                         k=k_t[tc], medium=np.where(into, P.IN_PLATE, P.IN_AIR).astype(np.int8),
                          src=surface[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
                          seen_reflector=seen[tc]))
     return out

@@ -31,6 +31,7 @@ MEDIA = (P.IN_AIR, P.IN_PLATE)
 MAX_RING_STEPS = 2 * MAX_RINGS + 3
 TOL = 1e-9  # mm of ray parameter: a facet root on a ring border belongs to both rings
 NONE = -1
+WALK_ALL = 0.9  # the share of walking rays from which the others walk too (from t = inf: no hit)
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -68,10 +69,14 @@ def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pi
     t_hit = np.full(n, np.inf)
     normal = np.zeros((n, 3))
     ray, k, t_a, t_out = _enter(o, d, y_a, y_b, pitch, radius, count, t_limit)
-    if len(ray) == 0:
+    if ray is None:  # (nearly) every ray walks: all of them, those that do not with no stretch to walk
+        w = _Walk(o, d, y_a, pitch, radius, count, row * table.shape[1], table.ravel(), on_rings)
+        ray = np.arange(n)
+    elif len(ray) == 0:
         return t_hit, normal
-    w = _Walk(o[ray], d[ray], y_a[ray], pitch[ray], radius[ray], count[ray], row[ray] * table.shape[1],
-              table.ravel(), None if on_rings is None else on_rings[ray])
+    else:
+        w = _Walk(o[ray], d[ray], y_a[ray], pitch[ray], radius[ray], count[ray], row[ray] * table.shape[1],
+                  table.ravel(), None if on_rings is None else on_rings[ray])
     last = table.shape[1] - 1
     t_ray = np.full(len(ray), np.inf)
     hit_ring = np.zeros(len(ray), np.int64)
@@ -240,8 +245,8 @@ def _roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.
 
 def _enter(o, d, y_a, y_b, pitch, radius, count, t_limit):
     """The rays whose path crosses the slab between planes A and B before ``t_limit``, each in
-    the ring where it enters the slab (or where it starts, inside it): the rays, their rings and
-    where they enter and leave the slab."""
+    the ring where it enters the slab (or where it starts, inside it): the rays (None for all),
+    their rings and where they enter and leave the slab."""
     with np.errstate(divide="ignore", invalid="ignore"):
         ta = (y_a - o[:, 1]) / d[:, 1]
         tb = (y_b - o[:, 1]) / d[:, 1]
@@ -253,7 +258,17 @@ def _enter(o, d, y_a, y_b, pitch, radius, count, t_limit):
         t_out = np.where(parallel, np.where(in_slab, np.inf, -np.inf), t_out)
     t_in = np.maximum(t_in, 0.0)
     t_out = np.minimum(t_out, t_limit)
-    ray = np.nonzero(t_in <= t_out)[0]
+    walking = t_in <= t_out
+    n_walking = np.count_nonzero(walking)
+    if n_walking >= WALK_ALL * len(o):
+        # Gathering the walkers would cost more than walking the few others from t = inf, where
+        # they find nothing. Their ring (from any point) only has to be a ring.
+        t_in = np.where(walking, t_in, np.inf)
+        with np.errstate(invalid="ignore"):
+            x, z = o[:, 0] + t_in * d[:, 0], o[:, 2] + t_in * d[:, 2]
+            k = np.floor(np.hypot(x, z) / pitch).astype(np.int64)
+        return None, np.clip(k, 0, count - 1), t_in, t_out
+    ray = np.nonzero(walking)[0]
     t_in = t_in[ray]
     x, z = o[ray, 0] + t_in * d[ray, 0], o[ray, 2] + t_in * d[ray, 2]
     k = np.floor(np.hypot(x, z) / pitch[ray]).astype(np.int64)
