@@ -68,85 +68,82 @@ def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pi
     n = len(o)
     t_hit = np.full(n, np.inf)
     normal = np.zeros((n, 3))
-    ray, k, t_a, t_out = _enter(o, d, y_a, y_b, pitch, radius, count, t_limit)
-    if ray is None:  # (nearly) every ray walks: all of them, those that do not with no stretch to walk
-        w = _Walk(o, d, y_a, pitch, radius, count, row * table.shape[1], table.ravel(), on_rings)
-        ray = np.arange(n)
-    elif len(ray) == 0:
-        return t_hit, normal
-    else:
-        w = _Walk(o[ray], d[ray], y_a[ray], pitch[ray], radius[ray], count[ray], row[ray] * table.shape[1],
-                  table.ravel(), None if on_rings is None else on_rings[ray])
-    last = table.shape[1] - 1
-    t_ray = np.full(len(ray), np.inf)
-    hit_ring = np.zeros(len(ray), np.int64)
-    hit_draft = np.zeros(len(ray), bool)
-    at = None  # the walking rays' places among w's (None: all of them, in order)
-    for _ in range(MAX_RING_STEPS):
-        if len(k) == 0:
-            break
-        v = w if at is None else _Subset(w, at)
-        r_in = k * v.p
-        r_foot = (k + 1) * v.p
-        r_out = np.minimum(r_foot, v.radius)
-        t_next, inward = _next_border(v, w.all_moving, r_in, r_out, t_a)
-        # the facet within the stretch over this ring
-        tf = _facet_hit(v, w.slopes[v.row + k], r_foot, r_in, r_out, t_a, np.minimum(t_next, t_out), k)
-        missed = ~np.isfinite(tf)
-        found = np.nonzero(~missed)[0]
-        here = found if at is None else at[found]
-        t_ray[here], hit_ring[here] = tf[found], k[found]
-        # the border into the next ring, before the slab ends: a draft face there? (the rest only)
-        cross = np.nonzero(missed & (t_next <= t_out))[0]
-        at = cross if at is None else at[cross]
-        k, t_next, inward, t_out = k[cross], t_next[cross], inward[cross], t_out[cross]
-        v = _Subset(w, at)
-        border_ring = np.where(inward, k, k + 1)  # the ring whose draft stands on that border
-        at_rim = ~inward & ((k + 1) >= v.count)  # leaving the plate's rings at its rim
-        y = v.oy + t_next * v.dy
-        s_border = w.slopes[v.row + np.minimum(border_ring, last)]
-        draft = (y >= v.y_a) & (y <= v.y_a + s_border * v.p) & (border_ring > 0) & ~at_rim & (t_next > T_MIN)
-        maybe_own = np.nonzero(draft & (v.own_draft == border_ring))[0]
-        if len(maybe_own):  # a ray leaving its own draft: that crossing is its start
-            m = maybe_own
-            draft[m] = ~_is_start_root(v.o[m], v.d[m], border_ring[m] * v.p[m], t_next[m])
-        here = at[draft]
-        t_ray[here], hit_ring[here], hit_draft[here] = t_next[draft], border_ring[draft], True
-        go = np.nonzero(~draft & ~at_rim)[0]
-        at = at[go]
-        k = np.where(inward, k - 1, k + 1)[go]
-        t_a, t_out = t_next[go], t_out[go]
-
-    t_hit[ray] = t_ray
-    _normals(normal, ray, t_ray, hit_ring, hit_draft, w)
+    with np.errstate(invalid="ignore", divide="ignore"):  # NaN roots and rays along the axis fail the tests
+        ray, k, t_a, t_out = _enter(o, d, y_a, y_b, pitch, radius, count, t_limit)
+        if ray is None:  # (nearly) every ray walks: all of them, those that do not with no stretch to walk
+            w = _Walk(o, d, y_a, pitch, radius, count, row * table.shape[1], table.ravel(), on_rings)
+            ray = np.arange(n)
+        elif len(ray) == 0:
+            return t_hit, normal
+        else:
+            w = _Walk(o[ray], d[ray], y_a[ray], pitch[ray], radius[ray], count[ray], row[ray] * table.shape[1],
+                      table.ravel(), None if on_rings is None else on_rings[ray])
+        hit_ring = np.zeros(n, np.int64)
+        hit_draft = np.zeros(n, bool)
+        _walk(w, ray, k, t_a, t_out, table.shape[1] - 1, t_hit, hit_ring, hit_draft)
+        _normals(normal, o, d, t_hit, hit_ring, hit_draft, table.ravel(), row * table.shape[1])
     return t_hit, normal
 
 
-def _normals(normal, ray, t_ray, hit_ring, hit_draft, w) -> None:
-    """Into ``normal[ray]``, where the walk found a hit: the unit normal out of the plate, the
-    cone's on a facet, -r on a draft (the radial direction at the hit point)."""
-    hit = np.nonzero(np.isfinite(t_ray))[0]
+def _walk(w: _Walk, ray, k, t_a, t_out, last: int, t_hit, hit_ring, hit_draft) -> None:
+    """Walk the rays ``w`` (``ray`` among all) ring by ring from ring ``k`` at ``t_a`` until
+    ``t_out``: into ``t_hit``, ``hit_ring``, ``hit_draft`` their first hit. Each step keeps only
+    the rays still walking (after the first ring, a few): a step costs the same few dozen array
+    operations however few they are."""
+    for _ in range(MAX_RING_STEPS):
+        if len(k) == 0:
+            break
+        r_in = k * w.p
+        r_foot = (k + 1) * w.p
+        r_out = np.minimum(r_foot, w.radius)
+        t_next, inward = _next_border(w, r_in, r_out, t_a)
+        # the facet within the stretch over this ring
+        tf = _facet_hit(w, w.slopes[w.row + k], r_foot, r_in, r_out, t_a, np.minimum(t_next, t_out), k)
+        found = tf < np.inf
+        # the border into the next ring, before the slab ends: a draft face there?
+        cross = ~found & (t_next <= t_out)
+        border_ring = np.where(inward, k, k + 1)  # the ring whose draft stands on that border
+        at_rim = ~inward & ((k + 1) >= w.count)  # leaving the plate's rings at its rim
+        y = w.oy + t_next * w.dy
+        s_border = w.slopes[w.row + np.minimum(border_ring, last)]
+        draft = cross & (y >= w.y_a) & (y <= w.y_a + s_border * w.p) & (border_ring > 0) & ~at_rim & (t_next > T_MIN)
+        maybe_own = np.nonzero(draft & (w.own_draft == border_ring))[0]
+        if len(maybe_own):  # a ray leaving its own draft: that crossing is its start
+            m = maybe_own
+            draft[m] = ~_is_start_root(w.o[m], w.d[m], border_ring[m] * w.p[m], t_next[m])
+        done = np.nonzero(found | draft)[0]
+        on_facet = found[done]
+        here = ray[done]
+        t_hit[here] = np.where(on_facet, tf[done], t_next[done])
+        hit_ring[here] = np.where(on_facet, k[done], border_ring[done])
+        hit_draft[here] = ~on_facet
+        go = np.nonzero(cross & ~draft & ~at_rim)[0]
+        k = np.where(inward, k - 1, k + 1)[go]
+        t_a, t_out, ray = t_next[go], t_out[go], ray[go]
+        w = w.take(go)
+
+
+def _normals(normal, o, d, t_hit, hit_ring, on_draft, slopes, row) -> None:
+    """Into ``normal``, where ``t_hit`` is a hit: the unit normal out of the plate, the cone's on a
+    facet (ray i's slope of ring k is ``slopes[row[i] + k]``), -r on a draft (the radial direction
+    at the hit point)."""
+    hit = np.nonzero(t_hit < np.inf)[0]
     if len(hit) == 0:
         return
-    t = t_ray[hit]
-    x = w.o[hit, 0] + t * w.d[hit, 0]
-    z = w.o[hit, 2] + t * w.d[hit, 2]
+    t = t_hit[hit]
+    x = o[hit, 0] + t * d[hit, 0]
+    z = o[hit, 2] + t * d[hit, 2]
     rho = np.hypot(x, z)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ux, uz = np.where(rho > 0, x / rho, 0.0), np.where(rho > 0, z / rho, 0.0)
-    out = np.empty((len(hit), 3))
-    on_draft = hit_draft[hit]
-    facet = np.nonzero(~on_draft)[0]
-    s = w.slopes[w.row[hit[facet]] + hit_ring[hit[facet]]]
+    ux, uz = np.where(rho > 0, x / rho, 0.0), np.where(rho > 0, z / rho, 0.0)
+    facet = np.nonzero(~on_draft[hit])[0]
+    f = hit[facet]
+    s = slopes[row[f] + hit_ring[f]]
     length = np.sqrt(1.0 + s * s)
-    out[facet, 0] = s * ux[facet] / length
-    out[facet, 1] = 1.0 / length
-    out[facet, 2] = s * uz[facet] / length
-    draft = np.nonzero(on_draft)[0]
-    out[draft, 0] = -ux[draft]
-    out[draft, 1] = 0.0
-    out[draft, 2] = -uz[draft]
-    normal[ray[hit]] = out
+    normal[hit, 0] = -ux
+    normal[hit, 2] = -uz  # (y is 0 on a draft)
+    normal[f, 0] = s * ux[facet] / length
+    normal[f, 1] = 1.0 / length
+    normal[f, 2] = s * uz[facet] / length
 
 
 class _Walk:
@@ -154,62 +151,61 @@ class _Walk:
     Every number is computed by the same expression as when each step worked it out afresh, so
     the hits are the same bits."""
 
+    _PER_RAY = ("o", "d", "y_a", "p", "radius", "count", "row", "oy", "dy", "a", "b", "oo", "t_near", "rho2_near",
+                "height", "fall", "own_facet", "own_draft")
+
     def __init__(self, o, d, y_a, p, radius, count, row, slopes, on_rings):
         self.o, self.d, self.y_a, self.p, self.radius, self.count, self.row = o, d, y_a, p, radius, count, row
         self.slopes = slopes
+        if on_rings is False:  # ``take``: filled in there
+            return
         ox, oz, dx, dz = o[:, 0], o[:, 2], d[:, 0], d[:, 2]
         self.oy, self.dy = o[:, 1], d[:, 1]
         self.a = dx**2 + dz**2
         self.b = ox * dx + oz * dz  # half the linear coefficient of r^2 along the ray
         self.oo = ox**2 + oz**2
-        with np.errstate(invalid="ignore", divide="ignore"):
-            self.t_near = -self.b / self.a  # nearest approach to the axis
-            self.rho2_near = np.maximum(self.oo - self.b * self.b / self.a, 0.0)
+        self.t_near = -self.b / self.a  # nearest approach to the axis
+        self.rho2_near = np.maximum(self.oo - self.b * self.b / self.a, 0.0)
         self.moving = self.a > 1e-30
         self.all_moving = bool(self.moving.all())
         self.height = self.oy - y_a
         self.fall = -self.dy
         self.own_facet, self.own_draft = _own_element(o, y_a, p, slopes, row, count, on_rings)
 
-
-class _Subset:
-    """The rays ``at`` of a ``_Walk``: each of its per-ray arrays gathered when first used (after
-    the first ring most rays have found their hit, and a step uses only some of the arrays)."""
-
-    def __init__(self, walk: _Walk, at: np.ndarray):
-        self._walk, self._at = walk, at
-
-    def __getattr__(self, name: str) -> np.ndarray:
-        value = getattr(self._walk, name)[self._at]
-        setattr(self, name, value)
-        return value
+    def take(self, sel: np.ndarray) -> _Walk:
+        """The rays ``sel`` only."""
+        part = _Walk(*(None,) * 7, self.slopes, False)
+        for name in self._PER_RAY:
+            setattr(part, name, getattr(self, name)[sel])
+        part.all_moving = self.all_moving
+        part.moving = None if self.all_moving else self.moving[sel]
+        return part
 
 
-def _next_border(v, all_moving: bool, r_in, r_out, t_a) -> tuple[np.ndarray, np.ndarray]:
+def _next_border(w: _Walk, r_in, r_out, t_a) -> tuple[np.ndarray, np.ndarray]:
     """Where the ray, inside the ring r_in <= r <= r_out from ``t_a`` on, next crosses one of its
     borders, and whether inward (r_in) or outward (r_out). Never before ``t_a``."""
-    t_near, rho2_near, a = v.t_near, v.rho2_near, v.a
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out = t_near + np.sqrt(np.maximum(r_out**2 - rho2_near, 0.0) / a)
-        inner = t_near - np.sqrt((r_in**2 - rho2_near) / a)
-        inner_ok = (r_in > 0) & (rho2_near < r_in**2) & (inner >= t_a - TOL) & (t_near > t_a)
-    if all_moving:
+    t_near, rho2_near, a = w.t_near, w.rho2_near, w.a
+    out = t_near + np.sqrt(np.maximum(r_out**2 - rho2_near, 0.0) / a)
+    inner = t_near - np.sqrt((r_in**2 - rho2_near) / a)
+    inner_ok = (r_in > 0) & (rho2_near < r_in**2) & (inner >= t_a - TOL) & (t_near > t_a)
+    if w.all_moving:
         t_inner = np.where(inner_ok, np.maximum(inner, t_a), np.inf)
         t_outer = np.maximum(out, t_a)
     else:
-        t_inner = np.where(v.moving & inner_ok, np.maximum(inner, t_a), np.inf)
-        t_outer = np.where(v.moving, np.maximum(out, t_a), np.inf)
+        t_inner = np.where(w.moving & inner_ok, np.maximum(inner, t_a), np.inf)
+        t_outer = np.where(w.moving, np.maximum(out, t_a), np.inf)
     inward = t_inner < t_outer
     return np.where(inward, t_inner, t_outer), inward
 
 
-def _facet_hit(v, s, r_foot, r_in, r_out, t_a, t_b, k) -> np.ndarray:
+def _facet_hit(w: _Walk, s, r_foot, r_in, r_out, t_a, t_b, k) -> np.ndarray:
     """The cone r = r_foot - (y - y_a) / s between radii r_in and r_out, for roots in [t_a, t_b];
-    for a ray starting on this facet (``v.own_facet == k``) the root nearest 0 is the start itself."""
-    e = r_foot - v.height / s  # r on the cone as a linear function of t: e + g t
-    g = v.fall / s
-    lo, hi = _roots(v.a - g * g, 2.0 * (v.b - e * g), v.oo - e * e)
-    own = v.own_facet == k
+    for a ray starting on this facet (``w.own_facet == k``) the root nearest 0 is the start itself."""
+    e = r_foot - w.height / s  # r on the cone as a linear function of t: e + g t
+    g = w.fall / s
+    lo, hi = _roots(w.a - g * g, 2.0 * (w.b - e * g), w.oo - e * e)
+    own = w.own_facet == k
     if own.any():
         own_is_lo = np.abs(lo) <= np.abs(hi)
         lo = np.where(own & own_is_lo, np.nan, lo)
@@ -218,11 +214,10 @@ def _facet_hit(v, s, r_foot, r_in, r_out, t_a, t_b, k) -> np.ndarray:
     lower = np.maximum(_ABOVE_T_MIN, t_a - TOL)
     upper = t_b + TOL
     r_lo, r_hi = r_in - 1e-9, r_out + 1e-9
-    with np.errstate(invalid="ignore"):
-        r = e + g * lo
-        ok_lo = (lo >= lower) & (lo <= upper) & (r >= r_lo) & (r <= r_hi)
-        r = e + g * hi
-        ok_hi = (hi >= lower) & (hi <= upper) & (r >= r_lo) & (r <= r_hi)
+    r = e + g * lo
+    ok_lo = (lo >= lower) & (lo <= upper) & (r >= r_lo) & (r <= r_hi)
+    r = e + g * hi
+    ok_hi = (hi >= lower) & (hi <= upper) & (r >= r_lo) & (r <= r_hi)
     return np.where(ok_lo, lo, np.where(ok_hi, hi, np.inf))
 
 
@@ -230,26 +225,21 @@ _ABOVE_T_MIN = np.nextafter(T_MIN, np.inf)  # t > T_MIN exactly when t >= this
 
 
 def _roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``base.solve_quadratic``, the same bits, without its linear case where no ray needs it."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        linear = np.abs(a) < 1e-15
-        if linear.any():
-            return solve_quadratic(a, b, c)
-        disc = b * b - 4.0 * a * c
-        sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
-        q = -0.5 * (b + np.copysign(sq, b))
-        r1 = q / a
-        r2 = c / q
-    return np.fmin(r1, r2), np.fmax(r1, r2)
+    """``base.solve_quadratic``, the same bits, without its linear case where no ray needs it
+    (a negative discriminant gives NaN roots either way). Inside ``hit_rings``'s errstate."""
+    if (np.abs(a) < 1e-15).any():
+        return solve_quadratic(a, b, c)
+    sq = np.sqrt(b * b - 4.0 * a * c)
+    q = -0.5 * (b + np.copysign(sq, b))
+    return np.fmin(q / a, c / q), np.fmax(q / a, c / q)
 
 
 def _enter(o, d, y_a, y_b, pitch, radius, count, t_limit):
     """The rays whose path crosses the slab between planes A and B before ``t_limit``, each in
     the ring where it enters the slab (or where it starts, inside it): the rays (None for all),
-    their rings and where they enter and leave the slab."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ta = (y_a - o[:, 1]) / d[:, 1]
-        tb = (y_b - o[:, 1]) / d[:, 1]
+    their rings and where they enter and leave the slab. Inside ``hit_rings``'s errstate."""
+    ta = (y_a - o[:, 1]) / d[:, 1]
+    tb = (y_b - o[:, 1]) / d[:, 1]
     t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
     parallel = d[:, 1] == 0
     if parallel.any():
@@ -259,21 +249,18 @@ def _enter(o, d, y_a, y_b, pitch, radius, count, t_limit):
     t_in = np.maximum(t_in, 0.0)
     t_out = np.minimum(t_out, t_limit)
     walking = t_in <= t_out
-    n_walking = np.count_nonzero(walking)
-    if n_walking >= WALK_ALL * len(o):
+    if np.count_nonzero(walking) >= WALK_ALL * len(o):
         # Gathering the walkers would cost more than walking the few others from t = inf, where
         # they find nothing. Their ring (from any point) only has to be a ring.
         t_in = np.where(walking, t_in, np.inf)
-        with np.errstate(invalid="ignore"):
-            x, z = o[:, 0] + t_in * d[:, 0], o[:, 2] + t_in * d[:, 2]
-            k = np.floor(np.hypot(x, z) / pitch).astype(np.int64)
-        return None, np.clip(k, 0, count - 1), t_in, t_out
+        x, z = o[:, 0] + t_in * d[:, 0], o[:, 2] + t_in * d[:, 2]
+        k = np.floor(np.hypot(x, z) / pitch).astype(np.int64)
+        return None, np.minimum(np.maximum(k, 0), count - 1), t_in, t_out
     ray = np.nonzero(walking)[0]
     t_in = t_in[ray]
     x, z = o[ray, 0] + t_in * d[ray, 0], o[ray, 2] + t_in * d[ray, 2]
     k = np.floor(np.hypot(x, z) / pitch[ray]).astype(np.int64)
-    k = np.clip(k, 0, count[ray] - 1)
-    return ray, k, t_in, t_out[ray]
+    return ray, np.minimum(np.maximum(k, 0), count[ray] - 1), t_in, t_out[ray]
 
 
 def _is_start_root(o, d, r, t) -> np.ndarray:
