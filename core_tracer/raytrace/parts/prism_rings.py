@@ -170,7 +170,7 @@ class _Walk:
         self.all_moving = bool(self.moving.all())
         self.height = self.oy - y_a
         self.fall = -self.dy
-        self.own_facet, self.own_draft = _own_element(o, y_a, p, slopes, row, count, on_rings)
+        self.own_facet, self.own_draft = _own_element(o, self.height, p, slopes, row, count, on_rings)
 
     def take(self, sel: np.ndarray) -> _Walk:
         """The rays ``sel`` only."""
@@ -297,32 +297,42 @@ def _facet_hit_alone(o, d, y_a, s, r_foot, r_in, r_out, t_a, t_b, own) -> np.nda
     return np.where(ok(lo), lo, np.where(ok(hi), hi, np.inf))
 
 
-def _own_element(o, y_a, pitch, slopes, row, count, on_rings) -> tuple[np.ndarray, np.ndarray]:
+def _own_element(o, height, pitch, slopes, row, count, on_rings) -> tuple[np.ndarray, np.ndarray]:
     """For rays starting on the ring face: the ring whose facet, or whose draft, they start on
-    (the element whose equation the origin satisfies best); NONE elsewhere. Ray i's slope of
-    ring k is ``slopes[row[i] + k]``."""
+    (the element whose equation the origin satisfies best: the first of rings k0 - 1, k0, k0 + 1
+    about the origin's, then the draft nearest it); NONE elsewhere. ``height`` is y - y_A at the
+    origin; ray i's slope of ring k is ``slopes[row[i] + k]``."""
     n = len(o)
     own_facet, own_draft = np.full(n, NONE), np.full(n, NONE)
     if on_rings is None or not on_rings.any():
         return own_facet, own_draft
-    idx = np.nonzero(on_rings)[0]
-    p, ya, last, row = pitch[idx], y_a[idx], count[idx] - 1, row[idx]
-    rho = np.hypot(o[idx, 0], o[idx, 2])
-    y = o[idx, 1]
-    k0 = np.clip(np.floor(rho / p).astype(np.int64), 0, last)
-    best, best_facet = np.full(len(idx), np.inf), np.full(len(idx), NONE)
-    for k in (k0 - 1, k0, k0 + 1):
-        kk = np.clip(k, 0, last)
-        s = slopes[row + kk]
-        res = np.abs(y - ya - s * ((kk + 1) * p - rho)) / np.sqrt(1.0 + s * s)  # distance to the cone
-        better = (k == kk) & (res < best)
-        best = np.where(better, res, best)
-        best_facet = np.where(better, kk, best_facet)
-    j = np.clip(np.rint(rho / p).astype(np.int64), 1, np.maximum(last, 1))
-    res = np.abs(rho - j * p)
-    better = (j <= last) & (res < best)
+    idx = None if on_rings.all() else np.nonzero(on_rings)[0]
+    if idx is not None:
+        o, height, pitch, row, count = o[idx], height[idx], pitch[idx], row[idx], count[idx]
+    last = count - 1
+    lengths = np.sqrt(1.0 + slopes * slopes)  # per ring: the residual below over this is the distance to the cone
+    rho = np.hypot(o[:, 0], o[:, 2])
+    k0 = np.minimum(np.maximum(np.floor(rho / pitch).astype(np.int64), 0), last)
+
+    def residual(k):
+        return np.abs(height - slopes[row + k] * ((k + 1) * pitch - rho)) / lengths[row + k]
+
+    best_facet = np.where(k0 >= 1, k0 - 1, NONE)
+    best = np.where(k0 >= 1, residual(np.maximum(k0 - 1, 0)), np.inf)
+    res = residual(k0)
+    better = res < best
+    best = np.where(better, res, best)
+    best_facet = np.where(better, k0, best_facet)
+    res = residual(np.minimum(k0 + 1, last))
+    better = (k0 + 1 <= last) & (res < best)
+    best = np.where(better, res, best)
+    best_facet = np.where(better, k0 + 1, best_facet)
+    j = np.minimum(np.maximum(np.rint(rho / pitch).astype(np.int64), 1), np.maximum(last, 1))
+    better = (j <= last) & (np.abs(rho - j * pitch) < best)
     best_draft = np.where(better, j, NONE)
     best_facet = np.where(better, NONE, best_facet)
+    if idx is None:
+        return best_facet, best_draft
     own_facet[idx], own_draft[idx] = best_facet, best_draft
     return own_facet, own_draft
 
