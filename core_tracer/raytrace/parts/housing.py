@@ -41,6 +41,6 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
     sel = np.nonzero(housed)[0]
     if len(sel):
         li = rays.lamp[sel]
-        t[sel] = hit_housing(rays.o[sel], rays.d[sel], lamps.radius[li], lamps.plate_front[li],
-                             lamps.housing_back[li])
+        o, d = np.take(rays.o, sel, axis=0), np.take(rays.d, sel, axis=0)  # (take: 3x a fancy index of rows)
+        t[sel] = hit_housing(o, d, lamps.radius[li], lamps.plate_front[li], lamps.housing_back[li])
     return t, None

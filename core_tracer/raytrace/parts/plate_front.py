@@ -37,5 +37,6 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
     sel = np.nonzero(toward & np.isfinite(y_front) & (rays.medium != P.IN_LENS) & (rays.src != P.PLATE_FRONT))[0]
     if len(sel):
         li = rays.lamp[sel]
-        t[sel] = hit_plate_front(rays.o[sel], rays.d[sel], y_front[sel], lamps.radius[li], in_plate[sel])
+        o, d = np.take(rays.o, sel, axis=0), np.take(rays.d, sel, axis=0)  # (take: 3x a fancy index of rows)
+        t[sel] = hit_plate_front(o, d, y_front[sel], lamps.radius[li], in_plate[sel])
     return t, np.broadcast_to(NORMAL, rays.o.shape)

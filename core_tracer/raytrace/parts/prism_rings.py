@@ -48,10 +48,10 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
     sel = np.nonzero(plate & ((rays.medium == P.IN_PLATE) | ((rays.medium == P.IN_AIR) & behind)))[0]
     if len(sel):
         ls = li[sel]
-        t[sel], normal[sel] = hit_rings(rays.o[sel], rays.d[sel], lamps.plate_base[ls], lamps.plate_peak[ls],
-                                        lamps.plate_pitch[ls], lamps.radius[ls], lamps.ring_slopes, ls,
-                                        lamps.ring_count[ls].astype(np.int64), t_limit[sel],
-                                        rays.src[sel] == P.RINGS)
+        t[sel] = _hit_rings(np.take(rays.o, sel, axis=0), np.take(rays.d, sel, axis=0), lamps.plate_base[ls],
+                            lamps.plate_peak[ls], lamps.plate_pitch[ls], lamps.radius[ls], lamps.ring_slopes, ls,
+                            lamps.ring_count[ls].astype(np.int64), t_limit[sel], rays.src[sel] == P.RINGS,
+                            normal, sel)
     return t, normal
 
 
@@ -65,24 +65,32 @@ def hit_rings(o: np.ndarray, d: np.ndarray, y_a: np.ndarray, y_b: np.ndarray, pi
     ``on_rings`` marks rays that start on the ring face: the facet or draft they start on is
     found from their origin, and its root nearest the origin is excluded (by geometry, not
     distance, as for the cuts: see ``cuts.hit_cuts``)."""
+    normal = np.zeros((len(o), 3))
+    t = _hit_rings(o, d, y_a, y_b, pitch, radius, table, row, count, t_limit, on_rings, normal, np.arange(len(o)))
+    return t, normal
+
+
+def _hit_rings(o, d, y_a, y_b, pitch, radius, table, row, count, t_limit, on_rings, normal, into) -> np.ndarray:
+    """``hit_rings``, its normals written into ``normal[into]`` (the caller's rays, of which these
+    are ``into``: no gather and scatter of normals)."""
     n = len(o)
     t_hit = np.full(n, np.inf)
-    normal = np.zeros((n, 3))
     with np.errstate(invalid="ignore", divide="ignore"):  # NaN roots and rays along the axis fail the tests
         ray, k, t_a, t_out = _enter(o, d, y_a, y_b, pitch, radius, count, t_limit)
         if ray is None:  # (nearly) every ray walks: all of them, those that do not with no stretch to walk
             w = _Walk(o, d, y_a, pitch, radius, count, row * table.shape[1], table.ravel(), on_rings)
             ray = np.arange(n)
         elif len(ray) == 0:
-            return t_hit, normal
+            return t_hit
         else:
-            w = _Walk(o[ray], d[ray], y_a[ray], pitch[ray], radius[ray], count[ray], row[ray] * table.shape[1],
-                      table.ravel(), None if on_rings is None else on_rings[ray])
+            w = _Walk(np.take(o, ray, axis=0), np.take(d, ray, axis=0), y_a[ray], pitch[ray], radius[ray],
+                      count[ray], row[ray] * table.shape[1], table.ravel(),
+                      None if on_rings is None else on_rings[ray])
         hit_ring = np.zeros(n, np.int64)
         hit_draft = np.zeros(n, bool)
         _walk(w, ray, k, t_a, t_out, table.shape[1] - 1, t_hit, hit_ring, hit_draft)
-        _normals(normal, o, d, t_hit, hit_ring, hit_draft, table.ravel(), row * table.shape[1])
-    return t_hit, normal
+        _normals(normal, into, o, d, t_hit, hit_ring, hit_draft, table.ravel(), row * table.shape[1])
+    return t_hit
 
 
 def _walk(w: _Walk, ray, k, t_a, t_out, last: int, t_hit, hit_ring, hit_draft) -> None:
@@ -123,10 +131,10 @@ def _walk(w: _Walk, ray, k, t_a, t_out, last: int, t_hit, hit_ring, hit_draft) -
         w = w.take(go)
 
 
-def _normals(normal, o, d, t_hit, hit_ring, on_draft, slopes, row) -> None:
-    """Into ``normal``, where ``t_hit`` is a hit: the unit normal out of the plate, the cone's on a
-    facet (ray i's slope of ring k is ``slopes[row[i] + k]``), -r on a draft (the radial direction
-    at the hit point)."""
+def _normals(normal, into, o, d, t_hit, hit_ring, on_draft, slopes, row) -> None:
+    """Into ``normal[into]``, where ``t_hit`` is a hit: the unit normal out of the plate, the
+    cone's on a facet (ray i's slope of ring k is ``slopes[row[i] + k]``), -r on a draft (the
+    radial direction at the hit point)."""
     hit = np.nonzero(t_hit < np.inf)[0]
     if len(hit) == 0:
         return
@@ -135,15 +143,14 @@ def _normals(normal, o, d, t_hit, hit_ring, on_draft, slopes, row) -> None:
     z = o[hit, 2] + t * d[hit, 2]
     rho = np.hypot(x, z)
     ux, uz = np.where(rho > 0, x / rho, 0.0), np.where(rho > 0, z / rho, 0.0)
-    facet = np.nonzero(~on_draft[hit])[0]
-    f = hit[facet]
-    s = slopes[row[f] + hit_ring[f]]
+    facet = ~on_draft[hit]
+    s = slopes[row[hit] + hit_ring[hit]]
     length = np.sqrt(1.0 + s * s)
-    normal[hit, 0] = -ux
-    normal[hit, 2] = -uz  # (y is 0 on a draft)
-    normal[f, 0] = s * ux[facet] / length
-    normal[f, 1] = 1.0 / length
-    normal[f, 2] = s * uz[facet] / length
+    # on a draft (-ux, 0, -uz); the 0 is the caller's
+    rows = into[hit]
+    normal[rows, 0] = np.where(facet, s * ux / length, -ux)
+    normal[rows, 1] = np.where(facet, 1.0 / length, 0.0)
+    normal[rows, 2] = np.where(facet, s * uz / length, -uz)
 
 
 class _Walk:
@@ -176,7 +183,8 @@ class _Walk:
         """The rays ``sel`` only."""
         part = _Walk(*(None,) * 7, self.slopes, False)
         for name in self._PER_RAY:
-            setattr(part, name, getattr(self, name)[sel])
+            value = getattr(self, name)
+            setattr(part, name, np.take(value, sel, axis=0) if value.ndim == 2 else value[sel])
         part.all_moving = self.all_moving
         part.moving = None if self.all_moving else self.moving[sel]
         return part
