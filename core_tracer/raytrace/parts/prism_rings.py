@@ -142,7 +142,10 @@ def _normals(normal, into, o, d, t_hit, hit_ring, on_draft, slopes, row) -> None
     x = o[hit, 0] + t * d[hit, 0]
     z = o[hit, 2] + t * d[hit, 2]
     rho = np.hypot(x, z)
-    ux, uz = np.where(rho > 0, x / rho, 0.0), np.where(rho > 0, z / rho, 0.0)
+    if (rho > 0).all():  # (a hit on the axis itself has no radial direction: 0 there)
+        ux, uz = x / rho, z / rho
+    else:
+        ux, uz = np.where(rho > 0, x / rho, 0.0), np.where(rho > 0, z / rho, 0.0)
     facet = ~on_draft[hit]
     s = slopes[row[hit] + hit_ring[hit]]
     length = np.sqrt(1.0 + s * s)
