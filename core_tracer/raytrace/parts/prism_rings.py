@@ -288,8 +288,7 @@ def _is_start_root(o, d, r, t) -> np.ndarray:
 
 
 def _facet_hit_alone(o, d, y_a, s, r_foot, r_in, r_out, t_a, t_b, own) -> np.ndarray:
-    """The cone r = r_foot - (y - y_a) / s between radii r_in and r_out, for roots in [t_a, t_b];
-    for ``own`` rays (starting on this facet) the root nearest 0 is the start itself."""
+    """``_facet_hit`` from the rays alone (no ``_Walk``): the brute force's test of one ring."""
     e = r_foot - (o[:, 1] - y_a) / s  # r on the cone as a linear function of t: e + g t
     g = -d[:, 1] / s
     a = d[:, 0] ** 2 + d[:, 2] ** 2 - g * g
@@ -356,7 +355,7 @@ def brute_force_rings(o: np.ndarray, d: np.ndarray, y_a: float, pitch: float, ra
     for k, s in enumerate(slopes):
         r_in, r_out = k * pitch, min((k + 1) * pitch, radius)
         tf = _facet_hit_alone(o, d, np.full(n, y_a), np.full(n, s), np.full(n, (k + 1) * pitch), np.full(n, r_in),
-                        np.full(n, r_out), np.zeros(n), np.full(n, t_limit), np.zeros(n, bool))
+                              np.full(n, r_out), np.zeros(n), np.full(n, t_limit), np.zeros(n, bool))
         best = np.minimum(best, tf)
         if k == 0:
             continue
