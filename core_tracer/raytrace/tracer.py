@@ -665,26 +665,41 @@ def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray, cls: np.n
     """A prism-plate face hit from either side (README, the prism plate): the Fresnel split of
     the lens's faces (MODEL.md §5) with the plate's index; ``out_normal`` points out of the plate
     material. Nothing leaves the lamp here, so both branches go on where above the cut-off."""
+    def rows(a: np.ndarray, idx: np.ndarray) -> np.ndarray:  # a[idx] for (N, 3) a, about 3x as fast
+        return np.take(a, idx, axis=0)
+
+    def scaled(v: np.ndarray, s: np.ndarray) -> np.ndarray:
+        # v * s[:, None], the same products a column at a time (numpy broadcasts slowly over rows of 3)
+        out = np.empty_like(v)
+        for j in range(3):
+            np.multiply(v[:, j], s, out=out[:, j])
+        return out
+
     li = rays.lamp[m]
-    d = rays.d[m]
+    d = rows(rays.d, m)
     medium = rays.medium[m]
     from_plate = medium == P.IN_PLATE
-    facing = np.where(from_plate[:, None], -out_normal, out_normal)  # toward the incident side
+    # toward the incident side: the normal negated for rays inside the plate (a sign flip is exact)
+    facing = scaled(out_normal, np.where(from_plate, -1.0, 1.0))
     cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
-    n1 = np.where(from_plate, L.plate_ior[li], 1.0)
-    n2 = np.where(from_plate, 1.0, L.plate_ior[li])
+    ior = L.plate_ior[li]
+    n1 = np.where(from_plate, ior, 1.0)
+    n2 = np.where(from_plate, 1.0, ior)
     r = optics.fresnel_reflectance(cos_i, n1, n2)
     pix, seen = rays.pix[m], rays.seen_reflector[m]
-    k_r = k * r[:, None]
+    k_r = scaled(k, r)
     go = np.nonzero(_alive(k_r))[0]
-    out = [_Rays(pix=pix[go], lamp=li[go], o=hit[go], d=optics.reflect(d[go], facing[go]), k=k_r[go],
-                 medium=medium[go], src=surface[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
-                 seen_reflector=seen[go])]
-    k_t = k * (1.0 - r[:, None])
+    out = [_Rays(pix=pix[go], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(facing, go)),
+                 k=rows(k_r, go), medium=medium[go], src=surface[go], parent=cls[go],
+                 branch=np.full(len(go), P.REFLECTED, np.int8), seen_reflector=seen[go])]
+    k_t = scaled(k, 1.0 - r)
     tc = np.nonzero((r < 1.0) & _alive(k_t))[0]
     if len(tc):
-        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], n1[tc] / n2[tc]),
-                         k=k_t[tc], medium=np.where(from_plate[tc], P.IN_AIR, P.IN_PLATE).astype(np.int8),
+        into = ~from_plate[tc]
+        eta = np.where(into, 1.0 / ior[tc], ior[tc])  # n1 / n2: 1 / n into the plate, n / 1 out of it
+        d_t = optics.refract(rows(d, tc), rows(facing, tc), eta)
+        out.append(_Rays(pix=pix[tc], lamp=li[tc], o=rows(hit, tc), d=d_t, k=rows(k_t, tc),
+                         medium=np.where(into, P.IN_PLATE, P.IN_AIR).astype(np.int8),
                          src=surface[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
                          seen_reflector=seen[tc]))
     return out

@@ -55,6 +55,23 @@ def test_ring_walk_agrees_with_every_ring_tested(pitch, focal, ior):
     assert np.isfinite(t).sum() > 3000  # the rays do meet the rings
 
 
+def test_ring_walk_agrees_with_every_ring_tested_when_every_ray_walks():
+    # Rays that all start between planes A and B (on the rings, as most rays the walk sees do):
+    # the walk takes them all without gathering them, and still finds what testing every ring finds.
+    rng = np.random.default_rng(21)
+    slopes, y_b = _plate()
+    o, d = _random_rays(rng, 6000, Y_A, y_b)
+    n = len(o)
+    entered = prism_rings._enter(o, d, np.full(n, Y_A), np.full(n, y_b), np.full(n, PITCH), np.full(n, R),
+                                 np.full(n, len(slopes)), np.full(n, np.inf))
+    assert entered[0] is None  # the branch that walks every ray
+    t, _ = _walk(o, d, slopes, y_b)
+    brute = prism_rings.brute_force_rings(o, d, Y_A, PITCH, R, slopes)
+    same = np.isclose(t, brute, rtol=1e-9, atol=1e-9) | (np.isinf(t) & np.isinf(brute))
+    assert same.all(), np.c_[t, brute][~same][:5]
+    assert np.isfinite(t).sum() > 3000
+
+
 def test_ring_walk_stops_at_its_limit():
     rng = np.random.default_rng(3)
     slopes, y_b = _plate()

@@ -33,10 +33,14 @@ def hit_housing(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_front: np.nd
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
+    housed = np.isfinite(lamps.housing_back[rays.lamp]) & (rays.medium != P.IN_LENS)
+    if housed.all():  # every lamp has a plate: no gather
+        li = rays.lamp
+        return hit_housing(rays.o, rays.d, lamps.radius[li], lamps.plate_front[li], lamps.housing_back[li]), None
     t = np.full(len(rays.o), np.inf)
-    sel = np.nonzero(np.isfinite(lamps.housing_back[rays.lamp]) & (rays.medium != P.IN_LENS))[0]
+    sel = np.nonzero(housed)[0]
     if len(sel):
         li = rays.lamp[sel]
-        t[sel] = hit_housing(rays.o[sel], rays.d[sel], lamps.radius[li], lamps.plate_front[li],
-                             lamps.housing_back[li])
+        o, d = np.take(rays.o, sel, axis=0), np.take(rays.d, sel, axis=0)  # (take: 3x a fancy index of rows)
+        t[sel] = hit_housing(o, d, lamps.radius[li], lamps.plate_front[li], lamps.housing_back[li])
     return t, None

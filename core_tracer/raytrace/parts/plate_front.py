@@ -29,10 +29,14 @@ def hit_plate_front(o: np.ndarray, d: np.ndarray, y_front: np.ndarray, radius: n
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     t = np.full(len(rays.o), np.inf)
-    sel = np.nonzero(np.isfinite(lamps.plate_front[rays.lamp]) & (rays.medium != P.IN_LENS)
-                     & (rays.src != P.PLATE_FRONT))[0]
+    y_front = lamps.plate_front[rays.lamp]
+    # Only rays heading for the plane can meet it: those are worth gathering (``hit_plate_front``'s
+    # own test, done first on every ray; a lamp without a plate has its plane at +inf).
+    dy, in_plate = rays.d[:, 1], rays.medium == P.IN_PLATE
+    toward = np.where(in_plate, dy < 0, (dy > 0) & (rays.o[:, 1] <= y_front))
+    sel = np.nonzero(toward & np.isfinite(y_front) & (rays.medium != P.IN_LENS) & (rays.src != P.PLATE_FRONT))[0]
     if len(sel):
         li = rays.lamp[sel]
-        t[sel] = hit_plate_front(rays.o[sel], rays.d[sel], lamps.plate_front[li], lamps.radius[li],
-                                 rays.medium[sel] == P.IN_PLATE)
+        o, d = np.take(rays.o, sel, axis=0), np.take(rays.d, sel, axis=0)  # (take: 3x a fancy index of rows)
+        t[sel] = hit_plate_front(o, d, y_front[sel], lamps.radius[li], in_plate[sel])
     return t, np.broadcast_to(NORMAL, rays.o.shape)
