@@ -154,18 +154,41 @@ class Environment:
         y = (1.0 - v) * h - 0.5
         x0 = np.floor(x)
         y0 = np.floor(y)
-        tx = (x - x0)[:, None]
-        ty = (y - y0)[:, None]
-        x0 = x0.astype(np.int64) % w
-        y0 = y0.astype(np.int64) % h
-        x1 = (x0 + 1) % w
-        y1 = (y0 + 1) % h
-        flat = self.pixels.reshape(-1, 3)  # take() on the flat rows: the same values as p[y, x], faster
-        y0 *= w
-        y1 *= w
-        top = flat.take(y0 + x0, axis=0) * (1.0 - tx) + flat.take(y0 + x1, axis=0) * tx
-        bottom = flat.take(y1 + x0, axis=0) * (1.0 - tx) + flat.take(y1 + x1, axis=0) * tx
-        return self.strength * (top * (1.0 - ty) + bottom * ty)
+        tx = x - x0
+        ty = y - y0
+        # x0 lies in [-1, w], y0 in [-1, h] (u, v in [0, 1]): the padded image (``_padded``) holds the
+        # repeated border, so the four corners need no modulo (the same values as the image's p[y % h, x % w]).
+        x0 = x0.astype(np.int64)
+        y0 = y0.astype(np.int64)
+        corner = (y0 + 1) * (w + 3) + (x0 + 1)
+        flat = self._padded
+        c00 = flat.take(corner, axis=0, mode="clip")
+        c01 = flat.take(corner + 1, axis=0, mode="clip")
+        c10 = flat.take(corner + (w + 3), axis=0, mode="clip")
+        c11 = flat.take(corner + (w + 4), axis=0, mode="clip")
+        # The same products and sums, in the same order, as top * (1 - ty) + bottom * ty of the rows.
+        sx = (1.0 - tx)[:, None]
+        tx = tx[:, None]
+        c00 *= sx
+        c01 *= tx
+        c00 += c01
+        c10 *= sx
+        c11 *= tx
+        c10 += c11
+        c00 *= (1.0 - ty)[:, None]
+        c10 *= ty[:, None]
+        c00 += c10
+        c00 *= self.strength
+        return c00
+
+    @functools.cached_property
+    def _padded(self) -> np.ndarray:
+        """The image as float64 rows (H + 3) x (W + 3) flattened, row j + 1 holding image row j % h and
+        column i + 1 image column i % w for j in [-1, h + 1], i in [-1, w + 1]: the repeated border."""
+        h, w = self.pixels.shape[:2]
+        rows = np.arange(-1, h + 2) % h
+        cols = np.arange(-1, w + 2) % w
+        return self.pixels[rows][:, cols].astype(np.float64).reshape(-1, 3)
 
     # -- what the image holds ------------------------------------------------------------------
 
