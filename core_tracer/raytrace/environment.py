@@ -156,39 +156,39 @@ class Environment:
         y0 = np.floor(y)
         tx = x - x0
         ty = y - y0
-        # x0 lies in [-1, w], y0 in [-1, h] (u, v in [0, 1]): the padded image (``_padded``) holds the
-        # repeated border, so the four corners need no modulo (the same values as the image's p[y % h, x % w]).
+        # x0 lies in [-1, w - 1], y0 in [-1, h - 1] (u, v in [0, 1]): the padded image (``_pixel_pairs``)
+        # holds the repeated border, so the corners need no modulo (the same values as p[y % h, x % w]),
+        # and one row of it holds a pixel and its right neighbour: two lookups for the four corners.
         x0 = x0.astype(np.int64)
         y0 = y0.astype(np.int64)
         corner = (y0 + 1) * (w + 3) + (x0 + 1)
-        flat = self._padded
-        c00 = flat.take(corner, axis=0, mode="clip")
-        c01 = flat.take(corner + 1, axis=0, mode="clip")
-        c10 = flat.take(corner + (w + 3), axis=0, mode="clip")
-        c11 = flat.take(corner + (w + 4), axis=0, mode="clip")
+        pairs = self._pixel_pairs
+        upper = pairs.take(corner, axis=0, mode="clip")  # (N, 6): the corner and its right neighbour
+        lower = pairs.take(corner + (w + 3), axis=0, mode="clip")
         # The same products and sums, in the same order, as top * (1 - ty) + bottom * ty of the rows.
         sx = (1.0 - tx)[:, None]
         tx = tx[:, None]
-        c00 *= sx
-        c01 *= tx
-        c00 += c01
-        c10 *= sx
-        c11 *= tx
-        c10 += c11
-        c00 *= (1.0 - ty)[:, None]
-        c10 *= ty[:, None]
-        c00 += c10
-        c00 *= self.strength
-        return c00
+        top = upper[:, :3] * sx
+        top += upper[:, 3:] * tx
+        bottom = lower[:, :3] * sx
+        bottom += lower[:, 3:] * tx
+        top *= (1.0 - ty)[:, None]
+        bottom *= ty[:, None]
+        top += bottom
+        top *= self.strength
+        return top
 
     @functools.cached_property
-    def _padded(self) -> np.ndarray:
-        """The image as float64 rows (H + 3) x (W + 3) flattened, row j + 1 holding image row j % h and
-        column i + 1 image column i % w for j in [-1, h + 1], i in [-1, w + 1]: the repeated border."""
+    def _pixel_pairs(self) -> np.ndarray:
+        """The image padded to (H + 3) x (W + 3) float64 pixels, flattened: row j + 1 holds image row
+        j % h and column i + 1 image column i % w for j in [-1, h + 1], i in [-1, w + 1] (the repeated
+        border). Viewed as overlapping rows of 6: pixel k and pixel k + 1 (a read-only view)."""
         h, w = self.pixels.shape[:2]
         rows = np.arange(-1, h + 2) % h
         cols = np.arange(-1, w + 2) % w
-        return self.pixels[rows][:, cols].astype(np.float64).reshape(-1, 3)
+        padded = self.pixels[rows][:, cols].astype(np.float64).reshape(-1)
+        return np.lib.stride_tricks.as_strided(padded, shape=(len(padded) // 3 - 1, 6),
+                                               strides=(3 * padded.itemsize, padded.itemsize), writeable=False)
 
     # -- what the image holds ------------------------------------------------------------------
 

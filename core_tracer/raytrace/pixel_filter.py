@@ -60,29 +60,29 @@ def _inverse_cdf_table(name: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 @cache
-def _lookup_table(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _lookup_table(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``_inverse_cdf_table`` with what finds a number's interval without a binary search: the
     slope of each interval (as ``np.interp`` computes it) and, for each of ``_BUCKETS`` equal
-    buckets of [0, 1], the interval holding the bucket's start."""
+    buckets of [0, 1], the interval holding the bucket's start and whether another begins inside it."""
     cdf, x = _inverse_cdf_table(name)
     slopes = (x[1:] - x[:-1]) / (cdf[1:] - cdf[:-1])
-    start = np.searchsorted(cdf, np.arange(_BUCKETS + 1) / _BUCKETS, side="right") - 1
-    return cdf, x, slopes, np.minimum(start, len(slopes) - 1)
+    start = np.minimum(np.searchsorted(cdf, np.arange(_BUCKETS + 1) / _BUCKETS, side="right") - 1, len(slopes) - 1)
+    return cdf, x, slopes, start[:-1], start[1:] != start[:-1]
 
 
 def offsets_of(name: str, u: np.ndarray) -> np.ndarray:
     """Offsets in pixels whose density is the normalised filter, from uniform numbers ``u`` in [0, 1)."""
     if name == "box":
         return u - 0.5  # exact: the box's inverse distribution is linear
-    cdf, x, slopes, start = _lookup_table(name)
+    cdf, x, slopes, start, split = _lookup_table(name)
     # np.interp(u, cdf, x), value for value: the interval j with cdf[j] <= u < cdf[j + 1] is the
     # bucket's own where the bucket lies inside one interval (most of them: u * 2^k is exact), found
     # by a binary search only where an interval ends inside the bucket; then np.interp's formula.
     bucket = (u * _BUCKETS).astype(np.int64)
     j = start.take(bucket)
-    split = np.nonzero(start.take(bucket + 1) != j)[0]
-    if len(split):
-        j[split] = np.minimum(np.searchsorted(cdf, u[split], side="right") - 1, len(slopes) - 1)
+    search = np.flatnonzero(split.take(bucket))
+    if len(search):
+        j[search] = np.minimum(np.searchsorted(cdf, u[search], side="right") - 1, len(slopes) - 1)
     return slopes.take(j) * (u - cdf.take(j)) + x.take(j)
 
 

@@ -344,11 +344,21 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
     pilot_mean = _over_samples(np.add, pilot_values) / len(pilot)
     brightness = pilot_mean.sum(axis=0).max(axis=1)
     spread = (high - low).reshape(-1, len(PASS_NAMES) * 3)[inner]
-    busy = np.nonzero((spread > ctx.adaptive_threshold * brightness[:, None]).any(axis=1))[0]
+    busy = (spread > ctx.adaptive_threshold * brightness[:, None]).any(axis=1)
     band.acc[:] = pilot_mean
-    band.busy = len(busy)
+    band.busy = int(busy.sum())
     pixels = np.arange(y0 * width, y1 * width)
     rest = np.setdiff1d(np.arange(ctx.samples), pilot)
+    if ctx.background_seen and ctx.world_seen:
+        # Busy pixels whose whole neighbourhood's pilot samples saw only the world (a textured sky):
+        # their other samples are looked up in it rather than traced (``_world_samples``).
+        others = np.arange(len(PASS_NAMES) * 3) // 3 != BACKGROUND_PASS
+        low_inner = low.reshape(-1, len(PASS_NAMES) * 3)[inner]
+        high_inner = high.reshape(-1, len(PASS_NAMES) * 3)[inner]
+        world = busy & ~(high_inner[:, others] != 0).any(axis=1) & ~(low_inner[:, others] != 0).any(axis=1)
+        busy &= ~world
+        busy[_world_samples(ctx, band, pixels, np.flatnonzero(world), pilot, pilot_values)] = True
+    busy = np.flatnonzero(busy)
     chunk = max(1, TILE_RAYS // len(rest))
     for c0 in range(0, len(busy), chunk):
         idx = busy[c0:c0 + chunk]
@@ -359,6 +369,36 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
         for k in range(1, ctx.samples):  # in sample order, as ``_over_samples`` and the full path
             total += by_sample[k]
         band.acc[:, idx] = total / ctx.samples
+
+
+def _world_samples(ctx: _Context, band: _Band, pixels: np.ndarray, idx: np.ndarray, pilot: np.ndarray,
+                   pilot_values: np.ndarray) -> np.ndarray:
+    """The samples other than the pilot ones of the pixels ``idx`` (indices into ``pixels``), whose
+    neighbourhood's pilot samples saw only the world: an eye ray that misses the body's box sees
+    just the world (``_first_hits``), so where all of a pixel's rays miss it the world's radiance
+    of each, summed with the pilot samples' in sample order, is the pixel (the values tracing them
+    gives). Returns the indices of ``idx`` a ray of which meets the box after all: trace those."""
+    rest = np.setdiff1d(np.arange(ctx.samples), pilot)
+    chunk = max(1, TILE_RAYS // len(rest))
+    met = []
+    for c0 in range(0, len(idx), chunk):
+        part = idx[c0:c0 + chunk]
+        offsets = pixel_filter.grid_offsets(ctx.filter_name, pixels[part], rest, ctx.samples, sample_major=True)
+        o, d = eye_rays(ctx.camera, np.tile(pixels[part], len(rest)), offsets)
+        t_near, t_far, _ = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
+        toward = ((t_near <= t_far) & (t_near > 0)).reshape(len(rest), len(part)).any(axis=0)
+        by_sample = np.empty((ctx.samples, len(part), 3))
+        by_sample[rest] = ctx.sky(d).reshape(len(rest), len(part), 3)
+        by_sample[pilot] = pilot_values[:, BACKGROUND_PASS][:, part]
+        total = by_sample[0].copy()
+        for k in range(1, ctx.samples):  # in sample order, as the traced pixels
+            total += by_sample[k]
+        seen = ~toward
+        band.acc[BACKGROUND_PASS, part[seen]] = total[seen] / ctx.samples
+        band.segments += len(rest) * int(seen.sum())
+        band.max_depth = max(band.max_depth, 1)
+        met.append(part[toward])
+    return np.concatenate(met) if met else np.zeros(0, dtype=np.int64)
 
 
 def _trace_eye_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> None:
