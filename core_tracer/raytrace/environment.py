@@ -156,22 +156,21 @@ class Environment:
         y0 = np.floor(y)
         tx = x - x0
         ty = y - y0
-        # x0 lies in [-1, w - 1], y0 in [-1, h - 1] (u, v in [0, 1]): the padded image (``_pixel_pairs``)
-        # holds the repeated border, so the corners need no modulo (the same values as p[y % h, x % w]),
-        # and one row of it holds a pixel and its right neighbour: two lookups for the four corners.
+        # x0 lies in [-1, w - 1], y0 in [-1, h - 1] (u, v in [0, 1]): the padded image (``_padded``) holds
+        # the repeated border, so the corners need no modulo (the same values as p[y % h, x % w]).
         x0 = x0.astype(np.int64)
         y0 = y0.astype(np.int64)
         corner = (y0 + 1) * (w + 3) + (x0 + 1)
-        pairs = self._pixel_pairs
-        upper = pairs.take(corner, axis=0, mode="clip")  # (N, 6): the corner and its right neighbour
-        lower = pairs.take(corner + (w + 3), axis=0, mode="clip")
-        # The same products and sums, in the same order, as top * (1 - ty) + bottom * ty of the rows.
+        flat = self._padded
+        # The same products and sums, in the same order, as top * (1 - ty) + bottom * ty of the rows
+        # (float32 pixels times float64 weights: float64 products, as before padding).
         sx = (1.0 - tx)[:, None]
         tx = tx[:, None]
-        top = upper[:, :3] * sx
-        top += upper[:, 3:] * tx
-        bottom = lower[:, :3] * sx
-        bottom += lower[:, 3:] * tx
+        top = flat.take(corner, axis=0, mode="clip") * sx
+        top += flat.take(corner + 1, axis=0, mode="clip") * tx
+        corner += w + 3
+        bottom = flat.take(corner, axis=0, mode="clip") * sx
+        bottom += flat.take(corner + 1, axis=0, mode="clip") * tx
         top *= (1.0 - ty)[:, None]
         bottom *= ty[:, None]
         top += bottom
@@ -179,16 +178,14 @@ class Environment:
         return top
 
     @functools.cached_property
-    def _pixel_pairs(self) -> np.ndarray:
-        """The image padded to (H + 3) x (W + 3) float64 pixels, flattened: row j + 1 holds image row
-        j % h and column i + 1 image column i % w for j in [-1, h + 1], i in [-1, w + 1] (the repeated
-        border). Viewed as overlapping rows of 6: pixel k and pixel k + 1 (a read-only view)."""
+    def _padded(self) -> np.ndarray:
+        """The image's float32 pixels padded to (H + 3) x (W + 3), flattened to rows of 3: row j + 1
+        holds image row j % h and column i + 1 image column i % w for j in [-1, h + 1], i in [-1, w + 1]
+        (the repeated border; a contiguous copy, so that ``take`` reads it in place)."""
         h, w = self.pixels.shape[:2]
         rows = np.arange(-1, h + 2) % h
         cols = np.arange(-1, w + 2) % w
-        padded = self.pixels[rows][:, cols].astype(np.float64).reshape(-1)
-        return np.lib.stride_tricks.as_strided(padded, shape=(len(padded) // 3 - 1, 6),
-                                               strides=(3 * padded.itemsize, padded.itemsize), writeable=False)
+        return np.ascontiguousarray(self.pixels[rows][:, cols]).reshape(-1, 3)
 
     # -- what the image holds ------------------------------------------------------------------
 
