@@ -1,12 +1,16 @@
-"""What samples per pixel cost: the four-lamp preset at 512x512 with 1, 4 and 16 samples, every
-sample of every pixel against adaptive sampling (the default: all samples only where a pixel's
-neighbourhood disagrees), with the adaptive image's difference from the full one; optionally the
-same scene rendered by Cycles, for the ratio of the two times in one run.
+"""What samples per pixel cost: the four-lamp day preset (surroundings: Blender's city world, a
+three-quarter view) and the four-lamp preset at 512x512 with 1, 4 and 16 samples, every sample of
+every pixel against adaptive sampling (the default: all samples only where a pixel's neighbourhood
+disagrees), with the adaptive image's difference from the full one; optionally the same scene
+rendered by Cycles, for the ratio of the two times in one run.
 
-    .venv/bin/python benchmarks/bench_samples.py [--runs 3] [--samples 1 4 16] [--cycles 256]
+    .venv/bin/python benchmarks/bench_samples.py [--runs 3] [--samples 1 4 16] [--threads 2]
+        [--preset presets/four-lamp-day-lit.json ...] [--cycles 256]
 
-Issue target (with surroundings, not built here): 16 samples at 512x512 in <= 1.5 s on 2 cores.
-Times are the minimum and median of the runs (wall clock; CPU over both threads in brackets).
+Target: the day preset, 16 samples at 512x512, in <= 1.5 s on 2 cores. Times are the minimum and
+median of the runs (wall clock; CPU over the threads in brackets). The day preset's peak is the sun
+seen in a lens, thousands of times the rest of the image, so the adaptive image's difference is
+also given against the 99.9th percentile of the pixels.
 """
 
 from __future__ import annotations
@@ -31,11 +35,12 @@ import core_tracer  # noqa: E402
 from core_tracer.raytrace.tracer import render_passes  # noqa: E402
 
 
-def _timed(scene: dict, size: int, samples: int, runs: int, threshold: float | None):
+def _timed(scene: dict, size: int, samples: int, runs: int, threshold: float | None, threads: int | None):
     walls, cpus, result = [], [], None
     for _ in range(runs):
         w, c = time.perf_counter(), time.process_time()
-        result = render_passes(scene, size, size, keep_passes=False, samples=samples, adaptive_threshold=threshold)
+        result = render_passes(scene, size, size, keep_passes=False, samples=samples, adaptive_threshold=threshold,
+                               threads=threads)
         walls.append(time.perf_counter() - w)
         cpus.append(time.process_time() - c)
     return min(walls), statistics.median(walls), min(cpus), result
@@ -58,34 +63,44 @@ def _cycles(preset: Path, size: int, samples: int, cycles_samples: int) -> str:
             f"{cycles_samples} samples {cycles:.2f} s: Cycles takes {cycles / tracer:.0f} times as long")
 
 
+def _bench(preset: Path, args: argparse.Namespace) -> None:
+    scene = core_tracer.load_scene(preset)
+    render_passes(scene, 64, 64, keep_passes=False)  # warm up (and read the world image)
+    print(f"{preset.name}, {args.size}x{args.size}, {args.threads or os.cpu_count()} threads on {os.cpu_count()} "
+          f"cores, load average {os.getloadavg()[0]:.2f}, min / median of {args.runs} runs")
+    for samples in args.samples:
+        w_full, m_full, c_full, full = _timed(scene, args.size, samples, args.runs, 0.0, args.threads)
+        line = (f"{samples:3d} samples: every sample {w_full:5.2f} / {m_full:5.2f} s ({c_full:5.2f} s CPU, "
+                f"{full.stats['segments'] / 1e6:.2f} M segments)")
+        if samples > 4:
+            w, m, c, adaptive = _timed(scene, args.size, samples, args.runs, None, args.threads)
+            reference = full.image.astype(np.float64)
+            error = np.abs(adaptive.image - reference)
+            busy = adaptive.stats["busy_pixels"] / args.size**2
+            p999 = np.percentile(reference.max(axis=2), 99.9)
+            line += (f"; adaptive {w:5.2f} / {m:5.2f} s ({c:5.2f} s CPU, {adaptive.stats['segments'] / 1e6:.2f} M "
+                     f"segments, {busy:.0%} of pixels took every sample), differs by at most "
+                     f"{error.max() / reference.max():.1e} of the peak ({error.max() / p999:.1e} of the 99.9th "
+                     f"percentile), {error.mean() / reference.mean():.1e} of the mean")
+        print(line, flush=True)
+    print(f"load average after: {os.getloadavg()[0]:.2f}", flush=True)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--samples", type=int, nargs="+", default=[1, 4, 16])
-    parser.add_argument("--preset", default=str(ROOT / "presets" / "four-lamp-rear-combination.json"))
+    parser.add_argument("--preset", nargs="+", default=[str(ROOT / "presets" / "four-lamp-day-lit.json"),
+                                                         str(ROOT / "presets" / "four-lamp-rear-combination.json")])
     parser.add_argument("--size", type=int, default=512)
+    parser.add_argument("--threads", type=int, default=None, help="threads of a render (default: all cores)")
     parser.add_argument("--cycles", type=int, default=0, metavar="N",
-                        help="also render the scene at 16 samples with both renderers (Cycles at N samples)")
+                        help="also render each scene at 16 samples with both renderers (Cycles at N samples)")
     args = parser.parse_args()
-    scene = core_tracer.load_scene(args.preset)
-    render_passes(scene, 64, 64, keep_passes=False)  # warm up
-    print(f"{args.size}x{args.size}, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}, "
-          f"min / median of {args.runs} runs")
-    for samples in args.samples:
-        w_full, m_full, c_full, full = _timed(scene, args.size, samples, args.runs, 0.0)
-        line = (f"{samples:3d} samples: every sample {w_full:5.2f} / {m_full:5.2f} s ({c_full:5.2f} s CPU, "
-                f"{full.stats['segments'] / 1e6:.2f} M segments)")
-        if samples > 4:
-            w, m, c, adaptive = _timed(scene, args.size, samples, args.runs, None)
-            error = np.abs(adaptive.image.astype(np.float64) - full.image)
-            busy = adaptive.stats["busy_pixels"] / args.size**2
-            line += (f"; adaptive {w:5.2f} / {m:5.2f} s ({c:5.2f} s CPU, {adaptive.stats['segments'] / 1e6:.2f} M "
-                     f"segments, {busy:.0%} of pixels took every sample), differs by at most "
-                     f"{error.max() / full.image.max():.1e} of the peak, {error.mean() / full.image.mean():.1e} "
-                     "of the mean")
-        print(line, flush=True)
-    if args.cycles:
-        print(_cycles(Path(args.preset), args.size, 16, args.cycles))
+    for preset in args.preset:
+        _bench(Path(preset), args)
+        if args.cycles:
+            print(_cycles(Path(preset), args.size, 16, args.cycles), flush=True)
     return 0
 
 

@@ -60,13 +60,19 @@ def eye_rays(camera: Camera, pixels: np.ndarray,
         x, y = col + 0.5 + offsets[0], row + 0.5 + offsets[1]
     u = (x / camera.width * 2.0 - 1.0) * camera.half_width + camera.shift[0]
     v = (1.0 - y / camera.height * 2.0) * camera.half_height + camera.shift[1]
-    offset = u[:, None] * camera.right + v[:, None] * camera.up
+    # Axis by axis on contiguous columns: the same values as u right + v up on (N, 3) arrays, faster.
+    offset = [u * r + v * q for r, q in zip(camera.right.tolist(), camera.up.tolist(), strict=True)]
+    origins = np.empty((len(u), 3))
     if camera.orthographic:
-        origins = camera.position + offset
-        directions = np.broadcast_to(camera.forward, origins.shape).copy()
+        for axis, p in enumerate(camera.position.tolist()):
+            origins[:, axis] = p + offset[axis]
+        directions = np.empty((len(u), 3))
+        directions[:] = camera.forward
     else:
-        origins = np.broadcast_to(camera.position, offset.shape).copy()
-        directions = camera.forward + offset
-        x, y, z = directions[:, 0], directions[:, 1], directions[:, 2]
-        directions /= np.sqrt(x * x + y * y + z * z)[:, None]  # = np.linalg.norm's sum, without its slow reduction
+        origins[:] = camera.position
+        x, y, z = (f + a for f, a in zip(camera.forward.tolist(), offset, strict=True))
+        norm = np.sqrt(x * x + y * y + z * z)  # = np.linalg.norm's sum, without its slow reduction
+        directions = np.empty((len(u), 3))
+        for axis, a in enumerate((x, y, z)):
+            np.divide(a, norm, out=directions[:, axis])
     return origins, directions

@@ -154,18 +154,38 @@ class Environment:
         y = (1.0 - v) * h - 0.5
         x0 = np.floor(x)
         y0 = np.floor(y)
-        tx = (x - x0)[:, None]
-        ty = (y - y0)[:, None]
-        x0 = x0.astype(np.int64) % w
-        y0 = y0.astype(np.int64) % h
-        x1 = (x0 + 1) % w
-        y1 = (y0 + 1) % h
-        flat = self.pixels.reshape(-1, 3)  # take() on the flat rows: the same values as p[y, x], faster
-        y0 *= w
-        y1 *= w
-        top = flat.take(y0 + x0, axis=0) * (1.0 - tx) + flat.take(y0 + x1, axis=0) * tx
-        bottom = flat.take(y1 + x0, axis=0) * (1.0 - tx) + flat.take(y1 + x1, axis=0) * tx
-        return self.strength * (top * (1.0 - ty) + bottom * ty)
+        tx = x - x0
+        ty = y - y0
+        # x0 lies in [-1, w - 1], y0 in [-1, h - 1] (u, v in [0, 1]): the padded image (``_padded``) holds
+        # the repeated border, so the corners need no modulo (the same values as p[y % h, x % w]).
+        x0 = x0.astype(np.int64)
+        y0 = y0.astype(np.int64)
+        corner = (y0 + 1) * (w + 3) + (x0 + 1)
+        flat = self._padded
+        # The same products and sums, in the same order, as top * (1 - ty) + bottom * ty of the rows
+        # (float32 pixels times float64 weights: float64 products, as before padding).
+        sx = (1.0 - tx)[:, None]
+        tx = tx[:, None]
+        top = flat.take(corner, axis=0, mode="clip") * sx
+        top += flat.take(corner + 1, axis=0, mode="clip") * tx
+        corner += w + 3
+        bottom = flat.take(corner, axis=0, mode="clip") * sx
+        bottom += flat.take(corner + 1, axis=0, mode="clip") * tx
+        top *= (1.0 - ty)[:, None]
+        bottom *= ty[:, None]
+        top += bottom
+        top *= self.strength
+        return top
+
+    @functools.cached_property
+    def _padded(self) -> np.ndarray:
+        """The image's float32 pixels padded to (H + 3) x (W + 3), flattened to rows of 3: row j + 1
+        holds image row j % h and column i + 1 image column i % w for j in [-1, h + 1], i in [-1, w + 1]
+        (the repeated border; a contiguous copy, so that ``take`` reads it in place)."""
+        h, w = self.pixels.shape[:2]
+        rows = np.arange(-1, h + 2) % h
+        cols = np.arange(-1, w + 2) % w
+        return np.ascontiguousarray(self.pixels[rows][:, cols]).reshape(-1, 3)
 
     # -- what the image holds ------------------------------------------------------------------
 

@@ -24,6 +24,7 @@ BLACKMAN_HARRIS_WIDTH = 1.5  # px, Cycles' "Pixel Filter" default
 FILTERS = ("blackman-harris", "box")
 DEFAULT_FILTER = "blackman-harris"
 _TABLE_POINTS = 4097
+_BUCKETS = 2**16  # equal buckets of the uniform numbers, a power of two (``offsets_of``)
 
 
 def filter_support(name: str) -> float:
@@ -58,12 +59,31 @@ def _inverse_cdf_table(name: str) -> tuple[np.ndarray, np.ndarray]:
     return cdf / cdf[-1], x
 
 
+@cache
+def _lookup_table(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``_inverse_cdf_table`` with what finds a number's interval without a binary search: the
+    slope of each interval (as ``np.interp`` computes it) and, for each of ``_BUCKETS`` equal
+    buckets of [0, 1], the interval holding the bucket's start and whether another begins inside it."""
+    cdf, x = _inverse_cdf_table(name)
+    slopes = (x[1:] - x[:-1]) / (cdf[1:] - cdf[:-1])
+    start = np.minimum(np.searchsorted(cdf, np.arange(_BUCKETS + 1) / _BUCKETS, side="right") - 1, len(slopes) - 1)
+    return cdf, x, slopes, start[:-1], start[1:] != start[:-1]
+
+
 def offsets_of(name: str, u: np.ndarray) -> np.ndarray:
     """Offsets in pixels whose density is the normalised filter, from uniform numbers ``u`` in [0, 1)."""
     if name == "box":
         return u - 0.5  # exact: the box's inverse distribution is linear
-    cdf, x = _inverse_cdf_table(name)
-    return np.interp(u, cdf, x)
+    cdf, x, slopes, start, split = _lookup_table(name)
+    # np.interp(u, cdf, x), value for value: the interval j with cdf[j] <= u < cdf[j + 1] is the
+    # bucket's own where the bucket lies inside one interval (most of them: u * 2^k is exact), found
+    # by a binary search only where an interval ends inside the bucket; then np.interp's formula.
+    bucket = (u * _BUCKETS).astype(np.int64)
+    j = start.take(bucket)
+    search = np.flatnonzero(split.take(bucket))
+    if len(search):
+        j[search] = np.minimum(np.searchsorted(cdf, u[search], side="right") - 1, len(slopes) - 1)
+    return slopes.take(j) * (u - cdf.take(j)) + x.take(j)
 
 
 def _radical_inverse_2(i: np.ndarray) -> np.ndarray:
@@ -95,3 +115,22 @@ def sample_offsets(name: str, pixels: np.ndarray, samples: np.ndarray, count: in
     u = ((samples + 0.5) / count + shift_x) % 1.0
     v = (_radical_inverse_2(samples) + shift_y) % 1.0
     return offsets_of(name, u), offsets_of(name, v)
+
+
+def grid_offsets(name: str, pixels: np.ndarray, samples: np.ndarray, count: int,
+                 sample_major: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``sample_offsets`` of every sample ``samples`` of every pixel ``pixels``, flat: sample-major
+    (ray s * len(pixels) + i is sample s of pixel i) or pixel-major (ray i * len(samples) + s).
+    The same values, each pixel's shift and each sample's point computed once."""
+    with np.errstate(over="ignore"):
+        shift_x = _hash_unit(pixels, 1)
+        shift_y = _hash_unit(pixels, 2)
+    point_x = (samples + 0.5) / count
+    point_y = _radical_inverse_2(samples)
+    if sample_major:
+        u = (point_x[:, None] + shift_x) % 1.0
+        v = (point_y[:, None] + shift_y) % 1.0
+    else:
+        u = (point_x + shift_x[:, None]) % 1.0
+        v = (point_y + shift_y[:, None]) % 1.0
+    return offsets_of(name, u.reshape(-1)), offsets_of(name, v.reshape(-1))

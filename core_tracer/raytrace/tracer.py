@@ -268,7 +268,7 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
     # sums whatever the threads.
     for count, o, d in sample_groups(cam, pixels, ctx.samples, ctx.filter_name):
         group = _Band(len(o), ctx)
-        _trace_rays(ctx, group, o, d)
+        _trace_eye_rays(ctx, group, o, d)
         per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3)
         band.acc += _over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
         band.segments += group.segments
@@ -287,10 +287,8 @@ def sample_groups(cam: Camera, pixels: np.ndarray, samples: int,
     per_group = max(1, TILE_RAYS // len(pixels))
     for s0 in range(0, samples, per_group):
         count = min(samples, s0 + per_group) - s0
-        ray_pixels = np.repeat(pixels, count)
-        ray_samples = np.tile(np.arange(s0, s0 + count), len(pixels))
-        offsets = pixel_filter.sample_offsets(filter_name, ray_pixels, ray_samples, samples)
-        yield (count, *eye_rays(cam, ray_pixels, offsets))
+        offsets = pixel_filter.grid_offsets(filter_name, pixels, np.arange(s0, s0 + count), samples, sample_major=False)
+        yield (count, *eye_rays(cam, np.repeat(pixels, count), offsets))
 
 
 def pilot_samples(samples: int) -> np.ndarray:
@@ -312,10 +310,9 @@ def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray, sample_ids: np.n
     for i0 in range(0, len(pixels), per_group):
         group_pixels = pixels[i0:i0 + per_group]
         ray_pixels = np.tile(group_pixels, count)
-        offsets = pixel_filter.sample_offsets(ctx.filter_name, ray_pixels, np.repeat(sample_ids, len(group_pixels)),
-                                              ctx.samples)
+        offsets = pixel_filter.grid_offsets(ctx.filter_name, group_pixels, sample_ids, ctx.samples, sample_major=True)
         group = _Band(len(ray_pixels), ctx)
-        _trace_rays(ctx, group, *eye_rays(ctx.camera, ray_pixels, offsets))
+        _trace_eye_rays(ctx, group, *eye_rays(ctx.camera, ray_pixels, offsets))
         values[:, :, i0:i0 + len(group_pixels)] = (group.acc.reshape(len(PASS_NAMES), count, len(group_pixels), 3)
                                                    .transpose(1, 0, 2, 3))
         band.segments += group.segments
@@ -347,11 +344,21 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
     pilot_mean = _over_samples(np.add, pilot_values) / len(pilot)
     brightness = pilot_mean.sum(axis=0).max(axis=1)
     spread = (high - low).reshape(-1, len(PASS_NAMES) * 3)[inner]
-    busy = np.nonzero((spread > ctx.adaptive_threshold * brightness[:, None]).any(axis=1))[0]
+    busy = (spread > ctx.adaptive_threshold * brightness[:, None]).any(axis=1)
     band.acc[:] = pilot_mean
-    band.busy = len(busy)
+    band.busy = int(busy.sum())
     pixels = np.arange(y0 * width, y1 * width)
     rest = np.setdiff1d(np.arange(ctx.samples), pilot)
+    if ctx.background_seen and ctx.world_seen:
+        # Busy pixels whose whole neighbourhood's pilot samples saw only the world (a textured sky):
+        # their other samples are looked up in it rather than traced (``_world_samples``).
+        others = np.arange(len(PASS_NAMES) * 3) // 3 != BACKGROUND_PASS
+        low_inner = low.reshape(-1, len(PASS_NAMES) * 3)[inner]
+        high_inner = high.reshape(-1, len(PASS_NAMES) * 3)[inner]
+        world = busy & ~(high_inner[:, others] != 0).any(axis=1) & ~(low_inner[:, others] != 0).any(axis=1)
+        busy &= ~world
+        busy[_world_samples(ctx, band, pixels, np.flatnonzero(world), pilot, pilot_values)] = True
+    busy = np.flatnonzero(busy)
     chunk = max(1, TILE_RAYS // len(rest))
     for c0 in range(0, len(busy), chunk):
         idx = busy[c0:c0 + chunk]
@@ -362,6 +369,61 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
         for k in range(1, ctx.samples):  # in sample order, as ``_over_samples`` and the full path
             total += by_sample[k]
         band.acc[:, idx] = total / ctx.samples
+
+
+def _world_samples(ctx: _Context, band: _Band, pixels: np.ndarray, idx: np.ndarray, pilot: np.ndarray,
+                   pilot_values: np.ndarray) -> np.ndarray:
+    """The samples other than the pilot ones of the pixels ``idx`` (indices into ``pixels``), whose
+    neighbourhood's pilot samples saw only the world: an eye ray that misses the body's box sees
+    just the world (``_first_hits``), so where all of a pixel's rays miss it the world's radiance
+    of each, summed with the pilot samples' in sample order, is the pixel (the values tracing them
+    gives). Returns the indices of ``idx`` a ray of which meets the box after all: trace those."""
+    rest = np.setdiff1d(np.arange(ctx.samples), pilot)
+    chunk = max(1, TILE_RAYS // len(rest))
+    met = []
+    for c0 in range(0, len(idx), chunk):
+        part = idx[c0:c0 + chunk]
+        offsets = pixel_filter.grid_offsets(ctx.filter_name, pixels[part], rest, ctx.samples, sample_major=True)
+        o, d = eye_rays(ctx.camera, np.tile(pixels[part], len(rest)), offsets)
+        t_near, t_far, _ = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
+        toward = ((t_near <= t_far) & (t_near > 0)).reshape(len(rest), len(part)).any(axis=0)
+        by_sample = np.empty((ctx.samples, len(part), 3))
+        by_sample[rest] = ctx.sky(d).reshape(len(rest), len(part), 3)
+        by_sample[pilot] = pilot_values[:, BACKGROUND_PASS][:, part]
+        total = by_sample[0].copy()
+        for k in range(1, ctx.samples):  # in sample order, as the traced pixels
+            total += by_sample[k]
+        seen = ~toward
+        band.acc[BACKGROUND_PASS, part[seen]] = total[seen] / ctx.samples
+        band.segments += len(rest) * int(seen.sum())
+        band.max_depth = max(band.max_depth, 1)
+        met.append(part[toward])
+    return np.concatenate(met) if met else np.zeros(0, dtype=np.int64)
+
+
+def _trace_eye_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> None:
+    """``_trace_rays`` of the eye rays of samples (ray i adds to slot i of the fresh ``band``), the
+    rays that miss the body's box taken apart: they see only the world (``_first_hits``), looked up
+    here at once, and only the others are traced. The same values in every slot: a ray's branches
+    keep their order whatever other rays are traced with them."""
+    t_near, t_far, _ = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
+    toward = (t_near <= t_far) & (t_near > 0)
+    miss = np.nonzero(~toward)[0]
+    if len(miss) < len(o) // 8:  # too few to be worth the copies
+        _trace_rays(ctx, band, o, d)
+        return
+    if ctx.background_seen and ctx.world_seen:
+        band.acc[BACKGROUND_PASS, miss] = ctx.sky(d[miss])
+    band.segments += len(miss)
+    band.max_depth = max(band.max_depth, 1)
+    lamp = np.nonzero(toward)[0]
+    if len(lamp):
+        traced = _Band(len(lamp), ctx)
+        _trace_rays(ctx, traced, o[lamp], d[lamp])
+        band.acc[:, lamp] = traced.acc
+        band.segments += traced.segments
+        band.max_depth = max(band.max_depth, traced.max_depth)
+        band.transitions |= traced.transitions
 
 
 def _over_samples(combine: np.ufunc, values: np.ndarray) -> np.ndarray:

@@ -1,0 +1,114 @@
+"""The lookups every sample makes — where its ray goes through the pixel, what the surroundings give
+it — are the straightforward formulas' values exactly, only found with less work: the filter's
+inverse distribution without a binary search, each pixel's shift once, the world image padded
+instead of wrapped, the rays that miss the lamp looked up without tracing them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers import scene_with, write_exr
+
+from core_tracer.raytrace import environment, pixel_filter, tracer
+from core_tracer.raytrace.camera import eye_rays, make_camera
+
+
+def test_filter_offsets_are_np_interp_of_the_inverse_distribution_value_for_value():
+    cdf, x = pixel_filter._inverse_cdf_table("blackman-harris")
+    # uniform numbers, and the table's own knots and their neighbours (the ends of the intervals)
+    u = np.concatenate([np.random.default_rng(5).random(200_000), cdf[:-1], np.nextafter(cdf[1:-1], 0.0),
+                        np.nextafter(cdf[:-1], 1.0), np.arange(4096) / 4096, [np.nextafter(1.0, 0.0)]])
+    np.testing.assert_array_equal(pixel_filter.offsets_of("blackman-harris", u), np.interp(u, cdf, x))
+
+
+@pytest.mark.parametrize("sample_major", [True, False])
+def test_grid_offsets_are_the_per_ray_offsets(sample_major):
+    pixels, samples = np.arange(1000, 1700), np.array([0, 3, 5, 12, 15])
+    if sample_major:
+        ray_pixels, ray_samples = np.tile(pixels, len(samples)), np.repeat(samples, len(pixels))
+    else:
+        ray_pixels, ray_samples = np.repeat(pixels, len(samples)), np.tile(samples, len(pixels))
+    expected = pixel_filter.sample_offsets("blackman-harris", ray_pixels, ray_samples, 16)
+    got = pixel_filter.grid_offsets("blackman-harris", pixels, samples, 16, sample_major)
+    for a, b in zip(got, expected, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def _bilinear_wrapped(pixels: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Cycles' bilinear lookup of pixel centres, the image repeated at its borders (modulo)."""
+    h, w = pixels.shape[:2]
+    x, y = u * w - 0.5, (1.0 - v) * h - 0.5
+    i, j = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = (x - i)[:, None], (y - j)[:, None]
+    p = pixels.astype(np.float64)
+    top = p[j % h, i % w] * (1 - fx) + p[j % h, (i + 1) % w] * fx
+    bottom = p[(j + 1) % h, i % w] * (1 - fx) + p[(j + 1) % h, (i + 1) % w] * fx
+    return top * (1 - fy) + bottom * fy
+
+
+def test_radiance_at_the_seams_and_poles_repeats_the_border(tmp_path):
+    rng = np.random.default_rng(3)
+    pixels = rng.random((16, 32, 3)).astype(np.float32)
+    env = environment.Environment(pixels, 1.7, math.radians(30.0))
+    # along the seam (u = 0 and 1), at the poles (v = 1, 0), and everywhere
+    seam = [[-1.0, 0.0, 0.0], [-1.0, -0.0, 0.0], [-1.0, 1e-17, 0.3], [-1.0, -1e-17, -0.3]]
+    turned = [[math.cos(a) * d[0] + math.sin(a) * d[1], -math.sin(a) * d[0] + math.cos(a) * d[1], d[2]]
+              for d in seam for a in [math.radians(30.0)]]
+    d = np.concatenate([np.array(turned), [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1e-9, 0.0, -1.0]],
+                        rng.normal(size=(5000, 3))])
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    u, v = env.texture_coordinates(d)
+    assert u.min() == 0.0 or u.max() == 1.0
+    np.testing.assert_allclose(env.radiance(d), 1.7 * _bilinear_wrapped(pixels, u, v), rtol=1e-12, atol=0)
+
+
+def test_rays_missing_the_lamp_are_looked_up_as_the_tracer_would_trace_them(tmp_path):
+    sky = write_exr(tmp_path / "sky.exr", np.random.default_rng(4).random((32, 64, 3)).astype(np.float32) + 0.1)
+    scene = scene_with(**{"environment": {"world": "file", "file": sky}, "image": {"width": 48, "height": 36}})
+    scene["camera"]["fov_deg"] = 50.0  # the lamp and plenty of surroundings around it
+    cam = make_camera(scene["camera"], 48, 36)
+    ctx = tracer._Context(scene, cam, False, 16, "blackman-harris")
+    pixels = np.arange(48 * 36)
+    o, d = eye_rays(cam, np.tile(pixels, 4), pixel_filter.grid_offsets("blackman-harris", pixels, np.arange(4), 16,
+                                                                        sample_major=True))
+    split, whole = tracer._Band(len(o), ctx), tracer._Band(len(o), ctx)
+    tracer._trace_eye_rays(ctx, split, o, d)
+    tracer._trace_rays(ctx, whole, o, d)
+    background = whole.acc[tracer.BACKGROUND_PASS]
+    others = np.delete(whole.acc, tracer.BACKGROUND_PASS, axis=0)
+    seeing_only_the_world = others.max(axis=(0, 2)) == 0
+    assert seeing_only_the_world.mean() > 0.3 and (~seeing_only_the_world).sum() > 100
+    assert (background[seeing_only_the_world] > 0).all()
+    # The same values; to the last bit but for the surroundings' lookups, whose arctan2 (numpy's
+    # SIMD code) was seen to differ in the last bit between two calls on equal directions.
+    np.testing.assert_allclose(split.acc, whole.acc, rtol=1e-13, atol=0)
+    np.testing.assert_array_equal(np.delete(split.acc, tracer.BACKGROUND_PASS, 0), others)
+    assert split.segments == whole.segments
+
+
+def test_adaptive_pixels_that_see_only_the_world_are_the_traced_ones(tmp_path, monkeypatch):
+    """Busy pixels whose neighbourhood saw only the surroundings take their other samples from the
+    world image directly (``tracer._world_samples``): the image is the one tracing them gives."""
+    sky = write_exr(tmp_path / "sky.exr", np.random.default_rng(6).random((32, 64, 3)).astype(np.float32) + 0.1)
+    scene = scene_with(**{"environment": {"world": "file", "file": sky}})
+    scene["camera"]["fov_deg"] = 50.0
+
+    def render():
+        return tracer.render_passes(scene, 48, 36, samples=16, keep_passes=False, threads=1)
+
+    looked_up = render()
+    shortcut = tracer._world_samples
+    taken = []
+
+    def trace_them_all(ctx, band, pixels, idx, pilot, pilot_values):
+        taken.append(len(idx) - len(shortcut(ctx, tracer._Band(band.n, ctx), pixels, idx, pilot, pilot_values)))
+        return idx
+
+    monkeypatch.setattr(tracer, "_world_samples", trace_them_all)
+    traced = render()
+    assert sum(taken) > 0.3 * 48 * 36  # most of the surroundings took the shortcut
+    np.testing.assert_allclose(looked_up.image, traced.image, rtol=1e-6, atol=0)  # float32 images, last bit
+    assert looked_up.stats["segments"] == traced.stats["segments"]
+    assert looked_up.stats["busy_pixels"] == traced.stats["busy_pixels"]
