@@ -77,12 +77,27 @@ class _Rays:
         return len(self.pix)
 
     def take(self, sel: np.ndarray) -> _Rays:
-        if sel.dtype == bool and sel.all():
-            return self
-        return _Rays(*(getattr(self, f)[sel] for f in _RAY_FIELDS))
+        if sel.dtype == bool:
+            if sel.all():
+                return self
+            sel = np.nonzero(sel)[0]
+        return _Rays(*(rows(getattr(self, f), sel) for f in _RAY_FIELDS))
 
 
 _RAY_FIELDS = ("pix", "lamp", "o", "d", "k", "medium", "src", "parent", "branch", "seen_reflector")
+
+
+def rows(a: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``a[idx]`` for an index array: numpy's fancy indexing copies the rows of an (N, 3) array
+    several times slower than ``take`` (and a boolean mask is slower still: index arrays throughout)."""
+    return a.take(idx, axis=0)
+
+
+def put_rows(a: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
+    """``a[idx] = values`` for (N, 3) arrays, column by column: several times faster than numpy's
+    scatter of whole rows."""
+    for axis in range(a.shape[1]):
+        a[idx, axis] = values[:, axis]
 
 
 def _concat(parts: list[_Rays]) -> _Rays:
@@ -507,22 +522,19 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
         idx, seg = reaching[part.MEDIA]
         if len(seg.o) == 0:
             continue
-        if idx is None:  # every ray: no gather, no scatter
+        if idx is None:  # every ray: no gather of the segments
             t, part_normal = part.intersect(seg, ctx.lamps, t_best)
-            nearer = t < t_best
-            t_best[nearer] = t[nearer]
-            surface[nearer] = part.SURFACE
-            if part_normal is not None:
-                normal[nearer] = part_normal[nearer]
+            nearer = np.nonzero(t < t_best)[0]
+            hit = nearer
         else:
             t_limit = t_best[idx]
             t, part_normal = part.intersect(seg, ctx.lamps, t_limit)
-            nearer = t < t_limit
+            nearer = np.nonzero(t < t_limit)[0]
             hit = idx[nearer]
-            t_best[hit] = t[nearer]
-            surface[hit] = part.SURFACE
-            if part_normal is not None:
-                normal[hit] = part_normal[nearer]
+        t_best[hit] = t[nearer]
+        surface[hit] = part.SURFACE
+        if part_normal is not None:
+            put_rows(normal, hit, rows(part_normal, nearer))
     return t_best, surface, normal
 
 
@@ -536,7 +548,7 @@ def _reaching(rays: _Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, S
         idx = np.nonzero(np.isin(rays.medium, media))[0]
     if idx is None or len(idx) == len(rays):
         return None, Segments(rays.o, rays.d, rays.lamp, rays.src, rays.medium)
-    return idx, Segments(rays.o[idx], rays.d[idx], rays.lamp[idx], rays.src[idx], rays.medium[idx])
+    return idx, Segments(rows(rays.o, idx), rows(rays.d, idx), rays.lamp[idx], rays.src[idx], rays.medium[idx])
 
 
 def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
@@ -550,36 +562,36 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     lens = np.nonzero(rays.medium == P.IN_LENS)[0]
     if len(lens):
         k = k.copy()
-        k[lens] *= optics.absorption(L.absorption[rays.lamp[lens]], t[lens])
+        put_rows(k, lens, rows(k, lens) * optics.absorption(rows(L.absorption, rays.lamp[lens]), t[lens]))
     plate = np.nonzero(rays.medium == P.IN_PLATE)[0]
     if len(plate):  # eq. (2) inside the prism plate too
         k = k.copy() if k is rays.k else k
-        k[plate] *= optics.absorption(L.plate_absorption[rays.lamp[plate]], t[plate])
+        put_rows(k, plate, rows(k, plate) * optics.absorption(rows(L.plate_absorption, rays.lamp[plate]), t[plate]))
 
     for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, L.wall_color), (P.BULB, BULB_PASS, L.bulb_intensity),
                                 (P.SOCKET, SOCKET_PASS, L.socket_color)):
         m = np.nonzero(surface == sid)[0]
         if len(m):
-            band.add(pass_id, rays.pix[m], k[m] * color[rays.lamp[m]])
+            band.add(pass_id, rays.pix[m], rows(k, m) * rows(color, rays.lamp[m]))
 
     m = np.nonzero(surface == P.HOUSING)[0]  # a prism-plate lamp's housing ends the path with its colour
     if len(m):
-        band.add(SIDE_WALL_PASS, rays.pix[m], k[m] * L.housing_color[rays.lamp[m]])
+        band.add(SIDE_WALL_PASS, rays.pix[m], rows(k, m) * rows(L.housing_color, rays.lamp[m]))
 
     # Only the rays that go on need their end point (their t is finite).
     children: list[_Rays] = []
     m = np.nonzero(surface == P.REFLECTOR)[0]
     if len(m):
-        hit = rays.o[m] + t[m, None] * rays.d[m]
-        children.append(_reflector(ctx, band, rays, m, k[m], hit, cls[m]))
+        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        children.append(_reflector(ctx, band, rays, m, rows(k, m), hit, cls[m]))
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
-        hit = rays.o[m] + t[m, None] * rays.d[m]
-        children.extend(_dielectric(ctx, band, rays, m, k[m], hit, cls[m], surface[m], normal[m]))
+        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        children.extend(_dielectric(ctx, band, rays, m, rows(k, m), hit, cls[m], surface[m], rows(normal, m)))
     m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0]
     if len(m):
-        hit = rays.o[m] + t[m, None] * rays.d[m]
-        children.extend(_plate(rays, m, k[m], hit, cls[m], surface[m], normal[m], L))
+        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        children.extend(_plate(rays, m, rows(k, m), hit, cls[m], surface[m], rows(normal, m), L))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]
@@ -596,22 +608,22 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     where it stays above the cut-off."""
     L = ctx.lamps
     li = rays.lamp[m]
-    d = rays.d[m]
+    d = rows(rays.d, m)
     pix = rays.pix[m]
     first = np.nonzero(~rays.seen_reflector[m])[0]
-    band.add(REFLECTOR_CONSTANT, pix[first], k[first] * L.reflector_color[li[first]])
+    band.add(REFLECTOR_CONSTANT, pix[first], rows(k, first) * rows(L.reflector_color, li[first]))
     normal = reflector.reflector_normal(hit, L.focal[li])
-    to_bulb = optics.normalize(L.bulb_center[li] - hit)
+    to_bulb = optics.normalize(rows(L.bulb_center, li) - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
-    band.add(REFLECTOR_SCATTER, pix, k * scatter[:, None] * L.bulb_intensity[li])
+    band.add(REFLECTOR_SCATTER, pix, k * scatter[:, None] * rows(L.bulb_intensity, li))
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, L, li, hit, normal, -d))
     k = k * L.reflectance[li, None]
     go = np.nonzero(_alive(k))[0]
     n = len(go)
-    return _Rays(pix=pix[go], lamp=li[go], o=hit[go], d=optics.reflect(d[go], normal[go]), k=k[go],
-                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls[go],
-                 branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
+    return _Rays(pix=pix[go], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(normal, go)),
+                 k=rows(k, go), medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8),
+                 parent=cls[go], branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
 
 def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
@@ -621,7 +633,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     face, the cap's on the cuts)."""
     L = ctx.lamps
     li = rays.lamp[m]
-    d = rays.d[m]
+    d = rows(rays.d, m)
     medium = rays.medium[m]
     from_lens = medium == P.IN_LENS
     # Toward the incident side: the normal negated for rays inside the lens (a sign flip is exact).
@@ -635,7 +647,8 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     k_r = k * r[:, None]
     go = np.nonzero(_alive(k_r))[0]
     gm = m[go]
-    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=hit[go], d=optics.reflect(d[go], facing[go]), k=k_r[go],
+    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(facing, go)),
+                 k=rows(k_r, go),
                  medium=medium[go], src=src[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
                  seen_reflector=rays.seen_reflector[gm])]
     trans = np.nonzero(r < 1.0)[0]
@@ -643,18 +656,20 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     # ⑩: out through the outer face, to the background (ends).
     lv = trans[leaving]
     if ctx.background_seen:
-        out_d = optics.refract(d[lv], facing[lv], n1[lv] / n2[lv]) if ctx.environment is not None else d[lv]
-        band.add(BACKGROUND_PASS, rays.pix[m[lv]], k[lv] * (1.0 - r[lv, None]) * ctx.sky(out_d))
+        d_lv = rows(d, lv)
+        out_d = optics.refract(d_lv, rows(facing, lv), n1[lv] / n2[lv]) if ctx.environment is not None else d_lv
+        band.add(BACKGROUND_PASS, rays.pix[m[lv]], rows(k, lv) * (1.0 - r[lv, None]) * ctx.sky(out_d))
     band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
-    k_t = k[tc] * (1.0 - r[tc, None])
+    k_t = rows(k, tc) * (1.0 - r[tc, None])
     go = np.nonzero(_alive(k_t))[0]
-    tc, k_t = tc[go], k_t[go]
+    tc, k_t = tc[go], rows(k_t, go)
     if len(tc):
         eta = n1[tc] / n2[tc]
         tm = m[tc]
-        out.append(_Rays(pix=rays.pix[tm], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
-                         k=k_t, medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS).astype(np.int8),
+        out.append(_Rays(pix=rays.pix[tm], lamp=li[tc], o=rows(hit, tc),
+                         d=optics.refract(rows(d, tc), rows(facing, tc), eta), k=k_t,
+                         medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS).astype(np.int8),
                          src=src[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
                          seen_reflector=rays.seen_reflector[tm]))
     return out
