@@ -129,13 +129,24 @@ def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:
     """Add ``values`` (N, 3) to the pixels ``pix`` of one pass ``acc`` (pixels, 3), repeats summed.
 
     One count over the (pixel, channel) bins of the pixels spanned, each bin summing its values in
-    ray order, then added to the pass: the same sums as one count per channel."""
+    ray order, then added to the pass: the same sums as one count per channel. A few rays spread
+    over many pixels (the deep branches of a band) are counted over the pixels they reach alone:
+    the same sums, without adding zeros to every pixel between."""
     if len(pix) == 0:
         return
     first, last = int(pix.min()), int(pix.max()) + 1
-    bins = (3 * (pix - first))[:, None] + np.arange(3)
+    if 4 * len(pix) < last - first:
+        pixels, slot = np.unique(pix, return_inverse=True)
+        put_rows(acc, pixels, rows(acc, pixels) + _bin_sums(slot, values, len(pixels)))
+    else:
+        acc[first:last] += _bin_sums(pix - first, values, last - first)
+
+
+def _bin_sums(slot: np.ndarray, values: np.ndarray, n_slots: int) -> np.ndarray:
+    """Per slot (n_slots, 3), the sum of the ``values`` of its rays in ray order."""
+    bins = (3 * slot)[:, None] + np.arange(3)
     weights = np.broadcast_to(values, bins.shape)
-    acc[first:last].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * (last - first))
+    return np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * n_slots).reshape(n_slots, 3)
 
 
 class _Band:

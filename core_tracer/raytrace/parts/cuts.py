@@ -93,12 +93,12 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
             break
         t = walk.cap_hits()
         found = np.isfinite(t)
-        if found.any():
-            ray = walk.ray[found]
-            t_hit[ray] = t[found]
-            cell_i[ray], cell_j[ray] = walk.row("i")[found], walk.row("j")[found]
-        walk.advance()
-        walk.keep(~found & (walk.row("t_cell") <= walk.row("t_out")))
+        hits = np.nonzero(found)[0]
+        if len(hits):
+            ray = walk.ray[hits]
+            t_hit[ray] = t[hits]
+            cell_i[ray], cell_j[ray] = walk.row("i")[hits], walk.row("j")[hits]
+        walk.advance(~found)
 
     normal = np.zeros((n, 3))
     normal[:, 1] = 1.0
@@ -127,7 +127,6 @@ class _CellWalk:
         "t_cell",  # where the ray enters the current cell
         "t_out",  # where it leaves the slab (or meets the side wall)
         "t_next_i", "t_next_j",  # where it crosses the next cell border in x, and in z
-        "dt_i", "dt_j",  # ray length across one cell in x, and in z
     )
     _ROW = {name: k for k, name in enumerate(ROWS)}
 
@@ -185,8 +184,6 @@ class _CellWalk:
         with np.errstate(divide="ignore", invalid="ignore"):
             row["t_next_i"][:] = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
             row["t_next_j"][:] = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
-            row["dt_i"][:] = np.where(si != 0, p / np.abs(dx), np.inf)
-            row["dt_j"][:] = np.where(sj != 0, p / np.abs(dz), np.inf)
         on_cap = on_cap[ray]
         return cls(ray, state, on_cap if on_cap.any() else None)
 
@@ -225,18 +222,26 @@ class _CellWalk:
         hi_ok = (hi > T_MIN) & (hi >= t_cell - self.TOL) & (hi <= t_end + self.TOL)
         return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
 
-    def advance(self) -> None:
-        """Step every ray to the neighbouring cell it enters next."""
+    def advance(self, walking: np.ndarray) -> None:
+        """Step the rays still ``walking`` (no hit in their cell) to the neighbouring cell they
+        enter next; drop the others and those whose next cell lies beyond the slab. (Most rays
+        leave after their first cell: they are dropped before the stepping.)"""
         row = self.row
-        t_next_i, t_next_j = row("t_next_i"), row("t_next_j")
+        row("t_cell")[:] = np.where(row("t_next_i") < row("t_next_j"), row("t_next_i"), row("t_next_j"))
+        self.keep(walking & (row("t_cell") <= row("t_out")))
+        self.on_cap = None
+        if len(self.ray) == 0:
+            return
+        row = self.row
+        t_next_i, t_next_j, p = row("t_next_i"), row("t_next_j"), row("p")
         step_i = t_next_i < t_next_j
         step_j = ~step_i
-        row("t_cell")[:] = np.where(step_i, t_next_i, t_next_j)
         np.add(row("i"), row("si"), out=row("i"), where=step_i)
         np.add(row("j"), row("sj"), out=row("j"), where=step_j)
-        np.add(t_next_i, row("dt_i"), out=t_next_i, where=step_i)
-        np.add(t_next_j, row("dt_j"), out=t_next_j, where=step_j)
-        self.on_cap = None
+        # The ray length across one cell, p / |d|: where a ray steps in x its t_next_i is finite, so d_x != 0.
+        with np.errstate(divide="ignore"):
+            np.add(t_next_i, p / np.abs(row("dx")), out=t_next_i, where=step_i)
+            np.add(t_next_j, p / np.abs(row("dz")), out=t_next_j, where=step_j)
 
 
 def _cap_normal(hx: np.ndarray, hy: np.ndarray, hz: np.ndarray, rho: np.ndarray) -> np.ndarray:
