@@ -167,23 +167,40 @@ class _CellWalk:
         if not all_live:
             live = np.nonzero(live)[0]
             ray, t_in, t_out = ray[live], t_in[live], t_out[live]
-        take = (lambda a: a) if all_live else (lambda a: a[ray])
-
         state = np.empty((len(cls.ROWS), len(ray)))
         row = dict(zip(cls.ROWS, state, strict=True))
+        # Every row written in place (``out=``): the walk's setup is a fair part of its cost.
+        for name, values in (("ox", o[:, 0]), ("oz", o[:, 2]), ("dx", d[:, 0]), ("dz", d[:, 2]), ("p", pitch)):
+            if all_live:
+                row[name][:] = values
+            else:  # mode "clip": the indices are valid, and "raise" would copy through a buffer
+                np.take(values, ray, out=row[name], mode="clip")
         ox, oz, dx, dz, p = row["ox"], row["oz"], row["dx"], row["dz"], row["p"]
-        ox[:], oz[:], dx[:], dz[:], p[:] = take(o[:, 0]), take(o[:, 2]), take(d[:, 0]), take(d[:, 2]), take(pitch)
+        take = (lambda a: a) if all_live else (lambda a: a[ray])
         r = take(rho)
         ay, dy = take(o[:, 1]) - take(plane_b), take(d[:, 1])
-        row["ay_dy"][:], row["rho_dy"][:] = ay * dy, r * dy
-        row["ay_ay"][:], row["two_rho_ay"][:] = ay * ay, 2.0 * r * ay
-        i = np.floor((ox + t_in * dx) / p + 0.5, out=row["i"])
-        j = np.floor((oz + t_in * dz) / p + 0.5, out=row["j"])
-        si, sj = np.sign(dx, out=row["si"]), np.sign(dz, out=row["sj"])
+        np.multiply(ay, dy, out=row["ay_dy"])
+        np.multiply(r, dy, out=row["rho_dy"])
+        np.multiply(ay, ay, out=row["ay_ay"])
+        np.multiply(2.0 * r, ay, out=row["two_rho_ay"])
+        for cell, o_k, d_k, sign in ((row["i"], ox, dx, row["si"]), (row["j"], oz, dz, row["sj"])):
+            np.multiply(t_in, d_k, out=cell)
+            cell += o_k
+            cell /= p
+            cell += 0.5
+            np.floor(cell, out=cell)
+            np.sign(d_k, out=sign)
         row["t_cell"][:], row["t_out"][:] = t_in, t_out
         with np.errstate(divide="ignore", invalid="ignore"):
-            row["t_next_i"][:] = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
-            row["t_next_j"][:] = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
+            for t_next, cell, o_k, d_k, sign in ((row["t_next_i"], row["i"], ox, dx, row["si"]),
+                                                 (row["t_next_j"], row["j"], oz, dz, row["sj"])):
+                # ((cell + sign / 2) p - o) / d: where the ray crosses the cell's far border; inf if d = 0
+                np.multiply(0.5, sign, out=t_next)
+                t_next += cell
+                t_next *= p
+                t_next -= o_k
+                t_next /= d_k
+                np.copyto(t_next, np.inf, where=sign == 0)
         on_cap = on_cap[ray]
         return cls(ray, state, on_cap if on_cap.any() else None)
 
