@@ -28,7 +28,7 @@ from .camera import Camera, eye_rays, make_camera
 from .lamp_table import LampTable
 from .lighting import Lighting
 from .parts import body_box, outer_face, parts_for, reflector
-from .parts.base import Segments
+from .parts.base import Segments, put_rows, rows
 from .parts.cylinder_lens import outward_normal
 
 CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
@@ -85,19 +85,6 @@ class _Rays:
 
 
 _RAY_FIELDS = ("pix", "lamp", "o", "d", "k", "medium", "src", "parent", "branch", "seen_reflector")
-
-
-def rows(a: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """``a[idx]`` for an index array: numpy's fancy indexing copies the rows of an (N, 3) array
-    several times slower than ``take`` (and a boolean mask is slower still: index arrays throughout)."""
-    return a.take(idx, axis=0)
-
-
-def put_rows(a: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
-    """``a[idx] = values`` for (N, 3) arrays, column by column: several times faster than numpy's
-    scatter of whole rows."""
-    for axis in range(a.shape[1]):
-        a[idx, axis] = values[:, axis]
 
 
 def _concat(parts: list[_Rays]) -> _Rays:
@@ -518,14 +505,18 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     return _into_lenses(ctx, band, s, li, ds, face_normal, cos_i, local)
 
 
-def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+# Per part that gives normals: its surface id, the rays it was given (None: all) and their normals.
+_Normals = list[tuple[int, np.ndarray | None, np.ndarray]]
+
+
+def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, _Normals]:
     """Nearest surface of every ray among the parts its medium can reach (``parts.PARTS``, in
-    order; ties keep the earlier part): (t, surface id, normal out of the lens material where the
-    part gives one: the lens faces)."""
+    order; ties keep the earlier part): (t, surface id, the normals out of the lens material that
+    the parts gave, the lens faces': ``_normals_at`` reads those of the rays that need them)."""
     n = len(rays)
     t_best = np.full(n, np.inf)
     surface = np.full(n, P.NOTHING, np.int8)
-    normal = np.zeros((n, 3))
+    normals: _Normals = []
     reaching: dict[tuple[int, ...], tuple[np.ndarray | None, Segments]] = {}
     for part in ctx.parts:
         if part.MEDIA not in reaching:
@@ -545,8 +536,20 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
         t_best[hit] = t[nearer]
         surface[hit] = part.SURFACE
         if part_normal is not None:
-            put_rows(normal, hit, rows(part_normal, nearer))
-    return t_best, surface, normal
+            normals.append((part.SURFACE, idx, part_normal))
+    return t_best, surface, normals
+
+
+def _normals_at(normals: _Normals, m: np.ndarray, surface_m: np.ndarray) -> np.ndarray:
+    """The normals (len(m), 3) where the segments ``m`` end, on the surfaces ``surface_m``: each
+    from the part that surface is (the nearest part, so the last that gave the ray a normal)."""
+    normal = np.zeros((len(m), 3))
+    for sid, idx, part_normal in normals:
+        sel = np.nonzero(surface_m == sid)[0]
+        if len(sel):
+            at = m[sel] if idx is None else np.searchsorted(idx, m[sel])  # idx is sorted
+            put_rows(normal, sel, rows(part_normal, at))
+    return normal
 
 
 def _reaching(rays: _Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, Segments]:
@@ -565,7 +568,7 @@ def _reaching(rays: _Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, S
 def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     """Trace one generation: find each segment's end, add its luminance, spawn the children."""
     L = ctx.lamps
-    t, surface, normal = _intersect(ctx, rays)
+    t, surface, normals = _intersect(ctx, rays)
     cls = _path_class(rays.medium, rays.src, surface)
     band.note(rays.parent, rays.branch, cls)
 
@@ -598,11 +601,14 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
         hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
-        children.extend(_dielectric(ctx, band, rays, m, rows(k, m), hit, cls[m], surface[m], rows(normal, m)))
+        surface_m = surface[m]
+        children.extend(_dielectric(ctx, band, rays, m, rows(k, m), hit, cls[m], surface_m,
+                                    _normals_at(normals, m, surface_m)))
     m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0]
     if len(m):
         hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
-        children.extend(_plate(rays, m, rows(k, m), hit, cls[m], surface[m], rows(normal, m), L))
+        surface_m = surface[m]
+        children.extend(_plate(rays, m, rows(k, m), hit, cls[m], surface_m, _normals_at(normals, m, surface_m), L))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]

@@ -43,6 +43,19 @@ class Part(Protocol):
         ...
 
 
+def rows(a: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``a[idx]`` for an index array: numpy's fancy indexing copies the rows of an (N, 3) array
+    several times slower than ``take`` (and a boolean mask is slower still: index arrays throughout)."""
+    return a.take(idx, axis=0)
+
+
+def put_rows(a: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
+    """``a[idx] = values`` for (N, 3) arrays, column by column: several times faster than numpy's
+    scatter of whole rows."""
+    for axis in range(a.shape[1]):
+        a[idx, axis] = values[:, axis]
+
+
 def solve_quadratic(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Roots (small, large) of a t^2 + b t + c = 0 by the stable formula; NaN where none.
     Handles a == 0 (a linear equation) with both roots equal."""

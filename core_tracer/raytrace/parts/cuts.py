@@ -12,7 +12,7 @@ from ...scene.spec import MAX_CUTS_ACROSS
 from .. import optics
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments
+from .base import T_MIN, Segments, put_rows, rows
 
 SURFACE = P.CUT
 MEDIA = (P.IN_LENS, P.IN_AIR)
@@ -83,7 +83,10 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
     t_hit = np.full(n, np.inf)
     on_cap = np.zeros(n, np.int8) if on_cap is None else on_cap
 
-    flat_base_hits(o, d, plane_a, t_limit, np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0], t_hit)
+    curved = np.isfinite(rho)
+    every_curved = bool(curved.all())
+    if not every_curved:
+        flat_base_hits(o, d, plane_a, t_limit, np.nonzero(~curved & (on_cap == OFF_CAP))[0], t_hit)
 
     # The walk keeps only the cell each ray's hit lies in; the normals follow after the walk.
     cell_i, cell_j = np.zeros(n), np.zeros(n)
@@ -102,11 +105,11 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
 
     normal = np.zeros((n, 3))
     normal[:, 1] = 1.0
-    capped = np.nonzero(np.isfinite(t_hit) & np.isfinite(rho))[0]
+    capped = np.nonzero(np.isfinite(t_hit) if every_curved else np.isfinite(t_hit) & curved)[0]
     if len(capped):
-        oc, dc, tc, pc = o[capped], d[capped], t_hit[capped], pitch[capped]
+        oc, dc, tc, pc = rows(o, capped), rows(d, capped), t_hit[capped], pitch[capped]
         ax, ay, az = oc[:, 0] - cell_i[capped] * pc, oc[:, 1] - plane_b[capped], oc[:, 2] - cell_j[capped] * pc
-        normal[capped] = _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2], rho[capped])
+        put_rows(normal, capped, _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2], rho[capped]))
     return t_hit, normal
 
 
