@@ -13,10 +13,13 @@ processed together as arrays; the image is worked in bands of rows to bound memo
 from __future__ import annotations
 
 import os
+import sys
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -232,10 +235,47 @@ def _never() -> bool:
     return False
 
 
+# The interpreter's switch interval while bands run on several threads, in seconds (Python's is
+# 5 ms). A band's last generations trace a few rays each: their numpy calls are too small to release
+# the GIL, so that band keeps the interpreter for a whole switch interval each time the other thread,
+# tracing many rays, wants it back between two of its numpy calls; with 5 ms that thread all but
+# stops while the other finishes its deep branches (benchmarks/bench_viewport.py).
+SWITCH_INTERVAL = 2e-4
+_switch_lock = threading.Lock()
+_switch_users = [0, 0.0]  # renders on several threads running now, and the interval before the first
+
+
+@contextmanager
+def _short_switch_interval() -> Iterator[None]:
+    """``SWITCH_INTERVAL`` (if shorter) while any render runs bands on several threads; the
+    interval it found is restored when the last one ends."""
+    with _switch_lock:
+        if _switch_users[0] == 0:
+            _switch_users[1] = sys.getswitchinterval()
+            sys.setswitchinterval(min(SWITCH_INTERVAL, _switch_users[1]))
+        _switch_users[0] += 1
+    try:
+        yield
+    finally:
+        with _switch_lock:
+            _switch_users[0] -= 1
+            if _switch_users[0] == 0:
+                sys.setswitchinterval(_switch_users[1])
+
+
 def _traced_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
                   should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
     """Trace the bands, at most ``threads`` at a time (in the calling thread when 1), and yield
     them in order; ``should_stop()`` is polled before starting a band and after each finishes."""
+    if threads > 1:
+        with _short_switch_interval():
+            yield from _traced_bands_on(ctx, bands, threads, should_stop)
+    else:
+        yield from _traced_bands_on(ctx, bands, 1, should_stop)
+
+
+def _traced_bands_on(ctx: _Context, bands: list[tuple[int, int]], threads: int,
+                     should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
     pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
     pending, running = deque(bands), deque()
     try:
