@@ -706,7 +706,8 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     from_lens = medium == P.IN_LENS
     # Toward the incident side: the normal negated for rays inside the lens (a sign flip is exact).
     facing = out_normal * np.where(from_lens, -1.0, 1.0)[:, None]
-    cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
+    cos_facing = -optics.dot(d, facing)
+    cos_i = np.clip(cos_facing, 0.0, 1.0)
     ior = L.ior[li]
     n1 = np.where(from_lens, ior, 1.0)
     n2 = np.where(from_lens, 1.0, ior)
@@ -736,7 +737,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
         eta = n1[tc] / n2[tc]
         tm = m[tc]
         out.append(_Rays(pix=rays.pix[tm], lamp=li[tc], o=rows(hit, tc),
-                         d=optics.refract(rows(d, tc), rows(facing, tc), eta), k=k_t,
+                         d=optics.refract(rows(d, tc), rows(facing, tc), eta, cos_facing[tc]), k=k_t,
                          medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS).astype(np.int8),
                          src=src[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
                          seen_reflector=rays.seen_reflector[tm]))
