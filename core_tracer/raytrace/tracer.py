@@ -108,6 +108,7 @@ class _Context(Lighting):
         self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
+        self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body
         self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
         self.body = body
         in_lens = sunlight.sun_transmittance(self.sun, self.lamps, np.arange(len(self.lamps.ior)))
@@ -311,7 +312,14 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
     pixels = np.arange(y0 * cam.width, y1 * cam.width)
     band = _Band(len(pixels), ctx)
     if ctx.samples == 1:  # the paper's setting: one ray through each pixel centre
-        _trace_rays(ctx, band, *eye_rays(cam, pixels))
+        slots = _slots_seeing_body(ctx, y0, y1)
+        if slots is None:
+            _trace_rays(ctx, band, *eye_rays(cam, pixels))
+        else:  # the others see the black background: their eye rays still count as segments
+            band.segments += len(pixels) - len(slots)
+            band.max_depth = 1
+            if len(slots):
+                _trace_rays(ctx, band, *eye_rays(cam, pixels[slots]), slots)
         return band
     if ctx.adaptive_threshold > 0 and len(pilot_samples(ctx.samples)) < ctx.samples:
         _trace_adaptive(ctx, band, y0, y1)
@@ -439,10 +447,23 @@ def _neighbourhood(values: np.ndarray, combine: np.ufunc) -> np.ndarray:
     return out
 
 
-def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> None:
-    """Trace eye rays ``o, d`` (ray i adds to slot i of ``band``) to the end of every branch."""
+def _slots_seeing_body(ctx: _Context, y0: int, y1: int) -> np.ndarray | None:
+    """The pixels of the band of rows [y0, y1) (slots, from its first pixel) whose eye rays can
+    meet the body, where the others add nothing (a black background or a transparent film): those
+    outside ``body_box.screen_window``. None: every pixel."""
+    if ctx.window is None or (ctx.background_seen and ctx.world_seen):
+        return None
+    first_col, last_col, first_row, last_row = ctx.window
+    rows = np.arange(max(y0, first_row), min(y1, last_row + 1)) - y0
+    cols = np.arange(first_col, last_col + 1)
+    return (rows[:, None] * ctx.camera.width + cols).ravel()
+
+
+def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray, slots: np.ndarray | None = None) -> None:
+    """Trace eye rays ``o, d`` (ray i adds to slot i of ``band``, or to ``slots[i]``) to the end of
+    every branch."""
     band.segments += len(o)
-    rays = _first_hits(ctx, band, o, d)
+    rays = _first_hits(ctx, band, o, d, np.arange(len(o)) if slots is None else slots)
     depth = 1
     while len(rays) and depth < MAX_DEPTH:
         band.segments += len(rays)
@@ -451,12 +472,12 @@ def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> Non
     band.max_depth = depth
 
 
-def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Rays:
-    """Classify the eye rays (paper §3.1): background, body, or lens (①)."""
+def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> _Rays:
+    """Classify the eye rays (paper §3.1), ray i of the band's slot ``pix[i]``: background, body,
+    or lens (①)."""
     n = len(o)
-    pix = np.arange(n)
     if ctx.wraps:
-        return _first_hits_wrapped(ctx, band, o, d)
+        return _first_hits_wrapped(ctx, band, o, d, pix)
     t_near, t_far, face = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     hit_box = (t_near <= t_far) & (t_near > 0)
 
@@ -478,7 +499,8 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     normal = np.zeros((len(b), 3))
     normal[np.arange(len(b)), face[b]] = -np.sign(d[b, face[b]])
     body = ctx.body
-    band.add(BODY_PASS, b, ctx.shade(normal, -d[b], np.asarray(body["color"]), body["specular"], body["shininess"]))
+    band.add(BODY_PASS, pix[b], ctx.shade(normal, -d[b], np.asarray(body["color"]), body["specular"],
+                                          body["shininess"]))
 
     # Lens outer face (①): Fresnel split; the reflected branch is shaded by eq. (1) (§3.2.3).
     s = np.nonzero(on_lens)[0]
@@ -486,7 +508,7 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     ds = d[s]
     local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     local[:, 1] = 0.0
-    return _into_lenses(ctx, band, s, li, ds, np.tile(outer_face.NORMAL, (len(s), 1)), ds[:, 1], local)
+    return _into_lenses(ctx, band, pix[s], li, ds, np.tile(outer_face.NORMAL, (len(s), 1)), ds[:, 1], local)
 
 
 def _into_lenses(ctx: _Context, band: _Band, s: np.ndarray, li: np.ndarray, ds: np.ndarray,
@@ -514,11 +536,10 @@ def _into_lenses(ctx: _Context, band: _Band, s: np.ndarray, li: np.ndarray, ds: 
     return rays.take(_alive(k))
 
 
-def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Rays:
+def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> _Rays:
     """``_first_hits`` for a body whose front curves round to the side (cylindrical lenses): the
     same classification, with the curved panel's normals and the cylindrical outer faces'."""
     n = len(o)
-    pix = np.arange(n)
     t_near, hit_body, face, normal = body_box.hit_body(o, d, ctx.box_lo, ctx.box_hi, ctx.wraps)
     if ctx.background_seen and ctx.world_seen:
         band.add(BACKGROUND_PASS, pix[~hit_body], ctx.sky(d[~hit_body]))
@@ -530,7 +551,8 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     on_lens = lamp >= 0
     b = np.nonzero(hit_body & ~on_lens)[0]
     body = ctx.body
-    band.add(BODY_PASS, b, ctx.shade(normal[b], -d[b], np.asarray(body["color"]), body["specular"], body["shininess"]))
+    band.add(BODY_PASS, pix[b], ctx.shade(normal[b], -d[b], np.asarray(body["color"]), body["specular"],
+                                           body["shininess"]))
 
     s = np.nonzero(on_lens)[0]
     li = lamp[s]
@@ -542,7 +564,7 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     curved = np.nonzero(~flat)[0]
     face_normal[curved] = outward_normal(local[curved], L.cyl_axis_x[li[curved]], L.cyl_radius[li[curved]])
     cos_i = np.clip(-optics.dot(ds, face_normal), 0.0, 1.0)
-    return _into_lenses(ctx, band, s, li, ds, face_normal, cos_i, local)
+    return _into_lenses(ctx, band, pix[s], li, ds, face_normal, cos_i, local)
 
 
 # Per part that gives normals: its surface id, the rays it was given (None: all) and their normals.
