@@ -166,6 +166,14 @@ class _CellWalk:
         np.maximum(t_in, 0.0, out=t_in)
         np.minimum(t_out, pick(t_limit), out=t_out)
         live = t_in <= t_out
+        # A ray leaving a cap into the air never meets that cap again (``cap_hits``): it starts in
+        # the next cell it enters, and most leave the slab before, so they are left out here.
+        leaving_air = np.nonzero(live & (pick(on_cap) == INTO_AIR))[0]
+        if len(leaving_air):
+            k = ray[leaving_air]
+            t_cross = [_entry_cell(t_in[leaving_air], o[k, axis], d[k, axis], pitch[k])[2] for axis in (0, 2)]
+            t_second = np.where(t_cross[0] < t_cross[1], t_cross[0], t_cross[1])
+            live[leaving_air[~(t_second <= t_out[leaving_air])]] = False
         all_live = every and bool(live.all())  # every ray crosses the slab: no gathers at all
         if not all_live:
             live = np.nonzero(live)[0]
@@ -186,26 +194,19 @@ class _CellWalk:
         np.multiply(r, dy, out=row["rho_dy"])
         np.multiply(ay, ay, out=row["ay_ay"])
         np.multiply(2.0 * r, ay, out=row["two_rho_ay"])
-        for cell, o_k, d_k, sign in ((row["i"], ox, dx, row["si"]), (row["j"], oz, dz, row["sj"])):
-            np.multiply(t_in, d_k, out=cell)
-            cell += o_k
-            cell /= p
-            cell += 0.5
-            np.floor(cell, out=cell)
-            np.sign(d_k, out=sign)
+        _entry_cell(t_in, ox, dx, p, row["i"], row["si"], row["t_next_i"])
+        _entry_cell(t_in, oz, dz, p, row["j"], row["sj"], row["t_next_j"])
         row["t_cell"][:], row["t_out"][:] = t_in, t_out
-        with np.errstate(divide="ignore", invalid="ignore"):
-            for t_next, cell, o_k, d_k, sign in ((row["t_next_i"], row["i"], ox, dx, row["si"]),
-                                                 (row["t_next_j"], row["j"], oz, dz, row["sj"])):
-                # ((cell + sign / 2) p - o) / d: where the ray crosses the cell's far border; inf if d = 0
-                np.multiply(0.5, sign, out=t_next)
-                t_next += cell
-                t_next *= p
-                t_next -= o_k
-                t_next /= d_k
-                np.copyto(t_next, np.inf, where=sign == 0)
-        on_cap = on_cap[ray]
-        return cls(ray, state, on_cap if on_cap.any() else None)
+        walk = cls(ray, state, on_cap[ray])
+        if len(leaving_air):  # those that stay: into their second cell, where any cap may be met
+            moving = walk.on_cap == INTO_AIR
+            row["t_cell"][:] = np.where(moving, np.where(row["t_next_i"] < row["t_next_j"], row["t_next_i"],
+                                                         row["t_next_j"]), row["t_cell"])
+            walk.step_cells(moving)
+            walk.on_cap = np.where(moving, OFF_CAP, walk.on_cap).astype(np.int8)
+        if not walk.on_cap.any():
+            walk.on_cap = None
+        return walk
 
     def keep(self, keep: np.ndarray) -> None:
         """Drop the rays not in ``keep``."""
@@ -248,20 +249,54 @@ class _CellWalk:
         leave after their first cell: they are dropped before the stepping.)"""
         row = self.row
         row("t_cell")[:] = np.where(row("t_next_i") < row("t_next_j"), row("t_next_i"), row("t_next_j"))
-        self.keep(walking & (row("t_cell") <= row("t_out")))
+        self.keep(walking & (self.row("t_cell") <= self.row("t_out")))
         self.on_cap = None
-        if len(self.ray) == 0:
-            return
+        if len(self.ray):
+            self.step_cells()
+
+    def step_cells(self, moving: np.ndarray | None = None) -> None:
+        """Move the rays (those ``moving``, default all) whose ``t_cell`` is already where they
+        leave their cell into the neighbouring cell, and on to its far borders."""
         row = self.row
         t_next_i, t_next_j, p = row("t_next_i"), row("t_next_j"), row("p")
         step_i = t_next_i < t_next_j
         step_j = ~step_i
+        if moving is not None:
+            step_i &= moving
+            step_j &= moving
         np.add(row("i"), row("si"), out=row("i"), where=step_i)
         np.add(row("j"), row("sj"), out=row("j"), where=step_j)
         # The ray length across one cell, p / |d|: where a ray steps in x its t_next_i is finite, so d_x != 0.
         with np.errstate(divide="ignore"):
             np.add(t_next_i, p / np.abs(row("dx")), out=t_next_i, where=step_i)
             np.add(t_next_j, p / np.abs(row("dz")), out=t_next_j, where=step_j)
+
+
+def _entry_cell(t_in: np.ndarray, o_k: np.ndarray, d_k: np.ndarray, p: np.ndarray, cell: np.ndarray | None = None,
+                sign: np.ndarray | None = None, t_next: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Along one axis (x or z, origin ``o_k``, direction ``d_k``): the cell a ray is in at
+    ``t_in``, the way it steps (the sign of d) and where it crosses that cell's far border (inf
+    where d = 0); into ``cell``, ``sign`` and ``t_next`` when given. One sequence of operations
+    for every caller: the walk and the rays it leaves out must agree to the last bit."""
+    cell = np.empty_like(t_in) if cell is None else cell
+    sign = np.empty_like(t_in) if sign is None else sign
+    t_next = np.empty_like(t_in) if t_next is None else t_next
+    np.multiply(t_in, d_k, out=cell)
+    cell += o_k
+    cell /= p
+    cell += 0.5
+    np.floor(cell, out=cell)
+    np.sign(d_k, out=sign)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # ((cell + sign / 2) p - o) / d
+        np.multiply(0.5, sign, out=t_next)
+        t_next += cell
+        t_next *= p
+        t_next -= o_k
+        t_next /= d_k
+    np.copyto(t_next, np.inf, where=sign == 0)
+    return cell, sign, t_next
 
 
 def _cap_normal(hx: np.ndarray, hy: np.ndarray, hz: np.ndarray, rho: np.ndarray) -> np.ndarray:
