@@ -147,15 +147,20 @@ class _CellWalk:
     def enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
         """The rays with curved cuts whose path crosses the slab between planes A and B before
         ``t_limit``, each placed in the cell where it enters the slab."""
+        # (one errstate for all: rays parallel to a plane or an axis divide by zero, on purpose)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return cls._enter(o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap)
+
+    @classmethod
+    def _enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
         curved = np.isfinite(rho)
         every = bool(curved.all())  # the usual case: no gather needed to find the slab
         ray = np.arange(len(rho)) if every else np.nonzero(curved)[0]
         pick = (lambda a: a) if every else (lambda a: a[ray])
         oy, dy = pick(o[:, 1]), pick(d[:, 1])
         a_plane, b_plane = pick(plane_a), pick(plane_b)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ta = (a_plane - oy) / dy
-            tb = (b_plane - oy) / dy
+        ta = (a_plane - oy) / dy
+        tb = (b_plane - oy) / dy
         t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
         parallel = np.nonzero(dy == 0)[0]
         if len(parallel):  # a ray parallel to the planes is in the slab for ever or never
@@ -239,8 +244,9 @@ class _CellWalk:
             hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
         t_cell = row("t_cell")
         t_end = np.minimum(np.minimum(row("t_next_i"), row("t_next_j")), row("t_out"))
-        lo_ok = (lo > T_MIN) & (lo >= t_cell - self.TOL) & (lo <= t_end + self.TOL)
-        hi_ok = (hi > T_MIN) & (hi >= t_cell - self.TOL) & (hi <= t_end + self.TOL)
+        cell_from, cell_to = t_cell - self.TOL, t_end + self.TOL
+        lo_ok = (lo > T_MIN) & (lo >= cell_from) & (lo <= cell_to)
+        hi_ok = (hi > T_MIN) & (hi >= cell_from) & (hi <= cell_to)
         return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
 
     def advance(self, walking: np.ndarray) -> None:
@@ -278,7 +284,8 @@ def _entry_cell(t_in: np.ndarray, o_k: np.ndarray, d_k: np.ndarray, p: np.ndarra
     """Along one axis (x or z, origin ``o_k``, direction ``d_k``): the cell a ray is in at
     ``t_in``, the way it steps (the sign of d) and where it crosses that cell's far border (inf
     where d = 0); into ``cell``, ``sign`` and ``t_next`` when given. One sequence of operations
-    for every caller: the walk and the rays it leaves out must agree to the last bit."""
+    for every caller: the walk and the rays it leaves out must agree to the last bit. Called under
+    ``np.errstate(divide="ignore", invalid="ignore")`` (d = 0 divides by zero)."""
     cell = np.empty_like(t_in) if cell is None else cell
     sign = np.empty_like(t_in) if sign is None else sign
     t_next = np.empty_like(t_in) if t_next is None else t_next
@@ -288,13 +295,12 @@ def _entry_cell(t_in: np.ndarray, o_k: np.ndarray, d_k: np.ndarray, p: np.ndarra
     cell += 0.5
     np.floor(cell, out=cell)
     np.sign(d_k, out=sign)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        # ((cell + sign / 2) p - o) / d
-        np.multiply(0.5, sign, out=t_next)
-        t_next += cell
-        t_next *= p
-        t_next -= o_k
-        t_next /= d_k
+    # ((cell + sign / 2) p - o) / d
+    np.multiply(0.5, sign, out=t_next)
+    t_next += cell
+    t_next *= p
+    t_next -= o_k
+    t_next /= d_k
     np.copyto(t_next, np.inf, where=sign == 0)
     return cell, sign, t_next
 
