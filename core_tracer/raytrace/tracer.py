@@ -486,7 +486,7 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray, pix: n
 
     # Only rays entering the front face can reach a lens: find their points there.
     front = np.nonzero(hit_box & (face == 1) & (d[:, 1] > 0))[0]
-    p = o[front] + t_near[front, None] * d[front]
+    p = rows(o, front) + t_near[front, None] * rows(d, front)
     L = ctx.lamps
     lamp_front = outer_face.lens_at(p[:, 0], p[:, 2], L)
     lamp = np.full(n, -1)
@@ -499,13 +499,13 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray, pix: n
     normal = np.zeros((len(b), 3))
     normal[np.arange(len(b)), face[b]] = -np.sign(d[b, face[b]])
     body = ctx.body
-    band.add(BODY_PASS, pix[b], ctx.shade(normal, -d[b], np.asarray(body["color"]), body["specular"],
+    band.add(BODY_PASS, pix[b], ctx.shade(normal, -rows(d, b), np.asarray(body["color"]), body["specular"],
                                           body["shininess"]))
 
     # Lens outer face (①): Fresnel split; the reflected branch is shaded by eq. (1) (§3.2.3).
     s = np.nonzero(on_lens)[0]
     li = lamp[s]
-    ds = d[s]
+    ds = rows(d, s)
     local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     local[:, 1] = 0.0
     return _into_lenses(ctx, band, pix[s], li, ds, np.tile(outer_face.NORMAL, (len(s), 1)), ds[:, 1], local)
@@ -544,19 +544,19 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     if ctx.background_seen and ctx.world_seen:
         band.add(BACKGROUND_PASS, pix[~hit_body], ctx.sky(d[~hit_body]))
     front = np.nonzero(hit_body & (((face == 1) & (d[:, 1] > 0)) | (face == body_box.CURVED_FRONT)))[0]
-    p = o[front] + t_near[front, None] * d[front]
+    p = rows(o, front) + t_near[front, None] * rows(d, front)
     L = ctx.lamps
     lamp = np.full(n, -1)
     lamp[front] = outer_face.lens_at(p[:, 0], p[:, 2], L)
     on_lens = lamp >= 0
     b = np.nonzero(hit_body & ~on_lens)[0]
     body = ctx.body
-    band.add(BODY_PASS, pix[b], ctx.shade(normal[b], -d[b], np.asarray(body["color"]), body["specular"],
+    band.add(BODY_PASS, pix[b], ctx.shade(rows(normal, b), -rows(d, b), np.asarray(body["color"]), body["specular"],
                                            body["shininess"]))
 
     s = np.nonzero(on_lens)[0]
     li = lamp[s]
-    ds = d[s]
+    ds = rows(d, s)
     local = o[s] + t_near[s, None] * ds - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     flat = L.cylindrical[li] == 0
     local[flat, 1] = 0.0
@@ -750,7 +750,8 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
         d_lv = rows(d, lv)
         out_d = optics.refract(d_lv, rows(facing, lv), n1[lv] / n2[lv]) if ctx.environment is not None else d_lv
         band.add(BACKGROUND_PASS, rays.pix[m[lv]], rows(k, lv) * (1.0 - r[lv, None]) * ctx.sky(out_d))
-    band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
+    if ctx.record:
+        band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
     k_t = rows(k, tc) * (1.0 - r[tc, None])
     go = np.nonzero(_alive(k_t))[0]
