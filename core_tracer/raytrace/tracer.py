@@ -315,7 +315,7 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
         slots = _slots_seeing_body(ctx, y0, y1)
         if slots is None:
             _trace_rays(ctx, band, *eye_rays(cam, pixels))
-        else:  # the others see the black background: their eye rays still count as segments
+        else:  # the others add nothing (black background, or a film): their eye rays still count as segments
             band.segments += len(pixels) - len(slots)
             band.max_depth = 1
             if len(slots):
