@@ -106,6 +106,7 @@ class _Context(Lighting):
         self.adaptive_threshold = adaptive_threshold
         self.lamps = LampTable.from_scene(scene)
         self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
+        self.plates = bool(self.lamps.ring_count.any())  # else no ray meets a prism plate or its housing
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
         self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body
@@ -639,7 +640,7 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     if len(lens):
         k = k.copy()
         put_rows(k, lens, rows(k, lens) * optics.absorption(rows(L.absorption, rays.lamp[lens]), t[lens]))
-    plate = np.nonzero(rays.medium == P.IN_PLATE)[0]
+    plate = np.nonzero(rays.medium == P.IN_PLATE)[0] if ctx.plates else ()
     if len(plate):  # eq. (2) inside the prism plate too
         k = k.copy() if k is rays.k else k
         put_rows(k, plate, rows(k, plate) * optics.absorption(rows(L.plate_absorption, rays.lamp[plate]), t[plate]))
@@ -650,7 +651,7 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
         if len(m):
             band.add(pass_id, rays.pix[m], rows(k, m) * rows(color, rays.lamp[m]))
 
-    m = np.nonzero(surface == P.HOUSING)[0]  # a prism-plate lamp's housing ends the path with its colour
+    m = np.nonzero(surface == P.HOUSING)[0] if ctx.plates else ()  # a plate lamp's housing ends the path
     if len(m):
         band.add(SIDE_WALL_PASS, rays.pix[m], rows(k, m) * rows(L.housing_color, rays.lamp[m]))
 
@@ -666,7 +667,7 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
         surface_m = surface[m]
         children.extend(_dielectric(ctx, band, rays, m, rows(k, m), hit, cls[m], surface_m,
                                     _normals_at(normals, m, surface_m)))
-    m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0]
+    m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
     if len(m):
         hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
         surface_m = surface[m]

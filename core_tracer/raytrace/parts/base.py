@@ -74,7 +74,7 @@ def quadratic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.nda
     rays with a != 0 (there ``solve_quadratic`` returns exactly their min and max)."""
     with np.errstate(invalid="ignore", divide="ignore"):
         disc = b * b - 4.0 * a * c
-        sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
+        sq = np.sqrt(disc)  # NaN where no root is real (copysign then gives it b's sign, as for any NaN)
         q = -0.5 * (b + np.copysign(sq, b))
         return q / a, c / q
 
