@@ -7,7 +7,9 @@ camera (the lamp fills the view) and from a three-quarter viewport view.
     .venv/bin/python benchmarks/bench_viewport.py [--runs 5] [--threads 2] [--size 1024x768]
 
 Targets of the viewport preview: first image <= 0.1 s; full resolution <= 0.4 s. Also prints the time of each
-candidate coarse divisor, the figure the coarse stage's divisor is chosen from.
+candidate coarse divisor, the figure the coarse stage's divisor is chosen from, and the CPU time of the
+full-resolution render on one thread: on a machine shared with other work the steadier figure, to
+compare versions by.
 """
 
 from __future__ import annotations
@@ -124,6 +126,12 @@ def main() -> int:
                 core_tracer.render_passes(scene, w, h, threads=args.threads, keep_passes=False)
                 times.append(time.perf_counter() - start)
             print(f"{'':<20} 1/{divisor:<2} ({w}x{h}) {min(times):.3f} / {statistics.median(times):.3f} s")
+        cpus = []
+        for _ in range(args.runs):
+            start = time.process_time()
+            core_tracer.render_passes(scene, width, height, threads=1, keep_passes=False)
+            cpus.append(time.process_time() - start)
+        print(f"{'':<20} full resolution on 1 thread: CPU {min(cpus):.3f} / {statistics.median(cpus):.3f} s")
     return 0
 
 

@@ -31,8 +31,10 @@ def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarra
     sin2_t = eta * eta * (1.0 - cos_i * cos_i)
     tir = sin2_t >= 1.0
     cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
-    rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
-    rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t)
+    n1_cos_i, n2_cos_t = n1 * cos_i, n2 * cos_t  # each product once
+    rs = (n1_cos_i - n2_cos_t) / (n1_cos_i + n2_cos_t)
+    n2_cos_i, n1_cos_t = n2 * cos_i, n1 * cos_t
+    rp = (n2_cos_i - n1_cos_t) / (n2_cos_i + n1_cos_t)
     r = 0.5 * (rs * rs + rp * rp)
     return np.where(tir, 1.0, r)
 
@@ -45,12 +47,14 @@ def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
     return normalize(d - 2.0 * dot(d, n)[:, None] * n)
 
 
-def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float) -> np.ndarray:
-    """Snell's law. ``n`` faces the incident side (d·n < 0), ``eta`` = n1 / n2.
+def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float, cos_i: np.ndarray | None = None) -> np.ndarray:
+    """Snell's law. ``n`` faces the incident side (d·n < 0), ``eta`` = n1 / n2; ``cos_i`` is -d·n
+    when the caller has it already.
 
     Only meaningful where there is no total internal reflection (callers mask those rays).
     """
-    cos_i = -dot(d, n)
+    if cos_i is None:
+        cos_i = -dot(d, n)
     eta = np.broadcast_to(eta, cos_i.shape)
     sin2_t = eta * eta * (1.0 - cos_i * cos_i)
     cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))

@@ -13,10 +13,13 @@ processed together as arrays; the image is worked in bands of rows to bound memo
 from __future__ import annotations
 
 import os
+import sys
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,7 +31,7 @@ from .camera import Camera, eye_rays, make_camera
 from .lamp_table import LampTable
 from .lighting import Lighting
 from .parts import body_box, outer_face, parts_for, reflector
-from .parts.base import Segments
+from .parts.base import Segments, put_rows, rows
 from .parts.cylinder_lens import outward_normal
 
 CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
@@ -77,9 +80,11 @@ class _Rays:
         return len(self.pix)
 
     def take(self, sel: np.ndarray) -> _Rays:
-        if sel.dtype == bool and sel.all():
-            return self
-        return _Rays(*(getattr(self, f)[sel] for f in _RAY_FIELDS))
+        if sel.dtype == bool:
+            if sel.all():
+                return self
+            sel = np.nonzero(sel)[0]
+        return _Rays(*(rows(getattr(self, f), sel) for f in _RAY_FIELDS))
 
 
 _RAY_FIELDS = ("pix", "lamp", "o", "d", "k", "medium", "src", "parent", "branch", "seen_reflector")
@@ -101,8 +106,10 @@ class _Context(Lighting):
         self.adaptive_threshold = adaptive_threshold
         self.lamps = LampTable.from_scene(scene)
         self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
+        self.plates = bool(self.lamps.ring_count.any())  # else no ray meets a prism plate or its housing
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
+        self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body
         self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
         self.body = body
         in_lens = sunlight.sun_transmittance(self.sun, self.lamps, np.arange(len(self.lamps.ior)))
@@ -114,13 +121,24 @@ def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:
     """Add ``values`` (N, 3) to the pixels ``pix`` of one pass ``acc`` (pixels, 3), repeats summed.
 
     One count over the (pixel, channel) bins of the pixels spanned, each bin summing its values in
-    ray order, then added to the pass: the same sums as one count per channel."""
+    ray order, then added to the pass: the same sums as one count per channel. A few rays spread
+    over many pixels (the deep branches of a band) are counted over the pixels they reach alone:
+    the same sums, without adding zeros to every pixel between."""
     if len(pix) == 0:
         return
     first, last = int(pix.min()), int(pix.max()) + 1
-    bins = (3 * (pix - first))[:, None] + np.arange(3)
+    if 4 * len(pix) < last - first:
+        pixels, slot = np.unique(pix, return_inverse=True)
+        put_rows(acc, pixels, rows(acc, pixels) + _bin_sums(slot, values, len(pixels)))
+    else:
+        acc[first:last] += _bin_sums(pix - first, values, last - first)
+
+
+def _bin_sums(slot: np.ndarray, values: np.ndarray, n_slots: int) -> np.ndarray:
+    """Per slot (n_slots, 3), the sum of the ``values`` of its rays in ray order."""
+    bins = (3 * slot)[:, None] + np.arange(3)
     weights = np.broadcast_to(values, bins.shape)
-    acc[first:last].reshape(-1)[:] += np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * (last - first))
+    return np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * n_slots).reshape(n_slots, 3)
 
 
 class _Band:
@@ -219,10 +237,47 @@ def _never() -> bool:
     return False
 
 
+# The interpreter's switch interval while bands run on several threads, in seconds (Python's is
+# 5 ms). A band's last generations trace a few rays each: their numpy calls are too small to release
+# the GIL, so that band keeps the interpreter for a whole switch interval each time the other thread,
+# tracing many rays, wants it back between two of its numpy calls; with 5 ms that thread all but
+# stops while the other finishes its deep branches (benchmarks/bench_viewport.py).
+SWITCH_INTERVAL = 2e-4
+_switch_lock = threading.Lock()
+_switch_users = [0, 0.0]  # renders on several threads running now, and the interval before the first
+
+
+@contextmanager
+def _short_switch_interval() -> Iterator[None]:
+    """``SWITCH_INTERVAL`` (if shorter) while any render runs bands on several threads; the
+    interval it found is restored when the last one ends."""
+    with _switch_lock:
+        if _switch_users[0] == 0:
+            _switch_users[1] = sys.getswitchinterval()
+            sys.setswitchinterval(min(SWITCH_INTERVAL, _switch_users[1]))
+        _switch_users[0] += 1
+    try:
+        yield
+    finally:
+        with _switch_lock:
+            _switch_users[0] -= 1
+            if _switch_users[0] == 0:
+                sys.setswitchinterval(_switch_users[1])
+
+
 def _traced_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
                   should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
     """Trace the bands, at most ``threads`` at a time (in the calling thread when 1), and yield
     them in order; ``should_stop()`` is polled before starting a band and after each finishes."""
+    if threads > 1:
+        with _short_switch_interval():
+            yield from _traced_bands_on(ctx, bands, threads, should_stop)
+    else:
+        yield from _traced_bands_on(ctx, bands, 1, should_stop)
+
+
+def _traced_bands_on(ctx: _Context, bands: list[tuple[int, int]], threads: int,
+                     should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
     pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
     pending, running = deque(bands), deque()
     try:
@@ -258,7 +313,14 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
     pixels = np.arange(y0 * cam.width, y1 * cam.width)
     band = _Band(len(pixels), ctx)
     if ctx.samples == 1:  # the paper's setting: one ray through each pixel centre
-        _trace_rays(ctx, band, *eye_rays(cam, pixels))
+        slots = _slots_seeing_body(ctx, y0, y1)
+        if slots is None:
+            _trace_rays(ctx, band, *eye_rays(cam, pixels))
+        else:  # the others add nothing (black background, or a film): their eye rays still count as segments
+            band.segments += len(pixels) - len(slots)
+            band.max_depth = 1
+            if len(slots):
+                _trace_rays(ctx, band, *eye_rays(cam, pixels[slots]), slots)
         return band
     if ctx.adaptive_threshold > 0 and len(pilot_samples(ctx.samples)) < ctx.samples:
         _trace_adaptive(ctx, band, y0, y1)
@@ -448,10 +510,23 @@ def _neighbourhood(values: np.ndarray, combine: np.ufunc) -> np.ndarray:
     return out
 
 
-def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> None:
-    """Trace eye rays ``o, d`` (ray i adds to slot i of ``band``) to the end of every branch."""
+def _slots_seeing_body(ctx: _Context, y0: int, y1: int) -> np.ndarray | None:
+    """The pixels of the band of rows [y0, y1) (slots, from its first pixel) whose eye rays can
+    meet the body, where the others add nothing (a black background or a transparent film): those
+    outside ``body_box.screen_window``. None: every pixel."""
+    if ctx.window is None or (ctx.background_seen and ctx.world_seen):
+        return None
+    first_col, last_col, first_row, last_row = ctx.window
+    rows = np.arange(max(y0, first_row), min(y1, last_row + 1)) - y0
+    cols = np.arange(first_col, last_col + 1)
+    return (rows[:, None] * ctx.camera.width + cols).ravel()
+
+
+def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray, slots: np.ndarray | None = None) -> None:
+    """Trace eye rays ``o, d`` (ray i adds to slot i of ``band``, or to ``slots[i]``) to the end of
+    every branch."""
     band.segments += len(o)
-    rays = _first_hits(ctx, band, o, d)
+    rays = _first_hits(ctx, band, o, d, np.arange(len(o)) if slots is None else slots)
     depth = 1
     while len(rays) and depth < MAX_DEPTH:
         band.segments += len(rays)
@@ -460,12 +535,12 @@ def _trace_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> Non
     band.max_depth = depth
 
 
-def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Rays:
-    """Classify the eye rays (paper §3.1): background, body, or lens (①)."""
+def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> _Rays:
+    """Classify the eye rays (paper §3.1), ray i of the band's slot ``pix[i]``: background, body,
+    or lens (①)."""
     n = len(o)
-    pix = np.arange(n)
     if ctx.wraps:
-        return _first_hits_wrapped(ctx, band, o, d)
+        return _first_hits_wrapped(ctx, band, o, d, pix)
     t_near, t_far, face = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     hit_box = (t_near <= t_far) & (t_near > 0)
 
@@ -474,7 +549,7 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
 
     # Only rays entering the front face can reach a lens: find their points there.
     front = np.nonzero(hit_box & (face == 1) & (d[:, 1] > 0))[0]
-    p = o[front] + t_near[front, None] * d[front]
+    p = rows(o, front) + t_near[front, None] * rows(d, front)
     L = ctx.lamps
     lamp_front = outer_face.lens_at(p[:, 0], p[:, 2], L)
     lamp = np.full(n, -1)
@@ -487,15 +562,16 @@ def _first_hits(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Ra
     normal = np.zeros((len(b), 3))
     normal[np.arange(len(b)), face[b]] = -np.sign(d[b, face[b]])
     body = ctx.body
-    band.add(BODY_PASS, b, ctx.shade(normal, -d[b], np.asarray(body["color"]), body["specular"], body["shininess"]))
+    band.add(BODY_PASS, pix[b], ctx.shade(normal, -rows(d, b), np.asarray(body["color"]), body["specular"],
+                                          body["shininess"]))
 
     # Lens outer face (①): Fresnel split; the reflected branch is shaded by eq. (1) (§3.2.3).
     s = np.nonzero(on_lens)[0]
     li = lamp[s]
-    ds = d[s]
+    ds = rows(d, s)
     local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     local[:, 1] = 0.0
-    return _into_lenses(ctx, band, s, li, ds, np.tile(outer_face.NORMAL, (len(s), 1)), ds[:, 1], local)
+    return _into_lenses(ctx, band, pix[s], li, ds, np.tile(outer_face.NORMAL, (len(s), 1)), ds[:, 1], local)
 
 
 def _into_lenses(ctx: _Context, band: _Band, s: np.ndarray, li: np.ndarray, ds: np.ndarray,
@@ -523,27 +599,27 @@ def _into_lenses(ctx: _Context, band: _Band, s: np.ndarray, li: np.ndarray, ds: 
     return rays.take(_alive(k))
 
 
-def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> _Rays:
+def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> _Rays:
     """``_first_hits`` for a body whose front curves round to the side (cylindrical lenses): the
     same classification, with the curved panel's normals and the cylindrical outer faces'."""
     n = len(o)
-    pix = np.arange(n)
     t_near, hit_body, face, normal = body_box.hit_body(o, d, ctx.box_lo, ctx.box_hi, ctx.wraps)
     if ctx.background_seen and ctx.world_seen:
         band.add(BACKGROUND_PASS, pix[~hit_body], ctx.sky(d[~hit_body]))
     front = np.nonzero(hit_body & (((face == 1) & (d[:, 1] > 0)) | (face == body_box.CURVED_FRONT)))[0]
-    p = o[front] + t_near[front, None] * d[front]
+    p = rows(o, front) + t_near[front, None] * rows(d, front)
     L = ctx.lamps
     lamp = np.full(n, -1)
     lamp[front] = outer_face.lens_at(p[:, 0], p[:, 2], L)
     on_lens = lamp >= 0
     b = np.nonzero(hit_body & ~on_lens)[0]
     body = ctx.body
-    band.add(BODY_PASS, b, ctx.shade(normal[b], -d[b], np.asarray(body["color"]), body["specular"], body["shininess"]))
+    band.add(BODY_PASS, pix[b], ctx.shade(rows(normal, b), -rows(d, b), np.asarray(body["color"]), body["specular"],
+                                           body["shininess"]))
 
     s = np.nonzero(on_lens)[0]
     li = lamp[s]
-    ds = d[s]
+    ds = rows(d, s)
     local = o[s] + t_near[s, None] * ds - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
     flat = L.cylindrical[li] == 0
     local[flat, 1] = 0.0
@@ -551,17 +627,21 @@ def _first_hits_wrapped(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray
     curved = np.nonzero(~flat)[0]
     face_normal[curved] = outward_normal(local[curved], L.cyl_axis_x[li[curved]], L.cyl_radius[li[curved]])
     cos_i = np.clip(-optics.dot(ds, face_normal), 0.0, 1.0)
-    return _into_lenses(ctx, band, s, li, ds, face_normal, cos_i, local)
+    return _into_lenses(ctx, band, pix[s], li, ds, face_normal, cos_i, local)
 
 
-def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+# Per part that gives normals: its surface id, the rays it was given (None: all) and their normals.
+_Normals = list[tuple[int, np.ndarray | None, np.ndarray]]
+
+
+def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, _Normals]:
     """Nearest surface of every ray among the parts its medium can reach (``parts.PARTS``, in
-    order; ties keep the earlier part): (t, surface id, normal out of the lens material where the
-    part gives one: the lens faces)."""
+    order; ties keep the earlier part): (t, surface id, the normals out of the lens material that
+    the parts gave, the lens faces': ``_normals_at`` reads those of the rays that need them)."""
     n = len(rays)
     t_best = np.full(n, np.inf)
     surface = np.full(n, P.NOTHING, np.int8)
-    normal = np.zeros((n, 3))
+    normals: _Normals = []
     reaching: dict[tuple[int, ...], tuple[np.ndarray | None, Segments]] = {}
     for part in ctx.parts:
         if part.MEDIA not in reaching:
@@ -569,23 +649,32 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, np.n
         idx, seg = reaching[part.MEDIA]
         if len(seg.o) == 0:
             continue
-        if idx is None:  # every ray: no gather, no scatter
+        if idx is None:  # every ray: no gather of the segments
             t, part_normal = part.intersect(seg, ctx.lamps, t_best)
-            nearer = t < t_best
-            t_best[nearer] = t[nearer]
-            surface[nearer] = part.SURFACE
-            if part_normal is not None:
-                normal[nearer] = part_normal[nearer]
+            nearer = np.nonzero(t < t_best)[0]
+            hit = nearer
         else:
             t_limit = t_best[idx]
             t, part_normal = part.intersect(seg, ctx.lamps, t_limit)
-            nearer = t < t_limit
+            nearer = np.nonzero(t < t_limit)[0]
             hit = idx[nearer]
-            t_best[hit] = t[nearer]
-            surface[hit] = part.SURFACE
-            if part_normal is not None:
-                normal[hit] = part_normal[nearer]
-    return t_best, surface, normal
+        t_best[hit] = t[nearer]
+        surface[hit] = part.SURFACE
+        if part_normal is not None:
+            normals.append((part.SURFACE, idx, part_normal))
+    return t_best, surface, normals
+
+
+def _normals_at(normals: _Normals, m: np.ndarray, surface_m: np.ndarray) -> np.ndarray:
+    """The normals (len(m), 3) where the segments ``m`` end, on the surfaces ``surface_m``: each
+    from the part that surface is (the nearest part, so the last that gave the ray a normal)."""
+    normal = np.zeros((len(m), 3))
+    for sid, idx, part_normal in normals:
+        sel = np.nonzero(surface_m == sid)[0]
+        if len(sel):
+            at = m[sel] if idx is None else np.searchsorted(idx, m[sel])  # idx is sorted
+            put_rows(normal, sel, rows(part_normal, at))
+    return normal
 
 
 def _reaching(rays: _Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, Segments]:
@@ -598,53 +687,67 @@ def _reaching(rays: _Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, S
         idx = np.nonzero(np.isin(rays.medium, media))[0]
     if idx is None or len(idx) == len(rays):
         return None, Segments(rays.o, rays.d, rays.lamp, rays.src, rays.medium)
-    return idx, Segments(rays.o[idx], rays.d[idx], rays.lamp[idx], rays.src[idx], rays.medium[idx])
+    return idx, Segments(rows(rays.o, idx), rows(rays.d, idx), rays.lamp[idx], rays.src[idx], rays.medium[idx])
 
 
 def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     """Trace one generation: find each segment's end, add its luminance, spawn the children."""
     L = ctx.lamps
-    t, surface, normal = _intersect(ctx, rays)
-    cls = P.CLASS_OF[rays.medium, rays.src, surface]
+    t, surface, normals = _intersect(ctx, rays)
+    cls = _path_class(rays.medium, rays.src, surface)
     band.note(rays.parent, rays.branch, cls)
 
     k = rays.k
     lens = np.nonzero(rays.medium == P.IN_LENS)[0]
     if len(lens):
         k = k.copy()
-        k[lens] *= optics.absorption(L.absorption[rays.lamp[lens]], t[lens])
-    plate = np.nonzero(rays.medium == P.IN_PLATE)[0]
+        put_rows(k, lens, rows(k, lens) * optics.absorption(rows(L.absorption, rays.lamp[lens]), t[lens]))
+    plate = np.nonzero(rays.medium == P.IN_PLATE)[0] if ctx.plates else ()
     if len(plate):  # eq. (2) inside the prism plate too
         k = k.copy() if k is rays.k else k
-        k[plate] *= optics.absorption(L.plate_absorption[rays.lamp[plate]], t[plate])
+        put_rows(k, plate, rows(k, plate) * optics.absorption(rows(L.plate_absorption, rays.lamp[plate]), t[plate]))
 
     for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, L.wall_color), (P.BULB, BULB_PASS, L.bulb_intensity),
                                 (P.SOCKET, SOCKET_PASS, L.socket_color)):
         m = np.nonzero(surface == sid)[0]
         if len(m):
-            band.add(pass_id, rays.pix[m], k[m] * color[rays.lamp[m]])
+            band.add(pass_id, rays.pix[m], rows(k, m) * rows(color, rays.lamp[m]))
 
-    m = np.nonzero(surface == P.HOUSING)[0]  # a prism-plate lamp's housing ends the path with its colour
+    m = np.nonzero(surface == P.HOUSING)[0] if ctx.plates else ()  # a plate lamp's housing ends the path
     if len(m):
-        band.add(SIDE_WALL_PASS, rays.pix[m], k[m] * L.housing_color[rays.lamp[m]])
+        band.add(SIDE_WALL_PASS, rays.pix[m], rows(k, m) * rows(L.housing_color, rays.lamp[m]))
 
     # Only the rays that go on need their end point (their t is finite).
     children: list[_Rays] = []
     m = np.nonzero(surface == P.REFLECTOR)[0]
     if len(m):
-        hit = rays.o[m] + t[m, None] * rays.d[m]
-        children.append(_reflector(ctx, band, rays, m, k[m], hit, cls[m]))
+        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        children.append(_reflector(ctx, band, rays, m, rows(k, m), hit, cls[m]))
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
-        hit = rays.o[m] + t[m, None] * rays.d[m]
-        children.extend(_dielectric(ctx, band, rays, m, k[m], hit, cls[m], surface[m], normal[m]))
-    m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0]
+        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        surface_m = surface[m]
+        children.extend(_dielectric(ctx, band, rays, m, rows(k, m), hit, cls[m], surface_m,
+                                    _normals_at(normals, m, surface_m)))
+    m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
     if len(m):
-        hit = rays.o[m] + t[m, None] * rays.d[m]
-        children.extend(_plate(rays, m, k[m], hit, cls[m], surface[m], normal[m], L))
+        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        surface_m = surface[m]
+        children.extend(_plate(rays, m, rows(k, m), hit, cls[m], surface_m, _normals_at(normals, m, surface_m), L))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]
+
+
+def _path_class(medium: np.ndarray, src: np.ndarray, surface: np.ndarray) -> np.ndarray:
+    """``paths.CLASS_OF[medium, src, surface]`` as one flat look-up: numpy's indexing by three
+    small-integer arrays is several times slower."""
+    code = medium.astype(np.intp)
+    code *= P.CLASS_OF.shape[1]
+    code += src
+    code *= P.CLASS_OF.shape[2]
+    code += surface
+    return P.CLASS_OF.take(code)
 
 
 def _alive(k: np.ndarray) -> np.ndarray:
@@ -658,22 +761,22 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     where it stays above the cut-off."""
     L = ctx.lamps
     li = rays.lamp[m]
-    d = rays.d[m]
+    d = rows(rays.d, m)
     pix = rays.pix[m]
     first = np.nonzero(~rays.seen_reflector[m])[0]
-    band.add(REFLECTOR_CONSTANT, pix[first], k[first] * L.reflector_color[li[first]])
+    band.add(REFLECTOR_CONSTANT, pix[first], rows(k, first) * rows(L.reflector_color, li[first]))
     normal = reflector.reflector_normal(hit, L.focal[li])
-    to_bulb = optics.normalize(L.bulb_center[li] - hit)
+    to_bulb = optics.normalize(rows(L.bulb_center, li) - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
-    band.add(REFLECTOR_SCATTER, pix, k * scatter[:, None] * L.bulb_intensity[li])
+    band.add(REFLECTOR_SCATTER, pix, k * scatter[:, None] * rows(L.bulb_intensity, li))
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, L, li, hit, normal, -d))
     k = k * L.reflectance[li, None]
     go = np.nonzero(_alive(k))[0]
     n = len(go)
-    return _Rays(pix=pix[go], lamp=li[go], o=hit[go], d=optics.reflect(d[go], normal[go]), k=k[go],
-                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8), parent=cls[go],
-                 branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
+    return _Rays(pix=pix[go], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(normal, go)),
+                 k=rows(k, go), medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8),
+                 parent=cls[go], branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
 
 def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
@@ -683,12 +786,13 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     face, the cap's on the cuts)."""
     L = ctx.lamps
     li = rays.lamp[m]
-    d = rays.d[m]
+    d = rows(rays.d, m)
     medium = rays.medium[m]
     from_lens = medium == P.IN_LENS
     # Toward the incident side: the normal negated for rays inside the lens (a sign flip is exact).
     facing = out_normal * np.where(from_lens, -1.0, 1.0)[:, None]
-    cos_i = np.clip(-optics.dot(d, facing), 0.0, 1.0)
+    cos_facing = -optics.dot(d, facing)
+    cos_i = np.clip(cos_facing, 0.0, 1.0)
     ior = L.ior[li]
     n1 = np.where(from_lens, ior, 1.0)
     n2 = np.where(from_lens, 1.0, ior)
@@ -697,7 +801,8 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     k_r = k * r[:, None]
     go = np.nonzero(_alive(k_r))[0]
     gm = m[go]
-    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=hit[go], d=optics.reflect(d[go], facing[go]), k=k_r[go],
+    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(facing, go)),
+                 k=rows(k_r, go),
                  medium=medium[go], src=src[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
                  seen_reflector=rays.seen_reflector[gm])]
     trans = np.nonzero(r < 1.0)[0]
@@ -705,18 +810,21 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     # ⑩: out through the outer face, to the background (ends).
     lv = trans[leaving]
     if ctx.background_seen:
-        out_d = optics.refract(d[lv], facing[lv], n1[lv] / n2[lv]) if ctx.environment is not None else d[lv]
-        band.add(BACKGROUND_PASS, rays.pix[m[lv]], k[lv] * (1.0 - r[lv, None]) * ctx.sky(out_d))
-    band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
+        d_lv = rows(d, lv)
+        out_d = optics.refract(d_lv, rows(facing, lv), n1[lv] / n2[lv]) if ctx.environment is not None else d_lv
+        band.add(BACKGROUND_PASS, rays.pix[m[lv]], rows(k, lv) * (1.0 - r[lv, None]) * ctx.sky(out_d))
+    if ctx.record:
+        band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
-    k_t = k[tc] * (1.0 - r[tc, None])
+    k_t = rows(k, tc) * (1.0 - r[tc, None])
     go = np.nonzero(_alive(k_t))[0]
-    tc, k_t = tc[go], k_t[go]
+    tc, k_t = tc[go], rows(k_t, go)
     if len(tc):
         eta = n1[tc] / n2[tc]
         tm = m[tc]
-        out.append(_Rays(pix=rays.pix[tm], lamp=li[tc], o=hit[tc], d=optics.refract(d[tc], facing[tc], eta),
-                         k=k_t, medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS).astype(np.int8),
+        out.append(_Rays(pix=rays.pix[tm], lamp=li[tc], o=rows(hit, tc),
+                         d=optics.refract(rows(d, tc), rows(facing, tc), eta, cos_facing[tc]), k=k_t,
+                         medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS).astype(np.int8),
                          src=src[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
                          seen_reflector=rays.seen_reflector[tm]))
     return out

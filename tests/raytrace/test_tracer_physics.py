@@ -218,3 +218,25 @@ def test_should_stop_ends_the_render_after_the_band_it_follows(monkeypatch, thre
         render_passes(scene, threads=threads, on_band=lambda a, b, rows, passes: bands.append((a, b)),
                       should_stop=lambda: len(bands) >= 1)
     assert bands == [(0, 10)]
+
+
+def test_threaded_render_shortens_the_switch_interval_and_restores_it_even_when_cancelled(monkeypatch):
+    # Bands on several threads run with the interpreter's switch interval at tracer.SWITCH_INTERVAL
+    # (a band tracing its last few rays would otherwise hold the GIL for 5 ms at a time); the
+    # caller's interval comes back afterwards, also when the render is cancelled.
+    import sys
+
+    from core_tracer.raytrace import tracer
+
+    monkeypatch.setattr(tracer, "TILE_RAYS", 400)
+    scene = scene_with(**{"image": {"width": 40, "height": 30}})
+    before = sys.getswitchinterval()
+    seen = []
+    render_passes(scene, threads=2, on_rows=lambda a, b, rows: seen.append(sys.getswitchinterval()))
+    assert seen == pytest.approx([tracer.SWITCH_INTERVAL] * 3)  # (kept in microseconds)
+    assert sys.getswitchinterval() == before
+    with pytest.raises(tracer.RenderCancelled):
+        render_passes(scene, threads=2, should_stop=lambda: True)
+    assert sys.getswitchinterval() == before
+    render_passes(scene, threads=1, on_rows=lambda a, b, rows: seen.append(sys.getswitchinterval()))
+    assert seen[3:] == [before] * 3

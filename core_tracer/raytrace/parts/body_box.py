@@ -3,7 +3,11 @@ Only eye rays meet it: it decides background, body or lens (paper §3.1)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from ..camera import Camera
 
 
 def body_box(body: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -39,6 +43,31 @@ def hit_box(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tup
     # argmax's choice: the first axis whose entry is the latest
     face = np.where((t_lo[0] >= t_lo[1]) & (t_lo[0] >= t_lo[2]), 0, np.where(t_lo[1] >= t_lo[2], 1, 2))
     return t_near, t_far, face
+
+
+def screen_window(cam: Camera, lo: np.ndarray, hi: np.ndarray, margin: int = 2) -> tuple[int, int, int, int] | None:
+    """The pixels whose eye rays can meet the box [lo, hi]: (first column, last column, first row,
+    last row), the box's corners projected, widened by ``margin`` pixels so that no ray rounding
+    the other way at the box's silhouette is left out; empty (first > last) when the box is out of
+    view. None when some corner lies behind a perspective camera (every pixel may see the box).
+
+    The box lies inside the convex hull of its corners, whose picture lies inside the rectangle
+    of their pictures: a ray through a pixel outside it misses the box."""
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    rel = corners - cam.position
+    depth, across, upward = (rel[:, 0] * a[0] + rel[:, 1] * a[1] + rel[:, 2] * a[2]
+                             for a in (cam.forward, cam.right, cam.up))
+    if cam.orthographic:
+        u, v = across, upward
+    elif (depth <= 0).any():
+        return None
+    else:
+        u, v = across / depth, upward / depth
+    # camera.eye_rays: u = ((col + 1/2) / W * 2 - 1) half_width + shift_x, and v likewise down the rows
+    col = ((u - cam.shift[0]) / cam.half_width + 1.0) * cam.width / 2.0 - 0.5
+    row = (1.0 - (v - cam.shift[1]) / cam.half_height) * cam.height / 2.0 - 0.5
+    return (max(0, math.floor(col.min()) - margin), min(cam.width - 1, math.ceil(col.max()) + margin),
+            max(0, math.floor(row.min()) - margin), min(cam.height - 1, math.ceil(row.max()) + margin))
 
 
 CURVED_FRONT = 3  # the face code of a curved end of the front (``hit_body``), after the box's 0, 1, 2

@@ -12,7 +12,7 @@ from ...scene.spec import MAX_CUTS_ACROSS
 from .. import optics
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments
+from .base import T_MIN, Segments, put_rows, rows
 
 SURFACE = P.CUT
 MEDIA = (P.IN_LENS, P.IN_AIR)
@@ -83,7 +83,10 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
     t_hit = np.full(n, np.inf)
     on_cap = np.zeros(n, np.int8) if on_cap is None else on_cap
 
-    flat_base_hits(o, d, plane_a, t_limit, np.nonzero(~np.isfinite(rho) & (on_cap == OFF_CAP))[0], t_hit)
+    curved = np.isfinite(rho)
+    every_curved = bool(curved.all())
+    if not every_curved:
+        flat_base_hits(o, d, plane_a, t_limit, np.nonzero(~curved & (on_cap == OFF_CAP))[0], t_hit)
 
     # The walk keeps only the cell each ray's hit lies in; the normals follow after the walk.
     cell_i, cell_j = np.zeros(n), np.zeros(n)
@@ -93,20 +96,20 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
             break
         t = walk.cap_hits()
         found = np.isfinite(t)
-        if found.any():
-            ray = walk.ray[found]
-            t_hit[ray] = t[found]
-            cell_i[ray], cell_j[ray] = walk.row("i")[found], walk.row("j")[found]
-        walk.advance()
-        walk.keep(~found & (walk.row("t_cell") <= walk.row("t_out")))
+        hits = np.nonzero(found)[0]
+        if len(hits):
+            ray = walk.ray[hits]
+            t_hit[ray] = t[hits]
+            cell_i[ray], cell_j[ray] = walk.row("i")[hits], walk.row("j")[hits]
+        walk.advance(~found)
 
     normal = np.zeros((n, 3))
     normal[:, 1] = 1.0
-    capped = np.nonzero(np.isfinite(t_hit) & np.isfinite(rho))[0]
+    capped = np.nonzero(np.isfinite(t_hit) if every_curved else np.isfinite(t_hit) & curved)[0]
     if len(capped):
-        oc, dc, tc, pc = o[capped], d[capped], t_hit[capped], pitch[capped]
+        oc, dc, tc, pc = rows(o, capped), rows(d, capped), t_hit[capped], pitch[capped]
         ax, ay, az = oc[:, 0] - cell_i[capped] * pc, oc[:, 1] - plane_b[capped], oc[:, 2] - cell_j[capped] * pc
-        normal[capped] = _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2], rho[capped])
+        put_rows(normal, capped, _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2], rho[capped]))
     return t_hit, normal
 
 
@@ -127,7 +130,6 @@ class _CellWalk:
         "t_cell",  # where the ray enters the current cell
         "t_out",  # where it leaves the slab (or meets the side wall)
         "t_next_i", "t_next_j",  # where it crosses the next cell border in x, and in z
-        "dt_i", "dt_j",  # ray length across one cell in x, and in z
     )
     _ROW = {name: k for k, name in enumerate(ROWS)}
 
@@ -145,15 +147,20 @@ class _CellWalk:
     def enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
         """The rays with curved cuts whose path crosses the slab between planes A and B before
         ``t_limit``, each placed in the cell where it enters the slab."""
+        # (one errstate for all: rays parallel to a plane or an axis divide by zero, on purpose)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return cls._enter(o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap)
+
+    @classmethod
+    def _enter(cls, o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap) -> _CellWalk:
         curved = np.isfinite(rho)
         every = bool(curved.all())  # the usual case: no gather needed to find the slab
         ray = np.arange(len(rho)) if every else np.nonzero(curved)[0]
         pick = (lambda a: a) if every else (lambda a: a[ray])
         oy, dy = pick(o[:, 1]), pick(d[:, 1])
         a_plane, b_plane = pick(plane_a), pick(plane_b)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ta = (a_plane - oy) / dy
-            tb = (b_plane - oy) / dy
+        ta = (a_plane - oy) / dy
+        tb = (b_plane - oy) / dy
         t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
         parallel = np.nonzero(dy == 0)[0]
         if len(parallel):  # a ray parallel to the planes is in the slab for ever or never
@@ -164,31 +171,47 @@ class _CellWalk:
         np.maximum(t_in, 0.0, out=t_in)
         np.minimum(t_out, pick(t_limit), out=t_out)
         live = t_in <= t_out
+        # A ray leaving a cap into the air never meets that cap again (``cap_hits``): it starts in
+        # the next cell it enters, and most leave the slab before, so they are left out here.
+        leaving_air = np.nonzero(live & (pick(on_cap) == INTO_AIR))[0]
+        if len(leaving_air):
+            k = ray[leaving_air]
+            t_cross = [_entry_cell(t_in[leaving_air], o[k, axis], d[k, axis], pitch[k])[2] for axis in (0, 2)]
+            t_second = np.where(t_cross[0] < t_cross[1], t_cross[0], t_cross[1])
+            live[leaving_air[~(t_second <= t_out[leaving_air])]] = False
         all_live = every and bool(live.all())  # every ray crosses the slab: no gathers at all
         if not all_live:
             live = np.nonzero(live)[0]
             ray, t_in, t_out = ray[live], t_in[live], t_out[live]
-        take = (lambda a: a) if all_live else (lambda a: a[ray])
-
         state = np.empty((len(cls.ROWS), len(ray)))
         row = dict(zip(cls.ROWS, state, strict=True))
+        # Every row written in place (``out=``): the walk's setup is a fair part of its cost.
+        for name, values in (("ox", o[:, 0]), ("oz", o[:, 2]), ("dx", d[:, 0]), ("dz", d[:, 2]), ("p", pitch)):
+            if all_live:
+                row[name][:] = values
+            else:  # mode "clip": the indices are valid, and "raise" would copy through a buffer
+                np.take(values, ray, out=row[name], mode="clip")
         ox, oz, dx, dz, p = row["ox"], row["oz"], row["dx"], row["dz"], row["p"]
-        ox[:], oz[:], dx[:], dz[:], p[:] = take(o[:, 0]), take(o[:, 2]), take(d[:, 0]), take(d[:, 2]), take(pitch)
+        take = (lambda a: a) if all_live else (lambda a: a[ray])
         r = take(rho)
         ay, dy = take(o[:, 1]) - take(plane_b), take(d[:, 1])
-        row["ay_dy"][:], row["rho_dy"][:] = ay * dy, r * dy
-        row["ay_ay"][:], row["two_rho_ay"][:] = ay * ay, 2.0 * r * ay
-        i = np.floor((ox + t_in * dx) / p + 0.5, out=row["i"])
-        j = np.floor((oz + t_in * dz) / p + 0.5, out=row["j"])
-        si, sj = np.sign(dx, out=row["si"]), np.sign(dz, out=row["sj"])
+        np.multiply(ay, dy, out=row["ay_dy"])
+        np.multiply(r, dy, out=row["rho_dy"])
+        np.multiply(ay, ay, out=row["ay_ay"])
+        np.multiply(2.0 * r, ay, out=row["two_rho_ay"])
+        _entry_cell(t_in, ox, dx, p, row["i"], row["si"], row["t_next_i"])
+        _entry_cell(t_in, oz, dz, p, row["j"], row["sj"], row["t_next_j"])
         row["t_cell"][:], row["t_out"][:] = t_in, t_out
-        with np.errstate(divide="ignore", invalid="ignore"):
-            row["t_next_i"][:] = np.where(si != 0, ((i + 0.5 * si) * p - ox) / dx, np.inf)
-            row["t_next_j"][:] = np.where(sj != 0, ((j + 0.5 * sj) * p - oz) / dz, np.inf)
-            row["dt_i"][:] = np.where(si != 0, p / np.abs(dx), np.inf)
-            row["dt_j"][:] = np.where(sj != 0, p / np.abs(dz), np.inf)
-        on_cap = on_cap[ray]
-        return cls(ray, state, on_cap if on_cap.any() else None)
+        walk = cls(ray, state, on_cap[ray])
+        if len(leaving_air):  # those that stay: into their second cell, where any cap may be met
+            moving = walk.on_cap == INTO_AIR
+            row["t_cell"][:] = np.where(moving, np.where(row["t_next_i"] < row["t_next_j"], row["t_next_i"],
+                                                         row["t_next_j"]), row["t_cell"])
+            walk.step_cells(moving)
+            walk.on_cap = np.where(moving, OFF_CAP, walk.on_cap).astype(np.int8)
+        if not walk.on_cap.any():
+            walk.on_cap = None
+        return walk
 
     def keep(self, keep: np.ndarray) -> None:
         """Drop the rays not in ``keep``."""
@@ -221,22 +244,65 @@ class _CellWalk:
             hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
         t_cell = row("t_cell")
         t_end = np.minimum(np.minimum(row("t_next_i"), row("t_next_j")), row("t_out"))
-        lo_ok = (lo > T_MIN) & (lo >= t_cell - self.TOL) & (lo <= t_end + self.TOL)
-        hi_ok = (hi > T_MIN) & (hi >= t_cell - self.TOL) & (hi <= t_end + self.TOL)
+        cell_from, cell_to = t_cell - self.TOL, t_end + self.TOL
+        lo_ok = (lo > T_MIN) & (lo >= cell_from) & (lo <= cell_to)
+        hi_ok = (hi > T_MIN) & (hi >= cell_from) & (hi <= cell_to)
         return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
 
-    def advance(self) -> None:
-        """Step every ray to the neighbouring cell it enters next."""
+    def advance(self, walking: np.ndarray) -> None:
+        """Step the rays still ``walking`` (no hit in their cell) to the neighbouring cell they
+        enter next; drop the others and those whose next cell lies beyond the slab. (Most rays
+        leave after their first cell: they are dropped before the stepping.)"""
         row = self.row
-        t_next_i, t_next_j = row("t_next_i"), row("t_next_j")
+        row("t_cell")[:] = np.where(row("t_next_i") < row("t_next_j"), row("t_next_i"), row("t_next_j"))
+        self.keep(walking & (self.row("t_cell") <= self.row("t_out")))
+        self.on_cap = None
+        if len(self.ray):
+            self.step_cells()
+
+    def step_cells(self, moving: np.ndarray | None = None) -> None:
+        """Move the rays (those ``moving``, default all) whose ``t_cell`` is already where they
+        leave their cell into the neighbouring cell, and on to its far borders."""
+        row = self.row
+        t_next_i, t_next_j, p = row("t_next_i"), row("t_next_j"), row("p")
         step_i = t_next_i < t_next_j
         step_j = ~step_i
-        row("t_cell")[:] = np.where(step_i, t_next_i, t_next_j)
+        if moving is not None:
+            step_i &= moving
+            step_j &= moving
         np.add(row("i"), row("si"), out=row("i"), where=step_i)
         np.add(row("j"), row("sj"), out=row("j"), where=step_j)
-        np.add(t_next_i, row("dt_i"), out=t_next_i, where=step_i)
-        np.add(t_next_j, row("dt_j"), out=t_next_j, where=step_j)
-        self.on_cap = None
+        # The ray length across one cell, p / |d|: where a ray steps in x its t_next_i is finite, so d_x != 0.
+        with np.errstate(divide="ignore"):
+            np.add(t_next_i, p / np.abs(row("dx")), out=t_next_i, where=step_i)
+            np.add(t_next_j, p / np.abs(row("dz")), out=t_next_j, where=step_j)
+
+
+def _entry_cell(t_in: np.ndarray, o_k: np.ndarray, d_k: np.ndarray, p: np.ndarray, cell: np.ndarray | None = None,
+                sign: np.ndarray | None = None, t_next: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Along one axis (x or z, origin ``o_k``, direction ``d_k``): the cell a ray is in at
+    ``t_in``, the way it steps (the sign of d) and where it crosses that cell's far border (inf
+    where d = 0); into ``cell``, ``sign`` and ``t_next`` when given. One sequence of operations
+    for every caller: the walk and the rays it leaves out must agree to the last bit. Called under
+    ``np.errstate(divide="ignore", invalid="ignore")`` (d = 0 divides by zero)."""
+    cell = np.empty_like(t_in) if cell is None else cell
+    sign = np.empty_like(t_in) if sign is None else sign
+    t_next = np.empty_like(t_in) if t_next is None else t_next
+    np.multiply(t_in, d_k, out=cell)
+    cell += o_k
+    cell /= p
+    cell += 0.5
+    np.floor(cell, out=cell)
+    np.sign(d_k, out=sign)
+    # ((cell + sign / 2) p - o) / d
+    np.multiply(0.5, sign, out=t_next)
+    t_next += cell
+    t_next *= p
+    t_next -= o_k
+    t_next /= d_k
+    np.copyto(t_next, np.inf, where=sign == 0)
+    return cell, sign, t_next
 
 
 def _cap_normal(hx: np.ndarray, hy: np.ndarray, hz: np.ndarray, rho: np.ndarray) -> np.ndarray:
