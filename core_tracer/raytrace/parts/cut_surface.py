@@ -25,25 +25,29 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
     if not (lamps.sawtooth.any() or lamps.flutes.any() or lamps.any_cylindrical):
         return cuts.intersect(rays, lamps, t_limit)
     kinds = _kinds(lamps)
-    kind = kinds[rays.lamp]
-    present = np.unique(kinds)
+    present = [k for k in (FISHEYE, CYLINDER, SAWTOOTH, FLUTES) if (kinds == k).any()]
     if len(present) == 1:
-        return _walk(int(present[0]), rays, lamps, t_limit)
+        return _walk(present[0], rays, lamps, t_limit)
+    kind = kinds[rays.lamp]
     t = np.full(len(kind), np.inf)
     normal = np.zeros((len(kind), 3))
     for k in present:
         idx = np.nonzero(kind == k)[0]
+        if len(idx) == len(kind):
+            return _walk(k, rays, lamps, t_limit)
         if len(idx):  # the rows gathered with take and scattered column by column (``base.rows``)
             sub = Segments(rows(rays.o, idx), rows(rays.d, idx), rays.lamp[idx], rays.src[idx], rays.medium[idx])
-            t[idx], n = _walk(int(k), sub, lamps, t_limit[idx])
+            t[idx], n = _walk(k, sub, lamps, t_limit[idx])
             put_rows(normal, idx, n)
     return t, normal
 
 
 def _kinds(lamps: LampTable) -> np.ndarray:
     """Per lamp, which walk finds its cuts (``FISHEYE`` …)."""
-    return np.select([lamps.sawtooth != 0, lamps.flutes != 0, lamps.cylindrical > 0], [SAWTOOTH, FLUTES, CYLINDER],
-                     FISHEYE)
+    kinds = np.where(lamps.cylindrical > 0, CYLINDER, FISHEYE)
+    kinds[lamps.sawtooth != 0] = SAWTOOTH
+    kinds[lamps.flutes != 0] = FLUTES
+    return kinds
 
 
 def _walk(kind: int, rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
