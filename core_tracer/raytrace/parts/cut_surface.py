@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import paths as P
-from ..lamp_table import LampTable
+from ..lamp_table import CYLINDER_KEYS, LampTable
 from . import cuts, flutes, sawtooth
 from .base import Segments, put_rows, rows
 from .cylinder_lens import hit_cylinder_cuts
@@ -61,7 +61,8 @@ def _walk(kind: int, rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> t
     on_cap = np.where(rays.src != P.CUT, cuts.OFF_CAP,
                       np.where(rays.medium == P.IN_AIR, cuts.INTO_AIR, cuts.INTO_LENS)).astype(np.int8)
     if kind == CYLINDER:
-        return hit_cylinder_cuts(rays.o, rays.d, lamps.cylinder_of(li), lamps.pitch[li], lamps.cut_radius[li],
-                                 t_limit, on_cap)
+        # (``LampTable.cylinder_of``, its rows gathered with take: faster than indexing)
+        geo = {k: getattr(lamps, "cyl_" + k).take(li) for k in CYLINDER_KEYS}
+        return hit_cylinder_cuts(rays.o, rays.d, geo, lamps.pitch.take(li), lamps.cut_radius.take(li), t_limit, on_cap)
     return cuts.hit_cuts(rays.o, rays.d, lamps.plane_a[li], lamps.plane_b[li], lamps.pitch[li], lamps.cut_radius[li],
                          t_limit, on_cap)

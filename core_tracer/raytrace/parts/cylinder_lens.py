@@ -42,16 +42,16 @@ def _circle_roots(X: np.ndarray, Y: np.ndarray, dX: np.ndarray, dY: np.ndarray,
     roots (small, large; NaN where it misses) and the quadratic's leading coefficient."""
     a = dX * dX + dY * dY
     b = X * dX + Y * dY
-    lo, hi = _roots(a, b, X * X + Y * Y - r * r)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lo, hi = _roots(a, b, X * X + Y * Y - r * r)
     return lo, hi, a
 
 
 def _roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The roots (small, large; NaN for none) of a t^2 + 2 b t + c = 0, by the stable formula."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sq = np.sqrt(b * b - a * c)
-        q = -(b + np.copysign(sq, b))
-        r1, r2 = q / a, c / q
+    """The roots (small, large; NaN for none) of a t^2 + 2 b t + c = 0, by the stable formula.
+    Called under ``np.errstate(invalid="ignore", divide="ignore")``."""
+    q = -(b + np.copysign(np.sqrt(b * b - a * c), b))
+    r1, r2 = q / a, c / q
     return np.fmin(r1, r2), np.fmax(r1, r2)
 
 
@@ -98,6 +98,12 @@ def hit_cylinder_cuts(o: np.ndarray, d: np.ndarray, geo: dict[str, np.ndarray], 
     ray the arrays ``axis_x, radius, side, base, apex, phi_center, corner`` of
     ``scene.derived.lens_cylinder``; ``on_cap`` as in ``cuts.hit_cuts``. ``rho`` = inf is a smooth
     inner face, the base cylinder itself."""
+    # (one errstate for all: lines that miss a circle or are parallel to a border divide by zero, on purpose)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return _hit_cylinder_cuts(o, d, geo, pitch, rho, t_limit, on_cap)
+
+
+def _hit_cylinder_cuts(o, d, geo, pitch, rho, t_limit, on_cap) -> tuple[np.ndarray, np.ndarray]:
     smooth = np.nonzero(~np.isfinite(rho))[0]
     if len(smooth) == 0:  # the usual case: every ray's lamp has cuts, no gathers
         return _walk_cells(o, d, geo, pitch, rho, t_limit, on_cap)
@@ -112,8 +118,7 @@ def hit_cylinder_cuts(o: np.ndarray, d: np.ndarray, geo: dict[str, np.ndarray], 
     oc = on_cap[s]
     lo = np.where(oc == OFF_CAP, lo, np.nan)  # a ray on the cylinder starts at its near root
     hi = np.where(oc == INTO_LENS, np.nan, hi)  # leaving the disk outward: never back
-    with np.errstate(invalid="ignore"):
-        t = np.where(lo > T_MIN, lo, np.where(hi > T_MIN, hi, np.inf))
+    t = np.where(lo > T_MIN, lo, np.where(hi > T_MIN, hi, np.inf))
     t = np.where(t < t_limit[s], t, np.inf)
     t_hit[s] = t
     at = np.where(np.isfinite(t), t, 0.0)
@@ -151,17 +156,17 @@ def _walk_cells(o, d, g, pitch, rho, t_limit, on_cap) -> tuple[np.ndarray, np.nd
         crosses_b &= ~along_axis
     # first piece: from entering A to entering B (or leaving A); second: leaving B to leaving A
     # (NaN, a line that misses a circle, propagates through maximum/minimum and fails start <= end)
-    with np.errstate(invalid="ignore"):
-        start1, end1 = np.maximum(a_lo, 0.0), np.minimum(np.where(crosses_b, b_lo, a_hi), t_limit)
-        start2, end2 = np.maximum(np.where(crosses_b, b_hi, np.nan), 0.0), np.minimum(a_hi, t_limit)
-        go1 = np.nonzero(start1 <= end1)[0]
-        piece2 = start2 <= end2
+    start1, end1 = np.maximum(a_lo, 0.0), np.minimum(np.where(crosses_b, b_lo, a_hi), t_limit)
+    start2, end2 = np.maximum(np.where(crosses_b, b_hi, np.nan), 0.0), np.minimum(a_hi, t_limit)
+    go1 = np.nonzero(start1 <= end1)[0]
+    piece2 = start2 <= end2
     # the cell each ray that starts on a cap starts in (its own cap: ``_Piece.cap_hits``); NaN for the others
-    start_cell = np.full((n, 2), np.nan)
+    start_cell = np.full((2, n), np.nan)
     on = np.nonzero(on_cap != OFF_CAP)[0]
     if len(on):
-        start_cell[on] = _cell_of(rows(o, on), rows(d, on), np.zeros(len(on)), {k: v[on] for k, v in g.items()},
-                                  pitch[on])
+        start_cell[:, on] = _cell_of(rows(o, on), rows(d, on), np.zeros(len(on)),
+                                     {k: g[k].take(on) for k in ("side", "axis_x", "radius", "phi_center", "base")},
+                                     pitch.take(on)).T
     step = pitch / g["base"]  # the cell's angle about the axis
 
     t_hit = np.full(n, np.inf)
@@ -201,22 +206,24 @@ class _Piece:
     """The rays walking one shell piece [t_start, t_end] of their path, cell after cell, testing
     each cell's cap (paper Fig. 9 on the curved base); the first root inside its own cell is the
     hit. The rays still walking are the columns of one (rows, K) array, so dropping the finished
-    ones is one gather (as ``cuts._CellWalk``)."""
+    ones is one gather (as ``cuts._CellWalk``); ``r`` names its rows. Runs under
+    ``np.errstate(divide="ignore", invalid="ignore")`` (``hit_cylinder_cuts``)."""
 
     ROWS = ("X", "Y", "Z", "dX", "dY", "dZ", "side", "apex", "phi_c", "step", "p", "rho", "i", "j", "si", "sj",
             "t_cell", "t_end", "t_next_i", "t_next_j", "dt_j", "own", "i0", "j0")
 
     def __init__(self, o, d, g, step, pitch, rho, t_start, t_end, on_cap, start_cell, go):
-        self.ray = go  # index of the ray in the caller's arrays
-        self.state = np.empty((len(self.ROWS), len(go)))
-        row = dict(zip(self.ROWS, self.state, strict=True))
-        for name, values in (("dX", d[:, 0]), ("dY", d[:, 1]), ("dZ", d[:, 2]), ("side", g["side"]),
-                             ("apex", g["apex"]), ("phi_c", g["phi_center"]), ("step", step), ("p", pitch),
-                             ("rho", rho), ("t_cell", t_start), ("t_end", t_end), ("i0", start_cell[:, 0]),
-                             ("j0", start_cell[:, 1])):
+        self._set(go, np.empty((len(self.ROWS), len(go))))
+        row = self.r
+        # (1-D arrays gathered with take; (N, 3) ones by rows: take of a strided column copies it first)
+        for name, values in (("side", g["side"]), ("apex", g["apex"]), ("phi_c", g["phi_center"]), ("step", step),
+                             ("p", pitch), ("rho", rho), ("t_cell", t_start), ("t_end", t_end),
+                             ("i0", start_cell[0]), ("j0", start_cell[1])):
             np.take(values, go, out=row[name], mode="clip")  # "clip": valid indices, no buffer copy
-        row["own"][:] = on_cap[go]
-        oc, axis_x, radius, base = rows(o, go), g["axis_x"][go], g["radius"][go], g["base"][go]
+        row["own"][:] = on_cap.take(go)
+        oc, dc = rows(o, go), rows(d, go)
+        row["dX"][:], row["dY"][:], row["dZ"][:] = dc[:, 0], dc[:, 1], dc[:, 2]
+        axis_x, radius, base = g["axis_x"].take(go), g["radius"].take(go), g["base"].take(go)
         X, Y, Z, dX, dY, dZ, p = row["X"], row["Y"], row["Z"], row["dX"], row["dY"], row["dZ"], row["p"]
         np.subtract(oc[:, 0], axis_x, out=X)
         np.subtract(oc[:, 1], radius, out=Y)
@@ -224,44 +231,46 @@ class _Piece:
         t = row["t_cell"]
         # the cell at t_start (``_cell_of``, the same operations)
         phi = np.arctan2(row["side"] * ((oc[:, 0] + t * dX) - axis_x), radius - (oc[:, 1] + t * dY))
-        row["i"][:] = np.floor((phi - row["phi_c"]) * base / p + 0.5)
-        row["j"][:] = np.floor((oc[:, 2] + t * dZ) / p + 0.5)
+        np.floor((phi - row["phi_c"]) * base / p + 0.5, out=row["i"])
+        np.floor((oc[:, 2] + t * dZ) / p + 0.5, out=row["j"])
         # the angle about the axis changes monotonically along a line: its direction is the sign of
         # the (constant) moment of the line about the axis
         np.sign(row["side"] * (X * dY - Y * dX), out=row["si"])
         np.sign(dZ, out=row["sj"])
-        moving_j = row["sj"] != 0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            row["t_next_j"][:] = np.where(moving_j, ((row["j"] + 0.5 * row["sj"]) * p - Z) / dZ, np.inf)
-            row["dt_j"][:] = np.where(moving_j, p / np.abs(dZ), np.inf)
+        np.divide((row["j"] + 0.5 * row["sj"]) * p - Z, dZ, out=row["t_next_j"])
+        np.divide(p, np.abs(dZ), out=row["dt_j"])
+        level = np.nonzero(row["sj"] == 0)[0]
+        if len(level):  # horizontal rays never cross a row border
+            row["t_next_j"][level] = row["dt_j"][level] = np.inf
         row["t_next_i"][:] = self._next_border()
         self.any_own = bool(row["own"].any())
         if self.any_own:
             self._leave_own_caps()
 
+    def _set(self, ray: np.ndarray, state: np.ndarray) -> None:
+        self.ray = ray  # index of the ray in the caller's arrays
+        self.state = state  # (len(ROWS), K)
+        self.r = dict(zip(self.ROWS, state, strict=True))
+
     def _leave_own_caps(self) -> None:
         """A ray leaving a cap into the air never meets that cap again (``cap_hits``): in the
         cell of its own cap it moves straight on to the next, and most leave the piece before."""
-        leaving = (self.own == INTO_AIR) & (self.i == self.i0) & (self.j == self.j0)
+        r = self.r
+        leaving = (r["own"] == INTO_AIR) & (r["i"] == r["i0"]) & (r["j"] == r["j0"])
         if not leaving.any():
             return
-        self.own[leaving] = OFF_CAP
+        r["own"][leaving] = OFF_CAP
         self.advance(np.ones(len(leaving), bool), leaving)  # the others stay: t_start <= t_end
-
-    def __getattr__(self, name: str) -> np.ndarray:  # the rows by name: w.X, w.t_cell ...
-        return self.state[self.ROWS.index(name)]
 
     def _next_border(self, cols: np.ndarray | None = None) -> np.ndarray:
         """Where each walking ray (those ``cols``, default all) crosses the radial half-plane at
         the far border of its cell column (inf if never: the line's angle stops short of it)."""
-        s = self.state if cols is None else self.state.take(cols, axis=1)
-        r = dict(zip(self.ROWS, s, strict=True))
+        r = self.r if cols is None else dict(zip(self.ROWS, self.state.take(cols, axis=1), strict=True))
         angle = r["phi_c"] + (r["i"] + 0.5 * r["si"]) * r["step"]
         cos_b, sin_b = np.cos(angle), r["side"] * np.sin(angle)  # the plane's normal (cos, side sin)
         X, Y, dX, dY = r["X"], r["Y"], r["dX"], r["dY"]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = -(cos_b * X + sin_b * Y) / (cos_b * dX + sin_b * dY)
-            on_half = sin_b * (X + t * dX) - cos_b * (Y + t * dY) > 0  # the radial direction is (side sin, -cos)
+        t = -(cos_b * X + sin_b * Y) / (cos_b * dX + sin_b * dY)
+        on_half = sin_b * (X + t * dX) - cos_b * (Y + t * dY) > 0  # the radial direction is (side sin, -cos)
         return np.where((r["si"] != 0) & np.isfinite(t) & on_half, t, np.inf)
 
     def walk(self, t_hit: np.ndarray, cell_hit: np.ndarray) -> None:
@@ -276,36 +285,35 @@ class _Piece:
             if len(hits):
                 ray = self.ray[hits]
                 t_hit[ray] = t[hits]
-                cell_hit[ray, 0], cell_hit[ray, 1] = self.i[hits], self.j[hits]
+                cell_hit[ray, 0], cell_hit[ray, 1] = self.r["i"][hits], self.r["j"][hits]
             self.advance(~found)
 
     def cap_hits(self) -> np.ndarray:
         """Each ray's hit on the cap of its current cell within the cell (inf if none); see
         ``cuts._CellWalk.cap_hits`` for the roots. A ray that starts on a cap excludes it by
         geometry: the near root is its own start, and out of a sphere it never comes back in."""
-        phi = self.phi_c + self.i * self.step
-        ex, ey = self.side * np.sin(phi), -np.cos(phi)  # the cell's radial direction
+        r = self.r
+        phi = r["phi_c"] + r["i"] * r["step"]
+        ex, ey = r["side"] * np.sin(phi), -np.cos(phi)  # the cell's radial direction
         # the ray's origin relative to the cap's apex; the sphere's centre lies rho beyond it along e
-        apex, dX, dY, dZ, rho = self.apex, self.dX, self.dY, self.dZ, self.rho
-        ax, ay, az = self.X - apex * ex, self.Y - apex * ey, self.Z - self.j * self.p
+        apex, dX, dY, dZ, rho = r["apex"], r["dX"], r["dY"], r["dZ"], r["rho"]
+        ax, ay, az = r["X"] - apex * ex, r["Y"] - apex * ey, r["Z"] - r["j"] * r["p"]
         b = ax * dX + ay * dY + az * dZ - rho * (ex * dX + ey * dY)
         c = ax * ax + ay * ay + az * az - 2.0 * rho * (ax * ex + ay * ey)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            q = -(b + np.copysign(np.sqrt(b * b - c), b))
-            r2 = c / q
+        q = -(b + np.copysign(np.sqrt(b * b - c), b))
+        r2 = c / q
         lo, hi = np.fmin(q, r2), np.fmax(q, r2)
         if self.any_own:
-            own = self.own
-            in_own = (own != OFF_CAP) & (self.i == self.i0) & (self.j == self.j0)
+            own = r["own"]
+            in_own = (own != OFF_CAP) & (r["i"] == r["i0"]) & (r["j"] == r["j0"])
             lo[in_own] = np.nan  # the near root is the ray's own start
             hi[in_own & (own == INTO_AIR)] = np.nan  # out of a sphere: never back in
             # along a line the angle and z change monotonically: a cell left is never entered again
             own[in_own] = OFF_CAP
-        tc = self.t_cell
-        t_stop = np.minimum(np.minimum(self.t_next_i, self.t_next_j), self.t_end)
-        with np.errstate(invalid="ignore"):
-            lo_ok = (lo > T_MIN) & (lo >= tc - TOL) & (lo <= t_stop + TOL)
-            hi_ok = (hi > T_MIN) & (hi >= tc - TOL) & (hi <= t_stop + TOL)
+        tc = r["t_cell"]
+        t_stop = np.minimum(np.minimum(r["t_next_i"], r["t_next_j"]), r["t_end"])
+        lo_ok = (lo > T_MIN) & (lo >= tc - TOL) & (lo <= t_stop + TOL)
+        hi_ok = (hi > T_MIN) & (hi >= tc - TOL) & (hi <= t_stop + TOL)
         return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
 
     def advance(self, walking: np.ndarray, moving: np.ndarray | None = None) -> None:
@@ -313,28 +321,30 @@ class _Piece:
         enter next; drop the others and those whose next cell lies beyond the piece (most, after
         their first cell: they are dropped before the stepping). With ``moving`` only those rays
         step, and the others stay (all walking) where they are."""
-        step_i = self.t_next_i < self.t_next_j
-        t_next = np.where(step_i, self.t_next_i, self.t_next_j)
+        r = self.r
+        step_i = r["t_next_i"] < r["t_next_j"]
+        t_next = np.where(step_i, r["t_next_i"], r["t_next_j"])
         if moving is None:
-            self.t_cell[:] = t_next
+            r["t_cell"][:] = t_next
         else:
-            np.copyto(self.t_cell, t_next, where=moving)
-        keep = walking & (self.t_cell <= self.t_end)
+            np.copyto(r["t_cell"], t_next, where=moving)
+        keep = walking & (r["t_cell"] <= r["t_end"])
         if not keep.all():
             idx = np.nonzero(keep)[0]
-            self.ray, self.state, step_i = self.ray[idx], self.state.take(idx, axis=1), step_i[idx]
+            self._set(self.ray[idx], self.state.take(idx, axis=1))
+            r, step_i = self.r, step_i[idx]
             moving = None if moving is None else moving[idx]
         if len(self.ray) == 0:
             return
         if self.any_own:
-            self.any_own = bool(self.own.any())
+            self.any_own = bool(r["own"].any())
         step_j = ~step_i
         if moving is not None:
             step_i &= moving
             step_j &= moving
-        np.add(self.i, self.si, out=self.i, where=step_i)
-        np.add(self.j, self.sj, out=self.j, where=step_j)
-        np.add(self.t_next_j, self.dt_j, out=self.t_next_j, where=step_j)
+        np.add(r["i"], r["si"], out=r["i"], where=step_i)
+        np.add(r["j"], r["sj"], out=r["j"], where=step_j)
+        np.add(r["t_next_j"], r["dt_j"], out=r["t_next_j"], where=step_j)
         cols = np.nonzero(step_i)[0]
         if len(cols):
-            self.t_next_i[cols] = self._next_border(cols)
+            r["t_next_i"][cols] = self._next_border(cols)
