@@ -74,16 +74,16 @@ class _StripWalk:
     (rows, K) array so that dropping the finished rays is one gather (as ``cuts._CellWalk``)."""
 
     ROWS = ("s0", "ds", "p", "t_cell", "t_out", "k", "t_next", "dt", "b_y", "c_y", "a2", "step", "cap")
-    _ROW = {name: i for i, name in enumerate(ROWS)}
 
     def __init__(self, ray: np.ndarray, state: np.ndarray, n: int):
-        self.ray = ray  # index of the ray in the caller's arrays
-        self.state = state
+        self._set(ray, state)
         self.n = n
         self.first = True  # in the strip where the ray enters the slab: its own flute if it starts on one
 
-    def __getattr__(self, name: str) -> np.ndarray:  # the rows by name: w.s0, w.t_cell ...
-        return self.state[self._ROW[name]]
+    def _set(self, ray: np.ndarray, state: np.ndarray) -> None:
+        self.ray = ray  # index of the ray in the caller's arrays
+        self.state = state  # (len(ROWS), K)
+        self.r = dict(zip(self.ROWS, state, strict=True))  # its rows by name
 
     @classmethod
     def enter(cls, o, d, plane_a, plane_b, pitch, rho, across, t_limit, on_cap, every_curved) -> _StripWalk:
@@ -109,7 +109,7 @@ class _StripWalk:
             ray = ray[live]
         state = np.empty((len(cls.ROWS), len(ray)))
         walk = cls(ray, state, n)
-        row = dict(zip(cls.ROWS, state, strict=True))
+        row = walk.r
         # (rows of (N, 3) arrays gathered whole: ``take`` of a strided column copies the column first)
         if everyone and every_curved:
             oc, dc, ac, r, p_ray = o, d, across, rho, pitch
@@ -139,7 +139,7 @@ class _StripWalk:
         np.add(qy * dy, r * dy, out=row["b_y"])
         np.add(qy * qy, 2.0 * r * qy, out=row["c_y"])
         row["cap"][:] = on_cap if everyone and every_curved else on_cap.take(ray)
-        if walk.cap.any():
+        if row["cap"].any():
             walk._leave_own_flutes()
         else:
             walk.first = False
@@ -148,21 +148,22 @@ class _StripWalk:
     def _leave_own_flutes(self) -> None:
         """A ray leaving a flute into the air never meets it again (``walk``): it starts in the
         next strip, and most leave the slab before."""
-        leaving = self.cap == INTO_AIR
+        leaving = self.r["cap"] == INTO_AIR
         if leaving.any():
-            keep = ~leaving | (self.t_next <= self.t_out)
+            keep = ~leaving | (self.r["t_next"] <= self.r["t_out"])
             self._keep(keep)
             leaving = leaving[keep] if not keep.all() else leaving
-            np.copyto(self.t_cell, self.t_next, where=leaving)
-            np.add(self.k, self.step, out=self.k, where=leaving)
-            np.add(self.t_next, self.dt, out=self.t_next, where=leaving)
-            self.cap[leaving] = OFF_CAP
-        self.first = bool(self.cap.any())
+            r = self.r
+            np.copyto(r["t_cell"], r["t_next"], where=leaving)
+            np.add(r["k"], r["step"], out=r["k"], where=leaving)
+            np.add(r["t_next"], r["dt"], out=r["t_next"], where=leaving)
+            r["cap"][leaving] = OFF_CAP
+        self.first = bool(self.r["cap"].any())
 
     def _keep(self, keep: np.ndarray) -> None:
         if not keep.all():
             idx = np.nonzero(keep)[0]
-            self.ray, self.state = self.ray[idx], self.state.take(idx, axis=1)
+            self._set(self.ray[idx], self.state.take(idx, axis=1))
 
     def walk(self, t_hit: np.ndarray) -> np.ndarray:
         """Walk to each ray's hit or out of the slab: the hits go into ``t_hit``; returns each
@@ -171,17 +172,19 @@ class _StripWalk:
         for _ in range(MAX_STRIP_STEPS):
             if len(self.ray) == 0:
                 break
-            s0, ds, p, k, a2, t_cell, t_next = self.s0, self.ds, self.p, self.k, self.a2, self.t_cell, self.t_next
+            r = self.r
+            s0, ds, p, k, a2, t_cell, t_next, t_out = (r["s0"], r["ds"], r["p"], r["k"], r["a2"], r["t_cell"],
+                                                       r["t_next"], r["t_out"])
             qs = s0 - k * p
-            b = qs * ds + self.b_y
-            c = qs * qs + self.c_y
+            b = qs * ds + r["b_y"]
+            c = qs * qs + r["c_y"]
             q = -(b + np.copysign(np.sqrt(b * b - a2 * c), b))
             r1, r2 = q / a2, c / q
             lo, hi = np.fmin(r1, r2), np.fmax(r1, r2)
             if self.first:  # the flute a ray starts on: leaving it inward, only its far root
-                lo[self.cap != OFF_CAP] = np.nan
+                lo[r["cap"] != OFF_CAP] = np.nan
                 self.first = False
-            t_end = np.minimum(t_next, self.t_out)
+            t_end = np.minimum(t_next, t_out)
             lo_ok = (lo > T_MIN) & (lo >= t_cell - TOL) & (lo <= t_end + TOL)
             hi_ok = (hi > T_MIN) & (hi >= t_cell - TOL) & (hi <= t_end + TOL)
             t = np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
@@ -191,11 +194,12 @@ class _StripWalk:
                 ray = self.ray[hits]
                 t_hit[ray] = t[hits]
                 strip[ray] = k[hits]
-            self._keep(~found & (t_next <= self.t_out))
+            self._keep(~found & (t_next <= t_out))
             if len(self.ray):
-                self.t_cell[:] = self.t_next
-                self.k += self.step
-                self.t_next += self.dt
+                r = self.r
+                r["t_cell"][:] = r["t_next"]
+                r["k"] += r["step"]
+                r["t_next"] += r["dt"]
         return strip
 
 
