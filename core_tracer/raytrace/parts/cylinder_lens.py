@@ -171,11 +171,22 @@ def _walk_cells(o, d, g, pitch, rho, t_limit, on_cap) -> tuple[np.ndarray, np.nd
 
     t_hit = np.full(n, np.inf)
     cell = np.zeros((n, 2))
-    for go, start, end in ((go1, start1, end1), (None, start2, end2)):
-        if go is None:  # the second piece: the rays without a hit in the first
-            go = np.nonzero(piece2 & ~np.isfinite(t_hit))[0] if len(go1) else np.nonzero(piece2)[0]
-        if len(go):
-            _Piece(o, d, g, step, pitch, rho, start, end, on_cap, start_cell, go).walk(t_hit, cell)
+    # Both pieces walked at once, one column each (most rays have one): a ray's first piece comes
+    # first along it, so its hit there wins, and the second's counts only without one.
+    go2 = np.nonzero(piece2)[0]
+    first = len(go1)
+    go = np.concatenate([go1, go2])
+    if len(go):
+        t_start = np.concatenate([start1.take(go1), start2.take(go2)])
+        t_end = np.concatenate([end1.take(go1), end2.take(go2)])
+        col_t, col_cell = np.full(len(go), np.inf), np.empty((2, len(go)))
+        _Piece(o, d, g, step, pitch, rho, t_start, t_end, on_cap, start_cell, go).walk(col_t, col_cell)
+        for part in (slice(first, None), slice(0, first)):  # the second pieces' hits, then the first's over them
+            found = np.nonzero(np.isfinite(col_t[part]))[0]
+            if len(found):
+                ray = go[part].take(found)
+                t_hit[ray] = col_t[part].take(found)
+                cell[ray, 0], cell[ray, 1] = col_cell[0, part].take(found), col_cell[1, part].take(found)
     normal = np.zeros((n, 3))
     hit = np.nonzero(np.isfinite(t_hit))[0]
     if len(hit):
@@ -213,12 +224,14 @@ class _Piece:
             "t_cell", "t_end", "t_next_i", "t_next_j", "dt_j", "own", "i0", "j0")
 
     def __init__(self, o, d, g, step, pitch, rho, t_start, t_end, on_cap, start_cell, go):
-        self._set(go, np.empty((len(self.ROWS), len(go))))
+        """The rays ``go`` of the caller's arrays (one may come twice, once per piece), each
+        walking from ``t_start`` to ``t_end`` (per column); ``ray`` is then the column."""
+        self._set(np.arange(len(go)), np.empty((len(self.ROWS), len(go))))
         row = self.r
+        row["t_cell"][:], row["t_end"][:] = t_start, t_end
         # (1-D arrays gathered with take; (N, 3) ones by rows: take of a strided column copies it first)
         for name, values in (("side", g["side"]), ("apex", g["apex"]), ("phi_c", g["phi_center"]), ("step", step),
-                             ("p", pitch), ("rho", rho), ("t_cell", t_start), ("t_end", t_end),
-                             ("i0", start_cell[0]), ("j0", start_cell[1])):
+                             ("p", pitch), ("rho", rho), ("i0", start_cell[0]), ("j0", start_cell[1])):
             np.take(values, go, out=row[name], mode="clip")  # "clip": valid indices, no buffer copy
         row["own"][:] = on_cap.take(go)
         oc, dc = rows(o, go), rows(d, go)
@@ -274,8 +287,8 @@ class _Piece:
         return np.where((r["si"] != 0) & np.isfinite(t) & on_half, t, np.inf)
 
     def walk(self, t_hit: np.ndarray, cell_hit: np.ndarray) -> None:
-        """Walk to each ray's hit or the piece's end; the hits go into ``t_hit`` and their cells
-        into ``cell_hit``."""
+        """Walk to each column's hit or its piece's end; the hits go into ``t_hit`` and their
+        cells into ``cell_hit`` (2, columns)."""
         for _ in range(MAX_CELL_STEPS):
             if len(self.ray) == 0:
                 break
@@ -285,7 +298,7 @@ class _Piece:
             if len(hits):
                 ray = self.ray[hits]
                 t_hit[ray] = t[hits]
-                cell_hit[ray, 0], cell_hit[ray, 1] = self.r["i"][hits], self.r["j"][hits]
+                cell_hit[0, ray], cell_hit[1, ray] = self.r["i"][hits], self.r["j"][hits]
             self.advance(~found)
 
     def cap_hits(self) -> np.ndarray:
