@@ -160,13 +160,6 @@ def _walk_cells(o, d, g, pitch, rho, t_limit, on_cap) -> tuple[np.ndarray, np.nd
     start2, end2 = np.maximum(np.where(crosses_b, b_hi, np.nan), 0.0), np.minimum(a_hi, t_limit)
     go1 = np.nonzero(start1 <= end1)[0]
     piece2 = start2 <= end2
-    # the cell each ray that starts on a cap starts in (its own cap: ``_Piece.cap_hits``); NaN for the others
-    start_cell = np.full((2, n), np.nan)
-    on = np.nonzero(on_cap != OFF_CAP)[0]
-    if len(on):
-        start_cell[:, on] = _cell_of(rows(o, on), rows(d, on), np.zeros(len(on)),
-                                     {k: g[k].take(on) for k in ("side", "axis_x", "radius", "phi_center", "base")},
-                                     pitch.take(on)).T
     step = pitch / g["base"]  # the cell's angle about the axis
 
     t_hit = np.full(n, np.inf)
@@ -180,7 +173,7 @@ def _walk_cells(o, d, g, pitch, rho, t_limit, on_cap) -> tuple[np.ndarray, np.nd
         t_start = np.concatenate([start1.take(go1), start2.take(go2)])
         t_end = np.concatenate([end1.take(go1), end2.take(go2)])
         col_t, col_cell = np.full(len(go), np.inf), np.empty((2, len(go)))
-        _Piece(o, d, g, step, pitch, rho, t_start, t_end, on_cap, start_cell, go).walk(col_t, col_cell)
+        _Piece(o, d, g, step, pitch, rho, t_start, t_end, on_cap, go).walk(col_t, col_cell)
         for part in (slice(first, None), slice(0, first)):  # the second pieces' hits, then the first's over them
             found = np.nonzero(np.isfinite(col_t[part]))[0]
             if len(found):
@@ -223,7 +216,7 @@ class _Piece:
     ROWS = ("X", "Y", "Z", "dX", "dY", "dZ", "side", "apex", "phi_c", "step", "p", "rho", "i", "j", "si", "sj",
             "t_cell", "t_end", "t_next_i", "t_next_j", "dt_j", "own", "i0", "j0")
 
-    def __init__(self, o, d, g, step, pitch, rho, t_start, t_end, on_cap, start_cell, go):
+    def __init__(self, o, d, g, step, pitch, rho, t_start, t_end, on_cap, go):
         """The rays ``go`` of the caller's arrays (one may come twice, once per piece), each
         walking from ``t_start`` to ``t_end`` (per column); ``ray`` is then the column."""
         self._set(np.arange(len(go)), np.empty((len(self.ROWS), len(go))))
@@ -231,7 +224,7 @@ class _Piece:
         row["t_cell"][:], row["t_end"][:] = t_start, t_end
         # (1-D arrays gathered with take; (N, 3) ones by rows: take of a strided column copies it first)
         for name, values in (("side", g["side"]), ("apex", g["apex"]), ("phi_c", g["phi_center"]), ("step", step),
-                             ("p", pitch), ("rho", rho), ("i0", start_cell[0]), ("j0", start_cell[1])):
+                             ("p", pitch), ("rho", rho)):
             np.take(values, go, out=row[name], mode="clip")  # "clip": valid indices, no buffer copy
         row["own"][:] = on_cap.take(go)
         oc, dc = rows(o, go), rows(d, go)
@@ -241,11 +234,14 @@ class _Piece:
         np.subtract(oc[:, 0], axis_x, out=X)
         np.subtract(oc[:, 1], radius, out=Y)
         Z[:] = oc[:, 2]
-        t = row["t_cell"]
-        # the cell at t_start (``_cell_of``, the same operations)
-        phi = np.arctan2(row["side"] * ((oc[:, 0] + t * dX) - axis_x), radius - (oc[:, 1] + t * dY))
-        np.floor((phi - row["phi_c"]) * base / p + 0.5, out=row["i"])
-        np.floor((oc[:, 2] + t * dZ) / p + 0.5, out=row["j"])
+        # the cell at t_start, and for a ray that starts on a cap the cell of that cap, its own
+        # (``cap_hits``; NaN for the others)
+        self._cell_at(row["t_cell"], oc, axis_x, radius, base, row["i"], row["j"])
+        self.any_own = bool(row["own"].any())
+        if self.any_own:
+            self._cell_at(0.0, oc, axis_x, radius, base, row["i0"], row["j0"])
+            off = row["own"] == OFF_CAP
+            row["i0"][off] = row["j0"][off] = np.nan
         # the angle about the axis changes monotonically along a line: its direction is the sign of
         # the (constant) moment of the line about the axis
         np.sign(row["side"] * (X * dY - Y * dX), out=row["si"])
@@ -256,9 +252,16 @@ class _Piece:
         if len(level):  # horizontal rays never cross a row border
             row["t_next_j"][level] = row["dt_j"][level] = np.inf
         row["t_next_i"][:] = self._next_border()
-        self.any_own = bool(row["own"].any())
         if self.any_own:
             self._leave_own_caps()
+
+    def _cell_at(self, t, oc, axis_x, radius, base, i, j) -> None:
+        """The cell (into ``i``, ``j``) holding each ray's point at ``t`` (``_cell_of``, the same
+        operations)."""
+        r = self.r
+        phi = np.arctan2(r["side"] * ((oc[:, 0] + t * r["dX"]) - axis_x), radius - (oc[:, 1] + t * r["dY"]))
+        np.floor((phi - r["phi_c"]) * base / r["p"] + 0.5, out=i)
+        np.floor((oc[:, 2] + t * r["dZ"]) / r["p"] + 0.5, out=j)
 
     def _set(self, ray: np.ndarray, state: np.ndarray) -> None:
         self.ray = ray  # index of the ray in the caller's arrays
