@@ -192,7 +192,7 @@ def _walk_cells(o, d, g, pitch, rho, t_limit, on_cap) -> tuple[np.ndarray, np.nd
         h = np.empty((len(hit), 3))
         h[:, 0] = oh[:, 0] - g["axis_x"][hit] - apex_h * ex + th * dh[:, 0] - rh * ex
         h[:, 1] = oh[:, 1] - g["radius"][hit] - apex_h * ey + th * dh[:, 1] - rh * ey
-        h[:, 2] = oh[:, 2] - cell[hit, 1] * pitch[hit] + th * dh[:, 2] - rh * 0.0
+        h[:, 2] = oh[:, 2] - cell[hit, 1] * pitch[hit] + th * dh[:, 2]  # (e has no z)
         put_rows(normal, hit, optics.normalize(h))
     return t_hit, normal
 
