@@ -213,8 +213,10 @@ class _Piece:
     ones is one gather (as ``cuts._CellWalk``); ``r`` names its rows. Runs under
     ``np.errstate(divide="ignore", invalid="ignore")`` (``hit_cylinder_cuts``)."""
 
-    ROWS = ("X", "Y", "Z", "dX", "dY", "dZ", "side", "apex", "phi_c", "step", "p", "rho", "i", "j", "si", "sj",
+    # (the first ``BORDER_ROWS`` are what ``_next_border`` reads: only they are gathered for it)
+    ROWS = ("X", "Y", "dX", "dY", "side", "phi_c", "step", "i", "si", "Z", "dZ", "apex", "p", "rho", "j", "sj",
             "t_cell", "t_end", "t_next_i", "t_next_j", "dt_j", "own", "i0", "j0")
+    BORDER_ROWS = 9
 
     def __init__(self, o, d, g, step, pitch, rho, t_start, t_end, on_cap, go):
         """The rays ``go`` of the caller's arrays (one may come twice, once per piece), each
@@ -281,7 +283,8 @@ class _Piece:
     def _next_border(self, cols: np.ndarray | None = None) -> np.ndarray:
         """Where each walking ray (those ``cols``, default all) crosses the radial half-plane at
         the far border of its cell column (inf if never: the line's angle stops short of it)."""
-        r = self.r if cols is None else dict(zip(self.ROWS, self.state.take(cols, axis=1), strict=True))
+        r = self.r if cols is None else dict(zip(self.ROWS[:self.BORDER_ROWS],
+                                                  self.state[:self.BORDER_ROWS].take(cols, axis=1), strict=True))
         angle = r["phi_c"] + (r["i"] + 0.5 * r["si"]) * r["step"]
         cos_b, sin_b = np.cos(angle), r["side"] * np.sin(angle)  # the plane's normal (cos, side sin)
         X, Y, dX, dY = r["X"], r["Y"], r["dX"], r["dY"]
