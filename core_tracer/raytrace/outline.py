@@ -148,23 +148,37 @@ def wall_exit(o: np.ndarray, d: np.ndarray, half_w: np.ndarray, half_h: np.ndarr
     cylinder, at the far root of that circle (a convex set is left once, and the stretch outside it
     but inside the box lies in one corner square)."""
     ox, oz, dx, dz = o[:, 0], o[:, 2], d[:, 0], d[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tx = np.where(dx != 0, (np.copysign(half_w, dx) - ox) / dx, np.inf)
-        tz = np.where(dz != 0, (np.copysign(half_h, dz) - oz) / dz, np.inf)
-    t = np.minimum(tx, tz)
-    with np.errstate(invalid="ignore"):  # inf * 0 for a ray along the axis: no corner, no hit
-        px, pz = ox + t * dx, oz + t * dz
-    core_x, core_z = half_w - corner, half_h - corner
-    in_corner = (np.abs(px) > core_x) & (np.abs(pz) > core_z) & np.isfinite(t)
-    k = np.nonzero(in_corner)[0]
-    if len(k):
-        cx = np.copysign(core_x[k], px[k])
-        cz = np.copysign(core_z[k], pz[k])
-        ax, az = ox[k] - cx, oz[k] - cz
-        a = dx[k] ** 2 + dz[k] ** 2
-        b = ax * dx[k] + az * dz[k]
-        c = ax * ax + az * az - corner[k] ** 2
-        with np.errstate(invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # one for all: d = 0 divides by zero, on purpose
+        tx = np.copysign(half_w, dx)
+        tx -= ox
+        tx /= dx
+        tz = np.copysign(half_h, dz)
+        tz -= oz
+        tz /= dz
+        t = np.minimum(tx, tz)
+        # (a ray parallel to a pair of sides never meets them: patched, not a select over every ray)
+        across_x, across_z = np.nonzero(dx == 0)[0], np.nonzero(dz == 0)[0]
+        if len(across_x) or len(across_z):
+            tx[across_x] = np.inf
+            tz[across_z] = np.inf
+            np.minimum(tx, tz, out=t)
+        px, pz = t * dx, t * dz  # inf * 0 for a ray along the axis: no corner, no hit
+        px += ox
+        pz += oz
+        core_x, core_z = half_w - corner, half_h - corner
+        np.abs(px, out=tx)
+        np.abs(pz, out=tz)
+        in_corner = tx > core_x
+        in_corner &= tz > core_z
+        in_corner &= np.isfinite(t)
+        k = np.nonzero(in_corner)[0]
+        if len(k):
+            cx = np.copysign(core_x[k], px[k])
+            cz = np.copysign(core_z[k], pz[k])
+            ax, az = ox[k] - cx, oz[k] - cz
+            a = dx[k] ** 2 + dz[k] ** 2
+            b = ax * dx[k] + az * dz[k]
+            c = ax * ax + az * az - corner[k] ** 2
             far = (-b + np.sqrt(np.maximum(b * b - a * c, 0.0))) / a
-        t[k] = far
+            t[k] = far
     return t

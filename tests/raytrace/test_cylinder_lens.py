@@ -5,14 +5,17 @@ a large radius converging to the flat lens, and the flat default unchanged."""
 from __future__ import annotations
 
 import copy
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from core_tracer.raytrace.lamp_table import CYLINDER_KEYS
-from core_tracer.raytrace.parts import body_box, cylinder_lens
-from core_tracer.raytrace.parts.base import T_MIN
+from core_tracer.raytrace import paths as P
+from core_tracer.raytrace.lamp_table import CYLINDER_KEYS, LampTable
+from core_tracer.raytrace.parts import body_box, cut_surface, cuts, cylinder_lens, flutes, sawtooth
+from core_tracer.raytrace.parts.base import T_MIN, Segments
 from core_tracer.raytrace.parts.cuts import INTO_AIR, INTO_LENS, OFF_CAP
 from core_tracer.raytrace.parts.side_wall import hit_side_wall
 from core_tracer.raytrace.tracer import render
@@ -355,3 +358,44 @@ def test_surroundings_light_and_surround_a_wrapped_body(tmp_path):
     missed = result.image.reshape(-1, 3)[others.max(axis=1) == 0]
     assert len(missed) > 500
     np.testing.assert_allclose(missed, 0.3, rtol=1e-6)
+
+
+def test_the_cut_dispatch_gives_each_ray_its_own_lamps_walk():
+    """``cut_surface`` on a scene with all four cut walks (fish-eye on a flat lens, fish-eye on a
+    cylindrical lens, saw-tooth, flutes): every ray gets exactly what its lamp's walk alone gives."""
+    doc = json.loads((Path(__file__).resolve().parents[2] / "presets" / "four-lamp-rear-combination.json").read_text())
+    doc["body"]["depth"] = 100.0
+    doc["lamps"][3]["lens"].update(shape="cylindrical", wrap_radius=110.0, wrap_toward="+x")
+    doc["lamps"][1]["cuts"].update(type="sawtooth", tooth_angle=25.0, orientation=0.0)
+    doc["lamps"][2]["cuts"].update(type="flutes", orientation=30.0)
+    lamps = LampTable.from_scene(normalize(doc))
+    rng = np.random.default_rng(7)
+    n = 4000
+    lamp = rng.integers(0, 4, n)
+    o = np.stack([rng.uniform(-30, 30, n), rng.uniform(-2.0, 12.0, n), rng.uniform(-30, 30, n)], axis=1)
+    d = rng.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    src = np.where(rng.random(n) < 0.5, P.CUT, P.REFLECTOR).astype(np.int8)
+    medium = np.where(rng.random(n) < 0.5, P.IN_AIR, P.IN_LENS).astype(np.int8)
+    t_limit = np.where(rng.random(n) < 0.8, np.inf, rng.uniform(0.0, 20.0, n))
+    t, normal = cut_surface.intersect(Segments(o, d, lamp, src, medium), lamps, t_limit)
+    on_cap = np.where(src != P.CUT, OFF_CAP, np.where(medium == P.IN_AIR, INTO_AIR, INTO_LENS)).astype(np.int8)
+    for li in range(4):
+        k = np.nonzero(lamp == li)[0]
+        ls = lamp[k]
+        if li == 1:
+            t_own, n_own = sawtooth.hit_sawtooth(o[k], d[k], lamps.plane_a[ls], lamps.plane_b[ls], lamps.pitch[ls],
+                                                 lamps.tooth_slope[ls], lamps.ridge_across[ls], t_limit[k])
+        elif li == 2:
+            t_own, n_own = flutes.hit_flutes(o[k], d[k], lamps.plane_a[ls], lamps.plane_b[ls], lamps.pitch[ls],
+                                             lamps.flute_radius[ls], lamps.ridge_across[ls], t_limit[k], on_cap[k])
+        elif li == 3:
+            t_own, n_own = cylinder_lens.hit_cylinder_cuts(o[k], d[k], lamps.cylinder_of(ls), lamps.pitch[ls],
+                                                           lamps.cut_radius[ls], t_limit[k], on_cap[k])
+        else:
+            t_own, n_own = cuts.hit_cuts(o[k], d[k], lamps.plane_a[ls], lamps.plane_b[ls], lamps.pitch[ls],
+                                         lamps.cut_radius[ls], t_limit[k], on_cap[k])
+        assert np.isfinite(t_own).sum() > 50, li  # each walk finds hits here
+        assert np.array_equal(t[k], t_own), li
+        hit = np.isfinite(t_own)
+        assert np.array_equal(normal[k][hit], n_own[hit]), li

@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments
+from .base import T_MIN, Segments, put_rows, rows
 
 SURFACE = P.CUT
 MEDIA = (P.IN_LENS, P.IN_AIR)
@@ -34,9 +34,9 @@ TOL = 1e-9  # mm of ray parameter: a hit on a strip border belongs to both sides
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    li = rays.lamp
-    return hit_sawtooth(rays.o, rays.d, lamps.plane_a[li], lamps.plane_b[li], lamps.pitch[li],
-                        lamps.tooth_slope[li], lamps.ridge_across[li], t_limit)
+    li = rays.lamp  # (the lamps' rows gathered with take: faster than indexing)
+    return hit_sawtooth(rays.o, rays.d, lamps.plane_a.take(li), lamps.plane_b.take(li), lamps.pitch.take(li),
+                        lamps.tooth_slope.take(li), lamps.ridge_across.take(li, axis=0), t_limit)
 
 
 def hit_sawtooth(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndarray, pitch: np.ndarray,
@@ -45,64 +45,88 @@ def hit_sawtooth(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.
     unit normal pointing out of the lens material (toward the air). ``slope`` is tan alpha,
     ``across`` the (N, 2) [x, z] unit vector across the ridges."""
     n = len(o)
+    flat = np.nonzero(slope == 0)[0]
+    if len(flat) == 0:  # the usual case: every ray's lamp has teeth, no gathers
+        return _hit_teeth(o, d, plane_a, plane_b, pitch, slope, across, t_limit)
     t_hit = np.full(n, np.inf)
     normal = np.zeros((n, 3))
     normal[:, 1] = 1.0
     oy, dy = o[:, 1], d[:, 1]
-
-    flat = np.nonzero(slope == 0)[0]
-    if len(flat):  # a zero tooth angle is a flat inner face: plane A, never met again from it
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (plane_a[flat] - oy[flat]) / dy[flat]
-        ok = (t > T_MIN) & (t < t_limit[flat]) & (np.abs(oy[flat] - plane_a[flat]) > ON_PLANE)
-        t_hit[flat[ok]] = t[ok]
+    # a zero tooth angle is a flat inner face: plane A, never met again from it
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (plane_a[flat] - oy[flat]) / dy[flat]
+    ok = (t > T_MIN) & (t < t_limit[flat]) & (np.abs(oy[flat] - plane_a[flat]) > ON_PLANE)
+    t_hit[flat[ok]] = t[ok]
 
     ray = np.nonzero(slope != 0)[0]
-    if len(ray) == 0:
-        return t_hit, normal
-    o, d, a, b, p, m, ax, az, limit = (
-        o[ray], d[ray], plane_a[ray], plane_b[ray], pitch[ray], slope[ray], across[ray, 0], across[ray, 1],
-        t_limit[ray])
+    if len(ray):
+        t_hit[ray], nrm = _hit_teeth(rows(o, ray), rows(d, ray), plane_a[ray], plane_b[ray], pitch[ray], slope[ray],
+                                     rows(across, ray), t_limit[ray])
+        put_rows(normal, ray, nrm)
+    return t_hit, normal
+
+
+def _hit_teeth(o, d, a, b, p, m, across, limit) -> tuple[np.ndarray, np.ndarray]:
+    """``hit_sawtooth`` for rays whose lamps all have teeth (m != 0)."""
+    ax, az = across[:, 0], across[:, 1]
     oy, dy = o[:, 1], d[:, 1]
-
-    # Planes A and B: the part of the ray inside the slab, [t_in, t_out], cut at the limit.
+    # (one errstate: rays parallel to the planes or to the ridges divide by zero, on purpose)
     with np.errstate(divide="ignore", invalid="ignore"):
+        # Planes A and B: the part of the ray inside the slab, [t_in, t_out], cut at the limit.
         ta, tb = (a - oy) / dy, (b - oy) / dy
-    t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
-    parallel = dy == 0  # parallel to the planes: in the slab for ever or never
-    in_slab = (oy >= a) & (oy <= b)
-    t_in = np.where(parallel, np.where(in_slab, 0.0, np.inf), np.maximum(t_in, 0.0))
-    t_out = np.minimum(np.where(parallel, np.where(in_slab, np.inf, -np.inf), t_out), limit)
+        t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
+        np.maximum(t_in, 0.0, out=t_in)
+        parallel = np.nonzero(dy == 0)[0]
+        if len(parallel):  # parallel to the planes: in the slab for ever or never
+            y = oy[parallel]
+            in_slab = (y >= a[parallel]) & (y <= b[parallel])
+            t_in[parallel] = np.where(in_slab, 0.0, np.inf)
+            t_out[parallel] = np.where(in_slab, np.inf, -np.inf)
+        np.minimum(t_out, limit, out=t_out)
 
-    # The strip where the ray enters the slab; a ray standing on the border ahead of it (it starts
-    # on that return facet, or rounding put it on the wrong side) is in the next strip.
-    s0 = o[:, 0] * ax + o[:, 2] * az
-    ds = d[:, 0] * ax + d[:, 2] * az
-    step = np.sign(ds)
-    with np.errstate(invalid="ignore"):
+        # The strip where the ray enters the slab; a ray standing on the border ahead of it (it
+        # starts on that return facet, or rounding put it on the wrong side) is in the next strip.
+        s0 = o[:, 0] * ax + o[:, 2] * az
+        ds = d[:, 0] * ax + d[:, 2] * az
+        step = np.sign(ds)
         s_in = s0 + np.where(np.isfinite(t_in), t_in, 0.0) * ds
-    k = np.floor(s_in / p + 0.5)
-    k += np.where((k + 0.5 * step) * p * step - s_in * step <= ON_PLANE, step, 0.0)
+        k = np.floor(s_in / p + 0.5)
+        np.add(k, step, out=k, where=(k + 0.5 * step) * p * step - s_in * step <= ON_PLANE)
 
-    # The inclined facet of strip k: y = A + m (s - (k - 1/2) p), skipped when the ray starts on it.
-    s_low = (k - 0.5) * p
-    residual = oy - a - m * (s0 - s_low)
-    with np.errstate(divide="ignore", invalid="ignore"):
+        # The inclined facet of strip k: y = A + m (s - (k - 1/2) p), skipped when the ray starts on it.
+        s_low = (k - 0.5) * p
+        residual = oy - a - m * (s0 - s_low)
         t_facet = residual / (m * ds - dy)
-        t_border = np.where(step != 0, ((k + 0.5 * step) * p - s0) / ds, np.inf)
-    t_end = np.minimum(t_border, t_out)
-    on_facet = np.abs(residual) <= ON_PLANE * np.sqrt(1.0 + m * m)  # distance to the plane
-    facet = (~on_facet & (t_facet > T_MIN) & (t_facet >= t_in - TOL) & (t_facet <= t_end + TOL)
-             & (t_in <= t_out))
-    # Otherwise the return facet at the border ahead, if the ray reaches it inside the slab.
-    border = ~facet & (t_border > T_MIN) & (t_border >= t_in - TOL) & (t_border <= t_out) & (t_in <= t_out)
+        t_border = ((k + 0.5 * step) * p - s0) / ds
+        along = np.nonzero(step == 0)[0]
+        if len(along):  # parallel to the ridges: no border ahead
+            t_border[along] = np.inf
+        t_end = np.minimum(t_border, t_out)
+        sec = np.sqrt(1.0 + m * m)
+        live = t_in <= t_out
+        facet = np.abs(residual) > ON_PLANE * sec  # not on the facet: farther from its plane than that
+        facet &= t_facet > T_MIN
+        facet &= t_facet >= t_in - TOL
+        facet &= t_facet <= t_end + TOL
+        facet &= live
+        # Otherwise the return facet at the border ahead, if the ray reaches it inside the slab.
+        border = ~facet
+        border &= t_border > T_MIN
+        border &= t_border >= t_in - TOL
+        border &= t_border <= t_out
+        border &= live
 
-    t_hit[ray] = np.where(facet, t_facet, np.where(border, t_border, np.inf))
+    t_hit = np.where(facet, t_facet, np.where(border, t_border, np.inf))
     # Normals out of the lens: the facet's (-sin alpha a, cos alpha), the return facet's +a.
-    cos_a = 1.0 / np.sqrt(1.0 + m * m)
-    sin_a = m * cos_a
-    normal[ray] = np.where(facet[:, None], np.stack([-sin_a * ax, cos_a, -sin_a * az], axis=1),
-                           np.stack([ax, np.zeros_like(ax), az], axis=1))
+    normal = np.zeros((len(o), 3))
+    normal[:, 0], normal[:, 2] = ax, az
+    f = np.nonzero(facet)[0]
+    if len(f):
+        cos_a = 1.0 / sec[f]
+        sin_a = m[f] * cos_a
+        normal[f, 0] = -sin_a * ax[f]
+        normal[f, 1] = cos_a
+        normal[f, 2] = -sin_a * az[f]
     return t_hit, normal
 
 
