@@ -7,7 +7,9 @@ first few disagree, and lets the pixels of flat regions keep the mean of those f
 surface a ray branches into a reflected and a transmitted ray (the ray-tracing tree of Fig. 7);
 each carries its accumulated attenuation k, and luminance is added to the pixel as k × the
 value found, so the tree is never stored (MODEL.md §5). All live rays of one generation are
-processed together as arrays; the image is worked in bands of rows to bound memory.
+processed together as arrays; the image is worked in bands of rows to bound memory, and with one
+sample per pixel the last few branches of a band are traced along with the next band's rays
+(``_carrying_tails``).
 """
 
 from __future__ import annotations
@@ -270,7 +272,8 @@ def _short_switch_interval() -> Iterator[None]:
 def _traced_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
                   should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
     """Trace the bands, at most ``threads`` at a time (in the calling thread when 1), and yield
-    them in order; ``should_stop()`` is polled before starting a band and after each finishes."""
+    them in order; ``should_stop()`` is polled before starting a band and after each finishes
+    (with one sample per pixel, before the first and as each completes: ``_carried_bands``)."""
     traced = _carried_bands if ctx.samples == 1 else _traced_bands_on
     if threads > 1:
         with _short_switch_interval():
