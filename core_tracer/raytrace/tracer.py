@@ -7,12 +7,15 @@ first few disagree, and lets the pixels of flat regions keep the mean of those f
 surface a ray branches into a reflected and a transmitted ray (the ray-tracing tree of Fig. 7);
 each carries its accumulated attenuation k, and luminance is added to the pixel as k × the
 value found, so the tree is never stored (MODEL.md §5). All live rays of one generation are
-processed together as arrays; the image is worked in bands of rows to bound memory.
+processed together as arrays; the image is worked in bands of rows to bound memory, and with one
+sample per pixel the last few branches of a band are traced along with the next band's rays
+(``_carrying_tails``).
 """
 
 from __future__ import annotations
 
 import os
+import queue
 import sys
 import threading
 import time
@@ -20,7 +23,7 @@ from collections import deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -144,9 +147,9 @@ def _bin_sums(slot: np.ndarray, values: np.ndarray, n_slots: int) -> np.ndarray:
 class _Band:
     """Accumulates the passes of one band of pixels and the band's statistics."""
 
-    def __init__(self, n_pixels: int, ctx: _Context):
+    def __init__(self, n_pixels: int, ctx: _Context, acc: np.ndarray | None = None):
         self.n = n_pixels
-        self.acc = np.zeros((len(PASS_NAMES), n_pixels, 3))
+        self.acc = np.zeros((len(PASS_NAMES), n_pixels, 3)) if acc is None else acc
         self.segments = 0
         self.max_depth = 0
         self.busy = 0  # pixels that took every sample (adaptive sampling)
@@ -156,7 +159,8 @@ class _Band:
     def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
         add_to_pass(self.acc[pass_id], pix, values)
 
-    def note(self, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
+    def note(self, pix: np.ndarray, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
+        """Record the transitions (parent class, branch, child class) of the rays at slots ``pix``."""
         if self.ctx.record and len(child):
             codes = np.unique(parent.astype(np.int64) * 10000 + branch.astype(np.int64) * 100 + child)
             self.transitions.update((int(c) // 10000, (int(c) // 100) % 100, int(c) % 100) for c in codes)
@@ -268,12 +272,14 @@ def _short_switch_interval() -> Iterator[None]:
 def _traced_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
                   should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
     """Trace the bands, at most ``threads`` at a time (in the calling thread when 1), and yield
-    them in order; ``should_stop()`` is polled before starting a band and after each finishes."""
+    them in order; ``should_stop()`` is polled before starting a band and after each finishes
+    (with one sample per pixel, before the first and as each completes: ``_carried_bands``)."""
+    traced = _carried_bands if ctx.samples == 1 else _traced_bands_on
     if threads > 1:
         with _short_switch_interval():
-            yield from _traced_bands_on(ctx, bands, threads, should_stop)
+            yield from traced(ctx, bands, threads, should_stop)
     else:
-        yield from _traced_bands_on(ctx, bands, 1, should_stop)
+        yield from traced(ctx, bands, 1, should_stop)
 
 
 def _traced_bands_on(ctx: _Context, bands: list[tuple[int, int]], threads: int,
@@ -295,6 +301,219 @@ def _traced_bands_on(ctx: _Context, bands: list[tuple[int, int]], threads: int,
     finally:
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# Carrying the tails of bands (one sample per pixel)
+
+# Below this many live rays, a worker stops tracing its band alone: the rays left (the band's deep
+# branches) are carried into the wavefront of the next band it takes (benchmarks/bench_viewport.py).
+CARRY_RAYS = 4096
+
+
+@dataclass
+class _Tail:
+    """A band of rows whose branches are being traced, and where its slots are in the wavefront."""
+
+    index: int  # the band's place in the image's list of bands
+    first_pixel: int  # the image index of the band's first pixel
+    band: _Band
+    lo: int  # its slots in the wavefront's accumulator: lo:hi
+    hi: int
+    pixels: np.ndarray | None = None  # the band's pixels (image indices) at those slots; None: all, in order
+    depth: int = 1  # generations traced, counted as ``_trace_rays`` does
+
+    def image_pixels(self, slots: np.ndarray) -> np.ndarray:
+        return slots - self.lo + self.first_pixel if self.pixels is None else self.pixels[slots - self.lo]
+
+    def put_back(self, acc: np.ndarray) -> None:
+        """Copy the passes of the pixels carried in ``acc`` back to the band's own accumulator."""
+        if self.pixels is not None:
+            self.band.acc[:, self.pixels - self.first_pixel] = acc[:, self.lo:self.hi]
+
+
+class _Wavefront(_Band):
+    """The passes of the rays one worker traces together: each band in ``tails`` owns the slots
+    ``lo:hi`` of ``acc`` (the band just started all its pixels, an earlier band the pixels its
+    carried rays can still reach), so ``add`` needs no splitting; transitions go to their band."""
+
+    def __init__(self, ctx: _Context, acc: np.ndarray, tails: list[_Tail]):
+        super().__init__(acc.shape[1], ctx, acc)
+        self.tails = tails
+
+    def note(self, pix: np.ndarray, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
+        if self.ctx.record and len(child):
+            for tail in self.tails:
+                sel = np.nonzero((pix >= tail.lo) & (pix < tail.hi))[0]
+                tail.band.note(pix[sel], parent[sel], branch[sel], child[sel])
+
+
+def _carrying_tails(ctx: _Context, take: Callable[[], tuple[int, int, int] | None],
+                    stopped: Callable[[], bool]) -> Iterator[tuple[int, _Band]]:
+    """One worker's bands (``take()`` gives the next band's (index, y0, y1), None when there are no
+    more), yielded as (index, band) as each band's last branch ends, not necessarily in order.
+
+    Why carried: a band's last generations trace a few deep branches each (total internal
+    reflections in clear lenses), many numpy calls on a few rays each, too short to release the GIL,
+    so a second thread all but stops while one thread finishes a band alone. Once fewer than
+    ``CARRY_RAYS`` rays are left, the worker starts its next band and traces those rays in the same
+    generations, first; only its last band's tail is traced alone. Every value is the same bit for
+    bit as tracing the bands apart: every operation on the rays is row by row, a band's rays keep
+    their order among the others, each band sums into its own slots in ray order (``add_to_pass``),
+    and each band counts its own depth (it stops at ``MAX_DEPTH`` as it would alone)."""
+    tails: list[_Tail] = []
+    wave: _Wavefront | None = None
+    rays: _Rays | None = None
+    more = True
+    while True:
+        job = take() if more else None
+        if job is not None:
+            wave, rays = _next_wavefront(ctx, tails, wave, rays, *job)
+        elif not tails:
+            return
+        else:
+            more = False  # trace what is left to the end
+        while True:
+            if stopped():
+                return
+            counts = _rays_per_tail(tails, rays.pix)
+            ended = [(tail, count) for tail, count in zip(tails, counts, strict=True)
+                     if count == 0 or tail.depth >= MAX_DEPTH]  # as ``_trace_rays``'s loop ends
+            for tail, count in ended:
+                tails.remove(tail)
+                tail.put_back(wave.acc)
+                tail.band.max_depth = tail.depth
+                if count:  # MAX_DEPTH: its rays go no further
+                    rays = rays.take((rays.pix < tail.lo) | (rays.pix >= tail.hi))
+                yield tail.index, tail.band
+            if not tails or (more and len(rays) < CARRY_RAYS):
+                break
+            counts = _rays_per_tail(tails, rays.pix) if ended else counts
+            for tail, count in zip(tails, counts, strict=True):
+                tail.band.segments += count
+                tail.depth += 1
+            rays = _step(ctx, wave, rays)
+
+
+def _rays_per_tail(tails: list[_Tail], pix: np.ndarray) -> list[int]:
+    """How many of the rays at slots ``pix`` each band in ``tails`` has."""
+    if len(tails) <= 1:
+        return [len(pix)] * len(tails)
+    bounds = [tail.hi for tail in tails[:-1]]
+    if tails[-1].pixels is None:  # the band just started, after the carried slots: most rays are its own
+        earlier = pix < tails[-1].lo
+        carried = pix[earlier] if len(tails) > 2 else None
+        n_carried = int(np.count_nonzero(earlier)) if carried is None else len(carried)
+        counts = [n_carried] if carried is None else np.bincount(np.searchsorted(bounds, carried, side="right"),
+                                                                 minlength=len(tails) - 1).tolist()
+        return [*counts, len(pix) - n_carried]
+    return np.bincount(np.searchsorted(bounds, pix, side="right"), minlength=len(tails)).tolist()
+
+
+def _next_wavefront(ctx: _Context, tails: list[_Tail], wave: _Wavefront | None, rays: _Rays | None,
+                    index: int, y0: int, y1: int) -> tuple[_Wavefront, _Rays]:
+    """The wavefront of the band ``index`` (rows y0:y1) and of the rays carried from ``wave``: the
+    pixels those rays can still reach come first (their passes copied from their bands), then the
+    new band's; the carried rays come first, then the new band's eye rays' first branches."""
+    carried_pixels = np.zeros(0, dtype=np.int64)
+    if tails:
+        image_pix = np.empty(len(rays), dtype=np.int64)
+        for tail in tails:
+            sel = np.nonzero((rays.pix >= tail.lo) & (rays.pix < tail.hi))[0]
+            image_pix[sel] = tail.image_pixels(rays.pix[sel])
+            tail.put_back(wave.acc)
+        carried_pixels = np.unique(image_pix)
+    m = len(carried_pixels)
+    width = ctx.camera.width
+    pixels = np.arange(y0 * width, y1 * width)
+    acc = np.zeros((len(PASS_NAMES), m + len(pixels), 3))
+    for tail in tails:
+        tail.lo, tail.hi = np.searchsorted(carried_pixels, [tail.first_pixel, tail.first_pixel + tail.band.n])
+        tail.pixels = carried_pixels[tail.lo:tail.hi]
+        acc[:, tail.lo:tail.hi] = tail.band.acc[:, tail.pixels - tail.first_pixel]
+    band = _Band(len(pixels), ctx, acc[:, m:])
+    tails.append(_Tail(index, y0 * width, band, m, m + len(pixels)))
+    wave = _Wavefront(ctx, acc, tails)
+    parts = [replace(rays, pix=np.searchsorted(carried_pixels, image_pix))] if m else []
+    slots = _slots_seeing_body(ctx, y0, y1)
+    if slots is None:
+        slots = np.arange(len(pixels))
+    else:  # the others add nothing (black background, or a film): their eye rays still count as segments
+        band.segments += len(pixels) - len(slots)
+    band.segments += len(slots)
+    if len(slots):
+        parts.append(_first_hits(ctx, wave, *eye_rays(ctx.camera, pixels[slots]), m + slots))
+    if not parts:
+        return wave, _Rays(*(np.zeros(0, dtype=np.int64) for _ in _RAY_FIELDS))
+    return wave, _concat(parts) if len(parts) > 1 else parts[0]
+
+
+def _carried_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
+                   should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, _Band]]:
+    """``_traced_bands`` with tails carried (``_carrying_tails``): each of ``threads`` workers
+    takes the next band from one queue; bands are yielded in order as they complete (those that
+    complete early wait). ``should_stop()`` is polled in the calling thread before the first band,
+    as each band completes and before each is yielded; then the workers stop within a generation."""
+    if should_stop():
+        raise RenderCancelled("render cancelled")
+    queued = deque(enumerate(bands))
+    stop = threading.Event()
+
+    def take() -> tuple[int, int, int] | None:
+        if stop.is_set():
+            return None
+        try:
+            index, (y0, y1) = queued.popleft()  # one atomic step: safe between threads
+        except IndexError:
+            return None
+        return index, y0, y1
+
+    pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
+    try:
+        if pool is None:
+            completed = _carrying_tails(ctx, take, _never)
+        else:
+            completed = _completed_on(pool, threads, lambda: _carrying_tails(ctx, take, stop.is_set))
+        waiting: dict[int, _Band] = {}
+        next_index = 0
+        for index, band in completed:
+            waiting[index] = band
+            if next_index not in waiting and should_stop():
+                raise RenderCancelled("render cancelled")
+            while next_index in waiting:
+                if should_stop():
+                    raise RenderCancelled("render cancelled")
+                y0, y1 = bands[next_index]
+                yield y0, y1, waiting.pop(next_index)
+                next_index += 1
+    finally:
+        stop.set()
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _completed_on(pool: ThreadPoolExecutor, threads: int,
+                  worker: Callable[[], Iterator[tuple[int, _Band]]]) -> Iterator[tuple[int, _Band]]:
+    """What ``threads`` runs of ``worker()`` on ``pool`` yield, as they yield it; a worker's
+    exception is raised here."""
+    done: queue.SimpleQueue = queue.SimpleQueue()
+
+    def run() -> None:
+        try:
+            for item in worker():
+                done.put(item)
+        except BaseException as error:  # handed to the calling thread, raised there
+            done.put(error)
+        else:
+            done.put(None)
+
+    for _ in range(threads):
+        pool.submit(run)
+    for _ in range(threads):
+        while (item := done.get()) is not None:
+            if isinstance(item, BaseException):
+                raise item
+            yield item
 
 
 def render(scene: dict, width: int | None = None, height: int | None = None, *,
@@ -589,7 +808,7 @@ def _into_lenses(ctx: _Context, band: _Band, s: np.ndarray, li: np.ndarray, ds: 
     if ctx.background_seen and ctx.environment is None:
         band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
     ones = np.ones(len(s), dtype=np.int8)
-    band.note(ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
+    band.note(s, ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
 
     k = np.repeat((1.0 - r)[:, None], 3, axis=1)
     d_in = optics.refract(ds, face_normal, 1.0 / ior)
@@ -695,7 +914,7 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     L = ctx.lamps
     t, surface, normals = _intersect(ctx, rays)
     cls = _path_class(rays.medium, rays.src, surface)
-    band.note(rays.parent, rays.branch, cls)
+    band.note(rays.pix, rays.parent, rays.branch, cls)
 
     k = rays.k
     lens = np.nonzero(rays.medium == P.IN_LENS)[0]
@@ -814,7 +1033,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
         out_d = optics.refract(d_lv, rows(facing, lv), n1[lv] / n2[lv]) if ctx.environment is not None else d_lv
         band.add(BACKGROUND_PASS, rays.pix[m[lv]], rows(k, lv) * (1.0 - r[lv, None]) * ctx.sky(out_d))
     if ctx.record:
-        band.note(cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
+        band.note(rays.pix[m[lv]], cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
     k_t = rows(k, tc) * (1.0 - r[tc, None])
     go = np.nonzero(_alive(k_t))[0]
