@@ -56,13 +56,12 @@ def _walk(kind: int, rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> t
         return sawtooth.intersect(rays, lamps, t_limit)
     if kind == FLUTES:
         return flutes.intersect(rays, lamps, t_limit)
+    if kind == FISHEYE:
+        return cuts.intersect(rays, lamps, t_limit)
     li = rays.lamp
     # A ray that starts on a cut knows it: its own cap is excluded by geometry (``cuts.hit_cuts``).
     on_cap = np.where(rays.src != P.CUT, cuts.OFF_CAP,
                       np.where(rays.medium == P.IN_AIR, cuts.INTO_AIR, cuts.INTO_LENS)).astype(np.int8)
-    if kind == CYLINDER:
-        # (``LampTable.cylinder_of``, its rows gathered with take: faster than indexing)
-        geo = {k: getattr(lamps, "cyl_" + k).take(li) for k in CYLINDER_KEYS}
-        return hit_cylinder_cuts(rays.o, rays.d, geo, lamps.pitch.take(li), lamps.cut_radius.take(li), t_limit, on_cap)
-    return cuts.hit_cuts(rays.o, rays.d, lamps.plane_a[li], lamps.plane_b[li], lamps.pitch[li], lamps.cut_radius[li],
-                         t_limit, on_cap)
+    # (``LampTable.cylinder_of``, its rows gathered with take: faster than indexing)
+    geo = {k: getattr(lamps, "cyl_" + k).take(li) for k in CYLINDER_KEYS}
+    return hit_cylinder_cuts(rays.o, rays.d, geo, lamps.pitch.take(li), lamps.cut_radius.take(li), t_limit, on_cap)

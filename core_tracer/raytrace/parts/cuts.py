@@ -23,28 +23,12 @@ MAX_CELL_STEPS = math.ceil(math.sqrt(2.0) * MAX_CUTS_ACROSS) + 3
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The fish-eye cuts of flat lenses (``cut_surface`` sends a cylindrical lens's rays to its own walk)."""
     # A ray that starts on a cut knows it: its own cap is excluded by geometry, not by distance.
     on_cap = np.where(rays.src != P.CUT, OFF_CAP, np.where(rays.medium == P.IN_AIR, INTO_AIR, INTO_LENS))
-    on_cap = on_cap.astype(np.int8)
     li = rays.lamp
-    if not lamps.any_cylindrical:
-        return hit_cuts(rays.o, rays.d, lamps.plane_a[li], lamps.plane_b[li], lamps.pitch[li], lamps.cut_radius[li],
-                        t_limit, on_cap)
-    from .cylinder_lens import hit_cylinder_cuts  # (imports cuts: the shared on-cap codes)
-
-    t, normal = np.full(len(li), np.inf), np.zeros((len(li), 3))
-    curved = lamps.cylindrical[li] > 0
-    for sel, cyl in ((np.nonzero(~curved)[0], False), (np.nonzero(curved)[0], True)):
-        if len(sel) == 0:
-            continue
-        ls, o, d = li[sel], rays.o[sel], rays.d[sel]
-        if cyl:
-            t[sel], normal[sel] = hit_cylinder_cuts(o, d, lamps.cylinder_of(ls), lamps.pitch[ls], lamps.cut_radius[ls],
-                                                    t_limit[sel], on_cap[sel])
-        else:
-            t[sel], normal[sel] = hit_cuts(o, d, lamps.plane_a[ls], lamps.plane_b[ls], lamps.pitch[ls],
-                                           lamps.cut_radius[ls], t_limit[sel], on_cap[sel])
-    return t, normal
+    return hit_cuts(rays.o, rays.d, lamps.plane_a[li], lamps.plane_b[li], lamps.pitch[li], lamps.cut_radius[li],
+                    t_limit, on_cap.astype(np.int8))
 
 
 # How a ray starts relative to the cut surface (the ``on_cap`` argument of ``hit_cuts``).
