@@ -69,6 +69,26 @@ def solve_quadratic(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.nda
     return lo, hi
 
 
+def slab_span(oy: np.ndarray, dy: np.ndarray, a: np.ndarray, b: np.ndarray,
+              t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The part [t_in, t_out] of each ray (origin height ``oy``, direction ``dy`` in y) that lies in
+    the slab between the planes y = a and y = b (the cut walks' planes A and B), from t = 0 and cut
+    at ``t_limit``; empty (t_in > t_out) where it misses the slab. A ray parallel to the planes is in
+    the slab for ever or never."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ta, tb = (a - oy) / dy, (b - oy) / dy
+    t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
+    np.maximum(t_in, 0.0, out=t_in)
+    parallel = np.nonzero(dy == 0)[0]
+    if len(parallel):
+        y = oy[parallel]
+        in_slab = (y >= a[parallel]) & (y <= b[parallel])
+        t_in[parallel] = np.where(in_slab, 0.0, np.inf)
+        t_out[parallel] = np.where(in_slab, np.inf, -np.inf)
+    np.minimum(t_out, t_limit, out=t_out)
+    return t_in, t_out
+
+
 def quadratic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The two roots q / a and c / q of ``solve_quadratic`` (unordered), for callers that only use
     rays with a != 0 (there ``solve_quadratic`` returns exactly their min and max)."""

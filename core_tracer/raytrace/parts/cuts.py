@@ -12,7 +12,7 @@ from ...scene.spec import MAX_CUTS_ACROSS
 from .. import optics
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments, put_rows, rows
+from .base import T_MIN, Segments, put_rows, rows, slab_span
 
 SURFACE = P.CUT
 MEDIA = (P.IN_LENS, P.IN_AIR)
@@ -143,17 +143,7 @@ class _CellWalk:
         pick = (lambda a: a) if every else (lambda a: a[ray])
         oy, dy = pick(o[:, 1]), pick(d[:, 1])
         a_plane, b_plane = pick(plane_a), pick(plane_b)
-        ta = (a_plane - oy) / dy
-        tb = (b_plane - oy) / dy
-        t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
-        parallel = np.nonzero(dy == 0)[0]
-        if len(parallel):  # a ray parallel to the planes is in the slab for ever or never
-            y = oy[parallel]
-            in_slab = (y >= a_plane[parallel]) & (y <= b_plane[parallel])
-            t_in[parallel] = np.where(in_slab, 0.0, np.inf)
-            t_out[parallel] = np.where(in_slab, np.inf, -np.inf)
-        np.maximum(t_in, 0.0, out=t_in)
-        np.minimum(t_out, pick(t_limit), out=t_out)
+        t_in, t_out = slab_span(oy, dy, a_plane, b_plane, pick(t_limit))
         live = t_in <= t_out
         # A ray leaving a cap into the air never meets that cap again (``cap_hits``): it starts in
         # the next cell it enters, and most leave the slab before, so they are left out here.

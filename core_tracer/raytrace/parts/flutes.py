@@ -19,7 +19,7 @@ from ...scene.spec import MAX_CUTS_ACROSS
 from .. import optics
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments, put_rows, rows
+from .base import T_MIN, Segments, put_rows, rows, slab_span
 from .cuts import INTO_AIR, INTO_LENS, OFF_CAP, flat_base_hits
 
 SURFACE = P.CUT
@@ -93,16 +93,7 @@ class _StripWalk:
         ray = np.arange(n) if every_curved else np.nonzero(np.isfinite(rho))[0]
         pick = (lambda a: a) if every_curved else (lambda a: a.take(ray, axis=0))
         oy, dy, a_plane, b_plane = pick(o[:, 1]), pick(d[:, 1]), pick(plane_a), pick(plane_b)
-        ta, tb = (a_plane - oy) / dy, (b_plane - oy) / dy
-        t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
-        np.maximum(t_in, 0.0, out=t_in)
-        parallel = np.nonzero(dy == 0)[0]
-        if len(parallel):  # parallel to the planes: in the slab for ever or never
-            y = oy[parallel]
-            in_slab = (y >= a_plane[parallel]) & (y <= b_plane[parallel])
-            t_in[parallel] = np.where(in_slab, 0.0, np.inf)
-            t_out[parallel] = np.where(in_slab, np.inf, -np.inf)
-        np.minimum(t_out, pick(t_limit), out=t_out)
+        t_in, t_out = slab_span(oy, dy, a_plane, b_plane, pick(t_limit))
         live = np.nonzero(t_in <= t_out)[0]
         everyone = len(live) == len(ray)
         if not everyone:

@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments, put_rows, rows
+from .base import T_MIN, Segments, put_rows, rows, slab_span
 
 SURFACE = P.CUT
 MEDIA = (P.IN_LENS, P.IN_AIR)
@@ -73,16 +73,7 @@ def _hit_teeth(o, d, a, b, p, m, across, limit) -> tuple[np.ndarray, np.ndarray]
     # (one errstate: rays parallel to the planes or to the ridges divide by zero, on purpose)
     with np.errstate(divide="ignore", invalid="ignore"):
         # Planes A and B: the part of the ray inside the slab, [t_in, t_out], cut at the limit.
-        ta, tb = (a - oy) / dy, (b - oy) / dy
-        t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
-        np.maximum(t_in, 0.0, out=t_in)
-        parallel = np.nonzero(dy == 0)[0]
-        if len(parallel):  # parallel to the planes: in the slab for ever or never
-            y = oy[parallel]
-            in_slab = (y >= a[parallel]) & (y <= b[parallel])
-            t_in[parallel] = np.where(in_slab, 0.0, np.inf)
-            t_out[parallel] = np.where(in_slab, np.inf, -np.inf)
-        np.minimum(t_out, limit, out=t_out)
+        t_in, t_out = slab_span(oy, dy, a, b, limit)
 
         # The strip where the ray enters the slab; a ray standing on the border ahead of it (it
         # starts on that return facet, or rounding put it on the wrong side) is in the next strip.
