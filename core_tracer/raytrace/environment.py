@@ -233,6 +233,13 @@ class Environment:
             return _cached_sun(self.key, self.rotation).copy()
         return _sun_direction(self.pixels, self.rotation)
 
+    def sun_color(self) -> np.ndarray:
+        """The colour of the image's sun (the pixels ``sun_direction`` takes) at luminance 1, whatever
+        the strength and the turn (``sunlight.followed_color``)."""
+        if self.key:
+            return _cached_sun_color(self.key).copy()
+        return _sun_color(self.pixels)
+
 
 def _pixel_directions(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray]:
     return Environment(pixels, 1.0, rotation)._pixel_directions()
@@ -267,13 +274,41 @@ def _irradiance(pixels: np.ndarray, rotation: float) -> np.ndarray:
     return out.reshape(IRRADIANCE_LAT + 1, IRRADIANCE_LON, 3)
 
 
+def _sun_pixels(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The luminance of the pixels ``rgb`` (H*W, 3) and which of them are the sun: at least
+    ``SUN_FRACTION`` of the brightest."""
+    lum = rgb @ LUMINANCE
+    return lum, lum >= SUN_FRACTION * lum.max()
+
+
 def _sun_direction(pixels: np.ndarray, rotation: float) -> np.ndarray:
     d, solid = _pixel_directions(pixels, rotation)
-    lum = pixels.reshape(-1, 3).astype(np.float64) @ LUMINANCE
-    sun = lum >= SUN_FRACTION * lum.max()
+    lum, sun = _sun_pixels(pixels.reshape(-1, 3).astype(np.float64))
     centre = ((lum * solid)[sun, None] * d[sun]).sum(axis=0)
     norm = float(np.linalg.norm(centre))
     return centre / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
+
+
+def _sun_color(pixels: np.ndarray) -> np.ndarray:
+    """The light of the sun pixels, sum(L_c omega) over radiance L and solid angle omega, divided by
+    its luminance; negative values (out of gamut in some HDR images) count as 0, and an image without
+    light gives white."""
+    h, w = pixels.shape[:2]
+    rgb = pixels.reshape(-1, 3).astype(np.float64)
+    _, sun = _sun_pixels(rgb)
+    # The solid angle of a pixel is its row's band of latitude over its width (the turn does not
+    # change it): rows from the top, latitude pi/2 - (i + 1/2) pi/h at the centre.
+    lat = 0.5 * np.pi - (np.arange(h) + 0.5) * np.pi / h
+    half = 0.5 * np.pi / h
+    solid = np.repeat((np.sin(lat + half) - np.sin(lat - half)) * (2.0 * np.pi / w), w)
+    light = np.maximum((rgb[sun] * solid[sun, None]).sum(axis=0), 0.0)
+    luminance = float(light @ LUMINANCE)
+    return light / luminance if luminance > 0.0 else np.ones(3)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_sun_color(key: tuple) -> np.ndarray:
+    return _sun_color(_read(*key))
 
 
 @functools.lru_cache(maxsize=8)

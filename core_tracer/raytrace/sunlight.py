@@ -153,19 +153,6 @@ def followed_color(env: environment.Environment) -> np.ndarray:
 
     The sun is the pixels ``environment.sun_direction`` takes (at least ``SUN_FRACTION`` of the
     brightest luminance); its colour is that of their light, sum(L_c omega) over those pixels of
-    radiance L and solid angle omega, divided by its luminance. Negative values (out of gamut in
-    some HDR images) count as 0; an image without light gives white."""
-    pixels = env.pixels
-    h, w = pixels.shape[:2]
-    rgb = pixels.reshape(-1, 3).astype(np.float64)
-    lum = rgb @ environment.LUMINANCE
-    sun = lum >= environment.SUN_FRACTION * lum.max()
-    # The solid angle of a pixel is its row's band of latitude over its width (the turn does not
-    # change it): rows from the top, latitude pi/2 - (i + 1/2) pi/h at the centre.
-    lat = 0.5 * np.pi - (np.arange(h) + 0.5) * np.pi / h
-    half = 0.5 * np.pi / h
-    solid = np.repeat((np.sin(lat + half) - np.sin(lat - half)) * (2.0 * np.pi / w), w)
-    light = np.maximum((rgb[sun] * solid[sun, None]).sum(axis=0), 0.0)
-    luminance = float(light @ environment.LUMINANCE)
-    return light / luminance if luminance > 0.0 else np.ones(3)
-
+    radiance L and solid angle omega, divided by its luminance (``Environment.sun_color``, computed
+    once per image)."""
+    return env.sun_color()

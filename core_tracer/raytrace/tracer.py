@@ -940,22 +940,27 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     children: list[_Rays] = []
     m = np.nonzero(surface == P.REFLECTOR)[0]
     if len(m):
-        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        hit = _end_points(rays, t, m)
         children.append(_reflector(ctx, band, rays, m, rows(k, m), hit, cls[m]))
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
-        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        hit = _end_points(rays, t, m)
         surface_m = surface[m]
         children.extend(_dielectric(ctx, band, rays, m, rows(k, m), hit, cls[m], surface_m,
                                     _normals_at(normals, m, surface_m)))
     m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
     if len(m):
-        hit = rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+        hit = _end_points(rays, t, m)
         surface_m = surface[m]
         children.extend(_plate(rays, m, rows(k, m), hit, cls[m], surface_m, _normals_at(normals, m, surface_m), L))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]
+
+
+def _end_points(rays: _Rays, t: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Where the segments ``m`` end: o + t d."""
+    return rows(rays.o, m) + t[m, None] * rows(rays.d, m)
 
 
 def _path_class(medium: np.ndarray, src: np.ndarray, surface: np.ndarray) -> np.ndarray:

@@ -792,6 +792,13 @@ def body_mesh(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[tuple[flo
     mb.face([c[1, 0, 0], c[1, 1, 0], c[1, 1, 1], c[1, 0, 1]], FLAT)  # right, +x
     mb.face([c[0, 0, 0], c[0, 1, 0], c[1, 1, 0], c[1, 0, 0]], FLAT)  # bottom, -z
     mb.face([c[0, 0, 1], c[1, 0, 1], c[1, 1, 1], c[0, 1, 1]], FLAT)  # top, +z
+    add_bores(mb, rims, bores)
+    return mb.result()
+
+
+def add_bores(mb: _MeshBuilder, rims: Sequence[np.ndarray], bores: Sequence[tuple[float, float]]) -> None:
+    """The body's bore around each lens: a tube along y from y_a to y_b through the rim's [x, z]
+    polygon, material slot 2 + i (none where the bore has no length)."""
     for i, (rim, (y_a, y_b)) in enumerate(zip(rims, bores, strict=True)):
         if y_b - y_a <= 1e-9:
             continue
@@ -800,4 +807,3 @@ def body_mesh(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[tuple[flo
         for k in range(len(rim)):
             k1 = (k + 1) % len(rim)
             mb.face([front[k], front[k1], back[k1], back[k]], 2 + i)  # normals toward the lamp axis
-    return mb.result()

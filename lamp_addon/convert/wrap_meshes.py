@@ -32,6 +32,7 @@ from .meshes import (
     MeshData,
     _clip_convex,
     _MeshBuilder,
+    add_bores,
     cell_lines,
     fan_triangles,
     triangle_deviation,
@@ -350,14 +351,7 @@ def body_mesh_wrapped(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[t
     mb.face([bottom_front[-1], c[1, 0], c[1, 1], top_front[-1]], FLAT)  # right, +x
     mb.face([*bottom_front, c[1, 0], c[0, 0]][::-1], FLAT)  # bottom, -z
     mb.face([*top_front, c[1, 1], c[0, 1]], FLAT)  # top, +z
-    for i, (rim, (y_a, y_b)) in enumerate(zip(rims, bores, strict=True)):
-        if y_b - y_a <= 1e-9:
-            continue
-        front = [mb.vertex(float(x), y_a, float(z)) for x, z in rim]
-        back = [mb.vertex(float(x), y_b, float(z)) for x, z in rim]
-        for n in range(len(rim)):
-            n1 = (n + 1) % len(rim)
-            mb.face([front[n], front[n1], back[n1], back[n]], 2 + i)
+    add_bores(mb, rims, bores)
     data = mb.result()
 
     def distance(q: np.ndarray) -> np.ndarray:

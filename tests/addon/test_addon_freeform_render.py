@@ -134,16 +134,25 @@ def test_export_never_replaces_without_being_asked(lamp_addon, addon_core, bl_sc
     assert not any(".lamp-export-aside" in n for n in names) and len(bpy.data.scenes) == 1
 
 
-def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_addon, addon_core, bl_scene):
+def _viewport_session(lamp_addon, bl_scene):
+    """A viewport session updated from the scene, and the scene camera's matrices as a viewport's
+    (window, view) at ``SIZE``."""
     import bpy
 
-    _converted(lamp_addon, addon_core, bl_scene)
     camera = bl_scene.camera
     depsgraph = bpy.context.evaluated_depsgraph_get()
     window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=SIZE[0], y=SIZE[1])]
     view = [list(r) for r in camera.matrix_world.inverted()]
     session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
     session.update(bl_scene, depsgraph)
+    return session, window, view
+
+
+def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_addon, addon_core, bl_scene):
+    import bpy
+
+    _converted(lamp_addon, addon_core, bl_scene)
+    session, window, view = _viewport_session(lamp_addon, bl_scene)
     assert session.freeform is not None and session.freeform.geometry is not None
     session.sync(bl_scene, SIZE[0], SIZE[1], window, view)
     while session.preview.step() and session.preview.frame().divisor != 1:
@@ -348,15 +357,9 @@ def test_rebuilding_the_parametric_lamp_of_a_mixed_design_is_rendered(lamp_addon
 
 
 def test_the_viewport_renders_a_mixed_design(lamp_addon, addon_core, bl_scene):
-    import bpy
 
     _mixed(lamp_addon, addon_core, bl_scene)
-    camera = bl_scene.camera
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=SIZE[0], y=SIZE[1])]
-    view = [list(r) for r in camera.matrix_world.inverted()]
-    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
-    session.update(bl_scene, depsgraph)
+    session, window, view = _viewport_session(lamp_addon, bl_scene)
     geometry = session.freeform.geometry
     parametric = sorted(name for name in geometry.meshes if name.endswith(" (Parametric)"))
     assert len(parametric) == 6 and "Lamp 1 Side Wall (Parametric)" in parametric
