@@ -71,18 +71,31 @@ def _perspective_window(width: int, height: int, lens_mm: float = 50.0, sensor_m
     return window.tolist()
 
 
-def _time_stages(render_preview, scene: dict, width: int, height: int, threads: int, runs: int):
+def cpu_seconds(pool) -> float:
+    """CPU time of this process and of the band pool's worker processes (Linux: /proc; elsewhere
+    this process only)."""
+    total = time.process_time()
+    for pid in pool.process_ids() if pool is not None else ():
+        try:
+            fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
+    return total
+
+
+def _time_stages(render_preview, scene: dict, width: int, height: int, threads: int, runs: int, pool):
     """Per stage, over the runs, the minimum and the median of the time from the restart to its
-    image, and the minimum CPU time (all threads) to it: on a busy machine the steadier figures."""
+    image, and the minimum CPU time (all threads and worker processes) to it."""
     walls, cpus = [], []
     for _ in range(runs):
         preview = render_preview.ProgressivePreview(threads=threads)
-        start, cpu_start = time.perf_counter(), time.process_time()
+        start, cpu_start = time.perf_counter(), cpu_seconds(pool)
         preview.restart(scene, width, height)
         run_walls, run_cpus = [], []
         while preview.step():
             run_walls.append(time.perf_counter() - start)
-            run_cpus.append(time.process_time() - cpu_start)
+            run_cpus.append(cpu_seconds(pool) - cpu_start)
         walls.append(run_walls)
         cpus.append(run_cpus)
     per_stage = zip(zip(*walls, strict=True), zip(*cpus, strict=True), strict=True)
@@ -95,9 +108,16 @@ def main() -> int:
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--size", default="1024x768")
+    parser.add_argument("--no-pool", action="store_true",
+                        help="bands on threads of this process instead of the band pool's worker processes")
     args = parser.parse_args()
     width, height = (int(v) for v in args.size.split("x"))
     render_preview, viewport = _addon_package()
+    band_pool = render_preview.band_pool  # the add-on's copy, the one its preview uses
+    band_pool.enabled = not args.no_pool
+    pool = band_pool.shared()
+    if pool is not None and not pool.ready(30):
+        raise SystemExit(f"the band pool did not start: {pool.broken}")
 
     design = core_tracer.load_scene(args.preset)
     core_tracer.render(design, 64, 48)  # warm up imports and caches
@@ -109,13 +129,15 @@ def main() -> int:
     }
     print(f"preset        {Path(args.preset).name}")
     print(f"machine       {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}; "
-          f"{args.threads} threads, {args.runs} runs")
+          f"{args.threads} threads, {args.runs} runs; bands in "
+          + (f"{pool.size} worker processes (started before timing, as after a first render)" if pool
+             else "threads of this process"))
     print(f"region        {width}x{height}; stages 1/{render_preview.coarse_divisor(width, height)}, full, then "
           f"{render_preview.REFINE_SAMPLES} samples per pixel (targets: first <= 0.1 s, full <= 0.4 s); "
           "times from the restart, min / median (CPU min)")
     for name, camera in views.items():
         scene = {**design, "camera": camera, "image": {"width": width, "height": height}}
-        stages = _time_stages(render_preview, scene, width, height, args.threads, args.runs)
+        stages = _time_stages(render_preview, scene, width, height, args.threads, args.runs, pool)
         print(f"{name:<20} " + "   ".join(f"{label} {w:.3f} / {m:.3f} s (CPU {c:.3f} s)" for label, (w, m, c)
                                         in zip(("first image", "full resolution", "refined"), stages, strict=False)))
         for divisor in (2, 4, 8, 16):
@@ -123,7 +145,7 @@ def main() -> int:
             times = []
             for _ in range(args.runs):
                 start = time.perf_counter()
-                core_tracer.render_passes(scene, w, h, threads=args.threads, keep_passes=False)
+                core_tracer.render_passes(scene, w, h, threads=args.threads, keep_passes=False, pool=pool)
                 times.append(time.perf_counter() - start)
             print(f"{'':<20} 1/{divisor:<2} ({w}x{h}) {min(times):.3f} / {statistics.median(times):.3f} s")
         cpus = []

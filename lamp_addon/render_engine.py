@@ -13,6 +13,7 @@ import bpy
 import numpy as np
 
 from ..core_tracer.budget import check_rays
+from ..core_tracer.raytrace import band_pool
 from ..core_tracer.raytrace.tracer import PASS_NAMES
 from ..core_tracer.scene.reading import SceneError
 from . import freeform_render, freeform_status, render_camera, render_viewport
@@ -182,7 +183,8 @@ class LampTracerEngine(bpy.types.RenderEngine):
                                                should_stop=self.test_break, on_band=write_rows,
                                                threads=depsgraph.scene.render.threads,  # Blender's count
                                                keep_passes=with_passes,
-                                               world_seen=not (transparent and surroundings))
+                                               world_seen=not (transparent and surroundings),
+                                               pool=band_pool.shared())
         except core_tracer.RenderCancelled:
             return  # Esc: Blender keeps the bands finished so far, with their passes
         # Glare needs the whole image: the bands shown while rendering are replaced by the glared
@@ -313,6 +315,7 @@ def register() -> None:
 
 def unregister() -> None:
     _unregister_classes()
+    band_pool.shutdown()  # its worker processes end with the engine; the next render starts new ones
     for panel in _panels():
         panel.COMPAT_ENGINES.discard(ENGINE_ID)
     delattr(bpy.types.ViewLayer, PASSES_PROPERTY)

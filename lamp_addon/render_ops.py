@@ -20,6 +20,7 @@ import bpy
 import numpy as np
 
 from ..core_tracer.images import display, glare
+from ..core_tracer.raytrace import band_pool
 from ..core_tracer.scene.reading import SceneError
 from . import actions, image_view, jobs, render_camera, reports
 
@@ -68,7 +69,8 @@ class TracerJob:
         start = time.perf_counter()
         try:
             core_tracer.render_passes(self.scene, progress=self._set_progress,
-                                      should_stop=lambda: self.stop_requested, on_rows=self._on_rows)
+                                      should_stop=lambda: self.stop_requested, on_rows=self._on_rows,
+                                      pool=band_pool.shared())
             shown = glare.apply(self.rows, self.scene)  # as render_to_image: the same pixels
             if shown is not self.rows:
                 self.rows[:] = shown

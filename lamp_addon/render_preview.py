@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core_tracer.raytrace import band_pool
 from ..core_tracer.raytrace.tracer import RenderCancelled, render_passes
 from ..core_tracer.scene.reading import SceneError
 
@@ -110,7 +111,8 @@ class PreviewJob:
         width, height = stage_size(self.width, self.height, divisor)
         try:
             result = self.renderer(self.scene, width, height, should_stop=self._cancel.is_set,
-                                   threads=self.threads, keep_passes=False, samples=samples)
+                                   threads=self.threads, keep_passes=False, samples=samples,
+                                   pool=band_pool.shared())
         except RenderCancelled:
             return None
         self.next_stage += 1

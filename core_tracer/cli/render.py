@@ -47,6 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from .. import RenderCancelled, render_passes  # the tracer loads only when it is needed
     from ..images import glare
     from ..images.imageio import load_writer, write_image
+    from ..raytrace import band_pool
 
     load_writer()
 
@@ -54,8 +55,12 @@ def run(args: argparse.Namespace) -> int:
     with ctrl_c_sets() as stop:
         try:
             if meshes is None:
+                # A heavy render starts worker processes for its bands (about 0.2 s, then twice
+                # the speed of threads on two cores); a light one is done before they would be up.
+                heavy = size["width"] * size["height"] * size["samples"] >= band_pool.HEAVY_RAYS
                 result = render_passes(scene, should_stop=stop.is_set, keep_passes=keep_passes,
-                                       progress=lambda fraction: checkpoint("render:band"))
+                                       progress=lambda fraction: checkpoint("render:band"),
+                                       pool=band_pool.shared() if heavy else None)
             else:
                 from ..freeform import render_passes as render_freeform
 

@@ -24,6 +24,7 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -36,6 +37,9 @@ from .lighting import Lighting
 from .parts import body_box, outer_face, parts_for, reflector
 from .parts.base import Segments, put_rows, rows
 from .parts.cylinder_lens import outward_normal
+
+if TYPE_CHECKING:
+    from .band_pool import BandPool
 
 CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
 MAX_DEPTH = 64  # safety net on the number of segments along one branch
@@ -174,7 +178,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   threads: int | None = None, record_transitions: bool = False,
                   keep_passes: bool = True, samples: int | None = None,
                   filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True,
-                  adaptive_threshold: float | None = None) -> RenderResult:
+                  adaptive_threshold: float | None = None, pool: BandPool | None = None) -> RenderResult:
     """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
@@ -188,53 +192,119 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     the surroundings still light the lamp and show in it.
     ``adaptive_threshold`` (default ``ADAPTIVE_THRESHOLD``) spends the samples where the image
     changes (``_trace_adaptive``); 0 traces every sample of every pixel.
+    ``pool`` (``band_pool.shared()``) traces the bands in worker processes when it is running and
+    free, and ``threads`` > 1: the same image bit for bit, without the threads' contention for
+    the interpreter; otherwise, and with no pool, bands run on threads of this process.
     """
     width = int(width or scene["image"]["width"])
     height = int(height or scene["image"]["height"])
-    # A document an earlier version wrote, or an image section a caller built, has no samples: 1.
-    samples = int(samples or scene["image"].get("samples", 1))
-    pixel_filter.filter_support(filter_name)  # an unknown filter fails here, before any work
     start = time.perf_counter()
-    adaptive_threshold = ADAPTIVE_THRESHOLD if adaptive_threshold is None else float(adaptive_threshold)
-    ctx = _Context(scene, make_camera(scene["camera"], width, height), record_transitions, samples, filter_name,
-                   adaptive_threshold)
-    ctx.world_seen = world_seen
+    ctx = make_context(scene, width, height, record_transitions=record_transitions, samples=samples,
+                       filter_name=filter_name, adaptive_threshold=adaptive_threshold, world_seen=world_seen)
     passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
     image = np.zeros((height, width, 3), dtype=np.float32)
-    # Adaptive sampling traces the pilot samples of a band at once, then the rest of its busy pixels;
-    # it also traces the row above and below its band. The band and those two rows fit one group of
-    # rays: every call of the wavefront pays for its own tail of deep branches.
-    adaptive = adaptive_threshold > 0 and len(pilot_samples(samples)) < samples
-    if adaptive:
-        rows_per_band = max(1, TILE_RAYS // (width * len(pilot_samples(samples))) - 2)
-    else:
-        rows_per_band = max(1, TILE_RAYS // (width * samples))
-    bands = [(y, min(height, y + rows_per_band)) for y in range(0, height, rows_per_band)]
+    bands = band_rows(ctx)
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
     stats = {"segments": 0, "max_depth": 0, "transitions": set(), "busy_pixels": 0}
+    workers: set[int] = set()
 
-    def finish(y0: int, y1: int, band: _Band) -> None:
-        acc = band.acc.reshape(len(PASS_NAMES), y1 - y0, width, 3)
+    def finish(y0: int, y1: int, band: BandImage) -> None:
         if keep_passes:
-            passes[:, y0:y1] = acc
-        image[y0:y1] = acc.sum(axis=0)
+            passes[:, y0:y1] = band.passes.reshape(len(PASS_NAMES), y1 - y0, width, 3)
+        image[y0:y1] = band.image.reshape(y1 - y0, width, 3)
         stats["segments"] += band.segments
         stats["busy_pixels"] += band.busy
         stats["max_depth"] = max(stats["max_depth"], band.max_depth)
         stats["transitions"] |= band.transitions
+        workers.add(band.process)
         if on_rows is not None:
             on_rows(y0, y1, image[y0:y1])
         if on_band is not None:
             on_band(y0, y1, image[y0:y1], {name: passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)}
                     if keep_passes else {})
 
-    for done, (y0, y1, band) in enumerate(_traced_bands(ctx, bands, threads, should_stop or _never), start=1):
+    def on_threads(some: list[tuple[int, int]]) -> Iterator[tuple[int, int, BandImage]]:
+        for y0, y1, band in _traced_bands(ctx, some, max(1, min(threads, len(some))), should_stop or _never):
+            yield y0, y1, BandImage.of(band, keep_passes)
+
+    if pool is not None and threads > 1:
+        options = {"record_transitions": record_transitions, "samples": ctx.samples, "filter_name": filter_name,
+                   "adaptive_threshold": ctx.adaptive_threshold, "world_seen": world_seen,
+                   "keep_passes": keep_passes}
+        traced = pool.traced_bands(scene, width, height, options, bands, threads, should_stop or _never, on_threads)
+    else:
+        traced = on_threads(bands)
+    for done, (y0, y1, band) in enumerate(traced, start=1):
         finish(y0, y1, band)
         if progress is not None:
             progress(done / len(bands))
     stats["seconds"] = time.perf_counter() - start
-    stats["width"], stats["height"], stats["samples"] = width, height, samples
+    stats["width"], stats["height"], stats["samples"] = width, height, ctx.samples
+    stats["worker_processes"] = len(workers - {0})  # how many of a pool's processes traced bands
     return RenderResult(image, dict(zip(PASS_NAMES, passes, strict=False)) if keep_passes else {}, stats)
+
+
+def make_context(scene: dict, width: int, height: int, *, record_transitions: bool = False,
+                 samples: int | None = None, filter_name: str = pixel_filter.DEFAULT_FILTER,
+                 adaptive_threshold: float | None = None, world_seen: bool = True) -> _Context:
+    """Everything constant during one render of ``scene`` at ``width`` x ``height`` (the
+    arguments as ``render_passes`` takes them): built alike in this process and in a worker
+    process of a ``band_pool``, so that both trace the same bands to the same values."""
+    # A document an earlier version wrote, or an image section a caller built, has no samples: 1.
+    samples = int(samples or scene["image"].get("samples", 1))
+    pixel_filter.filter_support(filter_name)  # an unknown filter fails here, before any work
+    adaptive_threshold = ADAPTIVE_THRESHOLD if adaptive_threshold is None else float(adaptive_threshold)
+    ctx = _Context(scene, make_camera(scene["camera"], width, height), record_transitions, samples, filter_name,
+                   adaptive_threshold)
+    ctx.world_seen = world_seen
+    return ctx
+
+
+def band_rows(ctx: _Context) -> list[tuple[int, int]]:
+    """The image's bands of rows, (y0, y1) each, top first."""
+    width, height, samples = ctx.camera.width, ctx.camera.height, ctx.samples
+    # Adaptive sampling traces the pilot samples of a band at once, then the rest of its busy pixels;
+    # it also traces the row above and below its band. The band and those two rows fit one group of
+    # rays: every call of the wavefront pays for its own tail of deep branches.
+    if ctx.adaptive_threshold > 0 and len(pilot_samples(samples)) < samples:
+        rows_per_band = max(1, TILE_RAYS // (width * len(pilot_samples(samples))) - 2)
+    else:
+        rows_per_band = max(1, TILE_RAYS // (width * samples))
+    return [(y, min(height, y + rows_per_band)) for y in range(0, height, rows_per_band)]
+
+
+@dataclass
+class BandImage:
+    """What a traced band gives the image: its pixels' sum of passes (pixels, 3) and, when the
+    passes are kept, each pass (passes, pixels, 3), float32 as the image stores them, and the
+    band's statistics. Small enough to send from a worker process."""
+
+    image: np.ndarray
+    passes: np.ndarray | None
+    segments: int
+    busy: int
+    max_depth: int
+    transitions: set[tuple[int, int, int]]
+    process: int = 0  # the id of the worker process that traced it; 0: this process
+
+    @classmethod
+    def of(cls, band: _Band, keep_passes: bool) -> BandImage:
+        # the passes summed in float64, then stored in float32: as the image always was
+        return cls(band.acc.sum(axis=0).astype(np.float32), band.acc.astype(np.float32) if keep_passes else None,
+                   band.segments, band.busy, band.max_depth, band.transitions)
+
+
+def worker_bands(ctx: _Context, take: Callable[[], tuple[int, int, int] | None],
+                 stopped: Callable[[], bool]) -> Iterator[tuple[int, _Band]]:
+    """One worker's bands, taken one by one from ``take()`` ((index, y0, y1), None when there are
+    no more) and yielded as (index, band) as each completes; ``stopped()`` ends the work within a
+    generation (one sample per pixel) or a band."""
+    if ctx.samples == 1:
+        yield from _carrying_tails(ctx, take, stopped)
+        return
+    while not stopped() and (job := take()) is not None:
+        index, y0, y1 = job
+        yield index, _trace_band(ctx, y0, y1)
 
 
 def _never() -> bool:

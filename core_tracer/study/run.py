@@ -23,7 +23,6 @@ import os
 import queue
 import shutil
 import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -32,17 +31,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..fileio import EXTENSION_ROOT
+from .. import processes
 from ..images import glare
 from ..raytrace.tracer import RenderCancelled, render_passes
 from .definition import Study
 
-# The folder that holds the core_tracer package: a worker's import root.
-PACKAGE_ROOT = EXTENSION_ROOT
-_BOOTSTRAP = ("import sys; sys.path.insert(0, sys.argv[1]); "
-              "from core_tracer.study.worker import main; raise SystemExit(main())")
-_SINGLE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                                         "NUMEXPR_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")}
 TERMINATE_TIMEOUT = 3.0  # seconds a worker gets to exit after terminate() before kill()
 
 workers_started = 0  # how many worker processes this interpreter has started (tests read it)
@@ -104,14 +97,7 @@ def default_workers() -> int:
 
 def worker_command(python: str | None = None) -> list[str]:
     """The command line of one worker process."""
-    return [python or sys.executable, "-I", "-c", _BOOTSTRAP, PACKAGE_ROOT]
-
-
-def worker_environment() -> dict[str, str]:
-    env = dict(os.environ)
-    env.update(_SINGLE_THREAD)
-    env["PYTHONNOUSERSITE"] = "1"
-    return env
+    return processes.worker_command("study.worker", python=python)
 
 
 @dataclass
@@ -185,8 +171,8 @@ class StudyRun:
                 log_path = os.path.join(self._folder, f"worker-{k}.log")
                 with open(log_path, "wb") as log:
                     process = subprocess.Popen(worker_command(self.python), stdin=subprocess.PIPE,
-                                               stdout=subprocess.PIPE, stderr=log, cwd=PACKAGE_ROOT,
-                                               env=worker_environment(),
+                                               stdout=subprocess.PIPE, stderr=log, cwd=processes.PACKAGE_ROOT,
+                                               env=processes.worker_environment(),
                                                # a terminal's Ctrl-C reaches this process only; it stops them
                                                start_new_session=os.name == "posix")
                 workers_started += 1

@@ -269,6 +269,29 @@ def test_engine_equals_core_render(lamp_addon, bl_scene, tmp_path):
     assert expected.max() > 1.0 and expected[0, 0].sum() == 0.0  # a real image: bulb and background
 
 
+def test_engine_traces_its_bands_in_the_worker_processes(lamp_addon, addon_core, bl_scene, tmp_path):
+    # F12 hands its bands to the add-on's band pool (worker processes, no interpreter lock between
+    # them): the same pixels as the tracer alone; unregistering the engine ends the workers.
+    band_pool = addon_core.raytrace.band_pool
+    pool = band_pool.shared()
+    assert pool is not None and pool.ready(30)
+    renders = pool.renders
+    scene = _preset_scene(size=(320, 240))  # several bands of rows
+    _load_design(lamp_addon, bl_scene, scene)
+    bl_scene.render.engine = "LAMP_TRACER"
+    bl_scene.render.threads_mode = "FIXED"
+    bl_scene.render.threads = 2
+    rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
+    assert pool.renders == renders + 1
+    expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
+    np.testing.assert_array_equal(rgba[:, :, :3], expected)
+    lamp_addon.render_engine.unregister()
+    try:
+        assert pool.broken == "closed" and all(p.poll() is not None for p in pool._processes)
+    finally:
+        lamp_addon.render_engine.register()
+
+
 def test_engine_renders_percentage_and_writes_still(lamp_addon, bl_scene, tmp_path):
     import bpy
 

@@ -1,0 +1,43 @@
+"""Worker processes of core_tracer (a study's renders, a render's bands): how they are started.
+
+A worker runs the interpreter that runs this code (``sys.executable``: the venv's python for the
+CLI and the tests, Blender's own Python inside Blender) in isolated mode (``-I``: no user
+site-packages, no PYTHON* variables), with the folder that holds ``core_tracer`` first on its path,
+so that it imports ``core_tracer`` as a top-level package whatever name this process knows it by.
+Its numpy runs single-threaded (OMP/BLAS threads = 1): the workers are the parallelism.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from .fileio import EXTENSION_ROOT
+
+# The folder that holds the core_tracer package: a worker's import root.
+PACKAGE_ROOT = EXTENSION_ROOT
+_SINGLE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                                         "NUMEXPR_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")}
+
+
+def worker_command(module: str, *arguments: str, python: str | None = None) -> list[str]:
+    """The command line of a worker running ``core_tracer.<module>``'s ``main()`` with
+    ``arguments`` after the import root in its ``sys.argv``."""
+    bootstrap = (f"import sys; sys.path.insert(0, sys.argv[1]); "
+                 f"from core_tracer.{module} import main; raise SystemExit(main())")
+    return [python or sys.executable, "-I", "-c", bootstrap, PACKAGE_ROOT, *arguments]
+
+
+def worker_environment() -> dict[str, str]:
+    env = dict(os.environ)
+    env.update(_SINGLE_THREAD)
+    env["PYTHONNOUSERSITE"] = "1"
+    return env
+
+
+def python_runs_workers(python: str | None = None) -> bool:
+    """Whether ``python`` (``sys.executable`` by default) is a Python interpreter: older Blender
+    builds, and programs embedding Python, give their own executable there, which must never be
+    started as a worker."""
+    path = python or sys.executable
+    return bool(path) and os.path.basename(path).lower().startswith("python") and os.path.isfile(path)
