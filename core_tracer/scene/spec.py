@@ -180,8 +180,8 @@ class Section:
     optional: tuple[str, ...] = ()  # keys that have no default and may be absent
     one_of: tuple[OneOf, ...] = ()  # either/or rules; their keys are absent unless their form is used
     # (key, choice key, choice values): a field that means something only when the section's choice
-    # field holds one of the values (a rectangular lens's width); editors show it only then
-    shown_when: tuple[tuple[str, str, tuple[str, ...]], ...] = ()
+    # field (or flag) holds one of the values (a rectangular lens's width); editors show it only then
+    shown_when: tuple[tuple[str, str, tuple[str | bool, ...]], ...] = ()
 
     def shown(self, key: str, value_of) -> bool:
         """Whether field ``key`` means something for a section whose fields ``value_of(key)`` gives."""
@@ -288,6 +288,8 @@ LIGHT = Section(
                                                 "still sets how bright the sun is)"),
     },
     "The sun: the directional light of equation (1)",
+    # what the environment image gives is not asked for again (a flag's value is a bool)
+    shown_when=(("direction", "follow_environment", (False,)), ("sun_color", "follow_environment_color", (False,))),
 )
 
 BUNDLED_WORLDS = ("city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset")

@@ -282,6 +282,24 @@ def test_lens_outline_rows(lamp_addon, bl_scene, design):
     assert drawn.index("outline") < drawn.index("width")
 
 
+def test_the_light_panel_leaves_out_what_the_environment_gives(lamp_addon, bl_scene, design):
+    # Following the environment's sun, its direction (or colour) comes from the image: the field
+    # that would be ignored is not drawn, the other stays.
+    import bpy
+
+    def drawn() -> set[str]:
+        return draw(bpy.types.LAMP_PT_light, bl_scene).spec_paths()
+
+    assert {"light.direction", "light.sun_color"} <= drawn()
+    design.light.follow_environment = True
+    assert "light.direction" not in drawn() and "light.sun_color" in drawn()
+    design.light.follow_environment_color = True
+    assert not {"light.direction", "light.sun_color"} & drawn()
+    design.light.follow_environment = False
+    assert "light.direction" in drawn() and "light.sun_color" not in drawn()
+    assert {"light.strength", "light.follow_environment", "light.follow_environment_color"} <= drawn()
+
+
 def test_lens_shape_rows(lamp_addon, bl_scene, design):
     # the shape choice, then the cylinder's radius and side only for a cylindrical lens
     import bpy
