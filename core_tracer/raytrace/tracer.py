@@ -940,27 +940,29 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     children: list[_Rays] = []
     m = np.nonzero(surface == P.REFLECTOR)[0]
     if len(m):
-        hit = _end_points(rays, t, m)
-        children.append(_reflector(ctx, band, rays, m, rows(k, m), hit, cls[m]))
+        d, hit = _end_points(rays, t, m)
+        children.append(_reflector(ctx, band, rays, m, rows(k, m), d, hit, cls[m]))
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
-        hit = _end_points(rays, t, m)
+        d, hit = _end_points(rays, t, m)
         surface_m = surface[m]
-        children.extend(_dielectric(ctx, band, rays, m, rows(k, m), hit, cls[m], surface_m,
+        children.extend(_dielectric(ctx, band, rays, m, rows(k, m), d, hit, cls[m], surface_m,
                                     _normals_at(normals, m, surface_m)))
     m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
     if len(m):
-        hit = _end_points(rays, t, m)
+        d, hit = _end_points(rays, t, m)
         surface_m = surface[m]
-        children.extend(_plate(rays, m, rows(k, m), hit, cls[m], surface_m, _normals_at(normals, m, surface_m), L))
+        children.extend(_plate(rays, m, rows(k, m), d, hit, cls[m], surface_m, _normals_at(normals, m, surface_m),
+                               L))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]
 
 
-def _end_points(rays: _Rays, t: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Where the segments ``m`` end: o + t d."""
-    return rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+def _end_points(rays: _Rays, t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The directions of the segments ``m`` and where they end: o + t d."""
+    d = rows(rays.d, m)
+    return d, rows(rays.o, m) + optics.scaled(d, t[m])
 
 
 def _path_class(medium: np.ndarray, src: np.ndarray, surface: np.ndarray) -> np.ndarray:
@@ -979,23 +981,22 @@ def _alive(k: np.ndarray) -> np.ndarray:
     return np.maximum(np.maximum(k[:, 0], k[:, 1]), k[:, 2]) >= CUTOFF
 
 
-def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
-               cls: np.ndarray) -> _Rays:
+def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray,
+               hit: np.ndarray, cls: np.ndarray) -> _Rays:
     """A reflector hit (③ ④): the first-hit constant, Blinn's scatter (eq. 3), then the mirror ray
     where it stays above the cut-off."""
     L = ctx.lamps
     li = rays.lamp[m]
-    d = rows(rays.d, m)
     pix = rays.pix[m]
     first = np.nonzero(~rays.seen_reflector[m])[0]
     band.add(REFLECTOR_CONSTANT, pix[first], rows(k, first) * rows(L.reflector_color, li[first]))
     normal = reflector.reflector_normal(hit, L.focal[li])
     to_bulb = optics.normalize(rows(L.bulb_center, li) - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
-    band.add(REFLECTOR_SCATTER, pix, k * scatter[:, None] * rows(L.bulb_intensity, li))
+    band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(L.bulb_intensity, li))
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, L, li, hit, normal, -d))
-    k = k * L.reflectance[li, None]
+    k = optics.scaled(k, L.reflectance[li])
     go = np.nonzero(_alive(k))[0]
     n = len(go)
     return _Rays(pix=pix[go], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(normal, go)),
@@ -1003,18 +1004,17 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
                  parent=cls[go], branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
 
-def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
-                cls: np.ndarray, surface: np.ndarray, out_normal: np.ndarray) -> list[_Rays]:
+def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray,
+                hit: np.ndarray, cls: np.ndarray, surface: np.ndarray, out_normal: np.ndarray) -> list[_Rays]:
     """A lens surface hit from either side: Fresnel split into the reflected and transmitted rays
     that stay above the cut-off; ``out_normal`` points out of the lens material (-y on the outer
     face, the cap's on the cuts)."""
     L = ctx.lamps
     li = rays.lamp[m]
-    d = rows(rays.d, m)
     medium = rays.medium[m]
     from_lens = medium == P.IN_LENS
     # Toward the incident side: the normal negated for rays inside the lens (a sign flip is exact).
-    facing = out_normal * np.where(from_lens, -1.0, 1.0)[:, None]
+    facing = optics.scaled(out_normal, np.where(from_lens, -1.0, 1.0))
     cos_facing = -optics.dot(d, facing)
     cos_i = np.clip(cos_facing, 0.0, 1.0)
     ior = L.ior[li]
@@ -1022,7 +1022,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     n2 = np.where(from_lens, 1.0, ior)
     r = optics.fresnel_reflectance(cos_i, n1, n2)
     src = surface  # OUTER or CUT: the surface hit is where the children start
-    k_r = k * r[:, None]
+    k_r = optics.scaled(k, r)
     go = np.nonzero(_alive(k_r))[0]
     gm = m[go]
     out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(facing, go)),
@@ -1040,7 +1040,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     if ctx.record:
         band.note(rays.pix[m[lv]], cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
     tc = trans[~leaving]
-    k_t = rows(k, tc) * (1.0 - r[tc, None])
+    k_t = optics.scaled(rows(k, tc), 1.0 - r[tc])
     go = np.nonzero(_alive(k_t))[0]
     tc, k_t = tc[go], rows(k_t, go)
     if len(tc):
@@ -1054,23 +1054,13 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     return out
 
 
-def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray, cls: np.ndarray, surface: np.ndarray,
-           out_normal: np.ndarray, L: LampTable) -> list[_Rays]:
+def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
+           surface: np.ndarray, out_normal: np.ndarray, L: LampTable) -> list[_Rays]:
     """A prism-plate face hit from either side (README, the prism plate): the Fresnel split of
     the lens's faces (MODEL.md §5) with the plate's index; ``out_normal`` points out of the plate
     material. Nothing leaves the lamp here, so both branches go on where above the cut-off."""
-    def rows(a: np.ndarray, idx: np.ndarray) -> np.ndarray:  # a[idx] for (N, 3) a, about 3x as fast
-        return np.take(a, idx, axis=0)
-
-    def scaled(v: np.ndarray, s: np.ndarray) -> np.ndarray:
-        # v * s[:, None], the same products a column at a time (numpy broadcasts slowly over rows of 3)
-        out = np.empty_like(v)
-        for j in range(3):
-            np.multiply(v[:, j], s, out=out[:, j])
-        return out
-
+    scaled = optics.scaled
     li = rays.lamp[m]
-    d = rows(rays.d, m)
     medium = rays.medium[m]
     from_plate = medium == P.IN_PLATE
     # toward the incident side: the normal negated for rays inside the plate (a sign flip is exact)
