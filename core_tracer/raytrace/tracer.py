@@ -862,26 +862,38 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, _Nor
     surface = np.full(n, P.NOTHING, np.int8)
     normals: _Normals = []
     reaching: dict[tuple[int, ...], tuple[np.ndarray | None, Segments]] = {}
-    for part in ctx.parts:
-        if part.MEDIA not in reaching:
-            reaching[part.MEDIA] = _reaching(rays, part.MEDIA)
-        idx, seg = reaching[part.MEDIA]
+    for media, run in _runs_of_media(ctx.parts):
+        if media not in reaching:
+            reaching[media] = _reaching(rays, media)
+        idx, seg = reaching[media]
         if len(seg.o) == 0:
             continue
-        if idx is None:  # every ray: no gather of the segments
-            t, part_normal = part.intersect(seg, ctx.lamps, t_best)
-            nearer = np.nonzero(t < t_best)[0]
-            hit = nearer
-        else:
-            t_limit = t_best[idx]
-            t, part_normal = part.intersect(seg, ctx.lamps, t_limit)
-            nearer = np.nonzero(t < t_limit)[0]
-            hit = idx[nearer]
-        t_best[hit] = t[nearer]
-        surface[hit] = part.SURFACE
-        if part_normal is not None:
-            normals.append((part.SURFACE, idx, part_normal))
+        # The nearest hits of the rays reaching this run of parts (the air's reflector, bulb and
+        # socket), kept apart and updated in place: one gather and one scatter for the run.
+        t_run = t_best if idx is None else t_best[idx]
+        surface_run = surface if idx is None else surface[idx]
+        for part in run:
+            t, part_normal = part.intersect(seg, ctx.lamps, t_run)
+            nearer = t < t_run
+            np.copyto(t_run, t, where=nearer)
+            np.copyto(surface_run, part.SURFACE, where=nearer)
+            if part_normal is not None:
+                normals.append((part.SURFACE, idx, part_normal))
+        if idx is not None:
+            t_best[idx] = t_run
+            surface[idx] = surface_run
     return t_best, surface, normals
+
+
+def _runs_of_media(parts: tuple) -> list[tuple[tuple[int, ...], list]]:
+    """``parts`` in order, those next to each other that the same media reach grouped: (media, parts)."""
+    runs: list[tuple[tuple[int, ...], list]] = []
+    for part in parts:
+        if runs and runs[-1][0] == part.MEDIA:
+            runs[-1][1].append(part)
+        else:
+            runs.append((part.MEDIA, [part]))
+    return runs
 
 
 def _normals_at(normals: _Normals, m: np.ndarray, surface_m: np.ndarray) -> np.ndarray:
@@ -890,7 +902,10 @@ def _normals_at(normals: _Normals, m: np.ndarray, surface_m: np.ndarray) -> np.n
     normal = np.zeros((len(m), 3))
     for sid, idx, part_normal in normals:
         sel = np.nonzero(surface_m == sid)[0]
-        if len(sel):
+        if len(sel) and part_normal.strides[0] == 0:  # one normal for all (the flat outer face)
+            for axis in range(3):
+                normal[sel, axis] = part_normal[0, axis]
+        elif len(sel):
             at = m[sel] if idx is None else np.searchsorted(idx, m[sel])  # idx is sorted
             put_rows(normal, sel, rows(part_normal, at))
     return normal

@@ -25,4 +25,4 @@ def hit_sphere(o: np.ndarray, d: np.ndarray, center: np.ndarray, radius: np.ndar
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
-    return hit_sphere(rays.o, rays.d, rows(lamps.bulb_center, rays.lamp), lamps.bulb_radius[rays.lamp]), None
+    return hit_sphere(rays.o, rays.d, rows(lamps.bulb_center, rays.lamp), lamps.bulb_radius.take(rays.lamp)), None
