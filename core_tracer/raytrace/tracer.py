@@ -139,7 +139,11 @@ def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:
 
 def _bin_sums(slot: np.ndarray, values: np.ndarray, n_slots: int) -> np.ndarray:
     """Per slot (n_slots, 3), the sum of the ``values`` of its rays in ray order."""
-    bins = (3 * slot)[:, None] + np.arange(3)
+    # bin 3 slot + channel, a column at a time (numpy broadcasts slowly over rows of three)
+    bins = np.empty((len(slot), 3), dtype=np.intp)
+    np.multiply(slot, 3, out=bins[:, 0])
+    np.add(bins[:, 0], 1, out=bins[:, 1])
+    np.add(bins[:, 0], 2, out=bins[:, 2])
     weights = np.broadcast_to(values, bins.shape)
     return np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * n_slots).reshape(n_slots, 3)
 
@@ -1040,29 +1044,29 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     k_r = optics.scaled(k, r)
     go = np.nonzero(_alive(k_r))[0]
     gm = m[go]
-    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(facing, go)),
-                 k=rows(k_r, go),
+    # The mirror ray, optics.reflect(d, facing) with d·facing = -cos_facing known already.
+    d_r = optics.normalize(rows(d, go) + optics.scaled(rows(facing, go), 2.0 * cos_facing[go]))
+    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=rows(hit, go), d=d_r, k=rows(k_r, go),
                  medium=medium[go], src=src[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
                  seen_reflector=rays.seen_reflector[gm])]
-    trans = np.nonzero(r < 1.0)[0]
-    leaving = (surface[trans] == P.OUTER)
-    # ⑩: out through the outer face, to the background (ends).
-    lv = trans[leaving]
-    if ctx.background_seen:
-        d_lv = rows(d, lv)
-        out_d = optics.refract(d_lv, rows(facing, lv), n1[lv] / n2[lv]) if ctx.environment is not None else d_lv
-        band.add(BACKGROUND_PASS, rays.pix[m[lv]], rows(k, lv) * (1.0 - r[lv, None]) * ctx.sky(out_d))
-    if ctx.record:
-        band.note(rays.pix[m[lv]], cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
-    tc = trans[~leaving]
-    k_t = optics.scaled(rows(k, tc), 1.0 - r[tc])
-    go = np.nonzero(_alive(k_t))[0]
-    tc, k_t = tc[go], rows(k_t, go)
+    k_t = optics.scaled(k, 1.0 - r)
+    if ctx.background_seen or ctx.record:
+        # ⑩: out through the outer face, to the background (ends).
+        lv = np.nonzero((r < 1.0) & (surface == P.OUTER))[0]
+        if ctx.background_seen:
+            d_lv = rows(d, lv)
+            out_d = optics.refract(d_lv, rows(facing, lv), n1[lv] / n2[lv]) if ctx.environment is not None else d_lv
+            band.add(BACKGROUND_PASS, rays.pix[m[lv]], rows(k_t, lv) * ctx.sky(out_d))
+        if ctx.record:
+            band.note(rays.pix[m[lv]], cls[lv], np.full(len(lv), P.TRANSMITTED),
+                      np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
+    # The transmitted rays into the lens or out of it at a cut, above the cut-off.
+    tc = np.nonzero((r < 1.0) & (surface != P.OUTER) & _alive(k_t))[0]
     if len(tc):
         eta = n1[tc] / n2[tc]
         tm = m[tc]
         out.append(_Rays(pix=rays.pix[tm], lamp=li[tc], o=rows(hit, tc),
-                         d=optics.refract(rows(d, tc), rows(facing, tc), eta, cos_facing[tc]), k=k_t,
+                         d=optics.refract(rows(d, tc), rows(facing, tc), eta, cos_facing[tc]), k=rows(k_t, tc),
                          medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS).astype(np.int8),
                          src=src[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
                          seen_reflector=rays.seen_reflector[tm]))
