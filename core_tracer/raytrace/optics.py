@@ -10,14 +10,35 @@ import numpy as np
 
 
 def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.einsum("ij,ij->i", a, b)
+    """Row by row dot products of (N, 3) arrays.
+
+    Summed as numpy's ``einsum("ij,ij->i")`` sums them, (0 + a0 b0 + a2 b2) + a1 b1, so every value
+    is the same to the last bit (a sum of -0 terms is +0), in half its time: einsum loops over
+    each row's three products on its own. (Rows not contiguous in memory einsum sums in order: those
+    go to einsum itself.)"""
+    if a.strides[-1] != 8 or b.strides[-1] != 8 or a.dtype != np.float64 or b.dtype != np.float64:
+        return np.einsum("ij,ij->i", a, b)
+    products = a * b
+    out = products[:, 0] + products[:, 2]
+    out += products[:, 1]
+    out += 0.0
+    return out
+
+
+def scaled(v: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """``v * s[:, None]`` for (N, 3) ``v``: the same products a column at a time, in about half
+    the time (numpy broadcasts slowly over rows of three)."""
+    out = np.empty(v.shape)
+    for j in range(3):
+        np.multiply(v[:, j], s, out=out[:, j])
+    return out
 
 
 def normalize(v: np.ndarray) -> np.ndarray:
     """Rows of ``v`` scaled to unit length (a single vector too)."""
     if v.ndim == 1:
         return v / np.sqrt(v @ v)
-    return v / np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
+    return v / np.sqrt(dot(v, v))[:, None]
 
 
 def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float) -> np.ndarray:
@@ -44,7 +65,7 @@ def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
 
     Renormalised: a ray may bounce dozens of times inside the lens (total internal reflection),
     and each bounce would otherwise multiply the rounding error of its length."""
-    return normalize(d - 2.0 * dot(d, n)[:, None] * n)
+    return normalize(d - scaled(n, 2.0 * dot(d, n)))
 
 
 def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float, cos_i: np.ndarray | None = None) -> np.ndarray:
@@ -58,12 +79,12 @@ def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float, cos_i: np.nda
     eta = np.broadcast_to(eta, cos_i.shape)
     sin2_t = eta * eta * (1.0 - cos_i * cos_i)
     cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
-    return normalize(eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n)  # unit, as in reflect()
+    return normalize(scaled(d, eta) + scaled(n, eta * cos_i - cos_t))  # unit, as in reflect()
 
 
 def absorption(coeff: np.ndarray, length: np.ndarray) -> np.ndarray:
     """Equation (2): the fraction of each channel left after ``length`` mm in the lens."""
-    return np.exp(-coeff * length[:, None])
+    return np.exp(scaled(-coeff, length))
 
 
 def phong(normal: np.ndarray, view: np.ndarray, light_dir: np.ndarray, diffuse: np.ndarray,

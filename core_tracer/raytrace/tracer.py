@@ -143,7 +143,11 @@ def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:
 
 def _bin_sums(slot: np.ndarray, values: np.ndarray, n_slots: int) -> np.ndarray:
     """Per slot (n_slots, 3), the sum of the ``values`` of its rays in ray order."""
-    bins = (3 * slot)[:, None] + np.arange(3)
+    # bin 3 slot + channel, a column at a time (numpy broadcasts slowly over rows of three)
+    bins = np.empty((len(slot), 3), dtype=np.intp)
+    np.multiply(slot, 3, out=bins[:, 0])
+    np.add(bins[:, 0], 1, out=bins[:, 1])
+    np.add(bins[:, 0], 2, out=bins[:, 2])
     weights = np.broadcast_to(values, bins.shape)
     return np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * n_slots).reshape(n_slots, 3)
 
@@ -932,26 +936,38 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, _Nor
     surface = np.full(n, P.NOTHING, np.int8)
     normals: _Normals = []
     reaching: dict[tuple[int, ...], tuple[np.ndarray | None, Segments]] = {}
-    for part in ctx.parts:
-        if part.MEDIA not in reaching:
-            reaching[part.MEDIA] = _reaching(rays, part.MEDIA)
-        idx, seg = reaching[part.MEDIA]
+    for media, run in _runs_of_media(ctx.parts):
+        if media not in reaching:
+            reaching[media] = _reaching(rays, media)
+        idx, seg = reaching[media]
         if len(seg.o) == 0:
             continue
-        if idx is None:  # every ray: no gather of the segments
-            t, part_normal = part.intersect(seg, ctx.lamps, t_best)
-            nearer = np.nonzero(t < t_best)[0]
-            hit = nearer
-        else:
-            t_limit = t_best[idx]
-            t, part_normal = part.intersect(seg, ctx.lamps, t_limit)
-            nearer = np.nonzero(t < t_limit)[0]
-            hit = idx[nearer]
-        t_best[hit] = t[nearer]
-        surface[hit] = part.SURFACE
-        if part_normal is not None:
-            normals.append((part.SURFACE, idx, part_normal))
+        # The nearest hits of the rays reaching this run of parts (the air's reflector, bulb and
+        # socket), kept apart and updated in place: one gather and one scatter for the run.
+        t_run = t_best if idx is None else t_best[idx]
+        surface_run = surface if idx is None else surface[idx]
+        for part in run:
+            t, part_normal = part.intersect(seg, ctx.lamps, t_run)
+            nearer = t < t_run
+            np.copyto(t_run, t, where=nearer)
+            np.copyto(surface_run, part.SURFACE, where=nearer)
+            if part_normal is not None:
+                normals.append((part.SURFACE, idx, part_normal))
+        if idx is not None:
+            t_best[idx] = t_run
+            surface[idx] = surface_run
     return t_best, surface, normals
+
+
+def _runs_of_media(parts: tuple) -> list[tuple[tuple[int, ...], list]]:
+    """``parts`` in order, those next to each other that the same media reach grouped: (media, parts)."""
+    runs: list[tuple[tuple[int, ...], list]] = []
+    for part in parts:
+        if runs and runs[-1][0] == part.MEDIA:
+            runs[-1][1].append(part)
+        else:
+            runs.append((part.MEDIA, [part]))
+    return runs
 
 
 def _normals_at(normals: _Normals, m: np.ndarray, surface_m: np.ndarray) -> np.ndarray:
@@ -960,7 +976,10 @@ def _normals_at(normals: _Normals, m: np.ndarray, surface_m: np.ndarray) -> np.n
     normal = np.zeros((len(m), 3))
     for sid, idx, part_normal in normals:
         sel = np.nonzero(surface_m == sid)[0]
-        if len(sel):
+        if len(sel) and part_normal.strides[0] == 0:  # one normal for all (the flat outer face)
+            for axis in range(3):
+                normal[sel, axis] = part_normal[0, axis]
+        elif len(sel):
             at = m[sel] if idx is None else np.searchsorted(idx, m[sel])  # idx is sorted
             put_rows(normal, sel, rows(part_normal, at))
     return normal
@@ -1010,27 +1029,29 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     children: list[_Rays] = []
     m = np.nonzero(surface == P.REFLECTOR)[0]
     if len(m):
-        hit = _end_points(rays, t, m)
-        children.append(_reflector(ctx, band, rays, m, rows(k, m), hit, cls[m]))
+        d, hit = _end_points(rays, t, m)
+        children.append(_reflector(ctx, band, rays, m, rows(k, m), d, hit, cls[m]))
     m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
     if len(m):
-        hit = _end_points(rays, t, m)
+        d, hit = _end_points(rays, t, m)
         surface_m = surface[m]
-        children.extend(_dielectric(ctx, band, rays, m, rows(k, m), hit, cls[m], surface_m,
+        children.extend(_dielectric(ctx, band, rays, m, rows(k, m), d, hit, cls[m], surface_m,
                                     _normals_at(normals, m, surface_m)))
     m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
     if len(m):
-        hit = _end_points(rays, t, m)
+        d, hit = _end_points(rays, t, m)
         surface_m = surface[m]
-        children.extend(_plate(rays, m, rows(k, m), hit, cls[m], surface_m, _normals_at(normals, m, surface_m), L))
+        children.extend(_plate(rays, m, rows(k, m), d, hit, cls[m], surface_m, _normals_at(normals, m, surface_m),
+                               L))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return _concat(children) if len(children) > 1 else children[0]
 
 
-def _end_points(rays: _Rays, t: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Where the segments ``m`` end: o + t d."""
-    return rows(rays.o, m) + t[m, None] * rows(rays.d, m)
+def _end_points(rays: _Rays, t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The directions of the segments ``m`` and where they end: o + t d."""
+    d = rows(rays.d, m)
+    return d, rows(rays.o, m) + optics.scaled(d, t[m])
 
 
 def _path_class(medium: np.ndarray, src: np.ndarray, surface: np.ndarray) -> np.ndarray:
@@ -1049,23 +1070,22 @@ def _alive(k: np.ndarray) -> np.ndarray:
     return np.maximum(np.maximum(k[:, 0], k[:, 1]), k[:, 2]) >= CUTOFF
 
 
-def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
-               cls: np.ndarray) -> _Rays:
+def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray,
+               hit: np.ndarray, cls: np.ndarray) -> _Rays:
     """A reflector hit (③ ④): the first-hit constant, Blinn's scatter (eq. 3), then the mirror ray
     where it stays above the cut-off."""
     L = ctx.lamps
     li = rays.lamp[m]
-    d = rows(rays.d, m)
     pix = rays.pix[m]
     first = np.nonzero(~rays.seen_reflector[m])[0]
     band.add(REFLECTOR_CONSTANT, pix[first], rows(k, first) * rows(L.reflector_color, li[first]))
     normal = reflector.reflector_normal(hit, L.focal[li])
     to_bulb = optics.normalize(rows(L.bulb_center, li) - hit)
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter[li], L.scatter_shininess[li])
-    band.add(REFLECTOR_SCATTER, pix, k * scatter[:, None] * rows(L.bulb_intensity, li))
+    band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(L.bulb_intensity, li))
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, L, li, hit, normal, -d))
-    k = k * L.reflectance[li, None]
+    k = optics.scaled(k, L.reflectance[li])
     go = np.nonzero(_alive(k))[0]
     n = len(go)
     return _Rays(pix=pix[go], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(normal, go)),
@@ -1073,18 +1093,17 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
                  parent=cls[go], branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
 
 
-def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray,
-                cls: np.ndarray, surface: np.ndarray, out_normal: np.ndarray) -> list[_Rays]:
+def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray,
+                hit: np.ndarray, cls: np.ndarray, surface: np.ndarray, out_normal: np.ndarray) -> list[_Rays]:
     """A lens surface hit from either side: Fresnel split into the reflected and transmitted rays
     that stay above the cut-off; ``out_normal`` points out of the lens material (-y on the outer
     face, the cap's on the cuts)."""
     L = ctx.lamps
     li = rays.lamp[m]
-    d = rows(rays.d, m)
     medium = rays.medium[m]
     from_lens = medium == P.IN_LENS
     # Toward the incident side: the normal negated for rays inside the lens (a sign flip is exact).
-    facing = out_normal * np.where(from_lens, -1.0, 1.0)[:, None]
+    facing = optics.scaled(out_normal, np.where(from_lens, -1.0, 1.0))
     cos_facing = -optics.dot(d, facing)
     cos_i = np.clip(cos_facing, 0.0, 1.0)
     ior = L.ior[li]
@@ -1092,55 +1111,45 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     n2 = np.where(from_lens, 1.0, ior)
     r = optics.fresnel_reflectance(cos_i, n1, n2)
     src = surface  # OUTER or CUT: the surface hit is where the children start
-    k_r = k * r[:, None]
+    k_r = optics.scaled(k, r)
     go = np.nonzero(_alive(k_r))[0]
     gm = m[go]
-    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(facing, go)),
-                 k=rows(k_r, go),
+    # The mirror ray, optics.reflect(d, facing) with d·facing = -cos_facing known already.
+    d_r = optics.normalize(rows(d, go) + optics.scaled(rows(facing, go), 2.0 * cos_facing[go]))
+    out = [_Rays(pix=rays.pix[gm], lamp=li[go], o=rows(hit, go), d=d_r, k=rows(k_r, go),
                  medium=medium[go], src=src[go], parent=cls[go], branch=np.full(len(go), P.REFLECTED, np.int8),
                  seen_reflector=rays.seen_reflector[gm])]
-    trans = np.nonzero(r < 1.0)[0]
-    leaving = (surface[trans] == P.OUTER)
-    # ⑩: out through the outer face, to the background (ends).
-    lv = trans[leaving]
-    if ctx.background_seen:
-        d_lv = rows(d, lv)
-        out_d = optics.refract(d_lv, rows(facing, lv), n1[lv] / n2[lv]) if ctx.environment is not None else d_lv
-        band.add(BACKGROUND_PASS, rays.pix[m[lv]], rows(k, lv) * (1.0 - r[lv, None]) * ctx.sky(out_d))
-    if ctx.record:
-        band.note(rays.pix[m[lv]], cls[lv], np.full(len(lv), P.TRANSMITTED), np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
-    tc = trans[~leaving]
-    k_t = rows(k, tc) * (1.0 - r[tc, None])
-    go = np.nonzero(_alive(k_t))[0]
-    tc, k_t = tc[go], rows(k_t, go)
+    k_t = optics.scaled(k, 1.0 - r)
+    if ctx.background_seen or ctx.record:
+        # ⑩: out through the outer face, to the background (ends).
+        lv = np.nonzero((r < 1.0) & (surface == P.OUTER))[0]
+        if ctx.background_seen:
+            d_lv = rows(d, lv)
+            out_d = optics.refract(d_lv, rows(facing, lv), n1[lv] / n2[lv]) if ctx.environment is not None else d_lv
+            band.add(BACKGROUND_PASS, rays.pix[m[lv]], rows(k_t, lv) * ctx.sky(out_d))
+        if ctx.record:
+            band.note(rays.pix[m[lv]], cls[lv], np.full(len(lv), P.TRANSMITTED),
+                      np.full(len(lv), P.LENS_OUTER_TO_OUTSIDE))
+    # The transmitted rays into the lens or out of it at a cut, above the cut-off.
+    tc = np.nonzero((r < 1.0) & (surface != P.OUTER) & _alive(k_t))[0]
     if len(tc):
         eta = n1[tc] / n2[tc]
         tm = m[tc]
         out.append(_Rays(pix=rays.pix[tm], lamp=li[tc], o=rows(hit, tc),
-                         d=optics.refract(rows(d, tc), rows(facing, tc), eta, cos_facing[tc]), k=k_t,
+                         d=optics.refract(rows(d, tc), rows(facing, tc), eta, cos_facing[tc]), k=rows(k_t, tc),
                          medium=np.where(from_lens[tc], P.IN_AIR, P.IN_LENS).astype(np.int8),
                          src=src[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
                          seen_reflector=rays.seen_reflector[tm]))
     return out
 
 
-def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, hit: np.ndarray, cls: np.ndarray, surface: np.ndarray,
-           out_normal: np.ndarray, L: LampTable) -> list[_Rays]:
+def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
+           surface: np.ndarray, out_normal: np.ndarray, L: LampTable) -> list[_Rays]:
     """A prism-plate face hit from either side (README, the prism plate): the Fresnel split of
     the lens's faces (MODEL.md §5) with the plate's index; ``out_normal`` points out of the plate
     material. Nothing leaves the lamp here, so both branches go on where above the cut-off."""
-    def rows(a: np.ndarray, idx: np.ndarray) -> np.ndarray:  # a[idx] for (N, 3) a, about 3x as fast
-        return np.take(a, idx, axis=0)
-
-    def scaled(v: np.ndarray, s: np.ndarray) -> np.ndarray:
-        # v * s[:, None], the same products a column at a time (numpy broadcasts slowly over rows of 3)
-        out = np.empty_like(v)
-        for j in range(3):
-            np.multiply(v[:, j], s, out=out[:, j])
-        return out
-
+    scaled = optics.scaled
     li = rays.lamp[m]
-    d = rows(rays.d, m)
     medium = rays.medium[m]
     from_plate = medium == P.IN_PLATE
     # toward the incident side: the normal negated for rays inside the plate (a sign flip is exact)

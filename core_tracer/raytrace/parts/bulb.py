@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import optics
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments
+from .base import T_MIN, Segments, rows
 
 SURFACE = P.BULB
 MEDIA = (P.IN_AIR,)
@@ -16,12 +17,12 @@ MEDIA = (P.IN_AIR,)
 def hit_sphere(o: np.ndarray, d: np.ndarray, center: np.ndarray, radius: np.ndarray) -> np.ndarray:
     """A sphere reached from outside (the near root)."""
     oc = o - center
-    b = np.einsum("ij,ij->i", oc, d)
-    c = np.einsum("ij,ij->i", oc, oc) - radius**2
+    b = optics.dot(oc, d)
+    c = optics.dot(oc, oc) - radius**2
     with np.errstate(invalid="ignore"):
         t = -b - np.sqrt(b * b - c)
     return np.where(t > T_MIN, t, np.inf)
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
-    return hit_sphere(rays.o, rays.d, lamps.bulb_center[rays.lamp], lamps.bulb_radius[rays.lamp]), None
+    return hit_sphere(rays.o, rays.d, rows(lamps.bulb_center, rays.lamp), lamps.bulb_radius.take(rays.lamp)), None

@@ -25,10 +25,11 @@ MAX_CELL_STEPS = math.ceil(math.sqrt(2.0) * MAX_CUTS_ACROSS) + 3
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The fish-eye cuts of flat lenses (``cut_surface`` sends a cylindrical lens's rays to its own walk)."""
     # A ray that starts on a cut knows it: its own cap is excluded by geometry, not by distance.
-    on_cap = np.where(rays.src != P.CUT, OFF_CAP, np.where(rays.medium == P.IN_AIR, INTO_AIR, INTO_LENS))
-    li = rays.lamp
-    return hit_cuts(rays.o, rays.d, lamps.plane_a[li], lamps.plane_b[li], lamps.pitch[li], lamps.cut_radius[li],
-                    t_limit, on_cap.astype(np.int8))
+    on_cap = np.where(rays.medium == P.IN_AIR, np.int8(INTO_AIR), np.int8(INTO_LENS))
+    on_cap[rays.src != P.CUT] = OFF_CAP
+    li = rays.lamp  # (the lamps' values gathered with take: faster than indexing)
+    return hit_cuts(rays.o, rays.d, lamps.plane_a.take(li), lamps.plane_b.take(li), lamps.pitch.take(li),
+                    lamps.cut_radius.take(li), t_limit, on_cap)
 
 
 # How a ray starts relative to the cut surface (the ``on_cap`` argument of ``hit_cuts``).

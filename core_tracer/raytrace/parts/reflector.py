@@ -35,7 +35,7 @@ def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.nd
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
     li = rays.lamp
-    return hit_reflector(rays.o, rays.d, lamps.focal[li], lamps.vertex[li], lamps.rim[li],
+    return hit_reflector(rays.o, rays.d, lamps.focal.take(li), lamps.vertex.take(li), lamps.rim.take(li),
                          rays.src == P.REFLECTOR), None
 
 

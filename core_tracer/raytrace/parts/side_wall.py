@@ -34,9 +34,9 @@ def hit_outline_wall(o: np.ndarray, d: np.ndarray, half_size: np.ndarray, corner
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
+    if not lamps.rectangular.any():  # round lenses only: no ray needs sorting
+        return hit_side_wall(rays.o, rays.d, lamps.radius.take(rays.lamp)), None
     rect = lamps.rectangular[rays.lamp] > 0
-    if not rect.any():
-        return hit_side_wall(rays.o, rays.d, lamps.radius[rays.lamp]), None
     t = np.empty(len(rect))
     rnd = ~rect
     if rnd.any():

@@ -35,4 +35,6 @@ def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.nda
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
     li = rays.lamp
-    return hit_socket(rays.o, rays.d, lamps.socket_radius[li], lamps.bulb_center[li, 1], lamps.vertex[li]), None
+    # (the lamps' values gathered with take: faster than indexing)
+    return hit_socket(rays.o, rays.d, lamps.socket_radius.take(li), lamps.bulb_center[:, 1].take(li),
+                      lamps.vertex.take(li)), None
