@@ -57,6 +57,8 @@ class BandPool:
         self._lease = threading.Lock()
         self._messages: queue.SimpleQueue = queue.SimpleQueue()
         self._ready = [threading.Event() for _ in range(self.size)]
+        self._starting = threading.Lock()
+        self._started = 0  # workers that reported ready
         self._serial = 0
         self._processes: list[subprocess.Popen] = []
         fd, self._flag_path = tempfile.mkstemp(prefix="lamp-bands-")
@@ -83,9 +85,11 @@ class BandPool:
     def _read(self, slot: int, stream) -> None:
         while (message := read_message(stream)) is not None:
             if message[0] == "ready":
+                with self._starting:
+                    self._started += 1
+                    if self._started == self.size:
+                        self._forget_flag_file()  # before anyone can see the pool ready
                 self._ready[slot].set()
-                if all(event.is_set() for event in self._ready):
-                    self._forget_flag_file()
             else:
                 self._messages.put((slot, message))
         if self.broken is None:
