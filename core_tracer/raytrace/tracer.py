@@ -846,7 +846,7 @@ def _rays_toward_body(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) 
     if len(miss) < len(o) // 8:
         return None
     if ctx.background_seen and ctx.world_seen:
-        band.acc[BACKGROUND_PASS, miss] = ctx.sky(d[miss])
+        _put_slots(band.acc[BACKGROUND_PASS], miss, ctx.sky(d[miss]))
     band.segments += len(miss)
     band.max_depth = max(band.max_depth, 1)
     return np.nonzero(toward)[0]
@@ -854,10 +854,20 @@ def _rays_toward_body(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) 
 
 def _put_traced(band: _Band, toward: np.ndarray, traced: _Band) -> None:
     """The traced rays ``toward`` (``_rays_toward_body``) into their slots of ``band``."""
-    band.acc[:, toward] = traced.acc
+    for acc, values in zip(band.acc, traced.acc, strict=True):
+        _put_slots(acc, toward, values)
     band.segments += traced.segments
     band.max_depth = max(band.max_depth, traced.max_depth)
     band.transitions |= traced.transitions
+
+
+_SLOT = np.dtype((np.void, 3 * 8))  # one slot of a pass, its three float64 channels as one item
+
+
+def _put_slots(acc: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:
+    """``acc[slots] = values`` for (N, 3) float64 rows: each row copied as one 24-byte item, about
+    twice as fast as numpy's scatter of rows (the same bytes)."""
+    acc.view(_SLOT)[slots, 0] = np.ascontiguousarray(values).view(_SLOT)[:, 0]
 
 
 def _over_samples(combine: np.ufunc, values: np.ndarray) -> np.ndarray:
