@@ -7,9 +7,10 @@ first few disagree, and lets the pixels of flat regions keep the mean of those f
 surface a ray branches into a reflected and a transmitted ray (the ray-tracing tree of Fig. 7);
 each carries its accumulated attenuation k, and luminance is added to the pixel as k × the
 value found, so the tree is never stored (MODEL.md §5). All live rays of one generation are
-processed together as arrays; the image is worked in bands of rows to bound memory, and with one
-sample per pixel the last few branches of a band are traced along with the next band's rays
-(``_carrying_tails``).
+processed together as arrays; the image is worked in bands of rows to bound memory, and the last
+few branches of a band are traced along with the next band's rays (``_carrying_tails``; with more
+than one sample per pixel, those of each group of samples along with the next group's,
+``_carrying_samples``).
 """
 
 from __future__ import annotations
@@ -745,9 +746,9 @@ def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray,
 def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
     """Adaptive sampling of rows ``y0:y1`` (its eye rays asked for as ``_sample_rays``). The pilot
     samples (``pilot_samples``) are traced for every pixel and for the rows just outside (the
-    neighbours the filter reaches): a pixel whose
-    3 x 3 neighbourhood's pilot samples all agree in every pass to ``adaptive_threshold`` of its
-    brightness lies in a flat part of the image and keeps their mean. Every other pixel (an edge,
+    neighbours the filter reaches): a pixel whose 3 x 3 neighbourhood's pilot samples all agree in
+    every pass to ``adaptive_threshold`` of its brightness lies in a flat part of the image and
+    keeps their mean. Every other pixel (an edge,
     a crease, a bulb image in a lenslet) traces the rest of its samples and is their sum in
     sample order over the count, exactly as without adaptive sampling.
 
@@ -867,7 +868,7 @@ _SLOT = np.dtype((np.void, 3 * 8))  # one slot of a pass, its three float64 chan
 def _put_slots(acc: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:
     """``acc[slots] = values`` for (N, 3) float64 rows: each row copied as one 24-byte item, about
     twice as fast as numpy's scatter of rows (the same bytes)."""
-    acc.view(_SLOT)[slots, 0] = np.ascontiguousarray(values).view(_SLOT)[:, 0]
+    acc.view(_SLOT)[slots, 0] = np.ascontiguousarray(values, dtype=np.float64).view(_SLOT)[:, 0]
 
 
 def _over_samples(combine: np.ufunc, values: np.ndarray) -> np.ndarray:
