@@ -128,9 +128,16 @@ def grid_offsets(name: str, pixels: np.ndarray, samples: np.ndarray, count: int,
     point_x = (samples + 0.5) / count
     point_y = _radical_inverse_2(samples)
     if sample_major:
-        u = (point_x[:, None] + shift_x) % 1.0
-        v = (point_y[:, None] + shift_y) % 1.0
+        u = _wrapped(point_x[:, None] + shift_x)
+        v = _wrapped(point_y[:, None] + shift_y)
     else:
-        u = (point_x + shift_x[:, None]) % 1.0
-        v = (point_y + shift_y[:, None]) % 1.0
+        u = _wrapped(point_x + shift_x[:, None])
+        v = _wrapped(point_y + shift_y[:, None])
     return offsets_of(name, u.reshape(-1)), offsets_of(name, v.reshape(-1))
+
+
+def _wrapped(s: np.ndarray) -> np.ndarray:
+    """``s % 1.0`` for sums ``s`` of two numbers in [0, 1), without numpy's slow float remainder: for
+    s in [1, 2) both are s - 1, which is exact (Sterbenz), and s itself below 1."""
+    s -= s >= 1.0
+    return s

@@ -103,15 +103,16 @@ def phantom(sun: Sun, lamps: LampTable, lamp: np.ndarray, hit: np.ndarray, norma
             view: np.ndarray) -> np.ndarray:
     """The phantom light (N, 3) per unit accumulated attenuation at reflector points ``hit`` (local
     lamp coordinates) of normal ``normal`` seen from ``view`` (module docstring)."""
-    transmit = sun_transmittance(sun, lamps, lamp)
+    # T_sun depends on the lamp alone: computed once per lamp of the table and looked up per point.
+    transmit = sun_transmittance(sun, lamps, np.arange(len(lamps.ior))).take(lamp, axis=0)
     if not transmit.any():
         return transmit
     # The line toward the sun crosses the apex plane inside the lens opening.
     to_plane = (lamps.plane_b[lamp] - hit[:, 1]) / sun.direction[1]
-    cross = hit + to_plane[:, None] * sun.direction
+    cross_x = hit[:, 0] + to_plane * sun.direction[0]
+    cross_z = hit[:, 2] + to_plane * sun.direction[2]
     half, corner = lamps.half_size[lamp], lamps.corner[lamp]
-    inside = outline.signed_distance(cross[:, 0], cross[:, 2], half[:, 0] - corner, half[:, 1] - corner,
-                                     corner) <= 0.0
+    inside = outline.signed_distance(cross_x, cross_z, half[:, 0] - corner, half[:, 1] - corner, corner) <= 0.0
     return scattered(sun, normal, view, lamps.scatter[lamp], lamps.scatter_shininess[lamp], transmit, inside)
 
 
@@ -120,12 +121,17 @@ def scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, scatter: np.ndarra
     """The reflector's scatter of eq. (3) with the sun as the light (module docstring), (N, 3): at
     points of ``normal`` seen from ``view`` whose line to the sun passes through the lens (``lit``),
     the lens letting ``transmit`` (N, 3) through."""
+    out = np.zeros((len(normal), 3))
+    at = np.flatnonzero(lit)  # only these can be lit: the others stay 0
+    normal, view = normal.take(at, axis=0), view.take(at, axis=0)
     sun_dir = np.broadcast_to(sun.direction, normal.shape)
     # Lit on the side the eye ray came from only (the normal turned toward the viewer).
     toward_view = np.where((optics.dot(normal, view) < 0.0)[:, None], -normal, normal)
-    facing = optics.dot(toward_view, sun_dir) > 0.0
-    value = optics.blinn(toward_view, view, sun_dir, scatter, shininess)
-    return np.where((lit & facing)[:, None], value[:, None] * transmit * sun.light, 0.0)
+    facing = np.flatnonzero(optics.dot(toward_view, sun_dir) > 0.0)
+    at, toward_view, view = at[facing], toward_view.take(facing, axis=0), view.take(facing, axis=0)
+    value = optics.blinn(toward_view, view, sun_dir[:len(at)], scatter[at], shininess[at])
+    out[at] = value[:, None] * transmit.take(at, axis=0) * sun.light
+    return out
 
 
 def sun_direction(scene: dict) -> np.ndarray:

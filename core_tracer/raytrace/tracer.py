@@ -7,9 +7,10 @@ first few disagree, and lets the pixels of flat regions keep the mean of those f
 surface a ray branches into a reflected and a transmitted ray (the ray-tracing tree of Fig. 7);
 each carries its accumulated attenuation k, and luminance is added to the pixel as k × the
 value found, so the tree is never stored (MODEL.md §5). All live rays of one generation are
-processed together as arrays; the image is worked in bands of rows to bound memory, and with one
-sample per pixel the last few branches of a band are traced along with the next band's rays
-(``_carrying_tails``).
+processed together as arrays; the image is worked in bands of rows to bound memory, and the last
+few branches of a band are traced along with the next band's rays (``_carrying_tails``; with more
+than one sample per pixel, those of each group of samples along with the next group's,
+``_carrying_samples``).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import sys
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -489,26 +490,10 @@ def _next_wavefront(ctx: _Context, tails: list[_Tail], wave: _Wavefront | None, 
     """The wavefront of the band ``index`` (rows y0:y1) and of the rays carried from ``wave``: the
     pixels those rays can still reach come first (their passes copied from their bands), then the
     new band's; the carried rays come first, then the new band's eye rays' first branches."""
-    carried_pixels = np.zeros(0, dtype=np.int64)
-    if tails:
-        image_pix = np.empty(len(rays), dtype=np.int64)
-        for tail in tails:
-            sel = np.nonzero((rays.pix >= tail.lo) & (rays.pix < tail.hi))[0]
-            image_pix[sel] = tail.image_pixels(rays.pix[sel])
-            tail.put_back(wave.acc)
-        carried_pixels = np.unique(image_pix)
-    m = len(carried_pixels)
     width = ctx.camera.width
     pixels = np.arange(y0 * width, y1 * width)
-    acc = np.zeros((len(PASS_NAMES), m + len(pixels), 3))
-    for tail in tails:
-        tail.lo, tail.hi = np.searchsorted(carried_pixels, [tail.first_pixel, tail.first_pixel + tail.band.n])
-        tail.pixels = carried_pixels[tail.lo:tail.hi]
-        acc[:, tail.lo:tail.hi] = tail.band.acc[:, tail.pixels - tail.first_pixel]
-    band = _Band(len(pixels), ctx, acc[:, m:])
-    tails.append(_Tail(index, y0 * width, band, m, m + len(pixels)))
-    wave = _Wavefront(ctx, acc, tails)
-    parts = [replace(rays, pix=np.searchsorted(carried_pixels, image_pix))] if m else []
+    wave, parts = _carried_wavefront(ctx, tails, wave, rays, index, y0 * width, len(pixels))
+    band, m = tails[-1].band, tails[-1].lo
     slots = _slots_seeing_body(ctx, y0, y1)
     if slots is None:
         slots = np.arange(len(pixels))
@@ -518,8 +503,138 @@ def _next_wavefront(ctx: _Context, tails: list[_Tail], wave: _Wavefront | None, 
     if len(slots):
         parts.append(_first_hits(ctx, wave, *eye_rays(ctx.camera, pixels[slots]), m + slots))
     if not parts:
-        return wave, _Rays(*(np.zeros(0, dtype=np.int64) for _ in _RAY_FIELDS))
+        return wave, _no_rays()
     return wave, _concat(parts) if len(parts) > 1 else parts[0]
+
+
+def _carried_wavefront(ctx: _Context, tails: list[_Tail], wave: _Wavefront | None, rays: _Rays | None, index: int,
+                       first_pixel: int, n: int) -> tuple[_Wavefront, list[_Rays]]:
+    """A wavefront of the slots the rays carried from ``wave`` can still reach (their passes copied
+    from their bands), then ``n`` slots of a new band ``index`` whose first pixel is ``first_pixel``
+    (appended to ``tails``); and the carried rays, moved to their new slots (none: an empty list)."""
+    carried_pixels = np.zeros(0, dtype=np.int64)
+    if tails:
+        image_pix = np.empty(len(rays), dtype=np.int64)
+        for tail in tails:
+            sel = np.nonzero((rays.pix >= tail.lo) & (rays.pix < tail.hi))[0]
+            image_pix[sel] = tail.image_pixels(rays.pix[sel])
+            tail.put_back(wave.acc)
+        carried_pixels = np.unique(image_pix)
+    m = len(carried_pixels)
+    acc = np.zeros((len(PASS_NAMES), m + n, 3))
+    for tail in tails:
+        tail.lo, tail.hi = np.searchsorted(carried_pixels, [tail.first_pixel, tail.first_pixel + tail.band.n])
+        tail.pixels = carried_pixels[tail.lo:tail.hi]
+        acc[:, tail.lo:tail.hi] = tail.band.acc[:, tail.pixels - tail.first_pixel]
+    tails.append(_Tail(index, first_pixel, _Band(n, ctx, acc[:, m:]), m, m + n))
+    wave = _Wavefront(ctx, acc, tails)
+    return wave, [replace(rays, pix=np.searchsorted(carried_pixels, image_pix))] if m else []
+
+
+def _no_rays() -> _Rays:
+    return _Rays(*(np.zeros(0, dtype=np.int64) for _ in _RAY_FIELDS))
+
+
+@dataclass
+class _Group:
+    """A group of eye rays a band's sampling asked for (``_sample_rays``), being traced."""
+
+    index: int  # the band's place in the image's list of bands
+    band: _Band
+    requests: _Requests  # the band's sampling, sent ``rays`` once traced
+    rays: _Band  # every ray's slot, those that miss the body's box already looked up
+    toward: np.ndarray | None  # the rays traced (``_rays_toward_body``; None: all), in the wavefront's tail
+    o: np.ndarray  # their origins and directions
+    d: np.ndarray
+
+
+def _carrying_samples(ctx: _Context, take: Callable[[], tuple[int, int, int] | None],
+                      stopped: Callable[[], bool]) -> Iterator[tuple[int, _Band]]:
+    """``_carrying_tails`` for more than one sample per pixel: one worker's bands (``take()`` gives
+    the next band's (index, y0, y1), None when there are no more), yielded as (index, band) as each
+    band's sampling ends, not necessarily in order.
+
+    A band's sampling asks for groups of eye rays one after another (``_sample_rays``: adaptive
+    sampling its pilot samples, then, once those are traced, the rest of its busy pixels' samples).
+    Once fewer than ``CARRY_RAYS`` rays are left in the wavefront, the next group starts in it: a
+    group a band asked for when its last one ended, else the first of the next band taken. So the
+    deep branches of one group share their generations with the next group's rays; only the worker's
+    last group's tail is traced alone. Bit for bit as tracing each group alone
+    (``_traced_at_once``), as ``_carrying_tails`` is: each group has its own slots (one per ray) and
+    counts its own depth."""
+    tails: list[_Tail] = []
+    tracing: dict[int, _Group] = {}  # by their tails' index
+    ready: deque[_Group] = deque()
+    wave: _Wavefront | None = None
+    rays = _no_rays()
+    next_slot = 0  # groups' slots are numbered on from one group to the next (``_Tail.first_pixel``)
+    more = True
+    while True:
+        while len(rays) < CARRY_RAYS and (ready or more):
+            if not ready:
+                job = take()
+                if job is None:
+                    more = False
+                else:
+                    index, y0, y1 = job
+                    band = _Band((y1 - y0) * ctx.camera.width, ctx)
+                    yield from _ask(ctx, index, band, _sample_rays(ctx, band, y0, y1), None, ready)
+                continue
+            group = ready.popleft()
+            n = len(group.o)
+            wave, parts = _carried_wavefront(ctx, tails, wave, rays, next_slot, next_slot, n)
+            tracing[next_slot] = group
+            tail = tails[-1]
+            tail.band.segments += n
+            parts.append(_first_hits(ctx, wave, group.o, group.d, tail.lo + np.arange(n)))
+            rays = _concat(parts) if len(parts) > 1 else parts[0]
+            next_slot += n
+        if not tails:
+            return
+        if stopped():
+            return
+        counts = _rays_per_tail(tails, rays.pix)
+        ended = [(tail, count) for tail, count in zip(tails, counts, strict=True)
+                 if count == 0 or tail.depth >= MAX_DEPTH]  # as ``_trace_rays``'s loop ends
+        for tail, count in ended:
+            tails.remove(tail)
+            tail.put_back(wave.acc)
+            tail.band.max_depth = tail.depth
+            if count:  # MAX_DEPTH: its rays go no further
+                rays = rays.take((rays.pix < tail.lo) | (rays.pix >= tail.hi))
+            group = tracing.pop(tail.index)
+            if group.toward is None:
+                traced = tail.band
+            else:
+                traced = group.rays
+                _put_traced(traced, group.toward, tail.band)
+            yield from _ask(ctx, group.index, group.band, group.requests, traced, ready)
+        if ended:
+            continue  # room for the next group, perhaps
+        for tail, count in zip(tails, counts, strict=True):
+            tail.band.segments += count
+            tail.depth += 1
+        rays = _step(ctx, wave, rays)
+
+
+def _ask(ctx: _Context, index: int, band: _Band, requests: _Requests, traced: _Band | None,
+         ready: deque[_Group]) -> Iterator[tuple[int, _Band]]:
+    """Send ``traced`` (None: nothing yet) to the sampling of the band ``index`` and queue in
+    ``ready`` the group of eye rays it asks for next; yields (index, band) when it asks for none."""
+    while True:
+        try:
+            o, d = requests.send(traced)
+        except StopIteration:
+            yield index, band
+            return
+        rays = _Band(len(o), ctx)
+        toward = _rays_toward_body(ctx, rays, o, d)
+        if toward is None or len(toward):
+            if toward is not None:
+                o, d = o[toward], d[toward]
+            ready.append(_Group(index, band, requests, rays, toward, o, d))
+            return
+        traced = rays  # every ray missed the body's box
 
 
 def _carried_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
@@ -615,15 +730,29 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
             if len(slots):
                 _trace_rays(ctx, band, *eye_rays(cam, pixels[slots]), slots)
         return band
+    _traced_at_once(ctx, _sample_rays(ctx, band, y0, y1))
+    return band
+
+
+# The sampling of a band of more than one sample per pixel asks for its eye rays a group at a time:
+# it yields a group's origins and directions and is sent them traced (a fresh ``_Band``, ray i in
+# slot i). Nothing else of a group depends on how it is traced: alone (``_traced_at_once``) or in
+# the wavefront of other groups' rays (``_carrying_samples``).
+_Requests = Generator[tuple[np.ndarray, np.ndarray], _Band, None]
+
+
+def _sample_rays(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
+    """The samples of rows ``y0:y1`` into ``band``: adaptive sampling (``_trace_adaptive``), or every
+    sample of every pixel."""
     if ctx.adaptive_threshold > 0 and len(pilot_samples(ctx.samples)) < ctx.samples:
-        _trace_adaptive(ctx, band, y0, y1)
-        return band
+        yield from _trace_adaptive(ctx, band, y0, y1)
+        return
+    pixels = np.arange(y0 * ctx.camera.width, y1 * ctx.camera.width)
     # Samples in groups of at most TILE_RAYS rays (a wide row at many samples takes several),
     # each ray counted in its own slot (pixel-major), summed per pixel in sample order: the same
     # sums whatever the threads.
-    for count, o, d in sample_groups(cam, pixels, ctx.samples, ctx.filter_name):
-        group = _Band(len(o), ctx)
-        _trace_eye_rays(ctx, group, o, d)
+    for count, o, d in sample_groups(ctx.camera, pixels, ctx.samples, ctx.filter_name):
+        group = yield o, d
         per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3)
         band.acc += _over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
         band.segments += group.segments
@@ -631,7 +760,18 @@ def _trace_band(ctx: _Context, y0: int, y1: int) -> _Band:
         band.transitions |= group.transitions
     # The samples are placed by the filter (importance sampling), so the pixel is their plain mean.
     band.acc /= ctx.samples
-    return band
+
+
+def _traced_at_once(ctx: _Context, requests: _Requests) -> None:
+    """Trace each group of eye rays a band's sampling asks for alone (``_trace_eye_rays``)."""
+    group = None
+    while True:
+        try:
+            o, d = requests.send(group)
+        except StopIteration:
+            return
+        group = _Band(len(o), ctx)
+        _trace_eye_rays(ctx, group, o, d)
 
 
 def sample_groups(cam: Camera, pixels: np.ndarray, samples: int,
@@ -654,11 +794,13 @@ def pilot_samples(samples: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, samples - 1, count)).astype(np.int64))
 
 
-def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray, sample_ids: np.ndarray) -> np.ndarray:
-    """Trace the samples ``sample_ids`` of every pixel (groups of at most TILE_RAYS rays, whole
-    pixels to a group): each ray's passes, sample-major (samples, passes, pixels, 3), so that one
-    sample of every pixel is one contiguous block; the band's statistics take the rays' counts.
-    Every ray has its own slot, so the order of the rays changes no value."""
+def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray,
+                sample_ids: np.ndarray) -> Generator[tuple[np.ndarray, np.ndarray], _Band, np.ndarray]:
+    """Trace the samples ``sample_ids`` of every pixel (asked for in groups of at most TILE_RAYS rays,
+    whole pixels to a group, as ``_sample_rays``): returns each ray's passes, sample-major (samples,
+    passes, pixels, 3), so that one sample of every pixel is one contiguous block; the band's
+    statistics take the rays' counts. Every ray has its own slot, so the order of the rays changes
+    no value."""
     count = len(sample_ids)
     values = np.empty((count, len(PASS_NAMES), len(pixels), 3))
     per_group = max(1, TILE_RAYS // count)
@@ -666,8 +808,7 @@ def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray, sample_ids: np.n
         group_pixels = pixels[i0:i0 + per_group]
         ray_pixels = np.tile(group_pixels, count)
         offsets = pixel_filter.grid_offsets(ctx.filter_name, group_pixels, sample_ids, ctx.samples, sample_major=True)
-        group = _Band(len(ray_pixels), ctx)
-        _trace_eye_rays(ctx, group, *eye_rays(ctx.camera, ray_pixels, offsets))
+        group = yield eye_rays(ctx.camera, ray_pixels, offsets)
         values[:, :, i0:i0 + len(group_pixels)] = (group.acc.reshape(len(PASS_NAMES), count, len(group_pixels), 3)
                                                    .transpose(1, 0, 2, 3))
         band.segments += group.segments
@@ -676,11 +817,12 @@ def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray, sample_ids: np.n
     return values
 
 
-def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
-    """Adaptive sampling of rows ``y0:y1``. The pilot samples (``pilot_samples``) are traced for
-    every pixel and for the rows just outside (the neighbours the filter reaches): a pixel whose
-    3 x 3 neighbourhood's pilot samples all agree in every pass to ``adaptive_threshold`` of its
-    brightness lies in a flat part of the image and keeps their mean. Every other pixel (an edge,
+def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
+    """Adaptive sampling of rows ``y0:y1`` (its eye rays asked for as ``_sample_rays``). The pilot
+    samples (``pilot_samples``) are traced for every pixel and for the rows just outside (the
+    neighbours the filter reaches): a pixel whose 3 x 3 neighbourhood's pilot samples all agree in
+    every pass to ``adaptive_threshold`` of its brightness lies in a flat part of the image and
+    keeps their mean. Every other pixel (an edge,
     a crease, a bulb image in a lenslet) traces the rest of its samples and is their sum in
     sample order over the count, exactly as without adaptive sampling.
 
@@ -690,7 +832,7 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
     width = cam.width
     pilot = pilot_samples(ctx.samples)
     top, bottom = max(0, y0 - 1), min(cam.height, y1 + 1)
-    pilot_values = _per_sample(ctx, band, np.arange(top * width, bottom * width), pilot)
+    pilot_values = yield from _per_sample(ctx, band, np.arange(top * width, bottom * width), pilot)
     shape = (bottom - top, width, len(PASS_NAMES) * 3)
     low = _neighbourhood(_over_samples(np.minimum, pilot_values).transpose(1, 0, 2).reshape(shape), np.minimum)
     high = _neighbourhood(_over_samples(np.maximum, pilot_values).transpose(1, 0, 2).reshape(shape), np.maximum)
@@ -717,7 +859,7 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> None:
     chunk = max(1, TILE_RAYS // len(rest))
     for c0 in range(0, len(busy), chunk):
         idx = busy[c0:c0 + chunk]
-        traced = _per_sample(ctx, band, pixels[idx], rest)
+        traced = yield from _per_sample(ctx, band, pixels[idx], rest)
         by_sample = {int(k): traced[i] for i, k in enumerate(rest)}
         by_sample.update({int(k): pilot_values[i][:, idx] for i, k in enumerate(pilot)})
         total = by_sample[0].copy()
@@ -758,27 +900,49 @@ def _world_samples(ctx: _Context, band: _Band, pixels: np.ndarray, idx: np.ndarr
 
 def _trace_eye_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> None:
     """``_trace_rays`` of the eye rays of samples (ray i adds to slot i of the fresh ``band``), the
-    rays that miss the body's box taken apart: they see only the world (``_first_hits``), looked up
-    here at once, and only the others are traced. The same values in every slot: a ray's branches
-    keep their order whatever other rays are traced with them."""
+    rays that miss the body's box taken apart (``_rays_toward_body``). The same values in every slot:
+    a ray's branches keep their order whatever other rays are traced with them."""
+    toward = _rays_toward_body(ctx, band, o, d)
+    if toward is None:
+        _trace_rays(ctx, band, o, d)
+    elif len(toward):
+        traced = _Band(len(toward), ctx)
+        _trace_rays(ctx, traced, o[toward], d[toward])
+        _put_traced(band, toward, traced)
+
+
+def _rays_toward_body(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> np.ndarray | None:
+    """The eye rays ``o, d`` (ray i of slot i of the fresh ``band``) that meet the body's box, to be
+    traced; the others see only the world (``_first_hits``), looked up here at once. None: trace
+    them all (too few miss to be worth the copies)."""
     t_near, t_far, _ = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     toward = (t_near <= t_far) & (t_near > 0)
     miss = np.nonzero(~toward)[0]
-    if len(miss) < len(o) // 8:  # too few to be worth the copies
-        _trace_rays(ctx, band, o, d)
-        return
+    if len(miss) < len(o) // 8:
+        return None
     if ctx.background_seen and ctx.world_seen:
-        band.acc[BACKGROUND_PASS, miss] = ctx.sky(d[miss])
+        _put_slots(band.acc[BACKGROUND_PASS], miss, ctx.sky(d[miss]))
     band.segments += len(miss)
     band.max_depth = max(band.max_depth, 1)
-    lamp = np.nonzero(toward)[0]
-    if len(lamp):
-        traced = _Band(len(lamp), ctx)
-        _trace_rays(ctx, traced, o[lamp], d[lamp])
-        band.acc[:, lamp] = traced.acc
-        band.segments += traced.segments
-        band.max_depth = max(band.max_depth, traced.max_depth)
-        band.transitions |= traced.transitions
+    return np.nonzero(toward)[0]
+
+
+def _put_traced(band: _Band, toward: np.ndarray, traced: _Band) -> None:
+    """The traced rays ``toward`` (``_rays_toward_body``) into their slots of ``band``."""
+    for acc, values in zip(band.acc, traced.acc, strict=True):
+        _put_slots(acc, toward, values)
+    band.segments += traced.segments
+    band.max_depth = max(band.max_depth, traced.max_depth)
+    band.transitions |= traced.transitions
+
+
+_SLOT = np.dtype((np.void, 3 * 8))  # one slot of a pass, its three float64 channels as one item
+
+
+def _put_slots(acc: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:
+    """``acc[slots] = values`` for (N, 3) float64 rows: each row copied as one 24-byte item, about
+    twice as fast as numpy's scatter of rows (the same bytes)."""
+    acc.view(_SLOT)[slots, 0] = np.ascontiguousarray(values, dtype=np.float64).view(_SLOT)[:, 0]
 
 
 def _over_samples(combine: np.ufunc, values: np.ndarray) -> np.ndarray:
