@@ -302,14 +302,10 @@ class BandImage:
 def worker_bands(ctx: _Context, take: Callable[[], tuple[int, int, int] | None],
                  stopped: Callable[[], bool]) -> Iterator[tuple[int, _Band]]:
     """One worker's bands, taken one by one from ``take()`` ((index, y0, y1), None when there are
-    no more) and yielded as (index, band) as each completes; ``stopped()`` ends the work within a
-    generation (one sample per pixel) or a band."""
-    if ctx.samples == 1:
-        yield from _carrying_tails(ctx, take, stopped)
-        return
-    while not stopped() and (job := take()) is not None:
-        index, y0, y1 = job
-        yield index, _trace_band(ctx, y0, y1)
+    no more) and yielded as (index, band) as each completes, the deep branches of each band (or
+    group of samples) traced along with the next one's rays; ``stopped()`` ends the work within a
+    generation."""
+    yield from (_carrying_tails if ctx.samples == 1 else _carrying_samples)(ctx, take, stopped)
 
 
 def _never() -> bool:

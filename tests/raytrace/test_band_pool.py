@@ -43,8 +43,11 @@ CASES = {
     # scene, width, height, rows per band (TILE_RAYS / width / samples), render_passes options
     "one-sample": (lambda: load_preset("four-lamp-rear-combination.json"), 160, 120, 8, {"samples": 1}),
     "deep-tails": (_clear_deep_cuts, 96, 72, 6, {"samples": 1, "record_transitions": True}),
-    "adaptive": (_day, 96, 64, 4, {"samples": 16}),
-    "every-sample": (_day, 64, 48, 4, {"samples": 8, "adaptive_threshold": 0}),
+    "adaptive-deep-tails": (_clear_deep_cuts, 64, 48, 4, {"samples": 16, "record_transitions": True}),
+    "every-sample-four-lamps": (lambda: load_preset("four-lamp-rear-combination.json"), 64, 48, 4,
+                                {"samples": 8, "adaptive_threshold": 0}),
+    "adaptive-surroundings": (_day, 96, 64, 4, {"samples": 16}),
+    "every-sample-surroundings": (_day, 64, 48, 4, {"samples": 8, "adaptive_threshold": 0}),
 }
 
 
@@ -62,11 +65,18 @@ def _render(monkeypatch, case: str, **options) -> tracer.RenderResult:
         monkeypatch.undo()
 
 
-def _same(a: tracer.RenderResult, b: tracer.RenderResult) -> None:
-    assert np.array_equal(a.image, b.image)
+def _same(a: tracer.RenderResult, b: tracer.RenderResult, ulps: int = 0) -> None:
+    """Equal bit for bit (``ulps`` 0), or within ``ulps`` float32 units in the last place."""
+    def equal(x: np.ndarray, y: np.ndarray) -> None:
+        if ulps:
+            np.testing.assert_array_max_ulp(x, y, maxulp=ulps)
+        else:
+            assert np.array_equal(x, y)
+
+    equal(a.image, b.image)
     assert a.passes.keys() == b.passes.keys()
     for name in a.passes:
-        assert np.array_equal(a.passes[name], b.passes[name]), name
+        equal(a.passes[name], b.passes[name])
     for key in ("segments", "max_depth", "busy_pixels", "transitions"):
         assert a.stats[key] == b.stats[key], key
 
@@ -79,7 +89,11 @@ def test_the_pool_traces_what_threads_trace(monkeypatch, pool, case):
     assert pool.renders == renders + 1
     assert on_threads.stats["worker_processes"] == 0
     assert in_pool.stats["worker_processes"] == 2  # both workers took bands
-    _same(on_threads, in_pool)
+    # With surroundings, the last bits of the float64 world lookups vary with how numpy's AVX-512
+    # code paths meet the arrays (up to 6e-14 relative between two identical traces of a band; none
+    # with NPY_DISABLE_CPU_FEATURES turning AVX-512 off), so a float32 value may move by one unit in
+    # the last place; without surroundings every value is the same bit for bit.
+    _same(on_threads, in_pool, ulps=1 if "surroundings" in case else 0)
     if case == "deep-tails":
         assert in_pool.stats["transitions"]  # recorded in the workers, brought back
 
