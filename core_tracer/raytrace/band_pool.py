@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterator
 
 from .. import processes
 from .band_worker import read_message, write_message
-from .tracer import BandImage, RenderCancelled
+from .tracer import BandImage, RenderCancelled, short_switch_interval
 
 POLL_SECONDS = 0.002  # how often a render in the pool polls should_stop() while no band arrives
 LEASE_WAIT = 0.25  # seconds a render waits for the pool to finish stopping the render before it
@@ -155,8 +155,12 @@ class BandPool:
             usable = self.ready(READY_WAIT if heavy else 0.0)
             if usable:
                 self.renders += 1
-                rest = yield from self._traced(scene, width, height, options, bands, min(workers, self.size),
-                                               should_stop)
+                # A worker that asks for its next band waits for this thread's answer: with the
+                # interface's thread running Python (Blender's), the interpreter's 5 ms switch
+                # interval would be that wait.
+                with short_switch_interval():
+                    rest = yield from self._traced(scene, width, height, options, bands, min(workers, self.size),
+                                                   should_stop)
         finally:
             self._lease.release()
         if not usable:

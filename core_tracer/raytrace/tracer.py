@@ -323,7 +323,7 @@ _switch_users = [0, 0.0]  # renders on several threads running now, and the inte
 
 
 @contextmanager
-def _short_switch_interval() -> Iterator[None]:
+def short_switch_interval() -> Iterator[None]:
     """``SWITCH_INTERVAL`` (if shorter) while any render runs bands on several threads; the
     interval it found is restored when the last one ends."""
     with _switch_lock:
@@ -347,7 +347,7 @@ def _traced_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
     (with one sample per pixel, before the first and as each completes: ``_carried_bands``)."""
     traced = _carried_bands if ctx.samples == 1 else _traced_bands_on
     if threads > 1:
-        with _short_switch_interval():
+        with short_switch_interval():
             yield from traced(ctx, bands, threads, should_stop)
     else:
         yield from traced(ctx, bands, 1, should_stop)

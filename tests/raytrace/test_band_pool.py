@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 
 import numpy as np
 import pytest
@@ -99,11 +100,20 @@ def test_the_pool_traces_what_threads_trace(monkeypatch, pool, case):
 
 
 def test_bands_arrive_in_order_with_progress(monkeypatch, pool):
-    rows, fractions = [], []
-    _render(monkeypatch, "one-sample", threads=2, pool=pool, on_rows=lambda y0, y1, _: rows.append((y0, y1)),
-            progress=fractions.append)
+    # ... and the interpreter's switch interval is short while the workers trace (they wait for this
+    # process's answers), the caller's afterwards
+    rows, fractions, intervals = [], [], []
+    before = sys.getswitchinterval()
+
+    def on_rows(y0, y1, _):
+        rows.append((y0, y1))
+        intervals.append(sys.getswitchinterval())
+
+    _render(monkeypatch, "one-sample", threads=2, pool=pool, on_rows=on_rows, progress=fractions.append)
     assert rows == [(y, min(120, y + 8)) for y in range(0, 120, 8)]
     assert fractions == [k / len(rows) for k in range(1, len(rows) + 1)]
+    assert intervals == pytest.approx([tracer.SWITCH_INTERVAL] * len(rows))
+    assert sys.getswitchinterval() == before
 
 
 def test_a_cancelled_render_leaves_the_workers_ready_for_the_next(monkeypatch, pool):
