@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterator
 
 from .. import processes
 from .band_worker import read_message, write_message
-from .tracer import BandImage, RenderCancelled, short_switch_interval
+from .tracer import BandImage, InOrder, RenderCancelled, short_switch_interval
 
 POLL_SECONDS = 0.002  # how often a render in the pool polls should_stop() while no band arrives
 LEASE_WAIT = 0.25  # seconds a render waits for the pool to finish stopping the render before it
@@ -177,8 +177,7 @@ class BandPool:
         _SERIAL.pack_into(self._flag, 0, serial)
         slots = list(range(workers))
         queued = deque(enumerate(bands))
-        waiting: dict[int, BandImage] = {}
-        next_index = 0
+        in_order = InOrder(bands, should_stop)
         busy = set(slots)  # workers that have not reported the render's end
         try:
             for slot in slots:
@@ -192,7 +191,7 @@ class BandPool:
                     continue
                 if message is None:  # a worker died: the others stop, and the rest is traced elsewhere
                     self.close()
-                    return bands[next_index:]
+                    return bands[in_order.next_index:]
                 kind, message_serial = message[0], message[1]
                 if message_serial != serial:
                     continue
@@ -204,21 +203,16 @@ class BandPool:
                     self._send(slot, ("job", job))
                 elif kind == "band":
                     index, *fields = message[2:]
-                    waiting[index] = BandImage(*fields)
-                    while next_index in waiting:
-                        if should_stop():
-                            raise RenderCancelled("render cancelled")
-                        y0, y1 = bands[next_index]
-                        yield y0, y1, waiting.pop(next_index)
-                        next_index += 1
+                    yield from in_order.add(index, BandImage(*fields))
                 elif kind == "error":
                     raise BandWorkerError(f"a band worker failed:\n{message[2]}")
                 elif kind == "idle":
                     busy.discard(slot)
             if should_stop():
                 raise RenderCancelled("render cancelled")
-            if next_index != len(bands):  # every worker ended, yet bands are missing: a tracer bug
-                raise BandWorkerError(f"the band workers ended with {len(bands) - next_index} bands not traced")
+            if in_order.next_index != len(bands):  # every worker ended, yet bands are missing: a tracer bug
+                raise BandWorkerError(f"the band workers ended with {len(bands) - in_order.next_index} bands "
+                                      "not traced")
             return []
         finally:
             self._stop(serial, busy)

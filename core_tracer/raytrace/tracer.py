@@ -447,15 +447,8 @@ def _carrying_tails(ctx: _Context, take: Callable[[], tuple[int, int, int] | Non
         while True:
             if stopped():
                 return
-            counts = _rays_per_tail(tails, rays.pix)
-            ended = [(tail, count) for tail, count in zip(tails, counts, strict=True)
-                     if count == 0 or tail.depth >= MAX_DEPTH]  # as ``_trace_rays``'s loop ends
-            for tail, count in ended:
-                tails.remove(tail)
-                tail.put_back(wave.acc)
-                tail.band.max_depth = tail.depth
-                if count:  # MAX_DEPTH: its rays go no further
-                    rays = rays.take((rays.pix < tail.lo) | (rays.pix >= tail.hi))
+            ended, counts, rays = _end_tails(tails, wave, rays)
+            for tail in ended:
                 yield tail.index, tail.band
             if not tails or (more and len(rays) < CARRY_RAYS):
                 break
@@ -464,6 +457,22 @@ def _carrying_tails(ctx: _Context, take: Callable[[], tuple[int, int, int] | Non
                 tail.band.segments += count
                 tail.depth += 1
             rays = _step(ctx, wave, rays)
+
+
+def _end_tails(tails: list[_Tail], wave: _Wavefront, rays: _Rays) -> tuple[list[_Tail], list[int], _Rays]:
+    """Take out of ``tails`` the bands (or groups) whose branches have all ended, or reached
+    ``MAX_DEPTH`` (as ``_trace_rays``'s loop ends): their passes go back to their own accumulators
+    and the rays of those cut at the depth leave the wavefront. Returns them, every tail's count of
+    rays before (``_rays_per_tail``) and the rays left."""
+    counts = _rays_per_tail(tails, rays.pix)
+    ended = [(tail, count) for tail, count in zip(tails, counts, strict=True) if count == 0 or tail.depth >= MAX_DEPTH]
+    for tail, count in ended:
+        tails.remove(tail)
+        tail.put_back(wave.acc)
+        tail.band.max_depth = tail.depth
+        if count:  # MAX_DEPTH: its rays go no further
+            rays = rays.take((rays.pix < tail.lo) | (rays.pix >= tail.hi))
+    return [tail for tail, _ in ended], counts, rays
 
 
 def _rays_per_tail(tails: list[_Tail], pix: np.ndarray) -> list[int]:
@@ -589,15 +598,8 @@ def _carrying_samples(ctx: _Context, take: Callable[[], tuple[int, int, int] | N
             return
         if stopped():
             return
-        counts = _rays_per_tail(tails, rays.pix)
-        ended = [(tail, count) for tail, count in zip(tails, counts, strict=True)
-                 if count == 0 or tail.depth >= MAX_DEPTH]  # as ``_trace_rays``'s loop ends
-        for tail, count in ended:
-            tails.remove(tail)
-            tail.put_back(wave.acc)
-            tail.band.max_depth = tail.depth
-            if count:  # MAX_DEPTH: its rays go no further
-                rays = rays.take((rays.pix < tail.lo) | (rays.pix >= tail.hi))
+        ended, counts, rays = _end_tails(tails, wave, rays)
+        for tail in ended:
             group = tracing.pop(tail.index)
             if group.toward is None:
                 traced = tail.band
@@ -659,22 +661,36 @@ def _carried_bands(ctx: _Context, bands: list[tuple[int, int]], threads: int,
             completed = _carrying_tails(ctx, take, _never)
         else:
             completed = _completed_on(pool, threads, lambda: _carrying_tails(ctx, take, stop.is_set))
-        waiting: dict[int, _Band] = {}
-        next_index = 0
+        in_order = InOrder(bands, should_stop)
         for index, band in completed:
-            waiting[index] = band
-            if next_index not in waiting and should_stop():
+            if index != in_order.next_index and should_stop():
                 raise RenderCancelled("render cancelled")
-            while next_index in waiting:
-                if should_stop():
-                    raise RenderCancelled("render cancelled")
-                y0, y1 = bands[next_index]
-                yield y0, y1, waiting.pop(next_index)
-                next_index += 1
+            yield from in_order.add(index, band)
     finally:
         stop.set()
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
+
+
+class InOrder:
+    """Bands that complete in any order, handed on in the image's order: ``add(index, band)``
+    yields (y0, y1, band) for each band now next in line; ``should_stop()`` is polled before each
+    (``RenderCancelled``)."""
+
+    def __init__(self, bands: list[tuple[int, int]], should_stop: Callable[[], bool]):
+        self.bands = bands
+        self.should_stop = should_stop
+        self.next_index = 0
+        self._waiting: dict = {}
+
+    def add(self, index: int, band) -> Iterator[tuple[int, int, object]]:
+        self._waiting[index] = band
+        while self.next_index in self._waiting:
+            if self.should_stop():
+                raise RenderCancelled("render cancelled")
+            y0, y1 = self.bands[self.next_index]
+            yield y0, y1, self._waiting.pop(self.next_index)
+            self.next_index += 1
 
 
 def _completed_on(pool: ThreadPoolExecutor, threads: int,
