@@ -75,9 +75,12 @@ def slab_span(oy: np.ndarray, dy: np.ndarray, a: np.ndarray, b: np.ndarray,
     the slab between the planes y = a and y = b (the cut walks' planes A and B), from t = 0 and cut
     at ``t_limit``; empty (t_in > t_out) where it misses the slab. A ray parallel to the planes is in
     the slab for ever or never."""
+    # (in place where a temporary is free: these run on every ray that reaches a cut walk)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ta, tb = (a - oy) / dy, (b - oy) / dy
-    t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
+        ta, tb = np.subtract(a, oy), np.subtract(b, oy)
+        ta /= dy
+        tb /= dy
+    t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb, out=tb)
     np.maximum(t_in, 0.0, out=t_in)
     parallel = np.nonzero(dy == 0)[0]
     if len(parallel):
