@@ -197,14 +197,29 @@ class _CellWalk:
         stays exact when the cap is nearly flat (it tends to the plane)."""
         row = self.row
         p, dx, dz = row("p"), row("dx"), row("dz")
-        ax, az = row("ox") - row("i") * p, row("oz") - row("j") * p
+        # (each step's operations in place, in the order the formulas give: no temporaries
+        # over every ray the walk holds)
+        ax, az = row("i") * p, row("j") * p
+        np.subtract(row("ox"), ax, out=ax)
+        np.subtract(row("oz"), az, out=az)
         # b = a.d + rho d_y and c = |a|^2 + 2 rho a_y, the cell-independent terms from the rows
-        b = ax * dx + row("ay_dy") + az * dz + row("rho_dy")
-        c = ax * ax + row("ay_ay") + az * az + row("two_rho_ay")
+        b, term = ax * dx, az * dz
+        b += row("ay_dy")
+        b += term
+        b += row("rho_dy")
+        c = np.multiply(ax, ax, out=ax)
+        c += row("ay_ay")
+        c += np.multiply(az, az, out=az)
+        c += row("two_rho_ay")
         with np.errstate(invalid="ignore", divide="ignore"):
-            q = -(b + np.copysign(np.sqrt(b * b - c), b))
-            r2 = c / q
-        lo, hi = np.fmin(q, r2), np.fmax(q, r2)
+            q = np.multiply(b, b, out=term)
+            q -= c
+            np.sqrt(q, out=q)
+            np.copysign(q, b, out=q)
+            q += b
+            np.negative(q, out=q)  # q = -(b + sign(b) sqrt(b^2 - c))
+            r2 = np.divide(c, q, out=c)
+        lo, hi = np.fmin(q, r2), np.fmax(q, r2, out=r2)
         if self.on_cap is not None:  # only in a ray's first cell: the cap it starts on
             np.copyto(lo, np.nan, where=self.on_cap != OFF_CAP)  # the near root is the ray's own start
             np.copyto(hi, np.nan, where=self.on_cap == INTO_AIR)  # out of a sphere: never back in
