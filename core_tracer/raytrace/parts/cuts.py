@@ -259,8 +259,8 @@ class _CellWalk:
 
     def step_cells(self, moving: np.ndarray | None = None) -> None:
         """Move the rays (those at the indices ``moving``, default all) out of their cell into the
-        neighbouring one they enter next, their ``t_cell`` to where they enter it, and on to its far
-        borders."""
+        neighbouring one they enter next, and on to its far borders. The rays ``moving`` also get
+        their ``t_cell``, where they enter it (``advance`` sets it itself for all)."""
         row = self.row
         t_next_i, t_next_j, p = row("t_next_i"), row("t_next_j"), row("p")
         if moving is not None:
