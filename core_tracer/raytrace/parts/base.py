@@ -75,9 +75,12 @@ def slab_span(oy: np.ndarray, dy: np.ndarray, a: np.ndarray, b: np.ndarray,
     the slab between the planes y = a and y = b (the cut walks' planes A and B), from t = 0 and cut
     at ``t_limit``; empty (t_in > t_out) where it misses the slab. A ray parallel to the planes is in
     the slab for ever or never."""
+    # (in place where a temporary is free: these run on every ray that reaches a cut walk)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ta, tb = (a - oy) / dy, (b - oy) / dy
-    t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb)
+        ta, tb = np.subtract(a, oy), np.subtract(b, oy)
+        ta /= dy
+        tb /= dy
+    t_in, t_out = np.fmin(ta, tb), np.fmax(ta, tb, out=tb)
     np.maximum(t_in, 0.0, out=t_in)
     parallel = np.nonzero(dy == 0)[0]
     if len(parallel):
@@ -89,14 +92,35 @@ def slab_span(oy: np.ndarray, dy: np.ndarray, a: np.ndarray, b: np.ndarray,
     return t_in, t_out
 
 
+def axis_cylinder_terms(o: np.ndarray, d: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The coefficients a, b, c of a t^2 + b t + c = 0 for the ray o + t d on the cylinder of
+    ``radius`` about the lamp axis (x^2 + z^2 = r^2): d_x^2 + d_z^2, 2 (o_x d_x + o_z d_z) and
+    o_x^2 + o_z^2 - r^2, computed in place (the socket and the side wall meet every ray)."""
+    ox, oz, dx, dz = o[:, 0], o[:, 2], d[:, 0], d[:, 2]
+    a = np.square(dx)
+    a += np.square(dz)
+    b, term = ox * dx, oz * dz
+    b += term
+    b *= 2.0
+    c = np.square(ox)
+    c += np.square(oz, out=term)
+    c -= radius**2
+    return a, b, c
+
+
 def quadratic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The two roots q / a and c / q of ``solve_quadratic`` (unordered), for callers that only use
     rays with a != 0 (there ``solve_quadratic`` returns exactly their min and max)."""
     with np.errstate(invalid="ignore", divide="ignore"):
-        disc = b * b - 4.0 * a * c
-        sq = np.sqrt(disc)  # NaN where no root is real (copysign then gives it b's sign, as for any NaN)
-        q = -0.5 * (b + np.copysign(sq, b))
-        return q / a, c / q
+        # (the same operations in place: every ray that can reach the socket or the wall runs them)
+        disc, four_ac = b * b, 4.0 * a
+        four_ac *= c
+        disc -= four_ac
+        q = np.sqrt(disc, out=disc)  # NaN where no root is real (copysign then gives it b's sign, as for any NaN)
+        np.copysign(q, b, out=q)
+        q += b
+        q *= -0.5
+        return q / a, np.divide(c, q, out=four_ac)
 
 
 def first_beyond(lo: np.ndarray, hi: np.ndarray, ok_lo: np.ndarray, ok_hi: np.ndarray) -> np.ndarray:

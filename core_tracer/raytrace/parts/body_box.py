@@ -26,9 +26,10 @@ def hit_box(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tup
     t_lo, t_hi = [], []
     for axis in range(3):
         oa, da = o[:, axis], d[:, axis]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t1 = (lo[axis] - oa) / da
-            t2 = (hi[axis] - oa) / da
+        with np.errstate(divide="ignore", invalid="ignore"):  # (in place: these run on every eye ray)
+            t1, t2 = np.subtract(lo[axis], oa), np.subtract(hi[axis], oa)
+            t1 /= da
+            t2 /= da
         # A ray parallel to a slab is inside it (−inf, inf) or outside it (inf, −inf).
         parallel = da == 0
         if parallel.any():
@@ -37,9 +38,11 @@ def hit_box(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tup
             t_hi.append(np.where(parallel, np.where(inside, np.inf, -np.inf), np.fmax(t1, t2)))
         else:
             t_lo.append(np.fmin(t1, t2))
-            t_hi.append(np.fmax(t1, t2))
-    t_near = np.maximum(np.maximum(t_lo[0], t_lo[1]), t_lo[2])
-    t_far = np.minimum(np.minimum(t_hi[0], t_hi[1]), t_hi[2])
+            t_hi.append(np.fmax(t1, t2, out=t2))
+    t_near = np.maximum(t_lo[0], t_lo[1])
+    np.maximum(t_near, t_lo[2], out=t_near)
+    t_far = np.minimum(t_hi[0], t_hi[1], out=t_hi[0])
+    np.minimum(t_far, t_hi[2], out=t_far)
     # argmax's choice: the first axis whose entry is the latest
     face = np.where((t_lo[0] >= t_lo[1]) & (t_lo[0] >= t_lo[2]), 0, np.where(t_lo[1] >= t_lo[2], 1, 2))
     return t_near, t_far, face

@@ -34,6 +34,7 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
 
 # How a ray starts relative to the cut surface (the ``on_cap`` argument of ``hit_cuts``).
 OFF_CAP, INTO_AIR, INTO_LENS = 0, 1, -1
+_ABOVE_T_MIN = np.nextafter(T_MIN, np.inf)  # the least t with t > T_MIN
 
 
 def flat_base_hits(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, t_limit: np.ndarray, flat: np.ndarray,
@@ -179,22 +180,12 @@ class _CellWalk:
         row["t_cell"][:], row["t_out"][:] = t_in, t_out
         walk = cls(ray, state, on_cap[ray])
         if len(leaving_air):  # those that stay: into their second cell, where any cap may be met
-            moving = walk.on_cap == INTO_AIR
-            row["t_cell"][:] = np.where(moving, np.where(row["t_next_i"] < row["t_next_j"], row["t_next_i"],
-                                                         row["t_next_j"]), row["t_cell"])
+            moving = np.nonzero(walk.on_cap == INTO_AIR)[0]  # (a few: stepped by index, not by mask)
             walk.step_cells(moving)
-            walk.on_cap = np.where(moving, OFF_CAP, walk.on_cap).astype(np.int8)
+            walk.on_cap[moving] = OFF_CAP
         if not walk.on_cap.any():
             walk.on_cap = None
         return walk
-
-    def keep(self, keep: np.ndarray) -> None:
-        """Drop the rays not in ``keep``."""
-        if keep.all():
-            return
-        idx = np.nonzero(keep)[0]
-        self.ray = self.ray[idx]
-        self.state = self.state.take(idx, axis=1)
 
     def cap_hits(self) -> np.ndarray:
         """Each ray's hit on the cap of its current cell within the cell (inf if none).
@@ -206,45 +197,86 @@ class _CellWalk:
         stays exact when the cap is nearly flat (it tends to the plane)."""
         row = self.row
         p, dx, dz = row("p"), row("dx"), row("dz")
-        ax, az = row("ox") - row("i") * p, row("oz") - row("j") * p
+        # (each step's operations in place, in the order the formulas give: no temporaries
+        # over every ray the walk holds)
+        ax, az = row("i") * p, row("j") * p
+        np.subtract(row("ox"), ax, out=ax)
+        np.subtract(row("oz"), az, out=az)
         # b = a.d + rho d_y and c = |a|^2 + 2 rho a_y, the cell-independent terms from the rows
-        b = ax * dx + row("ay_dy") + az * dz + row("rho_dy")
-        c = ax * ax + row("ay_ay") + az * az + row("two_rho_ay")
+        b, term = ax * dx, az * dz
+        b += row("ay_dy")
+        b += term
+        b += row("rho_dy")
+        c = np.multiply(ax, ax, out=ax)
+        c += row("ay_ay")
+        c += np.multiply(az, az, out=az)
+        c += row("two_rho_ay")
         with np.errstate(invalid="ignore", divide="ignore"):
-            q = -(b + np.copysign(np.sqrt(b * b - c), b))
-            r2 = c / q
-        lo, hi = np.fmin(q, r2), np.fmax(q, r2)
+            q = np.multiply(b, b, out=term)
+            q -= c
+            np.sqrt(q, out=q)
+            np.copysign(q, b, out=q)
+            q += b
+            np.negative(q, out=q)  # q = -(b + sign(b) sqrt(b^2 - c))
+            r2 = np.divide(c, q, out=c)
+        lo, hi = np.fmin(q, r2), np.fmax(q, r2, out=r2)
         if self.on_cap is not None:  # only in a ray's first cell: the cap it starts on
-            lo = np.where(self.on_cap == OFF_CAP, lo, np.nan)  # the near root is the ray's own start
-            hi = np.where(self.on_cap == INTO_AIR, np.nan, hi)  # out of a sphere: never back in
-        t_cell = row("t_cell")
-        t_end = np.minimum(np.minimum(row("t_next_i"), row("t_next_j")), row("t_out"))
-        cell_from, cell_to = t_cell - self.TOL, t_end + self.TOL
-        lo_ok = (lo > T_MIN) & (lo >= cell_from) & (lo <= cell_to)
-        hi_ok = (hi > T_MIN) & (hi >= cell_from) & (hi <= cell_to)
-        return np.where(lo_ok, lo, np.where(hi_ok, hi, np.inf))
+            np.copyto(lo, np.nan, where=self.on_cap != OFF_CAP)  # the near root is the ray's own start
+            np.copyto(hi, np.nan, where=self.on_cap == INTO_AIR)  # out of a sphere: never back in
+        t_end = np.minimum(row("t_next_i"), row("t_next_j"))
+        np.minimum(t_end, row("t_out"), out=t_end)
+        t_end += self.TOL
+        # A root counts from the cell's start (less TOL) and beyond T_MIN: t > T_MIN is
+        # t >= the next double above it, so both are one comparison with their maximum.
+        t_from = row("t_cell") - self.TOL
+        np.maximum(t_from, _ABOVE_T_MIN, out=t_from)
+        lo_ok = lo >= t_from
+        lo_ok &= lo <= t_end
+        hi_ok = hi >= t_from
+        hi_ok &= hi <= t_end
+        np.copyto(hi, np.inf, where=~hi_ok)
+        np.copyto(hi, lo, where=lo_ok)
+        return hi
 
     def advance(self, walking: np.ndarray) -> None:
         """Step the rays still ``walking`` (no hit in their cell) to the neighbouring cell they
         enter next; drop the others and those whose next cell lies beyond the slab. (Most rays
-        leave after their first cell: they are dropped before the stepping.)"""
+        leave after their first cell: they are dropped before any other work.)"""
         row = self.row
-        row("t_cell")[:] = np.where(row("t_next_i") < row("t_next_j"), row("t_next_i"), row("t_next_j"))
-        self.keep(walking & (self.row("t_cell") <= self.row("t_out")))
+        idx = np.nonzero(walking)[0]
+        t_next_i, t_next_j = row("t_next_i").take(idx), row("t_next_j").take(idx)
+        t_cell = np.where(t_next_i < t_next_j, t_next_i, t_next_j)
+        inside = t_cell <= row("t_out").take(idx)
+        if not inside.all():
+            idx, t_cell = idx[inside], t_cell[inside]
+        if len(idx) < len(self.ray):
+            self.ray = self.ray[idx]
+            self.state = self.state.take(idx, axis=1)
+        self.row("t_cell")[:] = t_cell
         self.on_cap = None
         if len(self.ray):
             self.step_cells()
 
     def step_cells(self, moving: np.ndarray | None = None) -> None:
-        """Move the rays (those ``moving``, default all) whose ``t_cell`` is already where they
-        leave their cell into the neighbouring cell, and on to its far borders."""
+        """Move the rays (those at the indices ``moving``, default all) out of their cell into the
+        neighbouring one they enter next, and on to its far borders. The rays ``moving`` also get
+        their ``t_cell``, where they enter it (``advance`` sets it itself for all)."""
         row = self.row
         t_next_i, t_next_j, p = row("t_next_i"), row("t_next_j"), row("p")
+        if moving is not None:
+            ti, tj = t_next_i.take(moving), t_next_j.take(moving)
+            step_i = ti < tj
+            row("t_cell")[moving] = np.where(step_i, ti, tj)
+            on_i, on_j = moving[step_i], moving[~step_i]
+            # (the same operations as below, on the rows of the few rays moving)
+            row("i")[on_i] += row("si")[on_i]
+            row("j")[on_j] += row("sj")[on_j]
+            with np.errstate(divide="ignore"):
+                t_next_i[on_i] += p[on_i] / np.abs(row("dx")[on_i])
+                t_next_j[on_j] += p[on_j] / np.abs(row("dz")[on_j])
+            return
         step_i = t_next_i < t_next_j
         step_j = ~step_i
-        if moving is not None:
-            step_i &= moving
-            step_j &= moving
         np.add(row("i"), row("si"), out=row("i"), where=step_i)
         np.add(row("j"), row("sj"), out=row("j"), where=step_j)
         # The ray length across one cell, p / |d|: where a ray steps in x its t_next_i is finite, so d_x != 0.

@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import Segments, first_beyond, solve_quadratic
+from .base import Segments, axis_cylinder_terms, first_beyond, solve_quadratic
 
 SURFACE = P.REFLECTOR
 MEDIA = (P.IN_AIR,)
@@ -20,9 +20,15 @@ def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.nd
     For rays that start on the reflector (``leaving``) the root nearer 0 is the start itself:
     only the other one can be a hit, whatever its distance (see ``cuts.hit_cuts``)."""
     inv4f = 0.25 / focal
-    a = (d[:, 0] ** 2 + d[:, 2] ** 2) * inv4f
-    b = d[:, 1] + 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2]) * inv4f
-    c = o[:, 1] + (o[:, 0] ** 2 + o[:, 2] ** 2) * inv4f - vertex
+    # a = (d_x^2 + d_z^2) / 4f, b = d_y + 2 (o_x d_x + o_z d_z) / 4f, c = o_y + (o_x^2 + o_z^2) / 4f - y_v:
+    # the axis cylinder's terms (of radius 0) scaled, in place
+    a, b, c = axis_cylinder_terms(o, d, 0.0)
+    a *= inv4f
+    b *= inv4f
+    b += d[:, 1]
+    c *= inv4f
+    c += o[:, 1]
+    c -= vertex
     lo, hi = solve_quadratic(a, b, c)
     if leaving is not None:
         own_is_lo = np.abs(lo) <= np.abs(hi)

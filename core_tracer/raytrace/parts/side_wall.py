@@ -11,7 +11,7 @@ import numpy as np
 from .. import outline
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments, quadratic_roots
+from .base import T_MIN, Segments, axis_cylinder_terms, quadratic_roots
 
 SURFACE = P.WALL
 MEDIA = (P.IN_LENS, P.IN_AIR)
@@ -19,9 +19,7 @@ MEDIA = (P.IN_LENS, P.IN_AIR)
 
 def hit_side_wall(o: np.ndarray, d: np.ndarray, radius: np.ndarray) -> np.ndarray:
     """The cylinder r = R, left from inside (the far root)."""
-    a = d[:, 0] ** 2 + d[:, 2] ** 2
-    b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
-    c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
+    a, b, c = axis_cylinder_terms(o, d, radius)
     r1, r2 = quadratic_roots(a, b, c)  # a <= 1e-15 (parallel to the axis) misses the wall
     hi = np.fmax(r1, r2)
     return np.where((a > 1e-15) & (hi > T_MIN), hi, np.inf)

@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import paths as P
 from ..lamp_table import LampTable
-from .base import T_MIN, Segments, quadratic_roots
+from .base import T_MIN, Segments, axis_cylinder_terms, quadratic_roots
 
 SURFACE = P.SOCKET
 MEDIA = (P.IN_AIR,)
@@ -18,9 +18,7 @@ def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.nda
     """A solid cylinder of ``radius`` about the axis from the plane of the bulb centre ``y_start``
     back to the reflector vertex ``y_end``, closed at ``y_start`` by a flat disk. Its far end lies
     behind the reflector, so it needs no cap."""
-    a = d[:, 0] ** 2 + d[:, 2] ** 2
-    b = 2.0 * (o[:, 0] * d[:, 0] + o[:, 2] * d[:, 2])
-    c = o[:, 0] ** 2 + o[:, 2] ** 2 - radius**2
+    a, b, c = axis_cylinder_terms(o, d, radius)
     r1, r2 = quadratic_roots(a, b, c)  # a <= 1e-15 (parallel to the axis) misses the side
     lo = np.fmin(r1, r2)
     y = o[:, 1] + lo * d[:, 1]
