@@ -115,6 +115,24 @@ def scene_with(**edits) -> dict:
     return parse_scene(doc)
 
 
+def dark_clear_lens_doc(reflector: dict) -> dict:
+    """The baseline document with its lamp reduced to a flat clear lens (no cuts, no absorption, no
+    surface shading, a black side wall) over a reflector of ``reflector``'s values, the bulb off, a
+    black socket and body, no sun, and the camera low on the left looking at the lens obliquely."""
+    doc = baseline_doc()
+    lamp = doc["lamps"][0]
+    lamp["cuts"]["height"] = 0.0
+    lamp["lens"].update(absorption=[0.0, 0.0, 0.0], diffuse_color=[0.0, 0.0, 0.0], specular=0.0,
+                        side_wall_color=[0.0, 0.0, 0.0])
+    lamp["reflector"].update(reflector)
+    lamp["bulb"]["on"] = False
+    lamp["socket"]["color"] = [0.0, 0.0, 0.0]
+    doc["body"]["color"] = [0.0, 0.0, 0.0]
+    doc["light"] = {"direction": [0.3, -1.0, 0.6], "color": [1, 1, 1], "ambient": 0.0, "strength": 0.0}
+    doc["camera"] = {"position": [-260, -700, -160], "target": [0, 0, 0], "up": [0, 0, 1], "fov_deg": 9.0}
+    return doc
+
+
 def flat_lens_on_axis(ior: float = 1.49, absorption=(0.0, 0.0, 0.0), intensity=(8.0, 7.0, 6.0),
                       thickness: float = 3.0) -> dict:
     """A flat lens (no cuts) seen straight on by an orthographic camera: the centre pixel sees the

@@ -11,11 +11,9 @@ figures are printed (``pytest -s``).
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
-from helpers import BASELINE
+from helpers import dark_clear_lens_doc
 
 import core_tracer
 
@@ -29,18 +27,8 @@ TOLERANCE = 0.01
 
 
 def _constant_scene() -> dict:
-    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
-    lamp = doc["lamps"][0]
-    lamp["cuts"]["height"] = 0.0
-    lamp["lens"].update(absorption=[0.0, 0.0, 0.0], diffuse_color=[0.0, 0.0, 0.0], specular=0.0,
-                        side_wall_color=[0.0, 0.0, 0.0])
-    lamp["reflector"].update(reflectance=0.8, scatter=0.0, color=[0.3, 0.2, 0.1])
-    lamp["bulb"]["on"] = False
-    lamp["socket"]["color"] = [0.0, 0.0, 0.0]
-    doc["body"]["color"] = [0.0, 0.0, 0.0]
+    doc = dark_clear_lens_doc({"reflectance": 0.8, "scatter": 0.0, "color": [0.3, 0.2, 0.1]})
     doc["body"]["specular"] = 0.0
-    doc["light"] = {"direction": [0.3, -1.0, 0.6], "color": [1, 1, 1], "ambient": 0.0, "strength": 0.0}
-    doc["camera"] = {"position": [-260, -700, -160], "target": [0, 0, 0], "up": [0, 0, 1], "fov_deg": 9.0}
     doc["image"] = {"width": SIZE[0], "height": SIZE[1], "samples": 1}
     return core_tracer.parse_scene(doc)
 

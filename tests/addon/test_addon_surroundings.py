@@ -14,7 +14,7 @@ import json
 
 import numpy as np
 import pytest
-from helpers import BASELINE
+from helpers import BASELINE, dark_clear_lens_doc
 
 import core_tracer
 from core_tracer.raytrace import environment
@@ -27,18 +27,8 @@ BODY_SAMPLES = 64  # a diffuse surface under the world: Cycles' MIS leaves littl
 
 
 def _mirror_scene(size=(48, 32)) -> dict:
-    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
-    lamp = doc["lamps"][0]
-    lamp["cuts"]["height"] = 0.0
-    lamp["lens"].update(absorption=[0.0, 0.0, 0.0], diffuse_color=[0.0, 0.0, 0.0], specular=0.0,
-                        side_wall_color=[0.0, 0.0, 0.0])
-    lamp["reflector"].update(reflectance=0.0, scatter=0.0, color=[0.0, 0.0, 0.0])
-    lamp["bulb"]["on"] = False
-    lamp["socket"]["color"] = [0.0, 0.0, 0.0]
-    doc["body"]["color"] = [0.0, 0.0, 0.0]
-    doc["light"] = {"direction": [0.3, -1.0, 0.6], "color": [1, 1, 1], "ambient": 0.0, "strength": 0.0}
     # Seen from low on the left, the lens mirrors the sky above and right of the lamp.
-    doc["camera"] = {"position": [-260, -700, -160], "target": [0, 0, 0], "up": [0, 0, 1], "fov_deg": 9.0}
+    doc = dark_clear_lens_doc({"reflectance": 0.0, "scatter": 0.0, "color": [0.0, 0.0, 0.0]})
     doc["environment"] = {"world": "courtyard", "strength": 1.0, "rotation_deg": 40.0}
     doc["image"] = {"width": size[0], "height": size[1], "samples": 4}
     return core_tracer.parse_scene(doc)

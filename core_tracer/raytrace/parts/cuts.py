@@ -75,19 +75,9 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
         flat_base_hits(o, d, plane_a, t_limit, np.nonzero(~curved & (on_cap == OFF_CAP))[0], t_hit)
 
     # The walk keeps only the cell each ray's hit lies in; the normals follow after the walk.
-    cell_i, cell_j = np.zeros(n), np.zeros(n)
-    walk = _CellWalk.enter(o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap)
-    for _ in range(MAX_CELL_STEPS):
-        if len(walk.ray) == 0:
-            break
-        t = walk.cap_hits()
-        found = np.isfinite(t)
-        hits = np.nonzero(found)[0]
-        if len(hits):
-            ray = walk.ray[hits]
-            t_hit[ray] = t[hits]
-            cell_i[ray], cell_j[ray] = walk.row("i")[hits], walk.row("j")[hits]
-        walk.advance(~found)
+    cell_hit = np.zeros((2, n))
+    walk_to_hits(_CellWalk.enter(o, d, plane_a, plane_b, pitch, rho, t_limit, on_cap), MAX_CELL_STEPS, t_hit, cell_hit)
+    cell_i, cell_j = cell_hit
 
     normal = np.zeros((n, 3))
     normal[:, 1] = 1.0
@@ -97,6 +87,24 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
         ax, ay, az = oc[:, 0] - cell_i[capped] * pc, oc[:, 1] - plane_b[capped], oc[:, 2] - cell_j[capped] * pc
         put_rows(normal, capped, _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2], rho[capped]))
     return t_hit, normal
+
+
+def walk_to_hits(walk, steps: int, t_hit: np.ndarray, cell_hit: np.ndarray) -> None:
+    """Step ``walk`` (``_CellWalk``, or a cylindrical lens's piece: its ``ray``, ``cap_hits()``,
+    ``row(name)`` and ``advance(walking)``) cell after cell, at most ``steps`` times, until each ray
+    has hit a cap or left; the hits go into ``t_hit`` and their cells (i, j) into ``cell_hit`` (2, n),
+    both indexed by the walk's ``ray``."""
+    for _ in range(steps):
+        if len(walk.ray) == 0:
+            break
+        t = walk.cap_hits()
+        found = np.isfinite(t)
+        hits = np.nonzero(found)[0]
+        if len(hits):
+            ray = walk.ray[hits]
+            t_hit[ray] = t[hits]
+            cell_hit[0, ray], cell_hit[1, ray] = walk.row("i")[hits], walk.row("j")[hits]
+        walk.advance(~found)
 
 
 class _CellWalk:

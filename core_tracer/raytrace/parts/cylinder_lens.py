@@ -28,7 +28,7 @@ import numpy as np
 from ...scene.spec import MAX_CUTS_ACROSS
 from .. import optics
 from .base import T_MIN, put_rows, rows
-from .cuts import INTO_AIR, INTO_LENS, OFF_CAP
+from .cuts import INTO_AIR, INTO_LENS, OFF_CAP, walk_to_hits
 
 # The lens spans less than half a turn of the cylinder (validation: apex > 2 R), so one shell
 # piece inside the side wall crosses at most (pi/2 + 1) * 2R / p angular and vertical cells.
@@ -173,7 +173,7 @@ def _walk_cells(o, d, g, pitch, rho, t_limit, on_cap) -> tuple[np.ndarray, np.nd
         t_start = np.concatenate([start1.take(go1), start2.take(go2)])
         t_end = np.concatenate([end1.take(go1), end2.take(go2)])
         col_t, col_cell = np.full(len(go), np.inf), np.empty((2, len(go)))
-        _Piece(o, d, g, step, pitch, rho, t_start, t_end, on_cap, go).walk(col_t, col_cell)
+        walk_to_hits(_Piece(o, d, g, step, pitch, rho, t_start, t_end, on_cap, go), MAX_CELL_STEPS, col_t, col_cell)
         for part in (slice(first, None), slice(0, first)):  # the second pieces' hits, then the first's over them
             found = np.nonzero(np.isfinite(col_t[part]))[0]
             if len(found):
@@ -292,20 +292,8 @@ class _Piece:
         on_half = sin_b * (X + t * dX) - cos_b * (Y + t * dY) > 0  # the radial direction is (side sin, -cos)
         return np.where((r["si"] != 0) & np.isfinite(t) & on_half, t, np.inf)
 
-    def walk(self, t_hit: np.ndarray, cell_hit: np.ndarray) -> None:
-        """Walk to each column's hit or its piece's end; the hits go into ``t_hit`` and their
-        cells into ``cell_hit`` (2, columns)."""
-        for _ in range(MAX_CELL_STEPS):
-            if len(self.ray) == 0:
-                break
-            t = self.cap_hits()
-            found = np.isfinite(t)
-            hits = np.nonzero(found)[0]
-            if len(hits):
-                ray = self.ray[hits]
-                t_hit[ray] = t[hits]
-                cell_hit[0, ray], cell_hit[1, ray] = self.r["i"][hits], self.r["j"][hits]
-            self.advance(~found)
+    def row(self, name: str) -> np.ndarray:
+        return self.r[name]
 
     def cap_hits(self) -> np.ndarray:
         """Each ray's hit on the cap of its current cell within the cell (inf if none); see
