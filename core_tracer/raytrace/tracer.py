@@ -15,6 +15,7 @@ than one sample per pixel, those of each group of samples along with the next gr
 
 from __future__ import annotations
 
+import math
 import os
 import queue
 import sys
@@ -810,19 +811,24 @@ def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray,
                 sample_ids: np.ndarray) -> Generator[tuple[np.ndarray, np.ndarray], _Band, np.ndarray]:
     """Trace the samples ``sample_ids`` of every pixel (asked for in groups of at most TILE_RAYS rays,
     whole pixels to a group, as ``_sample_rays``): returns each ray's passes, sample-major (samples,
-    passes, pixels, 3), so that one sample of every pixel is one contiguous block; the band's
-    statistics take the rays' counts. Every ray has its own slot, so the order of the rays changes
-    no value."""
+    passes, pixels, 3), so that one sample of every pixel is one block (a view of the traced group's
+    passes when one group holds every pixel: no copy); the band's statistics take the rays' counts.
+    Every ray has its own slot, so the order of the rays changes no value."""
     count = len(sample_ids)
-    values = np.empty((count, len(PASS_NAMES), len(pixels), 3))
     per_group = max(1, TILE_RAYS // count)
+    values = None
     for i0 in range(0, len(pixels), per_group):
         group_pixels = pixels[i0:i0 + per_group]
         ray_pixels = np.tile(group_pixels, count)
         offsets = pixel_filter.grid_offsets(ctx.filter_name, group_pixels, sample_ids, ctx.samples, sample_major=True)
         group = yield eye_rays(ctx.camera, ray_pixels, offsets)
-        values[:, :, i0:i0 + len(group_pixels)] = (group.acc.reshape(len(PASS_NAMES), count, len(group_pixels), 3)
-                                                   .transpose(1, 0, 2, 3))
+        traced = group.acc.reshape(len(PASS_NAMES), count, len(group_pixels), 3).transpose(1, 0, 2, 3)
+        if len(group_pixels) == len(pixels):
+            values = traced
+        else:
+            if values is None:
+                values = np.empty((count, len(PASS_NAMES), len(pixels), 3))
+            values[:, :, i0:i0 + len(group_pixels)] = traced
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
         band.transitions |= group.transitions
@@ -845,15 +851,20 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
     pilot = pilot_samples(ctx.samples)
     top, bottom = max(0, y0 - 1), min(cam.height, y1 + 1)
     pilot_values = yield from _per_sample(ctx, band, np.arange(top * width, bottom * width), pilot)
-    shape = (bottom - top, width, len(PASS_NAMES) * 3)
-    low = _neighbourhood(_over_samples(np.minimum, pilot_values).transpose(1, 0, 2).reshape(shape), np.minimum)
-    high = _neighbourhood(_over_samples(np.maximum, pilot_values).transpose(1, 0, 2).reshape(shape), np.maximum)
-    inner = slice((y0 - top) * width, (y1 - top) * width)
-    pilot_values = pilot_values[:, :, inner]
+    # Each pass's least and greatest pilot sample over the pixel's 3 x 3 neighbourhood, on the passes'
+    # own planes (passes, rows, columns, 3): no transposed copies.
+    shape = (len(PASS_NAMES), bottom - top, width, 3)
+    low = _neighbourhood(_over_samples(np.minimum, pilot_values).reshape(shape), np.minimum)
+    high = _neighbourhood(_over_samples(np.maximum, pilot_values).reshape(shape), np.maximum)
+    inner = slice(y0 - top, y1 - top)
+    low = low[:, inner].reshape(len(PASS_NAMES), -1, 3)
+    high = high[:, inner].reshape(len(PASS_NAMES), -1, 3)
+    pilot_values = pilot_values[:, :, (y0 - top) * width:(y1 - top) * width]
     pilot_mean = _over_samples(np.add, pilot_values) / len(pilot)
     brightness = pilot_mean.sum(axis=0).max(axis=1)
-    spread = (high - low).reshape(-1, len(PASS_NAMES) * 3)[inner]
-    busy = (spread > ctx.adaptive_threshold * brightness[:, None]).any(axis=1)
+    # Some pass and channel spread beyond the threshold: the greatest spread of each pixel does.
+    spread = np.maximum.reduce(high - low, axis=0).max(axis=1)
+    busy = spread > ctx.adaptive_threshold * brightness
     band.acc[:] = pilot_mean
     band.busy = int(busy.sum())
     pixels = np.arange(y0 * width, y1 * width)
@@ -861,10 +872,7 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
     if ctx.background_seen and ctx.world_seen:
         # Busy pixels whose whole neighbourhood's pilot samples saw only the world (a textured sky):
         # their other samples are looked up in it rather than traced (``_world_samples``).
-        others = np.arange(len(PASS_NAMES) * 3) // 3 != BACKGROUND_PASS
-        low_inner = low.reshape(-1, len(PASS_NAMES) * 3)[inner]
-        high_inner = high.reshape(-1, len(PASS_NAMES) * 3)[inner]
-        world = busy & ~(high_inner[:, others] != 0).any(axis=1) & ~(low_inner[:, others] != 0).any(axis=1)
+        world = busy & ~_any_but_background(high) & ~_any_but_background(low)
         busy &= ~world
         busy[_world_samples(ctx, band, pixels, np.flatnonzero(world), pilot, pilot_values)] = True
     busy = np.flatnonzero(busy)
@@ -878,6 +886,15 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
         for k in range(1, ctx.samples):  # in sample order, as ``_over_samples`` and the full path
             total += by_sample[k]
         band.acc[:, idx] = total / ctx.samples
+
+
+def _any_but_background(planes: np.ndarray) -> np.ndarray:
+    """Per pixel of (passes, pixels, 3) ``planes``: whether a pass other than the background's is not 0."""
+    found = np.zeros(planes.shape[1:], dtype=bool)
+    for pass_id, plane in enumerate(planes):
+        if pass_id != BACKGROUND_PASS:
+            found |= plane != 0
+    return found[:, 0] | found[:, 1] | found[:, 2]
 
 
 def _world_samples(ctx: _Context, band: _Band, pixels: np.ndarray, idx: np.ndarray, pilot: np.ndarray,
@@ -894,8 +911,13 @@ def _world_samples(ctx: _Context, band: _Band, pixels: np.ndarray, idx: np.ndarr
         part = idx[c0:c0 + chunk]
         offsets = pixel_filter.grid_offsets(ctx.filter_name, pixels[part], rest, ctx.samples, sample_major=True)
         o, d = eye_rays(ctx.camera, np.tile(pixels[part], len(rest)), offsets)
-        t_near, t_far, _ = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
-        toward = ((t_near <= t_far) & (t_near > 0)).reshape(len(rest), len(part)).any(axis=0)
+        # Only the rays of pixels whose samples can reach the body's picture are tested against its box.
+        toward = np.zeros(len(part), dtype=bool)
+        near = np.flatnonzero(_near_body(ctx, pixels[part]))
+        if len(near):
+            rays = (np.arange(len(rest))[:, None] * len(part) + near).ravel()
+            t_near, t_far, _ = body_box.hit_box(rows(o, rays), rows(d, rays), ctx.box_lo, ctx.box_hi)
+            toward[near] = ((t_near <= t_far) & (t_near > 0)).reshape(len(rest), len(near)).any(axis=0)
         by_sample = np.empty((ctx.samples, len(part), 3))
         by_sample[rest] = ctx.sky(d).reshape(len(rest), len(part), 3)
         by_sample[pilot] = pilot_values[:, BACKGROUND_PASS][:, part]
@@ -908,6 +930,19 @@ def _world_samples(ctx: _Context, band: _Band, pixels: np.ndarray, idx: np.ndarr
         band.max_depth = max(band.max_depth, 1)
         met.append(part[toward])
     return np.concatenate(met) if met else np.zeros(0, dtype=np.int64)
+
+
+def _near_body(ctx: _Context, pixels: np.ndarray) -> np.ndarray:
+    """Whether the samples of each of ``pixels`` can meet the body's box: the pixels within the
+    filter's reach of ``body_box.screen_window`` (every pixel where there is no window). The rays
+    of the others pass outside the picture of the box's corners, so they miss it."""
+    if ctx.window is None:
+        return np.ones(len(pixels), dtype=bool)
+    first_col, last_col, first_row, last_row = ctx.window
+    reach = math.ceil(pixel_filter.filter_support(ctx.filter_name))
+    row, col = np.divmod(pixels, ctx.camera.width)
+    return ((col >= first_col - reach) & (col <= last_col + reach)
+            & (row >= first_row - reach) & (row <= last_row + reach))
 
 
 def _trace_eye_rays(ctx: _Context, band: _Band, o: np.ndarray, d: np.ndarray) -> None:
@@ -968,15 +1003,19 @@ def _over_samples(combine: np.ufunc, values: np.ndarray) -> np.ndarray:
 
 
 def _neighbourhood(values: np.ndarray, combine: np.ufunc) -> np.ndarray:
-    """``combine`` (np.minimum or np.maximum) of each pixel's 3 x 3 neighbourhood, for (rows,
-    columns, values) arrays; the image's border pixels have fewer neighbours."""
+    """``combine`` (np.minimum or np.maximum) of each pixel's 3 x 3 neighbourhood, for (..., rows,
+    columns, channels) arrays; the image's border pixels have fewer neighbours."""
+    # Each row's pixels as one run of columns x channels: the neighbour across is ``channels`` values
+    # along it, so every step combines long contiguous runs.
+    channels = values.shape[-1]
+    values = np.ascontiguousarray(values).reshape(*values.shape[:-2], -1)
     out = values.copy()
-    combine(out[1:], values[:-1], out=out[1:])
-    combine(out[:-1], values[1:], out=out[:-1])
+    combine(out[..., 1:, :], values[..., :-1, :], out=out[..., 1:, :])
+    combine(out[..., :-1, :], values[..., 1:, :], out=out[..., :-1, :])
     rows = out.copy()
-    combine(out[:, 1:], rows[:, :-1], out=out[:, 1:])
-    combine(out[:, :-1], rows[:, 1:], out=out[:, :-1])
-    return out
+    combine(out[..., channels:], rows[..., :-channels], out=out[..., channels:])
+    combine(out[..., :-channels], rows[..., channels:], out=out[..., :-channels])
+    return out.reshape(*out.shape[:-1], -1, channels)
 
 
 def _slots_seeing_body(ctx: _Context, y0: int, y1: int) -> np.ndarray | None:
