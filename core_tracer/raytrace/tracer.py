@@ -269,9 +269,9 @@ def make_context(scene: dict, width: int, height: int, *, record_transitions: bo
 def band_rows(ctx: _Context) -> list[tuple[int, int]]:
     """The image's bands of rows, (y0, y1) each, top first."""
     width, height, samples = ctx.camera.width, ctx.camera.height, ctx.samples
-    # Adaptive sampling traces the pilot samples of a band at once, then the rest of its busy pixels;
-    # it also traces the row above and below its band. The band and those two rows fit one group of
-    # rays: every call of the wavefront pays for its own tail of deep branches.
+    # Adaptive sampling traces the pilot samples of a band at once, then those of its neighbours in
+    # the rows above and below it that it needs, then the rest of its busy pixels. The band and those
+    # two rows fit one group of rays.
     if ctx.adaptive_threshold > 0 and len(pilot_samples(samples)) < samples:
         rows_per_band = max(1, TILE_RAYS // (width * len(pilot_samples(samples))) - 2)
     else:
@@ -837,41 +837,39 @@ def _per_sample(ctx: _Context, band: _Band, pixels: np.ndarray,
 
 def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
     """Adaptive sampling of rows ``y0:y1`` (its eye rays asked for as ``_sample_rays``). The pilot
-    samples (``pilot_samples``) are traced for every pixel and for the rows just outside (the
-    neighbours the filter reaches): a pixel whose 3 x 3 neighbourhood's pilot samples all agree in
-    every pass to ``adaptive_threshold`` of its brightness lies in a flat part of the image and
-    keeps their mean. Every other pixel (an edge,
-    a crease, a bulb image in a lenslet) traces the rest of its samples and is their sum in
-    sample order over the count, exactly as without adaptive sampling.
+    samples (``pilot_samples``) are traced for every pixel: a pixel whose 3 x 3 neighbourhood's pilot
+    samples all agree in every pass to ``adaptive_threshold`` of its brightness lies in a flat part
+    of the image and keeps their mean. Every other pixel (an edge, a crease, a bulb image in a
+    lenslet) traces the rest of its samples and is their sum in sample order over the count,
+    exactly as without adaptive sampling.
+
+    The neighbours of the band's first and last rows in the rows just outside it are traced only
+    where they can still decide something: next to the pixels there that agree within the band
+    (a neighbour only widens the spread, so a pixel the band finds busy stays busy).
 
     (A second round, keeping pixels whose first two quarters of samples agreed, was tried and
     dropped: thin creases that both quarters miss made whole pixels wrong.)"""
-    cam = ctx.camera
-    width = cam.width
+    width = ctx.camera.width
     pilot = pilot_samples(ctx.samples)
-    top, bottom = max(0, y0 - 1), min(cam.height, y1 + 1)
-    pilot_values = yield from _per_sample(ctx, band, np.arange(top * width, bottom * width), pilot)
+    pixels = np.arange(y0 * width, y1 * width)
+    pilot_values = yield from _per_sample(ctx, band, pixels, pilot)
     # Each pass's least and greatest pilot sample over the pixel's 3 x 3 neighbourhood, on the passes'
     # own planes (passes, rows, columns, 3): no transposed copies.
-    shape = (len(PASS_NAMES), bottom - top, width, 3)
+    shape = (len(PASS_NAMES), y1 - y0, width, 3)
     low = _neighbourhood(_over_samples(np.minimum, pilot_values).reshape(shape), np.minimum)
     high = _neighbourhood(_over_samples(np.maximum, pilot_values).reshape(shape), np.maximum)
-    inner = slice(y0 - top, y1 - top)
-    low = low[:, inner].reshape(len(PASS_NAMES), -1, 3)
-    high = high[:, inner].reshape(len(PASS_NAMES), -1, 3)
-    pilot_values = pilot_values[:, :, (y0 - top) * width:(y1 - top) * width]
     pilot_mean = _over_samples(np.add, pilot_values) / len(pilot)
-    brightness = pilot_mean.sum(axis=0).max(axis=1)
-    # Some pass and channel spread beyond the threshold: the greatest spread of each pixel does.
-    spread = np.maximum.reduce(high - low, axis=0).max(axis=1)
-    busy = spread > ctx.adaptive_threshold * brightness
+    threshold = ctx.adaptive_threshold * pilot_mean.sum(axis=0).max(axis=1)
+    busy = _spread(high.reshape(len(PASS_NAMES), -1, 3), low.reshape(len(PASS_NAMES), -1, 3)) > threshold
+    yield from _outside_rows(ctx, band, y0, y1, pilot, low, high, busy, threshold)
+    low, high = low.reshape(len(PASS_NAMES), -1, 3), high.reshape(len(PASS_NAMES), -1, 3)
     band.acc[:] = pilot_mean
     band.busy = int(busy.sum())
-    pixels = np.arange(y0 * width, y1 * width)
     rest = np.setdiff1d(np.arange(ctx.samples), pilot)
     if ctx.background_seen and ctx.world_seen:
         # Busy pixels whose whole neighbourhood's pilot samples saw only the world (a textured sky):
-        # their other samples are looked up in it rather than traced (``_world_samples``).
+        # their other samples are looked up in it rather than traced (``_world_samples``, which
+        # traces any whose rays meet the body after all).
         world = busy & ~_any_but_background(high) & ~_any_but_background(low)
         busy &= ~world
         busy[_world_samples(ctx, band, pixels, np.flatnonzero(world), pilot, pilot_values)] = True
@@ -886,6 +884,48 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
         for k in range(1, ctx.samples):  # in sample order, as ``_over_samples`` and the full path
             total += by_sample[k]
         band.acc[:, idx] = total / ctx.samples
+
+
+def _spread(high: np.ndarray, low: np.ndarray) -> np.ndarray:
+    """Per pixel of (passes, pixels, 3) neighbourhood extremes: the greatest spread over its passes
+    and channels (some pass and channel spreads beyond a threshold exactly where this does)."""
+    return np.maximum.reduce(high - low, axis=0).max(axis=1)
+
+
+def _outside_rows(ctx: _Context, band: _Band, y0: int, y1: int, pilot: np.ndarray, low: np.ndarray,
+                  high: np.ndarray, busy: np.ndarray, threshold: np.ndarray) -> _Requests:
+    """The band's first and last rows' neighbours just outside it (``_trace_adaptive``): their pilot
+    samples traced next to the pixels there that are not busy yet, then those pixels' neighbourhood
+    extremes ``low`` and ``high`` (passes, rows, columns, 3) widened by them and ``busy`` (per pixel of
+    the band) decided again, in place."""
+    width, height = ctx.camera.width, ctx.camera.height
+    edges = []  # (the row outside, its neighbour row in the band, that row's calm pixels, the columns next to them)
+    for outside, row in ((y0 - 1, 0), (y1, y1 - y0 - 1)):
+        if 0 <= outside < height:
+            calm = np.flatnonzero(~busy[row * width:(row + 1) * width])
+            if len(calm):
+                near = np.unique(np.concatenate([calm[calm > 0] - 1, calm, calm[calm < width - 1] + 1]))
+                edges.append((outside, row, calm, near))
+    if not edges:
+        return
+    neighbours = np.concatenate([outside * width + near for outside, _, _, near in edges])
+    values = yield from _per_sample(ctx, band, neighbours, pilot)
+    least, most = _over_samples(np.minimum, values), _over_samples(np.maximum, values)
+    start = 0
+    for _, row, calm, near in edges:
+        at = np.full(width, -1)
+        at[near] = np.arange(start, start + len(near))
+        start += len(near)
+        row_low, row_high = low[:, row, calm], high[:, row, calm]
+        for step in (-1, 0, 1):
+            column = calm + step
+            inside = np.flatnonzero((column >= 0) & (column < width))
+            source = at[column[inside]]
+            row_low[:, inside] = np.minimum(row_low[:, inside], least[:, source])
+            row_high[:, inside] = np.maximum(row_high[:, inside], most[:, source])
+        low[:, row, calm], high[:, row, calm] = row_low, row_high
+        pixel = row * width + calm
+        busy[pixel] = _spread(row_high, row_low) > threshold[pixel]
 
 
 def _any_but_background(planes: np.ndarray) -> np.ndarray:

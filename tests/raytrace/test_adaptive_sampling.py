@@ -66,3 +66,28 @@ def test_pilot_samples_spread_over_the_pixel(samples):
     pilot = pilot_samples(samples)
     assert len(pilot) == 4 and pilot[0] == 0 and pilot[-1] == samples - 1
     assert len(set(pilot.tolist())) == 4
+
+
+def test_the_rows_outside_a_band_are_traced_only_where_they_decide(monkeypatch):
+    """A band traces the pilot samples of its neighbours in the rows just outside it only next to
+    its edge rows' calm pixels (``tracer._outside_rows``): the day preset (sky, body, lenses and
+    ground at the bands' edges) in bands of 3 rows is the image of one band, pass for pass, with the
+    same busy pixels, while tracing fewer of the outside rows than all of them."""
+    scene = load_scene(PRESETS / "four-lamp-day-lit.json")
+    one = render_passes(scene, 64, 48, samples=16, threads=1)
+    pilot_pixels = []
+    per_sample = tracer._per_sample
+
+    def counting(ctx, band, pixels, sample_ids):
+        if len(sample_ids) == len(pilot_samples(16)):
+            pilot_pixels.append(len(pixels))
+        return (yield from per_sample(ctx, band, pixels, sample_ids))
+
+    monkeypatch.setattr(tracer, "_per_sample", counting)
+    monkeypatch.setattr(tracer, "TILE_RAYS", 5 * 64 * 4)  # bands of 3 rows
+    many = render_passes(scene, 64, 48, samples=16, threads=2)
+    assert many.stats["busy_pixels"] == one.stats["busy_pixels"]
+    for name in tracer.PASS_NAMES:  # (surroundings: float64 sums may differ in their last bit)
+        np.testing.assert_array_max_ulp(many.passes[name], one.passes[name], maxulp=1)
+    outside = sum(pilot_pixels) - 64 * 48
+    assert 0 < outside < 2 * (48 // 3 - 1) * 64
