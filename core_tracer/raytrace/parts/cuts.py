@@ -290,12 +290,14 @@ class _CellWalk:
             return
         step_i = t_next_i < t_next_j
         step_j = ~step_i
-        np.add(row("i"), row("si"), out=row("i"), where=step_i)
-        np.add(row("j"), row("sj"), out=row("j"), where=step_j)
+        # (the sums over every ray, kept where it steps: faster than an add with where=)
+        i, j = row("i"), row("j")
+        np.putmask(i, step_i, i + row("si"))
+        np.putmask(j, step_j, j + row("sj"))
         # The ray length across one cell, p / |d|: where a ray steps in x its t_next_i is finite, so d_x != 0.
         with np.errstate(divide="ignore"):
-            np.add(t_next_i, p / np.abs(row("dx")), out=t_next_i, where=step_i)
-            np.add(t_next_j, p / np.abs(row("dz")), out=t_next_j, where=step_j)
+            np.putmask(t_next_i, step_i, t_next_i + p / np.abs(row("dx")))
+            np.putmask(t_next_j, step_j, t_next_j + p / np.abs(row("dz")))
 
 
 def _entry_cell(t_in: np.ndarray, o_k: np.ndarray, d_k: np.ndarray, p: np.ndarray, cell: np.ndarray | None = None,
