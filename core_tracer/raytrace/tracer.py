@@ -1144,10 +1144,9 @@ def _intersect(ctx: _Context, rays: _Rays) -> tuple[np.ndarray, np.ndarray, _Nor
         surface_run = surface if idx is None else surface.take(idx)
         for part in run:
             t, part_normal = part.intersect(seg, ctx.lamps, t_run)
-            # Nearer: t < t_run. fmin is that select where the run's t is never NaN (it starts at inf
-            # and only takes a part's t that is smaller), and it and putmask run several times faster
-            # than copyto with where=.
-            np.putmask(surface_run, t < t_run, part.SURFACE)
+            np.copyto(surface_run, part.SURFACE, where=t < t_run)
+            # t where t < t_run: fmin is that select, the run's t never being NaN (it starts at inf
+            # and only takes a part's t that is smaller), and faster than copyto with where=.
             np.fmin(t_run, t, out=t_run)
             if part_normal is not None:
                 normals.append((part.SURFACE, idx, part_normal))
