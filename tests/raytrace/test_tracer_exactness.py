@@ -205,3 +205,24 @@ def test_cell_walk_is_exact_at_the_finest_pitch():
             assert t[k] == pytest.approx(ref[0], rel=1e-9, abs=1e-9), k
     assert found > n // 3
     assert cuts.MAX_CELL_STEPS <= 2 * spec.MAX_CUTS_ACROSS
+
+
+# -- A pass's sums ----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("dtype", [np.int64, np.int32])
+def test_a_sparse_call_adds_each_pixels_rays_in_ray_order(dtype):
+    # Few rays over many pixels (the deep branches of a band) take add_to_pass's sparse path; each
+    # pixel must get exactly (0 + v1 + v2 + ...) in ray order added to what it held, as the dense path.
+    rng = np.random.default_rng(7)
+    pix = rng.integers(100, 40_000, 600).astype(dtype)
+    pix[rng.integers(0, 600, 60)] = pix[:60]  # repeats, scattered through the rays
+    values = rng.random((600, 3)) * 10.0 ** rng.integers(-8, 3, (600, 1))
+    acc = rng.random((40_000, 3))
+    expected = acc.copy()
+    sums: dict[int, np.ndarray] = {}
+    for p, v in zip(pix.tolist(), values, strict=True):
+        sums[p] = sums.get(p, np.zeros(3)) + v
+    for p, s in sums.items():
+        expected[p] += s
+    tracer.add_to_pass(acc, pix, values)
+    assert np.array_equal(acc, expected)

@@ -83,9 +83,11 @@ def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndar
     normal[:, 1] = 1.0
     capped = np.nonzero(np.isfinite(t_hit) if every_curved else np.isfinite(t_hit) & curved)[0]
     if len(capped):
-        oc, dc, tc, pc = rows(o, capped), rows(d, capped), t_hit[capped], pitch[capped]
-        ax, ay, az = oc[:, 0] - cell_i[capped] * pc, oc[:, 1] - plane_b[capped], oc[:, 2] - cell_j[capped] * pc
-        put_rows(normal, capped, _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2], rho[capped]))
+        oc, dc, tc, pc = rows(o, capped), rows(d, capped), t_hit.take(capped), pitch.take(capped)
+        ax, ay, az = (oc[:, 0] - cell_i.take(capped) * pc, oc[:, 1] - plane_b.take(capped),
+                      oc[:, 2] - cell_j.take(capped) * pc)
+        put_rows(normal, capped, _cap_normal(ax + tc * dc[:, 0], ay + tc * dc[:, 1], az + tc * dc[:, 2],
+                                             rho.take(capped)))
     return t_hit, normal
 
 
@@ -101,9 +103,9 @@ def walk_to_hits(walk, steps: int, t_hit: np.ndarray, cell_hit: np.ndarray) -> N
         found = np.isfinite(t)
         hits = np.nonzero(found)[0]
         if len(hits):
-            ray = walk.ray[hits]
-            t_hit[ray] = t[hits]
-            cell_hit[0, ray], cell_hit[1, ray] = walk.row("i")[hits], walk.row("j")[hits]
+            ray = walk.ray.take(hits)
+            t_hit[ray] = t.take(hits)
+            cell_hit[0, ray], cell_hit[1, ray] = walk.row("i").take(hits), walk.row("j").take(hits)
         walk.advance(~found)
 
 
@@ -159,14 +161,15 @@ class _CellWalk:
         # the next cell it enters, and most leave the slab before, so they are left out here.
         leaving_air = np.nonzero(live & (pick(on_cap) == INTO_AIR))[0]
         if len(leaving_air):
-            k = ray[leaving_air]
-            t_cross = [_entry_cell(t_in[leaving_air], o[k, axis], d[k, axis], pitch[k])[2] for axis in (0, 2)]
+            k = ray.take(leaving_air)
+            t_at, p_at = t_in.take(leaving_air), pitch.take(k)  # (1-D gathers by take; a column of o by index)
+            t_cross = [_entry_cell(t_at, o[:, axis][k], d[:, axis][k], p_at)[2] for axis in (0, 2)]
             t_second = np.where(t_cross[0] < t_cross[1], t_cross[0], t_cross[1])
-            live[leaving_air[~(t_second <= t_out[leaving_air])]] = False
+            live[leaving_air[~(t_second <= t_out.take(leaving_air))]] = False
         all_live = every and bool(live.all())  # every ray crosses the slab: no gathers at all
         if not all_live:
             live = np.nonzero(live)[0]
-            ray, t_in, t_out = ray[live], t_in[live], t_out[live]
+            ray, t_in, t_out = ray.take(live), t_in.take(live), t_out.take(live)
         state = np.empty((len(cls.ROWS), len(ray)))
         row = dict(zip(cls.ROWS, state, strict=True))
         # Every row written in place (``out=``): the walk's setup is a fair part of its cost.
@@ -176,9 +179,11 @@ class _CellWalk:
             else:  # mode "clip": the indices are valid, and "raise" would copy through a buffer
                 np.take(values, ray, out=row[name], mode="clip")
         ox, oz, dx, dz, p = row["ox"], row["oz"], row["dx"], row["dz"], row["p"]
-        take = (lambda a: a) if all_live else (lambda a: a[ray])
-        r = take(rho)
-        ay, dy = take(o[:, 1]) - take(plane_b), take(d[:, 1])
+        # (contiguous arrays gathered by take; take would copy a column of o or d whole first)
+        if all_live:
+            r, ay, dy = rho, o[:, 1] - plane_b, d[:, 1]
+        else:
+            r, ay, dy = rho.take(ray), o[:, 1][ray] - plane_b.take(ray), d[:, 1][ray]
         np.multiply(ay, dy, out=row["ay_dy"])
         np.multiply(r, dy, out=row["rho_dy"])
         np.multiply(ay, ay, out=row["ay_ay"])
@@ -186,7 +191,7 @@ class _CellWalk:
         _entry_cell(t_in, ox, dx, p, row["i"], row["si"], row["t_next_i"])
         _entry_cell(t_in, oz, dz, p, row["j"], row["sj"], row["t_next_j"])
         row["t_cell"][:], row["t_out"][:] = t_in, t_out
-        walk = cls(ray, state, on_cap[ray])
+        walk = cls(ray, state, on_cap.take(ray))
         if len(leaving_air):  # those that stay: into their second cell, where any cap may be met
             moving = np.nonzero(walk.on_cap == INTO_AIR)[0]  # (a few: stepped by index, not by mask)
             walk.step_cells(moving)
@@ -285,12 +290,14 @@ class _CellWalk:
             return
         step_i = t_next_i < t_next_j
         step_j = ~step_i
-        np.add(row("i"), row("si"), out=row("i"), where=step_i)
-        np.add(row("j"), row("sj"), out=row("j"), where=step_j)
+        # (the sums over every ray, kept where it steps: faster than an add with where=)
+        i, j = row("i"), row("j")
+        np.putmask(i, step_i, i + row("si"))
+        np.putmask(j, step_j, j + row("sj"))
         # The ray length across one cell, p / |d|: where a ray steps in x its t_next_i is finite, so d_x != 0.
         with np.errstate(divide="ignore"):
-            np.add(t_next_i, p / np.abs(row("dx")), out=t_next_i, where=step_i)
-            np.add(t_next_j, p / np.abs(row("dz")), out=t_next_j, where=step_j)
+            np.putmask(t_next_i, step_i, t_next_i + p / np.abs(row("dx")))
+            np.putmask(t_next_j, step_j, t_next_j + p / np.abs(row("dz")))
 
 
 def _entry_cell(t_in: np.ndarray, o_k: np.ndarray, d_k: np.ndarray, p: np.ndarray, cell: np.ndarray | None = None,

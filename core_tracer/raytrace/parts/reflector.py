@@ -30,10 +30,12 @@ def hit_reflector(o: np.ndarray, d: np.ndarray, focal: np.ndarray, vertex: np.nd
     c += o[:, 1]
     c -= vertex
     lo, hi = solve_quadratic(a, b, c)
-    if leaving is not None:
-        own_is_lo = np.abs(lo) <= np.abs(hi)
-        lo = np.where(leaving & own_is_lo, np.nan, lo)
-        hi = np.where(leaving & ~own_is_lo, np.nan, hi)
+    own = np.nonzero(leaving)[0] if leaving is not None else ()
+    if len(own):  # (the few rays leaving the reflector, by index: not a select over every ray)
+        lo_own, hi_own = lo.take(own), hi.take(own)
+        own_is_lo = np.abs(lo_own) <= np.abs(hi_own)
+        lo[own[own_is_lo]] = np.nan
+        hi[own[~own_is_lo]] = np.nan
     y_lo = o[:, 1] + lo * d[:, 1]
     y_hi = o[:, 1] + hi * d[:, 1]
     return first_beyond(lo, hi, y_lo >= rim - 1e-9, y_hi >= rim - 1e-9)
@@ -47,7 +49,12 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
 
 def reflector_normal(p: np.ndarray, focal: np.ndarray) -> np.ndarray:
     """Unit normal of the paraboloid facing the lamp interior."""
-    nx, nz = -p[:, 0] / (2.0 * focal), -p[:, 2] / (2.0 * focal)
+    two_f = 2.0 * focal
+    nx, nz = -p[:, 0] / two_f, -p[:, 2] / two_f
     # the length as np.linalg.norm sums it, (x^2 + y^2) + z^2, without its slow reduction over rows
     length = np.sqrt(nx * nx + 1.0 + nz * nz)
-    return np.stack([nx / length, -1.0 / length, nz / length], axis=1)
+    normal = np.empty((len(p), 3))  # (each column divided into place: no stacking copy)
+    np.divide(nx, length, out=normal[:, 0])
+    np.divide(-1.0, length, out=normal[:, 1])
+    np.divide(nz, length, out=normal[:, 2])
+    return normal
