@@ -99,8 +99,28 @@ class _Rays:
 _RAY_FIELDS = ("pix", "lamp", "o", "d", "k", "medium", "src", "parent", "branch", "seen_reflector")
 
 
+class _Unrecorded:
+    """The rays' parent classes and branches when the render records no transitions: they only feed
+    ``_Band.note``, so nothing is computed or gathered for them; every gather of this is itself."""
+
+    def take(self, *_args, **_kwargs) -> _Unrecorded:
+        return self
+
+    def __getitem__(self, _key) -> _Unrecorded:
+        return self
+
+
+UNRECORDED = _Unrecorded()
+
+
+def _tags(cls: np.ndarray | _Unrecorded, branch: int, n: int) -> np.ndarray | _Unrecorded:
+    """The ``branch`` of ``n`` children whose parents' classes are ``cls`` (UNRECORDED: none kept)."""
+    return UNRECORDED if cls is UNRECORDED else np.full(n, branch, np.int8)
+
+
 def _concat(parts: list[_Rays]) -> _Rays:
-    return _Rays(*(np.concatenate([getattr(p, f) for p in parts]) for f in _RAY_FIELDS))
+    fields = ([getattr(p, f) for p in parts] for f in _RAY_FIELDS)
+    return _Rays(*(UNRECORDED if any(a is UNRECORDED for a in each) else np.concatenate(each) for each in fields))
 
 
 class _Context(Lighting):
@@ -1162,8 +1182,10 @@ def _into_lenses(ctx: _Context, band: _Band, s: np.ndarray, li: np.ndarray, ds: 
     k = np.repeat((1.0 - r)[:, None], 3, axis=1)
     d_in = optics.refract(ds, face_normal, 1.0 / ior)
     rays = _Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
-                 src=np.full(len(s), P.OUTER, np.int8), parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8),
-                 branch=np.full(len(s), P.TRANSMITTED, np.int8), seen_reflector=np.zeros(len(s), bool))
+                 src=np.full(len(s), P.OUTER, np.int8),
+                 parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8) if ctx.record else UNRECORDED,
+                 branch=np.full(len(s), P.TRANSMITTED, np.int8) if ctx.record else UNRECORDED,
+                 seen_reflector=np.zeros(len(s), bool))
     return rays.take(_alive(k))
 
 
@@ -1279,7 +1301,8 @@ def _step(ctx: _Context, band: _Band, rays: _Rays) -> _Rays:
     """Trace one generation: find each segment's end, add its luminance, spawn the children."""
     L = ctx.lamps
     t, surface, normals = _intersect(ctx, rays)
-    cls = _path_class(rays.medium, rays.src, surface)
+    # The path classes only feed the transitions a render records (``_Band.note``).
+    cls = _path_class(rays.medium, rays.src, surface) if ctx.record else UNRECORDED
     band.note(rays.pix, rays.parent, rays.branch, cls)
 
     k = rays.k
@@ -1368,7 +1391,7 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     n = len(go)
     return _Rays(pix=pix.take(go), lamp=li.take(go), o=rows(hit, go), d=optics.reflect(rows(d, go), rows(normal, go)),
                  k=rows(k, go), medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8),
-                 parent=cls.take(go), branch=np.full(n, P.REFLECTED, np.int8), seen_reflector=np.ones(n, bool))
+                 parent=cls.take(go), branch=_tags(cls, P.REFLECTED, n), seen_reflector=np.ones(n, bool))
 
 
 def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray,
@@ -1397,7 +1420,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
     d_r = optics.normalize(rows(d, go) + optics.scaled(rows(facing, go), 2.0 * cos_facing.take(go)))
     out = [_Rays(pix=pix.take(go), lamp=li.take(go), o=rows(hit, go), d=d_r, k=rows(k_r, go),
                  medium=medium.take(go), src=src.take(go), parent=cls.take(go),
-                 branch=np.full(len(go), P.REFLECTED, np.int8), seen_reflector=seen.take(go))]
+                 branch=_tags(cls, P.REFLECTED, len(go)), seen_reflector=seen.take(go))]
     k_t = optics.scaled(k, 1.0 - r)
     partial = r < 1.0
     if ctx.background_seen or ctx.record:
@@ -1418,7 +1441,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
         out.append(_Rays(pix=pix.take(tc), lamp=li.take(tc), o=rows(hit, tc),
                          d=optics.refract(rows(d, tc), rows(facing, tc), eta, cos_facing.take(tc)),
                          k=rows(k_t, tc), medium=np.where(from_lens.take(tc), np.int8(P.IN_AIR), np.int8(P.IN_LENS)),
-                         src=src.take(tc), parent=cls.take(tc), branch=np.full(len(tc), P.TRANSMITTED, np.int8),
+                         src=src.take(tc), parent=cls.take(tc), branch=_tags(cls, P.TRANSMITTED, len(tc)),
                          seen_reflector=seen.take(tc)))
     return out
 
@@ -1444,7 +1467,7 @@ def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.nda
     go = np.nonzero(_alive(k_r))[0]
     out = [_Rays(pix=pix[go], lamp=li[go], o=rows(hit, go), d=optics.reflect(rows(d, go), rows(facing, go)),
                  k=rows(k_r, go), medium=medium[go], src=surface[go], parent=cls[go],
-                 branch=np.full(len(go), P.REFLECTED, np.int8), seen_reflector=seen[go])]
+                 branch=_tags(cls, P.REFLECTED, len(go)), seen_reflector=seen[go])]
     k_t = scaled(k, 1.0 - r)
     tc = np.nonzero((r < 1.0) & _alive(k_t))[0]
     if len(tc):
@@ -1453,6 +1476,6 @@ def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.nda
         d_t = optics.refract(rows(d, tc), rows(facing, tc), eta)
         out.append(_Rays(pix=pix[tc], lamp=li[tc], o=rows(hit, tc), d=d_t, k=rows(k_t, tc),
                          medium=np.where(into, P.IN_PLATE, P.IN_AIR).astype(np.int8),
-                         src=surface[tc], parent=cls[tc], branch=np.full(len(tc), P.TRANSMITTED, np.int8),
+                         src=surface[tc], parent=cls[tc], branch=_tags(cls, P.TRANSMITTED, len(tc)),
                          seen_reflector=seen[tc]))
     return out
