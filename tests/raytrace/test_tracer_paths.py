@@ -38,6 +38,19 @@ def test_every_transition_while_rendering_presets_is_in_table_1(preset):
     assert np.all(np.isfinite(result.image)) and np.all(result.image >= 0)
 
 
+@pytest.mark.parametrize("samples", [1, 8])
+def test_recording_transitions_changes_no_pixel(samples):
+    """Without recording, the rays carry no path classes (``tracer.UNRECORDED``): the same image and
+    passes, bit for bit, as a render that records every transition."""
+    scene = load_scene(PRESETS / "four-lamp-rear-combination.json")
+    plain = render_passes(scene, 64, 48, samples=samples, threads=1)
+    recorded = render_passes(scene, 64, 48, samples=samples, threads=1, record_transitions=True)
+    assert not plain.stats["transitions"] and recorded.stats["transitions"]
+    for name in plain.passes:
+        np.testing.assert_array_equal(plain.passes[name], recorded.passes[name])
+    assert plain.stats["segments"] == recorded.stats["segments"]
+
+
 def test_rich_scene_reaches_most_path_classes():
     # A deep-cut, high-index lens exercises the internal paths (⑧, ⑨) as well.
     scene = scene_with(**{"lamps[0].cuts.height": 4.0, "lamps[0].cuts.pitch": 7.0, "lamps[0].lens.ior": 1.7})
