@@ -56,11 +56,28 @@ class Sun:
             return optics.phong(normal, view, self.direction, diffuse, self.highlight, self.ambient, specular,
                                 shininess)
         L = self.direction
-        cos_theta = np.maximum(0.0, normal[:, 0] * L[0] + normal[:, 1] * L[1] + normal[:, 2] * L[2])
-        cos_beta = np.maximum(0.0, optics.dot(normal, optics.normalize(view + L)))
-        lit = self.ambient + (1.0 - self.ambient) * self.strength * cos_theta[:, None] * self.color
+        # cos_theta = max(0, n0 L0 + n1 L1 + n2 L2), cos_beta = max(0, n . normalize(view + L)), in place
+        cos_theta = normal[:, 0] * L[0]
+        term = normal[:, 1] * L[1]
+        cos_theta += term
+        np.multiply(normal[:, 2], L[2], out=term)
+        cos_theta += term
+        np.maximum(0.0, cos_theta, out=cos_theta)
+        cos_beta = optics.dot(normal, optics.normalize(view + L))
+        np.maximum(0.0, cos_beta, out=cos_beta)
         spec = np.where(cos_theta > 0.0, self.strength * np.asarray(specular) * np.power(cos_beta, shininess), 0.0)
-        return lit * diffuse + spec[:, None] * self.highlight
+        # [a + (1 - a) s cos_theta S_c] C0_c + spec C1_c, a channel at a time: numpy broadcasts
+        # (N, 1) over rows of 3 slowly.
+        lit = (1.0 - self.ambient) * self.strength * cos_theta
+        diffuse = np.broadcast_to(diffuse, (len(normal), 3))
+        out = np.empty((len(normal), 3))
+        for c in range(3):
+            np.multiply(lit, self.color[c], out=term)
+            term += self.ambient
+            term *= diffuse[:, c]
+            np.multiply(spec, self.highlight[c], out=out[:, c])
+            out[:, c] += term
+        return out
 
     @property
     def light(self) -> np.ndarray:
