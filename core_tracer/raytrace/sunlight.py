@@ -187,8 +187,9 @@ def _scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, at: np.ndarray, o
     turned = optics.dot(normal, view) < 0.0
     to_sun = optics.dot(normal, sun_dir)
     facing = np.flatnonzero(np.where(turned, -to_sun, to_sun) > 0.0)
-    at, normal, view, turned = at.take(facing), normal.take(facing, axis=0), view.take(facing, axis=0), \
-        turned.take(facing)
+    if len(facing) < len(at):  # else every point faces the sun (the usual case): nothing to drop
+        at, normal, view, turned = at.take(facing), normal.take(facing, axis=0), view.take(facing, axis=0), \
+            turned.take(facing)
     for j in range(3):
         np.negative(normal[:, j], out=normal[:, j], where=turned)
     rows = at if of is None else of.take(at)
