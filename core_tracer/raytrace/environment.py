@@ -139,10 +139,21 @@ class Environment:
     def texture_coordinates(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """u, v of unit directions ``d`` (N, 3) in the image, as Cycles (module docstring)."""
         c, s = math.cos(self.rotation), math.sin(self.rotation)
-        x = c * d[:, 0] - s * d[:, 1]
-        y = s * d[:, 0] + c * d[:, 1]
-        u = -np.arctan2(y, x) / (2.0 * math.pi) + 0.5
-        v = np.arctan2(d[:, 2], np.hypot(x, y)) / math.pi + 0.5
+        # x = c d0 - s d1, y = s d0 + c d1, u = -atan2(y, x) / 2 pi + 0.5, v = atan2(d2, hypot(x, y)) / pi
+        # + 0.5: the same operations on the same arrays, the arithmetic in place.
+        x = c * d[:, 0]
+        term = s * d[:, 1]
+        x -= term
+        y = s * d[:, 0]
+        np.multiply(c, d[:, 1], out=term)
+        y += term
+        u = np.arctan2(y, x)
+        np.negative(u, out=u)
+        u /= 2.0 * math.pi
+        u += 0.5
+        v = np.arctan2(d[:, 2], np.hypot(x, y))
+        v /= math.pi
+        v += 0.5
         return u, v
 
     def radiance(self, d: np.ndarray) -> np.ndarray:
@@ -150,27 +161,44 @@ class Environment:
         u, v = self.texture_coordinates(d)
         h, w = self.pixels.shape[:2]
         # Cycles' bilinear lookup: pixel i covers [i, i + 1) of u W; v counts rows from the bottom.
-        x = u * w - 0.5
-        y = (1.0 - v) * h - 0.5
+        x = u  # x = u w - 0.5, y = (1 - v) h - 0.5, tx = x - floor(x), ty = y - floor(y), in place
+        x *= w
+        x -= 0.5
+        y = np.subtract(1.0, v, out=v)
+        y *= h
+        y -= 0.5
         x0 = np.floor(x)
         y0 = np.floor(y)
-        tx = x - x0
-        ty = y - y0
-        # x0 lies in [-1, w - 1], y0 in [-1, h - 1] (u, v in [0, 1]): the padded image (``_planes``) holds
+        tx = np.subtract(x, x0, out=x)
+        ty = np.subtract(y, y0, out=y)
+        # x0 lies in [-1, w - 1], y0 in [-1, h - 1] (u, v in [0, 1]): the padded image (``_padded``) holds
         # the repeated border, so the corners need no modulo (the same values as p[y % h, x % w]).
-        corner = (y0.astype(np.int64) + 1) * (w + 3) + (x0.astype(np.int64) + 1)
+        corner = y0.astype(np.int64)
+        corner += 1
+        corner *= w + 3
+        column = x0.astype(np.int64)
+        column += 1
+        corner += column
         below = corner + (w + 3)
+        # The four corners' pixels, their channels side by side (one row of the padded image each).
+        padded = self._padded
+        top_left = padded.take(corner, axis=0, mode="clip")
+        corner += 1
+        top_right = padded.take(corner, axis=0, mode="clip")
+        bottom_left = padded.take(below, axis=0, mode="clip")
+        below += 1
+        bottom_right = padded.take(below, axis=0, mode="clip")
         sx = 1.0 - tx
         sy = 1.0 - ty
         # The same products and sums, in the same order, as top * (1 - ty) + bottom * ty of the rows
         # (float32 pixels times float64 weights: float64 products, as before padding), a channel at a
-        # time on contiguous planes: numpy broadcasts (N, 1) weights over rows of 3 slowly.
+        # time: numpy broadcasts (N, 1) weights over rows of 3 slowly.
         out = np.empty((len(d), 3))
-        for channel, plane in enumerate(self._planes):
-            top = plane.take(corner, mode="clip") * sx
-            top += plane.take(corner + 1, mode="clip") * tx
-            bottom = plane.take(below, mode="clip") * sx
-            bottom += plane.take(below + 1, mode="clip") * tx
+        for channel in range(3):
+            top = top_left[:, channel] * sx
+            top += top_right[:, channel] * tx
+            bottom = bottom_left[:, channel] * sx
+            bottom += bottom_right[:, channel] * tx
             top *= sy
             bottom *= ty
             top += bottom
@@ -178,14 +206,12 @@ class Environment:
         return out
 
     @functools.cached_property
-    def _planes(self) -> np.ndarray:
-        """The image's float32 pixels padded to (H + 3) x (W + 3), one flat plane per channel (3,
-        (H + 3) * (W + 3)): row j + 1 holds image row j % h and column i + 1 image column i % w for j in
-        [-1, h + 1], i in [-1, w + 1] (the repeated border; contiguous, so that ``take`` reads it in place)."""
-        h, w = self.pixels.shape[:2]
-        rows = np.arange(-1, h + 2) % h
-        cols = np.arange(-1, w + 2) % w
-        return np.ascontiguousarray(self.pixels[rows][:, cols].reshape(-1, 3).T)
+    def _padded(self) -> np.ndarray:
+        """The image's pixels padded to (H + 3) x (W + 3), flattened to ((H + 3) * (W + 3), 4): row
+        (j + 1) (W + 3) + i + 1 holds pixel (j % h, i % w) for j in [-1, h + 1], i in [-1, w + 1] (the
+        repeated border), its three channels and a 0 (rows of 16 bytes, which ``take`` copies fastest).
+        Computed once per image (``_cached_padded``)."""
+        return _cached_padded(self.key) if self.key else _pad(self.pixels)
 
     # -- what the image holds ------------------------------------------------------------------
 
@@ -213,18 +239,47 @@ class Environment:
 
     def irradiance(self, normal: np.ndarray) -> np.ndarray:
         """Irradiance (N, 3) on surfaces of unit ``normal`` (N, 3) from the whole environment."""
-        x = (np.arctan2(normal[:, 1], normal[:, 0]) + math.pi) / (2.0 * math.pi) * IRRADIANCE_LON
-        y = (np.arcsin(np.clip(normal[:, 2], -1.0, 1.0)) + 0.5 * math.pi) / math.pi * IRRADIANCE_LAT
+        # x = (atan2(n1, n0) + pi) / 2 pi LON, y = (asin(n2) + pi / 2) / pi LAT, in place
+        x = np.arctan2(normal[:, 1], normal[:, 0])
+        x += math.pi
+        x /= 2.0 * math.pi
+        x *= IRRADIANCE_LON
+        y = np.arcsin(np.clip(normal[:, 2], -1.0, 1.0))
+        y += 0.5 * math.pi
+        y /= math.pi
+        y *= IRRADIANCE_LAT
         i0 = np.floor(x)
         j0 = np.minimum(np.floor(y), IRRADIANCE_LAT - 1)
-        tx = (x - i0)[:, None]
-        ty = (y - j0)[:, None]
+        tx = np.subtract(x, i0, out=x)
+        ty = np.subtract(y, j0, out=y)
         i0 = i0.astype(np.int64) % IRRADIANCE_LON
         i1 = (i0 + 1) % IRRADIANCE_LON
-        j0 = j0.astype(np.int64)
-        m = self._irradiance_map
-        return ((m[j0, i0] * (1.0 - tx) + m[j0, i1] * tx) * (1.0 - ty)
-                + (m[j0 + 1, i0] * (1.0 - tx) + m[j0 + 1, i1] * tx) * ty)
+        # The nodes (j0, i0), (j0, i1), (j0 + 1, i0), (j0 + 1, i1) as rows of the flattened map.
+        row = j0.astype(np.int64)
+        row *= IRRADIANCE_LON
+        top_left, top_right = row + i0, row + i1
+        row += IRRADIANCE_LON
+        bottom_left, bottom_right = row + i0, row + i1
+        sx = 1.0 - tx
+        sy = 1.0 - ty
+        # (m00 (1 - tx) + m01 tx) (1 - ty) + (m10 (1 - tx) + m11 tx) ty, a channel at a time:
+        # numpy broadcasts (N, 1) weights over rows of 3 slowly.
+        out = np.empty((len(normal), 3))
+        for channel, plane in enumerate(self._irradiance_planes):
+            top = plane.take(top_left) * sx
+            top += plane.take(top_right) * tx
+            bottom = plane.take(bottom_left) * sx
+            bottom += plane.take(bottom_right) * tx
+            top *= sy
+            bottom *= ty
+            top += bottom
+            out[:, channel] = top
+        return out
+
+    @functools.cached_property
+    def _irradiance_planes(self) -> np.ndarray:
+        """The irradiance map, one flat plane per channel (3, (IRRADIANCE_LAT + 1) * IRRADIANCE_LON)."""
+        return np.ascontiguousarray(self._irradiance_map.reshape(-1, 3).T)
 
     def sun_direction(self) -> np.ndarray:
         """Unit direction toward the image's sun: the solid-angle weighted centroid of its pixels of at
@@ -239,6 +294,17 @@ class Environment:
         if self.key:
             return _cached_sun_color(self.key).copy()
         return _sun_color(self.pixels)
+
+
+def _pad(pixels: np.ndarray) -> np.ndarray:
+    """``Environment._padded`` of ``pixels``."""
+    h, w = pixels.shape[:2]
+    rows = np.arange(-1, h + 2) % h
+    cols = np.arange(-1, w + 2) % w
+    padded = np.zeros(((h + 3) * (w + 3), 4), dtype=pixels.dtype)
+    padded[:, :3] = pixels[rows][:, cols].reshape(-1, 3)
+    padded.setflags(write=False)
+    return padded
 
 
 def _pixel_directions(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray]:
@@ -304,6 +370,11 @@ def _sun_color(pixels: np.ndarray) -> np.ndarray:
     light = np.maximum((rgb[sun] * solid[sun, None]).sum(axis=0), 0.0)
     luminance = float(light @ LUMINANCE)
     return light / luminance if luminance > 0.0 else np.ones(3)
+
+
+@functools.lru_cache(maxsize=2)
+def _cached_padded(key: tuple) -> np.ndarray:
+    return _pad(_read(*key))
 
 
 @functools.lru_cache(maxsize=8)

@@ -35,5 +35,8 @@ class Lighting:
         """Equation (1) under the sun, plus the environment's light on a Lambertian surface."""
         out = self.sun.shade(normal, view, diffuse, specular, shininess)
         if self.environment is not None:
-            out = out + diffuse * self.environment.irradiance(normal) / np.pi
+            lambert = self.environment.irradiance(normal)  # + diffuse E / pi, in place
+            np.multiply(lambert, diffuse, out=lambert)
+            lambert /= np.pi
+            out += lambert
         return out

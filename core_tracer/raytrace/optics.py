@@ -35,10 +35,21 @@ def scaled(v: np.ndarray, s: np.ndarray) -> np.ndarray:
 
 
 def normalize(v: np.ndarray) -> np.ndarray:
-    """Rows of ``v`` scaled to unit length (a single vector too)."""
+    """Rows of ``v`` scaled to unit length (a single vector too).
+
+    The quotients of ``v / length[:, None]``: numpy divides by a broadcast (N, 1) column an element
+    at a time, but by a whole (N, 3) array with vector instructions, so each row's length is first
+    copied into its three places (copies are exact)."""
     if v.ndim == 1:
         return v / np.sqrt(v @ v)
-    return v / np.sqrt(dot(v, v))[:, None]
+    length = dot(v, v)
+    np.sqrt(length, out=length)
+    if v.dtype != np.float64:
+        return v / length[:, None]
+    out = np.empty(v.shape)
+    for j in range(v.shape[1]):
+        out[:, j] = length
+    return np.divide(v, out, out=out)
 
 
 def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float) -> np.ndarray:
@@ -49,15 +60,31 @@ def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarra
     """
     cos_i = np.clip(cos_i, 0.0, 1.0)
     eta = n1 / n2
-    sin2_t = eta * eta * (1.0 - cos_i * cos_i)
+    # sin2_t = eta^2 (1 - cos_i^2), cos_t = sqrt(max(0, 1 - sin2_t)): the same operations, in place.
+    sin2_t = cos_i * cos_i
+    np.subtract(1.0, sin2_t, out=sin2_t)
+    sin2_t *= eta * eta
     tir = sin2_t >= 1.0
-    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
-    n1_cos_i, n2_cos_t = n1 * cos_i, n2 * cos_t  # each product once
-    rs = (n1_cos_i - n2_cos_t) / (n1_cos_i + n2_cos_t)
-    n2_cos_i, n1_cos_t = n2 * cos_i, n1 * cos_t
-    rp = (n2_cos_i - n1_cos_t) / (n2_cos_i + n1_cos_t)
-    r = 0.5 * (rs * rs + rp * rp)
-    return np.where(tir, 1.0, r)
+    cos_t = np.subtract(1.0, sin2_t, out=sin2_t)
+    np.maximum(0.0, cos_t, out=cos_t)
+    np.sqrt(cos_t, out=cos_t)
+    rs = _ratio(n1 * cos_i, n2 * cos_t)  # (n1 cos_i - n2 cos_t) / (n1 cos_i + n2 cos_t)
+    rp = _ratio(n2 * cos_i, n1 * cos_t)
+    # r = 0.5 (rs^2 + rp^2)
+    rs *= rs
+    rp *= rp
+    rs += rp
+    rs *= 0.5
+    np.copyto(rs, 1.0, where=tir)  # total internal reflection: exactly 1
+    return rs
+
+
+def _ratio(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(a - b) / (a + b), written over ``a``."""
+    total = a + b
+    a -= b
+    a /= total
+    return a
 
 
 def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
@@ -65,7 +92,10 @@ def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
 
     Renormalised: a ray may bounce dozens of times inside the lens (total internal reflection),
     and each bounce would otherwise multiply the rounding error of its length."""
-    return normalize(d - scaled(n, 2.0 * dot(d, n)))
+    twice = dot(d, n)
+    twice *= 2.0
+    m = scaled(n, twice)
+    return normalize(np.subtract(d, m, out=m))  # d - 2 (d.n) n
 
 
 def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float, cos_i: np.ndarray | None = None) -> np.ndarray:
@@ -77,9 +107,21 @@ def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float, cos_i: np.nda
     if cos_i is None:
         cos_i = -dot(d, n)
     eta = np.broadcast_to(eta, cos_i.shape)
-    sin2_t = eta * eta * (1.0 - cos_i * cos_i)
-    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
-    return normalize(scaled(d, eta) + scaled(n, eta * cos_i - cos_t))  # unit, as in reflect()
+    # cos_t = sqrt(max(0, 1 - eta^2 (1 - cos_i^2))): the same operations, in place.
+    cos_t = cos_i * cos_i
+    np.subtract(1.0, cos_t, out=cos_t)
+    cos_t *= eta * eta
+    np.subtract(1.0, cos_t, out=cos_t)
+    np.maximum(0.0, cos_t, out=cos_t)
+    np.sqrt(cos_t, out=cos_t)
+    along_n = eta * cos_i
+    along_n -= cos_t
+    # eta d + (eta cos_i - cos_t) n, a column at a time, unit as in reflect()
+    out = scaled(d, eta)
+    for j in range(3):
+        np.multiply(n[:, j], along_n, out=cos_t)
+        out[:, j] += cos_t
+    return normalize(out)
 
 
 def absorption(coeff: np.ndarray, length: np.ndarray) -> np.ndarray:
@@ -109,6 +151,6 @@ def phong(normal: np.ndarray, view: np.ndarray, light_dir: np.ndarray, diffuse: 
 def blinn(normal: np.ndarray, view: np.ndarray, to_light: np.ndarray, weight: np.ndarray,
           shininess: np.ndarray) -> np.ndarray:
     """Equation (3) without I0: w (cos β)^n with β between the normal and the half vector."""
-    half = normalize(view + to_light)
-    cos_beta = np.maximum(0.0, dot(normal, half))
+    cos_beta = dot(normal, normalize(view + to_light))
+    np.maximum(0.0, cos_beta, out=cos_beta)
     return weight * np.power(cos_beta, shininess)

@@ -27,7 +27,7 @@ its own test of the line to the sun on the meshes (``freeform.render``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -45,6 +45,9 @@ class Sun:
     strength: float
     color: np.ndarray  # S
     paper: bool  # s = 1 and S = white: eq. (1) exactly as the paper's light
+    # The phantom light's values per lamp of the lamp table last asked for (``_PhantomLamps``): a
+    # render asks with one table, at every reflector hit.
+    _phantom_lamps: list = field(default_factory=list, compare=False, repr=False)
 
     def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
         """Equation (1) under the sun (module docstring); ``view`` and the sun's direction point away
@@ -53,11 +56,28 @@ class Sun:
             return optics.phong(normal, view, self.direction, diffuse, self.highlight, self.ambient, specular,
                                 shininess)
         L = self.direction
-        cos_theta = np.maximum(0.0, normal[:, 0] * L[0] + normal[:, 1] * L[1] + normal[:, 2] * L[2])
-        cos_beta = np.maximum(0.0, optics.dot(normal, optics.normalize(view + L)))
-        lit = self.ambient + (1.0 - self.ambient) * self.strength * cos_theta[:, None] * self.color
+        # cos_theta = max(0, n0 L0 + n1 L1 + n2 L2), cos_beta = max(0, n . normalize(view + L)), in place
+        cos_theta = normal[:, 0] * L[0]
+        term = normal[:, 1] * L[1]
+        cos_theta += term
+        np.multiply(normal[:, 2], L[2], out=term)
+        cos_theta += term
+        np.maximum(0.0, cos_theta, out=cos_theta)
+        cos_beta = optics.dot(normal, optics.normalize(view + L))
+        np.maximum(0.0, cos_beta, out=cos_beta)
         spec = np.where(cos_theta > 0.0, self.strength * np.asarray(specular) * np.power(cos_beta, shininess), 0.0)
-        return lit * diffuse + spec[:, None] * self.highlight
+        # [a + (1 - a) s cos_theta S_c] C0_c + spec C1_c, a channel at a time: numpy broadcasts
+        # (N, 1) over rows of 3 slowly.
+        lit = (1.0 - self.ambient) * self.strength * cos_theta
+        diffuse = np.broadcast_to(diffuse, (len(normal), 3))
+        out = np.empty((len(normal), 3))
+        for c in range(3):
+            np.multiply(lit, self.color[c], out=term)
+            term += self.ambient
+            term *= diffuse[:, c]
+            np.multiply(spec, self.highlight[c], out=out[:, c])
+            out[:, c] += term
+        return out
 
     @property
     def light(self) -> np.ndarray:
@@ -99,21 +119,51 @@ def plate_transmittance(sun: Sun, ior: np.ndarray, absorption: np.ndarray, thick
     return ((1.0 - r) ** 2)[:, None] * optics.absorption(absorption, thickness / cos_t)
 
 
+@dataclass(frozen=True)
+class _PhantomLamps:
+    """What the phantom light needs of each lamp of ``lamps`` (indexed by lamp number), gathered
+    per point: T_sun, whether it lets any light in, and the core half sizes of the outline."""
+
+    lamps: LampTable
+    transmit: np.ndarray  # (L, 3)
+    lets_in: np.ndarray  # (L,) bool
+    core_x: np.ndarray
+    core_z: np.ndarray
+
+    @classmethod
+    def of(cls, sun: Sun, lamps: LampTable) -> _PhantomLamps:
+        """The values of ``lamps`` under ``sun``, computed once per lamp table and kept on the sun."""
+        kept = sun._phantom_lamps
+        if kept and kept[0].lamps is lamps:
+            return kept[0]
+        transmit = sun_transmittance(sun, lamps, np.arange(len(lamps.ior)))
+        half, corner = lamps.half_size, lamps.corner
+        made = cls(lamps, transmit, transmit.any(axis=1), half[:, 0] - corner, half[:, 1] - corner)
+        kept[:] = [made]
+        return made
+
+
 def phantom(sun: Sun, lamps: LampTable, lamp: np.ndarray, hit: np.ndarray, normal: np.ndarray,
             view: np.ndarray) -> np.ndarray:
     """The phantom light (N, 3) per unit accumulated attenuation at reflector points ``hit`` (local
     lamp coordinates) of normal ``normal`` seen from ``view`` (module docstring)."""
-    # T_sun depends on the lamp alone: computed once per lamp of the table and looked up per point.
-    transmit = sun_transmittance(sun, lamps, np.arange(len(lamps.ior))).take(lamp, axis=0)
-    if not transmit.any():
-        return transmit
+    # T_sun and the outline depend on the lamp alone: computed once per lamp and looked up per point.
+    per_lamp = _PhantomLamps.of(sun, lamps)
+    if not per_lamp.lets_in.take(lamp).any():
+        return np.zeros((len(lamp), 3))
     # The line toward the sun crosses the apex plane inside the lens opening.
-    to_plane = (lamps.plane_b[lamp] - hit[:, 1]) / sun.direction[1]
-    cross_x = hit[:, 0] + to_plane * sun.direction[0]
-    cross_z = hit[:, 2] + to_plane * sun.direction[2]
-    half, corner = lamps.half_size[lamp], lamps.corner[lamp]
-    inside = outline.signed_distance(cross_x, cross_z, half[:, 0] - corner, half[:, 1] - corner, corner) <= 0.0
-    return scattered(sun, normal, view, lamps.scatter[lamp], lamps.scatter_shininess[lamp], transmit, inside)
+    toward = sun.direction
+    to_plane = lamps.plane_b.take(lamp)
+    to_plane -= hit[:, 1]
+    to_plane /= toward[1]
+    cross_x = to_plane * toward[0]
+    cross_x += hit[:, 0]
+    cross_z = to_plane * toward[2]
+    cross_z += hit[:, 2]
+    inside = outline.signed_distance(cross_x, cross_z, per_lamp.core_x.take(lamp), per_lamp.core_z.take(lamp),
+                                     lamps.corner.take(lamp)) <= 0.0
+    return _scattered(sun, normal, view, np.flatnonzero(inside), lamp, lamps.scatter, lamps.scatter_shininess,
+                      per_lamp.transmit)
 
 
 def scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, scatter: np.ndarray, shininess: np.ndarray,
@@ -121,16 +171,35 @@ def scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, scatter: np.ndarra
     """The reflector's scatter of eq. (3) with the sun as the light (module docstring), (N, 3): at
     points of ``normal`` seen from ``view`` whose line to the sun passes through the lens (``lit``),
     the lens letting ``transmit`` (N, 3) through."""
+    return _scattered(sun, normal, view, np.flatnonzero(lit), None, scatter, shininess, transmit)
+
+
+def _scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, at: np.ndarray, of: np.ndarray | None,
+               scatter: np.ndarray, shininess: np.ndarray, transmit: np.ndarray) -> np.ndarray:
+    """``scattered`` at the points ``at`` only (the others stay 0), ``scatter``, ``shininess`` and
+    ``transmit`` being rows ``of`` the points (per lamp), or of the points themselves (None)."""
     out = np.zeros((len(normal), 3))
-    at = np.flatnonzero(lit)  # only these can be lit: the others stay 0
     normal, view = normal.take(at, axis=0), view.take(at, axis=0)
     sun_dir = np.broadcast_to(sun.direction, normal.shape)
-    # Lit on the side the eye ray came from only (the normal turned toward the viewer).
-    toward_view = np.where((optics.dot(normal, view) < 0.0)[:, None], -normal, normal)
-    facing = np.flatnonzero(optics.dot(toward_view, sun_dir) > 0.0)
-    at, toward_view, view = at[facing], toward_view.take(facing, axis=0), view.take(facing, axis=0)
-    value = optics.blinn(toward_view, view, sun_dir[:len(at)], scatter[at], shininess[at])
-    out[at] = value[:, None] * transmit.take(at, axis=0) * sun.light
+    # Lit on the side the eye ray came from only (the normal turned toward the viewer): turning
+    # the normal turns the sign of its cosine to the sun, so the points are chosen first and only
+    # their normals turned.
+    turned = optics.dot(normal, view) < 0.0
+    to_sun = optics.dot(normal, sun_dir)
+    facing = np.flatnonzero(np.where(turned, -to_sun, to_sun) > 0.0)
+    if len(facing) < len(at):  # else every point faces the sun (the usual case): nothing to drop
+        at, normal, view, turned = at.take(facing), normal.take(facing, axis=0), view.take(facing, axis=0), \
+            turned.take(facing)
+    for j in range(3):
+        np.negative(normal[:, j], out=normal[:, j], where=turned)
+    rows = at if of is None else of.take(at)
+    value = optics.blinn(normal, view, sun_dir[:len(at)], scatter.take(rows), shininess.take(rows))
+    # value T_sun I_sun, a column at a time (numpy broadcasts (N, 1) over rows of 3 slowly)
+    transmit, light, column = transmit.take(rows, axis=0), sun.light, np.empty(len(at))
+    for j in range(3):
+        np.multiply(value, transmit[:, j], out=column)
+        column *= light[j]
+        out[at, j] = column
     return out
 
 

@@ -61,3 +61,39 @@ def test_scaled_and_normalize_are_the_broadcast_products_bit_for_bit():
     u = rng.standard_normal((100_000, 3))
     expected = u / np.sqrt(np.einsum("ij,ij->i", u, u))[:, None]
     assert (_bits(optics.normalize(u)) == _bits(expected)).all()
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
+
+
+def test_surface_optics_are_their_plain_formulas_bit_for_bit():
+    # reflect, refract, fresnel_reflectance and blinn work in place a column at a time: the same
+    # operations on every element as the textbook expressions, so the same bits.
+    rng = np.random.default_rng(10)
+    n_rays = 50_000
+    d, n = _unit(rng.standard_normal((n_rays, 3))), _unit(rng.standard_normal((n_rays, 3)))
+    n = np.where((np.einsum("ij,ij->i", d, n) > 0.0)[:, None], -n, n)  # facing the incident side
+    eta = rng.uniform(0.6, 1.6, n_rays)
+    cos_i = -np.einsum("ij,ij->i", d, n)
+    with np.errstate(invalid="ignore"):
+        assert (_bits(optics.reflect(d, n)) == _bits(_unit(d - n * (2.0 * np.einsum("ij,ij->i", d, n))[:, None]))).all()
+        for e in (eta, 1.0 / 1.49):
+            ee = np.broadcast_to(e, cos_i.shape)
+            cos_t = np.sqrt(np.maximum(0.0, 1.0 - ee * ee * (1.0 - cos_i * cos_i)))
+            expected = _unit(d * ee[:, None] + n * (ee * cos_i - cos_t)[:, None])
+            assert (_bits(optics.refract(d, n, e)) == _bits(expected)).all()
+            assert (_bits(optics.refract(d, n, e, cos_i)) == _bits(expected)).all()
+        for n1, n2 in ((1.0, eta), (eta, 1.0), (1.49, 1.0)):
+            c = np.clip(cos_i, 0.0, 1.0)
+            ratio = n1 / n2
+            sin2_t = ratio * ratio * (1.0 - c * c)
+            cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+            rs = (n1 * c - n2 * cos_t) / (n1 * c + n2 * cos_t)
+            rp = (n2 * c - n1 * cos_t) / (n2 * c + n1 * cos_t)
+            expected = np.where(sin2_t >= 1.0, 1.0, 0.5 * (rs * rs + rp * rp))
+            assert (_bits(optics.fresnel_reflectance(cos_i, n1, n2)) == _bits(expected)).all()
+        view, light = _unit(rng.standard_normal((n_rays, 3))), _unit(rng.standard_normal((n_rays, 3)))
+        weight, shininess = rng.uniform(0.0, 1.0, n_rays), rng.uniform(1.0, 50.0, n_rays)
+        expected = weight * np.power(np.maximum(0.0, np.einsum("ij,ij->i", n, _unit(view + light))), shininess)
+        assert (_bits(optics.blinn(n, view, light, weight, shininess)) == _bits(expected)).all()

@@ -64,6 +64,44 @@ def test_radiance_at_the_seams_and_poles_repeats_the_border(tmp_path):
     np.testing.assert_allclose(env.radiance(d), 1.7 * _bilinear_wrapped(pixels, u, v), rtol=1e-12, atol=0)
 
 
+def _bits(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(a).view(np.uint64)
+
+
+def test_radiance_and_irradiance_are_the_plain_formulas_bit_for_bit():
+    # The lookups work in place, a channel at a time on a padded copy of the image: the same
+    # operations on every element as the plain expressions below, so the same bits.
+    rng = np.random.default_rng(6)
+    pixels = (rng.random((16, 32, 3)) * 10.0).astype(np.float32)
+    env = environment.Environment(pixels, 1.7, math.radians(30.0))
+    d = rng.normal(size=(20_000, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    c, s = math.cos(env.rotation), math.sin(env.rotation)
+    x, y = c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]
+    u = -np.arctan2(y, x) / (2.0 * math.pi) + 0.5
+    v = np.arctan2(d[:, 2], np.hypot(x, y)) / math.pi + 0.5
+    got_u, got_v = env.texture_coordinates(d)
+    assert (_bits(got_u) == _bits(u)).all() and (_bits(got_v) == _bits(v)).all()
+    h, w = pixels.shape[:2]
+    px, py = u * w - 0.5, (1.0 - v) * h - 0.5
+    i, j = np.floor(px).astype(int), np.floor(py).astype(int)
+    tx, ty = (px - np.floor(px))[:, None], (py - np.floor(py))[:, None]
+    top = pixels[j % h, i % w] * (1.0 - tx) + pixels[j % h, (i + 1) % w] * tx  # float32 x float64: float64
+    bottom = pixels[(j + 1) % h, i % w] * (1.0 - tx) + pixels[(j + 1) % h, (i + 1) % w] * tx
+    assert (_bits(env.radiance(d)) == _bits((top * (1.0 - ty) + bottom * ty) * env.strength)).all()
+    n = environment.IRRADIANCE_LON, environment.IRRADIANCE_LAT
+    ex = (np.arctan2(d[:, 1], d[:, 0]) + math.pi) / (2.0 * math.pi) * n[0]
+    ey = (np.arcsin(np.clip(d[:, 2], -1.0, 1.0)) + 0.5 * math.pi) / math.pi * n[1]
+    i0, j0 = np.floor(ex), np.minimum(np.floor(ey), n[1] - 1)
+    tx, ty = (ex - i0)[:, None], (ey - j0)[:, None]
+    i0, j0 = i0.astype(np.int64) % n[0], j0.astype(np.int64)
+    i1 = (i0 + 1) % n[0]
+    m = env._irradiance_map
+    expected = ((m[j0, i0] * (1.0 - tx) + m[j0, i1] * tx) * (1.0 - ty)
+                + (m[j0 + 1, i0] * (1.0 - tx) + m[j0 + 1, i1] * tx) * ty)
+    assert (_bits(env.irradiance(d)) == _bits(expected)).all()
+
+
 def test_rays_missing_the_lamp_are_looked_up_as_the_tracer_would_trace_them(tmp_path):
     sky = write_exr(tmp_path / "sky.exr", np.random.default_rng(4).random((32, 64, 3)).astype(np.float32) + 0.1)
     scene = scene_with(**{"environment": {"world": "file", "file": sky}, "image": {"width": 48, "height": 36}})

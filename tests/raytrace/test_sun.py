@@ -26,6 +26,27 @@ def test_the_general_sun_at_strength_1_and_white_is_the_papers_light():
                                paper.shade(normal, view, colour, 0.5, 30.0), rtol=1e-12, atol=1e-15)
 
 
+@pytest.mark.parametrize("per_point", [False, True])
+def test_the_general_sun_is_its_plain_formula_bit_for_bit(per_point):
+    # Sun.shade works in place a channel at a time: the same operations on every element as the
+    # plain expression of eq. (1) with strength and colour below, so the same bits.
+    rng = np.random.default_rng(4)
+    normal = optics.normalize(rng.normal(size=(5000, 3)))
+    view = optics.normalize(rng.normal(size=(5000, 3)))
+    sun = sunlight.Sun(optics.normalize(np.array([0.3, -1.0, 0.6])), np.array([1.0, 0.9, 0.8]), 0.25, 1.7,
+                       np.array([1.0, 0.8, 0.6]), False)
+    colour = rng.random((5000, 3)) if per_point else np.array([0.6, 0.3, 0.1])
+    specular, shininess = (rng.random(5000), rng.uniform(1.0, 60.0, 5000)) if per_point else (0.5, 30.0)
+    L = sun.direction
+    cos_theta = np.maximum(0.0, normal[:, 0] * L[0] + normal[:, 1] * L[1] + normal[:, 2] * L[2])
+    cos_beta = np.maximum(0.0, np.einsum("ij,ij->i", normal, optics.normalize(view + L)))
+    lit = sun.ambient + (1.0 - sun.ambient) * sun.strength * cos_theta[:, None] * sun.color
+    spec = np.where(cos_theta > 0.0, sun.strength * np.asarray(specular) * np.power(cos_beta, shininess), 0.0)
+    expected = lit * colour + spec[:, None] * sun.highlight
+    got = sun.shade(normal, view, colour, specular, shininess)
+    assert (got.view(np.uint64) == expected.view(np.uint64)).all()
+
+
 def test_strength_and_colour_scale_the_sunlit_part_only():
     scene = scene_with(**{"light": {"direction": [0, -1, 0], "color": [1, 1, 1], "ambient": 0.2, "strength": 2.0,
                                     "sun_color": [1.0, 0.5, 0.25]},
