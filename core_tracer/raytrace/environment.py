@@ -195,13 +195,8 @@ class Environment:
         # time: numpy broadcasts (N, 1) weights over rows of 3 slowly.
         out = np.empty((len(d), 3))
         for channel in range(3):
-            top = top_left[:, channel] * sx
-            top += top_right[:, channel] * tx
-            bottom = bottom_left[:, channel] * sx
-            bottom += bottom_right[:, channel] * tx
-            top *= sy
-            bottom *= ty
-            top += bottom
+            top = _bilinear(top_left[:, channel], top_right[:, channel], bottom_left[:, channel],
+                            bottom_right[:, channel], sx, tx, sy, ty)
             np.multiply(top, self.strength, out=out[:, channel])
         return out
 
@@ -266,14 +261,8 @@ class Environment:
         # numpy broadcasts (N, 1) weights over rows of 3 slowly.
         out = np.empty((len(normal), 3))
         for channel, plane in enumerate(self._irradiance_planes):
-            top = plane.take(top_left) * sx
-            top += plane.take(top_right) * tx
-            bottom = plane.take(bottom_left) * sx
-            bottom += plane.take(bottom_right) * tx
-            top *= sy
-            bottom *= ty
-            top += bottom
-            out[:, channel] = top
+            out[:, channel] = _bilinear(plane.take(top_left), plane.take(top_right), plane.take(bottom_left),
+                                        plane.take(bottom_right), sx, tx, sy, ty)
         return out
 
     @functools.cached_property
@@ -294,6 +283,20 @@ class Environment:
         if self.key:
             return _cached_sun_color(self.key).copy()
         return _sun_color(self.pixels)
+
+
+def _bilinear(top_left: np.ndarray, top_right: np.ndarray, bottom_left: np.ndarray, bottom_right: np.ndarray,
+              sx: np.ndarray, tx: np.ndarray, sy: np.ndarray, ty: np.ndarray) -> np.ndarray:
+    """One channel of a bilinear lookup, (top_left sx + top_right tx) sy + (bottom_left sx +
+    bottom_right tx) ty, in that order (sx = 1 - tx, sy = 1 - ty)."""
+    top = top_left * sx
+    top += top_right * tx
+    bottom = bottom_left * sx
+    bottom += bottom_right * tx
+    top *= sy
+    bottom *= ty
+    top += bottom
+    return top
 
 
 def _pad(pixels: np.ndarray) -> np.ndarray:

@@ -27,7 +27,7 @@ its own test of the line to the sun on the meshes (``freeform.render``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -45,9 +45,6 @@ class Sun:
     strength: float
     color: np.ndarray  # S
     paper: bool  # s = 1 and S = white: eq. (1) exactly as the paper's light
-    # The phantom light's values per lamp of the lamp table last asked for (``_PhantomLamps``): a
-    # render asks with one table, at every reflector hit.
-    _phantom_lamps: list = field(default_factory=list, compare=False, repr=False)
 
     def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
         """Equation (1) under the sun (module docstring); ``view`` and the sun's direction point away
@@ -120,9 +117,10 @@ def plate_transmittance(sun: Sun, ior: np.ndarray, absorption: np.ndarray, thick
 
 
 @dataclass(frozen=True)
-class _PhantomLamps:
+class PhantomLamps:
     """What the phantom light needs of each lamp of ``lamps`` (indexed by lamp number), gathered
-    per point: T_sun, whether it lets any light in, and the core half sizes of the outline."""
+    per point: T_sun, whether it lets any light in, and the core half sizes of the outline. A
+    render makes it once (``of``)."""
 
     lamps: LampTable
     transmit: np.ndarray  # (L, 3)
@@ -131,26 +129,20 @@ class _PhantomLamps:
     core_z: np.ndarray
 
     @classmethod
-    def of(cls, sun: Sun, lamps: LampTable) -> _PhantomLamps:
-        """The values of ``lamps`` under ``sun``, computed once per lamp table and kept on the sun."""
-        kept = sun._phantom_lamps
-        if kept and kept[0].lamps is lamps:
-            return kept[0]
+    def of(cls, sun: Sun, lamps: LampTable) -> PhantomLamps:
         transmit = sun_transmittance(sun, lamps, np.arange(len(lamps.ior)))
         half, corner = lamps.half_size, lamps.corner
-        made = cls(lamps, transmit, transmit.any(axis=1), half[:, 0] - corner, half[:, 1] - corner)
-        kept[:] = [made]
-        return made
+        return cls(lamps, transmit, transmit.any(axis=1), half[:, 0] - corner, half[:, 1] - corner)
 
 
-def phantom(sun: Sun, lamps: LampTable, lamp: np.ndarray, hit: np.ndarray, normal: np.ndarray,
+def phantom(sun: Sun, per_lamp: PhantomLamps, lamp: np.ndarray, hit: np.ndarray, normal: np.ndarray,
             view: np.ndarray) -> np.ndarray:
     """The phantom light (N, 3) per unit accumulated attenuation at reflector points ``hit`` (local
-    lamp coordinates) of normal ``normal`` seen from ``view`` (module docstring)."""
-    # T_sun and the outline depend on the lamp alone: computed once per lamp and looked up per point.
-    per_lamp = _PhantomLamps.of(sun, lamps)
+    lamp coordinates) of lamps ``lamp`` of ``per_lamp.lamps``, of normal ``normal`` seen from
+    ``view`` (module docstring)."""
     if not per_lamp.lets_in.take(lamp).any():
         return np.zeros((len(lamp), 3))
+    lamps = per_lamp.lamps
     # The line toward the sun crosses the apex plane inside the lens opening.
     toward = sun.direction
     to_plane = lamps.plane_b.take(lamp)

@@ -141,8 +141,8 @@ class _Context(Lighting):
         self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body
         self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
         self.body = body
-        in_lens = sunlight.sun_transmittance(self.sun, self.lamps, np.arange(len(self.lamps.ior)))
-        self.phantom = scene["light"].get("phantom", False) and bool(in_lens.any())
+        self.phantom_lamps = sunlight.PhantomLamps.of(self.sun, self.lamps)  # T_sun and the outline per lamp
+        self.phantom = scene["light"].get("phantom", False) and bool(self.phantom_lamps.lets_in.any())
         self.record = record_transitions
 
 
@@ -898,11 +898,12 @@ def _trace_adaptive(ctx: _Context, band: _Band, y0: int, y1: int) -> _Requests:
     shape = (len(PASS_NAMES), y1 - y0, width, 3)
     low = _neighbourhood(_over_samples(np.minimum, pilot_values).reshape(shape), np.minimum)
     high = _neighbourhood(_over_samples(np.maximum, pilot_values).reshape(shape), np.maximum)
+    per_pixel = (len(PASS_NAMES), -1, 3)  # views of the same planes, a pixel per column
     pilot_mean = _over_samples(np.add, pilot_values) / len(pilot)
     threshold = ctx.adaptive_threshold * pilot_mean.sum(axis=0).max(axis=1)
-    busy = _spread(high.reshape(len(PASS_NAMES), -1, 3), low.reshape(len(PASS_NAMES), -1, 3)) > threshold
-    yield from _outside_rows(ctx, band, y0, y1, pilot, low, high, busy, threshold)
-    low, high = low.reshape(len(PASS_NAMES), -1, 3), high.reshape(len(PASS_NAMES), -1, 3)
+    busy = _spread(high.reshape(per_pixel), low.reshape(per_pixel)) > threshold
+    yield from _outside_rows(ctx, band, y0, y1, pilot, low, high, busy, threshold)  # (widens low, high in place)
+    low, high = low.reshape(per_pixel), high.reshape(per_pixel)
     band.acc[:] = pilot_mean
     band.busy = int(busy.sum())
     rest = np.setdiff1d(np.arange(ctx.samples), pilot)
@@ -1385,7 +1386,7 @@ def _reflector(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nda
     scatter = optics.blinn(normal, -d, to_bulb, L.scatter.take(li), L.scatter_shininess.take(li))
     band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(L.bulb_intensity, li))
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
-        band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, L, li, hit, normal, -d))
+        band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, ctx.phantom_lamps, li, hit, normal, -d))
     k = optics.scaled(k, L.reflectance.take(li))
     go = np.nonzero(_alive(k))[0]
     n = len(go)
