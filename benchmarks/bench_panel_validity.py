@@ -22,8 +22,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from core_tracer.scene.limits import lamp_limits  # noqa: E402
 from core_tracer.scene.reading import SceneError, read_json  # noqa: E402
-from core_tracer.scene.validate import lamp_limits, parse_scene  # noqa: E402
+from core_tracer.scene.validate import parse_scene  # noqa: E402
 
 PRESET = ROOT / "presets" / "four-lamp-rear-combination.json"
 

@@ -22,9 +22,9 @@ import numpy as np
 from mathutils import Matrix
 from mathutils.geometry import tessellate_polygon
 
-from ..core_tracer.raytrace.outline import Outline
 from ..core_tracer.scene import functions
 from ..core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geometry, lens_cylinder
+from ..core_tracer.scene.outline import Outline
 from . import design_materials
 from .convert import meshes, prism_meshes, units, wrap_meshes
 

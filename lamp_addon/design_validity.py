@@ -13,8 +13,9 @@ import textwrap
 from dataclasses import dataclass
 
 from ..core_tracer.scene import spec as S
+from ..core_tracer.scene.limits import lamp_limits
 from ..core_tracer.scene.reading import SceneError
-from ..core_tracer.scene.validate import lamp_limits, parse_scene
+from ..core_tracer.scene.validate import parse_scene
 from . import design_properties
 
 WRAP = 44  # characters per label line in the sidebar

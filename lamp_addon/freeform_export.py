@@ -89,7 +89,7 @@ def export_pair(bl_scene: bpy.types.Scene, json_path: str, *, overwrite: bool = 
     """Write the scene's free-form design to ``json_path`` and the ``.glb`` beside it. Raises
     ``SceneError`` (the design or a part is not valid), ``fileio.TargetExistsError`` or ``OSError``;
     nothing is written then."""
-    from ..core_tracer.freeform import geometry
+    from ..core_tracer.freeform import cache, geometry
 
     json_path = os.path.abspath(json_path)
     glb_path = glb_path_for(json_path)
@@ -99,7 +99,7 @@ def export_pair(bl_scene: bpy.types.Scene, json_path: str, *, overwrite: bool = 
     # The checks the tracer makes before rendering (closed outward lenses, limits; overlapping lenses
     # where Embree is here to find them): a colleague never receives a pair that cannot render.
     if freeform_status.available()[0]:
-        geometry.GeometryCache().get(scene, meshes)
+        cache.GeometryCache().get(scene, meshes)
     else:
         geometry.build_geometry(scene, meshes)
     if not overwrite:

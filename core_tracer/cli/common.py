@@ -14,8 +14,9 @@ from collections.abc import Iterator
 from ..fileio import check_writable
 from ..images import display
 from ..scene import spec as S
+from ..scene.messages import show_value
 from ..scene.reading import SceneError, read_json
-from ..scene.validate import parse_scene, show_value
+from ..scene.validate import parse_scene
 
 
 def in_file(error: SceneError, file: str | os.PathLike) -> SceneError:

@@ -93,7 +93,7 @@ def _freeform_meshes(scene_path: str, scene: dict) -> tuple[dict | None, object]
     if "freeform" not in scene:
         return None, None
     from ..freeform import available
-    from ..freeform.geometry import GeometryCache
+    from ..freeform.cache import GeometryCache
     from ..freeform.loading import load_meshes
     from ..scene.reading import SceneError
 

@@ -30,7 +30,8 @@ def _check_freeform(path: str, scene: dict) -> str:
     """Read and check the meshes of a free-form design (the lens checks; overlaps too where Embree
     is available); returns what the design holds, in words."""
     from ..freeform import available
-    from ..freeform.geometry import GeometryCache, build_geometry
+    from ..freeform.cache import GeometryCache
+    from ..freeform.geometry import build_geometry
     from ..freeform.loading import load_meshes
     from ..scene.reading import SceneError
 

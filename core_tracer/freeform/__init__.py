@@ -37,7 +37,7 @@ def __getattr__(name: str):
         from . import render
         return getattr(render, name)
     if name == "GeometryCache":
-        from .geometry import GeometryCache
+        from .cache import GeometryCache
         return GeometryCache
     if name == "load":
         from .loading import load

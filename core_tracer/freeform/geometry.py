@@ -1,5 +1,5 @@
-"""The meshes of a free-form design as one set of triangles with their roles, checked, and the
-Embree scene over them, built once per geometry change (``GeometryCache``).
+"""The meshes of a free-form design as one set of triangles with their roles, checked (the Embree
+scene over them, built once per geometry change, is ``cache.GeometryCache``'s).
 
 Each triangle knows its part, the surface it is in Table 1's terms and, for a lens, which lens
 volume it bounds. Table 1's surfaces follow from the roles (README, "Free-form"):
@@ -19,7 +19,6 @@ import numpy as np
 from ..raytrace import paths as P
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
-from .embree import EmbreeScene, embree_missing
 from .meshes import MAX_TRIANGLES, MeshData, area_normals, check_lens_volume, check_mesh, face_normals
 
 # a surface beyond Table 1's and the prism plate's: the housing, shaded by eq. (1), ends the path
@@ -123,31 +122,3 @@ def build_geometry(scene: dict, meshes: dict[str, MeshData], key: tuple | None =
 def _joined(arrays: list[np.ndarray]) -> np.ndarray:
     """The arrays one after another (one part's own array, not a copy: a large lens is not copied)."""
     return np.asarray(arrays[0]) if len(arrays) == 1 else np.concatenate(arrays)
-
-
-class GeometryCache:
-    """The checked geometry and its Embree scene, rebuilt only when the meshes or roles change.
-
-    Keep one per design (a viewport, a render job) and pass it to every ``render_passes``: the
-    build (``stats["build_seconds"]``) is paid once per geometry change."""
-
-    def __init__(self) -> None:
-        self.geometry: Geometry | None = None
-        self.embree: EmbreeScene | None = None
-        self.builds = 0
-
-    def get(self, scene: dict, meshes: dict[str, MeshData]) -> tuple[Geometry, EmbreeScene, bool]:
-        """(geometry, Embree scene, whether it was built now)."""
-        reason = embree_missing()
-        if reason is not None:
-            raise SceneError("freeform", reason)
-        key = fingerprint(scene, part_meshes(scene, meshes))
-        if self.geometry is not None and self.geometry.fingerprint == key:
-            return self.geometry, self.embree, False
-        geometry = build_geometry(scene, meshes, key)
-        embree = EmbreeScene(geometry.vertices, geometry.triangles)
-        from .overlap import check_lens_overlap  # needs the Embree scene
-        check_lens_overlap(scene, geometry, embree)
-        self.geometry, self.embree = geometry, embree
-        self.builds += 1
-        return geometry, embree, True

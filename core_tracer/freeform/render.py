@@ -44,8 +44,9 @@ from ..raytrace.tracer import (
     add_to_pass,
     sample_groups,
 )
+from .cache import GeometryCache
 from .embree import EmbreeScene
-from .geometry import BODY, Geometry, GeometryCache
+from .geometry import BODY, Geometry
 from .meshes import MeshData
 from .roles import PartTable
 

@@ -9,8 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.derived import cut_sphere_radius, flute_radius, lamp_geometry, lens_absorption, lens_cylinder
+from ..scene.outline import Outline
 from ..scene.prism_profile import ring_slopes
-from .outline import Outline
 
 CYLINDER_KEYS = ("axis_x", "radius", "side", "base", "apex", "phi_center", "corner")
 

@@ -31,7 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import environment, optics, outline
+from ..scene import outline
+from . import environment, optics
 from .lamp_table import LampTable
 
 FRONT = np.array([0.0, -1.0, 0.0])  # the outward normal of the lens's outer face (MODEL.md §2)

@@ -11,8 +11,8 @@ import copy
 import math
 from typing import Any
 
-from ..raytrace.outline import Outline
 from . import spec as S
+from .outline import Outline
 from .prism_profile import ring_slopes
 
 

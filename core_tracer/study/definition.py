@@ -53,9 +53,10 @@ from .. import budget
 from ..scene import functions
 from ..scene import spec as S
 from ..scene.derived import use_form
+from ..scene.messages import show_value
 from ..scene.reading import SceneError, parse_json_text, read_json, scene_to_json
 from ..scene.safe_text import has_surrogate, show_key
-from ..scene.validate import check_number, parse_scene, show_value
+from ..scene.validate import check_number, parse_scene
 
 SCHEMA = "lamp-study/1"
 STUDY_ATTRIBUTE = "lamp:study"  # the header attribute of a contact sheet that holds the study

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import copy
 
-from ...core_tracer.raytrace.outline import Outline
 from ...core_tracer.scene import spec
 from ...core_tracer.scene.derived import new_lamp
+from ...core_tracer.scene.outline import Outline
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
 

@@ -20,8 +20,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ...core_tracer.raytrace.outline import Outline
 from ...core_tracer.scene.derived import cut_sphere_radius, lamp_geometry, lens_cylinder
+from ...core_tracer.scene.outline import Outline
 from .meshes import (
     CHORD_TOLERANCE_MM,
     FLAT,

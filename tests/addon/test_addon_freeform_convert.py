@@ -172,7 +172,7 @@ def test_convert_closes_the_glass_of_a_wrap_around_lens(lamp_addon, addon_core, 
     parts = lamp_addon.freeform_properties.role_objects(bl_scene)
     volumes = _lens_volumes(lamp_addon, addon_core, bl_scene, parts)
     lens = design["lamps"][2]["lens"]  # rectangular on a cylinder: its side wall's collar is left to the wall
-    outline = addon_core.raytrace.outline.Outline.of_lens(lens)
+    outline = addon_core.scene.outline.Outline.of_lens(lens)
     assert volumes["Lamp 3 Lens (Free-form)"] > outline.area * lens["thickness"] * 0.9
     walls = [o for o in parts if o.lamp_role.role == "side_wall"]
     assert sorted(o.name for o in walls) == [f"Lamp {i} Side Wall (Free-form)" for i in (1, 2, 3)]

@@ -300,7 +300,7 @@ def test_every_transition_through_a_cylindrical_lens_is_in_table_1():
 
 def test_the_panel_hint_gives_the_smallest_wrap_radius_validation_allows():
     from core_tracer.scene import SceneError
-    from core_tracer.scene.validate import lamp_limits
+    from core_tracer.scene.limits import lamp_limits
     doc = normalize(_wrap_scene())
     hint = lamp_limits(doc, 0)["lens.wrap_radius"]
     assert hint.startswith("more than 94.5 mm")

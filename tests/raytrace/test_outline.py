@@ -1,4 +1,4 @@
-"""The lens outline (``core_tracer.raytrace.outline``): a rectangular lens with rounded corners,
+"""The lens outline (``core_tracer.scene.outline``): a rectangular lens with rounded corners,
 its wall found in closed form against a brute-force test of its eight pieces, its area, and
 the whole tracer with a rectangular lens against the one-ray-at-a-time reference tracer."""
 
@@ -12,11 +12,11 @@ from helpers import scene_with
 from reference_tracer import Lamp, compare
 
 from core_tracer import render, render_passes
-from core_tracer.raytrace import outline
 from core_tracer.raytrace.lamp_table import LampTable
-from core_tracer.raytrace.outline import Outline
 from core_tracer.raytrace.parts import outer_face, side_wall
+from core_tracer.scene import outline
 from core_tracer.scene.derived import lamp_geometry
+from core_tracer.scene.outline import Outline
 
 SQUARE = {"lamps[0].lens.outline": "rectangular", "lamps[0].lens.width": 90.0, "lamps[0].lens.height": 60.0,
           "lamps[0].lens.corner_radius": 10.0}

@@ -274,7 +274,7 @@ def test_geometry_of_a_prism_plate_lamp():
 
 
 def test_limits_shown_beside_a_prism_plate_lamps_sliders():
-    from core_tracer.scene.validate import lamp_limits
+    from core_tracer.scene.limits import lamp_limits
 
     scene = _prism_scene()
     limits = lamp_limits(scene, 0)

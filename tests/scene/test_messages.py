@@ -187,7 +187,7 @@ def test_random_designs_get_a_field_and_a_range_that_is_not_empty():
     empty; the limits shown beside the sliders never fail, valid design or not."""
     import random
 
-    from core_tracer.scene.validate import lamp_limits
+    from core_tracer.scene.limits import lamp_limits
 
     rng = random.Random(1990)
     seen = set()

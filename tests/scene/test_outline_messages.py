@@ -12,8 +12,9 @@ import re
 import pytest
 from helpers import BASELINE, FOUR_LAMPS
 
+from core_tracer.scene.limits import lamp_limits
 from core_tracer.scene.reading import SceneError
-from core_tracer.scene.validate import lamp_limits, parse_scene
+from core_tracer.scene.validate import parse_scene
 
 NUMBER = r"-?[0-9.]+(?:e[-+]?[0-9]+)?"
 

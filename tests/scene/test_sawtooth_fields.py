@@ -8,8 +8,9 @@ import pytest
 from helpers import BASELINE, assert_bad_input, run_cli
 
 from core_tracer.scene.derived import cut_depth, lamp_geometry
+from core_tracer.scene.limits import lamp_limits
 from core_tracer.scene.reading import SceneError
-from core_tracer.scene.validate import lamp_limits, parse_scene
+from core_tracer.scene.validate import parse_scene
 
 
 def _doc() -> dict:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import outline
+from ...scene import outline
 from .. import paths as P
 from ..lamp_table import LampTable
 from .base import T_MIN, Segments, axis_cylinder_terms, quadratic_roots

@@ -7,18 +7,17 @@ from __future__ import annotations
 import math
 
 from . import spec as S
+from .messages import interval, rounded, show_value
 from .prism_profile import MAX_FACET_INCIDENCE_DEG, shortest_focal_length
 from .reading import SceneError
 
 
 def check_prism_plate(scene: dict, i: int, g: dict) -> None:
     """Raise for the first rule lamps[i]'s prism plate breaks; ``g`` is its ``lamp_geometry``."""
-    from .validate import _interval, _rounded
-
     lamp, where = scene["lamps"][i], f"lamps[{i}]"
     plate, R = lamp["prism_plate"], lamp["lens"]["radius"]
     p, f, n = plate["pitch"], plate["focal_length"], plate["ior"]
-    pitch_range = f"allowed {_interval(R / S.MAX_RINGS, R)} mm (at most {S.MAX_RINGS} rings across the radius)"
+    pitch_range = f"allowed {interval(R / S.MAX_RINGS, R)} mm (at most {S.MAX_RINGS} rings across the radius)"
     if p > R:
         raise SceneError(f"{where}.prism_plate.pitch", f"{p:g} is wider than the plate (lens radius {R:g} mm); "
                                                        f"{pitch_range}")
@@ -34,25 +33,23 @@ def check_prism_plate(scene: dict, i: int, g: dict) -> None:
         raise SceneError(f"{where}.prism_plate.focal_length",
                          f"{f:g} is too short for lens radius {R:g} mm at ior {n:g}: the outer rings would meet the "
                          f"bulb's light more than {MAX_FACET_INCIDENCE_DEG:g} degrees from their normal and cannot "
-                         f"bend it parallel; allowed {_interval(f_lo, f_hi)} mm")
+                         f"bend it parallel; allowed {interval(f_lo, f_hi)} mm")
     depth = scene["body"]["depth"]
     if g["vertex"] > depth:
         room = depth - g["plate_base"]
         if room > 0:
             raise SceneError(f"{where}.prism_plate.housing_depth",
                              f"{plate['housing_depth']:g} puts the housing's back {g['vertex']:.4g} mm deep, deeper "
-                             f"than the body ({depth:g} mm); allowed (0, {_rounded(room, False)}] mm, or body.depth "
-                             f"at least {_rounded(g['vertex'], True)} mm")
+                             f"than the body ({depth:g} mm); allowed (0, {rounded(room, False)}] mm, or body.depth "
+                             f"at least {rounded(g['vertex'], True)} mm")
         raise SceneError("body.depth", f"{depth:g} is shallower than the prism plate of lamps[{i}] (its rings start "
                                        f"{g['plate_base']:.4g} mm deep); allowed at least "
-                                       f"{_rounded(g['vertex'], True)} mm")
+                                       f"{rounded(g['vertex'], True)} mm")
     _check_bulb(lamp, g, where)
 
 
 def _check_bulb(lamp: dict, g: dict, where: str) -> None:
     """The bulb sphere must lie behind the plate's highest ring and inside the housing."""
-    from .validate import _interval, _rounded, _show
-
     rb, off = lamp["bulb"]["radius"], lamp["bulb"]["offset"]
     bx, by, bz = g["bulb_center"]
     R = lamp["lens"]["radius"]
@@ -61,33 +58,31 @@ def _check_bulb(lamp: dict, g: dict, where: str) -> None:
     if rb >= room:
         raise SceneError(f"{where}.bulb.radius", f"{rb:g} does not fit in the housing between the prism plate's "
                          f"rings and the housing's back ({back - front:.4g} mm deep, radius {R:g} mm); allowed "
-                         f"(0, {_rounded(room, False)}) mm")
+                         f"(0, {rounded(room, False)}) mm")
     # (to a nanometre: the positions are sums of the fields, whose rounding would show as -7e-15)
     y_lo, y_hi = round(front + rb - g["focus"], 9) + 0.0, round(back - rb - g["focus"], 9) + 0.0
     if not front + rb < by < back - rb:
-        raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) "
+        raise SceneError(f"{where}.bulb.offset", f"{show_value(off)} puts the bulb (radius {rb:g} mm) "
                          f"{'into the prism plate' if by - rb <= front else 'through the housing'}; allowed y in "
-                         f"({_interval(y_lo, y_hi)[1:-1]}) mm")
+                         f"({interval(y_lo, y_hi)[1:-1]}) mm")
     if math.hypot(bx, bz) + rb >= R:
-        raise SceneError(f"{where}.bulb.offset", f"{_show(off)} puts the bulb (radius {rb:g} mm) through the "
+        raise SceneError(f"{where}.bulb.offset", f"{show_value(off)} puts the bulb (radius {rb:g} mm) through the "
                          f"housing's side; allowed a distance from the axis sqrt(x^2 + z^2) below "
-                         f"{_rounded(R - rb, False)} mm")
+                         f"{rounded(R - rb, False)} mm")
 
 
 def prism_limits(lamp: dict, g: dict) -> dict[str, str]:
     """The limits of a prism-plate lamp's fields that depend on other fields, in words (``lamp_limits``)."""
-    from .validate import _interval, _rounded
-
     plate, R = lamp["prism_plate"], lamp["lens"]["radius"]
     rb = lamp["bulb"]["radius"]
     out = {"prism_plate.pitch": f"at most {R:g} mm, the lens radius"}
     f_lo = shortest_focal_length(R, plate["pitch"], plate["ior"], S.PRISM_PLATE.fields["focal_length"].hi)
     if f_lo is not None:
-        out["prism_plate.focal_length"] = f"at least {_rounded(f_lo, True)} mm for this radius, pitch and ior"
+        out["prism_plate.focal_length"] = f"at least {rounded(f_lo, True)} mm for this radius, pitch and ior"
     front, back = g["plate_peak"], g["vertex"]
     if back - front > 2 * rb:
-        out["bulb.offset"] = f"y in {_interval(round(front + rb - g['focus'], 9), round(back - rb - g['focus'], 9))} mm"
+        out["bulb.offset"] = f"y in {interval(round(front + rb - g['focus'], 9), round(back - rb - g['focus'], 9))} mm"
     room = min(R, (back - front) / 2)
     if room > 0:
-        out["bulb.radius"] = f"less than {_rounded(room, False)} mm in the housing"
+        out["bulb.radius"] = f"less than {rounded(room, False)} mm in the housing"
     return out
