@@ -64,14 +64,16 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
         raise in_file(e, path) from None
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM arrived: stop as for Ctrl-C (temporary files removed, nothing half-written)."""
+
+
 class StopEvent(threading.Event):
     """Set by Ctrl-C or SIGTERM; remembers which, so the program ends as that signal asks."""
 
     signum: int = 0
 
     def interrupt(self) -> KeyboardInterrupt:
-        from .main import Terminated
-
         return Terminated() if self.signum == signal.SIGTERM else KeyboardInterrupt()
 
 

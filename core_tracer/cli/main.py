@@ -19,6 +19,7 @@ from collections.abc import Iterator, Sequence
 
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
+from .common import Terminated
 
 COMMANDS = ("render", "validate", "presets", "study")
 
@@ -52,10 +53,6 @@ def one_line(text: str) -> str:
     """A message as one printable line: control characters (a file's carriage returns, terminal
     escape sequences) and lone surrogates escaped, the length bounded."""
     return printable(" ".join(str(text).split("\n")), MAX_ERROR)
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM arrived: stop as for Ctrl-C (temporary files removed, nothing half-written)."""
 
 
 def _raise_terminated(signum, frame) -> None:

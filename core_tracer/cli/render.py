@@ -9,6 +9,7 @@ import time
 from .. import budget
 from ..checkpoints import checkpoint
 from ..images.imageio import image_format
+from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, load_scene_file, view_for
 
@@ -62,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
                                        progress=lambda fraction: checkpoint("render:band"),
                                        pool=band_pool.shared() if heavy else None)
             else:
-                from ..freeform import render_passes as render_freeform
+                from ..freeform import render_passes as render_freeform  # free-form only (start-up speed)
 
                 result = render_freeform(scene, meshes, should_stop=stop.is_set, geometry_cache=geometry,
                                          progress=lambda fraction: checkpoint("render:band"))
@@ -92,10 +93,10 @@ def _freeform_meshes(scene_path: str, scene: dict) -> tuple[dict | None, object]
     their roles, the lens volumes), or (None, None) for a parametric design."""
     if "freeform" not in scene:
         return None, None
+    # free-form only: the mesh modules load when a design has meshes (start-up speed)
     from ..freeform import available
     from ..freeform.cache import GeometryCache
     from ..freeform.loading import load_meshes
-    from ..scene.reading import SceneError
 
     ok, reason = available()
     if not ok:

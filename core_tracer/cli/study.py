@@ -13,7 +13,7 @@ import time
 from .. import budget
 from ..checkpoints import checkpoint
 from ..images.imageio import image_format
-from ..scene.reading import SceneError
+from ..scene.reading import SceneError, read_json
 from ..scene.safe_text import printable
 from ..study import definition as st
 from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, in_file, view_for
@@ -73,8 +73,6 @@ def _build(args: argparse.Namespace) -> st.Study:
         raise SceneError("--vary", "is required: one or two parameters to vary, e.g. --vary lens.ior=1.45:1.6:4")
     if len(args.vary) > st.MAX_AXES:
         raise SceneError("--vary", f"given {len(args.vary)} times; a study varies 1 or {st.MAX_AXES} parameters")
-    from ..scene.reading import read_json
-
     base = read_json(args.base)
     axes = [st.parse_vary(v) for v in args.vary]
     try:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import load_scene_file
 
@@ -29,11 +30,11 @@ def run(args: argparse.Namespace) -> int:
 def _check_freeform(path: str, scene: dict) -> str:
     """Read and check the meshes of a free-form design (the lens checks; overlaps too where Embree
     is available); returns what the design holds, in words."""
+    # free-form only: the mesh modules load when a design has meshes (start-up speed)
     from ..freeform import available
     from ..freeform.cache import GeometryCache
     from ..freeform.geometry import build_geometry
     from ..freeform.loading import load_meshes
-    from ..scene.reading import SceneError
 
     meshes = load_meshes(path, scene)
     try:
