@@ -8,6 +8,7 @@ import os
 import sys
 
 from ..library import presets as P
+from ..library import shipping
 from ..scene.reading import SceneError, scene_to_json
 
 HELP = ("list, show or validate the presets of a library folder (default: the built-in presets), or make "
@@ -55,7 +56,7 @@ def _thumbnails(libraries: list[P.Library], check: bool) -> int:
     status = 0
     for library in libraries:
         if check:
-            state = P.check_shipped_thumbnails(library)
+            state = shipping.check_shipped_thumbnails(library)
             for line in state.problems():
                 print(f"problem: {line}", file=sys.stderr)
             if not state.ok:
@@ -64,7 +65,7 @@ def _thumbnails(libraries: list[P.Library], check: bool) -> int:
                       file=sys.stderr)
                 status = 2
             continue
-        made, removed, warnings = P.make_shipped_thumbnails(library)
+        made, removed, warnings = shipping.make_shipped_thumbnails(library)
         for path in made:
             print(f"made: {P.printable(path)}")
         for path in removed:

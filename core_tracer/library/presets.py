@@ -12,7 +12,7 @@ the library is skipped. Writes are atomic (``fileio``), so a crash never leaves 
 Thumbnails are small tracer renders as PNG whose file name carries a hash of the preset's
 canonical JSON, so a changed preset gets a new thumbnail. A library may ship them in its
 ``thumbnails/`` folder (the built-in presets do: ``python -m core_tracer presets thumbnails``
-makes them); otherwise they are made on demand and cached beside the presets (``.thumbnails/``)
+makes them, ``shipping``); otherwise they are made on demand and cached beside the presets (``.thumbnails/``)
 when the library is writable, else in a cache folder.
 """
 
@@ -25,6 +25,7 @@ import unicodedata
 from dataclasses import dataclass, field
 
 from .. import fileio
+from ..freeform.loading import mesh_file_path
 from ..images import display
 from ..images.display import ViewTransform
 from ..scene.derived import without_defaults
@@ -212,8 +213,6 @@ def _check_mesh_file(path: str, scene: dict) -> None:
     """A free-form preset's mesh file is data from whoever shared the library: a plain .glb name
     beside the preset, not leading out of the library, within the size limit. Its contents are
     read and checked (triangle limits, closed lenses) only when the preset is used."""
-    from ..freeform.loading import mesh_file_path
-
     try:
         mesh_file_path(path, scene["freeform"]["mesh_file"])
     except SceneError as e:
@@ -329,7 +328,7 @@ def thumbnail_name(entry: PresetEntry) -> str:
     return f"{stem}-{thumbnail_digest(entry)}.png"
 
 
-def _own_subfolder(library: Library, subfolder: str) -> str | None:
+def own_subfolder(library: Library, subfolder: str) -> str | None:
     """``<library>/<subfolder>``, unless it is a link that leads out of the library."""
     folder = os.path.join(library.folder, subfolder)
     inside = os.path.dirname(os.path.realpath(folder)) == os.path.realpath(library.folder)
@@ -341,7 +340,7 @@ def _thumbnail_in(entry: PresetEntry, subfolder: str) -> str | None:
 
     Only a regular file of a thumbnail's size whose real location is that folder counts: a link
     out of the library is never opened, whoever wrote the library."""
-    folder = _own_subfolder(entry.library, subfolder)
+    folder = own_subfolder(entry.library, subfolder)
     if folder is None:
         return None
     path = os.path.join(folder, thumbnail_name(entry))
@@ -369,7 +368,7 @@ def thumbnail_path(entry: PresetEntry, cache_dir: str | os.PathLike) -> str:
     shipped = shipped_thumbnail(entry)
     if shipped is not None:
         return shipped
-    beside = _own_subfolder(entry.library, THUMBNAIL_FOLDER)
+    beside = own_subfolder(entry.library, THUMBNAIL_FOLDER)
     made = _thumbnail_in(entry, THUMBNAIL_FOLDER)
     if beside is not None and entry.library.writable and os.access(entry.library.folder, os.W_OK):
         path = os.path.join(beside, thumbnail_name(entry))
@@ -404,7 +403,7 @@ def _forget_thumbnails(library: Library, preset_path: str) -> None:
     """Remove the thumbnails of a preset file that is gone from its (writable) library."""
     stem = os.path.splitext(os.path.basename(preset_path))[0]
     for subfolder in (THUMBNAIL_FOLDER, SHIPPED_THUMBNAIL_FOLDER):
-        folder = _own_subfolder(library, subfolder)
+        folder = own_subfolder(library, subfolder)
         if folder is not None:
             _remove_thumbnails(folder, stem)
 
@@ -421,7 +420,7 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     scene = copy.deepcopy(entry.scene)
     scene["image"] = {"width": int(size), "height": int(size)}
     if "freeform" in scene:  # the meshes are read and checked now, before they are used
-        from ..freeform import render_passes as render_freeform
+        from ..freeform import render_passes as render_freeform  # free-form only: loads Embree
         from ..freeform.loading import load_meshes
 
         image = render_freeform(scene, load_meshes(entry.file, scene), size, size).image
@@ -432,73 +431,3 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     stem = os.path.splitext(os.path.basename(entry.file))[0]
     _remove_thumbnails(os.path.dirname(os.path.abspath(target)), stem, keep=os.path.abspath(target))
     return target
-
-
-# ---------------------------------------------------------------------------------------------
-# Shipped thumbnails
-
-
-@dataclass(frozen=True)
-class ShippedThumbnails:
-    """How a library's ``thumbnails/`` folder stands against its presets."""
-
-    folder: str
-    missing: tuple[PresetEntry, ...]  # presets without a thumbnail of their current content
-    stale: tuple[str, ...]  # PNG files of no current preset (an old hash, a removed preset)
-    warnings: tuple[PresetWarning, ...]  # library files that are not valid presets
-
-    @property
-    def ok(self) -> bool:
-        return not (self.missing or self.stale or self.warnings)
-
-    def problems(self) -> list[str]:
-        """One line per problem, each saying what to do."""
-        lines = [f"{printable(e.file)}: has no thumbnail {thumbnail_name(e)} in {printable(self.folder)}"
-                 for e in self.missing]
-        lines += [f"{printable(os.path.join(self.folder, name))}: belongs to no current preset"
-                  for name in self.stale]
-        lines += [str(w) for w in self.warnings]
-        return lines
-
-
-def check_shipped_thumbnails(library: Library) -> ShippedThumbnails:
-    """Compare a library's shipped ``thumbnails/`` folder with its presets as they are now."""
-    entries, warnings = list_library(library)
-    folder = _own_subfolder(library, SHIPPED_THUMBNAIL_FOLDER)
-    if folder is None:
-        raise PresetError(printable(os.path.join(library.folder, SHIPPED_THUMBNAIL_FOLDER)),
-                          "is a link that leads out of the library; a library's thumbnails are its own")
-    missing = tuple(e for e in entries if shipped_thumbnail(e) is None)
-    wanted = {thumbnail_name(e) for e in entries}
-    try:
-        names = sorted(os.listdir(folder))
-    except (FileNotFoundError, NotADirectoryError):
-        names = []
-    stale = tuple(n for n in names if n.lower().endswith(".png") and n not in wanted and not n.startswith("."))
-    return ShippedThumbnails(folder, missing, stale, tuple(warnings))
-
-
-def make_shipped_thumbnails(library: Library,
-                            size: int = THUMBNAIL_SIZE) -> tuple[list[str], list[str], list[PresetWarning]]:
-    """Make the missing thumbnails of ``thumbnails/`` and remove the stale ones, on purpose.
-
-    Writes into the library's folder whatever its ``writable`` flag says: this is how a library is
-    prepared for shipping. Returns the thumbnails made, the files removed and the warnings about
-    files that are not valid presets (which get no thumbnail)."""
-    state = check_shipped_thumbnails(library)
-    view = display.view_transform(display.DEFAULT_VIEW)
-    if view.note and state.missing:  # shipped thumbnails must look as their name says
-        raise PresetError(printable(state.folder), f"cannot make shipped thumbnails: {view.note}")
-    os.makedirs(state.folder, exist_ok=True)
-    made = []
-    for entry in state.missing:
-        path = make_thumbnail(entry, os.path.join(state.folder, thumbnail_name(entry)), size, view=view)
-        os.chmod(path, 0o644)  # shipped to everyone who installs the library, whatever this umask is
-        made.append(path)
-    removed = []
-    for name in state.stale:
-        path = os.path.join(state.folder, name)
-        if os.path.isfile(path) or os.path.islink(path):
-            os.unlink(path)
-            removed.append(path)
-    return made, removed, list(state.warnings)

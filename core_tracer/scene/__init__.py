@@ -1,10 +1,10 @@
 """The scene document ``lamp-scene/2``, in the order a design flows through it: field declarations
-(``spec``), JSON reading with limits (``reading``), the walk of a document against the declarations
-(``validate``), the rules that relate several fields (``geometry_checks``, ``bulb_checks``,
-``prism_checks``) and their limits in words for the panel (``limits``), derived quantities
-(``derived``), the lens outline (``outline``), the lamp functions (``functions``), how messages
-show values (``messages``), text made safe for messages (``safe_text``) and the README's field
-table (``fields_doc``).
+(``spec``, of the kinds in ``field_kinds``), JSON reading with limits (``reading``), the walk of a
+document against the declarations (``validate``), the rules that relate several fields
+(``geometry_checks``, ``bulb_checks``, ``prism_checks``) and their limits in words for the panel
+(``limits``), derived quantities (``derived``), the lens outline (``outline``), the lamp functions
+(``functions``), how messages show values (``messages``), text made safe for messages
+(``safe_text``) and the README's field table (``fields_doc``).
 
 The names below are the package's public API; code inside ``core_tracer`` imports the module that
 defines a name.

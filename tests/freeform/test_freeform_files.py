@@ -14,7 +14,8 @@ from helpers import PRESETS, run_cli
 from core_tracer.freeform import load, render_passes, shapes
 from core_tracer.freeform.gltf import read_glb
 from core_tracer.images.imageio import read_image
-from core_tracer.library.presets import builtin_library, check_shipped_thumbnails, digest
+from core_tracer.library.presets import builtin_library, digest
+from core_tracer.library.shipping import check_shipped_thumbnails
 from core_tracer.scene import spec as S
 from core_tracer.scene.reading import SceneError, read_json, scene_to_json
 from core_tracer.scene.validate import load_scene, parse_scene

@@ -13,6 +13,7 @@ from hostile_presets import leaves
 from core_tracer import render
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
+from core_tracer.library import shipping
 from core_tracer.scene.derived import lamp_geometry, lens_absorption
 from core_tracer.scene.reading import read_json
 from core_tracer.scene.validate import parse_scene
@@ -133,6 +134,6 @@ def test_every_preset_ships_its_thumbnail(path, tmp_path):
 
 
 def test_no_stale_shipped_thumbnails():
-    state = P.check_shipped_thumbnails(P.builtin_library())
+    state = shipping.check_shipped_thumbnails(P.builtin_library())
     assert state.stale == (), (f"thumbnails of no current preset: {', '.join(state.stale)}; remove them with "
                                f"`{P.REGENERATE_COMMAND}`")

@@ -18,6 +18,7 @@ from hostile_presets import leaves, make_hostile_folder
 from core_tracer import fileio
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
+from core_tracer.library import shipping
 from core_tracer.scene import reading
 from core_tracer.scene.reading import SceneError, read_json, scene_to_json
 from core_tracer.scene.validate import parse_scene
@@ -368,7 +369,7 @@ def test_a_library_cannot_pass_off_other_files_as_thumbnails(tmp_path, hostile):
         assert Path(P.thumbnail_path(writable, tmp_path / "cache")).parent == tmp_path / "cache"
         (outside / "stale-0123456789abcdef.png").write_bytes(b"someone else's")
         with pytest.raises(P.PresetError, match="thumbnails: is a link that leads out of the library"):
-            P.make_shipped_thumbnails(lib)
+            shipping.make_shipped_thumbnails(lib)
         P.delete_preset(writable)
         assert files_in(outside) == sorted([name, "stale-0123456789abcdef.png"])
 
@@ -442,10 +443,10 @@ def test_deleting_a_preset_removes_its_thumbnails(tmp_path):
 
 def test_a_change_of_display_makes_thumbnails_stale(tmp_path, monkeypatch):
     lib, entry = _thumbnail_library(tmp_path, writable=False)
-    made, _, _ = P.make_shipped_thumbnails(lib, size=16)
-    assert P.check_shipped_thumbnails(lib).ok
+    made, _, _ = shipping.make_shipped_thumbnails(lib, size=16)
+    assert shipping.check_shipped_thumbnails(lib).ok
     monkeypatch.setattr(P, "THUMBNAIL_LOOK", P.THUMBNAIL_LOOK + "; another view")
-    state = P.check_shipped_thumbnails(lib)
+    state = shipping.check_shipped_thumbnails(lib)
     assert [e.file for e in state.missing] == [entry.file] and state.stale == (Path(made[0]).name,)
 
 
