@@ -19,6 +19,7 @@ from ..core_tracer.scene import spec as S
 from ..core_tracer.scene.functions import suggested_values
 from ..core_tracer.scene.reading import SceneError
 from ..core_tracer.study import definition as st
+from ..core_tracer.study.parameters import study_parameters
 from . import design_properties
 
 ALL_LAMPS = "ALL"
@@ -42,7 +43,7 @@ def _parameter_label(path: str) -> str:
 
 def _parameter_items() -> tuple[tuple[str, str, str], ...]:
     items = []
-    for path in st.study_parameters():
+    for path in study_parameters():
         spec = S.lookup(path)
         vector = isinstance(spec, S.Num) and spec.size > 1
         how = "a list of values written a/b/c" if vector else "a list of names" if isinstance(spec, S.Choice) \

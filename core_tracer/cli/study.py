@@ -16,6 +16,7 @@ from ..images.imageio import image_format
 from ..scene.reading import SceneError, read_json
 from ..scene.safe_text import printable
 from ..study import definition as st
+from ..study.parameters import study_parameters
 from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, in_file, view_for
 
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
@@ -96,7 +97,7 @@ def _progress_printer():
 
 def run(args: argparse.Namespace) -> int:
     if args.list:
-        for name in st.study_parameters():
+        for name in study_parameters():
             print(name)
         return 0
     # Every check on the user's input happens before the first worker starts.

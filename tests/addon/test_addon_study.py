@@ -14,6 +14,7 @@ import core_tracer
 from core_tracer.images import display
 from core_tracer.study import definition as st
 from core_tracer.study import sheet as study_sheet
+from core_tracer.study.parameters import study_parameters
 
 pytestmark = pytest.mark.blender
 
@@ -41,7 +42,7 @@ def _two_by_one(settings) -> None:
 
 def test_every_study_parameter_is_offered(lamp_addon):
     offered = [item[0] for item in lamp_addon.study_settings.PARAMETER_ITEMS]
-    assert offered == st.study_parameters()
+    assert offered == study_parameters()
     assert "lens.transmitted_color" in offered and "cuts.height" in offered
 
 

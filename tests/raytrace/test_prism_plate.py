@@ -297,7 +297,7 @@ def test_the_bulb_offset_range_is_shown_without_rounding_noise():
 
 
 def test_a_study_varies_the_prism_plates_fields():
-    from core_tracer.study.definition import apply_value, resolve_parameter, study_parameters
+    from core_tracer.study.parameters import apply_value, resolve_parameter, study_parameters
 
     assert {"prism_plate.focal_length", "prism_plate.pitch", "prism_plate.ior"} <= set(study_parameters())
     base = _prism_scene()

@@ -22,6 +22,7 @@ from core_tracer.scene.validate import load_scene, parse_scene
 from core_tracer.study import definition as st
 from core_tracer.study import run as study_run
 from core_tracer.study import sheet as study_sheet
+from core_tracer.study.parameters import study_parameters
 
 SIZE = (32, 32)
 
@@ -452,7 +453,7 @@ def test_study_run_driven_by_polling_like_a_modal_operator():
 def test_cli_lists_the_parameters():
     proc = run_cli("study", "--list")
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.split() == st.study_parameters()
+    assert proc.stdout.split() == study_parameters()
 
 
 def test_one_lamps_centre_is_a_parameter():
@@ -474,7 +475,7 @@ def test_the_axes_line_names_both_parameters_in_full():
 
 
 def test_samples_vary_like_any_parameter_and_count_in_the_budget():
-    assert "image.samples" in st.study_parameters()
+    assert "image.samples" in study_parameters()
     doc = {**baseline_doc(), "image": {"width": 9, "height": 9, "samples": 4}}
     s = st.Study.build(doc, [st.parse_vary("image.samples=1,16")], SIZE)
     assert s.base["image"] == {"width": SIZE[0], "height": SIZE[1], "samples": 4}  # the design's, at the study's size

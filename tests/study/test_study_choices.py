@@ -18,6 +18,7 @@ from core_tracer.scene.reading import SceneError
 from core_tracer.study import definition as st
 from core_tracer.study import run as study_run
 from core_tracer.study import sheet as study_sheet
+from core_tracer.study.parameters import resolve_parameter, study_parameters
 
 WRAP = PRESETS / "wrap-around-combination.json"  # its third lamp has a cylindrical lens
 
@@ -30,11 +31,11 @@ def _types_by_collection(size=(64, 48)) -> st.Study:
 def test_every_choice_of_the_scene_is_a_study_parameter():
     choices = {info.path.removeprefix("lamps[].") for info in S.iter_fields()
                if isinstance(info.spec, S.Choice) and info.path != "schema"}
-    offered = {name for name in st.study_parameters() if isinstance(st.resolve_parameter(name).spec, S.Choice)}
+    offered = {name for name in study_parameters() if isinstance(resolve_parameter(name).spec, S.Choice)}
     assert offered == choices
     assert {"cuts.type", "lens.outline", "lens.shape", "lens.wrap_toward", "collection", "function",
             "environment.world", "camera.type"} <= offered
-    assert "schema" not in st.study_parameters()
+    assert "schema" not in study_parameters()
 
 
 def test_cut_type_by_collection_renders_six_different_lamps():
@@ -121,7 +122,7 @@ def test_choice_axes_round_trip_and_apply_to_one_lamp():
     assert s.variants[3].scene["camera"]["type"] == "orthographic"
     again = st.Study.from_json(s.to_json())
     assert [v.scene for v in again.variants] == [v.scene for v in s.variants]
-    assert st.resolve_parameter("lamps[1].cuts.type").short == "cuts.type"
+    assert resolve_parameter("lamps[1].cuts.type").short == "cuts.type"
 
 
 @pytest.mark.parametrize("function_first", [True, False])

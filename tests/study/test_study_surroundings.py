@@ -8,6 +8,7 @@ from helpers import BASELINE, baseline_doc, run_cli
 from core_tracer.raytrace import environment
 from core_tracer.scene.reading import SceneError
 from core_tracer.study import definition as st
+from core_tracer.study.parameters import study_parameters
 
 
 def test_the_world_varies_by_name_and_its_turn_over_a_range():
@@ -21,7 +22,7 @@ def test_the_world_varies_by_name_and_its_turn_over_a_range():
 
 
 def test_study_lists_the_surroundings_and_the_sun():
-    names = st.study_parameters()
+    names = study_parameters()
     assert {"environment.world", "environment.strength", "environment.rotation_deg", "light.strength",
             "light.sun_color", "light.phantom", "light.follow_environment"} <= set(names)
     assert "environment.file" not in names
