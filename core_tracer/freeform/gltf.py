@@ -49,7 +49,7 @@ def read_glb(path: str | os.PathLike, max_bytes: int = MAX_MESH_FILE_BYTES) -> d
     except OSError as e:
         raise _error(name, f"cannot be read ({e.strerror or e}); allowed a readable .glb beside the design") from None
     _check_header(name, data)
-    from pygltflib import GLTF2
+    from pygltflib import GLTF2  # it and its dependencies load only when a mesh file is read (start-up)
 
     try:
         with warnings.catch_warnings():  # its warnings about odd chunks would be a second line

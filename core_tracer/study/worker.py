@@ -33,6 +33,7 @@ def main() -> int:
     protocol = os.fdopen(os.dup(sys.stdout.fileno()), "w", buffering=1, encoding="utf-8")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
 
+    # imported once stdout is the protocol's own copy: whatever an import prints goes to stderr
     import numpy as np
 
     from ..images import glare
