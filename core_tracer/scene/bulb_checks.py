@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 
-from .derived import lamp_geometry
 from .messages import interval, lens_size, rounded, show_value
 from .outline import Outline
 from .reading import SceneError
@@ -102,9 +101,9 @@ def check_bulb(lamp: dict, g: dict, where: str) -> None:
                      f"{along} (at y = {y_shown:.12g} mm)")
 
 
-def bulb_limits(lamp: dict) -> dict[str, str]:
-    """The bulb's radius where it sits and the depths (offset y) at which it fits, in words."""
-    g = lamp_geometry(lamp)
+def bulb_limits(lamp: dict, g: dict) -> dict[str, str]:
+    """The bulb's radius where it sits and the depths (offset y) at which it fits, in words; ``g`` is
+    the lamp's ``lamp_geometry``."""
     rb, (x, _, z) = lamp["bulb"]["radius"], lamp["bulb"]["offset"]
     by, rho = g["bulb_center"][1], math.hypot(x, z)
     shape = Outline.of_lens(lamp["lens"])

@@ -59,5 +59,5 @@ def lamp_limits(scene: dict, i: int) -> dict[str, str]:
     if lamp.get("collection", "reflector") == "prism_plate":
         limits.update(prism_limits(lamp, lamp_geometry(lamp)))
     else:
-        limits.update(bulb_limits(lamp))
+        limits.update(bulb_limits(lamp, lamp_geometry(lamp)))
     return limits
