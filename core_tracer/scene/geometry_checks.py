@@ -219,25 +219,35 @@ def _check_teeth(cuts: dict, where: str) -> None:
 
 def _lens_outside_body(scene: dict, i: int) -> None:
     """Raise for lamps[i]'s lens reaching outside the body: blame its centre when the lens fits
-    the body somewhere, else the body's size (the size that holds every lens where it is)."""
+    the body somewhere, else the body's size (the size that holds every lens where it is), else
+    the lens's own size."""
     body = scene["body"]
     (bx, bz), (w, h) = body["center"], body["size"]
     lamp = scene["lamps"][i]
-    if lamp["lens"].get("outline", "round") != "round":
-        _rectangle_outside_body(scene, i)
-    R = lamp["lens"]["radius"]
-    if 2 * R <= w + 1e-9 and 2 * R <= h + 1e-9:
-        raise SceneError(f"lamps[{i}].center", f"{show_value(lamp['center'])} with lens radius {R:g} mm puts "
-                         f"the lens outside the body; allowed x in {interval(bx - w / 2 + R, bx + w / 2 - R)}, "
-                         f"z in {interval(bz - h / 2 + R, bz + h / 2 - R)} mm")
+    lens = lamp["lens"]
+    if lens.get("outline", "round") == "round":
+        R = lens["radius"]
+        fits = 2 * R <= w + 1e-9 and 2 * R <= h + 1e-9
+        x_range, z_range = (bx - w / 2 + R, bx + w / 2 - R), (bz - h / 2 + R, bz + h / 2 - R)
+        what, held = f"lens radius {R:g} mm", f"radius {R:g} mm"
+        smaller = f", or a smaller lamps[{i}].lens.radius, at most {rounded(min(w, h) / 2, False)} mm"
+        key, size, room = "radius", R, min(w, h) / 2
+    else:
+        lw, lh = lens["width"], lens["height"]
+        fits = lw <= w + 1e-9 and lh <= h + 1e-9
+        x_range, z_range = (bx - (w - lw) / 2, bx + (w - lw) / 2), (bz - (h - lh) / 2, bz + (h - lh) / 2)
+        what, held, smaller = f"a {lw:g} x {lh:g} mm lens", f"{lw:g} x {lh:g} mm", ""
+        key, size, room = ("width", lw, w) if lw > w else ("height", lh, h)
+    if fits:
+        raise SceneError(f"lamps[{i}].center", f"{show_value(lamp['center'])} with {what} puts the lens outside the "
+                         f"body; allowed x in {interval(*x_range)}, z in {interval(*z_range)} mm")
     need_w, need_h = _body_needs(scene)
     hi = S.BODY.fields["size"].hi
     if need_w <= hi and need_h <= hi:
-        raise SceneError("body.size", f"{show_value(body['size'])} cannot hold the lens of lamps[{i}] (radius "
-                         f"{R:g} mm); allowed width in {interval(need_w, hi)} and height in {interval(need_h, hi)} "
-                         f"mm, or a smaller lamps[{i}].lens.radius, at most {rounded(min(w, h) / 2, False)} mm")
-    raise SceneError(f"lamps[{i}].lens.radius", f"{R:g} does not fit in the body {w:g} x {h:g} mm; allowed "
-                     f"(0, {rounded(min(w, h) / 2, False)}] mm")
+        raise SceneError("body.size", f"{show_value(body['size'])} cannot hold the lens of lamps[{i}] ({held}); "
+                         f"allowed width in {interval(need_w, hi)} and height in {interval(need_h, hi)} mm{smaller}")
+    raise SceneError(f"lamps[{i}].lens.{key}", f"{size:g} does not fit in the body {w:g} x {h:g} mm; allowed "
+                     f"(0, {rounded(room, False)}] mm")
 
 
 def _body_needs(scene: dict) -> tuple[float, float]:
@@ -246,26 +256,6 @@ def _body_needs(scene: dict) -> tuple[float, float]:
     need_w = max(2 * (abs(lp["center"][0] - bx) + o.half_w) for lp, o in zip(scene["lamps"], shapes, strict=True))
     need_h = max(2 * (abs(lp["center"][1] - bz) + o.half_h) for lp, o in zip(scene["lamps"], shapes, strict=True))
     return need_w, need_h
-
-
-def _rectangle_outside_body(scene: dict, i: int) -> None:
-    """``_lens_outside_body`` for a rectangular lens: its centre, else the body's size, else its own size."""
-    body = scene["body"]
-    (bx, bz), (w, h) = body["center"], body["size"]
-    lamp = scene["lamps"][i]
-    lw, lh = lamp["lens"]["width"], lamp["lens"]["height"]
-    if lw <= w + 1e-9 and lh <= h + 1e-9:
-        raise SceneError(f"lamps[{i}].center", f"{show_value(lamp['center'])} with a {lw:g} x {lh:g} mm lens puts the "
-                         f"lens outside the body; allowed x in {interval(bx - (w - lw) / 2, bx + (w - lw) / 2)}, "
-                         f"z in {interval(bz - (h - lh) / 2, bz + (h - lh) / 2)} mm")
-    need_w, need_h = _body_needs(scene)
-    hi = S.BODY.fields["size"].hi
-    if need_w <= hi and need_h <= hi:
-        raise SceneError("body.size", f"{show_value(body['size'])} cannot hold the lens of lamps[{i}] ({lw:g} x "
-                         f"{lh:g} mm); allowed width in {interval(need_w, hi)} and height in {interval(need_h, hi)} mm")
-    key, size, room = ("width", lw, w) if lw > w else ("height", lh, h)
-    raise SceneError(f"lamps[{i}].lens.{key}", f"{size:g} does not fit in the body {w:g} x {h:g} mm; allowed "
-                     f"(0, {rounded(room, False)}] mm")
 
 
 def _reflector_too_deep(scene: dict, i: int, g: dict) -> None:
