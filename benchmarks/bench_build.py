@@ -94,10 +94,10 @@ def main() -> int:
 
 
 def run(bpy, package: str, repeat: int) -> int:
-    props = importlib.import_module(f"{package}.lamp_addon.design_properties")
-    builder = importlib.import_module(f"{package}.lamp_addon.design_builder")
-    parts = importlib.import_module(f"{package}.lamp_addon.design_parts")
-    auto = importlib.import_module(f"{package}.lamp_addon.design_autobuild")
+    props = importlib.import_module(f"{package}.lamp_addon.design.properties")
+    builder = importlib.import_module(f"{package}.lamp_addon.design.builder")
+    parts = importlib.import_module(f"{package}.lamp_addon.design.parts")
+    auto = importlib.import_module(f"{package}.lamp_addon.design.autobuild")
     core = importlib.import_module(f"{package}.core_tracer.scene")
     bl_scene = bpy.context.scene
     props.scene_to_design(bl_scene, core.load_scene(PRESET))

@@ -45,9 +45,9 @@ def main() -> int:
     scene = load_scene(PRESET)
     scene["image"].update(width=width, height=height, samples=64)
     with dev_extension.enabled_from_source(bpy, "lamp_styling_dev") as package:
-        ops = importlib.import_module(f"{package}.lamp_addon.compare_ops")
-        design = importlib.import_module(f"{package}.lamp_addon.design_properties")
-        camera = importlib.import_module(f"{package}.lamp_addon.render_camera")
+        ops = importlib.import_module(f"{package}.lamp_addon.compare.ops")
+        design = importlib.import_module(f"{package}.lamp_addon.design.properties")
+        camera = importlib.import_module(f"{package}.lamp_addon.render.camera")
         bl_scene = bpy.context.scene
         design.scene_to_design(bl_scene, scene)
         bl_scene.camera, _ = camera.ensure_lamp_camera(bl_scene, frame=False)

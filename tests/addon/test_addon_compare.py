@@ -51,8 +51,8 @@ def _scene(edit=None, size=(48, 32)) -> dict:
 
 
 def _compare(lamp_addon, bl_scene, scene, samples, size=None):
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    return lamp_addon.compare_ops.compare_design(bl_scene, samples=samples, resolution=size)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    return lamp_addon.compare.ops.compare_design(bl_scene, samples=samples, resolution=size)
 
 
 def _region_mean(image: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
@@ -164,19 +164,19 @@ def _handlers_installed(compare) -> list[str]:
 
 def _design_and_user_settings(lamp_addon, bl_scene, size=(24, 16)) -> dict:
     """The baseline design with its scene camera and the user's settings; returns those settings."""
-    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=size))
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=size))
+    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
-    return _settings(lamp_addon.compare_ops, bl_scene)
+    return _settings(lamp_addon.compare.ops, bl_scene)
 
 
 def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, tmp_path):
     import bpy
 
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare.ops
     scene = _scene(size=(40, 24))
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
     before = _settings(compare, bl_scene)
     result = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
@@ -212,10 +212,10 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
 
 def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):
     scene = _scene(size=(24, 16))
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     assert bl_scene.camera is None
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)  # the Lamp Camera, at the design's view
+    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=1)
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)  # the Lamp Camera, at the design's view
     assert result["size"] == (24, 16) and result["scene"]["camera"]["position"] == pytest.approx(
         scene["camera"]["position"], abs=1e-3)
     assert result["left_out"] == []
@@ -238,7 +238,7 @@ def _modal_run(compare, bl_scene, samples=2, resolution=(40, 24)):
 
 
 def test_modal_steps_give_the_synchronous_result(lamp_addon, bl_scene):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare.ops
     before = _design_and_user_settings(lamp_addon, bl_scene, (40, 24))
     blocking = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
 
@@ -269,7 +269,7 @@ def _cancel_as_blender_does(bl_scene) -> None:
 
 @pytest.mark.parametrize("stage", ["cycles", "tracer"])
 def test_a_cancelled_render_restores_the_settings_and_removes_the_handlers(lamp_addon, bl_scene, stage):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare.ops
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     assert _settings(compare, bl_scene) != before
@@ -288,8 +288,8 @@ def test_a_cancelled_render_restores_the_settings_and_removes_the_handlers(lamp_
 def test_a_render_of_another_scene_is_not_taken_for_the_comparisons(lamp_addon, bl_scene):
     import bpy
 
-    compare = lamp_addon.compare_ops
-    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    compare = lamp_addon.compare.ops
+    lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     try:
         other = bpy.data.scenes.new("Other")
@@ -301,7 +301,7 @@ def test_a_render_of_another_scene_is_not_taken_for_the_comparisons(lamp_addon, 
 
 
 def test_a_design_edited_between_the_renders_stops_the_comparison(lamp_addon, bl_scene):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare.ops
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     bl_scene.lamp_design.lamps[0].lens.ior = 1.6  # the interface is live during the Cycles render
@@ -312,7 +312,7 @@ def test_a_design_edited_between_the_renders_stops_the_comparison(lamp_addon, bl
 
 
 def test_a_setting_the_user_changes_during_the_comparison_is_kept(lamp_addon, bl_scene):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare.ops
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     bl_scene.cycles.seed = 42  # while Cycles renders, the user sets the seed for later
@@ -323,7 +323,7 @@ def test_a_setting_the_user_changes_during_the_comparison_is_kept(lamp_addon, bl
 def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
     import bpy
 
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare.ops
     before = _design_and_user_settings(lamp_addon, bl_scene)
     actions = list(lamp_addon.actions.ACTION_OPERATORS)
     _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
@@ -341,7 +341,7 @@ def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
 def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
     result = _compare(lamp_addon, bl_scene, _scene(size=(24, 16)), samples=1)
     for name in ("c.exr", "c.png"):
-        lamp_addon.compare_ops.write_comparison(str(tmp_path / name), result)
+        lamp_addon.compare.ops.write_comparison(str(tmp_path / name), result)
         image, scene = imageio.read_image(tmp_path / name)
         assert image.shape == result["side_by_side"].shape
         assert scene == core_tracer.normalize(result["scene"])
@@ -352,7 +352,7 @@ def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
 def test_compare_operator(lamp_addon, bl_scene, tmp_path):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     assert bpy.ops.lamp.compare_cycles(samples=1) == {"FINISHED"}
     shown = lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Compare"])
     assert not (tmp_path / "c.png").exists()
@@ -367,11 +367,11 @@ def test_compare_operator(lamp_addon, bl_scene, tmp_path):
 def test_compare_operator_reports_design_errors(lamp_addon, bl_scene):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     bl_scene.lamp_design.lamps[0].cuts.pitch = 95.0  # larger than the lens
     with pytest.raises(RuntimeError, match=r"lamps\[0\]\.cuts\.pitch: 95 is larger than the lens"):
         bpy.ops.lamp.compare_cycles(samples=1)
-    assert _handlers_installed(lamp_addon.compare_ops) == [] and lamp_addon.compare_ops.running() is None
+    assert _handlers_installed(lamp_addon.compare.ops) == [] and lamp_addon.compare.ops.running() is None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -426,7 +426,7 @@ def test_lit_body_without_specular_agrees_with_cycles(lamp_addon, bl_scene):
 def test_cycles_filters_as_the_tracer_samples(lamp_addon):
     # One tracer sample is the pixel centre: Cycles samples a 0.01 px box. More samples are spread by
     # Cycles' default Blackman-Harris 1.5 px (core_tracer.raytrace.pixel_filter): Cycles keeps it.
-    one = lamp_addon.compare_ops.cycles_settings(1)
+    one = lamp_addon.compare.ops.cycles_settings(1)
     assert (one["pixel_filter_type"], one["filter_width"]) == ("BOX", 0.01)
-    many = lamp_addon.compare_ops.cycles_settings(16)
+    many = lamp_addon.compare.ops.cycles_settings(16)
     assert (many["pixel_filter_type"], many["filter_width"]) == ("BLACKMAN_HARRIS", 1.5)

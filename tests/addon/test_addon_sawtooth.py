@@ -25,7 +25,7 @@ def _lens(bl_scene):
 def _build(lamp_addon, bl_scene, scene: dict) -> None:
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
 
 
@@ -98,7 +98,7 @@ def test_the_cuts_panel_shows_the_saw_tooth_fields_and_the_tooth_angle_limit(lam
     import bpy
 
     scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     design = bl_scene.lamp_design
     shown = draw(bpy.types.LAMP_PT_cuts, bl_scene)
     assert [e[2] for e in shown.props()] == ["type", "pitch", "height"]

@@ -156,8 +156,8 @@ def test_bulb_through_a_smooth_cylindrical_lens_agrees_with_cycles(lamp_addon, b
 def test_auto_build_previews_a_cylindrical_lens_then_builds_it_in_full(lamp_addon, bl_scene, addon_core):
     # the cylindrical lens's mesh is made in Python: while a designer drags, a lighter preview
     scene = addon_core.scene.load_scene(PRESETS / "wrap-around-combination.json")
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    builder = lamp_addon.design_builder
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    builder = lamp_addon.design.builder
     assert builder.build_lamp(bl_scene, scene, preview=True).preview
     preview_faces = len(_objects(bl_scene)["Lamp 3 Lens"].data.polygons)
     assert not builder.build_lamp(bl_scene, scene).preview
