@@ -2,7 +2,7 @@
 
 Every parameter of a lamp design is declared here once, with its unit, allowed range, default
 and description. The validator (``validate``), the README's field table, the JSON presets and
-the Blender properties (``lamp_addon/design_properties.py``) all follow from these declarations.
+the Blender properties (``lamp_addon/design/properties.py``) all follow from these declarations.
 
 Lengths are millimetres, absorption coefficients per millimetre, angles degrees, colours
 linear RGB (MODEL.md §2).
