@@ -4,7 +4,7 @@
 
 Applies the four-lamp rear combination preset, builds it once (cold: every mesh is made), then makes
 one edit at a time through the design's properties, as a designer would, and times what Auto Build
-does after it: read the design, check it, rebuild what changed (``design_autobuild._step``). Edits
+does after it: read the design, check it, rebuild what changed (``design.autobuild._step``). Edits
 of lens colour, IOR, bulb and body colour remake no mesh; a lens radius remakes that lamp's lens,
 reflector, socket and the body. Deep cuts are timed apart: a cut height near its limit pitch/sqrt 2
 gives ~190,000 faces; given are the preview build (while dragging, on the UI thread), the making of

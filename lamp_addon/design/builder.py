@@ -43,7 +43,8 @@ from ...core_tracer.raytrace import environment, sunlight
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
-from ..convert import meshes, units
+from ..convert import units
+from ..convert.meshes import builder as mesh_builder
 from . import materials, properties
 from . import parts as design_parts
 from . import root as design_root
@@ -347,7 +348,7 @@ def _free_parts_whose_collection_was_deleted() -> None:
             bpy.data.objects.remove(obj)
 
 
-def fill_mesh(mesh: bpy.types.Mesh, data: meshes.MeshData) -> None:
+def fill_mesh(mesh: bpy.types.Mesh, data: mesh_builder.MeshData) -> None:
     """Replace ``mesh``'s geometry: vertices (mm -> BU), faces, material slots, smooth faces and sharp creases."""
     mesh.clear_geometry()
     sizes = np.fromiter(map(len, data.faces), dtype=np.int32, count=len(data.faces))
@@ -364,7 +365,7 @@ def fill_mesh(mesh: bpy.types.Mesh, data: meshes.MeshData) -> None:
     mesh.polygons.foreach_set("loop_start", starts)
     mesh.update(calc_edges=True)
     _set_attribute(mesh, "material_index", "INT", "FACE", data.material)
-    _set_attribute(mesh, "sharp_face", "BOOLEAN", "FACE", data.group == meshes.FLAT)
+    _set_attribute(mesh, "sharp_face", "BOOLEAN", "FACE", data.group == mesh_builder.FLAT)
     # An edge is a sharp crease where the faces on it belong to different smoothing groups.
     edge_index = np.empty(len(mesh.loops), dtype=np.int32)
     _corners(mesh, ".corner_edge", "edge_index", "foreach_get", edge_index)

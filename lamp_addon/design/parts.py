@@ -25,11 +25,15 @@ from mathutils.geometry import tessellate_polygon
 from ...core_tracer.raytrace.outline import Outline
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geometry, lens_cylinder
-from ..convert import meshes, prism_meshes, units, wrap_meshes
+from ..convert import units
+from ..convert.meshes import builder as mesh_builder
+from ..convert.meshes import fisheye, prism_plate, wrap
+from ..convert.meshes import lens as lens_meshes
+from ..convert.meshes import parts as part_meshes
 from . import materials
 
 MM = units.BU_PER_MM
-CHORD_TOLERANCE_MM = meshes.CHORD_TOLERANCE_MM
+CHORD_TOLERANCE_MM = mesh_builder.CHORD_TOLERANCE_MM
 # A preview lens has at most about this many cut-surface quads: a deep cut at full tolerance has up
 # to ~190,000 faces and takes 1-4 s to make, its preview 0.03-0.25 s (benchmarks/bench_build.py).
 PREVIEW_CUT_QUADS = 5000
@@ -48,7 +52,7 @@ class MeshPart:
     part: str
     name: str
     shape: tuple  # the numbers the mesh is made from (the builder keeps them on the mesh)
-    make: Callable[[], meshes.MeshData]
+    make: Callable[[], mesh_builder.MeshData]
     slots: list[Slot]
     matrix: Matrix  # where the design puts it, relative to the root
 
@@ -98,19 +102,20 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     prism = lamp.get("collection", "reflector") == "prism_plate"
     lens_outline, rim_local = R, None
     if prism:  # a round lens only (validation)
-        n = meshes.circle_segments(R)
+        n = mesh_builder.circle_segments(R)
         collecting = prism_plate_parts(base, label, lamp, n)
     elif outline.round:
         reflector_shape = ("reflector", R, f, g["vertex"], CHORD_TOLERANCE_MM)
         reflector = shapes.get(reflector_shape,
-                                lambda: meshes.reflector_mesh(lamp, meshes.circle_segments(R), CHORD_TOLERANCE_MM))
+                                lambda: part_meshes.reflector_mesh(lamp, mesh_builder.circle_segments(R),
+                                                                   CHORD_TOLERANCE_MM))
         n = ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
     else:  # one rim polygon for the lens, the trimmed reflector and the body opening
-        rim_local = meshes.outline_rim(lamp, CHORD_TOLERANCE_MM)
+        rim_local = mesh_builder.outline_rim(lamp, CHORD_TOLERANCE_MM)
         lens_outline = ("rectangular", outline.half_w, outline.half_h, outline.corner, f, g["vertex"])
         reflector_shape = ("reflector", lens_outline, CHORD_TOLERANCE_MM)
         reflector = shapes.get(reflector_shape,
-                                lambda: meshes.trimmed_reflector_mesh(lamp, rim_local, CHORD_TOLERANCE_MM))
+                                lambda: part_meshes.trimmed_reflector_mesh(lamp, rim_local, CHORD_TOLERANCE_MM))
         n = len(rim_local)
     if not prism:
         collecting = [MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
@@ -126,25 +131,26 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
         MeshPart(f"{base}.lens", f"{label} Lens",
                   ("lens", lens_outline, lens["thickness"], cuts["pitch"], _cut_shape(cuts), n, CHORD_TOLERANCE_MM,
                    k),
-                  partial(meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k, rim_local),
+                  partial(lens_meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k, rim_local),
                   [Slot(f"{base}.lens", f"{label} Lens", partial(materials.lens_glass, lamp=lamp)),
                    _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
                                  "Side Wall BSDF")], axis),
         *(dataclasses.replace(part, matrix=axis) for part in collecting),
-        MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM), partial(meshes.sphere_mesh, rb),
+        MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM),
+                  partial(part_meshes.sphere_mesh, rb),
                   [Slot(f"{base}.bulb", f"{label} Bulb", partial(materials.bulb, lamp=lamp))],
                   _translation(cx + bx, by, cz + bz)),
         MeshPart(f"{base}.socket", f"{label} Socket", ("socket", rs, g["vertex"], by, CHORD_TOLERANCE_MM),
-                  partial(meshes.socket_mesh, rs, g["vertex"], by),
+                  partial(part_meshes.socket_mesh, rs, g["vertex"], by),
                   [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
     if lens_cylinder(lamp) is not None:
         if preview and k > CYLINDER_PREVIEW_QUADS:  # its mesh is made in Python: 1.5 s at 6 x 6 quads a cell
             k, lighter = CYLINDER_PREVIEW_QUADS, True
-        return _cylindrical(parts, lamp, meshes.rim_polygon(R, n) if outline.round else rim_local, lens_outline, k,
-                            g, lighter)
+        rim = mesh_builder.rim_polygon(R, n) if outline.round else rim_local
+        return _cylindrical(parts, lamp, rim, lens_outline, k, g, lighter)
     if outline.round:
-        return parts, meshes.rim_polygon(R, n) + np.array([cx, cz]), (g["plane_b"], g["rim"]), lighter
+        return parts, mesh_builder.rim_polygon(R, n) + np.array([cx, cz]), (g["plane_b"], g["rim"]), lighter
     # a rectangular lens's collar reaches the reflector's edge: the body's opening needs no bore
     return parts, rim_local + np.array([cx, cz]), (g["plane_b"], g["plane_b"]), lighter
 
@@ -156,10 +162,10 @@ def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outlin
     lens, cuts = lamp["lens"], lamp["cuts"]
     key = ("cylindrical lens", lens_outline, lens["thickness"], cuts["pitch"], cuts["height"], len(rim),
            lens["wrap_radius"], lens["wrap_toward"], CHORD_TOLERANCE_MM, k)
-    data = shapes.get(key, partial(wrap_meshes.cylindrical_lens_mesh, lamp, rim, k, CHORD_TOLERANCE_MM))
+    data = shapes.get(key, partial(wrap.cylindrical_lens_mesh, lamp, rim, k, CHORD_TOLERANCE_MM))
     old = parts[0]
     parts[0] = MeshPart(old.part, old.name, key, lambda: data, old.slots, old.matrix)
-    opening = wrap_meshes.outer_rim(data, lamp) + np.array(lamp["center"])
+    opening = wrap.outer_rim(data, lamp) + np.array(lamp["center"])
     return parts, opening, (g["plane_b"], g["rim"]), lighter
 
 
@@ -172,12 +178,12 @@ def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[
                g["plate_base"], segments, CHORD_TOLERANCE_MM)
     return [
         MeshPart(f"{base}.prism_plate", f"{label} Prism Plate", ("prism_plate", *profile),
-                  partial(prism_meshes.prism_plate_mesh, lamp, segments),
+                  partial(prism_plate.prism_plate_mesh, lamp, segments),
                   [Slot(f"{base}.prism_plate", f"{label} Prism Plate",
                         partial(materials.prism_plate_glass, lamp=lamp))], None),
         MeshPart(f"{base}.housing", f"{label} Housing",
                   ("housing", lamp["lens"]["radius"], g["plate_front"], g["vertex"], segments, CHORD_TOLERANCE_MM),
-                  partial(prism_meshes.housing_mesh, lamp, segments),
+                  partial(prism_plate.housing_mesh, lamp, segments),
                   [_diffuse_slot(f"{base}.housing", f"{label} Housing", plate["housing_color"], "Housing BSDF")],
                   None),
     ]
@@ -208,8 +214,8 @@ def cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
     t, p, h = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     outline = Outline.of_lens(lamp["lens"])
     area_radius = outline.half_w if outline.round else math.sqrt(outline.area / math.pi)  # same cell count
-    light = preview_subdivision(area_radius, p) if preview else meshes.MAX_CELL_SUBDIVISION
-    most = light + 1 if preview else meshes.MAX_CELL_SUBDIVISION
+    light = preview_subdivision(area_radius, p) if preview else mesh_builder.MAX_CELL_SUBDIVISION
+    most = light + 1 if preview else mesh_builder.MAX_CELL_SUBDIVISION
     k = subdivisions.get((t, p, h, most), partial(_cut_subdivision, t, p, h, most))
     return min(k, light), k > light
 
@@ -221,15 +227,15 @@ def body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> MeshPa
     wraps = body_wraps(scene)
     if wraps:  # a front that curves round to the side (cylindrical lenses)
         return MeshPart("body", "Lamp Body", (*shape, tuple(wraps)),
-                        partial(wrap_meshes.body_mesh_wrapped, scene, rims, bores, wraps, tessellate_polygon),
+                        partial(wrap.body_mesh_wrapped, scene, rims, bores, wraps, tessellate_polygon),
                         [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
-    return MeshPart("body", "Lamp Body", shape, partial(meshes.body_mesh, scene, rims, bores, tessellate_polygon),
+    return MeshPart("body", "Lamp Body", shape, partial(part_meshes.body_mesh, scene, rims, bores, tessellate_polygon),
                      [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
 
 
 def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:
     rho = None if height == 0 else cut_sphere_radius(pitch, height)
-    return meshes.cut_subdivision(meshes.CutSurface(thickness, pitch, height, rho), most=most)[0]
+    return fisheye.cut_subdivision(fisheye.CutSurface(thickness, pitch, height, rho), most=most)[0]
 
 
 def preview_subdivision(radius: float, pitch: float) -> int:
@@ -238,7 +244,7 @@ def preview_subdivision(radius: float, pitch: float) -> int:
     return max(2, math.floor(math.sqrt(PREVIEW_CUT_QUADS / cells)))
 
 
-def ring_segments(data: meshes.MeshData) -> int:
+def ring_segments(data: mesh_builder.MeshData) -> int:
     """Segments of the reflector's rim ring (its vertices at the largest radius)."""
     r = np.hypot(data.verts[:, 0], data.verts[:, 2])
     return int(np.count_nonzero(r > r.max() * (1 - 1e-9)))

@@ -13,7 +13,8 @@ import bmesh
 import bpy
 import numpy as np
 
-from ..convert import meshes, units
+from ..convert import units
+from ..convert.meshes import builder as mesh_builder
 
 INSET_MM = 0.005
 
@@ -64,9 +65,9 @@ def glass_faces(mesh: bpy.types.Mesh) -> tuple[np.ndarray, np.ndarray]:
     corner_vertex, starts = _face_vertices(mesh)
     corner_face = np.repeat(np.arange(len(starts)), np.diff(np.append(starts, len(corner_vertex))))
     on_glass = np.zeros(len(mesh.vertices), bool)
-    on_glass[corner_vertex[material[corner_face] == meshes.LENS_GLASS]] = True
-    band = (material == meshes.LENS_SIDE_WALL) & np.logical_and.reduceat(on_glass[corner_vertex], starts)
-    return (material == meshes.LENS_GLASS) | band, material == meshes.LENS_SIDE_WALL
+    on_glass[corner_vertex[material[corner_face] == mesh_builder.LENS_GLASS]] = True
+    band = (material == mesh_builder.LENS_SIDE_WALL) & np.logical_and.reduceat(on_glass[corner_vertex], starts)
+    return (material == mesh_builder.LENS_GLASS) | band, material == mesh_builder.LENS_SIDE_WALL
 
 
 def inset(mesh: bpy.types.Mesh) -> None:

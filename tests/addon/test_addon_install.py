@@ -44,7 +44,7 @@ def _blender_ext() -> Path:
 def test_zip_contents(built_zip):
     names = set(zipfile.ZipFile(built_zip).namelist())
     for required in ("blender_manifest.toml", "__init__.py", "lamp_addon/__init__.py",
-                     "lamp_addon/design/properties.py", "lamp_addon/convert/meshes.py",
+                     "lamp_addon/design/properties.py", "lamp_addon/convert/meshes/builder.py",
                      "core_tracer/__init__.py", "core_tracer/scene/validate.py", "core_tracer/scene/spec.py"):
         assert required in names
     presets = {p.name for p in (ROOT / "presets").glob("*.json")}

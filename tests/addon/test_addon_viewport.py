@@ -14,7 +14,7 @@
   tracer's image back; through Blender's view transform it equals the tracer's image under that
   transform within 1/255. Needs a display: run under ``xvfb-run -a`` (the README's test command
   does); without one those tests skip.
-- The engine's film-transparent alpha (``render_engine.body_coverage``) is the tracer's own
+- The engine's film-transparent alpha (``render.engine.body_coverage``) is the tracer's own
   ray-box decision.
 """
 

@@ -1,5 +1,5 @@
 """Meshes of a cylindrical lens and of a body whose front curves round to the side (README, "the
-cylindrical lens"), numpy only, in the conventions of ``meshes`` (mm, x right, y into the lamp, z
+cylindrical lens"), numpy only, in the conventions of the package (mm, x right, y into the lamp, z
 up; faces wound so that normals point out of the solid).
 
 The lens is built as the tracer sees it (``core_tracer.scene.derived.lens_cylinder``): the cut
@@ -20,23 +20,22 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ...core_tracer.raytrace.outline import Outline
-from ...core_tracer.scene.derived import cut_sphere_radius, lamp_geometry, lens_cylinder
-from .meshes import (
+from ....core_tracer.raytrace.outline import Outline
+from ....core_tracer.scene.derived import cut_sphere_radius, lamp_geometry, lens_cylinder
+from .builder import (
     CHORD_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     LENS_SIDE_WALL,
     SAMPLED_MARGIN,
-    CutSurface,
+    MeshBuilder,
     MeshData,
-    _clip_convex,
-    _MeshBuilder,
-    add_bores,
-    cell_lines,
+    clip_convex,
     fan_triangles,
     triangle_deviation,
 )
+from .fisheye import CutSurface, cell_lines
+from .parts import add_bores
 
 
 def strip_lines(x_t: float, stop: float, radius: float, tol: float = CHORD_TOLERANCE_MM) -> np.ndarray:
@@ -138,7 +137,7 @@ def cylindrical_lens_mesh(lamp: dict, rim: np.ndarray, k: int, tol: float = CHOR
     outside = (cross < 0).all(axis=1).any(axis=1)  # wholly outside one edge of the outline
     inside = (cross >= -1e-9 * np.hypot(edges[:, 0], edges[:, 1])[None, None, :]).all(axis=(1, 2))
 
-    mb = _MeshBuilder()
+    mb = MeshBuilder()
     cut_faces: list[list[int]] = []
     for q_index in np.flatnonzero(~outside).tolist():
         i, j = int(qi[q_index]), int(qj[q_index])
@@ -150,7 +149,7 @@ def cylindrical_lens_mesh(lamp: dict, rim: np.ndarray, k: int, tol: float = CHOR
             corners_uz = list(zip(corner_u[q_index].tolist(), corner_z[q_index].tolist(), strict=True))
             poly = [tuple(q) for q in xz.tolist()]
             flip = not _ccw(poly)
-            clipped = _clip_convex(poly[::-1] if flip else poly, rim, range(len(rim)))
+            clipped = clip_convex(poly[::-1] if flip else poly, rim, range(len(rim)))
             if len(clipped) < 3:
                 continue
             lookup = {(round(x * 1e9), round(z * 1e9)): q for (x, z), q in zip(poly, pts.tolist(), strict=True)}
@@ -217,7 +216,7 @@ def cylindrical_lens_mesh(lamp: dict, rim: np.ndarray, k: int, tol: float = CHOR
     for x0, x1 in zip(lines[:-1], lines[1:], strict=True):
         lo, hi = min(x0, x1), max(x0, x1)
         strip = np.array([(lo, -1e9), (hi, -1e9), (hi, 1e9), (lo, 1e9)])
-        piece = _clip_convex([tuple(q) for q in poly], strip, range(4))
+        piece = clip_convex([tuple(q) for q in poly], strip, range(4))
         face = [mb.vertex(x, y_outer(x), z) for x, z in piece]
         face = [v for n_, v in enumerate(face) if v != face[n_ - 1]]
         if len(face) >= 3:
@@ -309,7 +308,7 @@ def front_depth(wraps: Sequence[tuple[float, float, float]]) -> Callable[[float]
 def body_mesh_wrapped(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[tuple[float, float]],
                       wraps: Sequence[tuple[float, float, float]], triangulate: Callable[[list], list],
                       tol: float = CHORD_TOLERANCE_MM) -> MeshData:
-    """``meshes.body_mesh`` for a front that curves round to the side: the front triangulated with
+    """``parts.body_mesh`` for a front that curves round to the side: the front triangulated with
     its openings in [x, z], cut along the strip lines of each curved end and lifted onto the front."""
     body = scene["body"]
     bx, bz = body["center"]
@@ -323,7 +322,7 @@ def body_mesh_wrapped(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[t
         lines += strip_lines(x_t, edge, radius, tol).tolist()
     lines = sorted({round(x, 9) for x in lines if x0 - 1e-9 <= x <= x1 + 1e-9})
 
-    mb = _MeshBuilder()
+    mb = MeshBuilder()
     outline = [(x0, z0), (x1, z0), (x1, z1), (x0, z1)]
     loops = [outline] + [[(float(x), float(z)) for x, z in rim] for rim in rims]
     points = [q for loop in loops for q in loop]
@@ -336,7 +335,7 @@ def body_mesh_wrapped(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[t
         cuts = [x for x in lines if lo < x < hi]
         for a, b in zip([lo, *cuts], [*cuts, hi], strict=True):
             strip = np.array([(a, -1e9), (b, -1e9), (b, 1e9), (a, 1e9)])
-            piece = _clip_convex(poly, strip, range(4)) if cuts else poly
+            piece = clip_convex(poly, strip, range(4)) if cuts else poly
             face = [mb.vertex(x, f(x), z) for x, z in piece]
             face = [v for n, v in enumerate(face) if v != face[n - 1]]
             if len(face) >= 3:

@@ -16,14 +16,14 @@ import math
 
 import numpy as np
 
-from ...core_tracer.scene.derived import tooth_height
-from .meshes import (
+from ....core_tracer.scene.derived import tooth_height
+from .builder import (
     CHORD_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     LENS_SIDE_WALL,
+    MeshBuilder,
     MeshData,
-    _MeshBuilder,
     collar_top,
     fan_triangles,
     rim_polygon,
@@ -101,7 +101,7 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_M
     """The lens solid of a saw-tooth lamp, relative to its axis: outer disk at y = 0, one flat
     polygon per inclined facet and per return facet, the side wall from y = 0 to the cut surface
     and the open collar above it up to the apex plane (material ``LENS_SIDE_WALL``), as
-    ``meshes.lens_mesh`` for fish-eye cuts. ``rim`` is the lens outline, any convex polygon
+    ``fisheye.fisheye_lens_mesh`` for fish-eye cuts. ``rim`` is the lens outline, any convex polygon
     counter-clockwise seen from -y (default: the round lens's ``rim_polygon(R, segments)``).
     ``max_deviation`` is the measured distance of the facets' vertices from their analytic planes
     and of the side wall from the cylinder of the round lens."""
@@ -110,7 +110,7 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_M
     p, across = cuts["pitch"], ridge_across(cuts["orientation"])
     h = tooth_height(p, cuts["tooth_angle"])
     loop = _Loop(rim_polygon(R, segments) if rim is None else rim, across, t, p, h)
-    mb = _MeshBuilder()
+    mb = MeshBuilder()
     ids = [(mb.vertex(x, ya, z), mb.vertex(x, yl, z)) for x, z, _, ya, yl in loop.points]
     n = len(ids)
 

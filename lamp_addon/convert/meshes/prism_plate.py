@@ -4,7 +4,7 @@ The plate: the flat front face, and the ring face revolved from the profile the 
 (``core_tracer.scene.prism_profile``): per ring the conical facet from its top at the inner radius to
 its foot at the outer radius, then the vertical draft up to the next ring's top. The facets and drafts
 are straight in profile, so the only chord error is around the axis: ``segments`` (from
-``meshes.circle_segments(R)``) keeps it within ``CHORD_TOLERANCE_MM`` at the rim, measured anyway.
+``builder.circle_segments(R)``) keeps it within ``CHORD_TOLERANCE_MM`` at the rim, measured anyway.
 The plate has no rim face of its own: the housing's cylinder r = R closes it, as in the tracer,
 where a ray inside the plate that reaches r = R ends on the housing.
 
@@ -18,9 +18,9 @@ import math
 
 import numpy as np
 
-from ...core_tracer.scene.derived import lamp_geometry
-from ...core_tracer.scene.prism_profile import ring_slopes
-from .meshes import FLAT, MeshData, _MeshBuilder, fan_triangles, triangle_deviation
+from ....core_tracer.scene.derived import lamp_geometry
+from ....core_tracer.scene.prism_profile import ring_slopes
+from .builder import FLAT, MeshBuilder, MeshData, fan_triangles, triangle_deviation
 
 
 def ring_profile(lamp: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -78,7 +78,7 @@ def prism_plate_mesh(lamp: dict, segments: int) -> MeshData:
     g = lamp_geometry(lamp)
     R = lamp["lens"]["radius"]
     r, y, kind = ring_profile(lamp)
-    mb = _MeshBuilder()
+    mb = MeshBuilder()
     a = 2.0 * math.pi * np.arange(segments) / segments
     cos_a, sin_a = np.cos(a), np.sin(a)
     front = [mb.vertex(R * c, g["plate_front"], R * t) for c, t in zip(cos_a, sin_a, strict=True)]
@@ -103,7 +103,7 @@ def housing_mesh(lamp: dict, segments: int) -> MeshData:
     g = lamp_geometry(lamp)
     R = lamp["lens"]["radius"]
     a = 2.0 * math.pi * np.arange(segments) / segments
-    mb = _MeshBuilder()
+    mb = MeshBuilder()
     front = [mb.vertex(R * math.cos(t), g["plate_front"], R * math.sin(t)) for t in a]
     back = [mb.vertex(R * math.cos(t), g["vertex"], R * math.sin(t)) for t in a]
     for k in range(segments):

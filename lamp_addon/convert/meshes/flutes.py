@@ -15,21 +15,21 @@ import math
 
 import numpy as np
 
-from ...core_tracer.scene.derived import flute_radius
-from .meshes import (
+from ....core_tracer.scene.derived import flute_radius
+from .builder import (
     CHORD_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     SAMPLED_MARGIN,
+    MeshBuilder,
     MeshData,
-    _MeshBuilder,
-    _side_wall,
     collar_top,
     fan_triangles,
     rim_polygon,
+    side_wall,
     triangle_deviation,
 )
-from .sawtooth_mesh import ridge_across
+from .sawtooth import ridge_across
 
 ON_LINE = 1e-9  # mm
 
@@ -43,7 +43,7 @@ def bands_per_flute(pitch: float, rho: float, tol: float) -> int:
 
 def flutes_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
                      rim: np.ndarray | None = None) -> MeshData:
-    """The lens solid of a fluted lamp, relative to its axis, as ``meshes.lens_mesh`` for fish-eye
+    """The lens solid of a fluted lamp, relative to its axis, as ``fisheye.fisheye_lens_mesh`` for fish-eye
     cuts (outer face, cut surface, side wall and open collar up to the apex plane). ``rim``: the
     lens outline, any convex polygon counter-clockwise seen from -y (default: the round lens's)."""
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
@@ -80,7 +80,7 @@ def flutes_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
             f = (line - s_rim[i]) / (s_rim[j] - s_rim[i])
             x, z = rim[i] + f * (rim[j] - rim[i])
             points.append((float(x), float(z), float(line)))
-    mb = _MeshBuilder()
+    mb = MeshBuilder()
     s_pts = np.array([q[2] for q in points])
     y_pts = np.interp(s_pts, lines, heights)  # exact on the lines, the band's plane between them
     ring = [mb.vertex(x, y, z) for (x, z, _), y in zip(points, y_pts, strict=True)]
@@ -93,7 +93,7 @@ def flutes_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
         flute = math.floor((lines[m] + lines[m + 1]) / 2 / p + 0.5)
         mb.face(face[::-1], FLAT if h == 0 else 4096 + flute - k_lo, LENS_GLASS)
     cut_faces = list(mb.faces)
-    bottom = _side_wall(mb, ring, collar_top(lamp))
+    bottom = side_wall(mb, ring, collar_top(lamp))
     side = mb.faces[len(cut_faces):]
     mb.face(bottom, FLAT, LENS_GLASS)
 
