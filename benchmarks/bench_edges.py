@@ -47,7 +47,7 @@ def main() -> int:
     with dev_extension.enabled_from_source(bpy, "lamp_styling_dev") as package:
         ops = importlib.import_module(f"{package}.lamp_addon.compare.ops")
         design = importlib.import_module(f"{package}.lamp_addon.design.properties")
-        camera = importlib.import_module(f"{package}.lamp_addon.render.camera")
+        camera = importlib.import_module(f"{package}.lamp_addon.render.lamp_camera")
         bl_scene = bpy.context.scene
         design.scene_to_design(bl_scene, scene)
         bl_scene.camera, _ = camera.ensure_lamp_camera(bl_scene, frame=False)

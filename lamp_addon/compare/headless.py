@@ -14,7 +14,7 @@ from ...core_tracer.images import display, imageio
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import load_scene
 from ..design import properties as design_properties
-from ..render import camera as render_camera
+from ..render import lamp_camera
 from . import ops
 
 CHANNELS = ("R", "G", "B")
@@ -41,7 +41,7 @@ def run(preset: str, output: str, *, samples: int = ops.DEFAULT_SAMPLES,
     bl_scene = bpy.context.scene
     design_properties.scene_to_design(bl_scene, scene)
     # The preset fixes the view: the Lamp Camera takes it and becomes the scene camera.
-    bl_scene.camera, _ = render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    bl_scene.camera, _ = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     if size is None:
         size = (scene["image"]["width"], scene["image"]["height"])
     comparison = ops.compare_design(bl_scene, samples=samples, resolution=size)

@@ -59,6 +59,7 @@ from ..freeform import materials as freeform_materials
 from ..freeform import parametric as freeform_parametric
 from ..freeform import properties as freeform_properties
 from ..render import camera as render_camera
+from ..render import lamp_camera, view_link
 from ..render.engine import ENGINE_ID
 
 RENDER_RESULT = "Render Result"
@@ -323,13 +324,13 @@ class CompareRun:
             self.ended = how
 
     def prepare(self) -> None:
-        """Make sure the Lamp Camera exists (made and framed the first time, ``render.camera``), build
+        """Make sure the Lamp Camera exists (made and framed the first time, ``render.lamp_camera``), build
         the lamp when its objects are out of date, fix the scene the tracer renders, set the render
         settings both renders use and leave out of the Cycles render every object that is not part of
         the design (``left_out``). Raises ``SceneError``."""
         bl_scene = self.bl_scene
-        _camera, self.camera_news = render_camera.ensure_lamp_camera(bl_scene)
-        render_camera.pause_link(bl_scene)  # the render size set below is the comparison's, not the user's
+        _camera, self.camera_news = lamp_camera.ensure_lamp_camera(bl_scene)
+        view_link.pause_link(bl_scene)  # the render size set below is the comparison's, not the user's
         self._paused = True
         parts = freeform_properties.role_objects(bl_scene)
         if self.build and needs_build(bl_scene) and not parts:  # with parts, the lamp is the parts
@@ -457,7 +458,7 @@ class CompareRun:
         if self._paused:
             self._paused = False
             if scene_exists:
-                render_camera.resume_link(self.bl_scene)
+                view_link.resume_link(self.bl_scene)
         if running() is self:
             unwatch()
         if self._folder is not None:

@@ -14,7 +14,7 @@ import bpy
 from ...core_tracer.scene import spec
 from ...core_tracer.scene.reading import SceneError
 from ..convert.layout import design_with_new_lamp, refusal_of_new_lamp, with_new_lamp_unchecked
-from ..render import camera as render_camera
+from ..render import lamp_camera, view_link
 from ..render import setup as render_setup
 from . import properties
 from .operator import DesignOperator
@@ -45,7 +45,7 @@ class LAMP_OT_lamp_add(DesignOperator, bpy.types.Operator):
         design.body.center = doc["body"]["center"]
         design.body.size = doc["body"]["size"]
         design.active_lamps_index = len(design.lamps) - 1
-        render_camera.keep_framed(context.scene)
+        lamp_camera.keep_framed(context.scene)
         if len(design.lamps) == 1 and design.auto_build and not render_setup.is_set_up(context.scene):
             # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now.
             news = render_setup.set_up(context.scene)
@@ -91,7 +91,7 @@ class LAMP_OT_lamp_remove(DesignOperator, bpy.types.Operator):
         design.lamps.remove(design.active_lamps_index)
         design.active_lamps_index = min(design.active_lamps_index, len(design.lamps) - 1)
         properties.notify_edited(context.scene)  # removing from the list calls no update callback
-        render_camera.keep_framed(context.scene)
+        lamp_camera.keep_framed(context.scene)
         return {"FINISHED"}
 
 
@@ -118,7 +118,7 @@ class LAMP_OT_build(DesignOperator, bpy.types.Operator):
         except SceneError as e:
             return self.cancelled(e)
         report = builder.build_lamp(context.scene, scene)
-        render_camera.sync_view(context.scene)
+        view_link.sync_view(context.scene)
         news = render_setup.set_up(context.scene)
         level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
         self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "

@@ -30,6 +30,7 @@ from .. import reports
 from ..design import properties as design_properties
 from ..design import root as design_root
 from ..render import camera as render_camera
+from ..render import lamp_camera
 from ..render import setup as render_setup
 from . import library as preset_library
 
@@ -129,14 +130,14 @@ def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
 def show_view(bl_scene: bpy.types.Scene, scene: dict) -> str:
     """Show the design's view (just set from a preset) through the add-on's Lamp Camera.
 
-    The design's camera fields are the Lamp Camera (``render.camera.sync_view``): it takes the
+    The design's camera fields are the Lamp Camera (``render.view_link.sync_view``): it takes the
     preset's view, made when the scene has none. A camera of the designer's stays as it is.
     Returns what happened, for the report."""
     mine = bl_scene.camera is not None and not render_camera.is_lamp_camera(bl_scene.camera)
     if mine and render_camera.find_lamp_camera(bl_scene) is None:
         return (f"kept your camera \"{bl_scene.camera.name}\" (the preset's view is the design's camera; "
                 "Frame Lamp makes the Lamp Camera)")
-    ob, made = render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    ob, made = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     if mine:
         return (f"kept your camera \"{bl_scene.camera.name}\" (the preset's view is on \"{ob.name}\"; "
                 "Frame Lamp makes it the scene camera)")

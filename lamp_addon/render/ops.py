@@ -23,7 +23,7 @@ from ...core_tracer.images import display, glare
 from ...core_tracer.raytrace import band_pool
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, image_view, jobs, reports
-from . import camera
+from . import camera, view_link
 
 IMAGE_NAME = "Lamp Tracer"
 
@@ -90,7 +90,7 @@ def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
     Returns the image and the render time in seconds. Raises ``SceneError``."""
     from ... import core_tracer
 
-    camera.sync_view(bl_scene)
+    view_link.sync_view(bl_scene)
     scene = camera.scene_for_render(bl_scene)
     start = time.perf_counter()
     rgb = glare.apply(core_tracer.render(scene), scene)
@@ -127,7 +127,7 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
             return self.execute(context)
-        camera.sync_view(context.scene)
+        view_link.sync_view(context.scene)
         try:
             scene = camera.scene_for_render(context.scene)
         except SceneError as e:

@@ -30,7 +30,7 @@ from ...core_tracer.scene.validate import parse_scene
 from .. import image_view
 from ..convert import camera as cm
 from ..design import properties as design_properties
-from . import camera
+from . import camera, lamp_camera
 
 SETUP_KEY = "lamp_scene_setup"  # scene custom property: JSON {"exposure": the value the add-on set, or null}
 DEFAULT_ENGINES = ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")  # what a new file renders with (4.2-5.0)
@@ -72,14 +72,14 @@ def design_view_shows_body(bl_scene) -> bool:
 def _camera(bl_scene) -> str:
     previous = bl_scene.camera
     if camera.find_lamp_camera(bl_scene) is None:
-        ob, what = camera.ensure_lamp_camera(bl_scene, frame=not design_view_shows_body(bl_scene))
+        ob, what = lamp_camera.ensure_lamp_camera(bl_scene, frame=not design_view_shows_body(bl_scene))
     else:  # made earlier (by a preset, by Compare): the link renewed
-        ob, what = camera.ensure_lamp_camera(bl_scene)[0], ""
+        ob, what = lamp_camera.ensure_lamp_camera(bl_scene)[0], ""
         if previous is not ob:
             bl_scene.camera = ob
             what = f'made "{ob.name}" the scene camera' + (
                 f' (your "{previous.name}" is kept as it was)' if previous is not None else "")
-    camera.carry_with_root(bl_scene, ob)  # the lamp's view moves with the lamp
+    lamp_camera.carry_with_root(bl_scene, ob)  # the lamp's view moves with the lamp
     return what
 
 
@@ -131,9 +131,9 @@ def set_up(bl_scene) -> list[str]:
     if not is_set_up(bl_scene):
         news += [_camera(bl_scene), _engine(bl_scene)]
         _remember(bl_scene, 0.0 if exposure_is_the_addons(bl_scene) else None)  # None: the user's own exposure
-    lamp_camera = camera.find_lamp_camera(bl_scene)
-    if lamp_camera is not None:
-        camera.carry_with_root(bl_scene, lamp_camera)  # made before the root (Add Lamp, a preset)
+    ob = camera.find_lamp_camera(bl_scene)
+    if ob is not None:
+        lamp_camera.carry_with_root(bl_scene, ob)  # made before the root (Add Lamp, a preset)
     news.append(follow_design_exposure(bl_scene))
     return [n for n in news if n]
 

@@ -165,7 +165,7 @@ def _handlers_installed(compare) -> list[str]:
 def _design_and_user_settings(lamp_addon, bl_scene, size=(24, 16)) -> dict:
     """The baseline design with its scene camera and the user's settings; returns those settings."""
     lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=size))
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
     return _settings(lamp_addon.compare.ops, bl_scene)
 
@@ -176,7 +176,7 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     compare = lamp_addon.compare.ops
     scene = _scene(size=(40, 24))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
     before = _settings(compare, bl_scene)
     result = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))

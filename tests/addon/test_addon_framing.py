@@ -178,7 +178,7 @@ def test_four_lamps_after_add_lamp_are_all_in_the_image(lamp_addon, bl_scene):
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 3
     bl_scene.lamp_design.body.size = (320.0, 110.0)
     bl_scene.lamp_design.body.center = (95.0, 0.0)
-    assert lamp_addon.render.camera.keep_framed(bl_scene)
+    assert lamp_addon.render.lamp_camera.keep_framed(bl_scene)
     near = lamp_addon.render.camera.scene_for_render(bl_scene)["camera"]
     assert math.dist(near["position"], near["target"]) < 0.8 * far
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 3
@@ -194,7 +194,7 @@ def test_without_reframing_the_fourth_lamp_leaves_the_image(lamp_addon, bl_scene
     for _ in range(3):
         doc = from_ops.design_with_new_lamp(doc, 0)
     lamp_addon.design.properties.scene_to_design(bl_scene, doc)
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
     assert rims_in_image(lamp_addon, bl_scene) != [True] * 4
 
 

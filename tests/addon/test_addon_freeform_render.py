@@ -18,7 +18,7 @@ def _converted(lamp_addon, addon_core, bl_scene, path=BASELINE, size=SIZE) -> di
     scene = addon_core.scene.load_scene(path)
     scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     lamp_addon.freeform.conversion.convert_to_freeform(bl_scene)
     bl_scene.render.engine = "LAMP_TRACER"
     return scene
@@ -100,7 +100,7 @@ def test_exported_pair_renders_the_same_from_the_command_line(lamp_addon, addon_
     lens = next(o for o in lamp_addon.freeform.properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
     lens.modifiers.new("Bend", "SIMPLE_DEFORM").deform_axis = "Z"  # reshaped: modifiers are applied
     lens.modifiers["Bend"].angle = 0.2
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bpy.context.view_layer.update()
     in_blender = _f12(bl_scene, tmp_path / "blender.exr")
     json_path = tmp_path / "my lamp.json"
@@ -260,7 +260,7 @@ def _mixed(lamp_addon, addon_core, bl_scene, size=SIZE, path=BASELINE) -> tuple[
     scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lamp_addon.design.builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     return scene, _add_my_lamp(lamp_addon, bl_scene)
 
@@ -318,7 +318,7 @@ def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, 
     root.rotation_euler = (0.1, 0.2, 0.3)
     for obj in (bpy.data.objects["My Slab"], bpy.data.objects["My Bulb"]):
         obj.parent = root  # the designer's parts move with the lamp
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bpy.context.view_layer.update()
     in_blender = _f12(bl_scene, tmp_path / "blender.exr")
     json_path = tmp_path / "mixed.json"

@@ -24,7 +24,7 @@ def _glare_scene(size=(48, 32)) -> dict:
 
 def _load_design(lamp_addon, bl_scene, scene: dict) -> None:
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def _cli_exr(scene: dict, tmp_path) -> np.ndarray:

@@ -359,7 +359,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     assert preset["camera"]["position"] != design_camera["position"]
     for key, value in seen.items():
         assert preset["camera"][key] == (value if isinstance(value, str) else pytest.approx(value, abs=1e-4)), key
-    # Moving the Lamp Camera moved the design's camera: one view (render.camera.sync_view).
+    # Moving the Lamp Camera moved the design's camera: one view (render.view_link.sync_view).
     for key, value in props.design_to_scene(bl_scene)["camera"].items():
         assert value == (seen[key] if isinstance(value, str) else pytest.approx(seen[key], abs=1e-4)), key
 

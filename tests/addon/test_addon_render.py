@@ -55,7 +55,7 @@ def _preset_scene(camera: dict | None = None, size=(48, 32)) -> dict:
 
 def _load_design(lamp_addon, bl_scene, scene: dict) -> None:
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def _axes(cam, camera_module):
@@ -154,16 +154,16 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     moving the Lamp Camera or changing the resolution writes the design: one view, one size."""
     import bpy
 
-    rc = lamp_addon.render.camera
+    rc, lc, link = lamp_addon.render.camera, lamp_addon.render.lamp_camera, lamp_addon.render.view_link
     scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    ob, made = rc.ensure_lamp_camera(bl_scene, frame=False)
+    ob, made = lc.ensure_lamp_camera(bl_scene, frame=False)
     assert bl_scene.camera == ob and rc.is_lamp_camera(ob) and "Lamp Camera" in made
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (40, 30)
     assert rc.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(31.25, abs=1e-4)
     # The design's FOV reaches the render (16 -> 40 in the issue; here 31.25 -> 40).
     bl_scene.lamp_design.camera.fov_deg = 40.0
-    assert rc.sync_view(bl_scene) == "blender"
+    assert link.sync_view(bl_scene) == "blender"
     assert rc.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     image = bpy.data.images["Lamp Tracer"]
@@ -175,7 +175,7 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
                                atol=1e-4, rtol=1e-5)
     # The design's image size is the render size.
     bl_scene.lamp_design.image.width = 48
-    rc.sync_view(bl_scene)
+    link.sync_view(bl_scene)
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (48, 30)
     # The user moves the Lamp Camera 50 mm to the right and sets the resolution: the design follows.
     ob.location.x += 0.05
@@ -184,23 +184,23 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     design = lamp_addon.design.properties.design_to_scene(bl_scene)
     assert design["camera"]["position"][0] == pytest.approx(scene["camera"]["position"][0] + 50.0, abs=1e-3)
     assert design["image"] == {"width": 48, "height": 36, "samples": 1}
-    assert rc.sync_view(bl_scene) == ""  # both sides agree now
+    assert link.sync_view(bl_scene) == ""  # both sides agree now
 
 
 def test_a_users_camera_is_rendered_as_it_is_and_never_moved(lamp_addon, bl_scene):
     import bpy
 
-    rc = lamp_addon.render.camera
+    rc, lc, link = lamp_addon.render.camera, lamp_addon.render.lamp_camera, lamp_addon.render.view_link
     scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    rc.ensure_lamp_camera(bl_scene, frame=False)
+    lc.ensure_lamp_camera(bl_scene, frame=False)
     lamp = bl_scene.camera
     mine = _user_camera(lamp_addon, bl_scene, _preset_scene({"position": [60.0, -700.0, 40.0]}, (40, 30)))
     before = tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens
-    assert "not used" in rc.view_status(bl_scene)[0] and "My Camera" in rc.view_status(bl_scene)[0]
+    assert "not used" in link.view_status(bl_scene)[0] and "My Camera" in link.view_status(bl_scene)[0]
     bl_scene.lamp_design.camera.fov_deg = 20.0  # drives the Lamp Camera, not mine
-    rc.sync_view(bl_scene)
-    assert rc.keep_framed(bl_scene)  # frames the Lamp Camera ...
+    link.sync_view(bl_scene)
+    assert lc.keep_framed(bl_scene)  # frames the Lamp Camera ...
     assert (tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens) == before  # ... never mine
     assert rc.scene_camera_to_dict(bl_scene, lamp)["fov_deg"] == pytest.approx(20.0, abs=1e-4)
     assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # my view into the design: the Lamp Camera takes it

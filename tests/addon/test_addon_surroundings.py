@@ -98,7 +98,7 @@ def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp
     doc["image"] = {"width": 48, "height": 32, "samples": samples}
     scene = core_tracer.parse_scene(doc)
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
     rgba = _engine_rgba(bl_scene, tmp_path / "film.exr")
