@@ -15,12 +15,13 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import load_scene
 from ..design import properties as design_properties
 from ..render import lamp_camera
-from . import ops
+from .comparison import DEFAULT_SAMPLES, compare_design, write_comparison
+from .scope import left_out_text
 
 CHANNELS = ("R", "G", "B")
 
 
-def run(preset: str, output: str, *, samples: int = ops.DEFAULT_SAMPLES,
+def run(preset: str, output: str, *, samples: int = DEFAULT_SAMPLES,
         size: tuple[int, int] | None = None, view: str = display.DEFAULT_VIEW, exposure: float | str = "auto",
         prog: str = "compare_preset") -> int:
     """Load ``preset`` into the current (empty) scene's design, build it, render it both ways
@@ -44,10 +45,10 @@ def run(preset: str, output: str, *, samples: int = ops.DEFAULT_SAMPLES,
     bl_scene.camera, _ = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     if size is None:
         size = (scene["image"]["width"], scene["image"]["height"])
-    comparison = ops.compare_design(bl_scene, samples=samples, resolution=size)
+    comparison = compare_design(bl_scene, samples=samples, resolution=size)
     folder = os.path.dirname(os.path.abspath(output))
     os.makedirs(folder, exist_ok=True)
-    ev = ops.write_comparison(output, comparison, view=transform, exposure=exposure)
+    ev = write_comparison(output, comparison, view=transform, exposure=exposure)
     print(report(comparison, preset, output))
     if output.lower().endswith(".png"):
         print(f"shown: {transform.view} at {ev:+.1f} EV, both halves")
@@ -74,6 +75,6 @@ def report(comparison: dict, preset: str, output: str) -> str:
     ]
     lines += [f"  {name:<27}" + "".join(f"{v:10.4f}" for v in values) for name, values in rows]
     if comparison.get("left_out"):
-        lines.append(ops.left_out_text(comparison["left_out"]))
+        lines.append(left_out_text(comparison["left_out"]))
     lines.append(f"wrote {output}")
     return "\n".join(lines)

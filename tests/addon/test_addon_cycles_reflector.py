@@ -36,7 +36,7 @@ def _constant_scene() -> dict:
 def test_the_reflector_constant_is_seen_once_per_path_as_in_the_model(lamp_addon, bl_scene):
     scene = _constant_scene()
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=SAMPLES, resolution=SIZE)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES, resolution=SIZE)
     tracer, cycles = result["tracer"].astype(np.float64), result["cycles"].astype(np.float64)
     passes = core_tracer.render_passes(scene, *SIZE, samples=1).passes
     # Only the constant lights this lamp: the pixels where the reflector is seen (not the bulb or

@@ -186,7 +186,7 @@ def test_compare_renders_up_to_date_objects_as_they_are(lamp_addon, bl_scene):
     assert bpy.ops.lamp.build() == {"FINISHED"}
     ior = _lens_ior_input(lamp_addon, bl_scene)
     ior.default_value = 1.7
-    lamp_addon.compare.ops.compare_design(bl_scene, samples=1)
+    lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     assert _lens_ior_input(lamp_addon, bl_scene).default_value == pytest.approx(1.7)
 
 
@@ -198,7 +198,7 @@ def test_compare_rebuilds_out_of_date_objects(lamp_addon, bl_scene):
     bl_scene.lamp_design.auto_build = False
     bl_scene.lamp_design.lamps[0].lens.ior = 1.6
     assert not lamp_addon.design.builder.is_up_to_date(bl_scene)
-    lamp_addon.compare.ops.compare_design(bl_scene, samples=1)
+    lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     assert _lens_ior_input(lamp_addon, bl_scene).default_value == pytest.approx(1.6)
     assert lamp_addon.design.builder.is_up_to_date(bl_scene)
 

@@ -35,7 +35,7 @@ def _baseline(size=SIZE) -> dict:
 
 def _clean_comparison(lamp_addon, bl_scene) -> dict:
     lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
-    return lamp_addon.compare.ops.compare_design(bl_scene, samples=SAMPLES)
+    return lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
 
 
 @pytest.fixture
@@ -68,17 +68,17 @@ def test_startup_file_build_then_compare_shows_the_lamp_in_both_halves(lamp_addo
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)  # the first Build made it the scene camera
     assert bpy.ops.lamp.compare_cycles(samples=SAMPLES) == {"FINISHED"}
-    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=SAMPLES)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
     _assert_same_lamp(result, clean_shares)
     assert sorted(result["left_out"]) == ["Cube", "Light"]
-    assert lamp_addon.compare.ops.left_out_text(result["left_out"]) == "left out of the Cycles half: Cube, Light"
+    assert lamp_addon.compare.scope.left_out_text(result["left_out"]) == "left out of the Cycles half: Cube, Light"
     # Put back exactly: the Cube and the Light render again; the startup camera never moved.
     assert not bl_scene.objects["Cube"].hide_render and not bl_scene.objects["Light"].hide_render
     assert (tuple(startup_camera.location), tuple(startup_camera.rotation_euler), startup_camera.data.lens) == before
     assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
     # The render size is the design's, not the startup file's 1920 x 1080.
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == SIZE
-    lamp_addon.compare.ops.write_comparison(str(tmp_path / "startup-compare.png"), result)
+    lamp_addon.compare.comparison.write_comparison(str(tmp_path / "startup-compare.png"), result)
 
 
 def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_scene):
@@ -98,7 +98,7 @@ def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_sce
     bl_scene.collection.children.link(props)
     props.hide_render = True
     props.objects.link(bpy.data.objects.new("Wheel", bpy.data.meshes.new("Wheel")))
-    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=SAMPLES)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
     _assert_same_lamp(result, clean_shares)
     assert result["left_out"] == ["Car Body"]
     assert not car.hide_render and light.hide_render
@@ -107,7 +107,7 @@ def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_sce
 def test_a_cancelled_comparison_puts_the_left_out_objects_back(lamp_addon, bl_scene):
     import bpy
 
-    compare = lamp_addon.compare.ops
+    compare = lamp_addon.compare.comparison
     bpy.ops.wm.read_homefile(use_factory_startup=True)
     bl_scene = bpy.context.scene
     lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
@@ -237,9 +237,9 @@ def test_applying_a_preset_to_a_built_lamp_rebuilds_it(lamp_addon, bl_scene):
 
 def test_the_design_fov_reaches_both_halves_of_compare(lamp_addon, bl_scene):
     lamp_addon.design.properties.scene_to_design(bl_scene, _baseline((24, 20)))
-    narrow = lamp_addon.compare.ops.compare_design(bl_scene, samples=1)
+    narrow = lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     bl_scene.lamp_design.camera.fov_deg = 40.0  # the edit: 16 -> 40
-    wide = lamp_addon.compare.ops.compare_design(bl_scene, samples=1)
+    wide = lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     assert narrow["scene"]["camera"]["fov_deg"] == pytest.approx(16.0, abs=1e-4)
     assert wide["scene"]["camera"]["fov_deg"] == pytest.approx(40.0, abs=1e-4)
     assert lamp_addon.render.camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)

@@ -31,7 +31,7 @@ def test_bulb_through_a_flat_coloured_lens_mesh_agrees_with_cycles(lamp_addon, a
     scene = addon_core.parse_scene(doc)
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lamp_addon.freeform.conversion.convert_to_freeform(bl_scene)
-    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=SAMPLES)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
     region = (slice(12, 20), slice(12, 20))
     tracer = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
     cycles = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)

@@ -130,7 +130,7 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):  # n
     # Compare: the lamp in both halves, the Cube and the Light left out of Cycles.
     assert bpy.ops.lamp.compare_cycles(samples=4) == {"FINISHED"}
     watch.lap("Compare (Cycles 4 spp)")
-    compare = bpy.data.images[lamp_addon.compare.ops.COMPARE_IMAGE]
+    compare = bpy.data.images[lamp_addon.compare.comparison.COMPARE_IMAGE]
     shown = lamp_addon.image_view.image_to_array(compare)  # labels strip on top, a gap between the halves
     seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     lit = lit_lens_mask(seen)

@@ -135,7 +135,7 @@ def test_prism_plate_on_axis_transmission_agrees_with_cycles(lamp_addon, bl_scen
     _on_axis(doc)
     scene = core_tracer.parse_scene(doc)
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=SAMPLES, resolution=None)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES, resolution=None)
     region = (slice(12, 20), slice(12, 20))  # the 8 x 8 centre: rings 0 and 1 of the plate
     tracer = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
     cycles = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)

@@ -58,7 +58,7 @@ def test_the_body_under_the_followed_sun_agrees_with_cycles(lamp_addon, bl_scene
            "image": {"width": 64, "height": 64, "samples": 1}}
     scene = core_tracer.parse_scene(doc)
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=16, resolution=(64, 64))
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=16, resolution=(64, 64))
     region = (slice(24, 40), slice(4, 14))  # left of the lens, clear of the body's edges
     t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
     c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)

@@ -60,7 +60,7 @@ def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon
         pytest.skip("Blender's world images are not on this machine")
     scene = _mirror_scene()
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=SAMPLES, resolution=(48, 32))
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES, resolution=(48, 32))
     tracer, cycles = result["tracer"].astype(np.float64), result["cycles"].astype(np.float64)
     # The lens pixels: a block well inside the lens (the lens covers the centre of the image).
     passes = core_tracer.render_passes(scene, 48, 32, samples=1).passes
@@ -143,7 +143,7 @@ def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
     doc["image"] = {"width": 64, "height": 64}
     scene = core_tracer.parse_scene(doc)
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.ops.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
     region = (slice(24, 40), slice(4, 14))  # left of the lens, clear of the body's edges (as the lit-body test)
     t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
     c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
