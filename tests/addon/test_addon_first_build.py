@@ -159,7 +159,7 @@ def test_the_lamp_camera_moves_with_the_root(lamp_addon, startup):
 
 
 def test_compare_needs_a_build_only_when_the_objects_are_out_of_date(lamp_addon, addon_core, bl_scene):
-    compare, builder = lamp_addon.compare.ops, lamp_addon.design.builder
+    compare, builder = lamp_addon.compare.scope, lamp_addon.design.builder
     lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert compare.needs_build(bl_scene)  # not built
     scene = lamp_addon.design.properties.design_to_scene(bl_scene)

@@ -377,7 +377,7 @@ def test_the_viewport_renders_a_mixed_design(lamp_addon, addon_core, bl_scene):
 def test_compare_keeps_the_traced_parametric_lamp_in_the_cycles_half(lamp_addon, addon_core, bl_scene):
     # Cycles renders what the tracer traces: the designer's parts and the parametric lamp still in
     # use; once the design is edited without rebuilding, the tracer leaves the lamp out, so does Cycles.
-    compare = lamp_addon.compare.ops
+    compare = lamp_addon.compare.comparison
     _, mine = _mixed(lamp_addon, addon_core, bl_scene)
     built = [o for o in bl_scene.objects if o.get("lamp_part") not in (None, "root", "sun") and o.type == "MESH"]
     assert built
