@@ -46,6 +46,7 @@ from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 from .. import image_view, jobs
 from ..convert.sheet import differences, shown_side_by_side, side_by_side
+from ..design import builder as design_builder
 from ..design import root as design_root
 from ..freeform import materials as freeform_materials
 from ..freeform import parametric as freeform_parametric
@@ -223,8 +224,6 @@ class CompareRun:
         self._folder = tempfile.mkdtemp(prefix="lamp-compare-")
 
     def _build(self) -> None:
-        from ..design import builder as design_builder
-
         # Seen through the scene camera: a design camera that is not used cannot block the build.
         design_builder.build_lamp(self.bl_scene, render_camera.scene_for_render(self.bl_scene, size=self.resolution))
 

@@ -5,23 +5,22 @@ renders: the lamp's objects (built when out of date) and the free-form parts; ev
 
 from __future__ import annotations
 
+from ..design import builder as design_builder
+from ..design.root import PART_KEY
+from ..freeform.properties import has_role
+
 
 def needs_build(bl_scene) -> bool:
     """Whether Compare must build the lamp before rendering, so that Cycles renders what the tracer
     renders: when the objects are not up to date with the design (not built, out of date, a preview
     lens, a part deleted). Objects that are up to date are rendered as they are, with the
     designer's edits."""
-    from ..design import builder as design_builder
-
     return not design_builder.is_up_to_date(bl_scene)
 
 
 def _in_design(ob) -> bool:
     """Objects the builder made carry the part key; what the designer parented under the root is
     part of the lamp too, and so is every free-form part (a mesh with a lamp role)."""
-    from ..design.root import PART_KEY
-    from ..freeform.properties import has_role
-
     if has_role(ob):
         return True
     while ob is not None:

@@ -16,7 +16,7 @@ from ...core_tracer.scene.reading import SceneError
 from ..convert.layout import design_with_new_lamp, refusal_of_new_lamp, with_new_lamp_unchecked
 from ..render import lamp_camera, view_link
 from ..render import setup as render_setup
-from . import properties
+from . import builder, properties
 from .operator import DesignOperator
 
 
@@ -111,8 +111,6 @@ class LAMP_OT_build(DesignOperator, bpy.types.Operator):
         return None
 
     def execute(self, context):
-        from . import builder
-
         try:
             scene = properties.design_to_scene(context.scene)
         except SceneError as e:

@@ -11,6 +11,7 @@ import bpy
 
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
+from ..render.camera import scene_for_render
 from . import meshes as freeform_meshes
 from . import parametric, properties
 
@@ -37,8 +38,6 @@ def design_for_export(bl_scene: bpy.types.Scene, mesh_file: str, objects, built=
     """The checked scene of an export (the design as F12 renders it: the scene camera's numbers as F12
     reads them, at the render size, with the parts and the built parametric parts ``built``) and their
     meshes; raises ``SceneError`` when there are no parts or something is not allowed."""
-    from ..render.camera import scene_for_render
-
     if not objects:
         raise SceneError("freeform.parts", "no object has a lamp role; allowed 1 or more mesh objects with a role "
                                            "(Lamp tab, Free-form Parts, +)")

@@ -15,7 +15,10 @@ from dataclasses import dataclass
 import bpy
 
 from ...core_tracer.scene.reading import SceneError
-from . import properties
+from ..design import builder as design_builder
+from ..design import properties as design_properties
+from . import parametric, properties
+from . import scene as freeform_scene
 
 WRAP = 44  # characters per label line in the sidebar
 
@@ -46,9 +49,6 @@ def note_mesh_problem(bl_scene: bpy.types.Scene, message: str | None) -> None:
 
 def part_problem(bl_scene: bpy.types.Scene) -> str | None:
     """The first problem of the scene's parts in one line, or None."""
-    from ..design import properties as design_properties
-    from . import scene as freeform_scene
-
     objects = properties.role_objects(bl_scene)
     if not objects:
         return None
@@ -100,9 +100,6 @@ NOT_BUILT_TEXT = ("The Lamp Tracer renders these parts only: the parametric lamp
 
 def rendered_text(bl_scene: bpy.types.Scene) -> str:
     """What the Lamp Tracer renders of a scene with parts."""
-    from ..design import builder as design_builder
-    from . import parametric
-
     if parametric.built_parts(bl_scene, None):
         return MIXED_TEXT
     status = design_builder.build_status(bl_scene)

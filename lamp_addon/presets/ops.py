@@ -27,8 +27,11 @@ from ...core_tracer.library import presets as P
 from ...core_tracer.scene.reading import SceneError, scene_to_json
 from ...core_tracer.scene.validate import normalize
 from .. import reports
+from ..design import builder as design_builder
 from ..design import properties as design_properties
 from ..design import root as design_root
+from ..freeform import loading as freeform_import
+from ..freeform.properties import role_objects
 from ..render import camera as render_camera
 from ..render import lamp_camera
 from ..render import setup as render_setup
@@ -67,8 +70,6 @@ def _failed(operator: bpy.types.Operator, message: str, error: Exception | None 
 
 def _parts_left_out(bl_scene) -> str:
     """What a preset of the scene's design leaves out: its free-form parts (a preset is the JSON only)."""
-    from ..freeform.properties import role_objects
-
     count = len(role_objects(bl_scene))
     if not count:
         return ""
@@ -149,8 +150,6 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
     lamp has been built in this scene, rebuild it so that its objects are the preset's too. A free-form
     preset (read from ``path``) also brings its parts in as objects with roles (``freeform.loading``),
     its meshes read and checked first. Returns what happened, for the report."""
-    from ..freeform import loading as freeform_import
-
     parts = None
     if "freeform" in scene:
         if path is None:
@@ -168,7 +167,6 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
             # (the Lamp Camera at the preset's view, Lamp Tracer, the design's exposure), as the first Add Lamp does.
             view += render_setup.news_text(render_setup.set_up(bl_scene))
         return view
-    from ..design import builder as design_builder
 
     design_builder.build_lamp(bl_scene, design)
     return f"{view}; rebuilt the lamp objects"
@@ -393,8 +391,6 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
         try:
             scene = P.load_preset(self.filepath)
             if "freeform" in scene:  # its meshes are part of it: a missing or bad .glb refuses it
-                from ..freeform import loading as freeform_import
-
                 freeform_import.read_parts(self.filepath, scene)
         except SceneError as e:
             return _failed(self, "Not imported", e)

@@ -31,6 +31,7 @@ from .. import image_view
 from ..convert import camera as cm
 from ..design import properties as design_properties
 from . import camera, lamp_camera
+from .engine import ENGINE_ID
 
 SETUP_KEY = "lamp_scene_setup"  # scene custom property: JSON {"exposure": the value the add-on set, or null}
 DEFAULT_ENGINES = ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")  # what a new file renders with (4.2-5.0)
@@ -84,8 +85,6 @@ def _camera(bl_scene) -> str:
 
 
 def _engine(bl_scene) -> str:
-    from .engine import ENGINE_ID
-
     engine = bl_scene.render.engine
     if engine not in DEFAULT_ENGINES:
         return ""

@@ -24,6 +24,9 @@ from ...core_tracer.scene.reading import SceneError
 from ..convert import viewport
 from ..design import properties as design_properties
 from ..design import root as design_root
+from ..design import validity as design_validity
+from ..freeform import geometry as freeform_geometry
+from ..freeform import render as freeform_render
 from .preview import ProgressivePreview
 
 POLL_SECONDS = 0.05  # how often the main thread looks for a finished stage
@@ -43,8 +46,6 @@ def _rows(matrix) -> list[list[float]]:
 def invalid_design_text(bl_scene: bpy.types.Scene, error: SceneError) -> str:
     """Why the viewport shows nothing, in the panel's words: the design's state, the state of its
     objects, and the field to change with its allowed range (``design.validity``)."""
-    from ..design import validity as design_validity
-
     if not bl_scene.lamp_design.lamps:
         return "no lamp yet: Add Lamp (Lamp tab, Lamps) or apply a preset"
     built = "objects as last built" if design_root.find_root(bl_scene) is not None else "not built"
@@ -86,9 +87,6 @@ class ViewportSession:
             self.design, self.error = None, invalid_design_text(bl_scene, e)
         self.freeform = None
         if depsgraph is not None and self.design is not None:
-            from ..freeform import geometry as freeform_geometry
-            from ..freeform import render as freeform_render
-
             freeform_geometry.note_updates(bl_scene, depsgraph)
             try:
                 self.freeform = freeform_render.prepare(bl_scene, depsgraph, self.design)
@@ -103,7 +101,6 @@ class ViewportSession:
         prepared = self.freeform
         if prepared is None or prepared.geometry is None:
             return None
-        from ..freeform import render as freeform_render
 
         def render(scene, width, height, **options):
             return freeform_render.render_passes(freeform_render.Prepared(scene, prepared.geometry), width,

@@ -26,6 +26,7 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from .. import image_view, jobs, reports
 from ..design import properties as design_properties
+from ..presets import library as preset_library
 from . import settings
 from .settings import last_study, sheet_image
 
@@ -208,8 +209,6 @@ class LAMP_OT_study_keep_variant(_OnLastStudy, bpy.types.Operator):
     bl_options = {"REGISTER"}
 
     def execute(self, context):
-        from ..presets import library as preset_library
-
         chosen = _chosen_variant(self, context)
         if chosen is None:
             return {"CANCELLED"}

@@ -20,6 +20,7 @@ from ...core_tracer.scene.functions import suggested_values
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from ..design import properties as design_properties
+from ..render import camera as render_camera
 
 ALL_LAMPS = "ALL"
 SHEET_IMAGE = "Lamp Study"
@@ -153,8 +154,6 @@ def axis_doc(axis) -> dict:
 def study_from_settings(bl_scene) -> st.Study:
     """The study the settings describe, of the scene's current design seen through its camera.
     Raises ``SceneError`` (with the parameter, value and range) for a bad setting or design."""
-    from ..render import camera as render_camera  # on use: the render camera sits above the design's settings
-
     settings = bl_scene.lamp_study
     size = (settings.width, settings.height)
     if bl_scene.camera is not None:
