@@ -74,3 +74,37 @@ def test_the_render_side_does_not_depend_on_a_panel():
     for module in ("render.engine", "render.camera", "render.lamp_camera", "render.view_link", "render.camera_sync",
                    "render.camera_ops", "render.ops", "compare.ops", "render.exposure"):
         assert not reached(module) & panels, (module, reached(module) & panels)
+
+
+def _registered_classes(lamp_addon) -> list[type]:
+    """The classes the add-on's modules list, through each sub-package's ``modules()``."""
+    out = []
+    for room in lamp_addon.modules():
+        for module in room.modules() if hasattr(room, "modules") else (room,):
+            out += getattr(module, "classes", ())
+    return out
+
+
+def test_every_sub_package_lists_what_it_registers_and_registering_repeats(lamp_addon, bl_scene):
+    """``lamp_addon.register`` hands over to the sub-packages, each registering the modules of its
+    ``modules()``; unregistering takes all of it away and registering again, twice, brings back the
+    same classes, the same handlers and the action buttons in their order."""
+    import bpy
+
+    classes = _registered_classes(lamp_addon)
+    assert len(classes) >= 20 and all(cls.is_registered for cls in classes)
+    watched = ("depsgraph_update_post", "load_post", "render_complete", "render_cancel")
+
+    def state():
+        return ({name: len(getattr(bpy.app.handlers, name)) for name in watched},
+                list(lamp_addon.actions.ACTION_OPERATORS), [cls.is_registered for cls in classes])
+
+    before = state()
+    assert [idname for idname, _, _ in before[1]][:5] == list(lamp_addon.actions.ORDER)
+    for _ in range(2):
+        lamp_addon.unregister()
+        assert not [cls for cls in classes if cls.is_registered]
+        assert [idname for idname, _, _ in lamp_addon.actions.ACTION_OPERATORS] == ["lamp.build"]
+        lamp_addon.register()
+        assert state() == before
+    assert hasattr(bl_scene, "lamp_design") and bpy.ops.lamp.lamp_add.poll()
