@@ -30,7 +30,7 @@ from .. import reports
 from ..design import builder as design_builder
 from ..design import properties as design_properties
 from ..design import root as design_root
-from ..freeform import loading as freeform_import
+from ..freeform import loading as freeform_loading
 from ..freeform.properties import role_objects
 from ..render import camera as render_camera
 from ..render import lamp_camera
@@ -154,12 +154,12 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
     if "freeform" in scene:
         if path is None:
             raise SceneError("freeform", "a free-form design needs its file, to find its .glb beside it")
-        parts = freeform_import.read_parts(path, scene)  # before any change: all or nothing
+        parts = freeform_loading.read_parts(path, scene)  # before any change: all or nothing
     design_properties.scene_to_design(bl_scene, scene)
     design = design_properties.design_to_scene(bl_scene)
     view = show_view(bl_scene, design)
     if parts is not None:
-        made = freeform_import.make_parts(bl_scene, scene, parts)
+        made = freeform_loading.make_parts(bl_scene, scene, parts)
         view += f"; made {len(made)} free-form parts"
     if not any(ob.get(design_root.PART_KEY) for ob in bl_scene.objects):
         if bl_scene.lamp_design.auto_build and not render_setup.is_set_up(bl_scene):
@@ -391,7 +391,7 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
         try:
             scene = P.load_preset(self.filepath)
             if "freeform" in scene:  # its meshes are part of it: a missing or bad .glb refuses it
-                freeform_import.read_parts(self.filepath, scene)
+                freeform_loading.read_parts(self.filepath, scene)
         except SceneError as e:
             return _failed(self, "Not imported", e)
         if "freeform" in scene and self.add_to_library:

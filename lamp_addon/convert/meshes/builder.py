@@ -116,6 +116,10 @@ def fan_triangles(faces: Sequence[Sequence[int]]) -> np.ndarray:
     return np.array(tris, dtype=np.int64).reshape(-1, 3)
 
 
+# ---------------------------------------------------------------------------------------------
+# Rims: regular polygons, a rectangular lens's outline, convex clipping
+
+
 def circle_segments(radius: float, tol: float = CHORD_TOLERANCE_MM, multiple: int = 4, minimum: int = 16) -> int:
     """Segments of a regular polygon inscribed in a circle whose sagitta r(1 - cos(pi/n)) is <= tol."""
     if tol >= radius:
@@ -174,6 +178,10 @@ def _lerp(a, b, f):
 
 def polygon_area(poly: Sequence[tuple[float, float]]) -> float:
     return 0.5 * abs(sum(poly[i - 1][0] * poly[i][1] - poly[i][0] * poly[i - 1][1] for i in range(len(poly))))
+
+
+# ---------------------------------------------------------------------------------------------
+# The lens side wall and its collar, shared by every kind of lens
 
 
 def collar_top(lamp: dict) -> float | Callable[[float, float], float]:
