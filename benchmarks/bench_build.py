@@ -4,7 +4,7 @@
 
 Applies the four-lamp rear combination preset, builds it once (cold: every mesh is made), then makes
 one edit at a time through the design's properties, as a designer would, and times what Auto Build
-does after it: read the design, check it, rebuild what changed (``design_autobuild._step``). Edits
+does after it: read the design, check it, rebuild what changed (``design.autobuild._step``). Edits
 of lens colour, IOR, bulb and body colour remake no mesh; a lens radius remakes that lamp's lens,
 reflector, socket and the body. Deep cuts are timed apart: a cut height near its limit pitch/sqrt 2
 gives ~190,000 faces; given are the preview build (while dragging, on the UI thread), the making of
@@ -94,10 +94,10 @@ def main() -> int:
 
 
 def run(bpy, package: str, repeat: int) -> int:
-    props = importlib.import_module(f"{package}.lamp_addon.design_properties")
-    builder = importlib.import_module(f"{package}.lamp_addon.design_builder")
-    parts = importlib.import_module(f"{package}.lamp_addon.design_parts")
-    auto = importlib.import_module(f"{package}.lamp_addon.design_autobuild")
+    props = importlib.import_module(f"{package}.lamp_addon.design.properties")
+    builder = importlib.import_module(f"{package}.lamp_addon.design.builder")
+    parts = importlib.import_module(f"{package}.lamp_addon.design.parts")
+    auto = importlib.import_module(f"{package}.lamp_addon.design.autobuild")
     core = importlib.import_module(f"{package}.core_tracer.scene")
     bl_scene = bpy.context.scene
     props.scene_to_design(bl_scene, core.load_scene(PRESET))

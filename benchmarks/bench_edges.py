@@ -45,13 +45,13 @@ def main() -> int:
     scene = load_scene(PRESET)
     scene["image"].update(width=width, height=height, samples=64)
     with dev_extension.enabled_from_source(bpy, "lamp_styling_dev") as package:
-        ops = importlib.import_module(f"{package}.lamp_addon.compare_ops")
-        design = importlib.import_module(f"{package}.lamp_addon.design_properties")
-        camera = importlib.import_module(f"{package}.lamp_addon.render_camera")
+        compare = importlib.import_module(f"{package}.lamp_addon.compare.comparison")
+        design = importlib.import_module(f"{package}.lamp_addon.design.properties")
+        camera = importlib.import_module(f"{package}.lamp_addon.render.lamp_camera")
         bl_scene = bpy.context.scene
         design.scene_to_design(bl_scene, scene)
         bl_scene.camera, _ = camera.ensure_lamp_camera(bl_scene, frame=False)
-        comparison = ops.compare_design(bl_scene, samples=args.cycles_samples, resolution=(width, height))
+        comparison = compare.compare_design(bl_scene, samples=args.cycles_samples, resolution=(width, height))
     rendered = comparison["scene"]
     cycles = comparison["cycles"]
     # The body's bottom edge: the first row from the bottom whose centre ray misses the body.

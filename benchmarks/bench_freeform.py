@@ -1,5 +1,5 @@
 """How fast is the free-form tracer? The four-lamp preset as meshes (the add-on's own bpy-free
-tessellation, ``lamp_addon/convert/meshes.py``, at its 0.05 mm chord tolerance) rendered at
+tessellation, ``lamp_addon/convert/meshes/``, at its 0.05 mm chord tolerance) rendered at
 512x512, the acceleration structure built once and reused (build and render reported
 separately), and the build of a 1-million-triangle lens.
 
@@ -32,10 +32,13 @@ from core_tracer.scene.validate import load_scene, parse_scene  # noqa: E402
 
 
 def convert_module():
-    """``lamp_addon.convert.meshes`` imported without Blender (the package's __init__ needs bpy)."""
+    """``lamp_addon.convert.meshes`` imported without Blender (the package's __init__ needs bpy): its
+    modules, as attributes of the package."""
     spec = importlib.util.spec_from_file_location("lamp_styling", ROOT / "__init__.py",
                                                   submodule_search_locations=[str(ROOT)])
     sys.modules.setdefault("lamp_styling", importlib.util.module_from_spec(spec))
+    for name in ("builder", "lens", "parts"):
+        importlib.import_module(f"lamp_styling.lamp_addon.convert.meshes.{name}")
     return importlib.import_module("lamp_styling.lamp_addon.convert.meshes")
 
 
@@ -69,7 +72,7 @@ def without_collar(meshes_mod, lens):
     side wall's look): a lens role needs the closed glass only."""
     v = np.asarray(lens.verts)
     keep = [i for i, face in enumerate(lens.faces)
-            if not (lens.material[i] == meshes_mod.LENS_SIDE_WALL and v[list(face), 1].min() > 0.0)]
+            if not (lens.material[i] == meshes_mod.builder.LENS_SIDE_WALL and v[list(face), 1].min() > 0.0)]
     return type(lens)(v, [lens.faces[i] for i in keep], lens.material[keep], lens.group[keep])
 
 
@@ -132,12 +135,12 @@ def four_lamp_design(preset: Path) -> tuple[dict, dict[str, MeshData]]:
         cx, cz = lamp["center"]
         axis = (cx, 0.0, cz)
         R = lamp["lens"]["radius"]
-        reflector = meshes_mod.reflector_mesh(lamp, meshes_mod.circle_segments(R))
-        n = len(reflector.verts) and meshes_mod.circle_segments(R)
-        lens = without_collar(meshes_mod, meshes_mod.lens_mesh(lamp, n))
-        bulb = meshes_mod.sphere_mesh(lamp["bulb"]["radius"])
+        reflector = meshes_mod.parts.reflector_mesh(lamp, meshes_mod.builder.circle_segments(R))
+        n = len(reflector.verts) and meshes_mod.builder.circle_segments(R)
+        lens = without_collar(meshes_mod, meshes_mod.lens.lens_mesh(lamp, n))
+        bulb = meshes_mod.parts.sphere_mesh(lamp["bulb"]["radius"])
         bx, by, bz = g["bulb_center"]
-        socket = meshes_mod.socket_mesh(lamp["socket"]["radius"], g["vertex"], by)
+        socket = meshes_mod.parts.socket_mesh(lamp["socket"]["radius"], g["vertex"], by)
         lens_values = {k: lamp["lens"][k] for k in ("ior", "diffuse_color", "specular", "shininess")}
         lens_values.update({k: lamp["lens"][k] for k in ("absorption", "transmitted_color", "reference_thickness")
                             if k in lamp["lens"]})
@@ -151,7 +154,7 @@ def four_lamp_design(preset: Path) -> tuple[dict, dict[str, MeshData]]:
             name = f"Lamp {i + 1} {role}"
             meshes[name] = triangulated(name, mesh, offset)
             parts.append({"object": name, "role": role, role: values})
-        rims.append(meshes_mod.rim_polygon(R, n) + np.array([cx, cz]))
+        rims.append(meshes_mod.builder.rim_polygon(R, n) + np.array([cx, cz]))
     meshes["Body"] = front_with_holes("Body", scene, rims)
     parts.append({"object": "Body", "role": "body",
                   "body": {k: scene["body"][k] for k in ("color", "specular", "shininess")}})

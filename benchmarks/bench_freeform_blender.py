@@ -52,22 +52,22 @@ def main() -> int:
                 bl_scene = bpy.context.scene
                 scene = core.scene.load_scene(PRESET)
                 scene["image"] = {"width": args.size, "height": args.size, "samples": 1}
-                addon.design_properties.scene_to_design(bl_scene, scene)
-                addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
-                addon.design_builder.build_lamp(bl_scene, addon.design_properties.design_to_scene(bl_scene))
+                addon.design.properties.scene_to_design(bl_scene, scene)
+                addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+                addon.design.builder.build_lamp(bl_scene, addon.design.properties.design_to_scene(bl_scene))
                 bl_scene.render.engine = "LAMP_TRACER"
-                addon.freeform_geometry.forget()
+                addon.freeform.geometry.forget()
                 figures.setdefault("convert", []).append(
-                    _timed(addon.freeform_convert.convert_to_freeform, bl_scene))
-                parts = addon.freeform_properties.role_objects(bl_scene)
+                    _timed(addon.freeform.conversion.convert_to_freeform, bl_scene))
+                parts = addon.freeform.properties.role_objects(bl_scene)
                 depsgraph = bpy.context.evaluated_depsgraph_get()
                 figures.setdefault("read meshes", []).append(
-                    _timed(addon.freeform_meshes.scene_meshes, bl_scene, depsgraph, parts))
+                    _timed(addon.freeform.meshes.scene_meshes, bl_scene, depsgraph, parts))
                 figures.setdefault("F12 first (read + build + render)", []).append(_timed(bpy.ops.render.render))
                 figures.setdefault("F12 again (reused)", []).append(_timed(bpy.ops.render.render))
                 figures.setdefault("export JSON + glb", []).append(_timed(
-                    addon.freeform_export.export_pair, bl_scene, os.path.join(out, "lamp.json"), overwrite=True))
-            triangles = sum(m.triangle_count for m in addon.freeform_meshes.scene_meshes(
+                    addon.freeform.export.export_pair, bl_scene, os.path.join(out, "lamp.json"), overwrite=True))
+            triangles = sum(m.triangle_count for m in addon.freeform.meshes.scene_meshes(
                 bl_scene, bpy.context.evaluated_depsgraph_get(), parts).values())
             shutil.rmtree(out, ignore_errors=True)
     finally:

@@ -1,5 +1,5 @@
 """What the panel's validity line costs at a redraw (the add-on checks a design again only when it
-changed, ``lamp_addon.design_validity``).
+changed, ``lamp_addon.design.validity``).
 
     .venv/bin/python benchmarks/bench_panel_validity.py [--runs 50]
 

@@ -1,7 +1,7 @@
 """How fast is the viewport preview? For a region of 1024x768 on 2 threads, the time from a restart
 (a design edit or a view change) to the coarse image, to the full-resolution image and to the
 refined one (16 samples per pixel, adaptive), through the engine's own stages
-(``lamp_addon.render_preview``), for the four-lamp preset seen two ways: through the preset's own
+(``lamp_addon.render.preview``), for the four-lamp preset seen two ways: through the preset's own
 camera (the lamp fills the view) and from a three-quarter viewport view.
 
     .venv/bin/python benchmarks/bench_viewport.py [--runs 5] [--threads 2] [--size 1024x768]
@@ -38,8 +38,8 @@ def _addon_package():
     package = importlib.util.module_from_spec(spec)
     sys.modules["lamp_styling"] = package
     spec.loader.exec_module(package)
-    from lamp_styling.lamp_addon import render_preview  # type: ignore[import-not-found]
     from lamp_styling.lamp_addon.convert import viewport  # type: ignore[import-not-found]
+    from lamp_styling.lamp_addon.render import preview as render_preview  # type: ignore[import-not-found]
 
     return render_preview, viewport
 

@@ -1,61 +1,35 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The Blender side of Lamp Styling: everything that touches ``bpy``.
+"""The Blender side of Lamp Styling: everything that touches ``bpy``, in rooms by what the designer does.
 
-Modules are grouped by feature: ``design_*`` (the design's properties, panel, operators and the
-object builder), ``render_*`` (the Lamp Tracer engine, its camera and render operator),
-``compare_*`` (tracer and Cycles side by side), ``preset_*`` and ``preferences`` (libraries),
-``study_*`` (contact sheets), ``freeform_*`` (lamp roles on the designer's own meshes, their
-rendering, Convert to Free-form and export). ``convert`` is the bpy-free layer they share.
+- ``design``: the design's properties, the Lamp tab's panels, the operators that edit it and the
+  builder that makes the lamp's objects (Auto Build keeps them up to date).
+- ``render``: the Lamp Tracer engine (F12 and the viewport's Rendered shading), the scene camera
+  both renderers use, Render with Lamp Tracer and Exposure from Design.
+- ``compare``: the tracer and Cycles side by side, from the panel and headless.
+- ``presets``: the preset libraries, their browser and operators.
+- ``study``: design studies and their contact sheets.
+- ``freeform``: lamp roles on the designer's own meshes, their rendering, Convert to Free-form and
+  export.
+- ``convert``: the bpy-free layer they share (units, camera mathematics, Cycles numbers, meshes).
 
-Each module owns its classes and its ``register``/``unregister``. They are registered in the
-order of ``modules()`` (properties before the operators and panels that use them) and
-unregistered in reverse. The imports happen in ``modules()`` so that ``lamp_addon.convert``
-can be imported without Blender.
+Shared by several rooms: ``preferences`` (the add-on's preferences, found through ``__package__``),
+``actions`` (the buttons of the actions area), ``jobs`` (modal jobs), ``reports``, ``image_view``,
+``registration``.
+
+Each sub-package lists the modules that register in its ``modules()``; this package registers the
+sub-packages in the order of ``modules()`` (the design's properties before everything that uses
+them) and unregisters them in reverse. The imports happen in ``modules()`` so that
+``lamp_addon.convert`` can be imported without Blender.
 """
+
+from .registration import modules_factory
 
 
 def modules() -> tuple:
-    """Every module that registers, in registration order."""
-    from . import (
-        compare_ops,
-        design_autobuild,
-        design_ops,
-        design_panels,
-        design_properties,
-        display_ops,
-        freeform_geometry,
-        freeform_ops,
-        freeform_panel,
-        freeform_properties,
-        preferences,
-        preset_library,
-        preset_ops,
-        preset_panel,
-        render_camera,
-        render_engine,
-        render_ops,
-        study_ops,
-        study_panel,
-        study_settings,
-    )
+    """Every sub-package (or module) that registers, in registration order."""
+    from . import compare, design, freeform, preferences, presets, render, study
 
-    return (
-        design_properties,
-        design_ops,
-        design_autobuild,
-        design_panels,
-        freeform_properties, freeform_geometry, freeform_ops, freeform_panel,
-        render_camera, render_engine, render_ops, compare_ops, display_ops,
-        preferences, preset_library, preset_ops, preset_panel,
-        study_settings, study_panel, study_ops,
-    )
+    return (design, freeform, render, compare, preferences, presets, study)
 
 
-def register() -> None:
-    for module in modules():
-        module.register()
-
-
-def unregister() -> None:
-    for module in reversed(modules()):
-        module.unregister()
+register, unregister = modules_factory(modules)

@@ -1,8 +1,10 @@
 """The buttons of the Lamp tab's actions area (Build, Frame, Render, Compare, ...).
 
 A module whose operators show there registers them with ``register_actions_factory`` (or
-``add_action``); the design panel draws ``ACTION_OPERATORS`` in order. This module sits below both
-the panels and the operators, so an operator module never depends on a panel module.
+``add_action``); the design panel draws ``ACTION_OPERATORS`` in order. The buttons of the add-on
+stand in the order of ``ORDER`` whichever sub-package registers first; others follow in the order
+they were added. This module sits below both the panels and the operators, so an operator module
+never depends on a panel module.
 """
 
 from __future__ import annotations
@@ -10,12 +12,16 @@ from __future__ import annotations
 import bpy
 
 ACTION_OPERATORS: list[tuple[str, str, str]] = [("lamp.build", "Build Lamp", "MESH_CYLINDER")]
+ORDER = ("lamp.build", "lamp.frame_design", "lamp.render_tracer", "lamp.compare_cycles", "lamp.exposure_from_design")
 
 
 def add_action(idname: str, text: str, icon: str = "NONE") -> None:
     """Show operator ``idname`` as a button in the actions area (call from a module's ``register``)."""
     remove_action(idname)
-    ACTION_OPERATORS.append((idname, text, icon))
+    rank = ORDER.index(idname) if idname in ORDER else len(ORDER)
+    at = next((i for i, (other, _, _) in enumerate(ACTION_OPERATORS)
+               if rank < (ORDER.index(other) if other in ORDER else len(ORDER))), len(ACTION_OPERATORS))
+    ACTION_OPERATORS.insert(at, (idname, text, icon))
 
 
 def remove_action(idname: str) -> None:

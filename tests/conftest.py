@@ -10,8 +10,8 @@ Session fixtures
 - ``addon``: enables the add-on from the working tree through a development extension repository
   (``tools/dev_extension.py``, the same set-up as ``tools/compare_preset.py``) and returns its module name,
   ``"bl_ext.lamp_dev.lamp_styling"``. Disabled again at the end of the session.
-- ``lamp_addon``: the add-on's ``lamp_addon`` package as Blender imported it (``lamp_addon.design_properties``,
-  ``lamp_addon.design_builder``, ...).
+- ``lamp_addon``: the add-on's ``lamp_addon`` package as Blender imported it (``lamp_addon.design.properties``,
+  ``lamp_addon.design.builder``, ...).
 - ``addon_core``: the add-on's own copy of ``core_tracer`` (``bl_ext.lamp_dev.lamp_styling.core_tracer``).
   Catch ``addon_core.SceneError`` for errors raised inside the add-on: the top-level ``core_tracer``
   package that the tracer tests import is a different module object with its own ``SceneError``.

@@ -164,6 +164,31 @@ def sibling_imports(path: Path) -> set[str]:
     return out
 
 
+def package_imports(package: Path) -> dict[str, set[str]]:
+    """The modules of ``package`` (a folder, sub-packages included) by dotted name below it
+    (``"design.properties"``, a sub-package's ``__init__`` as ``"design"``), each with the modules of
+    the package it imports, at the top or inside functions, relative imports resolved
+    (``from ..design import properties`` is ``"design.properties"``)."""
+    paths = {}
+    for path in package.rglob("*.py"):
+        parts = path.relative_to(package).with_suffix("").parts
+        paths[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    graph = {}
+    for name, path in paths.items():
+        here = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+        here = [p for p in here if p]
+        out = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level:
+                base = here[: len(here) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+                for full in [target] + [f"{target}.{a.name}".lstrip(".") for a in node.names]:
+                    if full in paths and full != name and paths[full].name != "__init__.py":
+                        out.add(full)
+        graph[name] = out
+    return graph
+
+
 def fresnel_unpolarised(cos_i: float, n: float) -> float:
     """Fresnel reflectance of unpolarised light from air into index ``n``, written out here
     independently of ``optics`` (the mean of the s and p reflectances)."""

@@ -87,7 +87,7 @@ def main() -> int:
 
         bpy.ops.wm.read_homefile(use_empty=True)  # an empty scene: the preset's camera is the view
         with dev_extension.enabled_from_source(bpy, DEV_REPO) as package:
-            headless = importlib.import_module(f"{package}.lamp_addon.compare_headless")
+            headless = importlib.import_module(f"{package}.lamp_addon.compare.headless")
             return headless.run(args.preset, args.output, samples=args.samples, size=args.size,
                                 view=args.view, exposure=args.exposure, prog=PROG)
     finally:

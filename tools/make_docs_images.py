@@ -68,7 +68,7 @@ def startup_with_preset(bpy, core, addon):
     scene = core.load_scene(os.path.join(ROOT, "presets", "four-lamp-rear-combination.json"))
     scene["image"] = {"width": COMPARE_SIZE[0], "height": COMPARE_SIZE[1]}
     started = time.perf_counter()
-    addon.design_properties.scene_to_design(bl_scene, scene)
+    addon.design.properties.scene_to_design(bl_scene, scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
     _timed(f"Build in the startup file (exposure {bl_scene.view_settings.exposure:+.1f} EV, engine "
            f"{bl_scene.render.engine}, camera {bl_scene.camera.name})", started)
@@ -87,7 +87,7 @@ def viewport_picture(bpy, addon, bl_scene, path: str) -> None:
     from mathutils import Vector
 
     width, height = VIEWPORT_SIZE
-    root = addon.design_root.find_root(bl_scene)
+    root = addon.design.root.find_root(bl_scene)
     centre = root.matrix_world @ Vector((0.0425, 0.04, 0.0))  # the four-lamp body's centre, in metres
     eye = centre + Vector((-0.33, -0.48, 0.19))
     view = bpy.data.cameras.new("Docs View")
@@ -135,7 +135,7 @@ def draw_viewport(bpy, addon, bl_scene, width: int, height: int, window, view) -
 
         def render(self, depsgraph):
             scene = depsgraph.scene
-            session = addon.render_viewport.ViewportSession(self, in_background=False)
+            session = addon.render.viewport.ViewportSession(self, in_background=False)
             session.update(scene)
             session.sync(scene, width, height, [list(r) for r in window], [list(r) for r in view])
             while session.preview.step():
@@ -154,7 +154,7 @@ def draw_viewport(bpy, addon, bl_scene, width: int, height: int, window, view) -
 
     render = bl_scene.render
     kept = bl_scene.camera, render.engine, render.resolution_x, render.resolution_y
-    addon.render_camera.pause_link(bl_scene)  # the probe's tiny render is not the user's size
+    addon.render.view_link.pause_link(bl_scene)  # the probe's tiny render is not the user's size
     bpy.utils.register_class(DocsDrawProbe)
     stand_in = None
     try:
@@ -172,7 +172,7 @@ def draw_viewport(bpy, addon, bl_scene, width: int, height: int, window, view) -
             bpy.data.objects.remove(stand_in)
             bpy.data.cameras.remove(camera_data)
         bpy.utils.unregister_class(DocsDrawProbe)
-        addon.render_camera.resume_link(bl_scene)
+        addon.render.view_link.resume_link(bl_scene)
         offscreen.free()
     return out
 

@@ -2,7 +2,7 @@
 
 Every parameter of a lamp design is declared here once, with its unit, allowed range, default
 and description. The validator (``validate``), the README's field table, the JSON presets and
-the Blender properties (``lamp_addon/design_properties.py``) all follow from these declarations.
+the Blender properties (``lamp_addon/design/properties.py``) all follow from these declarations.
 The kinds of field (``Num``, ``Section``, the either/or rule ``OneOf`` …) are ``field_kinds``'s.
 
 Lengths are millimetres, absorption coefficients per millimetre, angles degrees, colours

@@ -1,6 +1,6 @@
 """Cycles material numbers equivalent to the paper's parameters (BLENDER-NOTES "Cycles equivalents").
 
-Pure arithmetic on the design's values; ``design_materials`` writes the results into node sockets.
+Pure arithmetic on the design's values; ``design.materials`` writes the results into node sockets.
 Absorption A is per mm; Cycles works per Blender unit (1 mm = 0.001 Blender units, ``units``).
 """
 

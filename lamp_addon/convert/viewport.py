@@ -16,7 +16,7 @@ terms is exact for any region aspect and any off-centre window, as long as pixel
 (Blender's viewport pixels always are).
 
 The camera is expressed in the design's model space (MODEL.md §2: millimetres, the root object's
-local space, see ``design_root``): ``world_from_model`` takes model millimetres to the world.
+local space, see ``design.root``): ``world_from_model`` takes model millimetres to the world.
 A root with a non-uniform scale distorts the lamp in a way no pinhole camera can show, and is
 refused.
 

@@ -30,7 +30,7 @@ def _load(scene_mod, name: str) -> dict:
 def _build(lamp_addon, bl_scene, scene: dict) -> None:
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
 
 
@@ -260,13 +260,13 @@ def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     # The user's camera object is kept as it was; the first build made the Lamp Camera the scene camera
     # (test_addon_first_build.py: a camera the user picks afterwards stays the scene camera).
     assert cam.name in bl_scene.objects and cam.matrix_world == Matrix.Identity(4) and cam.data == cam_data
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
 
 
 def test_two_scenes_keep_their_own_lamps(lamp_addon, bl_scene, scene_mod):
     import bpy
 
-    props, builder = lamp_addon.design_properties, lamp_addon.design_builder
+    props, builder = lamp_addon.design.properties, lamp_addon.design.builder
     other = bpy.data.scenes.new("Other")
     other_design = _load(scene_mod, "paper-baseline")
     other_design["lamps"][0]["lens"]["ior"] = 1.7
@@ -333,7 +333,7 @@ def test_lamp_list_operators(lamp_addon, bl_scene):
     for _ in range(4):
         assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert design.active_lamps_index == 3
-    assert lamp_addon.design_properties.design_to_scene(bl_scene)  # new lamps were placed without overlaps
+    assert lamp_addon.design.properties.design_to_scene(bl_scene)  # new lamps were placed without overlaps
     with pytest.raises(RuntimeError, match="at most 4 lamps"):
         bpy.ops.lamp.lamp_add()
     for _ in range(3):
@@ -346,7 +346,7 @@ def test_lamp_list_operators(lamp_addon, bl_scene):
 def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, scene_mod):
     import bpy
 
-    props, margin = lamp_addon.design_properties, lamp_addon.convert.layout.MARGIN_MM
+    props, margin = lamp_addon.design.properties, lamp_addon.convert.layout.MARGIN_MM
     baseline = _load(scene_mod, "paper-baseline")
     props.scene_to_design(bl_scene, baseline)
     design = bl_scene.lamp_design
@@ -375,7 +375,7 @@ def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, 
 def test_adding_a_lamp_that_does_not_fit_the_spec_is_refused(lamp_addon, addon_core, bl_scene, scene_mod):
     import bpy
 
-    props = lamp_addon.design_properties
+    props = lamp_addon.design.properties
     props.scene_to_design(bl_scene, _load(scene_mod, "paper-baseline"))
     bl_scene.lamp_design.body.size = (9990.0, 120.0)  # the lens in the middle: no room within 10 m
     before = props.design_to_scene(bl_scene)

@@ -51,8 +51,8 @@ def _scene(edit=None, size=(48, 32)) -> dict:
 
 
 def _compare(lamp_addon, bl_scene, scene, samples, size=None):
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    return lamp_addon.compare_ops.compare_design(bl_scene, samples=samples, resolution=size)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    return lamp_addon.compare.comparison.compare_design(bl_scene, samples=samples, resolution=size)
 
 
 def _region_mean(image: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
@@ -148,10 +148,10 @@ def _settings(compare, bl_scene) -> dict:
     """Every scene setting a comparison changes, by owner and name."""
     owners = {
         "render": (bl_scene.render, ("engine", "resolution_x", "resolution_y", "resolution_percentage", "use_border")),
-        "cycles": (bl_scene.cycles, ("samples", *compare.MIN_BOUNCES, *compare.CYCLES_SETTINGS)),
-        "view": (bl_scene.view_settings, tuple(compare.STANDARD_VIEW)),
+        "cycles": (bl_scene.cycles, ("samples", *compare.settings.MIN_BOUNCES, *compare.settings.CYCLES_SETTINGS)),
+        "view": (bl_scene.view_settings, tuple(compare.settings.STANDARD_VIEW)),
         "output": (bl_scene.render.image_settings,
-                   tuple(compare._exr_output_values(bl_scene.render.image_settings))),
+                   tuple(compare.settings.exr_output_values(bl_scene.render.image_settings))),
     }
     return {f"{name}.{key}": getattr(owner, key) for name, (owner, keys) in owners.items() for key in keys}
 
@@ -159,33 +159,33 @@ def _settings(compare, bl_scene) -> dict:
 def _handlers_installed(compare) -> list[str]:
     import bpy
 
-    return [name for name, handler in compare.HANDLERS.items() if handler in getattr(bpy.app.handlers, name)]
+    return [name for name, handler in compare.comparison.HANDLERS.items() if handler in getattr(bpy.app.handlers, name)]
 
 
 def _design_and_user_settings(lamp_addon, bl_scene, size=(24, 16)) -> dict:
     """The baseline design with its scene camera and the user's settings; returns those settings."""
-    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=size))
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=size))
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
-    return _settings(lamp_addon.compare_ops, bl_scene)
+    return _settings(lamp_addon.compare, bl_scene)
 
 
 def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, tmp_path):
     import bpy
 
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare
     scene = _scene(size=(40, 24))
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
     before = _settings(compare, bl_scene)
-    result = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
+    result = compare.comparison.compare_design(bl_scene, samples=2, resolution=(40, 24))
     assert result["size"] == (40, 24) and result["samples"] == 2
     assert result["seconds"]["tracer"] > 0 and result["seconds"]["cycles"] > 0
     assert any(o.name == "Lamp 1 Bulb" for o in bl_scene.objects)  # the lamp was built
     # Everything the comparison changed for itself is put back, and its handlers are gone.
     assert _settings(compare, bl_scene) == before and result["not_restored"] == []
-    assert _handlers_installed(compare) == [] and compare.running() is None
+    assert _handlers_installed(compare) == [] and compare.comparison.running() is None
     # The tracer half is core_tracer's image of the same scene, exactly.
     np.testing.assert_array_equal(result["tracer"], core_tracer.render(result["scene"]))
     # Render Result: Cycles in slot 1, the tracer in slot 2 (indices 0 and 1).
@@ -205,17 +205,17 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     assert result["exposure"] == display.auto_exposure([result["tracer"], result["cycles"]]) < -2
     assert compare_image.use_view_as_render
     assert compare_image["lamp_exposure"] == pytest.approx(result["exposure"] - 0.5)
-    np.testing.assert_allclose(lamp_addon.image_view.image_to_array(compare_image),
-                               compare.shown_side_by_side(result, None, result["exposure"]) * np.float32(2 ** -0.5),
+    shown = lamp_addon.convert.sheet.shown_side_by_side(result, None, result["exposure"])
+    np.testing.assert_allclose(lamp_addon.image_view.image_to_array(compare_image), shown * np.float32(2 ** -0.5),
                                rtol=1e-6)
 
 
 def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):
     scene = _scene(size=(24, 16))
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     assert bl_scene.camera is None
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)  # the Lamp Camera, at the design's view
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)  # the Lamp Camera, at the design's view
     assert result["size"] == (24, 16) and result["scene"]["camera"]["position"] == pytest.approx(
         scene["camera"]["position"], abs=1e-3)
     assert result["left_out"] == []
@@ -229,32 +229,32 @@ def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):
 
 
 def _modal_run(compare, bl_scene, samples=2, resolution=(40, 24)):
-    run = compare.CompareRun(bl_scene, samples=samples, resolution=resolution)
-    compare.watch(run)
+    run = compare.comparison.CompareRun(bl_scene, samples=samples, resolution=resolution)
+    compare.comparison.watch(run)
     run.prepare()
     assert run.ended is None
-    run.start(compare.CYCLES, invoke=True)
+    run.start(compare.comparison.CYCLES, invoke=True)
     return run
 
 
 def test_modal_steps_give_the_synchronous_result(lamp_addon, bl_scene):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare
     before = _design_and_user_settings(lamp_addon, bl_scene, (40, 24))
-    blocking = compare.compare_design(bl_scene, samples=2, resolution=(40, 24))
+    blocking = compare.comparison.compare_design(bl_scene, samples=2, resolution=(40, 24))
 
     run = _modal_run(compare, bl_scene)
     try:
         assert _handlers_installed(compare) == ["render_complete", "render_cancel"]
         assert run.ended == "complete"  # reported by Blender through the render_complete handler
-        assert not compare.LAMP_OT_compare_cycles.poll(SimpleNamespace(scene=bl_scene))  # one at a time
+        assert not compare.ops.LAMP_OT_compare_cycles.poll(SimpleNamespace(scene=bl_scene))  # one at a time
         assert run.advance() is False  # Cycles read back, the tracer started
-        assert run.stage is compare.TRACER and set(run.images) == {"cycles"}
+        assert run.stage is compare.comparison.TRACER and set(run.images) == {"cycles"}
         assert run.advance() is True
         result = run.compose()
     finally:
         run.close()
     assert _settings(compare, bl_scene) == before and run.not_restored == []
-    assert _handlers_installed(compare) == [] and compare.running() is None
+    assert _handlers_installed(compare) == [] and compare.comparison.running() is None
     np.testing.assert_array_equal(result["tracer"], blocking["tracer"])
     np.testing.assert_array_equal(result["cycles"], blocking["cycles"])  # seed 0: Cycles repeats itself
     assert result["scene"] == blocking["scene"]
@@ -269,18 +269,18 @@ def _cancel_as_blender_does(bl_scene) -> None:
 
 @pytest.mark.parametrize("stage", ["cycles", "tracer"])
 def test_a_cancelled_render_restores_the_settings_and_removes_the_handlers(lamp_addon, bl_scene, stage):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     assert _settings(compare, bl_scene) != before
     if stage == "tracer":
-        assert run.advance() is False and run.stage is compare.TRACER
+        assert run.advance() is False and run.stage is compare.comparison.TRACER
     _cancel_as_blender_does(bl_scene)  # Esc: Blender stops the render job and calls render_cancel
-    with pytest.raises(compare.CompareCancelled, match="render cancelled"):
+    with pytest.raises(compare.comparison.CompareCancelled, match="render cancelled"):
         run.advance()
     run.close()  # what the operator does on every way out
     assert _settings(compare, bl_scene) == before
-    assert _handlers_installed(compare) == [] and compare.running() is None
+    assert _handlers_installed(compare) == [] and compare.comparison.running() is None
     run.close()  # again: nothing more happens
     assert _settings(compare, bl_scene) == before
 
@@ -288,8 +288,8 @@ def test_a_cancelled_render_restores_the_settings_and_removes_the_handlers(lamp_
 def test_a_render_of_another_scene_is_not_taken_for_the_comparisons(lamp_addon, bl_scene):
     import bpy
 
-    compare = lamp_addon.compare_ops
-    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    compare = lamp_addon.compare
+    lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     try:
         other = bpy.data.scenes.new("Other")
@@ -301,18 +301,18 @@ def test_a_render_of_another_scene_is_not_taken_for_the_comparisons(lamp_addon, 
 
 
 def test_a_design_edited_between_the_renders_stops_the_comparison(lamp_addon, bl_scene):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     bl_scene.lamp_design.lamps[0].lens.ior = 1.6  # the interface is live during the Cycles render
-    with pytest.raises(compare.CompareError, match="changed during the Cycles render; compare again"):
+    with pytest.raises(compare.comparison.CompareError, match="changed during the Cycles render; compare again"):
         run.advance()
     run.close()
     assert _settings(compare, bl_scene) == before and _handlers_installed(compare) == []
 
 
 def test_a_setting_the_user_changes_during_the_comparison_is_kept(lamp_addon, bl_scene):
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare
     before = _design_and_user_settings(lamp_addon, bl_scene)
     run = _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
     bl_scene.cycles.seed = 42  # while Cycles renders, the user sets the seed for later
@@ -323,17 +323,17 @@ def test_a_setting_the_user_changes_during_the_comparison_is_kept(lamp_addon, bl
 def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
     import bpy
 
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare
     before = _design_and_user_settings(lamp_addon, bl_scene)
     actions = list(lamp_addon.actions.ACTION_OPERATORS)
     _modal_run(compare, bl_scene, samples=1, resolution=(24, 16))
-    compare.unregister()
+    compare.ops.unregister()
     try:
-        assert _handlers_installed(compare) == [] and compare.running() is None
+        assert _handlers_installed(compare) == [] and compare.comparison.running() is None
         assert _settings(compare, bl_scene) == before
         assert not hasattr(bpy.types, "LAMP_OT_compare_cycles")
     finally:
-        compare.register()
+        compare.ops.register()
         lamp_addon.actions.ACTION_OPERATORS[:] = actions  # the button back in its place
     assert bpy.ops.lamp.compare_cycles.poll()
 
@@ -341,7 +341,7 @@ def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
 def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
     result = _compare(lamp_addon, bl_scene, _scene(size=(24, 16)), samples=1)
     for name in ("c.exr", "c.png"):
-        lamp_addon.compare_ops.write_comparison(str(tmp_path / name), result)
+        lamp_addon.compare.comparison.write_comparison(str(tmp_path / name), result)
         image, scene = imageio.read_image(tmp_path / name)
         assert image.shape == result["side_by_side"].shape
         assert scene == core_tracer.normalize(result["scene"])
@@ -352,7 +352,7 @@ def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
 def test_compare_operator(lamp_addon, bl_scene, tmp_path):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     assert bpy.ops.lamp.compare_cycles(samples=1) == {"FINISHED"}
     shown = lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Compare"])
     assert not (tmp_path / "c.png").exists()
@@ -367,11 +367,11 @@ def test_compare_operator(lamp_addon, bl_scene, tmp_path):
 def test_compare_operator_reports_design_errors(lamp_addon, bl_scene):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
+    lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     bl_scene.lamp_design.lamps[0].cuts.pitch = 95.0  # larger than the lens
     with pytest.raises(RuntimeError, match=r"lamps\[0\]\.cuts\.pitch: 95 is larger than the lens"):
         bpy.ops.lamp.compare_cycles(samples=1)
-    assert _handlers_installed(lamp_addon.compare_ops) == [] and lamp_addon.compare_ops.running() is None
+    assert _handlers_installed(lamp_addon.compare) == [] and lamp_addon.compare.comparison.running() is None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -426,7 +426,7 @@ def test_lit_body_without_specular_agrees_with_cycles(lamp_addon, bl_scene):
 def test_cycles_filters_as_the_tracer_samples(lamp_addon):
     # One tracer sample is the pixel centre: Cycles samples a 0.01 px box. More samples are spread by
     # Cycles' default Blackman-Harris 1.5 px (core_tracer.raytrace.pixel_filter): Cycles keeps it.
-    one = lamp_addon.compare_ops.cycles_settings(1)
+    one = lamp_addon.compare.settings.cycles_settings(1)
     assert (one["pixel_filter_type"], one["filter_width"]) == ("BOX", 0.01)
-    many = lamp_addon.compare_ops.cycles_settings(16)
+    many = lamp_addon.compare.settings.cycles_settings(16)
     assert (many["pixel_filter_type"], many["filter_width"]) == ("BLACKMAN_HARRIS", 1.5)

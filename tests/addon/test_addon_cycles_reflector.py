@@ -35,8 +35,8 @@ def _constant_scene() -> dict:
 
 def test_the_reflector_constant_is_seen_once_per_path_as_in_the_model(lamp_addon, bl_scene):
     scene = _constant_scene()
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES, resolution=SIZE)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES, resolution=SIZE)
     tracer, cycles = result["tracer"].astype(np.float64), result["cycles"].astype(np.float64)
     passes = core_tracer.render_passes(scene, *SIZE, samples=1).passes
     # Only the constant lights this lamp: the pixels where the reflector is seen (not the bulb or
@@ -65,27 +65,27 @@ def test_a_reflector_built_with_the_constant_on_every_hit_is_gated_on_the_next_b
     import bpy
 
     scene = _constant_scene()
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
     (tree,) = _reflector_trees(bpy)
     gate, path = tree.nodes["Constant Not For Diffuse Rays"], tree.nodes["Light Path"]
-    assert gate.inputs[0].links[0].from_node.name == lamp_addon.design_materials.CONSTANT_GATE
+    assert gate.inputs[0].links[0].from_node.name == lamp_addon.design.materials.CONSTANT_GATE
     # The layout of earlier versions: the gate fed by Is Diffuse Ray alone.
-    for name in (lamp_addon.design_materials.CONSTANT_GATE, "After A Glossy Bounce"):
+    for name in (lamp_addon.design.materials.CONSTANT_GATE, "After A Glossy Bounce"):
         tree.nodes.remove(tree.nodes[name])
     tree.links.new(path.outputs["Is Diffuse Ray"], gate.inputs[0])
     scene["lamps"][0]["reflector"]["color"] = [0.2, 0.2, 0.2]  # any change: the lamp is built again
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
     (tree,) = _reflector_trees(bpy)
     gate = tree.nodes["Constant Not For Diffuse Rays"]
-    assert gate.inputs[0].links[0].from_node.name == lamp_addon.design_materials.CONSTANT_GATE
+    assert gate.inputs[0].links[0].from_node.name == lamp_addon.design.materials.CONSTANT_GATE
     # A designer's own link into the gate stays.
-    for name in (lamp_addon.design_materials.CONSTANT_GATE, "After A Glossy Bounce"):
+    for name in (lamp_addon.design.materials.CONSTANT_GATE, "After A Glossy Bounce"):
         tree.nodes.remove(tree.nodes[name])
     tree.links.new(tree.nodes["Light Path"].outputs["Is Camera Ray"], gate.inputs[0])
     scene["lamps"][0]["reflector"]["color"] = [0.25, 0.2, 0.2]
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
     (tree,) = _reflector_trees(bpy)
     assert tree.nodes["Constant Not For Diffuse Rays"].inputs[0].links[0].from_socket.name == "Is Camera Ray"

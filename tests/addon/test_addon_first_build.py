@@ -1,4 +1,4 @@
-"""The first build of a design sets the file up to show the lamp (``lamp_addon.render_setup``).
+"""The first build of a design sets the file up to show the lamp (``lamp_addon.render.setup``).
 
 In Blender's startup file the first Build makes the Lamp Camera (framing every lens) the scene
 camera, switches EEVEE to Lamp Tracer and sets the scene's exposure to the design's automatic
@@ -51,18 +51,18 @@ def test_first_build_in_the_startup_file_sets_the_scene_up_for_the_lamp(lamp_add
 
     camera = startup.objects["Camera"]
     before = _object_state(camera)
-    lamp_addon.design_properties.scene_to_design(startup, _baseline())
+    lamp_addon.design.properties.scene_to_design(startup, _baseline())
     capfd.readouterr()
     assert bpy.ops.lamp.build() == {"FINISHED"}
     report = capfd.readouterr().out
 
     lamp_camera = startup.camera
-    assert lamp_addon.render_camera.is_lamp_camera(lamp_camera) and lamp_camera.name == "Lamp Camera"
-    assert lamp_camera.parent == lamp_addon.design_root.find_root(startup)  # moves with the lamp
+    assert lamp_addon.render.camera.is_lamp_camera(lamp_camera) and lamp_camera.name == "Lamp Camera"
+    assert lamp_camera.parent == lamp_addon.design.root.find_root(startup)  # moves with the lamp
     assert _object_state(camera) == before  # the user's camera object: untouched
     assert rims_in_image(lamp_addon, startup) == [True]
     assert startup.render.engine == "LAMP_TRACER"
-    expected = lamp_addon.image_view.design_exposure(lamp_addon.render_camera.scene_for_render(startup))
+    expected = lamp_addon.image_view.design_exposure(lamp_addon.render.camera.scene_for_render(startup))
     assert expected < -1.0  # a lit lens is many times display white
     assert startup.view_settings.exposure == pytest.approx(expected, abs=1e-6)
     for said in ('made the scene camera "Lamp Camera"', 'your "Camera" is kept as it was',
@@ -73,7 +73,7 @@ def test_first_build_in_the_startup_file_sets_the_scene_up_for_the_lamp(lamp_add
 def test_later_builds_keep_what_the_user_chose(lamp_addon, startup, capfd):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(startup, _baseline())
+    lamp_addon.design.properties.scene_to_design(startup, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
     startup.camera = startup.objects["Camera"]  # the user's choices after the first build
     startup.render.engine = "CYCLES"
@@ -90,7 +90,7 @@ def test_later_builds_keep_what_the_user_chose(lamp_addon, startup, capfd):
 def test_the_exposure_follows_the_design_while_it_is_the_addons(lamp_addon, startup):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(startup, _baseline())
+    lamp_addon.design.properties.scene_to_design(startup, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
     first = startup.view_settings.exposure
     bulb = startup.lamp_design.lamps[0].bulb
@@ -111,10 +111,10 @@ def test_a_file_set_up_otherwise_is_left_alone(lamp_addon, startup):
 
     startup.render.engine = "CYCLES"
     startup.view_settings.exposure = -1.0
-    lamp_addon.design_properties.scene_to_design(startup, _baseline())
+    lamp_addon.design.properties.scene_to_design(startup, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert startup.render.engine == "CYCLES" and startup.view_settings.exposure == -1.0
-    assert lamp_addon.render_camera.is_lamp_camera(startup.camera)
+    assert lamp_addon.render.camera.is_lamp_camera(startup.camera)
 
 
 def test_the_first_lamp_added_sets_the_scene_up(lamp_addon, startup):
@@ -124,14 +124,14 @@ def test_the_first_lamp_added_sets_the_scene_up(lamp_addon, startup):
 
     assert len(startup.lamp_design.lamps) == 0 and startup.lamp_design.auto_build
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
-    assert lamp_addon.render_camera.is_lamp_camera(startup.camera)
+    assert lamp_addon.render.camera.is_lamp_camera(startup.camera)
     assert startup.render.engine == "LAMP_TRACER" and startup.view_settings.exposure < -1.0
     assert rims_in_image(lamp_addon, startup) == [True]
     # The build the timer makes (tests have no event loop: the same build called here).
     assert startup.camera.parent is None  # made before the root
-    lamp_addon.design_builder.build_lamp(startup, lamp_addon.design_properties.design_to_scene(startup))
+    lamp_addon.design.builder.build_lamp(startup, lamp_addon.design.properties.design_to_scene(startup))
     startup.view_layers[0].update()  # the depsgraph update after the timer's build
-    assert startup.camera.parent == lamp_addon.design_root.find_root(startup)
+    assert startup.camera.parent == lamp_addon.design.root.find_root(startup)
 
 
 def test_the_lamp_camera_moves_with_the_root(lamp_addon, startup):
@@ -140,15 +140,15 @@ def test_the_lamp_camera_moves_with_the_root(lamp_addon, startup):
     import bpy
     from mathutils import Euler
 
-    lamp_addon.design_properties.scene_to_design(startup, _baseline())
+    lamp_addon.design.properties.scene_to_design(startup, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    view = dict(lamp_addon.render_camera.scene_for_render(startup)["camera"])
-    root = lamp_addon.design_root.find_root(startup)
+    view = dict(lamp_addon.render.camera.scene_for_render(startup)["camera"])
+    root = lamp_addon.design.root.find_root(startup)
     root.location = (1.2, 2.5, 0.7)
     root.rotation_euler = Euler((0.0, 0.0, math.radians(180)))
     startup.view_layers[0].update()
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    moved = lamp_addon.render_camera.scene_for_render(startup)["camera"]
+    moved = lamp_addon.render.camera.scene_for_render(startup)["camera"]
     np.testing.assert_allclose(moved["position"], view["position"], atol=1e-3)
     np.testing.assert_allclose(moved["target"], view["target"], atol=1e-3)
     assert rims_in_image(lamp_addon, startup) == [True]
@@ -159,15 +159,15 @@ def test_the_lamp_camera_moves_with_the_root(lamp_addon, startup):
 
 
 def test_compare_needs_a_build_only_when_the_objects_are_out_of_date(lamp_addon, addon_core, bl_scene):
-    compare, builder = lamp_addon.compare_ops, lamp_addon.design_builder
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    compare, builder = lamp_addon.compare.scope, lamp_addon.design.builder
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert compare.needs_build(bl_scene)  # not built
-    scene = lamp_addon.design_properties.design_to_scene(bl_scene)
+    scene = lamp_addon.design.properties.design_to_scene(bl_scene)
     builder.build_lamp(bl_scene, scene)
     assert not compare.needs_build(bl_scene)
     bl_scene.lamp_design.lamps[0].lens.ior = 1.6
     assert compare.needs_build(bl_scene)  # out of date
-    builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene), preview=True)
+    builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene), preview=True)
     assert builder.build_status(bl_scene) in (builder.UP_TO_DATE, builder.PREVIEW)
     assert compare.needs_build(bl_scene) == (builder.build_status(bl_scene) == builder.PREVIEW)
 
@@ -182,47 +182,47 @@ def test_compare_renders_up_to_date_objects_as_they_are(lamp_addon, bl_scene):
     Cycles renders (a rebuild would have put the design's back)."""
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline((24, 20)))
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline((24, 20)))
     assert bpy.ops.lamp.build() == {"FINISHED"}
     ior = _lens_ior_input(lamp_addon, bl_scene)
     ior.default_value = 1.7
-    lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
+    lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     assert _lens_ior_input(lamp_addon, bl_scene).default_value == pytest.approx(1.7)
 
 
 def test_compare_rebuilds_out_of_date_objects(lamp_addon, bl_scene):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline((24, 20)))
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline((24, 20)))
     assert bpy.ops.lamp.build() == {"FINISHED"}
     bl_scene.lamp_design.auto_build = False
     bl_scene.lamp_design.lamps[0].lens.ior = 1.6
-    assert not lamp_addon.design_builder.is_up_to_date(bl_scene)
-    lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
+    assert not lamp_addon.design.builder.is_up_to_date(bl_scene)
+    lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     assert _lens_ior_input(lamp_addon, bl_scene).default_value == pytest.approx(1.6)
-    assert lamp_addon.design_builder.is_up_to_date(bl_scene)
+    assert lamp_addon.design.builder.is_up_to_date(bl_scene)
 
 
 def test_the_first_build_keeps_a_view_that_shows_the_body_and_frames_one_that_does_not(lamp_addon, startup):
     import bpy
 
     scene = _baseline()
-    lamp_addon.design_properties.scene_to_design(startup, scene)
-    assert lamp_addon.render_setup.design_view_shows_body(startup)
+    lamp_addon.design.properties.scene_to_design(startup, scene)
+    assert lamp_addon.render.setup.design_view_shows_body(startup)
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    seen = lamp_addon.render_camera.scene_for_render(startup)["camera"]
+    seen = lamp_addon.render.camera.scene_for_render(startup)["camera"]
     np.testing.assert_allclose(seen["position"], scene["camera"]["position"], atol=1e-3)  # the preset's view
     np.testing.assert_allclose(seen["target"], scene["camera"]["target"], atol=1e-3)
 
     bpy.ops.wm.read_homefile(use_factory_startup=True)
     startup = bpy.context.scene
     close = {**scene, "camera": {**scene["camera"], "position": [60.0, -150.0, 20.0]}}  # too close to hold the body
-    lamp_addon.design_properties.scene_to_design(startup, close)
-    assert not lamp_addon.render_setup.design_view_shows_body(startup)
+    lamp_addon.design.properties.scene_to_design(startup, close)
+    assert not lamp_addon.render.setup.design_view_shows_body(startup)
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert rims_in_image(lamp_addon, startup) == [True]
-    seen = lamp_addon.render_camera.scene_for_render(startup)["camera"]
-    assert lamp_addon.render_setup.design_view_shows_body(startup)  # the design's fields follow the framing
+    seen = lamp_addon.render.camera.scene_for_render(startup)["camera"]
+    assert lamp_addon.render.setup.design_view_shows_body(startup)  # the design's fields follow the framing
     direction = np.subtract(seen["target"], seen["position"])
     wanted = np.subtract(close["camera"]["target"], close["camera"]["position"])
     cosine = direction @ wanted / np.linalg.norm(direction) / np.linalg.norm(wanted)
@@ -240,7 +240,7 @@ def test_a_preset_applied_in_the_startup_file_sets_the_scene_up(lamp_addon, star
     bpy.ops.lamp.preset_refresh()
     wm.lamp_presets_index = next(i for i, item in enumerate(wm.lamp_presets) if item.file.endswith(BASELINE.name))
     assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
-    assert lamp_addon.render_camera.is_lamp_camera(startup.camera)
+    assert lamp_addon.render.camera.is_lamp_camera(startup.camera)
     assert startup.render.engine == "LAMP_TRACER" and startup.view_settings.exposure < -1.0
     assert rims_in_image(lamp_addon, startup) == [True]
     assert _object_state(startup.objects["Camera"]) == camera_before

@@ -34,8 +34,8 @@ def _baseline(size=SIZE) -> dict:
 
 
 def _clean_comparison(lamp_addon, bl_scene) -> dict:
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
-    return lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES)
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
+    return lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
 
 
 @pytest.fixture
@@ -64,21 +64,21 @@ def test_startup_file_build_then_compare_shows_the_lamp_in_both_halves(lamp_addo
     assert {"Cube", "Camera", "Light"} <= set(bl_scene.objects.keys()) and hasattr(bl_scene, "lamp_design")
     startup_camera = bl_scene.objects["Camera"]
     before = tuple(startup_camera.location), tuple(startup_camera.rotation_euler), startup_camera.data.lens
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)  # the first Build made it the scene camera
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)  # the first Build made it the scene camera
     assert bpy.ops.lamp.compare_cycles(samples=SAMPLES) == {"FINISHED"}
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
     _assert_same_lamp(result, clean_shares)
     assert sorted(result["left_out"]) == ["Cube", "Light"]
-    assert lamp_addon.compare_ops.left_out_text(result["left_out"]) == "left out of the Cycles half: Cube, Light"
+    assert lamp_addon.compare.scope.left_out_text(result["left_out"]) == "left out of the Cycles half: Cube, Light"
     # Put back exactly: the Cube and the Light render again; the startup camera never moved.
     assert not bl_scene.objects["Cube"].hide_render and not bl_scene.objects["Light"].hide_render
     assert (tuple(startup_camera.location), tuple(startup_camera.rotation_euler), startup_camera.data.lens) == before
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
     # The render size is the design's, not the startup file's 1920 x 1080.
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == SIZE
-    lamp_addon.compare_ops.write_comparison(str(tmp_path / "startup-compare.png"), result)
+    lamp_addon.compare.comparison.write_comparison(str(tmp_path / "startup-compare.png"), result)
 
 
 def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_scene):
@@ -87,7 +87,7 @@ def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_sce
     clean_shares, _ = clean
     bpy.ops.wm.read_homefile(use_empty=True)
     bl_scene = bpy.context.scene
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     bpy.ops.mesh.primitive_cube_add(size=4.0)  # a 4 m "car" around the lamp and the camera
     car = bpy.context.active_object
     car.name = "Car Body"
@@ -98,7 +98,7 @@ def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_sce
     bl_scene.collection.children.link(props)
     props.hide_render = True
     props.objects.link(bpy.data.objects.new("Wheel", bpy.data.meshes.new("Wheel")))
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
     _assert_same_lamp(result, clean_shares)
     assert result["left_out"] == ["Car Body"]
     assert not car.hide_render and light.hide_render
@@ -107,10 +107,10 @@ def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_sce
 def test_a_cancelled_comparison_puts_the_left_out_objects_back(lamp_addon, bl_scene):
     import bpy
 
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare.comparison
     bpy.ops.wm.read_homefile(use_factory_startup=True)
     bl_scene = bpy.context.scene
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     with compare.CompareRun(bl_scene, samples=1) as run:
         run.prepare()
         assert bl_scene.objects["Cube"].hide_render and bl_scene.objects["Light"].hide_render
@@ -123,7 +123,7 @@ def test_a_cancelled_comparison_puts_the_left_out_objects_back(lamp_addon, bl_sc
 
 def rims_in_image(lamp_addon, bl_scene) -> list[bool]:
     """For each lamp: whether its whole lens rim projects inside the image the tracer renders."""
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     size = (seen["image"]["width"], seen["image"]["height"])
     inside = []
     for lamp in seen["lamps"]:
@@ -143,28 +143,28 @@ def test_four_lamps_added_in_the_startup_file_are_all_in_the_image(lamp_addon, b
 
     bpy.ops.wm.read_homefile(use_factory_startup=True)
     bl_scene = bpy.context.scene
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
     for _ in range(3):
         assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 4
 
 
 def test_four_lamps_after_add_lamp_are_all_in_the_image(lamp_addon, bl_scene):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}  # an empty file: Build makes the Lamp Camera
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
     for _ in range(3):
         assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert len(bl_scene.lamp_design.lamps) == 4
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 4
     # What the tracer renders holds every lens: a red lens pixel near each lens centre.
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     image = core_tracer.render(seen)
     size = (seen["image"]["width"], seen["image"]["height"])
     for lamp in seen["lamps"]:
@@ -178,8 +178,8 @@ def test_four_lamps_after_add_lamp_are_all_in_the_image(lamp_addon, bl_scene):
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 3
     bl_scene.lamp_design.body.size = (320.0, 110.0)
     bl_scene.lamp_design.body.center = (95.0, 0.0)
-    assert lamp_addon.render_camera.keep_framed(bl_scene)
-    near = lamp_addon.render_camera.scene_for_render(bl_scene)["camera"]
+    assert lamp_addon.render.lamp_camera.keep_framed(bl_scene)
+    near = lamp_addon.render.camera.scene_for_render(bl_scene)["camera"]
     assert math.dist(near["position"], near["target"]) < 0.8 * far
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 3
 
@@ -189,19 +189,19 @@ def test_without_reframing_the_fourth_lamp_leaves_the_image(lamp_addon, bl_scene
     meaningful only because this one does not hold every lens."""
     import copy
 
-    from_ops = lamp_addon.design_ops
+    from_ops = lamp_addon.design.ops
     doc = copy.deepcopy(_baseline())
     for _ in range(3):
         doc = from_ops.design_with_new_lamp(doc, 0)
-    lamp_addon.design_properties.scene_to_design(bl_scene, doc)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, doc)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
     assert rims_in_image(lamp_addon, bl_scene) != [True] * 4
 
 
 def test_frame_lamp_moves_only_the_lamp_camera(lamp_addon, bl_scene):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     mine = bpy.data.objects.new("Mine", bpy.data.cameras.new("Mine"))
     bl_scene.collection.objects.link(mine)
     mine.location = (3.0, -9.0, 2.0)
@@ -211,8 +211,8 @@ def test_frame_lamp_moves_only_the_lamp_camera(lamp_addon, bl_scene):
     bl_scene.lamp_design.body.center = (90.0, 0.0)
     assert bpy.ops.lamp.frame_design() == {"FINISHED"}
     assert (tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens) == before
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)  # framing shows the lamp
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)  # framing shows the lamp
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     assert seen["camera"]["target"] == pytest.approx([90.0, 40.0, 0.0], abs=1e-3)  # the body box's centre
     body = lamp_addon.convert.camera.body_box(seen)
     size = (seen["image"]["width"], seen["image"]["height"])
@@ -227,22 +227,22 @@ def test_applying_a_preset_to_a_built_lamp_rebuilds_it(lamp_addon, bl_scene):
     import bpy
     from helpers import FOUR_LAMPS
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    report = lamp_addon.preset_ops.apply_preset(bl_scene, core_tracer.load_scene(str(FOUR_LAMPS)))
+    report = lamp_addon.presets.ops.apply_preset(bl_scene, core_tracer.load_scene(str(FOUR_LAMPS)))
     assert "rebuilt the lamp objects" in report
     lenses = [ob for ob in bl_scene.objects if str(ob.get("lamp_part", "")).endswith(".lens")]
     assert len(lenses) == 4  # the objects are the preset's
 
 
 def test_the_design_fov_reaches_both_halves_of_compare(lamp_addon, bl_scene):
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline((24, 20)))
-    narrow = lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline((24, 20)))
+    narrow = lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     bl_scene.lamp_design.camera.fov_deg = 40.0  # the issue's edit: 16 -> 40
-    wide = lamp_addon.compare_ops.compare_design(bl_scene, samples=1)
+    wide = lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     assert narrow["scene"]["camera"]["fov_deg"] == pytest.approx(16.0, abs=1e-4)
     assert wide["scene"]["camera"]["fov_deg"] == pytest.approx(40.0, abs=1e-4)
-    assert lamp_addon.render_camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
+    assert lamp_addon.render.camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
     # Cycles sees it too: the lens covers a smaller share of the wider view, in both halves.
     for half in ("tracer", "cycles"):
         assert lens_share(wide[half]) < 0.5 * lens_share(narrow[half]), half
@@ -253,7 +253,7 @@ def test_the_camera_area_says_which_camera_renders(lamp_addon, bl_scene):
     import bpy
     from test_addon_panels import draw
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _baseline())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     panel = bpy.types.LAMP_PT_camera_view
     assert panel.bl_parent_id == "LAMP_PT_camera"
     layout = draw(panel, bl_scene)

@@ -14,8 +14,8 @@ pytestmark = pytest.mark.blender
 def _scene(lamp_addon, addon_core, bl_scene) -> None:
     scene = addon_core.scene.load_scene(BASELINE)
     scene["image"] = {"width": 24, "height": 16, "samples": 1}
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
 
 
@@ -40,7 +40,7 @@ def _part(lamp_addon, kind: str, name: str, role: str = "lens"):
         bpy.ops.mesh.primitive_cube_add(size=0.02, location=(0.0, 0.01, 0.0))
     obj = bpy.context.active_object
     obj.name = name
-    lamp_addon.freeform_properties.set_role(obj, role)
+    lamp_addon.freeform.properties.set_role(obj, role)
     return obj
 
 
@@ -85,7 +85,7 @@ def test_a_bad_lens_mesh_is_named_in_f12_the_panel_and_export(lamp_addon, addon_
     assert "Lamp Tracer: " in text and "Traceback" not in text
     assert re.search(message, text), text
     assert "Traceback" not in capfd.readouterr().err
-    assert re.search(message, lamp_addon.freeform_status.part_problem(bl_scene))
+    assert re.search(message, lamp_addon.freeform.status.part_problem(bl_scene))
     with pytest.raises(RuntimeError, match=message):
         bpy.ops.lamp.freeform_export(filepath=str(tmp_path / "lamp.json"))
     assert list(tmp_path.iterdir()) == []  # nothing written
@@ -93,7 +93,7 @@ def test_a_bad_lens_mesh_is_named_in_f12_the_panel_and_export(lamp_addon, addon_
     bpy.data.objects.remove(obj)
     _part(lamp_addon, "cube", "Good Lens")
     assert bpy.ops.render.render() == {"FINISHED"}
-    assert lamp_addon.freeform_status.part_problem(bl_scene) is None
+    assert lamp_addon.freeform.status.part_problem(bl_scene) is None
 
 
 def test_a_role_value_out_of_range_is_named_in_f12(lamp_addon, addon_core, bl_scene):
@@ -120,13 +120,13 @@ def test_without_embree_the_feature_says_so_once_and_the_lamp_renders(lamp_addon
     import bpy
 
     monkeypatch.setitem(sys.modules, "embreex", None)
-    monkeypatch.setattr(lamp_addon.freeform_status, "_available", [])
-    monkeypatch.setattr(lamp_addon.freeform_render, "_said", set())
+    monkeypatch.setattr(lamp_addon.freeform.status, "_available", [])
+    monkeypatch.setattr(lamp_addon.freeform.render, "_said", set())
     _scene(lamp_addon, addon_core, bl_scene)
     _part(lamp_addon, "cube", "Glass")
-    ok, reason = lamp_addon.freeform_status.available()
+    ok, reason = lamp_addon.freeform.status.available()
     assert not ok and "embreex" in reason
-    lines = [line.text for line in lamp_addon.freeform_status.panel_lines(bl_scene)]
+    lines = [line.text for line in lamp_addon.freeform.status.panel_lines(bl_scene)]
     assert " ".join(lines).startswith("free-form rendering needs the embreex package")
     capfd.readouterr()
     for _ in range(2):
@@ -148,7 +148,7 @@ def test_the_viewport_says_which_part_is_wrong(lamp_addon, addon_core, bl_scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
     window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=24, y=16)]
     view = [list(r) for r in camera.matrix_world.inverted()]
-    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    session = lamp_addon.render.viewport.ViewportSession(None, in_background=False)
     session.update(bl_scene, depsgraph)
     session.sync(bl_scene, 24, 16, window, view)
     session.preview._run(session.preview.job)  # the worker's loop, in this thread

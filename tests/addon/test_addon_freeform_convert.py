@@ -2,7 +2,7 @@
 by the parametric tracer and, after conversion, by the free-form tracer on the converted meshes.
 
 Tolerance. The builder's meshes lie within the chord tolerance ε = 0.05 mm of the analytic surfaces
-(``design_parts.CHORD_TOLERANCE_MM``, measured per mesh by the builder). A hit point is thus off by at
+(``design.parts.CHORD_TOLERANCE_MM``, measured per mesh by the builder). A hit point is thus off by at
 most ε: 2 % of the 2.3 mm a pixel covers on the lamp at 96² (the design camera spans 225 mm), and
 1.7 % of the 3 mm plate a ray crosses (absorption, eq. 2). So a pixel agrees within τ = 2 % of its
 value (its largest channel; at least 0.1 % of the image's brightest pixel, so that near-black pixels
@@ -33,16 +33,16 @@ MAX_SHARE_EXCEPTED = 0.10  # of the whole image: excepted and outside TAU
 def _design(lamp_addon, addon_core, bl_scene, path) -> dict:
     scene = addon_core.scene.load_scene(path)
     scene["image"] = {"width": SIZE, "height": SIZE, "samples": 1}
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    return lamp_addon.design_properties.design_to_scene(bl_scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    return lamp_addon.design.properties.design_to_scene(bl_scene)
 
 
 def _freeform_image(lamp_addon, bl_scene, design: dict) -> np.ndarray:
     import bpy
 
-    prepared = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(), design)
+    prepared = lamp_addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(), design)
     assert prepared.geometry is not None
-    return lamp_addon.freeform_render.render_passes(prepared, SIZE, SIZE).image
+    return lamp_addon.freeform.render.render_passes(prepared, SIZE, SIZE).image
 
 
 def agreement(parametric: np.ndarray, freeform: np.ndarray, mask: np.ndarray | None = None) -> tuple[float, float]:
@@ -74,7 +74,7 @@ def test_agreement_measure_fails_on_a_different_lamp():
 def test_parametric_equals_freeform(lamp_addon, addon_core, bl_scene, path):
     design = _design(lamp_addon, addon_core, bl_scene, path)
     parametric = addon_core.render_passes(design, SIZE, SIZE).image
-    lamp_addon.freeform_convert.convert_to_freeform(bl_scene)
+    lamp_addon.freeform.conversion.convert_to_freeform(bl_scene)
     freeform = _freeform_image(lamp_addon, bl_scene, design)
     within, excepted = agreement(parametric, freeform)
     print(f"\n{path.stem}: {within:.2%} of the pixels within {TAU:.0%} (at silhouettes and creases, "
@@ -89,28 +89,28 @@ def test_convert_makes_closed_lenses_with_roles_and_hides_the_parametric_parts(l
     mine = bpy.data.objects.new("My Empty", None)
     bl_scene.collection.objects.link(mine)
     assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
-    parts = lamp_addon.freeform_properties.role_objects(bl_scene)
+    parts = lamp_addon.freeform.properties.role_objects(bl_scene)
     roles = sorted(o.lamp_role.role for o in parts)
     assert roles == ["body", "bulb", "lens", "reflector", "side_wall", "socket"]
     built = [o for o in bl_scene.objects if o.get("lamp_part") not in (None, "root", "sun")]
     assert built and all(o.hide_render and o.hide_get() for o in built)
     assert not mine.hide_render and mine.lamp_role.role == "NONE"  # the designer's objects are left alone
-    root = lamp_addon.design_root.find_root(bl_scene)
+    root = lamp_addon.design.root.find_root(bl_scene)
     assert all(o.parent == root and o.get("lamp_part") is None for o in parts)
-    meshes = lamp_addon.freeform_meshes.scene_meshes(bl_scene, bpy.context.evaluated_depsgraph_get(), parts)
+    meshes = lamp_addon.freeform.meshes.scene_meshes(bl_scene, bpy.context.evaluated_depsgraph_get(), parts)
     core_meshes = addon_core.freeform.meshes
     lens = next(o for o in parts if o.lamp_role.role == "lens")
     lamp = design["lamps"][0]
     assert core_meshes.check_lens_volume(meshes[lens.name]) > np.pi * lamp["lens"]["radius"] ** 2 * 0.9 * \
         lamp["lens"]["thickness"]
-    assert lamp_addon.freeform_properties.part_document(lens)["lens"]["ior"] == lamp["lens"]["ior"]
+    assert lamp_addon.freeform.properties.part_document(lens)["lens"]["ior"] == lamp["lens"]["ior"]
     # Every part has its role material, so Cycles renders what the tracer traces.
-    assert all(lamp_addon.freeform_materials.role_material(o) is not None for o in parts)
+    assert all(lamp_addon.freeform.materials.role_material(o) is not None for o in parts)
     assert {"REGISTER", "UNDO"} <= bpy.types.LAMP_OT_freeform_convert.bl_options
     # The parametric lamp is hidden now: the copies are traced alone, and the panel says so.
-    status = lamp_addon.freeform_status
+    status = lamp_addon.freeform.status
     assert status.rendered_text(bl_scene) == status.PARTS_ONLY_TEXT
-    assert lamp_addon.freeform_parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get()) == []
+    assert lamp_addon.freeform.parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get()) == []
 
 
 def test_converting_again_says_the_earlier_parts_are_traced_too(lamp_addon, addon_core, bl_scene, capfd):
@@ -121,14 +121,14 @@ def test_converting_again_says_the_earlier_parts_are_traced_too(lamp_addon, addo
     capfd.readouterr()
     assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
     assert "the 6 parts the scene had already are traced too" in capfd.readouterr().out
-    assert len(lamp_addon.freeform_properties.role_objects(bl_scene)) == 12  # nothing of the first was changed
+    assert len(lamp_addon.freeform.properties.role_objects(bl_scene)) == 12  # nothing of the first was changed
 
 
 def _lens_volumes(lamp_addon, addon_core, bl_scene, parts) -> dict[str, float]:
     """Volume (mm³) of each lens-role part, which ``check_lens_volume`` finds closed and outward."""
     import bpy
 
-    meshes = lamp_addon.freeform_meshes.scene_meshes(bl_scene, bpy.context.evaluated_depsgraph_get(), parts)
+    meshes = lamp_addon.freeform.meshes.scene_meshes(bl_scene, bpy.context.evaluated_depsgraph_get(), parts)
     return {o.name: addon_core.freeform.meshes.check_lens_volume(meshes[o.name]) for o in parts
             if o.lamp_role.role == "lens"}
 
@@ -137,7 +137,7 @@ def test_convert_makes_the_prism_plate_a_closed_lens_and_its_housing_a_wall(lamp
     import bpy
 
     design = _design(lamp_addon, addon_core, bl_scene, PRESETS / "prism-plate-stop-lamp.json")
-    lamp_addon.design_builder.build_lamp(bl_scene, design)
+    lamp_addon.design.builder.build_lamp(bl_scene, design)
     built_lens = next(o for o in bl_scene.objects if o.get("lamp_part") == "lamps[0].lens")
     mine = bpy.data.objects.new("My Bracket", bpy.data.meshes.new("My Bracket"))
     mine.data.from_pydata([(0, 0, 0), (0.01, 0, 0), (0, 0.01, 0)], [], [(0, 1, 2)])
@@ -145,17 +145,17 @@ def test_convert_makes_the_prism_plate_a_closed_lens_and_its_housing_a_wall(lamp
     mine.parent = built_lens
     where = mine.matrix_world.copy()
     assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
-    parts = lamp_addon.freeform_properties.role_objects(bl_scene)
+    parts = lamp_addon.freeform.properties.role_objects(bl_scene)
     by_name = {o.name: o for o in parts}
     plate = by_name["Lamp 1 Prism Plate (Free-form)"]
     housing = by_name["Lamp 1 Housing (Free-form)"]
     lamp = design["lamps"][0]
-    values = lamp_addon.freeform_properties.part_document(plate)["lens"]
+    values = lamp_addon.freeform.properties.part_document(plate)["lens"]
     assert plate.lamp_role.role == "lens" and values["ior"] == lamp["prism_plate"]["ior"]
     assert values["absorption"] == pytest.approx(lamp["prism_plate"]["absorption"])
     assert values["specular"] == 0 and values["diffuse_color"] == [0, 0, 0]  # the plate has no eq. (1) shading
     assert housing.lamp_role.role == "side_wall"
-    assert lamp_addon.freeform_properties.part_document(housing)["side_wall"]["color"] == pytest.approx(
+    assert lamp_addon.freeform.properties.part_document(housing)["side_wall"]["color"] == pytest.approx(
         lamp["prism_plate"]["housing_color"])
     volumes = _lens_volumes(lamp_addon, addon_core, bl_scene, parts)  # the plate is closed at its rim now
     assert volumes[plate.name] > np.pi * lamp["lens"]["radius"] ** 2 * lamp["prism_plate"]["thickness"]
@@ -169,7 +169,7 @@ def test_convert_closes_the_glass_of_a_wrap_around_lens(lamp_addon, addon_core, 
 
     design = _design(lamp_addon, addon_core, bl_scene, PRESETS / "wrap-around-combination.json")
     assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
-    parts = lamp_addon.freeform_properties.role_objects(bl_scene)
+    parts = lamp_addon.freeform.properties.role_objects(bl_scene)
     volumes = _lens_volumes(lamp_addon, addon_core, bl_scene, parts)
     lens = design["lamps"][2]["lens"]  # rectangular on a cylinder: its side wall's collar is left to the wall
     outline = addon_core.scene.outline.Outline.of_lens(lens)
@@ -184,7 +184,7 @@ def test_a_mixed_design_renders_the_parametric_lamp_as_the_parametric_tracer(lam
     from test_addon_freeform_render import _add_my_lamp
 
     design = _design(lamp_addon, addon_core, bl_scene, BASELINE)
-    lamp_addon.design_builder.build_lamp(bl_scene, design)
+    lamp_addon.design.builder.build_lamp(bl_scene, design)
     parametric = addon_core.render_passes(design, SIZE, SIZE).image
     _add_my_lamp(lamp_addon, bl_scene)
     mixed = _freeform_image(lamp_addon, bl_scene, design)
@@ -212,7 +212,7 @@ def test_parametric_equals_mixed(lamp_addon, addon_core, bl_scene, path):
     from mathutils import Matrix
 
     design = _design(lamp_addon, addon_core, bl_scene, path)
-    lamp_addon.design_builder.build_lamp(bl_scene, design)
+    lamp_addon.design.builder.build_lamp(bl_scene, design)
     parametric = addon_core.render_passes(design, SIZE, SIZE).image
     block = bpy.data.objects.new("My Block", bpy.data.meshes.new("My Block"))
     bm = bmesh.new()
@@ -221,8 +221,8 @@ def test_parametric_equals_mixed(lamp_addon, addon_core, bl_scene, path):
     bm.free()
     bl_scene.collection.objects.link(block)
     behind = design["body"]["depth"] + 50.0 if design.get("body") else 500.0
-    block.matrix_world = lamp_addon.design_root.world_from_design(bl_scene) @ Matrix.Translation((0, behind / 1000, 0))
-    lamp_addon.freeform_properties.set_role(block, "body")
+    block.matrix_world = lamp_addon.design.root.world_from_design(bl_scene) @ Matrix.Translation((0, behind / 1000, 0))
+    lamp_addon.freeform.properties.set_role(block, "body")
     bpy.context.view_layer.update()
     mixed = _freeform_image(lamp_addon, bl_scene, design)
     within, excepted = agreement(parametric, mixed)

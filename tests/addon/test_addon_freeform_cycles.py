@@ -29,9 +29,9 @@ def test_bulb_through_a_flat_coloured_lens_mesh_agrees_with_cycles(lamp_addon, a
     doc["camera"]["fov_deg"] = 2.0  # 28 mm across at 800 mm: the bulb (8 mm radius) fills the centre
     doc["image"] = {"width": 32, "height": 32, "samples": 1}
     scene = addon_core.parse_scene(doc)
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.freeform_convert.convert_to_freeform(bl_scene)
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.freeform.conversion.convert_to_freeform(bl_scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
     region = (slice(12, 20), slice(12, 20))
     tracer = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
     cycles = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)

@@ -17,9 +17,9 @@ SIZE = (48, 40)
 def _converted(lamp_addon, addon_core, bl_scene, path=BASELINE, size=SIZE) -> dict:
     scene = addon_core.scene.load_scene(path)
     scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
-    lamp_addon.freeform_convert.convert_to_freeform(bl_scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.freeform.conversion.convert_to_freeform(bl_scene)
     bl_scene.render.engine = "LAMP_TRACER"
     return scene
 
@@ -40,9 +40,9 @@ def _f12(bl_scene, path) -> np.ndarray:
 def _expected(lamp_addon, bl_scene) -> np.ndarray:
     import bpy
 
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
-    prepared = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(), seen)
-    return lamp_addon.freeform_render.render_passes(prepared, seen["image"]["width"], seen["image"]["height"]).image
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    prepared = lamp_addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(), seen)
+    return lamp_addon.freeform.render.render_passes(prepared, seen["image"]["width"], seen["image"]["height"]).image
 
 
 def test_f12_renders_the_parts_with_the_freeform_tracer(lamp_addon, addon_core, bl_scene, tmp_path):
@@ -55,25 +55,25 @@ def test_f12_renders_the_parts_with_the_freeform_tracer(lamp_addon, addon_core, 
     centre, corner = rgba[SIZE[1] // 2, SIZE[0] // 2], rgba[SIZE[1] // 2, 3]
     assert centre[0] > 3 * centre[1] and corner[0] == pytest.approx(corner[1], rel=0.1) and corner[0] > 0.05
     # Taking the roles away renders the parametric lamp again (its objects' visibility does not matter).
-    for obj in lamp_addon.freeform_properties.role_objects(bl_scene):
-        lamp_addon.freeform_properties.set_role(obj, "NONE")
+    for obj in lamp_addon.freeform.properties.role_objects(bl_scene):
+        lamp_addon.freeform.properties.set_role(obj, "NONE")
     parametric = _f12(bl_scene, tmp_path / "parametric.exr")
     np.testing.assert_array_equal(parametric[:, :, :3],
-                                  addon_core.render(lamp_addon.render_camera.scene_for_render(bl_scene)))
+                                  addon_core.render(lamp_addon.render.camera.scene_for_render(bl_scene)))
 
 
 def test_geometry_is_built_once_per_geometry_change(lamp_addon, addon_core, bl_scene, tmp_path):
     import bpy
 
     _converted(lamp_addon, addon_core, bl_scene)
-    geometry = lamp_addon.freeform_geometry
+    geometry = lamp_addon.freeform.geometry
     first = _f12(bl_scene, tmp_path / "1.exr")
     reads = geometry.reads()
     cache = geometry._entries[bl_scene.name].cache
     assert cache.builds == 1
     _f12(bl_scene, tmp_path / "2.exr")  # nothing changed: the meshes and the structure are reused
     assert geometry.reads() == reads and cache.builds == 1
-    lens = next(o for o in lamp_addon.freeform_properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
+    lens = next(o for o in lamp_addon.freeform.properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
     lens.lamp_role.lens.specular = 0.0  # a role value is not geometry
     bpy.context.view_layer.update()
     no_highlight = _f12(bl_scene, tmp_path / "3.exr")
@@ -94,13 +94,13 @@ def test_exported_pair_renders_the_same_from_the_command_line(lamp_addon, addon_
     import OpenImageIO as oiio
 
     _converted(lamp_addon, addon_core, bl_scene, size=(64, 48))
-    root = lamp_addon.design_root.find_root(bl_scene)
+    root = lamp_addon.design.root.find_root(bl_scene)
     root.location = (0.3, -0.2, 0.1)  # the lamp stands anywhere: the file holds it in the root's frame
     root.rotation_euler = (0.1, 0.2, 0.3)
-    lens = next(o for o in lamp_addon.freeform_properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
+    lens = next(o for o in lamp_addon.freeform.properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
     lens.modifiers.new("Bend", "SIMPLE_DEFORM").deform_axis = "Z"  # reshaped: modifiers are applied
     lens.modifiers["Bend"].angle = 0.2
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bpy.context.view_layer.update()
     in_blender = _f12(bl_scene, tmp_path / "blender.exr")
     json_path = tmp_path / "my lamp.json"
@@ -130,7 +130,7 @@ def test_export_never_replaces_without_being_asked(lamp_addon, addon_core, bl_sc
     assert (tmp_path / "lamp.glb").read_bytes()[:4] == b"glTF"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["lamp.glb", "lamp.json"]  # no temporary left
     names = {o.name for o in bpy.data.objects}
-    assert all(o.name in names for o in lamp_addon.freeform_properties.role_objects(bl_scene))
+    assert all(o.name in names for o in lamp_addon.freeform.properties.role_objects(bl_scene))
     assert not any(".lamp-export-aside" in n for n in names) and len(bpy.data.scenes) == 1
 
 
@@ -143,7 +143,7 @@ def _viewport_session(lamp_addon, bl_scene):
     depsgraph = bpy.context.evaluated_depsgraph_get()
     window = [list(r) for r in camera.calc_matrix_camera(depsgraph, x=SIZE[0], y=SIZE[1])]
     view = [list(r) for r in camera.matrix_world.inverted()]
-    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    session = lamp_addon.render.viewport.ViewportSession(None, in_background=False)
     session.update(bl_scene, depsgraph)
     return session, window, view
 
@@ -171,7 +171,7 @@ def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_ad
     assert close.mean() > 0.97
     session.sync(bl_scene, SIZE[0], SIZE[1], window, view)  # a redraw: the same job
     generation = session.preview.generation
-    lens = next(o for o in lamp_addon.freeform_properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
+    lens = next(o for o in lamp_addon.freeform.properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
     lens.location.z += 0.01
     depsgraph = bpy.context.evaluated_depsgraph_get()
     depsgraph.update()
@@ -190,16 +190,16 @@ def test_an_exported_pair_imports_back_as_parts_with_roles(lamp_addon, addon_cor
     exported = _f12(bl_scene, tmp_path / "exported.exr")
     json_path = tmp_path / "shared.json"
     assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
-    parts_before = {o.name: lamp_addon.freeform_properties.part_document(o)
-                    for o in lamp_addon.freeform_properties.role_objects(bl_scene)}
+    parts_before = {o.name: lamp_addon.freeform.properties.part_document(o)
+                    for o in lamp_addon.freeform.properties.role_objects(bl_scene)}
     bpy.ops.wm.read_homefile(use_empty=True)  # a colleague's empty file
     bl_scene = bpy.context.scene
     with pytest.raises(RuntimeError, match="not added to a library"):
         bpy.ops.lamp.preset_import(filepath=str(json_path))
     assert bpy.ops.lamp.preset_import(filepath=str(json_path), add_to_library=False) == {"FINISHED"}
-    parts = lamp_addon.freeform_properties.role_objects(bl_scene)
-    assert {o.name: lamp_addon.freeform_properties.part_document(o) for o in parts} == parts_before
-    assert all(lamp_addon.freeform_materials.role_material(o) is not None for o in parts)
+    parts = lamp_addon.freeform.properties.role_objects(bl_scene)
+    assert {o.name: lamp_addon.freeform.properties.part_document(o) for o in parts} == parts_before
+    assert all(lamp_addon.freeform.materials.role_material(o) is not None for o in parts)
     bl_scene.render.engine = "LAMP_TRACER"
     imported = _f12(bl_scene, tmp_path / "imported.exr")
     # Blender keeps positions in 32 bits and custom normals in its own compressed form: the same
@@ -232,7 +232,7 @@ def _add_my_lamp(lamp_addon, bl_scene) -> list:
     import bpy
     from mathutils import Matrix
 
-    to_world = lamp_addon.design_root.world_from_design(bl_scene)
+    to_world = lamp_addon.design.root.world_from_design(bl_scene)
     made = []
     for name, make, where, scale, role, values in (
             ("My Slab", lambda bm: bmesh.ops.create_cube(bm, size=1.0), (0.075, -0.010, 0.0),
@@ -247,7 +247,7 @@ def _add_my_lamp(lamp_addon, bl_scene) -> list:
         obj = bpy.data.objects.new(name, mesh)
         bl_scene.collection.objects.link(obj)
         obj.matrix_world = to_world @ Matrix.LocRotScale(where, None, scale)
-        lamp_addon.freeform_properties.set_role(obj, role, values)
+        lamp_addon.freeform.properties.set_role(obj, role, values)
         made.append(obj)
     bpy.context.view_layer.update()
     return made
@@ -258,9 +258,9 @@ def _mixed(lamp_addon, addon_core, bl_scene, size=SIZE, path=BASELINE) -> tuple[
     beside it."""
     scene = addon_core.scene.load_scene(path)
     scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.design_builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     return scene, _add_my_lamp(lamp_addon, bl_scene)
 
@@ -278,14 +278,14 @@ def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, ad
     before = _state(mine) + _state(built)
     names = sorted(o.name for o in bpy.data.objects)
     meshes = len(bpy.data.meshes)
-    status = lamp_addon.freeform_status
+    status = lamp_addon.freeform.status
     assert status.rendered_text(bl_scene) == status.MIXED_TEXT
     panel = " ".join(line.text for line in status.panel_lines(bl_scene))
     assert status.MIXED_TEXT in panel and "only" not in panel
     rgba = _f12(bl_scene, tmp_path / "mixed.exr")
     np.testing.assert_array_equal(rgba[:, :, :3], _expected(lamp_addon, bl_scene))
-    prepared = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
-                                                  lamp_addon.render_camera.scene_for_render(bl_scene))
+    prepared = lamp_addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
+                                                  lamp_addon.render.camera.scene_for_render(bl_scene))
     roles = sorted(p["role"] for p in prepared.scene["freeform"]["parts"])
     assert roles == ["body", "bulb", "bulb", "lens", "lens", "reflector", "side_wall", "socket"]
     # Both lamps are in the picture: the red lens in the middle, the designer's bulb through their slab.
@@ -301,8 +301,8 @@ def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, ad
     bl_scene.lamp_design.lamps[0].lens.thickness = 4.0
     assert status.rendered_text(bl_scene) == status.NOT_BUILT_TEXT
     assert "Build Lamp" in " ".join(line.text for line in status.panel_lines(bl_scene))
-    parts_only = lamp_addon.freeform_render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
-                                                    lamp_addon.render_camera.scene_for_render(bl_scene))
+    parts_only = lamp_addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
+                                                    lamp_addon.render.camera.scene_for_render(bl_scene))
     assert sorted(p["role"] for p in parts_only.scene["freeform"]["parts"]) == ["bulb", "lens"]
 
 
@@ -313,19 +313,19 @@ def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, 
     import OpenImageIO as oiio
 
     _mixed(lamp_addon, addon_core, bl_scene, size=(64, 48), path=path)
-    root = lamp_addon.design_root.find_root(bl_scene)
+    root = lamp_addon.design.root.find_root(bl_scene)
     root.location = (0.3, -0.2, 0.1)  # the lamp stands anywhere: the file holds it in the root's frame
     root.rotation_euler = (0.1, 0.2, 0.3)
     for obj in (bpy.data.objects["My Slab"], bpy.data.objects["My Bulb"]):
         obj.parent = root  # the designer's parts move with the lamp
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bpy.context.view_layer.update()
     in_blender = _f12(bl_scene, tmp_path / "blender.exr")
     json_path = tmp_path / "mixed.json"
     assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
     doc = json.loads(json_path.read_text())
-    built = lamp_addon.freeform_parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get())
-    parametric = lamp_addon.freeform_parametric.part_documents(built, lamp_addon.render_camera.scene_for_render(
+    built = lamp_addon.freeform.parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get())
+    parametric = lamp_addon.freeform.parametric.part_documents(built, lamp_addon.render.camera.scene_for_render(
         bl_scene))
     assert len(doc["freeform"]["parts"]) == 2 + len(parametric) >= 8  # the designer's 2 and the lamp's
     proc = run_cli("render", json_path, "-o", tmp_path / "cli.exr")
@@ -341,10 +341,10 @@ def test_rebuilding_the_parametric_lamp_of_a_mixed_design_is_rendered(lamp_addon
 
     _mixed(lamp_addon, addon_core, bl_scene)
     first = _f12(bl_scene, tmp_path / "1.exr")
-    cache = lamp_addon.freeform_geometry._entries[bl_scene.name].cache
+    cache = lamp_addon.freeform.geometry._entries[bl_scene.name].cache
     assert cache.builds == 1
     bl_scene.lamp_design.lamps[0].center = (-20.0, 0.0)  # the lamp 20 mm to the left, built again
-    lamp_addon.design_builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    lamp_addon.design.builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
     bpy.context.view_layer.update()
     moved = _f12(bl_scene, tmp_path / "2.exr")
     assert cache.builds == 2
@@ -377,7 +377,7 @@ def test_the_viewport_renders_a_mixed_design(lamp_addon, addon_core, bl_scene):
 def test_compare_keeps_the_traced_parametric_lamp_in_the_cycles_half(lamp_addon, addon_core, bl_scene):
     # Cycles renders what the tracer traces: the designer's parts and the parametric lamp still in
     # use; once the design is edited without rebuilding, the tracer leaves the lamp out, so does Cycles.
-    compare = lamp_addon.compare_ops
+    compare = lamp_addon.compare.comparison
     _, mine = _mixed(lamp_addon, addon_core, bl_scene)
     built = [o for o in bl_scene.objects if o.get("lamp_part") not in (None, "root", "sun") and o.type == "MESH"]
     assert built

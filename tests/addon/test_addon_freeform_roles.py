@@ -38,7 +38,7 @@ def test_every_role_field_is_a_property_with_the_spec_default(lamp_addon, addon_
             prop = values[key]
             if isinstance(spec, S.Num) and spec.size == 1:
                 assert prop.default == pytest.approx(spec.default), (role, key)
-                lo, hi = lamp_addon.design_properties.blender_range(spec)
+                lo, hi = lamp_addon.design.properties.blender_range(spec)
                 assert (prop.hard_min, prop.hard_max) == pytest.approx((lo, hi)), (role, key)
             elif isinstance(spec, S.Num):
                 assert tuple(prop.default_array) == pytest.approx(spec.default), (role, key)
@@ -56,18 +56,18 @@ def test_assign_and_clear(lamp_addon, bl_scene):
     assert bpy.ops.lamp.role_assign(role="lens") == {"FINISHED"}
     _select_only(b)
     assert bpy.ops.lamp.role_assign(role="reflector", material=False) == {"FINISHED"}
-    assert [o.name for o in lamp_addon.freeform_properties.role_objects(bl_scene)] == ["Lens A", "Reflector B"]
+    assert [o.name for o in lamp_addon.freeform.properties.role_objects(bl_scene)] == ["Lens A", "Reflector B"]
     assert c.lamp_role.role == "NONE"
     # The lens got its Cycles material, the reflector kept what it had (nothing).
-    mat = lamp_addon.freeform_materials.role_material(a)
+    mat = lamp_addon.freeform.materials.role_material(a)
     assert mat is not None and mat.node_tree.nodes["Lens BSDF"].inputs["IOR"].default_value == pytest.approx(1.49)
     assert len(b.material_slots) == 0
-    doc = lamp_addon.freeform_properties.part_document(a)
+    doc = lamp_addon.freeform.properties.part_document(a)
     assert doc["object"] == "Lens A" and doc["role"] == "lens"
     assert set(doc["lens"]) == {"ior", "transmitted_color", "reference_thickness", "diffuse_color", "specular",
                                 "shininess"}  # the preferred colour form, the picker
     a.lamp_role.lens.ior = 1.6
-    assert lamp_addon.freeform_properties.part_document(a)["lens"]["ior"] == 1.6
+    assert lamp_addon.freeform.properties.part_document(a)["lens"]["ior"] == 1.6
     assert bpy.ops.lamp.role_clear(object_name="Lens A") == {"FINISHED"}
     assert a.lamp_role.role == "NONE"
     assert a.lamp_role.lens.ior == pytest.approx(1.6)  # values stay for when the role comes back
@@ -79,7 +79,7 @@ def test_built_parts_and_non_meshes_are_refused(lamp_addon, addon_core, bl_scene
     import bpy
     from helpers import BASELINE
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, addon_core.scene.load_scene(BASELINE))
+    lamp_addon.design.properties.scene_to_design(bl_scene, addon_core.scene.load_scene(BASELINE))
     assert bpy.ops.lamp.build() == {"FINISHED"}
     lens = next(o for o in bl_scene.objects if o.get("lamp_part") == "lamps[0].lens")
     _select_only(lens)
@@ -94,12 +94,12 @@ def test_built_parts_and_non_meshes_are_refused(lamp_addon, addon_core, bl_scene
 def test_role_value_out_of_range_is_named_with_the_object(lamp_addon, addon_core, bl_scene):
     from helpers import BASELINE
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, addon_core.scene.load_scene(BASELINE))
+    lamp_addon.design.properties.scene_to_design(bl_scene, addon_core.scene.load_scene(BASELINE))
     obj = _mesh("My Lens")
-    lamp_addon.freeform_properties.set_role(obj, "lens")
-    assert lamp_addon.freeform_status.part_problem(bl_scene) is None
+    lamp_addon.freeform.properties.set_role(obj, "lens")
+    assert lamp_addon.freeform.status.part_problem(bl_scene) is None
     obj.lamp_role.lens["ior"] = 0.5  # below the spec's 1, as an old file or a script may store it
-    problem = lamp_addon.freeform_status.part_problem(bl_scene)
+    problem = lamp_addon.freeform.status.part_problem(bl_scene)
     assert problem.startswith('"My Lens" lens.ior: 0.5') and "allowed [1, 3]" in problem
 
 
@@ -123,7 +123,7 @@ def test_panel_lists_parts_and_shows_the_selected_role(lamp_addon, addon_core, b
     assert {"lamp.role_assign", "lamp.role_clear", "lamp.freeform_convert", "lamp.freeform_export"} <= set(
         empty.operators())
     obj = _mesh("Lens")
-    lamp_addon.freeform_properties.set_role(obj, "lens")
+    lamp_addon.freeform.properties.set_role(obj, "lens")
     bl_scene.lamp_role_index = list(bl_scene.objects).index(obj)
     for mode in ("transmitted_color", "absorption"):
         obj.lamp_role.lens.color_mode = mode
@@ -139,7 +139,7 @@ def test_role_list_filters_to_parts(lamp_addon, bl_scene):
 
     a = _mesh("Zed")
     _mesh("Alpha")
-    lamp_addon.freeform_properties.set_role(a, "body")
+    lamp_addon.freeform.properties.set_role(a, "body")
     ui_list = bpy.types.LAMP_UL_role_objects
     flags, _order = ui_list.filter_items(ui_list, bpy.context, bl_scene, "objects")
     shown = [obj.name for obj, flag in zip(bl_scene.objects, flags, strict=True) if flag]
@@ -150,9 +150,9 @@ def test_registration_is_symmetric_and_keeps_the_roles(lamp_addon, bl_scene):
     import bpy
 
     obj = _mesh("Kept")
-    lamp_addon.freeform_properties.set_role(obj, "reflector")
+    lamp_addon.freeform.properties.set_role(obj, "reflector")
     obj.lamp_role.reflector.scatter = 0.3
-    handler = lamp_addon.freeform_geometry._on_depsgraph_update
+    handler = lamp_addon.freeform.geometry._on_depsgraph_update
 
     def registered():
         return (hasattr(bpy.types.Object, "lamp_role"), hasattr(bpy.types, "LAMP_PT_freeform"),
@@ -173,10 +173,10 @@ def test_a_preset_of_a_design_with_parts_says_it_leaves_them_out(lamp_addon, add
     import bpy
     from helpers import BASELINE
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, addon_core.scene.load_scene(BASELINE))
+    lamp_addon.design.properties.scene_to_design(bl_scene, addon_core.scene.load_scene(BASELINE))
     capfd.readouterr()
     assert bpy.ops.lamp.preset_export(filepath=str(tmp_path / "a.json")) == {"FINISHED"}
     assert "free-form parts" not in capfd.readouterr().out
-    lamp_addon.freeform_properties.set_role(_mesh("Glass"), "lens")
+    lamp_addon.freeform.properties.set_role(_mesh("Glass"), "lens")
     assert bpy.ops.lamp.preset_export(filepath=str(tmp_path / "b.json")) == {"FINISHED"}
     assert "the 1 free-form parts are not in it; Export Free-form Design writes them" in capfd.readouterr().out

@@ -2,15 +2,13 @@
 below the panels and operators that use them)."""
 
 
-from helpers import ROOT, sibling_imports
+from helpers import ROOT, package_imports
 
 ADDON = ROOT / "lamp_addon"
 
 
 def _graph() -> dict[str, set[str]]:
-    modules = {p.stem: p for p in ADDON.glob("*.py") if p.stem != "__init__"}
-    modules.update({p.name: p / "__init__.py" for p in ADDON.iterdir() if (p / "__init__.py").exists()})
-    return {name: sibling_imports(path) & set(modules) for name, path in modules.items()}
+    return package_imports(ADDON)
 
 
 def _circle(graph: dict[str, set[str]]) -> list[str] | None:
@@ -39,16 +37,16 @@ def test_the_circle_finder_finds_a_circle():
 
 def test_no_import_circles_in_the_addon():
     graph = _graph()
-    assert {"preferences", "preset_library", "study_ops", "study_panel", "study_settings"} <= set(graph)
+    assert {"preferences", "presets.library", "study.ops", "study.panel", "study.settings"} <= set(graph)
     assert _circle(graph) is None, " -> ".join(_circle(graph))
-    assert "preset_library" not in graph["preferences"]
-    assert "study_ops" not in graph["study_panel"] and "study_panel" not in graph["study_ops"]
+    assert "presets.library" not in graph["preferences"]
+    assert "study.ops" not in graph["study.panel"] and "study.panel" not in graph["study.ops"]
 
 
 def test_library_folders_changed_marks_the_listing_stale(addon, lamp_addon):
     import bpy
 
-    listing = lamp_addon.preset_library.listing()
+    listing = lamp_addon.presets.library.listing()
     listing.stale = False
     prefs = bpy.context.preferences.addons[addon].preferences
     item = prefs.library_folders.add()
@@ -72,6 +70,41 @@ def test_the_render_side_does_not_depend_on_a_panel():
                 todo.append(nxt)
         return seen
 
-    panels = {name for name in graph if name.endswith("_panel") or name.endswith("_panels")}
-    for module in ("render_engine", "render_camera", "render_ops", "compare_ops", "display_ops"):
+    panels = {name for name in graph if name.rpartition(".")[2] in ("panel", "panels")}
+    for module in ("render.engine", "render.camera", "render.lamp_camera", "render.view_link", "render.camera_sync",
+                   "render.camera_ops", "render.ops", "compare.ops", "render.exposure"):
         assert not reached(module) & panels, (module, reached(module) & panels)
+
+
+def _registered_classes(lamp_addon) -> list[type]:
+    """The classes the add-on's modules list, through each sub-package's ``modules()``."""
+    out = []
+    for room in lamp_addon.modules():
+        for module in room.modules() if hasattr(room, "modules") else (room,):
+            out += getattr(module, "classes", ())
+    return out
+
+
+def test_every_sub_package_lists_what_it_registers_and_registering_repeats(lamp_addon, bl_scene):
+    """``lamp_addon.register`` hands over to the sub-packages, each registering the modules of its
+    ``modules()``; unregistering takes all of it away and registering again, twice, brings back the
+    same classes, the same handlers and the action buttons in their order."""
+    import bpy
+
+    classes = _registered_classes(lamp_addon)
+    assert len(classes) >= 20 and all(cls.is_registered for cls in classes)
+    watched = ("depsgraph_update_post", "load_post", "render_complete", "render_cancel")
+
+    def state():
+        return ({name: len(getattr(bpy.app.handlers, name)) for name in watched},
+                list(lamp_addon.actions.ACTION_OPERATORS), [cls.is_registered for cls in classes])
+
+    before = state()
+    assert [idname for idname, _, _ in before[1]][:5] == list(lamp_addon.actions.ORDER)
+    for _ in range(2):
+        lamp_addon.unregister()
+        assert not [cls for cls in classes if cls.is_registered]
+        assert [idname for idname, _, _ in lamp_addon.actions.ACTION_OPERATORS] == ["lamp.build"]
+        lamp_addon.register()
+        assert state() == before
+    assert hasattr(bl_scene, "lamp_design") and bpy.ops.lamp.lamp_add.poll()

@@ -44,7 +44,7 @@ def _blender_ext() -> Path:
 def test_zip_contents(built_zip):
     names = set(zipfile.ZipFile(built_zip).namelist())
     for required in ("blender_manifest.toml", "__init__.py", "lamp_addon/__init__.py",
-                     "lamp_addon/design_properties.py", "lamp_addon/convert/meshes.py",
+                     "lamp_addon/design/properties.py", "lamp_addon/convert/meshes/builder.py",
                      "core_tracer/__init__.py", "core_tracer/scene/validate.py", "core_tracer/scene/spec.py"):
         assert required in names
     presets = {p.name for p in (ROOT / "presets").glob("*.json")}
@@ -98,7 +98,7 @@ INSTALL_SCRIPT = textwrap.dedent("""
 
     # Use it: a built-in preset from the installed copy, built as objects by the operator.
     scene = mod.core_tracer.scene.load_scene(os.path.join(installed, "presets", "paper-baseline.json"))
-    mod.lamp_addon.design_properties.scene_to_design(bpy.context.scene, scene)
+    mod.lamp_addon.design.properties.scene_to_design(bpy.context.scene, scene)
     assert bpy.ops.lamp.build() == {{"FINISHED"}}
     assert "Lamp 1 Lens" in bpy.data.objects
 
@@ -109,7 +109,7 @@ INSTALL_SCRIPT = textwrap.dedent("""
     addon_utils.enable(name, default_set=True, handle_error=fail)
     assert hasattr(bpy.types, "LAMP_PT_design")
     # The design stored in the scene survived: the properties read it back.
-    assert mod.lamp_addon.design_properties.design_to_scene(bpy.context.scene) == scene
+    assert mod.lamp_addon.design.properties.design_to_scene(bpy.context.scene) == scene
     assert bpy.ops.lamp.build() == {{"FINISHED"}}
     assert len([o for o in bpy.data.objects if o.get("lamp_part")]) == 7  # the root and its six parts
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 
 import pytest
-from helpers import ROOT, sibling_imports
+from helpers import ROOT, package_imports
 
 from lamp_addon import jobs
 
@@ -30,19 +30,21 @@ def test_one_run_at_a_time_per_kind():
 
 
 def test_the_modal_operators_share_the_base(lamp_addon):
-    for module, name in (("render_ops", "LAMP_OT_render_tracer"), ("compare_ops", "LAMP_OT_compare_cycles"),
-                         ("study_ops", "LAMP_OT_study_run")):
-        operator = getattr(getattr(lamp_addon, module), name)
+    for module, name in ((lamp_addon.render.ops, "LAMP_OT_render_tracer"),
+                         (lamp_addon.compare.ops, "LAMP_OT_compare_cycles"),
+                         (lamp_addon.study.ops, "LAMP_OT_study_run")):
+        operator = getattr(module, name)
         assert issubclass(operator, lamp_addon.jobs.ModalJob), name
         assert operator.job_key == operator.bl_idname
     # The modal jobs' polling interval is declared once (the viewport preview polls at its own rate).
-    declared = [p.name for p in ADDON.rglob("*.py") if re.search(r"^POLL_SECONDS\s*=", p.read_text(), re.M)]
+    declared = [p.relative_to(ADDON).as_posix() for p in ADDON.rglob("*.py")
+                if re.search(r"^POLL_SECONDS\s*=", p.read_text(), re.M)]
     assert "jobs.py" in declared
-    assert not {"render_ops.py", "compare_ops.py", "study_ops.py", "preset_library.py"} & set(declared)
+    assert not {"render/ops.py", "compare/ops.py", "study/ops.py", "presets/library.py"} & set(declared)
 
 
 def test_no_import_circle_through_the_study_camera_and_compare_modules():
-    graph = {p.stem: sibling_imports(p) for p in ADDON.glob("*.py")}
+    graph = package_imports(ADDON)
 
     def reaches(start: str, goal: str) -> bool:
         seen, todo = set(), [start]
@@ -56,6 +58,6 @@ def test_no_import_circle_through_the_study_camera_and_compare_modules():
                     todo.append(nxt)
         return False
 
-    for module in ("study_ops", "study_panel", "study_settings", "render_camera", "render_ops", "compare_ops",
-                   "compare_headless", "jobs"):
+    for module in ("study.ops", "study.panel", "study.settings", "render.camera", "render.lamp_camera",
+                   "render.view_link", "render.ops", "compare.ops", "compare.headless", "jobs"):
         assert not reaches(module, module), module

@@ -87,14 +87,14 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):  # n
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert bpy.ops.lamp.build() == {"FINISHED"}
     watch.lap("Add Lamp x2 + Build")
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
     assert (startup_camera.matrix_world, startup_camera.data.lens) == camera_before
     assert bl_scene.render.engine == "LAMP_TRACER"
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == SIZE
     assert rims_in_image(lamp_addon, bl_scene) == [True, True]
 
     # F12: the lit lens through AgX at the scene's (the design's) exposure.
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     lit = lit_lens_mask(seen)
     assert lit.sum() > 0.02 * lit.size  # the lenses are plainly in the picture
     codes = f12_codes(bl_scene, tmp_path / "f12.png")
@@ -112,8 +112,8 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):  # n
     watch.lap("F12 at EV 0 (the measure's control)")
 
     # Edits that survive an Auto Build: the design's IOR, the user's name and placement.
-    auto = lamp_addon.design_autobuild
-    root = lamp_addon.design_root.find_root(bl_scene)
+    auto = lamp_addon.design.autobuild
+    root = lamp_addon.design.root.find_root(bl_scene)
     lens = next(o for o in bl_scene.objects if o.get("lamp_part") == "lamps[0].lens")
     lens.name = "My Stop Lens"
     root.location = (0.4, -1.5, 0.6)
@@ -124,15 +124,15 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):  # n
     assert lens.name == "My Stop Lens" and tuple(root.location) == pytest.approx((0.4, -1.5, 0.6))
     glass = lens.data.materials[0].node_tree.nodes["Lens BSDF"]
     assert glass.inputs["IOR"].default_value == pytest.approx(1.58)
-    assert lamp_addon.design_builder.is_up_to_date(bl_scene)
+    assert lamp_addon.design.builder.is_up_to_date(bl_scene)
     assert rims_in_image(lamp_addon, bl_scene) == [True, True]  # the Lamp Camera moved with the root
 
     # Compare: the lamp in both halves, the Cube and the Light left out of Cycles.
     assert bpy.ops.lamp.compare_cycles(samples=4) == {"FINISHED"}
     watch.lap("Compare (Cycles 4 spp)")
-    compare = bpy.data.images[lamp_addon.compare_ops.COMPARE_IMAGE]
+    compare = bpy.data.images[lamp_addon.compare.comparison.COMPARE_IMAGE]
     shown = lamp_addon.image_view.image_to_array(compare)  # labels strip on top, a gap between the halves
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     lit = lit_lens_mask(seen)
     height, width = lit.shape
     below = shown[shown.shape[0] - height:]
@@ -144,7 +144,7 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):  # n
     # The viewport orbited to a three-quarter view: the draw path into an offscreen shows the lamp.
     window, view = _three_quarter_view(*VIEWPORT)  # around the origin: orbit where the root now is
     drawn = _draw_viewport(lamp_addon, bl_scene, *VIEWPORT, window, view @ root.matrix_world.inverted())
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera) and bl_scene.render.resolution_x == SIZE[0]
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera) and bl_scene.render.resolution_x == SIZE[0]
     watch.lap("viewport: coarse + full stages, drawn")
     pixels = drawn["pixels"][::-1, :, :3]  # top row first
     background = np.asarray(drawn["scene"]["background"], np.float32)

@@ -25,8 +25,8 @@ def no_openimageio(monkeypatch):
 
 def _design(lamp_addon, bl_scene) -> None:
     scene = scene_with(image={"width": 24, "height": 16})
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def test_openimageio_is_missing_as_blender_sees_it(lamp_addon, no_openimageio):
@@ -75,8 +75,8 @@ def test_study_runs_and_save_sheet_says_why_not(lamp_addon, bl_scene, tmp_path, 
 
 
 def test_thumbnails_say_why_they_are_missing_instead_of_being_made(lamp_addon, tmp_path, no_openimageio):
-    library = lamp_addon.preset_library
-    P = lamp_addon.preset_library.P
+    library = lamp_addon.presets.library
+    P = lamp_addon.presets.library.P
     folder = tmp_path / "lib"
     folder.mkdir()
     (folder / "red.json").write_text(BASELINE.read_text())
@@ -120,15 +120,15 @@ def _draw_selected(lamp_addon, thumbs, entry) -> list[tuple[str, str]]:
     item = wm.lamp_presets.add()
     item.name, item.file = entry.name, entry.file
     wm.lamp_presets_index = 0
-    panel = lamp_addon.preset_panel
-    original = panel.preset_library.thumbnails
-    panel.preset_library.thumbnails = lambda: thumbs
+    panel = lamp_addon.presets.panel
+    original = panel.library.thumbnails
+    panel.library.thumbnails = lambda: thumbs
     try:
         log: list[tuple[str, str]] = []
         panel.LAMP_PT_presets._draw_selected(SimpleNamespace(window_manager=wm), _Labels(log))
         return log
     finally:
-        panel.preset_library.thumbnails = original
+        panel.library.thumbnails = original
         wm.lamp_presets.clear()
 
 

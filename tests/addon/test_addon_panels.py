@@ -150,7 +150,7 @@ def S(addon_core):
 @pytest.fixture
 def design(lamp_addon, addon_core, bl_scene):
     scene = addon_core.scene.load_scene(PRESETS / "four-lamp-rear-combination.json")
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     bl_scene.lamp_design.active_lamps_index = 2
     return bl_scene.lamp_design
 
@@ -158,7 +158,7 @@ def design(lamp_addon, addon_core, bl_scene):
 def _panels(lamp_addon):
     import bpy
 
-    return [cls for cls in lamp_addon.design_panels.classes if issubclass(cls, bpy.types.Panel)]
+    return [cls for cls in lamp_addon.design.panels.classes if issubclass(cls, bpy.types.Panel)]
 
 
 def test_panels_are_in_the_lamp_tab(lamp_addon):
@@ -195,7 +195,7 @@ def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
             design.lamps[2].cuts.type = cut_type
             for cls in _shown_panels(lamp_addon, bl_scene):
                 shown |= draw(cls, bl_scene).spec_paths()
-    wanted = {info.path for info in S.iter_fields() if not lamp_addon.design_properties.is_constant(info.spec)}
+    wanted = {info.path for info in S.iter_fields() if not lamp_addon.design.properties.is_constant(info.spec)}
     assert wanted - shown == set()
     assert shown - wanted == {"lamps[].lens.color_mode"}  # the only property that is not a scene field
 
@@ -373,7 +373,7 @@ def test_empty_design(lamp_addon, bl_scene):
         else:
             draw(cls, bl_scene)
     assert bpy.ops.lamp.lamp_add.poll() and not bpy.ops.lamp.lamp_remove.poll()
-    hints = [e for e in draw(lamp_addon.design_panels.LAMP_PT_lamps, bl_scene).log if e[0] == "label"]
+    hints = [e for e in draw(lamp_addon.design.panels.LAMP_PT_lamps, bl_scene).log if e[0] == "label"]
     assert any("Add a lamp" in e[1] for e in hints)  # the empty list says how to start
 
 
@@ -407,7 +407,7 @@ def test_every_panel_of_the_addon_is_drawn(addon, lamp_addon, bl_scene, design):
     import bpy
 
     assert bpy.ops.lamp.preset_refresh() == {"FINISHED"}  # the preset browser lists (no listing: one line)
-    bl_scene.render.engine = lamp_addon.render_engine.ENGINE_ID  # the passes panel shows for this engine
+    bl_scene.render.engine = lamp_addon.render.engine.ENGINE_ID  # the passes panel shows for this engine
     wm = bpy.context.window_manager
     wm.lamp_presets_index = 0
     panels = _addon_panels(addon)
@@ -460,7 +460,7 @@ def test_a_valid_design_says_so(lamp_addon, bl_scene, design):
 
 def _baseline(lamp_addon, addon_core, bl_scene):
     scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     return bl_scene.lamp_design
 
 
@@ -529,7 +529,7 @@ def test_the_cut_height_panel_states_the_limit_of_the_pitch(lamp_addon, addon_co
 
 
 def test_validity_is_checked_once_per_design(lamp_addon, addon_core, bl_scene, monkeypatch):
-    validity = lamp_addon.design_validity
+    validity = lamp_addon.design.validity
     design = _baseline(lamp_addon, addon_core, bl_scene)
     calls = []
     real = validity._check
@@ -613,11 +613,11 @@ def test_a_preset_with_a_function_keeps_its_own_values(lamp_addon, addon_core, b
     scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
     scene["lamps"][0]["function"] = "stop"
     scene["lamps"][0]["bulb"]["intensity"] = [1.0, 2.0, 3.0]
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lamp = bl_scene.lamp_design.lamps[0]
     assert lamp.function == "stop" and tuple(lamp.bulb.intensity) == (1.0, 2.0, 3.0)
     assert lamp.lens.color_mode == "absorption"
-    assert lamp_addon.design_properties.design_to_scene(bl_scene) == addon_core.scene.normalize(scene)
+    assert lamp_addon.design.properties.design_to_scene(bl_scene) == addon_core.scene.normalize(scene)
 
 
 def test_a_new_design_starts_with_the_colour_picker(lamp_addon, bl_scene):
@@ -629,14 +629,14 @@ def test_a_new_design_starts_with_the_colour_picker(lamp_addon, bl_scene):
 
 def test_tooltips_say_what_a_field_does_first(lamp_addon, bl_scene):
 
-    assert lamp_addon.design_properties.RESERVED_KEYS == {v: k for k, v in SPEC_KEYS.items()}
+    assert lamp_addon.design.properties.RESERVED_KEYS == {v: k for k, v in SPEC_KEYS.items()}
     design = bl_scene.lamp_design.bl_rna.properties
     assert design["design_name"].description.startswith("The design's name")  # not Blender's generic text
-    info = draw(lamp_addon.design_panels.LAMP_PT_info, bl_scene)
+    info = draw(lamp_addon.design.panels.LAMP_PT_info, bl_scene)
     assert "design_name" in [p for _, _, p, _ in info.props()]
     bl_scene.lamp_design["name"] = "Saved before"  # where a file of an earlier version keeps the name
     assert bl_scene.lamp_design.design_name == "Saved before"
-    assert lamp_addon.design_properties.design_document(bl_scene)["name"] == "Saved before"
+    assert lamp_addon.design.properties.design_document(bl_scene)["name"] == "Saved before"
     body = bl_scene.lamp_design.body.bl_rna.properties
     assert body["specular"].description.startswith(
         "How strongly the body reflects the light as a highlight (w in eq. 1)")

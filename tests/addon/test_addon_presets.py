@@ -19,7 +19,7 @@ BUILTIN = PRESETS
 @pytest.fixture
 def browser(lamp_addon):
     """The add-on's preset modules, with the user's own library emptied before the test."""
-    lib = lamp_addon.preset_library
+    lib = lamp_addon.presets.library
     user, why = lib.user_library()
     assert user is not None, why
     if lib.thumbnails() is not None:
@@ -81,7 +81,7 @@ def test_preferences_belong_to_the_extension(addon, browser):
 def test_libraries_are_builtin_user_and_preferences(browser, add_library, tmp_path):
     team = add_library(tmp_path, "Team")
     wm = refresh()
-    listing = browser.preset_library.listing()
+    listing = browser.presets.library.listing()
     assert [lib.name for lib in listing.libraries] == ["Built-in", "My Presets", "Team"]
     assert [lib.writable for lib in listing.libraries] == [False, True, True]
     assert listing.libraries[2].folder == team
@@ -92,7 +92,7 @@ def test_libraries_are_builtin_user_and_preferences(browser, add_library, tmp_pa
 
 def test_builtin_thumbnails_are_shipped_not_made(browser):
     wm = refresh()
-    thumbs = browser.preset_library.thumbnails()
+    thumbs = browser.presets.library.thumbnails()
     assert not thumbs.busy()  # nothing to render: opening the browser stays instant
     builtin = [item for item in wm.lamp_presets if item.library == "Built-in"]
     assert len(builtin) == len(list(BUILTIN.glob("*.json")))
@@ -100,7 +100,7 @@ def test_builtin_thumbnails_are_shipped_not_made(browser):
         path = Path(thumbs.paths[item.file])
         assert path.parent.name == "thumbnails" and path.parent.parent.samefile(BUILTIN), path
         assert thumbs.previews[str(path)].image_size[:] == (96, 96)  # loaded for the list (icon_id is 0 headless)
-    cache = Path(browser.preset_library.thumbnail_cache())
+    cache = Path(browser.presets.library.thumbnail_cache())
     assert not any(cache.glob("*.png")) if cache.is_dir() else True
 
 
@@ -109,7 +109,7 @@ def test_two_designers_share_a_folder(browser, add_library, bl_scene, tmp_path, 
 
     (tmp_path / "share").mkdir()
     team = add_library(tmp_path / "share", "Team share")
-    props = browser.design_properties
+    props = browser.design.properties
 
     # Alice starts from the amber study, changes it and saves it to the team's folder.
     wm = refresh()
@@ -125,10 +125,10 @@ def test_two_designers_share_a_folder(browser, add_library, bl_scene, tmp_path, 
                                     description="Try it with your cuts", library=team) == {"FINISHED"}
     saved = Path(team) / "amber-turn-alice.json"
     assert saved.is_file()
-    thumbs = browser.preset_library.thumbnails()
+    thumbs = browser.presets.library.thumbnails()
     thumbs.wait()
-    entry = browser.preset_library.listing().entry(str(saved))
-    thumb = Path(team) / ".thumbnails" / f"amber-turn-alice-{browser.preset_library.P.thumbnail_digest(entry)}.png"
+    entry = browser.presets.library.listing().entry(str(saved))
+    thumb = Path(team) / ".thumbnails" / f"amber-turn-alice-{browser.presets.library.P.thumbnail_digest(entry)}.png"
     assert thumb.is_file() and thumbs.errors == {}
 
     # Bob, in a new file, lists the folder: he sees the preset with its thumbnail and applies it.
@@ -181,11 +181,11 @@ def test_hostile_folder_is_listed_with_warnings(browser, add_library, tmp_path):
     good, bad = make_hostile_folder(tmp_path / "hostile")
     add_library(tmp_path / "hostile", "Hostile", read_only=True)
     wm = refresh()
-    listing = browser.preset_library.listing()
+    listing = browser.presets.library.listing()
     assert {os.path.basename(i.file) for i in wm.lamp_presets if i.library == "Hostile"} == good
     assert len(listing.warnings) == len(bad)
     texts = [str(w) for w in listing.warnings]
-    printable = browser.preset_library.P.printable
+    printable = browser.presets.library.P.printable
     for name, needles in bad.items():
         (text,) = [t for t in texts if f"/hostile/{printable(name)}:" in t]
         for needle in needles:
@@ -199,7 +199,7 @@ def _design(props, bl_scene) -> dict:
 def test_apply_is_all_or_nothing(browser, add_library, bl_scene, tmp_path):
     import bpy
 
-    props = browser.design_properties
+    props = browser.design.properties
     team = Path(add_library(tmp_path, "Team"))
     doc = json.loads((BUILTIN / "paper-baseline.json").read_text())
     # Valid for the tracer, but a tag with a comma cannot be kept in the comma-separated tag field.
@@ -245,7 +245,7 @@ def test_read_only_libraries_refuse_changes(browser, add_library, tmp_path):
         assert not bpy.ops.lamp.preset_delete.poll()
         assert not bpy.ops.lamp.preset_rename.poll()
         assert bpy.ops.lamp.preset_apply.poll()
-    assert [lib.name for lib in browser.preset_library.writable_libraries()] == ["My Presets"]
+    assert [lib.name for lib in browser.presets.library.writable_libraries()] == ["My Presets"]
 
 
 def test_rename_and_delete(browser, add_library, bl_scene, tmp_path):
@@ -268,7 +268,7 @@ def test_rename_and_delete(browser, add_library, bl_scene, tmp_path):
 def test_export_then_import(browser, bl_scene, tmp_path, addon_core):
     import bpy
 
-    props = browser.design_properties
+    props = browser.design.properties
     wm = refresh()
     select(wm, "four-lamp-rear-combination.json")
     bpy.ops.lamp.preset_apply()
@@ -282,7 +282,7 @@ def test_export_then_import(browser, bl_scene, tmp_path, addon_core):
     assert _design(props, bl_scene) != four
     assert bpy.ops.lamp.preset_import(filepath=str(out)) == {"FINISHED"}
     assert _design(props, bl_scene) == four
-    user = browser.preset_library.user_library()[0]
+    user = browser.presets.library.user_library()[0]
     assert _presets_in(user.folder) == ["four-lamp-rear-combination.json"]
     assert bpy.ops.lamp.preset_import(filepath=str(out)) == {"FINISHED"}  # the same design again: fine
 
@@ -339,9 +339,9 @@ def _assert_camera_shows(camera_module, bl_scene, preset: dict) -> None:
 def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_scene, tmp_path, addon_core, capfd):
     import bpy
 
-    camera = browser.render_camera
+    camera = browser.render.camera
     team = add_library(tmp_path, "Team share")
-    props = browser.design_properties
+    props = browser.design.properties
 
     # Designer 1 applies a preset (the add-on makes its camera), then moves the Blender camera and
     # changes the render size: the preset records that view, not the design's camera section.
@@ -359,7 +359,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     assert preset["camera"]["position"] != design_camera["position"]
     for key, value in seen.items():
         assert preset["camera"][key] == (value if isinstance(value, str) else pytest.approx(value, abs=1e-4)), key
-    # Moving the Lamp Camera moved the design's camera: one view (render_camera.sync_view).
+    # Moving the Lamp Camera moved the design's camera: one view (render.view_link.sync_view).
     for key, value in props.design_to_scene(bl_scene)["camera"].items():
         assert value == (seen[key] if isinstance(value, str) else pytest.approx(seen[key], abs=1e-4)), key
 
@@ -409,9 +409,9 @@ def test_applying_never_moves_the_designers_own_camera(browser, bl_scene, addon_
     assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
     assert 'your "Studio" is kept as it was' in capfd.readouterr().out
     assert ([list(row) for row in own.matrix_world], own.data.lens, own.data.shift_x) == before
-    assert browser.render_camera.is_lamp_camera(bl_scene.camera)
+    assert browser.render.camera.is_lamp_camera(bl_scene.camera)
     preset = addon_core.library.presets.load_preset(BUILTIN / "four-lamp-rear-combination.json")
-    assert leaves(browser.design_properties.design_to_scene(bl_scene)) == leaves(preset)  # the design has its view
+    assert leaves(browser.design.properties.design_to_scene(bl_scene)) == leaves(preset)  # the design has its view
 
     bl_scene.camera = own  # the designer's choice, after the set-up
     select(refresh(), "paper-baseline.json")
@@ -443,11 +443,11 @@ def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(bro
     bpy.ops.lamp.preset_apply()
     own = bpy.data.objects.new("Studio", bpy.data.cameras.new("Studio"))
     bl_scene.collection.objects.link(own)
-    browser.render_camera.apply_camera(own, browser.design_properties.design_to_scene(bl_scene)["camera"], bl_scene)
+    browser.render.camera.apply_camera(own, browser.design.properties.design_to_scene(bl_scene)["camera"], bl_scene)
     bl_scene.camera = own
     bl_scene.lamp_design.camera.position = (0.0, 500.0, 0.0)  # behind the lamp: not a view of it
     with pytest.raises(addon_core.SceneError, match="camera.position"):
-        browser.design_properties.design_to_scene(bl_scene)
+        browser.design.properties.design_to_scene(bl_scene)
     assert bpy.ops.lamp.preset_save(name="Seen", library=team) == {"FINISHED"}
     saved = addon_core.library.presets.load_preset(tmp_path / "seen.json")
     assert saved["camera"]["position"] == pytest.approx([0.0, -800.0, 0.0], abs=1e-4)  # where Studio is
@@ -462,9 +462,9 @@ def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene,
     wm = refresh()
     select(wm, "paper-baseline.json")
     bpy.ops.lamp.preset_apply()
-    before = _design(browser.design_properties, bl_scene)
-    user = browser.preset_library.user_library()[0]
-    printable = browser.preset_library.P.printable
+    before = _design(browser.design.properties, bl_scene)
+    user = browser.presets.library.user_library()[0]
+    printable = browser.presets.library.P.printable
     tried = 0
     for name, needles in bad.items():
         path = tmp_path / "hostile" / name
@@ -480,5 +480,5 @@ def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene,
                 assert needle in text, (name, needle, text)
         tried += 1
     assert tried >= 20
-    assert _design(browser.design_properties, bl_scene) == before
+    assert _design(browser.design.properties, bl_scene) == before
     assert _presets_in(user.folder) == []

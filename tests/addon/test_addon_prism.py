@@ -24,7 +24,7 @@ TOLERANCE = 0.02  # per channel, relative (issue 12: the plate's on-axis transmi
 def _build(lamp_addon, bl_scene, scene: dict) -> dict:
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
     return {obj.get("lamp_part"): obj for obj in bl_scene.objects if obj.get("lamp_part")}
 
@@ -134,8 +134,8 @@ def test_prism_plate_on_axis_transmission_agrees_with_cycles(lamp_addon, bl_scen
         doc = json.load(f)
     _on_axis(doc)
     scene = core_tracer.parse_scene(doc)
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES, resolution=None)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES, resolution=None)
     region = (slice(12, 20), slice(12, 20))  # the 8 x 8 centre: rings 0 and 1 of the plate
     tracer = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
     cycles = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)

@@ -27,7 +27,7 @@ def scene_mod(addon_core):
 
 def _group_rna(lamp_addon, path: str):
     """The RNA property of a spec path like ``lamps[].lens.ior`` on the generated groups."""
-    props = lamp_addon.design_properties
+    props = lamp_addon.design.properties
     cls = props.LampDesign
     parts = path.replace("[]", "").split(".")
     for part in parts[:-1]:
@@ -41,7 +41,7 @@ def _rna(cls, key: str):
 
 def test_every_spec_field_is_a_property(lamp_addon, S):
     for info in S.iter_fields():
-        if lamp_addon.design_properties.is_constant(info.spec):
+        if lamp_addon.design.properties.is_constant(info.spec):
             continue
         rna = _group_rna(lamp_addon, info.path)
         assert rna.description.startswith(info.spec.doc), info.path
@@ -63,7 +63,7 @@ def test_every_spec_field_is_a_property(lamp_addon, S):
 
 
 def test_ranges_and_defaults_follow_the_spec(lamp_addon, S):
-    margin = lamp_addon.design_properties.OPEN_BOUND_MARGIN
+    margin = lamp_addon.design.properties.OPEN_BOUND_MARGIN
     for info in S.iter_fields():
         spec = info.spec
         if not isinstance(spec, S.Num):
@@ -101,17 +101,17 @@ def test_there_are_presets():
 def test_preset_round_trip(lamp_addon, bl_scene, path, scene_mod):
     """JSON -> properties -> JSON is lossless, and the text is the same canonical text."""
     scene = scene_mod.load_scene(path)
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    back = lamp_addon.design_properties.design_to_scene(bl_scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    back = lamp_addon.design.properties.design_to_scene(bl_scene)
     assert back == scene
     assert scene_mod.scene_to_json(back) == scene_mod.scene_to_json(scene)
     # ... and again through the properties (the second pass sees the rounded values)
-    lamp_addon.design_properties.scene_to_design(bl_scene, back)
-    assert lamp_addon.design_properties.design_to_scene(bl_scene) == scene
+    lamp_addon.design.properties.scene_to_design(bl_scene, back)
+    assert lamp_addon.design.properties.design_to_scene(bl_scene) == scene
 
 
 def test_float32_values_come_back_as_written(lamp_addon):
-    from_float32 = lamp_addon.design_properties.from_float32
+    from_float32 = lamp_addon.design.properties.from_float32
     import struct
 
     for x in (1.49, 0.62, 0.02, 860.96, -1234.567, 1e-6, 99999.9, 0.1 + 0.2, 1 / 3):
@@ -124,7 +124,7 @@ def test_float32_values_come_back_as_written(lamp_addon):
 
 
 def test_lens_colour_modes(lamp_addon, bl_scene, S, scene_mod):
-    props = lamp_addon.design_properties
+    props = lamp_addon.design.properties
     scene = scene_mod.parse_scene({"schema": S.SCHEMA, "lamps": [
         {"lens": {"transmitted_color": [0.9, 0.4, 0.1], "reference_thickness": 2.5}},
     ]})
@@ -152,7 +152,7 @@ def test_lens_colour_modes(lamp_addon, bl_scene, S, scene_mod):
 
 
 def test_scene_to_design_is_all_or_nothing(lamp_addon, addon_core, bl_scene, scene_mod):
-    props = lamp_addon.design_properties
+    props = lamp_addon.design.properties
     good = scene_mod.load_scene(PRESETS[0])
     props.scene_to_design(bl_scene, good)
     before = props.design_to_scene(bl_scene)
@@ -178,7 +178,7 @@ def test_scene_to_design_is_all_or_nothing(lamp_addon, addon_core, bl_scene, sce
 
 
 def test_design_to_scene_reports_the_field(lamp_addon, addon_core, bl_scene):
-    props = lamp_addon.design_properties
+    props = lamp_addon.design.properties
     design = bl_scene.lamp_design
     with pytest.raises(addon_core.SceneError, match="lamps"):
         props.design_to_scene(bl_scene)  # no lamp yet
@@ -192,7 +192,7 @@ def test_default_design_is_valid_and_matches_the_spec(lamp_addon, bl_scene, S, s
     """Fresh properties hold the spec defaults, every either/or rule in its preferred form (the lens
     colour picker); with one lamp they are a valid scene."""
     bl_scene.lamp_design.lamps.add()
-    scene = lamp_addon.design_properties.design_to_scene(bl_scene)
+    scene = lamp_addon.design.properties.design_to_scene(bl_scene)
     expected = scene_mod.parse_scene({"schema": S.SCHEMA, "camera": {}, "lamps": [{"lens": {
         "transmitted_color": list(S.LENS.fields["transmitted_color"].default)}}]})
     assert scene == expected
@@ -200,7 +200,7 @@ def test_default_design_is_valid_and_matches_the_spec(lamp_addon, bl_scene, S, s
 
 
 def test_tags_and_text(lamp_addon, bl_scene, S, scene_mod):
-    props = lamp_addon.design_properties
+    props = lamp_addon.design.properties
     scene = scene_mod.parse_scene({"schema": S.SCHEMA, "name": "Ünïcode lamp ✓", "tags": ["a b", "c"],
                                    "description": "line one\nline two", "lamps": [{}]})
     props.scene_to_design(bl_scene, scene)

@@ -27,12 +27,12 @@ def startup_scene(addon):
 
 @pytest.fixture
 def builder(lamp_addon):
-    return lamp_addon.design_builder
+    return lamp_addon.design.builder
 
 
 @pytest.fixture
 def autobuild(lamp_addon):
-    auto = lamp_addon.design_autobuild
+    auto = lamp_addon.design.autobuild
     auto._edits.clear()  # edits other tests made (their timers never ran: no event loop)
     auto._jobs.clear()
     yield auto
@@ -42,7 +42,7 @@ def autobuild(lamp_addon):
 
 def _design(lamp_addon, addon_core, bl_scene, name: str = "paper-baseline") -> dict:
     scene = addon_core.scene.load_scene(PRESETS / f"{name}.json")
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     return scene
 
 
@@ -76,9 +76,9 @@ def test_build_in_the_startup_file_touches_none_of_its_objects(lamp_addon, addon
     # scene's camera pointer is a scene setting, not the Camera object: the first build makes the Lamp
     # Camera the scene camera (test_addon_first_build.py), so the lamp is what F12 shows.
     assert {name: _state(bpy.data.objects[name]) for name in before} == before
-    assert camera.name == "Camera" and lamp_addon.render_camera.is_lamp_camera(startup_scene.camera)
+    assert camera.name == "Camera" and lamp_addon.render.camera.is_lamp_camera(startup_scene.camera)
     assert world.use_fake_user  # the startup world is replaced by the design's, not lost
-    root = lamp_addon.design_root.find_root(startup_scene)
+    root = lamp_addon.design.root.find_root(startup_scene)
     assert root.name == "Lamp Design" and root.type == "EMPTY" and root.parent is None
     assert root.users_collection[0].name == "Lamp Design"
     parts = [o for o in startup_scene.objects if o.get("lamp_part") not in (None, "root")]
@@ -97,7 +97,7 @@ def test_rebuild_keeps_the_designers_edits(lamp_addon, addon_core, builder, star
     assert bpy.ops.lamp.build() == {"FINISHED"}
     others = {name: _state(bpy.data.objects[name]) for name in ("Camera", "Light")}
     car = bpy.data.objects["Cube"]
-    root = lamp_addon.design_root.find_root(startup_scene)
+    root = lamp_addon.design.root.find_root(startup_scene)
     lens, reflector = _part(startup_scene, "lamps[0].lens"), _part(startup_scene, "lamps[0].reflector")
     bulb, socket, body = (_part(startup_scene, p) for p in ("lamps[0].bulb", "lamps[0].socket", "body"))
     pointers = {o.get("lamp_part"): o.as_pointer() for o in startup_scene.objects if o.get("lamp_part")}
@@ -127,7 +127,7 @@ def test_rebuild_keeps_the_designers_edits(lamp_addon, addon_core, builder, star
     design.lamps[0].lens.ior = 1.6
     design.lamps[0].lens.radius = 48.0
     design.lamps[0].center = (20.0, 5.0)  # the lamp moves 20 mm right, 5 mm up
-    report = builder.build_lamp(startup_scene, lamp_addon.design_properties.design_to_scene(startup_scene))
+    report = builder.build_lamp(startup_scene, lamp_addon.design.properties.design_to_scene(startup_scene))
     assert not report.not_driven
 
     # Kept
@@ -147,7 +147,7 @@ def test_rebuild_keeps_the_designers_edits(lamp_addon, addon_core, builder, star
     assert _local_radius_mm(lens) == pytest.approx(48.0, abs=1e-3)
     assert tuple(lens.location) == pytest.approx((0.020, 0.0, 0.005), abs=1e-7)  # moved with the lamp
     assert tuple(reflector.location) == pytest.approx((0.020, 0.0, 0.007), abs=1e-7)  # ... keeping the nudge
-    g = addon_core.scene.lamp_geometry(lamp_addon.design_properties.design_to_scene(startup_scene)["lamps"][0])
+    g = addon_core.scene.lamp_geometry(lamp_addon.design.properties.design_to_scene(startup_scene)["lamps"][0])
     in_root = root.matrix_world.inverted() @ bulb.matrix_world  # the bulb, under the lens, at its design place
     expected = Matrix.Translation(((20 + g["bulb_center"][0]) / 1000, g["bulb_center"][1] / 1000,
                                    (5 + g["bulb_center"][2]) / 1000))
@@ -156,7 +156,7 @@ def test_rebuild_keeps_the_designers_edits(lamp_addon, addon_core, builder, star
 
 def test_unchanged_meshes_are_not_remade(lamp_addon, addon_core, builder, bl_scene):
     _design(lamp_addon, addon_core, bl_scene, "four-lamp-rear-combination")
-    props = lamp_addon.design_properties
+    props = lamp_addon.design.properties
     first = builder.build_lamp(bl_scene, props.design_to_scene(bl_scene))
     assert len(first.remeshed) == 17  # the body and four parts of four lamps
     design = bl_scene.lamp_design
@@ -178,7 +178,7 @@ def test_a_deleted_driven_node_is_reported_not_brought_back(lamp_addon, addon_co
     glass = _part(bl_scene, "lamps[0].lens").data.materials[0]
     glass.node_tree.nodes.remove(glass.node_tree.nodes["Lens Absorption"])
     bl_scene.lamp_design.lamps[0].lens.ior = 1.55
-    report = builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    report = builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
     assert report.not_driven == ["Lamp 1 Lens: Lens Absorption"]
     assert "Lens Absorption" not in glass.node_tree.nodes
     assert glass.node_tree.nodes["Lens BSDF"].inputs["IOR"].default_value == pytest.approx(1.55)
@@ -193,7 +193,7 @@ def test_a_material_of_the_designers_own_is_kept(lamp_addon, addon_core, builder
     paint = bpy.data.materials.new("Car Paint")
     body.data.materials[0] = paint
     bl_scene.lamp_design.body.color = (0.1, 0.2, 0.3)
-    report = builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    report = builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
     assert body.data.materials[0] == paint and "lamp_part" not in paint
     assert report.not_driven == ["Lamp Body: the designer's material 'Car Paint'"]
 
@@ -218,7 +218,7 @@ def test_removing_a_lamp_removes_its_parts_and_keeps_the_designers_objects(lamp_
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert not [o for o in bl_scene.objects if o.get("lamp_part", "").startswith("lamps[3]")]
     assert not mesh_names & set(bpy.data.meshes.keys())  # their data went with them
-    assert bezel.name in bl_scene.objects and bezel.parent == lamp_addon.design_root.find_root(bl_scene)
+    assert bezel.name in bl_scene.objects and bezel.parent == lamp_addon.design.root.find_root(bl_scene)
     assert np.allclose(np.array(bezel.matrix_world), np.array(where), atol=1e-7)
 
 
@@ -262,7 +262,7 @@ def _deep_cut(bl_scene) -> float:
 def test_a_preview_build_is_lighter_and_says_so(lamp_addon, addon_core, builder, bl_scene):
     _design(lamp_addon, addon_core, bl_scene)
     _deep_cut(bl_scene)
-    scene = lamp_addon.design_properties.design_to_scene(bl_scene)
+    scene = lamp_addon.design.properties.design_to_scene(bl_scene)
     report = builder.build_lamp(bl_scene, scene, preview=True)
     preview_faces = len(_part(bl_scene, "lamps[0].lens").data.polygons)
     assert report.preview and builder.build_status(bl_scene) == builder.PREVIEW
@@ -274,7 +274,7 @@ def test_a_preview_build_is_lighter_and_says_so(lamp_addon, addon_core, builder,
     assert preview_faces * 10 < full_faces
     # A shallow cut is light already: its preview is the full lens.
     bl_scene.lamp_design.lamps[0].cuts.height = 1.5
-    scene = lamp_addon.design_properties.design_to_scene(bl_scene)
+    scene = lamp_addon.design.properties.design_to_scene(bl_scene)
     assert not builder.build_lamp(bl_scene, scene, preview=True).preview
     assert builder.is_up_to_date(bl_scene)
 
@@ -326,7 +326,7 @@ def test_auto_build_previews_while_editing_then_builds_in_full(lamp_addon, addon
     # Edits stopped: the full lens is made in the worker thread; the objects keep the preview meanwhile.
     assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS) == autobuild.TICK_SECONDS
     digest, job = autobuild._jobs[bl_scene.name]
-    assert digest == builder.design_digest(lamp_addon.design_properties.design_to_scene(bl_scene))
+    assert digest == builder.design_digest(lamp_addon.design.properties.design_to_scene(bl_scene))
     job.result(timeout=120)  # waits for the worker (no sleeping)
     assert builder.build_status(bl_scene) == builder.PREVIEW
     assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS + 0.1) is None  # copied into Blender
@@ -353,7 +353,7 @@ def test_an_edit_while_the_full_lens_is_made_starts_again(lamp_addon, addon_core
     second.result(timeout=120)
     assert autobuild.tick(now=edited + autobuild.SETTLE_SECONDS + 0.1) is None
     assert builder.is_up_to_date(bl_scene)
-    assert lamp_addon.design_root.find_root(bl_scene)[builder.DIGEST_KEY] == digest
+    assert lamp_addon.design.root.find_root(bl_scene)[builder.DIGEST_KEY] == digest
 
 
 def test_auto_build_off_and_invalid_designs_build_nothing(lamp_addon, addon_core, builder, autobuild, bl_scene):
@@ -414,10 +414,10 @@ def test_a_deleted_root_is_made_again_and_takes_the_parts(lamp_addon, addon_core
     _design(lamp_addon, addon_core, bl_scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
     lens = _part(bl_scene, "lamps[0].lens")
-    bpy.data.objects.remove(lamp_addon.design_root.find_root(bl_scene))
+    bpy.data.objects.remove(lamp_addon.design.root.find_root(bl_scene))
     assert lens.parent is None and builder.build_status(bl_scene) == builder.NOT_BUILT
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    root = lamp_addon.design_root.find_root(bl_scene)
+    root = lamp_addon.design.root.find_root(bl_scene)
     assert _part(bl_scene, "lamps[0].lens") == lens and lens.parent == root
     assert all(o.parent == root for o in bl_scene.objects if o.get("lamp_part") not in (None, "root"))
     assert builder.is_up_to_date(bl_scene)
@@ -445,7 +445,7 @@ def test_a_copy_of_the_lamp_is_left_alone(lamp_addon, addon_core, builder, bl_sc
 
     _design(lamp_addon, addon_core, bl_scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    root = lamp_addon.design_root.find_root(bl_scene)
+    root = lamp_addon.design.root.find_root(bl_scene)
     lens = _part(bl_scene, "lamps[0].lens")
     copy = lens.copy()  # as Shift+D: tags and all, in the same collection, parented elsewhere
     copy.data = lens.data.copy()
@@ -457,7 +457,7 @@ def test_a_copy_of_the_lamp_is_left_alone(lamp_addon, addon_core, builder, bl_sc
     coll.objects.link(lens)
     copy_vertices = len(copy.data.vertices)
     bl_scene.lamp_design.lamps[0].lens.radius = 48.0
-    builder.build_lamp(bl_scene, lamp_addon.design_properties.design_to_scene(bl_scene))
+    builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
     assert lens.parent == root and _local_radius_mm(lens) == pytest.approx(48.0, abs=1e-3)
     assert copy.name in bl_scene.objects and len(copy.data.vertices) == copy_vertices  # untouched
     assert _local_radius_mm(copy) == pytest.approx(45.0, abs=1e-3)
@@ -470,7 +470,7 @@ def test_a_lamp_built_before_the_root_existed_is_adopted(lamp_addon, addon_core,
 
     _design(lamp_addon, addon_core, bl_scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    bpy.data.objects.remove(lamp_addon.design_root.find_root(bl_scene))
+    bpy.data.objects.remove(lamp_addon.design.root.find_root(bl_scene))
     parts = {o.get("lamp_part"): o for o in bl_scene.objects if o.get("lamp_part")}
     for obj in parts.values():
         del obj[builder.DRIVEN_KEY]
@@ -478,10 +478,10 @@ def test_a_lamp_built_before_the_root_existed_is_adopted(lamp_addon, addon_core,
             del obj.data[builder.GEOMETRY_KEY]
     glass = parts["lamps[0].lens"].data.materials[0]
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    root = lamp_addon.design_root.find_root(bl_scene)
+    root = lamp_addon.design.root.find_root(bl_scene)
     assert {o.get("lamp_part"): o for o in bl_scene.objects if o.get("lamp_part") not in (None, "root")} == parts
     assert all(o.parent == root for o in parts.values())
-    g = addon_core.scene.lamp_geometry(lamp_addon.design_properties.design_to_scene(bl_scene)["lamps"][0])
+    g = addon_core.scene.lamp_geometry(lamp_addon.design.properties.design_to_scene(bl_scene)["lamps"][0])
     assert tuple(parts["lamps[0].bulb"].location) == pytest.approx(
         tuple(x / 1000 for x in g["bulb_center"]), abs=1e-7)
     assert parts["lamps[0].lens"].data.materials[0] == glass and builder.is_up_to_date(bl_scene)
@@ -492,7 +492,7 @@ def test_a_full_lens_that_cannot_be_made_leaves_the_preview(lamp_addon, addon_co
     def fail(scene):
         raise MemoryError("no room for the lens")
 
-    monkeypatch.setattr(lamp_addon.design_parts, "make_lenses", fail)
+    monkeypatch.setattr(lamp_addon.design.parts, "make_lenses", fail)
     _design(lamp_addon, addon_core, bl_scene)
     autobuild._edits.clear()
     _deep_cut(bl_scene)

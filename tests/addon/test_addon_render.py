@@ -54,8 +54,8 @@ def _preset_scene(camera: dict | None = None, size=(48, 32)) -> dict:
 
 
 def _load_design(lamp_addon, bl_scene, scene: dict) -> None:
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def _axes(cam, camera_module):
@@ -72,7 +72,7 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
     scene = _preset_scene(CAMERAS[name], size)
     _load_design(lamp_addon, bl_scene, scene)
     # What the renderers see: the camera as the depsgraph evaluates it (location + rotation, float32)
-    back = lamp_addon.render_camera.scene_camera_to_dict(bl_scene, lamp_addon.render_camera.evaluated_camera(bl_scene))
+    back = lamp_addon.render.camera.scene_camera_to_dict(bl_scene, lamp_addon.render.camera.evaluated_camera(bl_scene))
     want = scene["camera"]
     assert back["type"] == want["type"]
     assert back["sensor_fit"] == want["sensor_fit"]
@@ -89,7 +89,7 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
         assert back["fov_deg"] == pytest.approx(want["fov_deg"], abs=1e-4)
     else:
         assert back["width"] == pytest.approx(want["width"], abs=1e-4)
-    rendered = lamp_addon.render_camera.scene_for_render(bl_scene)
+    rendered = lamp_addon.render.camera.scene_for_render(bl_scene)
     assert rendered["image"] == {"width": size[0], "height": size[1], "samples": 1}
     assert rendered["camera"] == back
 
@@ -116,7 +116,7 @@ def test_tracer_camera_projects_like_blender(lamp_addon, bl_scene, name, size):
 
     scene = _preset_scene(CAMERAS[name], size)
     _load_design(lamp_addon, bl_scene, scene)
-    read = lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
+    read = lamp_addon.render.camera.scene_camera_to_dict(bl_scene)
     for point in ([-110, 0, -60], [110, 0, 60], [45, 30, -20], [0, 80, 0]):
         blender = world_to_camera_view(bl_scene, bl_scene.camera, Vector(point) * 0.001)
         tracer = _tracer_projection(read, size[0], size[1], point)
@@ -126,15 +126,15 @@ def test_tracer_camera_projects_like_blender(lamp_addon, bl_scene, name, size):
 
 def test_camera_refuses_what_the_tracer_cannot_render(lamp_addon, addon_core, bl_scene):
     with pytest.raises(addon_core.SceneError, match="no camera"):
-        lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.render.camera.scene_camera_to_dict(bl_scene)
     _load_design(lamp_addon, bl_scene, _preset_scene())
     bl_scene.render.pixel_aspect_x = 2.0
     with pytest.raises(addon_core.SceneError, match="pixel aspect 2:1"):
-        lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.render.camera.scene_camera_to_dict(bl_scene)
     bl_scene.render.pixel_aspect_x = 1.0
     bl_scene.camera.data.type = "PANO"
     with pytest.raises(addon_core.SceneError, match='camera.type: "pano"'):
-        lamp_addon.render_camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.render.camera.scene_camera_to_dict(bl_scene)
 
 
 def _user_camera(lamp_addon, bl_scene, scene: dict):
@@ -143,8 +143,8 @@ def _user_camera(lamp_addon, bl_scene, scene: dict):
 
     ob = bpy.data.objects.new("My Camera", bpy.data.cameras.new("My Camera"))
     bl_scene.collection.objects.link(ob)
-    lamp_addon.render_camera.apply_camera(ob, scene["camera"], bl_scene)
-    lamp_addon.render_camera.set_render_size(bl_scene, scene["image"])
+    lamp_addon.render.camera.apply_camera(ob, scene["camera"], bl_scene)
+    lamp_addon.render.camera.set_render_size(bl_scene, scene["image"])
     bl_scene.camera = ob
     return ob
 
@@ -154,16 +154,16 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     moving the Lamp Camera or changing the resolution writes the design: one view, one size."""
     import bpy
 
-    rc = lamp_addon.render_camera
+    rc, lc, link = lamp_addon.render.camera, lamp_addon.render.lamp_camera, lamp_addon.render.view_link
     scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    ob, made = rc.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    ob, made = lc.ensure_lamp_camera(bl_scene, frame=False)
     assert bl_scene.camera == ob and rc.is_lamp_camera(ob) and "Lamp Camera" in made
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (40, 30)
     assert rc.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(31.25, abs=1e-4)
     # The design's FOV reaches the render (16 -> 40 in the issue; here 31.25 -> 40).
     bl_scene.lamp_design.camera.fov_deg = 40.0
-    assert rc.sync_view(bl_scene) == "blender"
+    assert link.sync_view(bl_scene) == "blender"
     assert rc.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     image = bpy.data.images["Lamp Tracer"]
@@ -171,41 +171,41 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     # carry the exposure it is shown at).
     gain = np.float32(2.0 ** lamp_addon.image_view.image_exposure(image))
     rendered = lamp_addon.image_view.image_to_array(image) / gain
-    np.testing.assert_allclose(rendered, core_tracer.render(lamp_addon.design_properties.design_to_scene(bl_scene)),
+    np.testing.assert_allclose(rendered, core_tracer.render(lamp_addon.design.properties.design_to_scene(bl_scene)),
                                atol=1e-4, rtol=1e-5)
     # The design's image size is the render size.
     bl_scene.lamp_design.image.width = 48
-    rc.sync_view(bl_scene)
+    link.sync_view(bl_scene)
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == (48, 30)
     # The user moves the Lamp Camera 50 mm to the right and sets the resolution: the design follows.
     ob.location.x += 0.05
     bl_scene.render.resolution_y = 36
     bpy.context.view_layer.update()  # Blender's depsgraph update: the add-on's handler writes the design
-    design = lamp_addon.design_properties.design_to_scene(bl_scene)
+    design = lamp_addon.design.properties.design_to_scene(bl_scene)
     assert design["camera"]["position"][0] == pytest.approx(scene["camera"]["position"][0] + 50.0, abs=1e-3)
     assert design["image"] == {"width": 48, "height": 36, "samples": 1}
-    assert rc.sync_view(bl_scene) == ""  # both sides agree now
+    assert link.sync_view(bl_scene) == ""  # both sides agree now
 
 
 def test_a_users_camera_is_rendered_as_it_is_and_never_moved(lamp_addon, bl_scene):
     import bpy
 
-    rc = lamp_addon.render_camera
+    rc, lc, link = lamp_addon.render.camera, lamp_addon.render.lamp_camera, lamp_addon.render.view_link
     scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    rc.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lc.ensure_lamp_camera(bl_scene, frame=False)
     lamp = bl_scene.camera
     mine = _user_camera(lamp_addon, bl_scene, _preset_scene({"position": [60.0, -700.0, 40.0]}, (40, 30)))
     before = tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens
-    assert "not used" in rc.view_status(bl_scene)[0] and "My Camera" in rc.view_status(bl_scene)[0]
+    assert "not used" in link.view_status(bl_scene)[0] and "My Camera" in link.view_status(bl_scene)[0]
     bl_scene.lamp_design.camera.fov_deg = 20.0  # drives the Lamp Camera, not mine
-    rc.sync_view(bl_scene)
-    assert rc.keep_framed(bl_scene)  # frames the Lamp Camera ...
+    link.sync_view(bl_scene)
+    assert lc.keep_framed(bl_scene)  # frames the Lamp Camera ...
     assert (tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens) == before  # ... never mine
     assert rc.scene_camera_to_dict(bl_scene, lamp)["fov_deg"] == pytest.approx(20.0, abs=1e-4)
     assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # my view into the design: the Lamp Camera takes it
     assert (tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens) == before
-    design = lamp_addon.design_properties.design_to_scene(bl_scene)
+    design = lamp_addon.design.properties.design_to_scene(bl_scene)
     assert design["camera"]["position"] == pytest.approx([60.0, -700.0, 40.0], abs=1e-3)
     assert rc.scene_camera_to_dict(bl_scene, lamp)["position"] == pytest.approx([60.0, -700.0, 40.0], abs=1e-3)
     bl_scene.camera = lamp
@@ -218,20 +218,20 @@ def test_an_out_of_date_design_camera_does_not_block_a_render(lamp_addon, addon_
     import bpy
 
     scene = _preset_scene(size=(24, 16))
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     _user_camera(lamp_addon, bl_scene, scene)
     bl_scene.lamp_design.camera.position = (0.0, 500.0, 0.0)  # the design's own camera: behind the lamp
     with pytest.raises(addon_core.SceneError, match=r"camera\.position: y = 500"):
-        lamp_addon.design_properties.design_to_scene(bl_scene)
+        lamp_addon.design.properties.design_to_scene(bl_scene)
     # The Blender camera renders, and it replaces the design's camera before the scene is checked.
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-3)
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     _assert_shown(lamp_addon, bpy.data.images["Lamp Tracer"], core_tracer.render(seen))
     bl_scene.render.engine = "LAMP_TRACER"
     assert bpy.ops.render.render() == {"FINISHED"}  # the engine reports no error
     assert bpy.ops.lamp.camera_to_design() == {"FINISHED"}  # and the design camera can be brought up to date
-    assert lamp_addon.design_properties.design_to_scene(bl_scene)["camera"]["position"] == pytest.approx(
+    assert lamp_addon.design.properties.design_to_scene(bl_scene)["camera"]["position"] == pytest.approx(
         seen["camera"]["position"], abs=1e-3)
 
 
@@ -258,7 +258,7 @@ def test_engine_equals_core_render(lamp_addon, bl_scene, tmp_path):
     _load_design(lamp_addon, bl_scene, scene)
     bl_scene.render.engine = "LAMP_TRACER"
     rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     # The scene the engine rendered is the preset's, camera included (up to Blender's float32 storage).
     assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-4)
     assert seen["camera"]["fov_deg"] == pytest.approx(scene["camera"]["fov_deg"], abs=1e-4)
@@ -283,13 +283,13 @@ def test_engine_traces_its_bands_in_the_worker_processes(lamp_addon, addon_core,
     bl_scene.render.threads = 2
     rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
     assert pool.renders == renders + 1
-    expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
     np.testing.assert_array_equal(rgba[:, :, :3], expected)
-    lamp_addon.render_engine.unregister()
+    lamp_addon.render.engine.unregister()
     try:
         assert pool.broken == "closed" and all(p.poll() is not None for p in pool._processes)
     finally:
-        lamp_addon.render_engine.register()
+        lamp_addon.render.engine.register()
 
 
 def test_engine_renders_percentage_and_writes_still(lamp_addon, bl_scene, tmp_path):
@@ -303,7 +303,7 @@ def test_engine_renders_percentage_and_writes_still(lamp_addon, bl_scene, tmp_pa
     assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
     image, _ = imageio.read_image(tmp_path / "still.png")
     assert image.shape == (20, 32, 3)
-    expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
     assert expected.shape == (20, 32, 3)
     # PNG: 8-bit sRGB under the scene's view transform; compare where the view is the identity
     bl_scene.view_settings.view_transform = "Standard"
@@ -367,16 +367,16 @@ def test_engine_panels_are_compatible_and_registration_is_symmetric(lamp_addon):
     panels = (bpy.types.RENDER_PT_format, bpy.types.RENDER_PT_output, bpy.types.DATA_PT_lens,
               bpy.types.DATA_PT_camera, bpy.types.RENDER_PT_color_management)
     assert all("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
-    assert lamp_addon.render_engine.LampTracerEngine.is_registered
+    assert lamp_addon.render.engine.LampTracerEngine.is_registered
     assert "LAMP_TRACER" not in bpy.types.CYCLES_RENDER_PT_sampling.COMPAT_ENGINES
-    lamp_addon.render_engine.unregister()
+    lamp_addon.render.engine.unregister()
     try:
         assert not any("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
-        assert not lamp_addon.render_engine.LampTracerEngine.is_registered
+        assert not lamp_addon.render.engine.LampTracerEngine.is_registered
     finally:
-        lamp_addon.render_engine.register()
+        lamp_addon.render.engine.register()
     assert all("LAMP_TRACER" in p.COMPAT_ENGINES for p in panels)
-    assert lamp_addon.render_engine.LampTracerEngine.is_registered
+    assert lamp_addon.render.engine.LampTracerEngine.is_registered
 
 
 # ---------------------------------------------------------------------------------------------
@@ -446,7 +446,7 @@ def test_engine_writes_contribution_passes_to_multilayer_exr(lamp_addon, bl_scen
     assert set(layers) == {"ViewLayer"}
     got = layers["ViewLayer"]
     assert set(got) == {"Combined", *LABELS.values()}
-    expected = core_tracer.render_passes(lamp_addon.render_camera.scene_for_render(bl_scene))
+    expected = core_tracer.render_passes(lamp_addon.render.camera.scene_for_render(bl_scene))
     assert got["Combined"].shape == (24, 40, 4)
     np.testing.assert_array_equal(got["Combined"][:, :, :3], expected.image)
     np.testing.assert_array_equal(got["Combined"][:, :, 3], 1.0)
@@ -464,7 +464,7 @@ def test_engine_without_contribution_passes_writes_combined_only(lamp_addon, bl_
     layers = _render_multilayer_exr(bl_scene, tmp_path / "combined.exr")
     assert {layer: set(passes) for layer, passes in layers.items()} == {"ViewLayer": {"Combined"}}
     np.testing.assert_array_equal(layers["ViewLayer"]["Combined"][:, :, :3],
-                                  core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene)))
+                                  core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene)))
 
 
 def test_engine_contribution_passes_are_per_view_layer(lamp_addon, bl_scene, tmp_path):
@@ -477,7 +477,7 @@ def test_engine_contribution_passes_are_per_view_layer(lamp_addon, bl_scene, tmp
     layers = _render_multilayer_exr(bl_scene, tmp_path / "layers.exr")
     assert set(layers["ViewLayer"]) == {"Combined", *LABELS.values()}
     assert set(layers["Plain"]) == {"Combined"}
-    expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
     np.testing.assert_array_equal(layers["Plain"]["Combined"][:, :, :3], expected)
     np.testing.assert_array_equal(layers["ViewLayer"]["Combined"][:, :, :3], expected)
 
@@ -496,7 +496,7 @@ def test_engine_contribution_passes_follow_transparency_and_region(lamp_addon, b
     x0, x1, y0, y1 = 0, 15, 17, 32  # the border in whole pixels, rows counted from the bottom
     alpha = got["Combined"][:, :, 3]
     assert set(np.unique(alpha)) == {0.0, 1.0}  # the lamp's outline cuts the region
-    expected = core_tracer.render_passes(lamp_addon.render_camera.scene_for_render(bl_scene))
+    expected = core_tracer.render_passes(lamp_addon.render.camera.scene_for_render(bl_scene))
     for name, label in LABELS.items():
         want = expected.passes[name][32 - y1:32 - y0, x0:x1] * alpha[:, :, None]
         np.testing.assert_array_equal(got[label], want, err_msg=label)
@@ -542,7 +542,7 @@ def test_contribution_passes_in_the_compositor(lamp_addon, bl_scene, tmp_path):
     assert offered() == {"Image", "Alpha", *LABELS.values()}
     tree.links.new(render_layers.outputs["Lamp Bulb"], tree.nodes.new("NodeGroupOutput").inputs[0])
     rgba = _render_engine_exr(bl_scene, tmp_path / "bulb.exr")
-    bulb = core_tracer.render_passes(lamp_addon.render_camera.scene_for_render(bl_scene)).passes["bulb"]
+    bulb = core_tracer.render_passes(lamp_addon.render.camera.scene_for_render(bl_scene)).passes["bulb"]
     assert bulb.max() > 1.0
     np.testing.assert_array_equal(rgba[:, :, :3], bulb)
     layer.lamp_contribution_passes = False
@@ -568,7 +568,7 @@ def test_contribution_passes_panel_and_symmetric_registration(lamp_addon, bl_sce
 
     import bpy
 
-    engine = lamp_addon.render_engine
+    engine = lamp_addon.render.engine
     layer = bl_scene.view_layers["ViewLayer"]
     panel = bpy.types.LAMP_PT_view_layer_passes
     assert panel.bl_context == "view_layer" and panel.bl_parent_id == "VIEWLAYER_PT_layer_passes"
@@ -599,7 +599,7 @@ def test_contribution_passes_panel_and_symmetric_registration(lamp_addon, bl_sce
 
 
 def test_readme_names_the_contribution_passes(lamp_addon, repo_root):
-    assert lamp_addon.render_engine.PASS_LABELS == LABELS
+    assert lamp_addon.render.engine.PASS_LABELS == LABELS
     text = " ".join((repo_root / "README.md").read_text().split())
     assert "Contribution Passes" in text
     assert all(f"*{label}*" in text for label in LABELS.values())
@@ -617,14 +617,14 @@ def test_render_operator_image_equals_core_render(lamp_addon, bl_scene):
     image = bpy.data.images["Lamp Tracer"]
     assert image.is_float and tuple(image.size) == (48, 32)
     assert image.colorspace_settings.name == lamp_addon.image_view.scene_linear_colorspace()
-    expected = core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
     _assert_shown(lamp_addon, image, expected)
     # Again at another size: the same data-block, resized, still exact.
     bl_scene.render.resolution_x = 24
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     again = bpy.data.images["Lamp Tracer"]
     assert again == image and tuple(again.size) == (24, 32)
-    _assert_shown(lamp_addon, again, core_tracer.render(lamp_addon.render_camera.scene_for_render(bl_scene)))
+    _assert_shown(lamp_addon, again, core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene)))
 
 
 def _assert_shown(lamp_addon, image, expected) -> None:
@@ -639,18 +639,18 @@ def _assert_shown(lamp_addon, image, expected) -> None:
 def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, _preset_scene())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _preset_scene())
     assert not bpy.ops.lamp.render_tracer.poll()
     with pytest.raises(RuntimeError, match="no camera; Frame Lamp .* or Build Lamp makes one"):
         bpy.ops.lamp.render_tracer()
     # ... and both do: Build in a file without a camera makes the Lamp Camera.
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    assert lamp_addon.render_camera.is_lamp_camera(bl_scene.camera) and bpy.ops.lamp.render_tracer.poll()
+    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera) and bpy.ops.lamp.render_tracer.poll()
 
 
 def test_tracer_job_runs_on_a_thread_and_equals_core_render(lamp_addon):
     scene = _preset_scene(size=(40, 24))
-    job = lamp_addon.render_ops.TracerJob(scene).start()
+    job = lamp_addon.render.ops.TracerJob(scene).start()
     assert job.wait(60.0)
     assert job.error is None and not job.cancelled
     assert job.progress == 1.0 and job.rows_done == 24
@@ -659,7 +659,7 @@ def test_tracer_job_runs_on_a_thread_and_equals_core_render(lamp_addon):
 
 def test_tracer_job_cancels_through_should_stop(lamp_addon):
     scene = _preset_scene(size=(256, 256))  # several bands of rows
-    job = lamp_addon.render_ops.TracerJob(scene)
+    job = lamp_addon.render.ops.TracerJob(scene)
     job.stop()  # Esc before the first band is polled
     job.start()
     assert job.wait(60.0)
@@ -723,7 +723,7 @@ def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
     bl_scene.lamp_design.image.samples = 4
     bl_scene.render.engine = "LAMP_TRACER"
     rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     assert seen["image"]["samples"] == 4
     np.testing.assert_array_equal(rgba[:, :, :3], core_tracer.render(seen))
     assert not np.array_equal(rgba[:, :, :3], core_tracer.render({**seen, "image": {**seen["image"], "samples": 1}}))
@@ -744,7 +744,7 @@ def test_engine_film_transparent_alpha_is_the_covered_fraction_with_samples(lamp
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
     rgba = _render_engine_exr(bl_scene, tmp_path / "alpha.exr")
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     alpha = rgba[:, :, 3]
     edge = (alpha > 0) & (alpha < 1)
     assert edge.sum() > 40  # the outline's pixels

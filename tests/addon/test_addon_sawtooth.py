@@ -25,7 +25,7 @@ def _lens(bl_scene):
 def _build(lamp_addon, bl_scene, scene: dict) -> None:
     import bpy
 
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
 
 
@@ -98,7 +98,7 @@ def test_the_cuts_panel_shows_the_saw_tooth_fields_and_the_tooth_angle_limit(lam
     import bpy
 
     scene = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     design = bl_scene.lamp_design
     shown = draw(bpy.types.LAMP_PT_cuts, bl_scene)
     assert [e[2] for e in shown.props()] == ["type", "pitch", "height"]
@@ -141,7 +141,7 @@ def test_the_glass_is_closed_and_the_facets_cover_any_convex_outline(lamp_addon,
     import collections
     import importlib
 
-    mesh_module = importlib.import_module(f"{lamp_addon.__name__}.convert.sawtooth_mesh")
+    mesh_module = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes.sawtooth")
     lamp = addon_core.scene.load_scene(PRESETS / "sawtooth-stop-lamp.json")["lamps"][0]
     orientation = 0.0 if outline == "flush" else 17.0  # ridges along x: s = z exactly, on the border
     lamp["cuts"]["orientation"] = orientation
@@ -219,12 +219,12 @@ def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, ad
     import collections
     import importlib
 
-    flutes_mesh = importlib.import_module(f"{lamp_addon.__name__}.convert.flutes_mesh")
+    flutes_mesh = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes.flutes")
     lamp = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")["lamps"][0]
     lamp["cuts"].update(type="flutes", pitch=7.0, height=2.5, orientation=-25.0)
-    meshes = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes")
+    builder = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes.builder")
     # the round lens: within the tolerance
-    corners = {"round": meshes.circle_segments(45.0), "square": 4, "flush": 4}[outline]
+    corners = {"round": builder.circle_segments(45.0), "square": 4, "flush": 4}[outline]
     a = 2 * np.pi * np.arange(corners) / corners + (0.3 if corners == 4 else 0.0)
     rim = np.column_stack([45.0 * np.cos(a), 45.0 * np.sin(a)])
     if outline == "flush":  # two sides on the creases between flutes, as a 150 mm lens of 6 mm flutes has
@@ -247,23 +247,22 @@ def test_a_rectangular_lens_s_side_wall_reaches_the_reflector_edge(lamp_addon, a
     """The side wall of a rectangular lens stands up to the trimmed reflector's edge, whatever the
     cuts: no gap between them through which rays would leave the lamp (MODEL.md §3, the tracer's
     side wall reaches the reflector's edge)."""
-    import importlib
     import json
 
-    meshes = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes")
+    meshes = lamp_addon.convert.meshes
     doc = json.loads((PRESETS / "square-tail-lamp.json").read_text())
     doc["lamps"][0]["cuts"] = {"fisheye": {"pitch": 8.0, "height": 1.2},
                                "sawtooth": {"type": "sawtooth", "pitch": 6.0, "tooth_angle": 20.0, "orientation": 0.0},
                                "flutes": {"type": "flutes", "pitch": 6.0, "height": 1.0, "orientation": 90.0}}[cut_type]
     lamp = addon_core.scene.parse_scene(doc)["lamps"][0]
-    rim = meshes.outline_rim(lamp)
-    lens = meshes.lens_mesh(lamp, len(rim), rim=rim)
-    wall = np.unique([i for f, m in zip(lens.faces, lens.material, strict=True) if m == meshes.LENS_SIDE_WALL
+    rim = meshes.builder.outline_rim(lamp)
+    lens = meshes.lens.lens_mesh(lamp, len(rim), rim=rim)
+    wall = np.unique([i for f, m in zip(lens.faces, lens.material, strict=True) if m == meshes.builder.LENS_SIDE_WALL
                       for i in f])
-    reflector = meshes.trimmed_reflector_mesh(lamp, rim).verts
+    reflector = meshes.parts.trimmed_reflector_mesh(lamp, rim).verts
     r = np.hypot(reflector[:, 0], reflector[:, 2])
     edge = reflector[r > 0.999 * np.hypot(rim[:, 0], rim[:, 1]).min()]
-    edge = edge[np.abs(meshes.Outline.of_lens(lamp["lens"]).signed_distance(edge[:, 0], edge[:, 2])) < 1e-9]
+    edge = edge[np.abs(meshes.builder.Outline.of_lens(lamp["lens"]).signed_distance(edge[:, 0], edge[:, 2])) < 1e-9]
     assert len(edge) == len(rim)
     gap = np.linalg.norm(edge[:, None, :] - lens.verts[wall][None, :, :], axis=2).min(axis=1)
     assert gap.max() < 1e-9

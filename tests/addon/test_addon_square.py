@@ -175,9 +175,9 @@ def test_square_meshes_are_closed_and_within_tolerance(lamp_addon, addon_core, e
     for section, values in edits.items():
         doc["lamps"][0][section].update(values)
     lamp = core_tracer.parse_scene(doc)["lamps"][0]
-    rim = meshes.outline_rim(lamp)
-    refl = meshes.trimmed_reflector_mesh(lamp, rim)
-    lens = meshes.lens_mesh(lamp, len(rim), rim=rim)
+    rim = meshes.builder.outline_rim(lamp)
+    refl = meshes.parts.trimmed_reflector_mesh(lamp, rim)
+    lens = meshes.lens.lens_mesh(lamp, len(rim), rim=rim)
     assert refl.max_deviation <= TOL_MM and lens.max_deviation <= TOL_MM
     # The glass is closed: every edge is shared by two faces, except along the cut surface's rim, where
     # the open collar of the side wall stands on it (three), and the collar's top edge (one).

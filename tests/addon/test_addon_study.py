@@ -25,8 +25,8 @@ PRESET = str(BASELINE)
 def design(lamp_addon, bl_scene):
     with open(PRESET, encoding="utf-8") as f:
         scene = core_tracer.parse_scene(json.load(f))
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     settings = bl_scene.lamp_study
     settings.width, settings.height = 32, 32
     settings.workers = 2
@@ -41,7 +41,7 @@ def _two_by_one(settings) -> None:
 
 
 def test_every_study_parameter_is_offered(lamp_addon):
-    offered = [item[0] for item in lamp_addon.study_settings.PARAMETER_ITEMS]
+    offered = [item[0] for item in lamp_addon.study.settings.PARAMETER_ITEMS]
     assert offered == study_parameters()
     assert "lens.transmitted_color" in offered and "cuts.height" in offered
 
@@ -52,7 +52,7 @@ def test_run_study_operator_makes_the_sheet_image(design, lamp_addon):
     _two_by_one(design.lamp_study)
     assert bpy.ops.lamp.study_run() == {"FINISHED"}
     image = bpy.data.images["Lamp Study"]
-    study = lamp_addon.study_settings.last_study()
+    study = lamp_addon.study.settings.last_study()
     assert len(study) == 2 and study.size == (32, 32)
     # The sheet in Blender has the layout core_tracer computes, and each cell is the variant's render.
     lay = study_sheet.layout(st.Study.from_json(study.to_json()))
@@ -80,7 +80,7 @@ def test_range_settings_and_one_lamp(design, lamp_addon):
     settings.axis_2.parameter = "lens.transmitted_color"
     assert settings.axis_2.mode == "LIST"
     settings.axis_2.values = "0.9/0.1/0.1, 0.9/0.5/0.05"
-    study = lamp_addon.study_settings.study_from_settings(design)
+    study = lamp_addon.study.settings.study_from_settings(design)
     assert [a.parameter.text for a in study.axes] == ["lamps[0].cuts.height", "lens.transmitted_color"]
     assert (study.columns, study.rows) == (4, 2)
 
@@ -106,7 +106,7 @@ def test_apply_variant_sets_the_varied_parameter(design, lamp_addon):
     bpy.ops.lamp.study_run()
     design.lamp_study.variant = 2
     assert bpy.ops.lamp.study_apply_variant() == {"FINISHED"}
-    scene = lamp_addon.design_properties.design_to_scene(design)
+    scene = lamp_addon.design.properties.design_to_scene(design)
     assert scene["lamps"][0]["lens"]["ior"] == 1.6
 
 
@@ -118,14 +118,14 @@ def test_save_sheet_writes_the_study_into_the_file(design, lamp_addon, tmp_path)
     path = tmp_path / "sheet.exr"
     assert bpy.ops.lamp.study_save_sheet(filepath=str(path)) == {"FINISHED"}
     again = st.Study.load(path)
-    assert again.to_json() == lamp_addon.study_settings.last_study().to_json()
+    assert again.to_json() == lamp_addon.study.settings.last_study().to_json()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.exr"]
 
 
 def test_keep_variant_saves_a_preset_in_the_user_library(design, lamp_addon, addon_core):
     import bpy
 
-    library, why = lamp_addon.preset_library.user_library()
+    library, why = lamp_addon.presets.library.user_library()
     assert library is not None, why
     _two_by_one(design.lamp_study)
     bpy.ops.lamp.study_run()
@@ -154,10 +154,10 @@ def test_a_study_of_lamp_types_runs_in_blender(design, lamp_addon):
     settings.axis_2.parameter = "collection"
     assert (settings.axis_1.mode, settings.axis_1.values) == ("LIST", "fisheye, sawtooth, flutes")
     assert (settings.axis_2.mode, settings.axis_2.values) == ("LIST", "reflector, prism_plate")
-    log = draw(lamp_addon.study_panel.LAMP_PT_study, design).log
+    log = draw(lamp_addon.study.panel.LAMP_PT_study, design).log
     assert ("label", 'One of "fisheye", "sawtooth", "flutes"', "NONE") in log  # the names the list may hold
     assert bpy.ops.lamp.study_run() == {"FINISHED"}
-    study = lamp_addon.study_settings.last_study()
+    study = lamp_addon.study.settings.last_study()
     assert (study.columns, study.rows) == (3, 2)
     assert study.variants[5].label(study) == "cuts.type=flutes  collection=prism_plate"
     # The cells of the sheet differ from each other (mean absolute difference over 5 % of their mean).
@@ -168,7 +168,7 @@ def test_a_study_of_lamp_types_runs_in_blender(design, lamp_addon):
             assert np.abs(cells[a] - cells[b]).mean() > 0.05 * 0.5 * (cells[a].mean() + cells[b].mean()), (a, b)
     design.lamp_study.variant = 5
     assert bpy.ops.lamp.study_apply_variant() == {"FINISHED"}
-    lamp = lamp_addon.design_properties.design_to_scene(design)["lamps"][0]
+    lamp = lamp_addon.design.properties.design_to_scene(design)["lamps"][0]
     assert (lamp["cuts"]["type"], lamp["collection"]) == ("sawtooth", "prism_plate")
 
 

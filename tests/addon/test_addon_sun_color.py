@@ -33,10 +33,10 @@ def _design(tmp_path, follow: bool) -> dict:
 @pytest.mark.parametrize("follow", [True, False])
 def test_the_lamp_sun_has_the_tracers_colour(lamp_addon, bl_scene, tmp_path, follow):
     scene = _design(tmp_path, follow)
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     # The switch goes through the panel's properties and back unchanged.
-    assert lamp_addon.design_properties.design_to_scene(bl_scene)["light"]["follow_environment_color"] is follow
-    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    assert lamp_addon.design.properties.design_to_scene(bl_scene)["light"]["follow_environment_color"] is follow
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
     light = _sun_light(bl_scene)
     expected = sunlight.sun_color(scene)
     assert tuple(light.color) == pytest.approx(tuple(expected), rel=1e-6)
@@ -57,8 +57,8 @@ def test_the_body_under_the_followed_sun_agrees_with_cycles(lamp_addon, bl_scene
            "environment": {**scene["environment"], "strength": 1e-6}, "body": {**scene["body"], "specular": 0.0},
            "image": {"width": 64, "height": 64, "samples": 1}}
     scene = core_tracer.parse_scene(doc)
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=16, resolution=(64, 64))
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=16, resolution=(64, 64))
     region = (slice(24, 40), slice(4, 14))  # left of the lens, clear of the body's edges
     t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
     c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)

@@ -38,8 +38,8 @@ def test_the_world_holds_the_environment(lamp_addon, bl_scene):
     if environment.bundled_folder() is None:
         pytest.skip("Blender's world images are not on this machine")
     scene = _mirror_scene()
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
     tree = bl_scene.world.node_tree
     texture = tree.nodes["Environment"]
     assert texture.image is not None and texture.image.filepath.endswith("courtyard.exr")
@@ -49,8 +49,8 @@ def test_the_world_holds_the_environment(lamp_addon, bl_scene):
     assert tree.nodes["Background Or Surroundings"].inputs[0].default_value == 1.0
     # Back to none: the paper's black background again, the image no longer seen.
     scene["environment"]["world"] = "none"
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
     assert tree.nodes["Background Or Surroundings"].inputs[0].default_value == 0.0
     assert tree.nodes["Ambient Or Ambient And Surroundings"].inputs[0].default_value == 0.0
 
@@ -59,8 +59,8 @@ def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon
     if environment.bundled_folder() is None:
         pytest.skip("Blender's world images are not on this machine")
     scene = _mirror_scene()
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=SAMPLES, resolution=(48, 32))
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES, resolution=(48, 32))
     tracer, cycles = result["tracer"].astype(np.float64), result["cycles"].astype(np.float64)
     # The lens pixels: a block well inside the lens (the lens covers the centre of the image).
     passes = core_tracer.render_passes(scene, 48, 32, samples=1).passes
@@ -97,15 +97,15 @@ def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp
     doc["environment"] = {"world": "sunset", "strength": 1.0, "rotation_deg": 0.0}
     doc["image"] = {"width": 48, "height": 32, "samples": samples}
     scene = core_tracer.parse_scene(doc)
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
     rgba = _engine_rgba(bl_scene, tmp_path / "film.exr")
     alpha = rgba[:, :, 3]
     assert (alpha == 0).sum() > 100 and (alpha == 1).sum() > 100
     np.testing.assert_allclose(rgba[alpha == 0, :3], 0.0, atol=1e-7)  # no sky where nothing is
-    seen = lamp_addon.render_camera.scene_for_render(bl_scene)
+    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     full = core_tracer.render(seen)
     # Where every ray hits the lamp, the sky still shows in the lens and lights the body.
     np.testing.assert_allclose(rgba[alpha == 1, :3], full[alpha == 1], rtol=1e-6, atol=1e-7)
@@ -119,8 +119,8 @@ def test_the_lamp_sun_follows_the_sun_of_the_design_and_of_the_environment(lamp_
                     "sun_color": [1.0, 0.6, 0.3], "follow_environment": True}
     doc["environment"] = {"world": "sunset", "strength": 1.0, "rotation_deg": 30.0}
     scene = core_tracer.parse_scene(doc)
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
     sun = next(ob for ob in bl_scene.objects if ob.type == "LIGHT" and ob.data.type == "SUN")
     assert sun.data.energy == pytest.approx(np.pi * 0.8 * 2.5, rel=1e-6)
     assert tuple(sun.data.color) == pytest.approx((1.0, 0.6, 0.3))
@@ -142,8 +142,8 @@ def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
     doc["environment"] = {"world": "courtyard", "strength": 1.0, "rotation_deg": 40.0}
     doc["image"] = {"width": 64, "height": 64}
     scene = core_tracer.parse_scene(doc)
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare_ops.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
     region = (slice(24, 40), slice(4, 14))  # left of the lens, clear of the body's edges (as the lit-body test)
     t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
     c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
@@ -158,15 +158,15 @@ def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_n
         pytest.skip("Blender's world images are not on this machine")
     scene = _mirror_scene()
     scene["environment"]["world"] = "none"
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
     tree = bl_scene.world.node_tree
     assert tree.nodes.get("Surroundings") is None  # the paper's world, as earlier versions built it
     extra = tree.nodes.new("ShaderNodeValue")
     extra.name = "Designer's Value"
     scene["environment"]["world"] = "city"
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    report = lamp_addon.design_builder.build_lamp(bl_scene, scene)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    report = lamp_addon.design.builder.build_lamp(bl_scene, scene)
     assert report.not_driven == []
     assert tree.nodes.get("Designer's Value") is not None
     assert tree.nodes["Environment"].image.filepath.endswith("city.exr")

@@ -6,15 +6,15 @@
   zoom and pan as a scaled, off-centre window) and ``matrix_world.inverted()``; a point on each
   tracer eye ray (``core_tracer.raytrace.camera``) must land on its pixel's centre to 1e-6 of
   the image.
-- The progressive stages (``lamp_addon.render_preview``), stepped in the test's own thread:
+- The progressive stages (``lamp_addon.render.preview``), stepped in the test's own thread:
   coarse then full, restarted on an edit, and a stale job never publishes.
-  The viewport session (``lamp_addon.render_viewport``) restarts on design edits, view changes,
+  The viewport session (``lamp_addon.render.viewport``) restarts on design edits, view changes,
   region resizes and moves of the design root, and says why it shows nothing.
 - The draw path (``ViewportSession.draw_frame``) drawn into a ``gpu.types.GPUOffScreen`` gives the
   tracer's image back; through Blender's view transform it equals the tracer's image under that
   transform within 1/255. Needs a display: run under ``xvfb-run -a`` (the README's test command
   does); without one those tests skip.
-- The engine's film-transparent alpha (``render_engine.body_coverage``) is the tracer's own
+- The engine's film-transparent alpha (``render.engine.body_coverage``) is the tracer's own
   ray-box decision.
 """
 
@@ -250,13 +250,13 @@ def _four_lamps() -> dict:
 
 def _refined(lamp_addon, scene: dict, width: int, height: int) -> np.ndarray:
     """The refined stage's image: full resolution at the preview's samples per pixel."""
-    samples = lamp_addon.render_preview.REFINE_SAMPLES
+    samples = lamp_addon.render.preview.REFINE_SAMPLES
     return core_tracer.render_passes(scene, width, height, samples=samples, keep_passes=False).image
 
 
 def test_stages_run_coarse_then_full_then_refined(lamp_addon):
     scene = _four_lamps()
-    preview = lamp_addon.render_preview.ProgressivePreview(divisors=(8, 1), threads=1)
+    preview = lamp_addon.render.preview.ProgressivePreview(divisors=(8, 1), threads=1)
     assert not preview.step() and preview.frame() is None  # nothing to do before a restart
     preview.restart(scene, 64, 48)
     assert preview.busy() and preview.frame() is None
@@ -272,7 +272,7 @@ def test_stages_run_coarse_then_full_then_refined(lamp_addon):
     assert preview.busy()  # more samples per pixel to come
     assert preview.step()
     refined = preview.frame()
-    assert (refined.stage, refined.divisor, refined.samples) == (2, 1, lamp_addon.render_preview.REFINE_SAMPLES)
+    assert (refined.stage, refined.divisor, refined.samples) == (2, 1, lamp_addon.render.preview.REFINE_SAMPLES)
     np.testing.assert_array_equal(refined.image, _refined(lamp_addon, scene, 64, 48))
     assert not preview.step() and not preview.busy()
     assert preview.history == [(1, 0), (1, 1), (1, 2)]
@@ -281,7 +281,7 @@ def test_stages_run_coarse_then_full_then_refined(lamp_addon):
 def test_an_edit_during_refinement_restarts_from_the_coarse_stage(lamp_addon):
     scene = _four_lamps()
     edited = core_tracer.parse_scene({**_four_lamps_doc(), "background": [0.2, 0.3, 0.4]})
-    preview = lamp_addon.render_preview.ProgressivePreview(divisors=(8, 1), threads=1)
+    preview = lamp_addon.render.preview.ProgressivePreview(divisors=(8, 1), threads=1)
     preview.restart(scene, 64, 48)
     preview.step()
     preview.step()  # full resolution; the refined stage is next
@@ -295,7 +295,7 @@ def test_an_edit_during_refinement_restarts_from_the_coarse_stage(lamp_addon):
 
 
 def test_without_refinement_the_stages_end_at_full_resolution(lamp_addon):
-    rp = lamp_addon.render_preview
+    rp = lamp_addon.render.preview
     assert rp.stage_plan((8, 1), 16) == ((8, 1), (1, 1), (1, 16))
     assert rp.stage_plan((8, 1), 1) == ((8, 1), (1, 1))
     preview = rp.ProgressivePreview(divisors=(8, 1), threads=1, refine_samples=1)
@@ -308,7 +308,7 @@ def test_without_refinement_the_stages_end_at_full_resolution(lamp_addon):
 def test_an_edit_restarts_from_the_coarse_stage(lamp_addon):
     scene = _four_lamps()
     edited = core_tracer.parse_scene({**_four_lamps_doc(), "background": [0.2, 0.3, 0.4]})
-    preview = lamp_addon.render_preview.ProgressivePreview(divisors=(8, 1), threads=1)
+    preview = lamp_addon.render.preview.ProgressivePreview(divisors=(8, 1), threads=1)
     preview.restart(scene, 64, 48)
     preview.step()  # the coarse image of the first design
     stale = preview.job
@@ -322,7 +322,7 @@ def test_an_edit_restarts_from_the_coarse_stage(lamp_addon):
 
 
 def test_a_stage_finished_after_the_view_changed_is_never_shown(lamp_addon):
-    rp = lamp_addon.render_preview
+    rp = lamp_addon.render.preview
     preview = rp.ProgressivePreview(divisors=(8, 1), threads=1)
     preview.restart(_four_lamps(), 64, 48)
     old = preview.job
@@ -334,7 +334,7 @@ def test_a_stage_finished_after_the_view_changed_is_never_shown(lamp_addon):
 
 def test_a_stopped_job_stops_between_bands(lamp_addon):
     """The tracer polls the job's cancel flag between bands: a cancelled stage ends early."""
-    rp = lamp_addon.render_preview
+    rp = lamp_addon.render.preview
     job = rp.PreviewJob(_four_lamps(), 512, 512, generation=1, divisors=(1,), threads=1)
     bands = []
     original = job._cancel.is_set
@@ -351,8 +351,8 @@ def test_a_stopped_job_stops_between_bands(lamp_addon):
 
 
 def _design_session(lamp_addon, bl_scene):
-    lamp_addon.design_properties.scene_to_design(bl_scene, _four_lamps())
-    session = lamp_addon.render_viewport.ViewportSession(None, in_background=False)
+    lamp_addon.design.properties.scene_to_design(bl_scene, _four_lamps())
+    session = lamp_addon.render.viewport.ViewportSession(None, in_background=False)
     session.update(bl_scene)
     return session
 
@@ -363,7 +363,7 @@ def _design_session_with_root(lamp_addon, bl_scene):
 
     session = _design_session(lamp_addon, bl_scene)
     root = bpy.data.objects.new("Lamp Design", None)
-    root[lamp_addon.design_root.PART_KEY] = lamp_addon.design_root.ROOT_PART
+    root[lamp_addon.design.root.PART_KEY] = lamp_addon.design.root.ROOT_PART
     bl_scene.collection.objects.link(root)
     return session, root
 
@@ -407,7 +407,7 @@ def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_sc
     assert status.startswith("Lamp Tracer: design not valid (not built); Lamp 1 Bulb: Radius: "), status
     assert "mm" in status.split("Radius: ", 1)[1]  # the allowed range, in mm
 
-    lamp_addon.design_builder.build_lamp(bl_scene, _four_lamps())  # built before the bad edit
+    lamp_addon.design.builder.build_lamp(bl_scene, _four_lamps())  # built before the bad edit
     session.update(bl_scene)
     assert session.status().startswith("Lamp Tracer: design not valid (objects as last built); Lamp 1 Bulb")
     bl_scene.lamp_design.lamps.clear()
@@ -501,7 +501,7 @@ def test_drawn_pixels_are_the_tracers_image_under_the_view_transform(lamp_addon,
     """Standard view transform with an exposure: the drawn region, colour-managed by Blender,
     equals the sRGB encoding of 2^exposure times the tracer's image within 1/255."""
     width, height = 160, 120
-    lamp_addon.design_properties.scene_to_design(bl_scene, _four_lamps())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _four_lamps())
     window, view = _three_quarter_view(width, height)
     drawn = _draw_viewport(lamp_addon, bl_scene, width, height, window, view)
     traced = _refined(lamp_addon, drawn["scene"], width, height)
@@ -528,7 +528,7 @@ def test_drawn_pixels_under_agx_match_the_tracers_image_under_agx(lamp_addon, bl
     import shutil
 
     width, height = 320, 240
-    lamp_addon.design_properties.scene_to_design(bl_scene, _four_lamps())
+    lamp_addon.design.properties.scene_to_design(bl_scene, _four_lamps())
     window, view = _three_quarter_view(width, height)
     drawn = _draw_viewport(lamp_addon, bl_scene, width, height, window, view)
     traced = _refined(lamp_addon, drawn["scene"], width, height)
@@ -556,7 +556,7 @@ def test_body_coverage_is_where_the_tracer_hits_the_body(lamp_addon, position):
     scene = core_tracer.parse_scene(doc)
     scene["camera"] = {**scene["camera"], "position": position, "target": [0.0, 500.0, 0.0], "fov_deg": 60.0}
     passes = core_tracer.render_passes(scene).passes
-    coverage = lamp_addon.render_engine.body_coverage(scene, 0, 32)
+    coverage = lamp_addon.render.engine.body_coverage(scene, 0, 32)
     background_only = np.all(np.isclose(passes["background"], [0.2, 0.3, 0.4]), axis=-1)
     np.testing.assert_array_equal(coverage == 0, background_only)
 
@@ -564,7 +564,7 @@ def test_body_coverage_is_where_the_tracer_hits_the_body(lamp_addon, position):
 def test_stages_on_the_worker_thread(lamp_addon):
     """What the engine does: the stages on a worker thread; a restart while it runs means nothing
     of the old job is published afterwards."""
-    rp = lamp_addon.render_preview
+    rp = lamp_addon.render.preview
     scene = _four_lamps()
     preview = rp.ProgressivePreview(divisors=(8, 1), threads=2)
     preview.restart(scene, 64, 48)
@@ -604,7 +604,7 @@ def test_moving_the_design_root_moves_the_view_of_the_lamp(lamp_addon, bl_scene)
 @pytest.mark.parametrize("size, divisor", [((1024, 768), 8), ((1920, 1080), 16), ((3840, 2160), 32),
                                            ((300, 200), 4), ((200, 150), 2), ((40, 30), 2)])
 def test_the_coarse_stage_keeps_to_its_pixel_budget(lamp_addon, size, divisor):
-    rp = lamp_addon.render_preview
+    rp = lamp_addon.render.preview
     assert rp.coarse_divisor(*size) == divisor
     assert rp.stages_for(*size) == (divisor, 1)
     w, h = rp.stage_size(*size, divisor)

@@ -106,12 +106,12 @@ def test_the_wrap_lens_materials_follow_the_mapping(wrap):
 def test_a_round_cylindrical_lens_mesh_is_closed_and_within_the_tolerance(lamp_addon, addon_core, side):
     from collections import Counter
 
-    meshes, wrap_meshes = lamp_addon.convert.meshes, lamp_addon.convert.wrap_meshes
+    builder, wrap_meshes = lamp_addon.convert.meshes.builder, lamp_addon.convert.meshes.wrap
     doc = addon_core.scene.load_scene(PRESETS / "paper-baseline.json")
     doc["lamps"][0]["lens"].update(shape="cylindrical", wrap_radius=100.0, wrap_toward=side)
     doc["body"].update(center=[-5.0 if side == "+x" else 5.0, 0.0], size=[118.0, 120.0], depth=160.0)
     lamp = addon_core.scene.validate.normalize(doc)["lamps"][0]
-    data = wrap_meshes.cylindrical_lens_mesh(lamp, meshes.rim_polygon(45.0, meshes.circle_segments(45.0)), 6)
+    data = wrap_meshes.cylindrical_lens_mesh(lamp, builder.rim_polygon(45.0, builder.circle_segments(45.0)), 6)
     assert data.max_deviation <= TOL_MM
     uses = Counter()
     for face in data.faces:
@@ -156,8 +156,8 @@ def test_bulb_through_a_smooth_cylindrical_lens_agrees_with_cycles(lamp_addon, b
 def test_auto_build_previews_a_cylindrical_lens_then_builds_it_in_full(lamp_addon, bl_scene, addon_core):
     # the cylindrical lens's mesh is made in Python: while a designer drags, a lighter preview
     scene = addon_core.scene.load_scene(PRESETS / "wrap-around-combination.json")
-    lamp_addon.design_properties.scene_to_design(bl_scene, scene)
-    builder = lamp_addon.design_builder
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    builder = lamp_addon.design.builder
     assert builder.build_lamp(bl_scene, scene, preview=True).preview
     preview_faces = len(_objects(bl_scene)["Lamp 3 Lens"].data.polygons)
     assert not builder.build_lamp(bl_scene, scene).preview

@@ -34,7 +34,8 @@ def _run(code: str) -> str:
 
 def test_every_convert_module_imports_without_blender():
     out = _run("""
-names = sorted(m.name for m in pkgutil.iter_modules(convert.__path__))
+prefix = "lamp_styling.lamp_addon.convert."
+names = sorted(m.name.removeprefix(prefix) for m in pkgutil.walk_packages(convert.__path__, prefix))
 for name in names:
     importlib.import_module(f"lamp_styling.lamp_addon.convert.{name}")
 loaded = [m for m, v in sys.modules.items() if v is not None and (m.split(".")[0] in ("bpy", "mathutils"))]

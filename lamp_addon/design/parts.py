@@ -1,0 +1,259 @@
+"""What a lamp design is made of: its parts as meshes of given shapes, with materials and places.
+
+Pure description, no Blender data read or written (``design.builder`` puts the parts into Blender):
+each ``MeshPart`` names its part, the numbers its mesh is made from (``shape``, compared with the one a
+mesh was built from, so an unchanged part is not remade), how to make that mesh (``convert.meshes``),
+its material slots and its transform relative to the root. The meshes made last are kept in memory
+(``shapes``), so undo, redo and dragging a value back make nothing again; ``make_lenses`` fills it from
+Auto Build's worker thread.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+
+import numpy as np
+from mathutils import Matrix
+from mathutils.geometry import tessellate_polygon
+
+from ...core_tracer.scene import functions
+from ...core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geometry, lens_cylinder
+from ...core_tracer.scene.outline import Outline
+from ..convert import units
+from ..convert.meshes import builder as mesh_builder
+from ..convert.meshes import fisheye, prism_plate, wrap
+from ..convert.meshes import lens as lens_meshes
+from ..convert.meshes import parts as part_meshes
+from . import materials
+
+MM = units.BU_PER_MM
+CHORD_TOLERANCE_MM = mesh_builder.CHORD_TOLERANCE_MM
+# A preview lens has at most about this many cut-surface quads: a deep cut at full tolerance has up
+# to ~190,000 faces and takes 1-4 s to make, its preview 0.03-0.25 s (benchmarks/bench_build.py).
+PREVIEW_CUT_QUADS = 5000
+CYLINDER_PREVIEW_QUADS = 2  # quads per cut cell side of a cylindrical lens's preview (0.2 s to make)
+
+
+@dataclass
+class Slot:
+    part: str  # the material's lamp_part
+    name: str  # its name when the builder makes it
+    drive: Callable[..., list[str]]  # design.materials function with the design's values: drive(mat, new=...)
+
+
+@dataclass
+class MeshPart:
+    part: str
+    name: str
+    shape: tuple  # the numbers the mesh is made from (the builder keeps them on the mesh)
+    make: Callable[[], mesh_builder.MeshData]
+    slots: list[Slot]
+    matrix: Matrix  # where the design puts it, relative to the root
+
+
+class Memo:
+    """The last results of a slow function of hashable arguments, at most ``size`` of them weighing at
+    most ``most`` together (shared with Auto Build's worker thread: the lock guards the table, not the
+    making)."""
+
+    def __init__(self, size: int, weight: Callable = lambda value: 1, most: float = math.inf):
+        self.size, self.weight, self.most = size, weight, most
+        self.items: OrderedDict = OrderedDict()
+        self.lock = threading.Lock()
+
+    def get(self, key, make: Callable):
+        with self.lock:
+            if key in self.items:
+                self.items.move_to_end(key)
+                return self.items[key]
+        value = make()
+        with self.lock:
+            self.items[key] = value
+            while len(self.items) > 1 and (len(self.items) > self.size or
+                                           sum(map(self.weight, self.items.values())) > self.most):
+                self.items.popitem(last=False)
+        return value
+
+
+# MeshData by shape, so that undo, redo and dragging back make nothing again. A face costs ~200 bytes
+# of Python objects: 500,000 faces (under three deep-cut lenses of 190,000) are ~100 MB.
+shapes = Memo(40, weight=lambda data: len(data.faces), most=500_000)
+subdivisions = Memo(64)  # quads per cell side of a cut surface
+
+
+def _translation(x_mm: float, y_mm: float, z_mm: float) -> Matrix:
+    return Matrix.Translation((x_mm * MM, y_mm * MM, z_mm * MM))
+
+
+def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[MeshPart], np.ndarray, tuple, bool]:
+    """Lamp i's mesh parts, named after ``label`` ("Stop" makes "Stop Lens"), its rim polygon in scene
+    [x, z] and its bore (for the body's opening), and whether its lens is a preview."""
+    base = f"lamps[{i}]"
+    g = lamp_geometry(lamp)
+    R = lamp["lens"]["radius"]
+    outline = Outline.of_lens(lamp["lens"])
+    f = lamp["reflector"]["focal_length"]
+    prism = lamp.get("collection", "reflector") == "prism_plate"
+    lens_outline, rim_local = R, None
+    if prism:  # a round lens only (validation)
+        n = mesh_builder.circle_segments(R)
+        collecting = prism_plate_parts(base, label, lamp, n)
+    elif outline.round:
+        reflector_shape = ("reflector", R, f, g["vertex"], CHORD_TOLERANCE_MM)
+        reflector = shapes.get(reflector_shape,
+                                lambda: part_meshes.reflector_mesh(lamp, mesh_builder.circle_segments(R),
+                                                                   CHORD_TOLERANCE_MM))
+        n = ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
+    else:  # one rim polygon for the lens, the trimmed reflector and the body opening
+        rim_local = mesh_builder.outline_rim(lamp, CHORD_TOLERANCE_MM)
+        lens_outline = ("rectangular", outline.half_w, outline.half_h, outline.corner, f, g["vertex"])
+        reflector_shape = ("reflector", lens_outline, CHORD_TOLERANCE_MM)
+        reflector = shapes.get(reflector_shape,
+                                lambda: part_meshes.trimmed_reflector_mesh(lamp, rim_local, CHORD_TOLERANCE_MM))
+        n = len(rim_local)
+    if not prism:
+        collecting = [MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
+                               [Slot(f"{base}.reflector", f"{label} Reflector",
+                                     partial(materials.reflector, lamp=lamp))], None)]
+    k, lighter = cut_quads(lamp, preview)
+    cx, cz = lamp["center"]
+    axis = _translation(cx, 0.0, cz)
+    bx, by, bz = g["bulb_center"]
+    rb, rs = lamp["bulb"]["radius"], lamp["socket"]["radius"]
+    lens, cuts = lamp["lens"], lamp["cuts"]
+    parts = [
+        MeshPart(f"{base}.lens", f"{label} Lens",
+                  ("lens", lens_outline, lens["thickness"], cuts["pitch"], _cut_shape(cuts), n, CHORD_TOLERANCE_MM,
+                   k),
+                  partial(lens_meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k, rim_local),
+                  [Slot(f"{base}.lens", f"{label} Lens", partial(materials.lens_glass, lamp=lamp)),
+                   _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
+                                 "Side Wall BSDF")], axis),
+        *(dataclasses.replace(part, matrix=axis) for part in collecting),
+        MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM),
+                  partial(part_meshes.sphere_mesh, rb),
+                  [Slot(f"{base}.bulb", f"{label} Bulb", partial(materials.bulb, lamp=lamp))],
+                  _translation(cx + bx, by, cz + bz)),
+        MeshPart(f"{base}.socket", f"{label} Socket", ("socket", rs, g["vertex"], by, CHORD_TOLERANCE_MM),
+                  partial(part_meshes.socket_mesh, rs, g["vertex"], by),
+                  [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
+    ]
+    if lens_cylinder(lamp) is not None:
+        if preview and k > CYLINDER_PREVIEW_QUADS:  # its mesh is made in Python: 1.5 s at 6 x 6 quads a cell
+            k, lighter = CYLINDER_PREVIEW_QUADS, True
+        rim = mesh_builder.rim_polygon(R, n) if outline.round else rim_local
+        return _cylindrical(parts, lamp, rim, lens_outline, k, g, lighter)
+    if outline.round:
+        return parts, mesh_builder.rim_polygon(R, n) + np.array([cx, cz]), (g["plane_b"], g["rim"]), lighter
+    # a rectangular lens's collar reaches the reflector's edge: the body's opening needs no bore
+    return parts, rim_local + np.array([cx, cz]), (g["plane_b"], g["plane_b"]), lighter
+
+
+def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outline, k: int, g: dict,
+                 lighter: bool) -> tuple[list[MeshPart], np.ndarray, tuple, bool]:
+    """``lamp_parts`` for a cylindrical lens (README, "the cylindrical lens"): the lens mesh on its
+    cylinder, and the body's opening where its outer face meets its side wall."""
+    lens, cuts = lamp["lens"], lamp["cuts"]
+    key = ("cylindrical lens", lens_outline, lens["thickness"], cuts["pitch"], cuts["height"], len(rim),
+           lens["wrap_radius"], lens["wrap_toward"], CHORD_TOLERANCE_MM, k)
+    data = shapes.get(key, partial(wrap.cylindrical_lens_mesh, lamp, rim, k, CHORD_TOLERANCE_MM))
+    old = parts[0]
+    parts[0] = MeshPart(old.part, old.name, key, lambda: data, old.slots, old.matrix)
+    opening = wrap.outer_rim(data, lamp) + np.array(lamp["center"])
+    return parts, opening, (g["plane_b"], g["rim"]), lighter
+
+
+def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[MeshPart]:
+    """A prism-plate lamp's plate (glass) and housing (diffuse) in place of the reflector (README, the
+    prism plate); their matrices are set by ``lamp_parts``."""
+    plate = lamp["prism_plate"]
+    g = lamp_geometry(lamp)
+    profile = (lamp["lens"]["radius"], plate["pitch"], plate["focal_length"], plate["ior"], g["plate_front"],
+               g["plate_base"], segments, CHORD_TOLERANCE_MM)
+    return [
+        MeshPart(f"{base}.prism_plate", f"{label} Prism Plate", ("prism_plate", *profile),
+                  partial(prism_plate.prism_plate_mesh, lamp, segments),
+                  [Slot(f"{base}.prism_plate", f"{label} Prism Plate",
+                        partial(materials.prism_plate_glass, lamp=lamp))], None),
+        MeshPart(f"{base}.housing", f"{label} Housing",
+                  ("housing", lamp["lens"]["radius"], g["plate_front"], g["vertex"], segments, CHORD_TOLERANCE_MM),
+                  partial(prism_plate.housing_mesh, lamp, segments),
+                  [_diffuse_slot(f"{base}.housing", f"{label} Housing", plate["housing_color"], "Housing BSDF")],
+                  None),
+    ]
+
+
+def _diffuse_slot(part: str, name: str, color, node: str) -> Slot:
+    return Slot(part, name, partial(materials.diffuse, color=color, node_name=node))
+
+
+def _cut_shape(cuts: dict) -> float | tuple:
+    """What the lens mesh depends on besides pitch: the fish-eye cut height, or the saw-tooth's
+    type, tooth angle and orientation, or the flutes' height and orientation."""
+    if cuts["type"] == "sawtooth":
+        return ("sawtooth", cuts["tooth_angle"], cuts["orientation"])
+    if cuts["type"] == "flutes":
+        return ("flutes", cuts["height"], cuts["orientation"])
+    return cuts["height"]
+
+
+def cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
+    """Quads per side of one lenslet cell, and whether that is fewer than the tolerance needs (a preview).
+
+    A preview has at most ``preview_subdivision`` quads per side; the search for the full count then
+    stops just past that (a deep cut's full search measures cells of up to 48 x 48 quads). Saw-tooth
+    facets are planar: one polygon each, exact, the same in a preview."""
+    if lamp["cuts"]["type"] in ("sawtooth", "flutes"):  # bands along the ridges: few faces, no preview
+        return 1, False
+    t, p, h = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], lamp["cuts"]["height"]
+    outline = Outline.of_lens(lamp["lens"])
+    area_radius = outline.half_w if outline.round else math.sqrt(outline.area / math.pi)  # same cell count
+    light = preview_subdivision(area_radius, p) if preview else mesh_builder.MAX_CELL_SUBDIVISION
+    most = light + 1 if preview else mesh_builder.MAX_CELL_SUBDIVISION
+    k = subdivisions.get((t, p, h, most), partial(_cut_subdivision, t, p, h, most))
+    return min(k, light), k > light
+
+
+def body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> MeshPart:
+    body = scene["body"]
+    shape = ("body", tuple(body["center"]), tuple(body["size"]), body["depth"],
+             tuple(tuple(map(tuple, rim.round(9).tolist())) for rim in rims), tuple(bores))
+    wraps = body_wraps(scene)
+    if wraps:  # a front that curves round to the side (cylindrical lenses)
+        return MeshPart("body", "Lamp Body", (*shape, tuple(wraps)),
+                        partial(wrap.body_mesh_wrapped, scene, rims, bores, wraps, tessellate_polygon),
+                        [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
+    return MeshPart("body", "Lamp Body", shape, partial(part_meshes.body_mesh, scene, rims, bores, tessellate_polygon),
+                     [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
+
+
+def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:
+    rho = None if height == 0 else cut_sphere_radius(pitch, height)
+    return fisheye.cut_subdivision(fisheye.CutSurface(thickness, pitch, height, rho), most=most)[0]
+
+
+def preview_subdivision(radius: float, pitch: float) -> int:
+    """Quads per cell side that keep a preview lens near ``PREVIEW_CUT_QUADS`` quads."""
+    cells = math.pi * (radius / pitch + 0.5) ** 2
+    return max(2, math.floor(math.sqrt(PREVIEW_CUT_QUADS / cells)))
+
+
+def ring_segments(data: mesh_builder.MeshData) -> int:
+    """Segments of the reflector's rim ring (its vertices at the largest radius)."""
+    r = np.hypot(data.verts[:, 0], data.verts[:, 2])
+    return int(np.count_nonzero(r > r.max() * (1 - 1e-9)))
+
+
+def make_lenses(scene: dict) -> None:
+    """Make the full-quality lenses of a normalised scene, into memory only: no Blender data is read or
+    written, so Auto Build runs this in a worker thread, and the ``build_lamp`` that follows only
+    copies the meshes into Blender (a deep cut's lens takes seconds to make, 0.3 s to copy)."""
+    for i, lamp in enumerate(scene["lamps"]):
+        lens = lamp_parts(i, lamp, False, functions.lamp_label(scene["lamps"], i))[0][0]
+        shapes.get(lens.shape, lens.make)

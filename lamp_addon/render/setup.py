@@ -1,0 +1,143 @@
+"""What a file needs to show the lamp, done once when the lamp is first built there.
+
+A designer who builds a lamp in Blender's startup file expects to see it: the startup Camera is
+11 m away and frames the Cube, the render engine is EEVEE, and at exposure 0 a lit lens (ten or
+more times display white) is a flat pale disk under AgX. So the first build of a design in a file
+(``set_up``) sets the scene up for the lamp, each change said in the operator's report:
+
+- **camera**: the add-on's Lamp Camera (made when missing, at the design's view, framed on the
+  body when that view does not show it all) becomes the scene camera, parented to the design's
+  root so that it moves with the lamp. The user's own camera object is never touched; it is only
+  no longer the scene camera (the Scene properties switch back).
+- **engine**: Lamp Tracer, when the scene still renders with EEVEE (the engine of a new file): F12
+  and the viewport's Rendered shading then show the paper's model. Another engine is a choice.
+- **exposure**: the scene's exposure (Color Management) is set to the design's automatic exposure
+  (``image_view.design_exposure``), when it is still 0 (the default). Each later Build Lamp keeps it
+  at the design's exposure (a brighter bulb gets a lower exposure) for as long as it holds the value
+  the add-on set; once the user sets their own, it is theirs. Auto Build's builds leave it: the
+  picture is not re-exposed at every step of a drag.
+
+The scene remembers that it was set up (``SETUP_KEY``), so a camera or an engine the user chose
+afterwards is never changed again by a build.
+"""
+
+from __future__ import annotations
+
+import json
+
+from ...core_tracer.scene.reading import SceneError
+from ...core_tracer.scene.validate import parse_scene
+from .. import image_view
+from ..convert import camera as cm
+from ..design import properties as design_properties
+from . import camera, lamp_camera
+from .engine import ENGINE_ID
+
+SETUP_KEY = "lamp_scene_setup"  # scene custom property: JSON {"exposure": the value the add-on set, or null}
+DEFAULT_ENGINES = ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")  # what a new file renders with (4.2-5.0)
+EXPOSURE_TOLERANCE = 1e-3  # stops: Blender stores the exposure in single precision
+
+
+def _memory(bl_scene) -> dict | None:
+    text = bl_scene.get(SETUP_KEY)
+    if not isinstance(text, str):
+        return None
+    try:
+        memory = json.loads(text)
+    except ValueError:
+        return None
+    return memory if isinstance(memory, dict) else None
+
+
+def _remember(bl_scene, exposure: float | None) -> None:
+    bl_scene[SETUP_KEY] = json.dumps({"exposure": exposure})
+
+
+def is_set_up(bl_scene) -> bool:
+    """Whether the scene was set up for the lamp (by a build, or Exposure from Design)."""
+    return _memory(bl_scene) is not None
+
+
+def design_view_shows_body(bl_scene) -> bool:
+    """Whether the design's own camera is a valid view in which the whole body lies in the image."""
+    doc = design_properties.design_document(bl_scene)
+    try:
+        scene = parse_scene({**doc, "lamps": doc["lamps"] or [{}]})
+    except SceneError:
+        return False
+    size = (scene["image"]["width"], scene["image"]["height"])
+    corners = cm.project(scene["camera"], size, cm.box_corners(*cm.body_box(scene)))
+    return all(0.0 <= x <= size[0] and 0.0 <= y <= size[1] and depth > 0.0 for x, y, depth in corners)
+
+
+def _camera(bl_scene) -> str:
+    previous = bl_scene.camera
+    if camera.find_lamp_camera(bl_scene) is None:
+        ob, what = lamp_camera.ensure_lamp_camera(bl_scene, frame=not design_view_shows_body(bl_scene))
+    else:  # made earlier (by a preset, by Compare): the link renewed
+        ob, what = lamp_camera.ensure_lamp_camera(bl_scene)[0], ""
+        if previous is not ob:
+            bl_scene.camera = ob
+            what = f'made "{ob.name}" the scene camera' + (
+                f' (your "{previous.name}" is kept as it was)' if previous is not None else "")
+    lamp_camera.carry_with_root(bl_scene, ob)  # the lamp's view moves with the lamp
+    return what
+
+
+def _engine(bl_scene) -> str:
+    engine = bl_scene.render.engine
+    if engine not in DEFAULT_ENGINES:
+        return ""
+    bl_scene.render.engine = ENGINE_ID
+    return "render engine Lamp Tracer (was EEVEE; F12 and Rendered shading show the lamp)"
+
+
+def exposure_is_the_addons(bl_scene) -> bool:
+    """Whether the scene's exposure may follow the design: still the default 0 before the set-up,
+    afterwards still the value the add-on set."""
+    memory = _memory(bl_scene)
+    ours = 0.0 if memory is None else memory.get("exposure")
+    return isinstance(ours, int | float) and abs(bl_scene.view_settings.exposure - ours) <= EXPOSURE_TOLERANCE
+
+
+def follow_design_exposure(bl_scene, *, force: bool = False) -> str:
+    """Set the scene's exposure to the design's automatic exposure, measured through the scene camera
+    (when it is still the add-on's to set, or ``force``: Exposure from Design); remembered as the
+    add-on's. Returns what changed, for a report ("" when nothing did)."""
+    if not force and not exposure_is_the_addons(bl_scene):
+        return ""
+    try:
+        scene = camera.scene_for_render(bl_scene)
+    except SceneError:
+        return ""  # no camera, or an invalid design: the operator or the panel says why
+    exposure = image_view.design_exposure(scene)
+    settings = bl_scene.view_settings
+    changed = abs(settings.exposure - exposure) > EXPOSURE_TOLERANCE
+    if changed:
+        settings.exposure = exposure
+    _remember(bl_scene, exposure)
+    if not changed:
+        return ""
+    return (f"exposure {exposure:+.1f} EV ({settings.view_transform}), the design's: the lit lens shows its "
+            "cut pattern")
+
+
+def set_up(bl_scene) -> list[str]:
+    """Set the scene up for the lamp after a build (see the module's doc): the first time, the camera,
+    the engine and the exposure; afterwards the exposure only, while it is still the add-on's.
+    Returns what changed, one phrase per change, for the operator's report."""
+    news = []
+    if not is_set_up(bl_scene):
+        news += [_camera(bl_scene), _engine(bl_scene)]
+        _remember(bl_scene, 0.0 if exposure_is_the_addons(bl_scene) else None)  # None: the user's own exposure
+    ob = camera.find_lamp_camera(bl_scene)
+    if ob is not None:
+        lamp_camera.carry_with_root(bl_scene, ob)  # made before the root (Add Lamp, a preset)
+    news.append(follow_design_exposure(bl_scene))
+    return [n for n in news if n]
+
+
+def news_text(news: list[str]) -> str:
+    """The changes as one clause of a report: "; made ...; render engine ..." ("" for none)."""
+    return "".join(f"; {n}" for n in news)
+

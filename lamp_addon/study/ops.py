@@ -1,0 +1,270 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Running a design study from Blender and using its contact sheet.
+
+From the interface the variants render in worker processes (``core_tracer.study_run``) while a
+modal operator polls them on a timer: the interface keeps responding, the progress shows in the
+status bar, Esc cancels (the workers are stopped, nothing is kept). Called from a script or in
+background mode, where there are no windows, the operator renders synchronously (``execute``).
+The sheet becomes the "Lamp Study" image, shown in an Image Editor, carrying the study's JSON
+as a custom property; from it a sheet file (EXR/PNG, study in the header) can be saved, and any
+variant applied to the design or kept as a preset.
+
+Only ``{'REGISTER'}`` for the study itself, like ``render.render``: it makes a picture and changes
+nothing the design is made of. Applying a variant changes the design, so that one has UNDO.
+"""
+
+from __future__ import annotations
+
+import time
+
+import bpy
+from bpy.props import StringProperty
+from bpy_extras.io_utils import ExportHelper
+
+from ...core_tracer.library import presets as P
+from ...core_tracer.scene.reading import SceneError
+from ...core_tracer.study import definition as st
+from .. import image_view, jobs, reports
+from ..design import properties as design_properties
+from ..presets import library as preset_library
+from . import settings
+from .settings import last_study, sheet_image
+
+# ---------------------------------------------------------------------------------------------
+# The sheet image
+
+
+def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
+    """Compose the contact sheet into the "Lamp Study" image and show it in an Image Editor."""
+    from ...core_tracer.images import display
+    from ...core_tracer.study import sheet as study_sheet
+
+    exposure = display.auto_exposure(list(images))  # one for every variant, so the cells compare
+    sheet = study_sheet.compose(study, images, exposure=exposure)
+    image = image_view.show_linear(settings.SHEET_IMAGE, sheet, exposure, context.scene)
+    text = study.to_json()
+    image[settings.STUDY_PROPERTY] = text
+    settings.remember_study(study, text)
+    image_view.show_image(context, image)
+    return image
+
+
+def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, st.Study, float]:
+    """Build the study of the settings, render it (blocking) and show its sheet; the image, the study
+    and the render time. Raises ``SceneError`` for a bad setting or design."""
+    from ...core_tracer.study import run as study_run
+
+    study = settings.study_from_settings(context.scene)
+    if workers is None:
+        workers = context.scene.lamp_study.workers or None
+    start = time.perf_counter()
+    images = study_run.run_study(study, workers)
+    seconds = time.perf_counter() - start
+    return show_sheet(context, study, images), study, seconds
+
+
+def _summary(study: st.Study, seconds: float) -> str:
+    shape = " x ".join(str(len(a.values)) for a in study.axes)
+    w, h = study.size
+    return f"Lamp Study: {shape} variants of {w}x{h} in {seconds:.1f} s"
+
+
+# ---------------------------------------------------------------------------------------------
+# Operators
+
+
+class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
+    """Render variants of the design (one or two parameters varied) on a contact sheet"""
+
+    bl_idname = "lamp.study_run"
+    bl_label = "Run Study"
+    bl_options = {"REGISTER"}
+
+    job_key = bl_idname
+    busy_message = "A study is running (Esc cancels it)"
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or not hasattr(context.scene, "lamp_study"):
+            cls.poll_message_set("No scene")
+            return False
+        return cls.poll_not_running()
+
+    def execute(self, context):
+        from ...core_tracer.study.run import StudyError
+
+        try:
+            image, study, seconds = render_study(context)
+        except SceneError as e:
+            return reports.cancelled(self, str(e))
+        except (StudyError, OSError) as e:
+            return reports.cancelled(self, f"Lamp Study failed: {e}")
+        return reports.finished(self, _summary(study, seconds))
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        from ...core_tracer.study.run import StudyRun
+
+        try:
+            self._study = settings.study_from_settings(context.scene)
+        except SceneError as e:
+            return reports.cancelled(self, str(e))
+        self._run = StudyRun(self._study, context.scene.lamp_study.workers or None)
+        try:
+            self._run.start()
+        except OSError as e:
+            return reports.cancelled(self, f"Lamp Study cannot start its workers: {e}")
+        self._start = time.perf_counter()
+        return self.begin_modal(context, self._run)
+
+    def escape(self, context):
+        self.abandon(context)
+        self.end_modal(context)
+        self.report({"WARNING"}, "Lamp Study cancelled")
+        return {"CANCELLED"}
+
+    def step(self, context):
+        from ...core_tracer.study.run import StudyError
+
+        try:
+            finished = self._run.poll()
+        except StudyError as e:
+            self.end_modal(context)
+            return reports.cancelled(self, f"Lamp Study failed: {e}")
+        if not finished:
+            return None
+        seconds = time.perf_counter() - self._start
+        images = list(self._run.images)
+        self.end_modal(context)
+        show_sheet(context, self._study, images)
+        return reports.finished(self, _summary(self._study, seconds))
+
+    def abandon(self, context):
+        self._run.cancel()
+
+    def end_modal(self, context) -> None:
+        super().end_modal(context)
+        self._run.close()
+
+    def status(self) -> str:
+        run = self._run
+        return f"Lamp Study: {run.done}/{run.total} variants, {100 * run.fraction:.0f}% (Esc to cancel)"
+
+    def fraction(self) -> float:
+        return self._run.fraction
+
+
+def _chosen_variant(operator, context) -> tuple[st.Study, int] | None:
+    study = last_study()
+    index = context.scene.lamp_study.variant - 1
+    if study is None:
+        operator.report({"ERROR"}, "There is no study; run one first")
+        return None
+    if not 0 <= index < len(study):
+        operator.report({"ERROR"}, f"Variant {index + 1} does not exist; the study has {len(study)} variants")
+        return None
+    return study, index
+
+
+class _OnLastStudy:
+    """Operators on the last study's sheet or its chosen variant: available once there is a study."""
+
+    @classmethod
+    def poll(cls, context):
+        if last_study() is None:
+            cls.poll_message_set("Run a study first")
+            return False
+        return True
+
+
+class LAMP_OT_study_apply_variant(_OnLastStudy, bpy.types.Operator):
+    """Set the design's varied parameters to the values of the chosen variant"""
+
+    bl_idname = "lamp.study_apply_variant"
+    bl_label = "Apply to Design"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        chosen = _chosen_variant(self, context)
+        if chosen is None:
+            return {"CANCELLED"}
+        study, index = chosen
+        try:
+            design = design_properties.design_to_scene(context.scene)
+            # The design may have changed since the study: its lamps are checked again.
+            parameters = tuple(st.resolve_parameter(axis.parameter.text, design) for axis in study.axes)
+            st.apply_values(design, parameters, study.variants[index].values)
+            design_properties.scene_to_design(context.scene, design)
+        except SceneError as e:
+            return reports.cancelled(self, str(e))
+        return reports.finished(self, f"Design set to {study.variants[index].label(study)}")
+
+
+class LAMP_OT_study_keep_variant(_OnLastStudy, bpy.types.Operator):
+    """Save the chosen variant as a preset in your preset library"""
+
+    bl_idname = "lamp.study_keep_variant"
+    bl_label = "Keep as Preset"
+    bl_options = {"REGISTER"}
+
+    def execute(self, context):
+        chosen = _chosen_variant(self, context)
+        if chosen is None:
+            return {"CANCELLED"}
+        study, index = chosen
+        libraries, notes = preset_library.libraries(context)
+        writable = [lib for lib in libraries if lib.writable]
+        writable.sort(key=lambda lib: lib.name != preset_library.USER_LIBRARY_NAME)
+        if not writable:
+            return reports.cancelled(self, notes[0] if notes else "No writable preset library; add a preset folder "
+                                           "in the add-on preferences")
+        try:
+            entry = P.save_preset(writable[0], study.variant_name(index), study.variant_scene(index))
+        except (SceneError, OSError) as e:
+            return reports.cancelled(self, str(e))
+        preset_library.mark_stale()
+        return reports.finished(self, f"Saved \"{entry.name}\" in {writable[0].name}")
+
+
+class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
+    """Save the contact sheet as PNG (as shown: the scene's view transform) or EXR (linear), with the
+    study in its header"""
+
+    bl_idname = "lamp.study_save_sheet"
+    bl_label = "Save Sheet"
+    bl_options = {"REGISTER"}
+
+    filename_ext = ".png"
+    filter_glob: StringProperty(default="*.png;*.exr", options={"HIDDEN"})
+
+    def check(self, context):
+        # Keep a .exr the user typed; anything else becomes .png.
+        if self.filepath.lower().endswith(".exr"):
+            return False
+        return super().check(context)
+
+    def execute(self, context):
+        from ...core_tracer.study import sheet as study_sheet
+
+        study = last_study()
+        image = sheet_image()
+        if study is None or image is None:
+            return reports.cancelled(self, "There is no study sheet; run a study first")
+        if not image_view.openimageio_available():
+            return reports.cancelled(self, f"Sheet not saved: {image_view.NO_OPENIMAGEIO}; save the image from the "
+                                           "Image Editor")
+        try:
+            study_sheet.write_composed(self.filepath, study, image_view.image_to_array(image),
+                                       view=image_view.scene_view(context.scene),
+                                       exposure=image_view.image_exposure(image),
+                                       view_exposure=context.scene.view_settings.exposure)
+        except (SceneError, OSError) as e:
+            return reports.cancelled(self, str(e))
+        return reports.finished(self, f"Saved {self.filepath}")
+
+
+classes = (LAMP_OT_study_run, LAMP_OT_study_apply_variant, LAMP_OT_study_keep_variant, LAMP_OT_study_save_sheet)
+
+
+register, unregister = bpy.utils.register_classes_factory(classes)

@@ -1,0 +1,209 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The settings of a design study (``Scene.lamp_study``) and the study they describe.
+
+For each axis a parameter (every field that ``core_tracer.study`` can vary: numbers, switches and
+choices such as the cut type, lamp fields for all lamps or for one), and its values as a range with
+a number of steps or as a list written as on the command line (``1.45, 1.5``; for colours and other
+vectors ``0.9/0.1/0.1, 0.9/0.5/0.05``; for choices their names, ``fisheye, sawtooth``);
+the size of each variant and the number of worker processes. ``study_from_settings`` turns them into
+a ``core_tracer.study.Study`` of the current design; ``last_study`` is the study of the sheet shown.
+Both the panel (``study.panel``) and the operators (``study.ops``) sit above this module.
+"""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
+
+from ...core_tracer.scene import spec as S
+from ...core_tracer.scene.functions import suggested_values
+from ...core_tracer.scene.reading import SceneError
+from ...core_tracer.study import definition as st
+from ...core_tracer.study.parameters import study_parameters
+from ..design import properties as design_properties
+from ..render import camera as render_camera
+
+ALL_LAMPS = "ALL"
+SHEET_IMAGE = "Lamp Study"
+STUDY_PROPERTY = "lamp_study"  # custom property of the sheet image: the study's JSON, so it can be re-run
+
+
+def _parameter_label(path: str) -> str:
+    spec = S.lookup(path)
+    *parents, key = path.split(".")
+    unit = spec.unit if isinstance(spec, S.Num) else ""
+    prefix = " ".join(design_properties.display_name(p) for p in parents)
+    parent = S.lookup(".".join(parents)) if parents else S.SCENE
+    rule = parent.rule_of(key) if isinstance(parent, S.Section) else None
+    if rule is not None and rule.of_key(key).name == key:  # the field that picks a form: the form's name
+        label = rule.of_key(key).label
+    else:
+        label = design_properties.display_name(key, unit)
+    return f"{prefix}: {label}" if prefix else label
+
+
+def _parameter_items() -> tuple[tuple[str, str, str], ...]:
+    items = []
+    for path in study_parameters():
+        spec = S.lookup(path)
+        vector = isinstance(spec, S.Num) and spec.size > 1
+        how = "a list of values written a/b/c" if vector else "a list of names" if isinstance(spec, S.Choice) \
+            else "a range or a list"
+        items.append((path, _parameter_label(path), f"{spec.doc}. Allowed: {spec.range_text()}; {how}"))
+    return tuple(items)
+
+
+PARAMETER_ITEMS = _parameter_items()
+LAMP_ITEMS = ((ALL_LAMPS, "All Lamps", "Change the parameter of every lamp"),
+              *((str(i), f"Lamp {i + 1}", f"Change the parameter of lamp {i + 1} only") for i in range(S.MAX_LAMPS)))
+MODE_ITEMS = (("RANGE", "Range", "From a first to a last value in a number of equal steps"),
+              ("LIST", "List", "Values separated by commas; vectors and colours as a/b/c"))
+
+
+def is_single_number(path: str) -> bool:
+    spec = S.lookup(path)
+    return isinstance(spec, S.Num) and spec.size == 1
+
+
+def is_lamp_parameter(path: str) -> bool:
+    return path.split(".")[0] in S.LAMP.fields
+
+
+def _suggest_range(self, context) -> None:
+    """A new parameter gets a range around its default, inside its allowed range."""
+    spec = S.lookup(self.parameter)
+    if isinstance(spec, S.Num) and spec.size == 1:
+        lo, hi = design_properties.blender_range(spec)
+        d = float(spec.default)
+        span = abs(d) * 0.25 or 1.0
+        self.start = max(d - span, lo) if lo is not None else d - span
+        self.stop = min(d + span, hi) if hi is not None else d + span
+        self.mode = "RANGE"
+    else:
+        self.mode = "LIST"
+        if isinstance(spec, S.Flag):
+            self.values = "on, off"
+        elif self.parameter == "environment.world":  # the surroundings: by day, in the evening, at night
+            self.values = "city, sunset, night"
+        elif isinstance(spec, S.Choice):  # the kinds of lamp side by side: every name the field allows
+            self.values = ", ".join(spec.choices)
+        else:  # a vector: the values the lamp functions give it (red, amber, clear lenses), else its default
+            values = suggested_values(self.parameter) or [list(spec.default)]
+            self.values = ", ".join(st.format_value(v) for v in values)
+
+
+def _axis_group(name: str, parameter: str, start: float, stop: float) -> type:
+    annotations = {
+        "parameter": EnumProperty(name="Parameter", items=PARAMETER_ITEMS, default=parameter,
+                                  description="The field of the design this axis varies", update=_suggest_range),
+        "lamp": EnumProperty(name="Lamp", items=LAMP_ITEMS, default=ALL_LAMPS,
+                             description="Which lamp a lamp parameter changes"),
+        "mode": EnumProperty(name="Values", items=MODE_ITEMS, default="RANGE"),
+        "start": FloatProperty(name="From", default=start, precision=4,
+                               description="First value of the range"),
+        "stop": FloatProperty(name="To", default=stop, precision=4, description="Last value of the range"),
+        "steps": IntProperty(name="Steps", default=4, min=1, max=st.MAX_VARIANTS,
+                             description="Number of values from the first to the last, both included"),
+        "values": StringProperty(name="Values", default="",
+                                 description="Values separated by commas, e.g. 1.45, 1.5; colours and other "
+                                             "vectors as 0.9/0.1/0.1, 0.9/0.5/0.05"),
+    }
+    return type(name, (bpy.types.PropertyGroup,), {"__annotations__": annotations})
+
+
+LAMP_PG_study_axis_1 = _axis_group("LAMP_PG_study_axis_1", "lens.ior", 1.45, 1.6)
+LAMP_PG_study_axis_2 = _axis_group("LAMP_PG_study_axis_2", "cuts.height", 0.5, 2.0)
+
+
+class LAMP_PG_study(bpy.types.PropertyGroup):
+    axis_1: PointerProperty(type=LAMP_PG_study_axis_1, name="Columns")
+    use_axis_2: BoolProperty(name="Second Parameter", default=True,
+                             description="Vary a second parameter down the rows of the sheet")
+    axis_2: PointerProperty(type=LAMP_PG_study_axis_2, name="Rows")
+    width: IntProperty(name="Width", default=128, min=8, max=st.MAX_SIZE, subtype="PIXEL",
+                       description="Width of each variant image")
+    height: IntProperty(name="Height", default=128, min=8, max=st.MAX_SIZE, subtype="PIXEL",
+                        description="Height of each variant image")
+    workers: IntProperty(name="Workers", default=0, min=0, max=256,
+                         description="Worker processes rendering the variants (0: one per core)")
+    variant: IntProperty(name="Variant", default=1, min=1, max=st.MAX_VARIANTS,
+                         description="A variant of the last study (numbered along the rows of the sheet)")
+
+    @classmethod
+    def register(cls):
+        bpy.types.Scene.lamp_study = PointerProperty(type=cls, name="Lamp Study",
+                                                     description="Settings of the design study")
+
+    @classmethod
+    def unregister(cls):
+        del bpy.types.Scene.lamp_study
+
+
+def axis_doc(axis) -> dict:
+    """One axis of the settings as a ``lamp-study/1`` axis document (checked when the study is built)."""
+    path = axis.parameter
+    if axis.lamp != ALL_LAMPS and is_lamp_parameter(path):
+        path = f"lamps[{axis.lamp}].{path}"
+    # Only a single number has a range; the others take the list the panel shows for them.
+    if axis.mode == "RANGE" and is_single_number(axis.parameter):
+        return {"parameter": path, "range": [axis.start, axis.stop], "steps": axis.steps}
+    if not axis.values.strip():
+        raise SceneError(path, "has no values; write them separated by commas")
+    return st.parse_vary(f"{path}={axis.values}")
+
+
+def study_from_settings(bl_scene) -> st.Study:
+    """The study the settings describe, of the scene's current design seen through its camera.
+    Raises ``SceneError`` (with the parameter, value and range) for a bad setting or design."""
+    settings = bl_scene.lamp_study
+    size = (settings.width, settings.height)
+    if bl_scene.camera is not None:
+        base = render_camera.scene_for_render(bl_scene, size=size)
+    else:  # no scene camera: the design's own camera section
+        base = design_properties.design_to_scene(bl_scene)
+        base["image"] = {**base["image"], "width": size[0], "height": size[1]}
+    axes = [axis_doc(settings.axis_1)]
+    if settings.use_axis_2:
+        axes.append(axis_doc(settings.axis_2))
+    return st.Study.build(base, axes, size)
+
+
+# ---------------------------------------------------------------------------------------------
+# The sheet image and its study
+
+_cache: dict[str, object] = {"json": None, "study": None}
+
+
+def sheet_image() -> bpy.types.Image | None:
+    return bpy.data.images.get(SHEET_IMAGE)
+
+
+def last_study() -> st.Study | None:
+    """The study of the "Lamp Study" image (parsed once per study, then cached)."""
+    image = sheet_image()
+    text = image.get(STUDY_PROPERTY) if image is not None else None
+    if not isinstance(text, str):
+        return None
+    if _cache["json"] != text:
+        try:
+            study = st.Study.from_json(text, STUDY_PROPERTY)
+        except SceneError:
+            study = None
+        _cache.update(json=text, study=study)
+    return _cache["study"]  # type: ignore[return-value]
+
+
+def remember_study(study: st.Study, text: str) -> None:
+    """The study whose sheet was just stored with ``text``: no need to parse it again."""
+    _cache.update(json=text, study=study)
+
+
+classes = (LAMP_PG_study_axis_1, LAMP_PG_study_axis_2, LAMP_PG_study)
+
+
+register, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def unregister() -> None:
+    _unregister_classes()
+    _cache.update(json=None, study=None)  # the cached study belongs to this registration
