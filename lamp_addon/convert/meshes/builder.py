@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ....core_tracer.raytrace.outline import Outline
 from ....core_tracer.scene.derived import lamp_geometry
+from ....core_tracer.scene.outline import Outline
 
 CHORD_TOLERANCE_MM = 0.05
 MAX_CELL_SUBDIVISION = 48  # quads per side of one lenslet cell

@@ -11,8 +11,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ....core_tracer.raytrace.outline import Outline
 from ....core_tracer.scene.derived import cut_sphere_radius
+from ....core_tracer.scene.outline import Outline
 from .builder import (
     CHORD_TOLERANCE_MM,
     FLAT,
