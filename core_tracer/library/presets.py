@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from .. import fileio
 from ..images import display
 from ..images.display import ViewTransform
+from ..scene.beside import environment_file
 from ..scene.derived import without_defaults
 from ..scene.freeform_section import freeform_without_defaults
 from ..scene.reading import SceneError, read_json, scene_to_json
@@ -146,6 +147,7 @@ def _parse(path: str) -> dict:
     scene = parse_scene(doc)
     if "freeform" in scene:
         _check_mesh_file(path, scene)
+    environment_file(path, scene["environment"])  # an image beside the preset, or refused
     return scene
 
 

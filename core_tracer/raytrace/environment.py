@@ -405,6 +405,16 @@ def _make_world(padded: np.ndarray, width: int, height: int, rotation: float,
         return _irradiance(pixels, rotation), _sun_direction(pixels, rotation), _sun_color(pixels)
 
 
+def world_bytes(scene: dict) -> int:
+    """Bytes the world of a normalised scene's environment holds at its peak while it is made, from
+    the image's header (checked: a ``SceneError`` for a bad or too large one); 0 without one."""
+    env = scene.get("environment")
+    if env is None or env["world"] == "none":
+        return 0
+    width, height = world_image.header(image_path(env))[:2]
+    return world_image.peak_bytes(width, height)
+
+
 def from_scene(scene: dict) -> Environment | None:
     """The environment of a normalised scene, or None for the paper's plain background."""
     env = scene.get("environment")  # a scene an earlier version built in code has none
