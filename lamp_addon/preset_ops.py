@@ -24,6 +24,7 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..core_tracer import fileio
 from ..core_tracer.library import presets as P
+from ..core_tracer.scene.beside import environment_file
 from ..core_tracer.scene.reading import SceneError, scene_to_json
 from ..core_tracer.scene.validate import normalize
 from . import design_properties, design_root, preset_library, render_camera, render_setup, reports
@@ -146,6 +147,9 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
     from . import freeform_import
 
     parts = None
+    if path is not None and scene["environment"]["world"] == "file":
+        # The image beside the preset (refused when it leads elsewhere), held in the design by its path.
+        scene = {**scene, "environment": {**scene["environment"], "file": environment_file(path, scene["environment"])}}
     if "freeform" in scene:
         if path is None:
             raise SceneError("freeform", "a free-form design needs its file, to find its .glb beside it")

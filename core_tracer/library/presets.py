@@ -422,13 +422,15 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     target = os.fspath(path)
     scene = copy.deepcopy(entry.scene)
     scene["image"] = {"width": int(size), "height": int(size)}
+    image_file = environment_file(entry.file, scene["environment"])  # beside the preset, by its full path
+    traced = scene if image_file is None else {**scene, "environment": {**scene["environment"], "file": image_file}}
     if "freeform" in scene:  # the meshes are read and checked now, before they are used
         from ..freeform import render_passes as render_freeform
         from ..freeform.loading import load_meshes
 
-        image = render_freeform(scene, load_meshes(entry.file, scene), size, size).image
+        image = render_freeform(traced, load_meshes(entry.file, scene), size, size).image
     else:
-        image = render(scene, size, size)
+        image = render(traced, size, size)
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
     write_image(target, image, scene, view=view)
     stem = os.path.splitext(os.path.basename(entry.file))[0]

@@ -92,9 +92,7 @@ def _world(path: str, mtime_ns: int, size: int, rotation: float, layout: str, ma
         mapped = _map(os.path.join(folder, name))
         if mapped is not None:
             return mapped
-    padded, width, height = _made_padded(path)
-    irradiance, sun_direction, sun_color = make(padded, width, height, rotation)
-    made = World(padded, width, height, irradiance, sun_direction, sun_color)
+    made = _made(path, rotation, make)
     if folder is None:
         return made
     target = os.path.join(folder, name)
@@ -102,8 +100,15 @@ def _world(path: str, mtime_ns: int, size: int, rotation: float, layout: str, ma
         _write(target, made)
     except OSError:
         return made
+    del made  # the file's pages take the place of this copy: the workers then share these very pages
     _prune(folder, keep=target)
-    return _map(target) or made  # mapped: the workers then share these very pages
+    return _map(target) or _made(path, rotation, make)
+
+
+def _made(path: str, rotation: float, make) -> World:
+    padded, width, height = _made_padded(path)
+    irradiance, sun_direction, sun_color = make(padded, width, height, rotation)
+    return World(padded, width, height, irradiance, sun_direction, sun_color)
 
 
 def _made_padded(path: str) -> tuple[np.ndarray, int, int]:
@@ -136,7 +141,7 @@ def _write(target: str, w: World) -> None:
             f.write(_HEAD.pack(MAGIC, len(header)) + header)
             for key, a in arrays.items():
                 f.seek(start + table[key][0])
-                f.write(np.ascontiguousarray(a).tobytes())
+                f.write(memoryview(np.ascontiguousarray(a)).cast("B"))  # no copy of the pixels
             f.truncate(start + offset)
         os.replace(temporary, target)
     except BaseException:

@@ -154,6 +154,9 @@ def test_an_image_beside_the_scene_renders_from_another_working_directory(tmp_pa
                     "-o", tmp_path / "s.png")
     assert sheet.returncode == 0, sheet.stderr
     assert run_cli("presets", "validate", library["lib"]).returncode == 0
+    thumbnails = run_cli("presets", "thumbnails", library["lib"])
+    assert thumbnails.returncode == 0, thumbnails.stderr
+    assert list((library["lib"] / "thumbnails").glob("scene*.png"))
 
 
 def test_a_users_own_image_elsewhere_is_given_on_the_command_line(tmp_path, library):
