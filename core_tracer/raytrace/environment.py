@@ -396,10 +396,8 @@ def _sun_color(pixels: np.ndarray) -> np.ndarray:
 LAYOUT = f"{IRRADIANCE_LON}x{IRRADIANCE_LAT}-{IRRADIANCE_SOURCE[0]}x{IRRADIANCE_SOURCE[1]}-{SUN_FRACTION}"
 
 
-def _make_world(padded: np.ndarray, width: int, height: int, rotation: float,
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _make_world(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """What ``world_cache`` keeps of an image and turn: irradiance map, sun direction, sun colour."""
-    pixels = world_image.pixels_of(padded, width, height)
     with warnings.catch_warnings(), np.errstate(all="ignore"):  # the pixels are finite and bounded
         warnings.simplefilter("ignore")
         return _irradiance(pixels, rotation), _sun_direction(pixels, rotation), _sun_color(pixels)

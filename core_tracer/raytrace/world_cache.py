@@ -2,13 +2,14 @@
 its sun's direction and colour (``environment``), kept in a file that every process maps.
 
 A render's parent makes the world (or finds it) and the band pool's workers and a study's workers
-map the same file: the pages are the system's file cache, held once however many processes read
+map the same files: the pages are the system's file cache, held once however many processes read
 them. The file outlives the render, so the next render of the same image and turn skips the work.
 
 The files live in a per-user cache folder (``$LAMP_STYLING_CACHE``, else ``$XDG_CACHE_HOME`` or
-``~/.cache``, then ``lamp-styling/worlds``), named by the SHA-256 of the image file's bytes, the
-turn and the map's layout (``LAYOUT``). They are written to a temporary name and renamed (never
-seen half-written), checked when mapped (magic, header, size, CRC-32 of the data: a damaged file is
+``~/.cache``, then ``lamp-styling/worlds``): the pixels in ``<SHA-256 of the image file>-<reading
+rules>.image``, what the lookups compute from them in ``<SHA-256>-<turn>-<map layout>.turn`` (a
+study that turns the world keeps its pixels once). They are written to a temporary name and
+renamed (never seen half-written), checked when mapped (magic, header, size, CRC-32 of the data: a damaged file is
 made again), and the folder is kept under ``MAX_CACHE_BYTES`` by removing the least recently used.
 A folder that is not the user's own (or is writable by others), or that cannot be written, is not
 used: the world is then made in memory, in each process that needs it, as before.
@@ -23,7 +24,6 @@ import mmap
 import os
 import stat
 import struct
-import tempfile
 import time
 import zlib
 from dataclasses import dataclass
@@ -78,8 +78,9 @@ def cache_folder() -> str | None:
 
 def world(path: str, rotation: float, layout: str, make) -> World:
     """The world of the image at ``path`` turned by ``rotation``: from this process's memory, from
-    the cache file, or made by ``make(padded, width, height, rotation)`` -> (irradiance, sun
-    direction, sun colour) and stored. ``layout`` names what ``make`` computes (the map's size)."""
+    the cache files, or made and stored. The pixels (``world_image.read_padded``) are kept by the
+    image's content alone, what ``make(pixels (h, w, 3), rotation)`` -> (irradiance, sun direction,
+    sun colour) computes by content, turn and ``layout`` (the map's size)."""
     st = os.stat(path)
     return _world(path, st.st_mtime_ns, st.st_size, rotation, layout, make)
 
@@ -87,53 +88,61 @@ def world(path: str, rotation: float, layout: str, make) -> World:
 @functools.lru_cache(maxsize=4)
 def _world(path: str, mtime_ns: int, size: int, rotation: float, layout: str, make) -> World:
     folder = cache_folder()
-    name = f"{world_image.file_digest(path)[:40]}-{rotation.hex()}-{layout}.world"
+    digest = world_image.file_digest(path)[:40]
+    image_name = f"{digest}-{world_image.LAYOUT}.image"
+    turn_name = f"{digest}-{rotation.hex()}-{layout}.turn"
+    image, image_file = _cached(folder, image_name, lambda: _read(path), {"padded", "size"})
+    width, height = (int(n) for n in image["size"])
+    pixels = world_image.pixels_of(image["padded"], width, height)
+
+    def turned() -> dict[str, np.ndarray]:
+        irradiance, sun_direction, sun_color = make(pixels, rotation)
+        return {"irradiance": irradiance, "sun_direction": sun_direction, "sun_color": sun_color}
+
+    turn, _ = _cached(folder, turn_name, turned, {"irradiance", "sun_direction", "sun_color"})
     if folder is not None:
-        mapped = _map(os.path.join(folder, name))
-        if mapped is not None:
-            return mapped
-    made = _made(path, rotation, make)
-    if folder is None:
-        return made
-    target = os.path.join(folder, name)
-    try:
-        _write(target, made)
-    except OSError:
-        return made
-    del made  # the file's pages take the place of this copy: the workers then share these very pages
-    _prune(folder, keep=target)
-    return _map(target) or _made(path, rotation, make)
+        _prune(folder, keep={image_name, turn_name})
+    return World(image["padded"], width, height, turn["irradiance"], turn["sun_direction"], turn["sun_color"],
+                 image_file)
 
 
-def _made(path: str, rotation: float, make) -> World:
-    padded, width, height = _made_padded(path)
-    irradiance, sun_direction, sun_color = make(padded, width, height, rotation)
-    return World(padded, width, height, irradiance, sun_direction, sun_color)
-
-
-def _made_padded(path: str) -> tuple[np.ndarray, int, int]:
+def _read(path: str) -> dict[str, np.ndarray]:
     width, height = world_image.header(path)[:2]
     f = world_image.factor_for(width, height)
-    return world_image.read_padded(path), -(-width // f), -(-height // f)
+    return {"padded": world_image.read_padded(path), "size": np.array([-(-width // f), -(-height // f)])}
 
 
-def _arrays(w: World) -> dict[str, np.ndarray]:
-    return {"padded": w.padded, "irradiance": np.asarray(w.irradiance, np.float64),
-            "sun_direction": np.asarray(w.sun_direction, np.float64),
-            "sun_color": np.asarray(w.sun_color, np.float64)}
+def _cached(folder: str | None, name: str, make, keys: set[str]) -> tuple[dict[str, np.ndarray], str | None]:
+    """(the arrays ``keys`` of the cache file ``name``, mapped, and its path), made by ``make()`` and
+    stored first if it is missing or damaged; made in memory (path None) without a usable folder."""
+    if folder is None:
+        return make(), None
+    file = os.path.join(folder, name)
+    mapped = _map(file, keys)
+    if mapped is not None:
+        return mapped, file
+    arrays = make()
+    try:
+        _write(file, arrays)
+    except OSError:
+        return arrays, None
+    del arrays  # the file's pages take the place of this copy: the workers then share these very pages
+    mapped = _map(file, keys)
+    return (mapped, file) if mapped is not None else (make(), None)
 
 
-def _write(target: str, w: World) -> None:
-    arrays = _arrays(w)
+def _write(target: str, arrays: dict[str, np.ndarray]) -> None:
+    import tempfile  # only when a world is stored
+
+    arrays = {key: np.ascontiguousarray(a) for key, a in arrays.items()}
     table, offset = {}, 0
     for key, a in arrays.items():
         table[key] = [offset, list(a.shape), a.dtype.str]
         offset += -(-a.nbytes // ALIGN) * ALIGN
     crc = 0
     for a in arrays.values():
-        crc = zlib.crc32(memoryview(np.ascontiguousarray(a)).cast("B"), crc)
-    header = json.dumps({"width": w.width, "height": w.height, "arrays": table, "data_bytes": offset,
-                         "crc": crc}).encode()
+        crc = zlib.crc32(memoryview(a).cast("B"), crc)
+    header = json.dumps({"arrays": table, "data_bytes": offset, "crc": crc}).encode()
     start = -(-(_HEAD.size + len(header)) // ALIGN) * ALIGN
     fd, temporary = tempfile.mkstemp(prefix=".tmp-", dir=os.path.dirname(target))
     try:
@@ -141,7 +150,7 @@ def _write(target: str, w: World) -> None:
             f.write(_HEAD.pack(MAGIC, len(header)) + header)
             for key, a in arrays.items():
                 f.seek(start + table[key][0])
-                f.write(memoryview(np.ascontiguousarray(a)).cast("B"))  # no copy of the pixels
+                f.write(memoryview(a).cast("B"))  # no copy of the pixels
             f.truncate(start + offset)
         os.replace(temporary, target)
     except BaseException:
@@ -150,8 +159,8 @@ def _write(target: str, w: World) -> None:
         raise
 
 
-def _map(file: str) -> World | None:
-    """The world in ``file``, its arrays views of a read-only mapping; None if it is missing or
+def _map(file: str, keys: set[str]) -> dict[str, np.ndarray] | None:
+    """The arrays ``keys`` in ``file``, views of a read-only mapping; None if it is missing or
     damaged (a damaged file is removed, to be made again)."""
     try:
         with open(file, "rb") as f:
@@ -171,26 +180,23 @@ def _map(file: str) -> World | None:
         start = -(-(_HEAD.size + length) // ALIGN) * ALIGN
         if len(data) != start + int(header["data_bytes"]):
             raise ValueError("wrong size")
-        arrays, crc = {}, 0
-        for key in ("padded", "irradiance", "sun_direction", "sun_color"):
-            offset, shape, dtype = header["arrays"][key]
+        arrays, crc, a = {}, 0, None
+        for key, (offset, shape, dtype) in header["arrays"].items():
             count = int(np.prod(shape))
             a = np.frombuffer(data, dtype=np.dtype(dtype), count=count, offset=start + int(offset)).reshape(shape)
             crc = zlib.crc32(memoryview(a).cast("B"), crc)
             arrays[key] = a
-        if crc != header["crc"]:
+        if crc != header["crc"] or set(arrays) != keys:
             raise ValueError("damaged")
-        width, height = int(header["width"]), int(header["height"])
-        if arrays["padded"].shape != ((width + 3) * (height + 3), 4):
-            raise ValueError("wrong shape")
-    except (ValueError, TypeError, KeyError, struct.error, json.JSONDecodeError, OverflowError):
-        data.close()
+    except (ValueError, TypeError, KeyError, AttributeError, struct.error, OverflowError):
+        arrays = a = None  # the views go first, then the mapping
+        with contextlib.suppress(BufferError):
+            data.close()
         _discard(file)
         return None
     with contextlib.suppress(OSError):
         os.utime(file)  # recently used: pruned last
-    return World(arrays["padded"], width, height, arrays["irradiance"], arrays["sun_direction"],
-                 arrays["sun_color"], file)
+    return arrays
 
 
 def _discard(file: str) -> None:
@@ -198,7 +204,7 @@ def _discard(file: str) -> None:
         os.unlink(file)
 
 
-def _prune(folder: str, keep: str) -> None:
+def _prune(folder: str, keep: set[str]) -> None:
     """Remove the least recently used worlds beyond ``MAX_CACHE_BYTES`` and stale temporary files."""
     try:
         entries = [(e.stat().st_mtime, e.stat().st_size, e.path) for e in os.scandir(folder) if e.is_file()]
@@ -213,7 +219,7 @@ def _prune(folder: str, keep: str) -> None:
                 _discard(path)
             continue
         total += size
-        if total > MAX_CACHE_BYTES and path != keep:
+        if total > MAX_CACHE_BYTES and name not in keep:
             _discard(path)
 
 

@@ -32,6 +32,7 @@ STRIP_PIXELS = 1 << 20  # pixels of source read at once (and of the world's per-
 STRIP_BYTES_PER_PIXEL = 320  # the per-strip float64 temporaries (directions, weights, sums; measured: an
 # 8192 x 4096 image peaks at 993 MB, its padded pixels 537 MB, the interpreter and OpenImageIO about 100)
 FIELD = "environment.file"
+LAYOUT = f"v1-{MAX_PIXELS}-{MAX_RADIANCE:g}"  # the reading rules: part of a cached image's name
 
 
 def fail(path: str, why: str) -> SceneError:

@@ -211,23 +211,27 @@ def test_the_world_is_cached_by_content_and_a_damaged_cache_file_is_made_again(t
     scene = scene_with(**{"image": {"width": 8, "height": 8},
                           "environment": {"world": "file", "file": path, "rotation_deg": 30.0}})
     first = render_passes(scene).image
-    files = [f for f in os.listdir(own_cache / "worlds") if f.endswith(".world")]
-    assert len(files) == 1
+    files = sorted(os.listdir(own_cache / "worlds"))
+    assert sorted(f.rsplit(".", 1)[1] for f in files) == ["image", "turn"]  # the pixels, what the turn makes of them
     world_cache.clear_memory()
     copy = tmp_path / "copy.exr"
-    shutil.copy(path, copy)  # the same bytes elsewhere: the same world file
+    shutil.copy(path, copy)  # the same bytes elsewhere: the same files
     again = render_passes({**scene, "environment": {**scene["environment"], "file": str(copy)}}).image
     np.testing.assert_array_equal(first, again)
-    assert [f for f in os.listdir(own_cache / "worlds") if f.endswith(".world")] == files
-    world_file = own_cache / "worlds" / files[0]
-    data = bytearray(world_file.read_bytes())
-    data[-100] ^= 0xFF  # one damaged byte: the CRC notices, the world is made again
-    world_file.write_bytes(bytes(data))
-    world_cache.clear_memory()
-    np.testing.assert_array_equal(render_passes(scene).image, first)
-    world_file.write_bytes(b"LAMPWLD1 garbage")
-    world_cache.clear_memory()
-    np.testing.assert_array_equal(render_passes(scene).image, first)
+    assert sorted(os.listdir(own_cache / "worlds")) == files
+    turned = {**scene, "environment": {**scene["environment"], "rotation_deg": 50.0}}
+    render_passes(turned)  # another turn: its own .turn file, the same .image
+    assert len(os.listdir(own_cache / "worlds")) == 3
+    for name in files:
+        cached = own_cache / "worlds" / name
+        data = bytearray(cached.read_bytes())
+        data[len(data) * 3 // 4] ^= 0xFF  # one damaged byte: the CRC notices, the file is made again
+        cached.write_bytes(bytes(data))
+        world_cache.clear_memory()
+        np.testing.assert_array_equal(render_passes(scene).image, first)
+        cached.write_bytes(b"LAMPWLD1 garbage")
+        world_cache.clear_memory()
+        np.testing.assert_array_equal(render_passes(scene).image, first)
     assert not [f for f in os.listdir(own_cache / "worlds") if f.startswith(".tmp-")]
 
 
@@ -236,7 +240,7 @@ def test_the_cache_folder_stays_within_its_bound(tmp_path, own_cache, monkeypatc
     for i in range(3):
         path = write_exr(tmp_path / f"sky{i}.exr", _sky() + i)
         environment.from_scene(scene_with(**{"environment": {"world": "file", "file": path}}))
-    assert len([f for f in os.listdir(own_cache / "worlds") if f.endswith(".world")]) == 1
+    assert len(os.listdir(own_cache / "worlds")) == 2  # the newest image and its turn
 
 
 def test_an_unsafe_cache_folder_is_not_used(tmp_path, own_cache):
