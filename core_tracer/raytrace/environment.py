@@ -15,6 +15,11 @@ a smooth function of n, so it is computed once per image and turn on a grid of n
 area-averaged to at most 128 x 64 for the integral) and interpolated bilinearly between the nodes.
 Occlusion of the environment by the body itself is not modelled.
 
+The image is read by ``world_image`` (its header checked before any pixel, its values finite and
+bounded, down-sampled past a size) and what the lookups need of it, the padded pixels, the
+irradiance map and the sun, is made once per image and turn and shared between processes through
+a mapped cache file (``world_cache``).
+
 Blender's own world images (``spec.BUNDLED_WORLDS``) ship with the ``bpy`` module at
 ``bpy/<version>/datafiles/studiolights/world``; the folder is found from the installed package
 without importing it.
