@@ -6,7 +6,8 @@ is negligible (imports, the environment's world, the file), this tree against an
 Runs ``python -m core_tracer render presets/four-lamp-day-lit.json -o OUT --width 32 --height 32``
 in each tree, interleaved (this tree, the other, this tree, ...) so that both see the same load, and
 prints min / median wall and CPU seconds (user + system of the child) of each and their ratio, with
-``python -c "import numpy"`` as the floor. The first run of each tree is a warm-up (Python's
+``python -c "import numpy"`` as the floor (``--no-bytecode-cache``: every module compiled in every
+run, as under ``PYTHONDONTWRITEBYTECODE=1``). The first run of each tree is a warm-up (Python's
 bytecode cache, the world cache): ``PYTHONPYCACHEPREFIX`` points at a temporary folder so neither
 tree is written to, and each tree's world cache is its own temporary folder. On a loaded machine
 compare the ratios of one run, and the CPU times rather than the wall times.
@@ -43,12 +44,17 @@ def main() -> None:
     parser.add_argument("--base", default="/work/base", help="the tree to compare with (its own .venv)")
     parser.add_argument("--runs", type=int, default=15)
     parser.add_argument("--format", default="exr", choices=("exr", "png"))
+    parser.add_argument("--no-bytecode-cache", action="store_true",
+                        help="compile every module in every run (PYTHONDONTWRITEBYTECODE=1, as some sandboxes set)")
     args = parser.parse_args()
     trees = {"this": ROOT, "base": Path(args.base)}
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in (*trees, "numpy")}
     with tempfile.TemporaryDirectory() as tmp:
-        env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-        env["PYTHONPYCACHEPREFIX"] = os.path.join(tmp, "pycache")
+        env = {k: v for k, v in os.environ.items() if k not in ("PYTHONDONTWRITEBYTECODE", "PYTHONPYCACHEPREFIX")}
+        if args.no_bytecode_cache:
+            env["PYTHONDONTWRITEBYTECODE"] = "1"
+        else:
+            env["PYTHONPYCACHEPREFIX"] = os.path.join(tmp, "pycache")
         commands = {}
         envs = {}
         for name, tree in trees.items():
@@ -65,7 +71,8 @@ def main() -> None:
         for _ in range(args.runs):
             for name in commands:
                 times[name].append(timed(commands[name], cwd[name], envs[name]))
-    print(f"whole CLI render of {PRESET} at 32x32 to .{args.format}, {args.runs} interleaved runs")
+    cached = "no bytecode cache" if args.no_bytecode_cache else "bytecode cached"
+    print(f"whole CLI render of {PRESET} at 32x32 to .{args.format}, {args.runs} interleaved runs, {cached}")
     print(f"{'':>6} {'wall min':>9} {'wall med':>9} {'cpu min':>8} {'cpu med':>8}")
     summary = {}
     for name, runs in times.items():
