@@ -2,9 +2,11 @@
 
 The figures are what this program holds at its peak, measured (``benchmarks/bench_memory.py``):
 the image and, with ``--passes``, the eight contribution passes as float32 RGB; the copy a file
-writer makes; the tracer's bands, which are bounded whatever the image size; and a study's
-variant images and its contact sheet. A request above ``MEMORY_BUDGET`` is refused before any
-work starts, with the estimate and the budget in the message (README, "Memory and time").
+writer makes; the tracer's bands, which are bounded whatever the image size; the world of an
+environment image (``raytrace.world_image.peak_bytes``, from its header, before any pixel is read);
+the band pool's worker processes, each counted whole, when a render is heavy enough to use them;
+and a study's variant images and its contact sheet. A request above ``MEMORY_BUDGET`` is refused
+before any work starts, with the estimate and the budget in the message (README, "Memory and time").
 """
 
 from __future__ import annotations
@@ -20,6 +22,16 @@ PASS_COUNT = 8
 SHEET_COPIES = 4
 # The glare's peak (images/glare.py): float64 and complex128 arrays of the padded 2H x 2W size.
 GLARE_BYTES_PER_PIXEL = 300  # measured 280 (tracemalloc, 512² and 1024²)
+# A render of at least this many eye rays (pixels x samples) traces its bands in the band pool's
+# worker processes (``raytrace.band_pool``); a lighter one is done before they would be up.
+POOL_RAYS = 2_000_000
+# One band worker at its peak, counted for every worker besides the parent: the interpreter, numpy
+# and the tracer (about 60 MB), its bands in flight, and the freed memory its allocator keeps
+# mapped (up to 512 MB, ``processes._KEEP_FREED_MEMORY``). Measured with the day preset at 16
+# samples (RSS from /proc, tests/raytrace/test_world_memory.py): 201-245 MB a worker at 512², 300-339
+# MB at 1024², about 460 MB at 2048²; the environment image's world is mapped from one file that
+# every process shares (``raytrace.world_cache``) and is counted once.
+WORKER_BYTES = 640 * 2**20
 # A study renders at most this many pixels in all, the pixels of one 4096 x 4096 image: 64
 # variants of 512 x 512, or 4 of 2048 x 2048 (an hour or so of CPU time at most, README).
 MAX_STUDY_PIXELS = 4096 * 4096
@@ -34,16 +46,24 @@ def gib(n: int) -> str:
     return f"{n / 2**30:.1f} GB"
 
 
-def render_bytes(width: int, height: int, passes: bool, file_format: str, glare: bool = False) -> int:
-    """Peak bytes of ``render``: the image, the passes if kept, the file writer's copy, and the
-    glare's FFT arrays if it is on (``images.glare.BYTES_PER_PIXEL``)."""
+def uses_pool(width: int, height: int, samples: int) -> bool:
+    """Whether a render of this size traces its bands in the band pool's worker processes."""
+    return width * height * samples >= POOL_RAYS
+
+
+def render_bytes(width: int, height: int, passes: bool, file_format: str, glare: bool = False,
+                 environment: int = 0, workers: int = 0) -> int:
+    """Peak bytes of ``render``, its worker processes included: the image, the passes if kept, the
+    file writer's copy, the glare's FFT arrays if it is on (``images.glare.BYTES_PER_PIXEL``), the
+    environment's world (``environment`` bytes) and ``workers`` band workers."""
     pixels = width * height
     image = pixels * RGB_BYTES
     kept = pixels * RGB_BYTES * PASS_COUNT if passes else 0
     # EXR: a float32 copy; PNG: the 8-bit codes and OpenImageIO's copy of them
     writer = pixels * RGB_BYTES if file_format == "exr" else pixels * 3 * 2
     spread = pixels * GLARE_BYTES_PER_PIXEL if glare else 0
-    return BASE_BYTES + image + kept + max(writer, spread)  # the glare is done before the file is written
+    parent = BASE_BYTES + image + kept + max(writer, spread)  # the glare is done before the file is written
+    return parent + environment + workers * WORKER_BYTES
 
 
 def check_rays(width: int, height: int, samples: int, where: str = "image.samples") -> None:
@@ -56,12 +76,16 @@ def check_rays(width: int, height: int, samples: int, where: str = "image.sample
 
 
 def check_render(width: int, height: int, passes: bool, file_format: str, what: str = "the render",
-                 glare: bool = False, samples: int = 1) -> None:
+                 glare: bool = False, samples: int = 1, environment: int = 0, workers: int = 0) -> None:
+    """Refuse a render above ``MAX_EYE_RAYS`` or whose whole footprint (``render_bytes``: the
+    environment's ``environment`` bytes and ``workers`` worker processes included) is above
+    ``MEMORY_BUDGET``."""
     check_rays(width, height, samples)
-    need = render_bytes(width, height, passes, file_format, glare)
+    need = render_bytes(width, height, passes, file_format, glare, environment, workers)
     if need > MEMORY_BUDGET:
         hint = " without --passes, or" if passes else ""
         hint += " without glare, or" if glare else ""
+        hint += " with a smaller environment image, or" if environment > need // 4 else ""
         raise SceneError("image", f"{width}x{height} px{' with --passes' if passes else ''}: {what} needs about "
                          f"{gib(need)} of memory; allowed at most {gib(MEMORY_BUDGET)} (render{hint} smaller)")
 
@@ -76,8 +100,19 @@ def check_study_rays(size: tuple[int, int], samples: list[int], where: str = "im
                                 "samples, smaller variants or fewer of them)")
 
 
-def study_bytes(variant_pixels: int, count: int, sheet_pixels: int) -> int:
-    return BASE_BYTES + variant_pixels * count * RGB_BYTES + sheet_pixels * RGB_BYTES * SHEET_COPIES
+def pool_workers(width: int, height: int, samples: int, passes: bool, file_format: str, glare: bool = False,
+                 environment: int = 0, workers: int = 0) -> int:
+    """How many band workers a render uses within the budget: ``workers`` (the pool's size) when it
+    is heavy enough for the pool and the whole footprint fits, else 0 (the render runs on threads)."""
+    if not uses_pool(width, height, samples):
+        return 0
+    fits = render_bytes(width, height, passes, file_format, glare, environment, workers) <= MEMORY_BUDGET
+    return workers if fits else 0
+
+
+def study_bytes(variant_pixels: int, count: int, sheet_pixels: int, environment: int = 0) -> int:
+    return (BASE_BYTES + environment + variant_pixels * count * RGB_BYTES
+            + sheet_pixels * RGB_BYTES * SHEET_COPIES)
 
 
 def check_study_pixels(size: tuple[int, int], count: int, where: str = "size") -> None:
@@ -91,11 +126,13 @@ def check_study_pixels(size: tuple[int, int], count: int, where: str = "size") -
                                 "or fewer variants)")
 
 
-def check_study(size: tuple[int, int], count: int, sheet_size: tuple[int, int], where: str = "size") -> None:
-    """A study must stay within ``MAX_STUDY_PIXELS`` rendered pixels and the memory budget."""
+def check_study(size: tuple[int, int], count: int, sheet_size: tuple[int, int], where: str = "size",
+                environment: int = 0) -> None:
+    """A study must stay within ``MAX_STUDY_PIXELS`` rendered pixels and the memory budget (its
+    largest environment world, ``environment`` bytes, included)."""
     check_study_pixels(size, count, where)
     w, h = size
-    need = study_bytes(w * h, count, sheet_size[0] * sheet_size[1])
+    need = study_bytes(w * h, count, sheet_size[0] * sheet_size[1], environment)
     if need > MEMORY_BUDGET:
         raise SceneError(where, f"the study needs about {gib(need)} of memory; allowed at most "
                                 f"{gib(MEMORY_BUDGET)} (smaller variants or fewer of them)")

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from ..fileio import check_writable
 from ..images import display
 from ..scene import spec as S
+from ..scene.beside import environment_file
 from ..scene.messages import show_value
 from ..scene.reading import SceneError, read_json
 from ..scene.validate import parse_scene
@@ -59,9 +60,11 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
                 image["samples"] = samples
             doc["image"] = image
     try:
-        return parse_scene(doc)
+        scene = parse_scene(doc)
+        environment_file(path, scene["environment"])  # beside the file, or refused
     except SceneError as e:
         raise in_file(e, path) from None
+    return scene
 
 
 class Terminated(KeyboardInterrupt):

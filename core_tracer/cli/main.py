@@ -38,10 +38,15 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every command, or, given the ``command`` the arguments start with, of that one
+    in full (the others by name only: their modules' imports are a render's fixed cost)."""
     parser = _Parser(prog=PROG, description="The 1990 IPSJ lamp renderer, without Blender.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
     for name in COMMANDS:
+        if command in COMMANDS and name != command:
+            sub.add_parser(name)
+            continue
         module = importlib.import_module(f".{name}", __package__)
         cmd = sub.add_parser(name, help=module.HELP, description=module.HELP)
         module.add_arguments(cmd)
@@ -83,7 +88,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with sigterm_as_interrupt():
             try:
-                args = build_parser().parse_args(argv)
+                argv = sys.argv[1:] if argv is None else list(argv)
+                args = build_parser(argv[0] if argv else None).parse_args(argv)
                 return int(args.run(args))
             except SceneError as e:
                 print(f"error: {one_line(e)}", file=sys.stderr)

@@ -9,6 +9,7 @@ import time
 from .. import budget
 from ..checkpoints import checkpoint
 from ..images.imageio import image_format
+from ..scene.beside import environment_file
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, load_scene_file, view_for
@@ -26,6 +27,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "edges (overrides the scene)")
     parser.add_argument("--passes", metavar="DIR",
                         help="also write one .exr per contribution pass (lens surface, bulb, ...) into DIR")
+    parser.add_argument("--environment", metavar="IMAGE",
+                        help="your own environment image (.exr or .hdr, any folder) as the surroundings, in place "
+                             "of the scene's; a scene file names only an image beside it or a bundled world")
     add_display_arguments(parser)
 
 
@@ -38,17 +42,23 @@ def run(args: argparse.Namespace) -> int:
     if args.passes is not None:
         check_output_folder(args.passes, "--passes")
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
+    traced, scene = _with_environment(args, scene)
     meshes, geometry = _freeform_meshes(args.scene, scene)
     keep_passes = args.passes is not None
     size = scene["image"]
-    budget.check_render(size["width"], size["height"], keep_passes, file_format, glare=scene["glare"]["on"],
-                        samples=size["samples"])
+    from ..raytrace import environment  # numpy and OpenImageIO: the image's header is read here
+
+    world = environment.world_bytes(traced)  # the header checked before any pixel is read
+    glow = scene["glare"]["on"]
+    workers = budget.pool_workers(size["width"], size["height"], size["samples"], keep_passes, file_format, glow,
+                                  world, os.cpu_count() or 1) if meshes is None else 0
+    budget.check_render(size["width"], size["height"], keep_passes, file_format, glare=glow,
+                        samples=size["samples"], environment=world, workers=workers)
     checkpoint("render:checked")
 
     from .. import RenderCancelled, render_passes  # the tracer loads only when it is needed
     from ..images import glare
     from ..images.imageio import load_writer, write_image
-    from ..raytrace import band_pool
 
     load_writer()
 
@@ -57,19 +67,24 @@ def run(args: argparse.Namespace) -> int:
         try:
             if meshes is None:
                 # A heavy render starts worker processes for its bands (about 0.2 s, then twice
-                # the speed of threads on two cores); a light one is done before they would be up.
-                heavy = size["width"] * size["height"] * size["samples"] >= band_pool.HEAVY_RAYS
-                result = render_passes(scene, should_stop=stop.is_set, keep_passes=keep_passes,
-                                       progress=lambda fraction: checkpoint("render:band"),
-                                       pool=band_pool.shared() if heavy else None)
+                # the speed of threads on two cores), where the budget holds them; a light one is
+                # done before they would be up (and never imports the pool).
+                pool = None
+                if workers:
+                    from ..raytrace import band_pool  # only for heavy renders (start-up speed)
+
+                    pool = band_pool.shared()
+                result = render_passes(traced, should_stop=stop.is_set, keep_passes=keep_passes,
+                                       progress=lambda fraction: checkpoint("render:band"), pool=pool)
             else:
                 from ..freeform import render_passes as render_freeform  # free-form only (start-up speed)
 
-                result = render_freeform(scene, meshes, should_stop=stop.is_set, geometry_cache=geometry,
+                result = render_freeform(traced, meshes, should_stop=stop.is_set, geometry_cache=geometry,
                                          progress=lambda fraction: checkpoint("render:band"))
         except RenderCancelled:
             raise stop.interrupt() from None
         image = glare.apply(result.image, scene)  # the image file holds the glare; the passes do not
+    _check_finite(image, result.passes, traced)
     seconds = time.perf_counter() - start
     checkpoint("render:rendered")
 
@@ -86,6 +101,38 @@ def run(args: argparse.Namespace) -> int:
     samples = f" at {size['samples']} samples" if size["samples"] > 1 else ""
     print(f"{printable(args.output)}: {w}x{h} px{samples} in {seconds:.2f} s{traced}{shown}")
     return 0
+
+
+def _with_environment(args: argparse.Namespace, scene: dict) -> tuple[dict, dict]:
+    """(the scene to trace, the scene the files record): the environment image is the one
+    ``--environment`` gives (the files name it by its file name), else the scene's own, confined to
+    the scene file's folder (``scene.beside``) and traced by its full path, whatever the working
+    directory."""
+    env = scene["environment"]
+    if args.environment is not None:
+        path = os.path.abspath(os.path.expanduser(args.environment))
+        if not os.path.isfile(path):
+            raise SceneError("--environment", f"{printable(args.environment, 200)!r} does not exist; allowed an "
+                                              "existing .exr or .hdr file")
+        recorded = {**scene, "environment": {**env, "world": "file", "file": os.path.basename(path)}}
+        return {**scene, "environment": {**env, "world": "file", "file": path}}, recorded
+    path = environment_file(args.scene, env)
+    if path is None:
+        return scene, scene
+    return {**scene, "environment": {**env, "file": path}}, scene
+
+
+def _check_finite(image, passes: dict, scene: dict) -> None:
+    """No inf or NaN reaches a file (the environment's values are bounded, ``world_image``: this
+    is the last guard)."""
+    import numpy as np
+
+    if np.isfinite(image).all() and all(np.isfinite(p).all() for p in passes.values()):
+        return
+    env = scene["environment"]
+    source = f"; the environment image {printable(env['file'], 200)!r} is too bright" if env["world"] == "file" else ""
+    raise SceneError("image", f"the render holds values that are not finite numbers{source}; allowed finite "
+                              "images only (nothing was written)")
 
 
 def _freeform_meshes(scene_path: str, scene: dict) -> tuple[dict | None, object]:

@@ -84,6 +84,30 @@ def _build(args: argparse.Namespace) -> st.Study:
         raise
 
 
+def _with_environment(study: st.Study, document: str) -> tuple[st.Study, int]:
+    """(the study to render, the bytes of its largest world): the base's environment image is the
+    one beside ``document`` (``scene.beside``), rendered by its full path whatever the working
+    directory; every variant's image is checked by its header, then read and made into its world
+    (``raytrace.world_cache``), before any worker starts."""
+    from ..raytrace import environment  # numpy and OpenImageIO: the images' headers are read here
+    from ..scene.beside import environment_file
+
+    try:
+        path = environment_file(document, study.base["environment"])
+    except SceneError as e:
+        raise in_file(SceneError(f"base.{e.path}", e.message), document) from None
+    runnable = study
+    if path is not None:
+        doc = study.to_doc()
+        doc["base"]["environment"]["file"] = path
+        runnable = st.Study.from_doc(doc)
+    worlds = {(v.scene["environment"]["world"], v.scene["environment"]["file"]): v.scene for v in runnable.variants}
+    world = max((environment.world_bytes(scene) for scene in worlds.values()), default=0)
+    for scene in worlds.values():
+        environment.from_scene(scene)  # made (or found) once here: the workers map its cache file
+    return runnable, world
+
+
 def _progress_printer():
     if not sys.stderr.isatty():
         return None
@@ -115,11 +139,13 @@ def run(args: argparse.Namespace) -> int:
     if args.save_variants:
         check_output_folder(args.save_variants, "--save-variants")
     study = _build(args)
+    runnable = study
     if args.output is not None:
         from ..study import sheet as study_sheet  # numpy: only for a sheet
 
+        runnable, world = _with_environment(study, args.base or args.study)
         sheet_layout = study_sheet.layout(study)
-        budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height))
+        budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height), environment=world)
 
     if args.save_study:
         study.save(args.save_study)
@@ -144,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
 
     with ctrl_c_sets() as stop:
         try:
-            images = study_run.run_study(study, args.workers, progress=on_progress, should_stop=stop.is_set,
+            images = study_run.run_study(runnable, args.workers, progress=on_progress, should_stop=stop.is_set,
                                          on_start=lambda run: checkpoint("study:started"))
         except study_run.Cancelled:
             raise stop.interrupt() from None

@@ -8,8 +8,8 @@ read with size and triangle limits (``gltf``) before any of it is used.
 from __future__ import annotations
 
 import os
-import stat
 
+from ..scene.beside import path_beside
 from ..scene.freeform_section import check_mesh_file_name
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
@@ -23,21 +23,10 @@ def mesh_file_path(json_path: str | os.PathLike, mesh_file: str) -> str:
     the folder; checks that it is a regular file within the size limit (without reading it)."""
     json_path = os.fspath(json_path)
     check_mesh_file_name(mesh_file)
-    folder = os.path.dirname(os.path.abspath(json_path))
-    path = os.path.join(folder, mesh_file)
     where = f"{printable(json_path, 200)}: freeform.mesh_file"
-    if os.path.dirname(os.path.realpath(path)) != os.path.realpath(folder):
-        raise SceneError(where, f'"{printable(mesh_file, 60)}" leads outside the design\'s folder; allowed a '
-                                "file beside the JSON")
-    try:
-        st = os.stat(path)
-    except OSError:
-        raise SceneError(where, f'"{printable(mesh_file, 60)}" is missing; allowed a .glb beside the JSON '
-                                "(export the meshes again)") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise SceneError(where, f'"{printable(mesh_file, 60)}" is not a regular file; allowed a .glb file')
-    if st.st_size > MAX_MESH_FILE_BYTES:
-        raise SceneError(where, f'"{printable(mesh_file, 60)}" is {st.st_size} bytes; allowed at most '
+    path, size = path_beside(json_path, mesh_file, where, "a .glb", " (export the meshes again)")
+    if size > MAX_MESH_FILE_BYTES:
+        raise SceneError(where, f'"{printable(mesh_file, 60)}" is {size} bytes; allowed at most '
                                 f"{MAX_MESH_FILE_BYTES} bytes")
     return path
 

@@ -28,6 +28,7 @@ from .. import fileio
 from ..freeform.loading import mesh_file_path
 from ..images import display
 from ..images.display import ViewTransform
+from ..scene.beside import environment_file
 from ..scene.derived import without_defaults
 from ..scene.freeform_section import freeform_without_defaults
 from ..scene.reading import SceneError, read_json, scene_to_json
@@ -147,6 +148,7 @@ def _parse(path: str) -> dict:
     scene = parse_scene(doc)
     if "freeform" in scene:
         _check_mesh_file(path, scene)
+    environment_file(path, scene["environment"])  # an image beside the preset, or refused
     return scene
 
 
@@ -419,13 +421,15 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     target = os.fspath(path)
     scene = copy.deepcopy(entry.scene)
     scene["image"] = {"width": int(size), "height": int(size)}
+    image_file = environment_file(entry.file, scene["environment"])  # beside the preset, by its full path
+    traced = scene if image_file is None else {**scene, "environment": {**scene["environment"], "file": image_file}}
     if "freeform" in scene:  # the meshes are read and checked now, before they are used
         from ..freeform import render_passes as render_freeform  # free-form only: loads Embree
         from ..freeform.loading import load_meshes
 
-        image = render_freeform(scene, load_meshes(entry.file, scene), size, size).image
+        image = render_freeform(traced, load_meshes(entry.file, scene), size, size).image
     else:
-        image = render(scene, size, size)
+        image = render(traced, size, size)
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
     write_image(target, image, scene, view=view)
     stem = os.path.splitext(os.path.basename(entry.file))[0]

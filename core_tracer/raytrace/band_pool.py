@@ -29,14 +29,14 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterator
 
-from .. import processes
+from .. import budget, processes
 from .band_worker import read_message, write_message
 from .tracer import BandImage, InOrder, RenderCancelled, short_switch_interval
 
 POLL_SECONDS = 0.002  # how often a render in the pool polls should_stop() while no band arrives
 LEASE_WAIT = 0.25  # seconds a render waits for the pool to finish stopping the render before it
 READY_WAIT = 2.0  # seconds a heavy render waits for a starting pool's workers (about 0.2 s)
-HEAVY_RAYS = 2_000_000  # eye rays (pixels x samples) from which a render waits for a starting pool
+HEAVY_RAYS = budget.POOL_RAYS  # eye rays (pixels x samples) from which a render waits for a starting pool
 DRAIN_SECONDS = 10.0  # a stopped render's workers report idle within this, or the pool is broken
 CLOSE_SECONDS = 2.0  # workers get this long to exit when the pool closes, then are killed
 _SERIAL = struct.Struct("<I")

@@ -15,6 +15,11 @@ a smooth function of n, so it is computed once per image and turn on a grid of n
 area-averaged to at most 128 x 64 for the integral) and interpolated bilinearly between the nodes.
 Occlusion of the environment by the body itself is not modelled.
 
+The image is read by ``world_image`` (its header checked before any pixel, its values finite and
+bounded, down-sampled past a size) and what the lookups need of it, the padded pixels, the
+irradiance map and the sun, is made once per image and turn and shared between processes through
+a mapped cache file (``world_cache``).
+
 Blender's own world images (``spec.BUNDLED_WORLDS``) ship with the ``bpy`` module at
 ``bpy/<version>/datafiles/studiolights/world``; the folder is found from the installed package
 without importing it.
@@ -27,6 +32,7 @@ import importlib.util
 import math
 import os
 import sys
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,6 +40,7 @@ import numpy as np
 
 from ..scene.reading import SceneError
 from ..scene.spec import BUNDLED_WORLDS
+from . import world_cache, world_image
 
 SUFFIXES = (".exr", ".hdr")
 WORLD_FOLDER = ("datafiles", "studiolights", "world")
@@ -98,33 +105,13 @@ def image_path(env: dict) -> str:
     return path
 
 
-@functools.lru_cache(maxsize=4)
-def _read(path: str, mtime_ns: int, size: int) -> np.ndarray:
-    """RGB float32 pixels (H, W, 3), top row first (``mtime_ns`` and ``size`` key the cache)."""
-    from ..images.imageio import oiio_module  # OpenImageIO only when an environment is used
-
-    oiio = oiio_module()
-    buf = oiio.ImageBuf(path)
-    pixels = buf.get_pixels(oiio.FLOAT) if not buf.has_error else None
-    if pixels is None or buf.has_error or pixels.ndim != 3 or pixels.shape[2] < 1:
-        raise SceneError("environment.file", f"{path!r} cannot be read as an image ({buf.geterror() or 'no pixels'}); "
-                                             "allowed an .exr or .hdr file")
-    if pixels.shape[2] < 3:
-        pixels = np.repeat(pixels[..., :1], 3, axis=2)
-    pixels = np.ascontiguousarray(pixels[..., :3], dtype=np.float32)
-    if not np.isfinite(pixels).all():
-        pixels = np.nan_to_num(pixels, nan=0.0, posinf=0.0, neginf=0.0)
+def read_image(path: str) -> np.ndarray:
+    """RGB float32 pixels (H, W, 3) of the image at ``path``, top row first, read as the tracer reads
+    them (``world_image``: checked by its header, finite, down-sampled where too large)."""
+    world = world_cache.world(path, 0.0, LAYOUT, _make_world)
+    pixels = np.ascontiguousarray(world.pixels)
     pixels.setflags(write=False)
     return pixels
-
-
-def _image_key(path: str) -> tuple[str, int, int]:
-    st = os.stat(path)
-    return path, st.st_mtime_ns, st.st_size
-
-
-def read_image(path: str) -> np.ndarray:
-    return _read(*_image_key(path))
 
 
 @dataclass(frozen=True)
@@ -132,7 +119,7 @@ class Environment:
     pixels: np.ndarray  # (H, W, 3) float32, top row first
     strength: float
     rotation: float  # radians about +z, the Mapping node's
-    key: tuple = ()  # the image file's (path, mtime, size): what it holds is computed once per image and turn
+    world: world_cache.World | None = None  # what the image holds, made once per image and turn (from_scene)
 
     # -- looking up radiance ------------------------------------------------------------------
 
@@ -205,31 +192,20 @@ class Environment:
         """The image's pixels padded to (H + 3) x (W + 3), flattened to ((H + 3) * (W + 3), 4): row
         (j + 1) (W + 3) + i + 1 holds pixel (j % h, i % w) for j in [-1, h + 1], i in [-1, w + 1] (the
         repeated border), its three channels and a 0 (rows of 16 bytes, which ``take`` copies fastest).
-        Computed once per image (``_cached_padded``)."""
-        return _cached_padded(self.key) if self.key else _pad(self.pixels)
+        Made once per image (``world_cache``)."""
+        return self.world.padded if self.world is not None else _pad(self.pixels)
 
     # -- what the image holds ------------------------------------------------------------------
 
     def _pixel_directions(self) -> tuple[np.ndarray, np.ndarray]:
         """World directions of the pixel centres (H*W, 3) and their solid angles (H*W,)."""
         h, w = self.pixels.shape[:2]
-        u = (np.arange(w) + 0.5) / w
-        v = 1.0 - (np.arange(h) + 0.5) / h
-        phi = (0.5 - u) * 2.0 * math.pi  # texture azimuth: atan2(y, x) in the texture's frame
-        lat = (v - 0.5) * math.pi
-        lat, phi = np.meshgrid(lat, phi, indexing="ij")
-        t = np.stack([np.cos(lat) * np.cos(phi), np.cos(lat) * np.sin(phi), np.sin(lat)], axis=-1).reshape(-1, 3)
-        c, s = math.cos(self.rotation), math.sin(self.rotation)
-        world = np.stack([c * t[:, 0] + s * t[:, 1], -s * t[:, 0] + c * t[:, 1], t[:, 2]], axis=1)  # R_z(-phi) t
-        # The exact solid angle of each pixel's band of latitude: the pixels sum to 4 pi.
-        half = 0.5 * math.pi / h
-        solid = ((np.sin(lat + half) - np.sin(lat - half)) * (2.0 * math.pi / w)).reshape(-1)
-        return world, solid
+        return _pixel_directions(h, w, self.rotation)
 
     @functools.cached_property
     def _irradiance_map(self) -> np.ndarray:
         """Irradiance at the grid's nodes, (IRRADIANCE_LAT + 1, IRRADIANCE_LON, 3)."""
-        unit = _cached_irradiance(self.key, self.rotation) if self.key else _irradiance(self.pixels, self.rotation)
+        unit = self.world.irradiance if self.world is not None else _irradiance(self.pixels, self.rotation)
         return self.strength * unit
 
     def irradiance(self, normal: np.ndarray) -> np.ndarray:
@@ -273,15 +249,15 @@ class Environment:
     def sun_direction(self) -> np.ndarray:
         """Unit direction toward the image's sun: the solid-angle weighted centroid of its pixels of at
         least ``SUN_FRACTION`` of the brightest luminance."""
-        if self.key:
-            return _cached_sun(self.key, self.rotation).copy()
+        if self.world is not None:
+            return np.array(self.world.sun_direction)
         return _sun_direction(self.pixels, self.rotation)
 
     def sun_color(self) -> np.ndarray:
         """The colour of the image's sun (the pixels ``sun_direction`` takes) at luminance 1, whatever
         the strength and the turn (``sunlight.followed_color``)."""
-        if self.key:
-            return _cached_sun_color(self.key).copy()
+        if self.world is not None:
+            return np.array(self.world.sun_color)
         return _sun_color(self.pixels)
 
 
@@ -310,27 +286,61 @@ def _pad(pixels: np.ndarray) -> np.ndarray:
     return padded
 
 
-def _pixel_directions(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray]:
-    return Environment(pixels, 1.0, rotation)._pixel_directions()
+def _pixel_directions(h: int, w: int, rotation: float, first: int = 0, last: int | None = None,
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """World directions of the centres of pixel rows [first, last) of an h x w image (rows*W, 3) and
+    their solid angles (rows*W,)."""
+    u = (np.arange(w) + 0.5) / w
+    v = 1.0 - (np.arange(first, h if last is None else last) + 0.5) / h
+    phi = (0.5 - u) * 2.0 * math.pi  # texture azimuth: atan2(y, x) in the texture's frame
+    lat = (v - 0.5) * math.pi
+    lat, phi = np.meshgrid(lat, phi, indexing="ij")
+    t = np.stack([np.cos(lat) * np.cos(phi), np.cos(lat) * np.sin(phi), np.sin(lat)], axis=-1).reshape(-1, 3)
+    c, s = math.cos(rotation), math.sin(rotation)
+    world = np.stack([c * t[:, 0] + s * t[:, 1], -s * t[:, 0] + c * t[:, 1], t[:, 2]], axis=1)  # R_z(-phi) t
+    # The exact solid angle of each pixel's band of latitude: the pixels sum to 4 pi.
+    half = 0.5 * math.pi / h
+    solid = ((np.sin(lat + half) - np.sin(lat - half)) * (2.0 * math.pi / w)).reshape(-1)
+    return world, solid
+
+
+def _strips(h: int, w: int, starts: np.ndarray | None = None) -> list[tuple[int, int]]:
+    """Row ranges covering an h x w image of at most ``world_image.STRIP_PIXELS`` each (at least
+    one row), each a run of whole blocks when ``starts`` gives the blocks' first rows: the per-pixel
+    temporaries of the sums below stay bounded whatever the image's size."""
+    starts = list(range(h)) if starts is None else [int(row) for row in starts]
+    per_strip = max(1, world_image.STRIP_PIXELS // w)
+    edges, previous = [0], 0
+    for row in [*starts[1:], h]:
+        if row - edges[-1] > per_strip and previous > edges[-1]:
+            edges.append(previous)
+        previous = row
+    edges.append(h)
+    return list(zip(edges[:-1], edges[1:], strict=True))
 
 
 def _irradiance(pixels: np.ndarray, rotation: float) -> np.ndarray:
     """Irradiance of ``pixels`` at strength 1 at the nodes of the irradiance map (module docstring)."""
-    d, solid = _pixel_directions(pixels, rotation)
     h, w = pixels.shape[:2]
-    weighted = pixels.reshape(-1, 3).astype(np.float64) * solid[:, None]
     # Area-average to at most IRRADIANCE_SOURCE: sums of radiance x solid angle.
     cols = np.linspace(0, w, min(w, IRRADIANCE_SOURCE[0]) + 1).astype(np.int64)[:-1]
     rows = np.linspace(0, h, min(h, IRRADIANCE_SOURCE[1]) + 1).astype(np.int64)[:-1]
+    powers, directions = [], []
+    for first, last in _strips(h, w, rows):  # whole rows of blocks at a time
+        d, solid = _pixel_directions(h, w, rotation, first, last)
+        weighted = pixels[first:last].reshape(-1, 3).astype(np.float64) * solid[:, None]
+        block_rows = rows[(rows >= first) & (rows < last)] - first
 
-    def blocks(a: np.ndarray) -> np.ndarray:
-        a = a.reshape(h, w, -1)
-        return np.add.reduceat(np.add.reduceat(a, rows, axis=0), cols, axis=1).reshape(-1, a.shape[-1])
+        def blocks(a: np.ndarray, block_rows=block_rows, n=last - first) -> np.ndarray:
+            a = a.reshape(n, w, -1)
+            return np.add.reduceat(np.add.reduceat(a, block_rows, axis=0), cols, axis=1).reshape(-1, a.shape[-1])
 
-    power = blocks(weighted)
-    # Each block's light comes from its luminance-weighted mean direction: a sun keeps its place.
-    weight = (weighted @ LUMINANCE) + 1e-12 * solid
-    mean_dir = blocks(d * weight[:, None])
+        powers.append(blocks(weighted))
+        # Each block's light comes from its luminance-weighted mean direction: a sun keeps its place.
+        weight = (weighted @ LUMINANCE) + 1e-12 * solid
+        directions.append(blocks(d * weight[:, None]))
+    power = np.concatenate(powers)
+    mean_dir = np.concatenate(directions)
     mean_dir /= np.linalg.norm(mean_dir, axis=1)[:, None]
     lon = -math.pi + np.arange(IRRADIANCE_LON) * (2.0 * math.pi / IRRADIANCE_LON)
     lat = -0.5 * math.pi + np.arange(IRRADIANCE_LAT + 1) * (math.pi / IRRADIANCE_LAT)
@@ -343,17 +353,29 @@ def _irradiance(pixels: np.ndarray, rotation: float) -> np.ndarray:
     return out.reshape(IRRADIANCE_LAT + 1, IRRADIANCE_LON, 3)
 
 
-def _sun_pixels(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The luminance of the pixels ``rgb`` (H*W, 3) and which of them are the sun: at least
-    ``SUN_FRACTION`` of the brightest."""
-    lum = rgb @ LUMINANCE
-    return lum, lum >= SUN_FRACTION * lum.max()
+def _luminance_peak(pixels: np.ndarray) -> float:
+    h, w = pixels.shape[:2]
+    return max(float((pixels[a:b].reshape(-1, 3).astype(np.float64) @ LUMINANCE).max()) for a, b in _strips(h, w))
+
+
+def _sun_strips(pixels: np.ndarray):
+    """Per strip of rows: (first, last, rgb (n, 3) float64, which pixels are the sun: at least
+    ``SUN_FRACTION`` of the brightest luminance)."""
+    h, w = pixels.shape[:2]
+    strips = _strips(h, w)
+    peak = _luminance_peak(pixels) if len(strips) > 1 else None
+    for first, last in strips:
+        rgb = pixels[first:last].reshape(-1, 3).astype(np.float64)
+        lum = rgb @ LUMINANCE
+        yield first, last, rgb, lum, lum >= SUN_FRACTION * (lum.max() if peak is None else peak)
 
 
 def _sun_direction(pixels: np.ndarray, rotation: float) -> np.ndarray:
-    d, solid = _pixel_directions(pixels, rotation)
-    lum, sun = _sun_pixels(pixels.reshape(-1, 3).astype(np.float64))
-    centre = ((lum * solid)[sun, None] * d[sun]).sum(axis=0)
+    h, w = pixels.shape[:2]
+    centre = np.zeros(3)
+    for first, last, _, lum, sun in _sun_strips(pixels):
+        d, solid = _pixel_directions(h, w, rotation, first, last)
+        centre += ((lum * solid)[sun, None] * d[sun]).sum(axis=0)
     norm = float(np.linalg.norm(centre))
     return centre / norm if norm > 0 else np.array([0.0, 0.0, 1.0])
 
@@ -363,36 +385,37 @@ def _sun_color(pixels: np.ndarray) -> np.ndarray:
     its luminance; negative values (out of gamut in some HDR images) count as 0, and an image without
     light gives white."""
     h, w = pixels.shape[:2]
-    rgb = pixels.reshape(-1, 3).astype(np.float64)
-    _, sun = _sun_pixels(rgb)
     # The solid angle of a pixel is its row's band of latitude over its width (the turn does not
     # change it): rows from the top, latitude pi/2 - (i + 1/2) pi/h at the centre.
     lat = 0.5 * np.pi - (np.arange(h) + 0.5) * np.pi / h
     half = 0.5 * np.pi / h
     solid = np.repeat((np.sin(lat + half) - np.sin(lat - half)) * (2.0 * np.pi / w), w)
-    light = np.maximum((rgb[sun] * solid[sun, None]).sum(axis=0), 0.0)
+    light = np.zeros(3)
+    for first, last, rgb, _, sun in _sun_strips(pixels):
+        light += (rgb[sun] * solid[first * w:last * w][sun, None]).sum(axis=0)
+    light = np.maximum(light, 0.0)
     luminance = float(light @ LUMINANCE)
     return light / luminance if luminance > 0.0 else np.ones(3)
 
 
-@functools.lru_cache(maxsize=2)
-def _cached_padded(key: tuple) -> np.ndarray:
-    return _pad(_read(*key))
+LAYOUT = f"{IRRADIANCE_LON}x{IRRADIANCE_LAT}-{IRRADIANCE_SOURCE[0]}x{IRRADIANCE_SOURCE[1]}-{SUN_FRACTION}"
 
 
-@functools.lru_cache(maxsize=8)
-def _cached_sun_color(key: tuple) -> np.ndarray:
-    return _sun_color(_read(*key))
+def _make_world(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What ``world_cache`` keeps of an image and turn: irradiance map, sun direction, sun colour."""
+    with warnings.catch_warnings(), np.errstate(all="ignore"):  # the pixels are finite and bounded
+        warnings.simplefilter("ignore")
+        return _irradiance(pixels, rotation), _sun_direction(pixels, rotation), _sun_color(pixels)
 
 
-@functools.lru_cache(maxsize=8)
-def _cached_irradiance(key: tuple, rotation: float) -> np.ndarray:
-    return _irradiance(_read(*key), rotation)
-
-
-@functools.lru_cache(maxsize=8)
-def _cached_sun(key: tuple, rotation: float) -> np.ndarray:
-    return _sun_direction(_read(*key), rotation)
+def world_bytes(scene: dict) -> int:
+    """Bytes the world of a normalised scene's environment holds at its peak while it is made, from
+    the image's header (checked: a ``SceneError`` for a bad or too large one); 0 without one."""
+    env = scene.get("environment")
+    if env is None or env["world"] == "none":
+        return 0
+    width, height = world_image.header(image_path(env))[:2]
+    return world_image.peak_bytes(width, height)
 
 
 def from_scene(scene: dict) -> Environment | None:
@@ -400,5 +423,6 @@ def from_scene(scene: dict) -> Environment | None:
     env = scene.get("environment")  # a scene an earlier version built in code has none
     if env is None or env["world"] == "none":
         return None
-    key = _image_key(image_path(env))
-    return Environment(_read(*key), float(env["strength"]), math.radians(env["rotation_deg"]), key)
+    rotation = math.radians(env["rotation_deg"])
+    world = world_cache.world(image_path(env), rotation, LAYOUT, _make_world)
+    return Environment(world.pixels, float(env["strength"]), rotation, world)

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from . import spec as S
+from .beside import check_plain_name
 from .derived import section_defaults, without_defaults
 from .reading import SceneError
 from .safe_text import printable
@@ -20,11 +21,7 @@ MESH_SUFFIX = ".glb"
 
 def check_mesh_file_name(name: str, where: str = "freeform.mesh_file") -> None:
     """A plain ``*.glb`` file name, no folder, no hidden file: the mesh file lies beside the JSON."""
-    bad = (not name or name != name.strip() or "/" in name or "\\" in name or name.startswith(".")
-           or "\0" in name or ":" in name or not name.lower().endswith(MESH_SUFFIX) or len(name) <= len(MESH_SUFFIX))
-    if bad:
-        raise SceneError(where, f'"{printable(name, 60)}" is not allowed; allowed a plain file name ending in '
-                                f"{MESH_SUFFIX} beside the document, without folders")
+    check_plain_name(name, (MESH_SUFFIX,), where)
 
 
 def finish_freeform(raw: Any, section: dict) -> dict:

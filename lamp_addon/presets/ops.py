@@ -24,6 +24,7 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ...core_tracer import fileio
 from ...core_tracer.library import presets as P
+from ...core_tracer.scene.beside import environment_file
 from ...core_tracer.scene.reading import SceneError, scene_to_json
 from ...core_tracer.scene.validate import normalize
 from .. import reports
@@ -151,6 +152,9 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
     preset (read from ``path``) also brings its parts in as objects with roles (``freeform.loading``),
     its meshes read and checked first. Returns what happened, for the report."""
     parts = None
+    if path is not None and scene["environment"]["world"] == "file":
+        # The image beside the preset (refused when it leads elsewhere), held in the design by its path.
+        scene = {**scene, "environment": {**scene["environment"], "file": environment_file(path, scene["environment"])}}
     if "freeform" in scene:
         if path is None:
             raise SceneError("freeform", "a free-form design needs its file, to find its .glb beside it")
