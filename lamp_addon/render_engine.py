@@ -14,7 +14,7 @@ import numpy as np
 
 from ..core_tracer.budget import check_rays
 from ..core_tracer.raytrace import band_pool
-from ..core_tracer.raytrace.tracer import PASS_NAMES
+from ..core_tracer.raytrace.engine import PASS_NAMES
 from ..core_tracer.scene.reading import SceneError
 from . import freeform_render, freeform_status, render_camera, render_viewport
 
@@ -54,7 +54,7 @@ def body_coverage(scene: dict, row_start: int, row_stop: int) -> np.ndarray:
     from ..core_tracer.raytrace import pixel_filter
     from ..core_tracer.raytrace.camera import eye_rays, make_camera
     from ..core_tracer.raytrace.parts.body_box import body_box, hit_box
-    from ..core_tracer.raytrace.tracer import TILE_RAYS
+    from ..core_tracer.raytrace.engine.sampling import TILE_RAYS
 
     width, height = scene["image"]["width"], scene["image"]["height"]
     samples = scene["image"].get("samples", 1)

@@ -33,17 +33,12 @@ import numpy as np
 from ..raytrace import optics, pixel_filter, sunlight
 from ..raytrace import paths as P
 from ..raytrace.camera import Camera, eye_rays, make_camera
+from ..raytrace.engine.rays import CUTOFF, PASS_NAMES, add_to_pass
+from ..raytrace.engine.render import RenderResult
+from ..raytrace.engine.sampling import TILE_RAYS, sample_groups
+from ..raytrace.engine.schedule import RenderCancelled
+from ..raytrace.engine.walk import MAX_DEPTH
 from ..raytrace.lighting import Lighting
-from ..raytrace.tracer import (
-    CUTOFF,
-    MAX_DEPTH,
-    PASS_NAMES,
-    TILE_RAYS,
-    RenderCancelled,
-    RenderResult,
-    add_to_pass,
-    sample_groups,
-)
 from .embree import EmbreeScene
 from .geometry import BODY, Geometry, GeometryCache
 from .meshes import MeshData
