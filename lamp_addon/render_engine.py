@@ -53,8 +53,8 @@ def body_coverage(scene: dict, row_start: int, row_stop: int) -> np.ndarray:
     the body's front face, so the box is the whole lamp seen from outside."""
     from ..core_tracer.raytrace import pixel_filter
     from ..core_tracer.raytrace.camera import eye_rays, make_camera
-    from ..core_tracer.raytrace.parts.body_box import body_box, hit_box
     from ..core_tracer.raytrace.engine.sampling import TILE_RAYS
+    from ..core_tracer.raytrace.parts.body_box import body_box, hit_box
 
     width, height = scene["image"]["width"], scene["image"]["height"]
     samples = scene["image"].get("samples", 1)

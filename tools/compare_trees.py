@@ -1,6 +1,7 @@
 """Render every preset with one tree's tracer, or compare two such sets of renders.
 
     cd <tree> && .venv/bin/python <this file> render OUT      # writes OUT/<preset>-<case>.npy
+    cd <tree> && .venv/bin/python <this file> freeform OUT    # the same, presets as meshes (free-form tracer)
     python <this file> compare OLD NEW                       # max |new - old| / peak per preset
 
 The cases: 128x96 at 1 sample and 96x64 at 8 samples (one thread, so bands are traced alike)."""
@@ -30,6 +31,28 @@ def render(out: Path) -> None:
         print(preset.stem, flush=True)
 
 
+FREEFORM_PRESETS = ("paper-baseline", "four-lamp-rear-combination", "four-lamp-day-lit")
+
+
+def freeform(out: Path) -> None:
+    """The round-lens presets as meshes (``benchmarks/bench_freeform.py``'s conversion) through the
+    free-form tracer."""
+    sys.path.insert(0, os.getcwd())
+    sys.path.insert(0, os.path.join(os.getcwd(), "benchmarks"))
+    from bench_freeform import four_lamp_design
+
+    from core_tracer.freeform import GeometryCache, render_passes
+
+    out.mkdir(parents=True, exist_ok=True)
+    for name in FREEFORM_PRESETS:
+        scene, meshes = four_lamp_design(Path("presets") / f"{name}.json")
+        cache = GeometryCache()
+        for case, (width, height, samples) in CASES.items():
+            result = render_passes(scene, meshes, width, height, samples=samples, threads=1, geometry_cache=cache)
+            np.save(out / f"freeform-{name}-{case}.npy", result.image)
+        print(name, flush=True)
+
+
 def compare(old: Path, new: Path) -> None:
     worst = 0.0
     for path in sorted(old.glob("*.npy")):
@@ -45,5 +68,7 @@ def compare(old: Path, new: Path) -> None:
 if __name__ == "__main__":
     if sys.argv[1] == "render":
         render(Path(sys.argv[2]))
+    elif sys.argv[1] == "freeform":
+        freeform(Path(sys.argv[2]))
     else:
         compare(Path(sys.argv[2]), Path(sys.argv[3]))

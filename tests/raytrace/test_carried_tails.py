@@ -28,7 +28,7 @@ def _render(monkeypatch, carry: int | None, threads: int, **options) -> engine.R
     ``_trace_band``, as before tails were carried."""
     monkeypatch.setattr(engine.sampling, "TILE_RAYS", WIDTH * 6)
     if carry is None:
-        monkeypatch.setattr(engine.schedule, "_carried_bands", engine.schedule._traced_bands_on)
+        monkeypatch.setattr(engine.schedule, "_carried_bands", engine.schedule.bands_on_threads)
     else:
         monkeypatch.setattr(engine.carried, "CARRY_RAYS", carry)
     try:

@@ -7,7 +7,8 @@ end of a segment is added to the ray's pixel as k × the value, into one of the 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from functools import cache
 
 import numpy as np
 
@@ -22,10 +23,11 @@ PASS_NAMES = ("lens_surface", "bulb", "reflector_constant", "reflector_scatter",
 
 @dataclass
 class Rays:
-    """One generation of live rays inside the lamps (local lamp coordinates)."""
+    """One generation of live rays inside the lamps (a parametric design's in local lamp
+    coordinates), one row each."""
 
     pix: np.ndarray  # pixel index within the band
-    lamp: np.ndarray
+    lamp: np.ndarray  # the row of the lamp table its values come from (free-form: of the part table)
     o: np.ndarray
     d: np.ndarray
     k: np.ndarray  # accumulated attenuation, RGB
@@ -43,10 +45,13 @@ class Rays:
             if sel.all():
                 return self
             sel = np.nonzero(sel)[0]
-        return Rays(*(rows(getattr(self, f), sel) for f in RAY_FIELDS))
+        return type(self)(*(rows(getattr(self, f), sel) for f in field_names(type(self))))
 
 
-RAY_FIELDS = ("pix", "lamp", "o", "d", "k", "medium", "src", "parent", "branch", "seen_reflector")
+@cache
+def field_names(kind: type[Rays]) -> tuple[str, ...]:
+    """The fields of ``Rays`` or of a kind of rays that carries more (``freeform.render.MeshRays``)."""
+    return tuple(f.name for f in fields(kind))
 
 
 class _Unrecorded:
@@ -69,8 +74,9 @@ def branch_tags(cls: np.ndarray | _Unrecorded, branch: int, n: int) -> np.ndarra
 
 
 def concat(parts: list[Rays]) -> Rays:
-    fields = ([getattr(p, f) for p in parts] for f in RAY_FIELDS)
-    return Rays(*(UNRECORDED if any(a is UNRECORDED for a in each) else np.concatenate(each) for each in fields))
+    kind = type(parts[0])
+    columns = ([getattr(p, f) for p in parts] for f in field_names(kind))
+    return kind(*(UNRECORDED if any(a is UNRECORDED for a in each) else np.concatenate(each) for each in columns))
 
 
 def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:
@@ -144,7 +150,7 @@ class Band:
 
 
 def no_rays() -> Rays:
-    return Rays(*(np.zeros(0, dtype=np.int64) for _ in RAY_FIELDS))
+    return Rays(*(np.zeros(0, dtype=np.int64) for _ in field_names(Rays)))
 
 
 _SLOT = np.dtype((np.void, 3 * 8))  # one slot of a pass, its three float64 channels as one item

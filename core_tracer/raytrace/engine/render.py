@@ -36,6 +36,54 @@ class RenderResult:
     stats: dict = field(default_factory=dict)
 
 
+class Film:
+    """The image a render fills in band by band (and each pass, when kept), and the render's
+    statistics; each band goes on to the caller's ``on_rows`` and ``on_band`` as it arrives."""
+
+    def __init__(self, width: int, height: int, keep_passes: bool,
+                 on_rows: Callable[[int, int, np.ndarray], None] | None = None,
+                 on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None):
+        self.width, self.height, self.keep_passes = width, height, keep_passes
+        self.on_rows, self.on_band = on_rows, on_band
+        self.passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
+        self.image = np.zeros((height, width, 3), dtype=np.float32)
+        self.stats = {"segments": 0, "max_depth": 0, "transitions": set(), "busy_pixels": 0}
+        self.workers: set[int] = set()  # the processes that traced bands (0: this one)
+
+    def add(self, y0: int, y1: int, band: BandImage) -> None:
+        """The rows ``y0:y1`` traced."""
+        if self.keep_passes:
+            self.passes[:, y0:y1] = band.passes.reshape(len(PASS_NAMES), y1 - y0, self.width, 3)
+        self.image[y0:y1] = band.image.reshape(y1 - y0, self.width, 3)
+        self.stats["segments"] += band.segments
+        self.stats["busy_pixels"] += band.busy
+        self.stats["max_depth"] = max(self.stats["max_depth"], band.max_depth)
+        self.stats["transitions"] |= band.transitions
+        self.workers.add(band.process)
+        if self.on_rows is not None:
+            self.on_rows(y0, y1, self.image[y0:y1])
+        if self.on_band is not None:
+            self.on_band(y0, y1, self.image[y0:y1],
+                         {name: self.passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)} if self.keep_passes
+                         else {})
+
+    def expose(self, traced: Iterator[tuple[int, int, BandImage]], n_bands: int,
+               progress: Callable[[float], None] | None) -> None:
+        """Every band of ``traced`` (``n_bands`` in all) added, ``progress(fraction)`` after each."""
+        for done, (y0, y1, band) in enumerate(traced, start=1):
+            self.add(y0, y1, band)
+            if progress is not None:
+                progress(done / n_bands)
+
+    def result(self, samples: int, seconds: float) -> RenderResult:
+        stats = self.stats
+        stats["seconds"] = seconds
+        stats["width"], stats["height"], stats["samples"] = self.width, self.height, samples
+        stats["worker_processes"] = len(self.workers - {0})  # how many of a pool's processes traced bands
+        passes = dict(zip(PASS_NAMES, self.passes, strict=False)) if self.keep_passes else {}
+        return RenderResult(self.image, passes, stats)
+
+
 def render_passes(scene: dict, width: int | None = None, height: int | None = None, *,
                   progress: Callable[[float], None] | None = None,
                   should_stop: Callable[[], bool] | None = None,
@@ -67,27 +115,9 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     start = time.perf_counter()
     ctx = make_context(scene, width, height, record_transitions=record_transitions, samples=samples,
                        filter_name=filter_name, adaptive_threshold=adaptive_threshold, world_seen=world_seen)
-    passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
-    image = np.zeros((height, width, 3), dtype=np.float32)
     bands = band_rows(ctx)
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
-    stats = {"segments": 0, "max_depth": 0, "transitions": set(), "busy_pixels": 0}
-    workers: set[int] = set()
-
-    def finish(y0: int, y1: int, band: BandImage) -> None:
-        if keep_passes:
-            passes[:, y0:y1] = band.passes.reshape(len(PASS_NAMES), y1 - y0, width, 3)
-        image[y0:y1] = band.image.reshape(y1 - y0, width, 3)
-        stats["segments"] += band.segments
-        stats["busy_pixels"] += band.busy
-        stats["max_depth"] = max(stats["max_depth"], band.max_depth)
-        stats["transitions"] |= band.transitions
-        workers.add(band.process)
-        if on_rows is not None:
-            on_rows(y0, y1, image[y0:y1])
-        if on_band is not None:
-            on_band(y0, y1, image[y0:y1], {name: passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)}
-                    if keep_passes else {})
+    film = Film(width, height, keep_passes, on_rows, on_band)
 
     def on_threads(some: list[tuple[int, int]]) -> Iterator[tuple[int, int, BandImage]]:
         for y0, y1, band in schedule.traced_bands(ctx, some, max(1, min(threads, len(some))), should_stop or never):
@@ -100,14 +130,8 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
         traced = pool.traced_bands(scene, width, height, options, bands, threads, should_stop or never, on_threads)
     else:
         traced = on_threads(bands)
-    for done, (y0, y1, band) in enumerate(traced, start=1):
-        finish(y0, y1, band)
-        if progress is not None:
-            progress(done / len(bands))
-    stats["seconds"] = time.perf_counter() - start
-    stats["width"], stats["height"], stats["samples"] = width, height, ctx.samples
-    stats["worker_processes"] = len(workers - {0})  # how many of a pool's processes traced bands
-    return RenderResult(image, dict(zip(PASS_NAMES, passes, strict=False)) if keep_passes else {}, stats)
+    film.expose(traced, len(bands), progress)
+    return film.result(ctx.samples, time.perf_counter() - start)
 
 
 def make_context(scene: dict, width: int, height: int, *, record_transitions: bool = False,

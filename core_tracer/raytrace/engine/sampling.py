@@ -9,7 +9,7 @@ groups' rays (``carried.carrying_samples``).
 
 from __future__ import annotations
 
-from collections.abc import Generator, Iterator
+from collections.abc import Callable, Generator, Iterator
 
 import numpy as np
 
@@ -26,8 +26,9 @@ Requests = Generator[tuple[np.ndarray, np.ndarray], Band, None]
 
 
 
-def traced_at_once(ctx: Context, requests: Requests) -> None:
-    """Trace each group of eye rays a band's sampling asks for alone (``trace_eye_rays``)."""
+def traced_at_once(ctx: Context, requests: Requests, trace: Callable[..., None] = trace_eye_rays) -> None:
+    """Trace each group of eye rays a band's sampling asks for alone, by ``trace(ctx, group, o, d)``
+    (``walk.trace_eye_rays``; the free-form tracer gives its own)."""
     group = None
     while True:
         try:
@@ -35,7 +36,7 @@ def traced_at_once(ctx: Context, requests: Requests) -> None:
         except StopIteration:
             return
         group = Band(len(o), ctx)
-        trace_eye_rays(ctx, group, o, d)
+        trace(ctx, group, o, d)
 
 
 def sample_groups(cam: Camera, pixels: np.ndarray, samples: int,

@@ -121,7 +121,7 @@ def traced_bands(ctx: Context, bands: list[tuple[int, int]], threads: int,
     """Trace the bands, at most ``threads`` at a time (in the calling thread when 1), and yield
     them in order; ``should_stop()`` is polled before starting a band and after each finishes
     (with one sample per pixel, before the first and as each completes: ``_carried_bands``)."""
-    traced = _carried_bands if ctx.samples == 1 else _traced_bands_on
+    traced = _carried_bands if ctx.samples == 1 else bands_on_threads
     if threads > 1:
         with short_switch_interval():
             yield from traced(ctx, bands, threads, should_stop)
@@ -129,8 +129,12 @@ def traced_bands(ctx: Context, bands: list[tuple[int, int]], threads: int,
         yield from traced(ctx, bands, 1, should_stop)
 
 
-def _traced_bands_on(ctx: Context, bands: list[tuple[int, int]], threads: int,
-                     should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, Band]]:
+def bands_on_threads(ctx, bands: list[tuple[int, int]], threads: int, should_stop: Callable[[], bool],
+                     trace: Callable[..., Band] | None = None) -> Iterator[tuple[int, int, Band]]:
+    """The ``bands`` each traced alone by ``trace(ctx, y0, y1)`` (``trace_band``; the free-form
+    tracer gives its own), at most ``threads`` at a time (in the calling thread when 1), yielded in
+    order; ``should_stop()`` is polled before starting a band and after each finishes."""
+    trace = trace or trace_band
     pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
     pending, running = deque(bands), deque()
     try:
@@ -139,7 +143,7 @@ def _traced_bands_on(ctx: Context, bands: list[tuple[int, int]], threads: int,
                 if should_stop():
                     raise RenderCancelled("render cancelled")
                 y0, y1 = pending.popleft()
-                running.append((y0, y1, pool.submit(trace_band, ctx, y0, y1) if pool else trace_band(ctx, y0, y1)))
+                running.append((y0, y1, pool.submit(trace, ctx, y0, y1) if pool else trace(ctx, y0, y1)))
             y0, y1, band = running.popleft()
             band = band.result() if pool else band
             if should_stop():
@@ -149,9 +153,6 @@ def _traced_bands_on(ctx: Context, bands: list[tuple[int, int]], threads: int,
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
 
-
-# ---------------------------------------------------------------------------------------------
-# Carrying the tails of bands (one sample per pixel)
 
 def _carried_bands(ctx: Context, bands: list[tuple[int, int]], threads: int,
                    should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, Band]]:
