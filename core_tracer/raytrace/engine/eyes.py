@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import optics
 from ..parts import body_box, outer_face
 from ..parts.base import rows
 from ..parts.cylinder_lens import outward_normal
@@ -68,29 +67,29 @@ def first_hits(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.n
 
     # Only rays entering the front face can reach a lens: find their points there.
     front = np.nonzero(hit_box & (face == 1) & (d[:, 1] > 0))[0]
-    p = rows(o, front) + t_near[front, None] * rows(d, front)
-    L = ctx.lamps
-    lamp_front = outer_face.lens_at(p[:, 0], p[:, 2], L)
+    at_front = rows(o, front) + t_near[front, None] * rows(d, front)
+    lamps = ctx.lamps
+    lamp_at_front = outer_face.lens_at(at_front[:, 0], at_front[:, 2], lamps)
     lamp = np.full(n, -1)
-    lamp[front] = lamp_front
+    lamp[front] = lamp_at_front
     on_lens = lamp >= 0
-    on_body = hit_box & ~on_lens
 
     # Body: equation (1) with the face's outward normal.
-    b = np.nonzero(on_body)[0]
-    normal = np.zeros((len(b), 3))
-    normal[np.arange(len(b)), face[b]] = -np.sign(d[b, face[b]])
+    on_body = np.nonzero(hit_box & ~on_lens)[0]
+    normal = np.zeros((len(on_body), 3))
+    normal[np.arange(len(on_body)), face[on_body]] = -np.sign(d[on_body, face[on_body]])
     body = ctx.body
-    band.add(BODY_PASS, pix[b], ctx.shade(normal, -rows(d, b), np.asarray(body["color"]), body["specular"],
-                                          body["shininess"]))
+    band.add(BODY_PASS, pix[on_body], ctx.shade(normal, -rows(d, on_body), np.asarray(body["color"]),
+                                                body["specular"], body["shininess"]))
 
     # Lens outer face (①): Fresnel split; the reflected branch is shaded by eq. (1) (§3.2.3).
-    s = np.nonzero(on_lens)[0]
-    li = lamp[s]
-    ds = rows(d, s)
-    local = p[lamp_front >= 0] - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
+    on_lens = np.nonzero(on_lens)[0]
+    lamp = lamp[on_lens]
+    local = at_front[lamp_at_front >= 0] - np.stack([lamps.center[lamp, 0], np.zeros(len(lamp)),
+                                                     lamps.center[lamp, 1]], axis=1)
     local[:, 1] = 0.0
-    return into_lenses(ctx, band, pix[s], li, ds, np.tile(outer_face.NORMAL, (len(s), 1)), ds[:, 1], local)
+    return into_lenses(ctx, band, pix[on_lens], lamp, rows(d, on_lens), np.tile(outer_face.NORMAL, (len(lamp), 1)),
+                       local)
 
 
 def _first_hits_wrapped(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> Rays:
@@ -101,24 +100,24 @@ def _first_hits_wrapped(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, 
     if ctx.background_seen and ctx.world_seen:
         band.add(BACKGROUND_PASS, pix[~hit_body], ctx.sky(d[~hit_body]))
     front = np.nonzero(hit_body & (((face == 1) & (d[:, 1] > 0)) | (face == body_box.CURVED_FRONT)))[0]
-    p = rows(o, front) + t_near[front, None] * rows(d, front)
-    L = ctx.lamps
+    at_front = rows(o, front) + t_near[front, None] * rows(d, front)
+    lamps = ctx.lamps
     lamp = np.full(n, -1)
-    lamp[front] = outer_face.lens_at(p[:, 0], p[:, 2], L)
+    lamp[front] = outer_face.lens_at(at_front[:, 0], at_front[:, 2], lamps)
     on_lens = lamp >= 0
-    b = np.nonzero(hit_body & ~on_lens)[0]
+    on_body = np.nonzero(hit_body & ~on_lens)[0]
     body = ctx.body
-    band.add(BODY_PASS, pix[b], ctx.shade(rows(normal, b), -rows(d, b), np.asarray(body["color"]), body["specular"],
-                                           body["shininess"]))
+    band.add(BODY_PASS, pix[on_body], ctx.shade(rows(normal, on_body), -rows(d, on_body), np.asarray(body["color"]),
+                                                body["specular"], body["shininess"]))
 
-    s = np.nonzero(on_lens)[0]
-    li = lamp[s]
-    ds = rows(d, s)
-    local = o[s] + t_near[s, None] * ds - np.stack([L.center[li, 0], np.zeros(len(s)), L.center[li, 1]], axis=1)
-    flat = L.cylindrical[li] == 0
+    on_lens = np.nonzero(on_lens)[0]
+    lamp = lamp[on_lens]
+    d_lens = rows(d, on_lens)
+    local = (o[on_lens] + t_near[on_lens, None] * d_lens
+             - np.stack([lamps.center[lamp, 0], np.zeros(len(lamp)), lamps.center[lamp, 1]], axis=1))
+    flat = lamps.cylindrical[lamp] == 0
     local[flat, 1] = 0.0
-    face_normal = np.tile(outer_face.NORMAL, (len(s), 1))
+    face_normal = np.tile(outer_face.NORMAL, (len(lamp), 1))
     curved = np.nonzero(~flat)[0]
-    face_normal[curved] = outward_normal(local[curved], L.cyl_axis_x[li[curved]], L.cyl_radius[li[curved]])
-    cos_i = np.clip(-optics.dot(ds, face_normal), 0.0, 1.0)
-    return into_lenses(ctx, band, pix[s], li, ds, face_normal, cos_i, local)
+    face_normal[curved] = outward_normal(local[curved], lamps.cyl_axis_x[lamp[curved]], lamps.cyl_radius[lamp[curved]])
+    return into_lenses(ctx, band, pix[on_lens], lamp, d_lens, face_normal, local)

@@ -31,54 +31,56 @@ from .rays import (
 )
 
 
-def into_lenses(ctx: Context, band: Band, s: np.ndarray, li: np.ndarray, ds: np.ndarray,
-                 face_normal: np.ndarray, cos_i: np.ndarray, local: np.ndarray) -> Rays:
-    """Eye rays ``s`` meeting the outer face of lamps ``li`` (①) at ``local`` (lamp frame) with the
-    face's outward ``face_normal``: the Fresnel split, the reflected branch shaded by eq. (1) and
-    mirroring the surroundings (§3.2.3), the transmitted rays into the lens."""
-    L = ctx.lamps
-    ior = L.ior[li]
-    r = optics.fresnel_reflectance(cos_i, 1.0, ior)
-    surface = ctx.shade(face_normal, -ds, L.lens_diffuse[li], L.lens_specular[li], L.lens_shininess[li])
+def into_lenses(ctx: Context, band: Band, pix: np.ndarray, lamp: np.ndarray, d: np.ndarray,
+                face_normal: np.ndarray, local: np.ndarray) -> Rays:
+    """Eye rays ``d`` of slots ``pix`` meeting the outer face of lamps ``lamp`` (①) at ``local``
+    (lamp frame), where the face's outward normal is ``face_normal``: the Fresnel split from the
+    air, the reflected branch shaded by eq. (1) and mirroring the surroundings (§3.2.3), the
+    transmitted rays into the lens where above the cut-off."""
+    lamps = ctx.lamps
+    ior = lamps.ior[lamp]
+    split = fresnel_split(np.ones((len(d), 3)), d, face_normal, 1.0, ior)
+    surface = ctx.shade(face_normal, -d, lamps.lens_diffuse[lamp], lamps.lens_specular[lamp],
+                        lamps.lens_shininess[lamp])
     if ctx.environment is not None:  # the outer face mirrors the surroundings
-        surface = surface + ctx.sky(optics.reflect(ds, face_normal))
-    band.add(LENS_SURFACE, s, r[:, None] * surface)
+        surface = surface + ctx.sky(optics.reflect(d, face_normal))
+    band.add(LENS_SURFACE, pix, split.reflected * surface)
     if ctx.background_seen and ctx.environment is None:
-        band.add(BACKGROUND_PASS, s, r[:, None] * ctx.background)
-    ones = np.ones(len(s), dtype=np.int8)
-    band.note(s, ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
+        band.add(BACKGROUND_PASS, pix, split.reflected * ctx.background)
+    ones = np.ones(len(pix), dtype=np.int8)
+    band.note(pix, ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
 
-    k = np.repeat((1.0 - r)[:, None], 3, axis=1)
-    d_in = optics.refract(ds, face_normal, 1.0 / ior)
-    rays = Rays(pix=s, lamp=li, o=local, d=d_in, k=k, medium=np.full(len(s), P.IN_LENS, np.int8),
-                src=np.full(len(s), P.OUTER, np.int8),
-                parent=np.full(len(s), P.OUTSIDE_TO_LENS, np.int8) if ctx.record else UNRECORDED,
-                branch=np.full(len(s), P.TRANSMITTED, np.int8) if ctx.record else UNRECORDED,
-                seen_reflector=np.zeros(len(s), bool))
-    return rays.take(alive(k))
+    n = len(pix)
+    rays = Rays(pix=pix, lamp=lamp, o=local, d=optics.refract(d, face_normal, split.eta, split.cos_i),
+                k=split.transmitted, medium=np.full(n, P.IN_LENS, np.int8), src=np.full(n, P.OUTER, np.int8),
+                parent=np.full(n, P.OUTSIDE_TO_LENS, np.int8) if ctx.record else UNRECORDED,
+                branch=np.full(n, P.TRANSMITTED, np.int8) if ctx.record else UNRECORDED,
+                seen_reflector=np.zeros(n, bool))
+    return rays.take(alive(split.transmitted))
 
 
-def at_reflector(ctx: Context, band: Band, rays: Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray,
+def at_reflector(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray,
                  hit: np.ndarray, cls: np.ndarray) -> Rays:
-    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter (eq. 3), then the mirror ray
-    where it stays above the cut-off."""
-    L = ctx.lamps
-    li = rays.lamp.take(m)
-    pix = rays.pix.take(m)
-    first = np.nonzero(~rays.seen_reflector.take(m))[0]
-    band.add(REFLECTOR_CONSTANT, pix.take(first), rows(k, first) * rows(L.reflector_color, li.take(first)))
-    normal = reflector.reflector_normal(hit, L.focal.take(li))
-    to_bulb = optics.normalize(rows(L.bulb_center, li) - hit)
-    scatter = optics.blinn(normal, -d, to_bulb, L.scatter.take(li), L.scatter_shininess.take(li))
-    band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(L.bulb_intensity, li))
+    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter toward the bulb (eq. 3), then
+    the mirror ray, k × reflectance, where it stays above the cut-off."""
+    lamps = ctx.lamps
+    lamp = rays.lamp.take(met)
+    pix = rays.pix.take(met)
+    first = np.nonzero(~rays.seen_reflector.take(met))[0]
+    band.add(REFLECTOR_CONSTANT, pix.take(first), rows(k, first) * rows(lamps.reflector_color, lamp.take(first)))
+    normal = reflector.reflector_normal(hit, lamps.focal.take(lamp))
+    to_bulb = optics.normalize(rows(lamps.bulb_center, lamp) - hit)
+    scatter = optics.blinn(normal, -d, to_bulb, lamps.scatter.take(lamp), lamps.scatter_shininess.take(lamp))
+    band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_intensity, lamp))
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
-        band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, ctx.phantom_lamps, li, hit, normal, -d))
-    k = optics.scaled(k, L.reflectance.take(li))
-    go = np.nonzero(alive(k))[0]
-    n = len(go)
-    return Rays(pix=pix.take(go), lamp=li.take(go), o=rows(hit, go), d=optics.reflect(rows(d, go), rows(normal, go)),
-                k=rows(k, go), medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8),
-                parent=cls.take(go), branch=branch_tags(cls, P.REFLECTED, n), seen_reflector=np.ones(n, bool))
+        band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, ctx.phantom_lamps, lamp, hit, normal, -d))
+    mirrored = optics.scaled(k, lamps.reflectance.take(lamp))
+    going_on = np.nonzero(alive(mirrored))[0]
+    n = len(going_on)
+    return Rays(pix=pix.take(going_on), lamp=lamp.take(going_on), o=rows(hit, going_on),
+                d=optics.reflect(rows(d, going_on), rows(normal, going_on)), k=rows(mirrored, going_on),
+                medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8),
+                parent=cls.take(going_on), branch=branch_tags(cls, P.REFLECTED, n), seen_reflector=np.ones(n, bool))
 
 
 @dataclass
@@ -103,7 +105,7 @@ def fresnel_split(k: np.ndarray, d: np.ndarray, facing: np.ndarray, n1: np.ndarr
 
 @dataclass
 class FaceHit:
-    """Rays ``m`` of a generation at faces of a dielectric material (the lens, or a prism plate),
+    """Rays of a generation at faces of a dielectric material (the lens, or a prism plate),
     split there: the reflected rays are made at once, the transmitted ones (``through``) where
     the caller sends them on."""
 
@@ -122,11 +124,13 @@ class FaceHit:
 
     def reflected(self) -> Rays:
         """The mirror rays that stay above the cut-off, in the medium they came from."""
-        go = np.nonzero(alive(self.split.reflected))[0]
-        return Rays(pix=self.pix.take(go), lamp=self.lamp.take(go), o=rows(self.hit, go),
-                    d=optics.reflect(rows(self.d, go), rows(self.facing, go)), k=rows(self.split.reflected, go),
-                    medium=self.medium.take(go), src=self.surface.take(go), parent=self.cls.take(go),
-                    branch=branch_tags(self.cls, P.REFLECTED, len(go)), seen_reflector=self.seen_reflector.take(go))
+        going_on = np.nonzero(alive(self.split.reflected))[0]
+        return Rays(pix=self.pix.take(going_on), lamp=self.lamp.take(going_on), o=rows(self.hit, going_on),
+                    d=optics.reflect(rows(self.d, going_on), rows(self.facing, going_on)),
+                    k=rows(self.split.reflected, going_on), medium=self.medium.take(going_on),
+                    src=self.surface.take(going_on), parent=self.cls.take(going_on),
+                    branch=branch_tags(self.cls, P.REFLECTED, len(going_on)),
+                    seen_reflector=self.seen_reflector.take(going_on))
 
     def through(self, sel: np.ndarray) -> Rays:
         """The transmitted rays ``sel``: bent by Snell's law into the other medium."""
@@ -139,29 +143,29 @@ class FaceHit:
                     seen_reflector=self.seen_reflector.take(sel))
 
 
-def at_dielectric(rays: Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
+def at_dielectric(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
                   surface: np.ndarray, out_normal: np.ndarray, ior: np.ndarray, material: int) -> FaceHit:
-    """The rays ``m`` (attenuation ``k``, directions ``d``) meeting faces of ``material`` (index
+    """The rays ``met`` (attenuation ``k``, directions ``d``) meeting faces of ``material`` (index
     ``ior`` per lamp) at ``hit``, ``out_normal`` pointing out of the material: the Fresnel split."""
-    lamp = rays.lamp.take(m)
-    medium = rays.medium.take(m)
+    lamp = rays.lamp.take(met)
+    medium = rays.medium.take(met)
     from_inside = medium == material
     # Toward the incident side: the normal negated for rays inside (a sign flip is exact).
     facing = optics.scaled(out_normal, np.where(from_inside, -1.0, 1.0))
     n_material = ior.take(lamp)
     n1 = np.where(from_inside, n_material, 1.0)
     n2 = np.where(from_inside, 1.0, n_material)
-    return FaceHit(rays.pix.take(m), lamp, hit, d, facing, medium, from_inside, material, surface, cls,
-                   rays.seen_reflector.take(m), fresnel_split(k, d, facing, n1, n2))
+    return FaceHit(rays.pix.take(met), lamp, hit, d, facing, medium, from_inside, material, surface, cls,
+                   rays.seen_reflector.take(met), fresnel_split(k, d, facing, n1, n2))
 
 
-def at_lens_face(ctx: Context, band: Band, rays: Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray,
+def at_lens_face(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray,
                  hit: np.ndarray, cls: np.ndarray, surface: np.ndarray, out_normal: np.ndarray) -> list[Rays]:
     """A lens surface (the outer face or a cut) met from either side; ``out_normal`` points out of
     the lens material (-y on the outer face, the cap's on the cuts). Light transmitted out through
     the outer face leaves the lamp (⑩) and shows the background; every other branch goes on where
     above the cut-off."""
-    face = at_dielectric(rays, m, k, d, hit, cls, surface, out_normal, ctx.lamps.ior, P.IN_LENS)
+    face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, ctx.lamps.ior, P.IN_LENS)
     split = face.split
     partial = split.reflectance < 1.0
     if ctx.background_seen or ctx.record:
@@ -178,12 +182,12 @@ def at_lens_face(ctx: Context, band: Band, rays: Rays, m: np.ndarray, k: np.ndar
     return [face.reflected(), face.through(going_on)] if len(going_on) else [face.reflected()]
 
 
-def at_plate_face(rays: Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
-                  surface: np.ndarray, out_normal: np.ndarray, L: LampTable) -> list[Rays]:
+def at_plate_face(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
+                  surface: np.ndarray, out_normal: np.ndarray, lamps: LampTable) -> list[Rays]:
     """A prism-plate face met from either side (README, the prism plate): the lens's Fresnel split
     with the plate's index; ``out_normal`` points out of the plate material. Nothing leaves the lamp
     here, so both branches go on where above the cut-off."""
-    face = at_dielectric(rays, m, k, d, hit, cls, surface, out_normal, L.plate_ior, P.IN_PLATE)
+    face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, lamps.plate_ior, P.IN_PLATE)
     split = face.split
     going_on = np.nonzero((split.reflectance < 1.0) & alive(split.transmitted))[0]
     return [face.reflected(), face.through(going_on)] if len(going_on) else [face.reflected()]

@@ -92,17 +92,17 @@ def _runs_of_media(parts: tuple) -> list[tuple[tuple[int, ...], list]]:
     return runs
 
 
-def _normals_at(normals: _Normals, m: np.ndarray, surface_m: np.ndarray) -> np.ndarray:
-    """The normals (len(m), 3) where the segments ``m`` end, on the surfaces ``surface_m``: each
+def _normals_at(normals: _Normals, met: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """The normals (len(met), 3) where the segments ``met`` end, on the surfaces ``faces``: each
     from the part that surface is (the nearest part, so the last that gave the ray a normal)."""
-    normal = np.zeros((len(m), 3))
+    normal = np.zeros((len(met), 3))
     for sid, idx, part_normal in normals:
-        sel = np.nonzero(surface_m == sid)[0]
+        sel = np.nonzero(faces == sid)[0]
         if len(sel) and part_normal.strides[0] == 0:  # one normal for all (the flat outer face)
             for axis in range(3):
                 normal[sel, axis] = part_normal[0, axis]
         elif len(sel):
-            at = m.take(sel) if idx is None else np.searchsorted(idx, m.take(sel))  # idx is sorted
+            at = met.take(sel) if idx is None else np.searchsorted(idx, met.take(sel))  # idx is sorted
             put_rows(normal, sel, rows(part_normal, at))
     return normal
 
@@ -123,60 +123,69 @@ def _reaching(rays: Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, Se
 
 def step(ctx: Context, band: Band, rays: Rays) -> Rays:
     """Trace one generation: find each segment's end, add its luminance, spawn the children."""
-    L = ctx.lamps
+    lamps = ctx.lamps
     t, surface, normals = intersect(ctx, rays)
     # The path classes only feed the transitions a render records (``Band.note``).
     cls = _path_class(rays.medium, rays.src, surface) if ctx.record else UNRECORDED
     band.note(rays.pix, rays.parent, rays.branch, cls)
 
-    k = rays.k
-    lens = np.nonzero(rays.medium == P.IN_LENS)[0]
-    if len(lens):
-        k = k.copy()
-        put_rows(k, lens, rows(k, lens) * optics.absorption(rows(L.absorption, rays.lamp.take(lens)), t.take(lens)))
-    plate = np.nonzero(rays.medium == P.IN_PLATE)[0] if ctx.plates else ()
-    if len(plate):  # eq. (2) inside the prism plate too
-        k = k.copy() if k is rays.k else k
-        put_rows(k, plate, rows(k, plate) * optics.absorption(rows(L.plate_absorption, rays.lamp.take(plate)),
-                                                              t.take(plate)))
+    k = _absorbed(ctx, rays, t)
 
-    for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, L.wall_color), (P.BULB, BULB_PASS, L.bulb_intensity),
-                                (P.SOCKET, SOCKET_PASS, L.socket_color)):
-        m = np.nonzero(surface == sid)[0]
-        if len(m):
-            band.add(pass_id, rays.pix.take(m), rows(k, m) * rows(color, rays.lamp.take(m)))
+    # Surfaces that end a path: the luminance they show, times k.
+    for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, lamps.wall_color), (P.BULB, BULB_PASS, lamps.bulb_intensity),
+                                (P.SOCKET, SOCKET_PASS, lamps.socket_color)):
+        met = np.nonzero(surface == sid)[0]
+        if len(met):
+            band.add(pass_id, rays.pix.take(met), rows(k, met) * rows(color, rays.lamp.take(met)))
+    met = np.nonzero(surface == P.HOUSING)[0] if ctx.plates else ()  # a plate lamp's housing ends the path
+    if len(met):
+        band.add(SIDE_WALL_PASS, rays.pix.take(met), rows(k, met) * rows(lamps.housing_color, rays.lamp.take(met)))
 
-    m = np.nonzero(surface == P.HOUSING)[0] if ctx.plates else ()  # a plate lamp's housing ends the path
-    if len(m):
-        band.add(SIDE_WALL_PASS, rays.pix.take(m), rows(k, m) * rows(L.housing_color, rays.lamp.take(m)))
-
-    # Only the rays that go on need their end point (their t is finite).
+    # Surfaces that branch. Only the rays that go on need their end point (their t is finite).
     children: list[Rays] = []
-    m = np.nonzero(surface == P.REFLECTOR)[0]
-    if len(m):
-        d, hit = _end_points(rays, t, m)
-        children.append(at_reflector(ctx, band, rays, m, rows(k, m), d, hit, cls.take(m)))
-    m = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
-    if len(m):
-        d, hit = _end_points(rays, t, m)
-        surface_m = surface.take(m)
-        children.extend(at_lens_face(ctx, band, rays, m, rows(k, m), d, hit, cls.take(m), surface_m,
-                                    _normals_at(normals, m, surface_m)))
-    m = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
-    if len(m):
-        d, hit = _end_points(rays, t, m)
-        surface_m = surface.take(m)
-        children.extend(at_plate_face(rays, m, rows(k, m), d, hit, cls.take(m), surface_m,
-                                      _normals_at(normals, m, surface_m), L))
+    met = np.nonzero(surface == P.REFLECTOR)[0]
+    if len(met):
+        d, hit = _end_points(rays, t, met)
+        children.append(at_reflector(ctx, band, rays, met, rows(k, met), d, hit, cls.take(met)))
+    met = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
+    if len(met):
+        d, hit = _end_points(rays, t, met)
+        faces = surface.take(met)
+        children.extend(at_lens_face(ctx, band, rays, met, rows(k, met), d, hit, cls.take(met), faces,
+                                     _normals_at(normals, met, faces)))
+    met = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
+    if len(met):
+        d, hit = _end_points(rays, t, met)
+        faces = surface.take(met)
+        children.extend(at_plate_face(rays, met, rows(k, met), d, hit, cls.take(met), faces,
+                                      _normals_at(normals, met, faces), lamps))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return concat(children) if len(children) > 1 else children[0]
 
 
-def _end_points(rays: Rays, t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The directions of the segments ``m`` and where they end: o + t d."""
-    d = rows(rays.d, m)
-    return d, rows(rays.o, m) + optics.scaled(d, t.take(m))
+def _absorbed(ctx: Context, rays: Rays, t: np.ndarray) -> np.ndarray:
+    """The rays' accumulated attenuation k at the end of their segments of length ``t``: eq. (2)
+    along those inside a lens or a prism plate."""
+    lamps = ctx.lamps
+    k = rays.k
+    in_lens = np.nonzero(rays.medium == P.IN_LENS)[0]
+    if len(in_lens):
+        k = k.copy()
+        transmittance = optics.absorption(rows(lamps.absorption, rays.lamp.take(in_lens)), t.take(in_lens))
+        put_rows(k, in_lens, rows(k, in_lens) * transmittance)
+    in_plate = np.nonzero(rays.medium == P.IN_PLATE)[0] if ctx.plates else ()
+    if len(in_plate):
+        k = k.copy() if k is rays.k else k
+        transmittance = optics.absorption(rows(lamps.plate_absorption, rays.lamp.take(in_plate)), t.take(in_plate))
+        put_rows(k, in_plate, rows(k, in_plate) * transmittance)
+    return k
+
+
+def _end_points(rays: Rays, t: np.ndarray, met: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The directions of the segments ``met`` and where they end: o + t d."""
+    d = rows(rays.d, met)
+    return d, rows(rays.o, met) + optics.scaled(d, t.take(met))
 
 
 def _path_class(medium: np.ndarray, src: np.ndarray, surface: np.ndarray) -> np.ndarray:
