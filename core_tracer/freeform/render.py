@@ -23,14 +23,14 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from ..raytrace import optics, pixel_filter, sunlight
 from ..raytrace import paths as P
-from ..raytrace.camera import Camera, eye_rays, make_camera
+from ..raytrace.camera import Camera, make_camera
 from ..raytrace.engine import walk
-from ..raytrace.engine.adaptive import sample_rays
 from ..raytrace.engine.rays import (
     BACKGROUND_PASS,
     BODY_PASS,
@@ -46,8 +46,7 @@ from ..raytrace.engine.rays import (
     concat,
 )
 from ..raytrace.engine.render import Film, RenderResult
-from ..raytrace.engine.sampling import traced_at_once
-from ..raytrace.engine.schedule import BandImage, band_rows, bands_on_threads, never
+from ..raytrace.engine.schedule import BandImage, band_rows, bands_on_threads, never, trace_band
 from ..raytrace.engine.surfaces import fresnel_split
 from ..raytrace.lighting import Lighting
 from .embree import EmbreeScene
@@ -100,6 +99,7 @@ class _Context(Lighting):
         self.camera, self.geometry, self.embree = camera, geometry, embree
         self.samples, self.filter_name, self.record = samples, filter_name, record
         self.adaptive_threshold = 0.0  # every sample of every pixel
+        self.window = None  # no picture of a body's box: every pixel is traced
         self.parts = PartTable(scene, geometry)
         self.sun_transmit = sunlight.plate_transmittance(self.sun, self.parts.ior, self.parts.absorption,
                                                          mean_thickness(geometry, len(self.parts.ior)))
@@ -152,24 +152,15 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
     film = Film(width, height, True, on_rows, on_band)
     trace_start = time.perf_counter()
-    traced = bands_on_threads(ctx, bands, threads, should_stop or never, _trace_band)
+    # The engine's bands, each traced alone (a free-form design's pixels all may see a surface).
+    trace = partial(trace_band, trace_rays=_trace_rays, trace_eye_rays=_trace_rays)
+    traced = bands_on_threads(ctx, bands, threads, should_stop or never, trace)
     film.expose(((y0, y1, BandImage.of(band, True)) for y0, y1, band in traced), len(bands), progress)
     result = film.result(samples, time.perf_counter() - start)
     result.stats["trace_seconds"] = time.perf_counter() - trace_start
     result.stats["build_seconds"] = build_seconds
     result.stats["triangles"] = len(geometry.triangles)
     return result
-
-
-def _trace_band(ctx: _Context, y0: int, y1: int) -> Band:
-    cam = ctx.camera
-    pixels = np.arange(y0 * cam.width, y1 * cam.width)
-    band = Band(len(pixels), ctx)
-    if ctx.samples == 1:  # the paper's setting: one ray through each pixel centre
-        _trace_rays(ctx, band, *eye_rays(cam, pixels))
-    else:  # every sample of every pixel, placed by the filter: the pixel is their mean
-        traced_at_once(ctx, sample_rays(ctx, band, y0, y1), _trace_rays)
-    return band
 
 
 def _trace_rays(ctx: _Context, band: Band, o: np.ndarray, d: np.ndarray) -> None:

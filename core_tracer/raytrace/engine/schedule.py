@@ -25,7 +25,7 @@ from .context import Context
 from .eyes import slots_seeing_body
 from .rays import Band
 from .sampling import pilot_samples, traced_at_once
-from .walk import trace_rays
+from .walk import trace_eye_rays, trace_rays
 
 
 class RenderCancelled(Exception):
@@ -236,8 +236,11 @@ def _completed_on(pool: ThreadPoolExecutor, threads: int,
             yield item
 
 
-def trace_band(ctx: Context, y0: int, y1: int) -> Band:
-    """The rows ``y0:y1`` traced alone, to the end of every branch."""
+def trace_band(ctx: Context, y0: int, y1: int, trace_rays: Callable[..., None] = trace_rays,
+               trace_eye_rays: Callable[..., None] = trace_eye_rays) -> Band:
+    """The rows ``y0:y1`` traced alone, to the end of every branch: with one sample per pixel by
+    ``trace_rays`` (the pixels outside the body's picture left out, where they add nothing), else
+    each group of samples by ``trace_eye_rays`` (``walk``'s; the free-form tracer gives its own)."""
     cam = ctx.camera
     pixels = np.arange(y0 * cam.width, y1 * cam.width)
     band = Band(len(pixels), ctx)
@@ -251,5 +254,5 @@ def trace_band(ctx: Context, y0: int, y1: int) -> Band:
             if len(slots):
                 trace_rays(ctx, band, *eye_rays(cam, pixels[slots]), slots)
         return band
-    traced_at_once(ctx, sample_rays(ctx, band, y0, y1))
+    traced_at_once(ctx, sample_rays(ctx, band, y0, y1), trace_eye_rays)
     return band
