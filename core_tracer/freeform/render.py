@@ -23,14 +23,12 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
 from ..raytrace import optics, pixel_filter, sunlight
 from ..raytrace import paths as P
 from ..raytrace.camera import Camera, make_camera
-from ..raytrace.engine import walk
 from ..raytrace.engine.rays import (
     BACKGROUND_PASS,
     BODY_PASS,
@@ -46,7 +44,7 @@ from ..raytrace.engine.rays import (
     concat,
 )
 from ..raytrace.engine.render import Film, RenderResult
-from ..raytrace.engine.schedule import BandImage, band_rows, bands_on_threads, never, trace_band
+from ..raytrace.engine.schedule import BandImage, band_rows, never, traced_bands
 from ..raytrace.engine.surfaces import fresnel_split
 from ..raytrace.lighting import Lighting
 from .embree import EmbreeScene
@@ -99,7 +97,8 @@ class _Context(Lighting):
         self.camera, self.geometry, self.embree = camera, geometry, embree
         self.samples, self.filter_name, self.record = samples, filter_name, record
         self.adaptive_threshold = 0.0  # every sample of every pixel
-        self.window = None  # no picture of a body's box: every pixel is traced
+        self.walker = _MeshWalk()  # the engine's rays find the meshes' surfaces through Embree
+        self.box_lo = self.box_hi = self.window = None  # no body's box: every eye ray is traced
         self.parts = PartTable(scene, geometry)
         self.sun_transmit = sunlight.plate_transmittance(self.sun, self.parts.ior, self.parts.absorption,
                                                          mean_thickness(geometry, len(self.parts.ior)))
@@ -152,9 +151,7 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
     film = Film(width, height, True, on_rows, on_band)
     trace_start = time.perf_counter()
-    # The engine's bands, each traced alone (a free-form design's pixels all may see a surface).
-    trace = partial(trace_band, trace_rays=_trace_rays, trace_eye_rays=_trace_rays)
-    traced = bands_on_threads(ctx, bands, threads, should_stop or never, trace)
+    traced = traced_bands(ctx, bands, threads, should_stop or never)
     film.expose(((y0, y1, BandImage.of(band, True)) for y0, y1, band in traced), len(bands), progress)
     result = film.result(samples, time.perf_counter() - start)
     result.stats["trace_seconds"] = time.perf_counter() - trace_start
@@ -163,18 +160,22 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
     return result
 
 
-def _trace_rays(ctx: _Context, band: Band, o: np.ndarray, d: np.ndarray) -> None:
-    """Trace eye rays ``o, d`` (ray i adds to slot i of ``band``) to the end of every branch."""
-    n = len(o)
-    rays = MeshRays(pix=np.arange(n), lamp=np.full(n, -1, np.int64), o=o, d=d, k=np.ones((n, 3)),
-                    medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, EYE, np.int8), parent=np.zeros(n, np.int8),
-                    branch=np.zeros(n, np.int8), seen_reflector=np.zeros(n, bool), triangle=np.full(n, -1, np.int64))
-    depth = 0
-    while len(rays) and depth < walk.MAX_DEPTH:
-        band.segments += len(rays)
-        rays = _step(ctx, band, rays, depth == 0)
-        depth += 1
-    band.max_depth = max(band.max_depth, depth)
+class _MeshWalk:
+    """The engine's walk (``raytrace.engine.walk.Walker``) through a free-form design's meshes."""
+
+    @staticmethod
+    def first_hits(ctx: _Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> MeshRays:
+        """The eye rays ``o, d`` of slots ``pix`` to their first surface, and the rays that go on."""
+        n = len(o)
+        rays = MeshRays(pix=pix, lamp=np.full(n, -1, np.int64), o=o, d=d, k=np.ones((n, 3)),
+                        medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, EYE, np.int8),
+                        parent=np.zeros(n, np.int8), branch=np.zeros(n, np.int8), seen_reflector=np.zeros(n, bool),
+                        triangle=np.full(n, -1, np.int64))
+        return _step(ctx, band, rays, first=True)
+
+    @staticmethod
+    def step(ctx: _Context, band: Band, rays: MeshRays) -> MeshRays:
+        return _step(ctx, band, rays, first=False)
 
 
 def _spawn(rays: MeshRays, sel: np.ndarray, o: np.ndarray, d: np.ndarray, k: np.ndarray, part: np.ndarray,

@@ -15,7 +15,7 @@ from ..camera import eye_rays
 from . import walk
 from .adaptive import sample_rays
 from .context import Context
-from .eyes import first_hits, put_traced, rays_toward_body, slots_seeing_body
+from .eyes import put_traced, rays_toward_body, slots_seeing_body
 from .rays import PASS_NAMES, Band, Rays, concat, no_rays
 from .sampling import Requests
 
@@ -98,7 +98,7 @@ def carrying_tails(ctx: Context, take: Callable[[], tuple[int, int, int] | None]
             for tail, count in zip(tails, counts, strict=True):
                 tail.band.segments += count
                 tail.depth += 1
-            rays = walk.step(ctx, wave, rays)
+            rays = walk.next_generation(ctx, wave, rays)
 
 
 def _end_tails(tails: list[_Tail], wave: _Wavefront, rays: Rays) -> tuple[list[_Tail], list[int], Rays]:
@@ -149,7 +149,7 @@ def _next_wavefront(ctx: Context, tails: list[_Tail], wave: _Wavefront | None, r
         band.segments += len(pixels) - len(slots)
     band.segments += len(slots)
     if len(slots):
-        parts.append(first_hits(ctx, wave, *eye_rays(ctx.camera, pixels[slots]), m + slots))
+        parts.append(walk.first_generation(ctx, wave, *eye_rays(ctx.camera, pixels[slots]), m + slots))
     if not parts:
         return wave, no_rays()
     return wave, concat(parts) if len(parts) > 1 else parts[0]
@@ -230,7 +230,7 @@ def carrying_samples(ctx: Context, take: Callable[[], tuple[int, int, int] | Non
             tracing[next_slot] = group
             tail = tails[-1]
             tail.band.segments += n
-            parts.append(first_hits(ctx, wave, group.o, group.d, tail.lo + np.arange(n)))
+            parts.append(walk.first_generation(ctx, wave, group.o, group.d, tail.lo + np.arange(n)))
             rays = concat(parts) if len(parts) > 1 else parts[0]
             next_slot += n
         if not tails:
@@ -251,7 +251,7 @@ def carrying_samples(ctx: Context, take: Callable[[], tuple[int, int, int] | Non
         for tail, count in zip(tails, counts, strict=True):
             tail.band.segments += count
             tail.depth += 1
-        rays = walk.step(ctx, wave, rays)
+        rays = walk.next_generation(ctx, wave, rays)
 
 
 def _ask(ctx: Context, index: int, band: Band, requests: Requests, traced: Band | None,

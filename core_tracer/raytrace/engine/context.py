@@ -14,6 +14,8 @@ from ..parts import body_box, parts_for
 class Context(Lighting):
     """Everything constant during one render."""
 
+    walker = None  # how rays find surfaces: the parametric lamps' own walk (``walk.Walker``)
+
     def __init__(self, scene: dict, camera: Camera, record_transitions: bool, samples: int, filter_name: str,
                  adaptive_threshold: float = 0.0):
         super().__init__(scene)

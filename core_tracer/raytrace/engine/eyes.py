@@ -19,7 +19,9 @@ from .surfaces import into_lenses
 def rays_toward_body(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> np.ndarray | None:
     """The eye rays ``o, d`` (ray i of slot i of the fresh ``band``) that meet the body's box, to be
     traced; the others see only the world (``first_hits``), looked up here at once. None: trace
-    them all (too few miss to be worth the copies)."""
+    them all (too few miss to be worth the copies, or no body's box: a free-form design)."""
+    if ctx.box_lo is None:
+        return None
     t_near, t_far, _ = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
     toward = (t_near <= t_far) & (t_near > 0)
     miss = np.nonzero(~toward)[0]

@@ -9,7 +9,7 @@ groups' rays (``carried.carrying_samples``).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Generator, Iterator
+from collections.abc import Generator, Iterator
 
 import numpy as np
 
@@ -26,9 +26,8 @@ Requests = Generator[tuple[np.ndarray, np.ndarray], Band, None]
 
 
 
-def traced_at_once(ctx: Context, requests: Requests, trace: Callable[..., None] = trace_eye_rays) -> None:
-    """Trace each group of eye rays a band's sampling asks for alone, by ``trace(ctx, group, o, d)``
-    (``walk.trace_eye_rays``; the free-form tracer gives its own)."""
+def traced_at_once(ctx: Context, requests: Requests) -> None:
+    """Trace each group of eye rays a band's sampling asks for alone (``trace_eye_rays``)."""
     group = None
     while True:
         try:
@@ -36,7 +35,7 @@ def traced_at_once(ctx: Context, requests: Requests, trace: Callable[..., None] 
         except StopIteration:
             return
         group = Band(len(o), ctx)
-        trace(ctx, group, o, d)
+        trace_eye_rays(ctx, group, o, d)
 
 
 def sample_groups(cam: Camera, pixels: np.ndarray, samples: int,

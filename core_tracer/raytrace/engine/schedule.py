@@ -25,7 +25,7 @@ from .context import Context
 from .eyes import slots_seeing_body
 from .rays import Band
 from .sampling import pilot_samples, traced_at_once
-from .walk import trace_eye_rays, trace_rays
+from .walk import trace_rays
 
 
 class RenderCancelled(Exception):
@@ -129,12 +129,11 @@ def traced_bands(ctx: Context, bands: list[tuple[int, int]], threads: int,
         yield from traced(ctx, bands, 1, should_stop)
 
 
-def bands_on_threads(ctx, bands: list[tuple[int, int]], threads: int, should_stop: Callable[[], bool],
-                     trace: Callable[..., Band] | None = None) -> Iterator[tuple[int, int, Band]]:
-    """The ``bands`` each traced alone by ``trace(ctx, y0, y1)`` (``trace_band``; the free-form
-    tracer gives its own), at most ``threads`` at a time (in the calling thread when 1), yielded in
-    order; ``should_stop()`` is polled before starting a band and after each finishes."""
-    trace = trace or trace_band
+def bands_on_threads(ctx: Context, bands: list[tuple[int, int]], threads: int,
+                     should_stop: Callable[[], bool]) -> Iterator[tuple[int, int, Band]]:
+    """The ``bands`` each traced alone (``trace_band``), at most ``threads`` at a time (in the
+    calling thread when 1), yielded in order; ``should_stop()`` is polled before starting a band
+    and after each finishes."""
     pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
     pending, running = deque(bands), deque()
     try:
@@ -143,7 +142,7 @@ def bands_on_threads(ctx, bands: list[tuple[int, int]], threads: int, should_sto
                 if should_stop():
                     raise RenderCancelled("render cancelled")
                 y0, y1 = pending.popleft()
-                running.append((y0, y1, pool.submit(trace, ctx, y0, y1) if pool else trace(ctx, y0, y1)))
+                running.append((y0, y1, pool.submit(trace_band, ctx, y0, y1) if pool else trace_band(ctx, y0, y1)))
             y0, y1, band = running.popleft()
             band = band.result() if pool else band
             if should_stop():
@@ -236,11 +235,8 @@ def _completed_on(pool: ThreadPoolExecutor, threads: int,
             yield item
 
 
-def trace_band(ctx: Context, y0: int, y1: int, trace_rays: Callable[..., None] = trace_rays,
-               trace_eye_rays: Callable[..., None] = trace_eye_rays) -> Band:
-    """The rows ``y0:y1`` traced alone, to the end of every branch: with one sample per pixel by
-    ``trace_rays`` (the pixels outside the body's picture left out, where they add nothing), else
-    each group of samples by ``trace_eye_rays`` (``walk``'s; the free-form tracer gives its own)."""
+def trace_band(ctx: Context, y0: int, y1: int) -> Band:
+    """The rows ``y0:y1`` traced alone, to the end of every branch."""
     cam = ctx.camera
     pixels = np.arange(y0 * cam.width, y1 * cam.width)
     band = Band(len(pixels), ctx)
@@ -254,5 +250,5 @@ def trace_band(ctx: Context, y0: int, y1: int, trace_rays: Callable[..., None] =
             if len(slots):
                 trace_rays(ctx, band, *eye_rays(cam, pixels[slots]), slots)
         return band
-    traced_at_once(ctx, sample_rays(ctx, band, y0, y1), trace_eye_rays)
+    traced_at_once(ctx, sample_rays(ctx, band, y0, y1))
     return band

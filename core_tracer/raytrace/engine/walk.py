@@ -5,6 +5,8 @@ of the surface that ends a path, and the children of the surfaces that branch (`
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 
 from .. import optics
@@ -35,13 +37,35 @@ def trace_rays(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, slots: np
     """Trace eye rays ``o, d`` (ray i adds to slot i of ``band``, or to ``slots[i]``) to the end of
     every branch."""
     band.segments += len(o)
-    rays = first_hits(ctx, band, o, d, np.arange(len(o)) if slots is None else slots)
+    rays = first_generation(ctx, band, o, d, np.arange(len(o)) if slots is None else slots)
     depth = 1
     while len(rays) and depth < MAX_DEPTH:
         band.segments += len(rays)
-        rays = step(ctx, band, rays)
+        rays = next_generation(ctx, band, rays)
         depth += 1
     band.max_depth = depth
+
+
+class Walker(Protocol):
+    """How the rays of a kind of design find their surfaces and what happens there: a context's
+    ``walker`` (None: the parametric lamps', ``eyes.first_hits`` and ``step``; the free-form
+    tracer's walks its meshes)."""
+
+    def first_hits(self, ctx, band: Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> Rays: ...
+
+    def step(self, ctx, band: Band, rays: Rays) -> Rays: ...
+
+
+def first_generation(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> Rays:
+    """What the eye rays ``o, d`` of slots ``pix`` meet first, and the rays that go on from there."""
+    if ctx.walker is None:
+        return first_hits(ctx, band, o, d, pix)
+    return ctx.walker.first_hits(ctx, band, o, d, pix)
+
+
+def next_generation(ctx: Context, band: Band, rays: Rays) -> Rays:
+    """The rays that go on after one generation of ``rays`` (``step``, or the context's walker's)."""
+    return step(ctx, band, rays) if ctx.walker is None else ctx.walker.step(ctx, band, rays)
 
 
 # Per part that gives normals: its surface id, the rays it was given (None: all) and their normals.
