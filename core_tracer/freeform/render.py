@@ -198,12 +198,12 @@ def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
     if not first:
         band.note(rays.pix, rays.parent, rays.branch, cls)
 
-    h = np.nonzero(hit_any)[0]
-    tri_h = tri[h]
-    t_h, p_h = hit_point(g, rays.o[h], rays.d[h], t[h], tri_h)
+    hits = np.nonzero(hit_any)[0]  # the rays that meet a surface
+    tri_hit = tri[hits]
+    t_hit, point = hit_point(g, rays.o[hits], rays.d[hits], t[hits], tri_hit)
     t = t.copy()
-    t[h] = t_h  # from the segment's true start, in double precision
-    normal = shading_normal(g, tri_h, uv[h])
+    t[hits] = t_hit  # from the segment's true start, in double precision
+    normal = shading_normal(g, tri_hit, uv[hits])
 
     k = rays.k
     inside = np.nonzero(rays.medium == P.IN_LENS)[0]
@@ -217,65 +217,67 @@ def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
         # Out of the lamp: the surroundings along the ray (through an outer face, ⑩: refracted)
         band.add(BACKGROUND_PASS, rays.pix[miss], k[miss] * ctx.sky(rays.d[miss]))
 
-    part_h = g.part[tri_h]
-    surf_h = surface[h]
-    k_h = k[h]
-    d_h = rays.d[h]
+    # Per ray that meets a surface: its part (the role's values), the surface, k and direction.
+    part_hit = g.part[tri_hit]
+    surface_hit = surface[hits]
+    k_hit = k[hits]
+    d_hit = rays.d[hits]
 
     for sid, pass_id in ((P.WALL, SIDE_WALL_PASS), (P.BULB, BULB_PASS), (P.SOCKET, SOCKET_PASS)):
-        m = surf_h == sid
-        if m.any():
-            band.add(pass_id, rays.pix[h[m]], k_h[m] * parts.color[part_h[m]])
+        met = surface_hit == sid
+        if met.any():
+            band.add(pass_id, rays.pix[hits[met]], k_hit[met] * parts.color[part_hit[met]])
 
-    m = np.nonzero(surf_h == BODY)[0]
-    if len(m):
-        facing = toward(normal[m], d_h[m])
-        pm = part_h[m]
-        band.add(BODY_PASS, rays.pix[h[m]],
-                 k_h[m] * ctx.shade(facing, -d_h[m], parts.color[pm], parts.specular[pm], parts.shininess[pm]))
+    met = np.nonzero(surface_hit == BODY)[0]
+    if len(met):  # eq. (1)
+        facing = toward(normal[met], d_hit[met])
+        body = part_hit[met]
+        band.add(BODY_PASS, rays.pix[hits[met]], k_hit[met] * ctx.shade(facing, -d_hit[met], parts.color[body],
+                                                                         parts.specular[body], parts.shininess[body]))
 
     children: list[MeshRays] = []
-    m = np.nonzero(surf_h == P.REFLECTOR)[0]
-    if len(m):
-        children.append(_reflector(ctx, band, rays, h[m], k_h[m], p_h[m], normal[m], tri_h[m], part_h[m],
-                                   cls[h[m]]))
-    m = np.nonzero((surf_h == P.OUTER) | (surf_h == P.CUT))[0]
-    if len(m):
-        children.extend(_dielectric(ctx, band, rays, h[m], k_h[m], p_h[m], normal[m], tri_h[m], part_h[m],
-                                    cls[h[m]], surf_h[m]))
+    met = np.nonzero(surface_hit == P.REFLECTOR)[0]
+    if len(met):
+        children.append(_reflector(ctx, band, rays, hits[met], k_hit[met], point[met], normal[met], tri_hit[met],
+                                   part_hit[met], cls[hits[met]]))
+    met = np.nonzero((surface_hit == P.OUTER) | (surface_hit == P.CUT))[0]
+    if len(met):
+        children.extend(_dielectric(ctx, band, rays, hits[met], k_hit[met], point[met], normal[met], tri_hit[met],
+                                    part_hit[met], cls[hits[met]], surface_hit[met]))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return concat(children) if len(children) > 1 else children[0]
 
 
-def _reflector(ctx: _Context, band: Band, rays: MeshRays, m: np.ndarray, k: np.ndarray, p: np.ndarray,
+def _reflector(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np.ndarray, hit: np.ndarray,
                normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray) -> MeshRays:
     """A reflector hit (③ ④): the first-hit constant, Blinn's scatter toward its bulbs (eq. 3),
     then the mirror ray (k × reflectance) where it stays above the cut-off."""
     parts = ctx.parts
-    d = rays.d[m]
-    pix = rays.pix[m]
-    first = ~rays.seen_reflector[m]
+    d = rays.d[met]
+    pix = rays.pix[met]
+    first = ~rays.seen_reflector[met]
     band.add(REFLECTOR_CONSTANT, pix[first], k[first] * parts.color[part[first]])
-    n = toward(normal, d)
-    for b in range(len(parts.bulb_center)):
-        sel = np.nonzero(parts.bulbs_of[part, b])[0]
+    facing = toward(normal, d)
+    for bulb in range(len(parts.bulb_center)):
+        sel = np.nonzero(parts.bulbs_of[part, bulb])[0]
         if len(sel) == 0:
             continue
-        to_bulb = optics.normalize(parts.bulb_center[b] - p[sel])
-        scatter = optics.blinn(n[sel], -d[sel], to_bulb, parts.scatter[part[sel]], parts.shininess[part[sel]])
-        band.add(REFLECTOR_SCATTER, pix[sel], k[sel] * scatter[:, None] * parts.bulb_intensity[b])
+        to_bulb = optics.normalize(parts.bulb_center[bulb] - hit[sel])
+        scatter = optics.blinn(facing[sel], -d[sel], to_bulb, parts.scatter[part[sel]], parts.shininess[part[sel]])
+        band.add(REFLECTOR_SCATTER, pix[sel], k[sel] * scatter[:, None] * parts.bulb_intensity[bulb])
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
-        lens = _lens_toward_sun(ctx, p, tri, n)
+        lens = _lens_toward_sun(ctx, hit, tri, facing)
         lit = lens >= 0
-        band.add(REFLECTOR_SCATTER, pix, k * sunlight.scattered(ctx.sun, n, -d, parts.scatter[part],
+        band.add(REFLECTOR_SCATTER, pix, k * sunlight.scattered(ctx.sun, facing, -d, parts.scatter[part],
                                                                 parts.shininess[part],
                                                                 ctx.sun_transmit[np.maximum(lens, 0)], lit))
-    k = k * parts.reflectance[part, None]
-    count = len(m)
-    mirror = on_side(optics.reflect(d, n), d, ctx.geometry.normal[tri], lambda sel: optics.reflect(
-        d[sel], toward(ctx.geometry.normal[tri[sel]], d[sel])), same=False)
-    return _spawn(rays, m, p, mirror, k, part, np.full(count, P.IN_AIR, np.int8), tri,
+    mirrored = k * parts.reflectance[part, None]
+    count = len(met)
+    geometric = ctx.geometry.normal[tri]
+    mirror = on_side(optics.reflect(d, facing), d, geometric,
+                     lambda sel: optics.reflect(d[sel], toward(geometric[sel], d[sel])), same=False)
+    return _spawn(rays, met, hit, mirror, mirrored, part, np.full(count, P.IN_AIR, np.int8), tri,
                   np.full(count, P.REFLECTOR, np.int8), cls, P.REFLECTED, np.ones(count, bool))
 
 
@@ -306,14 +308,14 @@ def _lens_toward_sun(ctx: _Context, p: np.ndarray, tri: np.ndarray, n: np.ndarra
     return lens
 
 
-def _dielectric(ctx: _Context, band: Band, rays: MeshRays, m: np.ndarray, k: np.ndarray, p: np.ndarray,
+def _dielectric(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np.ndarray, hit: np.ndarray,
                 normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray,
                 surface: np.ndarray) -> list[MeshRays]:
     """A lens surface hit from either side: the engine's Fresnel split (TIR gives R = 1). Entering
     through the outer face from the air (①), the reflected branch is the lens surface's eq. (1) × R."""
     parts, g = ctx.parts, ctx.geometry
-    d = rays.d[m]
-    pix, seen = rays.pix[m], rays.seen_reflector[m]
+    d = rays.d[met]
+    pix, seen = rays.pix[met], rays.seen_reflector[met]
     geometric = g.normal[tri]
     entering = optics.dot(d, geometric) < 0.0  # the side test: by the geometric (outward) normal
     facing = np.where(entering[:, None], normal, -normal)  # shading normal toward the incident side
@@ -346,7 +348,7 @@ def _dielectric(ctx: _Context, band: Band, rays: MeshRays, m: np.ndarray, k: np.
     d_r, facing_r, geometric_r = d[mirrored], facing[mirrored], geometric_facing[mirrored]
     mirror = on_side(optics.reflect(d_r, facing_r), d_r, geometric[mirrored],
                      lambda sel: optics.reflect(d_r[sel], geometric_r[sel]), same=False)
-    out.append(_spawn(rays, m[mirrored], p[mirrored], mirror, split.reflected[mirrored], part[mirrored],
+    out.append(_spawn(rays, met[mirrored], hit[mirrored], mirror, split.reflected[mirrored], part[mirrored],
                       medium_before[mirrored], tri[mirrored], src[mirrored], cls[mirrored], P.REFLECTED,
                       seen[mirrored]))
 
@@ -355,7 +357,7 @@ def _dielectric(ctx: _Context, band: Band, rays: MeshRays, m: np.ndarray, k: np.
     eta = split.eta[through]
     bent = on_side(optics.refract(d_t, facing_t, eta, split.cos_i[through]), d_t, geometric[through],
                    lambda sel: optics.refract(d_t[sel], geometric_t[sel], eta[sel]), same=True)
-    out.append(_spawn(rays, m[through], p[through], bent, split.transmitted[through], part[through],
+    out.append(_spawn(rays, met[through], hit[through], bent, split.transmitted[through], part[through],
                       medium_after[through], tri[through], src[through], cls[through], P.TRANSMITTED,
                       seen[through]))
     return out
