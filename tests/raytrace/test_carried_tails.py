@@ -25,7 +25,7 @@ def _long_tails_scene() -> dict:
 
 def _render(monkeypatch, carry: int | None, threads: int, **options) -> engine.RenderResult:
     """The render in bands of 6 rows (12 bands); ``carry`` None: each band traced apart, by
-    ``_trace_band``, as before tails were carried."""
+    ``schedule.trace_band``, as before tails were carried."""
     monkeypatch.setattr(engine.sampling, "TILE_RAYS", WIDTH * 6)
     if carry is None:
         monkeypatch.setattr(engine.schedule, "_carried_bands", engine.schedule.bands_on_threads)
