@@ -141,7 +141,7 @@ def _next_wavefront(ctx: Context, tails: list[_Tail], wave: _Wavefront | None, r
     width = ctx.camera.width
     pixels = np.arange(y0 * width, y1 * width)
     wave, parts = _carried_wavefront(ctx, tails, wave, rays, index, y0 * width, len(pixels))
-    band, m = tails[-1].band, tails[-1].lo
+    band, first_slot = tails[-1].band, tails[-1].lo
     slots = slots_seeing_body(ctx, y0, y1)
     if slots is None:
         slots = np.arange(len(pixels))
@@ -149,7 +149,7 @@ def _next_wavefront(ctx: Context, tails: list[_Tail], wave: _Wavefront | None, r
         band.segments += len(pixels) - len(slots)
     band.segments += len(slots)
     if len(slots):
-        parts.append(walk.first_generation(ctx, wave, *eye_rays(ctx.camera, pixels[slots]), m + slots))
+        parts.append(walk.first_generation(ctx, wave, *eye_rays(ctx.camera, pixels[slots]), first_slot + slots))
     if not parts:
         return wave, no_rays()
     return wave, concat(parts) if len(parts) > 1 else parts[0]
@@ -168,15 +168,15 @@ def _carried_wavefront(ctx: Context, tails: list[_Tail], wave: _Wavefront | None
             image_pix[sel] = tail.image_pixels(rays.pix[sel])
             tail.put_back(wave.acc)
         carried_pixels = np.unique(image_pix)
-    m = len(carried_pixels)
-    acc = np.zeros((len(PASS_NAMES), m + n, 3))
+    n_carried = len(carried_pixels)
+    acc = np.zeros((len(PASS_NAMES), n_carried + n, 3))
     for tail in tails:
         tail.lo, tail.hi = np.searchsorted(carried_pixels, [tail.first_pixel, tail.first_pixel + tail.band.n])
         tail.pixels = carried_pixels[tail.lo:tail.hi]
         acc[:, tail.lo:tail.hi] = tail.band.acc[:, tail.pixels - tail.first_pixel]
-    tails.append(_Tail(index, first_pixel, Band(n, ctx, acc[:, m:]), m, m + n))
+    tails.append(_Tail(index, first_pixel, Band(n, ctx, acc[:, n_carried:]), n_carried, n_carried + n))
     wave = _Wavefront(ctx, acc, tails)
-    return wave, [replace(rays, pix=np.searchsorted(carried_pixels, image_pix))] if m else []
+    return wave, [replace(rays, pix=np.searchsorted(carried_pixels, image_pix))] if n_carried else []
 
 
 @dataclass
