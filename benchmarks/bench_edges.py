@@ -21,7 +21,7 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from core_tracer.raytrace.tracer import render_passes  # noqa: E402
+from core_tracer.raytrace.engine import render_passes  # noqa: E402
 from core_tracer.scene.validate import load_scene  # noqa: E402
 from tools import dev_extension  # noqa: E402
 

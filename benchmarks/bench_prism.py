@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 import core_tracer  # noqa: E402
-from core_tracer.raytrace import paths, tracer  # noqa: E402
+from core_tracer.raytrace import engine, paths  # noqa: E402
 
 PRESETS = {"four-lamp": ROOT / "presets" / "four-lamp-rear-combination.json",
            "prism-plate": ROOT / "presets" / "prism-plate-stop-lamp.json"}
@@ -101,7 +101,7 @@ def print_classes(name: str, scene: dict, size: int) -> None:
     by_class: dict[int, int] = {}
     by_weight = np.zeros(3, np.int64)
     bands = np.array([0.01, 0.1])
-    intersect = tracer._intersect
+    intersect = engine.walk.intersect
 
     def counting(ctx, rays):  # the tracer's own classification (paths.CLASS_OF), counted
         t, surface, normal = intersect(ctx, rays)
@@ -111,11 +111,11 @@ def print_classes(name: str, scene: dict, size: int) -> None:
         by_weight[:] += np.bincount(np.searchsorted(bands, rays.k.max(axis=1), side="right"), minlength=3)
         return t, surface, normal
 
-    tracer._intersect = counting
+    engine.walk.intersect = counting
     try:
         result = core_tracer.render_passes(scene, size, size, keep_passes=False)
     finally:
-        tracer._intersect = intersect
+        engine.walk.intersect = intersect
     inside = sum(by_class.values())
     print(f"{name}: {result.stats['segments']:,} segments = {result.stats['segments'] - inside:,} eye rays "
           f"+ {inside:,} inside the lamps; by attenuation k < 1 %: {by_weight[0]:,}, 1-10 %: {by_weight[1]:,}, "

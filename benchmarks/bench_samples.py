@@ -36,7 +36,7 @@ from bench_viewport import cpu_seconds  # noqa: E402
 
 import core_tracer  # noqa: E402
 from core_tracer.raytrace import band_pool  # noqa: E402
-from core_tracer.raytrace.tracer import render_passes  # noqa: E402
+from core_tracer.raytrace.engine import render_passes  # noqa: E402
 
 
 def _timed(scene: dict, size: int, samples: int, runs: int, threshold: float | None, threads: int | None, pool):

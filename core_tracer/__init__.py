@@ -3,7 +3,7 @@
 Never imports bpy: the Blender add-on (``lamp_addon``) depends on this package, not the reverse.
 """
 
-from .raytrace.tracer import PASS_NAMES, RenderCancelled, RenderResult, render, render_passes
+from .raytrace.engine import PASS_NAMES, RenderCancelled, RenderResult, render, render_passes
 from .scene.reading import SceneError, scene_to_json
 from .scene.validate import load_scene, normalize, parse_scene
 

@@ -11,7 +11,7 @@ Public API (used by the Blender side):
 - ``available() -> (bool, reason)``.
 - ``load(json_path) -> (scene, meshes)``: the JSON and its .glb, validated.
 - ``render_passes(scene, meshes, width, height, *, progress, should_stop, samples,
-  geometry_cache) -> RenderResult``: as ``core_tracer.raytrace.tracer.render_passes``.
+  geometry_cache) -> RenderResult``: as ``core_tracer.raytrace.engine.render_passes``.
 - ``GeometryCache``: the checked geometry and its acceleration structure, built once per geometry
   change and reused (keep one per design and pass it to every render).
 - ``surface_hits(scene, meshes, o, d, geometry_cache)``: the first surface along given rays.

@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterator
 
 from .. import budget, processes
 from .band_worker import read_message, write_message
-from .tracer import BandImage, InOrder, RenderCancelled, short_switch_interval
+from .engine.schedule import BandImage, InOrder, RenderCancelled, short_switch_interval
 
 POLL_SECONDS = 0.002  # how often a render in the pool polls should_stop() while no band arrives
 LEASE_WAIT = 0.25  # seconds a render waits for the pool to finish stopping the render before it
@@ -143,7 +143,7 @@ class BandPool:
                      workers: int, should_stop: Callable[[], bool],
                      fallback: Callable[[list[tuple[int, int]]], Iterator[tuple[int, int, BandImage]]],
                      ) -> Iterator[tuple[int, int, BandImage]]:
-        """The ``bands`` of the render (``tracer.make_context``'s arguments, and ``keep_passes`` in
+        """The ``bands`` of the render (``engine.make_context``'s arguments, and ``keep_passes`` in
         ``options``) traced by ``workers`` of the pool's processes, yielded in order as (y0, y1,
         band); ``fallback(bands)`` traces them instead (or the rest of them, if a worker dies)
         when the pool cannot take the render. Raises ``RenderCancelled`` once ``should_stop()``."""

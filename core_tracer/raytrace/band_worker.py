@@ -8,7 +8,7 @@ the pipes is therefore made of builtins and numpy arrays, never of core_tracer's
 Protocol: pickles, each after its length (8 bytes, little-endian), over stdin and stdout.
 
 - parent to worker: ``("render", serial, scene, width, height, options)`` starts a render
-  (``options``: the keywords of ``tracer.make_context`` and ``keep_passes``); ``("job", job)``
+  (``options``: the keywords of ``engine.make_context`` and ``keep_passes``); ``("job", job)``
   answers a take, ``job`` being (index, y0, y1) or None for no more. End of input: exit.
 - worker to parent: ``("ready", pid)`` once, then per render ``("take", serial)`` for each band it
   wants, ``("band", serial, index, image, passes, segments, busy, max_depth, transitions, pid)`` as each
@@ -28,6 +28,9 @@ import signal
 import struct
 import sys
 import traceback
+
+from .engine.render import make_context
+from .engine.schedule import BandImage, worker_bands
 
 _LENGTH = struct.Struct("<Q")
 _SERIAL = struct.Struct("<I")
@@ -59,8 +62,6 @@ def main() -> int:
     inbox = os.fdopen(os.dup(sys.stdin.fileno()), "rb")
     outbox = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # stray prints must not corrupt the protocol
-
-    from .tracer import BandImage, make_context, worker_bands
 
     with open(sys.argv[2], "rb") as flag_file:
         flag = mmap.mmap(flag_file.fileno(), _SERIAL.size, access=mmap.ACCESS_READ)

@@ -53,38 +53,24 @@ def normalize(v: np.ndarray) -> np.ndarray:
 
 
 def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float) -> np.ndarray:
-    """Unpolarised reflectance from the exact Fresnel equations (paper §3.3.1).
+    """Unpolarised reflectance R from the exact Fresnel equations (paper §3.3.1).
 
     ``cos_i`` is the cosine of the angle of incidence (>= 0), ``n1`` the index on the incident
     side, ``n2`` on the far side. Total internal reflection gives exactly 1.
     """
     cos_i = np.clip(cos_i, 0.0, 1.0)
     eta = n1 / n2
-    # sin2_t = eta^2 (1 - cos_i^2), cos_t = sqrt(max(0, 1 - sin2_t)): the same operations, in place.
-    sin2_t = cos_i * cos_i
-    np.subtract(1.0, sin2_t, out=sin2_t)
-    sin2_t *= eta * eta
-    tir = sin2_t >= 1.0
-    cos_t = np.subtract(1.0, sin2_t, out=sin2_t)
-    np.maximum(0.0, cos_t, out=cos_t)
-    np.sqrt(cos_t, out=cos_t)
-    rs = _ratio(n1 * cos_i, n2 * cos_t)  # (n1 cos_i - n2 cos_t) / (n1 cos_i + n2 cos_t)
-    rp = _ratio(n2 * cos_i, n1 * cos_t)
-    # r = 0.5 (rs^2 + rp^2)
-    rs *= rs
-    rp *= rp
-    rs += rp
-    rs *= 0.5
-    np.copyto(rs, 1.0, where=tir)  # total internal reflection: exactly 1
-    return rs
+    sin2_t = (1.0 - cos_i * cos_i) * (eta * eta)  # Snell: sin t = (n1 / n2) sin i
+    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+    r_s = _ratio(n1 * cos_i, n2 * cos_t)  # (n1 cos i - n2 cos t) / (n1 cos i + n2 cos t), s-polarised
+    r_p = _ratio(n2 * cos_i, n1 * cos_t)  # p-polarised
+    reflectance = (r_s * r_s + r_p * r_p) * 0.5  # R = (r_s² + r_p²) / 2
+    return np.where(sin2_t >= 1.0, 1.0, reflectance)  # total internal reflection: exactly 1
 
 
 def _ratio(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(a - b) / (a + b), written over ``a``."""
-    total = a + b
-    a -= b
-    a /= total
-    return a
+    """(a - b) / (a + b)."""
+    return (a - b) / (a + b)
 
 
 def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
@@ -92,10 +78,7 @@ def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
 
     Renormalised: a ray may bounce dozens of times inside the lens (total internal reflection),
     and each bounce would otherwise multiply the rounding error of its length."""
-    twice = dot(d, n)
-    twice *= 2.0
-    m = scaled(n, twice)
-    return normalize(np.subtract(d, m, out=m))  # d - 2 (d.n) n
+    return normalize(d - scaled(n, dot(d, n) * 2.0))  # d - 2 (d·n) n
 
 
 def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float, cos_i: np.ndarray | None = None) -> np.ndarray:
@@ -107,21 +90,9 @@ def refract(d: np.ndarray, n: np.ndarray, eta: np.ndarray | float, cos_i: np.nda
     if cos_i is None:
         cos_i = -dot(d, n)
     eta = np.broadcast_to(eta, cos_i.shape)
-    # cos_t = sqrt(max(0, 1 - eta^2 (1 - cos_i^2))): the same operations, in place.
-    cos_t = cos_i * cos_i
-    np.subtract(1.0, cos_t, out=cos_t)
-    cos_t *= eta * eta
-    np.subtract(1.0, cos_t, out=cos_t)
-    np.maximum(0.0, cos_t, out=cos_t)
-    np.sqrt(cos_t, out=cos_t)
-    along_n = eta * cos_i
-    along_n -= cos_t
-    # eta d + (eta cos_i - cos_t) n, a column at a time, unit as in reflect()
-    out = scaled(d, eta)
-    for j in range(3):
-        np.multiply(n[:, j], along_n, out=cos_t)
-        out[:, j] += cos_t
-    return normalize(out)
+    cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - cos_i * cos_i) * (eta * eta)))
+    # t = eta d + (eta cos i - cos t) n, of unit length as in reflect()
+    return normalize(scaled(d, eta) + scaled(n, eta * cos_i - cos_t))
 
 
 def absorption(coeff: np.ndarray, length: np.ndarray) -> np.ndarray:

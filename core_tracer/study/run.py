@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import processes
 from ..images import glare
-from ..raytrace.tracer import RenderCancelled, render_passes
+from ..raytrace.engine import RenderCancelled, render_passes
 from .definition import Study
 
 TERMINATE_TIMEOUT = 3.0  # seconds a worker gets to exit after terminate() before kill()

@@ -37,7 +37,7 @@ def main() -> int:
     import numpy as np
 
     from ..images import glare
-    from ..raytrace.tracer import RenderCancelled, render_passes
+    from ..raytrace.engine import RenderCancelled, render_passes
 
     parent = os.getppid()
 

@@ -60,10 +60,10 @@ def prepare(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, scene: di
 
 
 def render_passes(prepared: Prepared, width: int, height: int, **options):
-    """Render ``prepared`` with the tracer it needs; ``options`` as ``tracer.render_passes`` takes
+    """Render ``prepared`` with the tracer it needs; ``options`` as ``engine.render_passes`` takes
     them (the free-form tracer takes the ones it knows: progress, should_stop, samples, threads)."""
     if prepared.geometry is None:
-        from ...core_tracer.raytrace.tracer import render_passes as parametric
+        from ...core_tracer.raytrace.engine import render_passes as parametric
 
         return parametric(prepared.scene, width, height, **options)
     from ...core_tracer import freeform

@@ -14,7 +14,7 @@ import numpy as np
 
 from ...core_tracer.budget import check_rays
 from ...core_tracer.raytrace import band_pool
-from ...core_tracer.raytrace.tracer import PASS_NAMES
+from ...core_tracer.raytrace.engine import PASS_NAMES
 from ...core_tracer.scene.reading import SceneError
 from ..freeform import render as freeform_render
 from ..freeform import status as freeform_status
@@ -56,8 +56,8 @@ def body_coverage(scene: dict, row_start: int, row_stop: int) -> np.ndarray:
     the body's front face, so the box is the whole lamp seen from outside."""
     from ...core_tracer.raytrace import pixel_filter
     from ...core_tracer.raytrace.camera import eye_rays, make_camera
+    from ...core_tracer.raytrace.engine.sampling import TILE_RAYS
     from ...core_tracer.raytrace.parts.body_box import body_box, hit_box
-    from ...core_tracer.raytrace.tracer import TILE_RAYS
 
     width, height = scene["image"]["width"], scene["image"]["height"]
     samples = scene["image"].get("samples", 1)

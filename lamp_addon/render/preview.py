@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core_tracer.raytrace import band_pool
-from ...core_tracer.raytrace.tracer import RenderCancelled, render_passes
+from ...core_tracer.raytrace.engine import RenderCancelled, render_passes
 from ...core_tracer.scene.reading import SceneError
 
 # The coarse stage's pixel budget: 128x96, 1/8 of a 1024x768 region, renders the four-lamp preset

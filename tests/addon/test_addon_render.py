@@ -668,7 +668,7 @@ def test_tracer_job_cancels_through_should_stop(lamp_addon):
 
 
 def test_render_passes_stops_between_bands(monkeypatch):
-    monkeypatch.setattr(core_tracer.raytrace.tracer, "TILE_RAYS", 256 * 64)  # 64 rows a band: 4 bands
+    monkeypatch.setattr(core_tracer.raytrace.engine.sampling, "TILE_RAYS", 256 * 64)  # 64 rows a band: 4 bands
     scene = _preset_scene(size=(256, 256))
     bands = []
 

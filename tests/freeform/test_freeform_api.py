@@ -8,7 +8,7 @@ import pytest
 
 from core_tracer.freeform import GeometryCache, available, render_passes, shapes
 from core_tracer.freeform.meshes import MeshData
-from core_tracer.raytrace.tracer import PASS_NAMES, RenderCancelled
+from core_tracer.raytrace.engine import PASS_NAMES, RenderCancelled
 from core_tracer.scene.validate import normalize, parse_scene
 
 pytest.importorskip("embreex")

@@ -10,7 +10,7 @@ import pytest
 
 from core_tracer.freeform import GeometryCache, render_passes, shapes
 from core_tracer.freeform.render import surface_hits
-from core_tracer.raytrace.tracer import CUTOFF
+from core_tracer.raytrace.engine.rays import CUTOFF
 from core_tracer.scene.validate import parse_scene
 
 pytest.importorskip("embreex")

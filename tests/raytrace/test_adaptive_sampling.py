@@ -1,4 +1,4 @@
-"""Adaptive sampling (tracer._trace_adaptive): samples spent where the image changes, the result
+"""Adaptive sampling (engine.adaptive._trace_adaptive): samples spent where the image changes, the result
 within a stated tolerance of tracing every sample, the same on every run and with any threads."""
 
 from __future__ import annotations
@@ -8,8 +8,9 @@ import pytest
 from helpers import PRESETS
 
 from core_tracer import load_scene
-from core_tracer.raytrace import tracer
-from core_tracer.raytrace.tracer import pilot_samples, render_passes
+from core_tracer.raytrace import engine
+from core_tracer.raytrace.engine import render_passes
+from core_tracer.raytrace.engine.sampling import pilot_samples
 
 # Measured at 96 x 64 and 16 samples: at most 8e-5 of the peak, 7e-5 of the mean (README).
 MAX_OF_PEAK = 5e-4
@@ -49,7 +50,7 @@ def test_pixels_taking_every_sample_are_the_full_render():
 
 def test_adaptive_is_the_same_whatever_the_threads_and_bands(monkeypatch):
     one = _render("four-lamp-rear-combination", None, size=(40, 30), threads=1).image
-    monkeypatch.setattr(tracer, "TILE_RAYS", 300)  # bands of 1-2 rows, pilot groups split mid-row
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", 300)  # bands of 1-2 rows, pilot groups split mid-row
     many = _render("four-lamp-rear-combination", None, size=(40, 30), threads=2).image
     np.testing.assert_array_equal(one, many)
 
@@ -70,24 +71,24 @@ def test_pilot_samples_spread_over_the_pixel(samples):
 
 def test_the_rows_outside_a_band_are_traced_only_where_they_decide(monkeypatch):
     """A band traces the pilot samples of its neighbours in the rows just outside it only next to
-    its edge rows' calm pixels (``tracer._outside_rows``): the day preset (sky, body, lenses and
+    its edge rows' calm pixels (``adaptive._outside_rows``): the day preset (sky, body, lenses and
     ground at the bands' edges) in bands of 3 rows is the image of one band, pass for pass, with the
     same busy pixels, while tracing fewer of the outside rows than all of them."""
     scene = load_scene(PRESETS / "four-lamp-day-lit.json")
     one = render_passes(scene, 64, 48, samples=16, threads=1)
     pilot_pixels = []
-    per_sample = tracer._per_sample
+    per_sample = engine.sampling.per_sample
 
     def counting(ctx, band, pixels, sample_ids):
         if len(sample_ids) == len(pilot_samples(16)):
             pilot_pixels.append(len(pixels))
         return (yield from per_sample(ctx, band, pixels, sample_ids))
 
-    monkeypatch.setattr(tracer, "_per_sample", counting)
-    monkeypatch.setattr(tracer, "TILE_RAYS", 5 * 64 * 4)  # bands of 3 rows
+    monkeypatch.setattr(engine.sampling, "per_sample", counting)
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", 5 * 64 * 4)  # bands of 3 rows
     many = render_passes(scene, 64, 48, samples=16, threads=2)
     assert many.stats["busy_pixels"] == one.stats["busy_pixels"]
-    for name in tracer.PASS_NAMES:  # (surroundings: float64 sums may differ in their last bit)
+    for name in engine.PASS_NAMES:  # (surroundings: float64 sums may differ in their last bit)
         np.testing.assert_array_max_ulp(many.passes[name], one.passes[name], maxulp=1)
     outside = sum(pilot_pixels) - 64 * 48
     assert 0 < outside < 2 * (48 // 3 - 1) * 64

@@ -9,9 +9,9 @@ from helpers import PRESETS, scene_with
 
 from core_tracer import load_scene
 from core_tracer.budget import MAX_EYE_RAYS, check_render
-from core_tracer.raytrace import pixel_filter, tracer
+from core_tracer.raytrace import engine, pixel_filter
 from core_tracer.raytrace.camera import eye_rays, make_camera
-from core_tracer.raytrace.tracer import render_passes
+from core_tracer.raytrace.engine import render_passes
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
 
@@ -85,7 +85,7 @@ def test_same_image_every_run_and_any_threads(monkeypatch):
     np.testing.assert_array_equal(first, _image(scene, 30, 20, threads=3))
     # Bands of fewer rays than a row's samples (a wide image at many samples): the samples go in
     # groups, the memory stays bounded and the image is the same up to the order of the sums.
-    monkeypatch.setattr(tracer, "TILE_RAYS", 50)
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", 50)
     np.testing.assert_allclose(_image(scene, 30, 20, threads=2), first, rtol=1e-5, atol=1e-6)
 
 

@@ -15,7 +15,7 @@ import pytest
 from helpers import PRESETS, scene_with
 
 from core_tracer import load_scene, processes
-from core_tracer.raytrace import band_pool, tracer
+from core_tracer.raytrace import band_pool, engine
 
 
 @pytest.fixture(scope="module")
@@ -52,21 +52,21 @@ CASES = {
 }
 
 
-def _render(monkeypatch, case: str, **options) -> tracer.RenderResult:
+def _render(monkeypatch, case: str, **options) -> engine.RenderResult:
     make, width, height, rows, extra = CASES[case]
     samples = extra["samples"]
     adaptive = samples > 1 and extra.get("adaptive_threshold") != 0
-    # The parent cuts the image into bands of ``rows`` rows (as ``tracer.band_rows`` does); the
+    # The parent cuts the image into bands of ``rows`` rows (as ``engine.schedule.band_rows`` does); the
     # workers trace the rows they are given.
-    per_row = width * (len(tracer.pilot_samples(samples)) if adaptive else samples)
-    monkeypatch.setattr(tracer, "TILE_RAYS", per_row * (rows + 2 if adaptive else rows))
+    per_row = width * (len(engine.sampling.pilot_samples(samples)) if adaptive else samples)
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", per_row * (rows + 2 if adaptive else rows))
     try:
-        return tracer.render_passes(make(), width, height, keep_passes=True, **extra, **options)
+        return engine.render_passes(make(), width, height, keep_passes=True, **extra, **options)
     finally:
         monkeypatch.undo()
 
 
-def _same(a: tracer.RenderResult, b: tracer.RenderResult, ulps: int = 0) -> None:
+def _same(a: engine.RenderResult, b: engine.RenderResult, ulps: int = 0) -> None:
     """Equal bit for bit (``ulps`` 0), or within ``ulps`` float32 units in the last place."""
     def equal(x: np.ndarray, y: np.ndarray) -> None:
         if ulps:
@@ -112,13 +112,13 @@ def test_bands_arrive_in_order_with_progress(monkeypatch, pool):
     _render(monkeypatch, "one-sample", threads=2, pool=pool, on_rows=on_rows, progress=fractions.append)
     assert rows == [(y, min(120, y + 8)) for y in range(0, 120, 8)]
     assert fractions == [k / len(rows) for k in range(1, len(rows) + 1)]
-    assert intervals == pytest.approx([tracer.SWITCH_INTERVAL] * len(rows))
+    assert intervals == pytest.approx([engine.schedule.SWITCH_INTERVAL] * len(rows))
     assert sys.getswitchinterval() == before
 
 
 def test_a_cancelled_render_leaves_the_workers_ready_for_the_next(monkeypatch, pool):
     bands = []
-    with pytest.raises(tracer.RenderCancelled):
+    with pytest.raises(engine.RenderCancelled):
         _render(monkeypatch, "deep-tails", threads=2, pool=pool, should_stop=lambda: len(bands) >= 2,
                 on_rows=lambda y0, y1, _: bands.append(y0))
     assert len(bands) == 2
@@ -130,18 +130,18 @@ def test_a_cancelled_render_leaves_the_workers_ready_for_the_next(monkeypatch, p
 
 def test_a_render_that_finds_the_pool_busy_runs_on_threads(monkeypatch, pool):
     monkeypatch.setattr(band_pool, "LEASE_WAIT", 0.01)
-    inner: list[tracer.RenderResult] = []
+    inner: list[engine.RenderResult] = []
 
     def render_meanwhile(y0, y1, rows):
         if not inner:  # while the first render holds the pool
-            inner.append(tracer.render_passes(load_preset("four-lamp-rear-combination.json"), 160, 120,
+            inner.append(engine.render_passes(load_preset("four-lamp-rear-combination.json"), 160, 120,
                                               keep_passes=False, threads=2, pool=pool))
 
-    outer = tracer.render_passes(load_preset("four-lamp-rear-combination.json"), 640, 480, keep_passes=False,
+    outer = engine.render_passes(load_preset("four-lamp-rear-combination.json"), 640, 480, keep_passes=False,
                                  threads=2, pool=pool, on_rows=render_meanwhile)
     assert outer.stats["worker_processes"] == 2
     assert inner[0].stats["worker_processes"] == 0
-    alone = tracer.render_passes(load_preset("four-lamp-rear-combination.json"), 160, 120, keep_passes=False,
+    alone = engine.render_passes(load_preset("four-lamp-rear-combination.json"), 160, 120, keep_passes=False,
                                  threads=2)
     assert np.array_equal(inner[0].image, alone.image)
 
@@ -153,7 +153,7 @@ def test_a_failing_worker_raises_its_error_and_the_pool_serves_on(pool):
     with pytest.raises(band_pool.BandWorkerError, match="no-such-filter"):
         list(pool.traced_bands(scene, 64, 48, options, [(0, 24), (24, 48)], 2, lambda: False, lambda rest: iter(())))
     assert pool.ready() and pool.broken is None
-    result = tracer.render_passes(scene, 640, 480, threads=2, pool=pool, keep_passes=False)
+    result = engine.render_passes(scene, 640, 480, threads=2, pool=pool, keep_passes=False)
     assert result.stats["worker_processes"] == 2
 
 
@@ -188,7 +188,7 @@ def test_closing_ends_the_workers_and_removes_the_flag_file():
     assert [p.poll() is not None for p in closing._processes] == [True, True]
     assert not closing.ready()
     scene = load_preset("four-lamp-rear-combination.json")
-    result = tracer.render_passes(scene, 640, 480, threads=2, pool=closing, keep_passes=False)
+    result = engine.render_passes(scene, 640, 480, threads=2, pool=closing, keep_passes=False)
     assert result.stats["worker_processes"] == 0  # on threads
 
 

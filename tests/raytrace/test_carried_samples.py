@@ -1,6 +1,6 @@
-"""Carried samples (``tracer._carrying_samples``): with more than one sample per pixel, each group of
+"""Carried samples (``carried.carrying_samples``): with more than one sample per pixel, each group of
 eye rays a band's sampling asks for starts in the wavefront of the deep branches still being traced
-for earlier groups; every band is, bit for bit, what tracing it apart gives (``tracer._trace_band``):
+for earlier groups; every band is, bit for bit, what tracing it apart gives (``schedule.trace_band``):
 every pass, the segment count, the deepest branch, the busy pixels and the transitions."""
 
 from __future__ import annotations
@@ -11,20 +11,20 @@ import numpy as np
 import pytest
 from helpers import scene_with
 
-from core_tracer.raytrace import tracer
+from core_tracer.raytrace import engine
 from core_tracer.raytrace.camera import make_camera
 
 WIDTH, HEIGHT, SAMPLES = 48, 36, 8
 
 
-def _context(adaptive_threshold: float) -> tracer._Context:
+def _context(adaptive_threshold: float) -> engine.context.Context:
     # A clear lens of n = 2.4 with 3 mm cuts keeps branches going for dozens of generations after most
     # rays have ended (total internal reflection); a grey background and a wide view give pixels that
     # see only it, whose samples adaptive sampling looks up without tracing (``_world_samples``).
     scene = scene_with(**{"lamps[0].lens.ior": 2.4, "lamps[0].lens.absorption": [0, 0, 0],
                           "lamps[0].cuts.pitch": 3.0, "background": [0.2, 0.3, 0.4]})
     scene["camera"]["fov_deg"] = 2.0 * scene["camera"]["fov_deg"]
-    return tracer._Context(scene, make_camera(scene["camera"], WIDTH, HEIGHT), True, SAMPLES, "blackman-harris",
+    return engine.context.Context(scene, make_camera(scene["camera"], WIDTH, HEIGHT), True, SAMPLES, "blackman-harris",
                            adaptive_threshold)
 
 
@@ -32,7 +32,8 @@ def _bands(rows: int) -> list[tuple[int, int]]:
     return [(y, min(HEIGHT, y + rows)) for y in range(0, HEIGHT, rows)]
 
 
-def _carried(ctx: tracer._Context, bands: list[tuple[int, int]], stopped=lambda: False) -> dict[int, tracer._Band]:
+def _carried(ctx: engine.context.Context, bands: list[tuple[int, int]],
+             stopped=lambda: False) -> dict[int, engine.rays.Band]:
     queued = deque(enumerate(bands))
 
     def take():
@@ -41,7 +42,7 @@ def _carried(ctx: tracer._Context, bands: list[tuple[int, int]], stopped=lambda:
         index, (y0, y1) = queued.popleft()
         return index, y0, y1
 
-    return dict(tracer._carrying_samples(ctx, take, stopped))
+    return dict(engine.carried.carrying_samples(ctx, take, stopped))
 
 
 @pytest.mark.parametrize("adaptive_threshold", [0.01, 0.0], ids=["adaptive", "every-sample"])
@@ -51,20 +52,20 @@ def test_carried_samples_give_what_bands_traced_apart_give(monkeypatch, adaptive
     # Groups of at most 4 rows of pilot samples: bands of 2 rows ask for several groups each, the
     # rest of their busy pixels' samples in groups of their own. carry-all starts every group in the
     # wavefront of all the rays still live (several groups at once).
-    monkeypatch.setattr(tracer, "MAX_DEPTH", max_depth)
-    monkeypatch.setattr(tracer, "TILE_RAYS", WIDTH * 4 * 3)
-    monkeypatch.setattr(tracer, "CARRY_RAYS", carry)
+    monkeypatch.setattr(engine.walk, "MAX_DEPTH", max_depth)
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", WIDTH * 4 * 3)
+    monkeypatch.setattr(engine.carried, "CARRY_RAYS", carry)
     ctx = _context(adaptive_threshold)
     bands = _bands(2)
-    apart = [tracer._trace_band(ctx, y0, y1) for y0, y1 in bands]
+    apart = [engine.schedule.trace_band(ctx, y0, y1) for y0, y1 in bands]
     started = []
-    carrying = tracer._carried_wavefront
+    carrying = engine.carried._carried_wavefront
 
     def counting(ctx, tails, *args):
         started.append(len(tails))
         return carrying(ctx, tails, *args)
 
-    monkeypatch.setattr(tracer, "_carried_wavefront", counting)
+    monkeypatch.setattr(engine.carried, "_carried_wavefront", counting)
     carried = _carried(ctx, bands)
     assert sorted(carried) == list(range(len(bands)))
     assert max(started) >= (3 if carry > 10**6 else 1)  # groups were carried, several at once

@@ -1,5 +1,5 @@
-"""Carried tails (``tracer._carrying_tails``): a band's last few rays traced in the wavefront of the
-worker's next band give, bit for bit, what tracing each band apart gives (``tracer._trace_band``):
+"""Carried tails (``carried.carrying_tails``): a band's last few rays traced in the wavefront of the
+worker's next band give, bit for bit, what tracing each band apart gives (``schedule.trace_band``):
 the image, every pass, the segment count, the deepest branch and the transitions; callbacks still
 come in band order, and a cancelled render stops with no thread left running."""
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from helpers import scene_with
 
-from core_tracer.raytrace import tracer
+from core_tracer.raytrace import engine
 
 WIDTH, HEIGHT = 96, 72
 
@@ -23,16 +23,16 @@ def _long_tails_scene() -> dict:
                          "lamps[0].cuts.pitch": 3.0, "image": {"width": WIDTH, "height": HEIGHT}})
 
 
-def _render(monkeypatch, carry: int | None, threads: int, **options) -> tracer.RenderResult:
+def _render(monkeypatch, carry: int | None, threads: int, **options) -> engine.RenderResult:
     """The render in bands of 6 rows (12 bands); ``carry`` None: each band traced apart, by
-    ``_trace_band``, as before tails were carried."""
-    monkeypatch.setattr(tracer, "TILE_RAYS", WIDTH * 6)
+    ``schedule.trace_band``, as before tails were carried."""
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", WIDTH * 6)
     if carry is None:
-        monkeypatch.setattr(tracer, "_carried_bands", tracer._traced_bands_on)
+        monkeypatch.setattr(engine.schedule, "_carried_bands", engine.schedule.bands_on_threads)
     else:
-        monkeypatch.setattr(tracer, "CARRY_RAYS", carry)
+        monkeypatch.setattr(engine.carried, "CARRY_RAYS", carry)
     try:
-        return tracer.render_passes(_long_tails_scene(), threads=threads, record_transitions=True, **options)
+        return engine.render_passes(_long_tails_scene(), threads=threads, record_transitions=True, **options)
     finally:
         monkeypatch.undo()
 
@@ -40,13 +40,13 @@ def _render(monkeypatch, carry: int | None, threads: int, **options) -> tracer.R
 def _carried_counts(monkeypatch) -> list[int]:
     """Per wavefront started, how many earlier bands' rays it carries."""
     carried = []
-    start = tracer._next_wavefront
+    start = engine.carried._next_wavefront
 
     def counting(ctx, tails, wave, rays, *job):
         carried.append(len(tails))
         return start(ctx, tails, wave, rays, *job)
 
-    monkeypatch.setattr(tracer, "_next_wavefront", counting)
+    monkeypatch.setattr(engine.carried, "_next_wavefront", counting)
     return carried
 
 
@@ -57,9 +57,9 @@ def test_carried_tails_give_what_bands_traced_apart_give(monkeypatch, threads, m
     # With MAX_DEPTH at 64 or 7 branches are cut in many bands: each carried band must count its own
     # depth; at 1000 every branch ends by the cut-off.
     # carry-all carries every band's rays from its first hits on (several bands at once).
-    monkeypatch.setattr(tracer, "MAX_DEPTH", max_depth)
+    monkeypatch.setattr(engine.walk, "MAX_DEPTH", max_depth)
     apart = _render(monkeypatch, None, threads)
-    monkeypatch.setattr(tracer, "MAX_DEPTH", max_depth)
+    monkeypatch.setattr(engine.walk, "MAX_DEPTH", max_depth)
     carried_counts = _carried_counts(monkeypatch)
     carried = _render(monkeypatch, carry, threads)
     assert max(carried_counts) >= (3 if carry > 10**6 else 1)  # tails were carried, several at once
@@ -76,8 +76,8 @@ def test_each_band_keeps_its_own_statistics(monkeypatch):
     # The bands handed to the caller carry their own segment count and deepest branch.
     def per_band(carry):
         seen = []
-        traced = tracer._traced_bands
-        monkeypatch.setattr(tracer, "_traced_bands", lambda *args: (
+        traced = engine.schedule.traced_bands
+        monkeypatch.setattr(engine.schedule, "traced_bands", lambda *args: (
             (y0, y1, seen.append((y0, band.segments, band.max_depth, frozenset(band.transitions))) or band)
             for y0, y1, band in traced(*args)))
         _render(monkeypatch, carry, 2)
@@ -117,7 +117,7 @@ def test_cancelling_while_tails_are_carried_stops_every_worker(monkeypatch, thre
             polls_after_stop.append(True)
         return len(bands) >= 2
 
-    with pytest.raises(tracer.RenderCancelled):
+    with pytest.raises(engine.RenderCancelled):
         _render(monkeypatch, 10**9, threads, should_stop=should_stop,
                 on_rows=lambda a, b, rows: bands.append((a, b)))
     assert bands == [(0, 6), (6, 12)]
@@ -127,7 +127,7 @@ def test_cancelling_while_tails_are_carried_stops_every_worker(monkeypatch, thre
 
 def test_an_error_in_a_worker_reaches_the_caller_and_stops_the_other(monkeypatch):
     steps = []
-    step = tracer._step
+    step = engine.walk.step
 
     def failing(ctx, band, rays):
         steps.append(len(rays))
@@ -135,9 +135,9 @@ def test_an_error_in_a_worker_reaches_the_caller_and_stops_the_other(monkeypatch
             raise FloatingPointError("from a worker")
         return step(ctx, band, rays)
 
-    monkeypatch.setattr(tracer, "_step", failing)
-    monkeypatch.setattr(tracer, "TILE_RAYS", WIDTH * 6)
+    monkeypatch.setattr(engine.walk, "step", failing)
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", WIDTH * 6)
     before = set(threading.enumerate())
     with pytest.raises(FloatingPointError, match="from a worker"):
-        tracer.render_passes(_long_tails_scene(), threads=2)
+        engine.render_passes(_long_tails_scene(), threads=2)
     assert set(threading.enumerate()) == before

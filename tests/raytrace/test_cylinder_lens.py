@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 from core_tracer.raytrace import paths as P
+from core_tracer.raytrace.engine import render
 from core_tracer.raytrace.lamp_table import CYLINDER_KEYS, LampTable
 from core_tracer.raytrace.parts import body_box, cut_surface, cuts, cylinder_lens, flutes, sawtooth
 from core_tracer.raytrace.parts.base import T_MIN, Segments
 from core_tracer.raytrace.parts.cuts import INTO_AIR, INTO_LENS, OFF_CAP
 from core_tracer.raytrace.parts.side_wall import hit_side_wall
-from core_tracer.raytrace.tracer import render
 from core_tracer.scene.derived import body_wraps, cut_sphere_radius, lens_cylinder
 from core_tracer.scene.validate import normalize
 from tests.helpers import baseline_doc
@@ -288,7 +288,7 @@ def test_a_flat_lens_on_the_curved_front_is_refused():
 
 def test_every_transition_through_a_cylindrical_lens_is_in_table_1():
     from core_tracer.raytrace import paths
-    from core_tracer.raytrace.tracer import render_passes
+    from core_tracer.raytrace.engine import render_passes
     scene = normalize(_wrap_scene())
     scene["camera"] = {**scene["camera"], "position": [400.0, -900.0, 120.0], "target": [0.0, 20.0, 0.0]}
     result = render_passes(scene, 96, 96, record_transitions=True)

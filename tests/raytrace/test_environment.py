@@ -19,7 +19,7 @@ import pytest
 from helpers import assert_bad_input, baseline_doc, fresnel_unpolarised, run_cli, scene_with, write_exr
 
 from core_tracer import render_passes
-from core_tracer.raytrace import environment, tracer
+from core_tracer.raytrace import engine, environment
 from core_tracer.raytrace.camera import eye_rays, make_camera
 from core_tracer.scene.reading import SceneError
 
@@ -196,15 +196,15 @@ def test_none_is_the_papers_background(smooth_exr):
 def test_a_missing_file_is_named(tmp_path):
     scene = scene_with(**{"environment": {"world": "file", "file": str(tmp_path / "nowhere.exr")}})
     with pytest.raises(SceneError, match=r"^environment\.file: .*does not exist; allowed"):
-        tracer.render(scene, 4, 4)
+        engine.render(scene, 4, 4)
     scene["environment"]["file"] = str(tmp_path / "sky.png")
     with pytest.raises(SceneError, match=r"^environment\.file: .*allowed an \.exr or \.hdr file"):
-        tracer.render(scene, 4, 4)
+        engine.render(scene, 4, 4)
     garbage = tmp_path / "garbage.exr"
     garbage.write_text("not an image")
     scene["environment"]["file"] = str(garbage)
     with pytest.raises(SceneError, match=r"^environment\.file: .*cannot be read as an image .*allowed an \.exr"):
-        tracer.render(scene, 4, 4)
+        engine.render(scene, 4, 4)
 
 
 def test_bundled_worlds_are_found_without_importing_bpy(repo_root):
@@ -224,7 +224,7 @@ def test_without_blenders_worlds_the_render_says_so_and_names_the_alternative(mo
     scene = scene_with(**{"environment": {"world": "sunset"}})
     with pytest.raises(SceneError, match=r'^environment\.world: "sunset" is one of Blender\'s bundled world images, '
                                          r'which are not on this machine .*allowed "none", or "file"'):
-        tracer.render(scene, 4, 4)
+        engine.render(scene, 4, 4)
 
 
 def test_cli_reports_a_missing_environment_file_in_one_line(tmp_path):

@@ -11,8 +11,8 @@ from helpers import scene_with
 
 from core_tracer.raytrace import optics
 from core_tracer.raytrace import paths as P
+from core_tracer.raytrace.engine import render_passes
 from core_tracer.raytrace.parts import base, cuts, flutes, side_wall
-from core_tracer.raytrace.tracer import render_passes
 from core_tracer.scene.derived import flute_radius
 
 R, T = 45.0, 3.0

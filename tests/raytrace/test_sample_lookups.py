@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from helpers import scene_with, write_exr
 
-from core_tracer.raytrace import environment, pixel_filter, tracer
+from core_tracer.raytrace import engine, environment, pixel_filter
 from core_tracer.raytrace.camera import eye_rays, make_camera
 
 
@@ -107,44 +107,44 @@ def test_rays_missing_the_lamp_are_looked_up_as_the_tracer_would_trace_them(tmp_
     scene = scene_with(**{"environment": {"world": "file", "file": sky}, "image": {"width": 48, "height": 36}})
     scene["camera"]["fov_deg"] = 50.0  # the lamp and plenty of surroundings around it
     cam = make_camera(scene["camera"], 48, 36)
-    ctx = tracer._Context(scene, cam, False, 16, "blackman-harris")
+    ctx = engine.context.Context(scene, cam, False, 16, "blackman-harris")
     pixels = np.arange(48 * 36)
     o, d = eye_rays(cam, np.tile(pixels, 4), pixel_filter.grid_offsets("blackman-harris", pixels, np.arange(4), 16,
                                                                         sample_major=True))
-    split, whole = tracer._Band(len(o), ctx), tracer._Band(len(o), ctx)
-    tracer._trace_eye_rays(ctx, split, o, d)
-    tracer._trace_rays(ctx, whole, o, d)
-    background = whole.acc[tracer.BACKGROUND_PASS]
-    others = np.delete(whole.acc, tracer.BACKGROUND_PASS, axis=0)
+    split, whole = engine.rays.Band(len(o), ctx), engine.rays.Band(len(o), ctx)
+    engine.walk.trace_eye_rays(ctx, split, o, d)
+    engine.walk.trace_rays(ctx, whole, o, d)
+    background = whole.acc[engine.rays.BACKGROUND_PASS]
+    others = np.delete(whole.acc, engine.rays.BACKGROUND_PASS, axis=0)
     seeing_only_the_world = others.max(axis=(0, 2)) == 0
     assert seeing_only_the_world.mean() > 0.3 and (~seeing_only_the_world).sum() > 100
     assert (background[seeing_only_the_world] > 0).all()
     # The same values; to the last bit but for the surroundings' lookups, whose arctan2 (numpy's
     # SIMD code) was seen to differ in the last bit between two calls on equal directions.
     np.testing.assert_allclose(split.acc, whole.acc, rtol=1e-13, atol=0)
-    np.testing.assert_array_equal(np.delete(split.acc, tracer.BACKGROUND_PASS, 0), others)
+    np.testing.assert_array_equal(np.delete(split.acc, engine.rays.BACKGROUND_PASS, 0), others)
     assert split.segments == whole.segments
 
 
 def test_adaptive_pixels_that_see_only_the_world_are_the_traced_ones(tmp_path, monkeypatch):
     """Busy pixels whose neighbourhood saw only the surroundings take their other samples from the
-    world image directly (``tracer._world_samples``): the image is the one tracing them gives."""
+    world image directly (``adaptive._world_samples``): the image is the one tracing them gives."""
     sky = write_exr(tmp_path / "sky.exr", np.random.default_rng(6).random((32, 64, 3)).astype(np.float32) + 0.1)
     scene = scene_with(**{"environment": {"world": "file", "file": sky}})
     scene["camera"]["fov_deg"] = 50.0
 
     def render():
-        return tracer.render_passes(scene, 48, 36, samples=16, keep_passes=False, threads=1)
+        return engine.render_passes(scene, 48, 36, samples=16, keep_passes=False, threads=1)
 
     looked_up = render()
-    shortcut = tracer._world_samples
+    shortcut = engine.adaptive._world_samples
     taken = []
 
     def trace_them_all(ctx, band, pixels, idx, pilot, pilot_values):
-        taken.append(len(idx) - len(shortcut(ctx, tracer._Band(band.n, ctx), pixels, idx, pilot, pilot_values)))
+        taken.append(len(idx) - len(shortcut(ctx, engine.rays.Band(band.n, ctx), pixels, idx, pilot, pilot_values)))
         return idx
 
-    monkeypatch.setattr(tracer, "_world_samples", trace_them_all)
+    monkeypatch.setattr(engine.adaptive, "_world_samples", trace_them_all)
     traced = render()
     assert sum(taken) > 0.3 * 48 * 36  # most of the surroundings took the shortcut
     np.testing.assert_allclose(looked_up.image, traced.image, rtol=1e-6, atol=0)  # float32 images, last bit

@@ -12,10 +12,10 @@ from helpers import FOUR_LAMPS, scene_with
 
 from core_tracer.raytrace import optics
 from core_tracer.raytrace import paths as P
+from core_tracer.raytrace.engine import render, render_passes
 from core_tracer.raytrace.lamp_table import LampTable
 from core_tracer.raytrace.parts import base, cut_surface, cuts, sawtooth, side_wall
 from core_tracer.raytrace.parts.base import Segments
-from core_tracer.raytrace.tracer import render, render_passes
 from core_tracer.scene.validate import parse_scene
 
 R, T = 45.0, 3.0

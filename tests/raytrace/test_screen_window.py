@@ -8,7 +8,7 @@ import pytest
 from helpers import FOUR_LAMPS, scene_with
 
 from core_tracer import load_scene, render_passes
-from core_tracer.raytrace import tracer
+from core_tracer.raytrace import engine
 from core_tracer.raytrace.camera import eye_rays, make_camera
 from core_tracer.raytrace.parts import body_box
 
@@ -78,5 +78,5 @@ def test_leaving_out_the_pixels_outside_the_window_changes_no_bit(monkeypatch, v
         every = render_passes(scene, 96, 72, threads=1)
     assert seen.stats["segments"] == every.stats["segments"]
     np.testing.assert_array_equal(seen.image, every.image)
-    for name in tracer.PASS_NAMES:
+    for name in engine.PASS_NAMES:
         np.testing.assert_array_equal(seen.passes[name], every.passes[name])

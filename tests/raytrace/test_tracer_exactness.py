@@ -13,7 +13,7 @@ from helpers import scene_with
 from reference_tracer import Lamp, compare
 
 from core_tracer import render, render_passes
-from core_tracer.raytrace import tracer
+from core_tracer.raytrace import engine
 from core_tracer.raytrace.parts import cuts, side_wall
 from core_tracer.scene import spec
 from core_tracer.scene.reading import SceneError
@@ -53,7 +53,7 @@ def test_many_internal_reflections_keep_unit_directions_and_stay_inside_the_lamp
     scene = scene_with(**{"lamps[0].lens.ior": 2.4, "lamps[0].lens.absorption": [0, 0, 0],
                           "lamps[0].cuts.pitch": 3.0})
     seen = {"length_error": 0.0, "lens_escapes": 0, "behind_vertex": 0.0, "segments": 0}
-    intersect = tracer._intersect
+    intersect = engine.walk.intersect
 
     def checked(ctx, rays):
         t, surface, normal = intersect(ctx, rays)
@@ -68,7 +68,7 @@ def test_many_internal_reflections_keep_unit_directions_and_stay_inside_the_lamp
         seen["segments"] += len(t)
         return t, surface, normal
 
-    monkeypatch.setattr(tracer, "_intersect", checked)
+    monkeypatch.setattr(engine.walk, "intersect", checked)
     with np.errstate(all="raise"):  # no invalid Fresnel arithmetic from non-unit directions
         image = render(scene, 96, 72)
     assert np.isfinite(image).all()
@@ -224,5 +224,5 @@ def test_a_sparse_call_adds_each_pixels_rays_in_ray_order(dtype):
         sums[p] = sums.get(p, np.zeros(3)) + v
     for p, s in sums.items():
         expected[p] += s
-    tracer.add_to_pass(acc, pix, values)
+    engine.rays.add_to_pass(acc, pix, values)
     assert np.array_equal(acc, expected)

@@ -40,7 +40,7 @@ def test_every_transition_while_rendering_presets_is_in_table_1(preset):
 
 @pytest.mark.parametrize("samples", [1, 8])
 def test_recording_transitions_changes_no_pixel(samples):
-    """Without recording, the rays carry no path classes (``tracer.UNRECORDED``): the same image and
+    """Without recording, the rays carry no path classes (``rays.UNRECORDED``): the same image and
     passes, bit for bit, as a render that records every transition."""
     scene = load_scene(PRESETS / "four-lamp-rear-combination.json")
     plain = render_passes(scene, 64, 48, samples=samples, threads=1)

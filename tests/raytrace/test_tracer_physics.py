@@ -11,7 +11,7 @@ from helpers import flat_lens_on_axis, scene_with
 from core_tracer import render, render_passes
 from core_tracer.raytrace import optics
 from core_tracer.raytrace.camera import eye_rays, make_camera
-from core_tracer.raytrace.tracer import CUTOFF
+from core_tracer.raytrace.engine.rays import CUTOFF
 
 # -- Fresnel --------------------------------------------------------------------------------------
 
@@ -191,9 +191,9 @@ def test_passes_sum_to_the_image():
 
 
 def test_on_band_hands_out_each_band_of_the_image_and_its_passes(monkeypatch):
-    from core_tracer.raytrace import tracer
+    from core_tracer.raytrace import engine
 
-    monkeypatch.setattr(tracer, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide
     scene = scene_with(**{"image": {"width": 40, "height": 30}})
     bands = []
 
@@ -209,33 +209,33 @@ def test_on_band_hands_out_each_band_of_the_image_and_its_passes(monkeypatch):
 
 @pytest.mark.parametrize("threads", [1, 2])
 def test_should_stop_ends_the_render_after_the_band_it_follows(monkeypatch, threads):
-    from core_tracer.raytrace import tracer
+    from core_tracer.raytrace import engine
 
-    monkeypatch.setattr(tracer, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide: 3 bands
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", 400)  # 10 rows a band at 40 px wide: 3 bands
     scene = scene_with(**{"image": {"width": 40, "height": 30}})
     bands = []
-    with pytest.raises(tracer.RenderCancelled):
+    with pytest.raises(engine.RenderCancelled):
         render_passes(scene, threads=threads, on_band=lambda a, b, rows, passes: bands.append((a, b)),
                       should_stop=lambda: len(bands) >= 1)
     assert bands == [(0, 10)]
 
 
 def test_threaded_render_shortens_the_switch_interval_and_restores_it_even_when_cancelled(monkeypatch):
-    # Bands on several threads run with the interpreter's switch interval at tracer.SWITCH_INTERVAL
+    # Bands on several threads run with the interpreter's switch interval at engine.schedule.SWITCH_INTERVAL
     # (a band tracing its last few rays would otherwise hold the GIL for 5 ms at a time); the
     # caller's interval comes back afterwards, also when the render is cancelled.
     import sys
 
-    from core_tracer.raytrace import tracer
+    from core_tracer.raytrace import engine
 
-    monkeypatch.setattr(tracer, "TILE_RAYS", 400)
+    monkeypatch.setattr(engine.sampling, "TILE_RAYS", 400)
     scene = scene_with(**{"image": {"width": 40, "height": 30}})
     before = sys.getswitchinterval()
     seen = []
     render_passes(scene, threads=2, on_rows=lambda a, b, rows: seen.append(sys.getswitchinterval()))
-    assert seen == pytest.approx([tracer.SWITCH_INTERVAL] * 3)  # (kept in microseconds)
+    assert seen == pytest.approx([engine.schedule.SWITCH_INTERVAL] * 3)  # (kept in microseconds)
     assert sys.getswitchinterval() == before
-    with pytest.raises(tracer.RenderCancelled):
+    with pytest.raises(engine.RenderCancelled):
         render_passes(scene, threads=2, should_stop=lambda: True)
     assert sys.getswitchinterval() == before
     render_passes(scene, threads=1, on_rows=lambda a, b, rows: seen.append(sys.getswitchinterval()))

@@ -254,10 +254,10 @@ def test_an_unsafe_cache_folder_is_not_used(tmp_path, own_cache):
 
 @pytest.mark.slow
 def test_the_band_workers_map_the_parents_world_file(tmp_path, own_cache, monkeypatch):
-    from core_tracer.raytrace import tracer
     from core_tracer.raytrace.band_pool import BandPool
+    from core_tracer.raytrace.engine import sampling
 
-    monkeypatch.setattr(tracer, "TILE_RAYS", 64 * 8)  # bands of 8 rows: both workers take some
+    monkeypatch.setattr(sampling, "TILE_RAYS", 64 * 8)  # bands of 8 rows: both workers take some
 
     path = write_exr(tmp_path / "sky.exr", _sky())
     scene = scene_with(**{"image": {"width": 64, "height": 64},

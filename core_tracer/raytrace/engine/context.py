@@ -1,0 +1,36 @@
+"""Everything constant during one render of a parametric design: the lamps' table, the parts a
+ray can meet, the body's box and its picture on the screen, the lighting (``Lighting``)."""
+
+from __future__ import annotations
+
+from ...scene.derived import body_wraps
+from .. import sunlight
+from ..camera import Camera
+from ..lamp_table import LampTable
+from ..lighting import Lighting
+from ..parts import body_box, parts_for
+
+
+class Context(Lighting):
+    """Everything constant during one render."""
+
+    walker = None  # how rays find surfaces: the parametric lamps' own walk (``walk.Walker``)
+
+    def __init__(self, scene: dict, camera: Camera, record_transitions: bool, samples: int, filter_name: str,
+                 adaptive_threshold: float = 0.0):
+        super().__init__(scene)
+        self.camera = camera
+        self.samples = samples
+        self.filter_name = filter_name
+        self.adaptive_threshold = adaptive_threshold
+        self.lamps = LampTable.from_scene(scene)
+        self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
+        self.plates = bool(self.lamps.ring_count.any())  # else no ray meets a prism plate or its housing
+        body = scene["body"]
+        self.box_lo, self.box_hi = body_box.body_box(body)
+        self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body
+        self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
+        self.body = body
+        self.phantom_lamps = sunlight.PhantomLamps.of(self.sun, self.lamps)  # T_sun and the outline per lamp
+        self.phantom = scene["light"].get("phantom", False) and bool(self.phantom_lamps.lets_in.any())
+        self.record = record_transitions

@@ -1,0 +1,167 @@
+"""Rays and passes: one generation of live rays as arrays, and what a band of pixels accumulates.
+
+Each ray carries its accumulated attenuation k (paper §3.4, MODEL.md §5): luminance found at the
+end of a segment is added to the ray's pixel as k × the value, into one of the contribution passes
+(MODEL.md §5.2), so the ray-tracing tree of Fig. 7 is never stored.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from functools import cache
+
+import numpy as np
+
+from ..parts.base import put_rows, rows
+
+CUTOFF = 1e-3  # paper §3.4: a branch whose accumulated attenuation falls below 0.1 % is dropped
+PASS_NAMES = ("lens_surface", "bulb", "reflector_constant", "reflector_scatter", "socket", "side_wall",
+              "body", "background")
+(LENS_SURFACE, BULB_PASS, REFLECTOR_CONSTANT, REFLECTOR_SCATTER, SOCKET_PASS, SIDE_WALL_PASS, BODY_PASS,
+ BACKGROUND_PASS) = range(len(PASS_NAMES))
+
+
+@dataclass
+class Rays:
+    """One generation of live rays inside the lamps (a parametric design's in local lamp
+    coordinates), one row each."""
+
+    pix: np.ndarray  # pixel index within the band
+    lamp: np.ndarray  # the row of the lamp table its values come from (free-form: of the part table)
+    o: np.ndarray
+    d: np.ndarray
+    k: np.ndarray  # accumulated attenuation, RGB
+    medium: np.ndarray  # paths.IN_LENS / IN_AIR
+    src: np.ndarray  # surface the segment starts on
+    parent: np.ndarray  # path class of the segment that spawned this one
+    branch: np.ndarray  # paths.REFLECTED / TRANSMITTED
+    seen_reflector: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.pix)
+
+    def take(self, sel: np.ndarray) -> Rays:
+        if sel.dtype == bool:
+            if sel.all():
+                return self
+            sel = np.nonzero(sel)[0]
+        return type(self)(*(rows(getattr(self, f), sel) for f in field_names(type(self))))
+
+
+@cache
+def field_names(kind: type[Rays]) -> tuple[str, ...]:
+    """The fields of ``Rays`` or of a kind of rays that carries more (``freeform.render.MeshRays``)."""
+    return tuple(f.name for f in fields(kind))
+
+
+class _Unrecorded:
+    """The rays' parent classes and branches when the render records no transitions: they only feed
+    ``Band.note``, so nothing is computed or gathered for them; every gather of this is itself."""
+
+    def take(self, *_args, **_kwargs) -> _Unrecorded:
+        return self
+
+    def __getitem__(self, _key) -> _Unrecorded:
+        return self
+
+
+UNRECORDED = _Unrecorded()
+
+
+def branch_tags(cls: np.ndarray | _Unrecorded, branch: int, n: int) -> np.ndarray | _Unrecorded:
+    """The ``branch`` of ``n`` children whose parents' classes are ``cls`` (UNRECORDED: none kept)."""
+    return UNRECORDED if cls is UNRECORDED else np.full(n, branch, np.int8)
+
+
+def concat(parts: list[Rays]) -> Rays:
+    kind = type(parts[0])
+    columns = ([getattr(p, f) for p in parts] for f in field_names(kind))
+    return kind(*(UNRECORDED if any(a is UNRECORDED for a in each) else np.concatenate(each) for each in columns))
+
+
+def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:
+    """Add ``values`` (N, 3) to the pixels ``pix`` of one pass ``acc`` (pixels, 3), repeats summed.
+
+    One count over the (pixel, channel) bins of the pixels spanned, each bin summing its values in
+    ray order, then added to the pass: the same sums as one count per channel. A few rays spread
+    over many pixels (the deep branches of a band) are counted over the pixels they reach alone:
+    the same sums, without adding zeros to every pixel between."""
+    if len(pix) == 0:
+        return
+    first, last = int(pix.min()), int(pix.max()) + 1
+    if 4 * len(pix) < last - first:
+        pixels, slot = _distinct(pix)
+        sums = rows(acc, pixels)
+        sums += _bin_sums(slot, values, len(pixels))
+        put_rows(acc, pixels, sums)
+    else:
+        acc[first:last] += _bin_sums(pix - first, values, last - first)
+
+
+def _distinct(pix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(pix, return_inverse=True)`` for pixel indices (|pix| < 2^31): the distinct
+    pixels, ascending, and each ray's slot among them. One sort of (pixel, ray) packed into one
+    integer instead of numpy's argsort, in about two thirds of its time (the deep branches' calls)."""
+    n = len(pix)
+    key = np.left_shift(pix, 32, dtype=np.int64)
+    key |= np.arange(n)
+    key.sort()
+    ascending = key >> 32
+    new = np.empty(n, bool)
+    new[0] = True
+    np.not_equal(ascending[1:], ascending[:-1], out=new[1:])
+    slot = np.empty(n, np.intp)
+    key &= 0xFFFFFFFF  # the rays in pixel order
+    slot[key] = np.cumsum(new) - 1
+    return ascending[new], slot
+
+
+def _bin_sums(slot: np.ndarray, values: np.ndarray, n_slots: int) -> np.ndarray:
+    """Per slot (n_slots, 3), the sum of the ``values`` of its rays in ray order."""
+    # bin 3 slot + channel, a column at a time (numpy broadcasts slowly over rows of three)
+    bins = np.empty((len(slot), 3), dtype=np.intp)
+    np.multiply(slot, 3, out=bins[:, 0])
+    np.add(bins[:, 0], 1, out=bins[:, 1])
+    np.add(bins[:, 0], 2, out=bins[:, 2])
+    weights = np.broadcast_to(values, bins.shape)
+    return np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * n_slots).reshape(n_slots, 3)
+
+
+class Band:
+    """Accumulates the passes of one band of pixels and the band's statistics."""
+
+    def __init__(self, n_pixels: int, ctx, acc: np.ndarray | None = None):
+        self.n = n_pixels
+        self.acc = np.zeros((len(PASS_NAMES), n_pixels, 3)) if acc is None else acc
+        self.segments = 0
+        self.max_depth = 0
+        self.busy = 0  # pixels that took every sample (adaptive sampling)
+        self.transitions: set[tuple[int, int, int]] = set()
+        self.record = ctx.record  # whether the render records path transitions (its context's flag)
+
+    def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
+        add_to_pass(self.acc[pass_id], pix, values)
+
+    def note(self, pix: np.ndarray, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
+        """Record the transitions (parent class, branch, child class) of the rays at slots ``pix``."""
+        if self.record and len(child):
+            codes = np.unique(parent.astype(np.int64) * 10000 + branch.astype(np.int64) * 100 + child)
+            self.transitions.update((int(c) // 10000, (int(c) // 100) % 100, int(c) % 100) for c in codes)
+
+
+def no_rays() -> Rays:
+    return Rays(*(np.zeros(0, dtype=np.int64) for _ in field_names(Rays)))
+
+
+_SLOT = np.dtype((np.void, 3 * 8))  # one slot of a pass, its three float64 channels as one item
+
+
+def put_slots(acc: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:
+    """``acc[slots] = values`` for (N, 3) float64 rows: each row copied as one 24-byte item, about
+    twice as fast as numpy's scatter of rows (the same bytes)."""
+    acc.view(_SLOT)[slots, 0] = np.ascontiguousarray(values, dtype=np.float64).view(_SLOT)[:, 0]
+
+
+def alive(k: np.ndarray) -> np.ndarray:
+    """The branches whose accumulated attenuation is still above the cut-off in some channel."""
+    return np.maximum(np.maximum(k[:, 0], k[:, 1]), k[:, 2]) >= CUTOFF

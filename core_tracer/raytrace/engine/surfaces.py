@@ -1,0 +1,193 @@
+"""What happens where a ray meets a surface: the lens's outer face seen from the eye (①), the
+reflector (③ ④, eq. 3), and the faces of a dielectric (a lens or a prism plate) met from either
+side, where one Fresnel split (MODEL.md §5) gives the reflected and the transmitted branch.
+
+The free-form tracer (``freeform.render``) splits its meshes' lens faces with the same
+``fresnel_split``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import optics, sunlight
+from .. import paths as P
+from ..lamp_table import LampTable
+from ..parts import reflector
+from ..parts.base import rows
+from .context import Context
+from .rays import (
+    BACKGROUND_PASS,
+    LENS_SURFACE,
+    REFLECTOR_CONSTANT,
+    REFLECTOR_SCATTER,
+    UNRECORDED,
+    Band,
+    Rays,
+    alive,
+    branch_tags,
+)
+
+
+def into_lenses(ctx: Context, band: Band, pix: np.ndarray, lamp: np.ndarray, d: np.ndarray,
+                face_normal: np.ndarray, local: np.ndarray) -> Rays:
+    """Eye rays ``d`` of slots ``pix`` meeting the outer face of lamps ``lamp`` (①) at ``local``
+    (lamp frame), where the face's outward normal is ``face_normal``: the Fresnel split from the
+    air, the reflected branch shaded by eq. (1) and mirroring the surroundings (§3.2.3), the
+    transmitted rays into the lens where above the cut-off."""
+    lamps = ctx.lamps
+    ior = lamps.ior[lamp]
+    split = fresnel_split(np.ones((len(d), 3)), d, face_normal, 1.0, ior)
+    surface = ctx.shade(face_normal, -d, lamps.lens_diffuse[lamp], lamps.lens_specular[lamp],
+                        lamps.lens_shininess[lamp])
+    if ctx.environment is not None:  # the outer face mirrors the surroundings
+        surface = surface + ctx.sky(optics.reflect(d, face_normal))
+    band.add(LENS_SURFACE, pix, split.reflected * surface)
+    if ctx.background_seen and ctx.environment is None:
+        band.add(BACKGROUND_PASS, pix, split.reflected * ctx.background)
+    ones = np.ones(len(pix), dtype=np.int8)
+    band.note(pix, ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
+
+    n = len(pix)
+    rays = Rays(pix=pix, lamp=lamp, o=local, d=optics.refract(d, face_normal, split.eta, split.cos_i),
+                k=split.transmitted, medium=np.full(n, P.IN_LENS, np.int8), src=np.full(n, P.OUTER, np.int8),
+                parent=np.full(n, P.OUTSIDE_TO_LENS, np.int8) if ctx.record else UNRECORDED,
+                branch=np.full(n, P.TRANSMITTED, np.int8) if ctx.record else UNRECORDED,
+                seen_reflector=np.zeros(n, bool))
+    return rays.take(alive(split.transmitted))
+
+
+def at_reflector(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray,
+                 hit: np.ndarray, cls: np.ndarray) -> Rays:
+    """A reflector hit (③ ④): the first-hit constant, Blinn's scatter toward the bulb (eq. 3), then
+    the mirror ray, k × reflectance, where it stays above the cut-off."""
+    lamps = ctx.lamps
+    lamp = rays.lamp.take(met)
+    pix = rays.pix.take(met)
+    first = np.nonzero(~rays.seen_reflector.take(met))[0]
+    band.add(REFLECTOR_CONSTANT, pix.take(first), rows(k, first) * rows(lamps.reflector_color, lamp.take(first)))
+    normal = reflector.reflector_normal(hit, lamps.focal.take(lamp))
+    to_bulb = optics.normalize(rows(lamps.bulb_center, lamp) - hit)
+    scatter = optics.blinn(normal, -d, to_bulb, lamps.scatter.take(lamp), lamps.scatter_shininess.take(lamp))
+    band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_intensity, lamp))
+    if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
+        band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, ctx.phantom_lamps, lamp, hit, normal, -d))
+    mirrored = optics.scaled(k, lamps.reflectance.take(lamp))
+    going_on = np.nonzero(alive(mirrored))[0]
+    n = len(going_on)
+    return Rays(pix=pix.take(going_on), lamp=lamp.take(going_on), o=rows(hit, going_on),
+                d=optics.reflect(rows(d, going_on), rows(normal, going_on)), k=rows(mirrored, going_on),
+                medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8),
+                parent=cls.take(going_on), branch=branch_tags(cls, P.REFLECTED, n), seen_reflector=np.ones(n, bool))
+
+
+@dataclass
+class Split:
+    """The Fresnel split of rays at a face between two media (MODEL.md §5): the weights of the
+    reflected and the transmitted branch, and what Snell's law needs for the transmitted one."""
+
+    cos_i: np.ndarray  # -d·n, the normal turned toward the incident side
+    eta: np.ndarray  # n1 / n2, from the incident medium into the other
+    reflectance: np.ndarray  # R (Fresnel's equations; 1 at total internal reflection)
+    reflected: np.ndarray  # k R, the reflected branch's accumulated attenuation
+    transmitted: np.ndarray  # k (1 - R), the transmitted branch's
+
+
+def fresnel_split(k: np.ndarray, d: np.ndarray, facing: np.ndarray, n1: np.ndarray, n2: np.ndarray) -> Split:
+    """Rays ``d`` of accumulated attenuation ``k`` meeting a face whose unit normal ``facing`` points
+    toward them, from a medium of index ``n1`` into one of ``n2``."""
+    cos_i = -optics.dot(d, facing)
+    reflectance = optics.fresnel_reflectance(np.clip(cos_i, 0.0, 1.0), n1, n2)
+    return Split(cos_i, n1 / n2, reflectance, optics.scaled(k, reflectance), optics.scaled(k, 1.0 - reflectance))
+
+
+@dataclass
+class FaceHit:
+    """Rays of a generation at faces of a dielectric material (the lens, or a prism plate),
+    split there: the reflected rays are made at once, the transmitted ones (``through``) where
+    the caller sends them on."""
+
+    pix: np.ndarray
+    lamp: np.ndarray
+    hit: np.ndarray  # where they meet the face
+    d: np.ndarray
+    facing: np.ndarray  # the face's normal toward the incident side
+    medium: np.ndarray  # the medium they come from
+    from_inside: np.ndarray  # met from inside the material
+    material: int  # paths.IN_LENS or paths.IN_PLATE
+    surface: np.ndarray  # the surface met: where the children start
+    cls: np.ndarray  # the segments' path classes (UNRECORDED: not kept)
+    seen_reflector: np.ndarray
+    split: Split
+
+    def reflected(self) -> Rays:
+        """The mirror rays that stay above the cut-off, in the medium they came from."""
+        going_on = np.nonzero(alive(self.split.reflected))[0]
+        return Rays(pix=self.pix.take(going_on), lamp=self.lamp.take(going_on), o=rows(self.hit, going_on),
+                    d=optics.reflect(rows(self.d, going_on), rows(self.facing, going_on)),
+                    k=rows(self.split.reflected, going_on), medium=self.medium.take(going_on),
+                    src=self.surface.take(going_on), parent=self.cls.take(going_on),
+                    branch=branch_tags(self.cls, P.REFLECTED, len(going_on)),
+                    seen_reflector=self.seen_reflector.take(going_on))
+
+    def through(self, sel: np.ndarray) -> Rays:
+        """The transmitted rays ``sel``: bent by Snell's law into the other medium."""
+        split = self.split
+        d_t = optics.refract(rows(self.d, sel), rows(self.facing, sel), split.eta.take(sel), split.cos_i.take(sel))
+        medium = np.where(self.from_inside.take(sel), np.int8(P.IN_AIR), np.int8(self.material))
+        return Rays(pix=self.pix.take(sel), lamp=self.lamp.take(sel), o=rows(self.hit, sel), d=d_t,
+                    k=rows(split.transmitted, sel), medium=medium, src=self.surface.take(sel),
+                    parent=self.cls.take(sel), branch=branch_tags(self.cls, P.TRANSMITTED, len(sel)),
+                    seen_reflector=self.seen_reflector.take(sel))
+
+
+def at_dielectric(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
+                  surface: np.ndarray, out_normal: np.ndarray, ior: np.ndarray, material: int) -> FaceHit:
+    """The rays ``met`` (attenuation ``k``, directions ``d``) meeting faces of ``material`` (index
+    ``ior`` per lamp) at ``hit``, ``out_normal`` pointing out of the material: the Fresnel split."""
+    lamp = rays.lamp.take(met)
+    medium = rays.medium.take(met)
+    from_inside = medium == material
+    # Toward the incident side: the normal negated for rays inside (a sign flip is exact).
+    facing = optics.scaled(out_normal, np.where(from_inside, -1.0, 1.0))
+    n_material = ior.take(lamp)
+    n1 = np.where(from_inside, n_material, 1.0)
+    n2 = np.where(from_inside, 1.0, n_material)
+    return FaceHit(rays.pix.take(met), lamp, hit, d, facing, medium, from_inside, material, surface, cls,
+                   rays.seen_reflector.take(met), fresnel_split(k, d, facing, n1, n2))
+
+
+def at_lens_face(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray,
+                 hit: np.ndarray, cls: np.ndarray, surface: np.ndarray, out_normal: np.ndarray) -> list[Rays]:
+    """A lens surface (the outer face or a cut) met from either side; ``out_normal`` points out of
+    the lens material (-y on the outer face, the cap's on the cuts). Light transmitted out through
+    the outer face leaves the lamp (⑩) and shows the background; every other branch goes on where
+    above the cut-off."""
+    face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, ctx.lamps.ior, P.IN_LENS)
+    split = face.split
+    partial = split.reflectance < 1.0
+    if ctx.background_seen or ctx.record:
+        leaving = np.nonzero(partial & (surface == P.OUTER))[0]  # ⑩: out to the background (ends)
+        if ctx.background_seen:
+            d_out = rows(d, leaving)
+            if ctx.environment is not None:  # the surroundings along the refracted ray
+                d_out = optics.refract(d_out, rows(face.facing, leaving), split.eta.take(leaving))
+            band.add(BACKGROUND_PASS, face.pix.take(leaving), rows(split.transmitted, leaving) * ctx.sky(d_out))
+        if ctx.record:
+            band.note(face.pix.take(leaving), cls.take(leaving), np.full(len(leaving), P.TRANSMITTED),
+                      np.full(len(leaving), P.LENS_OUTER_TO_OUTSIDE))
+    going_on = np.nonzero(partial & (surface != P.OUTER) & alive(split.transmitted))[0]
+    return [face.reflected(), face.through(going_on)] if len(going_on) else [face.reflected()]
+
+
+def at_plate_face(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
+                  surface: np.ndarray, out_normal: np.ndarray, lamps: LampTable) -> list[Rays]:
+    """A prism-plate face met from either side (README, the prism plate): the lens's Fresnel split
+    with the plate's index; ``out_normal`` points out of the plate material. Nothing leaves the lamp
+    here, so both branches go on where above the cut-off."""
+    face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, lamps.plate_ior, P.IN_PLATE)
+    split = face.split
+    going_on = np.nonzero((split.reflectance < 1.0) & alive(split.transmitted))[0]
+    return [face.reflected(), face.through(going_on)] if len(going_on) else [face.reflected()]
