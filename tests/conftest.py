@@ -17,6 +17,8 @@ Session fixtures
   package that the tracer tests import is a different module object with its own ``SceneError``.
 
 Function fixtures
+- ``rng``: a ``numpy.random.Generator`` seeded by the test's ``@pytest.mark.seed(N)`` (on the test, its class
+  or its module), else by its ``seed`` parameter, else by ``DEFAULT_SEED``: the same numbers on every run.
 - ``bl_scene``: ``bpy.context.scene`` of the freshly reset file.
 - ``_reset_blender`` (autouse): before every test that uses ``addon`` (directly or through another
   fixture) or is marked ``blender``, ``bpy.ops.wm.read_homefile(use_empty=True)`` empties the file;
@@ -32,11 +34,13 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 EXTENSION_ID = "lamp_styling"
 DEV_REPO_MODULE = "lamp_dev"
+DEFAULT_SEED = 1990  # the paper's year
 
 # Before bpy can be imported by anything: Blender reads this once, at start-up.
 _USER_RESOURCES = tempfile.mkdtemp(prefix="lamp-blender-user-")
@@ -92,3 +96,15 @@ def bl_scene(addon):
     import bpy
 
     return bpy.context.scene
+
+
+@pytest.fixture
+def rng(request) -> np.random.Generator:
+    marker = request.node.get_closest_marker("seed")
+    if marker is not None:
+        seed = marker.args[0]
+    elif "seed" in request.fixturenames:
+        seed = request.getfixturevalue("seed")
+    else:
+        seed = DEFAULT_SEED
+    return np.random.default_rng(seed)

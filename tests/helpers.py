@@ -6,13 +6,16 @@ from __future__ import annotations
 import ast
 import copy
 import json
+import math
 import os
+import re
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 from core_tracer.checkpoints import ENV_MARKER, ENV_POINT
+from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -113,6 +116,43 @@ def scene_with(**edits) -> dict:
         else:
             node[last] = value
     return parse_scene(doc)
+
+
+NUMBER = r"-?[0-9.]+(?:e[-+]?[0-9]+)?"  # a number in a message
+
+
+def allowed_ranges(message: str) -> list[tuple[float, float]]:
+    """Every closed or half-open range [a, b] / (a, b] after "allowed" in a message."""
+    allowed = message[message.index("allowed"):]
+    return [(float(a), float(b)) for a, b in re.findall(rf"[\[(]({NUMBER}), ({NUMBER})[\])]", allowed)]
+
+
+def follow_message(doc: dict, err: SceneError) -> None:
+    """Change the field ``err`` names (of lamp 0 or the body) to a value from the range it gives, in place:
+    the top of the range for sizes, the bottom otherwise, just inside an open top; a bulb moved too far
+    sideways is brought back to the distance the message states, in the same direction."""
+    lamp = doc["lamps"][0]
+    ranges = allowed_ranges(err.message)
+    field = err.path.removeprefix("lamps[0].")
+    if field == "body.size":
+        doc["body"]["size"] = [ranges[0][0], ranges[1][0]]
+    elif field == "center":
+        lamp["center"] = [ranges[0][0], ranges[1][0]]
+    elif field == "bulb.offset" and ranges:
+        lamp["bulb"]["offset"][1] = sum(ranges[0]) / 2
+    elif field == "bulb.offset":
+        limit = float(re.search(rf"up to ({NUMBER}) mm", err.message)[1])
+        y = float(re.search(rf"at y = ({NUMBER}) mm", err.message)[1])
+        x, _, z = lamp["bulb"]["offset"]
+        scale = limit / math.hypot(x, z)
+        lamp["bulb"]["offset"] = [x * scale, y, z * scale]
+    else:
+        section, key = field.split(".")
+        node = doc["body"] if section == "body" else lamp[section]
+        lo, hi = ranges[0]
+        if section == "socket":  # an open range (0, hi)
+            hi *= 0.99
+        node[key] = hi if key in ("height", "pitch", "radius", "corner_radius", "width") else lo
 
 
 def dark_clear_lens_doc(reflector: dict) -> dict:

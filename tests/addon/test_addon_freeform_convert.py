@@ -63,8 +63,8 @@ def agreement(parametric: np.ndarray, freeform: np.ndarray, mask: np.ndarray | N
     return float((error[~edge & mask] <= TAU).mean()), float((edge & (error > TAU) & mask).mean())
 
 
-def test_agreement_measure_fails_on_a_different_lamp():
-    rng = np.random.default_rng(0)
+@pytest.mark.seed(0)
+def test_agreement_measure_fails_on_a_different_lamp(rng):
     image = np.ones((32, 32, 3)) + 0.001 * rng.random((32, 32, 3))
     assert agreement(image, image) == (1.0, 0.0)
     assert agreement(image, image * 1.03)[0] == 0.0  # 3 % brighter everywhere is not the same lamp

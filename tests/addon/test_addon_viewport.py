@@ -180,7 +180,8 @@ def _camera_view_window(ob, width: int, height: int, zoom: float, offset: tuple[
 
 
 @pytest.mark.parametrize("kind", ["PERSP", "ORTHO"])
-def test_camera_view_shows_the_cameras_frame(bl_scene, kind):
+@pytest.mark.seed(7)
+def test_camera_view_shows_the_cameras_frame(bl_scene, kind, rng):
     """Camera view, zoomed and panned off centre: the tracer's camera projects as the region's
     matrices do, and a point seen by the scene camera at a fraction (fx, fy) of its rendered frame
     lies at the same fraction of the camera border drawn in the viewport."""
@@ -209,7 +210,6 @@ def test_camera_view_shows_the_cameras_frame(bl_scene, kind):
     x1, y1 = border.max(axis=0)
     assert (x1 - x0) / (y1 - y0) == pytest.approx(800 / 450, rel=1e-5)  # the render's shape
     render_clip = np.asarray(_rows(ob.calc_matrix_camera(depsgraph, x=800, y=450))) @ np.asarray(view)
-    rng = np.random.default_rng(7)
     for point in rng.uniform((-0.2, -0.1, -0.1), (0.2, 0.1, 0.1), (20, 3)):
         c = render_clip @ np.r_[point, 1.0]
         fx, fy = (c[0] / c[3] + 1) / 2, (c[1] / c[3] + 1) / 2  # where F12 shows it, in the frame

@@ -103,12 +103,12 @@ def chord_error(dish, focal: float, vertex_y: float) -> float:
 
 
 @pytest.mark.parametrize("rings,segments", [(32, 64), (96, 192)])
-def test_mesh_paraboloid_focuses_axis_parallel_rays_within_the_chord_error(rings, segments):
+@pytest.mark.seed(3)
+def test_mesh_paraboloid_focuses_axis_parallel_rays_within_the_chord_error(rings, segments, rng):
     f, rim_radius, vertex_y = 18.0, 45.0, 32.0
     dish = shapes.paraboloid_dish("Dish", f, rim_radius, vertex_y, rings=rings, segments=segments)
     scene = parse_scene({"schema": "lamp-scene/2", "lamps": [{}], "freeform": {"mesh_file": "d.glb", "parts": [
         {"object": "Dish", "role": "reflector"}]}})
-    rng = np.random.default_rng(3)
     radius = rim_radius * np.sqrt(rng.uniform(0.02, 0.95, 2000))
     phi = rng.uniform(0, 2 * math.pi, 2000)
     o = np.stack([radius * np.cos(phi), np.full(2000, -10.0), radius * np.sin(phi)], axis=1)
@@ -158,7 +158,8 @@ def moller_trumbore(o: np.ndarray, d: np.ndarray, corners: np.ndarray) -> tuple[
     return best_t, best
 
 
-def test_embree_hits_agree_with_brute_force_moller_trumbore():
+@pytest.mark.seed(11)
+def test_embree_hits_agree_with_brute_force_moller_trumbore(rng):
     parts = [shapes.uv_sphere("Ball", (10, 40, -5), 12, 24), shapes.box("Block", (-40, 20, -30), (-10, 50, 10)),
              shapes.paraboloid_dish("Dish", 15, 35, 70, rings=12, segments=24),
              shapes.cylinder("Post", (25, 25), 6, 10, 60, segments=20)]
@@ -166,7 +167,6 @@ def test_embree_hits_agree_with_brute_force_moller_trumbore():
     scene = parse_scene({"schema": "lamp-scene/2", "lamps": [{}], "freeform": {"mesh_file": "m.glb", "parts": [
         {"object": m.name, "role": role} for m, role in zip(parts, roles, strict=True)]}})
     meshes = {m.name: m for m in parts}
-    rng = np.random.default_rng(11)
     n = 4000
     o = rng.uniform(-80, 80, (n, 3)) + [0, -100, 0]
     target = rng.uniform(-50, 50, (n, 3)) + [0, 45, 0]

@@ -116,8 +116,8 @@ def test_cli_png_equals_blenders_own_view_transform(blender_views, case):
 # Automatic exposure
 
 
-def test_auto_exposure_places_the_lit_region_below_the_shoulder():
-    rng = np.random.default_rng(3)
+@pytest.mark.seed(3)
+def test_auto_exposure_places_the_lit_region_below_the_shoulder(rng):
     image = np.zeros((100, 100, 3), np.float32)
     image[:, :] = (0.3, 0.3, 0.3)  # a lit body
     lens = rng.uniform(8.0, 11.0, (40, 40)).astype(np.float32)  # a cut pattern on a red lens
@@ -262,7 +262,8 @@ def test_study_sheet_png_shares_one_exposure_and_keeps_labels_readable(tmp_path)
 
 
 
-def test_png_through_a_view_holds_a_few_bytes_per_pixel(tmp_path, monkeypatch):
+@pytest.mark.seed(1)
+def test_png_through_a_view_holds_a_few_bytes_per_pixel(tmp_path, monkeypatch, rng):
     """The memory budget (core_tracer/budget.py) counts 6 bytes a pixel for a PNG: its 8-bit codes and
     the writer's copy. The view transform works strip by strip and the automatic exposure measures a
     bounded sample, so the float temporaries do not grow with the image (they were 36 bytes a pixel);
@@ -270,7 +271,7 @@ def test_png_through_a_view_holds_a_few_bytes_per_pixel(tmp_path, monkeypatch):
     import tracemalloc
 
     height, width = 2048, 4096
-    image = np.random.default_rng(1).random((height, width, 3), dtype=np.float32) * 8
+    image = rng.random((height, width, 3), dtype=np.float32) * 8
     agx = display.view_transform("AgX")
     tracemalloc.start()
     try:

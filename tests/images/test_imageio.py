@@ -27,8 +27,8 @@ def _leftovers(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir())
 
 
-def test_exr_round_trip_is_exact(tmp_path):
-    rng = np.random.default_rng(1)
+@pytest.mark.seed(1)
+def test_exr_round_trip_is_exact(tmp_path, rng):
     img = _random_image(rng)
     path = tmp_path / "out.exr"
     imageio.write_image(path, img)

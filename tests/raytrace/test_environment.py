@@ -87,8 +87,8 @@ def test_rotation_is_the_mapping_nodes_z_rotation(ramp_exr):
     assert (r, g) == pytest.approx((0.25 * W - 0.5, 0.5 * H - 0.5), abs=1e-6)
 
 
-def test_radiance_is_cycles_bilinear_lookup_times_strength(smooth_exr):
-    rng = np.random.default_rng(7)
+@pytest.mark.seed(7)
+def test_radiance_is_cycles_bilinear_lookup_times_strength(smooth_exr, rng):
     d = rng.normal(size=(200, 3))
     d /= np.linalg.norm(d, axis=1)[:, None]
     env = _env(smooth_exr, strength=2.5, rotation_deg=-30.0)
@@ -103,7 +103,8 @@ def test_uniform_environment_gives_pi_times_its_radiance_as_irradiance(tmp_path)
     np.testing.assert_allclose(env.irradiance(normals), np.full((4, 3), math.pi * 0.6), rtol=1.5e-3)
 
 
-def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path):
+@pytest.mark.seed(11)
+def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path, rng):
     # A sky with a small bright sun: E(n) = sum over pixels of L max(0, n . w) dOmega, by brute force.
     cols, rows = np.meshgrid(np.arange(4 * W) + 0.5, np.arange(4 * H) + 0.5)
     lon, lat = cols / (4 * W) * 2 * np.pi, (0.5 - rows / (4 * H)) * np.pi
@@ -111,7 +112,6 @@ def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path):
     sky[40, 200] = 5000.0
     env = _env(write_exr(tmp_path / "sun_sky.exr", sky), strength=1.3, rotation_deg=25.0)
     d, solid = env._pixel_directions()
-    rng = np.random.default_rng(11)
     normals = np.concatenate([np.eye(3), -np.eye(3), rng.normal(size=(30, 3))])
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     exact = 1.3 * np.array([(np.maximum(0.0, d @ n) * solid) @ sky.reshape(-1, 3).astype(np.float64)

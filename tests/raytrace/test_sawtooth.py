@@ -76,8 +76,8 @@ def _walk(o, d, pitch, slope, across, t_limit):
 
 
 @pytest.mark.parametrize("pitch, angle, orientation", CASES)
-def test_strip_walk_agrees_with_every_strip_tested(pitch, angle, orientation):
-    rng = np.random.default_rng(1990)
+@pytest.mark.seed(1990)
+def test_strip_walk_agrees_with_every_strip_tested(pitch, angle, orientation, rng):
     slope, across = math.tan(math.radians(angle)), _across(orientation)
     o, d = random_rays(rng, 6000, pitch * slope)
     t_limit = side_wall.hit_side_wall(o, d, np.full(len(o), R))
@@ -102,10 +102,10 @@ def test_strip_walk_agrees_with_every_strip_tested(pitch, angle, orientation):
 
 
 @pytest.mark.parametrize("pitch, angle, orientation", CASES)
-def test_a_ray_leaving_a_hit_point_finds_no_closer_hit(pitch, angle, orientation):
+@pytest.mark.seed(12)
+def test_a_ray_leaving_a_hit_point_finds_no_closer_hit(pitch, angle, orientation, rng):
     """From each hit, the reflected and the refracted ray (into the lens or into the air) find
     the same next hit as every strip tested, and never their own facet again."""
-    rng = np.random.default_rng(12)
     slope, across = math.tan(math.radians(angle)), _across(orientation)
     o, d = random_rays(rng, 6000, pitch * slope)
     t_limit = side_wall.hit_side_wall(o, d, np.full(len(o), R))
@@ -125,9 +125,9 @@ def test_a_ray_leaving_a_hit_point_finds_no_closer_hit(pitch, angle, orientation
         assert agree.mean() > 0.999, np.nonzero(~agree)[0][:5]
 
 
-def test_grazing_rays_leaving_a_facet_never_meet_it_again():
+@pytest.mark.seed(3)
+def test_grazing_rays_leaving_a_facet_never_meet_it_again(rng):
     pitch, slope, across = 5.0, math.tan(math.radians(30.0)), _across(0.0)
-    rng = np.random.default_rng(3)
     n = 4000
     s = rng.uniform(-20, 20, n)
     k = np.floor(s / pitch + 0.5)

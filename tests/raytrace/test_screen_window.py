@@ -30,8 +30,7 @@ def _cameras(rng: np.random.Generator, n: int) -> list[dict]:
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_every_ray_that_meets_the_box_is_inside_the_window(seed):
-    rng = np.random.default_rng(seed)
+def test_every_ray_that_meets_the_box_is_inside_the_window(seed, rng):
     lo, hi = np.array([-80.0, 0.0, -40.0]), np.array([120.0, 90.0, 45.0])
     width, height = 96, 64
     checked = 0

@@ -62,8 +62,8 @@ def test_total_internal_reflection_beyond_the_critical_angle():
     assert np.all(beyond == 1.0)
 
 
-def test_snell_law_and_reflection_directions():
-    rng = np.random.default_rng(7)
+@pytest.mark.seed(7)
+def test_snell_law_and_reflection_directions(rng):
     d = optics.normalize(rng.normal(size=(500, 3)) + [0, 0, -2])
     n = np.tile([0.0, 0.0, 1.0], (500, 1))
     eta = 1 / 1.49

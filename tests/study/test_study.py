@@ -302,9 +302,9 @@ def test_one_axis_sheet_is_one_row_without_row_labels():
 
 
 @pytest.mark.parametrize("text", ["oiio", "bitmap"])
-def test_sheet_pastes_each_image_in_its_cell_and_labels_it(text):
+@pytest.mark.seed(5)
+def test_sheet_pastes_each_image_in_its_cell_and_labels_it(text, rng):
     s = two_by_two()
-    rng = np.random.default_rng(5)
     images = [rng.random((32, 32, 3), dtype=np.float32) for _ in range(4)]
     sheet = study_sheet.compose(s, images, text=text)
     lay = study_sheet.layout(s)
