@@ -14,7 +14,7 @@ import json
 
 import numpy as np
 import pytest
-from helpers import BASELINE, dark_clear_lens_doc
+from helpers import BASELINE, dark_clear_lens_doc, render_engine_exr
 
 import core_tracer
 from core_tracer.raytrace import environment
@@ -76,18 +76,6 @@ def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon
     assert np.abs(relative).max() < TOLERANCE
 
 
-def _engine_rgba(bl_scene, path) -> np.ndarray:
-    import bpy
-    import OpenImageIO as oiio
-
-    settings = bl_scene.render.image_settings
-    settings.file_format = "OPEN_EXR"
-    settings.color_depth = "32"
-    bpy.ops.render.render()
-    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
-    buf = oiio.ImageBuf(str(path))
-    return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
-
 
 @pytest.mark.parametrize("samples", [1, 4])
 def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp_addon, bl_scene, tmp_path, samples):
@@ -101,7 +89,7 @@ def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp
     lamp_addon.render_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
-    rgba = _engine_rgba(bl_scene, tmp_path / "film.exr")
+    rgba = render_engine_exr(bl_scene, tmp_path / "film.exr")
     alpha = rgba[:, :, 3]
     assert (alpha == 0).sum() > 100 and (alpha == 1).sum() > 100
     np.testing.assert_allclose(rgba[alpha == 0, :3], 0.0, atol=1e-7)  # no sky where nothing is

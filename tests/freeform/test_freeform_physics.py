@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import slab_series
 
 from core_tracer.freeform import GeometryCache, render_passes, shapes
 from core_tracer.freeform.render import surface_hits
@@ -15,26 +16,6 @@ from core_tracer.scene.validate import parse_scene
 
 pytest.importorskip("embreex")
 
-
-def slab_series(r: float, transmittance: np.ndarray) -> np.ndarray:
-    """Bulb luminance factor through a slab, walked with the paper's 0.1 % cut-off: the eye ray
-    enters with 1 - r, crosses (× T), leaves toward the bulb with 1 - r or comes back with r and
-    is reflected in again at the outer face with r (the same walk as the parametric test's)."""
-    total = np.zeros(3)
-    k = np.full(3, 1.0 - r)
-    while True:
-        k = k * transmittance
-        to_bulb = k * (1.0 - r)
-        if to_bulb.max() >= CUTOFF:
-            total += to_bulb
-        back = k * r
-        if back.max() < CUTOFF:
-            break
-        back = back * transmittance
-        k = back * r
-        if k.max() < CUTOFF:
-            break
-    return total
 
 
 def slab_design(ior: float, lens_values: dict, thickness: float, intensity) -> tuple[dict, dict]:
@@ -57,7 +38,7 @@ def test_bulb_through_a_clear_slab_mesh_is_the_slab_series(ior):
     scene, meshes = slab_design(ior, {"absorption": [0, 0, 0]}, 3.0, (8.0, 7.0, 6.0))
     result = render_passes(scene, meshes, record_transitions=True)
     r = ((ior - 1) / (ior + 1)) ** 2
-    expected = np.array([8.0, 7.0, 6.0]) * slab_series(r, np.ones(3))
+    expected = np.array([8.0, 7.0, 6.0]) * slab_series(r, np.ones(3), CUTOFF)
     np.testing.assert_allclose(result.image[4, 4], expected, rtol=1e-6)
     np.testing.assert_allclose(result.passes["bulb"][4, 4], expected, rtol=1e-6)
     # The walk is Table 1's: ① → ② → ⑪, with ② ⇄ ⑥ inside and ⑩ out.
@@ -75,7 +56,7 @@ def test_bulb_through_an_absorbing_slab_mesh_follows_equation_2(form):
     scene, meshes = slab_design(ior, values, t, (5.0, 5.0, 5.0))
     centre = render_passes(scene, meshes).image[4, 4]
     r = ((ior - 1) / (ior + 1)) ** 2
-    np.testing.assert_allclose(centre, 5.0 * slab_series(r, np.exp(-a * t)), rtol=1e-5)
+    np.testing.assert_allclose(centre, 5.0 * slab_series(r, np.exp(-a * t), CUTOFF), rtol=1e-5)
 
 
 def test_lens_surface_is_fresnel_times_phong_at_the_outer_face():

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import fresnel_unpolarised, scene_with, write_exr
+from helpers import fresnel_unpolarised, scene_with, smooth_sky, write_exr
 
 from core_tracer import render_passes as parametric_passes
 from core_tracer.freeform import render_passes, shapes
@@ -30,10 +30,7 @@ IOR = 1.49
 @pytest.fixture
 def sky_exr(tmp_path) -> str:
     """A smooth, everywhere-different sky."""
-    cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
-    lon, lat = cols / W * 2 * np.pi, (0.5 - rows / H) * np.pi
-    sky = np.stack([1.0 + 0.5 * np.sin(lon), 1.0 + 0.5 * np.cos(lon) * np.cos(lat), 1.2 + 0.6 * np.sin(lat)], -1)
-    return write_exr(tmp_path / "sky.exr", sky)
+    return write_exr(tmp_path / "sky.exr", smooth_sky(W, H))
 
 
 def _cycles_radiance(path: str, d: np.ndarray, strength: float, rotation_deg: float) -> np.ndarray:

@@ -16,7 +16,7 @@ import sys
 
 import numpy as np
 import pytest
-from helpers import assert_bad_input, baseline_doc, fresnel_unpolarised, run_cli, scene_with, write_exr
+from helpers import assert_bad_input, baseline_doc, fresnel_unpolarised, run_cli, scene_with, smooth_sky, write_exr
 
 from core_tracer import render_passes
 from core_tracer.raytrace import environment, tracer
@@ -36,10 +36,7 @@ def ramp_exr(tmp_path) -> str:
 @pytest.fixture
 def smooth_exr(tmp_path) -> str:
     """A smooth, everywhere-different sky for the pixel tests."""
-    cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
-    lon, lat = cols / W * 2 * np.pi, (0.5 - rows / H) * np.pi
-    sky = np.stack([1.0 + 0.5 * np.sin(lon), 1.0 + 0.5 * np.cos(lon) * np.cos(lat), 1.2 + 0.6 * np.sin(lat)], -1)
-    return write_exr(tmp_path / "sky.exr", sky)
+    return write_exr(tmp_path / "sky.exr", smooth_sky(W, H))
 
 
 def _cycles_uv(d: np.ndarray, rotation_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray]:

@@ -66,13 +66,18 @@ def _walk(o, d, pitch, h, across, t_limit, on_cap=None):
                              np.full(n, flute_radius(pitch, h)), np.tile(across, (n, 1)), t_limit, on_cap)
 
 
-@pytest.mark.parametrize("pitch, h, orientation", CASES)
-@pytest.mark.seed(7)
-def test_strip_walk_agrees_with_every_strip_tested(pitch, h, orientation, rng):
+def _random_rays_walked(rng, pitch, h, orientation):
+    """5000 random rays through the lens walked across its flutes: (o, d, across, t_limit, t, normal)."""
     across = _across(orientation)
     o, d = random_rays(rng, 5000, h)
     t_limit = side_wall.hit_side_wall(o, d, np.full(len(o), R))
-    t_walk, normal = _walk(o, d, pitch, h, across, t_limit)
+    return o, d, across, t_limit, *_walk(o, d, pitch, h, across, t_limit)
+
+
+@pytest.mark.parametrize("pitch, h, orientation", CASES)
+@pytest.mark.seed(7)
+def test_strip_walk_agrees_with_every_strip_tested(pitch, h, orientation, rng):
+    o, d, across, t_limit, t_walk, normal = _random_rays_walked(rng, pitch, h, orientation)
     t_brute = brute_force(o, d, pitch, h, across, t_limit)
     assert np.array_equal(np.isfinite(t_walk), np.isfinite(t_brute))
     hit = np.isfinite(t_walk)
@@ -88,10 +93,7 @@ def test_strip_walk_agrees_with_every_strip_tested(pitch, h, orientation, rng):
 @pytest.mark.parametrize("pitch, h, orientation", CASES)
 @pytest.mark.seed(11)
 def test_a_ray_leaving_a_flute_finds_the_next_hit_not_its_own(pitch, h, orientation, rng):
-    across = _across(orientation)
-    o, d = random_rays(rng, 5000, h)
-    t_limit = side_wall.hit_side_wall(o, d, np.full(len(o), R))
-    t, normal = _walk(o, d, pitch, h, across, t_limit)
+    o, d, across, _, t, normal = _random_rays_walked(rng, pitch, h, orientation)
     hit = np.isfinite(t)
     p, d, normal = o[hit] + t[hit, None] * d[hit], d[hit], normal[hit]
     into_air = optics.dot(d, normal) < 0  # arriving from the air, the reflection leaves into the air

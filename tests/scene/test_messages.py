@@ -6,7 +6,7 @@ import json
 import re
 
 import pytest
-from helpers import BASELINE, FOUR_LAMPS, NUMBER, allowed_ranges, follow_message
+from helpers import BASELINE, FOUR_LAMPS, NUMBER, allowed_ranges, follow_message, random_lamp_doc
 
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
@@ -133,25 +133,6 @@ def test_a_body_shallower_than_the_lens_blames_its_depth():
     parse_scene(doc)
 
 
-def _random_lamp_doc(rng) -> dict:
-    """The baseline with lamp and body numbers drawn from wide but plausible ranges."""
-    doc = _doc()
-    lamp = doc["lamps"][0]
-    doc["body"]["size"] = [rng.uniform(20, 300), rng.uniform(20, 200)]
-    doc["body"]["depth"] = rng.uniform(2, 150)
-    lamp["center"] = [rng.uniform(-60, 60), rng.uniform(-40, 40)]
-    lamp["lens"]["radius"] = rng.uniform(5, 80)
-    lamp["lens"]["thickness"] = rng.uniform(0.5, 8)
-    lamp["cuts"]["pitch"] = rng.uniform(1, 40)
-    lamp["cuts"]["height"] = rng.uniform(0, 15)
-    lamp["reflector"]["focal_length"] = rng.uniform(2, 60)
-    lamp["reflector"]["gap"] = rng.uniform(0, 10)
-    lamp["bulb"]["radius"] = rng.uniform(1, 30)
-    lamp["bulb"]["offset"] = [rng.uniform(-20, 20), rng.uniform(-30, 30), rng.uniform(-20, 20)]
-    lamp["socket"]["radius"] = rng.uniform(1, 20)
-    return doc
-
-
 @pytest.mark.seed(1990)
 def test_random_designs_get_a_field_and_a_range_that_is_not_empty(rng):
     """Every message of a check that relates several fields names a field and a range that is not
@@ -160,7 +141,7 @@ def test_random_designs_get_a_field_and_a_range_that_is_not_empty(rng):
 
     seen = set()
     for _ in range(300):
-        doc = _random_lamp_doc(rng)
+        doc = random_lamp_doc(_doc(), rng)
         lamp_limits(doc, 0)
         try:
             parse_scene(doc)

@@ -7,9 +7,8 @@ import copy
 import json
 import re
 
-import numpy as np
 import pytest
-from helpers import BASELINE, FOUR_LAMPS, NUMBER, allowed_ranges, follow_message
+from helpers import BASELINE, FOUR_LAMPS, NUMBER, allowed_ranges, follow_message, random_lamp_doc
 
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import lamp_limits, parse_scene
@@ -112,29 +111,11 @@ def test_round_lenses_keep_their_messages():
                                 "(at most 1000 cuts across the lens diameter)")
 
 
-def _random_square_doc(rng: np.random.Generator) -> dict:
-    doc = _square()
-    lamp = doc["lamps"][0]
-    doc["body"]["size"] = [rng.uniform(20, 300), rng.uniform(20, 200)]
-    doc["body"]["depth"] = rng.uniform(2, 150)
-    lamp["center"] = [rng.uniform(-60, 60), rng.uniform(-40, 40)]
-    w, h = rng.uniform(5, 160), rng.uniform(5, 120)
-    lamp["lens"].update(width=w, height=h, corner_radius=rng.uniform(0, min(w, h) / 2 * 1.2))
-    lamp["lens"]["thickness"] = rng.uniform(0.5, 8)
-    lamp["cuts"]["pitch"] = rng.uniform(1, 40)
-    lamp["cuts"]["height"] = rng.uniform(0, 15)
-    lamp["reflector"]["focal_length"] = rng.uniform(2, 60)
-    lamp["bulb"]["radius"] = rng.uniform(1, 30)
-    lamp["bulb"]["offset"] = [rng.uniform(-20, 20), rng.uniform(-30, 30), rng.uniform(-20, 20)]
-    lamp["socket"]["radius"] = rng.uniform(1, 20)
-    return doc
-
-
 @pytest.mark.seed(2026)
 def test_random_rectangular_designs_get_a_field_and_a_range_a_value_of_which_clears_it(rng):
     seen = set()
     for _ in range(150):
-        doc = _random_square_doc(rng)
+        doc = random_lamp_doc(_square(), rng)
         lamp_limits(doc, 0)
         for _ in range(12):  # follow the messages until the design is valid
             try:
