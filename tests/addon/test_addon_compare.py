@@ -338,6 +338,7 @@ def test_unregister_ends_a_running_comparison(lamp_addon, bl_scene):
     assert bpy.ops.lamp.compare_cycles.poll()
 
 
+@pytest.mark.slow
 def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
     result = _compare(lamp_addon, bl_scene, _scene(size=(24, 16)), samples=1)
     for name in ("c.exr", "c.png"):
@@ -400,6 +401,7 @@ def assert_bulb_through_a_flat_lens(lamp_addon, bl_scene, scene: dict, what: str
     assert np.abs(relative).max() < tolerance
 
 
+@pytest.mark.slow
 def test_bulb_through_a_flat_coloured_lens_agrees_with_cycles(lamp_addon, bl_scene):
     assert_bulb_through_a_flat_lens(lamp_addon, bl_scene, _scene(_flat_lens, size=(32, 32)), "flat lens",
                                     BULB_TOLERANCE)
@@ -409,6 +411,7 @@ def _no_body_specular(doc):
     doc["body"]["specular"] = 0.0
 
 
+@pytest.mark.slow
 def test_lit_body_without_specular_agrees_with_cycles(lamp_addon, bl_scene):
     scene = _scene(_no_body_specular, size=(64, 64))
     # Left part of the body, clear of the lens (radius 45 mm) and of the body's edges: 3.5 mm per pixel.

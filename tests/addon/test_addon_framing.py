@@ -55,6 +55,7 @@ def _assert_same_lamp(result, clean_shares) -> dict:
     return shares
 
 
+@pytest.mark.slow
 def test_startup_file_build_then_compare_shows_the_lamp_in_both_halves(lamp_addon, clean, tmp_path):
     import bpy
 

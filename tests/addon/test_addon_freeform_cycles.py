@@ -21,6 +21,7 @@ SAMPLES = 64
 TOLERANCE = 0.02
 
 
+@pytest.mark.slow
 def test_bulb_through_a_flat_coloured_lens_mesh_agrees_with_cycles(lamp_addon, addon_core, bl_scene):
     doc = addon_core.scene.load_scene(BASELINE)
     lamp = doc["lamps"][0]

@@ -22,7 +22,7 @@ from test_addon_viewport import _display, _draw_viewport, _three_quarter_view, g
 
 import core_tracer
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.slow]
 
 SIZE = (160, 120)  # the design's image: the render resolution
 VIEWPORT = (160, 120)

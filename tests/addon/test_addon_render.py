@@ -256,6 +256,7 @@ def test_engine_equals_core_render(lamp_addon, bl_scene, tmp_path):
     assert expected.max() > 1.0 and expected[0, 0].sum() == 0.0  # a real image: bulb and background
 
 
+@pytest.mark.slow
 def test_engine_traces_its_bands_in_the_worker_processes(lamp_addon, addon_core, bl_scene, tmp_path):
     # F12 hands its bands to the add-on's band pool (worker processes, no interpreter lock between
     # them): the same pixels as the tracer alone; unregistering the engine ends the workers.
@@ -679,6 +680,7 @@ def _run_tool(args, tmp_path):
                           cwd=tmp_path, timeout=300)
 
 
+@pytest.mark.slow
 def test_headless_job_writes_the_side_by_side_image(tmp_path):
     out = tmp_path / "out" / "compare.png"
     done = _run_tool([PRESET, "-o", str(out), "--samples", "2", "--size", "40x32"], tmp_path)
@@ -690,6 +692,7 @@ def test_headless_job_writes_the_side_by_side_image(tmp_path):
     assert "mean difference" in done.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args, message", [
     (["missing.json"], "compare_preset: missing.json: cannot read the file"),
     ([PRESET, "-o", "x.jpg"], "compare_preset: x.jpg: .jpg is not an image format this writes"),
@@ -702,6 +705,7 @@ def test_headless_job_bad_input_is_one_line_and_exit_2(tmp_path, args, message):
     assert "Traceback" not in done.stderr + done.stdout
 
 
+@pytest.mark.slow
 def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
     import bpy
 

@@ -121,6 +121,7 @@ def test_square_lamp_materials_follow_the_mapping(square):
     assert_lens_materials(scene, objs["Lamp 1 Lens"], 0)
 
 
+@pytest.mark.slow
 def test_bulb_through_a_flat_rectangular_lens_agrees_with_cycles(lamp_addon, bl_scene):
     # The bulb seen on the axis through the flat clear middle of a square lamp's lens (cut height 0):
     # both renderers give the slab transmittance, whatever the outline around it (test_addon_compare).
@@ -143,6 +144,7 @@ def test_a_lamp_added_beside_a_square_lamp_fits(lamp_addon, addon_core):
     assert doc["body"]["size"][1] == scene["body"]["size"][1]  # 80 mm high lenses need no taller body
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edits", [
     {"lens": {"corner_radius": 0.0}},
     {"cuts": {"height": 0.0}},

@@ -55,6 +55,7 @@ def test_the_world_holds_the_environment(lamp_addon, bl_scene):
     assert tree.nodes["Ambient Or Ambient And Surroundings"].inputs[0].default_value == 0.0
 
 
+@pytest.mark.slow
 def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
     if environment.bundled_folder() is None:
         pytest.skip("Blender's world images are not on this machine")
@@ -77,6 +78,7 @@ def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon
 
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("samples", [1, 4])
 def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp_addon, bl_scene, tmp_path, samples):
     if environment.bundled_folder() is None:
@@ -119,6 +121,7 @@ def test_the_lamp_sun_follows_the_sun_of_the_design_and_of_the_environment(lamp_
     assert abs(expected[2]) < 0.1  # the low sun of the sunset world
 
 
+@pytest.mark.slow
 def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
     # The body's front face sees the open half of the world: the tracer's C0 E(n) / pi against Cycles'
     # Diffuse BSDF under the same world (no sun, no ambient, no specular).

@@ -89,6 +89,7 @@ def _pixel_errors(camera: dict, width: int, height: int, window, view, world_fro
     return worst
 
 
+@pytest.mark.slow
 def test_the_viewport_camera_needs_no_blender():
     """convert.viewport is bpy-free: it imports with bpy and mathutils unavailable."""
     import subprocess
@@ -254,6 +255,7 @@ def _refined(lamp_addon, scene: dict, width: int, height: int) -> np.ndarray:
     return core_tracer.render_passes(scene, width, height, samples=samples, keep_passes=False).image
 
 
+@pytest.mark.slow
 def test_stages_run_coarse_then_full_then_refined(lamp_addon):
     scene = _four_lamps()
     preview = lamp_addon.render_preview.ProgressivePreview(divisors=(8, 1), threads=1)
@@ -278,6 +280,7 @@ def test_stages_run_coarse_then_full_then_refined(lamp_addon):
     assert preview.history == [(1, 0), (1, 1), (1, 2)]
 
 
+@pytest.mark.slow
 def test_an_edit_during_refinement_restarts_from_the_coarse_stage(lamp_addon):
     scene = _four_lamps()
     edited = core_tracer.parse_scene({**_four_lamps_doc(), "background": [0.2, 0.3, 0.4]})
@@ -368,6 +371,7 @@ def _design_session_with_root(lamp_addon, bl_scene):
     return session, root
 
 
+@pytest.mark.slow
 def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_scene):
     session = _design_session(lamp_addon, bl_scene)
     ob = _blender_camera("PERSP")
@@ -395,6 +399,7 @@ def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_s
     assert session.preview.frame().image.shape == (48, 80, 3)
 
 
+@pytest.mark.slow
 def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_scene):
     """The viewport's text line gives the design's state, its objects' state and the field to change."""
     session = _design_session(lamp_addon, bl_scene)
@@ -497,6 +502,7 @@ def _three_quarter_view(width: int, height: int):
     return _window_matrix(ob, width, height), ob.matrix_world.inverted()
 
 
+@pytest.mark.slow
 def test_drawn_pixels_are_the_tracers_image_under_the_view_transform(lamp_addon, bl_scene, gpu_context, tmp_path):
     """Standard view transform with an exposure: the drawn region, colour-managed by Blender,
     equals the sRGB encoding of 2^exposure times the tracer's image within 1/255."""
@@ -521,6 +527,7 @@ def test_drawn_pixels_are_the_tracers_image_under_the_view_transform(lamp_addon,
     assert len(np.unique(shown[..., 0])) > 50  # a real picture, not a clipped flat disk
 
 
+@pytest.mark.slow
 def test_drawn_pixels_under_agx_match_the_tracers_image_under_agx(lamp_addon, bl_scene, gpu_context, tmp_path):
     """AgX (Blender's default): the drawn region and the tracer's own image, both through Blender's
     AgX, agree within 1/255."""
@@ -561,6 +568,7 @@ def test_body_coverage_is_where_the_tracer_hits_the_body(lamp_addon, position):
     np.testing.assert_array_equal(coverage == 0, background_only)
 
 
+@pytest.mark.slow
 def test_stages_on_the_worker_thread(lamp_addon):
     """What the engine does: the stages on a worker thread; a restart while it runs means nothing
     of the old job is published afterwards."""

@@ -12,7 +12,7 @@ import pytest
 from helpers import PRESETS, assert_lens_materials
 from test_addon_builder import TOL_MM, _build, _local, _objects, _poly_array, _triangle_samples
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.slow]
 
 
 def _cylinder(lamp: dict) -> dict:

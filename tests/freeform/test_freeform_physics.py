@@ -83,6 +83,7 @@ def chord_error(dish, focal: float, vertex_y: float) -> float:
     return float(np.abs(s[:, 1] - surface_y).max())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rings,segments", [(32, 64), (96, 192)])
 @pytest.mark.seed(3)
 def test_mesh_paraboloid_focuses_axis_parallel_rays_within_the_chord_error(rings, segments, rng):
@@ -139,6 +140,7 @@ def moller_trumbore(o: np.ndarray, d: np.ndarray, corners: np.ndarray) -> tuple[
     return best_t, best
 
 
+@pytest.mark.slow
 @pytest.mark.seed(11)
 def test_embree_hits_agree_with_brute_force_moller_trumbore(rng):
     parts = [shapes.uv_sphere("Ball", (10, 40, -5), 12, 24), shapes.box("Block", (-40, 20, -30), (-10, 50, 10)),

@@ -105,6 +105,7 @@ def test_a_lit_lamp_glows_around_its_lens():
     assert np.abs(out - image).sum() < 0.5 * image.sum()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("field", "value", "needle"), [
     ("strength", 2.0, "[0, 1]"),
     ("threshold", 0.0, "(0, 1e+06]"),
@@ -123,6 +124,7 @@ def test_scene_with_glare_validates():
     assert scene["glare"] == {"on": True, "threshold": 1.0, "strength": 0.5}
 
 
+@pytest.mark.slow
 def test_glare_is_in_the_memory_budget(tmp_path):
     doc = json.loads(FOUR_LAMPS.read_text())
     doc["glare"] = {"on": True}
@@ -135,6 +137,7 @@ def test_glare_is_in_the_memory_budget(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_cli_render_and_study_hold_the_glare(tmp_path):
     from core_tracer import render
     from core_tracer.images.imageio import read_image

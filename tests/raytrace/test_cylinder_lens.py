@@ -96,6 +96,7 @@ def _random_rays(rng, cyl, n):
     return o, d
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("side", ["+x", "-x"])
 @pytest.mark.parametrize("pitch, height", [(9.0, 1.5), (6.0, 4.0), (12.0, 0.3)])
 @pytest.mark.seed(12)
@@ -114,6 +115,7 @@ def test_the_curved_cut_walk_finds_what_testing_every_cell_finds(side, pitch, he
     np.testing.assert_allclose(t[hit], brute[hit], rtol=0, atol=1e-7)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("side", ["+x", "-x"])
 @pytest.mark.seed(5)
 def test_a_ray_leaving_a_curved_cut_finds_no_nearer_hit_and_not_its_own_cap(side, rng):
@@ -235,6 +237,7 @@ def test_the_body_front_curves_on_its_cylinder_and_rays_enter_it_from_outside(rn
         assert (outside_box | (q[:, 1] < f) | np.isnan(f)).all()
 
 
+@pytest.mark.slow
 def test_a_flat_lens_that_names_the_cylinder_fields_renders_the_default_image_bit_for_bit():
     plain = baseline_doc()
     plain["image"] = {"width": 64, "height": 64}
@@ -243,6 +246,7 @@ def test_a_flat_lens_that_names_the_cylinder_fields_renders_the_default_image_bi
     assert np.array_equal(render(normalize(plain)), render(normalize(named)))
 
 
+@pytest.mark.slow
 def test_a_large_wrap_radius_converges_to_the_flat_lens_image():
     flat = _wrap_scene()
     flat["lamps"][0]["lens"]["shape"] = "flat"
@@ -286,6 +290,7 @@ def test_a_flat_lens_on_the_curved_front_is_refused():
         normalize(doc)
 
 
+@pytest.mark.slow
 def test_every_transition_through_a_cylindrical_lens_is_in_table_1():
     from core_tracer.raytrace import paths
     from core_tracer.raytrace.tracer import render_passes
@@ -316,6 +321,7 @@ def test_the_panel_hint_gives_the_smallest_wrap_radius_validation_allows():
                 normalize(trial)
 
 
+@pytest.mark.slow
 def test_a_lens_wrapping_toward_minus_x_renders_the_mirror_image_of_one_wrapping_toward_plus_x():
     plus = _wrap_scene()
     plus["camera"] = {"position": [300.0, -900.0, 80.0], "target": [0.0, 20.0, 0.0], "up": [0, 0, 1],
@@ -335,6 +341,7 @@ def test_a_lens_wrapping_toward_minus_x_renders_the_mirror_image_of_one_wrapping
     assert float(np.mean(diff > 1e-3 * float(a.max()))) < 0.01
 
 
+@pytest.mark.slow
 def test_surroundings_light_and_surround_a_wrapped_body(tmp_path):
     # Under a uniform world W with the sun off, a Lambertian body shows rho W on its flat and its
     # curved front alike, and the rays that miss see W (README: surroundings; cylindrical lens).

@@ -100,6 +100,7 @@ def test_uniform_environment_gives_pi_times_its_radiance_as_irradiance(tmp_path)
     np.testing.assert_allclose(env.irradiance(normals), np.full((4, 3), math.pi * 0.6), rtol=1.5e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.seed(11)
 def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path, rng):
     # A sky with a small bright sun: E(n) = sum over pixels of L max(0, n . w) dOmega, by brute force.
@@ -171,6 +172,7 @@ def test_eye_rays_that_miss_see_the_environment(smooth_exr):
     np.testing.assert_allclose(image[missed], expected, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_body_under_a_uniform_environment_shows_its_colour_times_the_radiance(tmp_path):
     # A Lambertian surface under a uniform world W shows rho W (BLENDER-NOTES: Cycles gave 0.150 for 0.5, 0.3).
     grey = write_exr(tmp_path / "grey.exr", np.full((H, W, 3), 0.3, np.float32))
@@ -204,6 +206,7 @@ def test_a_missing_file_is_named(tmp_path):
         tracer.render(scene, 4, 4)
 
 
+@pytest.mark.slow
 def test_bundled_worlds_are_found_without_importing_bpy(repo_root):
     code = ("import sys; from core_tracer.raytrace import environment as e; f = e.bundled_folder(); "
             "print(f is not None and all((f / (n + '.exr')).is_file() for n in e.BUNDLED_WORLDS), "
@@ -224,6 +227,7 @@ def test_without_blenders_worlds_the_render_says_so_and_names_the_alternative(mo
         tracer.render(scene, 4, 4)
 
 
+@pytest.mark.slow
 def test_cli_reports_a_missing_environment_file_in_one_line(tmp_path):
     doc = baseline_doc()
     doc["environment"] = {"world": "file", "file": str(tmp_path / "sky.hdr")}

@@ -40,6 +40,7 @@ def _walls(shape: Outline, n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.full((n, 2), [shape.half_w, shape.half_h]), np.full(n, shape.corner)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shape", [Outline(45, 30, 10), Outline(45, 30, 0), Outline(30, 30, 30),
                                    Outline(60, 12, 11.5)], ids=["rounded", "sharp", "all-corner", "slot"])
 @pytest.mark.seed(12)
@@ -73,6 +74,7 @@ def test_from_a_wall_hit_there_is_no_closer_hit(rng):
     assert np.all(back >= t * (1 - 1e-12))
 
 
+@pytest.mark.slow
 def test_rectangle_area_is_w_h_less_the_corners():
     assert Outline(45, 30, 0).area == 90 * 60
     assert Outline(45, 30, 10).area == pytest.approx(90 * 60 - (4 - math.pi) * 100, rel=1e-15)
@@ -120,6 +122,7 @@ def test_lens_test_of_eye_rays_follows_the_outline(rng):
     np.testing.assert_array_equal(lamp == 0, shape.signed_distance(x, z) <= 0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edits", [{}, {"lamps[0].lens.corner_radius": 0.0},
                                    {"lamps[0].lens.ior": 2.4, "lamps[0].cuts.height": 4.0}],
                          ids=["rounded", "sharp", "steep-cuts"])
@@ -141,6 +144,7 @@ def test_wall_exit_of_rays_along_the_axis_is_none():
     assert np.isinf(side_wall.hit_outline_wall(o, d, np.array([[45.0, 30.0]]), np.array([10.0])))[0]
 
 
+@pytest.mark.slow
 def test_square_lamp_shows_the_rounded_rectangle():
     # Seen head-on, the lens pixels are those inside the outline (the pixel centres of an
     # orthographic camera 0.5 mm apart) and the corners beyond the arcs are body.
@@ -156,6 +160,7 @@ def test_square_lamp_shows_the_rounded_rectangle():
     assert render(scene).shape == (140, 200, 3)
 
 
+@pytest.mark.slow
 def test_round_and_rectangular_lamps_together_match_the_reference():
     # The side wall splits its rays between the circle's formula and the outline's: both in one scene.
     import json

@@ -187,6 +187,7 @@ def _prism_scene(**plate):
     return normalize(scene)
 
 
+@pytest.mark.slow
 def test_prism_plate_lamp_renders_through_its_table():
     scene = _prism_scene()
     result = render_passes(scene, 96, 96, record_transitions=True)
@@ -199,6 +200,7 @@ def test_prism_plate_lamp_renders_through_its_table():
     assert np.isfinite(result.image).all() and (result.image >= 0).all()
 
 
+@pytest.mark.slow
 def test_prism_plate_sends_the_bulb_straight_through_to_an_eye_on_the_axis():
     # An orthographic eye on the axis: parallel rays through a flat clear lens and the plate all
     # converge on the focus, so the whole plate shows the bulb, except where they meet a draft.
@@ -296,6 +298,7 @@ def test_the_bulb_offset_range_is_shown_without_rounding_noise():
         normalize(scene)
 
 
+@pytest.mark.slow
 def test_a_study_varies_the_prism_plates_fields():
     from core_tracer.study.definition import apply_value, resolve_parameter, study_parameters
 

@@ -51,6 +51,7 @@ def _buf(image: np.ndarray) -> oiio.ImageBuf:
     return buf
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", CASES)
 def test_render_matches_reference(case):
     if case in WORLD_CASES and environment.bundled_folder() is None:

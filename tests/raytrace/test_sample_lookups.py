@@ -128,6 +128,7 @@ def test_rays_missing_the_lamp_are_looked_up_as_the_tracer_would_trace_them(tmp_
     assert split.segments == whole.segments
 
 
+@pytest.mark.slow
 @pytest.mark.seed(6)
 def test_adaptive_pixels_that_see_only_the_world_are_the_traced_ones(tmp_path, monkeypatch, rng):
     """Busy pixels whose neighbourhood saw only the surroundings take their other samples from the

@@ -167,6 +167,7 @@ def test_a_facet_deviates_a_collimated_ray_by_snell_at_the_tooth_angle(ior, angl
     np.testing.assert_allclose(out[:, 0], 0.0, atol=1e-15)
 
 
+@pytest.mark.slow
 def test_fisheye_lamps_render_the_same_beside_a_sawtooth_lamp():
     """The dispatch by cut type: the four-lamp combination's fish-eye lamps keep every pixel when
     lamp 1 becomes saw-tooth (a ray never leaves its lamp), and the explicit default type changes
@@ -199,6 +200,7 @@ def test_cuts_module_is_untouched_by_the_dispatch_without_sawtooth():
     assert cut_surface.SURFACE == sawtooth.SURFACE == cuts.SURFACE and sawtooth.MEDIA == cuts.MEDIA
 
 
+@pytest.mark.slow
 def test_steep_teeth_reach_the_cut_to_cut_paths_and_stay_in_table_1():
     """Between a facet and the next strip's return facet a ray meets the cut twice, in the lens (⑧)
     and in the air (⑨); every transition is still one of Table 1's."""

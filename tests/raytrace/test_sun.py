@@ -137,6 +137,7 @@ def _unlit_four_lamps(sun) -> dict:
     return parse_scene(doc)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("height", [0.1, 0.3])
 def test_an_unlit_lamp_in_low_frontal_sun_looks_lit_and_with_the_sun_behind_it_does_not(height):
     front = render_passes(_unlit_four_lamps((0.3, -1.0, height)))

@@ -29,6 +29,7 @@ def _orthographic(width_mm: float, pixels: int) -> dict:
 
 # -- Directions stay unit and rays stay where they are ---------------------------------------------
 
+@pytest.mark.slow
 @pytest.mark.parametrize("absorption", [[0.02, 1.5, 1.6], [0.0, 0.0, 0.0]], ids=["red", "clear"])
 def test_high_ior_hemispherical_cuts_match_the_reference_pixel_by_pixel(absorption):
     # n = 3 with hemispherical cuts: rays reach the caps at grazing angles and bounce many times.
@@ -46,6 +47,7 @@ def test_high_ior_hemispherical_cuts_match_the_reference_pixel_by_pixel(absorpti
         assert result["wrong"] <= 2, result
 
 
+@pytest.mark.slow
 def test_many_internal_reflections_keep_unit_directions_and_stay_inside_the_lamp(monkeypatch):
     # A clear lens of n = 2.4 with 3 mm cuts traps rays by total internal reflection for dozens of
     # bounces. Every segment must start with a unit direction; a segment inside the lens ends
@@ -177,6 +179,7 @@ def test_shortest_allowed_vectors_render_like_unit_ones():
     np.testing.assert_allclose(render(short), render(unit), rtol=1e-6, atol=1e-7)
 
 
+@pytest.mark.slow
 @pytest.mark.seed(11)
 def test_cell_walk_is_exact_at_the_finest_pitch(rng):
     # 1000 cuts across a 45 mm lens (pitch 0.09 mm, hemispherical caps): the walk against the

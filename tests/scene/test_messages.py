@@ -133,6 +133,7 @@ def test_a_body_shallower_than_the_lens_blames_its_depth():
     parse_scene(doc)
 
 
+@pytest.mark.slow
 @pytest.mark.seed(1990)
 def test_random_designs_get_a_field_and_a_range_that_is_not_empty(rng):
     """Every message of a check that relates several fields names a field and a range that is not

@@ -111,6 +111,7 @@ def test_round_lenses_keep_their_messages():
                                 "(at most 1000 cuts across the lens diameter)")
 
 
+@pytest.mark.slow
 @pytest.mark.seed(2026)
 def test_random_rectangular_designs_get_a_field_and_a_range_a_value_of_which_clears_it(rng):
     seen = set()
@@ -139,6 +140,7 @@ def test_random_rectangular_designs_get_a_field_and_a_range_a_value_of_which_cle
     assert {"valid", "lamps[0].lens.corner_radius", "lamps[0].cuts.pitch", "lamps[0].bulb.offset"} <= seen, seen
 
 
+@pytest.mark.slow
 def test_the_command_line_refuses_a_bad_outline_in_one_line(tmp_path):
     from helpers import assert_bad_input, run_cli
 
