@@ -20,6 +20,7 @@ Function fixtures
 - ``rng``: a ``numpy.random.Generator`` seeded by the test's ``@pytest.mark.seed(N)`` (on the test, its class
   or its module), else by its ``seed`` parameter, else by ``DEFAULT_SEED``: the same numbers on every run.
 - ``bl_scene``: ``bpy.context.scene`` of the freshly reset file.
+- ``gpu_context``: Blender's ``gpu`` module with its GPU context made (skipped without a display).
 - ``_reset_blender`` (autouse): before every test that uses ``addon`` (directly or through another
   fixture) or is marked ``blender``, ``bpy.ops.wm.read_homefile(use_empty=True)`` empties the file;
   it keeps the enabled add-ons.
@@ -108,3 +109,33 @@ def rng(request) -> np.random.Generator:
     else:
         seed = DEFAULT_SEED
     return np.random.default_rng(seed)
+
+
+@pytest.fixture
+def gpu_context(bl_scene):
+    """Blender's GPU module, initialised. The bpy module starts in background mode and creates its
+    GPU context the first time a draw engine renders: a Workbench render of an empty scene."""
+    import os
+
+    import bpy
+
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        pytest.skip("GPU drawing needs a display: run the tests under `xvfb-run -a` (README)")
+    import gpu
+
+    try:
+        gpu.types.GPUOffScreen(4, 4).free()
+    except SystemError:
+        camera = bpy.data.objects.new("GPU start", bpy.data.cameras.new("GPU start"))
+        bl_scene.collection.objects.link(camera)
+        bl_scene.camera = camera
+        bl_scene.render.engine = "BLENDER_WORKBENCH"
+        bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4
+        bpy.ops.render.render()
+        bl_scene.camera = None
+        bpy.data.objects.remove(camera)
+        try:
+            gpu.types.GPUOffScreen(4, 4).free()
+        except SystemError as e:
+            pytest.skip(f"no GPU context on this display: {e}")
+    return gpu

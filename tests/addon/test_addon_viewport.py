@@ -426,36 +426,6 @@ def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_sc
 DRAWN_PNG_ENV = "LAMP_VIEWPORT_PNG"  # set to a path to keep the AgX read-back for a look
 
 
-@pytest.fixture
-def gpu_context(bl_scene):
-    """Blender's GPU module, initialised. The bpy module starts in background mode and creates its
-    GPU context the first time a draw engine renders: a Workbench render of an empty scene."""
-    import os
-
-    import bpy
-
-    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-        pytest.skip("GPU drawing needs a display: run the tests under `xvfb-run -a` (README)")
-    import gpu
-
-    try:
-        gpu.types.GPUOffScreen(4, 4).free()
-    except SystemError:
-        camera = bpy.data.objects.new("GPU start", bpy.data.cameras.new("GPU start"))
-        bl_scene.collection.objects.link(camera)
-        bl_scene.camera = camera
-        bl_scene.render.engine = "BLENDER_WORKBENCH"
-        bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4
-        bpy.ops.render.render()
-        bl_scene.camera = None
-        bpy.data.objects.remove(camera)
-        try:
-            gpu.types.GPUOffScreen(4, 4).free()
-        except SystemError as e:
-            pytest.skip(f"no GPU context on this display: {e}")
-    return gpu
-
-
 def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) -> dict:
     """What the engine's viewport path draws for this view, read back from an offscreen: the
     session as view_draw drives it (update, sync, both stages, draw_frame), drawn by a real engine
