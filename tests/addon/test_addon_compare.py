@@ -170,6 +170,7 @@ def _design_and_user_settings(lamp_addon, bl_scene, size=(24, 16)) -> dict:
     return _settings(lamp_addon.compare_ops, bl_scene)
 
 
+@pytest.mark.slow
 def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, tmp_path):
     import bpy
 
@@ -210,6 +211,7 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
                                rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):
     scene = _scene(size=(24, 16))
     lamp_addon.design_properties.scene_to_design(bl_scene, scene)
@@ -237,6 +239,7 @@ def _modal_run(compare, bl_scene, samples=2, resolution=(40, 24)):
     return run
 
 
+@pytest.mark.slow
 def test_modal_steps_give_the_synchronous_result(lamp_addon, bl_scene):
     compare = lamp_addon.compare_ops
     before = _design_and_user_settings(lamp_addon, bl_scene, (40, 24))
@@ -350,6 +353,7 @@ def test_write_comparison_png_and_exr(lamp_addon, bl_scene, tmp_path):
     np.testing.assert_array_equal(exr, result["side_by_side"])
 
 
+@pytest.mark.slow
 def test_compare_operator(lamp_addon, bl_scene, tmp_path):
     import bpy
 
