@@ -17,7 +17,10 @@ Session fixtures
   package that the tracer tests import is a different module object with its own ``SceneError``.
 
 Function fixtures
+- ``rng``: a ``numpy.random.Generator`` seeded by the test's ``@pytest.mark.seed(N)`` (on the test, its class
+  or its module), else by its ``seed`` parameter, else by ``DEFAULT_SEED``: the same numbers on every run.
 - ``bl_scene``: ``bpy.context.scene`` of the freshly reset file.
+- ``gpu_context``: Blender's ``gpu`` module with its GPU context made (skipped without a display).
 - ``_reset_blender`` (autouse): before every test that uses ``addon`` (directly or through another
   fixture) or is marked ``blender``, ``bpy.ops.wm.read_homefile(use_empty=True)`` empties the file;
   it keeps the enabled add-ons.
@@ -32,11 +35,13 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 EXTENSION_ID = "lamp_styling"
 DEV_REPO_MODULE = "lamp_dev"
+DEFAULT_SEED = 1990  # the paper's year
 
 # Before bpy can be imported by anything: Blender reads this once, at start-up.
 _USER_RESOURCES = tempfile.mkdtemp(prefix="lamp-blender-user-")
@@ -92,3 +97,45 @@ def bl_scene(addon):
     import bpy
 
     return bpy.context.scene
+
+
+@pytest.fixture
+def rng(request) -> np.random.Generator:
+    marker = request.node.get_closest_marker("seed")
+    if marker is not None:
+        seed = marker.args[0]
+    elif "seed" in request.fixturenames:
+        seed = request.getfixturevalue("seed")
+    else:
+        seed = DEFAULT_SEED
+    return np.random.default_rng(seed)
+
+
+@pytest.fixture
+def gpu_context(bl_scene):
+    """Blender's GPU module, initialised. The bpy module starts in background mode and creates its
+    GPU context the first time a draw engine renders: a Workbench render of an empty scene."""
+    import os
+
+    import bpy
+
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        pytest.skip("GPU drawing needs a display: run the tests under `xvfb-run -a` (README)")
+    import gpu
+
+    try:
+        gpu.types.GPUOffScreen(4, 4).free()
+    except SystemError:
+        camera = bpy.data.objects.new("GPU start", bpy.data.cameras.new("GPU start"))
+        bl_scene.collection.objects.link(camera)
+        bl_scene.camera = camera
+        bl_scene.render.engine = "BLENDER_WORKBENCH"
+        bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4
+        bpy.ops.render.render()
+        bl_scene.camera = None
+        bpy.data.objects.remove(camera)
+        try:
+            gpu.types.GPUOffScreen(4, 4).free()
+        except SystemError as e:
+            pytest.skip(f"no GPU context on this display: {e}")
+    return gpu

@@ -6,12 +6,15 @@ from __future__ import annotations
 import ast
 import copy
 import json
+import math
 import os
+import re
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+from core_tracer import SceneError
 from core_tracer.checkpoints import ENV_MARKER, ENV_POINT
 from core_tracer.scene.validate import parse_scene
 
@@ -115,6 +118,66 @@ def scene_with(**edits) -> dict:
     return parse_scene(doc)
 
 
+NUMBER = r"-?[0-9.]+(?:e[-+]?[0-9]+)?"  # a number in a message
+
+
+def allowed_ranges(message: str) -> list[tuple[float, float]]:
+    """Every closed or half-open range [a, b] / (a, b] after "allowed" in a message."""
+    allowed = message[message.index("allowed"):]
+    return [(float(a), float(b)) for a, b in re.findall(rf"[\[(]({NUMBER}), ({NUMBER})[\])]", allowed)]
+
+
+def random_lamp_doc(doc: dict, rng) -> dict:
+    """``doc`` with the body's and lamp 0's numbers drawn from wide but plausible ranges (a round lens's
+    radius, or a rectangular lens's width, height and corner radius), in place."""
+    lamp = doc["lamps"][0]
+    doc["body"]["size"] = [rng.uniform(20, 300), rng.uniform(20, 200)]
+    doc["body"]["depth"] = rng.uniform(2, 150)
+    lamp["center"] = [rng.uniform(-60, 60), rng.uniform(-40, 40)]
+    if lamp["lens"].get("outline") == "rectangular":
+        w, h = rng.uniform(5, 160), rng.uniform(5, 120)
+        lamp["lens"].update(width=w, height=h, corner_radius=rng.uniform(0, min(w, h) / 2 * 1.2))
+    else:
+        lamp["lens"]["radius"] = rng.uniform(5, 80)
+    lamp["lens"]["thickness"] = rng.uniform(0.5, 8)
+    lamp["cuts"]["pitch"] = rng.uniform(1, 40)
+    lamp["cuts"]["height"] = rng.uniform(0, 15)
+    lamp["reflector"]["focal_length"] = rng.uniform(2, 60)
+    lamp["reflector"]["gap"] = rng.uniform(0, 10)
+    lamp["bulb"]["radius"] = rng.uniform(1, 30)
+    lamp["bulb"]["offset"] = [rng.uniform(-20, 20), rng.uniform(-30, 30), rng.uniform(-20, 20)]
+    lamp["socket"]["radius"] = rng.uniform(1, 20)
+    return doc
+
+
+def follow_message(doc: dict, err: SceneError) -> None:
+    """Change the field ``err`` names (of lamp 0 or the body) to a value from the range it gives, in place:
+    the top of the range for sizes, the bottom otherwise, just inside an open top; a bulb moved too far
+    sideways is brought back to the distance the message states, in the same direction."""
+    lamp = doc["lamps"][0]
+    ranges = allowed_ranges(err.message)
+    field = err.path.removeprefix("lamps[0].")
+    if field == "body.size":
+        doc["body"]["size"] = [ranges[0][0], ranges[1][0]]
+    elif field == "center":
+        lamp["center"] = [ranges[0][0], ranges[1][0]]
+    elif field == "bulb.offset" and ranges:
+        lamp["bulb"]["offset"][1] = sum(ranges[0]) / 2
+    elif field == "bulb.offset":
+        limit = float(re.search(rf"up to ({NUMBER}) mm", err.message)[1])
+        y = float(re.search(rf"at y = ({NUMBER}) mm", err.message)[1])
+        x, _, z = lamp["bulb"]["offset"]
+        scale = limit / math.hypot(x, z)
+        lamp["bulb"]["offset"] = [x * scale, y, z * scale]
+    else:
+        section, key = field.split(".")
+        node = doc["body"] if section == "body" else lamp[section]
+        lo, hi = ranges[0]
+        if section == "socket":  # an open range (0, hi)
+            hi *= 0.99
+        node[key] = hi if key in ("height", "pitch", "radius", "corner_radius", "width") else lo
+
+
 def dark_clear_lens_doc(reflector: dict) -> dict:
     """The baseline document with its lamp reduced to a flat clear lens (no cuts, no absorption, no
     surface shading, a black side wall) over a reflector of ``reflector``'s values, the bulb off, a
@@ -214,3 +277,81 @@ def write_exr(path, pixels) -> str:
     assert out.write_image(np.asarray(pixels, np.float32))
     out.close()
     return str(path)
+
+
+def slab_series(r: float, transmittance, cutoff: float):
+    """Bulb luminance factor through a slab, bouncing inside it, walked with the paper's cut-off.
+
+    The eye ray enters with 1 - r; each pass through the lens multiplies by T. At the inner face
+    the ray splits: (1 - r) goes on to the bulb, r goes back; at the outer face r comes back in.
+    A branch is traced only while its accumulated attenuation (max over RGB) is >= ``cutoff``.
+    """
+    import numpy as np
+
+    total = np.zeros(3)
+    k = np.full(3, 1.0 - r)  # inside the lens, heading to the inner face
+    while True:
+        k = k * transmittance  # cross the lens
+        to_bulb = k * (1.0 - r)
+        if to_bulb.max() >= cutoff:
+            total += to_bulb
+        back = k * r
+        if back.max() < cutoff:
+            break
+        back = back * transmittance  # cross back to the outer face
+        k = back * r
+        if k.max() < cutoff:
+            break
+    return total
+
+
+def slab_luminance(lamp: dict, absorption):
+    """The bulb seen on the axis through the lamp's flat lens: its intensity times the slab transmittance
+    (1 - r)^2 tau / (1 - r^2 tau^2), every internal reflection summed (r at normal incidence,
+    tau = exp(-absorption * thickness))."""
+    import numpy as np
+
+    lens = lamp["lens"]
+    r = ((lens["ior"] - 1) / (lens["ior"] + 1)) ** 2
+    tau = np.exp(-np.asarray(absorption) * lens["thickness"])
+    return np.asarray(lamp["bulb"]["intensity"]) * (1 - r) ** 2 * tau / (1 - r * r * tau * tau)
+
+
+def smooth_sky(width: int, height: int):
+    """A smooth, everywhere-different equirectangular sky (height, width, 3)."""
+    import numpy as np
+
+    cols, rows = np.meshgrid(np.arange(width) + 0.5, np.arange(height) + 0.5)
+    lon, lat = cols / width * 2 * np.pi, (0.5 - rows / height) * np.pi
+    return np.stack([1.0 + 0.5 * np.sin(lon), 1.0 + 0.5 * np.cos(lon) * np.cos(lat), 1.2 + 0.6 * np.sin(lat)], -1)
+
+
+def render_engine_exr(bl_scene, path):
+    """Render ``bl_scene`` with its engine (F12) and read the result back from a 32-bit EXR at ``path``:
+    its pixels (height, width, channels)."""
+    import bpy
+    import numpy as np
+    import OpenImageIO as oiio
+
+    settings = bl_scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "32"
+    bpy.ops.render.render()
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    buf = oiio.ImageBuf(str(path))
+    return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
+
+
+def assert_lens_materials(scene: dict, lens_object, index: int) -> None:
+    """Lamp ``index``'s lens object carries the lens and side-wall materials, with the design's side-wall
+    colour and index of refraction."""
+    import bpy
+    import pytest
+
+    lamp, name = scene["lamps"][index], f"Lamp {index + 1}"
+    assert [m.name for m in lens_object.data.materials] == [f"{name} Lens", f"{name} Side Wall"]
+    wall = bpy.data.materials[f"{name} Side Wall"]
+    assert list(wall.node_tree.nodes["Side Wall BSDF"].inputs["Color"].default_value)[:3] == pytest.approx(
+        lamp["lens"]["side_wall_color"])
+    assert bpy.data.materials[f"{name} Lens"].node_tree.nodes["Lens BSDF"].inputs["IOR"].default_value == \
+        pytest.approx(lamp["lens"]["ior"], rel=1e-6)

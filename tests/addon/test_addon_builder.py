@@ -95,6 +95,7 @@ def _local(points_mm: np.ndarray, lamp: dict) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_objects_and_names(lamp_addon, bl_scene, scene_mod):
     _build(lamp_addon, bl_scene, _load(scene_mod, "four-lamp-rear-combination"))
     objs = _objects(bl_scene)
@@ -131,6 +132,7 @@ def test_body_has_an_opening_per_lens(lamp_addon, bl_scene, scene_mod):
         scene["body"]["depth"], abs=1e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", ["paper-baseline", "four-lamp-rear-combination", "paper-cut-size",
                                     "paper-bulb-position"])
 def test_geometry_on_the_analytic_surfaces(lamp_addon, bl_scene, scene_mod, preset):

@@ -33,6 +33,7 @@ def _constant_scene() -> dict:
     return core_tracer.parse_scene(doc)
 
 
+@pytest.mark.slow
 def test_the_reflector_constant_is_seen_once_per_path_as_in_the_model(lamp_addon, bl_scene):
     scene = _constant_scene()
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)

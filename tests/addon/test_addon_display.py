@@ -50,6 +50,7 @@ def test_lamp_tracer_image_in_blender_equals_the_cli_png(lamp_addon, bl_scene, t
     assert np.abs(shown - ours).max() <= 1
 
 
+@pytest.mark.slow
 def test_design_exposure_from_a_preview_equals_the_full_renders(lamp_addon):
     for path in (BASELINE, FOUR_LAMPS):
         scene = core_tracer.load_scene(path)
@@ -65,6 +66,7 @@ def test_thumbnails_use_the_default_view_of_the_running_blenders_config(lamp_add
     assert os.path.samefile(view.config, os.path.join(own, "config.ocio"))
 
 
+@pytest.mark.slow
 def test_compare_tool_png_shows_both_halves_through_one_transform(tmp_path):
     tool = str(ROOT / "tools" / "compare_preset.py")
     env = {k: v for k, v in os.environ.items() if k != "BLENDER_USER_RESOURCES"}
@@ -90,6 +92,7 @@ def test_compare_tool_png_shows_both_halves_through_one_transform(tmp_path):
         assert np.abs(codes[strip:, cols] - expected).max() <= 1
 
 
+@pytest.mark.slow
 def test_compare_tool_refuses_an_unknown_view_in_one_line(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "BLENDER_USER_RESOURCES"}
     done = subprocess.run([sys.executable, str(ROOT / "tools" / "compare_preset.py"), str(BASELINE), "-o",

@@ -177,6 +177,7 @@ def _lens_ior_input(lamp_addon, bl_scene):
     return lens.data.materials[0].node_tree.nodes["Lens BSDF"].inputs["IOR"]
 
 
+@pytest.mark.slow
 def test_compare_renders_up_to_date_objects_as_they_are(lamp_addon, bl_scene):
     """Up to date: no rebuild, so a value the designer typed on the material (a driven one) is what
     Cycles renders (a rebuild would have put the design's back)."""
@@ -190,6 +191,7 @@ def test_compare_renders_up_to_date_objects_as_they_are(lamp_addon, bl_scene):
     assert _lens_ior_input(lamp_addon, bl_scene).default_value == pytest.approx(1.7)
 
 
+@pytest.mark.slow
 def test_compare_rebuilds_out_of_date_objects(lamp_addon, bl_scene):
     import bpy
 

@@ -55,6 +55,7 @@ def _assert_same_lamp(result, clean_shares) -> dict:
     return shares
 
 
+@pytest.mark.slow
 def test_startup_file_build_then_compare_shows_the_lamp_in_both_halves(lamp_addon, clean, tmp_path):
     import bpy
 
@@ -81,6 +82,7 @@ def test_startup_file_build_then_compare_shows_the_lamp_in_both_halves(lamp_addo
     lamp_addon.compare.comparison.write_comparison(str(tmp_path / "startup-compare.png"), result)
 
 
+@pytest.mark.slow
 def test_a_large_object_enclosing_the_lamp_is_left_out(lamp_addon, clean, bl_scene):
     import bpy
 
@@ -235,6 +237,7 @@ def test_applying_a_preset_to_a_built_lamp_rebuilds_it(lamp_addon, bl_scene):
     assert len(lenses) == 4  # the objects are the preset's
 
 
+@pytest.mark.slow
 def test_the_design_fov_reaches_both_halves_of_compare(lamp_addon, bl_scene):
     lamp_addon.design.properties.scene_to_design(bl_scene, _baseline((24, 20)))
     narrow = lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)

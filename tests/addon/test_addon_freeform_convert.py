@@ -63,13 +63,14 @@ def agreement(parametric: np.ndarray, freeform: np.ndarray, mask: np.ndarray | N
     return float((error[~edge & mask] <= TAU).mean()), float((edge & (error > TAU) & mask).mean())
 
 
-def test_agreement_measure_fails_on_a_different_lamp():
-    rng = np.random.default_rng(0)
+@pytest.mark.seed(0)
+def test_agreement_measure_fails_on_a_different_lamp(rng):
     image = np.ones((32, 32, 3)) + 0.001 * rng.random((32, 32, 3))
     assert agreement(image, image) == (1.0, 0.0)
     assert agreement(image, image * 1.03)[0] == 0.0  # 3 % brighter everywhere is not the same lamp
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", sorted(PRESETS.glob("*.json")), ids=lambda p: p.stem)
 def test_parametric_equals_freeform(lamp_addon, addon_core, bl_scene, path):
     design = _design(lamp_addon, addon_core, bl_scene, path)
@@ -164,6 +165,7 @@ def test_convert_makes_the_prism_plate_a_closed_lens_and_its_housing_a_wall(lamp
     assert not mine.hide_render and not mine.hide_get() and mine.lamp_role.role == "NONE"
 
 
+@pytest.mark.slow
 def test_convert_closes_the_glass_of_a_wrap_around_lens(lamp_addon, addon_core, bl_scene):
     import bpy
 
@@ -202,6 +204,7 @@ def test_a_mixed_design_renders_the_parametric_lamp_as_the_parametric_tracer(lam
     assert mine.sum() >= 50 and mixed[mine].max() > 1.0 and parametric[mine].max() < 1.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", sorted(PRESETS.glob("*.json")), ids=lambda p: p.stem)
 def test_parametric_equals_mixed(lamp_addon, addon_core, bl_scene, path):
     """Every preset built, not converted, traced by the free-form tracer beside a part of the

@@ -89,6 +89,7 @@ def test_geometry_is_built_once_per_geometry_change(lamp_addon, addon_core, bl_s
     np.testing.assert_array_equal(moved[:, :, :3], _expected(lamp_addon, bl_scene))
 
 
+@pytest.mark.slow
 def test_exported_pair_renders_the_same_from_the_command_line(lamp_addon, addon_core, bl_scene, tmp_path):
     import bpy
     import OpenImageIO as oiio
@@ -148,6 +149,7 @@ def _viewport_session(lamp_addon, bl_scene):
     return session, window, view
 
 
+@pytest.mark.slow
 def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_addon, addon_core, bl_scene):
     import bpy
 
@@ -183,6 +185,7 @@ def test_the_viewport_renders_the_parts_and_restarts_on_geometry_changes(lamp_ad
     assert cache.builds == 2 and not np.array_equal(session.preview.frame().image, shown)
 
 
+@pytest.mark.slow
 def test_an_exported_pair_imports_back_as_parts_with_roles(lamp_addon, addon_core, bl_scene, tmp_path):
     import bpy
 
@@ -306,6 +309,7 @@ def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, ad
     assert sorted(p["role"] for p in parts_only.scene["freeform"]["parts"]) == ["bulb", "lens"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", [BASELINE, PRESETS / "prism-plate-stop-lamp.json"], ids=lambda p: p.stem)
 def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, addon_core, bl_scene, tmp_path,
                                                                     path):

@@ -36,6 +36,7 @@ def _cli_exr(scene: dict, tmp_path) -> np.ndarray:
     return imageio.read_image(out)[0]
 
 
+@pytest.mark.slow
 def test_engine_glare_equals_the_command_line(lamp_addon, bl_scene, tmp_path):
     import bpy
     import OpenImageIO as oiio

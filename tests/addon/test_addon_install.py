@@ -18,6 +18,8 @@ from pathlib import Path
 import pytest
 from helpers import ROOT
 
+pytestmark = pytest.mark.slow
+
 MANIFEST_ID = "lamp_styling"
 
 

@@ -18,11 +18,11 @@ import time
 import numpy as np
 import pytest
 from test_addon_framing import rims_in_image
-from test_addon_viewport import _display, _draw_viewport, _three_quarter_view, gpu_context  # noqa: F401 (a fixture)
+from test_addon_viewport import _display, _draw_viewport, _three_quarter_view
 
 import core_tracer
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.slow]
 
 SIZE = (160, 120)  # the design's image: the render resolution
 VIEWPORT = (160, 120)
@@ -68,7 +68,7 @@ class Stopwatch:
         self._last = now
 
 
-def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):  # noqa: F811
+def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):
     import bpy
 
     watch = Stopwatch()

@@ -53,6 +53,7 @@ def test_compare_runs_and_says_once_that_it_cannot_save(lamp_addon, bl_scene, tm
     assert shown.shape == (16 + strip, 2 * 24 + 2, 3) and shown[:strip].max() > 0.5
 
 
+@pytest.mark.slow
 def test_study_runs_and_save_sheet_says_why_not(lamp_addon, bl_scene, tmp_path, no_openimageio):
     import bpy
 

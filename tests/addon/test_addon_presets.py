@@ -104,6 +104,7 @@ def test_builtin_thumbnails_are_shipped_not_made(browser):
     assert not any(cache.glob("*.png")) if cache.is_dir() else True
 
 
+@pytest.mark.slow
 def test_two_designers_share_a_folder(browser, add_library, bl_scene, tmp_path, addon_core):
     import bpy
 
@@ -196,6 +197,7 @@ def _design(props, bl_scene) -> dict:
     return leaves(props.design_to_scene(bl_scene))
 
 
+@pytest.mark.slow
 def test_apply_is_all_or_nothing(browser, add_library, bl_scene, tmp_path):
     import bpy
 
@@ -248,6 +250,7 @@ def test_read_only_libraries_refuse_changes(browser, add_library, tmp_path):
     assert [lib.name for lib in browser.presets.library.writable_libraries()] == ["My Presets"]
 
 
+@pytest.mark.slow
 def test_rename_and_delete(browser, add_library, bl_scene, tmp_path):
     import bpy
 
@@ -336,6 +339,7 @@ def _assert_camera_shows(camera_module, bl_scene, preset: dict) -> None:
         preset["image"]["width"], preset["image"]["height"], 100)
 
 
+@pytest.mark.slow
 def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_scene, tmp_path, addon_core, capfd):
     import bpy
 

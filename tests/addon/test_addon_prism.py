@@ -129,6 +129,7 @@ def _on_axis(doc: dict) -> None:
     doc["image"] = {"width": 32, "height": 32}
 
 
+@pytest.mark.slow
 def test_prism_plate_on_axis_transmission_agrees_with_cycles(lamp_addon, bl_scene):
     with open(PRESET, encoding="utf-8") as f:
         doc = json.load(f)

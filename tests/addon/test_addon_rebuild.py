@@ -259,6 +259,7 @@ def _deep_cut(bl_scene) -> float:
     return height
 
 
+@pytest.mark.slow
 def test_a_preview_build_is_lighter_and_says_so(lamp_addon, addon_core, builder, bl_scene):
     _design(lamp_addon, addon_core, bl_scene)
     _deep_cut(bl_scene)
@@ -312,6 +313,7 @@ def test_auto_build_coalesces_edits_into_one_build(lamp_addon, addon_core, build
     assert autobuild.tick(now=edited + 10.0) is None and len(builds) == 1  # nothing left to do
 
 
+@pytest.mark.slow
 def test_auto_build_previews_while_editing_then_builds_in_full(lamp_addon, addon_core, builder, autobuild,
                                                                 bl_scene):
     _design(lamp_addon, addon_core, bl_scene)
@@ -334,6 +336,7 @@ def test_auto_build_previews_while_editing_then_builds_in_full(lamp_addon, addon
     assert len(_part(bl_scene, "lamps[0].lens").data.polygons) > 10 * preview_faces
 
 
+@pytest.mark.slow
 def test_an_edit_while_the_full_lens_is_made_starts_again(lamp_addon, addon_core, builder, autobuild, bl_scene):
     _design(lamp_addon, addon_core, bl_scene)
     autobuild._edits.clear()

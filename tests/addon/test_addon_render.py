@@ -16,7 +16,7 @@ import sys
 
 import numpy as np
 import pytest
-from helpers import BASELINE, ROOT
+from helpers import BASELINE, ROOT, render_engine_exr
 
 import core_tracer
 from core_tracer.images import display, imageio
@@ -239,25 +239,12 @@ def test_an_out_of_date_design_camera_does_not_block_a_render(lamp_addon, addon_
 # The render engine
 
 
-def _render_engine_exr(bl_scene, path) -> np.ndarray:
-    import bpy
-
-    settings = bl_scene.render.image_settings
-    settings.file_format = "OPEN_EXR"
-    settings.color_depth = "32"
-    bpy.ops.render.render()
-    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
-    import OpenImageIO as oiio
-
-    buf = oiio.ImageBuf(str(path))
-    return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
-
 
 def test_engine_equals_core_render(lamp_addon, bl_scene, tmp_path):
     scene = _preset_scene(size=(48, 32))
     _load_design(lamp_addon, bl_scene, scene)
     bl_scene.render.engine = "LAMP_TRACER"
-    rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
+    rgba = render_engine_exr(bl_scene, tmp_path / "engine.exr")
     seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     # The scene the engine rendered is the preset's, camera included (up to Blender's float32 storage).
     assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-4)
@@ -269,6 +256,7 @@ def test_engine_equals_core_render(lamp_addon, bl_scene, tmp_path):
     assert expected.max() > 1.0 and expected[0, 0].sum() == 0.0  # a real image: bulb and background
 
 
+@pytest.mark.slow
 def test_engine_traces_its_bands_in_the_worker_processes(lamp_addon, addon_core, bl_scene, tmp_path):
     # F12 hands its bands to the add-on's band pool (worker processes, no interpreter lock between
     # them): the same pixels as the tracer alone; unregistering the engine ends the workers.
@@ -281,7 +269,7 @@ def test_engine_traces_its_bands_in_the_worker_processes(lamp_addon, addon_core,
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.threads_mode = "FIXED"
     bl_scene.render.threads = 2
-    rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
+    rgba = render_engine_exr(bl_scene, tmp_path / "engine.exr")
     assert pool.renders == renders + 1
     expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
     np.testing.assert_array_equal(rgba[:, :, :3], expected)
@@ -318,11 +306,11 @@ def test_engine_renders_percentage_and_writes_still(lamp_addon, bl_scene, tmp_pa
 def test_engine_render_region(lamp_addon, bl_scene, tmp_path, border, crop):
     _load_design(lamp_addon, bl_scene, _preset_scene(size=(64, 48)))
     bl_scene.render.engine = "LAMP_TRACER"
-    full = _render_engine_exr(bl_scene, tmp_path / "full.exr")
+    full = render_engine_exr(bl_scene, tmp_path / "full.exr")
     render = bl_scene.render
     render.use_border, render.use_crop_to_border = True, crop
     render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = border
-    got = _render_engine_exr(bl_scene, tmp_path / "region.exr")
+    got = render_engine_exr(bl_scene, tmp_path / "region.exr")
     x0, x1, y0, y1 = int(border[0] * 64), int(border[1] * 64), int(border[2] * 48), int(border[3] * 48)
     want = full[48 - y1:48 - y0, x0:x1]  # rows top-first, the region counted from the bottom
     if not crop:
@@ -337,7 +325,7 @@ def test_engine_film_transparent_alpha_is_the_lamp(lamp_addon, bl_scene, tmp_pat
     _load_design(lamp_addon, bl_scene, scene)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
-    rgba = _render_engine_exr(bl_scene, tmp_path / "alpha.exr")
+    rgba = render_engine_exr(bl_scene, tmp_path / "alpha.exr")
     alpha = rgba[:, :, 3]
     assert set(np.unique(alpha)) == {0.0, 1.0}
     assert alpha[16, 24] == 1.0 and alpha[0, 0] == 0.0
@@ -541,7 +529,7 @@ def test_contribution_passes_in_the_compositor(lamp_addon, bl_scene, tmp_path):
     layer.lamp_contribution_passes = True  # the update callback asks the engine for its passes again
     assert offered() == {"Image", "Alpha", *LABELS.values()}
     tree.links.new(render_layers.outputs["Lamp Bulb"], tree.nodes.new("NodeGroupOutput").inputs[0])
-    rgba = _render_engine_exr(bl_scene, tmp_path / "bulb.exr")
+    rgba = render_engine_exr(bl_scene, tmp_path / "bulb.exr")
     bulb = core_tracer.render_passes(lamp_addon.render.camera.scene_for_render(bl_scene)).passes["bulb"]
     assert bulb.max() > 1.0
     np.testing.assert_array_equal(rgba[:, :, :3], bulb)
@@ -692,6 +680,7 @@ def _run_tool(args, tmp_path):
                           cwd=tmp_path, timeout=300)
 
 
+@pytest.mark.slow
 def test_headless_job_writes_the_side_by_side_image(tmp_path):
     out = tmp_path / "out" / "compare.png"
     done = _run_tool([PRESET, "-o", str(out), "--samples", "2", "--size", "40x32"], tmp_path)
@@ -703,6 +692,7 @@ def test_headless_job_writes_the_side_by_side_image(tmp_path):
     assert "mean difference" in done.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args, message", [
     (["missing.json"], "compare_preset: missing.json: cannot read the file"),
     ([PRESET, "-o", "x.jpg"], "compare_preset: x.jpg: .jpg is not an image format this writes"),
@@ -715,6 +705,7 @@ def test_headless_job_bad_input_is_one_line_and_exit_2(tmp_path, args, message):
     assert "Traceback" not in done.stderr + done.stdout
 
 
+@pytest.mark.slow
 def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
     import bpy
 
@@ -722,7 +713,7 @@ def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
     _load_design(lamp_addon, bl_scene, scene)
     bl_scene.lamp_design.image.samples = 4
     bl_scene.render.engine = "LAMP_TRACER"
-    rgba = _render_engine_exr(bl_scene, tmp_path / "engine.exr")
+    rgba = render_engine_exr(bl_scene, tmp_path / "engine.exr")
     seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     assert seen["image"]["samples"] == 4
     np.testing.assert_array_equal(rgba[:, :, :3], core_tracer.render(seen))
@@ -743,7 +734,7 @@ def test_engine_film_transparent_alpha_is_the_covered_fraction_with_samples(lamp
     bl_scene.lamp_design.image.samples = 16
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
-    rgba = _render_engine_exr(bl_scene, tmp_path / "alpha.exr")
+    rgba = render_engine_exr(bl_scene, tmp_path / "alpha.exr")
     seen = lamp_addon.render.camera.scene_for_render(bl_scene)
     alpha = rgba[:, :, 3]
     edge = (alpha > 0) & (alpha < 1)

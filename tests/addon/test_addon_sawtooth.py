@@ -74,6 +74,7 @@ def test_the_lens_is_built_on_the_analytic_facets(lamp_addon, addon_core, bl_sce
     assert co[:, 1].max() == pytest.approx(t + h, abs=VERTEX_TOL_MM)  # the collar up to the apex plane
 
 
+@pytest.mark.slow
 def test_changing_the_cut_type_rebuilds_the_lens_and_back(lamp_addon, addon_core, bl_scene):
     import bpy
 

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, assert_lens_materials
 from test_addon_builder import (
     TOL_MM,
     VERTEX_TOL_MM,
@@ -25,7 +25,7 @@ from test_addon_builder import (
     _triangle_samples,
     _world_mm,
 )
-from test_addon_compare import BULB_SAMPLES, _compared_region
+from test_addon_compare import assert_bulb_through_a_flat_lens
 
 import core_tracer
 
@@ -117,18 +117,11 @@ def test_square_lamp_body_opening_is_the_outline(square):
 
 
 def test_square_lamp_materials_follow_the_mapping(square):
-    import bpy
-
     scene, objs = square
-    lamp = scene["lamps"][0]
-    assert [m.name for m in objs["Lamp 1 Lens"].data.materials] == ["Lamp 1 Lens", "Lamp 1 Side Wall"]
-    wall = bpy.data.materials["Lamp 1 Side Wall"]
-    assert list(wall.node_tree.nodes["Side Wall BSDF"].inputs["Color"].default_value)[:3] == pytest.approx(
-        lamp["lens"]["side_wall_color"])
-    assert bpy.data.materials["Lamp 1 Lens"].node_tree.nodes["Lens BSDF"].inputs["IOR"].default_value == \
-        pytest.approx(lamp["lens"]["ior"], rel=1e-6)
+    assert_lens_materials(scene, objs["Lamp 1 Lens"], 0)
 
 
+@pytest.mark.slow
 def test_bulb_through_a_flat_rectangular_lens_agrees_with_cycles(lamp_addon, bl_scene):
     # The bulb seen on the axis through the flat clear middle of a square lamp's lens (cut height 0):
     # both renderers give the slab transmittance, whatever the outline around it (test_addon_compare).
@@ -139,17 +132,7 @@ def test_bulb_through_a_flat_rectangular_lens_agrees_with_cycles(lamp_addon, bl_
     doc["camera"]["fov_deg"] = 2.0  # 30 mm across at 850 mm: the bulb (8 mm radius) fills the centre
     doc["image"] = {"width": 32, "height": 32}
     scene = core_tracer.parse_scene(doc)
-    tracer, cycles, seconds = _compared_region(lamp_addon, bl_scene, scene, BULB_SAMPLES,
-                                               (slice(12, 20), slice(12, 20)))
-    lens = scene["lamps"][0]["lens"]
-    r = ((lens["ior"] - 1) / (lens["ior"] + 1)) ** 2
-    tau = np.exp(-np.asarray(core_tracer.scene.lens_absorption(lens)) * lens["thickness"])
-    slab = np.asarray(scene["lamps"][0]["bulb"]["intensity"]) * (1 - r) ** 2 * tau / (1 - r * r * tau * tau)
-    assert tracer == pytest.approx(slab, rel=1e-4)
-    relative = (cycles - tracer) / tracer
-    print(f"\nbulb through flat rectangular lens, {BULB_SAMPLES} spp, 32x32, 8x8 centre: tracer {tracer}, "
-          f"Cycles {cycles}, relative difference {relative}, seconds {seconds}")
-    assert np.abs(relative).max() < 0.02
+    assert_bulb_through_a_flat_lens(lamp_addon, bl_scene, scene, "flat rectangular lens", 0.02)
 
 
 def test_a_lamp_added_beside_a_square_lamp_fits(lamp_addon, addon_core):
@@ -161,6 +144,7 @@ def test_a_lamp_added_beside_a_square_lamp_fits(lamp_addon, addon_core):
     assert doc["body"]["size"][1] == scene["body"]["size"][1]  # 80 mm high lenses need no taller body
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edits", [
     {"lens": {"corner_radius": 0.0}},
     {"cuts": {"height": 0.0}},

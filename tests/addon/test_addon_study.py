@@ -46,6 +46,7 @@ def test_every_study_parameter_is_offered(lamp_addon):
     assert "lens.transmitted_color" in offered and "cuts.height" in offered
 
 
+@pytest.mark.slow
 def test_run_study_operator_makes_the_sheet_image(design, lamp_addon):
     import bpy
 
@@ -99,6 +100,7 @@ def test_bad_settings_are_reported_without_rendering(design, lamp_addon, addon_c
     assert getattr(sys.modules.get(run_module), "workers_started", 0) == before
 
 
+@pytest.mark.slow
 def test_apply_variant_sets_the_varied_parameter(design, lamp_addon):
     import bpy
 
@@ -110,6 +112,7 @@ def test_apply_variant_sets_the_varied_parameter(design, lamp_addon):
     assert scene["lamps"][0]["lens"]["ior"] == 1.6
 
 
+@pytest.mark.slow
 def test_save_sheet_writes_the_study_into_the_file(design, lamp_addon, tmp_path):
     import bpy
 
@@ -122,6 +125,7 @@ def test_save_sheet_writes_the_study_into_the_file(design, lamp_addon, tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.exr"]
 
 
+@pytest.mark.slow
 def test_keep_variant_saves_a_preset_in_the_user_library(design, lamp_addon, addon_core):
     import bpy
 
@@ -144,6 +148,7 @@ def test_keep_variant_saves_a_preset_in_the_user_library(design, lamp_addon, add
             os.unlink(os.path.join(library.folder, name))
 
 
+@pytest.mark.slow
 def test_a_study_of_lamp_types_runs_in_blender(design, lamp_addon):
     import bpy
     from test_addon_panels import draw

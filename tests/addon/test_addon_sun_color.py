@@ -48,6 +48,7 @@ def test_the_lamp_sun_has_the_tracers_colour(lamp_addon, bl_scene, tmp_path, fol
     assert light.energy == pytest.approx(np.pi * 0.8 * 2.5, rel=1e-6)  # the strength stays the user's
 
 
+@pytest.mark.slow
 def test_the_body_under_the_followed_sun_agrees_with_cycles(lamp_addon, bl_scene, tmp_path):
     # The body's front face lit by the sun alone (no ambient, no specular; the environment so dim that
     # only its sun's colour counts): the tracer's (1 - d) s S cos theta C0 against Cycles' Diffuse BSDF

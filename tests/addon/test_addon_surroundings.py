@@ -14,7 +14,7 @@ import json
 
 import numpy as np
 import pytest
-from helpers import BASELINE, dark_clear_lens_doc
+from helpers import BASELINE, dark_clear_lens_doc, render_engine_exr
 
 import core_tracer
 from core_tracer.raytrace import environment
@@ -55,6 +55,7 @@ def test_the_world_holds_the_environment(lamp_addon, bl_scene):
     assert tree.nodes["Ambient Or Ambient And Surroundings"].inputs[0].default_value == 0.0
 
 
+@pytest.mark.slow
 def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
     if environment.bundled_folder() is None:
         pytest.skip("Blender's world images are not on this machine")
@@ -76,19 +77,8 @@ def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon
     assert np.abs(relative).max() < TOLERANCE
 
 
-def _engine_rgba(bl_scene, path) -> np.ndarray:
-    import bpy
-    import OpenImageIO as oiio
 
-    settings = bl_scene.render.image_settings
-    settings.file_format = "OPEN_EXR"
-    settings.color_depth = "32"
-    bpy.ops.render.render()
-    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
-    buf = oiio.ImageBuf(str(path))
-    return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)
-
-
+@pytest.mark.slow
 @pytest.mark.parametrize("samples", [1, 4])
 def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp_addon, bl_scene, tmp_path, samples):
     if environment.bundled_folder() is None:
@@ -101,7 +91,7 @@ def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp
     lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
-    rgba = _engine_rgba(bl_scene, tmp_path / "film.exr")
+    rgba = render_engine_exr(bl_scene, tmp_path / "film.exr")
     alpha = rgba[:, :, 3]
     assert (alpha == 0).sum() > 100 and (alpha == 1).sum() > 100
     np.testing.assert_allclose(rgba[alpha == 0, :3], 0.0, atol=1e-7)  # no sky where nothing is
@@ -131,6 +121,7 @@ def test_the_lamp_sun_follows_the_sun_of_the_design_and_of_the_environment(lamp_
     assert abs(expected[2]) < 0.1  # the low sun of the sunset world
 
 
+@pytest.mark.slow
 def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
     # The body's front face sees the open half of the world: the tracer's C0 E(n) / pi against Cycles'
     # Diffuse BSDF under the same world (no sun, no ambient, no specular).

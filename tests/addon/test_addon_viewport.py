@@ -89,6 +89,7 @@ def _pixel_errors(camera: dict, width: int, height: int, window, view, world_fro
     return worst
 
 
+@pytest.mark.slow
 def test_the_viewport_camera_needs_no_blender():
     """convert.viewport is bpy-free: it imports with bpy and mathutils unavailable."""
     import subprocess
@@ -180,7 +181,8 @@ def _camera_view_window(ob, width: int, height: int, zoom: float, offset: tuple[
 
 
 @pytest.mark.parametrize("kind", ["PERSP", "ORTHO"])
-def test_camera_view_shows_the_cameras_frame(bl_scene, kind):
+@pytest.mark.seed(7)
+def test_camera_view_shows_the_cameras_frame(bl_scene, kind, rng):
     """Camera view, zoomed and panned off centre: the tracer's camera projects as the region's
     matrices do, and a point seen by the scene camera at a fraction (fx, fy) of its rendered frame
     lies at the same fraction of the camera border drawn in the viewport."""
@@ -209,7 +211,6 @@ def test_camera_view_shows_the_cameras_frame(bl_scene, kind):
     x1, y1 = border.max(axis=0)
     assert (x1 - x0) / (y1 - y0) == pytest.approx(800 / 450, rel=1e-5)  # the render's shape
     render_clip = np.asarray(_rows(ob.calc_matrix_camera(depsgraph, x=800, y=450))) @ np.asarray(view)
-    rng = np.random.default_rng(7)
     for point in rng.uniform((-0.2, -0.1, -0.1), (0.2, 0.1, 0.1), (20, 3)):
         c = render_clip @ np.r_[point, 1.0]
         fx, fy = (c[0] / c[3] + 1) / 2, (c[1] / c[3] + 1) / 2  # where F12 shows it, in the frame
@@ -254,6 +255,7 @@ def _refined(lamp_addon, scene: dict, width: int, height: int) -> np.ndarray:
     return core_tracer.render_passes(scene, width, height, samples=samples, keep_passes=False).image
 
 
+@pytest.mark.slow
 def test_stages_run_coarse_then_full_then_refined(lamp_addon):
     scene = _four_lamps()
     preview = lamp_addon.render.preview.ProgressivePreview(divisors=(8, 1), threads=1)
@@ -278,6 +280,7 @@ def test_stages_run_coarse_then_full_then_refined(lamp_addon):
     assert preview.history == [(1, 0), (1, 1), (1, 2)]
 
 
+@pytest.mark.slow
 def test_an_edit_during_refinement_restarts_from_the_coarse_stage(lamp_addon):
     scene = _four_lamps()
     edited = core_tracer.parse_scene({**_four_lamps_doc(), "background": [0.2, 0.3, 0.4]})
@@ -368,6 +371,7 @@ def _design_session_with_root(lamp_addon, bl_scene):
     return session, root
 
 
+@pytest.mark.slow
 def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_scene):
     session = _design_session(lamp_addon, bl_scene)
     ob = _blender_camera("PERSP")
@@ -395,6 +399,7 @@ def test_the_viewport_restarts_on_design_edits_and_view_changes(lamp_addon, bl_s
     assert session.preview.frame().image.shape == (48, 80, 3)
 
 
+@pytest.mark.slow
 def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_scene):
     """The viewport's text line gives the design's state, its objects' state and the field to change."""
     session = _design_session(lamp_addon, bl_scene)
@@ -419,36 +424,6 @@ def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_sc
 # Drawing: needs a GPU (a display; xvfb-run in CI)
 
 DRAWN_PNG_ENV = "LAMP_VIEWPORT_PNG"  # set to a path to keep the AgX read-back for a look
-
-
-@pytest.fixture
-def gpu_context(bl_scene):
-    """Blender's GPU module, initialised. The bpy module starts in background mode and creates its
-    GPU context the first time a draw engine renders: a Workbench render of an empty scene."""
-    import os
-
-    import bpy
-
-    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-        pytest.skip("GPU drawing needs a display: run the tests under `xvfb-run -a` (README)")
-    import gpu
-
-    try:
-        gpu.types.GPUOffScreen(4, 4).free()
-    except SystemError:
-        camera = bpy.data.objects.new("GPU start", bpy.data.cameras.new("GPU start"))
-        bl_scene.collection.objects.link(camera)
-        bl_scene.camera = camera
-        bl_scene.render.engine = "BLENDER_WORKBENCH"
-        bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4
-        bpy.ops.render.render()
-        bl_scene.camera = None
-        bpy.data.objects.remove(camera)
-        try:
-            gpu.types.GPUOffScreen(4, 4).free()
-        except SystemError as e:
-            pytest.skip(f"no GPU context on this display: {e}")
-    return gpu
 
 
 def _draw_viewport(lamp_addon, bl_scene, width: int, height: int, window, view) -> dict:
@@ -497,6 +472,7 @@ def _three_quarter_view(width: int, height: int):
     return _window_matrix(ob, width, height), ob.matrix_world.inverted()
 
 
+@pytest.mark.slow
 def test_drawn_pixels_are_the_tracers_image_under_the_view_transform(lamp_addon, bl_scene, gpu_context, tmp_path):
     """Standard view transform with an exposure: the drawn region, colour-managed by Blender,
     equals the sRGB encoding of 2^exposure times the tracer's image within 1/255."""
@@ -521,6 +497,7 @@ def test_drawn_pixels_are_the_tracers_image_under_the_view_transform(lamp_addon,
     assert len(np.unique(shown[..., 0])) > 50  # a real picture, not a clipped flat disk
 
 
+@pytest.mark.slow
 def test_drawn_pixels_under_agx_match_the_tracers_image_under_agx(lamp_addon, bl_scene, gpu_context, tmp_path):
     """AgX (Blender's default): the drawn region and the tracer's own image, both through Blender's
     AgX, agree within 1/255."""
@@ -561,6 +538,7 @@ def test_body_coverage_is_where_the_tracer_hits_the_body(lamp_addon, position):
     np.testing.assert_array_equal(coverage == 0, background_only)
 
 
+@pytest.mark.slow
 def test_stages_on_the_worker_thread(lamp_addon):
     """What the engine does: the stages on a worker thread; a restart while it runs means nothing
     of the old job is published afterwards."""

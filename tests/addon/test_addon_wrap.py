@@ -9,10 +9,10 @@ import math
 
 import numpy as np
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, assert_lens_materials
 from test_addon_builder import TOL_MM, _build, _local, _objects, _poly_array, _triangle_samples
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.slow]
 
 
 def _cylinder(lamp: dict) -> dict:
@@ -90,16 +90,8 @@ def test_the_body_front_curves_round_the_side(wrap):
 
 
 def test_the_wrap_lens_materials_follow_the_mapping(wrap):
-    import bpy
-
     scene, objs = wrap
-    lamp = scene["lamps"][2]
-    assert [m.name for m in objs["Lamp 3 Lens"].data.materials] == ["Lamp 3 Lens", "Lamp 3 Side Wall"]
-    wall = bpy.data.materials["Lamp 3 Side Wall"]
-    assert list(wall.node_tree.nodes["Side Wall BSDF"].inputs["Color"].default_value)[:3] == pytest.approx(
-        lamp["lens"]["side_wall_color"])
-    assert bpy.data.materials["Lamp 3 Lens"].node_tree.nodes["Lens BSDF"].inputs["IOR"].default_value == \
-        pytest.approx(lamp["lens"]["ior"], rel=1e-6)
+    assert_lens_materials(scene, objs["Lamp 3 Lens"], 2)
 
 
 @pytest.mark.parametrize("side", ["+x", "-x"])

@@ -14,6 +14,8 @@ import sys
 import pytest
 from helpers import ROOT
 
+pytestmark = pytest.mark.slow
+
 PRELUDE = f"""
 import importlib, importlib.util, pkgutil, sys
 sys.modules["bpy"] = None  # any 'import bpy' now raises ImportError

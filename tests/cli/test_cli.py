@@ -17,6 +17,8 @@ from core_tracer.scene import reading
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import load_scene
 
+pytestmark = pytest.mark.slow
+
 # ---------------------------------------------------------------------------------------------
 # Bad scenes: every case gives exit 2, one line naming the field, the value and the range, and
 # writes nothing.

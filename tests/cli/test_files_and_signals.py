@@ -27,6 +27,8 @@ from core_tracer.library import presets as P
 from core_tracer.scene.validate import load_scene
 from core_tracer.study import definition as st
 
+pytestmark = pytest.mark.slow
+
 BASELINE = ROOT / "presets" / "paper-baseline.json"
 
 

@@ -53,6 +53,7 @@ def test_geometry_is_built_once_per_geometry_change():
     assert cache.builds == 3
 
 
+@pytest.mark.slow
 def test_passes_sum_to_the_image_and_progress_reaches_one():
     scene, meshes = small_design()
     seen, bands = [], []
@@ -71,6 +72,7 @@ def test_passes_sum_to_the_image_and_progress_reaches_one():
         assert result.passes[name].max() > 0, name
 
 
+@pytest.mark.slow
 def test_cancelled_between_bands():
     scene, meshes = small_design()
     calls = []

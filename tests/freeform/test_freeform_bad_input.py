@@ -17,6 +17,8 @@ from core_tracer.freeform.meshes import MAX_TRIANGLES_PER_MESH, MeshData
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
 
+pytestmark = pytest.mark.slow
+
 pytest.importorskip("embreex")
 
 

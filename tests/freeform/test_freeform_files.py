@@ -80,6 +80,7 @@ def test_load_renders_the_same_as_the_meshes_in_memory(tmp_path):
     assert from_file.max() > 0.1  # the lamp is seen
 
 
+@pytest.mark.slow
 def test_cli_renders_the_pair_as_the_api(tmp_path):
     path = write_design(tmp_path)
     out = tmp_path / "out.exr"
@@ -91,6 +92,7 @@ def test_cli_renders_the_pair_as_the_api(tmp_path):
     np.testing.assert_array_equal(image, render_passes(scene, meshes).image)
 
 
+@pytest.mark.slow
 def test_lamp_scene_1_presets_load_as_2_and_keep_their_thumbnails():
     for path in sorted(PRESETS.glob("*.json")):
         raw = read_json(path)
@@ -123,6 +125,7 @@ def test_freeform_is_not_part_of_lamp_scene_1():
         parse_scene(doc)
 
 
+@pytest.mark.slow
 def test_cli_validates_the_pair(tmp_path):
     path = write_design(tmp_path)
     proc = run_cli("validate", path)
@@ -131,6 +134,7 @@ def test_cli_validates_the_pair(tmp_path):
     assert f'valid lamp-scene/2, "Mesh lamp", 5 free-form parts ({triangles} triangles)' in proc.stdout
 
 
+@pytest.mark.slow
 def test_a_free_form_preset_is_listed_and_gets_its_thumbnail(tmp_path):
     from core_tracer.library.presets import Library, list_library, make_thumbnail
 

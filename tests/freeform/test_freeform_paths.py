@@ -14,6 +14,8 @@ from core_tracer.freeform.render import NOT_IN_TABLE, TO_BODY
 from core_tracer.raytrace import paths as P
 from core_tracer.scene.validate import parse_scene
 
+pytestmark = pytest.mark.slow
+
 pytest.importorskip("embreex")
 
 

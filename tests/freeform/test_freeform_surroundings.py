@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import fresnel_unpolarised, scene_with, write_exr
+from helpers import fresnel_unpolarised, scene_with, smooth_sky, write_exr
 
 from core_tracer import render_passes as parametric_passes
 from core_tracer.freeform import render_passes, shapes
@@ -30,10 +30,7 @@ IOR = 1.49
 @pytest.fixture
 def sky_exr(tmp_path) -> str:
     """A smooth, everywhere-different sky."""
-    cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
-    lon, lat = cols / W * 2 * np.pi, (0.5 - rows / H) * np.pi
-    sky = np.stack([1.0 + 0.5 * np.sin(lon), 1.0 + 0.5 * np.cos(lon) * np.cos(lat), 1.2 + 0.6 * np.sin(lat)], -1)
-    return write_exr(tmp_path / "sky.exr", sky)
+    return write_exr(tmp_path / "sky.exr", smooth_sky(W, H))
 
 
 def _cycles_radiance(path: str, d: np.ndarray, strength: float, rotation_deg: float) -> np.ndarray:
@@ -71,6 +68,7 @@ OBLIQUE = {"type": "perspective", "position": [-300, -700, 250], "target": [0, 0
            "fov_deg": 3.5}
 
 
+@pytest.mark.slow
 def test_flat_clear_slab_mesh_mirrors_the_environment_by_its_fresnel_reflectance(sky_exr):
     world = {"world": "file", "file": sky_exr, "strength": 1.5, "rotation_deg": 20.0}
     scene, meshes = _slab_design(world, OBLIQUE)
@@ -84,6 +82,7 @@ def test_flat_clear_slab_mesh_mirrors_the_environment_by_its_fresnel_reflectance
     np.testing.assert_allclose(surface[lens_pixels], expected, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_rays_that_miss_see_the_environment_and_a_transparent_film_leaves_them_out(sky_exr):
     world = {"world": "file", "file": sky_exr, "strength": 1.5, "rotation_deg": 20.0}
     scene, meshes = _slab_design(world, {**OBLIQUE, "fov_deg": 12.0})
@@ -179,6 +178,7 @@ def _lamp_pair(sky: str, bulb_on: bool) -> tuple[dict, dict, dict]:
     return scene, parse_scene(doc), {m.name: m for m in meshes}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("bulb_on", [False, True], ids=["unlit", "lit"])
 def test_parametric_and_free_form_agree_under_surroundings_and_sun(sky_exr, bulb_on):
     scene, freeform_scene, meshes = _lamp_pair(sky_exr, bulb_on)
@@ -207,6 +207,7 @@ def test_parametric_and_free_form_agree_under_surroundings_and_sun(sky_exr, bulb
     np.testing.assert_allclose(freeform.passes["lens_surface"], parametric.passes["lens_surface"], rtol=2e-3)
 
 
+@pytest.mark.slow
 def test_a_body_between_the_lamp_and_the_sun_takes_the_phantom_light_where_it_shades(sky_exr):
     # The line toward the sun must pass a lens and nothing opaque: a plate up and to the right, in the sun's way
     # for the lower left reflector points but out of the camera's view, shades those points only.

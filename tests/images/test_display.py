@@ -38,6 +38,7 @@ def _codes(path: Path) -> np.ndarray:
 # Finding Blender's configuration
 
 
+@pytest.mark.slow
 def test_blenders_config_is_found_without_importing_bpy():
     code = ("import sys, core_tracer.images.display as d; p = d.find_config(); "
             "print(p); print('bpy' in sys.modules)")
@@ -101,6 +102,7 @@ for job in jobs:
 '''
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", range(7), ids=["AgX-auto", "AgX-0", "Filmic-auto", "Khronos-auto",
                                                  "FalseColor-auto", "Standard-auto", "Standard--2"])
 def test_cli_png_equals_blenders_own_view_transform(blender_views, case):
@@ -116,8 +118,8 @@ def test_cli_png_equals_blenders_own_view_transform(blender_views, case):
 # Automatic exposure
 
 
-def test_auto_exposure_places_the_lit_region_below_the_shoulder():
-    rng = np.random.default_rng(3)
+@pytest.mark.seed(3)
+def test_auto_exposure_places_the_lit_region_below_the_shoulder(rng):
     image = np.zeros((100, 100, 3), np.float32)
     image[:, :] = (0.3, 0.3, 0.3)  # a lit body
     lens = rng.uniform(8.0, 11.0, (40, 40)).astype(np.float32)  # a cut pattern on a red lens
@@ -157,6 +159,7 @@ def _lens_reading(image, mask, view, ev) -> tuple[float, float]:
     return clipped, float(p95 - p5)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("view_name", VIEWS)
 @pytest.mark.parametrize("preset", sorted(p.stem for p in PRESETS.glob("*.json")))
 def test_auto_exposure_keeps_every_presets_lit_lens_unclipped(preset_renders, preset, view_name):
@@ -186,6 +189,7 @@ def test_auto_exposure_keeps_every_presets_lit_lens_unclipped(preset_renders, pr
     assert clipped_0 >= MAX_CLIPPED or spread_0 < MIN_SPREAD, (preset, view_name, clipped_0, spread_0)
 
 
+@pytest.mark.slow
 def test_four_lamps_each_show_their_cut_pattern_under_agx(preset_renders):
     # Per lamp, not only over the whole image: the red tail lens next to the clear reversing lens.
     image, lens, lit, _, _ = preset_renders["four-lamp-rear-combination"]
@@ -207,6 +211,7 @@ def test_four_lamps_each_show_their_cut_pattern_under_agx(preset_renders):
 # Where Blender's configuration or OpenImageIO is missing
 
 
+@pytest.mark.slow
 def test_without_blenders_config_png_falls_back_to_standard_and_says_so_once(tmp_path):
     exr, png = tmp_path / "linear.exr", tmp_path / "shown.png"
     size = ("--width", "32", "--height", "24")
@@ -234,6 +239,7 @@ def test_without_openimageio_only_standard_is_offered(monkeypatch):
     assert display.view_transform("Standard").note == ""
 
 
+@pytest.mark.slow
 def test_unknown_view_is_refused_before_rendering(tmp_path):
     out = tmp_path / "o.png"
     line = assert_bad_input(run_cli("render", BASELINE, "-o", out, "--view", "Agx"), "--view", "'Agx'", "AgX")
@@ -241,6 +247,7 @@ def test_unknown_view_is_refused_before_rendering(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_study_sheet_png_shares_one_exposure_and_keeps_labels_readable(tmp_path):
     out = tmp_path / "sheet.png"
     proc = run_cli("study", BASELINE, "--vary", "bulb.intensity=2/2/2,8/8/8", "-o", out, "--size", "48x48",
@@ -262,7 +269,9 @@ def test_study_sheet_png_shares_one_exposure_and_keeps_labels_readable(tmp_path)
 
 
 
-def test_png_through_a_view_holds_a_few_bytes_per_pixel(tmp_path, monkeypatch):
+@pytest.mark.slow
+@pytest.mark.seed(1)
+def test_png_through_a_view_holds_a_few_bytes_per_pixel(tmp_path, monkeypatch, rng):
     """The memory budget (core_tracer/budget.py) counts 6 bytes a pixel for a PNG: its 8-bit codes and
     the writer's copy. The view transform works strip by strip and the automatic exposure measures a
     bounded sample, so the float temporaries do not grow with the image (they were 36 bytes a pixel);
@@ -270,7 +279,7 @@ def test_png_through_a_view_holds_a_few_bytes_per_pixel(tmp_path, monkeypatch):
     import tracemalloc
 
     height, width = 2048, 4096
-    image = np.random.default_rng(1).random((height, width, 3), dtype=np.float32) * 8
+    image = rng.random((height, width, 3), dtype=np.float32) * 8
     agx = display.view_transform("AgX")
     tracemalloc.start()
     try:

@@ -44,16 +44,16 @@ def test_kernel_far_field_follows_the_psf():
     assert ratio == pytest.approx(glare.psf(40 * DEG_PER_PX) / glare.psf(20 * DEG_PER_PX), rel=1e-9)
 
 
-def _bright_image(h: int = 48, w: int = 64) -> np.ndarray:
-    rng = np.random.default_rng(11)
+def _bright_image(rng: np.random.Generator, h: int = 48, w: int = 64) -> np.ndarray:
     image = rng.uniform(0.0, 0.8, (h, w, 3)).astype(np.float32)
     image[10, 5] = (40.0, 3.0, 0.5)  # near the edge: its glow would leave the frame
     image[30:33, 40:44] = (5.0, 9.0, 2.0)
     return image
 
 
-def test_energy_is_conserved_per_channel():
-    image = _bright_image()
+@pytest.mark.seed(11)
+def test_energy_is_conserved_per_channel(rng):
+    image = _bright_image(rng)
     out = glare.spread(image, 1.0, 1.0, DEG_PER_PX)
     assert out is not image and out.dtype == np.float32
     before = image.astype(np.float64).sum(axis=(0, 1))
@@ -62,8 +62,9 @@ def test_energy_is_conserved_per_channel():
     assert not np.array_equal(out, image)
 
 
-def test_image_without_bright_pixels_is_unchanged():
-    image = _bright_image()
+@pytest.mark.seed(11)
+def test_image_without_bright_pixels_is_unchanged(rng):
+    image = _bright_image(rng)
     image = np.minimum(image, 0.99)
     out = glare.spread(image, 1.0, 1.0, DEG_PER_PX)
     assert out is image
@@ -84,10 +85,11 @@ def test_only_the_light_above_the_threshold_spreads():
     assert np.allclose(spread_both, spread_alone * 9.5 / 9.0, rtol=1e-5, atol=1e-6)  # float32 output
 
 
-def test_off_leaves_the_render_unchanged():
+@pytest.mark.seed(11)
+def test_off_leaves_the_render_unchanged(rng):
     scene = load_scene(FOUR_LAMPS)
     assert scene["glare"] == {"on": False, "threshold": 1.0, "strength": 1.0}
-    image = _bright_image()
+    image = _bright_image(rng)
     assert glare.apply(image, scene) is image
 
 
@@ -103,6 +105,7 @@ def test_a_lit_lamp_glows_around_its_lens():
     assert np.abs(out - image).sum() < 0.5 * image.sum()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("field", "value", "needle"), [
     ("strength", 2.0, "[0, 1]"),
     ("threshold", 0.0, "(0, 1e+06]"),
@@ -121,6 +124,7 @@ def test_scene_with_glare_validates():
     assert scene["glare"] == {"on": True, "threshold": 1.0, "strength": 0.5}
 
 
+@pytest.mark.slow
 def test_glare_is_in_the_memory_budget(tmp_path):
     doc = json.loads(FOUR_LAMPS.read_text())
     doc["glare"] = {"on": True}
@@ -133,6 +137,7 @@ def test_glare_is_in_the_memory_budget(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_cli_render_and_study_hold_the_glare(tmp_path):
     from core_tracer import render
     from core_tracer.images.imageio import read_image

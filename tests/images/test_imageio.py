@@ -27,8 +27,8 @@ def _leftovers(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir())
 
 
-def test_exr_round_trip_is_exact(tmp_path):
-    rng = np.random.default_rng(1)
+@pytest.mark.seed(1)
+def test_exr_round_trip_is_exact(tmp_path, rng):
     img = _random_image(rng)
     path = tmp_path / "out.exr"
     imageio.write_image(path, img)
@@ -168,6 +168,7 @@ def test_header_with_a_broken_scene_is_reported(tmp_path):
     assert os.path.exists(path)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("view", ["Standard", "AgX"])
 def test_png_exposure_and_view_are_undone_on_reading(tmp_path, view):
     image = np.full((4, 6, 3), 4.0, dtype=np.float32)  # a bright lamp: clips at exposure 0 in Standard

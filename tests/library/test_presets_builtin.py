@@ -104,6 +104,7 @@ def test_four_lamp_rear_combination():
     assert all(lamp["bulb"]["on"] for lamp in lamps)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
 def test_every_preset_renders(path):
     scene = parse_scene(read_json(path))
@@ -114,6 +115,7 @@ def test_every_preset_renders(path):
     assert image.max() > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
 def test_every_preset_ships_its_thumbnail(path, tmp_path):
     entries, warnings = P.list_presets([P.builtin_library()])

@@ -182,6 +182,7 @@ def test_names_never_leave_the_library(tmp_path):
 # A folder of hostile presets
 
 
+@pytest.mark.slow
 def test_hostile_folder_through_the_api(tmp_path, monkeypatch):
     folder = tmp_path / "hostile"
     good, bad = make_hostile_folder(folder)
@@ -218,6 +219,7 @@ def test_ten_to_the_six_lamps_stop_validation_at_once():
 
 
 
+@pytest.mark.slow
 def test_hostile_folder_through_the_cli(tmp_path):
     folder = tmp_path / "hostile"
     good, bad = make_hostile_folder(folder)
@@ -240,6 +242,7 @@ def test_hostile_folder_through_the_cli(tmp_path):
     assert f"{len(good)} valid, {len(bad)} not valid" in proc.stderr
 
 
+@pytest.mark.slow
 def test_cli_lists_and_shows_the_builtin_presets():
     proc = run_cli("presets", "list", "--json")
     assert proc.returncode == 0, proc.stderr
@@ -256,6 +259,7 @@ def test_cli_lists_and_shows_the_builtin_presets():
     assert run_cli("presets", "show", "Four-lamp rear combination").stdout == proc.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["../presets/paper-baseline.json", "/etc/passwd", "no-such-preset"])
 def test_cli_show_refuses_paths_and_unknown_names(name):
     proc = run_cli("presets", "show", name)
@@ -267,6 +271,7 @@ def test_cli_show_refuses_paths_and_unknown_names(name):
 # Thumbnails
 
 
+@pytest.mark.slow
 def test_thumbnail_beside_a_writable_library_refreshes_when_the_preset_changes(tmp_path):
     lib = P.Library("mine", str(tmp_path / "lib"), writable=True)
     os.mkdir(lib.folder)
@@ -304,6 +309,7 @@ def _thumbnail_library(tmp_path: Path, writable: bool) -> tuple[P.Library, P.Pre
     return lib, entry
 
 
+@pytest.mark.slow
 def test_a_read_only_library_without_thumbnails_uses_the_cache(tmp_path):
     lib, entry = _thumbnail_library(tmp_path, writable=False)
     cache = tmp_path / "cache"
@@ -389,6 +395,7 @@ def test_libraries_list_only_their_json_files(tmp_path):
     assert [e.file for e in entries] == [entry.file] and warnings == []
 
 
+@pytest.mark.slow
 def test_shipped_thumbnails_are_made_on_purpose(tmp_path):
     lib, entry = _thumbnail_library(tmp_path, writable=False)
     folder = Path(lib.folder)
@@ -431,6 +438,7 @@ def test_shipped_thumbnails_are_made_on_purpose(tmp_path):
     assert os.stat(P.shipped_thumbnail(new)).st_mode & 0o644 == 0o644  # readable by whoever installs it
 
 
+@pytest.mark.slow
 def test_deleting_a_preset_removes_its_thumbnails(tmp_path):
     lib, entry = _thumbnail_library(tmp_path, writable=True)
     for sub in ("thumbnails", ".thumbnails"):
@@ -441,6 +449,7 @@ def test_deleting_a_preset_removes_its_thumbnails(tmp_path):
     assert files_in(Path(lib.folder) / "thumbnails") == ["keep.png"]
 
 
+@pytest.mark.slow
 def test_a_change_of_display_makes_thumbnails_stale(tmp_path, monkeypatch):
     lib, entry = _thumbnail_library(tmp_path, writable=False)
     made, _, _ = shipping.make_shipped_thumbnails(lib, size=16)
@@ -450,6 +459,7 @@ def test_a_change_of_display_makes_thumbnails_stale(tmp_path, monkeypatch):
     assert [e.file for e in state.missing] == [entry.file] and state.stale == (Path(made[0]).name,)
 
 
+@pytest.mark.slow
 def test_shipped_thumbnails_need_blenders_colour_configuration(tmp_path):
     lib, _ = _thumbnail_library(tmp_path, writable=False)
     env = {**os.environ, "LAMP_OCIO_CONFIG": str(tmp_path / "missing.ocio")}

@@ -40,6 +40,7 @@ def test_the_sun_is_high_by_day_low_in_the_evening_and_absent_at_night():
     assert _load("night", "lit")["light"]["strength"] == 0.0
 
 
+@pytest.mark.slow
 def test_the_low_evening_sun_lights_the_unlit_lamps_and_the_night_does_not():
     if environment.bundled_folder() is None:
         pytest.skip("Blender's world images are not on this machine")

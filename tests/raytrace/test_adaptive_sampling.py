@@ -22,6 +22,7 @@ def _render(case: str, threshold: float | None, size=(96, 64), **kw):
                          adaptive_threshold=threshold, **kw)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["four-lamp-rear-combination", "paper-baseline"])
 def test_adaptive_agrees_with_every_sample_and_traces_less(case):
     full, adaptive = _render(case, 0.0), _render(case, None)
@@ -33,6 +34,7 @@ def test_adaptive_agrees_with_every_sample_and_traces_less(case):
     assert adaptive.stats["segments"] < 0.9 * full.stats["segments"]
 
 
+@pytest.mark.slow
 def test_a_lax_threshold_is_visibly_wrong():
     """The tolerance above tells adaptive sampling from a careless one: at a threshold of one
     whole brightness, pixels across lens rims keep their few pilot samples."""
@@ -40,6 +42,7 @@ def test_a_lax_threshold_is_visibly_wrong():
     assert np.abs(lax.image.astype(np.float64) - full.image).max() > 10 * MAX_OF_PEAK * full.image.max()
 
 
+@pytest.mark.slow
 def test_pixels_taking_every_sample_are_the_full_render():
     """With the smallest threshold every pixel whose pilot samples differ at all takes every
     sample, summed as without adaptive sampling; the others are flat, their mean of 4 equal
@@ -48,6 +51,7 @@ def test_pixels_taking_every_sample_are_the_full_render():
     np.testing.assert_allclose(strict.image, full.image, rtol=1e-6, atol=0)
 
 
+@pytest.mark.slow
 def test_adaptive_is_the_same_whatever_the_threads_and_bands(monkeypatch):
     one = _render("four-lamp-rear-combination", None, size=(40, 30), threads=1).image
     monkeypatch.setattr(engine.sampling, "TILE_RAYS", 300)  # bands of 1-2 rows, pilot groups split mid-row
@@ -69,6 +73,7 @@ def test_pilot_samples_spread_over_the_pixel(samples):
     assert len(set(pilot.tolist())) == 4
 
 
+@pytest.mark.slow
 def test_the_rows_outside_a_band_are_traced_only_where_they_decide(monkeypatch):
     """A band traces the pilot samples of its neighbours in the rows just outside it only next to
     its edge rows' calm pixels (``adaptive._outside_rows``): the day preset (sky, body, lenses and

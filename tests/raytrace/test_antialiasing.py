@@ -39,6 +39,7 @@ def test_one_sample_is_the_pixel_centre_bit_for_bit():
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.slow
 def test_many_box_samples_equal_the_area_average_of_a_fine_render():
     # The box filter's mean over a pixel is its area average: a 32x finer render, block-averaged.
     # 256 samples come within 1 % of it on average over the four-lamp combination (cut creases and
@@ -78,6 +79,7 @@ def test_blackman_harris_is_cycles_default():
     assert pixel_filter.filter_support("blackman-harris") == 1.5
 
 
+@pytest.mark.slow
 def test_same_image_every_run_and_any_threads(monkeypatch):
     scene = _four_lamps(samples=6)
     first = _image(scene, 30, 20, threads=1)
@@ -89,6 +91,7 @@ def test_same_image_every_run_and_any_threads(monkeypatch):
     np.testing.assert_allclose(_image(scene, 30, 20, threads=2), first, rtol=1e-5, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_samples_smooth_the_silhouette():
     # The body's bottom edge against the black world: a ramp, not a step.
     scene = scene_with(**{"image.samples": 16})

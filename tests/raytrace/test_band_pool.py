@@ -17,6 +17,8 @@ from helpers import PRESETS, scene_with
 from core_tracer import load_scene, processes
 from core_tracer.raytrace import band_pool, engine
 
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def pool():

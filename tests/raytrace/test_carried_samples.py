@@ -14,6 +14,8 @@ from helpers import scene_with
 from core_tracer.raytrace import engine
 from core_tracer.raytrace.camera import make_camera
 
+pytestmark = pytest.mark.slow
+
 WIDTH, HEIGHT, SAMPLES = 48, 36, 8
 
 

@@ -13,6 +13,8 @@ from helpers import scene_with
 
 from core_tracer.raytrace import engine
 
+pytestmark = pytest.mark.slow
+
 WIDTH, HEIGHT = 96, 72
 
 

@@ -96,10 +96,11 @@ def _random_rays(rng, cyl, n):
     return o, d
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("side", ["+x", "-x"])
 @pytest.mark.parametrize("pitch, height", [(9.0, 1.5), (6.0, 4.0), (12.0, 0.3)])
-def test_the_curved_cut_walk_finds_what_testing_every_cell_finds(side, pitch, height):
-    rng = np.random.default_rng(12)
+@pytest.mark.seed(12)
+def test_the_curved_cut_walk_finds_what_testing_every_cell_finds(side, pitch, height, rng):
     cyl = lens_cylinder(_lamp(100.0, side, pitch, height))
     rho = cut_sphere_radius(pitch, height)
     o, d = _random_rays(rng, cyl, 4000)
@@ -114,9 +115,10 @@ def test_the_curved_cut_walk_finds_what_testing_every_cell_finds(side, pitch, he
     np.testing.assert_allclose(t[hit], brute[hit], rtol=0, atol=1e-7)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("side", ["+x", "-x"])
-def test_a_ray_leaving_a_curved_cut_finds_no_nearer_hit_and_not_its_own_cap(side):
-    rng = np.random.default_rng(5)
+@pytest.mark.seed(5)
+def test_a_ray_leaving_a_curved_cut_finds_no_nearer_hit_and_not_its_own_cap(side, rng):
     cyl = lens_cylinder(_lamp(100.0, side))
     rho = cut_sphere_radius(PITCH, HEIGHT)
     o, d = _random_rays(rng, cyl, 6000)
@@ -149,8 +151,8 @@ def test_a_ray_leaving_a_curved_cut_finds_no_nearer_hit_and_not_its_own_cap(side
         np.testing.assert_allclose(t2[finite], brute[finite], rtol=0, atol=1e-7)
 
 
-def test_the_cut_hits_lie_on_their_caps_and_the_normal_points_to_the_air():
-    rng = np.random.default_rng(3)
+@pytest.mark.seed(3)
+def test_the_cut_hits_lie_on_their_caps_and_the_normal_points_to_the_air(rng):
     cyl = lens_cylinder(_lamp(100.0, "+x"))
     rho = cut_sphere_radius(PITCH, HEIGHT)
     o, d = _random_rays(rng, cyl, 3000)
@@ -167,8 +169,8 @@ def test_the_cut_hits_lie_on_their_caps_and_the_normal_points_to_the_air():
     np.testing.assert_allclose(np.linalg.norm(normal[hit], axis=1), 1.0, atol=1e-12)
 
 
-def test_a_smooth_inner_face_is_the_base_cylinder():
-    rng = np.random.default_rng(4)
+@pytest.mark.seed(4)
+def test_a_smooth_inner_face_is_the_base_cylinder(rng):
     cyl = lens_cylinder(_lamp(120.0, "-x", height=0.0))
     o, d = _random_rays(rng, cyl, 2000)
     n = len(o)
@@ -179,8 +181,8 @@ def test_a_smooth_inner_face_is_the_base_cylinder():
     np.testing.assert_allclose(np.hypot(p[:, 0] - cyl["axis_x"], p[:, 1] - cyl["radius"]), cyl["base"], atol=1e-9)
 
 
-def test_the_outer_cylinder_is_met_from_inside_on_the_cylinder():
-    rng = np.random.default_rng(6)
+@pytest.mark.seed(6)
+def test_the_outer_cylinder_is_met_from_inside_on_the_cylinder(rng):
     cyl = lens_cylinder(_lamp(100.0, "+x"))
     o, d = _random_rays(rng, cyl, 2000)
     n = len(o)
@@ -209,12 +211,12 @@ def _wrap_scene(radius: float = 100.0) -> dict:
     return doc
 
 
-def test_the_body_front_curves_on_its_cylinder_and_rays_enter_it_from_outside():
+@pytest.mark.seed(8)
+def test_the_body_front_curves_on_its_cylinder_and_rays_enter_it_from_outside(rng):
     scene = normalize(_wrap_scene())
     (side, x_t, radius), = body_wraps(scene)
     assert (side, x_t, radius) == (1.0, -R, 100.0)
     lo, hi = body_box.body_box(scene["body"])
-    rng = np.random.default_rng(8)
     target = np.stack([rng.uniform(-70, 70, 5000), rng.uniform(0, 60, 5000), rng.uniform(-70, 70, 5000)], axis=1)
     o = np.array([300.0, -400.0, 50.0]) + rng.normal(size=(5000, 3)) * 20
     d = target - o
@@ -235,6 +237,7 @@ def test_the_body_front_curves_on_its_cylinder_and_rays_enter_it_from_outside():
         assert (outside_box | (q[:, 1] < f) | np.isnan(f)).all()
 
 
+@pytest.mark.slow
 def test_a_flat_lens_that_names_the_cylinder_fields_renders_the_default_image_bit_for_bit():
     plain = baseline_doc()
     plain["image"] = {"width": 64, "height": 64}
@@ -243,6 +246,7 @@ def test_a_flat_lens_that_names_the_cylinder_fields_renders_the_default_image_bi
     assert np.array_equal(render(normalize(plain)), render(normalize(named)))
 
 
+@pytest.mark.slow
 def test_a_large_wrap_radius_converges_to_the_flat_lens_image():
     flat = _wrap_scene()
     flat["lamps"][0]["lens"]["shape"] = "flat"
@@ -286,6 +290,7 @@ def test_a_flat_lens_on_the_curved_front_is_refused():
         normalize(doc)
 
 
+@pytest.mark.slow
 def test_every_transition_through_a_cylindrical_lens_is_in_table_1():
     from core_tracer.raytrace import paths
     from core_tracer.raytrace.engine import render_passes
@@ -316,6 +321,7 @@ def test_the_panel_hint_gives_the_smallest_wrap_radius_validation_allows():
                 normalize(trial)
 
 
+@pytest.mark.slow
 def test_a_lens_wrapping_toward_minus_x_renders_the_mirror_image_of_one_wrapping_toward_plus_x():
     plus = _wrap_scene()
     plus["camera"] = {"position": [300.0, -900.0, 80.0], "target": [0.0, 20.0, 0.0], "up": [0, 0, 1],
@@ -335,6 +341,7 @@ def test_a_lens_wrapping_toward_minus_x_renders_the_mirror_image_of_one_wrapping
     assert float(np.mean(diff > 1e-3 * float(a.max()))) < 0.01
 
 
+@pytest.mark.slow
 def test_surroundings_light_and_surround_a_wrapped_body(tmp_path):
     # Under a uniform world W with the sun off, a Lambertian body shows rho W on its flat and its
     # curved front alike, and the rays that miss see W (README: surroundings; cylindrical lens).
@@ -360,7 +367,8 @@ def test_surroundings_light_and_surround_a_wrapped_body(tmp_path):
     np.testing.assert_allclose(missed, 0.3, rtol=1e-6)
 
 
-def test_the_cut_dispatch_gives_each_ray_its_own_lamps_walk():
+@pytest.mark.seed(7)
+def test_the_cut_dispatch_gives_each_ray_its_own_lamps_walk(rng):
     """``cut_surface`` on a scene with all four cut walks (fish-eye on a flat lens, fish-eye on a
     cylindrical lens, saw-tooth, flutes): every ray gets exactly what its lamp's walk alone gives."""
     doc = json.loads((Path(__file__).resolve().parents[2] / "presets" / "four-lamp-rear-combination.json").read_text())
@@ -369,7 +377,6 @@ def test_the_cut_dispatch_gives_each_ray_its_own_lamps_walk():
     doc["lamps"][1]["cuts"].update(type="sawtooth", tooth_angle=25.0, orientation=0.0)
     doc["lamps"][2]["cuts"].update(type="flutes", orientation=30.0)
     lamps = LampTable.from_scene(normalize(doc))
-    rng = np.random.default_rng(7)
     n = 4000
     lamp = rng.integers(0, 4, n)
     o = np.stack([rng.uniform(-30, 30, n), rng.uniform(-2.0, 12.0, n), rng.uniform(-30, 30, n)], axis=1)

@@ -16,7 +16,7 @@ import sys
 
 import numpy as np
 import pytest
-from helpers import assert_bad_input, baseline_doc, fresnel_unpolarised, run_cli, scene_with, write_exr
+from helpers import assert_bad_input, baseline_doc, fresnel_unpolarised, run_cli, scene_with, smooth_sky, write_exr
 
 from core_tracer import render_passes
 from core_tracer.raytrace import engine, environment
@@ -36,10 +36,7 @@ def ramp_exr(tmp_path) -> str:
 @pytest.fixture
 def smooth_exr(tmp_path) -> str:
     """A smooth, everywhere-different sky for the pixel tests."""
-    cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
-    lon, lat = cols / W * 2 * np.pi, (0.5 - rows / H) * np.pi
-    sky = np.stack([1.0 + 0.5 * np.sin(lon), 1.0 + 0.5 * np.cos(lon) * np.cos(lat), 1.2 + 0.6 * np.sin(lat)], -1)
-    return write_exr(tmp_path / "sky.exr", sky)
+    return write_exr(tmp_path / "sky.exr", smooth_sky(W, H))
 
 
 def _cycles_uv(d: np.ndarray, rotation_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -87,8 +84,8 @@ def test_rotation_is_the_mapping_nodes_z_rotation(ramp_exr):
     assert (r, g) == pytest.approx((0.25 * W - 0.5, 0.5 * H - 0.5), abs=1e-6)
 
 
-def test_radiance_is_cycles_bilinear_lookup_times_strength(smooth_exr):
-    rng = np.random.default_rng(7)
+@pytest.mark.seed(7)
+def test_radiance_is_cycles_bilinear_lookup_times_strength(smooth_exr, rng):
     d = rng.normal(size=(200, 3))
     d /= np.linalg.norm(d, axis=1)[:, None]
     env = _env(smooth_exr, strength=2.5, rotation_deg=-30.0)
@@ -103,7 +100,9 @@ def test_uniform_environment_gives_pi_times_its_radiance_as_irradiance(tmp_path)
     np.testing.assert_allclose(env.irradiance(normals), np.full((4, 3), math.pi * 0.6), rtol=1.5e-3)
 
 
-def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path):
+@pytest.mark.slow
+@pytest.mark.seed(11)
+def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path, rng):
     # A sky with a small bright sun: E(n) = sum over pixels of L max(0, n . w) dOmega, by brute force.
     cols, rows = np.meshgrid(np.arange(4 * W) + 0.5, np.arange(4 * H) + 0.5)
     lon, lat = cols / (4 * W) * 2 * np.pi, (0.5 - rows / (4 * H)) * np.pi
@@ -111,7 +110,6 @@ def test_irradiance_is_the_cosine_weighted_integral_of_the_radiance(tmp_path):
     sky[40, 200] = 5000.0
     env = _env(write_exr(tmp_path / "sun_sky.exr", sky), strength=1.3, rotation_deg=25.0)
     d, solid = env._pixel_directions()
-    rng = np.random.default_rng(11)
     normals = np.concatenate([np.eye(3), -np.eye(3), rng.normal(size=(30, 3))])
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     exact = 1.3 * np.array([(np.maximum(0.0, d @ n) * solid) @ sky.reshape(-1, 3).astype(np.float64)
@@ -174,6 +172,7 @@ def test_eye_rays_that_miss_see_the_environment(smooth_exr):
     np.testing.assert_allclose(image[missed], expected, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_body_under_a_uniform_environment_shows_its_colour_times_the_radiance(tmp_path):
     # A Lambertian surface under a uniform world W shows rho W (BLENDER-NOTES: Cycles gave 0.150 for 0.5, 0.3).
     grey = write_exr(tmp_path / "grey.exr", np.full((H, W, 3), 0.3, np.float32))
@@ -207,6 +206,7 @@ def test_a_missing_file_is_named(tmp_path):
         engine.render(scene, 4, 4)
 
 
+@pytest.mark.slow
 def test_bundled_worlds_are_found_without_importing_bpy(repo_root):
     code = ("import sys; from core_tracer.raytrace import environment as e; f = e.bundled_folder(); "
             "print(f is not None and all((f / (n + '.exr')).is_file() for n in e.BUNDLED_WORLDS), "
@@ -227,6 +227,7 @@ def test_without_blenders_worlds_the_render_says_so_and_names_the_alternative(mo
         engine.render(scene, 4, 4)
 
 
+@pytest.mark.slow
 def test_cli_reports_a_missing_environment_file_in_one_line(tmp_path):
     doc = baseline_doc()
     doc["environment"] = {"world": "file", "file": str(tmp_path / "sky.hdr")}

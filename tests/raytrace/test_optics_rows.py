@@ -23,8 +23,8 @@ def _awkward_rows(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 @pytest.mark.parametrize("layout", ["contiguous", "one_row_broadcast", "every_other_row", "fortran"])
-def test_dot_is_einsum_bit_for_bit(layout):
-    rng = np.random.default_rng(7)
+@pytest.mark.seed(7)
+def test_dot_is_einsum_bit_for_bit(layout, rng):
     a, b = _awkward_rows(rng, 200_000), _awkward_rows(rng, 200_000)
     b[::7] = -0.0  # rows whose products are all -0: einsum's sum is +0
     a[::7] = np.abs(a[::7])
@@ -42,10 +42,10 @@ def test_dot_is_einsum_bit_for_bit(layout):
     assert (np.signbit(got[::7]) == np.signbit(expected[::7])).all()
 
 
-def test_dot_of_unit_rows_differs_from_the_plain_sum_where_einsum_does():
+@pytest.mark.seed(8)
+def test_dot_of_unit_rows_differs_from_the_plain_sum_where_einsum_does(rng):
     # The order matters: (a0 b0 + a1 b1) + a2 b2 differs from einsum's sum in the last bit for
     # about a third of random rows, so a helper summing in that order would change the images.
-    rng = np.random.default_rng(8)
     a, b = rng.standard_normal((100_000, 3)), rng.standard_normal((100_000, 3))
     products = a * b
     plain = (products[:, 0] + products[:, 1]) + products[:, 2]
@@ -53,8 +53,8 @@ def test_dot_of_unit_rows_differs_from_the_plain_sum_where_einsum_does():
     assert (_bits(optics.dot(a, b)) == _bits(np.einsum("ij,ij->i", a, b))).all()
 
 
-def test_scaled_and_normalize_are_the_broadcast_products_bit_for_bit():
-    rng = np.random.default_rng(9)
+@pytest.mark.seed(9)
+def test_scaled_and_normalize_are_the_broadcast_products_bit_for_bit(rng):
     v, s = _awkward_rows(rng, 100_000), rng.standard_normal(100_000) * 10.0 ** rng.integers(-100, 100, 100_000)
     with np.errstate(invalid="ignore", over="ignore", under="ignore"):
         assert (_bits(optics.scaled(v, s)) == _bits(v * s[:, None])).all()
@@ -67,10 +67,10 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.sqrt(np.einsum("ij,ij->i", v, v))[:, None]
 
 
-def test_surface_optics_are_their_plain_formulas_bit_for_bit():
+@pytest.mark.seed(10)
+def test_surface_optics_are_their_plain_formulas_bit_for_bit(rng):
     # reflect, refract, fresnel_reflectance and blinn work in place a column at a time: the same
     # operations on every element as the textbook expressions, so the same bits.
-    rng = np.random.default_rng(10)
     n_rays = 50_000
     d, n = _unit(rng.standard_normal((n_rays, 3))), _unit(rng.standard_normal((n_rays, 3)))
     n = np.where((np.einsum("ij,ij->i", d, n) > 0.0)[:, None], -n, n)  # facing the incident side

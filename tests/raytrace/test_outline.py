@@ -40,10 +40,11 @@ def _walls(shape: Outline, n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.full((n, 2), [shape.half_w, shape.half_h]), np.full(n, shape.corner)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shape", [Outline(45, 30, 10), Outline(45, 30, 0), Outline(30, 30, 30),
                                    Outline(60, 12, 11.5)], ids=["rounded", "sharp", "all-corner", "slot"])
-def test_wall_exit_agrees_with_every_piece_tested_on_random_rays(shape):
-    rng = np.random.default_rng(12)
+@pytest.mark.seed(12)
+def test_wall_exit_agrees_with_every_piece_tested_on_random_rays(shape, rng):
     o, d = _rays_inside(shape, 5000, rng)
     assert len(o) > 3000
     half, corner = _walls(shape, len(o))
@@ -59,11 +60,11 @@ def test_wall_exit_agrees_with_every_piece_tested_on_random_rays(shape):
     np.testing.assert_allclose(shape.signed_distance(hit[:, 0], hit[:, 2]), 0.0, atol=1e-9)
 
 
-def test_from_a_wall_hit_there_is_no_closer_hit():
+@pytest.mark.seed(3)
+def test_from_a_wall_hit_there_is_no_closer_hit(rng):
     # Onward from the hit the ray is outside: no hit beyond T_MIN. Back along the ray the wall is
     # next met at the ray's other crossing, never before the origin the ray came from (inside).
     shape = Outline(45, 30, 10)
-    rng = np.random.default_rng(3)
     o, d = _rays_inside(shape, 4000, rng)
     half, corner = _walls(shape, len(o))
     t = side_wall.hit_outline_wall(o, d, half, corner)
@@ -73,6 +74,7 @@ def test_from_a_wall_hit_there_is_no_closer_hit():
     assert np.all(back >= t * (1 - 1e-12))
 
 
+@pytest.mark.slow
 def test_rectangle_area_is_w_h_less_the_corners():
     assert Outline(45, 30, 0).area == 90 * 60
     assert Outline(45, 30, 10).area == pytest.approx(90 * 60 - (4 - math.pi) * 100, rel=1e-15)
@@ -110,16 +112,17 @@ def test_reflector_meets_the_rim_plane_at_the_outline_corner():
     assert g["vertex"] == pytest.approx(g["rim"] + reach ** 2 / (4 * 18.0), rel=1e-15)
 
 
-def test_lens_test_of_eye_rays_follows_the_outline():
+@pytest.mark.seed(5)
+def test_lens_test_of_eye_rays_follows_the_outline(rng):
     scene = square_scene(**{"lamps[0].center": [10.0, -5.0]})
     table = LampTable.from_scene(scene)
     shape = Outline(45, 30, 10)
-    rng = np.random.default_rng(5)
     x, z = rng.uniform(-60, 60, 20000), rng.uniform(-40, 40, 20000)
     lamp = outer_face.lens_at(x + 10.0, z - 5.0, table)
     np.testing.assert_array_equal(lamp == 0, shape.signed_distance(x, z) <= 0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edits", [{}, {"lamps[0].lens.corner_radius": 0.0},
                                    {"lamps[0].lens.ior": 2.4, "lamps[0].cuts.height": 4.0}],
                          ids=["rounded", "sharp", "steep-cuts"])
@@ -141,6 +144,7 @@ def test_wall_exit_of_rays_along_the_axis_is_none():
     assert np.isinf(side_wall.hit_outline_wall(o, d, np.array([[45.0, 30.0]]), np.array([10.0])))[0]
 
 
+@pytest.mark.slow
 def test_square_lamp_shows_the_rounded_rectangle():
     # Seen head-on, the lens pixels are those inside the outline (the pixel centres of an
     # orthographic camera 0.5 mm apart) and the corners beyond the arcs are body.
@@ -156,6 +160,7 @@ def test_square_lamp_shows_the_rounded_rectangle():
     assert render(scene).shape == (140, 200, 3)
 
 
+@pytest.mark.slow
 def test_round_and_rectangular_lamps_together_match_the_reference():
     # The side wall splits its rays between the circle's formula and the outline's: both in one scene.
     import json

@@ -41,8 +41,8 @@ def _random_rays(rng, n, y_lo, y_hi, radius=R):
 
 
 @pytest.mark.parametrize("pitch, focal, ior", [(2.0, 50.0, 1.49), (0.7, 60.0, 1.59), (9.0, 55.0, 1.49)])
-def test_ring_walk_agrees_with_every_ring_tested(pitch, focal, ior):
-    rng = np.random.default_rng(12)
+@pytest.mark.seed(12)
+def test_ring_walk_agrees_with_every_ring_tested(pitch, focal, ior, rng):
     slopes, y_b = _plate(pitch=pitch, focal=focal, ior=ior)
     # from inside the plate, from behind it, and from inside the slab of the rings
     o = np.concatenate([_random_rays(rng, 4000, Y_A - 2.0, Y_A, )[0], _random_rays(rng, 4000, y_b, y_b + 40)[0],
@@ -55,10 +55,10 @@ def test_ring_walk_agrees_with_every_ring_tested(pitch, focal, ior):
     assert np.isfinite(t).sum() > 3000  # the rays do meet the rings
 
 
-def test_ring_walk_agrees_with_every_ring_tested_when_every_ray_walks():
+@pytest.mark.seed(21)
+def test_ring_walk_agrees_with_every_ring_tested_when_every_ray_walks(rng):
     # Rays that all start between planes A and B (on the rings, as most rays the walk sees do):
     # the walk takes them all without gathering them, and still finds what testing every ring finds.
-    rng = np.random.default_rng(21)
     slopes, y_b = _plate()
     o, d = _random_rays(rng, 6000, Y_A, y_b)
     n = len(o)
@@ -72,8 +72,8 @@ def test_ring_walk_agrees_with_every_ring_tested_when_every_ray_walks():
     assert np.isfinite(t).sum() > 3000
 
 
-def test_ring_walk_stops_at_its_limit():
-    rng = np.random.default_rng(3)
+@pytest.mark.seed(3)
+def test_ring_walk_stops_at_its_limit(rng):
     slopes, y_b = _plate()
     o, d = _random_rays(rng, 3000, y_b, y_b + 30)
     free, _ = _walk(o, d, slopes, y_b)
@@ -98,8 +98,8 @@ def test_ring_walk_visits_a_few_rings_not_all():
     assert np.isfinite(t).all()
 
 
-def test_reintersecting_from_a_hit_finds_no_closer_hit():
-    rng = np.random.default_rng(5)
+@pytest.mark.seed(5)
+def test_reintersecting_from_a_hit_finds_no_closer_hit(rng):
     slopes, y_b = _plate()
     o, d = _random_rays(rng, 20000, y_b, y_b + 40)
     t, normal = _walk(o, d, slopes, y_b)
@@ -187,6 +187,7 @@ def _prism_scene(**plate):
     return normalize(scene)
 
 
+@pytest.mark.slow
 def test_prism_plate_lamp_renders_through_its_table():
     scene = _prism_scene()
     result = render_passes(scene, 96, 96, record_transitions=True)
@@ -199,6 +200,7 @@ def test_prism_plate_lamp_renders_through_its_table():
     assert np.isfinite(result.image).all() and (result.image >= 0).all()
 
 
+@pytest.mark.slow
 def test_prism_plate_sends_the_bulb_straight_through_to_an_eye_on_the_axis():
     # An orthographic eye on the axis: parallel rays through a flat clear lens and the plate all
     # converge on the focus, so the whole plate shows the bulb, except where they meet a draft.
@@ -296,6 +298,7 @@ def test_the_bulb_offset_range_is_shown_without_rounding_noise():
         normalize(scene)
 
 
+@pytest.mark.slow
 def test_a_study_varies_the_prism_plates_fields():
     from core_tracer.study.parameters import apply_value, resolve_parameter, study_parameters
 

@@ -15,10 +15,11 @@ from core_tracer.raytrace import engine, environment, pixel_filter
 from core_tracer.raytrace.camera import eye_rays, make_camera
 
 
-def test_filter_offsets_are_np_interp_of_the_inverse_distribution_value_for_value():
+@pytest.mark.seed(5)
+def test_filter_offsets_are_np_interp_of_the_inverse_distribution_value_for_value(rng):
     cdf, x = pixel_filter._inverse_cdf_table("blackman-harris")
     # uniform numbers, and the table's own knots and their neighbours (the ends of the intervals)
-    u = np.concatenate([np.random.default_rng(5).random(200_000), cdf[:-1], np.nextafter(cdf[1:-1], 0.0),
+    u = np.concatenate([rng.random(200_000), cdf[:-1], np.nextafter(cdf[1:-1], 0.0),
                         np.nextafter(cdf[:-1], 1.0), np.arange(4096) / 4096, [np.nextafter(1.0, 0.0)]])
     np.testing.assert_array_equal(pixel_filter.offsets_of("blackman-harris", u), np.interp(u, cdf, x))
 
@@ -48,8 +49,8 @@ def _bilinear_wrapped(pixels: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.nd
     return top * (1 - fy) + bottom * fy
 
 
-def test_radiance_at_the_seams_and_poles_repeats_the_border(tmp_path):
-    rng = np.random.default_rng(3)
+@pytest.mark.seed(3)
+def test_radiance_at_the_seams_and_poles_repeats_the_border(tmp_path, rng):
     pixels = rng.random((16, 32, 3)).astype(np.float32)
     env = environment.Environment(pixels, 1.7, math.radians(30.0))
     # along the seam (u = 0 and 1), at the poles (v = 1, 0), and everywhere
@@ -68,10 +69,10 @@ def _bits(a: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a).view(np.uint64)
 
 
-def test_radiance_and_irradiance_are_the_plain_formulas_bit_for_bit():
+@pytest.mark.seed(6)
+def test_radiance_and_irradiance_are_the_plain_formulas_bit_for_bit(rng):
     # The lookups work in place, a channel at a time on a padded copy of the image: the same
     # operations on every element as the plain expressions below, so the same bits.
-    rng = np.random.default_rng(6)
     pixels = (rng.random((16, 32, 3)) * 10.0).astype(np.float32)
     env = environment.Environment(pixels, 1.7, math.radians(30.0))
     d = rng.normal(size=(20_000, 3))
@@ -102,8 +103,9 @@ def test_radiance_and_irradiance_are_the_plain_formulas_bit_for_bit():
     assert (_bits(env.irradiance(d)) == _bits(expected)).all()
 
 
-def test_rays_missing_the_lamp_are_looked_up_as_the_tracer_would_trace_them(tmp_path):
-    sky = write_exr(tmp_path / "sky.exr", np.random.default_rng(4).random((32, 64, 3)).astype(np.float32) + 0.1)
+@pytest.mark.seed(4)
+def test_rays_missing_the_lamp_are_looked_up_as_the_tracer_would_trace_them(tmp_path, rng):
+    sky = write_exr(tmp_path / "sky.exr", rng.random((32, 64, 3)).astype(np.float32) + 0.1)
     scene = scene_with(**{"environment": {"world": "file", "file": sky}, "image": {"width": 48, "height": 36}})
     scene["camera"]["fov_deg"] = 50.0  # the lamp and plenty of surroundings around it
     cam = make_camera(scene["camera"], 48, 36)
@@ -126,10 +128,12 @@ def test_rays_missing_the_lamp_are_looked_up_as_the_tracer_would_trace_them(tmp_
     assert split.segments == whole.segments
 
 
-def test_adaptive_pixels_that_see_only_the_world_are_the_traced_ones(tmp_path, monkeypatch):
+@pytest.mark.slow
+@pytest.mark.seed(6)
+def test_adaptive_pixels_that_see_only_the_world_are_the_traced_ones(tmp_path, monkeypatch, rng):
     """Busy pixels whose neighbourhood saw only the surroundings take their other samples from the
     world image directly (``adaptive._world_samples``): the image is the one tracing them gives."""
-    sky = write_exr(tmp_path / "sky.exr", np.random.default_rng(6).random((32, 64, 3)).astype(np.float32) + 0.1)
+    sky = write_exr(tmp_path / "sky.exr", rng.random((32, 64, 3)).astype(np.float32) + 0.1)
     scene = scene_with(**{"environment": {"world": "file", "file": sky}})
     scene["camera"]["fov_deg"] = 50.0
 

@@ -76,8 +76,8 @@ def _walk(o, d, pitch, slope, across, t_limit):
 
 
 @pytest.mark.parametrize("pitch, angle, orientation", CASES)
-def test_strip_walk_agrees_with_every_strip_tested(pitch, angle, orientation):
-    rng = np.random.default_rng(1990)
+@pytest.mark.seed(1990)
+def test_strip_walk_agrees_with_every_strip_tested(pitch, angle, orientation, rng):
     slope, across = math.tan(math.radians(angle)), _across(orientation)
     o, d = random_rays(rng, 6000, pitch * slope)
     t_limit = side_wall.hit_side_wall(o, d, np.full(len(o), R))
@@ -102,10 +102,10 @@ def test_strip_walk_agrees_with_every_strip_tested(pitch, angle, orientation):
 
 
 @pytest.mark.parametrize("pitch, angle, orientation", CASES)
-def test_a_ray_leaving_a_hit_point_finds_no_closer_hit(pitch, angle, orientation):
+@pytest.mark.seed(12)
+def test_a_ray_leaving_a_hit_point_finds_no_closer_hit(pitch, angle, orientation, rng):
     """From each hit, the reflected and the refracted ray (into the lens or into the air) find
     the same next hit as every strip tested, and never their own facet again."""
-    rng = np.random.default_rng(12)
     slope, across = math.tan(math.radians(angle)), _across(orientation)
     o, d = random_rays(rng, 6000, pitch * slope)
     t_limit = side_wall.hit_side_wall(o, d, np.full(len(o), R))
@@ -125,9 +125,9 @@ def test_a_ray_leaving_a_hit_point_finds_no_closer_hit(pitch, angle, orientation
         assert agree.mean() > 0.999, np.nonzero(~agree)[0][:5]
 
 
-def test_grazing_rays_leaving_a_facet_never_meet_it_again():
+@pytest.mark.seed(3)
+def test_grazing_rays_leaving_a_facet_never_meet_it_again(rng):
     pitch, slope, across = 5.0, math.tan(math.radians(30.0)), _across(0.0)
-    rng = np.random.default_rng(3)
     n = 4000
     s = rng.uniform(-20, 20, n)
     k = np.floor(s / pitch + 0.5)
@@ -167,6 +167,7 @@ def test_a_facet_deviates_a_collimated_ray_by_snell_at_the_tooth_angle(ior, angl
     np.testing.assert_allclose(out[:, 0], 0.0, atol=1e-15)
 
 
+@pytest.mark.slow
 def test_fisheye_lamps_render_the_same_beside_a_sawtooth_lamp():
     """The dispatch by cut type: the four-lamp combination's fish-eye lamps keep every pixel when
     lamp 1 becomes saw-tooth (a ray never leaves its lamp), and the explicit default type changes
@@ -199,6 +200,7 @@ def test_cuts_module_is_untouched_by_the_dispatch_without_sawtooth():
     assert cut_surface.SURFACE == sawtooth.SURFACE == cuts.SURFACE and sawtooth.MEDIA == cuts.MEDIA
 
 
+@pytest.mark.slow
 def test_steep_teeth_reach_the_cut_to_cut_paths_and_stay_in_table_1():
     """Between a facet and the next strip's return facet a ray meets the cut twice, in the lens (⑧)
     and in the air (⑨); every transition is still one of Table 1's."""

@@ -30,8 +30,7 @@ def _cameras(rng: np.random.Generator, n: int) -> list[dict]:
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_every_ray_that_meets_the_box_is_inside_the_window(seed):
-    rng = np.random.default_rng(seed)
+def test_every_ray_that_meets_the_box_is_inside_the_window(seed, rng):
     lo, hi = np.array([-80.0, 0.0, -40.0]), np.array([120.0, 90.0, 45.0])
     width, height = 96, 64
     checked = 0
@@ -60,6 +59,7 @@ def test_a_box_reaching_behind_the_camera_gives_no_window():
     assert body_box.screen_window(cam, np.array([-50.0, 0.0, -50.0]), np.array([50.0, 90.0, 50.0])) is None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("view", ["preset", "oblique", "off to the side"])
 def test_leaving_out_the_pixels_outside_the_window_changes_no_bit(monkeypatch, view):
     scene = load_scene(FOUR_LAMPS) if view != "off to the side" else scene_with()

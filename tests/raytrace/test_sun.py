@@ -14,8 +14,8 @@ from core_tracer.raytrace.camera import eye_rays, make_camera
 from core_tracer.scene.derived import lamp_geometry
 
 
-def test_the_general_sun_at_strength_1_and_white_is_the_papers_light():
-    rng = np.random.default_rng(3)
+@pytest.mark.seed(3)
+def test_the_general_sun_at_strength_1_and_white_is_the_papers_light(rng):
     normal = optics.normalize(rng.normal(size=(50, 3)))
     view = optics.normalize(rng.normal(size=(50, 3)))
     paper = sunlight.Sun(optics.normalize(np.array([0.3, -1.0, 0.6])), np.array([1.0, 0.9, 0.8]), 0.25, 1.0,
@@ -27,10 +27,10 @@ def test_the_general_sun_at_strength_1_and_white_is_the_papers_light():
 
 
 @pytest.mark.parametrize("per_point", [False, True])
-def test_the_general_sun_is_its_plain_formula_bit_for_bit(per_point):
+@pytest.mark.seed(4)
+def test_the_general_sun_is_its_plain_formula_bit_for_bit(per_point, rng):
     # Sun.shade works in place a channel at a time: the same operations on every element as the
     # plain expression of eq. (1) with strength and colour below, so the same bits.
-    rng = np.random.default_rng(4)
     normal = optics.normalize(rng.normal(size=(5000, 3)))
     view = optics.normalize(rng.normal(size=(5000, 3)))
     sun = sunlight.Sun(optics.normalize(np.array([0.3, -1.0, 0.6])), np.array([1.0, 0.9, 0.8]), 0.25, 1.7,
@@ -137,6 +137,7 @@ def _unlit_four_lamps(sun) -> dict:
     return parse_scene(doc)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("height", [0.1, 0.3])
 def test_an_unlit_lamp_in_low_frontal_sun_looks_lit_and_with_the_sun_behind_it_does_not(height):
     front = render_passes(_unlit_four_lamps((0.3, -1.0, height)))

@@ -55,6 +55,7 @@ def test_followed_colour_is_the_light_of_the_sun_pixels_at_luminance_1(tmp_path)
     assert sunlight.followed_color(env) == pytest.approx(expected)
 
 
+@pytest.mark.slow
 def test_following_the_colour_renders_as_writing_that_colour_in(tmp_path):
     sky, _ = _sky_with_a_coloured_sun()
     path = write_exr(tmp_path / "sun.exr", sky)

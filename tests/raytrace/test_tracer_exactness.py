@@ -29,6 +29,7 @@ def _orthographic(width_mm: float, pixels: int) -> dict:
 
 # -- Directions stay unit and rays stay where they are ---------------------------------------------
 
+@pytest.mark.slow
 @pytest.mark.parametrize("absorption", [[0.02, 1.5, 1.6], [0.0, 0.0, 0.0]], ids=["red", "clear"])
 def test_high_ior_hemispherical_cuts_match_the_reference_pixel_by_pixel(absorption):
     # n = 3 with hemispherical cuts: rays reach the caps at grazing angles and bounce many times.
@@ -46,6 +47,7 @@ def test_high_ior_hemispherical_cuts_match_the_reference_pixel_by_pixel(absorpti
         assert result["wrong"] <= 2, result
 
 
+@pytest.mark.slow
 def test_many_internal_reflections_keep_unit_directions_and_stay_inside_the_lamp(monkeypatch):
     # A clear lens of n = 2.4 with 3 mm cuts traps rays by total internal reflection for dozens of
     # bounces. Every segment must start with a unit direction; a segment inside the lens ends
@@ -92,10 +94,10 @@ def test_very_low_cuts_render_as_the_flat_inner_face(height):
     np.testing.assert_allclose(low, flat, rtol=1e-6, atol=1e-7)
 
 
-def test_low_cap_intersection_is_the_plane_to_rounding():
+@pytest.mark.seed(3)
+def test_low_cap_intersection_is_the_plane_to_rounding(rng):
     # One cap of 9 mm pitch and 1e-9 mm sag: rho is about 2e10 mm. Rays from inside the lens meet
     # it where they meet the plane y = t + h (to within the sag), with the normal +y.
-    rng = np.random.default_rng(3)
     n = 200
     o = np.column_stack([rng.uniform(-2, 2, n), np.full(n, 1.0), rng.uniform(-2, 2, n)])
     d = rng.normal(size=(n, 3))
@@ -177,14 +179,15 @@ def test_shortest_allowed_vectors_render_like_unit_ones():
     np.testing.assert_allclose(render(short), render(unit), rtol=1e-6, atol=1e-7)
 
 
-def test_cell_walk_is_exact_at_the_finest_pitch():
+@pytest.mark.slow
+@pytest.mark.seed(11)
+def test_cell_walk_is_exact_at_the_finest_pitch(rng):
     # 1000 cuts across a 45 mm lens (pitch 0.09 mm, hemispherical caps): the walk against the
     # reference tracer's test of every cell under each ray.
     R = 45.0
     pitch = 2 * R / spec.MAX_CUTS_ACROSS
     h = pitch / math.sqrt(2.0)
     lamp = Lamp(scene_with(**{"lamps[0].cuts.pitch": pitch, "lamps[0].cuts.height": h})["lamps"][0])
-    rng = np.random.default_rng(11)
     n = 300
     r = 40 * np.sqrt(rng.uniform(0, 1, n))
     a = rng.uniform(0, 2 * np.pi, n)
@@ -210,10 +213,10 @@ def test_cell_walk_is_exact_at_the_finest_pitch():
 # -- A pass's sums ----------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("dtype", [np.int64, np.int32])
-def test_a_sparse_call_adds_each_pixels_rays_in_ray_order(dtype):
+@pytest.mark.seed(7)
+def test_a_sparse_call_adds_each_pixels_rays_in_ray_order(dtype, rng):
     # Few rays over many pixels (the deep branches of a band) take add_to_pass's sparse path; each
     # pixel must get exactly (0 + v1 + v2 + ...) in ray order added to what it held, as the dense path.
-    rng = np.random.default_rng(7)
     pix = rng.integers(100, 40_000, 600).astype(dtype)
     pix[rng.integers(0, 600, 60)] = pix[:60]  # repeats, scattered through the rays
     values = rng.random((600, 3)) * 10.0 ** rng.integers(-8, 3, (600, 1))

@@ -49,8 +49,8 @@ def random_rays(rng, n, where):
 
 
 @pytest.mark.parametrize("where", ["lens", "air"])
-def test_cell_walk_agrees_with_brute_force(where):
-    rng = np.random.default_rng(1990)
+@pytest.mark.seed(1990)
+def test_cell_walk_agrees_with_brute_force(where, rng):
     o, d = random_rays(rng, 4000, where)
     n = len(o)
     radius = np.full(n, R)
@@ -69,10 +69,10 @@ def test_cell_walk_agrees_with_brute_force(where):
     np.testing.assert_allclose(np.linalg.norm(normal[both], axis=1), 1.0, rtol=1e-12)
 
 
-def test_cell_walk_from_the_surface_itself_finds_the_next_cap_not_its_own():
+@pytest.mark.seed(3)
+def test_cell_walk_from_the_surface_itself_finds_the_next_cap_not_its_own(rng):
     # Re-intersect from hit points (pbrt's habit): rays leaving the cut surface into the air,
     # heading up, never hit the cut surface again unless they cross into a neighbouring cap.
-    rng = np.random.default_rng(3)
     o, d = random_rays(rng, 2000, "lens")
     n = len(o)
     args = (np.full(n, T), np.full(n, T + H), np.full(n, P_), np.full(n, RHO))
@@ -93,11 +93,11 @@ def test_flat_inner_face_is_plane_a():
     np.testing.assert_array_equal(normal[0], [0.0, 1.0, 0.0])
 
 
-def test_paraboloid_hits_lie_on_the_surface_and_focus_reflects_to_axis():
+@pytest.mark.seed(5)
+def test_paraboloid_hits_lie_on_the_surface_and_focus_reflects_to_axis(rng):
     f, R_, rim = 18.0, 45.0, 4.5
     vertex = rim + R_ * R_ / (4 * f)
     focus = np.array([0.0, vertex - f, 0.0])
-    rng = np.random.default_rng(5)
     d = rng.normal(size=(3000, 3))
     d[:, 1] = np.abs(d[:, 1])
     d /= np.linalg.norm(d, axis=1, keepdims=True)
@@ -126,7 +126,8 @@ def test_sphere_and_socket_hits():
     assert ts[0] == pytest.approx(14.0) and np.isinf(ts[1]) and ts[2] == pytest.approx(1.0)
 
 
-def test_a_ray_leaving_a_cap_never_meets_that_cap_again_even_from_the_wrong_side():
+@pytest.mark.seed(5)
+def test_a_ray_leaving_a_cap_never_meets_that_cap_again_even_from_the_wrong_side(rng):
     # Grazing rays leave the cap of cell (0, 0) into the air, starting 1e-12 mm on the wrong side
     # (inside the lens, as a rounded hit may). A distance threshold (T_MIN) alone lets many of them
     # meet their own cap again; told that they start on the cap, the walk agrees with a cell-by-
@@ -134,7 +135,6 @@ def test_a_ray_leaving_a_cap_never_meets_that_cap_again_even_from_the_wrong_side
     from helpers import scene_with
     from reference_tracer import Lamp
 
-    rng = np.random.default_rng(5)
     n = 400
     x, z = rng.uniform(-0.45 * P_, 0.45 * P_, n), rng.uniform(-0.45 * P_, 0.45 * P_, n)
     y = cuts.cut_surface_height(x, z, T + H, P_, RHO)
@@ -159,13 +159,13 @@ def test_a_ray_leaving_a_cap_never_meets_that_cap_again_even_from_the_wrong_side
             assert t_geometry[k] == pytest.approx(ref[0], rel=1e-9), k
 
 
-def test_a_ray_leaving_the_reflector_meets_it_only_at_its_other_root():
+@pytest.mark.seed(8)
+def test_a_ray_leaving_the_reflector_meets_it_only_at_its_other_root(rng):
     from helpers import scene_with
     from reference_tracer import Lamp
 
     f, rim = 18.0, T + H
     vertex = rim + R * R / (4 * f)
-    rng = np.random.default_rng(8)
     n = 400
     r, a = rng.uniform(5, 44, n), rng.uniform(0, 2 * np.pi, n)
     hit = np.column_stack([r * np.cos(a), vertex - r * r / (4 * f), r * np.sin(a)])

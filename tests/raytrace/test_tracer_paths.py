@@ -27,6 +27,7 @@ def test_table_1_is_the_papers():
     assert set(paths.PLATE_TABLE) - set(range(1, 13)) == set(range(13, 20))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", PRESET_FILES, ids=lambda p: p.stem)
 def test_every_transition_while_rendering_presets_is_in_table_1(preset):
     scene = load_scene(preset)
@@ -38,6 +39,7 @@ def test_every_transition_while_rendering_presets_is_in_table_1(preset):
     assert np.all(np.isfinite(result.image)) and np.all(result.image >= 0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("samples", [1, 8])
 def test_recording_transitions_changes_no_pixel(samples):
     """Without recording, the rays carry no path classes (``rays.UNRECORDED``): the same image and
@@ -78,6 +80,7 @@ def test_render_is_deterministic_and_thread_count_does_not_matter():
     np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.slow
 def test_core_tracer_imports_and_renders_without_bpy():
     code = (
         "import sys; sys.modules['bpy'] = None\n"  # any 'import bpy' now raises ImportError

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import flat_lens_on_axis, scene_with
+from helpers import flat_lens_on_axis, scene_with, slab_series
 
 from core_tracer import render, render_passes
 from core_tracer.raytrace import optics
@@ -62,8 +62,8 @@ def test_total_internal_reflection_beyond_the_critical_angle():
     assert np.all(beyond == 1.0)
 
 
-def test_snell_law_and_reflection_directions():
-    rng = np.random.default_rng(7)
+@pytest.mark.seed(7)
+def test_snell_law_and_reflection_directions(rng):
     d = optics.normalize(rng.normal(size=(500, 3)) + [0, 0, -2])
     n = np.tile([0.0, 0.0, 1.0], (500, 1))
     eta = 1 / 1.49
@@ -79,29 +79,6 @@ def test_snell_law_and_reflection_directions():
 
 # -- The slab: a bulb seen through a flat lens ------------------------------------------------------
 
-def slab_series(r: float, transmittance: np.ndarray) -> np.ndarray:
-    """Bulb luminance factor through a slab, bouncing inside it, walked with the paper's cut-off.
-
-    The eye ray enters with 1 - r; each pass through the lens multiplies by T. At the inner face
-    the ray splits: (1 - r) goes on to the bulb, r goes back; at the outer face r comes back in.
-    A branch is traced only while its accumulated attenuation (max over RGB) is >= 0.1 %.
-    """
-    total = np.zeros(3)
-    k = np.full(3, 1.0 - r)  # inside the lens, heading to the inner face
-    while True:
-        k = k * transmittance  # cross the lens
-        to_bulb = k * (1.0 - r)
-        if to_bulb.max() >= CUTOFF:
-            total += to_bulb
-        back = k * r
-        if back.max() < CUTOFF:
-            break
-        back = back * transmittance  # cross back to the outer face
-        k = back * r
-        if k.max() < CUTOFF:
-            break
-    return total
-
 
 @pytest.mark.parametrize("ior", [1.3, 1.49, 1.7])
 def test_bulb_through_flat_clear_lens_equals_slab_series(ior):
@@ -110,7 +87,7 @@ def test_bulb_through_flat_clear_lens_equals_slab_series(ior):
     result = render_passes(scene)
     centre = result.image[4, 4]
     r = ((ior - 1) / (ior + 1)) ** 2
-    expected = intensity * slab_series(r, np.ones(3))
+    expected = intensity * slab_series(r, np.ones(3), CUTOFF)
     np.testing.assert_allclose(centre, expected, rtol=1e-6)
     assert result.passes["bulb"][4, 4] == pytest.approx(centre, rel=1e-6)
     # the second bounce is traced exactly when its attenuation clears the 0.1 % cut-off
@@ -127,7 +104,7 @@ def test_bulb_through_flat_absorbing_lens_follows_equation_2():
     scene = flat_lens_on_axis(ior=1.49, absorption=tuple(a), intensity=(5.0, 5.0, 5.0), thickness=t)
     centre = render(scene)[4, 4]
     r = ((1.49 - 1) / 2.49) ** 2
-    np.testing.assert_allclose(centre, 5.0 * slab_series(r, np.exp(-a * t)), rtol=1e-6)
+    np.testing.assert_allclose(centre, 5.0 * slab_series(r, np.exp(-a * t), CUTOFF), rtol=1e-6)
 
 
 def test_channel_ratio_through_absorbing_lens_is_exp_minus_delta_a_t():

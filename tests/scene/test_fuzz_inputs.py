@@ -30,6 +30,8 @@ from core_tracer.scene.safe_text import has_surrogate, printable
 from core_tracer.scene.validate import parse_scene
 from core_tracer.study import definition as study_mod
 
+pytestmark = pytest.mark.slow
+
 BUILTIN = ROOT / "presets"
 SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
 

@@ -6,12 +6,10 @@ import json
 import re
 
 import pytest
-from helpers import BASELINE, FOUR_LAMPS
+from helpers import BASELINE, FOUR_LAMPS, NUMBER, allowed_ranges, follow_message, random_lamp_doc
 
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
-
-NUMBER = r"-?[0-9.]+(?:e[-+]?[0-9]+)?"
 
 
 def _doc(path=BASELINE) -> dict:
@@ -27,14 +25,8 @@ def _error(doc: dict, path: str | None = None) -> SceneError:
     return info.value
 
 
-def _ranges(message: str) -> list[tuple[float, float]]:
-    """Every closed or half-open range [a, b] / (a, b] after "allowed" in a message."""
-    allowed = message[message.index("allowed"):]
-    return [(float(a), float(b)) for a, b in re.findall(rf"[\[(]({NUMBER}), ({NUMBER})[\])]", allowed)]
-
-
 def _assert_not_empty(err: SceneError) -> list[tuple[float, float]]:
-    ranges = _ranges(err.message)
+    ranges = allowed_ranges(err.message)
     assert ranges, err.message
     for lo, hi in ranges:
         assert lo <= hi, err.message
@@ -141,58 +133,16 @@ def test_a_body_shallower_than_the_lens_blames_its_depth():
     parse_scene(doc)
 
 
-def _random_lamp_doc(rng) -> dict:
-    """The baseline with lamp and body numbers drawn from wide but plausible ranges."""
-    doc = _doc()
-    lamp = doc["lamps"][0]
-    doc["body"]["size"] = [rng.uniform(20, 300), rng.uniform(20, 200)]
-    doc["body"]["depth"] = rng.uniform(2, 150)
-    lamp["center"] = [rng.uniform(-60, 60), rng.uniform(-40, 40)]
-    lamp["lens"]["radius"] = rng.uniform(5, 80)
-    lamp["lens"]["thickness"] = rng.uniform(0.5, 8)
-    lamp["cuts"]["pitch"] = rng.uniform(1, 40)
-    lamp["cuts"]["height"] = rng.uniform(0, 15)
-    lamp["reflector"]["focal_length"] = rng.uniform(2, 60)
-    lamp["reflector"]["gap"] = rng.uniform(0, 10)
-    lamp["bulb"]["radius"] = rng.uniform(1, 30)
-    lamp["bulb"]["offset"] = [rng.uniform(-20, 20), rng.uniform(-30, 30), rng.uniform(-20, 20)]
-    lamp["socket"]["radius"] = rng.uniform(1, 20)
-    return doc
-
-
-def _follow(doc: dict, err: SceneError) -> None:
-    """Change the field ``err`` names to a value from the range it gives (in place)."""
-    lamp = doc["lamps"][0]
-    ranges = _ranges(err.message)
-    field = err.path.removeprefix("lamps[0].")
-    if field == "body.size":
-        doc["body"]["size"] = [ranges[0][0], ranges[1][0]]
-    elif field == "center":
-        lamp["center"] = [ranges[0][0], ranges[1][0]]
-    elif field == "bulb.offset" and ranges:
-        lamp["bulb"]["offset"][1] = sum(ranges[0]) / 2
-    elif field == "bulb.offset":
-        limit = float(re.search(rf"up to ({NUMBER}) mm", err.message)[1])
-        y = float(re.search(rf"at y = ({NUMBER}) mm", err.message)[1])
-        lamp["bulb"]["offset"] = [limit * 0.6, y, limit * 0.8]
-    else:
-        section, key = field.split(".")
-        node = doc["body"] if section == "body" else lamp[section]
-        lo, hi = ranges[0]
-        node[key] = hi if key in ("height", "pitch", "radius") else lo
-
-
-def test_random_designs_get_a_field_and_a_range_that_is_not_empty():
+@pytest.mark.slow
+@pytest.mark.seed(1990)
+def test_random_designs_get_a_field_and_a_range_that_is_not_empty(rng):
     """Every message of a check that relates several fields names a field and a range that is not
     empty; the limits shown beside the sliders never fail, valid design or not."""
-    import random
-
     from core_tracer.scene.limits import lamp_limits
 
-    rng = random.Random(1990)
     seen = set()
     for _ in range(300):
-        doc = _random_lamp_doc(rng)
+        doc = random_lamp_doc(_doc(), rng)
         lamp_limits(doc, 0)
         try:
             parse_scene(doc)
@@ -202,12 +152,12 @@ def test_random_designs_get_a_field_and_a_range_that_is_not_empty():
             assert e.path.startswith(("lamps[0].", "body.")), e
             allowed = e.message[e.message.index("allowed"):] if "allowed" in e.message else ""
             assert allowed, str(e)
-            for lo, hi in _ranges(e.message):
+            for lo, hi in allowed_ranges(e.message):
                 assert lo <= hi, str(e)
             if e.path.endswith("cuts.pitch"):
                 continue  # its range is being reworded (a lower bound too); followed in its own tests
             # A value from the range given clears this error: the next one, if any, is about another rule.
-            _follow(doc, e)
+            follow_message(doc, e)
             try:
                 parse_scene(doc)
             except SceneError as after:

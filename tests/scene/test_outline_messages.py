@@ -5,18 +5,14 @@ from __future__ import annotations
 
 import copy
 import json
-import math
-import random
 import re
 
 import pytest
-from helpers import BASELINE, FOUR_LAMPS
+from helpers import BASELINE, FOUR_LAMPS, NUMBER, allowed_ranges, follow_message, random_lamp_doc
 
 from core_tracer.scene.limits import lamp_limits
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
-
-NUMBER = r"-?[0-9.]+(?:e[-+]?[0-9]+)?"
 
 
 def _square(**lens) -> dict:
@@ -24,11 +20,6 @@ def _square(**lens) -> dict:
     doc["lamps"][0]["lens"].update({"outline": "rectangular", "width": 90, "height": 60, "corner_radius": 10,
                                     **lens})
     return doc
-
-
-def _ranges(message: str) -> list[tuple[float, float]]:
-    allowed = message[message.index("allowed"):]
-    return [(float(a), float(b)) for a, b in re.findall(rf"[\[(]({NUMBER}), ({NUMBER})[\])]", allowed)]
 
 
 def _error(doc: dict) -> SceneError:
@@ -45,7 +36,7 @@ def _error(doc: dict) -> SceneError:
 def test_an_outline_that_does_not_fit_names_the_field_and_its_range(lens, path, allowed):
     err = _error(_square(**lens))
     assert err.path == path, str(err)
-    assert _ranges(err.message)[0] == allowed, str(err)
+    assert allowed_ranges(err.message)[0] == allowed, str(err)
 
 
 def test_a_corner_radius_of_half_the_smaller_side_is_allowed():
@@ -61,7 +52,7 @@ def test_a_rectangular_lens_moved_out_of_the_body_blames_its_centre():
     doc["lamps"][0]["center"] = [70, 0]
     err = _error(doc)
     assert err.path == "lamps[0].center"
-    (x_lo, x_hi), (z_lo, z_hi) = _ranges(err.message)
+    (x_lo, x_hi), (z_lo, z_hi) = allowed_ranges(err.message)
     assert (x_lo, x_hi, z_lo, z_hi) == (-65, 65, -30, 30), str(err)
     doc["lamps"][0]["center"] = [x_hi, z_lo]
     parse_scene(doc)
@@ -92,7 +83,7 @@ def test_a_pitch_larger_than_the_smaller_side_is_refused():
     doc = _square()
     doc["lamps"][0]["cuts"]["pitch"] = 61
     err = _error(doc)
-    assert err.path == "lamps[0].cuts.pitch" and _ranges(err.message)[0][1] == 60, str(err)
+    assert err.path == "lamps[0].cuts.pitch" and allowed_ranges(err.message)[0][1] == 60, str(err)
     doc["lamps"][0]["cuts"]["pitch"] = 60
     doc["lamps"][0]["cuts"]["height"] = 1
     parse_scene(doc)
@@ -121,55 +112,12 @@ def test_round_lenses_keep_their_messages():
                                 "(at most 1000 cuts across the lens diameter)")
 
 
-def _random_square_doc(rng: random.Random) -> dict:
-    doc = _square()
-    lamp = doc["lamps"][0]
-    doc["body"]["size"] = [rng.uniform(20, 300), rng.uniform(20, 200)]
-    doc["body"]["depth"] = rng.uniform(2, 150)
-    lamp["center"] = [rng.uniform(-60, 60), rng.uniform(-40, 40)]
-    w, h = rng.uniform(5, 160), rng.uniform(5, 120)
-    lamp["lens"].update(width=w, height=h, corner_radius=rng.uniform(0, min(w, h) / 2 * 1.2))
-    lamp["lens"]["thickness"] = rng.uniform(0.5, 8)
-    lamp["cuts"]["pitch"] = rng.uniform(1, 40)
-    lamp["cuts"]["height"] = rng.uniform(0, 15)
-    lamp["reflector"]["focal_length"] = rng.uniform(2, 60)
-    lamp["bulb"]["radius"] = rng.uniform(1, 30)
-    lamp["bulb"]["offset"] = [rng.uniform(-20, 20), rng.uniform(-30, 30), rng.uniform(-20, 20)]
-    lamp["socket"]["radius"] = rng.uniform(1, 20)
-    return doc
-
-
-def _follow(doc: dict, err: SceneError) -> None:
-    """Change the field ``err`` names to a value from the range it gives (in place)."""
-    lamp = doc["lamps"][0]
-    ranges = _ranges(err.message)
-    field = err.path.removeprefix("lamps[0].")
-    if field == "body.size":
-        doc["body"]["size"] = [ranges[0][0], ranges[1][0]]
-    elif field == "center":
-        lamp["center"] = [ranges[0][0], ranges[1][0]]
-    elif field == "bulb.offset" and ranges:
-        lamp["bulb"]["offset"][1] = sum(ranges[0]) / 2
-    elif field == "bulb.offset":
-        limit = float(re.search(rf"up to ({NUMBER}) mm", err.message)[1])
-        y = float(re.search(rf"at y = ({NUMBER}) mm", err.message)[1])
-        x, _, z = lamp["bulb"]["offset"]
-        scale = limit / math.hypot(x, z)
-        lamp["bulb"]["offset"] = [x * scale, y, z * scale]
-    else:
-        section, key = field.split(".")
-        node = doc["body"] if section == "body" else lamp[section]
-        lo, hi = ranges[0]
-        if section == "socket":  # an open range (0, hi)
-            hi *= 0.99
-        node[key] = hi if key in ("height", "pitch", "radius", "corner_radius", "width") else lo
-
-
-def test_random_rectangular_designs_get_a_field_and_a_range_a_value_of_which_clears_it():
-    rng = random.Random(2026)
+@pytest.mark.slow
+@pytest.mark.seed(2026)
+def test_random_rectangular_designs_get_a_field_and_a_range_a_value_of_which_clears_it(rng):
     seen = set()
     for _ in range(150):
-        doc = _random_square_doc(rng)
+        doc = random_lamp_doc(_square(), rng)
         lamp_limits(doc, 0)
         for _ in range(12):  # follow the messages until the design is valid
             try:
@@ -179,12 +127,12 @@ def test_random_rectangular_designs_get_a_field_and_a_range_a_value_of_which_cle
             except SceneError as e:
                 seen.add(e.path)
                 assert e.path.startswith(("lamps[0].", "body.")), e
-                ranges = _ranges(e.message) if "allowed" in e.message else None
+                ranges = allowed_ranges(e.message) if "allowed" in e.message else None
                 assert ranges is not None, str(e)
                 for lo, hi in ranges:
                     assert lo <= hi, str(e)
                 before = str(e)
-                _follow(doc, e)
+                follow_message(doc, e)
                 try:
                     parse_scene(copy.deepcopy(doc))
                 except SceneError as after:
@@ -193,6 +141,7 @@ def test_random_rectangular_designs_get_a_field_and_a_range_a_value_of_which_cle
     assert {"valid", "lamps[0].lens.corner_radius", "lamps[0].cuts.pitch", "lamps[0].bulb.offset"} <= seen, seen
 
 
+@pytest.mark.slow
 def test_the_command_line_refuses_a_bad_outline_in_one_line(tmp_path):
     from helpers import assert_bad_input, run_cli
 

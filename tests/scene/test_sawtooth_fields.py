@@ -55,6 +55,7 @@ def test_too_steep_teeth_for_the_pitch_name_the_tooth_angle_and_its_range():
     assert "tooth_angle" not in info.value.path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edit, needles", [
     ({"type": "pillow"}, ("lamps[0].cuts.type", '"fisheye", "sawtooth"')),
     ({"type": "sawtooth", "tooth_angle": 75}, ("lamps[0].cuts.tooth_angle", "[0, 60] deg")),

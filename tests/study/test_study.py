@@ -200,6 +200,7 @@ def test_cli_refuses_a_bad_study_before_any_worker_starts(tmp_path, capsys, vary
 # Rendering
 
 
+@pytest.mark.slow
 def test_two_by_two_gives_the_images_of_four_separate_renders():
     s = two_by_two()
     seen = []
@@ -217,6 +218,7 @@ def test_two_by_two_gives_the_images_of_four_separate_renders():
     assert all(np.array_equal(a, b) for a, b in zip(images, here, strict=True))
 
 
+@pytest.mark.slow
 def test_cancel_stops_the_workers_and_removes_the_temporary_files():
     s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.4:1.6:4"), st.parse_vary("cuts.height=0.5:2:4")],
                        (48, 48))
@@ -303,9 +305,9 @@ def test_one_axis_sheet_is_one_row_without_row_labels():
 
 
 @pytest.mark.parametrize("text", ["oiio", "bitmap"])
-def test_sheet_pastes_each_image_in_its_cell_and_labels_it(text):
+@pytest.mark.seed(5)
+def test_sheet_pastes_each_image_in_its_cell_and_labels_it(text, rng):
     s = two_by_two()
-    rng = np.random.default_rng(5)
     images = [rng.random((32, 32, 3), dtype=np.float32) for _ in range(4)]
     sheet = study_sheet.compose(s, images, text=text)
     lay = study_sheet.layout(s)
@@ -364,6 +366,7 @@ def test_loading_a_study_from_an_image_without_one(tmp_path):
 # The command line, as users run it
 
 
+@pytest.mark.slow
 def test_cli_study_writes_the_sheet_and_reruns_it(tmp_path):
     out = tmp_path / "sheet.png"
     proc = run_cli("study", BASELINE, "--vary", "lens.ior=1.45:1.6:2", "--vary", "cuts.height=0.5,2", "-o", out,
@@ -386,6 +389,7 @@ def test_cli_study_writes_the_sheet_and_reruns_it(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["again.exr", "sheet.png", "study.json", "variants"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args,needles", [
     (["--vary", "lens.ior=1.45,9", "-o", "{out}"], ("lens.ior", "9", "[1, 3]")),
     (["--vary", "lens.ior=1.45:1.6:0", "-o", "{out}"], ("steps 0",)),
@@ -407,11 +411,13 @@ def test_cli_bad_input_exits_2_with_one_line(tmp_path, args, needles):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_cli_study_of_a_missing_sheet_exits_2(tmp_path):
     proc = run_cli("study", "--study", tmp_path / "nothing.exr", "-o", tmp_path / "x.png")
     assert proc.returncode == 2 and "nothing.exr" in proc.stderr and "Traceback" not in proc.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
 def test_cli_ctrl_c_exits_130_and_writes_nothing(tmp_path):
     out = tmp_path / "sheet.png"
@@ -428,6 +434,7 @@ def test_cli_ctrl_c_exits_130_and_writes_nothing(tmp_path):
     assert all(process_gone(pid) for pid in workers)
 
 
+@pytest.mark.slow
 def test_study_run_driven_by_polling_like_a_modal_operator():
     s = st.Study.build(baseline_doc(), [st.parse_vary("lens.ior=1.4:1.6:3")], (48, 48))
     run = study_run.StudyRun(s, workers=2)
@@ -450,6 +457,7 @@ def test_study_run_driven_by_polling_like_a_modal_operator():
     assert not os.path.exists(folder)
 
 
+@pytest.mark.slow
 def test_cli_lists_the_parameters():
     proc = run_cli("study", "--list")
     assert proc.returncode == 0, proc.stderr

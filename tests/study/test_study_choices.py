@@ -38,6 +38,7 @@ def test_every_choice_of_the_scene_is_a_study_parameter():
     assert "schema" not in study_parameters()
 
 
+@pytest.mark.slow
 def test_cut_type_by_collection_renders_six_different_lamps():
     s = _types_by_collection()
     assert (s.columns, s.rows) == (3, 2)
@@ -90,6 +91,7 @@ def test_cli_refuses_a_refused_combination_with_one_line_and_no_worker(tmp_path,
     assert study_run.workers_started == started and list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_cli_studies_lamp_types_and_the_sheet_carries_them(tmp_path):
     sheet = tmp_path / "types.png"
     proc = run_cli("study", BASELINE, "--vary", "cuts.type=fisheye,sawtooth,flutes", "--vary",

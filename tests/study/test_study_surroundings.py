@@ -10,6 +10,8 @@ from core_tracer.scene.reading import SceneError
 from core_tracer.study import definition as st
 from core_tracer.study.parameters import study_parameters
 
+pytestmark = pytest.mark.slow
+
 
 def test_the_world_varies_by_name_and_its_turn_over_a_range():
     s = st.Study.build(baseline_doc(), [st.parse_vary("environment.world=none, city,night"),
