@@ -598,9 +598,9 @@ def test_contribution_passes_panel_and_symmetric_registration(lamp_addon, bl_sce
             assert layer.lamp_contribution_passes  # the value is kept in the file across a disable
 
 
-def test_readme_names_the_contribution_passes(lamp_addon, repo_root):
+def test_user_guide_names_the_contribution_passes(lamp_addon, repo_root):
     assert lamp_addon.render_engine.PASS_LABELS == LABELS
-    text = " ".join((repo_root / "README.md").read_text().split())
+    text = " ".join((repo_root / "docs" / "user-guide.md").read_text().split())
     assert "Contribution Passes" in text
     assert all(f"*{label}*" in text for label in LABELS.values())
 
