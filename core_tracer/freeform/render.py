@@ -1,6 +1,6 @@
 """The paper's model on triangle meshes: a world-space numpy wavefront over Embree queries.
 
-The same improved ray tracing as ``raytrace.tracer`` (MODEL.md §5): rays from the eye branch at
+The same improved ray tracing as ``raytrace.tracer`` (docs/model.md §5): rays from the eye branch at
 every lens surface into a reflected and a transmitted ray (Fresnel, Snell, total internal
 reflection), each carrying its accumulated attenuation k; luminance is added as k × the value
 found; absorption over the path length inside a lens (eq. 2); the reflector's constant on the

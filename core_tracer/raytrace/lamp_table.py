@@ -1,5 +1,5 @@
 """Every lamp's parameters as arrays indexed by lamp number, gathered per ray by the parts and
-the tracer (MODEL.md §3: lens, cuts, reflector, bulb, socket of each lamp)."""
+the tracer (docs/model.md §3: lens, cuts, reflector, bulb, socket of each lamp)."""
 
 from __future__ import annotations
 

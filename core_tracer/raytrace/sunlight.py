@@ -34,7 +34,7 @@ import numpy as np
 from . import environment, optics, outline
 from .lamp_table import LampTable
 
-FRONT = np.array([0.0, -1.0, 0.0])  # the outward normal of the lens's outer face (MODEL.md §2)
+FRONT = np.array([0.0, -1.0, 0.0])  # the outward normal of the lens's outer face (docs/model.md §2)
 
 
 @dataclass(frozen=True)

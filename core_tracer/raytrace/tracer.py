@@ -6,7 +6,7 @@ the pixel being their mean; adaptive sampling (``_trace_adaptive``) traces all N
 first few disagree, and lets the pixels of flat regions keep the mean of those few. At every dielectric
 surface a ray branches into a reflected and a transmitted ray (the ray-tracing tree of Fig. 7);
 each carries its accumulated attenuation k, and luminance is added to the pixel as k × the
-value found, so the tree is never stored (MODEL.md §5). All live rays of one generation are
+value found, so the tree is never stored (docs/model.md §5). All live rays of one generation are
 processed together as arrays; the image is worked in bands of rows to bound memory, and the last
 few branches of a band are traced along with the next band's rays (``_carrying_tails``; with more
 than one sample per pixel, those of each group of samples along with the next group's,
@@ -225,7 +225,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   keep_passes: bool = True, samples: int | None = None,
                   filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True,
                   adaptive_threshold: float | None = None, pool: BandPool | None = None) -> RenderResult:
-    """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
+    """Render a normalised scene; returns the image and its contribution passes (docs/model.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
     spans the fitted side). Bands of rows are rendered on ``threads`` threads (numpy releases
@@ -1450,7 +1450,7 @@ def _dielectric(ctx: _Context, band: _Band, rays: _Rays, m: np.ndarray, k: np.nd
 def _plate(rays: _Rays, m: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
            surface: np.ndarray, out_normal: np.ndarray, L: LampTable) -> list[_Rays]:
     """A prism-plate face hit from either side (README, the prism plate): the Fresnel split of
-    the lens's faces (MODEL.md §5) with the plate's index; ``out_normal`` points out of the plate
+    the lens's faces (docs/model.md §5) with the plate's index; ``out_normal`` points out of the plate
     material. Nothing leaves the lamp here, so both branches go on where above the cut-off."""
     scaled = optics.scaled
     li = rays.lamp.take(m)

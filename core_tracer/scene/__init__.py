@@ -1,7 +1,7 @@
 """The scene document ``lamp-scene/1``: field declarations (``spec``), JSON reading with limits
 (``reading``), validation (``validate``), derived quantities (``derived``), the lamp functions
-(``functions``), text made safe for messages (``safe_text``) and the README's field table
-(``fields_doc``).
+(``functions``), text made safe for messages (``safe_text``) and the field table of
+docs/scene-format.md (``fields_doc``).
 
 The names below are the package's public API; code inside ``core_tracer`` imports the module that
 defines a name.

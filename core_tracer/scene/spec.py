@@ -1,11 +1,11 @@
 """The field declarations of a ``lamp-scene/2`` document.
 
 Every parameter of a lamp design is declared here once, with its unit, allowed range, default
-and description. The validator (``validate``), the README's field table, the JSON presets and
+and description. The validator (``validate``), the field table of docs/scene-format.md, the JSON presets and
 the Blender properties (``lamp_addon/design_properties.py``) all follow from these declarations.
 
 Lengths are millimetres, absorption coefficients per millimetre, angles degrees, colours
-linear RGB (MODEL.md §2).
+linear RGB (docs/model.md §2).
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ class Num:
     # "distance", "direction", "xyz"
 
     def range_text(self) -> str:
-        """The allowed range as the error messages and the README print it."""
+        """The allowed range as the error messages and docs/scene-format.md print it."""
         left = "(" if self.lo_open else "["
         right = ")" if self.hi_open else "]"
         lo = "-inf" if self.lo is None else _fmt(self.lo)

@@ -380,7 +380,7 @@ def test_engine_panels_are_compatible_and_registration_is_symmetric(lamp_addon):
 
 
 # ---------------------------------------------------------------------------------------------
-# The engine's contribution passes (MODEL.md §5.2) as Blender render passes
+# The engine's contribution passes (docs/model.md §5.2) as Blender render passes
 
 LABELS = {"lens_surface": "Lamp Lens Surface", "bulb": "Lamp Bulb", "reflector_constant": "Lamp Reflector Constant",
           "reflector_scatter": "Lamp Reflector Scatter", "socket": "Lamp Socket", "side_wall": "Lamp Side Wall",

@@ -245,7 +245,7 @@ def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, ad
 @pytest.mark.parametrize("cut_type", ["fisheye", "sawtooth", "flutes"])
 def test_a_rectangular_lens_s_side_wall_reaches_the_reflector_edge(lamp_addon, addon_core, cut_type):
     """The side wall of a rectangular lens stands up to the trimmed reflector's edge, whatever the
-    cuts: no gap between them through which rays would leave the lamp (MODEL.md §3, the tracer's
+    cuts: no gap between them through which rays would leave the lamp (docs/model.md §3, the tracer's
     side wall reaches the reflector's edge)."""
     import importlib
     import json

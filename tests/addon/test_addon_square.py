@@ -2,7 +2,7 @@
 body's opening follow the rectangular outline, within the chord tolerance of the analytic surfaces.
 
 The surfaces are written out here from the README's model (the outline's rounded rectangle, the
-paraboloid of MODEL.md §3.2 meeting the rim plane at the outline's farthest point), not taken from
+paraboloid of docs/model.md §3.2 meeting the rim plane at the outline's farthest point), not taken from
 the add-on's mesh code."""
 
 from __future__ import annotations
