@@ -10,7 +10,7 @@ from core_tracer.scene import fields_doc, spec
 
 DOCS = sorted([ROOT / "README.md", ROOT / "CONTRIBUTING.md", ROOT / "benchmarks" / "RESULTS.md",
                *(ROOT / "docs").glob("*.md")])
-CODE = re.compile(r"```[^\n]*\n(.*?)```|`([^`\n]+)`", re.S)  # fenced blocks, then inline code
+CODE = re.compile(r"```[^\n]*\n(.*?)```|`([^`]+)`", re.S)  # fenced blocks, then inline code (may wrap)
 PATH = re.compile(r"(?<![\w./-])((?:core_tracer|lamp_addon|tools|benchmarks|tests|docs|presets)/[\w./-]*)")
 MODULE = re.compile(r"(?<![\w./-])((?:core_tracer|lamp_addon)(?:\.\w+)+)")
 LINK = re.compile(r"\]\(([^)\s]+)\)")
