@@ -6,14 +6,14 @@ writer makes; the tracer's bands, which are bounded whatever the image size; the
 environment image (``raytrace.world_image.peak_bytes``, from its header, before any pixel is read);
 the band pool's worker processes, each counted whole, when a render is heavy enough to use them;
 and a study's variant images and its contact sheet. A request above ``MEMORY_BUDGET`` is refused
-before any work starts, with the estimate and the budget in the message (README, "Memory and time").
+before any work starts, with the estimate and the budget in the message (docs/user-guide.md, "Memory and time").
 """
 
 from __future__ import annotations
 
 from .scene.reading import SceneError
 
-MEMORY_BUDGET = 4 * 2**30  # bytes; README "Memory and time"
+MEMORY_BUDGET = 4 * 2**30  # bytes; docs/user-guide.md "Memory and time"
 BASE_BYTES = 160 * 2**20  # the interpreter, numpy and OpenImageIO loaded, the tracer's bands in flight
 RGB_BYTES = 3 * 4  # float32 RGB per pixel
 PASS_COUNT = 8
@@ -33,7 +33,7 @@ POOL_RAYS = 2_000_000
 # every process shares (``raytrace.world_cache``) and is counted once.
 WORKER_BYTES = 640 * 2**20
 # A study renders at most this many pixels in all, the pixels of one 4096 x 4096 image: 64
-# variants of 512 x 512, or 4 of 2048 x 2048 (an hour or so of CPU time at most, README).
+# variants of 512 x 512, or 4 of 2048 x 2048 (an hour or so of CPU time at most, docs/user-guide.md).
 MAX_STUDY_PIXELS = 4096 * 4096
 # Samples per pixel cost time, not memory (the tracer's bands hold a bounded number of rays,
 # whatever the samples): a render traces at most this many eye rays, those of an 8192 x 8192

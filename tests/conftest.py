@@ -120,7 +120,7 @@ def gpu_context(bl_scene):
     import bpy
 
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-        pytest.skip("GPU drawing needs a display: run the tests under `xvfb-run -a` (README)")
+        pytest.skip("GPU drawing needs a display: run the tests under `xvfb-run -a` (docs/model.md)")
     import gpu
 
     try:

@@ -1,4 +1,4 @@
-"""A brute-force tracer written from MODEL.md alone: one ray at a time, float64, every direction
+"""A brute-force tracer written from docs/model.md alone: one ray at a time, float64, every direction
 and normal renormalised, and the cut surface found by testing every cell under the ray's path
 through the cut slab (no cell walk). Slow, but independent of ``core_tracer.tracer``'s wavefront,
 so the tests can check the fast tracer pixel by pixel.
@@ -26,8 +26,8 @@ from core_tracer.raytrace.camera import eye_rays, make_camera  # noqa: E402
 # No distance threshold against self-intersection: each ray knows the surface it leaves, and the
 # root that is that surface is excluded by the geometry (a plane is not met again, a convex cap
 # left outward is not met again, a cap left inward or the reflector only at their other root).
-CUTOFF = 1e-3  # MODEL.md §5: a branch below 0.1 % (max over RGB) is dropped
-MAX_SEGMENTS = 64  # MODEL.md §5: the depth cap, counting the eye segment
+CUTOFF = 1e-3  # docs/model.md §5: a branch below 0.1 % (max over RGB) is dropped
+MAX_SEGMENTS = 64  # docs/model.md §5: the depth cap, counting the eye segment
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -48,7 +48,7 @@ def fresnel(cos_i: float, n1: float, n2: float) -> float:
 
 
 def phong(normal, view, light, diffuse, light_color, ambient, w, n) -> np.ndarray:
-    """MODEL.md §4, eq. (1): no specular term where the light is behind the surface."""
+    """docs/model.md §4, eq. (1): no specular term where the light is behind the surface."""
     cos_t = float(normal @ light)
     half = _unit(view + light)
     cos_b = max(0.0, float(normal @ half))
@@ -71,7 +71,7 @@ def _roots(a: float, b: float, c: float) -> list[float]:
 
 @dataclass
 class Lamp:
-    """One lamp's parts in its local frame (MODEL.md §3, derived here from the JSON, not from
+    """One lamp's parts in its local frame (docs/model.md §3, derived here from the JSON, not from
     ``scene.lamp_geometry``)."""
 
     lamp: dict
@@ -217,7 +217,7 @@ class Lamp:
         return (ts[0], None) if ts else None
 
     def socket(self, o, d):
-        """MODEL.md §3: a solid cylinder from the vertex to the bulb-centre plane, closed there by a disk."""
+        """docs/model.md §3: a solid cylinder from the vertex to the bulb-centre plane, closed there by a disk."""
         y0, y1 = self.bulb[1], self.vertex
         best = math.inf
         a = d[0] ** 2 + d[2] ** 2
@@ -326,7 +326,7 @@ class Reference:
                 out = out + self._trace(L, hit, _unit(d - 2 * float(d @ normal) * normal), k2, False, True,
                                         segment + 1, "reflector")
             return out
-        # a lens surface: Fresnel split (MODEL.md §5)
+        # a lens surface: Fresnel split (docs/model.md §5)
         facing = -normal if in_lens else normal
         n1, n2 = (L.n, 1.0) if in_lens else (1.0, L.n)
         r = fresnel(-float(d @ facing), n1, n2)

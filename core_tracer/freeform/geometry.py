@@ -2,7 +2,7 @@
 scene over them, built once per geometry change, is ``cache.GeometryCache``'s).
 
 Each triangle knows its part, the surface it is in Table 1's terms and, for a lens, which lens
-volume it bounds. Table 1's surfaces follow from the roles (README, "Free-form"):
+volume it bounds. Table 1's surfaces follow from the roles (docs/model.md, "Free-form"):
 
 - lens triangles facing the viewer (outward normal with y < 0) are the outer face, every other
   lens triangle the inner (cut) face;

@@ -1,6 +1,6 @@
 """Reading the meshes of a glTF binary (.glb) into model space, with limits, never trusting it.
 
-glTF is metres with +Y up; the model is millimetres with z up and the lamp facing -y (MODEL.md §2),
+glTF is metres with +Y up; the model is millimetres with z up and the lamp facing -y (docs/model.md §2),
 which is what Blender's exporter undoes: (x, y, z)_glTF → (1000 x, -1000 z, 1000 y). Each node
 with a mesh becomes one ``MeshData`` named by the node (Blender's object name), its vertices
 moved by the node's world transform. The file is parsed by ``pygltflib`` (the JSON chunk and the

@@ -1,7 +1,7 @@
 """Triangle meshes of free-form parts, in model space, and the checks a lens mesh must pass.
 
 Model space is the design root's frame in millimetres: x right, y into the lamp, z up; the lamp
-faces -y (MODEL.md §2). A lens must be a closed, consistently outward-oriented surface: the
+faces -y (docs/model.md §2). A lens must be a closed, consistently outward-oriented surface: the
 tracer tells inside from outside by the side a ray meets a face from, and measures the path
 length inside for absorption (eq. 2), which only means something for a closed volume.
 """

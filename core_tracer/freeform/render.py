@@ -1,7 +1,7 @@
 """The paper's model on triangle meshes: the engine's wavefront (``raytrace.engine``) over Embree
 queries, in world space.
 
-The same improved ray tracing as the parametric lamps (MODEL.md §5), on the same engine: bands,
+The same improved ray tracing as the parametric lamps (docs/model.md §5), on the same engine: bands,
 threads, samples, rays and the Fresnel split are the engine's. What differs is how a ray finds its
 surface (``hits``: Embree's nearest triangle) and which part, and so which role, a hit belongs to
 (``roles``): the reflector's constant on the first hit and Blinn's scatter toward its bulbs on
@@ -11,7 +11,7 @@ face (①), the reflected branch is the lens surface's own eq. (1) times the Fre
 for the parametric lens.
 
 Surroundings, sun and phantom light are the parametric tracer's (``raytrace.environment``,
-``raytrace.sunlight``; README, "Free-form designs"): rays leaving into nothing see the environment,
+``raytrace.sunlight``; docs/model.md, "Free-form designs"): rays leaving into nothing see the environment,
 ① also mirrors it, bodies and ① are lit by the sun and the environment's irradiance, and a
 reflector hit whose line to the sun passes a lens and nothing opaque but bulbs and sockets gets the
 sun's scatter through that lens's flat plate of its mean thickness (``mean_thickness``).
@@ -58,7 +58,7 @@ __all__ = ["NOT_IN_TABLE", "TO_BODY", "render_passes", "surface_hits"]
 
 EYE = BODY + 1  # the source "surface" of an eye ray
 TO_BODY = 20  # a class beyond Table 1 and the prism plate's ⑬-⑲: a segment that reaches a body (housing) and ends there
-NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (README, "Free-form")
+NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (docs/model.md, "Free-form")
 SUN_PASSES = 16  # surfaces a phantom-light ray toward the sun may pass through (lens faces, bulbs, sockets)
 
 

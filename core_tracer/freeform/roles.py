@@ -1,6 +1,6 @@
 """The role values of a free-form design's parts as arrays, as ``raytrace.lamp_table`` does for
 lamps: refractive index and absorption of lenses, colours, Phong and Blinn values, and which bulbs
-each reflector scatters toward (MODEL.md §5.2)."""
+each reflector scatters toward (docs/model.md §5.2)."""
 
 from __future__ import annotations
 

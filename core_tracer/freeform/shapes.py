@@ -1,6 +1,6 @@
 """Simple meshes with outward faces, for tests, benchmarks and examples of free-form designs.
 
-Model coordinates (MODEL.md §2): millimetres, x right, y into the lamp, z up. Every closed shape
+Model coordinates (docs/model.md §2): millimetres, x right, y into the lamp, z up. Every closed shape
 is wound counter-clockwise seen from outside; the open reflector dish faces the lamp's opening
 (-y) with its normals toward the inside of the bowl.
 """

@@ -1,5 +1,5 @@
 """Every lamp's parameters as arrays indexed by lamp number, gathered per ray by the parts and
-the tracer (MODEL.md §3: lens, cuts, reflector, bulb, socket of each lamp)."""
+the tracer (docs/model.md §3: lens, cuts, reflector, bulb, socket of each lamp)."""
 
 from __future__ import annotations
 
@@ -69,7 +69,7 @@ class LampTable:
     def cylinder_of(self, lamp: np.ndarray) -> dict[str, np.ndarray]:
         """Per ray, the cylinder geometry of its lamp (keys of CYLINDER_KEYS)."""
         return {k: getattr(self, "cyl_" + k)[lamp] for k in CYLINDER_KEYS}
-    # The prism plate (README, the prism plate): a lamp without one has its planes at +inf, so no
+    # The prism plate (docs/model.md, the prism plate): a lamp without one has its planes at +inf, so no
     # ray meets it; a lamp with one has its reflector's rim at +inf, so no ray meets the reflector.
     plate_front: np.ndarray  # y of the flat front face
     plate_base: np.ndarray  # y of the ring bottoms (plane A of the ring walk)

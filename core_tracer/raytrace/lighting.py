@@ -1,5 +1,5 @@
 """What lights a lamp and what a ray leaving it sees, shared by the parametric tracer and the
-free-form one so that both apply one model (README: surroundings, the sun, phantom light).
+free-form one so that both apply one model (docs/model.md: surroundings, the sun, phantom light).
 
 Without surroundings and with the paper's light this is exactly eq. (1) and the background colour
 (``sunlight``: strength 1 and white go through ``optics.phong`` itself).

@@ -104,7 +104,7 @@ def phong(normal: np.ndarray, view: np.ndarray, light_dir: np.ndarray, diffuse: 
           light_color: np.ndarray, ambient: float, specular: np.ndarray | float,
           shininess: np.ndarray | float) -> np.ndarray:
     """Equation (1): [d + (1-d) cos θ] C0 + w (cos β)^n C1, cosines below 0 counted as 0, and
-    no specular term where the light is behind the surface, cos θ <= 0 (MODEL.md §4).
+    no specular term where the light is behind the surface, cos θ <= 0 (docs/model.md §4).
 
     ``view`` points from the surface to the eye, ``light_dir`` from the surface to the light.
     ``diffuse`` is (N, 3) or (3,); returns (N, 3).

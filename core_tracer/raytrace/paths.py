@@ -1,5 +1,5 @@
 """The twelve elementary light paths of the paper (§3.2.2, Fig. 8, Table 1), and the prism plate's
-seven more (⑬-⑲, ``PLATE_TABLE``, README: the prism plate).
+seven more (⑬-⑲, ``PLATE_TABLE``, docs/model.md: the prism plate).
 
 Every ray segment inside a lamp belongs to one class, fixed by the medium it travels in, the
 surface it leaves and the surface it reaches (``CLASS_OF``). What happens at its end follows from
@@ -44,7 +44,7 @@ TABLE_1: dict[int, tuple[frozenset[int], frozenset[int]]] = {
 # Table 1 lists ⑦ only after rays inside the lens. With the cuts clipped by the side wall, the
 # wall also shows a thin band to the air between the clipped cut surface and the reflector rim
 # (plus any reflector gap); air rays that reach it end there as ⑦ too. These are the only
-# transitions the tracer adds to Table 1 (see README, "Where the model is completed").
+# transitions the tracer adds to Table 1 (see docs/model.md, "Where the model is completed").
 AIR_SIDE_WALL: dict[int, tuple[frozenset[int], frozenset[int]]] = {
     2: (frozenset(), frozenset({7})),
     3: (frozenset({7}), frozenset()),
@@ -54,7 +54,7 @@ AIR_SIDE_WALL: dict[int, tuple[frozenset[int], frozenset[int]]] = {
     9: (frozenset({7}), frozenset()),
 }
 
-# The prism plate's classes (README, "Where the model is completed": the prism plate), numbered on
+# The prism plate's classes (docs/model.md, "Where the model is completed": the prism plate), numbered on
 # from the paper's twelve. A prism-plate lamp has no reflector (③ ④ ⑤ never occur); between the
 # lens and the bulb stands a transparent plate, flat toward the lens (its front face) and carrying
 # the prism rings toward the bulb, inside a housing that ends paths like the socket. Rays reach the

@@ -35,7 +35,7 @@ from ..scene import outline
 from . import environment, optics
 from .lamp_table import LampTable
 
-FRONT = np.array([0.0, -1.0, 0.0])  # the outward normal of the lens's outer face (MODEL.md §2)
+FRONT = np.array([0.0, -1.0, 0.0])  # the outward normal of the lens's outer face (docs/model.md §2)
 
 
 @dataclass(frozen=True)
@@ -217,7 +217,7 @@ def sun_color(scene: dict) -> np.ndarray:
 
 def followed_color(env: environment.Environment) -> np.ndarray:
     """The colour of the environment's sun at luminance 1 (Rec. 709), independent of the
-    environment's strength and turn (where the paper is silent, README "The sun").
+    environment's strength and turn (where the paper is silent, docs/model.md "The sun").
 
     The sun is the pixels ``environment.sun_direction`` takes (at least ``SUN_FRACTION`` of the
     brightest luminance); its colour is that of their light, sum(L_c omega) over those pixels of

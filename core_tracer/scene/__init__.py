@@ -4,7 +4,7 @@ document against the declarations (``validate``), the rules that relate several 
 (``geometry_checks``, ``bulb_checks``, ``prism_checks``) and their limits in words for the panel
 (``limits``), derived quantities (``derived``), the lens outline (``outline``), the lamp functions
 (``functions``), how messages show values (``messages``), text made safe for messages
-(``safe_text``) and the README's field table (``fields_doc``).
+(``safe_text``) and the field table of docs/scene-format.md (``fields_doc``).
 
 The names below are the package's public API; code inside ``core_tracer`` imports the module that
 defines a name.

@@ -1,4 +1,4 @@
-"""The bulb of a reflector lamp (MODEL.md §3): the sphere must lie inside the paraboloid (and a
+"""The bulb of a reflector lamp (docs/model.md §3): the sphere must lie inside the paraboloid (and a
 rectangular lens's side wall), behind the cut apex plane. Where it does not, the message names
 the radius or the offset that fits, found by bisection; ``bulb_limits`` says the same in words
 for the panel."""

@@ -73,7 +73,7 @@ def fill_alternative(data: dict, sec: S.Section, alt: S.Alternative) -> None:
 
 
 def lens_absorption(lens: dict) -> list[float]:
-    """Absorption coefficients per mm (MODEL.md §6: A = -ln(T) / t_ref)."""
+    """Absorption coefficients per mm (docs/model.md §6: A = -ln(T) / t_ref)."""
     if "absorption" in lens:
         return list(lens["absorption"])
     t_ref = lens["reference_thickness"]
@@ -103,7 +103,7 @@ def without_defaults(data: dict, sec: S.Section = S.SCENE) -> dict:
 def use_form(data: dict, sec: S.Section, key: str) -> None:
     """Make ``data`` (a normalised ``sec``) use the form of the either/or rule that writes ``key``
     (in place); nothing changes for a key in no rule or a form already used. The lens colour
-    keeps its absorption through the change (MODEL.md §6): a transmitted colour is the one seen
+    keeps its absorption through the change (docs/model.md §6): a transmitted colour is the one seen
     through the lens's own thickness."""
     rule = sec.rule_of(key)
     if rule is None or rule.chosen(data) is rule.of_key(key):
@@ -120,14 +120,14 @@ def use_form(data: dict, sec: S.Section, key: str) -> None:
 
 
 def cut_sphere_radius(pitch: float, height: float) -> float:
-    """Radius rho of a lenslet sphere (MODEL.md §3.1): (c^2 + h^2) / 2h with c = p / sqrt 2."""
+    """Radius rho of a lenslet sphere (docs/model.md §3.1): (c^2 + h^2) / 2h with c = p / sqrt 2."""
     c = pitch / math.sqrt(2.0)
     return (c * c + height * height) / (2.0 * height)
 
 
 def tooth_height(pitch: float, tooth_angle_deg: float) -> float:
     """Height of a saw-tooth ridge: its inclined facet rises at the tooth angle across one pitch
-    to a return facet perpendicular to the lens plane (README, model: where the paper is silent)."""
+    to a return facet perpendicular to the lens plane (docs/model.md, model: where the paper is silent)."""
     return pitch * math.tan(math.radians(tooth_angle_deg))
 
 
@@ -144,7 +144,7 @@ def cut_depth(cuts: dict) -> float:
 
 
 def lamp_geometry(lamp: dict) -> dict:
-    """Derived y positions (mm) of one lamp's parts along its axis (MODEL.md §3). The paraboloid meets
+    """Derived y positions (mm) of one lamp's parts along its axis (docs/model.md §3). The paraboloid meets
     the rim plane at the outline's reach (its farthest point from the axis, R for a round lens), so
     that, trimmed to the outline's prism, it lies behind the rim plane everywhere. For a cylindrical
     lens ``plane_b`` is the deepest point of the cut apexes (at the lens's wrap-side edge), so the
@@ -168,7 +168,7 @@ def lamp_geometry(lamp: dict) -> dict:
 
 
 def _prism_plate_geometry(lamp: dict, y_apex: float) -> dict:
-    """Derived y positions of a prism-plate lamp (README, the prism plate): the plate's flat front
+    """Derived y positions of a prism-plate lamp (docs/model.md, the prism plate): the plate's flat front
     face ``plate_front``, its ring bottoms ``plate_base`` and ring tops ``plate_peak``, the focus f
     behind the ring bottoms, and the housing's back (``vertex``: where the socket ends, as for the
     reflector). ``rim`` is where the lens side wall gives way to the housing: the plate's front."""
@@ -188,7 +188,7 @@ def _prism_plate_geometry(lamp: dict, y_apex: float) -> dict:
 
 
 def lens_cylinder(lamp: dict) -> dict | None:
-    """A cylindrical lens's geometry in the lamp's frame (README, "cylindrical lens"), or None for
+    """A cylindrical lens's geometry in the lamp's frame (docs/model.md, "cylindrical lens"), or None for
     a flat one.
 
     The outer face is the cylinder of radius ``radius`` about the vertical line x = ``axis_x``,
@@ -218,7 +218,7 @@ def lens_cylinder(lamp: dict) -> dict | None:
 
 def cap_corner_radius(base: float, apex: float, pitch: float, rho: float) -> float:
     """Radius (from the cylinder axis) where a cell's cap meets the cell's corner edge on a
-    cylindrical base: the cap is the fish-eye sphere of the cell's tangent plane (MODEL.md §3.1),
+    cylindrical base: the cap is the fish-eye sphere of the cell's tangent plane (docs/model.md §3.1),
     centred on the cell's radial line at apex + rho; the corner edge is the radial line at the
     half-cell angle p / 2 base, a half-pitch above or below. NaN if the sphere misses it (the cap
     would leave a hole at the corner: validation refuses such cuts)."""
@@ -229,7 +229,7 @@ def cap_corner_radius(base: float, apex: float, pitch: float, rho: float) -> flo
 
 
 def body_wraps(scene: dict) -> list[tuple[float, float, float]]:
-    """The curved ends of the body's front (README, "cylindrical lens"): per wrap side, (side,
+    """The curved ends of the body's front (docs/model.md, "cylindrical lens"): per wrap side, (side,
     x of the tangent line in the world, radius). The front is the plane y = 0 between the tangent
     lines and follows each cylindrical lens's outer cylinder beyond its line. Several cylindrical
     lamps curving to one side share one cylinder (validation checks it)."""

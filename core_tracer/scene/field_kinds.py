@@ -1,7 +1,7 @@
 """The kinds of field a scene document declares (``spec``): numbers and vectors with their range
 and unit, choices, text, tags, flags, sections of fields, lists of sections, and the either/or
 rules of a section (``OneOf``). Each kind says its allowed range in words (``range_text``) as
-the messages and the README's field table print it."""
+the messages and the field table of docs/scene-format.md print it."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ class Num:
     # "distance", "direction", "xyz"
 
     def range_text(self) -> str:
-        """The allowed range as the error messages and the README print it."""
+        """The allowed range as the error messages and docs/scene-format.md print it."""
         left = "(" if self.lo_open else "["
         right = ")" if self.hi_open else "]"
         lo = "-inf" if self.lo is None else _fmt(self.lo)

@@ -1,4 +1,4 @@
-"""The rules that relate several fields of a normalised scene (README, "Limits"): the camera
+"""The rules that relate several fields of a normalised scene (docs/scene-format.md, "Rules across fields"): the camera
 sees the lamp, each lens fits the body and its neighbours, the cuts fit the lens, a cylindrical
 lens's cuts and wrap fit, the reflector fits the body. The bulb's rules are ``bulb_checks``'s, a
 prism plate's ``prism_checks``'s. Each raises ``SceneError`` naming the field to change."""
@@ -99,7 +99,7 @@ def check_geometry(scene: dict) -> None:
 
 
 def _plate_needs_round_flat_lens(lamp: dict, where: str) -> None:
-    """The prism plate's rings are circles about the lamp axis behind a flat round lens (README)."""
+    """The prism plate's rings are circles about the lamp axis behind a flat round lens (docs/model.md)."""
     if not Outline.of_lens(lamp["lens"]).round:
         raise SceneError(f"{where}.lens.outline", 'a prism plate sits behind a round lens; allowed "round" '
                          '(or collection "reflector")')
@@ -133,7 +133,7 @@ def _check_cylinder(lamp: dict, where: str) -> None:
     if cyl is None:
         return
     lens, cuts = lamp["lens"], lamp["cuts"]
-    if cuts["type"] != "fisheye":  # the curved base's cell walk is the fish-eye grid's (README)
+    if cuts["type"] != "fisheye":  # the curved base's cell walk is the fish-eye grid's (docs/model.md)
         raise SceneError(f"{where}.cuts.type", f'"{cuts["type"]}" cuts are not made on a cylindrical lens; '
                          'allowed "fisheye" (or lens.shape "flat")')
     R, t, h = -cyl["side"] * cyl["axis_x"], lens["thickness"], cuts["height"]
@@ -163,7 +163,7 @@ def _deepest_cylinder_cut(lamp: dict) -> float:
 
 
 def _check_wraps(scene: dict) -> None:
-    """The body's front follows one cylinder per wrap side (README, "cylindrical lens"): the
+    """The body's front follows one cylinder per wrap side (docs/model.md, "cylindrical lens"): the
     cylindrical lamps of a side share it, the flat lenses lie on the flat part, the body's side
     ends before the cylinder turns a quarter, in front of the body's back."""
     body = scene["body"]

@@ -1,4 +1,4 @@
-"""The lens outline (README "Where the paper is silent": the lens outline): round, a circle of the
+"""The lens outline (docs/model.md "Where the paper is silent": the lens outline): round, a circle of the
 lens radius R (the paper's lamp), or rectangular, a rectangle of width w and height h whose
 corners are quarter circles of radius r (a square lamp).
 

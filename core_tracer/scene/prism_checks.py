@@ -1,4 +1,4 @@
-"""The rules of a prism-plate lamp (README, the prism plate) that relate several fields: the rings
+"""The rules of a prism-plate lamp (docs/model.md, the prism plate) that relate several fields: the rings
 fit the plate and can bend the bulb's light parallel, the housing fits the body, and the bulb sits
 inside the housing behind the plate. Each raises ``SceneError`` naming the field to change."""
 

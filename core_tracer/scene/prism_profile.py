@@ -1,4 +1,4 @@
-"""The prism plate's ring profile (README, "Where the model is completed": the prism plate).
+"""The prism plate's ring profile (docs/model.md, "Where the model is completed": the prism plate).
 
 The plate's back face (toward the bulb) carries concentric rings of pitch p about the lamp axis:
 ring k spans the radii [k p, (k + 1) p] (the last one is cut by the lens radius). Each ring is a

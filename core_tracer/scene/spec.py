@@ -1,12 +1,12 @@
 """The field declarations of a ``lamp-scene/2`` document.
 
 Every parameter of a lamp design is declared here once, with its unit, allowed range, default
-and description. The validator (``validate``), the README's field table, the JSON presets and
+and description. The validator (``validate``), the field table of docs/scene-format.md, the JSON presets and
 the Blender properties (``lamp_addon/design/properties.py``) all follow from these declarations.
 The kinds of field (``Num``, ``Section``, the either/or rule ``OneOf`` …) are ``field_kinds``'s.
 
 Lengths are millimetres, absorption coefficients per millimetre, angles degrees, colours
-linear RGB (MODEL.md §2).
+linear RGB (docs/model.md §2).
 """
 
 from __future__ import annotations

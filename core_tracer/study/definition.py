@@ -27,7 +27,7 @@ lamp, ``cuts.type`` (fisheye, sawtooth, flutes), ``lens.outline``, ``lens.shape`
 on one sheet. A lamp's ``function`` is varied as choosing it in Blender does: it sets the lens
 colour and the bulb that go with it (``scene.functions``). Varying the lens colour
 (``lens.transmitted_color``) replaces the lens's absorption coefficients, as the scene format allows
-only one of the two (MODEL.md §6); varying ``lens.absorption`` replaces a transmitted colour.
+only one of the two (docs/model.md §6); varying ``lens.absorption`` replaces a transmitted colour.
 
 Everything is checked when the study is built, before anything renders: the parameter names,
 each value against its field's range, the number of variants, and every variant scene with

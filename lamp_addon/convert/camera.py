@@ -1,6 +1,6 @@
 """Camera mathematics between the scene description's camera and Blender's (no ``bpy``).
 
-The scene's camera (``scene["camera"]``, millimetres, MODEL.md §2) follows Blender's own camera
+The scene's camera (``scene["camera"]``, millimetres, docs/model.md §2) follows Blender's own camera
 code (``BKE_camera_params_compute_viewplane``): the sensor size is ``sensor_height`` for a vertical
 fit and ``sensor_width`` otherwise; AUTO fits the larger of the render's pixel dimensions times the
 pixel aspect; the lens shift is a fraction of the fitted side; an orthographic ``ortho_scale`` spans
@@ -160,7 +160,7 @@ def box_corners(lo: Sequence[float], hi: Sequence[float]) -> list[Vec3]:
 
 
 def body_box(scene: dict) -> tuple[Vec3, Vec3]:
-    """The lamp body's box in model space (mm, MODEL.md §2): the front face at y = 0, depth into +y.
+    """The lamp body's box in model space (mm, docs/model.md §2): the front face at y = 0, depth into +y.
     Every part of a valid design lies in it (the lenses inside the front face, the reflectors and
     bulbs within its depth)."""
     body = scene["body"]

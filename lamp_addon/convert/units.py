@@ -1,4 +1,4 @@
-"""Units between the lamp model and Blender (MODEL.md §2): the model works in millimetres, Blender
+"""Units between the lamp model and Blender (docs/model.md §2): the model works in millimetres, Blender
 in metres, so 1 mm of the model is 0.001 Blender units."""
 
 BU_PER_MM = 0.001

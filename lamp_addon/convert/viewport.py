@@ -15,7 +15,7 @@ fraction of the fitted side). Reading the window back from the matrix and writin
 terms is exact for any region aspect and any off-centre window, as long as pixels are square
 (Blender's viewport pixels always are).
 
-The camera is expressed in the design's model space (MODEL.md §2: millimetres, the root object's
+The camera is expressed in the design's model space (docs/model.md §2: millimetres, the root object's
 local space, see ``design.root``): ``world_from_model`` takes model millimetres to the world.
 A root with a non-uniform scale distorts the lamp in a way no pinhole camera can show, and is
 refused.

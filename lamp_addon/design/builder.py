@@ -5,7 +5,7 @@ Objects (each lamp i counted from 1): the root Empty "Lamp Design" (``design.roo
 "Lamp i Reflector", "Lamp i Bulb", "Lamp i Socket", all in the "Lamp Design" collection. The scene's
 world becomes "Lamp Design World". Geometry comes from ``convert.meshes`` (chord tolerance
 ``CHORD_TOLERANCE_MM`` = 0.05 mm, measured), positions from ``core_tracer.scene.lamp_geometry``;
-1 mm = 0.001 Blender units and the lamp's front faces -Y (MODEL.md §2).
+1 mm = 0.001 Blender units and the lamp's front faces -Y (docs/model.md §2).
 
 Everything the builder makes carries the custom property ``lamp_part`` (e.g. ``"lamps[0].lens"``), by
 which a rebuild finds it again, whatever its name or collection. A rebuild changes only what a

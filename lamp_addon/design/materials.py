@@ -11,10 +11,10 @@ part:
   distribution, colour = scatter w (``cycles.blinn_roughness``); (c) the constant colour C of the first
   reflector hit as an Emission of colour C, seen only by rays that have not yet made a glossy bounce
   (Light Path's Glossy Depth 0: the reflector's own mirror and lobe are glossy bounces, so a path sees C
-  at its first reflector hit, as in MODEL.md §5.2) and never by diffuse rays (so it lights nothing).
+  at its first reflector hit, as in docs/model.md §5.2) and never by diffuse rays (so it lights nothing).
   Approximations: the Beckmann lobe is normalised where the paper's term is not, and, being a BSDF, it
   scatters every light that reaches it, the surroundings too, where eq. 3 scatters only the bulb's (and
-  the sun's) light (README, surroundings); a path that reflected inside the lens before its first
+  the sun's) light (docs/model.md, surroundings); a path that reflected inside the lens before its first
   reflector hit does not see C in Cycles (about r², 0.2 % of it; on the cut lenses of the evening preset
   Cycles' C stayed within 1 % of the tracer's).
 - **Body, socket, lens side wall**: Diffuse BSDF of their colour. The paper's body adds the specular term
@@ -114,7 +114,7 @@ def lens_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
 
 def prism_plate_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
     """The prism plate: glass like the lens's (Principled BSDF transmitting, IOR = the plate's n) with
-    its own Volume Absorption (eq. 2, README: the prism plate)."""
+    its own Volume Absorption (eq. 2, docs/model.md: the prism plate)."""
     plate = lamp["prism_plate"]
     missing = _glass(mat, new, "Prism Plate", plate["ior"], plate["absorption"])
     mat.diffuse_color = (*cycles.transmitted_color(plate["absorption"], plate["thickness"]), 0.3)
@@ -221,7 +221,7 @@ CONSTANT_GATE = "Constant Only On First Reflector Hit"
 
 def _gate_constant_to_first_hit(tree) -> None:
     """Hide the constant C from rays after a glossy bounce as well as from diffuse rays: gate factor
-    max(Is Diffuse Ray, Glossy Depth > 0), 1 picking the gate's empty shader. MODEL.md §5.2 adds C on the
+    max(Is Diffuse Ray, Glossy Depth > 0), 1 picking the gate's empty shader. docs/model.md §5.2 adds C on the
     first reflector hit of a path from the eye; seen on every hit, an oblique view of a mirror of
     reflectance 0.8 showed 33 % more C than the model (tests/addon/test_addon_cycles_reflector.py).
     Inserted only where the gate is still fed by Light Path's Is Diffuse Ray as the builder laid it out

@@ -195,7 +195,7 @@ class _LampPartPanel(LampTab):
 
 def section_in_use(lamp, part: str) -> bool:
     """Whether the lamp's ``part`` section shapes it: the reflector's and the prism plate's only for
-    the lamp's collection (README, the prism plate); every other section always."""
+    the lamp's collection (docs/model.md, the prism plate); every other section always."""
     if part in S.COLLECTIONS:
         return lamp.collection == part
     return True

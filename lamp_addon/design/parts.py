@@ -157,7 +157,7 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
 
 def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outline, k: int, g: dict,
                  lighter: bool) -> tuple[list[MeshPart], np.ndarray, tuple, bool]:
-    """``lamp_parts`` for a cylindrical lens (README, "the cylindrical lens"): the lens mesh on its
+    """``lamp_parts`` for a cylindrical lens (docs/model.md, "the cylindrical lens"): the lens mesh on its
     cylinder, and the body's opening where its outer face meets its side wall."""
     lens, cuts = lamp["lens"], lamp["cuts"]
     key = ("cylindrical lens", lens_outline, lens["thickness"], cuts["pitch"], cuts["height"], len(rim),
@@ -170,7 +170,7 @@ def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outlin
 
 
 def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[MeshPart]:
-    """A prism-plate lamp's plate (glass) and housing (diffuse) in place of the reflector (README, the
+    """A prism-plate lamp's plate (glass) and housing (diffuse) in place of the reflector (docs/model.md, the
     prism plate); their matrices are set by ``lamp_parts``."""
     plate = lamp["prism_plate"]
     g = lamp_geometry(lamp)

@@ -4,7 +4,7 @@ Each mesh part the builder made (``design.root.PART_KEY``) is copied, as the vie
 (the designer's modifiers applied), into a new collection "Lamp Free-form", parented to the design
 root where the part stands, with the role and values its part has in the design: the lens as a
 ``lens`` (its glass: cut surface, outer face and the rim band between them, a closed solid) and a
-``side_wall`` (the opaque rim of the parametric model, MODEL.md §3: from the outer face to the cut
+``side_wall`` (the opaque rim of the parametric model, docs/model.md §3: from the outer face to the cut
 apex plane or the reflector's edge), a prism plate as a ``lens`` (its glass closed at the rim, the
 plate's index and absorption) and its housing as a ``side_wall`` (it ends a path with its colour,
 ⑲), the reflector, bulb, socket and body as themselves. Each copy gets a role material

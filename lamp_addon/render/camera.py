@@ -1,6 +1,6 @@
 """The scene camera: the one view both renderers use.
 
-The scene description's camera (``scene["camera"]``, millimetres, MODEL.md §2) and Blender's
+The scene description's camera (``scene["camera"]``, millimetres, docs/model.md §2) and Blender's
 camera object are converted into each other here. The projection follows Blender's own camera
 code (``BKE_camera_params_compute_viewplane``): the sensor size is ``sensor_height`` for a
 vertical fit and ``sensor_width`` otherwise; AUTO fits the larger of the render's pixel

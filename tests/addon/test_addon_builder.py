@@ -1,6 +1,6 @@
 """The lamp built as Blender objects: names, geometry against the analytic surfaces, rebuilds, materials.
 
-The analytic surfaces are written out here again from MODEL.md §3 (not taken from the add-on's mesh
+The analytic surfaces are written out here again from docs/model.md §3 (not taken from the add-on's mesh
 code), with the derived positions from ``core_tracer.scene.lamp_geometry``.
 """
 
@@ -70,7 +70,7 @@ def _poly_array(mesh, attr: str, dtype) -> np.ndarray:
 
 
 def _cut_distance(points_local: np.ndarray, lamp: dict, scene_mod) -> np.ndarray:
-    """Distance to the cap sphere of the cell holding each point (MODEL.md §3.1)."""
+    """Distance to the cap sphere of the cell holding each point (docs/model.md §3.1)."""
     t, p, h = lamp["lens"]["thickness"], lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     x, y, z = points_local.T
     if h == 0:

@@ -1,4 +1,4 @@
-"""The reflector's constant colour C in Cycles is added where the model adds it (MODEL.md §5.2): on the
+"""The reflector's constant colour C in Cycles is added where the model adds it (docs/model.md §5.2): on the
 first reflector hit of a path from the eye, not on every hit.
 
 The case: a flat clear lens over a reflector with a mirror (reflectance 0.8), no scatter lobe, a

@@ -1,5 +1,5 @@
 """A prism-plate lamp built as Blender objects and rendered by Cycles: the plate's mesh against the
-ring profile written out again here from the README (not taken from the add-on's mesh code), its
+ring profile written out again here from docs/model.md (not taken from the add-on's mesh code), its
 glass and housing materials, and the plate's on-axis transmission against the tracer."""
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def _samples(obj, lamp, samples: int = 6) -> np.ndarray:
 
 
 def _ring_face_distance(points: np.ndarray, lamp: dict, g: dict) -> np.ndarray:
-    """Distance to the plate as the README states it: ring k on [kp, (k+1)p] is the cone
+    """Distance to the plate as docs/model.md states it: ring k on [kp, (k+1)p] is the cone
     y = y_A + s_k((k+1)p - r) with s_k = u_r / (n + u_y), u the unit ray from the focus to the
     facet's mid-radius point (at height s_k p / 2), then the draft r = (k+1)p; the front face y =
     plate front."""

@@ -368,7 +368,7 @@ def test_engine_panels_are_compatible_and_registration_is_symmetric(lamp_addon):
 
 
 # ---------------------------------------------------------------------------------------------
-# The engine's contribution passes (MODEL.md §5.2) as Blender render passes
+# The engine's contribution passes (docs/model.md §5.2) as Blender render passes
 
 LABELS = {"lens_surface": "Lamp Lens Surface", "bulb": "Lamp Bulb", "reflector_constant": "Lamp Reflector Constant",
           "reflector_scatter": "Lamp Reflector Scatter", "socket": "Lamp Socket", "side_wall": "Lamp Side Wall",
@@ -586,9 +586,9 @@ def test_contribution_passes_panel_and_symmetric_registration(lamp_addon, bl_sce
             assert layer.lamp_contribution_passes  # the value is kept in the file across a disable
 
 
-def test_readme_names_the_contribution_passes(lamp_addon, repo_root):
+def test_user_guide_names_the_contribution_passes(lamp_addon, repo_root):
     assert lamp_addon.render.engine.PASS_LABELS == LABELS
-    text = " ".join((repo_root / "README.md").read_text().split())
+    text = " ".join((repo_root / "docs" / "user-guide.md").read_text().split())
     assert "Contribution Passes" in text
     assert all(f"*{label}*" in text for label in LABELS.values())
 

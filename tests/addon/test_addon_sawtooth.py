@@ -1,5 +1,5 @@
 """Saw-tooth and fluted lamps in Blender: their lenses built on the analytic surfaces (written out
-here again from the README's model, not taken from the mesh code) with closed glass, the Cuts
+here again from the model (docs/model.md), not taken from the mesh code) with closed glass, the Cuts
 panel showing the type's fields and the tooth angle's limit, and the rebuild when the cut type
 changes."""
 
@@ -246,7 +246,7 @@ def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, ad
 @pytest.mark.parametrize("cut_type", ["fisheye", "sawtooth", "flutes"])
 def test_a_rectangular_lens_s_side_wall_reaches_the_reflector_edge(lamp_addon, addon_core, cut_type):
     """The side wall of a rectangular lens stands up to the trimmed reflector's edge, whatever the
-    cuts: no gap between them through which rays would leave the lamp (MODEL.md §3, the tracer's
+    cuts: no gap between them through which rays would leave the lamp (docs/model.md §3, the tracer's
     side wall reaches the reflector's edge)."""
     import json
 

@@ -1,8 +1,8 @@
 """A square lamp built as Blender objects: the lens, its side wall, the trimmed reflector and the
 body's opening follow the rectangular outline, within the chord tolerance of the analytic surfaces.
 
-The surfaces are written out here from the README's model (the outline's rounded rectangle, the
-paraboloid of MODEL.md §3.2 meeting the rim plane at the outline's farthest point), not taken from
+The surfaces are written out here from the model (docs/model.md) (the outline's rounded rectangle, the
+paraboloid of docs/model.md §3.2 meeting the rim plane at the outline's farthest point), not taken from
 the add-on's mesh code."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """A wrap-around lamp built as Blender objects: the cylindrical lens's cut surface, outer face and
 side wall, and the body's curved front, lie within the chord tolerance of the analytic surfaces of
-the README's model ("the cylindrical lens"), written out here rather than taken from the mesh code;
+the model (docs/model.md) ("the cylindrical lens"), written out here rather than taken from the mesh code;
 the materials follow the same mapping as a flat lens's."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ pytestmark = [pytest.mark.blender, pytest.mark.slow]
 
 
 def _cylinder(lamp: dict) -> dict:
-    """The README's cylinder of a lens: tangent to y = 0 at the edge opposite the wrap side."""
+    """The docs/model.md's cylinder of a lens: tangent to y = 0 at the edge opposite the wrap side."""
     lens, cuts = lamp["lens"], lamp["cuts"]
     half_w = lens["width"] / 2 if lens.get("outline") == "rectangular" else lens["radius"]
     side = 1.0 if lens["wrap_toward"] == "+x" else -1.0

@@ -12,7 +12,7 @@ from core_tracer.raytrace import engine
 from core_tracer.raytrace.engine import render_passes
 from core_tracer.raytrace.engine.sampling import pilot_samples
 
-# Measured at 96 x 64 and 16 samples: at most 8e-5 of the peak, 7e-5 of the mean (README).
+# Measured at 96 x 64 and 16 samples: at most 8e-5 of the peak, 7e-5 of the mean (docs/model.md).
 MAX_OF_PEAK = 5e-4
 MEAN_OF_MEAN = 3e-4
 

@@ -344,7 +344,7 @@ def test_a_lens_wrapping_toward_minus_x_renders_the_mirror_image_of_one_wrapping
 @pytest.mark.slow
 def test_surroundings_light_and_surround_a_wrapped_body(tmp_path):
     # Under a uniform world W with the sun off, a Lambertian body shows rho W on its flat and its
-    # curved front alike, and the rays that miss see W (README: surroundings; cylindrical lens).
+    # curved front alike, and the rays that miss see W (docs/model.md: surroundings; cylindrical lens).
     from core_tracer import render_passes
     from tests.helpers import write_exr
 

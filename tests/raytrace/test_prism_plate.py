@@ -1,4 +1,4 @@
-"""The prism plate (README, the prism plate): the ring walk against every ring, re-intersection
+"""The prism plate (docs/model.md, the prism plate): the ring walk against every ring, re-intersection
 from a hit, the closed form of the Fresnel-lens design, its path classes, its validation."""
 
 from __future__ import annotations
@@ -152,7 +152,7 @@ def test_the_design_ray_of_every_ring_leaves_exactly_parallel_to_the_axis():
 
 
 def test_every_ray_from_the_focus_leaves_parallel_to_within_the_ring_discretisation():
-    # The bound (README): a ray from the focus leaves the plate at most as far from the axis as the
+    # The bound (docs/model.md): a ray from the focus leaves the plate at most as far from the axis as the
     # angle between it and its ring's design ray, seen from the focus (to first order the exit
     # angle is that difference times cos(incidence) / cos(refraction) < 1 at the facet).
     slopes, _ = _plate()
@@ -249,7 +249,7 @@ def test_bad_prism_plates_are_refused_naming_the_field_and_the_allowed_range(cha
     ({"shape": "cylindrical", "wrap_radius": 300.0}, "lamps[0].lens.shape"),
 ])
 def test_a_prism_plate_needs_a_round_flat_lens(lens, field):
-    # the rings are circles about the lamp axis behind a flat lens (README, the prism plate)
+    # the rings are circles about the lamp axis behind a flat lens (docs/model.md, the prism plate)
     scene = load_scene(BASELINE)
     scene["lamps"][0]["collection"] = "prism_plate"
     scene["lamps"][0]["lens"].update(lens)

@@ -1,7 +1,7 @@
 """The tracer against the model in the corners where rounding used to win: many total internal
 reflections, nearly flat cuts, an exposed socket end, a light behind a surface, and the
 smallest cut pitch validation allows. Pixels are checked against ``reference_tracer`` (a
-one-ray-at-a-time float64 tracer written from MODEL.md) or against closed forms."""
+one-ray-at-a-time float64 tracer written from docs/model.md) or against closed forms."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from core_tracer.raytrace.parts import cuts, side_wall
 from core_tracer.scene import spec
 from core_tracer.scene.reading import SceneError
 
-HEMISPHERE_9MM = 9.0 / math.sqrt(2.0)  # the highest cut a 9 mm pitch allows (MODEL.md §3.1)
+HEMISPHERE_9MM = 9.0 / math.sqrt(2.0)  # the highest cut a 9 mm pitch allows (docs/model.md §3.1)
 
 
 def _orthographic(width_mm: float, pixels: int) -> dict:
@@ -84,7 +84,7 @@ def test_many_internal_reflections_keep_unit_directions_and_stay_inside_the_lamp
 
 @pytest.mark.parametrize("height", [1e-7, 1e-8, 1e-11])
 def test_very_low_cuts_render_as_the_flat_inner_face(height):
-    # As h -> 0 the caps tend to the plane y = t (MODEL.md §3.1: h = 0 is a flat inner face).
+    # As h -> 0 the caps tend to the plane y = t (docs/model.md §3.1: h = 0 is a flat inner face).
     flat = render(scene_with(**{"lamps[0].cuts.height": 0.0}), 96, 72)
     low = render(scene_with(**{"lamps[0].cuts.height": height}), 96, 72)
     lens = flat.max(axis=2) > 0.5  # the lit lens; body and background are unaffected anyway
@@ -118,7 +118,7 @@ def test_low_cap_intersection_is_the_plane_to_rounding(rng):
 
 def test_sideways_bulb_exposes_the_socket_end_disk():
     # With the lens index 1 and no absorption the lens is invisible (no Fresnel reflection), so an
-    # orthographic view along the axis sees the socket's end disk (MODEL.md §3) wherever the
+    # orthographic view along the axis sees the socket's end disk (docs/model.md §3) wherever the
     # bulb, moved 12 mm sideways, does not cover it: exactly the socket colour.
     scene = scene_with(**_orthographic(20.0, 9), **{
         "lamps[0].cuts.height": 0.0, "lamps[0].lens.ior": 1.0, "lamps[0].lens.absorption": [0.0, 0.0, 0.0],
@@ -141,7 +141,7 @@ def test_body_face_lit_from_behind_has_no_specular():
     scene = scene_with(**{"image": {"width": 64, "height": 64}, "light": LIGHT_BEHIND,
                           "body.color": [0.5, 0.25, 0.125], "body.specular": 0.9, "body.shininess": 2.0})
     image = render(scene)
-    # the front face, left of the lens: only the ambient part of eq. (1) is left (MODEL.md §4)
+    # the front face, left of the lens: only the ambient part of eq. (1) is left (docs/model.md §4)
     np.testing.assert_allclose(image[18, 8], 0.3 * np.array([0.5, 0.25, 0.125]), rtol=1e-6)
 
 

@@ -122,7 +122,7 @@ def test_sphere_and_socket_hits():
     t = bulb.hit_sphere(o, d, c, np.full(3, 8.0))
     assert t[0] == pytest.approx(6.0) and np.isinf(t[1])
     ts = socket.hit_socket(o, d, np.full(3, 2.0), np.full(3, 14.0), np.full(3, 30.0))
-    # along the axis the ray meets the disk that closes the socket at the bulb-centre plane (MODEL.md §3)
+    # along the axis the ray meets the disk that closes the socket at the bulb-centre plane (docs/model.md §3)
     assert ts[0] == pytest.approx(14.0) and np.isinf(ts[1]) and ts[2] == pytest.approx(1.0)
 
 

@@ -1,5 +1,5 @@
 """The lens colour's either/or rule is declared once (spec.LENS.one_of) and the validator, the
-study parameters and the README table follow it."""
+study parameters and the field table of docs/scene-format.md follow it."""
 
 import json
 
@@ -64,11 +64,11 @@ def test_study_axes_follow_the_rule():
                               {"parameter": "lamps[0].lens.transmitted_color", "values": [[0.9, 0.1, 0.1]]}])
 
 
-def test_the_readme_states_the_rule_from_the_spec():
+def test_the_scene_format_doc_states_the_rule_from_the_spec():
     table = fields_doc.field_table()
     assert f"- `lamps[].lens`: {RULE.doc.lower()}: {RULE.range_text()}" in table
     assert "| `lamps[].lens.reference_thickness` | mm | (0, 100] | `thickness` |" in table
-    assert table in (ROOT / "README.md").read_text()
+    assert table in (ROOT / "docs" / "scene-format.md").read_text()
 
 
 def test_a_defaulted_field_does_not_change_the_thumbnail_hash():

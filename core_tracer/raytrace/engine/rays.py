@@ -1,8 +1,8 @@
 """Rays and passes: one generation of live rays as arrays, and what a band of pixels accumulates.
 
-Each ray carries its accumulated attenuation k (paper §3.4, MODEL.md §5): luminance found at the
+Each ray carries its accumulated attenuation k (paper §3.4, docs/model.md §5): luminance found at the
 end of a segment is added to the ray's pixel as k × the value, into one of the contribution passes
-(MODEL.md §5.2), so the ray-tracing tree of Fig. 7 is never stored.
+(docs/model.md §5.2), so the ray-tracing tree of Fig. 7 is never stored.
 """
 
 from __future__ import annotations

@@ -1,11 +1,11 @@
-"""The render entry: a scene in, the image and its contribution passes out (MODEL.md §5.2).
+"""The render entry: a scene in, the image and its contribution passes out (docs/model.md §5.2).
 
 Rays are traced backward from the eye, one per pixel through its centre (the paper's setting),
 or, with ``image.samples`` N > 1, N per pixel placed by the pixel filter (``pixel_filter``), the
 pixel being their mean; adaptive sampling (``adaptive``) traces all N only where a first few
 disagree. At every dielectric surface a ray branches into a reflected and a transmitted ray (the
 ray-tracing tree of Fig. 7); each carries its accumulated attenuation k, and luminance is added to
-the pixel as k × the value found, so the tree is never stored (MODEL.md §5). All live rays of one
+the pixel as k × the value found, so the tree is never stored (docs/model.md §5). All live rays of one
 generation are processed together as arrays (``walk``); the image is worked in bands of rows to
 bound memory (``schedule``), and the last few branches of a band are traced along with the next
 band's rays (``carried``).
@@ -93,7 +93,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   keep_passes: bool = True, samples: int | None = None,
                   filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True,
                   adaptive_threshold: float | None = None, pool: BandsElsewhere | None = None) -> RenderResult:
-    """Render a normalised scene; returns the image and its contribution passes (MODEL.md §5.2).
+    """Render a normalised scene; returns the image and its contribution passes (docs/model.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
     spans the fitted side). Bands of rows are rendered on ``threads`` threads (numpy releases

@@ -1,6 +1,6 @@
 """What happens where a ray meets a surface: the lens's outer face seen from the eye (①), the
 reflector (③ ④, eq. 3), and the faces of a dielectric (a lens or a prism plate) met from either
-side, where one Fresnel split (MODEL.md §5) gives the reflected and the transmitted branch.
+side, where one Fresnel split (docs/model.md §5) gives the reflected and the transmitted branch.
 
 The free-form tracer (``freeform.render``) splits its meshes' lens faces with the same
 ``fresnel_split``.
@@ -85,7 +85,7 @@ def at_reflector(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
 
 @dataclass
 class Split:
-    """The Fresnel split of rays at a face between two media (MODEL.md §5): the weights of the
+    """The Fresnel split of rays at a face between two media (docs/model.md §5): the weights of the
     reflected and the transmitted branch, and what Snell's law needs for the transmitted one."""
 
     cos_i: np.ndarray  # -d·n, the normal turned toward the incident side
@@ -184,7 +184,7 @@ def at_lens_face(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
 
 def at_plate_face(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
                   surface: np.ndarray, out_normal: np.ndarray, lamps: LampTable) -> list[Rays]:
-    """A prism-plate face met from either side (README, the prism plate): the lens's Fresnel split
+    """A prism-plate face met from either side (docs/model.md, the prism plate): the lens's Fresnel split
     with the plate's index; ``out_normal`` points out of the plate material. Nothing leaves the lamp
     here, so both branches go on where above the cut-off."""
     face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, lamps.plate_ior, P.IN_PLATE)

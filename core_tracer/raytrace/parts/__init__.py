@@ -1,4 +1,4 @@
-"""The parts of a lamp, one module per part type (MODEL.md §3), each a ``base.Part``: the surface
+"""The parts of a lamp, one module per part type (docs/model.md §3), each a ``base.Part``: the surface
 it is, the media it can be reached from, and ``intersect``. The tracer finds a ray's next surface
 by walking ``PARTS``, each part given the rays of its media, so a new part type is a new module
 and one entry in ``PARTS``; no loop changes.

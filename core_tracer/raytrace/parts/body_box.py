@@ -1,4 +1,4 @@
-"""The body (MODEL.md §3): an axis-aligned box, its front face in y = 0, in the world frame.
+"""The body (docs/model.md §3): an axis-aligned box, its front face in y = 0, in the world frame.
 Only eye rays meet it: it decides background, body or lens (paper §3.1)."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from ..camera import Camera
 
 
 def body_box(body: dict) -> tuple[np.ndarray, np.ndarray]:
-    """The body's box (MODEL.md §3): its lowest and highest corners; the front face lies in y = 0
+    """The body's box (docs/model.md §3): its lowest and highest corners; the front face lies in y = 0
     and the depth runs into +y."""
     (cx, cz), (sx, sz) = body["center"], body["size"]
     return np.array([cx - sx / 2, 0.0, cz - sz / 2]), np.array([cx + sx / 2, body["depth"], cz + sz / 2])

@@ -1,4 +1,4 @@
-"""The bulb (MODEL.md §3): a sphere of radius r_b about the focus plus the bulb offset, met from
+"""The bulb (docs/model.md §3): a sphere of radius r_b about the focus plus the bulb offset, met from
 the air; the light source, where a ray ends (⑪)."""
 
 from __future__ import annotations

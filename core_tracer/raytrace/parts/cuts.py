@@ -1,4 +1,4 @@
-"""The fish-eye cuts (MODEL.md §3.1, paper §3.2.4, Fig. 9): a square grid of spherical caps on
+"""The fish-eye cuts (docs/model.md §3.1, paper §3.2.4, Fig. 9): a square grid of spherical caps on
 the lens's inner face, found by walking the cells crossed between plane A (the base) and plane
 B (the apexes); a Fresnel surface met from inside the lens and from the air."""
 
@@ -50,7 +50,7 @@ def flat_base_hits(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, t_limit: n
 
 def hit_cuts(o: np.ndarray, d: np.ndarray, plane_a: np.ndarray, plane_b: np.ndarray, pitch: np.ndarray,
              rho: np.ndarray, t_limit: np.ndarray, on_cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The cut surface (MODEL.md §3.1): returns the hit parameter and the unit normal pointing
+    """The cut surface (docs/model.md §3.1): returns the hit parameter and the unit normal pointing
     out of the lens material (toward the air), for hits nearer than ``t_limit``.
 
     Intersect the ray with plane A (cut base) and plane B (apexes); the true hit lies on a cell

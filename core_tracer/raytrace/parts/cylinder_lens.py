@@ -1,4 +1,4 @@
-"""The cylindrical lens (README, "cylindrical lens"): its outer face on a vertical-axis cylinder
+"""The cylindrical lens (docs/model.md, "cylindrical lens"): its outer face on a vertical-axis cylinder
 and its fish-eye cuts laid out by arc length on the concentric cylinder of the cut base.
 
 Everything is in the lamp's frame (x, z from the lamp axis, y as in the world). The cylinder
@@ -6,7 +6,7 @@ axis is the vertical line (x, y) = (``axis_x``, ``radius``); an angle phi about 
 from the tangent line (phi = 0 at y = 0) and grows toward the wrap side ``side`` (+1: +x), so
 the point at radius r and angle phi is (axis_x + side r sin phi, radius - r cos phi).
 
-The cuts generalise MODEL.md §3.1 to the curved base: cell (i, j) covers the angles
+The cuts generalise docs/model.md §3.1 to the curved base: cell (i, j) covers the angles
 phi_center + (i -/+ 1/2) p / base (arc length p on the base) and z in (j -/+ 1/2) p; its cap is
 the fish-eye sphere of the cell's tangent plane, radius rho, centred on the cell's radial line
 at radius apex + rho, so its deepest point (the apex) lies at radius ``apex`` = base - h.

@@ -1,7 +1,7 @@
 """Cylindrical flutes: parallel cylindrical ridges on the lens's inner face, Table 1's cut face
 like the fish-eye cuts (``cuts``) and the saw-tooth ridges (``sawtooth``).
 
-Geometry (README, model: where the paper is silent). With s = a . (x, z) across the ridges
+Geometry (docs/model.md, model: where the paper is silent). With s = a . (x, z) across the ridges
 (``LampTable.ridge_across``), strip k covers (k - 1/2) p <= s <= (k + 1/2) p, one strip centred on
 the axis; its flute is the cylinder of radius rho = (p^2/4 + h^2) / 2h along the ridges, apex at
 (s = k p, plane B), meeting plane A at the strip's borders, so neighbouring flutes meet in creases.

@@ -1,4 +1,4 @@
-"""The housing of a prism-plate lamp (README, the prism plate): the cylinder r = R about the lamp
+"""The housing of a prism-plate lamp (docs/model.md, the prism plate): the cylinder r = R about the lamp
 axis from the plate's front face back, closed by a flat disk at the housing's depth; opaque and
 not reflecting, a ray ends there (⑲) with the housing's colour, as at the socket.
 

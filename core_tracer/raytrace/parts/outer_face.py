@@ -1,4 +1,4 @@
-"""The lens's outer face (MODEL.md §3): the lens outline's inside in the plane y = 0, a Fresnel
+"""The lens's outer face (docs/model.md §3): the lens outline's inside in the plane y = 0, a Fresnel
 surface reached from inside the lens (eye rays meet it from outside in ``lens_at``)."""
 
 from __future__ import annotations

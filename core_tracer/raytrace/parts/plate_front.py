@@ -1,4 +1,4 @@
-"""The prism plate's flat front face (README, the prism plate): the disk r <= R in the plane
+"""The prism plate's flat front face (docs/model.md, the prism plate): the disk r <= R in the plane
 y = plate front, toward the lens; a Fresnel surface met from the air between lens and plate and
 from inside the plate. A lamp without a plate has the plane at +inf: no ray meets it."""
 

@@ -1,4 +1,4 @@
-"""The prism plate's ring face (README, the prism plate; profile in ``scene.prism_profile``):
+"""The prism plate's ring face (docs/model.md, the prism plate; profile in ``scene.prism_profile``):
 concentric conical facets with vertical draft faces on the plate's back, toward the bulb; a
 Fresnel surface met from inside the plate and from the air behind it.
 

@@ -1,4 +1,4 @@
-"""The reflector (MODEL.md §3.2): the paraboloid y = y_v - (x^2 + z^2) / 4f between its rim and
+"""The reflector (docs/model.md §3.2): the paraboloid y = y_v - (x^2 + z^2) / 4f between its rim and
 its vertex, met from the air inside the lamp; shaded by eq. (3) and mirror-reflecting."""
 
 from __future__ import annotations

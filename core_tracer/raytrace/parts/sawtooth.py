@@ -2,7 +2,7 @@
 face, a Fresnel surface met from inside the lens and from the air, like the fish-eye cuts
 (``cuts``) whose surface id (Table 1's cut face) they share.
 
-Geometry (README, model: where the paper is silent). With ``a`` the unit vector across the ridges
+Geometry (docs/model.md, model: where the paper is silent). With ``a`` the unit vector across the ridges
 in the lens plane (``LampTable.ridge_across``) and s = a . (x, z), strip k covers
 (k - 1/2) p <= s <= (k + 1/2) p, one strip centred on the lamp axis. Its inclined facet rises from
 plane A (y = t) at the strip's lower border at the tooth angle alpha to plane B (y = t + h,

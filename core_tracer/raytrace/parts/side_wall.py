@@ -1,4 +1,4 @@
-"""The lens side wall (MODEL.md §3): the lens outline (``outline``) extruded along the lamp axis,
+"""The lens side wall (docs/model.md §3): the lens outline (``outline``) extruded along the lamp axis,
 met from inside: for a round lens the cylinder r = R, for a rectangular one four planes and four
 quarter cylinders. It stands from the outer face back to the reflector's edge (the prism holds the
 trimmed paraboloid: a ray in the lamp meets the wall before any part of the paraboloid outside it);

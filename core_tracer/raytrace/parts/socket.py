@@ -1,4 +1,4 @@
-"""The socket (MODEL.md §3): a solid cylinder on the lamp axis from the reflector vertex to the
+"""The socket (docs/model.md §3): a solid cylinder on the lamp axis from the reflector vertex to the
 plane of the bulb centre, closed there by a flat disk; opaque, a ray ends there (⑫)."""
 
 from __future__ import annotations

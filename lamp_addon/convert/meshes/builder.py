@@ -187,7 +187,7 @@ def polygon_area(poly: Sequence[tuple[float, float]]) -> float:
 def collar_top(lamp: dict) -> float | Callable[[float, float], float]:
     """Where the lens side wall's collar ends behind the cuts: the apex plane y = t + h of a round
     lens; for a rectangular one the reflector's edge at (x, z), which lies behind the apex plane
-    along the straight sides (README: the lens outline), so that no gap opens between them."""
+    along the straight sides (docs/model.md: the lens outline), so that no gap opens between them."""
     g = lamp_geometry(lamp)
     if Outline.of_lens(lamp["lens"]).round:
         return g["plane_b"]

@@ -1,4 +1,4 @@
-"""The lens solid of a lamp with spherical lenslet cuts (MODEL.md §3, §3.1; numpy, no Blender data):
+"""The lens solid of a lamp with spherical lenslet cuts (docs/model.md §3, §3.1; numpy, no Blender data):
 the outer disk, the cut surface (a grid of quads per lenslet cell clipped by the rim polygon) and the
 side wall with its collar. Also the cut surface's grid for the cylindrical lens (``wrap``).
 """
@@ -33,7 +33,7 @@ from .builder import (
 
 
 class CutSurface:
-    """The inner face of the lens: y(x, z) over the square lenslet grid (MODEL.md §3.1)."""
+    """The inner face of the lens: y(x, z) over the square lenslet grid (docs/model.md §3.1)."""
 
     def __init__(self, thickness: float, pitch: float, height: float, sphere_radius: float | None):
         self.t, self.p, self.h = thickness, pitch, height
@@ -176,7 +176,7 @@ def fisheye_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM
 
     A rectangular lens (``outline``) is clipped by its rim polygon ``rim`` (``outline_rim``, shared with
     the reflector and the body) instead of the regular ``segments``-gon, and its side wall's collar
-    stands up to the reflector's edge, which lies behind the rim plane along the straight sides (README:
+    stands up to the reflector's edge, which lies behind the rim plane along the straight sides (docs/model.md:
     the lens outline).
     """
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]

@@ -1,5 +1,5 @@
 """The lamp's parts other than the lens: the reflector (whole, or trimmed to a rectangular lens's
-outline), the bulb, the socket and the body with its openings (MODEL.md §3.2; numpy, no Blender data).
+outline), the bulb, the socket and the body with its openings (docs/model.md §3.2; numpy, no Blender data).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from .builder import (
 )
 
 # ---------------------------------------------------------------------------------------------
-# Reflector (MODEL.md §3.2)
+# Reflector (docs/model.md §3.2)
 
 
 def paraboloid_distance(vertex_y: float, focal_length: float) -> Callable[[np.ndarray], np.ndarray]:
@@ -67,7 +67,7 @@ def reflector_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -
 
 
 def trimmed_reflector_mesh(lamp: dict, rim: np.ndarray, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
-    """The paraboloid trimmed to a rectangular lens's prism (README: the lens outline): rows of points
+    """The paraboloid trimmed to a rectangular lens's prism (docs/model.md: the lens outline): rows of points
     s P_k for the rim polygon's vertices P_k and fractions s from 0 (the vertex) to 1 (the rim, on the
     side wall), spaced evenly in arc length along the longest profile; refined until measured."""
     f = lamp["reflector"]["focal_length"]

@@ -1,4 +1,4 @@
-"""Meshes of a prism-plate lamp (README, the prism plate), in the lamp's local frame in mm, bpy-free.
+"""Meshes of a prism-plate lamp (docs/model.md, the prism plate), in the lamp's local frame in mm, bpy-free.
 
 The plate: the flat front face, and the ring face revolved from the profile the tracer uses
 (``core_tracer.scene.prism_profile``): per ring the conical facet from its top at the inner radius to

@@ -1,5 +1,5 @@
 """The lens solid of a saw-tooth lamp (numpy; no Blender data): the same ridges as the tracer's
-``core_tracer/raytrace/parts/sawtooth.py`` (README, model: where the paper is silent).
+``core_tracer/raytrace/parts/sawtooth.py`` (docs/model.md, model: where the paper is silent).
 
 Strip k covers (k - 1/2) p <= s <= (k + 1/2) p across the ridges (s = a . (x, z), a the unit vector
 across them, ``ridge_across``); its inclined facet is the plane y = t + tan(alpha) (s - (k - 1/2) p)

@@ -1,4 +1,4 @@
-"""Meshes of a cylindrical lens and of a body whose front curves round to the side (README, "the
+"""Meshes of a cylindrical lens and of a body whose front curves round to the side (docs/model.md, "the
 cylindrical lens"), numpy only, in the conventions of the package (mm, x right, y into the lamp, z
 up; faces wound so that normals point out of the solid).
 
