@@ -14,8 +14,9 @@ from collections.abc import Callable
 import numpy as np
 
 from ..raytrace import optics
+from .cache import GeometryCache
 from .embree import EmbreeScene
-from .geometry import Geometry, GeometryCache
+from .geometry import Geometry
 from .meshes import MeshData
 
 SELF_HIT_RETRIES = 2
