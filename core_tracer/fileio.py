@@ -1,5 +1,8 @@
 """Writes that never leave a half-written file: write a temporary file beside, then rename.
 
+A folder of outputs (a render's passes, a study's variants) is written the same way, whole: into a
+temporary folder beside, which then replaces the folder (``atomic_folder``).
+
 The temporary file is created with mode 0666 less the umask, as any program's file (a teammate
 can read what was written to a shared folder), and its name is chosen before it is created, so
 a Ctrl-C or SIGTERM that lands at any instant still finds and removes it.
@@ -11,7 +14,10 @@ import contextlib
 import errno
 import os
 import secrets
-from collections.abc import Iterator
+import shutil
+import signal
+import threading
+from collections.abc import Callable, Iterator
 
 from .checkpoints import checkpoint
 
@@ -134,3 +140,81 @@ def check_writable(path: str | os.PathLike) -> None:
             raise _as_final(e, final) from None
         raise
     os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[None]:
+    """SIGINT and SIGTERM wait until the block is done (a few renames), then take effect: the
+    block is never left half-done by them."""
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+class FolderInUseError(OSError):
+    """The folder holds files that are not of the kind written there: it is never replaced."""
+
+
+def check_replaceable_folder(path: str | os.PathLike, replaceable: Callable[[str], bool], what: str) -> None:
+    """Raise ``FolderInUseError`` naming ``path`` unless it is missing, or a folder (not a link)
+    holding only regular files whose names ``replaceable`` accepts: the outputs of an earlier run,
+    which ``atomic_folder`` replaces whole. A folder holding anything else is the user's."""
+    final = os.fspath(path)
+    if not os.path.lexists(final):
+        return
+    if os.path.islink(final) or not os.path.isdir(final):
+        raise FolderInUseError(errno.EEXIST, f"is not a folder of {what}; allowed a new folder or one of an "
+                                             "earlier run", final)
+    for entry in os.scandir(final):
+        if not (replaceable(entry.name) and entry.is_file(follow_symlinks=False)):
+            raise FolderInUseError(errno.ENOTEMPTY, f"holds other files than {what} ({entry.name[:60]!r}); "
+                                                    "allowed a new folder or one of an earlier run, which is "
+                                                    "replaced whole", final)
+
+
+@contextlib.contextmanager
+def atomic_folder(path: str | os.PathLike, replaceable: Callable[[str], bool], what: str) -> Iterator[str]:
+    """Yield a new temporary folder beside ``path``; on success it becomes ``path`` whole: a folder
+    there (only of files ``replaceable`` accepts, see ``check_replaceable_folder``) is replaced, never
+    mixed with. On failure or an interrupt at any moment the temporary folder is removed and
+    ``path`` is as it was."""
+    final = os.path.normpath(os.path.abspath(os.fspath(path)))
+    tmp = temporary_name(final)  # named first: the cleanup below knows it whenever an interrupt lands
+    try:
+        try:
+            os.mkdir(tmp, 0o777)  # the umask applies, as to any program's folder
+        except FileExistsError:  # 64 random bits met an existing name: not ours, never remove it
+            tmp = ""
+            raise
+        except OSError as e:
+            raise _as_final(e, final) from None
+        yield tmp
+        checkpoint("folder:written")
+        with signals_deferred():
+            check_replaceable_folder(final, replaceable, what)  # again: the render took a while
+            old = temporary_name(final) if os.path.lexists(final) else ""
+            if old:
+                os.rename(final, old)
+            try:
+                os.rename(tmp, final)
+            except OSError as e:
+                if old:
+                    os.rename(old, final)
+                raise _as_final(e, final) from None
+            tmp = ""
+            if old:
+                shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        if tmp:
+            shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def is_pass_file(name: str) -> bool:
+    """A render's pass image (``--passes``): ``<pass>.exr``."""
+    return name.endswith(".exr") and not name.startswith(".")

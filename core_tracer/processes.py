@@ -5,12 +5,18 @@ CLI and the tests, Blender's own Python inside Blender) in isolated mode (``-I``
 site-packages, no PYTHON* variables), with the folder that holds ``core_tracer`` first on its path,
 so that it imports ``core_tracer`` as a top-level package whatever name this process knows it by.
 Its numpy runs single-threaded (OMP/BLAS threads = 1): the workers are the parallelism.
+
+A run's temporary files and folders are named ``<prefix><its process id>-...``: a run killed with
+SIGKILL cannot remove them, and the next run does (``remove_orphans``).
 """
 
 from __future__ import annotations
 
 import os
+import shutil
+import stat
 import sys
+import tempfile
 
 from .fileio import EXTENSION_ROOT
 
@@ -50,3 +56,50 @@ def python_runs_workers(python: str | None = None) -> bool:
     started as a worker."""
     path = python or sys.executable
     return bool(path) and os.path.basename(path).lower().startswith("python") and os.path.isfile(path)
+
+
+def remove_orphans(prefix: str, temp: str | None = None) -> list[str]:
+    """Remove the temporary files and folders ``<temp>/<prefix><pid>-...`` whose process is gone
+    (killed with SIGKILL, or by a power cut: no cleanup could run); returns them. Only this user's
+    entries whose process id no longer exists are touched, never through a link. POSIX only
+    (elsewhere ``os.kill`` cannot ask whether a process exists without ending it)."""
+    if os.name != "posix":
+        return []
+    temp = temp or tempfile.gettempdir()
+    removed = []
+    try:
+        names = os.listdir(temp)
+    except OSError:
+        return removed
+    for name in names:
+        pid_text = name[len(prefix):].split("-", 1)[0]
+        if not name.startswith(prefix) or not pid_text.isdigit() or len(pid_text) > 10:
+            continue
+        path = os.path.join(temp, name)
+        try:
+            st = os.lstat(path)
+        except OSError:
+            continue
+        if stat.S_ISLNK(st.st_mode) or st.st_uid != os.getuid() or _alive(int(pid_text)):
+            continue
+        if stat.S_ISDIR(st.st_mode):
+            shutil.rmtree(path, ignore_errors=True)
+        elif stat.S_ISREG(st.st_mode):
+            try:
+                os.unlink(path)
+            except OSError:
+                continue
+        else:
+            continue
+        removed.append(path)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True  # someone else's process, or a number no process has: leave it
+    return True

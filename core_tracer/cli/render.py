@@ -8,12 +8,14 @@ import time
 
 from .. import budget
 from ..checkpoints import checkpoint
+from ..fileio import atomic_folder, check_replaceable_folder, is_pass_file
 from ..images.imageio import image_format
 from ..scene.beside import environment_file
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, load_scene_file, view_for
 
+PASSES = "passes (.exr files)"
 HELP = "render a scene to an .exr (linear, scene in the header) or .png (view transform, exposure) image"
 
 
@@ -40,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.output, "output")
     view = view_for(args) if file_format == "png" else None
     if args.passes is not None:
-        check_output_folder(args.passes, "--passes")
+        _check_passes_folder(args.passes, args.output)
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
     traced, scene = _with_environment(args, scene)
     meshes, geometry = _freeform_meshes(args.scene, scene)
@@ -88,11 +90,14 @@ def run(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - start
     checkpoint("render:rendered")
 
-    if args.passes is not None:
-        os.makedirs(args.passes, exist_ok=True)
-        for name, data in result.passes.items():
-            write_image(os.path.join(args.passes, f"{name}.exr"), data, scene)
-    ev = write_image(args.output, image, scene, view=view, exposure=args.exposure)
+    if args.passes is None:
+        ev = write_image(args.output, image, scene, view=view, exposure=args.exposure)
+    else:  # the passes of this render only, put in place once they and the image are all written
+        with atomic_folder(args.passes, is_pass_file, PASSES) as folder:
+            for name, data in result.passes.items():
+                write_image(os.path.join(folder, f"{name}.exr"), data, scene)
+                checkpoint("render:pass")
+            ev = write_image(args.output, image, scene, view=view, exposure=args.exposure)
 
     h, w = image.shape[:2]
     segments = result.stats.get("segments")
@@ -133,6 +138,20 @@ def _check_finite(image, passes: dict, scene: dict) -> None:
     source = f"; the environment image {printable(env['file'], 200)!r} is too bright" if env["world"] == "file" else ""
     raise SceneError("image", f"the render holds values that are not finite numbers{source}; allowed finite "
                               "images only (nothing was written)")
+
+
+def _check_passes_folder(passes: str, output: str) -> None:
+    """Before the render: the passes can be written beside the folder, which is new or holds the
+    passes of an earlier render only (replaced whole), and does not hold the output image."""
+    check_output_folder(passes, "--passes")
+    check_output_folder(os.path.dirname(os.path.abspath(passes)) or os.sep, "--passes")
+    try:
+        check_replaceable_folder(passes, is_pass_file, PASSES)
+    except OSError as e:
+        raise SceneError(passes, f"--passes {e.strerror}") from None
+    if os.path.realpath(os.path.dirname(os.path.abspath(output))) == os.path.realpath(passes):
+        raise SceneError(passes, "--passes holds the output image; allowed a folder apart from -o (it is "
+                                 "replaced whole by the passes)")
 
 
 def _freeform_meshes(scene_path: str, scene: dict) -> tuple[dict | None, object]:

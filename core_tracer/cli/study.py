@@ -7,11 +7,15 @@ carries its study in its header), and ``study --list`` prints the parameters a s
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
+import re
 import sys
 import time
 
 from .. import budget
 from ..checkpoints import checkpoint
+from ..fileio import atomic_folder, check_replaceable_folder
 from ..images.imageio import image_format
 from ..scene.reading import SceneError, read_json
 from ..scene.safe_text import printable
@@ -19,6 +23,7 @@ from ..study import definition as st
 from ..study.parameters import study_parameters
 from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, in_file, view_for
 
+VARIANTS = "variant presets (variant-NN.json)"
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
 
 
@@ -108,6 +113,28 @@ def _with_environment(study: st.Study, document: str) -> tuple[st.Study, int]:
     return runnable, world
 
 
+def _is_variant_file(name: str) -> bool:
+    return re.fullmatch(r"variant-\d+\.json", name) is not None
+
+
+def _save_side_files(args: argparse.Namespace, study: st.Study) -> None:
+    """``--save-study`` and ``--save-variants``, after the sheet: an interrupt before leaves none of
+    them, one while they are written removes them; the variants replace an earlier run's whole."""
+    saved = []
+    try:
+        if args.save_study:
+            study.save(args.save_study)
+            saved.append(args.save_study)
+        if args.save_variants:
+            with atomic_folder(args.save_variants, _is_variant_file, VARIANTS) as folder:
+                study.save_variants(folder)
+    except BaseException:
+        for path in saved:
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+        raise
+
+
 def _progress_printer():
     if not sys.stderr.isatty():
         return None
@@ -138,6 +165,11 @@ def run(args: argparse.Namespace) -> int:
         check_output(args.save_study, "--save-study")
     if args.save_variants:
         check_output_folder(args.save_variants, "--save-variants")
+        check_output_folder(os.path.dirname(os.path.abspath(args.save_variants)), "--save-variants")
+        try:
+            check_replaceable_folder(args.save_variants, _is_variant_file, VARIANTS)
+        except OSError as e:
+            raise SceneError(args.save_variants, f"--save-variants {e.strerror}") from None
     study = _build(args)
     runnable = study
     if args.output is not None:
@@ -147,11 +179,8 @@ def run(args: argparse.Namespace) -> int:
         sheet_layout = study_sheet.layout(study)
         budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height), environment=world)
 
-    if args.save_study:
-        study.save(args.save_study)
-    if args.save_variants:
-        study.save_variants(args.save_variants)
     if args.output is None:
+        _save_side_files(args, study)
         print(f"study of {len(study)} variants saved")
         return 0
 
@@ -178,6 +207,7 @@ def run(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - start
     checkpoint("study:composed")
     ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure)
+    _save_side_files(args, study)
     workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
     how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
     w, h = study.size

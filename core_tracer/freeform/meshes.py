@@ -19,6 +19,9 @@ from ..scene.safe_text import printable
 # several such parts still fits in memory (about 100 bytes a triangle with normals).
 MAX_TRIANGLES_PER_MESH = 2_000_000
 MAX_TRIANGLES = 4_000_000
+# A lamp is at most a few metres across; 10 km from the origin is absurd, and keeps the volume
+# check's cubes (about 1e21 mm³) far inside the float range.
+MAX_COORDINATE_MM = 1e7
 
 
 @dataclass(frozen=True)
@@ -55,6 +58,9 @@ def check_mesh(mesh: MeshData) -> None:
                                     "(decimate it, or apply fewer subdivision levels)")
     if not np.isfinite(v).all():
         raise mesh_error(mesh.name, "has vertices that are not finite numbers; allowed finite coordinates")
+    if len(v) and np.abs(v).max() > MAX_COORDINATE_MM:
+        raise mesh_error(mesh.name, f"has vertices {np.abs(v).max():.4g} mm from the origin; allowed within "
+                                    f"±{MAX_COORDINATE_MM:g} mm (a lamp's size: check the units and scales)")
     if t.min() < 0 or t.max() >= len(v):
         raise mesh_error(mesh.name, f"has triangle indices outside 0..{len(v) - 1}; allowed indices of its vertices")
     n = mesh.corner_normals

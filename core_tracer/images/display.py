@@ -129,17 +129,23 @@ def _find_config(own: str) -> str | None:
     return installed[-1] if installed else None
 
 
-def _oiio():
+def optional_oiio():
+    """OpenImageIO, or None where it is not installed."""
     try:
         import OpenImageIO
-    except ImportError:
+    except ImportError as e:
+        # pybind11 turns a Ctrl-C or SIGTERM that lands during the module's initialisation into an
+        # ImportError: that is the interrupt, not a missing module (taken for one, the next import
+        # would fail with "type already registered").
+        if isinstance(e.__cause__ or e.__context__, KeyboardInterrupt):
+            raise (e.__cause__ or e.__context__) from None
         return None
     return OpenImageIO
 
 
 @lru_cache(maxsize=8)
 def _views_of(config: str) -> tuple[str, ...]:
-    oiio = _oiio()
+    oiio = optional_oiio()
     colors = oiio.ColorConfig(config)
     return tuple(colors.getViewNameByIndex(DISPLAY, i) for i in range(colors.getNumViews(DISPLAY)))
 
@@ -163,7 +169,7 @@ class ViewTransform:
         rgb = np.ascontiguousarray(np.asarray(linear, dtype=np.float32) * np.float32(2.0 ** exposure))
         if self.config is None:
             return srgb_encode(rgb).astype(np.float32)
-        oiio = _oiio()
+        oiio = optional_oiio()
         height, width = rgb.shape[:2]
         buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 3, oiio.FLOAT))
         buf.set_pixels(oiio.ROI(0, width, 0, height, 0, 1, 0, 3), rgb)
@@ -192,7 +198,7 @@ class ViewTransform:
         if self.config is None:
             rgb = srgb_decode(v)
         else:
-            oiio = _oiio()
+            oiio = optional_oiio()
             height, width = v.shape[:2]
             buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 3, oiio.FLOAT))
             buf.set_pixels(oiio.ROI(0, width, 0, height, 0, 1, 0, 3), v)
@@ -210,7 +216,7 @@ def view_transform(view: str = DEFAULT_VIEW, config: str | None = None) -> ViewT
     ``ValueError`` naming the views it has.
     """
     config = config or find_config()
-    oiio = _oiio()
+    oiio = optional_oiio()
     if config is None or oiio is None:
         if view != STANDARD:
             missing = "OpenImageIO is not installed" if oiio is None else _why_no_config()
@@ -237,7 +243,7 @@ def _why_no_config() -> str:
 def available_views(config: str | None = None) -> tuple[str, ...]:
     """The views that can be asked for: those of Blender's configuration, else the known names."""
     config = config or find_config()
-    if config is None or _oiio() is None:
+    if config is None or optional_oiio() is None:
         return KNOWN_VIEWS
     return _views_of(config)
 

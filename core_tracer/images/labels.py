@@ -13,24 +13,19 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from . import bitmap_font
+from .display import optional_oiio
 
 TEXT_MODES = ("auto", "oiio", "bitmap", "none")
 
 _render_text_works: bool | None = None
 
 
-def _oiio():
-    try:
-        import OpenImageIO
-    except ImportError:
-        return None
-    return OpenImageIO
 
 
 def render_text_available() -> bool:
     """Whether OpenImageIO can draw text here (probed once: it draws a "1" and looks for ink)."""
     global _render_text_works
-    oiio = _oiio()
+    oiio = optional_oiio()
     if oiio is None:  # checked every time: a module that cannot be imported draws nothing
         return False
     if _render_text_works is None:
@@ -60,7 +55,7 @@ def text_width(text: str, size: int, oiio_text: bool) -> int:
     """Width in pixels of ``text`` on one line: ``size`` is OpenImageIO's font size in pixels, and
     for the bitmap font its scale is ``bitmap_scale(size)``."""
     if oiio_text:
-        return int(_oiio().ImageBufAlgo.text_size(text, size, "").width)
+        return int(optional_oiio().ImageBufAlgo.text_size(text, size, "").width)
     return bitmap_font.ADVANCE_W * bitmap_scale(size) * len(text)
 
 
@@ -87,7 +82,7 @@ def coverage(text: str, width: int, height: int, *, size: int, oiio_text: bool, 
     vertically centred); whatever does not fit is clipped. ``size``: the line height in px
     (OpenImageIO's font size; the bitmap font uses the largest integer scale that fits)."""
     if oiio_text:
-        oiio = _oiio()
+        oiio = optional_oiio()
         buf = oiio.ImageBuf(oiio.ImageSpec(width, height, 1, oiio.FLOAT))
         x = width - 1 - inset if align == "right" else inset
         y, valign = (height // 2, "center") if top is None else (top, "top")

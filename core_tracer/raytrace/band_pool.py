@@ -61,7 +61,7 @@ class BandPool:
         self._started = 0  # workers that reported ready
         self._serial = 0
         self._processes: list[subprocess.Popen] = []
-        fd, self._flag_path = tempfile.mkstemp(prefix="lamp-bands-")
+        fd, self._flag_path = _new_flag_file()
         with os.fdopen(fd, "wb") as f:
             f.write(bytes(_SERIAL.size))
         with open(self._flag_path, "r+b") as f:
@@ -246,6 +246,16 @@ class BandPool:
             write_message(self._processes[slot].stdin, message)
         except (OSError, ValueError):  # the worker is gone: its reader reports it
             pass
+
+
+FLAG_PREFIX = "lamp-bands-"  # <temp>/lamp-bands-<pid of the pool's process>-<random>
+
+
+def _new_flag_file() -> tuple[int, str]:
+    """A pool's flag file, named by this process; those of pools whose process was killed before
+    their workers were up (SIGKILL: no cleanup ran) are removed first."""
+    processes.remove_orphans(FLAG_PREFIX)
+    return tempfile.mkstemp(prefix=f"{FLAG_PREFIX}{os.getpid()}-")
 
 
 enabled = True  # False: ``shared()`` gives no pool, every render runs on threads (benchmarks compare)

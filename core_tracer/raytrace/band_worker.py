@@ -59,6 +59,8 @@ def main() -> int:
     # The parent owns cancellation: Ctrl-C in a terminal reaches the whole process group, and the
     # parent stops the render itself, so the workers ignore it rather than print tracebacks.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "SIGPIPE"):  # the parent killed: end quietly at the next message, as a pipeline does
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     inbox = os.fdopen(os.dup(sys.stdin.fileno()), "rb")
     outbox = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # stray prints must not corrupt the protocol

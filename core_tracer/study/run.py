@@ -57,38 +57,8 @@ FOLDER_PREFIX = "lamp-study-"  # <temp>/lamp-study-<pid of the run's process>-<r
 
 def remove_orphaned_folders(temp: str | None = None) -> list[str]:
     """Remove the temporary folders of studies whose process is gone (killed with SIGKILL, or by a
-    power cut: no cleanup could run); returns them. Only this user's folders whose process id no
-    longer exists are touched."""
-    temp = temp or tempfile.gettempdir()
-    removed = []
-    try:
-        names = os.listdir(temp)
-    except OSError:
-        return removed
-    for name in names:
-        pid_text = name[len(FOLDER_PREFIX):].split("-", 1)[0]
-        if not name.startswith(FOLDER_PREFIX) or not pid_text.isdigit() or len(pid_text) > 10:
-            continue
-        path = os.path.join(temp, name)
-        try:
-            st = os.lstat(path)
-        except OSError:
-            continue
-        if not os.path.isdir(path) or os.path.islink(path) or st.st_uid != os.getuid() or _alive(int(pid_text)):
-            continue
-        shutil.rmtree(path, ignore_errors=True)
-        removed.append(path)
-    return removed
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError):
-        return True  # someone else's process, or a number no process has: leave the folder
-    return True
+    power cut: no cleanup could run); returns them (``processes.remove_orphans``)."""
+    return processes.remove_orphans(FOLDER_PREFIX, temp)
 
 
 def default_workers() -> int:

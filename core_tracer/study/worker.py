@@ -30,6 +30,8 @@ def main() -> int:
     # The parent owns cancellation: Ctrl-C in a terminal reaches the whole process group, and the
     # parent then stops the workers itself, so they ignore it rather than print tracebacks.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "SIGPIPE"):  # the parent killed: end quietly at the next message, as a pipeline does
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     protocol = os.fdopen(os.dup(sys.stdout.fileno()), "w", buffering=1, encoding="utf-8")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
 

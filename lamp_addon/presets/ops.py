@@ -37,6 +37,7 @@ from ..render import camera as render_camera
 from ..render import lamp_camera
 from ..render import setup as render_setup
 from . import library as preset_library
+from .state import SceneState
 
 # Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
 # the camera object that differs from the design's by less than this, relative to the view's size, is
@@ -176,6 +177,24 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
     return f"{view}; rebuilt the lamp objects"
 
 
+def apply_preset_whole(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None) -> str:
+    """``apply_preset``, all or nothing: whatever fails part-way (a ``SceneError``, or a failure of
+    a file or of Blender), the scene is put back as it was (``preset_state``) and the error raised
+    again; the operator's one undo step then holds no change."""
+    before = SceneState(bl_scene)
+    try:
+        return apply_preset(bl_scene, scene, path)
+    except Exception:
+        before.restore(bl_scene)
+        raise
+
+
+def _not_applied(operator: bpy.types.Operator, message: str, e: Exception) -> set[str]:
+    """The one-line report of an apply that failed (a failure other than the preset's own named by its kind)."""
+    return _failed(operator, message, e if isinstance(e, (SceneError, OSError)) else
+                   RuntimeError(f"{type(e).__name__}: {e}"))
+
+
 # Dynamic enum items must stay referenced from Python while Blender shows them.
 _library_items: list[tuple[str, str, str]] = []
 
@@ -231,9 +250,9 @@ class LAMP_OT_preset_apply(bpy.types.Operator):
             return _failed(self, "Not a preset of the listed libraries; refresh the preset list")
         try:
             # Read again: the file may have changed since it was listed.
-            view = apply_preset(context.scene, P.load_preset(entry.file), entry.file)
-        except SceneError as e:
-            return _failed(self, "Preset not applied, the design is unchanged", e)
+            view = apply_preset_whole(context.scene, P.load_preset(entry.file), entry.file)
+        except Exception as e:  # noqa: BLE001 - put back whole; the report says what failed
+            return _not_applied(self, "Preset not applied, the design is unchanged", e)
         return reports.finished(self, f"Applied \"{entry.name}\" from {entry.library.name}; {view}")
 
 
@@ -421,9 +440,9 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
         view = ""
         if self.apply:
             try:
-                view = f"; {apply_preset(context.scene, scene, self.filepath)}"
-            except SceneError as e:
-                return _failed(self, "Not imported, the design is unchanged", e)
+                view = f"; {apply_preset_whole(context.scene, scene, self.filepath)}"
+            except Exception as e:  # noqa: BLE001 - put back whole; the report says what failed
+                return _not_applied(self, "Not imported, the design is unchanged", e)
         if lib is not None:
             try:
                 entry = P.save_preset(lib, scene["name"], scene, overwrite=overwrite)

@@ -21,7 +21,8 @@ def write_glb(path, meshes: list[MeshData], translation=None, rotation=None, sca
     if translation is not None or rotation is not None or scale is not None:
         from core_tracer.freeform.gltf import _local_matrix
 
-        local = _local_matrix(pygltflib.Node(translation=translation, rotation=rotation, scale=scale))
+        trs = {"translation": translation, "rotation": rotation, "scale": scale}
+        local = _local_matrix({key: list(value) for key, value in trs.items() if value is not None})
     inverse = np.linalg.inv(local)
     for mesh in meshes:
         v = (mesh.vertices @ MODEL_TO_GLTF.T)

@@ -1,0 +1,69 @@
+"""Applying a preset in Blender is all or nothing (issue 21): whatever fails part-way, after the
+design was written and the Lamp Camera made, the design and the scene are put back exactly as they
+were and the operator reports one line."""
+
+from __future__ import annotations
+
+import pytest
+from helpers import PRESETS
+
+pytestmark = pytest.mark.blender
+
+
+def _state(lamp_addon, bl_scene) -> dict:
+    import bpy
+
+    return {"design": lamp_addon.design.properties.design_document(bl_scene),
+            "objects": sorted(ob.name for ob in bpy.data.objects),
+            "cameras": sorted(c.name for c in bpy.data.cameras),
+            "camera": bl_scene.camera.name if bl_scene.camera else None,
+            "custom": sorted(k for k in bl_scene.keys() if k not in bl_scene.bl_rna.properties),
+            "render": (bl_scene.render.engine, bl_scene.render.resolution_x, bl_scene.render.resolution_y),
+            "exposure": bl_scene.view_settings.exposure}
+
+
+@pytest.fixture
+def failing_after_changes(lamp_addon, monkeypatch):
+    """``show_view`` makes the Lamp Camera (as it does), then fails as a broken file or a Blender
+    failure would, after the design has been written."""
+    ops = lamp_addon.presets.ops
+    real = ops.show_view
+
+    def show_view_then_fail(bl_scene, scene):
+        real(bl_scene, scene)
+        raise ValueError("negative image size in the header")
+
+    monkeypatch.setattr(ops, "show_view", show_view_then_fail)
+    return ops
+
+
+def test_a_failure_part_way_leaves_design_and_scene_as_they_were(lamp_addon, bl_scene, failing_after_changes):
+    import bpy
+
+    core = lamp_addon.presets.ops.P
+    before = _state(lamp_addon, bl_scene)
+    with pytest.raises(ValueError, match="negative image size"):
+        failing_after_changes.apply_preset_whole(bl_scene, core.load_preset(str(PRESETS / "paper-baseline.json")))
+    assert _state(lamp_addon, bl_scene) == before
+    assert not [ob for ob in bpy.data.objects if "Camera" in ob.name]
+
+
+def test_the_import_operator_reports_one_line_and_changes_nothing(lamp_addon, bl_scene, failing_after_changes):
+    import bpy
+
+    before = _state(lamp_addon, bl_scene)
+    with pytest.raises(RuntimeError) as err:
+        bpy.ops.lamp.preset_import(filepath=str(PRESETS / "four-lamp-rear-combination.json"), apply=True,
+                                   add_to_library=False)
+    text = str(err.value).strip()
+    assert "Not imported, the design is unchanged: ValueError: negative image size in the header" in text
+    assert "\n" not in text.removeprefix("Error: ")
+    assert _state(lamp_addon, bl_scene) == before
+
+
+def test_a_good_preset_still_applies(lamp_addon, bl_scene):
+    import bpy
+
+    assert bpy.ops.lamp.preset_import(filepath=str(PRESETS / "four-lamp-rear-combination.json"), apply=True,
+                                      add_to_library=False) == {"FINISHED"}
+    assert len(lamp_addon.design.properties.design_document(bl_scene)["lamps"]) == 4
