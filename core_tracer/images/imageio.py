@@ -137,7 +137,9 @@ def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mappin
         spec.attribute(key, value)
     pixels = np.ascontiguousarray(pixels)
 
-    with fileio.atomic_path(name) as tmp:
+    # Ctrl-C or SIGTERM waits for the write (milliseconds): a file closed between open and
+    # write_image makes libpng print its own error ("No IDATs written") beside our one line.
+    with fileio.atomic_path(name) as tmp, fileio.signals_deferred():
         out = oiio.ImageOutput.create(tmp)
         if out is None:
             raise OSError(f"{name}: OpenImageIO cannot write this format ({oiio.geterror()})")

@@ -12,6 +12,8 @@ import signal
 import pytest
 from helpers import BASELINE, assert_bad_input, run_cli, signal_and_wait, start_cli_at
 
+pytestmark = pytest.mark.slow  # subprocesses and signals
+
 RENDER = ("render", BASELINE, "--width", "16", "--height", "16")
 
 

@@ -17,6 +17,8 @@ from helpers import BASELINE, ROOT, cli_command, process_gone, signal_and_wait, 
 
 from core_tracer.images import display
 
+pytestmark = pytest.mark.slow  # subprocesses and signals
+
 EXPECTED = {signal.SIGINT: (130, "interrupted"), signal.SIGTERM: (143, "terminated")}
 
 
