@@ -1,5 +1,6 @@
 """The preset libraries: ``library`` (the libraries as Blender sees them and their thumbnails),
-``ops`` (apply, save, rename, delete, import, export, drop) and ``panel`` (the preset browser).
+``apply`` (what applying a preset does to the scene, all or nothing, with ``state``), ``ops`` (apply,
+save, rename, delete, import, export, drop) and ``panel`` (the preset browser).
 """
 
 from ..registration import modules_factory

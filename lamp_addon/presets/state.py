@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """The scene's state that applying a preset may change, kept to be put back when the apply fails
-part-way (``preset_ops.apply_preset_whole``): Blender does not undo what a cancelled operator did.
+part-way (``apply.apply_preset_whole``): Blender does not undo what a cancelled operator did.
 """
 
 from __future__ import annotations

@@ -26,7 +26,7 @@ def _state(lamp_addon, bl_scene) -> dict:
 def failing_after_changes(lamp_addon, monkeypatch):
     """``show_view`` makes the Lamp Camera (as it does), then fails as a broken file or a Blender
     failure would, after the design has been written."""
-    ops = lamp_addon.presets.ops
+    ops = lamp_addon.presets.apply
     real = ops.show_view
 
     def show_view_then_fail(bl_scene, scene):

@@ -1,0 +1,139 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""What applying a preset does to the Blender scene, and the view a saved preset records.
+
+A preset is applied only after it has been read again and validated in full, and then all at once
+(``design.properties.scene_to_design``); ``apply_preset_whole`` puts the scene back as it was
+(``state.SceneState``) when anything fails part-way. Applying shows the preset's view through the
+add-on's own "Lamp Camera" (created when the scene has no camera); a camera of the designer's own is
+never moved. The operators that call these are in ``ops``.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+
+import bpy
+
+from ...core_tracer.scene.beside import environment_file
+from ...core_tracer.scene.reading import SceneError
+from ...core_tracer.scene.validate import normalize
+from ..design import builder as design_builder
+from ..design import properties as design_properties
+from ..design import root as design_root
+from ..freeform import loading as freeform_loading
+from ..render import camera as render_camera
+from ..render import lamp_camera
+from ..render import setup as render_setup
+from .state import SceneState
+
+# Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
+# the camera object that differs from the design's by less than this, relative to the view's size, is
+# the design's view.
+SAME_VIEW = 1e-6
+
+
+# ---------------------------------------------------------------------------------------------
+# The view a preset records and shows
+
+
+def _as_stored(value):
+    """A camera value as the design's 32-bit float properties keep it, so that applying the preset
+    gives back exactly the numbers it holds (``design.properties.from_float32``)."""
+    if isinstance(value, dict):
+        return {k: _as_stored(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_as_stored(v) for v in value]
+    if isinstance(value, float):
+        return design_properties.from_float32(struct.unpack("<f", struct.pack("<f", value))[0])
+    return value
+
+
+def _same_view(a: dict, b: dict) -> bool:
+    """Whether two normalised camera sections show the same view, up to Blender's single precision."""
+    if (a["type"], a["sensor_fit"]) != (b["type"], b["sensor_fit"]):
+        return False
+    reach = max(math.dist(a["position"], a["target"]), a["width"], 1.0)  # mm: the size of the view
+    sizes = {"position": reach, "target": reach, "width": reach, "up": 1.0, "fov_deg": 180.0, "shift": 1.0}
+    for key, size in sizes.items():
+        x, y = (v if isinstance(v, list) else [v] for v in (a[key], b[key]))
+        if not all(abs(p - q) <= SAME_VIEW * size for p, q in zip(x, y, strict=True)):
+            return False
+    return True
+
+
+def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
+    """The design as a preset records it: seen through the Blender scene camera at the render size
+    when the scene has a camera, else through the design's own camera. Raises ``SceneError``.
+
+    A scene camera that shows the design's own view (say, right after applying a preset) keeps the
+    design's numbers, free of Blender's single-precision noise.
+    """
+    if bl_scene.camera is None:
+        return design_properties.design_to_scene(bl_scene)
+    seen = render_camera.scene_for_render(bl_scene)
+    try:
+        own = design_properties.design_to_scene(bl_scene)["camera"]
+    except SceneError:
+        own = None  # the design's own camera section does not hold a valid view: the scene camera is the view
+    seen["camera"] = own if own is not None and _same_view(seen["camera"], own) else _as_stored(seen["camera"])
+    return normalize(seen)
+
+
+def show_view(bl_scene: bpy.types.Scene, scene: dict) -> str:
+    """Show the design's view (just set from a preset) through the add-on's Lamp Camera.
+
+    The design's camera fields are the Lamp Camera (``render.view_link.sync_view``): it takes the
+    preset's view, made when the scene has none. A camera of the designer's stays as it is.
+    Returns what happened, for the report."""
+    mine = bl_scene.camera is not None and not render_camera.is_lamp_camera(bl_scene.camera)
+    if mine and render_camera.find_lamp_camera(bl_scene) is None:
+        return (f"kept your camera \"{bl_scene.camera.name}\" (the preset's view is the design's camera; "
+                "Frame Lamp makes the Lamp Camera)")
+    ob, made = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    if mine:
+        return (f"kept your camera \"{bl_scene.camera.name}\" (the preset's view is on \"{ob.name}\"; "
+                "Frame Lamp makes it the scene camera)")
+    return made or f"moved \"{ob.name}\" to its view"
+
+
+def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None) -> str:
+    """Set the design from a preset, all or nothing, then show its view (``show_view``) and, when the
+    lamp has been built in this scene, rebuild it so that its objects are the preset's too. A free-form
+    preset (read from ``path``) also brings its parts in as objects with roles (``freeform.loading``),
+    its meshes read and checked first. Returns what happened, for the report."""
+    parts = None
+    if path is not None and scene["environment"]["world"] == "file":
+        # The image beside the preset (refused when it leads elsewhere), held in the design by its path.
+        scene = {**scene, "environment": {**scene["environment"], "file": environment_file(path, scene["environment"])}}
+    if "freeform" in scene:
+        if path is None:
+            raise SceneError("freeform", "a free-form design needs its file, to find its .glb beside it")
+        parts = freeform_loading.read_parts(path, scene)  # before any change: all or nothing
+    design_properties.scene_to_design(bl_scene, scene)
+    design = design_properties.design_to_scene(bl_scene)
+    view = show_view(bl_scene, design)
+    if parts is not None:
+        made = freeform_loading.make_parts(bl_scene, scene, parts)
+        view += f"; made {len(made)} free-form parts"
+    if not any(ob.get(design_root.PART_KEY) for ob in bl_scene.objects):
+        if bl_scene.lamp_design.auto_build and not render_setup.is_set_up(bl_scene):
+            # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now
+            # (the Lamp Camera at the preset's view, Lamp Tracer, the design's exposure), as the first Add Lamp does.
+            view += render_setup.news_text(render_setup.set_up(bl_scene))
+        return view
+
+    design_builder.build_lamp(bl_scene, design)
+    return f"{view}; rebuilt the lamp objects"
+
+
+def apply_preset_whole(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None) -> str:
+    """``apply_preset``, all or nothing: whatever fails part-way (a ``SceneError``, or a failure of
+    a file or of Blender), the scene is put back as it was (``state``) and the error raised
+    again; the operator's one undo step then holds no change."""
+    before = SceneState(bl_scene)
+    try:
+        return apply_preset(bl_scene, scene, path)
+    except Exception:
+        before.restore(bl_scene)
+        raise
