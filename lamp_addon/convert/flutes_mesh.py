@@ -18,6 +18,7 @@ import numpy as np
 from ...core_tracer.scene.derived import flute_radius
 from .meshes import (
     CHORD_TOLERANCE_MM,
+    CUT_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     SAMPLED_MARGIN,
@@ -57,7 +58,7 @@ def flutes_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
         across = np.array([-p / 2, p / 2])
     else:
         rho = flute_radius(p, h)
-        per = bands_per_flute(p, rho, tol)
+        per = bands_per_flute(p, rho, min(tol, CUT_TOLERANCE_MM))
         half = math.asin(min(1.0, p / 2.0 / rho))
         across = rho * np.sin(np.linspace(-half, half, per + 1))
         across[0], across[-1] = -p / 2, p / 2

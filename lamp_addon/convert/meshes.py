@@ -1,13 +1,14 @@
 """Tessellated lamp parts: vertices in mm, faces, smoothing groups (numpy; no Blender data).
 
 Every part is built to a chord tolerance: no point of any triangle of the mesh lies further than
-``CHORD_TOLERANCE_MM`` (0.05 mm) from the analytic surface the tracer uses (MODEL.md §3). The
-tessellation is chosen from that tolerance and then *measured* (``MeshData.max_deviation``: the
-largest distance to the analytic surface over 28 sample points on every triangle of both diagonal
-splits of every quad); curved surfaces are refined until the measurement is within ``SAMPLED_MARGIN``
-times the tolerance (cylinders follow the exact sagitta r(1 - cos(pi/n))), up to a cap
-(``MAX_CELL_SUBDIVISION``, ``MAX_SEGMENTS``) that only extreme designs reach (cut caps close to
-hemispheres) — then ``max_deviation`` reports what was achieved and the build operator says so.
+``CHORD_TOLERANCE_MM`` (0.05 mm; the curved cut surfaces ``CUT_TOLERANCE_MM``, 0.0075 mm) from the
+analytic surface the tracer uses (MODEL.md §3). The tessellation is chosen from that tolerance and
+then *measured* (``MeshData.max_deviation``: the largest distance to the analytic surface over 28
+sample points on every triangle of both diagonal splits of every quad); curved surfaces are refined
+until the measurement is within ``SAMPLED_MARGIN`` times the tolerance (cylinders follow the exact
+sagitta r(1 - cos(pi/n))), up to a cap (``MAX_CELL_SUBDIVISION``, ``MAX_SEGMENTS``) that only extreme
+designs reach (cut caps close to hemispheres) — then ``max_deviation`` reports what was achieved and
+the build operator says so.
 
 Coordinates are the model's (MODEL.md §2): x right, y into the lamp (the lens front face is y = 0),
 z up, millimetres. Lamp parts are given relative to their lamp's axis (x = z = 0 on the axis); the
@@ -28,12 +29,22 @@ from ...core_tracer.raytrace.outline import Outline
 from ...core_tracer.scene.derived import cut_sphere_radius, lamp_geometry
 
 CHORD_TOLERANCE_MM = 0.05
+# The curved cut surfaces (fish-eye caps, flutes) are built finer than the rest: the eye sees the
+# lamp through them, and a faceted cap's shading normals (Blender's, averaged from its faces) are
+# flatter than the cap's near the creases between cells, by up to half a face's angle. At 0.05 mm
+# the lens lets through 0.6-4 % more light than the analytic caps do; at 0.0075 mm every preset
+# without a sky is within 0.3 % (benchmarks/bench_freeform_agreement.py).
+CUT_TOLERANCE_MM = 0.0075
 MAX_CELL_SUBDIVISION = 48  # quads per side of one lenslet cell
 MAX_SEGMENTS = 1024  # around a circle
 # Curved surfaces measured by sampling are refined to this fraction of the tolerance, so that the
 # largest deviation between the samples (a few percent more, at 28 samples per triangle) stays within it.
 SAMPLED_MARGIN = 0.95
 FLAT = -1  # smoothing group of flat-shaded faces
+# Where the rim cuts the cut grid, points closer than this are made one (a grid line crossing the rim
+# next to a rim corner or a grid vertex): the free-form checks weld vertices to about a millionth
+# of a mesh's size, and would take two such vertices for one, the glass for open.
+SNAP_MM = 1e-3
 
 # Material slots of the lens mesh.
 LENS_GLASS = 0
@@ -193,7 +204,7 @@ def cell_lines(surface: CutSurface, k: int) -> np.ndarray:
     return lines
 
 
-def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM,
+def cut_subdivision(surface: CutSurface, tol: float = CUT_TOLERANCE_MM,
                     most: int = MAX_CELL_SUBDIVISION) -> tuple[int, float]:
     """Quads per side of a cell so that one whole cell is within ``tol``, at most ``most``; returns
     (k, deviation)."""
@@ -338,7 +349,7 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     shape = Outline.of_lens(lamp["lens"])
     surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))
-    k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
+    k, dev_cell = cut_subdivision(surface, min(tol, CUT_TOLERANCE_MM), max_subdivision)
     if shape.round:
         grid = _CutGrid(surface, k, R)
         rim = rim_polygon(R, segments)
@@ -449,6 +460,8 @@ class _CutPolygons:
         self.polygons: list[tuple[int, ...]] = []
         self.rim_points: list[tuple[float, float]] = []
         self._rim_index: dict[tuple[int, int], int] = {}
+        self._near: dict[tuple[int, int], list[int]] = {}  # rim points by SNAP_MM square
+        self.moved: dict[int, tuple[float, float]] = {}  # grid vertices moved onto a rim point
 
     def add_clipped(self, a: int, b: int, rim: np.ndarray, holds_axis: bool,
                     edges_near: Callable | None = None) -> None:
@@ -476,11 +489,29 @@ class _CutPolygons:
             self.groups.append(int(self.grid.group(a, b)))  # the cell: one smooth cap
 
     def _rim_point(self, point: tuple[float, float]) -> int:
+        """The vertex of a point on the rim: a grid vertex within ``SNAP_MM`` (moved onto the rim), an
+        earlier rim point within ``SNAP_MM``, or a new one."""
         key = (round(point[0] * 1e6), round(point[1] * 1e6))
         i = self._rim_index.get(key)
-        if i is None:
-            i = self._rim_index[key] = self.grid.size ** 2 + len(self.rim_points)
-            self.rim_points.append(point)
+        if i is not None:
+            return i
+        lines, size = self.grid.lines, self.grid.size
+        a, b = (min(max(int(np.searchsorted(lines, c)), 1), size - 1) for c in point)
+        a -= abs(lines[a - 1] - point[0]) < abs(lines[a] - point[0])
+        b -= abs(lines[b - 1] - point[1]) < abs(lines[b] - point[1])
+        if abs(lines[a] - point[0]) <= SNAP_MM and abs(lines[b] - point[1]) <= SNAP_MM:
+            i = a * size + b
+            self.moved.setdefault(i, point)
+            return i
+        cx, cz = math.floor(point[0] / SNAP_MM), math.floor(point[1] / SNAP_MM)
+        for dx, dz in itertools.product((-1, 0, 1), repeat=2):
+            for j in self._near.get((cx + dx, cz + dz), ()):
+                q = self.rim_points[j - size ** 2]
+                if math.hypot(q[0] - point[0], q[1] - point[1]) <= SNAP_MM:
+                    return j
+        i = self._rim_index[key] = size ** 2 + len(self.rim_points)
+        self.rim_points.append(point)
+        self._near.setdefault((cx, cz), []).append(i)
         return i
 
     def welded(self) -> tuple[np.ndarray, list[tuple[int, ...]], list[int]]:
@@ -496,6 +527,10 @@ class _CutPolygons:
         xz[on_grid, 1] = self.grid.lines[used[on_grid] % self.grid.size]
         if self.rim_points:
             xz[~on_grid] = np.array(self.rim_points)[used[~on_grid] - grid_count]
+        for i, point in self.moved.items():
+            at = np.searchsorted(used, i)
+            if at < len(used) and used[at] == i:
+                xz[at] = point
         keys = np.round(xz * 1e6).astype(np.int64)
         _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
         order = np.argsort(first)  # vertices in the order they were first used
