@@ -33,7 +33,9 @@ CHORD_TOLERANCE_MM = 0.05
 # lamp through them, and a faceted cap's shading normals (Blender's, averaged from its faces) are
 # flatter than the cap's near the creases between cells, by up to half a face's angle. At 0.05 mm
 # the lens lets through 0.6-4 % more light than the analytic caps do; at 0.0075 mm every preset
-# without a sky is within 0.3 % (benchmarks/bench_freeform_agreement.py).
+# without a sky is within 0.3 % (benchmarks/bench_freeform_agreement.py). A preview lens (Auto Build
+# while the edits go on) keeps the chord tolerance's quads or fewer; the cylindrical lens, made a quad
+# at a time, keeps them too (its preset within 0.3 % all the same).
 CUT_TOLERANCE_MM = 0.0075
 MAX_CELL_SUBDIVISION = 48  # quads per side of one lenslet cell
 MAX_SEGMENTS = 1024  # around a circle
@@ -204,7 +206,7 @@ def cell_lines(surface: CutSurface, k: int) -> np.ndarray:
     return lines
 
 
-def cut_subdivision(surface: CutSurface, tol: float = CUT_TOLERANCE_MM,
+def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM,
                     most: int = MAX_CELL_SUBDIVISION) -> tuple[int, float]:
     """Quads per side of a cell so that one whole cell is within ``tol``, at most ``most``; returns
     (k, deviation)."""
@@ -330,7 +332,8 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     rim polygon; smooth within a cell, sharp creases between cells), and the side wall of radius R
     from y = 0 up to the cut apex plane y = t + h (material ``LENS_SIDE_WALL``; the part above the cut
     surface is the open collar the tracer also has). The glass is closed (watertight). At most
-    ``max_subdivision`` quads per cell side (a lighter preview when smaller than the tolerance needs).
+    ``max_subdivision`` quads per cell side (a lighter preview when smaller than the tolerance needs);
+    when it is at least what ``tol`` needs, the cut surface is built to ``CUT_TOLERANCE_MM`` instead.
 
     A rectangular lens (``outline``) is clipped by its rim polygon ``rim`` (``outline_rim``, shared with
     the reflector and the body) instead of the regular ``segments``-gon, and its side wall's collar
@@ -349,7 +352,10 @@ def lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     shape = Outline.of_lens(lamp["lens"])
     surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))
-    k, dev_cell = cut_subdivision(surface, min(tol, CUT_TOLERANCE_MM), max_subdivision)
+    if max_subdivision >= cut_subdivision(surface, tol)[0]:  # not a preview: to the cuts' own tolerance
+        k, dev_cell = cut_subdivision(surface, min(tol, CUT_TOLERANCE_MM))
+    else:
+        k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
     if shape.round:
         grid = _CutGrid(surface, k, R)
         rim = rim_polygon(R, segments)
@@ -462,11 +468,14 @@ class _CutPolygons:
         self._rim_index: dict[tuple[int, int], int] = {}
         self._near: dict[tuple[int, int], list[int]] = {}  # rim points by SNAP_MM square
         self.moved: dict[int, tuple[float, float]] = {}  # grid vertices moved onto a rim point
+        self._corners: dict[tuple[int, int], tuple[float, float]] = {}  # the rim polygon's vertices (by 1e-6 mm)
 
     def add_clipped(self, a: int, b: int, rim: np.ndarray, holds_axis: bool,
                     edges_near: Callable | None = None) -> None:
         """Quad (a, b) clipped by the rim polygon, if anything of it is left (``edges_near``: the rim
         edges that can cut a quad, ``_rim_edges_near`` of a regular rim by default)."""
+        if not self._corners:
+            self._corners = {(round(x * 1e6), round(z * 1e6)): (x, z) for x, z in rim.tolist()}
         x, s = self.grid.lines, self.grid.size
         corners = {(x[a], x[b]): a * s + b, (x[a + 1], x[b]): (a + 1) * s + b,
                    (x[a + 1], x[b + 1]): (a + 1) * s + b + 1, (x[a], x[b + 1]): a * s + b + 1}
@@ -490,24 +499,30 @@ class _CutPolygons:
 
     def _rim_point(self, point: tuple[float, float]) -> int:
         """The vertex of a point on the rim: a grid vertex within ``SNAP_MM`` (moved onto the rim), an
-        earlier rim point within ``SNAP_MM``, or a new one."""
+        earlier rim point within ``SNAP_MM``, or a new one; a vertex of the rim polygon (which the side
+        wall and the reflector's edge share) is where such a vertex ends up."""
         key = (round(point[0] * 1e6), round(point[1] * 1e6))
         i = self._rim_index.get(key)
         if i is not None:
             return i
+        corner = key in self._corners
+        point = self._corners.get(key, point)
         lines, size = self.grid.lines, self.grid.size
         a, b = (min(max(int(np.searchsorted(lines, c)), 1), size - 1) for c in point)
         a -= abs(lines[a - 1] - point[0]) < abs(lines[a] - point[0])
         b -= abs(lines[b - 1] - point[1]) < abs(lines[b] - point[1])
         if abs(lines[a] - point[0]) <= SNAP_MM and abs(lines[b] - point[1]) <= SNAP_MM:
             i = a * size + b
-            self.moved.setdefault(i, point)
+            if corner or i not in self.moved:
+                self.moved[i] = point
             return i
         cx, cz = math.floor(point[0] / SNAP_MM), math.floor(point[1] / SNAP_MM)
         for dx, dz in itertools.product((-1, 0, 1), repeat=2):
             for j in self._near.get((cx + dx, cz + dz), ()):
                 q = self.rim_points[j - size ** 2]
                 if math.hypot(q[0] - point[0], q[1] - point[1]) <= SNAP_MM:
+                    if corner:
+                        self.rim_points[j - size ** 2] = point
                     return j
         i = self._rim_index[key] = size ** 2 + len(self.rim_points)
         self.rim_points.append(point)

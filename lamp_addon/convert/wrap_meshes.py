@@ -34,7 +34,6 @@ from .meshes import (
     _MeshBuilder,
     add_bores,
     cell_lines,
-    cut_subdivision,
     fan_triangles,
     triangle_deviation,
 )
@@ -114,10 +113,6 @@ def cylindrical_lens_mesh(lamp: dict, rim: np.ndarray, k: int, tol: float = CHOR
     cuts = _Cuts(lamp)
     cyl, p = cuts.cyl, cuts.p
     surface = CutSurface(lamp["lens"]["thickness"], p, lamp["cuts"]["height"], cuts.rho)
-    # At the chord tolerance, not the finer one of flat lenses' cuts (``CUT_TOLERANCE_MM``): this mesh
-    # is made a quad at a time (the wrap-around preset's lens: 1.1 s at 0.05 mm, 6.8 s at 0.01 mm),
-    # and that preset keeps its light within 0.3 % at it (benchmarks/bench_freeform_agreement.py).
-    k = cut_subdivision(surface, tol, k)[0]
     across = cell_lines(surface, k)[:-1]
     half_w = float(np.max(np.abs(rim[:, 0])))
     # arc lengths reached inside the outline, down to the apex cylinder (the deepest the cuts go)

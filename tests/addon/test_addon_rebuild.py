@@ -272,9 +272,8 @@ def test_a_preview_build_is_lighter_and_says_so(lamp_addon, addon_core, builder,
     assert not report.preview and builder.is_up_to_date(bl_scene)
     assert report.max_deviation["lamps[0].lens"] <= builder.CHORD_TOLERANCE_MM
     assert preview_faces * 10 < full_faces
-    # A shallow cut is light already: its preview is the full lens (0.2 mm: the paper's 1.5 mm takes 18
-    # quads a cell side at the cut surfaces' tolerance, more than a preview's 7).
-    bl_scene.lamp_design.lamps[0].cuts.height = 0.2
+    # A shallow cut is light already: its preview is the full lens.
+    bl_scene.lamp_design.lamps[0].cuts.height = 1.5
     scene = lamp_addon.design_properties.design_to_scene(bl_scene)
     assert not builder.build_lamp(bl_scene, scene, preview=True).preview
     assert builder.is_up_to_date(bl_scene)
