@@ -25,8 +25,8 @@ the lens as a flat plate of the mesh's mean thickness, where the parametric lamp
 up to 0.75 %.
 
 ``--tolerance`` and ``--cut-tolerance`` build with other tolerances than the add-on's
-``CHORD_TOLERANCE_MM`` and ``CUT_TOLERANCE_MM`` (the module constants and the tessellation functions'
-defaults are set for this process only).
+``CHORD_TOLERANCE_MM`` and ``CUT_TOLERANCE_MM`` / ``FLUTE_TOLERANCE_MM`` (the module constants and the
+tessellation functions' defaults are set for this process only).
 """
 
 from __future__ import annotations
@@ -101,8 +101,9 @@ def set_tolerances(package: str, chord: float | None, cut: float | None) -> None
     modules = [module for name, module in list(sys.modules.items()) if name.startswith(f"{package}.lamp_addon")]
     if cut:
         for module in modules:
-            if hasattr(module, "CUT_TOLERANCE_MM"):
-                module.CUT_TOLERANCE_MM = cut
+            for name in ("CUT_TOLERANCE_MM", "FLUTE_TOLERANCE_MM"):
+                if hasattr(module, name):
+                    setattr(module, name, cut)
     if chord:
         old = meshes.CHORD_TOLERANCE_MM
         for module in modules:
@@ -152,7 +153,8 @@ def main() -> int:
     parser.add_argument("--size", type=int, default=256)
     parser.add_argument("--samples", type=int, default=1, help="samples per pixel")
     parser.add_argument("--tolerance", type=float, help="chord tolerance, mm (default: the add-on's)")
-    parser.add_argument("--cut-tolerance", type=float, help="the cut surfaces' tolerance, mm (default: the add-on's)")
+    parser.add_argument("--cut-tolerance", type=float,
+                        help="the cut surfaces' tolerance (caps and flutes), mm (default: the add-on's)")
     parser.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
     args = parser.parse_args()
 
