@@ -29,10 +29,10 @@ from ...core_tracer.raytrace.outline import Outline
 from ...core_tracer.scene.derived import cut_sphere_radius, lamp_geometry
 
 CHORD_TOLERANCE_MM = 0.05
-# The curved cut surfaces (fish-eye caps, flutes) are built finer than the rest: the eye sees the
-# lamp through them, and a faceted cap's shading normals (Blender's, averaged from its faces) are
-# flatter than the cap's near the creases between cells, by up to half a face's angle. At 0.05 mm
-# the lens lets through 0.6-4 % more light than the analytic caps do; at 0.0075 mm every preset
+# The fish-eye cut surfaces are built finer than the rest (flutes: ``flutes_mesh.FLUTE_TOLERANCE_MM``):
+# the eye sees the lamp through them, and a faceted cap's shading normals (Blender's, averaged from
+# its faces) are flatter than the cap's near the creases between cells, by up to half a face's angle.
+# At 0.05 mm the lens lets through 0.5-4 % more light than the analytic caps do; at 0.0075 mm every preset
 # without a sky is within 0.3 % (benchmarks/bench_freeform_agreement.py). A preview lens (Auto Build
 # while the edits go on) keeps the chord tolerance's quads or fewer; the cylindrical lens, made a quad
 # at a time, keeps them too (its preset within 0.3 % all the same).
