@@ -27,7 +27,7 @@ from ...core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geo
 from ...core_tracer.scene.outline import Outline
 from ..convert import units
 from ..convert.meshes import builder as mesh_builder
-from ..convert.meshes import fisheye, prism_plate, wrap
+from ..convert.meshes import fisheye, flutes, prism_plate, wrap
 from ..convert.meshes import lens as lens_meshes
 from ..convert.meshes import parts as part_meshes
 from . import materials
@@ -129,8 +129,9 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     lens, cuts = lamp["lens"], lamp["cuts"]
     parts = [
         MeshPart(f"{base}.lens", f"{label} Lens",
+                  # the cuts' own tolerances are part of the shape: a lens built before they changed is made again
                   ("lens", lens_outline, lens["thickness"], cuts["pitch"], _cut_shape(cuts), n, CHORD_TOLERANCE_MM,
-                   k),
+                   k, mesh_builder.CUT_TOLERANCE_MM, flutes.FLUTE_TOLERANCE_MM),
                   partial(lens_meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k, rim_local),
                   [Slot(f"{base}.lens", f"{label} Lens", partial(materials.lens_glass, lamp=lamp)),
                    _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],

@@ -16,12 +16,24 @@ from ....core_tracer.scene.derived import lamp_geometry
 from ....core_tracer.scene.outline import Outline
 
 CHORD_TOLERANCE_MM = 0.05
+# The fish-eye cut surfaces are built finer than the rest (flutes: ``flutes.FLUTE_TOLERANCE_MM``):
+# the eye sees the lamp through them, and a faceted cap's shading normals (Blender's, averaged from
+# its faces) are flatter than the cap's near the creases between cells, by up to half a face's angle.
+# At 0.05 mm the lens lets through 0.5-4 % more light than the analytic caps do; at 0.0075 mm every preset
+# without a sky is within 0.3 % (benchmarks/bench_freeform_agreement.py). A preview lens (Auto Build
+# while the edits go on) keeps the chord tolerance's quads or fewer; the cylindrical lens, made a quad
+# at a time, keeps them too (its preset within 0.3 % all the same).
+CUT_TOLERANCE_MM = 0.0075
 MAX_CELL_SUBDIVISION = 48  # quads per side of one lenslet cell
 MAX_SEGMENTS = 1024  # around a circle
 # Curved surfaces measured by sampling are refined to this fraction of the tolerance, so that the
 # largest deviation between the samples (a few percent more, at 28 samples per triangle) stays within it.
 SAMPLED_MARGIN = 0.95
 FLAT = -1  # smoothing group of flat-shaded faces
+# Where the rim cuts the cut grid, points closer than this are made one (a grid line crossing the rim
+# next to a rim corner or a grid vertex): the free-form checks weld vertices to about a millionth
+# of a mesh's size, and would take two such vertices for one, the glass for open.
+SNAP_MM = 1e-3
 
 # Material slots of the lens mesh.
 LENS_GLASS = 0

@@ -15,10 +15,12 @@ from ....core_tracer.scene.derived import cut_sphere_radius
 from ....core_tracer.scene.outline import Outline
 from .builder import (
     CHORD_TOLERANCE_MM,
+    CUT_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     MAX_CELL_SUBDIVISION,
     SAMPLED_MARGIN,
+    SNAP_MM,
     MeshBuilder,
     MeshData,
     clip_convex,
@@ -172,7 +174,8 @@ def fisheye_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM
     rim polygon; smooth within a cell, sharp creases between cells), and the side wall of radius R
     from y = 0 up to the cut apex plane y = t + h (material ``LENS_SIDE_WALL``; the part above the cut
     surface is the open collar the tracer also has). The glass is closed (watertight). At most
-    ``max_subdivision`` quads per cell side (a lighter preview when smaller than the tolerance needs).
+    ``max_subdivision`` quads per cell side (a lighter preview when smaller than the tolerance needs);
+    when it is at least what ``tol`` needs, the cut surface is built to ``CUT_TOLERANCE_MM`` instead.
 
     A rectangular lens (``outline``) is clipped by its rim polygon ``rim`` (``outline_rim``, shared with
     the reflector and the body) instead of the regular ``segments``-gon, and its side wall's collar
@@ -183,7 +186,10 @@ def fisheye_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     shape = Outline.of_lens(lamp["lens"])
     surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))
-    k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
+    if max_subdivision >= cut_subdivision(surface, tol)[0]:  # not a preview: to the cuts' own tolerance
+        k, dev_cell = cut_subdivision(surface, min(tol, CUT_TOLERANCE_MM))
+    else:
+        k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
     if shape.round:
         grid = _CutGrid(surface, k, R)
         rim = rim_polygon(R, segments)
@@ -294,11 +300,16 @@ class _CutPolygons:
         self.polygons: list[tuple[int, ...]] = []
         self.rim_points: list[tuple[float, float]] = []
         self._rim_index: dict[tuple[int, int], int] = {}
+        self._near: dict[tuple[int, int], list[int]] = {}  # rim points by SNAP_MM square
+        self.moved: dict[int, tuple[float, float]] = {}  # grid vertices moved onto a rim point
+        self._corners: dict[tuple[int, int], tuple[float, float]] = {}  # the rim polygon's vertices (by 1e-6 mm)
 
     def add_clipped(self, a: int, b: int, rim: np.ndarray, holds_axis: bool,
                     edges_near: Callable | None = None) -> None:
         """Quad (a, b) clipped by the rim polygon, if anything of it is left (``edges_near``: the rim
         edges that can cut a quad, ``_rim_edges_near`` of a regular rim by default)."""
+        if not self._corners:
+            self._corners = {(round(x * 1e6), round(z * 1e6)): (x, z) for x, z in rim.tolist()}
         x, s = self.grid.lines, self.grid.size
         corners = {(x[a], x[b]): a * s + b, (x[a + 1], x[b]): (a + 1) * s + b,
                    (x[a + 1], x[b + 1]): (a + 1) * s + b + 1, (x[a], x[b + 1]): a * s + b + 1}
@@ -321,11 +332,35 @@ class _CutPolygons:
             self.groups.append(int(self.grid.group(a, b)))  # the cell: one smooth cap
 
     def _rim_point(self, point: tuple[float, float]) -> int:
+        """The vertex of a point on the rim: a grid vertex within ``SNAP_MM`` (moved onto the rim), an
+        earlier rim point within ``SNAP_MM``, or a new one; a vertex of the rim polygon (which the side
+        wall and the reflector's edge share) is where such a vertex ends up."""
         key = (round(point[0] * 1e6), round(point[1] * 1e6))
         i = self._rim_index.get(key)
-        if i is None:
-            i = self._rim_index[key] = self.grid.size ** 2 + len(self.rim_points)
-            self.rim_points.append(point)
+        if i is not None:
+            return i
+        corner = key in self._corners
+        point = self._corners.get(key, point)
+        lines, size = self.grid.lines, self.grid.size
+        a, b = (min(max(int(np.searchsorted(lines, c)), 1), size - 1) for c in point)
+        a -= abs(lines[a - 1] - point[0]) < abs(lines[a] - point[0])
+        b -= abs(lines[b - 1] - point[1]) < abs(lines[b] - point[1])
+        if abs(lines[a] - point[0]) <= SNAP_MM and abs(lines[b] - point[1]) <= SNAP_MM:
+            i = a * size + b
+            if corner or i not in self.moved:
+                self.moved[i] = point
+            return i
+        cx, cz = math.floor(point[0] / SNAP_MM), math.floor(point[1] / SNAP_MM)
+        for dx, dz in itertools.product((-1, 0, 1), repeat=2):
+            for j in self._near.get((cx + dx, cz + dz), ()):
+                q = self.rim_points[j - size ** 2]
+                if math.hypot(q[0] - point[0], q[1] - point[1]) <= SNAP_MM:
+                    if corner:
+                        self.rim_points[j - size ** 2] = point
+                    return j
+        i = self._rim_index[key] = size ** 2 + len(self.rim_points)
+        self.rim_points.append(point)
+        self._near.setdefault((cx, cz), []).append(i)
         return i
 
     def welded(self) -> tuple[np.ndarray, list[tuple[int, ...]], list[int]]:
@@ -341,6 +376,10 @@ class _CutPolygons:
         xz[on_grid, 1] = self.grid.lines[used[on_grid] % self.grid.size]
         if self.rim_points:
             xz[~on_grid] = np.array(self.rim_points)[used[~on_grid] - grid_count]
+        for i, point in self.moved.items():
+            at = np.searchsorted(used, i)
+            if at < len(used) and used[at] == i:
+                xz[at] = point
         keys = np.round(xz * 1e6).astype(np.int64)
         _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
         order = np.argsort(first)  # vertices in the order they were first used
