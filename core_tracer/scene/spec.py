@@ -119,7 +119,8 @@ ENVIRONMENT = Section(
         "world": Choice("none", ("none", *BUNDLED_WORLDS, "file"),
                         "What surrounds the lamp: none (the background colour, as in the paper), one of Blender's "
                         "bundled world images by name, or the image in file"),
-        "file": Text("", "An equirectangular .exr or .hdr image (used when world is \"file\")", max_len=1000),
+        "file": Text("", "An equirectangular .exr or .hdr image (used when world is \"file\"); a preset names "
+                    "a file beside itself", max_len=1000),
         "strength": Num(1.0, 0.0, 1.0e4, doc="Brightness of the environment (the Background node's Strength)"),
         "rotation_deg": Num(0.0, -360.0, 360.0, unit="deg",
                             doc="Turn of the environment about the vertical axis (a Mapping node's Z rotation)"),
