@@ -355,3 +355,21 @@ def assert_lens_materials(scene: dict, lens_object, index: int) -> None:
         lamp["lens"]["side_wall_color"])
     assert bpy.data.materials[f"{name} Lens"].node_tree.nodes["Lens BSDF"].inputs["IOR"].default_value == \
         pytest.approx(lamp["lens"]["ior"], rel=1e-6)
+
+
+def creases(image, contrast_limit: float = 0.10):
+    """Pixels of ``image`` (H, W, 3) that differ from one of their 8 neighbours by more than
+    ``contrast_limit`` of their own value: silhouettes and cut creases, where a mesh and the
+    analytic surface may rightly disagree by a pixel."""
+    import numpy as np
+
+    value = np.maximum(image.max(axis=2), 1e-3 * image.max())
+    padded = np.pad(image, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    h, w = image.shape[:2]
+    contrast = np.zeros((h, w))
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            neighbour = padded[1 + dy:h + 1 + dy, 1 + dx:w + 1 + dx]
+            contrast = np.maximum(contrast, np.abs(neighbour - image).max(axis=2) / value)
+    return contrast > contrast_limit
+

@@ -18,13 +18,12 @@ from __future__ import annotations
 
 import json
 import os
-import stat
 import struct
 from typing import NamedTuple
 
 import numpy as np
 
-from ..scene.reading import SceneError
+from ..scene.reading import SceneError, read_bounded
 from ..scene.safe_text import printable
 from .meshes import MAX_COORDINATE_MM, MAX_TRIANGLES, MAX_TRIANGLES_PER_MESH, MeshData
 
@@ -67,18 +66,10 @@ def _error(path: str, message: str) -> SceneError:
 def read_glb(path: str | os.PathLike, max_bytes: int = MAX_MESH_FILE_BYTES) -> dict[str, MeshData]:
     """Every mesh node of a .glb as ``MeshData`` in model space, by node name."""
     name = os.fspath(path)
-    try:
-        st = os.stat(name)
-        if not stat.S_ISREG(st.st_mode):
-            raise _error(name, "is not a regular file; allowed a .glb file")
-        if st.st_size > max_bytes:
-            raise _error(name, f"is {st.st_size} bytes; allowed at most {max_bytes} bytes (decimate the meshes)")
-        with open(name, "rb") as f:
-            data = f.read(max_bytes + 1)
-    except SceneError:
-        raise
-    except OSError as e:
-        raise _error(name, f"cannot be read ({e.strerror or e}); allowed a readable .glb beside the design") from None
+    data = read_bounded(name, max_bytes, shown=printable(name, 200),
+                        not_regular="is not a regular file; allowed a .glb file",
+                        too_large="is {size} bytes; allowed at most {max_bytes} bytes (decimate the meshes)",
+                        unreadable="cannot be read ({reason}); allowed a readable .glb beside the design")
     document, blob = _chunks(name, data)
     try:
         with np.errstate(all="ignore"):  # every result is checked; numpy's warnings would be more lines

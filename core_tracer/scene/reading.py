@@ -33,24 +33,33 @@ class SceneError(ValueError):
 # Loading
 
 
+def read_bounded(path: str | os.PathLike, max_bytes: int, *, shown: str | None = None,
+                 not_regular: str = "not a regular file",
+                 too_large: str = "file is {size} bytes; allowed at most {max_bytes} bytes",
+                 unreadable: str = "cannot read the file ({reason})") -> bytes:
+    """The bytes of a regular file of at most ``max_bytes`` (its size checked before reading, at
+    most ``max_bytes + 1`` read), every failure a ``SceneError`` naming the file (``shown``) with the
+    caller's words. Only regular files are opened: a pipe or a device could block or never end."""
+    name = os.fspath(path)
+    shown = name if shown is None else shown
+    try:
+        st = os.stat(name)
+        if not stat.S_ISREG(st.st_mode):
+            raise SceneError(shown, not_regular)
+        if st.st_size > max_bytes:
+            raise SceneError(shown, too_large.format(size=st.st_size, max_bytes=max_bytes))
+        with open(name, "rb") as f:
+            return f.read(max_bytes + 1)
+    except OSError as e:
+        raise SceneError(shown, unreadable.format(reason=e.strerror or e)) from None
+
+
 def read_json(path: str | os.PathLike, max_bytes: int = MAX_FILE_BYTES) -> Any:
     """Read a JSON file with a size limit, turning every failure into a ``SceneError``.
 
     Only regular files are opened: a pipe or a device could block or never end."""
     name = os.fspath(path)
-    try:
-        st = os.stat(name)
-        if not stat.S_ISREG(st.st_mode):
-            raise SceneError(name, "not a regular file")
-        size = st.st_size
-        if size > max_bytes:
-            raise SceneError(name, f"file is {size} bytes; allowed at most {max_bytes} bytes")
-        with open(name, "rb") as f:
-            raw = f.read(max_bytes + 1)
-    except SceneError:
-        raise
-    except OSError as e:
-        raise SceneError(name, f"cannot read the file ({e.strerror or e})") from None
+    raw = read_bounded(name, max_bytes)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:

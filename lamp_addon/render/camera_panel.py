@@ -5,17 +5,15 @@ from __future__ import annotations
 
 import bpy
 
+from ..design.panels import LampTab
 from .camera import is_lamp_camera
 from .view_link import view_status
 
 
-class LAMP_PT_camera_view(bpy.types.Panel):
+class LAMP_PT_camera_view(LampTab, bpy.types.Panel):
     """In the design's Camera & Image panel: which camera renders, and the camera actions."""
 
     bl_label = "Scene Camera"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Lamp"
     bl_parent_id = "LAMP_PT_camera"
     bl_order = 0
 

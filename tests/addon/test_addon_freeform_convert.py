@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import BASELINE, PRESETS
+from helpers import BASELINE, PRESETS, creases
 
 pytestmark = pytest.mark.blender
 
@@ -50,16 +50,9 @@ def agreement(parametric: np.ndarray, freeform: np.ndarray, mask: np.ndarray | N
     silhouettes and creases and outside ``TAU``, of the image), of the pixels ``mask`` (all when None)."""
     value = np.maximum(parametric.max(axis=2), 1e-3 * parametric.max())
     error = np.abs(freeform - parametric).max(axis=2) / value
-    padded = np.pad(parametric, ((1, 1), (1, 1), (0, 0)), mode="edge")
-    h, w = parametric.shape[:2]
-    contrast = np.zeros((h, w))
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            neighbour = padded[1 + dy:h + 1 + dy, 1 + dx:w + 1 + dx]
-            contrast = np.maximum(contrast, np.abs(neighbour - parametric).max(axis=2) / value)
-    edge = contrast > EDGE_CONTRAST
+    edge = creases(parametric, EDGE_CONTRAST)
     if mask is None:
-        mask = np.ones((h, w), bool)
+        mask = np.ones(edge.shape, bool)
     return float((error[~edge & mask] <= TAU).mean()), float((edge & (error > TAU) & mask).mean())
 
 
