@@ -210,46 +210,29 @@ class _CellWalk:
         stays exact when the cap is nearly flat (it tends to the plane)."""
         row = self.row
         p, dx, dz = row("p"), row("dx"), row("dz")
-        # (each step's operations in place, in the order the formulas give: no temporaries
-        # over every ray the walk holds)
-        ax, az = row("i") * p, row("j") * p
-        np.subtract(row("ox"), ax, out=ax)
-        np.subtract(row("oz"), az, out=az)
-        # b = a.d + rho d_y and c = |a|^2 + 2 rho a_y, the cell-independent terms from the rows
-        b, term = ax * dx, az * dz
-        b += row("ay_dy")
-        b += term
-        b += row("rho_dy")
-        c = np.multiply(ax, ax, out=ax)
-        c += row("ay_ay")
-        c += np.multiply(az, az, out=az)
-        c += row("two_rho_ay")
+        # a: the ray's origin from the apex of its cell's cap (cell (i, j) of pitch p), across the lens
+        a_x = row("ox") - row("i") * p
+        a_z = row("oz") - row("j") * p
+        # t^2 + 2 b t + c = 0, b = a.d + rho d_y, c = |a|^2 + 2 rho a_y (the terms that do not
+        # depend on the cell, a_y d_y, rho d_y, a_y^2 and 2 rho a_y, are the walk's rows)
+        b = a_x * dx + row("ay_dy") + a_z * dz + row("rho_dy")
+        c = a_x * a_x + row("ay_ay") + a_z * a_z + row("two_rho_ay")
         with np.errstate(invalid="ignore", divide="ignore"):
-            q = np.multiply(b, b, out=term)
-            q -= c
-            np.sqrt(q, out=q)
-            np.copysign(q, b, out=q)
-            q += b
-            np.negative(q, out=q)  # q = -(b + sign(b) sqrt(b^2 - c))
-            r2 = np.divide(c, q, out=c)
-        lo, hi = np.fmin(q, r2), np.fmax(q, r2, out=r2)
+            # the two roots without cancellation: q = -(b + sign(b) sqrt(b^2 - c)) and c / q
+            q = -(np.copysign(np.sqrt(b * b - c), b) + b)
+            other_root = c / q
+        near, far = np.fmin(q, other_root), np.fmax(q, other_root)
         if self.on_cap is not None:  # only in a ray's first cell: the cap it starts on
-            np.copyto(lo, np.nan, where=self.on_cap != OFF_CAP)  # the near root is the ray's own start
-            np.copyto(hi, np.nan, where=self.on_cap == INTO_AIR)  # out of a sphere: never back in
-        t_end = np.minimum(row("t_next_i"), row("t_next_j"))
-        np.minimum(t_end, row("t_out"), out=t_end)
-        t_end += self.TOL
-        # A root counts from the cell's start (less TOL) and beyond T_MIN: t > T_MIN is
-        # t >= the next double above it, so both are one comparison with their maximum.
-        t_from = row("t_cell") - self.TOL
-        np.maximum(t_from, _ABOVE_T_MIN, out=t_from)
-        lo_ok = lo >= t_from
-        lo_ok &= lo <= t_end
-        hi_ok = hi >= t_from
-        hi_ok &= hi <= t_end
-        np.copyto(hi, np.inf, where=~hi_ok)
-        np.copyto(hi, lo, where=lo_ok)
-        return hi
+            np.copyto(near, np.nan, where=self.on_cap != OFF_CAP)  # the near root is the ray's own start
+            np.copyto(far, np.nan, where=self.on_cap == INTO_AIR)  # out of a sphere: never back in
+        # A root counts within the cell: from its start (less TOL, and beyond T_MIN: t > T_MIN is
+        # t >= the next double above it) to where the ray leaves it or the slab (plus TOL).
+        t_from = np.maximum(row("t_cell") - self.TOL, _ABOVE_T_MIN)
+        t_end = np.minimum(np.minimum(row("t_next_i"), row("t_next_j")), row("t_out")) + self.TOL
+        near_inside = (near >= t_from) & (near <= t_end)
+        far_inside = (far >= t_from) & (far <= t_end)
+        # the hit: the near root inside the cell, else the far one, else none
+        return np.where(near_inside, near, np.where(far_inside, far, np.inf))
 
     def advance(self, walking: np.ndarray) -> None:
         """Step the rays still ``walking`` (no hit in their cell) to the neighbouring cell they
