@@ -104,9 +104,20 @@ def ctrl_c_sets(stop: StopEvent | None = None) -> Iterator[StopEvent]:
         raise stop.interrupt()
 
 
+def check_utf8(path: str, what: str) -> None:
+    """OpenImageIO writes only to paths of UTF-8 characters: a folder or file name holding other bytes
+    (they reach Python as lone surrogates) is refused before any rendering."""
+    try:
+        os.path.abspath(path).encode("utf-8")
+    except UnicodeEncodeError:
+        raise SceneError(path, f"the {what} path holds bytes that are not UTF-8, which the image library cannot "
+                               "write to; allowed a path of UTF-8 characters") from None
+
+
 def check_output(path: str, what: str) -> None:
     """Before any rendering: the file ``path`` can be written (its folder exists and is writable,
-    and it is not a folder). The message names the user's path."""
+    and it is not a folder, and its path is UTF-8). The message names the user's path."""
+    check_utf8(path, what)
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise SceneError(path, f"the {what} folder {folder} does not exist")
@@ -119,6 +130,7 @@ def check_output(path: str, what: str) -> None:
 
 def check_output_folder(folder: str, what: str) -> None:
     """Before any rendering: files can be written into ``folder`` (or into the folder that will hold it)."""
+    check_utf8(folder, what)
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise SceneError(folder, f"{what} must name a folder; this is a file")
     parent = folder if os.path.isdir(folder) else os.path.dirname(os.path.abspath(folder))

@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import fileio
 from ..scene.reading import SceneError, parse_json_text, scene_to_json
+from ..scene.safe_text import printable
 from ..scene.validate import normalize, parse_scene
 from . import display
 
@@ -139,6 +140,11 @@ def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mappin
 
     # Ctrl-C or SIGTERM waits for the write (milliseconds): a file closed between open and
     # write_image makes libpng print its own error ("No IDATs written") beside our one line.
+    try:
+        os.path.abspath(name).encode("utf-8")
+    except UnicodeEncodeError:  # it reaches Python as lone surrogates; OpenImageIO takes only UTF-8 names
+        raise OSError(f"{printable(name)}: cannot write the image (its folder or name holds bytes that are not "
+                      "UTF-8, which OpenImageIO cannot write to)") from None
     with fileio.atomic_path(name) as tmp, fileio.signals_deferred():
         out = oiio.ImageOutput.create(tmp)
         if out is None:
@@ -160,6 +166,11 @@ def _opened(path: str | os.PathLike) -> Iterator[tuple[str, object, object]]:
     name = os.fspath(path)
     if not os.path.isfile(name):
         raise SceneError(name, "cannot read the image (no such file)")
+    try:
+        name.encode("utf-8")
+    except UnicodeEncodeError:
+        raise SceneError(name, "cannot read the image (its folder or name holds bytes that are not UTF-8, which "
+                               "OpenImageIO cannot open)") from None
     oiio = _oiio()
     inp = oiio.ImageInput.open(name)
     if inp is None:

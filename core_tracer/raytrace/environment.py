@@ -414,8 +414,7 @@ def world_bytes(scene: dict) -> int:
     env = scene.get("environment")
     if env is None or env["world"] == "none":
         return 0
-    width, height = world_image.header(image_path(env))[:2]
-    return world_image.peak_bytes(width, height)
+    return world_image.peak_bytes(*world_image.header(image_path(env)))
 
 
 def from_scene(scene: dict) -> Environment | None:

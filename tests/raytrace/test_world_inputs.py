@@ -108,7 +108,7 @@ def test_a_large_image_is_area_averaged_to_the_limit_while_it_is_read(tmp_path, 
 def test_the_header_estimate_enters_the_render_budget(tmp_path):
     path = write_exr(tmp_path / "sky.exr", _sky())
     scene = scene_with(**{"environment": {"world": "file", "file": path}})
-    assert environment.world_bytes(scene) == world_image.peak_bytes(32, 16) > 0
+    assert environment.world_bytes(scene) == world_image.peak_bytes(32, 16, 3) > 0
     assert environment.world_bytes(scene_with()) == 0
 
 
