@@ -247,6 +247,9 @@ class _Build:
         image = None
         if scene["environment"]["world"] != "none":
             try:
+                # Its header counted as the tracer counts it, before Blender's own reader is given the
+                # file: an image declaring 30000 x 15000 px would take gigabytes when Blender draws it.
+                environment.world_bytes(scene)
                 image = environment.image_path(scene["environment"])
             except SceneError as e:
                 self.report.not_driven.append(f"{wld.name}: surroundings ({e})")

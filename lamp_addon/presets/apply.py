@@ -15,6 +15,7 @@ import struct
 
 import bpy
 
+from ...core_tracer.raytrace import environment
 from ...core_tracer.scene.beside import environment_file
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import normalize
@@ -106,6 +107,9 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
     if path is not None and scene["environment"]["world"] == "file":
         # The image beside the preset (refused when it leads elsewhere), held in the design by its path.
         scene = {**scene, "environment": {**scene["environment"], "file": environment_file(path, scene["environment"])}}
+    # The image's header counted as the tracer counts it (one that declares more than the budget
+    # is refused here, before any change), never its pixels: they are read when a render needs them.
+    environment.world_bytes(scene)
     if "freeform" in scene:
         if path is None:
             raise SceneError("freeform", "a free-form design needs its file, to find its .glb beside it")

@@ -108,9 +108,11 @@ def follow_design_exposure(bl_scene, *, force: bool = False) -> str:
         return ""
     try:
         scene = camera.scene_for_render(bl_scene)
+        exposure = image_view.design_exposure(scene)
     except SceneError:
-        return ""  # no camera, or an invalid design: the operator or the panel says why
-    exposure = image_view.design_exposure(scene)
+        # No camera, an invalid design, or surroundings the tracer refuses to read (an image whose
+        # header declares too much): the operator, the panel or the build's report says why.
+        return ""
     settings = bl_scene.view_settings
     changed = abs(settings.exposure - exposure) > EXPOSURE_TOLERANCE
     if changed:
