@@ -90,9 +90,9 @@ def space(tmp_path, monkeypatch):
     world_cache.clear_memory()
 
 
-def render(capfd, scene: str, output: str, *args: str) -> tuple[int, str]:
-    """(exit status, stderr) of ``render SCENE -o OUTPUT ARGS`` in this process; any exception,
-    warning or file opened by Python outside the scene's folder (and the cache, the output) fails."""
+def run_main(capfd, argv: list[str]) -> tuple[int, str, int, list[str]]:
+    """(exit status, stderr, growth of the peak resident memory, files Python opened) of the command
+    line ``argv`` in this process; any exception or warning fails the test."""
     global _opened_paths
     capfd.readouterr()
     rss = _kib("VmRSS")
@@ -102,7 +102,7 @@ def render(capfd, scene: str, output: str, *args: str) -> tuple[int, str]:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            code = main(["render", scene, "-o", output, "--samples", "1", *args])
+            code = main(argv)
     finally:
         opened, _opened_paths = _opened_paths, None
     grown = _kib("VmHWM") - rss
@@ -112,8 +112,9 @@ def render(capfd, scene: str, output: str, *args: str) -> tuple[int, str]:
 
 
 def check_answer(capfd, folder: str, name: str, *, strength: float = 1.0, rotation: float = 0.0,
-                 allowed_reads: tuple[str, ...] = ()) -> tuple[int, str]:
-    """Render a preset in ``folder`` naming the environment image ``name`` and check the answer."""
+                 study: bool = False) -> tuple[int, str]:
+    """Render a preset in ``folder`` naming the environment image ``name`` (or a study of two variants
+    of it, in this process) and check the answer."""
     doc = baseline_doc()
     doc["image"] = {"width": 8, "height": 8}
     doc["environment"] = {"world": "file", "file": name, "strength": strength, "rotation_deg": rotation}
@@ -121,8 +122,14 @@ def check_answer(capfd, folder: str, name: str, *, strength: float = 1.0, rotati
     with open(scene, "w") as f:
         json.dump(doc, f)
     out_folder = tempfile.mkdtemp(dir=os.path.dirname(folder))
-    output = os.path.join(out_folder, "out.exr")
-    code, err, grown, opened = render(capfd, scene, output)
+    if study:
+        output = os.path.join(out_folder, "sheet.png")
+        argv = ["study", scene, "--vary", "lens.ior=1.45,1.55", "--size", "8x8", "--workers", "0", "-o", output,
+                "--save-variants", os.path.join(out_folder, "variants")]
+    else:
+        output = os.path.join(out_folder, "out.exr")
+        argv = ["render", scene, "-o", output, "--samples", "1"]
+    code, err, grown, opened = run_main(capfd, argv)
     assert code in (0, 2), (code, err)
     if currently_in_test_context():  # what --hypothesis-show-statistics counts
         said = re.sub(r"[0-9]+", "N", re.sub(r"(/tmp|'/tmp)\S*", "", err.split("environment.file: ")[-1]))
@@ -133,7 +140,11 @@ def check_answer(capfd, folder: str, name: str, *, strength: float = 1.0, rotati
         assert err == "", err  # nothing from OpenImageIO, OpenEXR or numpy either
         image, stored = imageio.read_image(output)
         assert np.isfinite(image).all(), "a non-finite pixel with exit 0"
-        assert stored["environment"]["file"] == name
+        if study:
+            assert sorted(os.listdir(out_folder)) == ["sheet.png", "variants"]
+            assert len(os.listdir(os.path.join(out_folder, "variants"))) == 2
+        else:
+            assert stored["environment"]["file"] == name
         real = os.path.realpath(image_path)
         assert os.path.dirname(real) == os.path.realpath(folder), ("rendered an image outside the folder", name)
     else:
@@ -142,14 +153,14 @@ def check_answer(capfd, folder: str, name: str, *, strength: float = 1.0, rotati
         assert printable(lines[0], 10**6) == lines[0]
         assert "environment.file" in lines[0], lines[0]
         assert printable(name, 60)[:40] in lines[0] or printable(name, 200)[:40] in lines[0], (name, lines[0])
-        assert not os.path.exists(output)
+        assert os.listdir(out_folder) == []  # no sheet, no variants, nothing half-written
     roots = (os.path.realpath(folder), os.path.realpath(os.environ[world_cache.ENV_FOLDER]),
-             os.path.realpath(out_folder), *allowed_reads)
+             os.path.realpath(out_folder))
     outside = [p for p in opened if os.path.realpath(p).startswith(os.path.dirname(os.path.realpath(folder)))
                and not os.path.realpath(p).startswith(roots)]
     assert not outside, ("read outside the preset's folder", outside)
     counted = _declared_bytes(image_path) if os.path.isfile(image_path) else 0
-    bound = budget.render_bytes(8, 8, False, "exr", environment=counted)
+    bound = budget.render_bytes(8, 8, False, "exr", environment=counted) + (budget.BASE_BYTES if study else 0)
     assert grown <= bound, (f"peak grew {grown / MIB:.0f} MB, the render was checked against {bound / MIB:.0f} MB")
     shutil.rmtree(out_folder)
     return code, err
@@ -304,6 +315,16 @@ def test_any_openexr_file(space, capfd, data, suffix, strength):
     with open(os.path.join(folder, name), "wb") as f:
         f.write(raw)
     check_answer(capfd, folder, name, strength=strength, rotation=data.draw(st.sampled_from([0.0, 90.0, -360.0])))
+
+
+@fuzz(40)
+@given(data=st.data(), kind=st.sampled_from(["hdr", "exr"]))
+def test_any_image_in_a_study(space, capfd, data, kind):
+    folder = library(space)
+    raw = data.draw(hdr_files() if kind == "hdr" else exr_files(folder))
+    with open(os.path.join(folder, "sky." + kind), "wb") as f:
+        f.write(raw)
+    check_answer(capfd, folder, "sky." + kind, strength=data.draw(st.sampled_from([1.0, 1e4])), study=True)
 
 
 @fuzz(60)
