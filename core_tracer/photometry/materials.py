@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .bands import Bands
-from .cie import spectrum_xyz
+from .cie import luminance_weights
 from .illuminants import illuminant_d65
 from .spectrum import Spectrum, fine_grid
 from .tables import table
@@ -258,13 +258,9 @@ def _basis_band_means(bands: Bands, illuminant: bool) -> np.ndarray:
     d65 = illuminant_d65()  # the white of Rec.709
     x = fine_grid(wavelengths, d65.wavelengths_nm)
     lit = np.stack([np.interp(x, wavelengths, basis[:, j]) for j in range(7)], axis=1) * d65.at(x)[:, None]
-    return bands.average(x, lit).T / _d65_luminance_scale()
-
-
-@functools.cache
-def _d65_luminance_scale() -> float:
-    """Km ∫ D65 V dλ of the shipped D65 curve (so that D65 / this has luminance 1 cd/m²)."""
-    return float(spectrum_xyz(illuminant_d65())[1])
+    means = bands.average(x, lit).T  # (7, K)
+    # RGB (1, 1, 1) (the white basis alone) has luminance exactly 1 cd/m² in these bands
+    return means / float(means[0] @ luminance_weights(bands))
 
 
 def rgb_to_reflectance(rgb: np.ndarray, bands: Bands) -> np.ndarray:
@@ -275,8 +271,9 @@ def rgb_to_reflectance(rgb: np.ndarray, bands: Bands) -> np.ndarray:
 def rgb_to_illuminant(rgb: np.ndarray, bands: Bands) -> np.ndarray:
     """(..., K) band-mean spectral radiance of light given as linear Rec.709 RGB (..., 3).
 
-    The Smits reflectance times D65 scaled to luminance 1 cd/m² at RGB (1, 1, 1): multiply by the
-    luminance a pixel value of 1 stands for (``daylight.environment_scale``) to get W/(m² sr nm)."""
+    The Smits reflectance times D65, scaled so that RGB (1, 1, 1) has luminance 1 cd/m² in ``bands``
+    exactly (at any K); times the cd/m² a pixel value of 1 stands for (``daylight.
+    environment_scale_for_luminance`` or ``..._for_illuminance``) it is W/(m² sr nm)."""
     return smits_weights(rgb) @ _basis_band_means(bands, True)
 
 
