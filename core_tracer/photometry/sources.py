@@ -173,10 +173,11 @@ def from_csv(path: str | os.PathLike, *, max_bytes: int = CSV_MAX_BYTES) -> Spec
 
 @dataclass(frozen=True)
 class BulbState:
-    """One filament (or LED state) of a bulb: its reference luminous flux in lm, with tolerance."""
+    """One filament (or LED state) of a bulb: its luminous flux in lm at the test voltage."""
 
     flux_lm: float
     tolerance_pct: float | None = None  # the objective flux's ± % where the source states it
+    value: str = "reference"  # "reference" (standard lamp) or "objective" (production lamps' nominal)
 
 
 @dataclass(frozen=True)
@@ -189,9 +190,10 @@ class BulbType:
     source: str = ""
 
 
-# UN Regulation No. 37 (filament light sources), category sheets, 12 V lamps at 13.5 V. Values
-# are the sheets' reference luminous flux (the flux lamp photometry is normalised to), with the
-# objective flux tolerance of production lamps where the sheet gives it.
+# UN Regulation No. 37 (filament light sources), category sheets, 12 V lamps at 13.5 V: the
+# reference luminous flux (the flux a lamp's photometry is normalised to) where the sheet found
+# gives it, else the objective flux of production lamps, with its tolerance. Looked up and not
+# found (so left out rather than guessed): P21W, PY21W, W16W, and R128's LED categories.
 BULB_TYPES: dict[str, BulbType] = {
     "P21/5W": BulbType(
         "P21/5W", "incandescent",
@@ -203,6 +205,11 @@ BULB_TYPES: dict[str, BulbType] = {
         {"on": BulbState(50.0)},
         "UN R37 category R5W, standard lamp reference luminous flux 50 lm at about 13.5 V, as adopted "
         "in GOST R 41.37 table 41 (ar-net.ru/doc/read/15584/17)"),
+    "PY21/5W": BulbType(
+        "PY21/5W", "amber_coated",
+        {"stop": BulbState(270.0, 20.0, "objective"), "tail": BulbState(21.0, 20.0, "objective")},
+        "UN R37 sheet PY21/5W/1 (amber, 12 V, 13.5 V: objective flux 270 lm and 21 lm ±20 %), as introduced "
+        "by Supplement 41 to the 03 series, proposal ECE/TRANS/WP.29/GRE/2012/34"),
 }
 
 

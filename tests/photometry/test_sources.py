@@ -177,7 +177,7 @@ def test_csv_row_limit(tmp_path):
 def test_named_bulbs_are_cited_and_usable():
     b = Bands.uniform(8)
     for name, bulb in sources.BULB_TYPES.items():
-        assert bulb.name == name and "R37" in bulb.source or "R128" in bulb.source
+        assert bulb.name == name and ("R37" in bulb.source or "R128" in bulb.source)
         assert bulb.spectrum in sources.SPECTRA
         for state in bulb.states.values():
             assert state.flux_lm > 0
@@ -185,6 +185,9 @@ def test_named_bulbs_are_cited_and_usable():
             assert radiance @ cie.luminance_weights(b) > 0
 
 
-def test_p21_5w_has_two_states_with_the_sheet_fluxes():
+def test_two_filament_bulbs_have_both_states_with_the_sheet_fluxes():
     bulb = sources.BULB_TYPES["P21/5W"]
     assert bulb.states["stop"].flux_lm == 440.0 and bulb.states["tail"].flux_lm == 35.0
+    amber = sources.BULB_TYPES["PY21/5W"]
+    assert (amber.states["stop"].flux_lm, amber.states["tail"].flux_lm) == (270.0, 21.0)
+    assert amber.states["stop"].value == "objective" and amber.spectrum == "amber_coated"
