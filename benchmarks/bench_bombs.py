@@ -27,6 +27,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests"))  # the tile bomb the Blender test makes too
+from helpers import write_tile_bomb  # noqa: E402
 
 BASELINE = json.loads((ROOT / "presets" / "paper-baseline.json").read_text())
 HDR_HEAD = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n"
@@ -110,21 +112,7 @@ def make(case: str, folder: Path) -> Path:
         elif case == "exr-8192x4096":
             exr(folder / name, 8192, 4096, constant=False)
         else:  # 1 x 1 px, tiles declared 2**25 px wide
-            import numpy as np
-
-            oiio = oiio_module()
-            spec = oiio.ImageSpec(1, 1, 3, oiio.FLOAT)
-            spec.tile_width = spec.tile_height = 4
-            made = folder / "made.exr"
-            out = oiio.ImageOutput.create(str(made))
-            assert out.open(str(made), spec)
-            assert out.write_image(np.ones((1, 1, 3), np.float32))
-            out.close()
-            raw = bytearray(made.read_bytes())
-            at = raw.index(b"tiles\0tiledesc\0") + len(b"tiles\0tiledesc\0") + 4
-            raw[at:at + 4] = struct.pack("<I", 2**25)
-            (folder / name).write_bytes(bytes(raw))
-            made.unlink()
+            write_tile_bomb(folder / name)
         doc["environment"] = {"world": "file", "file": name, "strength": 1.0}
     else:
         doc = {"schema": "lamp-scene/2", "lamps": [{}], "image": {"width": 8, "height": 8}, "freeform": FREEFORM}

@@ -373,3 +373,35 @@ def creases(image, contrast_limit: float = 0.10):
             contrast = np.maximum(contrast, np.abs(neighbour - image).max(axis=2) / value)
     return contrast > contrast_limit
 
+
+
+def status_bytes(field: str) -> int:
+    """A memory figure of this process from /proc/self/status (``VmRSS``, ``VmHWM``), in bytes."""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) * 1024
+    raise AssertionError(field)
+
+
+def write_tile_bomb(path: Path) -> None:
+    """A 1 x 1 px tiled OpenEXR at ``path`` whose tiles are declared 2**25 px wide (4 GB if believed)."""
+    import struct
+
+    import numpy as np
+
+    from core_tracer.images.imageio import oiio_module
+
+    oiio = oiio_module()
+    made = path.with_name("made.exr")
+    spec = oiio.ImageSpec(1, 1, 3, oiio.FLOAT)
+    spec.tile_width = spec.tile_height = 4
+    out = oiio.ImageOutput.create(str(made))
+    assert out.open(str(made), spec)
+    assert out.write_image(np.ones((1, 1, 3), np.float32))
+    out.close()
+    raw = bytearray(made.read_bytes())
+    at = raw.index(b"tiles\0tiledesc\0") + len(b"tiles\0tiledesc\0") + 4
+    raw[at:at + 4] = struct.pack("<I", 2**25)
+    path.write_bytes(bytes(raw))
+    made.unlink()

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -121,17 +121,25 @@ def write_display(
     _write(name, codes, scene, extra)
 
 
-def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mapping[str, str] | None) -> None:
+def write_channels(path: str | os.PathLike, pixels: np.ndarray, channel_names: Sequence[str], *,
+                   scene: dict | None = None, attributes: Mapping[str, str] | None = None) -> None:
+    """Write float ``pixels`` (H, W, C, top row first) as an EXR whose channels are named
+    ``channel_names``, with the scene and string ``attributes`` in its header; atomically, as every image."""
+    _write(os.fspath(path), np.asarray(pixels, dtype=np.float32), scene, attributes, tuple(channel_names))
+
+
+def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mapping[str, str] | None,
+           channel_names: tuple[str, ...] = RGB) -> None:
     scene_text = scene_to_json(normalize(scene)) if scene is not None else None
     oiio = _oiio()
     height, width = pixels.shape[:2]
     if pixels.dtype == np.uint8:
-        spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
+        spec = oiio.ImageSpec(width, height, len(channel_names), oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
     else:
-        spec = oiio.ImageSpec(width, height, 3, oiio.FLOAT)
+        spec = oiio.ImageSpec(width, height, len(channel_names), oiio.FLOAT)
         spec.attribute("compression", "zip")
-    spec.channelnames = RGB
+    spec.channelnames = channel_names
     if scene_text is not None:
         spec.attribute(SCENE_ATTRIBUTE, scene_text)
     for key, value in (attributes or {}).items():

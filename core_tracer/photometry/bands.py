@@ -17,7 +17,8 @@ VISIBLE_NM = (380.0, 780.0)  # the carried range: CIE 015:2018 computes colour o
 MAX_BANDS = 1000
 
 
-def _frozen(a: np.ndarray) -> np.ndarray:
+def frozen_array(a: np.ndarray) -> np.ndarray:
+    """A read-only float64 copy (the curves and bands are values, shared without copying)."""
     a = np.array(a, dtype=np.float64)
     a.flags.writeable = False
     return a
@@ -37,9 +38,9 @@ class Bands:
             raise ValueError(f"band edges: expected 2 to {MAX_BANDS + 1} values, got shape {edges.shape}")
         if not np.all(np.isfinite(edges)) or not np.all(np.diff(edges) > 0):
             raise ValueError("band edges: expected finite, strictly increasing wavelengths in nm")
-        object.__setattr__(self, "edges_nm", _frozen(edges))
-        object.__setattr__(self, "centres_nm", _frozen(0.5 * (edges[:-1] + edges[1:])))
-        object.__setattr__(self, "widths_nm", _frozen(np.diff(edges)))
+        object.__setattr__(self, "edges_nm", frozen_array(edges))
+        object.__setattr__(self, "centres_nm", frozen_array(0.5 * (edges[:-1] + edges[1:])))
+        object.__setattr__(self, "widths_nm", frozen_array(np.diff(edges)))
 
     @property
     def k(self) -> int:

@@ -23,7 +23,6 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from .. import fileio
 from ..images import bitmap_font, imageio
 from .bands import Bands
 from .cie import KM, xy, xyz_matrix, xyz_to_linear_rec709
@@ -119,36 +118,7 @@ def write_photometric_exr(path: str | os.PathLike, XYZ: np.ndarray, *,
     extra = {UNITS_ATTRIBUTE: units, "lamp:km": f"{KM:g}", **(attributes or {})}
     if bands is not None:
         extra[BANDS_ATTRIBUTE] = " ".join(f"{e:g}" for e in bands.edges_nm)
-    if scene is not None:
-        from ..scene.reading import scene_to_json
-        from ..scene.validate import normalize
-
-        extra[imageio.SCENE_ATTRIBUTE] = scene_to_json(normalize(scene))
-    _write_channels(name, pixels, tuple(planes), extra)
-
-
-def _write_channels(name: str, pixels: np.ndarray, channel_names: tuple[str, ...],
-                    attributes: Mapping[str, str]) -> None:
-    oiio = imageio.oiio_module()
-    height, width, count = pixels.shape
-    spec = oiio.ImageSpec(width, height, count, oiio.FLOAT)
-    spec.attribute("compression", "zip")
-    spec.channelnames = channel_names
-    for key, value in attributes.items():
-        spec.attribute(key, value)
-    with fileio.atomic_path(name) as tmp, fileio.signals_deferred():
-        out = oiio.ImageOutput.create(tmp)
-        if out is None:
-            raise OSError(f"{name}: OpenImageIO cannot write this format ({oiio.geterror()})")
-        try:
-            if not out.open(tmp, spec):
-                raise OSError(f"{name}: cannot write the image ({out.geterror()})")
-            if not out.write_image(pixels):
-                raise OSError(f"{name}: cannot write the image ({out.geterror()})")
-        finally:
-            closed = out.close()
-        if not closed:
-            raise OSError(f"{name}: cannot finish the image ({out.geterror()})")
+    imageio.write_channels(name, pixels, tuple(planes), scene=scene, attributes=extra)
 
 
 def read_photometric_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict[str, str]]:

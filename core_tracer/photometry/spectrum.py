@@ -6,16 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bands import Bands
+from .bands import Bands, frozen_array
 
 MAX_SAMPLES = 100_000
 FINE_STEP_NM = 1.0  # products of two curves are sampled at least this finely (CIE 015:2018 uses 1 or 5 nm)
-
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=np.float64)
-    a.flags.writeable = False
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,8 +34,8 @@ class Spectrum:
             raise ValueError(f"{self.name}: wavelengths must increase strictly")
         if np.any(y < 0):
             raise ValueError(f"{self.name}: values must be 0 or more")
-        object.__setattr__(self, "wavelengths_nm", _frozen(x))
-        object.__setattr__(self, "values", _frozen(y))
+        object.__setattr__(self, "wavelengths_nm", frozen_array(x))
+        object.__setattr__(self, "values", frozen_array(y))
 
     def at(self, wavelengths_nm: np.ndarray | float) -> np.ndarray:
         """The curve at the given wavelengths (linear between samples, the end values beyond)."""

@@ -13,13 +13,12 @@ from __future__ import annotations
 
 import json
 import os
-import struct
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import BASELINE
+from helpers import BASELINE, status_bytes, write_tile_bomb
 
 pytestmark = [pytest.mark.blender, pytest.mark.slow,
               pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")]
@@ -37,41 +36,17 @@ BIG = (8192, 4096)  # a real image at the size read without averaging: counted, 
 BOMB_GROWTH = 300 * MIB
 
 
-def _kib(field: str) -> int:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith(field + ":"):
-                return int(line.split()[1]) * 1024
-    raise AssertionError(field)
-
-
 class Peak:
     """The growth of the process's peak resident memory over what it held at the start of a block."""
 
     def __enter__(self):
-        self.start = _kib("VmRSS")
+        self.start = status_bytes("VmRSS")
         with open("/proc/self/clear_refs", "w") as f:
             f.write("5")
         return self
 
     def __exit__(self, *exc):
-        self.grown = _kib("VmHWM") - self.start
-
-
-def _tile_bomb(oiio, path: Path) -> None:
-    """A 1 x 1 px tiled OpenEXR whose tiles are declared 2**25 px wide."""
-    made = path.with_name("made.exr")
-    spec = oiio.ImageSpec(1, 1, 3, oiio.FLOAT)
-    spec.tile_width = spec.tile_height = 4
-    out = oiio.ImageOutput.create(str(made))
-    assert out.open(str(made), spec)
-    assert out.write_image(np.ones((1, 1, 3), np.float32))
-    out.close()
-    raw = bytearray(made.read_bytes())
-    at = raw.index(b"tiles\0tiledesc\0") + len(b"tiles\0tiledesc\0") + 4
-    raw[at:at + 4] = struct.pack("<I", 2**25)
-    path.write_bytes(bytes(raw))
-    made.unlink()
+        self.grown = status_bytes("VmHWM") - self.start
 
 
 def _big_exr(oiio, path: Path) -> None:
@@ -99,7 +74,7 @@ def bomb_library(tmp_path, addon):
     images = {name: said for name, (data, said) in BOMBS.items()}
     for name, (data, _) in BOMBS.items():
         (folder / name).write_bytes(data)
-    _tile_bomb(oiio, folder / "tiles.exr")
+    write_tile_bomb(folder / "tiles.exr")
     images["tiles.exr"] = "would take"
     _big_exr(oiio, folder / "big.exr")
     images["big.exr"] = None

@@ -26,7 +26,7 @@ import warnings
 
 import numpy as np
 import pytest
-from helpers import baseline_doc
+from helpers import baseline_doc, status_bytes
 from hypothesis import HealthCheck, currently_in_test_context, event, given, settings
 from hypothesis import strategies as st
 
@@ -65,14 +65,6 @@ def _audit(event: str, args: tuple) -> None:
 sys.addaudithook(_audit)  # for the life of the process; it records only while a render runs
 
 
-def _kib(field: str) -> int:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith(field + ":"):
-                return int(line.split()[1]) * 1024
-    raise AssertionError(field)
-
-
 def _declared_bytes(path: str) -> int:
     """What the render's check counted for the world of the image at ``path`` (0: none, refused)."""
     try:
@@ -95,7 +87,7 @@ def run_main(capfd, argv: list[str]) -> tuple[int, str, int, list[str]]:
     line ``argv`` in this process; any exception or warning fails the test."""
     global _opened_paths
     capfd.readouterr()
-    rss = _kib("VmRSS")
+    rss = status_bytes("VmRSS")
     with open("/proc/self/clear_refs", "w") as f:
         f.write("5")  # the peak resident memory starts again from here
     _opened_paths = []
@@ -105,7 +97,7 @@ def run_main(capfd, argv: list[str]) -> tuple[int, str, int, list[str]]:
             code = main(argv)
     finally:
         opened, _opened_paths = _opened_paths, None
-    grown = _kib("VmHWM") - rss
+    grown = status_bytes("VmHWM") - rss
     err = capfd.readouterr().err
     world_cache.clear_memory()
     return code, err, grown, opened
