@@ -24,6 +24,8 @@ class Lighting:
         # adding a black background adds exactly 0
         self.background_seen = bool(self.background.any()) or self.environment is not None
         self.world_seen = True
+        self.channels = 3  # R, G, B
+        self.photometric = None
 
     def sky(self, d: np.ndarray) -> np.ndarray:
         """What a ray leaving the scene along unit ``d`` (N, 3) sees: the environment or the background."""
