@@ -81,6 +81,12 @@ class LampTable:
     housing_color: np.ndarray  # (L, 3)
     ring_slopes: np.ndarray  # (L, most rings) facet slope of each ring (``prism_profile``), 0 past the last
     ring_count: np.ndarray  # (L,) rings of each plate (0 without one)
+    # The photometric mode's values per lamp and band (``spectral.photometric_lamps``; None in the
+    # paper mode): the lens's and the plate's refractive index per band for Fresnel (their ``ior``
+    # being n_d, which the rays' directions follow), and the reflector finish's spectral reflectance.
+    ior_bands: np.ndarray | None = None
+    plate_ior_bands: np.ndarray | None = None
+    reflector_bands: np.ndarray | None = None
 
     @classmethod
     def from_scene(cls, scene: dict) -> LampTable:

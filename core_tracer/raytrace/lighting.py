@@ -7,35 +7,60 @@ Without surroundings and with the paper's light this is exactly eq. (1) and the 
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from . import environment, sunlight
+from . import environment, spectral, sunlight
 
 
 class Lighting:
     """The surroundings (``environment``; None for the paper's background colour), the sun, the
-    background, and whether eye rays that miss show the world (False: a transparent film)."""
+    background, and whether eye rays that miss show the world (False: a transparent film).
 
-    def __init__(self, scene: dict):
+    ``channels`` are the colour columns the rays carry: R, G, B in the paper mode, the wavelength
+    bands in the photometric one (``photometric``, ``spectral.Photometric``; None in the paper
+    mode), whose environment is scaled to cd/m² and whose background is black."""
+
+    def __init__(self, scene: dict, bands: int | None = None):
         self.environment = environment.from_scene(scene)
         following = self.environment is not None and scene["light"].get("follow_environment", False)
         self.sun = sunlight.from_scene(scene, self.environment.sun_direction() if following else None)
         self.background = np.asarray(scene["background"], dtype=np.float64)
+        self.channels = 3  # R, G, B
+        self.photometric = None
+        if scene.get("light_model", "paper") == "photometric":
+            self.photometric = spectral.setup(scene, bands, self.sun.direction)
+            self.channels = self.photometric.channels
+            self.sun = self.photometric.sun
+            self.background = np.zeros(self.channels)
+            if self.environment is not None:  # its pixels times this are cd/m²
+                scale = spectral.environment_scale(scene, self.environment.pixels)
+                self.environment = replace(self.environment, strength=scale)
         # adding a black background adds exactly 0
         self.background_seen = bool(self.background.any()) or self.environment is not None
         self.world_seen = True
 
+    @property
+    def to_xyz(self) -> np.ndarray | None:
+        """(K, 3) from the carried bands to CIE XYZ in cd/m²; None in the paper mode (RGB as carried)."""
+        return None if self.photometric is None else self.photometric.to_xyz
+
     def sky(self, d: np.ndarray) -> np.ndarray:
         """What a ray leaving the scene along unit ``d`` (N, 3) sees: the environment or the background."""
         if self.environment is not None:
+            if self.photometric is not None:
+                return self.photometric.light(self.environment.radiance(d))
             return self.environment.radiance(d)
-        return np.broadcast_to(self.background, (len(d), 3))
+        return np.broadcast_to(self.background, (len(d), self.channels))
 
     def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
         """Equation (1) under the sun, plus the environment's light on a Lambertian surface."""
         out = self.sun.shade(normal, view, diffuse, specular, shininess)
         if self.environment is not None:
             lambert = self.environment.irradiance(normal)  # + diffuse E / pi, in place
+            if self.photometric is not None:
+                lambert = self.photometric.light(lambert)
             np.multiply(lambert, diffuse, out=lambert)
             lambert /= np.pi
             out += lambert

@@ -26,10 +26,10 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def scaled(v: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """``v * s[:, None]`` for (N, 3) ``v``: the same products a column at a time, in about half
-    the time (numpy broadcasts slowly over rows of three)."""
+    """``v * s[:, None]`` for (N, C) ``v`` (directions, or C colour channels): the same products a
+    column at a time, in about half the time (numpy broadcasts slowly over short rows)."""
     out = np.empty(v.shape)
-    for j in range(3):
+    for j in range(v.shape[1]):
         np.multiply(v[:, j], s, out=out[:, j])
     return out
 
@@ -66,6 +66,20 @@ def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarra
     r_p = _ratio(n2 * cos_i, n1 * cos_t)  # p-polarised
     reflectance = (r_s * r_s + r_p * r_p) * 0.5  # R = (r_s² + r_p²) / 2
     return np.where(sin2_t >= 1.0, 1.0, reflectance)  # total internal reflection: exactly 1
+
+
+def fresnel_polarised(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """The s- and p-polarised reflectances R_s = r_s², R_p = r_p² of the exact Fresnel equations
+    (Born & Wolf, Principles of Optics, §1.5.2), broadcast over ``cos_i`` (>= 0) and the indices
+    ``n1`` (incident side) and ``n2``; total internal reflection gives exactly 1 for both."""
+    eta = n1 / n2
+    sin2_t = (1.0 - cos_i * cos_i) * (eta * eta)
+    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+    r_s = _ratio(n1 * cos_i, n2 * cos_t)
+    r_p = _ratio(n2 * cos_i, n1 * cos_t)
+    tir = sin2_t >= 1.0
+    return np.where(tir, 1.0, r_s * r_s), np.where(tir, 1.0, r_p * r_p)
 
 
 def _ratio(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -46,6 +46,7 @@ class Sun:
     strength: float
     color: np.ndarray  # S
     paper: bool  # s = 1 and S = white: eq. (1) exactly as the paper's light
+    cosine_weighted = False  # the phantom light as eq. (3): no cosine toward the sun (the photometric sun's has)
 
     def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
         """Equation (1) under the sun (module docstring); ``view`` and the sun's direction point away
@@ -110,7 +111,7 @@ def plate_transmittance(sun: Sun, ior: np.ndarray, absorption: np.ndarray, thick
     (N,) facing the viewer (module docstring); 0 with the sun behind the lamp."""
     cos_i = float(sun.direction @ FRONT)  # the angle of incidence on the outer face; > 0 in front
     if cos_i <= 0.0 or sun.strength == 0.0:
-        return np.zeros((len(ior), 3))
+        return np.zeros((len(ior), absorption.shape[1]))
     r = optics.fresnel_reflectance(np.full(len(ior), cos_i), 1.0, ior)
     sin_t = np.sqrt(1.0 - cos_i * cos_i) / ior
     cos_t = np.sqrt(1.0 - sin_t * sin_t)
@@ -142,7 +143,7 @@ def phantom(sun: Sun, per_lamp: PhantomLamps, lamp: np.ndarray, hit: np.ndarray,
     lamp coordinates) of lamps ``lamp`` of ``per_lamp.lamps``, of normal ``normal`` seen from
     ``view`` (module docstring)."""
     if not per_lamp.lets_in.take(lamp).any():
-        return np.zeros((len(lamp), 3))
+        return np.zeros((len(lamp), per_lamp.transmit.shape[1]))
     lamps = per_lamp.lamps
     # The line toward the sun crosses the apex plane inside the lens opening.
     toward = sun.direction
@@ -171,7 +172,8 @@ def _scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, at: np.ndarray, o
                scatter: np.ndarray, shininess: np.ndarray, transmit: np.ndarray) -> np.ndarray:
     """``scattered`` at the points ``at`` only (the others stay 0), ``scatter``, ``shininess`` and
     ``transmit`` being rows ``of`` the points (per lamp), or of the points themselves (None)."""
-    out = np.zeros((len(normal), 3))
+    light = sun.light
+    out = np.zeros((len(normal), len(light)))
     normal, view = normal.take(at, axis=0), view.take(at, axis=0)
     sun_dir = np.broadcast_to(sun.direction, normal.shape)
     # Lit on the side the eye ray came from only (the normal turned toward the viewer): turning
@@ -179,17 +181,21 @@ def _scattered(sun: Sun, normal: np.ndarray, view: np.ndarray, at: np.ndarray, o
     # their normals turned.
     turned = optics.dot(normal, view) < 0.0
     to_sun = optics.dot(normal, sun_dir)
-    facing = np.flatnonzero(np.where(turned, -to_sun, to_sun) > 0.0)
+    cos_sun = np.where(turned, -to_sun, to_sun)
+    facing = np.flatnonzero(cos_sun > 0.0)
     if len(facing) < len(at):  # else every point faces the sun (the usual case): nothing to drop
         at, normal, view, turned = at.take(facing), normal.take(facing, axis=0), view.take(facing, axis=0), \
             turned.take(facing)
+        cos_sun = cos_sun.take(facing)
     for j in range(3):
         np.negative(normal[:, j], out=normal[:, j], where=turned)
     rows = at if of is None else of.take(at)
     value = optics.blinn(normal, view, sun_dir[:len(at)], scatter.take(rows), shininess.take(rows))
+    if sun.cosine_weighted:  # the irradiance on the reflector: E cos theta
+        value *= cos_sun
     # value T_sun I_sun, a column at a time (numpy broadcasts (N, 1) over rows of 3 slowly)
-    transmit, light, column = transmit.take(rows, axis=0), sun.light, np.empty(len(at))
-    for j in range(3):
+    transmit, column = transmit.take(rows, axis=0), np.empty(len(at))
+    for j in range(len(light)):
         np.multiply(value, transmit[:, j], out=column)
         column *= light[j]
         out[at, j] = column

@@ -65,3 +65,38 @@ def environment_file(document: str | os.PathLike, env: dict) -> str | None:
         raise SceneError(where, f"{e.message} (a user's own image elsewhere: render --environment PATH, or "
                                 "choose it in Blender)") from None
     return path_beside(document, name, where, "an .exr or .hdr", "")[0]
+
+
+def spectrum_files(document: str | os.PathLike, scene: dict) -> dict[tuple[int, str, str], str]:
+    """The measured curves (.csv) a normalised photometric scene names beside ``document``, by (lamp,
+    section, key): a bulb's ``spectrum_file``, a lens's or prism plate's ``filter_file``; each
+    confined to the document's folder as ``environment_file`` is (none in the paper mode)."""
+    found: dict[tuple[int, str, str], str] = {}
+    if scene.get("light_model") != "photometric":
+        return found
+    for i, lamp in enumerate(scene["lamps"]):
+        named = []
+        if lamp["bulb"]["type"] == "custom" and lamp["bulb"]["spectrum"] == "file":
+            named.append(("bulb", "spectrum_file"))
+        if lamp["lens"]["filter"] == "file":
+            named.append(("lens", "filter_file"))
+        if lamp.get("collection", "reflector") == "prism_plate" and lamp["prism_plate"]["filter"] == "file":
+            named.append(("prism_plate", "filter_file"))
+        for section, key in named:
+            where = f"lamps[{i}].{section}.{key}"
+            name = lamp[section][key]
+            check_plain_name(name, (".csv",), where)
+            found[(i, section, key)] = path_beside(document, name, where, "a .csv", "")[0]
+    return found
+
+
+def with_spectrum_files(document: str | os.PathLike, scene: dict) -> dict:
+    """``scene`` with the measured curves it names (``spectrum_files``) by their full paths, to be
+    traced whatever the working directory (the scene itself, when it names none)."""
+    found = spectrum_files(document, scene)
+    if not found:
+        return scene
+    lamps = [dict(lamp) for lamp in scene["lamps"]]
+    for (i, section, key), path in found.items():
+        lamps[i][section] = {**lamps[i][section], key: path}
+    return {**scene, "lamps": lamps}

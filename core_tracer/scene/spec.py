@@ -9,6 +9,8 @@ Lengths are millimetres, absorption coefficients per millimetre, angles degrees,
 linear RGB (docs/model.md §2).
 """
 
+# long: every field of the document is declared here once, as the project's rules ask (one place to read)
+
 from __future__ import annotations
 
 from collections.abc import Iterator
@@ -45,6 +47,57 @@ def _position(default, doc, size=3) -> Num:
     return Num(tuple(default), -1.0e5, 1.0e5, unit="mm", doc=doc, size=size, subtype="xyz")
 
 
+# ---------------------------------------------------------------------------------------------
+# The photometric mode (docs/photometric.md): light in lm, cd/m² and lx, carried as a spectrum.
+# Its fields say "Photometric:" first; the paper mode ignores them (and the photometric mode
+# ignores the paper's appearance values: bulb intensity, reflector colour, socket and wall colours).
+
+LIGHT_MODELS = ("paper", "photometric")
+# The named bulbs of core_tracer.photometry.sources.BULB_TYPES (a test keeps the two lists equal).
+BULB_TYPES = ("P21/5W", "R5W")
+BULB_STATES = ("stop", "tail", "on")  # P21/5W: stop and tail filaments; single-filament bulbs: on
+BULB_SPECTRA = ("incandescent", "amber_coated", "red_led", "amber_led", "white_led", "led", "file")
+MATERIALS = ("pmma", "polycarbonate", "custom")
+FILTERS = ("clear", "red", "amber", "smoke", "custom", "file")
+SPECTRUM_SUFFIXES = (".csv",)
+
+
+def _optics(default_filter: str, what: str) -> dict:
+    """The photometric fields of a transparent part (the lens, the prism plate): its plastic and
+    its colour filter."""
+    return {
+        "material": Choice("pmma", MATERIALS,
+                           f"Photometric: the plastic of the {what}, which sets its refractive index per wavelength "
+                           "(pmma: acrylic n_d 1.491, Abbe 59.2; polycarbonate: n_d 1.585, Abbe 29.1; custom: ior "
+                           "at the d line with abbe)"),
+        "abbe": Num(57.0, 10.0, 100.0,
+                    doc=f"Photometric, custom material: how little the {what}'s index changes with wavelength "
+                        "(Abbe number V_d; acrylic about 57, polycarbonate about 30)"),
+        "filter": Choice(default_filter, FILTERS,
+                         f"Photometric: the colour of the {what} as an internal transmittance curve at "
+                         "filter_thickness (clear, red, amber, smoke; custom: a smooth cut-on at filter_edge_nm; "
+                         "file: a measured curve)"),
+        "filter_edge_nm": Num(605.0, 300.0, 900.0, unit="nm",
+                              doc="Photometric, custom filter: the wavelength where the transmittance is half way "
+                                  "up its cut-on"),
+        "filter_slope_nm": Num(7.0, 0.1, 500.0, unit="nm",
+                               doc="Photometric, custom filter: how gradual the cut-on is (the logistic's scale)"),
+        "filter_range": Num((0.001, 0.9), 0.0, 1.0, size=2,
+                            doc="Photometric, custom filter: internal transmittance well below and well above the "
+                                "edge, at filter_thickness (the lower above 0)"),
+        "filter_file": Text("", "Photometric, filter file: a .csv of nm,transmittance rows beside the document, the "
+                                "internal transmittance at filter_thickness", max_len=120),
+        "filter_thickness": _length(3.0, f"Photometric: the thickness of {what} at which the filter curve is its "
+                                         "internal transmittance (Beer-Lambert gives every other path length)",
+                                    hi=100.0),
+    }
+
+
+_OPTICS_SHOWN = (("abbe", "material", ("custom",)), ("filter_edge_nm", "filter", ("custom",)),
+                 ("filter_slope_nm", "filter", ("custom",)), ("filter_range", "filter", ("custom",)),
+                 ("filter_file", "filter", ("file",)))
+
+
 CAMERA = Section(
     {
         "type": Choice("perspective", ("perspective", "orthographic"), "Projection of the camera"),
@@ -60,6 +113,12 @@ CAMERA = Section(
                              "Which image side the field of view spans (auto: the larger, as Blender)"),
         "shift": Num((0.0, 0.0), -2.0, 2.0, doc="Lens shift in fractions of the fitted side (as Blender)",
                      size=2),
+        "exposure": Choice("auto", ("auto", "ev100"),
+                           "Photometric: how the image is exposed for display: auto (a light meter's choice per "
+                           "image), or ev100, one physical exposure so that designs compare"),
+        "ev100": Num(9.0, -20.0, 30.0, unit="EV",
+                     doc="Photometric: the camera's exposure value at ISO 100; a luminance of 1.2 x 2^EV100 cd/m2 "
+                         "shows as display white"),
     },
     "The view of the tracer (and of Blender's scene camera); defaults frame the body",
 )
@@ -106,6 +165,9 @@ LIGHT = Section(
         "follow_environment_color": Flag(False, "Take the sun's colour from the environment image: the colour of its "
                                                 "brightest region at luminance 1 (sun_color is then ignored; strength "
                                                 "still sets how bright the sun is)"),
+        "illuminance_lux": Num(100000.0, 0.0, 200000.0, unit="lx",
+                               doc="Photometric: the sun's illuminance on a surface facing it (clear day about "
+                                   "100 000 lx; 0 is no sun), its spectrum CIE daylight at 5500 K"),
     },
     "The sun: the directional light of equation (1)",
     # what the environment image gives is not asked for again (a flag's value is a bool)
@@ -124,9 +186,18 @@ ENVIRONMENT = Section(
         "strength": Num(1.0, 0.0, 1.0e4, doc="Brightness of the environment (the Background node's Strength)"),
         "rotation_deg": Num(0.0, -360.0, 360.0, unit="deg",
                             doc="Turn of the environment about the vertical axis (a Mapping node's Z rotation)"),
+        "scale_by": Choice("illuminance", ("illuminance", "luminance"),
+                           "Photometric: how the image is brought to physical units: by the illuminance it gives "
+                           "on an upward-facing surface, or by its mean luminance"),
+        "illuminance_lux": Num(10000.0, 0.0, 200000.0, lo_open=True, unit="lx",
+                               doc="Photometric: the illuminance the environment gives on an upward-facing surface "
+                                   "(overcast day about 10 000 lx, street lighting at night a few lx)"),
+        "luminance_cd_m2": Num(1000.0, 0.0, 1.0e6, lo_open=True, unit="cd/m2",
+                               doc="Photometric: the environment's mean luminance over all directions"),
     },
     "The world around the lamp: seen around it, mirrored by the lens and lighting the body",
-    shown_when=(("file", "world", ("file",)),),
+    shown_when=(("file", "world", ("file",)), ("illuminance_lux", "scale_by", ("illuminance",)),
+                ("luminance_cd_m2", "scale_by", ("luminance",))),
 )
 
 BODY = Section(
@@ -178,6 +249,7 @@ LENS = Section(
         "wrap_radius": _length(100.0, "Radius of the cylindrical outer face: smaller wraps further round the side; "
                                       "at least the lens diameter plus thickness and cuts", hi=10000.0),
         "wrap_toward": Choice("+x", ("+x", "-x"), "Side toward which a cylindrical lens curves away from the viewer"),
+        **_optics("red", "the lens"),
     },
     "The lens disk; its colour is given by absorption, or by transmitted_color at "
     "reference_thickness (never both)",
@@ -192,7 +264,8 @@ LENS = Section(
         doc="How the lens colour is given"),),
     shown_when=(("radius", "outline", ("round",)), ("width", "outline", ("rectangular",)),
                 ("height", "outline", ("rectangular",)), ("corner_radius", "outline", ("rectangular",)),
-                ("wrap_radius", "shape", ("cylindrical",)), ("wrap_toward", "shape", ("cylindrical",))),
+                ("wrap_radius", "shape", ("cylindrical",)), ("wrap_toward", "shape", ("cylindrical",)),
+                *_OPTICS_SHOWN),
 )
 
 CUT_TYPES = ("fisheye", "sawtooth", "flutes")
@@ -239,6 +312,11 @@ REFLECTOR = Section(
                            doc="How much of the bulb's light the reflector mirrors (mirror reflectance)"),
         "scatter": Num(0.8, 0.0, 1.0, doc="How much light the reflector scatters as a soft glow (w in eq. 3)"),
         "shininess": Num(20.0, 0.0, 1.0e4, doc="How tight the reflector's glow is: higher is tighter (n in eq. 3)"),
+        "finish": Choice("aluminised", ("aluminised", "silvered"),
+                         "Photometric: the reflector's metal coat, which sets its reflectance per wavelength"),
+        "scatter_share": Num(0.1, 0.0, 1.0,
+                             doc="Photometric: the share of the reflected light spread into a soft glow (a "
+                                 "normalised lobe of the reflector's shininess); the rest is mirrored"),
     },
     "The paraboloid reflector behind the lens",
 )
@@ -251,8 +329,27 @@ BULB = Section(
                           "lights most evenly"),
         "intensity": _color((8.0, 7.0, 6.0), "Brightness and colour of the bulb's light (I0 per R, G, B)", hi=1.0e4),
         "on": Flag(True, "Whether the lamp is switched on"),
+        "type": Choice("custom", ("custom", *BULB_TYPES),
+                       "Photometric: a standard bulb by its category (UN R37), which gives its flux and spectrum; "
+                       "custom: flux_lm and spectrum"),
+        "state": Choice("stop", BULB_STATES,
+                        "Photometric: which filament of the bulb is lit (P21/5W: stop or tail; single-filament "
+                        "bulbs: on)"),
+        "flux_lm": Num(440.0, 0.0, 100000.0, unit="lm",
+                       doc="Photometric, custom bulb: the luminous flux the bulb emits in all directions"),
+        "spectrum": Choice("incandescent", BULB_SPECTRA,
+                           "Photometric, custom bulb: the colour of its light (incandescent: CIE illuminant A; "
+                           "amber-coated; red, amber or white LED; led: peak and width; file: a measured curve)"),
+        "led_peak_nm": Num(630.0, 360.0, 830.0, unit="nm", doc="Photometric, led spectrum: the peak wavelength"),
+        "led_width_nm": Num(20.0, 1.0, 300.0, unit="nm",
+                            doc="Photometric, led spectrum: the half spectral width (Ohno 2005's model)"),
+        "spectrum_file": Text("", "Photometric, spectrum file: a .csv of nm,value rows beside the document",
+                              max_len=120),
     },
     "The spherical bulb, the light source",
+    shown_when=(("state", "type", ("P21/5W", "R5W")), ("flux_lm", "type", ("custom",)),
+                ("spectrum", "type", ("custom",)), ("led_peak_nm", "spectrum", ("led",)),
+                ("led_width_nm", "spectrum", ("led",)), ("spectrum_file", "spectrum", ("file",))),
 )
 
 SOCKET = Section(
@@ -283,10 +380,12 @@ PRISM_PLATE = Section(
         "housing_depth": _length(60.0, "Depth of the opaque housing behind the plate, from the bottoms of the rings "
                                        "to its back", hi=1000.0),
         "housing_color": _color((0.08, 0.08, 0.08), "Colour of the opaque housing behind the plate"),
+        **_optics("clear", "the plate"),
     },
     "A transparent plate between bulb and lens whose back carries concentric prism rings (a Fresnel lens) "
     "that bend the bulb's light parallel to the lamp axis; used instead of the reflector when the lamp's "
     "collection is prism_plate",
+    shown_when=_OPTICS_SHOWN,
 )
 
 COLLECTIONS = ("reflector", "prism_plate")
@@ -315,6 +414,10 @@ LAMP = Section(
 SCENE = Section(
     {
         "schema": Choice(SCHEMA, (SCHEMA,), "Format and version of the document"),
+        "light_model": Choice("paper", LIGHT_MODELS,
+                              "How light is modelled: paper, the paper's RGB model with relative brightness; or "
+                              "photometric, light as a spectrum in physical units (lm, cd/m2, lx; "
+                              "docs/photometric.md)"),
         "name": Text("Untitled lamp", "The design's name, shown in the preset browser and on study sheets"),
         "author": Text("", "Who made the design, shown in the preset browser"),
         "description": Text("", "Notes on the design, shown in the preset browser", max_len=2000),

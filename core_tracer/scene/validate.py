@@ -27,6 +27,7 @@ from .derived import default_camera, default_value, fill_alternative
 from .freeform_section import finish_freeform
 from .geometry_checks import check_geometry
 from .messages import kind_of, show_value
+from .photometric_checks import check_photometric
 from .reading import HugeNumber, SceneError, read_json
 from .safe_text import has_surrogate, printable, show_key
 
@@ -56,6 +57,7 @@ def parse_scene(doc: Any) -> dict:
     check_geometry(scene)
     if raw_freeform is not None:
         scene["freeform"] = finish_freeform(raw_freeform, _section(raw_freeform, S.FREEFORM, "freeform."))
+    check_photometric(scene)
     return scene
 
 

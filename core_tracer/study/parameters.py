@@ -20,12 +20,12 @@ from ..scene.safe_text import show_key
 from ..scene.validate import check_number
 
 _PARAMETER = re.compile(
-    r"^(?:lamps\[(?P<lamp>\d*)\]\.)?(?P<path>[a-z_]+(?:\.[a-z_]+)*)(?:\[(?P<component>\d+)\])?$"
+    r"^(?:lamps\[(?P<lamp>\d*)\]\.)?(?P<path>[a-z_][a-z0-9_]*(?:\.[a-z_][a-z0-9_]*)*)(?:\[(?P<component>\d+)\])?$"
 )
 # Scene-level sections and fields a study may vary; image is the study's own size, but its
-# samples per pixel vary like any parameter.
+# samples per pixel vary like any parameter, and a study may set one design in both light models.
 _SCENE_PARTS = ("camera", "light", "background", "body", "environment")
-_SCENE_FIELDS = ("image.samples",)
+_SCENE_FIELDS = ("image.samples", "light_model")
 # A lamp's function sets these lamp fields (``functions.apply_function``): an axis over the function
 # and an axis over one of them would set the same thing. Both forms of the lens colour count: the
 # function switches the lens to a transmitted colour.

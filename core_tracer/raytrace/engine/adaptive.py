@@ -37,7 +37,7 @@ def sample_rays(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
     # sums whatever the threads.
     for count, o, d in sample_groups(ctx.camera, pixels, ctx.samples, ctx.filter_name):
         group = yield o, d
-        per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, 3)
+        per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, ctx.channels)
         band.acc += over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
@@ -65,11 +65,11 @@ def _trace_adaptive(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
     pixels = np.arange(y0 * width, y1 * width)
     pilot_values = yield from sampling.per_sample(ctx, band, pixels, pilot)
     # Each pass's least and greatest pilot sample over the pixel's 3 x 3 neighbourhood, on the passes'
-    # own planes (passes, rows, columns, 3): no transposed copies.
-    shape = (len(PASS_NAMES), y1 - y0, width, 3)
+    # own planes (passes, rows, columns, channels): no transposed copies.
+    shape = (len(PASS_NAMES), y1 - y0, width, ctx.channels)
     low = _neighbourhood(over_samples(np.minimum, pilot_values).reshape(shape), np.minimum)
     high = _neighbourhood(over_samples(np.maximum, pilot_values).reshape(shape), np.maximum)
-    per_pixel = (len(PASS_NAMES), -1, 3)  # views of the same planes, a pixel per column
+    per_pixel = (len(PASS_NAMES), -1, ctx.channels)  # views of the same planes, a pixel per column
     pilot_mean = over_samples(np.add, pilot_values) / len(pilot)
     threshold = ctx.adaptive_threshold * pilot_mean.sum(axis=0).max(axis=1)
     busy = _spread(high.reshape(per_pixel), low.reshape(per_pixel)) > threshold
@@ -99,7 +99,7 @@ def _trace_adaptive(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
 
 
 def _spread(high: np.ndarray, low: np.ndarray) -> np.ndarray:
-    """Per pixel of (passes, pixels, 3) neighbourhood extremes: the greatest spread over its passes
+    """Per pixel of (passes, pixels, channels) neighbourhood extremes: the greatest spread over its passes
     and channels (some pass and channel spreads beyond a threshold exactly where this does)."""
     return np.maximum.reduce(high - low, axis=0).max(axis=1)
 
@@ -108,7 +108,7 @@ def _outside_rows(ctx: Context, band: Band, y0: int, y1: int, pilot: np.ndarray,
                   high: np.ndarray, busy: np.ndarray, threshold: np.ndarray) -> Requests:
     """The band's first and last rows' neighbours just outside it (``_trace_adaptive``): their pilot
     samples traced next to the pixels there that are not busy yet, then those pixels' neighbourhood
-    extremes ``low`` and ``high`` (passes, rows, columns, 3) widened by them and ``busy`` (per pixel of
+    extremes ``low`` and ``high`` (passes, rows, columns, channels) widened by them and ``busy`` (per pixel of
     the band) decided again, in place."""
     width, height = ctx.camera.width, ctx.camera.height
     edges = []  # (the row outside, its neighbour row in the band, that row's calm pixels, the columns next to them)
@@ -141,12 +141,12 @@ def _outside_rows(ctx: Context, band: Band, y0: int, y1: int, pilot: np.ndarray,
 
 
 def _any_but_background(planes: np.ndarray) -> np.ndarray:
-    """Per pixel of (passes, pixels, 3) ``planes``: whether a pass other than the background's is not 0."""
+    """Per pixel of (passes, pixels, channels) ``planes``: whether a pass other than the background's is not 0."""
     found = np.zeros(planes.shape[1:], dtype=bool)
     for pass_id, plane in enumerate(planes):
         if pass_id != BACKGROUND_PASS:
             found |= plane != 0
-    return found[:, 0] | found[:, 1] | found[:, 2]
+    return found.any(axis=1)
 
 
 def _world_samples(ctx: Context, band: Band, pixels: np.ndarray, idx: np.ndarray, pilot: np.ndarray,
@@ -170,8 +170,8 @@ def _world_samples(ctx: Context, band: Band, pixels: np.ndarray, idx: np.ndarray
             rays = (np.arange(len(rest))[:, None] * len(part) + near).ravel()
             t_near, t_far, _ = body_box.hit_box(rows(o, rays), rows(d, rays), ctx.box_lo, ctx.box_hi)
             toward[near] = ((t_near <= t_far) & (t_near > 0)).reshape(len(rest), len(near)).any(axis=0)
-        by_sample = np.empty((ctx.samples, len(part), 3))
-        by_sample[rest] = ctx.sky(d).reshape(len(rest), len(part), 3)
+        by_sample = np.empty((ctx.samples, len(part), ctx.channels))
+        by_sample[rest] = ctx.sky(d).reshape(len(rest), len(part), ctx.channels)
         by_sample[pilot] = pilot_values[:, BACKGROUND_PASS][:, part]
         total = by_sample[0].copy()
         for k in range(1, ctx.samples):  # in sample order, as the traced pixels

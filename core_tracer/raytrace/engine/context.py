@@ -3,8 +3,10 @@ ray can meet, the body's box and its picture on the screen, the lighting (``Ligh
 
 from __future__ import annotations
 
+import numpy as np
+
 from ...scene.derived import body_wraps
-from .. import sunlight
+from .. import spectral, sunlight
 from ..camera import Camera
 from ..lamp_table import LampTable
 from ..lighting import Lighting
@@ -17,13 +19,15 @@ class Context(Lighting):
     walker = None  # how rays find surfaces: the parametric lamps' own walk (``walk.Walker``)
 
     def __init__(self, scene: dict, camera: Camera, record_transitions: bool, samples: int, filter_name: str,
-                 adaptive_threshold: float = 0.0):
-        super().__init__(scene)
+                 adaptive_threshold: float = 0.0, bands: int | None = None):
+        super().__init__(scene, bands)
         self.camera = camera
         self.samples = samples
         self.filter_name = filter_name
         self.adaptive_threshold = adaptive_threshold
         self.lamps = LampTable.from_scene(scene)
+        if self.photometric is not None:
+            self.lamps = spectral.photometric_lamps(self.lamps, scene, self.photometric.bands)
         self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
         self.plates = bool(self.lamps.ring_count.any())  # else no ray meets a prism plate or its housing
         body = scene["body"]
@@ -31,6 +35,8 @@ class Context(Lighting):
         self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body
         self.wraps = body_wraps(scene)  # the curved ends of the front, none for flat lenses
         self.body = body
+        self.body_color = (np.asarray(body["color"]) if self.photometric is None
+                           else self.photometric.reflectance(body["color"]))  # photometric: Smits's reflectance
         self.phantom_lamps = sunlight.PhantomLamps.of(self.sun, self.lamps)  # T_sun and the outline per lamp
         self.phantom = scene["light"].get("phantom", False) and bool(self.phantom_lamps.lets_in.any())
         self.record = record_transitions

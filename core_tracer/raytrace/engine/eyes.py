@@ -81,7 +81,7 @@ def first_hits(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.n
     normal = np.zeros((len(on_body), 3))
     normal[np.arange(len(on_body)), face[on_body]] = -np.sign(d[on_body, face[on_body]])
     body = ctx.body
-    band.add(BODY_PASS, pix[on_body], ctx.shade(normal, -rows(d, on_body), np.asarray(body["color"]),
+    band.add(BODY_PASS, pix[on_body], ctx.shade(normal, -rows(d, on_body), ctx.body_color,
                                                 body["specular"], body["shininess"]))
 
     # Lens outer face (①): Fresnel split; the reflected branch is shaded by eq. (1) (§3.2.3).
@@ -109,7 +109,7 @@ def _first_hits_wrapped(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, 
     on_lens = lamp >= 0
     on_body = np.nonzero(hit_body & ~on_lens)[0]
     body = ctx.body
-    band.add(BODY_PASS, pix[on_body], ctx.shade(rows(normal, on_body), -rows(d, on_body), np.asarray(body["color"]),
+    band.add(BODY_PASS, pix[on_body], ctx.shade(rows(normal, on_body), -rows(d, on_body), ctx.body_color,
                                                 body["specular"], body["shininess"]))
 
     on_lens = np.nonzero(on_lens)[0]

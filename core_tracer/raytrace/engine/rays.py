@@ -30,12 +30,16 @@ class Rays:
     lamp: np.ndarray  # the row of the lamp table its values come from (free-form: of the part table)
     o: np.ndarray
     d: np.ndarray
-    k: np.ndarray  # accumulated attenuation, RGB
+    k: np.ndarray  # accumulated attenuation, one column per channel (R, G, B; or the photometric bands)
     medium: np.ndarray  # paths.IN_LENS / IN_AIR
     src: np.ndarray  # surface the segment starts on
     parent: np.ndarray  # path class of the segment that spawned this one
     branch: np.ndarray  # paths.REFLECTED / TRANSMITTED
     seen_reflector: np.ndarray
+    # The photometric mode's share of k carried by s-polarised light (the rest is p-polarised), per
+    # channel: Fresnel splits each share with its own reflectance (``surfaces.fresnel_split``).
+    # UNPOLARISED in the paper mode, which splits k by the average reflectance at every surface.
+    k_s: np.ndarray
 
     def __len__(self) -> int:
         return len(self.pix)
@@ -55,8 +59,9 @@ def field_names(kind: type[Rays]) -> tuple[str, ...]:
 
 
 class _Unrecorded:
-    """The rays' parent classes and branches when the render records no transitions: they only feed
-    ``Band.note``, so nothing is computed or gathered for them; every gather of this is itself."""
+    """A column of the rays that the render does not keep: the parent classes and branches when it
+    records no transitions (they only feed ``Band.note``), the s-polarised share in the paper mode;
+    nothing is computed or gathered for them: every gather of this is itself."""
 
     def take(self, *_args, **_kwargs) -> _Unrecorded:
         return self
@@ -66,6 +71,7 @@ class _Unrecorded:
 
 
 UNRECORDED = _Unrecorded()
+UNPOLARISED = UNRECORDED  # ``Rays.k_s`` of the paper mode
 
 
 def branch_tags(cls: np.ndarray | _Unrecorded, branch: int, n: int) -> np.ndarray | _Unrecorded:
@@ -80,7 +86,8 @@ def concat(parts: list[Rays]) -> Rays:
 
 
 def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:
-    """Add ``values`` (N, 3) to the pixels ``pix`` of one pass ``acc`` (pixels, 3), repeats summed.
+    """Add ``values`` (N, C) to the pixels ``pix`` of one pass ``acc`` (pixels, C), repeats summed
+    (C channels: 3 in the paper mode, the bands in the photometric one).
 
     One count over the (pixel, channel) bins of the pixels spanned, each bin summing its values in
     ray order, then added to the pass: the same sums as one count per channel. A few rays spread
@@ -117,14 +124,16 @@ def _distinct(pix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _bin_sums(slot: np.ndarray, values: np.ndarray, n_slots: int) -> np.ndarray:
-    """Per slot (n_slots, 3), the sum of the ``values`` of its rays in ray order."""
-    # bin 3 slot + channel, a column at a time (numpy broadcasts slowly over rows of three)
-    bins = np.empty((len(slot), 3), dtype=np.intp)
-    np.multiply(slot, 3, out=bins[:, 0])
-    np.add(bins[:, 0], 1, out=bins[:, 1])
-    np.add(bins[:, 0], 2, out=bins[:, 2])
+    """Per slot (n_slots, C), the sum of the ``values`` (N, C) of its rays in ray order."""
+    # bin C slot + channel, a column at a time (numpy broadcasts slowly over short rows)
+    channels = values.shape[-1]
+    bins = np.empty((len(slot), channels), dtype=np.intp)
+    np.multiply(slot, channels, out=bins[:, 0])
+    for c in range(1, channels):
+        np.add(bins[:, 0], c, out=bins[:, c])
     weights = np.broadcast_to(values, bins.shape)
-    return np.bincount(bins.ravel(), weights=weights.ravel(), minlength=3 * n_slots).reshape(n_slots, 3)
+    return np.bincount(bins.ravel(), weights=weights.ravel(),
+                       minlength=channels * n_slots).reshape(n_slots, channels)
 
 
 class Band:
@@ -132,7 +141,7 @@ class Band:
 
     def __init__(self, n_pixels: int, ctx, acc: np.ndarray | None = None):
         self.n = n_pixels
-        self.acc = np.zeros((len(PASS_NAMES), n_pixels, 3)) if acc is None else acc
+        self.acc = np.zeros((len(PASS_NAMES), n_pixels, ctx.channels)) if acc is None else acc
         self.segments = 0
         self.max_depth = 0
         self.busy = 0  # pixels that took every sample (adaptive sampling)
@@ -153,15 +162,16 @@ def no_rays() -> Rays:
     return Rays(*(np.zeros(0, dtype=np.int64) for _ in field_names(Rays)))
 
 
-_SLOT = np.dtype((np.void, 3 * 8))  # one slot of a pass, its three float64 channels as one item
-
-
 def put_slots(acc: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:
-    """``acc[slots] = values`` for (N, 3) float64 rows: each row copied as one 24-byte item, about
-    twice as fast as numpy's scatter of rows (the same bytes)."""
-    acc.view(_SLOT)[slots, 0] = np.ascontiguousarray(values, dtype=np.float64).view(_SLOT)[:, 0]
+    """``acc[slots] = values`` for (N, C) float64 rows: each row copied as one item of C float64s,
+    about twice as fast as numpy's scatter of rows (the same bytes)."""
+    slot = np.dtype((np.void, acc.shape[-1] * 8))  # one slot of a pass, its channels as one item
+    acc.view(slot)[slots, 0] = np.ascontiguousarray(values, dtype=np.float64).view(slot)[:, 0]
 
 
 def alive(k: np.ndarray) -> np.ndarray:
-    """The branches whose accumulated attenuation is still above the cut-off in some channel."""
-    return np.maximum(np.maximum(k[:, 0], k[:, 1]), k[:, 2]) >= CUTOFF
+    """The branches whose accumulated attenuation is still above the cut-off in some channel (a
+    branch ends when every channel, every band in the photometric mode, is below it)."""
+    if k.shape[1] == 3:
+        return np.maximum(np.maximum(k[:, 0], k[:, 1]), k[:, 2]) >= CUTOFF
+    return k.max(axis=1) >= CUTOFF

@@ -92,7 +92,8 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   threads: int | None = None, record_transitions: bool = False,
                   keep_passes: bool = True, samples: int | None = None,
                   filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True,
-                  adaptive_threshold: float | None = None, pool: BandsElsewhere | None = None) -> RenderResult:
+                  adaptive_threshold: float | None = None, pool: BandsElsewhere | None = None,
+                  bands: int | None = None) -> RenderResult:
     """Render a normalised scene; returns the image and its contribution passes (docs/model.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
@@ -109,34 +110,45 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     ``pool`` (``band_pool.shared()``) traces the bands in worker processes when it is running and
     free, and ``threads`` > 1: the same image bit for bit, without the threads' contention for
     the interpreter; otherwise, and with no pool, bands run on threads of this process.
+
+    A scene whose ``light_model`` is "photometric" is traced on ``bands`` wavelength bands
+    (None: ``spectral.DEFAULT_BANDS``) and its image and passes are CIE XYZ with Y in cd/m²
+    (``stats["light_model"]`` says which); the paper mode's are linear RGB.
     """
     width = int(width or scene["image"]["width"])
     height = int(height or scene["image"]["height"])
     start = time.perf_counter()
     ctx = make_context(scene, width, height, record_transitions=record_transitions, samples=samples,
-                       filter_name=filter_name, adaptive_threshold=adaptive_threshold, world_seen=world_seen)
+                       filter_name=filter_name, adaptive_threshold=adaptive_threshold, world_seen=world_seen,
+                       bands=bands)
+    band_count = bands
     bands = band_rows(ctx)
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
     film = Film(width, height, keep_passes, on_rows, on_band)
 
     def on_threads(some: list[tuple[int, int]]) -> Iterator[tuple[int, int, BandImage]]:
         for y0, y1, band in schedule.traced_bands(ctx, some, max(1, min(threads, len(some))), should_stop or never):
-            yield y0, y1, BandImage.of(band, keep_passes)
+            yield y0, y1, BandImage.of(band, keep_passes, ctx.to_xyz)
 
     if pool is not None and threads > 1:
         options = {"record_transitions": record_transitions, "samples": ctx.samples, "filter_name": filter_name,
                    "adaptive_threshold": ctx.adaptive_threshold, "world_seen": world_seen,
-                   "keep_passes": keep_passes}
+                   "keep_passes": keep_passes, "bands": band_count}
         traced = pool.traced_bands(scene, width, height, options, bands, threads, should_stop or never, on_threads)
     else:
         traced = on_threads(bands)
     film.expose(traced, len(bands), progress)
-    return film.result(ctx.samples, time.perf_counter() - start)
+    result = film.result(ctx.samples, time.perf_counter() - start)
+    result.stats["light_model"] = "paper" if ctx.photometric is None else "photometric"
+    if ctx.photometric is not None:
+        result.stats["bands"] = ctx.channels
+    return result
 
 
 def make_context(scene: dict, width: int, height: int, *, record_transitions: bool = False,
                  samples: int | None = None, filter_name: str = pixel_filter.DEFAULT_FILTER,
-                 adaptive_threshold: float | None = None, world_seen: bool = True) -> Context:
+                 adaptive_threshold: float | None = None, world_seen: bool = True,
+                 bands: int | None = None) -> Context:
     """Everything constant during one render of ``scene`` at ``width`` x ``height`` (the
     arguments as ``render_passes`` takes them): built alike in this process and in a worker
     process of a ``band_pool``, so that both trace the same bands to the same values."""
@@ -145,7 +157,7 @@ def make_context(scene: dict, width: int, height: int, *, record_transitions: bo
     pixel_filter.filter_support(filter_name)  # an unknown filter fails here, before any work
     adaptive_threshold = ADAPTIVE_THRESHOLD if adaptive_threshold is None else float(adaptive_threshold)
     ctx = Context(scene, make_camera(scene["camera"], width, height), record_transitions, samples, filter_name,
-                  adaptive_threshold)
+                  adaptive_threshold, bands)
     ctx.world_seen = world_seen
     return ctx
 

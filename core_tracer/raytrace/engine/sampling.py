@@ -62,7 +62,7 @@ def per_sample(ctx: Context, band: Band, pixels: np.ndarray,
                 sample_ids: np.ndarray) -> Generator[tuple[np.ndarray, np.ndarray], Band, np.ndarray]:
     """Trace the samples ``sample_ids`` of every pixel (asked for in groups of at most TILE_RAYS rays,
     whole pixels to a group, as ``sample_rays``): returns each ray's passes, sample-major (samples,
-    passes, pixels, 3), so that one sample of every pixel is one block (a view of the traced group's
+    passes, pixels, channels), so that one sample of every pixel is one block (a view of the traced group's
     passes when one group holds every pixel: no copy); the band's statistics take the rays' counts.
     Every ray has its own slot, so the order of the rays changes no value."""
     count = len(sample_ids)
@@ -73,12 +73,12 @@ def per_sample(ctx: Context, band: Band, pixels: np.ndarray,
         ray_pixels = np.tile(group_pixels, count)
         offsets = pixel_filter.grid_offsets(ctx.filter_name, group_pixels, sample_ids, ctx.samples, sample_major=True)
         group = yield eye_rays(ctx.camera, ray_pixels, offsets)
-        traced = group.acc.reshape(len(PASS_NAMES), count, len(group_pixels), 3).transpose(1, 0, 2, 3)
+        traced = group.acc.reshape(len(PASS_NAMES), count, len(group_pixels), ctx.channels).transpose(1, 0, 2, 3)
         if len(group_pixels) == len(pixels):
             values = traced
         else:
             if values is None:
-                values = np.empty((count, len(PASS_NAMES), len(pixels), 3))
+                values = np.empty((count, len(PASS_NAMES), len(pixels), ctx.channels))
             values[:, :, i0:i0 + len(group_pixels)] = traced
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
@@ -87,7 +87,7 @@ def per_sample(ctx: Context, band: Band, pixels: np.ndarray,
 
 
 def over_samples(combine: np.ufunc, values: np.ndarray) -> np.ndarray:
-    """``combine`` (np.add, np.minimum, np.maximum) of sample-major (samples, passes, pixels, 3)
+    """``combine`` (np.add, np.minimum, np.maximum) of sample-major (samples, passes, pixels, channels)
     values over the samples, in sample order: bit for bit what the full path's sum over the
     samples gives."""
     out = values[0].copy()

@@ -23,6 +23,7 @@ from .rays import (
     LENS_SURFACE,
     REFLECTOR_CONSTANT,
     REFLECTOR_SCATTER,
+    UNPOLARISED,
     UNRECORDED,
     Band,
     Rays,
@@ -39,7 +40,12 @@ def into_lenses(ctx: Context, band: Band, pix: np.ndarray, lamp: np.ndarray, d: 
     transmitted rays into the lens where above the cut-off."""
     lamps = ctx.lamps
     ior = lamps.ior[lamp]
-    split = fresnel_split(np.ones((len(d), 3)), d, face_normal, 1.0, ior)
+    n = len(pix)
+    if ctx.photometric is None:
+        split = fresnel_split(np.ones((n, ctx.channels)), d, face_normal, 1.0, ior)
+    else:  # unpolarised light: half of it s-polarised
+        split = fresnel_split(np.ones((n, ctx.channels)), d, face_normal, 1.0, ior, np.full((n, ctx.channels), 0.5),
+                              1.0, lamps.ior_bands[lamp])
     surface = ctx.shade(face_normal, -d, lamps.lens_diffuse[lamp], lamps.lens_specular[lamp],
                         lamps.lens_shininess[lamp])
     if ctx.environment is not None:  # the outer face mirrors the surroundings
@@ -50,12 +56,11 @@ def into_lenses(ctx: Context, band: Band, pix: np.ndarray, lamp: np.ndarray, d: 
     ones = np.ones(len(pix), dtype=np.int8)
     band.note(pix, ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
 
-    n = len(pix)
     rays = Rays(pix=pix, lamp=lamp, o=local, d=optics.refract(d, face_normal, split.eta, split.cos_i),
                 k=split.transmitted, medium=np.full(n, P.IN_LENS, np.int8), src=np.full(n, P.OUTER, np.int8),
                 parent=np.full(n, P.OUTSIDE_TO_LENS, np.int8) if ctx.record else UNRECORDED,
                 branch=np.full(n, P.TRANSMITTED, np.int8) if ctx.record else UNRECORDED,
-                seen_reflector=np.zeros(n, bool))
+                seen_reflector=np.zeros(n, bool), k_s=split.transmitted_s)
     return rays.take(alive(split.transmitted))
 
 
@@ -66,21 +71,43 @@ def at_reflector(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
     lamps = ctx.lamps
     lamp = rays.lamp.take(met)
     pix = rays.pix.take(met)
-    first = np.nonzero(~rays.seen_reflector.take(met))[0]
-    band.add(REFLECTOR_CONSTANT, pix.take(first), rows(k, first) * rows(lamps.reflector_color, lamp.take(first)))
     normal = reflector.reflector_normal(hit, lamps.focal.take(lamp))
     to_bulb = optics.normalize(rows(lamps.bulb_center, lamp) - hit)
     scatter = optics.blinn(normal, -d, to_bulb, lamps.scatter.take(lamp), lamps.scatter_shininess.take(lamp))
-    band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_intensity, lamp))
+    k_s = rows(rays.k_s, met)
+    if ctx.photometric is None:
+        first = np.nonzero(~rays.seen_reflector.take(met))[0]
+        band.add(REFLECTOR_CONSTANT, pix.take(first), rows(k, first) * rows(lamps.reflector_color, lamp.take(first)))
+        band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_intensity, lamp))
+    else:  # no appearance constant; the finish's reflectance spread by the normalised lobe over the bulb's light
+        finish = rows(lamps.reflector_bands, lamp)
+        k = k * finish
+        k_s = k_s * finish
+        irradiance = bulb_irradiance(to_bulb, normal, hit, lamps, lamp)
+        band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter * irradiance) * rows(lamps.bulb_intensity, lamp))
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, ctx.phantom_lamps, lamp, hit, normal, -d))
-    mirrored = optics.scaled(k, lamps.reflectance.take(lamp))
+    mirror = lamps.reflectance.take(lamp)
+    mirrored = optics.scaled(k, mirror)
     going_on = np.nonzero(alive(mirrored))[0]
     n = len(going_on)
     return Rays(pix=pix.take(going_on), lamp=lamp.take(going_on), o=rows(hit, going_on),
                 d=optics.reflect(rows(d, going_on), rows(normal, going_on)), k=rows(mirrored, going_on),
                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8),
-                parent=cls.take(going_on), branch=branch_tags(cls, P.REFLECTED, n), seen_reflector=np.ones(n, bool))
+                parent=cls.take(going_on), branch=branch_tags(cls, P.REFLECTED, n), seen_reflector=np.ones(n, bool),
+                k_s=k_s if k_s is UNPOLARISED else rows(optics.scaled(k_s, mirror), going_on))
+
+
+def bulb_irradiance(to_bulb: np.ndarray, normal: np.ndarray, hit: np.ndarray, lamps: LampTable,
+                    lamp: np.ndarray) -> np.ndarray:
+    """Per unit of the bulb's radiance, the irradiance at reflector points ``hit`` of ``normal``
+    from the bulb (a sphere of uniform radiance): its solid angle Ω = 2π (1 - √(1 - r²/D²)) at the
+    distance D of its centre, times the cosine toward it (the whole bulb taken in the direction of
+    its centre; neither the socket's shadow nor a part of the bulb below the horizon is taken)."""
+    gap = rows(lamps.bulb_center, lamp) - hit
+    ratio = np.minimum(1.0, lamps.bulb_radius.take(lamp) ** 2 / optics.dot(gap, gap))
+    solid_angle = 2.0 * np.pi * (1.0 - np.sqrt(1.0 - ratio))
+    return solid_angle * np.maximum(0.0, optics.dot(normal, to_bulb))
 
 
 @dataclass
@@ -89,18 +116,43 @@ class Split:
     reflected and the transmitted branch, and what Snell's law needs for the transmitted one."""
 
     cos_i: np.ndarray  # -d·n, the normal turned toward the incident side
-    eta: np.ndarray  # n1 / n2, from the incident medium into the other
-    reflectance: np.ndarray  # R (Fresnel's equations; 1 at total internal reflection)
+    eta: np.ndarray  # n1 / n2, from the incident medium into the other (the geometry's indices)
+    reflectance: np.ndarray  # R (Fresnel's equations; 1 at total internal reflection); photometric: R_s
     reflected: np.ndarray  # k R, the reflected branch's accumulated attenuation
     transmitted: np.ndarray  # k (1 - R), the transmitted branch's
+    partial: np.ndarray  # the rays some light crosses the face for (no total internal reflection)
+    reflected_s: np.ndarray = UNPOLARISED  # photometric: the s-polarised shares of the two branches
+    transmitted_s: np.ndarray = UNPOLARISED
 
 
-def fresnel_split(k: np.ndarray, d: np.ndarray, facing: np.ndarray, n1: np.ndarray, n2: np.ndarray) -> Split:
+def fresnel_split(k: np.ndarray, d: np.ndarray, facing: np.ndarray, n1: np.ndarray, n2: np.ndarray,
+                  k_s: np.ndarray = UNPOLARISED, band_n1: np.ndarray | float = 1.0,
+                  band_n2: np.ndarray | float = 1.0) -> Split:
     """Rays ``d`` of accumulated attenuation ``k`` meeting a face whose unit normal ``facing`` points
-    toward them, from a medium of index ``n1`` into one of ``n2``."""
+    toward them, from a medium of index ``n1`` into one of ``n2``.
+
+    The paper mode splits k by the average of the s and p reflectances. The photometric mode
+    carries the s-polarised share ``k_s`` of k along each branch and splits each share by its own
+    reflectance, per band with the band's indices ``band_n1``, ``band_n2`` ((N, K) or scalars;
+    ``n1``, ``n2`` are the indices the ray's direction follows, at n_d: dispersion in Fresnel only,
+    docs/photometric.md). Where the geometry's indices give total internal reflection every band
+    is reflected whole."""
     cos_i = -optics.dot(d, facing)
-    reflectance = optics.fresnel_reflectance(np.clip(cos_i, 0.0, 1.0), n1, n2)
-    return Split(cos_i, n1 / n2, reflectance, optics.scaled(k, reflectance), optics.scaled(k, 1.0 - reflectance))
+    if k_s is UNPOLARISED:
+        reflectance = optics.fresnel_reflectance(np.clip(cos_i, 0.0, 1.0), n1, n2)
+        return Split(cos_i, n1 / n2, reflectance, optics.scaled(k, reflectance), optics.scaled(k, 1.0 - reflectance),
+                     reflectance < 1.0)
+    cos_i_clipped = np.clip(cos_i, 0.0, 1.0)
+    eta = n1 / n2
+    partial = (1.0 - cos_i_clipped * cos_i_clipped) * (eta * eta) < 1.0  # Snell has a transmitted ray
+    r_s, r_p = optics.fresnel_polarised(cos_i_clipped[:, None], band_n1, band_n2)
+    r_s = np.where(partial[:, None], r_s, 1.0)
+    r_p = np.where(partial[:, None], r_p, 1.0)
+    k_p = k - k_s
+    reflected_s, reflected_p = k_s * r_s, k_p * r_p
+    transmitted_s, transmitted_p = k_s * (1.0 - r_s), k_p * (1.0 - r_p)
+    return Split(cos_i, eta, r_s, reflected_s + reflected_p, transmitted_s + transmitted_p, partial, reflected_s,
+                 transmitted_s)
 
 
 @dataclass
@@ -130,7 +182,7 @@ class FaceHit:
                     k=rows(self.split.reflected, going_on), medium=self.medium.take(going_on),
                     src=self.surface.take(going_on), parent=self.cls.take(going_on),
                     branch=branch_tags(self.cls, P.REFLECTED, len(going_on)),
-                    seen_reflector=self.seen_reflector.take(going_on))
+                    seen_reflector=self.seen_reflector.take(going_on), k_s=rows(self.split.reflected_s, going_on))
 
     def through(self, sel: np.ndarray) -> Rays:
         """The transmitted rays ``sel``: bent by Snell's law into the other medium."""
@@ -140,13 +192,15 @@ class FaceHit:
         return Rays(pix=self.pix.take(sel), lamp=self.lamp.take(sel), o=rows(self.hit, sel), d=d_t,
                     k=rows(split.transmitted, sel), medium=medium, src=self.surface.take(sel),
                     parent=self.cls.take(sel), branch=branch_tags(self.cls, P.TRANSMITTED, len(sel)),
-                    seen_reflector=self.seen_reflector.take(sel))
+                    seen_reflector=self.seen_reflector.take(sel), k_s=rows(split.transmitted_s, sel))
 
 
 def at_dielectric(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
-                  surface: np.ndarray, out_normal: np.ndarray, ior: np.ndarray, material: int) -> FaceHit:
+                  surface: np.ndarray, out_normal: np.ndarray, ior: np.ndarray, material: int,
+                  band_ior: np.ndarray | None = None) -> FaceHit:
     """The rays ``met`` (attenuation ``k``, directions ``d``) meeting faces of ``material`` (index
-    ``ior`` per lamp) at ``hit``, ``out_normal`` pointing out of the material: the Fresnel split."""
+    ``ior`` per lamp; photometric: ``band_ior`` per lamp and band for Fresnel) at ``hit``,
+    ``out_normal`` pointing out of the material: the Fresnel split."""
     lamp = rays.lamp.take(met)
     medium = rays.medium.take(met)
     from_inside = medium == material
@@ -155,8 +209,15 @@ def at_dielectric(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit
     n_material = ior.take(lamp)
     n1 = np.where(from_inside, n_material, 1.0)
     n2 = np.where(from_inside, 1.0, n_material)
+    if band_ior is None:
+        split = fresnel_split(k, d, facing, n1, n2)
+    else:
+        n_bands = rows(band_ior, lamp)
+        inside = from_inside[:, None]
+        split = fresnel_split(k, d, facing, n1, n2, rows(rays.k_s, met), np.where(inside, n_bands, 1.0),
+                              np.where(inside, 1.0, n_bands))
     return FaceHit(rays.pix.take(met), lamp, hit, d, facing, medium, from_inside, material, surface, cls,
-                   rays.seen_reflector.take(met), fresnel_split(k, d, facing, n1, n2))
+                   rays.seen_reflector.take(met), split)
 
 
 def at_lens_face(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray,
@@ -165,9 +226,10 @@ def at_lens_face(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
     the lens material (-y on the outer face, the cap's on the cuts). Light transmitted out through
     the outer face leaves the lamp (⑩) and shows the background; every other branch goes on where
     above the cut-off."""
-    face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, ctx.lamps.ior, P.IN_LENS)
+    face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, ctx.lamps.ior, P.IN_LENS,
+                         ctx.lamps.ior_bands)
     split = face.split
-    partial = split.reflectance < 1.0
+    partial = split.partial
     if ctx.background_seen or ctx.record:
         leaving = np.nonzero(partial & (surface == P.OUTER))[0]  # ⑩: out to the background (ends)
         if ctx.background_seen:
@@ -187,7 +249,8 @@ def at_plate_face(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit
     """A prism-plate face met from either side (docs/model.md, the prism plate): the lens's Fresnel split
     with the plate's index; ``out_normal`` points out of the plate material. Nothing leaves the lamp
     here, so both branches go on where above the cut-off."""
-    face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, lamps.plate_ior, P.IN_PLATE)
+    face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, lamps.plate_ior, P.IN_PLATE,
+                         lamps.plate_ior_bands)
     split = face.split
-    going_on = np.nonzero((split.reflectance < 1.0) & alive(split.transmitted))[0]
+    going_on = np.nonzero(split.partial & alive(split.transmitted))[0]
     return [face.reflected(), face.through(going_on)] if len(going_on) else [face.reflected()]

@@ -5,6 +5,7 @@ of the surface that ends a path, and the children of the surfaces that branch (`
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Protocol
 
 import numpy as np
@@ -14,7 +15,7 @@ from .. import paths as P
 from ..parts.base import Segments, put_rows, rows
 from .context import Context
 from .eyes import first_hits, put_traced, rays_toward_body
-from .rays import BULB_PASS, SIDE_WALL_PASS, SOCKET_PASS, UNRECORDED, Band, Rays, concat
+from .rays import BULB_PASS, SIDE_WALL_PASS, SOCKET_PASS, UNPOLARISED, UNRECORDED, Band, Rays, concat
 from .surfaces import at_lens_face, at_plate_face, at_reflector
 
 MAX_DEPTH = 64  # safety net on the number of segments along one branch
@@ -153,7 +154,8 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
     cls = _path_class(rays.medium, rays.src, surface) if ctx.record else UNRECORDED
     band.note(rays.pix, rays.parent, rays.branch, cls)
 
-    k = _absorbed(ctx, rays, t)
+    rays = _absorbed(ctx, rays, t)
+    k = rays.k
 
     # Surfaces that end a path: the luminance they show, times k.
     for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, lamps.wall_color), (P.BULB, BULB_PASS, lamps.bulb_intensity),
@@ -188,22 +190,28 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
     return concat(children) if len(children) > 1 else children[0]
 
 
-def _absorbed(ctx: Context, rays: Rays, t: np.ndarray) -> np.ndarray:
-    """The rays' accumulated attenuation k at the end of their segments of length ``t``: eq. (2)
-    along those inside a lens or a prism plate."""
+def _absorbed(ctx: Context, rays: Rays, t: np.ndarray) -> Rays:
+    """The rays with their accumulated attenuation k (and its s-polarised share) at the end of
+    their segments of length ``t``: eq. (2) along those inside a lens or a prism plate."""
     lamps = ctx.lamps
-    k = rays.k
+    k, k_s = rays.k, rays.k_s
     in_lens = np.nonzero(rays.medium == P.IN_LENS)[0]
     if len(in_lens):
         k = k.copy()
         transmittance = optics.absorption(rows(lamps.absorption, rays.lamp.take(in_lens)), t.take(in_lens))
         put_rows(k, in_lens, rows(k, in_lens) * transmittance)
+        if k_s is not UNPOLARISED:
+            k_s = k_s.copy()
+            put_rows(k_s, in_lens, rows(k_s, in_lens) * transmittance)
     in_plate = np.nonzero(rays.medium == P.IN_PLATE)[0] if ctx.plates else ()
     if len(in_plate):
         k = k.copy() if k is rays.k else k
         transmittance = optics.absorption(rows(lamps.plate_absorption, rays.lamp.take(in_plate)), t.take(in_plate))
         put_rows(k, in_plate, rows(k, in_plate) * transmittance)
-    return k
+        if k_s is not UNPOLARISED:
+            k_s = k_s.copy() if k_s is rays.k_s else k_s
+            put_rows(k_s, in_plate, rows(k_s, in_plate) * transmittance)
+    return rays if k is rays.k else replace(rays, k=k, k_s=k_s)
 
 
 def _end_points(rays: Rays, t: np.ndarray, met: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
