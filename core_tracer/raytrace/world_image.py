@@ -45,7 +45,8 @@ FIELD = "environment.file"
 EXR_MAGIC = b"\x76\x2f\x31\x01"  # OpenEXR's first four bytes (OpenEXR file layout, "magic number")
 HDR_MAGIC = b"#?"  # a Radiance picture's first line: "#?RADIANCE" or "#?RGBE"
 FORMATS = ("openexr", "hdr")  # OpenImageIO's names of the two readers
-LAYOUT = f"v2-{MAX_PIXELS}-{MAX_RADIANCE:g}"  # the reading rules: part of a cached image's name (v2: data window origin)
+# the reading rules, part of a cached image's name (v2: the data window's origin is honoured)
+LAYOUT = f"v2-{MAX_PIXELS}-{MAX_RADIANCE:g}"
 
 
 def fail(path: str, why: str) -> SceneError:
