@@ -44,7 +44,8 @@ def fuzz(examples: int):
 
 
 DESIGNS = {stem: json.loads((BUILTIN / f"{stem}.json").read_text())
-           for stem in ("paper-baseline", "four-lamp-rear-combination")}
+           for stem in ("paper-baseline", "four-lamp-rear-combination", "photometric-stop-lamp",
+                        "four-lamp-night-lit-photometric")}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -66,7 +67,7 @@ def field_paths(node, spec: S.Spec, path: str = "") -> list[tuple[str, S.Spec]]:
     return out
 
 
-_STEP = re.compile(r"([a-z_]+)|\[(\d+)\]")
+_STEP = re.compile(r"([a-z_][a-z_0-9]*)|\[(\d+)\]")  # keys may hold digits after a letter: camera.ev100
 
 
 def set_path(doc: dict, path: str, value) -> dict:
