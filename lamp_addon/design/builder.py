@@ -139,19 +139,31 @@ def is_up_to_date(bl_scene: bpy.types.Scene) -> bool:
 def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False) -> BuildReport:
     """Create or update the objects of a normalised scene in ``bl_scene``; returns a ``BuildReport``.
     ``preview``: lenses with fewer quads per cut cell, where that is lighter (Auto Build while dragging)."""
-    _free_parts_whose_collection_was_deleted()
-    build = _Build(bl_scene)
     lamps = [design_parts.lamp_parts(i, lamp, preview, functions.lamp_label(scene["lamps"], i))
              for i, lamp in enumerate(scene["lamps"])]
-    build.mesh_part(design_parts.body_part(scene, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps]))
-    for parts, _, _, lens_preview in lamps:
-        for part in parts:
-            build.mesh_part(part)
-        build.report.preview |= lens_preview
+    body = design_parts.body_part(scene, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps])
+    specs = [body, *(part for parts, _, _, _ in lamps for part in parts)]
+    # Every shape that changed is made before the first change to the scene: a design whose geometry
+    # fails (or an interrupt while a deep-cut lens is meshed) leaves the objects as they were, so an
+    # apply that fails part-way is put back whole (presets.state restores what was added, not meshes refilled).
+    geometry = {spec.part: design_parts.shapes.get(spec.shape, spec.make) for spec in _changed_shapes(bl_scene, specs)}
+    _free_parts_whose_collection_was_deleted()
+    build = _Build(bl_scene)
+    for spec in specs:
+        build.mesh_part(spec, geometry.get(spec.part))
+    build.report.preview |= any(lens_preview for _, _, _, lens_preview in lamps)
     build.sun(scene)
     build.world(scene)
     build.finish(design_digest(scene))
     return build.report
+
+
+def _changed_shapes(bl_scene: bpy.types.Scene, specs: list) -> list:
+    """The parts whose mesh a build will refill: no object of ours yet, or its mesh made from other
+    numbers (``GEOMETRY_KEY``). Reads the scene, changes nothing."""
+    meshes = {ob.get(PART_KEY): ob.data for ob in bl_scene.objects if ob.type == "MESH" and ob.get(PART_KEY)}
+    return [spec for spec in specs
+            if spec.part not in meshes or meshes[spec.part].get(GEOMETRY_KEY) != repr(spec.shape)]
 
 
 class _Build:
@@ -174,7 +186,8 @@ class _Build:
         self.wanted: set[str] = set()
         self.moves: list[tuple[bpy.types.Object, Matrix]] = []
 
-    def mesh_part(self, spec: design_parts.MeshPart) -> None:
+    def mesh_part(self, spec: design_parts.MeshPart, data=None) -> None:
+        """Update or make the object of one mesh part; ``data``: its shape made beforehand (``_changed_shapes``)."""
         obj = self._existing(spec.part, "MESH")
         old = obj.data if obj is not None else None
         mesh = old if old is not None and old.get(PART_KEY) == spec.part and old.users == 1 else None
@@ -184,7 +197,7 @@ class _Build:
         self._materials(mesh, old, spec)
         shape = repr(spec.shape)
         if mesh.get(GEOMETRY_KEY) != shape:
-            data = design_parts.shapes.get(spec.shape, spec.make)
+            data = data if data is not None else design_parts.shapes.get(spec.shape, spec.make)
             fill_mesh(mesh, data)
             mesh[GEOMETRY_KEY] = shape
             mesh[DEVIATION_KEY] = data.max_deviation

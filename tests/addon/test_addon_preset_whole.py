@@ -67,3 +67,38 @@ def test_a_good_preset_still_applies(lamp_addon, bl_scene):
     assert bpy.ops.lamp.preset_import(filepath=str(PRESETS / "four-lamp-rear-combination.json"), apply=True,
                                       add_to_library=False) == {"FINISHED"}
     assert len(lamp_addon.design.properties.design_document(bl_scene)["lamps"]) == 4
+
+
+def _meshes(bpy) -> dict:
+    """Each of our parts' mesh: the numbers it was made from and its size."""
+    return {ob.get("lamp_part"): (ob.data.get("lamp_geometry"), len(ob.data.vertices), len(ob.data.polygons))
+            for ob in bpy.data.objects if ob.type == "MESH" and ob.get("lamp_part")}
+
+
+def test_a_rebuild_that_fails_while_meshing_leaves_the_built_lamp_as_it_was(lamp_addon, bl_scene, monkeypatch):
+    """The lamp is built; applying another preset rebuilds it, and making its third new shape fails (as
+    a deep-cut lens that runs out of memory, or an interrupt, would): the objects, their meshes and the
+    design are what they were. Before the shapes were made ahead of any change, the first parts were
+    refilled with the new preset's geometry and stayed so."""
+    import bpy
+
+    core = lamp_addon.presets.ops.P
+    apply = lamp_addon.presets.apply
+    apply.apply_preset_whole(bl_scene, core.load_preset(str(PRESETS / "four-lamp-rear-combination.json")))
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    before, meshes = _state(lamp_addon, bl_scene), _meshes(bpy)
+    shapes = lamp_addon.design.parts.shapes
+    real, made = shapes.get, []
+
+    def get_then_fail(key, make):
+        made.append(key)
+        if len(made) == 3:
+            raise MemoryError("meshing the third shape")
+        return real(key, make)
+
+    monkeypatch.setattr(shapes, "get", get_then_fail)
+    with pytest.raises(MemoryError):
+        apply.apply_preset_whole(bl_scene, core.load_preset(str(PRESETS / "paper-cut-height.json")))
+    assert len(made) == 3
+    assert _state(lamp_addon, bl_scene) == before
+    assert _meshes(bpy) == meshes
