@@ -165,3 +165,35 @@ def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_n
     assert mix.inputs[1].links[0].from_node.name == "Background Or Surroundings"
     assert mix.inputs[2].links[0].from_node.name == "Ambient Or Ambient And Surroundings"
     assert tree.nodes["Background Or Surroundings"].inputs[0].default_value == 1.0
+
+
+def test_a_followed_sun_leaves_the_world_and_the_surroundings_replace_the_ambient(lamp_addon, bl_scene):
+    """docs/model.md §8.18 in Blender's world: where the Lamp Sun follows the environment's sun, the
+    world shows the tracer's image without it (each light once, in Compare's Cycles render too), and
+    wherever surroundings are shown the ambient of eq. (1) gives way to them."""
+    if environment.bundled_folder() is None:
+        pytest.skip("Blender's world images are not on this machine")
+    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
+    doc["light"].update(ambient=0.25, strength=2.0, follow_environment=True)
+    doc["environment"] = {"world": "city", "strength": 1.0, "rotation_deg": 0.0}
+    scene = core_tracer.parse_scene(doc)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
+    tree = bl_scene.world.node_tree
+    image = tree.nodes["Environment"].image
+    w, h = image.size
+    shown = np.array(image.pixels[:], dtype=np.float32).reshape(h, w, 4)[::-1, :, :3]  # Blender's rows from the bottom
+    original = environment.read_image(environment.image_path(scene["environment"]))
+    np.testing.assert_array_equal(shown, environment.sunless(original))
+    assert shown.max() < 0.1 * original.max()  # the city's sun is gone from the world
+    assert tuple(tree.nodes["Ambient"].inputs["Color"].default_value)[:3] == (0.0, 0.0, 0.0)
+    # Not following: the image itself, still without the ambient; without surroundings the ambient is back.
+    scene["light"]["follow_environment"] = False
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
+    assert tree.nodes["Environment"].image.filepath.endswith("city.exr")
+    assert tuple(tree.nodes["Ambient"].inputs["Color"].default_value)[:3] == (0.0, 0.0, 0.0)
+    scene["environment"]["world"] = "none"
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
+    assert tuple(tree.nodes["Ambient"].inputs["Color"].default_value)[:3] == pytest.approx((0.25, 0.25, 0.25))
