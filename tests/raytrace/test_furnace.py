@@ -146,6 +146,29 @@ def test_sun_that_follows_the_image_takes_its_sun_out_of_it(sunny_world):
     assert (seen.irradiance(normals[:3]) / math.pi > SKY + 1.0).all()  # the image's sun, counted by the map
 
 
+def test_an_image_without_a_sun_standing_out_keeps_all_its_light(uniform_world):
+    """The furnace stays a furnace when the sun follows the environment: a uniform image has no sun
+    to take out (its brightest pixels are not brighter than the sky around them)."""
+    sky = environment.read_image(uniform_world)
+    assert np.array_equal(environment.sunless(sky), sky)
+    doc = furnace_doc(uniform_world)
+    doc["light"]["follow_environment"] = True
+    result = _render(doc)
+    on_body = result.passes["body"].max(axis=2) > 0
+    np.testing.assert_allclose(result.passes["body"][on_body], 1.0, atol=QUADRATURE)
+    assert result.image.max() <= 1.0 + QUADRATURE
+
+
+def test_the_image_without_its_sun_enters_the_memory_estimate(sunny_world):
+    from core_tracer.raytrace import world_image
+
+    scene = {"environment": {"world": "file", "file": sunny_world}, "light": {"follow_environment": False}}
+    alone = environment.world_bytes(scene)
+    assert alone == world_image.peak_bytes(512, 256, 3)
+    scene["light"]["follow_environment"] = True
+    assert environment.world_bytes(scene) == alone + 512 * 256 * 12 + 515 * 259 * world_image.PADDED_BYTES
+
+
 def test_body_lit_by_the_sun_once(sunny_world):
     """The body's front face under the sun that follows the image: the sky's E / pi plus eq. (1)'s
     sun, (1 - d) s cos(theta) C0, and nothing of the image's sun pixels along the same direction."""
