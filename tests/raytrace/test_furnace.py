@@ -3,11 +3,13 @@ off, no sun). A surface can only send back what reaches it, so no pixel may be b
 world, and a white body must show the world exactly: each light reaches each surface once
 (docs/model.md §8.18, "Energy bookkeeping").
 
-On the code before that rule (main 6bc8af6) this test found, at 96 x 96: a white body 1.25 (the
-ambient d = 0.25 of eq. (1) added to the environment's light), a white lens colour 1.0515 on the
-lens (its reflected share lit twice: as eq. (1)'s diffuse lens colour under the ambient and the
-environment, and as the mirrored sky), and with ``follow_environment`` the image's own sun lighting
-the body beside the explicit sun that stands for it.
+On the code before that rule (main 6bc8af6) this test found, at 96 x 96: a white body 1.2501 (the
+ambient d = 0.25 of eq. (1) added to the environment's light); the lens surface of a white lens
+colour 2.25 r = 0.0871 instead of r = 0.0387 (its reflected share lit three times: as eq. (1)'s
+diffuse lens colour under the ambient and under the environment, and as the mirrored sky; with the
+paper's default reflector behind a clear lens that put lens pixels at 1.05); and with
+``follow_environment`` the body's front face 2.52 brighter than sky and sun together (the image's
+own sun lighting it beside the explicit sun that stands for it).
 
 The one approximation is the quadrature of the environment's irradiance (a map of normals,
 ``environment``): for a uniform world it must give E = pi, and does within ``QUADRATURE``
