@@ -215,3 +215,48 @@ def test_photometric_furnace_never_exceeds_the_world(uniform_world, lens):
     on_body = body > 0
     assert on_body.sum() > 48 * 48 // 4
     np.testing.assert_allclose(body[on_body], LUMINANCE, rtol=QUADRATURE)
+
+
+# -- the free-form tracer: the same lighting on meshes --------------------------------------------
+
+
+def test_free_form_meshes_in_the_furnace(uniform_world):
+    """A white lens colour on a clear slab mesh and a white body mesh, ambient at its default: the lens
+    surface is Fresnel's r of each eye ray times the world (1), the body the world."""
+    pytest.importorskip("embreex")
+    from core_tracer.freeform import render_passes as freeform_passes
+    from core_tracer.freeform import shapes
+    from core_tracer.raytrace.camera import eye_rays, make_camera
+
+    meshes = {"Slab": shapes.box("Slab", (-30, 0, -30), (30, 3, 30)),
+              "Block": shapes.box("Block", (40, 0, -25), (120, 30, 25))}
+    scene = parse_scene({
+        "schema": "lamp-scene/2", "lamps": [{}], "image": {"width": 32, "height": 32},
+        "camera": {"type": "perspective", "position": [-300, -700, 250], "target": [40, 0, 0], "up": [0, 0, 1],
+                   "fov_deg": 16.0},
+        "environment": {"world": "file", "file": uniform_world},
+        "light": {"direction": [0.3, -1, 0.6], "color": [1, 1, 1], "strength": 0.0},  # ambient: its default
+        "freeform": {"mesh_file": "furnace.glb", "parts": [
+            {"object": "Slab", "role": "lens", "lens": {"ior": 1.49, "specular": 0.8, "diffuse_color": [1, 1, 1],
+                                                        "absorption": [0, 0, 0]}},
+            {"object": "Block", "role": "body", "body": {"color": [1, 1, 1], "specular": 0.5, "shininess": 30}}]}})
+    assert scene["light"]["ambient"] == 0.25
+    result = freeform_passes(scene, meshes)
+    surface = result.passes["lens_surface"].reshape(-1, 3)
+    on_lens = np.nonzero(surface.max(axis=1) > 0)[0]
+    assert len(on_lens) > 50
+    _, d = eye_rays(make_camera(scene["camera"], 32, 32), on_lens)
+    cos_i = d[:, 1]  # the slab's front face is the plane y = 0, its normal -y
+    sin_t = np.sqrt(1.0 - cos_i**2) / 1.49
+    cos_t = np.sqrt(1.0 - sin_t**2)
+    r = 0.5 * (((cos_i - 1.49 * cos_t) / (cos_i + 1.49 * cos_t)) ** 2
+               + ((1.49 * cos_i - cos_t) / (1.49 * cos_i + cos_t)) ** 2)
+    front = on_lens[np.abs(surface[on_lens, 0] - r) < 0.5 * r]  # the front face (the sides see other angles)
+    assert len(front) > 30
+    np.testing.assert_allclose(surface[front], np.repeat(r[np.isin(on_lens, front)][:, None], 3, axis=1),
+                               rtol=1e-6)
+    body = result.passes["body"].reshape(-1, 3)
+    on_body = (body.max(axis=1) > 0) & (surface.max(axis=1) == 0)  # seen directly, not through the slab
+    assert on_body.sum() > 50
+    np.testing.assert_allclose(body[on_body], 1.0, atol=QUADRATURE)
+    assert result.image.max() <= 1.0 + QUADRATURE
