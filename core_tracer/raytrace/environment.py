@@ -32,14 +32,12 @@ import importlib.util
 import math
 import os
 import sys
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..images import imageio
 from ..scene.reading import SceneError
 from ..scene.spec import BUNDLED_WORLDS
 from . import world_cache, world_image
@@ -111,23 +109,6 @@ def image_path(env: dict) -> str:
     if not os.path.isfile(path):
         raise SceneError("environment.file", f"{path!r} does not exist; allowed an existing .exr or .hdr file")
     return path
-
-
-def shown_file(scene: dict) -> str:
-    """The image file that stands for a normalised scene's environment where another renderer shows it
-    (Blender's world, for Build and Compare): the image itself, or where the scene's sun follows the
-    image's (``light.follow_environment``) a copy without its sun, the pixels the tracer sees
-    (``sunless``), written once per image into the world cache's folder (else the temporary folder).
-    A ``SceneError`` naming the field when the image cannot be read; ``OSError`` when the copy cannot
-    be written."""
-    path = image_path(scene["environment"])
-    if not scene["light"].get("follow_environment", False):
-        return path
-    folder = world_cache.cache_folder() or tempfile.gettempdir()
-    copy = os.path.join(folder, f"{world_image.file_digest(path)[:40]}-{world_image.LAYOUT}-{SUNLESS}.exr")
-    if not os.path.isfile(copy):
-        imageio.write_image(copy, sunless(read_image(path)))
-    return copy
 
 
 def read_image(path: str) -> np.ndarray:

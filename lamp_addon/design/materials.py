@@ -29,7 +29,7 @@ part:
   and added to the ambient for diffuse rays (the tracer's C0 E(n) / pi), the ambient then 0 (the
   surroundings take its place, docs/model.md §8.18); switched by two Mix Shaders, so a design without
   surroundings keeps the paper's world exactly. Where the sun follows the environment's, the image is
-  the tracer's copy without its sun (``environment.shown_file``).
+  the tracer's copy without its sun (``world_file.shown_file``).
 
 A designer may edit these materials. So a tree is laid out once, when the builder makes the material
 (``new=True``); every later build only writes the sockets a design parameter drives, on the nodes it
