@@ -339,9 +339,8 @@ def _dielectric(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: n
     s = np.nonzero(outer_from_air)[0]
     if len(s):  # ①: the surface's own eq. (1) in the reflected direction, no further tracing
         ps = part[s]
-        shade = ctx.shade(facing[s], -d[s], parts.color[ps], parts.specular[ps], parts.shininess[ps])
-        if ctx.environment is not None:  # the outer face mirrors the surroundings
-            shade = shade + ctx.sky(optics.reflect(d[s], facing[s]))
+        # eq. (1) with the lens's colour, and the surroundings it mirrors (``Lighting.lens_surface``)
+        shade = ctx.lens_surface(facing[s], d[s], parts.color[ps], parts.specular[ps], parts.shininess[ps])
         band.add(LENS_SURFACE, pix[s], split.reflected[s] * shade)
         if ctx.background_seen and ctx.environment is None:
             band.add(BACKGROUND_PASS, pix[s], split.reflected[s] * ctx.background)

@@ -49,6 +49,12 @@ IRRADIANCE_LON, IRRADIANCE_LAT = 64, 32
 IRRADIANCE_SOURCE = (128, 64)  # the image is area-averaged to at most this for the integral
 # The sun of an image: the pixels at least this fraction of the brightest one (luminance).
 SUN_FRACTION = 0.5
+# The sun taken out of the image where an explicit sun stands for it (``sunless``): the pixels within
+# SUN_REACH_DEG of its direction, at least SUN_EDGE of the brightest luminance and SUN_OVER_SKY times
+# the sky's around it.
+SUN_EDGE = 0.01
+SUN_OVER_SKY = 4.0
+SUN_REACH_DEG = 5.0
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec. 709, Blender's scene-linear primaries
 
 
@@ -398,7 +404,55 @@ def _sun_color(pixels: np.ndarray) -> np.ndarray:
     return light / luminance if luminance > 0.0 else np.ones(3)
 
 
+def sunless(pixels: np.ndarray) -> np.ndarray:
+    """A float32 copy of the image (H, W, 3) without its sun, for a scene whose explicit sun stands
+    for it (``light.follow_environment``, docs/model.md §8.18). The sky around the sun is the ring
+    from ``SUN_REACH_DEG`` to twice that about the sun's direction (``sun_direction``; at least two
+    pixels wide); the sun is the pixels within ``SUN_REACH_DEG`` that are at least ``SUN_EDGE`` of the
+    brightest luminance and ``SUN_OVER_SKY`` times the ring's median luminance (its disc and the
+    image's blur of it), and they take the ring's median colour. An image without a sun standing out
+    of its sky (a uniform or overcast one) is left as it is. The sun's direction and colour are still
+    the image's own (``_make_sunless_world``)."""
+    h, w = pixels.shape[:2]
+    out = np.array(pixels, dtype=np.float32)
+    peak = _luminance_peak(pixels)
+    if not peak > 0.0:
+        return out
+    toward = _sun_direction(pixels, 0.0)  # in the image's own frame, whatever the turn
+    reach = math.radians(SUN_REACH_DEG)
+    outer = reach + max(reach, 4.0 * math.pi / w)
+    # Only the rows whose latitude lies within the ring's reach of the sun's (a row is pi / h high).
+    latitude = 0.5 * math.pi - (np.arange(h) + 0.5) * math.pi / h
+    sun_latitude = math.asin(float(np.clip(toward[2], -1.0, 1.0)))
+    rows = np.flatnonzero(np.abs(latitude - sun_latitude) <= outer + math.pi / h)
+    first, last = int(rows[0]), int(rows[-1]) + 1
+    d, _ = _pixel_directions(h, w, 0.0, first, last)
+    cos = (d @ toward).reshape(last - first, w)
+    near = cos >= math.cos(reach)
+    ring = ~near & (cos >= math.cos(outer))
+    if not ring.any():
+        return out
+    block = out[first:last]
+    lum = block.astype(np.float64) @ LUMINANCE
+    sun = near & (lum >= SUN_EDGE * peak) & (lum >= SUN_OVER_SKY * float(np.median(lum[ring])))
+    block[sun] = np.median(block[ring], axis=0)
+    return out
+
+
+def _sunless_padded(pixels: np.ndarray) -> np.ndarray:
+    return _pad(sunless(pixels))
+
+
+def _make_sunless_world(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``_make_world`` of an image whose sun an explicit sun stands for: the irradiance of the image
+    without its sun (``sunless``), the direction and colour of the sun it had."""
+    with warnings.catch_warnings(), np.errstate(all="ignore"):  # the pixels are finite and bounded
+        warnings.simplefilter("ignore")
+        return _irradiance(sunless(pixels), rotation), _sun_direction(pixels, rotation), _sun_color(pixels)
+
+
 LAYOUT = f"{IRRADIANCE_LON}x{IRRADIANCE_LAT}-{IRRADIANCE_SOURCE[0]}x{IRRADIANCE_SOURCE[1]}-{SUN_FRACTION}"
+SUNLESS = f"sunless-{SUN_EDGE}-{SUN_OVER_SKY}-{SUN_REACH_DEG}"  # the cache's tag of an image without its sun
 
 
 def _make_world(pixels: np.ndarray, rotation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -414,14 +468,26 @@ def world_bytes(scene: dict) -> int:
     env = scene.get("environment")
     if env is None or env["world"] == "none":
         return 0
-    return world_image.peak_bytes(*world_image.header(image_path(env)))
+    header = world_image.header(image_path(env))
+    peak = world_image.peak_bytes(*header)
+    if scene.get("light", {}).get("follow_environment", False):  # the image without its sun beside it
+        f = world_image.factor_for(header[0], header[1])
+        w, h = -(-header[0] // f), -(-header[1] // f)
+        peak += w * h * 12 + (w + 3) * (h + 3) * world_image.PADDED_BYTES  # float32 RGB, and padded
+    return peak
 
 
 def from_scene(scene: dict) -> Environment | None:
-    """The environment of a normalised scene, or None for the paper's plain background."""
+    """The environment of a normalised scene, or None for the paper's plain background. Where the
+    scene's sun follows the environment's, the sun stands for the image's: the image is taken
+    without it (``sunless``), so that its light reaches the lamp once (docs/model.md §8.18)."""
     env = scene.get("environment")  # a scene an earlier version built in code has none
     if env is None or env["world"] == "none":
         return None
     rotation = math.radians(env["rotation_deg"])
-    world = world_cache.world(image_path(env), rotation, LAYOUT, _make_world)
+    if scene.get("light", {}).get("follow_environment", False):
+        world = world_cache.world(image_path(env), rotation, f"{LAYOUT}-{SUNLESS}", _make_sunless_world,
+                                  (SUNLESS, _sunless_padded))
+    else:
+        world = world_cache.world(image_path(env), rotation, LAYOUT, _make_world)
     return Environment(world.pixels, float(env["strength"]), rotation, world)

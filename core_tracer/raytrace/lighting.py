@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import environment, spectral, sunlight
+from . import environment, optics, spectral, sunlight
 
 
 class Lighting:
@@ -26,6 +26,8 @@ class Lighting:
         self.environment = environment.from_scene(scene)
         following = self.environment is not None and scene["light"].get("follow_environment", False)
         self.sun = sunlight.from_scene(scene, self.environment.sun_direction() if following else None)
+        if self.environment is not None:  # its light takes the place of eq. (1)'s ambient
+            self.sun = self.sun.under_surroundings()
         self.background = np.asarray(scene["background"], dtype=np.float64)
         self.channels = 3  # R, G, B
         self.photometric = None
@@ -54,8 +56,22 @@ class Lighting:
             return self.environment.radiance(d)
         return np.broadcast_to(self.background, (len(d), self.channels))
 
+    def lens_surface(self, normal: np.ndarray, d: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
+        """What the reflected share of eye rays ``d`` at a lens's outer face of ``normal`` sees (its
+        Fresnel weight applied by the caller): eq. (1) with the lens's colour (docs/model.md §4), and
+        with surroundings the sky in the mirror direction (§8.10). The sky reaches that share by the
+        mirror alone: the lens colour is not lit by the environment too, nor by the ambient it
+        replaces (§8.18); the sun, which the sky does not hold (masked where the sun follows it),
+        lights it by eq. (1)."""
+        if self.environment is None:
+            return self.shade(normal, -d, diffuse, specular, shininess)
+        surface = self.sun.shade(normal, -d, diffuse, specular, shininess)
+        surface += self.sky(optics.reflect(d, normal))
+        return surface
+
     def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
-        """Equation (1) under the sun, plus the environment's light on a Lambertian surface."""
+        """Equation (1) under the sun, plus the environment's light on a Lambertian surface in
+        place of the ambient (docs/model.md §8.18)."""
         out = self.sun.shade(normal, view, diffuse, specular, shininess)
         if self.environment is not None:
             lambert = self.environment.irradiance(normal)  # + diffuse E / pi, in place

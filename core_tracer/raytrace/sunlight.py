@@ -7,8 +7,8 @@ Equation (1) with the sun's strength s and colour S (the paper's light is s = 1,
 computed by ``optics.phong`` itself when s = 1 and S = white, so that a scene an earlier version
 wrote renders bit for bit as before. S is ``sun_color``, or, where the light follows the
 environment's colour, the colour of the environment's sun at luminance 1 (``followed_color``).
-Where an environment surrounds the lamp, the surfaces of eq. (1) are also lit by it as Lambertian
-surfaces, C0 E(n) / pi (``environment``).
+Where an environment surrounds the lamp, the surfaces of eq. (1) are lit by it as Lambertian
+surfaces, C0 E(n) / pi (``environment``), in place of the ambient d C0 (``Sun.under_surroundings``).
 
 **Phantom light** (where the paper is silent): sunlight that enters through the lens and is
 scattered back by the reflector. At every reflector hit of an eye path the reflector's scatter of
@@ -27,7 +27,7 @@ its own test of the line to the sun on the meshes (``freeform.render``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -46,6 +46,9 @@ class Sun:
     strength: float
     color: np.ndarray  # S
     paper: bool  # s = 1 and S = white: eq. (1) exactly as the paper's light
+    # Whether the ambient d C0 of eq. (1) is added: not where an environment lights the surfaces, whose
+    # light takes its place (``under_surroundings``, docs/model.md §8.18).
+    ambient_seen: bool = True
     cosine_weighted = False  # the phantom light as eq. (3): no cosine toward the sun (the photometric sun's has)
 
     def shade(self, normal: np.ndarray, view: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
@@ -72,7 +75,8 @@ class Sun:
         out = np.empty((len(normal), 3))
         for c in range(3):
             np.multiply(lit, self.color[c], out=term)
-            term += self.ambient
+            if self.ambient_seen:
+                term += self.ambient
             term *= diffuse[:, c]
             np.multiply(spec, self.highlight[c], out=out[:, c])
             out[:, c] += term
@@ -82,6 +86,15 @@ class Sun:
     def light(self) -> np.ndarray:
         """I_sun of the phantom light: s S."""
         return self.strength * self.color
+
+    def under_surroundings(self) -> Sun:
+        """This sun where an environment surrounds the lamp: eq. (1) without its ambient d C0, which
+        stands for the light of the surroundings that the environment now gives (C0 E(n) / pi); the
+        sun's own term keeps its (1 - d) s S cos theta, so adding surroundings changes no sunlit
+        face by the sun's share (docs/model.md §8.18). A sun of ambient 0 is returned as it is."""
+        if self.ambient == 0.0:
+            return self
+        return replace(self, paper=False, ambient_seen=False)
 
 
 def from_scene(scene: dict, environment_sun: np.ndarray | None) -> Sun:

@@ -76,17 +76,22 @@ def cache_folder() -> str | None:
     return folder
 
 
-def world(path: str, rotation: float, layout: str, make) -> World:
+def world(path: str, rotation: float, layout: str, make, retouch: tuple[str, object] | None = None) -> World:
     """The world of the image at ``path`` turned by ``rotation``: from this process's memory, from
     the cache files, or made and stored. The pixels (``world_image.read_padded``) are kept by the
     image's content alone, what ``make(pixels (h, w, 3), rotation)`` -> (irradiance, sun direction,
-    sun colour) computes by content, turn and ``layout`` (the map's size)."""
+    sun colour) computes by content, turn and ``layout`` (the map's size).
+
+    ``retouch`` = (tag, padded_of): the world's pixels are ``padded_of(pixels)`` instead (kept by
+    content and tag: the image without its sun, ``environment.sunless``); ``make`` still gets the
+    image as read, and must apply the same retouch where it wants it (``layout`` names it)."""
     st = os.stat(path)
-    return _world(path, st.st_mtime_ns, st.st_size, rotation, layout, make)
+    return _world(path, st.st_mtime_ns, st.st_size, rotation, layout, make, retouch)
 
 
 @functools.lru_cache(maxsize=4)
-def _world(path: str, mtime_ns: int, size: int, rotation: float, layout: str, make) -> World:
+def _world(path: str, mtime_ns: int, size: int, rotation: float, layout: str, make,
+           retouch: tuple[str, object] | None) -> World:
     folder = cache_folder()
     digest = world_image.file_digest(path)[:40]
     image_name = f"{digest}-{world_image.LAYOUT}.image"
@@ -100,8 +105,16 @@ def _world(path: str, mtime_ns: int, size: int, rotation: float, layout: str, ma
         return {"irradiance": irradiance, "sun_direction": sun_direction, "sun_color": sun_color}
 
     turn, _ = _cached(folder, turn_name, turned, {"irradiance", "sun_direction", "sun_color"})
+    keep = {image_name, turn_name}
+    if retouch is not None:
+        tag, padded_of = retouch
+        retouched_name = f"{digest}-{world_image.LAYOUT}-{tag}.image"
+        image, image_file = _cached(folder, retouched_name,
+                                    lambda: {"padded": padded_of(pixels), "size": np.array([width, height])},
+                                    {"padded", "size"})
+        keep.add(retouched_name)
     if folder is not None:
-        _prune(folder, keep={image_name, turn_name})
+        _prune(folder, keep=keep)
     return World(image["padded"], width, height, turn["irradiance"], turn["sun_direction"], turn["sun_color"],
                  image_file)
 

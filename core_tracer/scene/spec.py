@@ -152,7 +152,8 @@ LIGHT = Section(
         "color": _color((1, 1, 1),
                         "Colour and strength of the light's highlights on body and lens (R1G1B1 in eq. 1)", hi=1000.0),
         "ambient": Num(0.25, 0.0, 1.0,
-                       doc="How bright surfaces facing away from the light still look (ambient d in eq. 1)"),
+                       doc="How bright surfaces facing away from the light still look (ambient d in eq. 1); "
+                           "with surroundings their light takes its place"),
         "strength": Num(1.0, 0.0, 1000.0,
                         doc="Strength of the sun: scales its light on body and lens (the (1 - d) cos term and the "
                             "highlight of eq. 1) and its phantom light in the reflectors; 0 is no sun (night)"),
@@ -161,7 +162,8 @@ LIGHT = Section(
         "phantom": Flag(False, "Sunlight entering through the lens lights the reflector, so an unlit lamp facing a "
                                "low sun looks lit (phantom light; off in the paper)"),
         "follow_environment": Flag(False, "Take the sun's direction from the environment image: the direction of "
-                                          "its brightest region (direction is then ignored)"),
+                                          "its brightest region (direction is then ignored); the sun stands for the "
+                                          "image's own, which is taken out of the image"),
         "follow_environment_color": Flag(False, "Take the sun's colour from the environment image: the colour of its "
                                                 "brightest region at luminance 1 (sun_color is then ignored; strength "
                                                 "still sets how bright the sun is)"),

@@ -39,7 +39,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
-from ...core_tracer.raytrace import environment, sunlight
+from ...core_tracer.raytrace import environment, sunlight, world_file
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
@@ -263,8 +263,9 @@ class _Build:
                 # Its header counted as the tracer counts it, before Blender's own reader is given the
                 # file: an image declaring 30000 x 15000 px would take gigabytes when Blender draws it.
                 environment.world_bytes(scene)
-                image = environment.image_path(scene["environment"])
-            except SceneError as e:
+                # without its sun where the Lamp Sun follows it, as the tracer sees it (docs/model.md §8.18)
+                image = world_file.shown_file(scene)
+            except (SceneError, OSError) as e:
                 self.report.not_driven.append(f"{wld.name}: surroundings ({e})")
         self.report.not_driven += [f"{wld.name}: {node}"
                                    for node in materials.world(wld, scene, new=new, image_path=image)]

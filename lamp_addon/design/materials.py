@@ -26,8 +26,10 @@ part:
   environment sun's colour when ``follow_environment_color`` is on, as in the tracer).
 - **Surroundings** (``environment``): the image in an Environment Texture (Linear, equirectangular) after
   a Mapping node turning it about Z, into a Background of the environment's strength, seen by every ray
-  and added to the ambient for diffuse rays (the tracer's C0 E(n) / pi); switched by two Mix Shaders, so
-  a design without surroundings keeps the paper's world exactly.
+  and added to the ambient for diffuse rays (the tracer's C0 E(n) / pi), the ambient then 0 (the
+  surroundings take its place, docs/model.md §8.18); switched by two Mix Shaders, so a design without
+  surroundings keeps the paper's world exactly. Where the sun follows the environment's, the image is
+  the tracer's copy without its sun (``world_file.shown_file``).
 
 A designer may edit these materials. So a tree is laid out once, when the builder makes the material
 (``new=True``); every later build only writes the sockets a design parameter drives, on the nodes it
@@ -271,7 +273,8 @@ def world(wld: bpy.types.World, scene: dict, *, new: bool, image_path: str | Non
         _add_surroundings(tree)  # a world built before surroundings existed, or a new one
     missing: list[str] = []
     _drive(tree, "Background", missing, Color=_rgba(scene["background"]))
-    _drive(tree, "Ambient", missing, Color=_grey(scene["light"]["ambient"]))
+    # The surroundings take the place of eq. (1)'s ambient where they are shown (docs/model.md §8.18).
+    _drive(tree, "Ambient", missing, Color=_grey(0.0 if image_path is not None else scene["light"]["ambient"]))
     if tree is not None and tree.nodes.get("Surroundings") is not None:
         env = scene["environment"]
         on = 1.0 if image_path is not None else 0.0

@@ -165,3 +165,64 @@ def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_n
     assert mix.inputs[1].links[0].from_node.name == "Background Or Surroundings"
     assert mix.inputs[2].links[0].from_node.name == "Ambient Or Ambient And Surroundings"
     assert tree.nodes["Background Or Surroundings"].inputs[0].default_value == 1.0
+
+
+def test_a_followed_sun_leaves_the_world_and_the_surroundings_replace_the_ambient(lamp_addon, bl_scene):
+    """docs/model.md §8.18 in Blender's world: where the Lamp Sun follows the environment's sun, the
+    world shows the tracer's image without it (each light once, in Compare's Cycles render too), and
+    wherever surroundings are shown the ambient of eq. (1) gives way to them."""
+    if environment.bundled_folder() is None:
+        pytest.skip("Blender's world images are not on this machine")
+    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
+    doc["light"].update(ambient=0.25, strength=2.0, follow_environment=True)
+    doc["environment"] = {"world": "city", "strength": 1.0, "rotation_deg": 0.0}
+    scene = core_tracer.parse_scene(doc)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
+    tree = bl_scene.world.node_tree
+    image = tree.nodes["Environment"].image
+    w, h = image.size
+    shown = np.array(image.pixels[:], dtype=np.float32).reshape(h, w, 4)[::-1, :, :3]  # Blender's rows from the bottom
+    original = environment.read_image(environment.image_path(scene["environment"]))
+    np.testing.assert_array_equal(shown, environment.sunless(original))
+    assert shown.max() < 0.1 * original.max()  # the city's sun is gone from the world
+    assert tuple(tree.nodes["Ambient"].inputs["Color"].default_value)[:3] == (0.0, 0.0, 0.0)
+    # Not following: the image itself, still without the ambient; without surroundings the ambient is back.
+    scene["light"]["follow_environment"] = False
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
+    assert tree.nodes["Environment"].image.filepath.endswith("city.exr")
+    assert tuple(tree.nodes["Ambient"].inputs["Color"].default_value)[:3] == (0.0, 0.0, 0.0)
+    scene["environment"]["world"] = "none"
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.design.builder.build_lamp(bl_scene, scene)
+    assert tuple(tree.nodes["Ambient"].inputs["Color"].default_value)[:3] == pytest.approx((0.25, 0.25, 0.25))
+
+
+@pytest.mark.slow
+def test_body_under_a_followed_sun_agrees_with_cycles(lamp_addon, bl_scene):
+    """The body's front face under the city world with the Lamp Sun following its sun, ambient 0.25:
+    the tracer's C0 (E_sky / pi + (1 - d) s cos theta), the sky without its sun, against Cycles' diffuse
+    body under the world Compare builds (the same sunless image, no ambient) and the Lamp Sun of
+    strength pi (1 - d) s. Each counts the sun once; before docs/model.md §8.18 both counted it twice
+    (the image's and the Lamp Sun), and agreed."""
+    if environment.bundled_folder() is None:
+        pytest.skip("Blender's world images are not on this machine")
+    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
+    doc["body"]["specular"] = 0.0
+    doc["light"] = {"direction": [0.3, -1.0, 0.6], "color": [1, 1, 1], "ambient": 0.25, "strength": 2.0,
+                    "follow_environment": True}
+    doc["environment"] = {"world": "city", "strength": 1.0, "rotation_deg": 90.0}
+    doc["image"] = {"width": 64, "height": 64}
+    scene = core_tracer.parse_scene(doc)
+    toward = environment.from_scene(scene).sun_direction()
+    assert -toward[1] > 0.3  # turned so that the sun lights the front face
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
+    region = (slice(24, 40), slice(4, 14))
+    t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
+    c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
+    relative = (c - t) / t
+    print(f"\nbody under city with a followed sun, {BODY_SAMPLES} spp Cycles, 64x64: tracer {t}, Cycles {c}, "
+          f"relative difference {relative}")
+    assert np.abs(relative).max() < TOLERANCE

@@ -46,10 +46,8 @@ def into_lenses(ctx: Context, band: Band, pix: np.ndarray, lamp: np.ndarray, d: 
     else:  # unpolarised light: half of it s-polarised
         split = fresnel_split(np.ones((n, ctx.channels)), d, face_normal, 1.0, ior, np.full((n, ctx.channels), 0.5),
                               1.0, lamps.ior_bands[lamp])
-    surface = ctx.shade(face_normal, -d, lamps.lens_diffuse[lamp], lamps.lens_specular[lamp],
-                        lamps.lens_shininess[lamp])
-    if ctx.environment is not None:  # the outer face mirrors the surroundings
-        surface = surface + ctx.sky(optics.reflect(d, face_normal))
+    surface = ctx.lens_surface(face_normal, d, lamps.lens_diffuse[lamp], lamps.lens_specular[lamp],
+                               lamps.lens_shininess[lamp])
     band.add(LENS_SURFACE, pix, split.reflected * surface)
     if ctx.background_seen and ctx.environment is None:
         band.add(BACKGROUND_PASS, pix, split.reflected * ctx.background)
