@@ -92,7 +92,16 @@ def scene_camera_to_dict(bl_scene, camera_object=None) -> dict:
         "width": _round(cam.ortho_scale * MM_PER_BU, 6),
         "sensor_fit": fit,
         "shift": _round((cam.shift_x, cam.shift_y), 6),
+        **design_exposure(bl_scene),
     }
+
+
+def design_exposure(bl_scene) -> dict:
+    """The design's exposure fields of its camera (``exposure``, ``ev100``): Blender's camera has no
+    exposure of its own, so the camera a render uses keeps the design's (an EV100 fixed for every
+    design rendered through it, docs/scene-format.md)."""
+    group = bl_scene.lamp_design.camera
+    return {"exposure": group.exposure, "ev100": design_properties.from_float32(group.ev100)}
 
 
 def focus_distance(ob) -> float:
