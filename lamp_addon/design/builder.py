@@ -43,7 +43,7 @@ from ...core_tracer.raytrace import environment, sunlight
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
-from ..convert import units
+from ..convert import photometric_cycles, units
 from ..convert.meshes import builder as mesh_builder
 from . import materials, properties
 from . import parts as design_parts
@@ -141,15 +141,16 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False)
     ``preview``: lenses with fewer quads per cut cell, where that is lighter (Auto Build while dragging)."""
     _free_parts_whose_collection_was_deleted()
     build = _Build(bl_scene)
-    lamps = [design_parts.lamp_parts(i, lamp, preview, functions.lamp_label(scene["lamps"], i))
-             for i, lamp in enumerate(scene["lamps"])]
-    build.mesh_part(design_parts.body_part(scene, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps]))
+    shown = photometric_cycles.equivalent(scene)  # photometric: Cycles' lights in W (convert.photometric_cycles)
+    lamps = [design_parts.lamp_parts(i, lamp, preview, functions.lamp_label(shown["lamps"], i))
+             for i, lamp in enumerate(shown["lamps"])]
+    build.mesh_part(design_parts.body_part(shown, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps]))
     for parts, _, _, lens_preview in lamps:
         for part in parts:
             build.mesh_part(part)
         build.report.preview |= lens_preview
-    build.sun(scene)
-    build.world(scene)
+    build.sun(shown)
+    build.world(shown)
     build.finish(design_digest(scene))
     return build.report
 
