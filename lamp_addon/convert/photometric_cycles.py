@@ -9,8 +9,9 @@ and a colour that carries its spectrum's luminous efficiency:
 - a source of luminous flux Φ (lm) with spectrum S radiates Φ_e = Φ / K_r watts, where
   K_r = 683 lm/W × ∫V·S dλ / ∫S dλ is its luminous efficacy of radiation over 380–780 nm, the range
   the tracer carries (``photometry.cie.luminous_efficacy``);
-- its colour is C = RGB(S) / Y(S) × K_r / 683: linear Rec.709 of the spectrum at unit luminance,
-  times its luminous efficiency. Then Cycles' pixel values times 683 lm/W are linear Rec.709 of the
+- its colour is C = RGB(S) / Y(S) × K_r / 683: linear Rec.709 of the spectrum at unit luminance
+  (clipped into the gamut at its own luminance where it lies outside: amber and red LEDs), times its
+  luminous efficiency. Then Cycles' pixel values times 683 lm/W are linear Rec.709 of the
   XYZ the tracer gives in cd/m², whatever the spectrum: one film exposure, 683 / (1.2 · 2^EV100),
   shows Cycles at the tracer's EV100 (``film_exposure``);
 - the bulb (a Lambertian sphere of radius r) is an Emission of radiance L_e = Φ_e / (4π² r²)
@@ -59,9 +60,21 @@ def unit_rgb(spectrum: Spectrum) -> np.ndarray:
     return cie.xyz_to_linear_rec709(xyz / xyz[1])
 
 
+def in_gamut(rgb: np.ndarray) -> np.ndarray:
+    """Linear Rec.709 clipped into the gamut at its own luminance (an amber or red LED's negative
+    green or blue): what Cycles' channels can carry, as bright as the light."""
+    rgb = np.asarray(rgb, dtype=np.float64)
+    if rgb.min() >= 0:
+        return rgb
+    weights = np.asarray(daylight.REC709_LUMINANCE)
+    clipped = np.maximum(rgb, 0.0)
+    return clipped * float(rgb @ weights) / float(clipped @ weights)
+
+
 def light_color(spectrum: Spectrum) -> np.ndarray:
-    """C = RGB(S) / Y(S) × K_r / 683: the colour of a Blender light of spectrum S (module doc)."""
-    return unit_rgb(spectrum) * cie.luminous_efficacy(spectrum) / cie.KM
+    """C = RGB(S) / Y(S) × K_r / 683: the colour of a Blender light of spectrum S (module doc),
+    ``in_gamut``."""
+    return in_gamut(unit_rgb(spectrum)) * cie.luminous_efficacy(spectrum) / cie.KM
 
 
 def bulb_light(bulb: dict, where: str = "bulb") -> dict:
@@ -98,12 +111,8 @@ def rgb_under(curve: Spectrum, source: Spectrum) -> np.ndarray:
     RGB_c(S · T) / RGB_c(S), in (0, 1]. Light the curve leaves outside Rec.709 (legal red has a
     negative green) is clipped into it at its own luminance, so that Cycles keeps the luminance it
     cannot keep the colour of."""
-    seen = cie.xyz_to_linear_rec709(cie.spectrum_xyz(source.times(curve)))
-    lit = cie.xyz_to_linear_rec709(cie.spectrum_xyz(source))
-    if seen.min() < 0:
-        weights = np.asarray(daylight.REC709_LUMINANCE)
-        clipped = np.maximum(seen, 0.0)
-        seen = clipped * float(seen @ weights) / float(clipped @ weights)
+    seen = in_gamut(cie.xyz_to_linear_rec709(cie.spectrum_xyz(source.times(curve))))
+    lit = in_gamut(cie.xyz_to_linear_rec709(cie.spectrum_xyz(source)))
     with np.errstate(divide="ignore", invalid="ignore"):
         share = np.where(lit > 0, seen / lit, 1.0)
     return np.clip(share, MIN_TRANSMITTANCE, 1.0)
@@ -137,7 +146,7 @@ def equivalent(scene: dict) -> dict:
         where = f"lamps[{i}]"
         bulb = bulb_light(lamp["bulb"], f"{where}.bulb")
         source = bulb["spectrum"]
-        lamp["bulb"]["intensity"] = [float(c) for c in np.maximum(bulb["radiance"] * bulb["color"], 0.0)]
+        lamp["bulb"]["intensity"] = [float(c) for c in bulb["radiance"] * bulb["color"]]
         lens = lamp["lens"]
         for key in ("transmitted_color", "reference_thickness"):
             lens.pop(key, None)

@@ -126,3 +126,31 @@ def test_body_under_the_sun_agrees_with_cycles(lamp_addon, bl_scene):
     assert tracer[1] == pytest.approx(xyz[1], rel=0.01)  # E ρ cos θ / π with Smits's paint
     assert abs(luminance) < LUMINANCE_TOLERANCE
     assert xy < XY_TOLERANCE
+
+
+def test_watts_from_lumens_against_colour_science(lamp_addon):
+    """Φ_e = Φ / K_r with K_r = 683 ∫V S / ∫S over 380–780 nm, checked with colour-science's own
+    luminous efficacy of illuminant A restricted to the same range, and the sun's W/m² from lux."""
+    import colour
+
+    convert = lamp_addon.convert.photometric_cycles
+    bulb = {"type": "P21/5W", "state": "stop", "radius": 8.0, "on": True}
+    light = convert.bulb_light(bulb)
+    sd = colour.SDS_ILLUMINANTS["A"].copy().align(colour.SpectralShape(380, 780, 1))
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(colour.SpectralShape(380, 780, 1))
+    # colour-science's tables (illuminant A, the 2° observer's y-bar = V), integrated here: its own
+    # luminous_efficacy needs numpy 2's trapezoid
+    efficacy = 683.002 * np.trapz(sd.values * cmfs.values[:, 1], sd.wavelengths) / np.trapz(sd.values, sd.wavelengths)
+    assert light["efficacy_lm_per_w"] == pytest.approx(efficacy, rel=2e-3)
+    assert light["power_w"] == pytest.approx(440.0 / efficacy, rel=2e-3)
+    r = 8e-3
+    assert light["radiance"] == pytest.approx(light["power_w"] / (4 * math.pi ** 2 * r * r), rel=1e-12)
+    # Cycles' pixel x 683 is linear Rec.709 of the bulb's XYZ at its luminance Φ / (4π² r²)
+    luminance = 440.0 / (4 * math.pi ** 2 * r * r)
+    xyz = colour.sd_to_XYZ(sd, cmfs, k=1.0)
+    rgb = cie.xyz_to_linear_rec709(xyz / xyz[1] * luminance)
+    np.testing.assert_allclose(light["radiance"] * light["color"] * cie.KM, rgb, rtol=3e-3)
+    sun = convert.sun_light(100000.0)
+    assert sun["strength"] == pytest.approx(100000.0 / sun["efficacy_lm_per_w"], rel=1e-12)
+    assert 200.0 < sun["efficacy_lm_per_w"] < 300.0  # daylight in the visible band
+    assert convert.film_exposure(15.0) == pytest.approx(683.002 / (1.2 * 2 ** 15))
