@@ -94,3 +94,11 @@ def test_a_wrong_filament_is_named_in_panel_words(lamp_addon, addon_core, bl_sce
     assert problem is not None and problem.path == "lamps[0].bulb.state"
     assert problem.label() == "Lamp 1 Bulb: Filament"
     assert "R5W" in problem.message and '"on"' in problem.message
+
+
+def test_the_study_panel_offers_bulb_type_and_lens_material(lamp_addon):
+    items = {path: label for path, label, _tooltip in lamp_addon.study.settings.PARAMETER_ITEMS}
+    assert items["bulb.type"] == "Bulb: Bulb Type"
+    assert items["lens.material"] == "Lens: Material"
+    assert items["bulb.flux_lm"] == "Bulb: Flux (lm)"
+    assert items["light.illuminance_lux"] == "Light: Sun Illuminance (lx)"
