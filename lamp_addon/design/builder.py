@@ -45,7 +45,7 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
 from ..convert import photometric_cycles, units
 from ..convert.meshes import builder as mesh_builder
-from . import materials, properties
+from . import curves, materials, properties
 from . import parts as design_parts
 from . import root as design_root
 
@@ -141,7 +141,11 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False)
     ``preview``: lenses with fewer quads per cut cell, where that is lighter (Auto Build while dragging)."""
     _free_parts_whose_collection_was_deleted()
     build = _Build(bl_scene)
-    shown = photometric_cycles.equivalent(scene)  # photometric: Cycles' lights in W (convert.photometric_cycles)
+    try:  # photometric: Cycles' lights in W (convert.photometric_cycles)
+        shown = photometric_cycles.equivalent(curves.with_curves(bl_scene, scene))
+    except SceneError as e:  # a measured curve not found: the objects keep the paper's values until it is
+        shown = scene
+        build.report.not_driven.append(f"photometric values: {e}")
     lamps = [design_parts.lamp_parts(i, lamp, preview, functions.lamp_label(shown["lamps"], i))
              for i, lamp in enumerate(shown["lamps"])]
     build.mesh_part(design_parts.body_part(shown, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps]))

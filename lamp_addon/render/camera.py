@@ -32,6 +32,7 @@ import bpy
 
 from ..convert import camera as cm
 from ..convert import units
+from ..design import curves as design_curves
 from ..design import properties as design_properties
 from ..design import root as design_root
 
@@ -177,8 +178,9 @@ def scene_for_render(bl_scene, *, camera_object=None, size: tuple[int, int] | No
         render.resolution_x, render.resolution_y, render.resolution_percentage)
     # The design's samples per pixel go with it (F12 renders them); only the size is Blender's.
     image = {"width": int(width), "height": int(height), "samples": int(bl_scene.lamp_design.image.samples)}
-    return design_properties.design_to_scene(bl_scene, camera=scene_camera_to_dict(bl_scene, camera_object),
-                                             image=image)
+    scene = design_properties.design_to_scene(bl_scene, camera=scene_camera_to_dict(bl_scene, camera_object),
+                                              image=image)
+    return design_curves.with_curves(bl_scene, scene)  # photometric: measured curves by their full paths
 
 
 # ---------------------------------------------------------------------------------------------

@@ -23,6 +23,7 @@ import numpy as np
 from ...core_tracer.raytrace import spectral
 from ...core_tracer.scene.reading import SceneError
 from ..convert import viewport
+from ..design import curves as design_curves
 from ..design import properties as design_properties
 from ..design import root as design_root
 from ..design import validity as design_validity
@@ -86,9 +87,9 @@ class ViewportSession:
         self.world_from_model = viewport.model_matrix(_rows(design_root.world_from_design(bl_scene)))
         try:
             # the design's exposure stays (photometric: one EV100 for the view, ``_shown``)
-            self.design = design_properties.design_to_scene(
+            self.design = design_curves.with_curves(bl_scene, design_properties.design_to_scene(
                 bl_scene, camera={**_STAND_IN_CAMERA, **camera_module.design_exposure(bl_scene)},
-                image=_STAND_IN_IMAGE)
+                image=_STAND_IN_IMAGE))
             self.error = None
         except SceneError as e:
             self.design, self.error = None, invalid_design_text(bl_scene, e)

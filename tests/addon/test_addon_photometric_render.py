@@ -5,6 +5,7 @@ out-of-gamut colours unclipped, for Blender's view transform to show."""
 from __future__ import annotations
 
 import colorsys
+import math
 
 import numpy as np
 import pytest
@@ -117,3 +118,46 @@ def test_the_viewport_shows_the_xyz_at_the_designs_ev100(lamp_addon, addon_core,
     assert session._auto_ev100 == (generation, ev100)
     expected = addon_core.photometry.output.xyz_to_linear_rec709(last.image) / (1.2 * 2.0 ** ev100)
     np.testing.assert_allclose(shown, expected, rtol=1e-5, atol=1e-7)
+
+
+def _named_curve_design(lamp_addon, addon_core, bl_scene) -> None:
+    _stop_lamp(lamp_addon, addon_core, bl_scene, size=48)
+    bulb = bl_scene.lamp_design.lamps[0].bulb
+    bulb.type, bulb.spectrum, bulb.spectrum_file, bulb.flux_lm = "custom", "file", "my-led.csv", 300.0
+
+
+def _write_led_curve(folder) -> None:
+    rows = "\n".join(f"{nm},{math.exp(-0.5 * ((nm - 625) / 12) ** 2):.6f}" for nm in range(560, 700))
+    (folder / "my-led.csv").write_text("nm,value\n" + rows + "\n")
+
+
+def test_a_measured_spectrum_is_read_beside_the_saved_blend_file(lamp_addon, addon_core, bl_scene, tmp_path):
+    import bpy
+
+    _named_curve_design(lamp_addon, addon_core, bl_scene)
+    with pytest.raises(addon_core.SceneError, match="save the .blend file"):
+        lamp_addon.render.camera.scene_for_render(bl_scene)
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "lamp.blend"))
+    bl_scene = bpy.context.scene
+    with pytest.raises(addon_core.SceneError, match="beside the saved .blend file") as missing:
+        lamp_addon.render.camera.scene_for_render(bl_scene)
+    assert missing.value.path == "lamps[0].bulb.spectrum_file" and str(tmp_path) in missing.value.message
+    _write_led_curve(tmp_path)
+    scene = lamp_addon.render.camera.scene_for_render(bl_scene)
+    assert scene["lamps"][0]["bulb"]["spectrum_file"] == str(tmp_path / "my-led.csv")
+    pixels = render_engine_exr(bl_scene, tmp_path / "f12.exr")
+    XYZ = addon_core.render(scene, 48, 48)
+    np.testing.assert_allclose(pixels[..., :3], addon_core.photometry.output.xyz_to_linear_rec709(XYZ)
+                               / (1.2 * 2.0 ** 15.0), rtol=1e-5, atol=1e-7)
+    assert addon_core.photometry.cie.xy(XYZ.reshape(-1, 3).sum(axis=0))[0] > 0.65  # a deep red LED, as measured
+
+
+def test_a_preset_finds_its_curves_beside_it(lamp_addon, addon_core, bl_scene, tmp_path):
+    _named_curve_design(lamp_addon, addon_core, bl_scene)
+    _write_led_curve(tmp_path)
+    doc = lamp_addon.design.properties.design_document(bl_scene)
+    (tmp_path / "led-lamp.json").write_text(addon_core.scene_to_json(addon_core.parse_scene(doc)))
+    scene = addon_core.scene.load_scene(tmp_path / "led-lamp.json")
+    lamp_addon.presets.apply.apply_preset(bl_scene, scene, str(tmp_path / "led-lamp.json"))
+    rendered = lamp_addon.render.camera.scene_for_render(bl_scene)
+    assert rendered["lamps"][0]["bulb"]["spectrum_file"] == str(tmp_path / "my-led.csv")
