@@ -161,3 +161,18 @@ def test_a_preset_finds_its_curves_beside_it(lamp_addon, addon_core, bl_scene, t
     lamp_addon.presets.apply.apply_preset(bl_scene, scene, str(tmp_path / "led-lamp.json"))
     rendered = lamp_addon.render.camera.scene_for_render(bl_scene)
     assert rendered["lamps"][0]["bulb"]["spectrum_file"] == str(tmp_path / "my-led.csv")
+
+
+def test_auto_exposure_is_measured_once_per_render(lamp_addon, addon_core, bl_scene, tmp_path):
+    """With "auto", F12 shows the image at the EV100 measured on a small preview of the same view, one
+    factor for every pixel (never re-exposed band by band)."""
+    _stop_lamp(lamp_addon, addon_core, bl_scene)
+    bl_scene.lamp_design.camera.exposure = "auto"
+    pixels = render_engine_exr(bl_scene, tmp_path / "f12.exr")
+    import bpy
+
+    scene = lamp_addon.render.camera.scene_for_render(bl_scene, camera_object=bpy.context.scene.camera)
+    ev100 = lamp_addon.render.photometric_display.auto_ev100(scene)
+    assert 5.0 < ev100 < 20.0 and ev100 != 15.0
+    expected = addon_core.photometry.output.xyz_to_linear_rec709(addon_core.render(scene, SIZE, SIZE))
+    np.testing.assert_allclose(pixels[..., :3], expected / (1.2 * 2.0 ** ev100), rtol=1e-5, atol=1e-7)
