@@ -176,3 +176,15 @@ def test_auto_exposure_is_measured_once_per_render(lamp_addon, addon_core, bl_sc
     assert 5.0 < ev100 < 20.0 and ev100 != 15.0
     expected = addon_core.photometry.output.xyz_to_linear_rec709(addon_core.render(scene, SIZE, SIZE))
     np.testing.assert_allclose(pixels[..., :3], expected / (1.2 * 2.0 ** ev100), rtol=1e-5, atol=1e-7)
+
+
+def test_a_photometric_design_never_sets_the_scenes_exposure(lamp_addon, addon_core, bl_scene):
+    """Its EV100 is in the pixels: Build and Apply Preset leave the view's exposure at 0 for the stop
+    and the tail lamp alike (the paper's automatic exposure would darken the stop lamp to match)."""
+    setup = lamp_addon.render.setup
+    for name in ("photometric-stop-lamp", "photometric-tail-lamp"):
+        scene = addon_core.scene.load_scene(PRESETS / f"{name}.json")
+        lamp_addon.presets.apply.apply_preset(bl_scene, scene)
+        lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+        setup.follow_design_exposure(bl_scene, force=True)
+        assert bl_scene.view_settings.exposure == 0.0, name
