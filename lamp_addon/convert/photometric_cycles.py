@@ -1,10 +1,15 @@
 """Cycles values for a photometric design: the same light in Blender's radiometric units.
 
-Blender's lights are radiometric (Blender manual, Shader Nodes > Emission: "light strength for point,
-spot and area lights is specified in Watts; sun lights are specified in Watts per square metre"; for
-a material's Emission, Strength 1 shows the Color input exactly, so Strength × Color is the radiance
-the camera sees). Cycles carries three colour channels, so each light becomes a power (or radiance)
-and a colour that carries its spectrum's luminous efficiency:
+Blender's lights are radiometric. The Blender manual (Shader Nodes > Emission) says point, spot and
+area lights are given in watts, sun lights in watts per square metre, and that a material's Emission
+of Strength 1 shows its Color exactly (Strength × Color is the radiance the camera sees). Cycles'
+source agrees: Blender's sync sets a light's strength to color × energy × 2^exposure
+(intern/cycles/blender/light.cpp, ``sync_light``), and ``LightManager::device_update_lights``
+(src/scene/light.cpp) turns a point light's radiant flux P into the radiance of its sphere of radius r
+with eval_fac = 1 / (4π r²) × 1/π, L = P / (4π² r²), the Lambertian sphere bulb of the tracer, and
+uses a sun's (angle 0) strength as its irradiance (eval_fac 1). Cycles carries three colour
+channels, so each light becomes a power (or radiance) and a colour that carries its spectrum's
+luminous efficiency:
 
 - a source of luminous flux Φ (lm) with spectrum S radiates Φ_e = Φ / K_r watts, where
   K_r = 683 lm/W × ∫V·S dλ / ∫S dλ is its luminous efficacy of radiation over 380–780 nm, the range
@@ -15,7 +20,8 @@ and a colour that carries its spectrum's luminous efficiency:
   XYZ the tracer gives in cd/m², whatever the spectrum: one film exposure, 683 / (1.2 · 2^EV100),
   shows Cycles at the tracer's EV100 (``film_exposure``);
 - the bulb (a Lambertian sphere of radius r) is an Emission of radiance L_e = Φ_e / (4π² r²)
-  W/(m² sr) and colour C, so Strength × Color = L_e × C;
+  W/(m² sr) and colour C, so Strength × Color = L_e × C: what a Blender point light of radius r,
+  power Φ_e W and colour C shows;
 - the sun is a Sun light of strength E_e = E_v / K_r W/m² (E_v its illuminance in lx, its spectrum
   CIE daylight at 5500 K) and colour C;
 - a lens or prism plate is glass of the material's n_d (a plate's rings keep the shape its own ior
