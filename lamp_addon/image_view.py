@@ -90,6 +90,8 @@ def design_exposure(scene: dict) -> float:
     of the same view, for images shown while they are still being rendered."""
     from ..core_tracer import render
 
+    if scene.get("light_model", "paper") == "photometric":
+        return 0.0  # its EV100 is in the pixels already (render.photometric_display)
     width, height = scene["image"]["width"], scene["image"]["height"]
     scale = min(1.0, PREVIEW_SIDE / max(width, height))
     preview = render(scene, max(1, round(width * scale)), max(1, round(height * scale)))

@@ -10,7 +10,7 @@ from .messages import show_value
 from .reading import SceneError
 
 # The filaments (states) of each named bulb, as core_tracer.photometry.sources.BULB_TYPES gives them.
-BULB_STATES = {"P21/5W": ("stop", "tail"), "R5W": ("on",)}
+BULB_STATES = {"P21/5W": ("stop", "tail"), "R5W": ("on",), "PY21/5W": ("stop", "tail")}
 
 
 def check_photometric(scene: dict) -> None:

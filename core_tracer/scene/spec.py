@@ -54,7 +54,7 @@ def _position(default, doc, size=3) -> Num:
 
 LIGHT_MODELS = ("paper", "photometric")
 # The named bulbs of core_tracer.photometry.sources.BULB_TYPES (a test keeps the two lists equal).
-BULB_TYPES = ("P21/5W", "R5W")
+BULB_TYPES = ("P21/5W", "R5W", "PY21/5W")  # appended: Blender stores an enum by its index
 BULB_STATES = ("stop", "tail", "on")  # P21/5W: stop and tail filaments; single-filament bulbs: on
 BULB_SPECTRA = ("incandescent", "amber_coated", "red_led", "amber_led", "white_led", "led", "file")
 MATERIALS = ("pmma", "polycarbonate", "custom")
@@ -67,15 +67,15 @@ def _optics(default_filter: str, what: str) -> dict:
     its colour filter."""
     return {
         "material": Choice("pmma", MATERIALS,
-                           f"Photometric: the plastic of the {what}, which sets its refractive index per wavelength "
-                           "(pmma: acrylic n_d 1.491, Abbe 59.2; polycarbonate: n_d 1.585, Abbe 29.1; custom: ior "
-                           "at the d line with abbe)"),
+                           f"Photometric: the plastic of {what}, which sets its refractive index per wavelength "
+                           "(pmma: acrylic, index 1.491 at the d line, Abbe 59.2; polycarbonate: 1.585, Abbe 29.1; "
+                           "custom: its own refractive index at the d line and Abbe number)"),
         "abbe": Num(57.0, 10.0, 100.0,
-                    doc=f"Photometric, custom material: how little the {what}'s index changes with wavelength "
+                    doc=f"Photometric, custom material: how little {what}'s index changes with wavelength "
                         "(Abbe number V_d; acrylic about 57, polycarbonate about 30)"),
         "filter": Choice(default_filter, FILTERS,
-                         f"Photometric: the colour of the {what} as an internal transmittance curve at "
-                         "filter_thickness (clear, red, amber, smoke; custom: a smooth cut-on at filter_edge_nm; "
+                         f"Photometric: the colour of {what} as an internal transmittance curve at "
+                         "the filter thickness (clear, red, amber, smoke; custom: a smooth cut-on at the filter edge; "
                          "file: a measured curve)"),
         "filter_edge_nm": Num(605.0, 300.0, 900.0, unit="nm",
                               doc="Photometric, custom filter: the wavelength where the transmittance is half way "
@@ -84,9 +84,9 @@ def _optics(default_filter: str, what: str) -> dict:
                                doc="Photometric, custom filter: how gradual the cut-on is (the logistic's scale)"),
         "filter_range": Num((0.001, 0.9), 0.0, 1.0, size=2,
                             doc="Photometric, custom filter: internal transmittance well below and well above the "
-                                "edge, at filter_thickness (the lower above 0)"),
+                                "edge, at the filter thickness (the lower above 0)"),
         "filter_file": Text("", "Photometric, filter file: a .csv of nm,transmittance rows beside the document, the "
-                                "internal transmittance at filter_thickness", max_len=120),
+                                "internal transmittance at the filter thickness", max_len=120),
         "filter_thickness": _length(3.0, f"Photometric: the thickness of {what} at which the filter curve is its "
                                          "internal transmittance (Beer-Lambert gives every other path length)",
                                     hi=100.0),
@@ -115,7 +115,7 @@ CAMERA = Section(
                      size=2),
         "exposure": Choice("auto", ("auto", "ev100"),
                            "Photometric: how the image is exposed for display: auto (a light meter's choice per "
-                           "image), or ev100, one physical exposure so that designs compare"),
+                           "image), or a fixed EV100, one physical exposure so that designs compare"),
         "ev100": Num(9.0, -20.0, 30.0, unit="EV",
                      doc="Photometric: the camera's exposure value at ISO 100; a luminance of 1.2 x 2^EV100 cd/m2 "
                          "shows as display white"),
@@ -333,23 +333,23 @@ BULB = Section(
         "on": Flag(True, "Whether the lamp is switched on"),
         "type": Choice("custom", ("custom", *BULB_TYPES),
                        "Photometric: a standard bulb by its category (UN R37), which gives its flux and spectrum; "
-                       "custom: flux_lm and spectrum"),
+                       "custom: its own flux and spectrum"),
         "state": Choice("stop", BULB_STATES,
-                        "Photometric: which filament of the bulb is lit (P21/5W: stop or tail; single-filament "
-                        "bulbs: on)"),
+                        "Photometric: which filament of the bulb is lit (P21/5W, PY21/5W: stop or tail; "
+                        "single-filament bulbs: on)"),
         "flux_lm": Num(440.0, 0.0, 100000.0, unit="lm",
                        doc="Photometric, custom bulb: the luminous flux the bulb emits in all directions"),
         "spectrum": Choice("incandescent", BULB_SPECTRA,
                            "Photometric, custom bulb: the colour of its light (incandescent: CIE illuminant A; "
                            "amber-coated; red, amber or white LED; led: peak and width; file: a measured curve)"),
-        "led_peak_nm": Num(630.0, 360.0, 830.0, unit="nm", doc="Photometric, led spectrum: the peak wavelength"),
+        "led_peak_nm": Num(630.0, 360.0, 830.0, unit="nm", doc="Photometric, LED spectrum: the peak wavelength"),
         "led_width_nm": Num(20.0, 1.0, 300.0, unit="nm",
-                            doc="Photometric, led spectrum: the half spectral width (Ohno 2005's model)"),
+                            doc="Photometric, LED spectrum: the half spectral width (Ohno 2005's model)"),
         "spectrum_file": Text("", "Photometric, spectrum file: a .csv of nm,value rows beside the document",
                               max_len=120),
     },
     "The spherical bulb, the light source",
-    shown_when=(("state", "type", ("P21/5W", "R5W")), ("flux_lm", "type", ("custom",)),
+    shown_when=(("state", "type", BULB_TYPES), ("flux_lm", "type", ("custom",)),
                 ("spectrum", "type", ("custom",)), ("led_peak_nm", "spectrum", ("led",)),
                 ("led_width_nm", "spectrum", ("led",)), ("spectrum_file", "spectrum", ("file",))),
 )

@@ -84,7 +84,9 @@ def _section(doc: Any, sec: S.Section, path: str) -> dict:
             continue
         out[key] = _value(doc[key], spec, where)
     _either_or(out, sec, path)
-    return out
+    # The canonical order is the declaration's: a form filled in by its default (a photometric lens
+    # without a colour) sits where a written one would, so normalising twice gives the same text.
+    return {key: out[key] for key in sec.fields if key in out}
 
 
 def _default(spec: S.Spec, where: str) -> Any:

@@ -15,6 +15,7 @@ from ..scene import functions
 from ..scene import spec as S
 from ..scene.derived import use_form
 from ..scene.messages import show_value
+from ..scene.photometric_checks import BULB_STATES
 from ..scene.reading import SceneError
 from ..scene.safe_text import show_key
 from ..scene.validate import check_number
@@ -181,7 +182,9 @@ def apply_values(scene: dict, params: tuple[Parameter, ...], values: tuple[Any, 
     """Set each parameter to its value (``apply_value``), a lamp's function first: it sets the lens
     colour seen through the lens's thickness as it is then, so a thickness varied with it still
     makes the lens look deeper, whichever axis comes first."""
-    pairs = sorted(zip(params, values, strict=True), key=lambda pv: pv[0].keys != ("function",))
+    # a named bulb before its filament: choosing the bulb keeps a filament it has (``_keep_filament``)
+    pairs = sorted(zip(params, values, strict=True),
+                   key=lambda pv: (pv[0].keys != ("function",), pv[0].keys[-2:] != ("bulb", "type")))
     for param, value in pairs:
         apply_value(scene, param, value)
 
@@ -203,6 +206,16 @@ def apply_value(scene: dict, param: Parameter, value: Any) -> None:
             vector = list(node[last])
             vector[param.component] = value
             node[last] = vector
+        if param.section is S.BULB and last == "type":
+            _keep_filament(node)
+
+
+def _keep_filament(bulb: dict) -> None:
+    """As choosing a named bulb in Blender: its filament stays when the bulb has it (a P21/5W's stop),
+    else it becomes the bulb's first (an R5W's "on"), so a study can set bulb types side by side."""
+    states = BULB_STATES.get(bulb["type"])
+    if states is not None and bulb.get("state") not in states:
+        bulb["state"] = states[0]
 
 
 def sets_same(a: Parameter, b: Parameter) -> bool:

@@ -45,6 +45,7 @@ import numpy as np
 from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 from .. import image_view, jobs
+from ..convert import photometric_cycles
 from ..convert.sheet import differences, shown_side_by_side, side_by_side
 from ..design import builder as design_builder
 from ..design import root as design_root
@@ -52,7 +53,7 @@ from ..freeform import materials as freeform_materials
 from ..freeform import parametric as freeform_parametric
 from ..freeform import properties as freeform_properties
 from ..render import camera as render_camera
-from ..render import lamp_camera, view_link
+from ..render import lamp_camera, photometric_display, view_link
 from ..render.engine import ENGINE_ID
 from .scope import needs_build, objects_outside_design
 from .settings import MIN_BOUNCES, STANDARD_VIEW, SceneSettings, cycles_settings, exr_output_values
@@ -167,6 +168,7 @@ class CompareRun:
         self.not_restored: list[str] = []
         self.left_out: list[str] = []  # objects hidden from the Cycles render: not part of the design
         self.camera_news = ""  # what making the Lamp Camera did, if it was made
+        self.ev100: float | None = None  # photometric: the one EV100 both halves are shown at
         self._paused = False
         self._settings = SceneSettings()
         self._folder: str | None = None
@@ -206,6 +208,9 @@ class CompareRun:
                      use_border=False)
         settings.set(cycles, samples=self.samples, **{k: max(v, getattr(cycles, k)) for k, v in MIN_BOUNCES.items()},
                      **cycles_settings(self.scene["image"]["samples"]))
+        if self.scene["light_model"] == "photometric":  # Cycles in W shown at the tracer's EV100
+            self.ev100 = photometric_display.scene_ev100(self.scene)
+            settings.set(cycles, film_exposure=photometric_cycles.film_exposure(self.ev100))
         image_settings = bl_scene.render.image_settings
         settings.set(image_settings, **exr_output_values(image_settings))
         for ob in objects_outside_design(bl_scene):
@@ -296,7 +301,8 @@ class CompareRun:
             "tracer": tracer,
             "cycles": cycles,
             "labels": names,
-            "exposure": display.auto_exposure([tracer, cycles]),  # one exposure for both halves
+            # one exposure for both halves (photometric: both at the design's EV100 already)
+            "exposure": 0.0 if self.ev100 is not None else display.auto_exposure([tracer, cycles]),
             "side_by_side": side_by_side(tracer, cycles, *names),
             "seconds": seconds,
             "samples": self.samples,

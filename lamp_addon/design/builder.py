@@ -43,9 +43,9 @@ from ...core_tracer.raytrace import environment, sunlight, world_file
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
-from ..convert import units
+from ..convert import photometric_cycles, units
 from ..convert.meshes import builder as mesh_builder
-from . import materials, properties
+from . import curves, materials, properties
 from . import parts as design_parts
 from . import root as design_root
 
@@ -139,9 +139,15 @@ def is_up_to_date(bl_scene: bpy.types.Scene) -> bool:
 def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False) -> BuildReport:
     """Create or update the objects of a normalised scene in ``bl_scene``; returns a ``BuildReport``.
     ``preview``: lenses with fewer quads per cut cell, where that is lighter (Auto Build while dragging)."""
-    lamps = [design_parts.lamp_parts(i, lamp, preview, functions.lamp_label(scene["lamps"], i))
-             for i, lamp in enumerate(scene["lamps"])]
-    body = design_parts.body_part(scene, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps])
+    not_driven = []
+    try:  # photometric: Cycles' lights in W (convert.photometric_cycles)
+        shown = photometric_cycles.equivalent(curves.with_curves(bl_scene, scene))
+    except SceneError as e:  # a measured curve not found: the objects keep the paper's values until it is
+        shown = scene
+        not_driven.append(f"photometric values: {e}")
+    lamps = [design_parts.lamp_parts(i, lamp, preview, functions.lamp_label(shown["lamps"], i))
+             for i, lamp in enumerate(shown["lamps"])]
+    body = design_parts.body_part(shown, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps])
     specs = [body, *(part for parts, _, _, _ in lamps for part in parts)]
     # Every shape that changed is made before the first change to the scene: a design whose geometry
     # fails (or an interrupt while a deep-cut lens is meshed) leaves the objects as they were, so an
@@ -149,11 +155,12 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False)
     geometry = {spec.part: design_parts.shapes.get(spec.shape, spec.make) for spec in _changed_shapes(bl_scene, specs)}
     _free_parts_whose_collection_was_deleted()
     build = _Build(bl_scene)
+    build.report.not_driven += not_driven
     for spec in specs:
         build.mesh_part(spec, geometry.get(spec.part))
     build.report.preview |= any(lens_preview for _, _, _, lens_preview in lamps)
-    build.sun(scene)
-    build.world(scene)
+    build.sun(shown)
+    build.world(shown)
     build.finish(design_digest(scene))
     return build.report
 

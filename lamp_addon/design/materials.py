@@ -118,7 +118,8 @@ def prism_plate_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list
     """The prism plate: glass like the lens's (Principled BSDF transmitting, IOR = the plate's n) with
     its own Volume Absorption (eq. 2, docs/model.md: the prism plate)."""
     plate = lamp["prism_plate"]
-    missing = _glass(mat, new, "Prism Plate", plate["ior"], plate["absorption"])
+    # photometric: the material's n_d refracts, the plate's own ior shaped its rings (convert.photometric_cycles)
+    missing = _glass(mat, new, "Prism Plate", plate.get("glass_ior", plate["ior"]), plate["absorption"])
     mat.diffuse_color = (*cycles.transmitted_color(plate["absorption"], plate["thickness"]), 0.3)
     return missing
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import bpy
 
-from ...core_tracer.scene import functions
+from ...core_tracer.scene import functions, light_models
 from ...core_tracer.scene import spec as S
 from ..actions import ACTION_OPERATORS
 from . import properties, validity
@@ -33,14 +33,22 @@ def draw_section(layout, group, section: S.Section, kinds: tuple[type, ...] | No
     """One ``prop`` per leaf field of ``section`` (only of the given spec ``kinds`` if set), then
     each either/or rule of the section."""
     status = validity.status(group.id_data)  # once per section: reading the design costs ~0.5 ms
+    model = group.id_data.lamp_design.light_model
+
+    def value_of(k):
+        return getattr(group, properties.property_id(k))
+
     for key in leaf_keys(section):
-        if not section.shown(key, lambda k: getattr(group, properties.property_id(k))):
+        if not section.shown(key, value_of):
             continue  # a field of another choice (a round lens's width)
+        if not light_models.used(section, key, model, value_of):
+            continue  # a field the design's light model does not use (a bulb's RGB intensity in lm)
         if kinds is None or isinstance(section.fields[key], kinds):
             validity.draw_field(layout, group, properties.property_id(key), status)
     if kinds is None:
         for rule in section.one_of:
-            draw_rule(layout, group, rule, status)
+            if any(light_models.used(section, key, model, value_of) for key in rule.keys):
+                draw_rule(layout, group, rule, status)
 
 
 def draw_rule(layout, group, rule: S.OneOf, status: validity.Status) -> None:
@@ -133,6 +141,7 @@ class LAMP_PT_light(DesignSection, bpy.types.Panel):
     def draw(self, context):
         layout = self._split(self.layout)
         design = context.scene.lamp_design
+        layout.row().prop(design, "light_model", expand=True)  # which fields follow: the paper's or lm, lx
         draw_section(layout, design.light, S.LIGHT)
         draw_section(layout, design, S.SCENE, (S.Num,))  # the background colour
         layout.separator()

@@ -42,10 +42,11 @@ from bpy.props import (
     StringProperty,
 )
 
-from ...core_tracer.scene import functions
+from ...core_tracer.scene import functions, photometric_checks
 from ...core_tracer.scene import spec as S
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import normalize, parse_scene
+from . import photometric_words
 
 OPEN_BOUND_MARGIN = 1.0e-6  # an open bound lo < x becomes lo + margin * max(1, |lo|) <= x
 TAG_SEPARATOR = ","
@@ -146,9 +147,9 @@ def _description(spec: S.Spec) -> str:
     return f"{spec.doc}. Allowed: {spec.range_text()}" if spec.doc else f"Allowed: {spec.range_text()}"
 
 
-def _num_property(key: str, spec: S.Num):
+def _num_property(key: str, spec: S.Num, name: str | None = None):
     lo, hi = blender_range(spec)
-    kw = {"name": display_name(key, spec.unit), "description": _description(spec), "update": _edited}
+    kw = {"name": name or display_name(key, spec.unit), "description": _description(spec), "update": _edited}
     if spec.integer:
         if lo is not None:
             kw["min"] = kw["soft_min"] = int(lo)
@@ -186,6 +187,8 @@ _writing = [0]  # > 0 while a design is being written: update callbacks leave th
 
 
 def _leaf_property(key: str, spec: S.Spec, section: S.Section):
+    if photometric_words.label(section, key) is not None:
+        return _worded_property(key, spec, section)
     if isinstance(spec, S.Num):
         return _num_property(key, spec)
     if isinstance(spec, S.Choice):
@@ -204,6 +207,31 @@ def _leaf_property(key: str, spec: S.Spec, section: S.Section):
         return StringProperty(name=display_name(key), default="", update=_edited,
                               description=f"{spec.doc}, separated by commas. Allowed: {spec.range_text()}")
     raise TypeError(f"no property for {spec!r}")  # pragma: no cover - every leaf kind is handled above
+
+
+def _worded_property(key: str, spec: S.Spec, section: S.Section):
+    """The property of a field the panel names in a designer's words (``photometric_words``): its
+    label, and a choice's items by name with their own tooltips (the menu lists what is allowed)."""
+    words = photometric_words.label(section, key)
+    name = f"{words} ({spec.unit})" if getattr(spec, "unit", "") else words
+    if isinstance(spec, S.Choice):
+        items = tuple((c, *photometric_words.choice_item(c, display_name(c))) for c in spec.choices)
+        update = _bulb_type_chosen if section is S.BULB and key == "type" else _edited
+        return EnumProperty(name=name, description=spec.doc, items=items, default=spec.default, update=update)
+    if isinstance(spec, S.Num):
+        return _num_property(key, spec, name)
+    if isinstance(spec, S.Text):
+        return StringProperty(name=name, description=_description(spec), default=spec.default, update=_edited)
+    raise TypeError(f"no worded property for {spec!r}")  # pragma: no cover - photometric_words names these kinds
+
+
+def _bulb_type_chosen(self, context) -> None:
+    """Picking a named bulb keeps its filament one the bulb has (a P21/5W's stop stays; an R5W's is on)."""
+    if not _writing[0] and self.type in photometric_checks.BULB_STATES:
+        states = photometric_checks.BULB_STATES[self.type]
+        if self.state not in states:
+            self.state = states[0]
+    _edited(self, context)
 
 
 def _make_groups(section: S.Section, class_name: str, out: list[type], extra: dict | None = None) -> type:

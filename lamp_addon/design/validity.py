@@ -16,7 +16,7 @@ from ...core_tracer.scene import spec as S
 from ...core_tracer.scene.limits import lamp_limits
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
-from . import properties
+from . import photometric_words, properties
 
 WRAP = 44  # characters per label line in the sidebar
 
@@ -51,6 +51,10 @@ class Problem:
         for part in self.property_path.split("."):
             m = re.fullmatch(r"(\w+)\[(\d+)\]", part)
             words.append(f"Lamp {int(m[2]) + 1}" if m and m[1] == "lamps" else properties.display_name(part))
+        owner, _, key = re.sub(r"\[\d+\]", "[]", self.property_path).rpartition(".")
+        section = _spec(owner) if owner else S.SCENE
+        if isinstance(section, S.Section):  # a photometric field's own words ("Filament", not "State")
+            words[-1] = photometric_words.label(section, key) or words[-1]
         return " ".join(words[:-1]) + (": " if len(words) > 1 else "") + words[-1]
 
     def lines(self) -> list[str]:

@@ -20,6 +20,7 @@ from ...core_tracer.scene.beside import environment_file
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import normalize
 from ..design import builder as design_builder
+from ..design import curves as design_curves
 from ..design import properties as design_properties
 from ..design import root as design_root
 from ..freeform import loading as freeform_loading
@@ -115,6 +116,8 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
             raise SceneError("freeform", "a free-form design needs its file, to find its .glb beside it")
         parts = freeform_loading.read_parts(path, scene)  # before any change: all or nothing
     design_properties.scene_to_design(bl_scene, scene)
+    if path is not None:  # its measured curves (.csv) are found beside it (design.curves)
+        design_curves.remember_preset_folder(bl_scene, path)
     design = design_properties.design_to_scene(bl_scene)
     view = show_view(bl_scene, design)
     if parts is not None:

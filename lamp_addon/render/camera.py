@@ -32,6 +32,7 @@ import bpy
 
 from ..convert import camera as cm
 from ..convert import units
+from ..design import curves as design_curves
 from ..design import properties as design_properties
 from ..design import root as design_root
 
@@ -92,7 +93,16 @@ def scene_camera_to_dict(bl_scene, camera_object=None) -> dict:
         "width": _round(cam.ortho_scale * MM_PER_BU, 6),
         "sensor_fit": fit,
         "shift": _round((cam.shift_x, cam.shift_y), 6),
+        **design_exposure(bl_scene),
     }
+
+
+def design_exposure(bl_scene) -> dict:
+    """The design's exposure fields of its camera (``exposure``, ``ev100``): Blender's camera has no
+    exposure of its own, so the camera a render uses keeps the design's (an EV100 fixed for every
+    design rendered through it, docs/scene-format.md)."""
+    group = bl_scene.lamp_design.camera
+    return {"exposure": group.exposure, "ev100": design_properties.from_float32(group.ev100)}
 
 
 def focus_distance(ob) -> float:
@@ -168,8 +178,9 @@ def scene_for_render(bl_scene, *, camera_object=None, size: tuple[int, int] | No
         render.resolution_x, render.resolution_y, render.resolution_percentage)
     # The design's samples per pixel go with it (F12 renders them); only the size is Blender's.
     image = {"width": int(width), "height": int(height), "samples": int(bl_scene.lamp_design.image.samples)}
-    return design_properties.design_to_scene(bl_scene, camera=scene_camera_to_dict(bl_scene, camera_object),
-                                             image=image)
+    scene = design_properties.design_to_scene(bl_scene, camera=scene_camera_to_dict(bl_scene, camera_object),
+                                              image=image)
+    return design_curves.with_curves(bl_scene, scene)  # photometric: measured curves by their full paths
 
 
 # ---------------------------------------------------------------------------------------------

@@ -18,7 +18,7 @@ from ...core_tracer.raytrace.engine import PASS_NAMES
 from ...core_tracer.scene.reading import SceneError
 from ..freeform import render as freeform_render
 from ..freeform import status as freeform_status
-from . import camera
+from . import camera, photometric_display
 from . import viewport as render_viewport
 
 ENGINE_ID = "LAMP_TRACER"
@@ -154,12 +154,21 @@ class LampTracerEngine(bpy.types.RenderEngine):
         # Surroundings vary with the direction: with a transparent film the tracer leaves out what the
         # missing rays see (they still light the lamp and show in the lens), so nothing is taken away.
         surroundings = scene["environment"]["world"] != "none"
-        if surroundings:
+        try:  # photometric: XYZ in cd/m² to the working space at one EV100 (render.photometric_display)
+            shown_as = photometric_display.for_scene(scene)
+        except SceneError as e:
+            self.report({"ERROR"}, f"Lamp Tracer: {e}")
+            return
+        if surroundings or shown_as is not None:  # the photometric background is black
             background = np.zeros(3, np.float32)
 
         def write_rows(row_start: int, row_stop: int, rows: np.ndarray,
-                       passes: dict[str, np.ndarray] | None = None) -> None:
-            """Rows ``row_start:row_stop`` of the image (and of each pass) into the result, in bands."""
+                       passes: dict[str, np.ndarray] | None = None, *, linear: bool = False) -> None:
+            """Rows ``row_start:row_stop`` of the image (and of each pass) into the result, in bands;
+            photometric rows are XYZ unless ``linear`` (already the working space's)."""
+            if shown_as is not None and not linear:
+                rows = shown_as.linear(rows)
+                passes = {name: shown_as.linear(values) for name, values in (passes or {}).items()}
             for start in range(row_start, row_stop, BAND_ROWS):
                 stop = min(start + BAND_ROWS, row_stop)
                 band = slice(start - row_start, stop - row_start)
@@ -192,6 +201,13 @@ class LampTracerEngine(bpy.types.RenderEngine):
             return  # Esc: Blender keeps the bands finished so far, with their passes
         # Glare needs the whole image: the bands shown while rendering are replaced by the glared
         # image (Combined only; the contribution passes stay the tracer's, without glare).
+        if shown_as is not None:  # glare's threshold is a display level: applied to the shown image
+            image = shown_as.linear(result.image)
+            shown = glare.apply(image, scene)
+            if shown is not image:
+                write_rows(0, height, shown, linear=True)
+            self.update_stats("", f"Lamp Tracer: photometric, EV100 {shown_as.ev100:.2f}")
+            return
         shown = glare.apply(result.image, scene)
         if shown is not result.image:
             write_rows(0, height, shown)

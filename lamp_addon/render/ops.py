@@ -23,7 +23,7 @@ from ...core_tracer.images import display, glare
 from ...core_tracer.raytrace import band_pool
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, image_view, jobs, reports
-from . import camera, view_link
+from . import camera, photometric_display, view_link
 
 IMAGE_NAME = "Lamp Tracer"
 
@@ -34,6 +34,7 @@ class TracerJob:
 
     def __init__(self, scene: dict):
         self.scene = scene
+        self.shown_as = photometric_display.for_scene(scene)  # photometric: XYZ rows to scene-linear
         width, height = scene["image"]["width"], scene["image"]["height"]
         self.rows = np.zeros((height, width, 3), np.float32)
         self.progress = 0.0
@@ -57,7 +58,7 @@ class TracerJob:
         return self.done.wait(timeout)
 
     def _on_rows(self, row_start: int, row_stop: int, rows: np.ndarray) -> None:
-        self.rows[row_start:row_stop] = rows
+        self.rows[row_start:row_stop] = rows if self.shown_as is None else self.shown_as.linear(rows)
         self.rows_done += row_stop - row_start
         self.updates += 1
 
@@ -93,6 +94,11 @@ def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
     view_link.sync_view(bl_scene)
     scene = camera.scene_for_render(bl_scene)
     start = time.perf_counter()
+    shown_as = photometric_display.for_scene(scene)
+    if shown_as is not None:  # photometric: the design's EV100 is in the pixels (render.photometric_display)
+        rgb = glare.apply(shown_as.linear(core_tracer.render(scene)), scene)
+        seconds = time.perf_counter() - start
+        return image_view.show_linear(IMAGE_NAME, rgb, 0.0, bl_scene), seconds
     rgb = glare.apply(core_tracer.render(scene), scene)
     seconds = time.perf_counter() - start
     exposure = display.auto_exposure(rgb)
@@ -130,9 +136,9 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
         view_link.sync_view(context.scene)
         try:
             scene = camera.scene_for_render(context.scene)
+            self._job = TracerJob(scene)
         except SceneError as e:
             return reports.cancelled(self, str(e))
-        self._job = TracerJob(scene)
         exposure = image_view.design_exposure(scene)  # known before the rows arrive
         self._gain = image_view.shown_gain(context.scene, exposure)
         self._image = image_view.show_linear(IMAGE_NAME, self._job.rows, exposure, context.scene)

@@ -30,6 +30,8 @@ def design_view(bl_scene) -> tuple[dict, dict]:
 def write_design_camera(bl_scene, camera: dict) -> None:
     group = bl_scene.lamp_design.camera
     for key, value in camera.items():
+        if key in ("exposure", "ev100"):
+            continue  # the design's own, carried by the camera dict (Blender's camera has no exposure)
         if hasattr(group, key) and getattr(group, key) != value:
             setattr(group, key, value)
 

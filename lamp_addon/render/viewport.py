@@ -20,13 +20,17 @@ import weakref
 import bpy
 import numpy as np
 
+from ...core_tracer.raytrace import spectral
 from ...core_tracer.scene.reading import SceneError
 from ..convert import viewport
+from ..design import curves as design_curves
 from ..design import properties as design_properties
 from ..design import root as design_root
 from ..design import validity as design_validity
 from ..freeform import geometry as freeform_geometry
 from ..freeform import render as freeform_render
+from . import camera as camera_module
+from . import photometric_display
 from .preview import ProgressivePreview
 
 POLL_SECONDS = 0.05  # how often the main thread looks for a finished stage
@@ -63,12 +67,14 @@ class ViewportSession:
         self.design: dict | None = None
         self.error: str | None = None  # why the design cannot be rendered
         self.view_error: str | None = None  # why this view cannot be (a root scaled unevenly)
+        self.display_error: str | None = None  # why the image cannot be shown (the working space)
         self.scene: dict | None = None  # the scene of the current preview job
         self.world_from_model = viewport.model_matrix()  # model mm -> world: the design root's matrix
         self.freeform = None  # freeform.render.Prepared when the view shows parts with roles
         self._freeform_generation = None  # the geometry generation of the current preview job
         self._texture = None
         self._texture_frame = None
+        self._auto_ev100: tuple[int | None, float] = (None, 0.0)  # (preview generation, its EV100)
         self._poll = self._make_poll()
 
     # -- main thread: Blender's callbacks ------------------------------------------------------
@@ -80,8 +86,10 @@ class ViewportSession:
         # Read here, not at every redraw: finding the root walks the scene's objects.
         self.world_from_model = viewport.model_matrix(_rows(design_root.world_from_design(bl_scene)))
         try:
-            self.design = design_properties.design_to_scene(bl_scene, camera=_STAND_IN_CAMERA,
-                                                            image=_STAND_IN_IMAGE)
+            # the design's exposure stays (photometric: one EV100 for the view, ``_shown``)
+            self.design = design_curves.with_curves(bl_scene, design_properties.design_to_scene(
+                bl_scene, camera={**_STAND_IN_CAMERA, **camera_module.design_exposure(bl_scene)},
+                image=_STAND_IN_IMAGE))
             self.error = None
         except SceneError as e:
             self.design, self.error = None, invalid_design_text(bl_scene, e)
@@ -140,7 +148,7 @@ class ViewportSession:
 
     def status(self) -> str:
         """One line for the viewport's text overlay."""
-        error = self.error or self.view_error or self.preview.error
+        error = self.error or self.view_error or self.display_error or self.preview.error
         if error is not None:
             return f"Lamp Tracer: {error}"
         frame = self.preview.frame()
@@ -157,10 +165,36 @@ class ViewportSession:
         frame = self.preview.frame()
         if frame is None or self.design is None or self.view_error is not None:
             return
-        if self._texture_frame is not frame:
-            self._texture = image_texture(frame.image)
-            self._texture_frame = frame
+        exposure = (self.design.get("light_model"), self.design["camera"].get("exposure"),
+                    self.design["camera"].get("ev100"))  # an exposure edit redraws without a new preview
+        if self._texture_frame != (frame, exposure):
+            shown = self._shown(frame)
+            if shown is None:
+                return
+            self._texture = image_texture(shown)
+            self._texture_frame = (frame, exposure)
         draw_texture(engine, bl_scene, self._texture, width, height)
+
+    def _shown(self, frame) -> np.ndarray | None:
+        """The frame's scene-linear image: the paper's RGB as it is; the photometric XYZ at the
+        design's EV100 (with "auto", measured on the first stage of each preview and kept for its
+        later stages, so that refining never re-exposes), in the working space. None, with the
+        reason in ``display_error``, when the working space cannot show it."""
+        if self.design is None or self.design.get("light_model", "paper") != "photometric":
+            return frame.image
+        if self.design["camera"]["exposure"] == "ev100":
+            ev100 = self.design["camera"]["ev100"]
+        else:
+            if self._auto_ev100[0] != frame.generation:
+                self._auto_ev100 = (frame.generation, spectral.exposure_ev100(frame.image, self.design))
+            ev100 = self._auto_ev100[1]
+        try:
+            shown = photometric_display.Display(ev100).linear(frame.image)
+        except SceneError as e:
+            self.display_error = str(e)
+            return None
+        self.display_error = None
+        return shown
 
     def free(self) -> None:
         self.preview.cancel()

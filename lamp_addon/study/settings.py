@@ -20,6 +20,7 @@ from ...core_tracer.scene.functions import suggested_values
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from ...core_tracer.study.parameters import study_parameters
+from ..design import photometric_words
 from ..design import properties as design_properties
 from ..render import camera as render_camera
 
@@ -37,6 +38,9 @@ def _parameter_label(path: str) -> str:
     rule = parent.rule_of(key) if isinstance(parent, S.Section) else None
     if rule is not None and rule.of_key(key).name == key:  # the field that picks a form: the form's name
         label = rule.of_key(key).label
+    elif isinstance(parent, S.Section) and photometric_words.label(parent, key) is not None:
+        words = photometric_words.label(parent, key)  # a photometric field's own words ("Bulb: Bulb Type")
+        label = f"{words} ({unit})" if unit else words
     else:
         label = design_properties.display_name(key, unit)
     return f"{prefix}: {label}" if prefix else label

@@ -181,26 +181,41 @@ def _shown_panels(lamp_addon, bl_scene) -> list:
     return [cls for cls in _panels(lamp_addon) if not hasattr(cls, "poll") or cls.poll(context)]
 
 
+# The photometric mode's choices that show further fields: (light model, bulb type, spectrum,
+# material, filter, environment brightness by), each value of each choice at least once.
+PHOTOMETRIC_CHOICES = (("paper", "custom", "incandescent", "pmma", "red", "illuminance"),
+                       ("photometric", "custom", "led", "custom", "custom", "illuminance"),
+                       ("photometric", "custom", "file", "pmma", "file", "luminance"),
+                       ("photometric", "P21/5W", "incandescent", "polycarbonate", "clear", "illuminance"))
+
+
 def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
     shown = set()
-    for collection, mode, outline, shape in (("reflector", "transmitted_color", "round", "flat"),
-                                             ("reflector", "absorption", "rectangular", "cylindrical"),
-                                             ("prism_plate", "absorption", "round", "flat")):
-        design.lamps[2].collection = collection
-        design.lamps[2].lens.color_mode = mode
-        design.lamps[2].lens.outline = outline
-        design.lamps[2].lens.shape = shape
-        design.environment.world = "none" if outline == "round" else "file"  # the file row shows only then
-        for cut_type in S.CUT_TYPES:  # each type shows its own fields
-            design.lamps[2].cuts.type = cut_type
-            for cls in _shown_panels(lamp_addon, bl_scene):
-                shown |= draw(cls, bl_scene).spec_paths()
+    lamp = design.lamps[2]
+    for model, bulb_type, spectrum, material, filter_kind, scale_by in PHOTOMETRIC_CHOICES:
+        design.light_model = model
+        lamp.bulb.type, lamp.bulb.spectrum = bulb_type, spectrum
+        for part in (lamp.lens, lamp.prism_plate):
+            part.material, part.filter = material, filter_kind
+        design.environment.scale_by = scale_by
+        for collection, mode, outline, shape in (("reflector", "transmitted_color", "round", "flat"),
+                                                 ("reflector", "absorption", "rectangular", "cylindrical"),
+                                                 ("prism_plate", "absorption", "round", "flat")):
+            lamp.collection = collection
+            lamp.lens.color_mode = mode
+            lamp.lens.outline = outline
+            lamp.lens.shape = shape
+            design.environment.world = "none" if outline == "round" else "file"  # the file row shows only then
+            for cut_type in S.CUT_TYPES:  # each type shows its own fields
+                lamp.cuts.type = cut_type
+                for cls in _shown_panels(lamp_addon, bl_scene):
+                    shown |= draw(cls, bl_scene).spec_paths()
     wanted = {info.path for info in S.iter_fields() if not lamp_addon.design.properties.is_constant(info.spec)}
     assert wanted - shown == set()
     assert shown - wanted == {"lamps[].lens.color_mode"}  # the only property that is not a scene field
 
 
-def test_each_sub_panel_shows_its_section(lamp_addon, S, bl_scene, design):
+def test_each_sub_panel_shows_its_section(lamp_addon, addon_core, S, bl_scene, design):
     import bpy
 
     sections = {
@@ -211,9 +226,18 @@ def test_each_sub_panel_shows_its_section(lamp_addon, S, bl_scene, design):
         "LAMP_PT_bulb": ("lamps[].bulb.", S.BULB),
         "LAMP_PT_socket": ("lamps[].socket.", S.SOCKET),
     }
-    for name, (prefix, section) in sections.items():
-        shown = draw(getattr(bpy.types, name), bl_scene).spec_paths()
-        assert {prefix + key for key in section.fields} <= shown, name
+    light_models = addon_core.scene.light_models
+    for model in ("paper", "photometric"):  # each shows the fields its light model uses, and only those
+        design.light_model = model
+        ignored = light_models.is_paper_only if model == "photometric" else light_models.is_photometric_only
+        for name, (prefix, section) in sections.items():
+            shown = draw(getattr(bpy.types, name), bl_scene).spec_paths()
+            conditional = {key for key, _choice, _values in section.shown_when}  # shown for some choices
+            assert {prefix + key for key in section.fields
+                    if key not in conditional and not ignored(section, key)} <= shown, (model, name)
+            assert not {prefix + key for key in section.fields if ignored(section, key)} & shown, (model, name)
+        assert "light_model" in draw(bpy.types.LAMP_PT_light, bl_scene).spec_paths()
+    design.light_model = "paper"
     cuts = set()
     for cut_type in S.CUT_TYPES:  # the cut type, then only the fields that type uses
         design.lamps[2].cuts.type = cut_type

@@ -19,6 +19,7 @@ import pytest
 from helpers import BASELINE, ROOT, render_engine_exr
 
 import core_tracer
+import core_tracer.raytrace.camera  # the projection tests use it; the package loads its modules lazily
 from core_tracer.images import display, imageio
 
 pytestmark = pytest.mark.blender

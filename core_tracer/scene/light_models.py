@@ -1,0 +1,57 @@
+"""Which fields each light model uses (``light_model``: paper or photometric), for editors that
+show only what shapes the image.
+
+The photometric mode's own fields say "Photometric" first in their description (``spec``); the
+paper mode ignores them. The photometric mode ignores the paper's appearance values
+(``raytrace.spectral``): the bulb's RGB intensity, the reflector's constant colour, mirror
+reflectance and Blinn weight (its finish and glow share stand for them), the unlit colours of the
+lens surface, its rim, the socket and the plate's housing (they end a path with 0), the lens colour
+as RGB absorption (its filter stands for it), the plate's RGB absorption, the sun's colour, strength,
+highlight colour and ambient (the sun is CIE daylight at its illuminance in lux), the environment's
+strength (its illuminance or luminance scales it) and the background colour (black). The lens's
+refractive index is its material's unless the material is custom.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from . import spec as S
+
+PHOTOMETRIC_PREFIX = "Photometric"
+
+# (section, keys the photometric mode ignores)
+_PAPER_ONLY = (
+    (S.SCENE, ("background",)),
+    (S.LIGHT, ("color", "ambient", "strength", "sun_color", "follow_environment_color")),
+    (S.ENVIRONMENT, ("strength",)),
+    (S.LENS, ("absorption", "transmitted_color", "reference_thickness", "diffuse_color", "side_wall_color")),
+    (S.REFLECTOR, ("color", "reflectance", "scatter")),
+    (S.BULB, ("intensity",)),
+    (S.SOCKET, ("color",)),
+    (S.PRISM_PLATE, ("absorption", "housing_color")),
+)
+# (section, key, choice key, values): shown in the photometric mode only while the choice holds
+# one of the values (the paper mode always uses the field)
+_PHOTOMETRIC_SHOWN_WHEN = ((S.LENS, "ior", "material", ("custom",)),)
+
+
+def is_photometric_only(section: S.Section, key: str) -> bool:
+    """Whether ``key`` of ``section`` means something in the photometric mode only."""
+    return section.fields[key].doc.startswith(PHOTOMETRIC_PREFIX)
+
+
+def is_paper_only(section: S.Section, key: str) -> bool:
+    """Whether the photometric mode ignores ``key`` of ``section``."""
+    return any(sec is section and key in keys for sec, keys in _PAPER_ONLY)
+
+
+def used(section: S.Section, key: str, light_model: str, value_of: Callable[[str], object]) -> bool:
+    """Whether field ``key`` of ``section`` shapes the image under ``light_model``; ``value_of``
+    gives the section's other fields (a custom material's index)."""
+    if light_model == "photometric":
+        if is_paper_only(section, key):
+            return False
+        return all(value_of(choice) in values for sec, k, choice, values in _PHOTOMETRIC_SHOWN_WHEN
+                   if sec is section and k == key)
+    return not is_photometric_only(section, key)
