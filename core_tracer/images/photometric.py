@@ -75,3 +75,28 @@ def write_render(path: str | os.PathLike, XYZ: np.ndarray, scene: dict, *, ev100
 def write_pass(path: str | os.PathLike, XYZ: np.ndarray, scene: dict, bands: Bands | None = None) -> None:
     """One contribution pass of a photometric render (XYZ, Y in cd/m²) as an .exr with units."""
     output.write_photometric_exr(path, XYZ, channels=("X", "Y", "Z"), bands=bands, scene=scene)
+
+
+def shown_together(scenes: Sequence[dict], images: Sequence[np.ndarray], *, ev100: float | str | None = None,
+                   stops: float = 0.0, exposure: float | str | None = "auto") -> tuple[list[np.ndarray], float | None,
+                                                                                     float | None]:
+    """(linear images ready for the view at exposure 0, the EV100 of the photometric ones, the
+    stops of the paper ones) for images shown side by side (a study's cells): every photometric
+    image at ONE EV100 (``ev100`` or the first photometric scene's camera; "auto" is one automatic
+    exposure over all of them) and ``stops`` more; every paper-mode image at ONE ``exposure``
+    ("auto": ``display.auto_exposure`` over all of them). None where there is no image of a kind."""
+    photometric = [i for i, scene in enumerate(scenes) if is_photometric(scene)]
+    paper = [i for i in range(len(scenes)) if i not in set(photometric)]
+    shown: list[np.ndarray] = [np.asarray(a, dtype=np.float32) for a in images]
+    camera = None
+    if photometric:
+        camera = ev100_for([shown[i] for i in photometric], scenes[photometric[0]], ev100)
+        gain = np.float32(2.0 ** stops)
+        for i in photometric:
+            shown[i] = scene_linear(shown[i], camera) * gain
+    paper_ev = None
+    if paper:
+        paper_ev = display.resolve_exposure(exposure, [shown[i] for i in paper])
+        for i in paper:
+            shown[i] = shown[i] * np.float32(2.0 ** paper_ev)
+    return shown, camera, paper_ev

@@ -95,3 +95,38 @@ def test_photometric_options_refused_for_the_paper_mode(tmp_path):
     proc = run_cli("render", STOP, "-o", tmp_path / "x.png", *SIZE, "--ev100", "40")
     assert proc.returncode == 2 and "[-20, 30]" in proc.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def _cells(sheet_path) -> list[np.ndarray]:
+    from core_tracer.study import sheet as study_sheet
+    from core_tracer.study.definition import Study
+
+    study = Study.load(str(sheet_path))
+    image = _png(sheet_path)
+    return [image[r.y:r.y + r.h, r.x:r.x + r.w] for r in study_sheet.layout(study).cells]
+
+
+@pytest.mark.parametrize("exposure", [(), ("--ev100", "auto")], ids=["scene-ev100", "one-auto"])
+def test_a_study_shows_the_brighter_filament_brighter(tmp_path, exposure):
+    """One exposure for every cell (the scene's EV100, or one automatic one over all cells): the
+    stop filament's cell is brighter than the tail filament's; with a worker process as in use."""
+    out = tmp_path / "sheet.png"
+    proc = run_cli("study", STOP, "--vary", "bulb.state=tail,stop", "--size", "64x64", "-o", out, "--workers", "1",
+                   *exposure)
+    assert proc.returncode == 0, proc.stderr
+    assert re.search(r"AgX at EV100 -?\d+\.\d for every cell", proc.stdout), proc.stdout
+    if not exposure:
+        assert "EV100 15.0" in proc.stdout
+    tail, stop = _cells(out)
+    lit = stop.max(axis=-1) > 40
+    assert stop[lit][:, 0].mean() > tail[lit][:, 0].mean() + 20
+    assert stop[lit][:, 0].mean() > 2.0 * stop[lit][:, 1].mean()  # red
+
+
+def test_a_photometric_study_sheet_exr_holds_xyz(tmp_path):
+    out = tmp_path / "sheet.exr"
+    proc = run_cli("study", STOP, "--vary", "bulb.state=tail,stop", "--size", "32x32", "-o", out, "--workers", "0")
+    assert proc.returncode == 0, proc.stderr
+    channels, attrs = output.read_photometric_exr(out)
+    assert sorted(channels) == ["X", "Y", "Z"] and "cd/m2" in attrs[output.UNITS_ATTRIBUTE]
+    assert channels["Y"].max() > 1000.0
