@@ -327,7 +327,11 @@ PHOTOMETRIC_THUMBNAIL_LOOK = (f"{display.DEFAULT_VIEW}; XYZ in cd/m2 to linear R
 def thumbnail_digest(entry: PresetEntry) -> str:
     """The hash of a preset's content and of how it is shown (``THUMBNAIL_LOOK``, or
     ``PHOTOMETRIC_THUMBNAIL_LOOK`` for a photometric preset)."""
-    look = PHOTOMETRIC_THUMBNAIL_LOOK if entry.scene.get("light_model") == "photometric" else THUMBNAIL_LOOK
+    look = THUMBNAIL_LOOK
+    if entry.scene.get("light_model") == "photometric":
+        from ..raytrace.spectral import DEFAULT_BANDS  # loaded for a photometric preset only
+
+        look = f"{PHOTOMETRIC_THUMBNAIL_LOOK}; {DEFAULT_BANDS} bands"
     return hashlib.sha256(f"{entry.digest}\n{look}".encode()).hexdigest()[:16]
 
 
