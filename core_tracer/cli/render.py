@@ -54,6 +54,7 @@ def run(args: argparse.Namespace) -> int:
     if args.passes is not None:
         _check_passes_folder(args.passes, args.output)
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
+    _check_photometric_options(args, scene)
     traced, scene = _with_environment(args, scene)
     meshes, geometry = _freeform_meshes(args.scene, scene)
     keep_passes = args.passes is not None
@@ -118,6 +119,21 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_photometric_options(args: argparse.Namespace, scene: dict) -> None:
+    """Before the render: ``--ev100``, ``--false-color`` and ``--luminance-range`` fit the scene and the output."""
+    if scene.get("light_model", "paper") != "photometric":
+        for option, given in (("--ev100", args.ev100 is not None), ("--false-color", args.false_color),
+                              ("--luminance-range", args.luminance_range is not None)):
+            if given:
+                raise SceneError(option, 'is for photometric scenes; allowed with "light_model": "photometric"')
+        return
+    if args.luminance_range is not None and not args.false_color:
+        raise SceneError("--luminance-range", "is the scale of --false-color; allowed with --false-color")
+    if args.false_color and image_format(args.output) != "png":
+        raise SceneError("--false-color", "draws a .png (an .exr holds the luminance itself, channel Y); allowed "
+                                          "with -o OUT.png")
+
+
 def _writers(args: argparse.Namespace, scene: dict, image, stats: dict, view):
     """(write the image and say in words what it shows, write a pass) for the scene's light model:
     the paper mode's linear RGB as ever; the photometric mode's XYZ in cd/m² at one EV100
@@ -125,10 +141,6 @@ def _writers(args: argparse.Namespace, scene: dict, image, stats: dict, view):
     from ..images.imageio import write_image
 
     if stats.get("light_model") != "photometric":
-        for option, given in (("--ev100", args.ev100 is not None), ("--false-color", args.false_color),
-                              ("--luminance-range", args.luminance_range is not None)):
-            if given:
-                raise SceneError(option, 'is for photometric scenes; allowed with "light_model": "photometric"')
 
         def write() -> str:
             ev = write_image(args.output, image, scene, view=view, exposure=args.exposure)
@@ -139,8 +151,6 @@ def _writers(args: argparse.Namespace, scene: dict, image, stats: dict, view):
     from ..images import photometric
     from ..photometry.bands import Bands
 
-    if args.luminance_range is not None and not args.false_color:
-        raise SceneError("--luminance-range", "is the scale of --false-color; allowed with --false-color")
     bands = Bands.uniform(int(stats["bands"]))
     ev100 = photometric.ev100_for(image, scene, args.ev100)
     stops = photometric_stops(args)

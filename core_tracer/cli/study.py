@@ -181,6 +181,7 @@ def run(args: argparse.Namespace) -> int:
         except OSError as e:
             raise SceneError(args.save_variants, f"--save-variants {e.strerror}") from None
     study = _build(args)
+    _check_photometric_options(args, study)
     runnable = study
     if args.output is not None:
         from ..study import sheet as study_sheet  # numpy: only for a sheet
@@ -226,6 +227,16 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_photometric_options(args: argparse.Namespace, study: st.Study) -> None:
+    """Before any worker starts: ``--ev100`` needs a photometric design; an .exr sheet holds one kind of cell."""
+    modes = {v.scene.get("light_model", "paper") for v in study.variants}
+    if args.ev100 is not None and "photometric" not in modes:
+        raise SceneError("--ev100", 'is for photometric designs; allowed with "light_model": "photometric"')
+    if len(modes) > 1 and args.output is not None and image_format(args.output) == "exr":
+        raise SceneError(args.output, "a study that varies light_model mixes RGB and XYZ cells; allowed a .png "
+                                      "sheet for it")
+
+
 def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view) -> str:
     """Write the sheet under ONE exposure for all its cells (never one per cell, issue 22 item 7):
     the paper mode's ``--exposure`` ("auto" measured over every cell); the photometric mode's
@@ -236,14 +247,9 @@ def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view) 
 
     scenes = [v.scene for v in study.variants]
     if not any(photometric.is_photometric(scene) for scene in scenes):
-        if args.ev100 is not None:
-            raise SceneError("--ev100", 'is for photometric designs; allowed with "light_model": "photometric"')
         ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure)
         return f", {view.view} at {ev:+.1f} EV" if view is not None else ""
     if view is None:  # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
-        if not all(photometric.is_photometric(scene) for scene in scenes):
-            raise SceneError(args.output, "a study that varies light_model mixes RGB and XYZ cells; allowed a "
-                                          ".png sheet for it")
         from ..photometry import output
 
         sheet = study_sheet.compose(study, images, text="bitmap")

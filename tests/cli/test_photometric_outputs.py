@@ -92,6 +92,9 @@ def test_photometric_options_refused_for_the_paper_mode(tmp_path):
     assert_bad_input(proc, "--ev100", "photometric")
     proc = run_cli("render", STOP, "-o", tmp_path / "x.png", *SIZE, "--luminance-range", "1:10")
     assert_bad_input(proc, "--luminance-range", "--false-color")
+    proc = run_cli("render", STOP, "-o", tmp_path / "x.exr", *SIZE, "--false-color")
+    assert_bad_input(proc, "--false-color", ".png")
+    assert not (tmp_path / "x.exr").exists()
     proc = run_cli("render", STOP, "-o", tmp_path / "x.png", *SIZE, "--ev100", "40")
     assert proc.returncode == 2 and "[-20, 30]" in proc.stderr
     assert not (tmp_path / "x.png").exists()
@@ -130,3 +133,13 @@ def test_a_photometric_study_sheet_exr_holds_xyz(tmp_path):
     channels, attrs = output.read_photometric_exr(out)
     assert sorted(channels) == ["X", "Y", "Z"] and "cd/m2" in attrs[output.UNITS_ATTRIBUTE]
     assert channels["Y"].max() > 1000.0
+
+
+def test_study_options_checked_before_any_render(tmp_path):
+    proc = run_cli("study", BASELINE, "--vary", "lens.ior=1.4,1.5", "--size", "32x32", "-o", tmp_path / "s.png",
+                   "--ev100", "12")
+    assert_bad_input(proc, "--ev100", "photometric")
+    proc = run_cli("study", STOP, "--vary", "light_model=paper,photometric", "--size", "32x32", "-o",
+                   tmp_path / "s.exr")
+    assert_bad_input(proc, "light_model", ".png")
+    assert not any(tmp_path.iterdir())
