@@ -179,3 +179,53 @@ def _exposure(text: str) -> float | str:
         raise argparse.ArgumentTypeError(f"{text} is out of range; allowed auto or [-{display.MAX_EXPOSURE:g}, "
                                          f"{display.MAX_EXPOSURE:g}] stops")
     return value
+
+
+# ---------------------------------------------------------------------------------------------
+# The photometric mode's display (docs/photometric.md, "Outputs")
+
+
+def add_photometric_arguments(parser: argparse.ArgumentParser, false_colour: bool = True) -> None:
+    """``--ev100 EV|auto`` (and ``--false-color``, ``--luminance-range LO:HI``): how a photometric
+    scene's .png shows its cd/m². The paper mode ignores them."""
+    parser.add_argument("--ev100", type=_ev100, metavar="EV|auto",
+                        help="photometric scenes: the camera's exposure value at ISO 100 for a .png (default the "
+                             "scene's camera.exposure and camera.ev100); one value for every image of a study; "
+                             "auto picks one from the lit lens; --exposure adds stops on top")
+    if not false_colour:
+        return
+    parser.add_argument("--false-color", action="store_true",
+                        help="photometric scenes: the .png is a false-colour map of the luminance with a legend "
+                             "in cd/m2 (log scale, four decades below the image's top unless --luminance-range)")
+    parser.add_argument("--luminance-range", type=_luminance_range, metavar="LO:HI",
+                        help="the cd/m2 at the two ends of --false-color's scale (e.g. 10:100000), the same for "
+                             "images to compare")
+
+
+def _ev100(text: str) -> float | str:
+    if text.strip().lower() == "auto":
+        return "auto"
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number or auto") from None
+    if not (math.isfinite(value) and -20.0 <= value <= 30.0):
+        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed auto or [-20, 30]")
+    return value
+
+
+def _luminance_range(text: str) -> tuple[float, float]:
+    parts = text.split(":")
+    try:
+        lo, hi = (float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not LO:HI in cd/m2 (e.g. 10:100000)") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo < hi):
+        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed 0 < LO < HI cd/m2")
+    return lo, hi
+
+
+def photometric_stops(args: argparse.Namespace) -> float:
+    """The stops a photometric .png adds on top of its EV100: ``--exposure`` when it is a number
+    (its "auto" means the camera's own exposure, which the EV100 already is)."""
+    return 0.0 if args.exposure == "auto" else float(args.exposure)

@@ -13,7 +13,16 @@ from ..images.imageio import image_format
 from ..scene.beside import environment_file
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
-from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, load_scene_file, view_for
+from .common import (
+    add_display_arguments,
+    add_photometric_arguments,
+    check_output,
+    check_output_folder,
+    ctrl_c_sets,
+    load_scene_file,
+    photometric_stops,
+    view_for,
+)
 
 PASSES = "passes (.exr files)"
 HELP = "render a scene to an .exr (linear, scene in the header) or .png (view transform, exposure) image"
@@ -33,6 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="your own environment image (.exr or .hdr, any folder) as the surroundings, in place "
                              "of the scene's; a scene file names only an image beside it or a bundled world")
     add_display_arguments(parser)
+    add_photometric_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -44,6 +54,7 @@ def run(args: argparse.Namespace) -> int:
     if args.passes is not None:
         _check_passes_folder(args.passes, args.output)
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
+    _check_photometric_options(args, scene)
     traced, scene = _with_environment(args, scene)
     meshes, geometry = _freeform_meshes(args.scene, scene)
     keep_passes = args.passes is not None
@@ -60,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
 
     from .. import RenderCancelled, render_passes  # the tracer loads only when it is needed
     from ..images import glare
-    from ..images.imageio import load_writer, write_image
+    from ..images.imageio import load_writer
 
     load_writer()
 
@@ -90,22 +101,72 @@ def run(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - start
     checkpoint("render:rendered")
 
+    write, write_pass = _writers(args, scene, image, result.stats, view)
     if args.passes is None:
-        ev = write_image(args.output, image, scene, view=view, exposure=args.exposure)
+        shown = write()
     else:  # the passes of this render only, put in place once they and the image are all written
         with atomic_folder(args.passes, is_pass_file, PASSES) as folder:
             for name, data in result.passes.items():
-                write_image(os.path.join(folder, f"{name}.exr"), data, scene)
+                write_pass(os.path.join(folder, f"{name}.exr"), data)
                 checkpoint("render:pass")
-            ev = write_image(args.output, image, scene, view=view, exposure=args.exposure)
+            shown = write()
 
     h, w = image.shape[:2]
     segments = result.stats.get("segments")
     traced = f", {segments} ray segments" if segments is not None else ""
-    shown = f", {view.view} at {ev:+.1f} EV" if view is not None else ""
     samples = f" at {size['samples']} samples" if size["samples"] > 1 else ""
     print(f"{printable(args.output)}: {w}x{h} px{samples} in {seconds:.2f} s{traced}{shown}")
     return 0
+
+
+def _check_photometric_options(args: argparse.Namespace, scene: dict) -> None:
+    """Before the render: ``--ev100``, ``--false-color`` and ``--luminance-range`` fit the scene and the output."""
+    if scene.get("light_model", "paper") != "photometric":
+        for option, given in (("--ev100", args.ev100 is not None), ("--false-color", args.false_color),
+                              ("--luminance-range", args.luminance_range is not None)):
+            if given:
+                raise SceneError(option, 'is for photometric scenes; allowed with "light_model": "photometric"')
+        return
+    if args.luminance_range is not None and not args.false_color:
+        raise SceneError("--luminance-range", "is the scale of --false-color; allowed with --false-color")
+    if args.false_color and image_format(args.output) != "png":
+        raise SceneError("--false-color", "draws a .png (an .exr holds the luminance itself, channel Y); allowed "
+                                          "with -o OUT.png")
+
+
+def _writers(args: argparse.Namespace, scene: dict, image, stats: dict, view):
+    """(write the image and say in words what it shows, write a pass) for the scene's light model:
+    the paper mode's linear RGB as ever; the photometric mode's XYZ in cd/m² at one EV100
+    (``images.photometric``)."""
+    from ..images.imageio import write_image
+
+    if stats.get("light_model") != "photometric":
+
+        def write() -> str:
+            ev = write_image(args.output, image, scene, view=view, exposure=args.exposure)
+            return f", {view.view} at {ev:+.1f} EV" if view is not None else ""
+
+        return write, lambda path, data: write_image(path, data, scene)
+
+    from ..images import photometric
+    from ..photometry.bands import Bands
+
+    bands = Bands.uniform(int(stats["bands"]))
+    ev100 = photometric.ev100_for(image, scene, args.ev100)
+    stops = photometric_stops(args)
+    false_colour = (args.luminance_range or (None, None)) if args.false_color else None
+
+    def write() -> str:
+        photometric.write_render(args.output, image, scene, ev100=ev100, view=view, stops=stops, bands=bands,
+                                 false_colour=false_colour)
+        if image_format(args.output) == "exr":
+            return f", XYZ (Y in cd/m2) on {bands.k} bands"
+        if false_colour is not None:
+            return f", false colour of luminance in cd/m2 on {bands.k} bands"
+        extra = f" {stops:+.1f} EV" if stops else ""
+        return f", {view.view} at EV100 {ev100:.1f}{extra} on {bands.k} bands"
+
+    return write, lambda path, data: photometric.write_pass(path, data, scene, bands)
 
 
 def _with_environment(args: argparse.Namespace, scene: dict) -> tuple[dict, dict]:

@@ -21,7 +21,16 @@ from ..scene.reading import SceneError, read_json
 from ..scene.safe_text import printable
 from ..study import definition as st
 from ..study.parameters import study_parameters
-from .common import add_display_arguments, check_output, check_output_folder, ctrl_c_sets, in_file, view_for
+from .common import (
+    add_display_arguments,
+    add_photometric_arguments,
+    check_output,
+    check_output_folder,
+    ctrl_c_sets,
+    in_file,
+    photometric_stops,
+    view_for,
+)
 
 VARIANTS = "variant presets (variant-NN.json)"
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
@@ -45,6 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--save-study", metavar="STUDY.json", help="write the study definition (base embedded)")
     parser.add_argument("--save-variants", metavar="DIR", help="write every variant as a lamp-scene/1 preset")
     add_display_arguments(parser)
+    add_photometric_arguments(parser, false_colour=False)
     parser.add_argument("--list", action="store_true", help="list the parameters a study can vary and exit")
 
 
@@ -171,6 +181,7 @@ def run(args: argparse.Namespace) -> int:
         except OSError as e:
             raise SceneError(args.save_variants, f"--save-variants {e.strerror}") from None
     study = _build(args)
+    _check_photometric_options(args, study)
     runnable = study
     if args.output is not None:
         from ..study import sheet as study_sheet  # numpy: only for a sheet
@@ -206,12 +217,49 @@ def run(args: argparse.Namespace) -> int:
         checkpoint("study:rendered")
     seconds = time.perf_counter() - start
     checkpoint("study:composed")
-    ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure)
+    shown = _write_sheet(args, study, images, view)
     _save_side_files(args, study)
     workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
     how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
     w, h = study.size
     shape = " x ".join(str(len(a.values)) for a in study.axes)
-    shown = f", {view.view} at {ev:+.1f} EV" if view is not None else ""
     print(f"{printable(args.output)}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}{shown}")
     return 0
+
+
+def _check_photometric_options(args: argparse.Namespace, study: st.Study) -> None:
+    """Before any worker starts: ``--ev100`` needs a photometric design; an .exr sheet holds one kind of cell."""
+    modes = {v.scene.get("light_model", "paper") for v in study.variants}
+    if args.ev100 is not None and "photometric" not in modes:
+        raise SceneError("--ev100", 'is for photometric designs; allowed with "light_model": "photometric"')
+    if len(modes) > 1 and args.output is not None and image_format(args.output) == "exr":
+        raise SceneError(args.output, "a study that varies light_model mixes RGB and XYZ cells; allowed a .png "
+                                      "sheet for it")
+
+
+def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view) -> str:
+    """Write the sheet under ONE exposure for all its cells (never one per cell, issue 22 item 7):
+    the paper mode's ``--exposure`` ("auto" measured over every cell); the photometric mode's
+    EV100 (``--ev100``, else the design's camera; "auto" measured over every cell) with
+    ``--exposure`` stops on top. Returns what the sheet shows, in words."""
+    from ..images import photometric
+    from ..study import sheet as study_sheet
+
+    scenes = [v.scene for v in study.variants]
+    if not any(photometric.is_photometric(scene) for scene in scenes):
+        ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure)
+        return f", {view.view} at {ev:+.1f} EV" if view is not None else ""
+    if view is None:  # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
+        from ..photometry import output
+
+        sheet = study_sheet.compose(study, images, text="bitmap")
+        output.write_photometric_exr(args.output, sheet, channels=("X", "Y", "Z"), attributes={
+            study_sheet.STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()})
+        return ", XYZ (Y in cd/m2)"
+    stops = photometric_stops(args)
+    cells, ev100, paper_ev = photometric.shown_together(scenes, images, ev100=args.ev100, stops=stops,
+                                                        exposure=args.exposure)
+    study_sheet.write_sheet(args.output, study, cells, view=view, exposure=0.0)
+    extra = f" {stops:+.1f} EV" if stops else ""
+    paper = f", paper-mode cells at {paper_ev:+.1f} EV" if paper_ev is not None else ""
+    return f", {view.view} at EV100 {ev100:.1f}{extra} for every cell{paper}"

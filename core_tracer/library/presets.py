@@ -319,9 +319,20 @@ THUMBNAIL_LOOK = (f"{display.DEFAULT_VIEW}; auto exposure {display.AUTO_TARGET:g
                   f"{display.AUTO_BRIGHT_END:g}th")
 
 
+# How a photometric preset's thumbnail shows it instead: at its own camera (``images.photometric``).
+PHOTOMETRIC_THUMBNAIL_LOOK = (f"{display.DEFAULT_VIEW}; XYZ in cd/m2 to linear Rec.709 at the camera's EV100 "
+                              f"(its ev100, or auto exposure {display.AUTO_TARGET:g} as an EV100)")
+
+
 def thumbnail_digest(entry: PresetEntry) -> str:
-    """The hash of a preset's content and of ``THUMBNAIL_LOOK``."""
-    return hashlib.sha256(f"{entry.digest}\n{THUMBNAIL_LOOK}".encode()).hexdigest()[:16]
+    """The hash of a preset's content and of how it is shown (``THUMBNAIL_LOOK``, or
+    ``PHOTOMETRIC_THUMBNAIL_LOOK`` for a photometric preset)."""
+    look = THUMBNAIL_LOOK
+    if entry.scene.get("light_model") == "photometric":
+        from ..raytrace.spectral import DEFAULT_BANDS  # loaded for a photometric preset only
+
+        look = f"{PHOTOMETRIC_THUMBNAIL_LOOK}; {DEFAULT_BANDS} bands"
+    return hashlib.sha256(f"{entry.digest}\n{look}".encode()).hexdigest()[:16]
 
 
 def thumbnail_name(entry: PresetEntry) -> str:
@@ -414,7 +425,8 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
                    view: ViewTransform | None = None) -> str:
     """Render ``entry`` with the tracer at ``size`` x ``size`` and write it as PNG (atomically), shown
     as everywhere else: through ``view`` (default Blender's AgX, ``images.display``) at the design's
-    automatic exposure."""
+    automatic exposure; a photometric design at its camera's EV100 (``images.photometric``), so that
+    thumbnails of designs under one EV100 compare."""
     from .. import render  # the tracer loads only when a thumbnail is actually made
     from ..images.imageio import write_image
 
@@ -431,7 +443,14 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     else:
         image = render(traced, size, size)
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
-    write_image(target, image, scene, view=view)
+    if scene.get("light_model") == "photometric":
+        from ..images import photometric
+
+        ev100 = photometric.ev100_for(image, scene)
+        write_image(target, photometric.scene_linear(image, ev100), scene, view=view, exposure=0.0,
+                    attributes={photometric.EV100_ATTRIBUTE: f"{ev100:g}"})
+    else:
+        write_image(target, image, scene, view=view)
     stem = os.path.splitext(os.path.basename(entry.file))[0]
     _remove_thumbnails(os.path.dirname(os.path.abspath(target)), stem, keep=os.path.abspath(target))
     return target

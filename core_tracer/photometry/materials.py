@@ -56,9 +56,10 @@ LINE_F_NM, LINE_D_NM, LINE_C_NM = 486.13, 587.56, 656.27
 
 
 def cauchy_coefficients(n_d: float, abbe: float) -> tuple[float, float]:
-    """(A, B in nm²) of n(λ) = A + B/λ² through n_d with Abbe number ``abbe``."""
-    if not (np.isfinite(n_d) and n_d > 1.0):
-        raise ValueError(f"refractive index n_d: {n_d!r} is not a number above 1")
+    """(A, B in nm²) of n(λ) = A + B/λ² through n_d with Abbe number ``abbe``. n_d = 1 (a lens's
+    lowest allowed ior, an index-matched "no lens") has no dispersion: n = 1 at every wavelength."""
+    if not (np.isfinite(n_d) and n_d >= 1.0):
+        raise ValueError(f"refractive index n_d: {n_d!r} is not a number of 1 or more")
     if not (np.isfinite(abbe) and abbe > 0.0):
         raise ValueError(f"Abbe number: {abbe!r} is not a number above 0 (allowed: above 0; plastics 20 to 70)")
     b = (n_d - 1.0) / abbe / (LINE_F_NM ** -2 - LINE_C_NM ** -2)

@@ -60,12 +60,19 @@ def fill_alternative(data: dict, sec: S.Section, alt: S.Alternative) -> None:
     """Give ``data`` every field of the form ``alt`` it lacks: the value of its ``same_as``
     field, else its default (in place)."""
     same_as = dict(alt.same_as)
-    for key in alt.keys:
-        if key not in data:
-            if key in same_as:
-                data[key] = copy.deepcopy(data[same_as[key]])
-            else:
-                data[key] = default_value(sec.fields[key])
+    missing = [key for key in alt.keys if key not in data]
+    for key in missing:
+        if key in same_as:
+            data[key] = copy.deepcopy(data[same_as[key]])
+        else:
+            data[key] = default_value(sec.fields[key])
+    if missing:
+        # in the section's order, as the same document read back from its normalised JSON: the
+        # hash that names a thumbnail is of the ordered text (``library.presets.digest``)
+        ordered = {key: data[key] for key in sec.fields if key in data}
+        ordered.update(data)
+        data.clear()
+        data.update(ordered)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -39,11 +39,17 @@ def test_dispersion_follows_the_measured_indices(key):
     np.testing.assert_allclose(material.index(lam), measured, atol=0.0025)
 
 
-@pytest.mark.parametrize("n_d, abbe, words", [(1.0, 50.0, "n_d"), (float("nan"), 50.0, "n_d"),
+@pytest.mark.parametrize("n_d, abbe, words", [(0.99, 50.0, "n_d"), (float("nan"), 50.0, "n_d"),
                                               (1.5, 0.0, "Abbe number"), (1.5, float("inf"), "Abbe number")])
 def test_dispersion_refuses_bad_input(n_d, abbe, words):
     with pytest.raises(ValueError, match=words):
         materials.refractive_index(n_d, abbe, 550.0)
+
+
+def test_index_one_has_no_dispersion():
+    """A lens's lowest ior, 1 (the scene allows it: a lens that is not there), is 1 at every
+    wavelength; a custom material at ior 1 once ended a photometric render with a traceback."""
+    np.testing.assert_array_equal(materials.refractive_index(1.0, 30.0, np.array([380.0, 587.56, 780.0])), 1.0)
 
 
 def test_beer_lambert_round_trip():
