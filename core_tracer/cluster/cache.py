@@ -1,0 +1,55 @@
+"""Rendered cells kept by content: ``<folder>/<key[:2]>/<key>.npy``, one file per cell key.
+
+A re-run, a study resumed after a crash or extended by one axis value, and the trials an
+optimisation repeats find their images here and render only what is new. Files are written
+atomically (a ``.part`` file renamed into place) as each cell arrives, so a crash loses at most
+the cells under way, and a damaged file is rendered again.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..raytrace.world_cache import ENV_FOLDER
+
+SUBFOLDER = "cells"
+
+
+def default_folder() -> str:
+    """``$LAMP_STYLING_CACHE/cells``, else ``$XDG_CACHE_HOME`` or ``~/.cache``, then ``lamp-styling/cells``."""
+    root = os.environ.get(ENV_FOLDER)
+    if not root:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        root = os.path.join(base, "lamp-styling")
+    return os.path.join(root, SUBFOLDER)
+
+
+class CellCache:
+    def __init__(self, folder: str | os.PathLike | None = None):
+        self.folder = os.fspath(folder) if folder is not None else default_folder()
+
+    def path(self, key: str) -> str:
+        return os.path.join(self.folder, key[:2], f"{key}.npy")
+
+    def get(self, key: str) -> np.ndarray | None:
+        try:
+            image = np.load(self.path(key), allow_pickle=False)
+        except (OSError, ValueError, EOFError):  # missing, or cut short: render it again
+            return None
+        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.float32:
+            return None
+        return image
+
+    def put(self, key: str, image: np.ndarray) -> None:
+        path = self.path(key)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        partial = f"{path}.{os.getpid()}.part.npy"
+        try:
+            np.save(partial, np.asarray(image, dtype=np.float32))
+            os.replace(partial, path)
+        except BaseException:
+            if os.path.exists(partial):
+                os.unlink(partial)
+            raise

@@ -1,0 +1,213 @@
+"""The Dask client that runs cells: on a scheduler's cluster, or on a local cluster by default.
+
+``connect(scheduler)`` gives a ``distributed.Client``: to ``scheduler`` (``tcp://host:8786``), else to
+``$DASK_SCHEDULER_ADDRESS``, else to a ``LocalCluster`` on this machine of ``workers`` processes
+(default one per core) with one thread each, each worker's memory limited to what the largest
+cell's render is budgeted (``worker_memory``): Dask pauses, then restarts, a worker above it.
+
+``run_cells(client, cells, ...)`` renders the cells the cache does not hold, one Dask task per
+distinct key, and returns every image in order with a ``RunCount``. A worker lost mid-task (killed,
+out of memory, its machine gone) is replaced and its tasks run again elsewhere by the scheduler;
+the images are the same bit for bit, since a render depends only on its cell. Cancelling sets the
+run's stop event, which running renders poll between bands, and cancels every task.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import logging
+import os
+import time
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import budget
+from .cache import CellCache
+from .cells import Cell, Inputs, render_cell
+
+SCHEDULER_VARIABLE = "DASK_SCHEDULER_ADDRESS"  # Dask's own name for it
+LOCAL = "local"
+CONNECT_TIMEOUT = "20s"
+POLL = 0.05  # seconds between looks at the tasks and at the caller's should_stop
+PRELOAD = os.path.join(os.path.dirname(os.path.abspath(__file__)), "preload.py")
+# A Dask worker process beyond the render's own figure (budget.BASE_BYTES counts the interpreter,
+# numpy and the tracer): distributed, tornado and the task's result held until fetched. Measured
+# 95 MB RSS more than a plain worker process (benchmarks/bench_cluster.py prints it); rounded up.
+DASK_BYTES = 192 * 2**20
+
+
+class Cancelled(Exception):
+    """The run was cancelled: every task is cancelled and nothing is returned."""
+
+
+class TaskError(RuntimeError):
+    """A render task failed on a worker (a tracer bug or a broken worker installation)."""
+
+
+def available() -> bool:
+    """Whether Dask's ``distributed`` is installed here."""
+    return importlib.util.find_spec("distributed") is not None
+
+
+def scheduler_address(given: str | None) -> str | None:
+    """The scheduler to use: ``given``, else ``$DASK_SCHEDULER_ADDRESS``; None (or "local") for a
+    local cluster."""
+    address = given if given is not None else os.environ.get(SCHEDULER_VARIABLE) or None
+    return None if address in (None, "", LOCAL) else address
+
+
+def default_workers() -> int:
+    return max(1, os.cpu_count() or 1)
+
+
+def cell_bytes(cell: Cell, environment: int = 0) -> int:
+    """The budget of one cell's render (``budget.render_bytes``, no passes, glare as the scene says)."""
+    glare = bool((cell.scene.get("glare") or {}).get("on", False))
+    return budget.render_bytes(cell.width, cell.height, False, "exr", glare, environment)
+
+
+def worker_memory(cells: Sequence[Cell], environment: int = 0) -> int:
+    """A local worker's memory limit: the largest cell's budget and Dask's own share, at most the
+    project's ``MEMORY_BUDGET``."""
+    need = max((cell_bytes(c, environment) for c in cells), default=budget.BASE_BYTES)
+    return min(budget.MEMORY_BUDGET, need + DASK_BYTES)
+
+
+@dataclass
+class Local:
+    """What a local cluster started: its processes, threads and memory limit per worker."""
+
+    workers: int
+    threads: int
+    memory_limit: int
+    dashboard: str
+
+    def describe(self) -> str:
+        return (f"local Dask cluster: {self.workers} worker process{'es' if self.workers != 1 else ''} x "
+                f"{self.threads} thread, {budget.gib(self.memory_limit)} each, dashboard {self.dashboard}")
+
+
+@contextlib.contextmanager
+def connect(scheduler: str | None = None, workers: int | None = None, memory_limit: int | None = None,
+            dashboard: str | None = ":0") -> Iterator:
+    """A ``distributed.Client`` (its ``.local`` is a ``Local`` for a local cluster, else None); closed,
+    and a local cluster stopped with its processes, on leaving."""
+    from distributed import Client, LocalCluster
+
+    address = scheduler_address(scheduler)
+    if address is not None:
+        client = Client(address, timeout=CONNECT_TIMEOUT)
+        client.local = None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    count = workers or default_workers()
+    limit = memory_limit or budget.MEMORY_BUDGET
+    cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, memory_limit=limit,
+                           dashboard_address=dashboard, preload=[PRELOAD], silence_logs=logging.ERROR)
+    try:
+        client = Client(cluster)
+        client.local = Local(count, 1, limit, client.dashboard_link or "off")
+        try:
+            yield client
+        finally:
+            client.close()
+    finally:
+        cluster.close()
+
+
+@dataclass
+class RunCount:
+    cells: int = 0
+    rendered: int = 0  # tasks run (one per distinct key the cache lacked)
+    from_cache: int = 0  # cells whose image the cache held
+    task_bytes: int = 0  # the pickled size of the largest task (the cell and its arguments)
+
+
+def run_cells(client, cells: Sequence[Cell], inputs: Inputs, cache: CellCache | None = None, *,
+              progress: Callable[[int, int], None] | None = None,
+              should_stop: Callable[[], bool] | None = None) -> tuple[list[np.ndarray], RunCount]:
+    """Every cell's image, in order: from ``cache`` where it holds the key, else rendered as a task
+    (and then kept in ``cache``). ``progress(done, total)`` as cells arrive; ``should_stop()``
+    polled every ``POLL`` seconds: True cancels every task and raises ``Cancelled``."""
+    from distributed import Event
+
+    count = RunCount(cells=len(cells))
+    keys = [c.key for c in cells]
+    images: list[np.ndarray | None] = [None] * len(cells)
+    wanted: dict[str, list[int]] = {}
+    for i, key in enumerate(keys):
+        image = cache.get(key) if cache is not None else None
+        if image is not None:
+            images[i] = image
+            count.from_cache += 1
+        else:
+            wanted.setdefault(key, []).append(i)
+    done = len(cells) - sum(len(v) for v in wanted.values())
+    if progress is not None:
+        progress(done, len(cells))
+    if not wanted:
+        return images, count  # type: ignore[return-value]
+
+    stop_name = f"lamp-stop-{uuid.uuid4().hex}"
+    needed = {cells[ix[0]].environment for ix in wanted.values()} - {None}
+    sent = {d: client.scatter(inputs.data[d], hash=False) for d in needed}
+    futures = {}
+    for key, indices in wanted.items():
+        cell = cells[indices[0]]
+        env = sent.get(cell.environment) if cell.environment is not None else None
+        futures[client.submit(render_cell, cell, env, stop_name, key=f"lamp-cell-{key}", pure=False)] = key
+    count.task_bytes = max(_task_bytes(cells[ix[0]]) for ix in wanted.values())
+    try:
+        pending = set(futures)
+        while pending:
+            if should_stop is not None and should_stop():
+                raise Cancelled()
+            finished = [f for f in pending if f.done()]
+            if not finished:
+                time.sleep(POLL)
+                continue
+            for future in finished:
+                pending.discard(future)
+                if future.status != "finished":
+                    raise TaskError(f"render task failed: {_error_text(future)}")
+                image = future.result()
+                key = futures[future]
+                if cache is not None:
+                    cache.put(key, image)
+                for i in wanted[key]:
+                    images[i] = image
+                count.rendered += 1
+                done += len(wanted[key])
+                future.release()
+            if progress is not None:
+                progress(done, len(cells))
+        return images, count  # type: ignore[return-value]
+    except BaseException:
+        with contextlib.suppress(Exception):
+            Event(stop_name, client=client).set()
+        client.cancel(list(futures), force=True)
+        raise
+    finally:
+        for f in sent.values():
+            f.release()
+
+
+def _error_text(future) -> str:
+    try:
+        e = future.exception(timeout=5)
+    except Exception as other:  # the future itself could not say (cancelled, lost)
+        return f"{type(other).__name__}: {other}"
+    return f"{type(e).__name__}: {e}"
+
+
+def _task_bytes(cell: Cell) -> int:
+    import pickle
+
+    return len(pickle.dumps(cell, protocol=pickle.HIGHEST_PROTOCOL))

@@ -1,0 +1,15 @@
+"""A Dask worker preload: puts the folder that holds ``core_tracer`` first on the worker's path.
+
+Dask imports this file by its path when a worker starts (``dask worker --preload
+<checkout>/core_tracer/cluster/preload.py``; the local cluster passes it itself), so a worker can
+unpickle the render tasks of a checkout that is not installed as a package. A worker that was
+restarted after a fault runs it again. Standalone on purpose: it is imported before ``core_tracer``
+can be.
+"""
+
+import os
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+if ROOT not in sys.path:
+    sys.path.insert(0, ROOT)
