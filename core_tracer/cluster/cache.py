@@ -43,11 +43,21 @@ class CellCache:
         return image
 
     def put(self, key: str, image: np.ndarray) -> None:
+        self.put_array(key, np.asarray(image, dtype=np.float32))
+
+    def get_array(self, key: str) -> np.ndarray | None:
+        """Any array kept under ``key`` (a trial's lamp mask, say), or None."""
+        try:
+            return np.load(self.path(key), allow_pickle=False)
+        except (OSError, ValueError, EOFError):
+            return None
+
+    def put_array(self, key: str, array: np.ndarray) -> None:
         path = self.path(key)
         os.makedirs(os.path.dirname(path), exist_ok=True)
         partial = f"{path}.{os.getpid()}.part.npy"
         try:
-            np.save(partial, np.asarray(image, dtype=np.float32))
+            np.save(partial, array)
             os.replace(partial, path)
         except BaseException:
             if os.path.exists(partial):

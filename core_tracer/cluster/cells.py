@@ -113,7 +113,7 @@ def _materialise(digest: str, suffix: str, data: bytes) -> str:
     return path
 
 
-def _stop_flag(name: str | None):
+def stop_flag(name: str | None):
     """A ``should_stop`` that looks at the study's ``distributed.Event`` at most every ``STOP_POLL``
     seconds (each look is a message to the scheduler), or None outside a Dask worker."""
     if name is None:
@@ -145,13 +145,19 @@ def render_cell(cell: Cell, environment: bytes | None = None, stop: str | None =
     from ..images import glare
     from ..raytrace.engine import render_passes
 
-    scene = cell.scene
-    if cell.environment is not None:
-        if environment is None:
-            raise ValueError(f"cell {cell.key[:12]} sees an environment image that was not sent with it")
-        scene = copy.deepcopy(scene)
-        scene["environment"]["world"] = "file"
-        scene["environment"]["file"] = _materialise(cell.environment, cell.suffix, environment)
-    result = render_passes(scene, cell.width, cell.height, should_stop=_stop_flag(stop), threads=threads,
+    scene = worker_scene(cell, environment)
+    result = render_passes(scene, cell.width, cell.height, should_stop=stop_flag(stop), threads=threads,
                            keep_passes=False)
     return glare.apply(result.image, scene)
+
+
+def worker_scene(cell: Cell, environment: bytes | None) -> dict:
+    """The cell's scene as this worker renders it: its environment image the copy of the bytes sent."""
+    if cell.environment is None:
+        return cell.scene
+    if environment is None:
+        raise ValueError(f"cell {cell.key[:12]} sees an environment image that was not sent with it")
+    scene = copy.deepcopy(cell.scene)
+    scene["environment"]["world"] = "file"
+    scene["environment"]["file"] = _materialise(cell.environment, cell.suffix, environment)
+    return scene

@@ -18,6 +18,8 @@ import contextlib
 import importlib.util
 import logging
 import os
+import shutil
+import tempfile
 import time
 import uuid
 from collections.abc import Callable, Iterator, Sequence
@@ -32,6 +34,8 @@ from .cells import Cell, Inputs, render_cell
 SCHEDULER_VARIABLE = "DASK_SCHEDULER_ADDRESS"  # Dask's own name for it
 LOCAL = "local"
 CONNECT_TIMEOUT = "20s"
+SCRATCH_PREFIX = "lamp-dask-"
+LOCAL_WORKER = "LAMP_LOCAL_WORKER"  # set in a local cluster's workers (preload.py reads it)
 POLL = 0.05  # seconds between looks at the tasks and at the caller's should_stop
 PRELOAD = os.path.join(os.path.dirname(os.path.abspath(__file__)), "preload.py")
 # A Dask worker process beyond the render's own figure (budget.BASE_BYTES counts the interpreter,
@@ -96,6 +100,7 @@ def connect(scheduler: str | None = None, workers: int | None = None, memory_lim
             dashboard: str | None = ":0") -> Iterator:
     """A ``distributed.Client`` (its ``.local`` is a ``Local`` for a local cluster, else None); closed,
     and a local cluster stopped with its processes, on leaving."""
+    import dask
     from distributed import Client, LocalCluster
 
     address = scheduler_address(scheduler)
@@ -109,17 +114,25 @@ def connect(scheduler: str | None = None, workers: int | None = None, memory_lim
         return
     count = workers or default_workers()
     limit = memory_limit or budget.MEMORY_BUDGET
-    cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, memory_limit=limit,
-                           dashboard_address=dashboard, preload=[PRELOAD], silence_logs=logging.ERROR)
+    # The workers' scratch space is the run's own, removed however the run ends (Dask's default
+    # <temp>/dask-scratch-space would outlive it).
+    scratch = tempfile.mkdtemp(prefix=SCRATCH_PREFIX)
     try:
-        client = Client(cluster)
-        client.local = Local(count, 1, limit, client.dashboard_link or "off")
+        with dask.config.set({"temporary-directory": scratch}):  # the scheduler's scratch space too
+            cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, memory_limit=limit,
+                                   dashboard_address=dashboard, preload=[PRELOAD], silence_logs=logging.ERROR,
+                                   local_directory=scratch, env={LOCAL_WORKER: "1"})
         try:
-            yield client
+            client = Client(cluster)
+            client.local = Local(count, 1, limit, client.dashboard_link or "off")
+            try:
+                yield client
+            finally:
+                client.close()
         finally:
-            client.close()
+            cluster.close()
     finally:
-        cluster.close()
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 @dataclass
