@@ -115,7 +115,7 @@ def _prepare_ssim(options: dict, where: str, folder: str) -> Reference:
 
     path = options.get("reference")
     if not isinstance(path, str) or not path:
-        raise SceneError(f"{where}.reference", "is required: the image to come close to (an .exr or .png)")
+        raise SceneError(f"{where}.reference", "is required: the image to come close to; allowed an .exr or .png file")
     full = os.path.join(folder, os.path.expanduser(path))
     if os.path.splitext(full)[1].lower() not in (".exr", ".png"):
         raise SceneError(f"{where}.reference", f"{path!r} is not an image; allowed an .exr or .png file")

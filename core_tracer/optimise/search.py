@@ -18,6 +18,7 @@ import contextlib
 import math
 import time
 import uuid
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -32,6 +33,7 @@ from .measures import Trial
 from .spec import Knob, Optimisation
 
 POLL = 0.05
+OPEN_ATTEMPTS = 5
 
 
 class Cancelled(Exception):
@@ -64,16 +66,12 @@ def directions(opt: Optimisation) -> list[str]:
 def make_sampler(opt: Optimisation):
     import optuna
 
-    def constraints(trial) -> list[float]:
-        return trial.user_attrs.get("constraints", [0.0])
-
-    with_constraints = constraints if opt.constraints else None
+    # Constraints reach the samplers through each trial's set_constraint (Optuna 5).
     if opt.sampler == "tpe":
-        return optuna.samplers.TPESampler(seed=opt.seed, constraints_func=with_constraints, multivariate=True,
+        return optuna.samplers.TPESampler(seed=opt.seed, multivariate=True,
                                           n_startup_trials=min(10, max(2, opt.trials // 4)))
     if opt.sampler == "nsga2":
-        return optuna.samplers.NSGAIISampler(seed=opt.seed, constraints_func=with_constraints,
-                                             population_size=max(4, min(50, opt.trials // 4)))
+        return optuna.samplers.NSGAIISampler(seed=opt.seed, population_size=max(4, min(50, opt.trials // 4)))
     if opt.sampler == "cmaes":
         return optuna.samplers.CmaEsSampler(seed=opt.seed)
     return optuna.samplers.RandomSampler(seed=opt.seed)
@@ -84,12 +82,28 @@ def open_study(opt: Optimisation):
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    try:
-        study = optuna.create_study(storage=opt.storage, study_name=opt.name, directions=directions(opt),
-                                    sampler=make_sampler(opt), load_if_exists=True)
-    except (ValueError, ImportError, ModuleNotFoundError) as e:  # a URL SQLAlchemy cannot use
-        raise SceneError("storage", f"{opt.storage!r} cannot be opened ({e}); allowed a database URL Optuna "
-                                    "accepts, e.g. sqlite:///opt.db") from None
+    # Constraints and the multivariate TPE are marked experimental, and Optuna says so on every trial:
+    # what the user gets is stated in docs/cluster.md instead.
+    warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
+    warnings.filterwarnings("ignore", category=FutureWarning, module=r"optuna\.")
+    from sqlalchemy.exc import SQLAlchemyError
+
+    for attempt in range(OPEN_ATTEMPTS):
+        try:
+            storage = opt.storage
+            if storage.startswith("sqlite:"):  # processes sharing the file wait for each other's writes
+                storage = optuna.storages.RDBStorage(storage, engine_kwargs={"connect_args": {"timeout": 60}})
+            study = optuna.create_study(storage=storage, study_name=opt.name, directions=directions(opt),
+                                        sampler=make_sampler(opt), load_if_exists=True)
+            break
+        except (ValueError, ImportError) as e:  # a URL SQLAlchemy cannot use
+            raise SceneError("storage", f"{opt.storage!r} cannot be opened ({e}); allowed a database URL Optuna "
+                                        "accepts, e.g. sqlite:///opt.db") from None
+        except (SQLAlchemyError, optuna.exceptions.DuplicatedStudyError):
+            # Two processes creating the tables or the study at once: one wins, the other loads it.
+            if attempt == OPEN_ATTEMPTS - 1:
+                raise
+            time.sleep(0.2 * (attempt + 1))
     wanted = directions(opt)
     have = [d.name.lower() for d in study.directions]
     if have != wanted:
@@ -160,6 +174,8 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
         feasible = all(e <= 0 for e in excess)
         trial.set_user_attr("measures", named)
         trial.set_user_attr("constraints", excess or [0.0])
+        for i, (c, e) in enumerate(zip(opt.constraints, excess, strict=True)):
+            trial.set_constraint(f"{i}:{c.measure.name}", e)
         trial.set_user_attr("feasible", feasible)
         trial.set_user_attr("design", values)
         trial.set_user_attr("cell", key)

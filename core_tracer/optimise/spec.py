@@ -250,8 +250,10 @@ def _knobs(value: Any, base: dict) -> tuple[Knob, ...]:
         try:
             param = resolve_parameter(doc.get("parameter"), base)
         except SceneError as e:
-            raise SceneError(f"{where}.parameter", f"{e.path}: {e.message}" if e.path != "parameter" else e.message
-                             ) from None
+            said = f"{e.path}: {e.message}" if e.path != "parameter" else e.message
+            if "allowed" not in said:
+                said += "; allowed a name `python -m core_tracer study --list` prints"
+            raise SceneError(f"{where}.parameter", said) from None
         if any(k.name == param.text for k in knobs):
             raise SceneError(f"{where}.parameter", f"{param.text} is given twice; allowed each parameter once")
         if param.is_vector:
@@ -271,7 +273,7 @@ def _knobs(value: Any, base: dict) -> tuple[Knob, ...]:
             continue
         if isinstance(param.spec, S.Choice | S.Flag):
             allowed = param.spec.range_text() if isinstance(param.spec, S.Choice) else "true, false"
-            raise SceneError(f"{where}.values", f"is required: {param.text} is a choice, give a list of values "
+            raise SceneError(f"{where}.values", f"is required: {param.text} is a choice; allowed a list of values "
                                                 f"({allowed})")
         rng = doc.get("range")
         if not isinstance(rng, list) or len(rng) != 2:
