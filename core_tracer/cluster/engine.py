@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import budget
+from .. import budget, processes
 from .cache import CellCache
 from .cells import Cell, Inputs, render_cell
 
@@ -39,9 +39,13 @@ LOCAL_WORKER = "LAMP_LOCAL_WORKER"  # set in a local cluster's workers (preload.
 POLL = 0.05  # seconds between looks at the tasks and at the caller's should_stop
 PRELOAD = os.path.join(os.path.dirname(os.path.abspath(__file__)), "preload.py")
 # A Dask worker process beyond the render's own figure (budget.BASE_BYTES counts the interpreter,
-# numpy and the tracer): distributed, tornado and the task's result held until fetched. Measured
-# 95 MB RSS more than a plain worker process (benchmarks/bench_cluster.py prints it); rounded up.
+# numpy and the tracer): distributed, tornado and the task's result held until fetched; a worker
+# measured 93 MB RSS idle after a 256 px render with its allocator trimming
+# (benchmarks/bench_cluster.py prints it); rounded up.
 DASK_BYTES = 192 * 2**20
+# What the allocator may keep mapped after a render (its trim threshold, processes._KEEP_FREED_MEMORY):
+# counted as budget.WORKER_BYTES counts it for a band worker.
+KEPT_FREED_BYTES = int(processes._KEEP_FREED_MEMORY["MALLOC_TRIM_THRESHOLD_"])
 
 
 class Cancelled(Exception):
@@ -75,10 +79,10 @@ def cell_bytes(cell: Cell, environment: int = 0) -> int:
 
 
 def worker_memory(cells: Sequence[Cell], environment: int = 0) -> int:
-    """A local worker's memory limit: the largest cell's budget and Dask's own share, at most the
-    project's ``MEMORY_BUDGET``."""
+    """A local worker's memory limit: the largest cell's budget, Dask's own share and the freed memory
+    its allocator keeps, at most the project's ``MEMORY_BUDGET``."""
     need = max((cell_bytes(c, environment) for c in cells), default=budget.BASE_BYTES)
-    return min(budget.MEMORY_BUDGET, need + DASK_BYTES)
+    return min(budget.MEMORY_BUDGET, need + DASK_BYTES + KEPT_FREED_BYTES)
 
 
 @dataclass
@@ -118,7 +122,10 @@ def connect(scheduler: str | None = None, workers: int | None = None, memory_lim
     # <temp>/dask-scratch-space would outlive it).
     scratch = tempfile.mkdtemp(prefix=SCRATCH_PREFIX)
     try:
-        with dask.config.set({"temporary-directory": scratch}):  # the scheduler's scratch space too
+        # The scheduler's scratch space too; and the workers keep freed memory mapped from their start
+        # (preload.py says why; it sets the same in a worker that is already running).
+        keep = {f"distributed.nanny.pre-spawn-environ.{k}": int(v) for k, v in processes._KEEP_FREED_MEMORY.items()}
+        with dask.config.set({"temporary-directory": scratch, **keep}):
             cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, memory_limit=limit,
                                    dashboard_address=dashboard, preload=[PRELOAD], silence_logs=logging.ERROR,
                                    local_directory=scratch, env={LOCAL_WORKER: "1"})
