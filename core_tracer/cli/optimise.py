@@ -57,6 +57,10 @@ def run(args: argparse.Namespace) -> int:
     tty = sys.stderr.isatty()
 
     def progress(p: search.Progress) -> None:
+        if p.refused:
+            print(f"trial {p.number}: {results.setting(p.params)} refused: {p.refused}  [{p.finished}/{p.total}]",
+                  file=sys.stderr if tty else sys.stdout, flush=True)
+            return
         shown = ", ".join(f"{v:.4g}" for v in p.values or [])
         flag = "" if p.feasible else " (infeasible)"
         src = "" if p.rendered else " (cached)"
@@ -74,8 +78,8 @@ def run(args: argparse.Namespace) -> int:
                 parallel = opt.parallel or workers
                 limit = engine.worker_memory([], 0) + _render_bytes(opt)
                 with engine.connect(args.scheduler, workers=workers, memory_limit=limit) as client:
-                    where = client.local.describe() if client.local is not None else \
-                        f"Dask scheduler {client.scheduler.address}"
+                    where = "on the " + (client.local.describe() if client.local is not None else
+                                         f"Dask scheduler {client.scheduler.address}")
                     outcome = search.run(opt, client, cache, parallel=parallel, progress=progress,
                                          should_stop=stop.is_set)
         except search.Cancelled:
@@ -90,8 +94,11 @@ def run(args: argparse.Namespace) -> int:
     results.write_trials(opt, study, os.path.join(folder, "trials.json"))
     results.write_history(opt, study, os.path.join(folder, "history.png"))
     best = search.best(opt, study)
-    print(f"{len(search.finished_trials(study))} trials in {printable(opt.storage)} ({len(outcome.told)} this run, "
-          f"{outcome.rendered} rendered, {outcome.from_cache} from the cache) in {seconds:.1f} s {where}")
+    measured = len(search.finished_trials(study))
+    refused = search.count_finished(study) - measured
+    print(f"{measured + refused} trials in {printable(opt.storage)} ({measured} measured, {refused} refused by the "
+          f"scene; {len(outcome.told)} this run: {outcome.rendered} rendered, {outcome.from_cache} from the cache) "
+          f"in {seconds:.1f} s {where}")
     if not best:
         closest = search.closest_infeasible(study)
         detail = ""
@@ -105,6 +112,10 @@ def run(args: argparse.Namespace) -> int:
     top = search.ranked(opt, study, results.SHEET_TRIALS)
     if opt.needs_render:
         results.write_sheet(opt, top, results.trial_images(opt, top, cache), os.path.join(folder, "sheet.png"))
+    first = search.finished_trials(study)[:1]
+    if first and first[0].number == 0 and search.feasible(first[0]):
+        shown = ", ".join(f"{o.measure.name} {v:.4g}" for o, v in zip(opt.objectives, first[0].values, strict=True))
+        print(f"start: trial 0 (the design as given): {results.setting(first[0].user_attrs['design'])} -> {shown}")
     for trial in best:
         shown = ", ".join(f"{o.measure.name} {v:.4g}" for o, v in zip(opt.objectives, trial.values, strict=True))
         print(f"best: trial {trial.number}: {results.setting(trial.user_attrs['design'])} -> {shown}")

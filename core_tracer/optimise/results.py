@@ -23,6 +23,7 @@ from .spec import Optimisation
 
 SHEET_TRIALS = 8
 SHEET_COLUMNS = 4
+SHEET_SIDE = 192  # px a trial's image is shown at least (by whole multiples)
 BACKGROUND = (0.018, 0.018, 0.02)
 TEXT_COLOR = (0.75, 0.75, 0.75)
 
@@ -63,24 +64,31 @@ def trial_images(opt: Optimisation, trials: Sequence, cache: CellCache | None) -
 
 
 def trial_lines(opt: Optimisation, trial) -> list[str]:
+    """Under a trial's image: its number, one line per measure, one per parameter (4 digits)."""
     measures = trial.user_attrs.get("measures", {})
-    lines = [f"#{trial.number} " + " ".join(f"{k}={v:.4g}" for k, v in measures.items())]
-    lines += [f"{name.split('.')[-1]}={format_value(v)}" for name, v in trial.user_attrs["design"].items()]
+    lines = [f"trial {trial.number}"] + [f"{k} {v:.4g}" for k, v in measures.items()]
+    lines += [f"{name.split('.')[-1]}={_short(v)}" for name, v in trial.user_attrs["design"].items()]
     return lines
+
+
+def _short(value) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else format_value(value)
 
 
 def compose_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarray]) -> tuple[np.ndarray, float]:
     """The sheet in display values and the exposure used (one for every trial, so they compare)."""
     view = display.view_transform()
     ev = display.auto_exposure(list(images))
-    w, h = opt.size
+    zoom = max(1, SHEET_SIDE // max(opt.size))  # small trial images shown larger, pixel for pixel
+    images = [np.repeat(np.repeat(image, zoom, axis=0), zoom, axis=1) for image in images]
+    w, h = opt.size[0] * zoom, opt.size[1] * zoom
     scale = 1 if min(w, h) < 96 else 2
     line_h = (bitmap_font.LINE_H + 2) * scale
     rows_of_text = max(len(trial_lines(opt, t)) for t in trials)
     cols = min(SHEET_COLUMNS, len(trials))
     rows = -(-len(trials) // cols)
     gap = 4 * scale
-    cell_w = max(w, 28 * bitmap_font.ADVANCE_W * scale)
+    cell_w = max(w, 20 * bitmap_font.ADVANCE_W * scale)
     title_h = line_h + gap
     cell_h = h + rows_of_text * line_h + gap
     width, height = cols * (cell_w + gap) + gap, title_h + rows * cell_h + gap

@@ -49,6 +49,7 @@ class Progress:
     feasible: bool
     params: dict[str, Any]
     rendered: bool  # False: the image came from the cache
+    refused: str = ""  # why the scene refused the design (then no values)
 
 
 @dataclass
@@ -56,6 +57,7 @@ class Outcome:
     study: Any  # optuna.Study
     rendered: int = 0
     from_cache: int = 0
+    refused: int = 0  # designs the scene refused (failed trials, counted)
     told: list[int] = field(default_factory=list)  # trial numbers this process finished
 
 
@@ -123,6 +125,27 @@ def suggest(trial, knob: Knob) -> Any:
     return trial.suggest_float(knob.name, knob.lo, knob.hi, step=knob.step, log=knob.log)
 
 
+def start_params(opt: Optimisation) -> dict[str, Any] | None:
+    """The base design's own values as Optuna parameters, or None if one lies outside its range (or
+    is not among its values, or off the step grid)."""
+    out = {}
+    for k in opt.knobs:
+        node = k.parameter.nodes(opt.base)[0]
+        value = node[k.parameter.keys[-1]]
+        if k.parameter.component is not None:
+            value = value[k.parameter.component]
+        if k.values:
+            if value not in k.values:
+                return None
+            out[k.name] = k.values.index(value)
+            continue
+        steps = (value - k.lo) / k.step if k.step else 0.0
+        if not k.lo <= value <= k.hi or abs(steps - round(steps)) > 1e-9:
+            return None
+        out[k.name] = int(value) if k.integer else float(value)
+    return out
+
+
 def design_values(opt: Optimisation, params: dict[str, Any]) -> dict[str, Any]:
     """A trial's Optuna parameters as design values (a choice is stored as its index)."""
     out = {}
@@ -162,6 +185,10 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
     """Finish ``opt.trials`` trials in the study (counting earlier runs and other processes'),
     ``parallel`` at a time: on ``client`` (Dask) or, without one, in this process one by one."""
     study = open_study(opt)
+    if not study.get_trials(deepcopy=False):  # a new study starts from the design as it is
+        start = start_params(opt)
+        if start is not None:
+            study.enqueue_trial(start)
     outcome = Outcome(study)
     inputs = Inputs()
     width, height = opt.size
@@ -203,6 +230,10 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
             trial.set_user_attr("design", values)
             study.tell(trial, state=optuna.trial.TrialState.FAIL)
             outcome.told.append(trial.number)
+            outcome.refused += 1
+            if progress is not None:
+                progress(Progress(trial.number, count_finished(study), opt.trials, None, False, values, False,
+                                  refused=f"{e.path}: {e.message}"))
             return
         if not opt.needs_render:
             tell(trial, scene, values, "", None, None, False)

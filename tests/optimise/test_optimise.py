@@ -156,7 +156,7 @@ def test_two_processes_share_one_study(folder):
     opt = spec.load(str(path))
     done = search.finished_trials(search.open_study(opt))
     assert 8 <= len(done) <= 9  # each process stops once the study holds 8 (one may be under way then)
-    told = [int(o.split(" this run")[0].split("(")[-1]) for o, _ in outs]
+    told = [int(o.split(" this run")[0].split("; ")[-1]) for o, _ in outs]
     assert sum(told) == len(done) and all(told), outs  # both worked on it
 
 
