@@ -150,73 +150,119 @@ class RunCount:
     task_bytes: int = 0  # the pickled size of the largest task (the cell and its arguments)
 
 
+class CellRun:
+    """The cells of one run as a non-blocking object (Blender's modal operators drive it from a
+    timer): the cache is read when it is made, ``submit()`` sends the rest as tasks, ``poll()``
+    takes in what finished and says whether every image is in, ``cancel()`` stops every task."""
+
+    def __init__(self, client, cells: Sequence[Cell], inputs: Inputs, cache: CellCache | None = None):
+        self.client, self.cells, self.inputs, self.cache = client, list(cells), inputs, cache
+        self.count = RunCount(cells=len(cells))
+        self.images: list[np.ndarray | None] = [None] * len(cells)
+        self.wanted: dict[str, list[int]] = {}
+        for i, cell in enumerate(self.cells):
+            key = cell.key
+            image = cache.get(key) if cache is not None else None
+            if image is not None:
+                self.images[i] = image
+                self.count.from_cache += 1
+            else:
+                self.wanted.setdefault(key, []).append(i)
+        self.stop_name = f"lamp-stop-{uuid.uuid4().hex}"
+        self.futures: dict = {}  # future -> key
+        self.pending: set = set()
+        self.sent: dict = {}
+
+    @property
+    def total(self) -> int:
+        return len(self.cells)
+
+    @property
+    def done(self) -> int:
+        return sum(image is not None for image in self.images)
+
+    @property
+    def finished(self) -> bool:
+        return self.done == self.total
+
+    def submit(self) -> None:
+        """Send one task per key the cache lacked, and each environment image they need once."""
+        needed = {self.cells[ix[0]].environment for ix in self.wanted.values()} - {None}
+        self.sent = {d: self.client.scatter(self.inputs.data[d], hash=False) for d in needed}
+        for key, indices in self.wanted.items():
+            cell = self.cells[indices[0]]
+            env = self.sent.get(cell.environment) if cell.environment is not None else None
+            future = self.client.submit(render_cell, cell, env, self.stop_name, key=f"lamp-cell-{key}", pure=False)
+            self.futures[future] = key
+        self.pending = set(self.futures)
+        if self.wanted:
+            self.count.task_bytes = max(_task_bytes(self.cells[ix[0]]) for ix in self.wanted.values())
+
+    def poll(self) -> bool:
+        """Take in the finished tasks (each image kept in the cache); True once every image is in.
+        Raises ``TaskError`` if a task failed."""
+        for future in [f for f in self.pending if f.done()]:
+            self.pending.discard(future)
+            if future.status != "finished":
+                raise TaskError(f"render task failed: {_error_text(future)}")
+            image = future.result()
+            key = self.futures[future]
+            if self.cache is not None:
+                self.cache.put(key, image)
+            for i in self.wanted[key]:
+                self.images[i] = image
+            self.count.rendered += 1
+            future.release()
+        return self.finished
+
+    def cancel(self) -> None:
+        """Stop every task: running renders at their next band (the run's stop event), the rest at once."""
+        if self.futures and self.client is not None:
+            from distributed import Event
+
+            with contextlib.suppress(Exception):
+                Event(self.stop_name, client=self.client).set()
+            with contextlib.suppress(Exception):
+                self.client.cancel(list(self.futures), force=True)
+        self.pending = set()
+        self.release()
+
+    def release(self) -> None:
+        for f in self.sent.values():
+            with contextlib.suppress(Exception):
+                f.release()
+        self.sent = {}
+
+
 def run_cells(client, cells: Sequence[Cell], inputs: Inputs, cache: CellCache | None = None, *,
               progress: Callable[[int, int], None] | None = None,
               should_stop: Callable[[], bool] | None = None) -> tuple[list[np.ndarray], RunCount]:
     """Every cell's image, in order: from ``cache`` where it holds the key, else rendered as a task
     (and then kept in ``cache``). ``progress(done, total)`` as cells arrive; ``should_stop()``
     polled every ``POLL`` seconds: True cancels every task and raises ``Cancelled``."""
-    from distributed import Event
-
-    count = RunCount(cells=len(cells))
-    keys = [c.key for c in cells]
-    images: list[np.ndarray | None] = [None] * len(cells)
-    wanted: dict[str, list[int]] = {}
-    for i, key in enumerate(keys):
-        image = cache.get(key) if cache is not None else None
-        if image is not None:
-            images[i] = image
-            count.from_cache += 1
-        else:
-            wanted.setdefault(key, []).append(i)
-    done = len(cells) - sum(len(v) for v in wanted.values())
+    run = CellRun(client, cells, inputs, cache)
     if progress is not None:
-        progress(done, len(cells))
-    if not wanted:
-        return images, count  # type: ignore[return-value]
-
-    stop_name = f"lamp-stop-{uuid.uuid4().hex}"
-    needed = {cells[ix[0]].environment for ix in wanted.values()} - {None}
-    sent = {d: client.scatter(inputs.data[d], hash=False) for d in needed}
-    futures = {}
-    for key, indices in wanted.items():
-        cell = cells[indices[0]]
-        env = sent.get(cell.environment) if cell.environment is not None else None
-        futures[client.submit(render_cell, cell, env, stop_name, key=f"lamp-cell-{key}", pure=False)] = key
-    count.task_bytes = max(_task_bytes(cells[ix[0]]) for ix in wanted.values())
+        progress(run.done, run.total)
+    if run.finished:
+        return run.images, run.count  # type: ignore[return-value]
     try:
-        pending = set(futures)
-        while pending:
+        run.submit()
+        reported = run.done
+        while True:
             if should_stop is not None and should_stop():
                 raise Cancelled()
-            finished = [f for f in pending if f.done()]
-            if not finished:
-                time.sleep(POLL)
-                continue
-            for future in finished:
-                pending.discard(future)
-                if future.status != "finished":
-                    raise TaskError(f"render task failed: {_error_text(future)}")
-                image = future.result()
-                key = futures[future]
-                if cache is not None:
-                    cache.put(key, image)
-                for i in wanted[key]:
-                    images[i] = image
-                count.rendered += 1
-                done += len(wanted[key])
-                future.release()
-            if progress is not None:
-                progress(done, len(cells))
-        return images, count  # type: ignore[return-value]
+            finished = run.poll()
+            if progress is not None and run.done != reported:
+                reported = run.done
+                progress(run.done, run.total)
+            if finished:
+                return run.images, run.count  # type: ignore[return-value]
+            time.sleep(POLL)
     except BaseException:
-        with contextlib.suppress(Exception):
-            Event(stop_name, client=client).set()
-        client.cancel(list(futures), force=True)
+        run.cancel()
         raise
     finally:
-        for f in sent.values():
-            f.release()
+        run.release()
 
 
 def _error_text(future) -> str:

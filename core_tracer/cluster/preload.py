@@ -12,6 +12,10 @@ large array back to the system, and a render then spends most of its time faulti
 (a 6-variant 256 px study took 20 s instead of 4 s on two workers). ``mallopt`` sets it in the
 running worker, so a studio's ``dask worker --preload`` gets it too.
 
+Inside Blender the project's package is ``bl_ext.<repository>.lamp_styling.core_tracer``, and a task
+sent from there names its functions so; a worker finds ``bl_ext...core_tracer.x`` as this checkout's
+``core_tracer.x`` (``BlenderNames``), the packages above it as empty ones.
+
 A local cluster's workers (``LAMP_LOCAL_WORKER`` set) start a session of their own and ignore
 Ctrl-C, as the project's own worker processes do (``start_new_session``): a terminal's Ctrl-C is
 for the study, which stops them itself; and where the kernel shares the processors between
@@ -22,9 +26,13 @@ part of its parent's (on this shared 2-core machine that halved a Dask study's s
 
 import ctypes
 import ctypes.util
+import importlib
+import importlib.abc
+import importlib.machinery
 import os
 import signal
 import sys
+import types
 
 # mallopt parameters (glibc malloc.h): M_TRIM_THRESHOLD -1, M_MMAP_THRESHOLD -3; the values are
 # processes._KEEP_FREED_MEMORY's.
@@ -50,3 +58,37 @@ if sys.platform.startswith("linux"):
         libc.mallopt(M_TRIM_THRESHOLD, TRIM_THRESHOLD)
     except (OSError, AttributeError):  # another C library: it has its own policy
         pass
+
+
+class _Alias(importlib.abc.Loader):
+    def __init__(self, module):
+        self.module = module
+
+    def create_module(self, spec):
+        return self.module
+
+    def exec_module(self, module):
+        pass
+
+
+class BlenderNames(importlib.abc.MetaPathFinder):
+    """``bl_ext.<repository>.<extension>`` as empty packages, and ``...core_tracer[.x]`` under them as
+    ``core_tracer[.x]``."""
+
+    PREFIX = "bl_ext"
+
+    def find_spec(self, fullname, path=None, target=None):
+        parts = fullname.split(".")
+        if parts[0] != self.PREFIX:
+            return None
+        if "core_tracer" in parts:
+            real = ".".join(parts[parts.index("core_tracer"):])
+            module = importlib.import_module(real)
+            return importlib.machinery.ModuleSpec(fullname, _Alias(module), is_package=hasattr(module, "__path__"))
+        package = types.ModuleType(fullname)
+        package.__path__ = []
+        return importlib.machinery.ModuleSpec(fullname, _Alias(package), is_package=True)
+
+
+if not any(isinstance(f, BlenderNames) for f in sys.meta_path):
+    sys.meta_path.insert(0, BlenderNames())  # before the path finder, which would load a second copy
