@@ -161,3 +161,69 @@ def worker_scene(cell: Cell, environment: bytes | None) -> dict:
     scene["environment"]["world"] = "file"
     scene["environment"]["file"] = _materialise(cell.environment, cell.suffix, environment)
     return scene
+
+
+# ---------------------------------------------------------------------------------------------
+# A large cell in bands of rows
+
+# A cell of at least this many eye rays (pixels x samples) is sent as several tasks, each a run of
+# its bands of rows of about this many rays: a print-size variant (1920 px at 64 samples, 236
+# million rays) becomes some 30 tasks that many workers share. Bands are traced alone, so the rows
+# are those of the whole render, bit for bit (the band pool relies on the same).
+BAND_TASK_RAYS = 8_000_000
+
+
+def band_groups(cell: Cell) -> list[list[tuple[int, int, int]]]:
+    """The cell's bands ((index, y0, y1), ``schedule.band_rows``) in runs of about
+    ``BAND_TASK_RAYS`` eye rays; one run for a cell below that."""
+    from ..raytrace.engine import make_context
+    from ..raytrace.engine.schedule import band_rows
+
+    ctx = make_context(cell.scene, cell.width, cell.height)
+    rays_per_row = cell.width * ctx.samples
+    groups: list[list[tuple[int, int, int]]] = [[]]
+    rays = 0
+    for index, (y0, y1) in enumerate(band_rows(ctx)):
+        if groups[-1] and rays + (y1 - y0) * rays_per_row > BAND_TASK_RAYS:
+            groups.append([])
+            rays = 0
+        groups[-1].append((index, y0, y1))
+        rays += (y1 - y0) * rays_per_row
+    return groups
+
+
+def render_bands(cell: Cell, bands: list[tuple[int, int, int]], environment: bytes | None = None,
+                 stop: str | None = None) -> list[tuple[int, int, np.ndarray]]:
+    """The task for part of a large cell: (y0, y1, rows (y1 - y0, W, 3) float32) of each band, traced
+    as ``render_passes`` traces them (no glare: that needs the whole image, ``assemble``)."""
+    from ..raytrace.engine import RenderCancelled, make_context
+    from ..raytrace.engine.schedule import BandImage, worker_bands
+
+    scene = worker_scene(cell, environment)
+    ctx = make_context(scene, cell.width, cell.height)
+    queued = list(bands)
+    rows = {index: (y0, y1) for index, y0, y1 in bands}
+    stopped = stop_flag(stop) or (lambda: False)
+
+    def take() -> tuple[int, int, int] | None:
+        if stopped():
+            raise RenderCancelled("render cancelled")
+        return queued.pop(0) if queued else None
+
+    out = []
+    for index, band in worker_bands(ctx, take, stopped):
+        y0, y1 = rows[index]
+        image = BandImage.of(band, False, ctx.to_xyz).image
+        out.append((y0, y1, image.reshape(y1 - y0, cell.width, 3)))
+    return out
+
+
+def assemble(cell: Cell, parts: list[list[tuple[int, int, np.ndarray]]]) -> np.ndarray:
+    """The cell's image from its bands' rows, glare applied as ``render_cell`` applies it."""
+    from ..images import glare
+
+    image = np.zeros((cell.height, cell.width, 3), dtype=np.float32)
+    for part in parts:
+        for y0, y1, rows in part:
+            image[y0:y1] = rows
+    return glare.apply(image, cell.scene)

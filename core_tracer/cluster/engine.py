@@ -28,8 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import budget, processes
+from . import cells as cells_module
 from .cache import CellCache
-from .cells import Cell, Inputs, render_cell
+from .cells import Cell, Inputs, assemble, band_groups, render_bands, render_cell
 
 SCHEDULER_VARIABLE = "DASK_SCHEDULER_ADDRESS"  # Dask's own name for it
 LOCAL = "local"
@@ -148,6 +149,7 @@ class RunCount:
     rendered: int = 0  # tasks run (one per distinct key the cache lacked)
     from_cache: int = 0  # cells whose image the cache held
     task_bytes: int = 0  # the pickled size of the largest task (the cell and its arguments)
+    band_tasks: int = 0  # tasks that traced runs of a large cell's bands
 
 
 class CellRun:
@@ -169,7 +171,8 @@ class CellRun:
             else:
                 self.wanted.setdefault(key, []).append(i)
         self.stop_name = f"lamp-stop-{uuid.uuid4().hex}"
-        self.futures: dict = {}  # future -> key
+        self.futures: dict = {}  # future -> (key, part): part None for a whole cell, else its run of bands
+        self.parts: dict[str, list] = {}  # key -> the rows of each run of bands of a large cell
         self.pending: set = set()
         self.sent: dict = {}
 
@@ -192,8 +195,19 @@ class CellRun:
         for key, indices in self.wanted.items():
             cell = self.cells[indices[0]]
             env = self.sent.get(cell.environment) if cell.environment is not None else None
-            future = self.client.submit(render_cell, cell, env, self.stop_name, key=f"lamp-cell-{key}", pure=False)
-            self.futures[future] = key
+            groups = band_groups(cell) if cell.width * cell.height * _samples(cell) >= cells_module.BAND_TASK_RAYS \
+                else [None]
+            if len(groups) == 1:
+                future = self.client.submit(render_cell, cell, env, self.stop_name, key=f"lamp-cell-{key}",
+                                            pure=False)
+                self.futures[future] = (key, None)
+                continue
+            self.parts[key] = [None] * len(groups)
+            self.count.band_tasks += len(groups)
+            for g, bands in enumerate(groups):
+                future = self.client.submit(render_bands, cell, bands, env, self.stop_name,
+                                            key=f"lamp-bands-{key}-{g}", pure=False)
+                self.futures[future] = (key, g)
         self.pending = set(self.futures)
         if self.wanted:
             self.count.task_bytes = max(_task_bytes(self.cells[ix[0]]) for ix in self.wanted.values())
@@ -205,14 +219,19 @@ class CellRun:
             self.pending.discard(future)
             if future.status != "finished":
                 raise TaskError(f"render task failed: {_error_text(future)}")
-            image = future.result()
-            key = self.futures[future]
-            if self.cache is not None:
-                self.cache.put(key, image)
-            for i in self.wanted[key]:
-                self.images[i] = image
-            self.count.rendered += 1
+            result = future.result()
+            key, part = self.futures[future]
             future.release()
+            if part is not None:  # one run of a large cell's bands
+                self.parts[key][part] = result
+                if any(p is None for p in self.parts[key]):
+                    continue
+                result = assemble(self.cells[self.wanted[key][0]], self.parts.pop(key))
+            if self.cache is not None:
+                self.cache.put(key, result)
+            for i in self.wanted[key]:
+                self.images[i] = result
+            self.count.rendered += 1
         return self.finished
 
     def cancel(self) -> None:
@@ -263,6 +282,10 @@ def run_cells(client, cells: Sequence[Cell], inputs: Inputs, cache: CellCache | 
         raise
     finally:
         run.release()
+
+
+def _samples(cell: Cell) -> int:
+    return int(cell.scene["image"].get("samples", 1) or 1)
 
 
 def _error_text(future) -> str:

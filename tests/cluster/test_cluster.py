@@ -178,3 +178,22 @@ def test_a_workers_memory_limit_is_the_largest_cells_budget():
                                                   + engine.KEPT_FREED_BYTES)
     assert engine.worker_memory([small]) < engine.worker_memory([small, big]) <= budget.MEMORY_BUDGET
 
+
+
+@pytest.mark.slow
+def test_a_large_cell_is_split_into_runs_of_bands_and_is_the_same_image(client, tmp_path, monkeypatch):
+    """A cell above BAND_TASK_RAYS is several tasks, each a run of its bands of rows; the assembled
+    image (glare applied to the whole) equals the whole render, bit for bit."""
+    from core_tracer.cluster import cells as cells_module
+
+    doc = baseline_doc()
+    doc["glare"] = {"on": True}
+    study = st.Study.build(doc, [{"parameter": "lens.ior", "values": [1.5]}], (512, 400))  # bands of 128 rows
+    cells, inputs = dask_study.study_cells(study)
+    monkeypatch.setattr(cells_module, "BAND_TASK_RAYS", 512 * 128)  # a band a task
+    groups = cells_module.band_groups(cells[0])
+    assert len(groups) >= 3 and [b for g in groups for b in g] == sorted(b for g in groups for b in g)
+    images, count = engine.run_cells(client, cells, inputs, CellCache(tmp_path))
+    assert count.band_tasks == len(groups) and count.rendered == 1
+    whole = render_cell(cells[0])
+    assert np.array_equal(images[0], whole)
