@@ -12,6 +12,7 @@ import os
 import sys
 import time
 
+from ..checkpoints import checkpoint
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import check_output_folder, ctrl_c_sets
@@ -57,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
     tty = sys.stderr.isatty()
 
     def progress(p: search.Progress) -> None:
+        checkpoint("optimise:trial")
         if p.refused:
             print(f"trial {p.number}: {results.setting(p.params)} refused: {p.refused}  [{p.finished}/{p.total}]",
                   file=sys.stderr if tty else sys.stdout, flush=True)

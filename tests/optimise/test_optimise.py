@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 
 import numpy as np
+import optuna
 import pytest
-from helpers import BASELINE, ROOT, baseline_doc, cli_command, run_cli
+from helpers import BASELINE, ROOT, baseline_doc, cli_command, run_cli, signal_and_wait, start_cli_at
 
 from core_tracer.cluster import engine
 from core_tracer.cluster.cache import CellCache
@@ -201,3 +203,19 @@ def test_trials_run_as_tasks_on_a_local_cluster(folder):
     scene = opt.scene_of(trial.user_attrs["design"])
     image, mask = T.render_trial(make_cell(scene, SIZE, SIZE, Inputs()))
     assert search.measure(opt, scene, image, mask)[0] == pytest.approx(trial.values, abs=0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("workers", ["0", "2"])
+def test_ctrl_c_stops_the_search_in_one_line_and_keeps_what_finished(folder, workers):
+    path = folder / "opt.json"
+    path.write_text(json.dumps(opt_doc(folder, trials=500)))
+    proc = start_cli_at("optimise:trial", folder / "reached", "optimise", path, "--workers", workers,
+                        "-o", folder / "out", "--no-cache")
+    _, err = signal_and_wait(proc, signal.SIGINT)
+    assert (proc.returncode, err.strip().splitlines()[-1]) == (130, "interrupted"), err
+    assert "Traceback" not in err and not (folder / "out" / "trials.json").exists()
+    opt = spec.load(str(path))
+    states = [t.state for t in search.open_study(opt).trials]
+    assert optuna.trial.TrialState.RUNNING not in states  # the trials under way were told as failed
+    assert states.count(optuna.trial.TrialState.COMPLETE) >= 1
