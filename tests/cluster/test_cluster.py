@@ -110,8 +110,10 @@ def test_the_environment_image_travels_with_the_task(client, tmp_path, monkeypat
 def test_a_worker_killed_mid_study_loses_nothing(tmp_path):
     """SIGKILL one worker process of a real local cluster while it renders: the scheduler runs its
     tasks again on the restarted worker and the images equal a run without the fault, bit for bit."""
-    study = st.Study.build(baseline_doc(), [{"parameter": "lens.ior", "values": [1.45, 1.5, 1.55, 1.6]},
-                                            {"parameter": "cuts.height", "values": [0.5, 2.0]}], (40, 40))
+    doc = baseline_doc()
+    doc["image"] = {"samples": 4}
+    study = st.Study.build(doc, [{"parameter": "lens.ior", "values": [1.45, 1.5, 1.55, 1.6]},
+                                 {"parameter": "cuts.height", "values": [0.5, 2.0]}], (96, 96))
     here = study_run.run_study(study, 0)
     killed: list[int] = []
     with engine.connect(workers=2, memory_limit=engine.worker_memory([])) as client:
@@ -130,10 +132,18 @@ def test_a_worker_killed_mid_study_loses_nothing(tmp_path):
                                          progress=progress)
         seconds = time.monotonic() - start
         after = set(client.run(os.getpid).values())
+
+        def lost(dask_scheduler) -> int:  # renders the scheduler took back from the dead worker
+            return sum(1 for entry in dask_scheduler.transition_log
+                       if entry[0].startswith("lamp-cell-") and entry[1] == "processing"
+                       and entry[2] in ("released", "waiting"))
+
+        taken_back = client.run_on_scheduler(lost)
     assert killed and killed[0] not in after  # a worker was killed while it rendered, and replaced
+    assert taken_back >= 1  # and its render ran again
     assert count.rendered == len(study) == 8
     assert all(np.array_equal(a, b) for a, b in zip(here, images, strict=True))
-    print(f"fault run: {seconds:.1f} s, killed pid {killed[0]}")
+    print(f"fault run: {seconds:.1f} s, killed pid {killed[0]}, {taken_back} render(s) run again")
 
 
 @pytest.mark.slow
