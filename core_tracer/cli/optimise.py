@@ -92,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
                                                 "running dask scheduler, or local") from None
             raise
     seconds = time.perf_counter() - start
+    if cache is not None:
+        cache.prune()
     study = outcome.study
     results.write_trials(opt, study, os.path.join(folder, "trials.json"))
     results.write_history(opt, study, os.path.join(folder, "history.png"))

@@ -282,6 +282,8 @@ def run_cells(client, cells: Sequence[Cell], inputs: Inputs, cache: CellCache | 
         raise
     finally:
         run.release()
+        if cache is not None:
+            cache.prune()
 
 
 def _samples(cell: Cell) -> int:

@@ -207,3 +207,17 @@ def test_a_large_cell_is_split_into_runs_of_bands_and_is_the_same_image(client, 
     assert count.band_tasks == len(groups) and count.rendered == 1
     whole = render_cell(cells[0])
     assert np.array_equal(images[0], whole)
+
+
+def test_the_cache_keeps_the_cells_used_last_within_its_size(tmp_path):
+    cache = CellCache(tmp_path)
+    image = np.zeros((8, 8, 3), np.float32)
+    for k in range(5):
+        cache.put(f"{k:02d}" * 32, image)
+        path = cache.path(f"{k:02d}" * 32)
+        os.utime(path, (1000 + k, 1000 + k))  # put in this order, a second apart
+    assert cache.get("00" * 32) is not None  # reading the oldest marks it used
+    size = os.path.getsize(cache.path("00" * 32))
+    assert cache.prune(2 * size) == 3 * size
+    kept = [k for k in range(5) if cache.get(f"{k:02d}" * 32) is not None]
+    assert kept == [0, 4]
