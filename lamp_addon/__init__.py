@@ -8,6 +8,7 @@
 - ``compare``: the tracer and Cycles side by side, from the panel and headless.
 - ``presets``: the preset libraries, their browser and operators.
 - ``study``: design studies and their contact sheets.
+- ``optimise``: optimisations (Optuna) and applying what they found.
 - ``freeform``: lamp roles on the designer's own meshes, their rendering, Convert to Free-form and
   export.
 - ``convert``: the bpy-free layer they share (units, camera mathematics, Cycles numbers, meshes).
@@ -27,9 +28,9 @@ from .registration import modules_factory
 
 def modules() -> tuple:
     """Every sub-package (or module) that registers, in registration order."""
-    from . import compare, design, freeform, preferences, presets, render, study
+    from . import compare, design, freeform, optimise, preferences, presets, render, study
 
-    return (design, freeform, render, compare, preferences, presets, study)
+    return (design, freeform, render, compare, preferences, presets, study, optimise)
 
 
 register, unregister = modules_factory(modules)

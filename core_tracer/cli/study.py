@@ -50,7 +50,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                                       f"{st.DEFAULT_SIZE[0]}x{st.DEFAULT_SIZE[1]})")
     parser.add_argument("--title", help="the sheet's title (default: the design's name)")
     parser.add_argument("--workers", type=int, metavar="N",
-                        help="worker processes (default: one per core; 0 renders in this process)")
+                        help="worker processes of a local cluster or pool (default: one per core; 0 renders in "
+                             "this process)")
+    parser.add_argument("--engine", choices=("dask", "processes"),
+                        help="dask: each variant a task on a Dask cluster, results cached by content (the default "
+                             "when Dask is installed); processes: the project's own worker processes")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="a Dask scheduler, tcp://HOST:8786 (default: $DASK_SCHEDULER_ADDRESS, else a local "
+                             "cluster; \"local\" forces one); docs/cluster.md")
+    parser.add_argument("--cache", metavar="DIR", help="the folder of rendered cells kept by content (default: "
+                                                       "the per-user cache, lamp-styling/cells)")
+    parser.add_argument("--no-cache", action="store_true", help="render every variant, keep none")
     parser.add_argument("--save-study", metavar="STUDY.json", help="write the study definition (base embedded)")
     parser.add_argument("--save-variants", metavar="DIR", help="write every variant as a lamp-scene/1 preset")
     add_display_arguments(parser)
@@ -208,22 +218,28 @@ def run(args: argparse.Namespace) -> int:
         if done:
             checkpoint("study:variant")
 
+    engine = _engine(args)
+    counted = ""
     with ctrl_c_sets() as stop:
-        try:
-            images = study_run.run_study(runnable, args.workers, progress=on_progress, should_stop=stop.is_set,
-                                         on_start=lambda run: checkpoint("study:started"))
-        except study_run.Cancelled:
-            raise stop.interrupt() from None
+        if engine == "dask":
+            images, how, counted = _run_on_dask(args, runnable, world, on_progress, stop)
+        else:
+            try:
+                images = study_run.run_study(runnable, args.workers, progress=on_progress, should_stop=stop.is_set,
+                                             on_start=lambda run: checkpoint("study:started"))
+            except study_run.Cancelled:
+                raise stop.interrupt() from None
         checkpoint("study:rendered")
     seconds = time.perf_counter() - start
     checkpoint("study:composed")
     shown = _write_sheet(args, study, images, view)
     _save_side_files(args, study)
-    workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
-    how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
+    if engine != "dask":
+        workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
+        how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
     w, h = study.size
     shape = " x ".join(str(len(a.values)) for a in study.axes)
-    print(f"{printable(args.output)}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}{shown}")
+    print(f"{printable(args.output)}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}{counted}{shown}")
     return 0
 
 
@@ -263,3 +279,50 @@ def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view) 
     extra = f" {stops:+.1f} EV" if stops else ""
     paper = f", paper-mode cells at {paper_ev:+.1f} EV" if paper_ev is not None else ""
     return f", {view.view} at EV100 {ev100:.1f}{extra} for every cell{paper}"
+
+
+def _engine(args: argparse.Namespace) -> str:
+    """dask or processes: ``--engine``, else Dask when installed (and always for ``--scheduler``);
+    ``--workers 0`` renders in this process through the processes path."""
+    from ..cluster import engine as dask_engine
+
+    if args.workers == 0:
+        if args.scheduler or args.engine == "dask":
+            raise SceneError("--workers", "0 renders in this process; allowed 1 or more with --engine dask "
+                                          "or --scheduler")
+        return "processes"
+    wanted = args.engine or ("dask" if args.scheduler or dask_engine.available() else "processes")
+    if wanted == "processes" and args.scheduler:
+        raise SceneError("--scheduler", "needs the Dask engine; allowed with --engine dask (or without --engine)")
+    if wanted == "dask" and not dask_engine.available():
+        raise SceneError("--engine", "dask is not installed here (pip install distributed); allowed processes")
+    return wanted
+
+
+def _run_on_dask(args: argparse.Namespace, study: st.Study, world: int, on_progress, stop):
+    """(the images, how they were rendered, what the cache gave) on a Dask cluster."""
+    from ..cluster import engine as dask_engine
+    from ..cluster import study as dask_study
+    from ..cluster.cache import CellCache
+
+    cache = None if args.no_cache else CellCache(args.cache)
+    where = []
+
+    def started(client) -> None:
+        local = client.local
+        where.append(local.describe() if local is not None else f"Dask scheduler {client.scheduler.address}")
+        if sys.stderr.isatty():
+            print(where[0], file=sys.stderr)
+        checkpoint("study:started")
+
+    try:
+        images, count = dask_study.run_study(study, args.scheduler, args.workers, cache=cache, environment=world,
+                                             progress=on_progress, should_stop=stop.is_set, on_start=started)
+    except dask_engine.Cancelled:
+        raise stop.interrupt() from None
+    except OSError as e:  # no scheduler at the address
+        raise SceneError("--scheduler", f"cannot reach {args.scheduler or os.environ.get('DASK_SCHEDULER_ADDRESS')}"
+                                        f" ({e}); allowed the address of a running dask scheduler, "
+                                        "or local") from None
+    how = f"on the {where[0]}" if where else "all from the cache"
+    return images, how, f" ({count.rendered} rendered, {count.from_cache} from the cache)"

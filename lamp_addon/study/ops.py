@@ -58,9 +58,33 @@ def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, 
     if workers is None:
         workers = context.scene.lamp_study.workers or None
     start = time.perf_counter()
-    images = study_run.run_study(study, workers)
+    if settings.uses_cluster(context.scene.lamp_study):
+        run = _cluster_run(context, study)
+        try:
+            run.start()
+            while not run.poll(timeout=0.05):
+                pass
+            images = run.images
+        finally:
+            run.close()
+    else:
+        images = study_run.run_study(study, workers)
     seconds = time.perf_counter() - start
     return show_sheet(context, study, images), study, seconds
+
+
+def _cluster_run(context, study: st.Study):
+    """The study as Dask tasks on the scheduler the settings name; results kept in the cell cache
+    (``core_tracer.cluster``). Raises ``SceneError`` when Dask is not installed in Blender's Python."""
+    from ...core_tracer.cluster import engine
+
+    if not engine.available():
+        raise SceneError("Scheduler", "needs Dask (distributed) in Blender's Python, which is not installed; "
+                                      "allowed \"local\" (this computer's worker processes)")
+    from ...core_tracer.cluster.cache import CellCache
+    from ...core_tracer.cluster.study import DaskStudyRun
+
+    return DaskStudyRun(study, context.scene.lamp_study.scheduler.strip(), cache=CellCache())
 
 
 def _summary(study: st.Study, seconds: float) -> str:
@@ -97,7 +121,7 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
             image, study, seconds = render_study(context)
         except SceneError as e:
             return reports.cancelled(self, str(e))
-        except (StudyError, OSError) as e:
+        except (StudyError, OSError, RuntimeError) as e:  # RuntimeError: a task failed on the cluster
             return reports.cancelled(self, f"Lamp Study failed: {e}")
         return reports.finished(self, _summary(study, seconds))
 
@@ -110,7 +134,13 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
             self._study = settings.study_from_settings(context.scene)
         except SceneError as e:
             return reports.cancelled(self, str(e))
-        self._run = StudyRun(self._study, context.scene.lamp_study.workers or None)
+        try:
+            if settings.uses_cluster(context.scene.lamp_study):
+                self._run = _cluster_run(context, self._study)
+            else:
+                self._run = StudyRun(self._study, context.scene.lamp_study.workers or None)
+        except SceneError as e:
+            return reports.cancelled(self, str(e))
         try:
             self._run.start()
         except OSError as e:
@@ -129,7 +159,7 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
 
         try:
             finished = self._run.poll()
-        except StudyError as e:
+        except (StudyError, RuntimeError) as e:  # RuntimeError: a task failed on the cluster
             self.end_modal(context)
             return reports.cancelled(self, f"Lamp Study failed: {e}")
         if not finished:

@@ -54,7 +54,11 @@ class LAMP_PT_study(DesignSection, bpy.types.Panel):
         col.use_property_decorate = False
         col.prop(settings, "width")
         col.prop(settings, "height")
-        col.prop(settings, "workers")
+        col.prop(settings, "scheduler")
+        if study_settings.uses_cluster(settings):
+            col.label(text="Variants render as Dask tasks", icon="NETWORK_DRIVE")
+        else:
+            col.prop(settings, "workers")
         layout.operator("lamp.study_run", icon="IMGDISPLAY")
 
         study = study_settings.last_study()

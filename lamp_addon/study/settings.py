@@ -64,6 +64,11 @@ MODE_ITEMS = (("RANGE", "Range", "From a first to a last value in a number of eq
               ("LIST", "List", "Values separated by commas; vectors and colours as a/b/c"))
 
 
+def uses_cluster(settings) -> bool:
+    """Whether the study renders on a Dask scheduler (an address) rather than this computer's workers."""
+    return settings.scheduler.strip().lower() not in ("", "local")
+
+
 def is_single_number(path: str) -> bool:
     spec = S.lookup(path)
     return isinstance(spec, S.Num) and spec.size == 1
@@ -130,6 +135,10 @@ class LAMP_PG_study(bpy.types.PropertyGroup):
                         description="Height of each variant image")
     workers: IntProperty(name="Workers", default=0, min=0, max=256,
                          description="Worker processes rendering the variants (0: one per core)")
+    scheduler: StringProperty(name="Scheduler", default="local", maxlen=300,
+                              description="Where the variants render: \"local\" (worker processes on this "
+                                          "computer) or a Dask scheduler's address, tcp://HOST:8786, to render "
+                                          "them as tasks on the studio's cluster (docs/cluster.md)")
     variant: IntProperty(name="Variant", default=1, min=1, max=st.MAX_VARIANTS,
                          description="A variant of the last study (numbered along the rows of the sheet)")
 

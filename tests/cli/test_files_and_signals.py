@@ -267,6 +267,7 @@ def test_a_signal_at_any_step_leaves_nothing_behind(tmp_path, command, point, si
                 "--passes", out_dir / "passes"]
     else:
         args = ["study", BASELINE, "--vary", "lens.ior=1.4,1.5,1.6", "--size", "16x16", "--workers", "2",
+                "--engine", "processes",
                 "-o", out_dir / "sheet.png", "--save-variants", out_dir / "variants"]
     proc = start_cli_at(point, marker, *args, env=env)  # waits there for the signal
     workers = child_pids(proc.pid)
@@ -292,7 +293,7 @@ def test_the_folder_of_a_study_killed_with_sigkill_is_removed_by_the_next_study(
     marker = tmp_path / "reached"
     env = dict(os.environ, TMPDIR=str(temp))
     args = ["study", BASELINE, "--vary", "lens.ior=1.4,1.5,1.6", "--size", "16x16", "--workers", "1",
-            "-o", tmp_path / "sheet.png"]
+            "--engine", "processes", "-o", tmp_path / "sheet.png"]
     proc = start_cli_at("study:variant", marker, *args, env=env)
     workers = child_pids(proc.pid)
     signal_and_wait(proc, signal.SIGKILL)

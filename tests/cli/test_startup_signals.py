@@ -35,7 +35,8 @@ def test_a_signal_before_the_modules_load_is_one_line(tmp_path, sig, command):
 
 @pytest.mark.parametrize("sig, command", [
     (signal.SIGINT, ("render", BASELINE, "--width", "32", "--height", "32")),
-    (signal.SIGTERM, ("study", BASELINE, "--vary", "lens.ior=1.4,1.5", "--size", "8x8", "--workers", "1")),
+    (signal.SIGTERM, ("study", BASELINE, "--vary", "lens.ior=1.4,1.5", "--size", "8x8", "--workers", "1",
+                      "--engine", "processes")),
 ], ids=["render-SIGINT", "study-SIGTERM"])
 def test_a_signal_at_any_moment_of_start_up_is_one_line(tmp_path, sig, command):
     # From 0.3 s, when the interpreter runs the program's code even on a loaded machine: the

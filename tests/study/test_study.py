@@ -422,7 +422,7 @@ def test_cli_study_of_a_missing_sheet_exits_2(tmp_path):
 def test_cli_ctrl_c_exits_130_and_writes_nothing(tmp_path):
     out = tmp_path / "sheet.png"
     args = ["study", BASELINE, "--vary", "lens.ior=1.4:1.6:8", "--vary", "cuts.height=0.5:2:8", "-o", out,
-            "--size", "128x128", "--workers", "2"]
+            "--size", "128x128", "--workers", "2", "--engine", "processes"]
     # The signal lands once both workers have started, before the first variant is done.
     proc = start_cli_at("study:started", tmp_path.parent / f"{tmp_path.name}-started", *args)
     workers = child_pids(proc.pid)

@@ -1,0 +1,103 @@
+"""Rendered cells kept by content: ``<folder>/<key[:2]>/<key>.npy``, one file per cell key.
+
+A re-run, a study resumed after a crash or extended by one axis value, and the trials an
+optimisation repeats find their images here and render only what is new. Files are written
+atomically (a ``.part`` file renamed into place) as each cell arrives, so a crash loses at most
+the cells under way, and a damaged file is rendered again.
+
+The folder is kept below ``MAX_BYTES`` (``prune``, after each run): the cells used least recently go
+first (reading a cell marks it used).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..raytrace.world_cache import ENV_FOLDER
+
+SUBFOLDER = "cells"
+MAX_BYTES = 4 * 2**30  # the cache's size after a prune: a 64-variant study of 2048 px is 3.2 GB
+
+
+def default_folder() -> str:
+    """``$LAMP_STYLING_CACHE/cells``, else ``$XDG_CACHE_HOME`` or ``~/.cache``, then ``lamp-styling/cells``."""
+    root = os.environ.get(ENV_FOLDER)
+    if not root:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        root = os.path.join(base, "lamp-styling")
+    return os.path.join(root, SUBFOLDER)
+
+
+class CellCache:
+    def __init__(self, folder: str | os.PathLike | None = None):
+        self.folder = os.fspath(folder) if folder is not None else default_folder()
+
+    def path(self, key: str) -> str:
+        return os.path.join(self.folder, key[:2], f"{key}.npy")
+
+    def get(self, key: str) -> np.ndarray | None:
+        try:
+            image = np.load(self.path(key), allow_pickle=False)
+        except (OSError, ValueError, EOFError):  # missing, or cut short: render it again
+            return None
+        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.float32:
+            return None
+        self._used(key)
+        return image
+
+    def _used(self, key: str) -> None:
+        try:
+            os.utime(self.path(key))
+        except OSError:
+            pass
+
+    def put(self, key: str, image: np.ndarray) -> None:
+        self.put_array(key, np.asarray(image, dtype=np.float32))
+
+    def get_array(self, key: str) -> np.ndarray | None:
+        """Any array kept under ``key`` (a trial's lamp mask, say), or None."""
+        try:
+            array = np.load(self.path(key), allow_pickle=False)
+        except (OSError, ValueError, EOFError):
+            return None
+        self._used(key)
+        return array
+
+    def put_array(self, key: str, array: np.ndarray) -> None:
+        path = self.path(key)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        partial = f"{path}.{os.getpid()}.part.npy"
+        try:
+            np.save(partial, array)
+            os.replace(partial, path)
+        except BaseException:
+            if os.path.exists(partial):
+                os.unlink(partial)
+            raise
+
+    def prune(self, max_bytes: int = MAX_BYTES) -> int:
+        """Remove the least recently used cells until the folder holds at most ``max_bytes``; the
+        bytes removed."""
+        files = []
+        for root, _, names in os.walk(self.folder):
+            for name in names:
+                if name.endswith(".npy") and ".part." not in name:
+                    path = os.path.join(root, name)
+                    try:
+                        st = os.stat(path)
+                    except OSError:
+                        continue
+                    files.append((st.st_mtime, st.st_size, path))
+        total = sum(size for _, size, _ in files)
+        removed = 0
+        for _, size, path in sorted(files):
+            if total - removed <= max_bytes:
+                break
+            try:
+                os.unlink(path)
+            except OSError:
+                continue
+            removed += size
+        return removed

@@ -1,0 +1,304 @@
+"""The Dask client that runs cells: on a scheduler's cluster, or on a local cluster by default.
+
+``connect(scheduler)`` gives a ``distributed.Client``: to ``scheduler`` (``tcp://host:8786``), else to
+``$DASK_SCHEDULER_ADDRESS``, else to a ``LocalCluster`` on this machine of ``workers`` processes
+(default one per core) with one thread each, each worker's memory limited to what the largest
+cell's render is budgeted (``worker_memory``): Dask pauses, then restarts, a worker above it.
+
+``run_cells(client, cells, ...)`` renders the cells the cache does not hold, one Dask task per
+distinct key, and returns every image in order with a ``RunCount``. A worker lost mid-task (killed,
+out of memory, its machine gone) is replaced and its tasks run again elsewhere by the scheduler;
+the images are the same bit for bit, since a render depends only on its cell. Cancelling sets the
+run's stop event, which running renders poll between bands, and cancels every task.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import logging
+import os
+import shutil
+import tempfile
+import time
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import budget, processes
+from . import cells as cells_module
+from .cache import CellCache
+from .cells import Cell, Inputs, assemble, band_groups, render_bands, render_cell
+
+SCHEDULER_VARIABLE = "DASK_SCHEDULER_ADDRESS"  # Dask's own name for it
+LOCAL = "local"
+CONNECT_TIMEOUT = "20s"
+SCRATCH_PREFIX = "lamp-dask-"
+LOCAL_WORKER = "LAMP_LOCAL_WORKER"  # set in a local cluster's workers (preload.py reads it)
+POLL = 0.05  # seconds between looks at the tasks and at the caller's should_stop
+PRELOAD = os.path.join(os.path.dirname(os.path.abspath(__file__)), "preload.py")
+# A Dask worker process beyond the render's own figure (budget.BASE_BYTES counts the interpreter,
+# numpy and the tracer): distributed, tornado and the task's result held until fetched; a worker
+# measured 93 MB RSS idle after a 256 px render with its allocator trimming
+# (benchmarks/bench_cluster.py prints it); rounded up.
+DASK_BYTES = 192 * 2**20
+# What the allocator may keep mapped after a render (its trim threshold, processes._KEEP_FREED_MEMORY):
+# counted as budget.WORKER_BYTES counts it for a band worker.
+KEPT_FREED_BYTES = int(processes._KEEP_FREED_MEMORY["MALLOC_TRIM_THRESHOLD_"])
+
+
+class Cancelled(Exception):
+    """The run was cancelled: every task is cancelled and nothing is returned."""
+
+
+class TaskError(RuntimeError):
+    """A render task failed on a worker (a tracer bug or a broken worker installation)."""
+
+
+def available() -> bool:
+    """Whether Dask's ``distributed`` is installed here."""
+    return importlib.util.find_spec("distributed") is not None
+
+
+def scheduler_address(given: str | None) -> str | None:
+    """The scheduler to use: ``given``, else ``$DASK_SCHEDULER_ADDRESS``; None (or "local") for a
+    local cluster."""
+    address = given if given is not None else os.environ.get(SCHEDULER_VARIABLE) or None
+    return None if address in (None, "", LOCAL) else address
+
+
+def default_workers() -> int:
+    return max(1, os.cpu_count() or 1)
+
+
+def cell_bytes(cell: Cell, environment: int = 0) -> int:
+    """The budget of one cell's render (``budget.render_bytes``, no passes, glare as the scene says)."""
+    glare = bool((cell.scene.get("glare") or {}).get("on", False))
+    return budget.render_bytes(cell.width, cell.height, False, "exr", glare, environment)
+
+
+def worker_memory(cells: Sequence[Cell], environment: int = 0) -> int:
+    """A local worker's memory limit: the largest cell's budget, Dask's own share and the freed memory
+    its allocator keeps, at most the project's ``MEMORY_BUDGET``."""
+    need = max((cell_bytes(c, environment) for c in cells), default=budget.BASE_BYTES)
+    return min(budget.MEMORY_BUDGET, need + DASK_BYTES + KEPT_FREED_BYTES)
+
+
+@dataclass
+class Local:
+    """What a local cluster started: its processes, threads and memory limit per worker."""
+
+    workers: int
+    threads: int
+    memory_limit: int
+    dashboard: str
+
+    def describe(self) -> str:
+        return (f"local Dask cluster: {self.workers} worker process{'es' if self.workers != 1 else ''} x "
+                f"{self.threads} thread, {budget.gib(self.memory_limit)} each, dashboard {self.dashboard}")
+
+
+@contextlib.contextmanager
+def connect(scheduler: str | None = None, workers: int | None = None, memory_limit: int | None = None,
+            dashboard: str | None = ":0") -> Iterator:
+    """A ``distributed.Client`` (its ``.local`` is a ``Local`` for a local cluster, else None); closed,
+    and a local cluster stopped with its processes, on leaving."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    address = scheduler_address(scheduler)
+    if address is not None:
+        client = Client(address, timeout=CONNECT_TIMEOUT)
+        client.local = None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    count = workers or default_workers()
+    limit = memory_limit or budget.MEMORY_BUDGET
+    # The workers' scratch space is the run's own, removed however the run ends (Dask's default
+    # <temp>/dask-scratch-space would outlive it).
+    scratch = tempfile.mkdtemp(prefix=SCRATCH_PREFIX)
+    try:
+        # The scheduler's scratch space too; and the workers keep freed memory mapped from their start
+        # (preload.py says why; it sets the same in a worker that is already running).
+        keep = {f"distributed.nanny.pre-spawn-environ.{k}": int(v) for k, v in processes._KEEP_FREED_MEMORY.items()}
+        with dask.config.set({"temporary-directory": scratch, **keep}):
+            cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, memory_limit=limit,
+                                   dashboard_address=dashboard, preload=[PRELOAD], silence_logs=logging.ERROR,
+                                   local_directory=scratch, env={LOCAL_WORKER: "1"})
+        try:
+            client = Client(cluster)
+            client.local = Local(count, 1, limit, client.dashboard_link or "off")
+            try:
+                yield client
+            finally:
+                client.close()
+        finally:
+            cluster.close()
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+@dataclass
+class RunCount:
+    cells: int = 0
+    rendered: int = 0  # tasks run (one per distinct key the cache lacked)
+    from_cache: int = 0  # cells whose image the cache held
+    task_bytes: int = 0  # the pickled size of the largest task (the cell and its arguments)
+    band_tasks: int = 0  # tasks that traced runs of a large cell's bands
+
+
+class CellRun:
+    """The cells of one run as a non-blocking object (Blender's modal operators drive it from a
+    timer): the cache is read when it is made, ``submit()`` sends the rest as tasks, ``poll()``
+    takes in what finished and says whether every image is in, ``cancel()`` stops every task."""
+
+    def __init__(self, client, cells: Sequence[Cell], inputs: Inputs, cache: CellCache | None = None):
+        self.client, self.cells, self.inputs, self.cache = client, list(cells), inputs, cache
+        self.count = RunCount(cells=len(cells))
+        self.images: list[np.ndarray | None] = [None] * len(cells)
+        self.wanted: dict[str, list[int]] = {}
+        for i, cell in enumerate(self.cells):
+            key = cell.key
+            image = cache.get(key) if cache is not None else None
+            if image is not None:
+                self.images[i] = image
+                self.count.from_cache += 1
+            else:
+                self.wanted.setdefault(key, []).append(i)
+        self.stop_name = f"lamp-stop-{uuid.uuid4().hex}"
+        self.futures: dict = {}  # future -> (key, part): part None for a whole cell, else its run of bands
+        self.parts: dict[str, list] = {}  # key -> the rows of each run of bands of a large cell
+        self.pending: set = set()
+        self.sent: dict = {}
+
+    @property
+    def total(self) -> int:
+        return len(self.cells)
+
+    @property
+    def done(self) -> int:
+        return sum(image is not None for image in self.images)
+
+    @property
+    def finished(self) -> bool:
+        return self.done == self.total
+
+    def submit(self) -> None:
+        """Send one task per key the cache lacked, and each environment image they need once."""
+        needed = {self.cells[ix[0]].environment for ix in self.wanted.values()} - {None}
+        self.sent = {d: self.client.scatter(self.inputs.data[d], hash=False) for d in needed}
+        for key, indices in self.wanted.items():
+            cell = self.cells[indices[0]]
+            env = self.sent.get(cell.environment) if cell.environment is not None else None
+            groups = band_groups(cell) if cell.width * cell.height * _samples(cell) >= cells_module.BAND_TASK_RAYS \
+                else [None]
+            if len(groups) == 1:
+                future = self.client.submit(render_cell, cell, env, self.stop_name, key=f"lamp-cell-{key}",
+                                            pure=False)
+                self.futures[future] = (key, None)
+                continue
+            self.parts[key] = [None] * len(groups)
+            self.count.band_tasks += len(groups)
+            for g, bands in enumerate(groups):
+                future = self.client.submit(render_bands, cell, bands, env, self.stop_name,
+                                            key=f"lamp-bands-{key}-{g}", pure=False)
+                self.futures[future] = (key, g)
+        self.pending = set(self.futures)
+        if self.wanted:
+            self.count.task_bytes = max(_task_bytes(self.cells[ix[0]]) for ix in self.wanted.values())
+
+    def poll(self) -> bool:
+        """Take in the finished tasks (each image kept in the cache); True once every image is in.
+        Raises ``TaskError`` if a task failed."""
+        for future in [f for f in self.pending if f.done()]:
+            self.pending.discard(future)
+            if future.status != "finished":
+                raise TaskError(f"render task failed: {_error_text(future)}")
+            result = future.result()
+            key, part = self.futures[future]
+            future.release()
+            if part is not None:  # one run of a large cell's bands
+                self.parts[key][part] = result
+                if any(p is None for p in self.parts[key]):
+                    continue
+                result = assemble(self.cells[self.wanted[key][0]], self.parts.pop(key))
+            if self.cache is not None:
+                self.cache.put(key, result)
+            for i in self.wanted[key]:
+                self.images[i] = result
+            self.count.rendered += 1
+        return self.finished
+
+    def cancel(self) -> None:
+        """Stop every task: running renders at their next band (the run's stop event), the rest at once."""
+        if self.futures and self.client is not None:
+            from distributed import Event
+
+            with contextlib.suppress(Exception):
+                Event(self.stop_name, client=self.client).set()
+            with contextlib.suppress(Exception):
+                self.client.cancel(list(self.futures), force=True)
+        self.pending = set()
+        self.release()
+
+    def release(self) -> None:
+        for f in self.sent.values():
+            with contextlib.suppress(Exception):
+                f.release()
+        self.sent = {}
+
+
+def run_cells(client, cells: Sequence[Cell], inputs: Inputs, cache: CellCache | None = None, *,
+              progress: Callable[[int, int], None] | None = None,
+              should_stop: Callable[[], bool] | None = None) -> tuple[list[np.ndarray], RunCount]:
+    """Every cell's image, in order: from ``cache`` where it holds the key, else rendered as a task
+    (and then kept in ``cache``). ``progress(done, total)`` as cells arrive; ``should_stop()``
+    polled every ``POLL`` seconds: True cancels every task and raises ``Cancelled``."""
+    run = CellRun(client, cells, inputs, cache)
+    if progress is not None:
+        progress(run.done, run.total)
+    if run.finished:
+        return run.images, run.count  # type: ignore[return-value]
+    try:
+        run.submit()
+        reported = run.done
+        while True:
+            if should_stop is not None and should_stop():
+                raise Cancelled()
+            finished = run.poll()
+            if progress is not None and run.done != reported:
+                reported = run.done
+                progress(run.done, run.total)
+            if finished:
+                return run.images, run.count  # type: ignore[return-value]
+            time.sleep(POLL)
+    except BaseException:
+        run.cancel()
+        raise
+    finally:
+        run.release()
+        if cache is not None:
+            cache.prune()
+
+
+def _samples(cell: Cell) -> int:
+    return int(cell.scene["image"].get("samples", 1) or 1)
+
+
+def _error_text(future) -> str:
+    try:
+        e = future.exception(timeout=5)
+    except Exception as other:  # the future itself could not say (cancelled, lost)
+        return f"{type(other).__name__}: {other}"
+    return f"{type(e).__name__}: {e}"
+
+
+def _task_bytes(cell: Cell) -> int:
+    import pickle
+
+    return len(pickle.dumps(cell, protocol=pickle.HIGHEST_PROTOCOL))

@@ -1,0 +1,337 @@
+"""The optimisation file, ``lamp-optimise/1``::
+
+    {"schema": "lamp-optimise/1",
+     "base": "../presets/paper-baseline.json",     (a lamp-scene/1 file beside this one, or the document)
+     "parameters": [{"parameter": "cuts.height", "range": [0.2, 2.0]},
+                    {"parameter": "lens.ior", "range": [1.45, 1.6], "step": 0.01},
+                    {"parameter": "cuts.type", "values": ["fisheye", "flutes"]}],
+     "objectives": [{"measure": "ssim", "goal": "maximise", "reference": "liked.exr"}],
+     "constraints": [{"measure": "lens_luminance", "min": 0.5}],
+     "size": [96, 96], "trials": 40, "sampler": "tpe", "seed": 1,
+     "storage": "sqlite:///opt.db", "name": "cut height for the liked look"}
+
+- ``parameters``: any study parameter (``python -m core_tracer study --list``), a number over a
+  ``range`` [lo, hi] (optionally on a ``step`` grid; ``log`` for a log scale) or one of ``values``
+  (names of a choice, switches, or numbers). Vectors are varied one component at a time
+  (``bulb.offset[1]``).
+- ``objectives``: one or more ``{"measure", "goal": "maximise"|"minimise", ...options}``
+  (``measures.MEASURES``); more than one is a multi-objective search (a Pareto front).
+- ``constraints``: ``{"measure", "min", "max"}``; a trial outside is infeasible. A search whose
+  trials are all infeasible says so when it ends.
+- ``sampler``: ``tpe`` (default), ``cmaes`` (numbers only, one objective, no constraints),
+  ``nsga2`` (the default with several objectives), ``random``.
+- ``storage``: any database URL Optuna accepts; default ``sqlite:///<this file>.optuna.db`` beside
+  the file, so an interrupted optimisation resumes and several processes can share it. ``name``
+  names the Optuna study in it (default: the file's name).
+
+Every error is a ``SceneError`` naming the JSON path, with the allowed range.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..scene import spec as S
+from ..scene.messages import show_value
+from ..scene.reading import SceneError, parse_json_text, read_json
+from ..scene.safe_text import show_key
+from ..scene.validate import parse_scene
+from ..study import definition as st
+from ..study.parameters import Parameter, apply_values, check_value, resolve_parameter
+from . import measures as M
+
+SCHEMA = "lamp-optimise/1"
+SAMPLERS = ("tpe", "cmaes", "nsga2", "random")
+GOALS = ("maximise", "minimise")
+MAX_TRIALS = 10_000
+DEFAULT_SIZE = (96, 96)
+KEYS = ("schema", "name", "base", "parameters", "objectives", "constraints", "size", "trials", "sampler", "seed",
+        "storage", "parallel")
+
+
+@dataclass(frozen=True)
+class Knob:
+    """One parameter of the search."""
+
+    parameter: Parameter
+    lo: float | None = None
+    hi: float | None = None
+    step: float | None = None
+    log: bool = False
+    values: tuple[Any, ...] = ()  # a choice among these (when no range)
+    integer: bool = False
+
+    @property
+    def name(self) -> str:
+        return self.parameter.text
+
+
+@dataclass(frozen=True)
+class Objective:
+    measure: M.Measure
+    goal: str
+    prepared: Any = None
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class Constraint:
+    measure: M.Measure
+    lo: float | None
+    hi: float | None
+    prepared: Any = None
+
+    def excess(self, value: float) -> float:
+        """Optuna's convention: <= 0 is feasible; the larger, the further outside."""
+        out = -math.inf
+        if self.lo is not None:
+            out = max(out, self.lo - value)
+        if self.hi is not None:
+            out = max(out, value - self.hi)
+        return out
+
+
+@dataclass(frozen=True)
+class Optimisation:
+    name: str
+    base: dict  # normalised scene
+    knobs: tuple[Knob, ...]
+    objectives: tuple[Objective, ...]
+    constraints: tuple[Constraint, ...]
+    size: tuple[int, int]
+    trials: int
+    sampler: str
+    seed: int | None
+    storage: str
+    parallel: int | None
+    folder: str  # where relative paths are read from
+    doc: dict = field(default_factory=dict)
+
+    @property
+    def needs_render(self) -> bool:
+        return any(o.measure.needs_render for o in self.objectives) or \
+            any(c.measure.needs_render for c in self.constraints)
+
+    def scene_of(self, values: dict[str, Any]) -> dict:
+        """The design of one trial: the base with ``values`` (by parameter name) applied, checked."""
+        scene = copy.deepcopy(self.base)
+        apply_values(scene, tuple(k.parameter for k in self.knobs), tuple(values[k.name] for k in self.knobs))
+        return parse_scene(scene)
+
+
+def load(path: str) -> Optimisation:
+    doc = read_json(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    stem = os.path.splitext(os.path.basename(path))[0]
+    try:
+        return from_doc(doc, folder, stem)
+    except SceneError as e:
+        raise SceneError(f"{path}: {e.path}" if e.path else path, e.message) from None
+
+
+def from_json(text: str, folder: str, stem: str = "optimisation") -> Optimisation:
+    return from_doc(parse_json_text(text, stem), folder, stem)
+
+
+def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
+    if not isinstance(doc, dict):
+        raise SceneError("", f"a {SCHEMA} document is a JSON object, got {show_value(doc)}")
+    if doc.get("schema") != SCHEMA:
+        raise SceneError("schema", f"{show_value(doc.get('schema'))} is missing or wrong; allowed \"{SCHEMA}\"")
+    for key in doc:
+        if key not in KEYS:
+            raise SceneError(show_key(key), f"unknown key; allowed keys here: {', '.join(KEYS)}")
+    size = st.parse_size(doc.get("size", list(DEFAULT_SIZE)))
+    base = _base(doc.get("base"), folder, size)
+    knobs = _knobs(doc.get("parameters"), base)
+    objectives = tuple(_objective(o, f"objectives[{i}]", folder) for i, o in enumerate(_list(doc, "objectives", 1)))
+    constraints = tuple(_constraint(c, f"constraints[{i}]", folder)
+                        for i, c in enumerate(_list(doc, "constraints", 0) if "constraints" in doc else []))
+    trials = _whole(doc.get("trials", 30), "trials", 1, MAX_TRIALS)
+    default_sampler = "nsga2" if len(objectives) > 1 else "tpe"
+    sampler = doc.get("sampler", default_sampler)
+    if sampler not in SAMPLERS:
+        raise SceneError("sampler", f"{show_value(sampler)} is not a sampler; allowed {', '.join(SAMPLERS)}")
+    if sampler == "cmaes":
+        import importlib.util
+
+        if importlib.util.find_spec("cmaes") is None:
+            raise SceneError("sampler", "cmaes needs the cmaes package, which is not installed here; allowed tpe, "
+                                        "nsga2 or random")
+        if len(objectives) > 1:
+            raise SceneError("sampler", "cmaes searches one objective; allowed nsga2, tpe or random for "
+                                        f"{len(objectives)} objectives")
+        if constraints:
+            raise SceneError("sampler", "cmaes takes no constraints; allowed tpe, nsga2 or random with constraints")
+        if any(k.values for k in knobs):
+            choice = next(k for k in knobs if k.values)
+            raise SceneError("sampler", f"cmaes varies numbers over ranges only ({choice.name} is a list of values); "
+                                        "allowed tpe, nsga2 or random")
+    seed = doc.get("seed")
+    if seed is not None:
+        seed = _whole(seed, "seed", 0, 2**32 - 1)
+    name = doc.get("name", stem)
+    if not isinstance(name, str) or not name or len(name) > 200:
+        raise SceneError("name", f"expected a non-empty string of at most 200 characters, got {show_value(name)}")
+    storage = doc.get("storage")
+    if storage is None:
+        storage = "sqlite:///" + os.path.join(folder, f"{stem}.optuna.db")
+    elif not isinstance(storage, str) or "://" not in storage:
+        raise SceneError("storage", f"{show_value(storage)} is not a database URL; allowed e.g. "
+                                    "\"sqlite:///opt.db\" or \"postgresql://user@host/db\"")
+    parallel = doc.get("parallel")
+    if parallel is not None:
+        parallel = _whole(parallel, "parallel", 1, 1024)
+    return Optimisation(name, base, knobs, objectives, constraints, size, trials, sampler, seed, storage, parallel,
+                        folder, doc)
+
+
+def _base(value: Any, folder: str, size: tuple[int, int]) -> dict:
+    if isinstance(value, str):
+        path = os.path.join(folder, os.path.expanduser(value))
+        if not os.path.isfile(path):
+            raise SceneError("base", f"{value!r} does not exist; allowed a lamp-scene/1 file (relative to this one) "
+                                     "or the design itself")
+        value = read_json(path)
+        from ..scene.beside import environment_file  # the base's environment image is the one beside it
+
+        if isinstance(value, dict) and isinstance(value.get("environment"), dict):
+            env = dict(value["environment"])
+            if env.get("world") == "file" and env.get("file"):
+                env["file"] = environment_file(path, {**env}) or env["file"]
+                value = {**value, "environment": env}
+    if not isinstance(value, dict):
+        raise SceneError("base", f"expected a lamp-scene/1 document or the path of one, got {show_value(value)}")
+    image = value.get("image") if isinstance(value.get("image"), dict) else {}
+    try:
+        base = parse_scene({**value, "image": {**image, "width": size[0], "height": size[1]}})
+    except SceneError as e:
+        raise SceneError(f"base.{e.path}" if e.path else "base", e.message) from None
+    if "freeform" in base:
+        raise SceneError("base.freeform", "a free-form design cannot be optimised; allowed a parametric design")
+    return base
+
+
+def _list(doc: dict, key: str, least: int) -> list:
+    value = doc.get(key)
+    if not isinstance(value, list) or len(value) < least:
+        raise SceneError(key, f"expected a list of at least {least}, got {show_value(value)}")
+    return value
+
+
+def _whole(value: Any, where: str, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise SceneError(where, f"{show_value(value)} is out of range; allowed a whole number {lo} to {hi}")
+    return value
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise SceneError(where, f"expected a number, got {show_value(value)}")
+    return float(value)
+
+
+def _knobs(value: Any, base: dict) -> tuple[Knob, ...]:
+    if not isinstance(value, list) or not value:
+        raise SceneError("parameters", f"expected a list of at least one parameter, got {show_value(value)}")
+    knobs: list[Knob] = []
+    for i, doc in enumerate(value):
+        where = f"parameters[{i}]"
+        if not isinstance(doc, dict):
+            raise SceneError(where, f"expected an object with parameter and range or values, got {show_value(doc)}")
+        for key in doc:
+            if key not in ("parameter", "range", "step", "log", "values"):
+                raise SceneError(f"{where}.{show_key(key)}", "unknown key; allowed keys here: parameter, range, "
+                                                            "step, log, values")
+        try:
+            param = resolve_parameter(doc.get("parameter"), base)
+        except SceneError as e:
+            said = f"{e.path}: {e.message}" if e.path != "parameter" else e.message
+            if "allowed" not in said:
+                said += "; allowed a name `python -m core_tracer study --list` prints"
+            raise SceneError(f"{where}.parameter", said) from None
+        if any(k.name == param.text for k in knobs):
+            raise SceneError(f"{where}.parameter", f"{param.text} is given twice; allowed each parameter once")
+        if param.is_vector:
+            raise SceneError(f"{where}.parameter", f"{param.text} is a vector; allowed one component of it, "
+                                                   f"e.g. {param.text}[0]")
+        if "values" in doc:
+            if "range" in doc:
+                raise SceneError(where, "gives both range and values; allowed one of them")
+            values = doc["values"]
+            if not isinstance(values, list) or not values:
+                raise SceneError(f"{where}.values", f"expected a non-empty list, got {show_value(values)}")
+            try:
+                checked = tuple(check_value(param, v) for v in values)
+            except SceneError as e:
+                raise SceneError(f"{where}.values", e.message) from None
+            knobs.append(Knob(param, values=checked))
+            continue
+        if isinstance(param.spec, S.Choice | S.Flag):
+            allowed = param.spec.range_text() if isinstance(param.spec, S.Choice) else "true, false"
+            raise SceneError(f"{where}.values", f"is required: {param.text} is a choice; allowed a list of values "
+                                                f"({allowed})")
+        rng = doc.get("range")
+        if not isinstance(rng, list) or len(rng) != 2:
+            raise SceneError(f"{where}.range", f"expected [lo, hi], got {show_value(rng)}; allowed within "
+                                               f"{param.spec.range_text()}")
+        lo, hi = (_number(v, f"{where}.range") for v in rng)
+        try:
+            lo, hi = check_value(param, lo), check_value(param, hi)
+        except SceneError as e:
+            raise SceneError(f"{where}.range", e.message) from None
+        if not lo < hi:
+            raise SceneError(f"{where}.range", f"[{lo:g}, {hi:g}] is empty; allowed lo < hi within "
+                                               f"{param.spec.range_text()}")
+        step = doc.get("step")
+        if step is not None:
+            step = _number(step, f"{where}.step")
+            if not 0 < step <= hi - lo:
+                raise SceneError(f"{where}.step", f"{step:g} is out of range; allowed above 0 up to {hi - lo:g} "
+                                                  "(the range's width)")
+        log = doc.get("log", False)
+        if not isinstance(log, bool):
+            raise SceneError(f"{where}.log", f"expected true or false, got {show_value(log)}")
+        if log and (lo <= 0 or step is not None):
+            raise SceneError(f"{where}.log", "a log scale needs a range above 0 and no step; allowed false here")
+        knobs.append(Knob(param, lo, hi, step, log, integer=param.spec.integer if hasattr(param.spec, "integer")
+                          else False))
+    return tuple(knobs)
+
+
+def _options(doc: dict, measure: M.Measure, where: str, extra: tuple[str, ...]) -> dict:
+    allowed = ("measure", *extra, *measure.options)
+    for key in doc:
+        if key not in allowed:
+            raise SceneError(f"{where}.{show_key(key)}", f"unknown key; allowed keys here: {', '.join(allowed)}")
+    return {k: v for k, v in doc.items() if k in measure.options}
+
+
+def _objective(doc: Any, where: str, folder: str) -> Objective:
+    if not isinstance(doc, dict):
+        raise SceneError(where, f"expected an object with measure and goal, got {show_value(doc)}")
+    measure = M.lookup(doc.get("measure"), f"{where}.measure")
+    options = _options(doc, measure, where, ("goal",))
+    goal = doc.get("goal", "maximise")
+    if goal not in GOALS:
+        raise SceneError(f"{where}.goal", f"{show_value(goal)} is not a goal; allowed {', '.join(GOALS)}")
+    prepared = measure.prepare(options, where, folder)
+    return Objective(measure, goal, prepared, f"{measure.name} ({goal[:3]})")
+
+
+def _constraint(doc: Any, where: str, folder: str) -> Constraint:
+    if not isinstance(doc, dict):
+        raise SceneError(where, f"expected an object with measure, min and/or max, got {show_value(doc)}")
+    measure = M.lookup(doc.get("measure"), f"{where}.measure")
+    options = _options(doc, measure, where, ("min", "max"))
+    lo = _number(doc["min"], f"{where}.min") if "min" in doc else None
+    hi = _number(doc["max"], f"{where}.max") if "max" in doc else None
+    if lo is None and hi is None:
+        raise SceneError(where, "gives neither min nor max; allowed one or both")
+    if lo is not None and hi is not None and lo > hi:
+        raise SceneError(f"{where}.max", f"{hi:g} is below min {lo:g}; allowed max >= min")
+    return Constraint(measure, lo, hi, measure.prepare(options, where, folder))
