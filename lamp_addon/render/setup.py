@@ -11,11 +11,13 @@ more times display white) is a flat pale disk under AgX. So the first build of a
   no longer the scene camera (the Scene properties switch back).
 - **engine**: Lamp Tracer, when the scene still renders with EEVEE (the engine of a new file): F12
   and the viewport's Rendered shading then show the paper's model. Another engine is a choice.
-- **exposure**: the scene's exposure (Color Management) is set to the design's automatic exposure
-  (``image_view.design_exposure``), when it is still 0 (the default). Each later Build Lamp keeps it
-  at the design's exposure (a brighter bulb gets a lower exposure) for as long as it holds the value
-  the add-on set; once the user sets their own, it is theirs. Auto Build's builds leave it: the
-  picture is not re-exposed at every step of a drag.
+- **exposure**: the exposure belongs to the view, not to the design. The first lamp of a new file
+  sets the scene's exposure (Color Management) once, to the design's automatic exposure measured
+  with its bulbs on (``design_exposure_lit``: a design whose bulbs are all off, "Paper study: lamp
+  off" say, is exposed for the lamp lit, so the lit design applied next is not washed out), when
+  the exposure is still the default 0. After that neither Build Lamp nor Apply Preset changes it,
+  so a stop lamp looks brighter than a tail lamp; *Exposure from Design* is the explicit way to
+  expose for the design again.
 
 The scene remembers that it was set up (``SETUP_KEY``), so a camera or an engine the user chose
 afterwards is never changed again by a build.
@@ -92,50 +94,68 @@ def _engine(bl_scene) -> str:
     return "render engine Lamp Tracer (was EEVEE; F12 and Rendered shading show the lamp)"
 
 
-def exposure_is_the_addons(bl_scene) -> bool:
-    """Whether the scene's exposure may follow the design: still the default 0 before the set-up,
-    afterwards still the value the add-on set."""
-    memory = _memory(bl_scene)
-    ours = 0.0 if memory is None else memory.get("exposure")
-    return isinstance(ours, int | float) and abs(bl_scene.view_settings.exposure - ours) <= EXPOSURE_TOLERANCE
+def is_lit(scene: dict) -> bool:
+    """Whether anything in a normalised design gives light: a bulb that is on (a parametric lamp's or
+    a free-form bulb's)."""
+    bulbs = [lamp["bulb"] for lamp in scene["lamps"]]
+    bulbs += [part["bulb"] for part in scene.get("freeform", {}).get("parts", []) if part["role"] == "bulb"]
+    return any(bulb["on"] for bulb in bulbs)
 
 
-def follow_design_exposure(bl_scene, *, force: bool = False) -> str:
-    """Set the scene's exposure to the design's automatic exposure, measured through the scene camera
-    (when it is still the add-on's to set, or ``force``: Exposure from Design); remembered as the
-    add-on's. Returns what changed, for a report ("" when nothing did)."""
-    if not force and not exposure_is_the_addons(bl_scene):
+def lit_version(scene: dict) -> dict:
+    """The design with every bulb on: what its exposure is measured on when nothing is lit."""
+    lamps = [{**lamp, "bulb": {**lamp["bulb"], "on": True}} for lamp in scene["lamps"]]
+    lit = {**scene, "lamps": lamps}
+    if "freeform" in scene:
+        parts = [{**part, "bulb": {**part["bulb"], "on": True}} if part["role"] == "bulb" else part
+                 for part in scene["freeform"]["parts"]]
+        lit["freeform"] = {**scene["freeform"], "parts": parts}
+    return lit
+
+
+def design_exposure_lit(scene: dict) -> float:
+    """The design's automatic exposure (``image_view.design_exposure``), measured with its bulbs on."""
+    return image_view.design_exposure(scene if is_lit(scene) else lit_version(scene))
+
+
+def set_design_exposure(bl_scene) -> tuple[float, bool]:
+    """Set the scene's exposure to the design's automatic exposure seen through the scene camera, measured
+    with the bulbs on (``design_exposure_lit``). Returns (the exposure, whether anything is lit).
+    Raises ``SceneError`` (no camera, an invalid design)."""
+    scene = camera.scene_for_render(bl_scene)
+    exposure = design_exposure_lit(scene)
+    bl_scene.view_settings.exposure = exposure
+    _remember(bl_scene, exposure)
+    return exposure, is_lit(scene)
+
+
+def _first_exposure(bl_scene) -> str:
+    """The exposure of a new file's first lamp, set once when the scene's is still the default 0 (one
+    the user set before is theirs). Returns what changed, for a report ("" when nothing did)."""
+    settings = bl_scene.view_settings
+    if abs(settings.exposure) > EXPOSURE_TOLERANCE:
         return ""
     try:
-        scene = camera.scene_for_render(bl_scene)
-        exposure = image_view.design_exposure(scene)
+        exposure, lit = set_design_exposure(bl_scene)
     except SceneError:
         # No camera, an invalid design, or surroundings the tracer refuses to read (an image whose
         # header declares too much): the operator, the panel or the build's report says why.
         return ""
-    settings = bl_scene.view_settings
-    changed = abs(settings.exposure - exposure) > EXPOSURE_TOLERANCE
-    if changed:
-        settings.exposure = exposure
-    _remember(bl_scene, exposure)
-    if not changed:
-        return ""
-    return (f"exposure {exposure:+.1f} EV ({settings.view_transform}), the design's: the lit lens shows its "
-            "cut pattern")
+    return f"exposure {exposure:+.1f} EV" + ("" if lit else " (for the bulbs on)")
 
 
 def set_up(bl_scene) -> list[str]:
-    """Set the scene up for the lamp after a build (see the module's doc): the first time, the camera,
-    the engine and the exposure; afterwards the exposure only, while it is still the add-on's.
-    Returns what changed, one phrase per change, for the operator's report."""
+    """Set the scene up for the lamp after its first build or first lamp (see the module's doc): the
+    camera, the engine and the exposure, once. Returns what changed, one short phrase per change,
+    for the operator's report."""
     news = []
     if not is_set_up(bl_scene):
-        news += [_camera(bl_scene), _engine(bl_scene)]
-        _remember(bl_scene, 0.0 if exposure_is_the_addons(bl_scene) else None)  # None: the user's own exposure
+        news += [_camera(bl_scene), _engine(bl_scene), _first_exposure(bl_scene)]
+        if not is_set_up(bl_scene):
+            _remember(bl_scene, None)  # the user's own exposure, or none measured: kept as it is
     ob = camera.find_lamp_camera(bl_scene)
     if ob is not None:
         lamp_camera.carry_with_root(bl_scene, ob)  # made before the root (Add Lamp, a preset)
-    news.append(follow_design_exposure(bl_scene))
     return [n for n in news if n]
 
 
