@@ -405,3 +405,12 @@ def write_tile_bomb(path: Path) -> None:
     raw[at:at + 4] = struct.pack("<I", 2**25)
     path.write_bytes(bytes(raw))
     made.unlink()
+
+
+def whole_report(error: str, out: str) -> str:
+    """The whole text of an operator's error report: ``error`` (the RuntimeError Blender raises with the
+    one-line report) unless it was cut to one line ("... (Info editor)"); then its lines in the Info
+    editor (``lamp_addon.reports.details``, printed as "Info: ..." in ``out``) joined again."""
+    if "(Info editor)" not in error:
+        return error
+    return " ".join(line.removeprefix("Info: ") for line in out.splitlines() if line.startswith("Info: "))

@@ -8,6 +8,7 @@ reports an error the user must act on, in one line, and cancels (no traceback fo
 
 from __future__ import annotations
 
+from .. import reports
 from . import properties
 
 
@@ -30,5 +31,4 @@ class DesignOperator:
         return True
 
     def cancelled(self, error: Exception | str) -> set[str]:
-        self.report({"ERROR"}, str(error))
-        return {"CANCELLED"}
+        return reports.cancelled(self, str(error))

@@ -13,6 +13,7 @@ import bpy
 
 from ...core_tracer.scene import spec
 from ...core_tracer.scene.reading import SceneError
+from .. import reports
 from ..convert.layout import design_with_new_lamp, refusal_of_new_lamp, with_new_lamp_unchecked
 from ..render import lamp_camera, view_link
 from ..render import setup as render_setup
@@ -49,7 +50,8 @@ class LAMP_OT_lamp_add(DesignOperator, bpy.types.Operator):
         if len(design.lamps) == 1 and design.auto_build and not render_setup.is_set_up(context.scene):
             # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now.
             news = render_setup.set_up(context.scene)
-            self.report({"INFO"}, "Added the first lamp" + render_setup.news_text(news))
+            return reports.finished(self, "Added the first lamp" + render_setup.news_text(news),
+                                    render_setup.news_details(news))
         return {"FINISHED"}
 
 
@@ -118,13 +120,20 @@ class LAMP_OT_build(DesignOperator, bpy.types.Operator):
         report = builder.build_lamp(context.scene, scene)
         view_link.sync_view(context.scene)
         news = render_setup.set_up(context.scene)
-        level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
-        self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
-                             f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)"
-                             + render_setup.news_text(news))
-        if report.not_driven:
-            self.report({"WARNING"}, f"Not following the design (your edits kept): {'; '.join(report.not_driven)}")
-        return {"FINISHED"}
+        if report.not_driven:  # the designer's own edits, each named in the Info editor
+            reports.details(self, [f"Not following the design (your edit kept): {what}" for what in report.not_driven])
+            reports.say(self, "WARNING", f"{len(report.not_driven)} of your edits kept, not following the design "
+                                         "(Info editor)")
+        deviation = (f"Largest deviation of the lamp objects from the model {report.worst_deviation:.3f} mm "
+                     f"(tolerance {report.tolerance:g} mm)")
+        if report.worst_deviation > report.tolerance:
+            reports.details(self, [deviation, *render_setup.news_details(news)])
+            reports.say(self, "WARNING", f"Built {len(report.objects)} objects, {report.worst_deviation:.3f} mm from "
+                                         f"the model: over the {report.tolerance:g} mm tolerance"
+                                         f"{render_setup.news_text(news)}")
+            return {"FINISHED"}
+        return reports.finished(self, f"Built {len(report.objects)} objects{render_setup.news_text(news)}",
+                                [deviation, *render_setup.news_details(news)])
 
 
 classes = (

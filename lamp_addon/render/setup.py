@@ -26,13 +26,14 @@ afterwards is never changed again by a build.
 from __future__ import annotations
 
 import json
+from typing import NamedTuple
 
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
 from .. import image_view
 from ..convert import camera as cm
 from ..design import properties as design_properties
-from . import camera, lamp_camera
+from . import camera, lamp_camera, view_frame
 from .engine import ENGINE_ID
 
 SETUP_KEY = "lamp_scene_setup"  # scene custom property: JSON {"exposure": the value the add-on set, or null}
@@ -72,7 +73,16 @@ def design_view_shows_body(bl_scene) -> bool:
     return all(0.0 <= x <= size[0] and 0.0 <= y <= size[1] and depth > 0.0 for x, y, depth in corners)
 
 
-def _camera(bl_scene) -> str:
+class News(NamedTuple):
+    """One change the set-up made: a few words for the report's one line, and the whole of it for the
+    Info editor."""
+
+    short: str
+    detail: str
+    lead: bool = False  # said first: what the user must do to see the lamp
+
+
+def _camera(bl_scene) -> News | None:
     previous = bl_scene.camera
     if camera.find_lamp_camera(bl_scene) is None:
         ob, what = lamp_camera.ensure_lamp_camera(bl_scene, frame=not design_view_shows_body(bl_scene))
@@ -83,15 +93,15 @@ def _camera(bl_scene) -> str:
             what = f'made "{ob.name}" the scene camera' + (
                 f' (your "{previous.name}" is kept as it was)' if previous is not None else "")
     lamp_camera.carry_with_root(bl_scene, ob)  # the lamp's view moves with the lamp
-    return what
+    return News(f'"{ob.name}"', what[:1].upper() + what[1:]) if what else None
 
 
-def _engine(bl_scene) -> str:
+def _engine(bl_scene) -> News | None:
     engine = bl_scene.render.engine
     if engine not in DEFAULT_ENGINES:
-        return ""
+        return None
     bl_scene.render.engine = ENGINE_ID
-    return "render engine Lamp Tracer (was EEVEE; F12 and Rendered shading show the lamp)"
+    return News("Lamp Tracer", "Render engine Lamp Tracer (was EEVEE): F12 and Rendered shading show the lamp")
 
 
 def is_lit(scene: dict) -> bool:
@@ -129,37 +139,58 @@ def set_design_exposure(bl_scene) -> tuple[float, bool]:
     return exposure, is_lit(scene)
 
 
-def _first_exposure(bl_scene) -> str:
+def _first_exposure(bl_scene) -> News | None:
     """The exposure of a new file's first lamp, set once when the scene's is still the default 0 (one
-    the user set before is theirs). Returns what changed, for a report ("" when nothing did)."""
+    the user set before is theirs)."""
     settings = bl_scene.view_settings
     if abs(settings.exposure) > EXPOSURE_TOLERANCE:
-        return ""
+        return None
     try:
         exposure, lit = set_design_exposure(bl_scene)
     except SceneError:
         # No camera, an invalid design, or surroundings the tracer refuses to read (an image whose
         # header declares too much): the operator, the panel or the build's report says why.
-        return ""
-    return f"exposure {exposure:+.1f} EV" + ("" if lit else " (for the bulbs on)")
+        return None
+    return News(f"{exposure:+.1f} EV",
+                f"Exposure {exposure:+.1f} EV ({settings.view_transform}), the design's"
+                + ("" if lit else " with its bulbs on") + ": the lit lens shows its cut pattern. Build Lamp "
+                "and Apply Preset keep it; Exposure from Design exposes again")
 
 
-def set_up(bl_scene) -> list[str]:
+def _views(bl_scene) -> News | None:
+    """The 3D Views framed on the design, and an object of the user's that hides it named."""
+    framed = view_frame.frame_views(bl_scene)
+    hidden = view_frame.enclosing(bl_scene)
+    if hidden:
+        return News(f'it is inside "{hidden[0]}": Hide Other Objects shows it',
+                    f'The lamp is inside "{hidden[0]}" (yours, not moved): Hide Other Objects (Lamp tab) hides '
+                    "the other objects in the viewport; Alt+H shows them again", lead=True)
+    return News("", f"Framed {framed} 3D Views on the lamp") if framed else None
+
+
+def set_up(bl_scene) -> list[News]:
     """Set the scene up for the lamp after its first build or first lamp (see the module's doc): the
-    camera, the engine and the exposure, once. Returns what changed, one short phrase per change,
-    for the operator's report."""
+    camera, the engine and the exposure, once, and the 3D Views framed on it. Returns what changed,
+    for the operator's report (``news_text``, ``news_details``)."""
     news = []
     if not is_set_up(bl_scene):
-        news += [_camera(bl_scene), _engine(bl_scene), _first_exposure(bl_scene)]
+        news += [_camera(bl_scene), _engine(bl_scene), _first_exposure(bl_scene), _views(bl_scene)]
         if not is_set_up(bl_scene):
             _remember(bl_scene, None)  # the user's own exposure, or none measured: kept as it is
     ob = camera.find_lamp_camera(bl_scene)
     if ob is not None:
         lamp_camera.carry_with_root(bl_scene, ob)  # made before the root (Add Lamp, a preset)
-    return [n for n in news if n]
+    return [n for n in news if n is not None]
 
 
-def news_text(news: list[str]) -> str:
-    """The changes as one clause of a report: "; made ...; render engine ..." ("" for none)."""
-    return "".join(f"; {n}" for n in news)
+def news_text(news: list[News]) -> str:
+    """The changes as short clauses of a report: "; it is inside ...; set up "Lamp Camera", Lamp Tracer,
+    -3.9 EV" ("" for none)."""
+    leads = [n.short for n in news if n.short and n.lead]
+    others = [n.short for n in news if n.short and not n.lead]
+    return "".join(f"; {text}" for text in leads) + ("; set up " + ", ".join(others) if others else "")
 
+
+def news_details(news: list[News]) -> list[str]:
+    """The changes in full, for the Info editor."""
+    return [n.detail for n in news]

@@ -65,9 +65,12 @@ def test_first_build_in_the_startup_file_sets_the_scene_up_for_the_lamp(lamp_add
     expected = lamp_addon.image_view.design_exposure(lamp_addon.render.camera.scene_for_render(startup))
     assert expected < -1.0  # a lit lens is many times display white
     assert startup.view_settings.exposure == pytest.approx(expected, abs=1e-6)
-    for said in ('made the scene camera "Lamp Camera"', 'your "Camera" is kept as it was',
-                 "render engine Lamp Tracer (was EEVEE", f"exposure {expected:+.1f} EV"):
+    for said in ('Made the scene camera "Lamp Camera"', 'your "Camera" is kept as it was',
+                 "Render engine Lamp Tracer (was EEVEE", f"Exposure {expected:+.1f} EV",
+                 f'Built 6 objects; it is inside "Cube": Hide Other Objects shows it; set up "Lamp Camera", '
+                 f"Lamp Tracer, {expected:+.1f} EV"):
         assert said in report, (said, report)
+    assert all(len(line) <= len("Info: ") + 120 for line in report.splitlines())  # each report one line
 
 
 def test_later_builds_keep_what_the_user_chose(lamp_addon, startup, capfd):

@@ -8,7 +8,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, whole_report
 from hostile_presets import leaves, make_hostile_folder
 
 pytestmark = pytest.mark.blender
@@ -457,9 +457,10 @@ def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(bro
     assert saved["camera"]["position"] == pytest.approx([0.0, -800.0, 0.0], abs=1e-4)  # where Studio is
 
 
-def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene, tmp_path):
-    """Huge numbers, lone surrogates, repeated keys...: each import is refused with the field named, and
-    the design stays as it was."""
+def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene, tmp_path, capfd):
+    """Huge numbers, lone surrogates, repeated keys...: each import is refused with the field named (in
+    the one-line error, or, when that is cut to one line, whole in the Info editor), and the design
+    stays as it was."""
     import bpy
 
     good, bad = make_hostile_folder(tmp_path / "hostile")
@@ -474,9 +475,14 @@ def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene,
         path = tmp_path / "hostile" / name
         if not path.is_file() or path.is_symlink() or name == "huge.json":
             continue
+        capfd.readouterr()
         with pytest.raises(RuntimeError) as info:
             bpy.ops.lamp.preset_import(filepath=str(path))
-        text = str(info.value)
+        error = str(info.value)
+        assert len(error.strip().removeprefix("Error: ")) <= browser.reports.LINE
+        info_lines = [line.removeprefix("Info: ") for line in capfd.readouterr().out.splitlines()
+                      if line.startswith("Info: ")]
+        text = whole_report(error, "\n".join(f"Info: {line}" for line in info_lines))
         assert "Not imported" in text and "Traceback" not in text, text
         assert printable(name) in text
         for needle in needles:
