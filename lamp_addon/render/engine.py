@@ -16,6 +16,7 @@ from ...core_tracer.budget import check_rays
 from ...core_tracer.raytrace import band_pool
 from ...core_tracer.raytrace.engine import PASS_NAMES
 from ...core_tracer.scene.reading import SceneError
+from ..design import validity as design_validity
 from ..freeform import render as freeform_render
 from ..freeform import status as freeform_status
 from . import camera
@@ -139,7 +140,7 @@ class LampTracerEngine(bpy.types.RenderEngine):
             black = np.zeros((height, width, 3), np.float32)
             self._fill(black, 0, np.ones((height, width), np.float32),
                        dict.fromkeys(PASS_LABELS.values(), black) if with_passes else {})
-            self.report({"ERROR"}, f"Lamp Tracer: {e}")
+            self.report({"ERROR"}, f"Lamp Tracer: {design_validity.message(depsgraph.scene, e)}")
             return
 
         if prepared.note is not None:

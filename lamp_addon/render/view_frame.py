@@ -14,7 +14,7 @@ from __future__ import annotations
 import bpy
 from mathutils import Matrix, Vector
 
-from .. import actions
+from .. import actions, reports
 from ..convert import camera as cm
 from ..convert.units import BU_PER_MM
 from ..design import properties as design_properties
@@ -165,7 +165,7 @@ class LAMP_OT_hide_others(bpy.types.Operator):
         for ob in others:
             ob.hide_set(True)
         names = ", ".join(ob.name for ob in others[:3]) + (", ..." if len(others) > 3 else "")
-        self.report({"INFO"}, f"Hid {len(others)} objects in the viewport ({names}); Alt+H shows them again")
+        reports.say(self, "INFO", f"Hid {len(others)} objects in the viewport ({names}); Alt+H shows them again")
         return {"FINISHED"}
 
 

@@ -121,7 +121,7 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
     def escape(self, context):
         self.abandon(context)
         self.end_modal(context)
-        self.report({"WARNING"}, "Lamp Study cancelled")
+        reports.say(self, "WARNING", "Lamp Study cancelled")
         return {"CANCELLED"}
 
     def step(self, context):

@@ -374,7 +374,7 @@ def test_compare_operator_reports_design_errors(lamp_addon, bl_scene):
 
     lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     bl_scene.lamp_design.lamps[0].cuts.pitch = 95.0  # larger than the lens
-    with pytest.raises(RuntimeError, match=r"lamps\[0\]\.cuts\.pitch: 95 is larger than the lens"):
+    with pytest.raises(RuntimeError, match=r"Lamp 1 › Cuts › Pitch: 95 is larger than the lens"):
         bpy.ops.lamp.compare_cycles(samples=1)
     assert _handlers_installed(lamp_addon.compare) == [] and lamp_addon.compare.comparison.running() is None
 

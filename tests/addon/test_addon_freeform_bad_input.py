@@ -103,7 +103,7 @@ def test_a_role_value_out_of_range_is_named_in_f12(lamp_addon, addon_core, bl_sc
     obj = _part(lamp_addon, "cube", "Glass")
     obj.lamp_role.lens["shininess"] = -5.0  # what an old file or a script may have stored
     text = _f12_message(bl_scene)
-    assert 'Lamp Tracer: free-form part: "Glass" lens.shininess: -5.0 is out of range; allowed [0, 10000]' in text
+    assert 'Lamp Tracer: free-form part: "Glass" Lens › Shininess: -5.0 is out of range; allowed [0, 10000]' in text
 
 
 def test_a_huge_mesh_is_refused_with_the_limit(lamp_addon, addon_core, bl_scene, monkeypatch):

@@ -533,7 +533,7 @@ def test_validity_is_checked_once_per_design(lamp_addon, addon_core, bl_scene, m
     design = _baseline(lamp_addon, addon_core, bl_scene)
     calls = []
     real = validity._check
-    monkeypatch.setattr(validity, "_check", lambda doc, active: calls.append(1) or real(doc, active))
+    monkeypatch.setattr(validity, "_check", lambda *args: calls.append(1) or real(*args))
     validity._memo.update(key=None, status=None)
     for _ in range(5):
         _status(bl_scene)

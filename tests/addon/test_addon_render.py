@@ -341,7 +341,7 @@ def test_engine_reports_design_errors_without_traceback(lamp_addon, bl_scene, tm
     _load_design(lamp_addon, bl_scene, _preset_scene(size=(16, 16)))
     bl_scene.camera.location.y = 0.5  # behind the lamp's front
     bl_scene.render.engine = "LAMP_TRACER"
-    with pytest.raises(RuntimeError, match=r"Lamp Tracer: camera.position: y = 500(\.0)? is not in front"):
+    with pytest.raises(RuntimeError, match=r"Lamp Tracer: Camera & Image › Position: y = 500(\.0)? is not in front"):
         bpy.ops.render.render()
     bl_scene.render.image_settings.file_format = "OPEN_EXR"
     bpy.data.images["Render Result"].save_render(str(tmp_path / "black.exr"), scene=bl_scene)
@@ -500,7 +500,7 @@ def test_engine_contribution_passes_are_black_after_a_design_error(lamp_addon, b
     bl_scene.view_layers["ViewLayer"].lamp_contribution_passes = True
     bl_scene.render.film_transparent = True
     bl_scene.camera.location.y = 0.5  # behind the lamp's front
-    with pytest.raises(RuntimeError, match=r"Lamp Tracer: camera.position"):
+    with pytest.raises(RuntimeError, match=r"Lamp Tracer: Camera & Image › Position"):
         _render_multilayer_exr(bl_scene, tmp_path / "unused.exr")
     path = tmp_path / "black.exr"
     bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
