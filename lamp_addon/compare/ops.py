@@ -9,6 +9,7 @@ import bpy
 
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, image_view, jobs, reports
+from ..convert.sheet import lens_figures_text
 from ..design import properties as design_properties
 from ..design import validity as design_validity
 from .comparison import (
@@ -162,9 +163,12 @@ class LAMP_OT_compare_cycles(jobs.ModalJob, bpy.types.Operator):
         notes = [comparison["camera_news"]] if comparison["camera_news"] else []
         if comparison["left_out"]:
             notes.append(left_out_text(comparison["left_out"]))
-        reports.say(self, "INFO", f"Lamp Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
-                              f"({comparison['samples']} samples)" + "".join(f"; {n}" for n in notes))
-        return {"FINISHED"}
+        lens = comparison["lens_differences"]
+        means = [f"{name} " + "/".join(f"{v:.3g}" for v in lens[key])
+                 for name, key in (("tracer", "tracer_mean"), ("Cycles", "cycles_mean"))]
+        notes.append(f"Lens pixels ({lens['pixels']}), linear RGB means: " + ", ".join(means))
+        return reports.finished(self, f"Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
+                                      f"({comparison['samples']} spp); {lens_figures_text(lens)}", notes)
 
 
 classes = (LAMP_OT_compare_cycles,)

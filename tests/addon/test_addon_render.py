@@ -686,10 +686,11 @@ def test_headless_job_writes_the_side_by_side_image(tmp_path):
     done = _run_tool([PRESET, "-o", str(out), "--samples", "2", "--size", "40x32"], tmp_path)
     assert done.returncode == 0, done.stderr
     image, scene = imageio.read_image(out)
-    assert image.shape[1] == 2 * 40 + 2 and image.shape[0] > 32
+    assert image.shape[1] == 3 * 40 + 2 * 2 and image.shape[0] > 32  # tracer, Cycles, |difference|
     assert scene["image"] == {"width": 40, "height": 32, "samples": 1}
     assert "Lamp Tracer:  40x32 in" in done.stdout and "2 samples per pixel" in done.stdout
     assert "mean difference" in done.stdout
+    assert "lens mean difference" in done.stdout and "lens RMS difference" in done.stdout
 
 
 @pytest.mark.slow
