@@ -20,6 +20,7 @@ from ...core_tracer.scene.functions import suggested_values
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from ...core_tracer.study.parameters import study_parameters
+from ..convert import camera as cm
 from ..design import properties as design_properties
 from ..render import camera as render_camera
 
@@ -162,6 +163,10 @@ def study_from_settings(bl_scene) -> st.Study:
     else:  # no scene camera: the design's own camera section
         base = design_properties.design_to_scene(bl_scene)
         base["image"] = {**base["image"], "width": size[0], "height": size[1]}
+    if bl_scene.camera is None or render_camera.is_lamp_camera(bl_scene.camera):
+        # The add-on's own view: each cell frames the lamp's body at the cell's size (a camera of the
+        # designer's own is their choice of view, kept as it is).
+        base["camera"] = cm.frame_view(base["camera"], cm.body_box(base), size)
     axes = [axis_doc(settings.axis_1)]
     if settings.use_axis_2:
         axes.append(axis_doc(settings.axis_2))
