@@ -35,7 +35,7 @@ def field_words(path: str) -> str | None:
     ``lens.radius`` (a lamp's) -> "Lens › Radius"; None when the path is no field of the design."""
     path = re.sub(r"\[\d+\]$", "", path) if not re.fullmatch(r"lamps\[\d+\]", path) else path
     try:
-        spec = S.lookup(re.sub(r"\[\d+\]", "[]", path))
+        S.lookup(re.sub(r"\[\d+\]", "[]", path))
     except KeyError:
         return None
     words = []
@@ -46,8 +46,15 @@ def field_words(path: str) -> str | None:
         elif i == 0 and part in PANEL_OF:
             words.append(PANEL_OF[part])
         else:
-            unit = spec.unit if isinstance(spec, S.Num) and part == path.rsplit(".", 1)[-1] else ""
-            words.append(_UNIT.sub("", properties.display_name(part, unit)))
+            parent_path = re.sub(r"\[\d+\]", "[]", ".".join(path.split(".")[:i]))
+            try:
+                parent = S.lookup(parent_path) if parent_path else S.SCENE
+            except KeyError:
+                parent = None
+            if isinstance(parent, S.ListOf):
+                parent = parent.item
+            own = properties.words.label(parent, part) if isinstance(parent, S.Section) else None
+            words.append(own or _UNIT.sub("", properties.display_name(part)))
     return SEPARATOR.join(words)
 
 

@@ -638,8 +638,8 @@ def test_tooltips_say_what_a_field_does_first(lamp_addon, bl_scene):
     assert bl_scene.lamp_design.design_name == "Saved before"
     assert lamp_addon.design.properties.design_document(bl_scene)["name"] == "Saved before"
     body = bl_scene.lamp_design.body.bl_rna.properties
-    assert body["specular"].description.startswith(
-        "How strongly the body reflects the light as a highlight (w in eq. 1)")
+    assert body["specular"].description == ("How strongly the body reflects the light as a highlight. Allowed: "
+                                            "from 0 to 1. Paper: w in eq. 1")  # the paper's symbol last
 
 
 def test_the_bulb_panel_states_where_the_bulb_fits(lamp_addon, addon_core, bl_scene):
