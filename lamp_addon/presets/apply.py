@@ -10,7 +10,6 @@ never moved. The operators that call these are in ``ops``.
 
 from __future__ import annotations
 
-import math
 import struct
 from typing import NamedTuple
 
@@ -29,12 +28,6 @@ from ..render import lamp_camera
 from ..render import setup as render_setup
 from .state import SceneState
 
-# Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
-# the camera object that differs from the design's by less than this, relative to the view's size, is
-# the design's view.
-SAME_VIEW = 1e-6
-
-
 # ---------------------------------------------------------------------------------------------
 # The view a preset records and shows
 
@@ -51,19 +44,6 @@ def _as_stored(value):
     return value
 
 
-def _same_view(a: dict, b: dict) -> bool:
-    """Whether two normalised camera sections show the same view, up to Blender's single precision."""
-    if (a["type"], a["sensor_fit"]) != (b["type"], b["sensor_fit"]):
-        return False
-    reach = max(math.dist(a["position"], a["target"]), a["width"], 1.0)  # mm: the size of the view
-    sizes = {"position": reach, "target": reach, "width": reach, "up": 1.0, "fov_deg": 180.0, "shift": 1.0}
-    for key, size in sizes.items():
-        x, y = (v if isinstance(v, list) else [v] for v in (a[key], b[key]))
-        if not all(abs(p - q) <= SAME_VIEW * size for p, q in zip(x, y, strict=True)):
-            return False
-    return True
-
-
 def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
     """The design as a preset records it: seen through the Blender scene camera at the render size
     when the scene has a camera, else through the design's own camera. Raises ``SceneError``.
@@ -78,7 +58,8 @@ def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
         own = design_properties.design_to_scene(bl_scene)["camera"]
     except SceneError:
         own = None  # the design's own camera section does not hold a valid view: the scene camera is the view
-    seen["camera"] = own if own is not None and _same_view(seen["camera"], own) else _as_stored(seen["camera"])
+    same = own is not None and render_camera.same_view(seen["camera"], own)
+    seen["camera"] = own if same else _as_stored(seen["camera"])
     return normalize(seen)
 
 
