@@ -23,6 +23,7 @@ from ..design import builder as design_builder
 from ..design import properties as design_properties
 from ..design import root as design_root
 from ..freeform import loading as freeform_loading
+from ..freeform import parametric as freeform_parametric
 from ..render import camera as render_camera
 from ..render import lamp_camera
 from ..render import setup as render_setup
@@ -123,6 +124,16 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
         news.append(render_setup.News(f"{len(made)} free-form parts", f"Made {len(made)} free-form parts"))
     if first:
         news += render_setup.set_up(bl_scene)
+    if parts is not None:
+        # The preset's meshes are the whole lamp: its parametric lamps are built now (not later by Auto
+        # Build) and hidden from view and renders, as Convert to Free-form leaves them, so the tracer does
+        # not meet the same lens twice.
+        design_builder.build_lamp(bl_scene, design)
+        hidden = freeform_parametric.used_parts(bl_scene, None)
+        for ob in hidden:
+            ob.hide_set(True)
+            ob.hide_render = True
+        news.append(render_setup.News("", f"Hid the {len(hidden)} parametric parts the free-form parts stand in for"))
     elif built:
         design_builder.build_lamp(bl_scene, design)
         news.append(render_setup.News("", "Rebuilt the lamp objects"))

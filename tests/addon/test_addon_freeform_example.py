@@ -44,6 +44,11 @@ def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, addon,
     parts = lamp_addon.freeform.properties.role_objects(bl_scene)
     assert sorted(o.lamp_role.role for o in parts) == ["body", "bulb", "lens", "reflector", "side_wall", "socket"]
     assert bl_scene.render.engine == "LAMP_TRACER"
+    # Its parametric lamp is built and hidden: Auto Build's next build does not bring it back into renders.
+    built = lamp_addon.freeform.parametric.used_parts(bl_scene, None)
+    assert built == [] and any(ob.get("lamp_part") == "lamps[0].lens" and ob.hide_render for ob in bl_scene.objects)
+    lamp_addon.design.builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
+    assert lamp_addon.freeform.parametric.used_parts(bl_scene, None) == []
 
     settings = bl_scene.render.image_settings
     settings.file_format, settings.color_depth = "OPEN_EXR", "32"
@@ -65,4 +70,24 @@ def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, addon,
     print(measured)
     assert (error <= 0.01).mean() >= 0.99 and np.abs(f12 - cli).mean() < 1e-3
     lens = cli[..., 0] > 4.0 * np.maximum(cli[..., 1], 1e-6)
+    assert lens.mean() > 0.15
+
     assert lens.mean() > 0.15 and cli[lens].max() > 1.0  # the lit red lens fills a good part of the frame
+
+
+def test_applied_over_a_built_parametric_lamp_nothing_is_traced_twice(lamp_addon, addon):
+    """The quick start's order: a parametric preset built, then the free-form example applied, then F12."""
+    import bpy
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    bpy.ops.lamp.preset_refresh()
+    wm = bpy.context.window_manager
+    listed = [item.file for item in wm.lamp_presets]
+    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith("four-lamp-rear-combination.json"))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"} and bpy.ops.lamp.build() == {"FINISHED"}
+    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith(EXAMPLE.name))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    bl_scene = bpy.context.scene
+    bl_scene.render.resolution_percentage = 25
+    assert lamp_addon.freeform.parametric.used_parts(bl_scene, None) == []
+    assert bpy.ops.render.render() == {"FINISHED"}  # no "overlaps lens ... (Parametric)"
