@@ -192,3 +192,21 @@ def test_a_combination_the_scene_refuses_is_reported_without_rendering(design, l
                      r"collection=prism_plate, lens\.outline=rectangular",
                      whole_report(str(raised.value), capfd.readouterr().out))
     assert "Lamp Study" not in bpy.data.images
+
+
+def test_sheet_labels_use_panel_words_and_rounded_values(design, lamp_addon):
+    """A range of 4 steps from 0.5 to 1.5 gives 0.8333, not 0.833333; the sheet names the fields as the
+    panel does (the study's own JSON keeps the paths)."""
+    settings = design.lamp_study
+    settings.axis_1.parameter = "cuts.height"
+    settings.axis_1.mode, settings.axis_1.start, settings.axis_1.stop, settings.axis_1.steps = "RANGE", 0.5, 1.5, 4
+    settings.use_axis_2 = True
+    settings.axis_2.parameter, settings.axis_2.mode, settings.axis_2.values = "bulb.on", "LIST", "on, off"
+    settings.axis_2.lamp = "0"
+    study = lamp_addon.study.settings.study_from_settings(design)
+    assert study.axes[0].values == (0.5, 0.8333, 1.167, 1.5)
+    lay = study_sheet.layout(lamp_addon.study.settings.worded(study))
+    texts = [box.text for box in lay.texts]
+    assert "Cuts Height=0.8333" in texts and "Bulb On=off" in texts
+    assert any("columns: Cuts › Height" in t and "rows: Lamp 1 › Bulb › On" in t for t in texts), texts
+    assert [a.parameter.text for a in study.axes] == ["cuts.height", "lamps[0].bulb.on"]
