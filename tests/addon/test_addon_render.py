@@ -11,12 +11,13 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
 import numpy as np
 import pytest
-from helpers import BASELINE, ROOT, render_engine_exr
+from helpers import BASELINE, ROOT, render_engine_exr, whole_report
 
 import core_tracer
 from core_tracer.images import display, imageio
@@ -707,7 +708,7 @@ def test_headless_job_bad_input_is_one_line_and_exit_2(tmp_path, args, message):
 
 
 @pytest.mark.slow
-def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
+def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path, capfd):
     import bpy
 
     scene = _preset_scene(size=(32, 24))
@@ -722,8 +723,11 @@ def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
     # Too many eye rays for one render: refused with the field and the range, as in the CLI.
     bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4096
     bl_scene.lamp_design.image.samples = 256
-    with pytest.raises(RuntimeError, match=r"image\.samples: .* 1 to 64 samples"):
+    capfd.readouterr()
+    with pytest.raises(RuntimeError) as raised:
         bpy.ops.render.render()
+    assert re.search(r"Camera & Image › Samples: .* 1 to 64 samples", whole_report(str(raised.value),
+                                                                             capfd.readouterr().out))
 
 
 def test_engine_film_transparent_alpha_is_the_covered_fraction_with_samples(lamp_addon, bl_scene, tmp_path):
