@@ -128,13 +128,14 @@ class LAMP_OT_freeform_convert(DesignOperator, bpy.types.Operator):
         except SceneError as e:
             return self.cancelled(f"Not converted: {e}")
         built = "built the lamp, then " if report.built else ""
-        text = (f"Converted: {built}made {len(report.objects)} free-form parts; hid the {len(report.hidden)} "
-                "parametric parts they stand in for")
+        text = f"Converted: {built}made {len(report.objects)} free-form parts"
+        hidden = f"Hid the {len(report.hidden)} parametric parts they stand in for"
         if report.earlier_parts:
+            reports.details(self, [hidden, "Take the earlier parts' roles away if they are an earlier copy"])
             reports.say(self, "WARNING", f"{text}; the {report.earlier_parts} parts the scene had already are traced "
-                                     "too (take their roles away if they are an earlier copy)")
+                                         "too")
             return {"FINISHED"}
-        return reports.finished(self, text)
+        return reports.finished(self, f"{text}; {hidden[:1].lower()}{hidden[1:]}")
 
 
 class LAMP_OT_freeform_export(bpy.types.Operator, ExportHelper):
