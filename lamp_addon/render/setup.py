@@ -18,6 +18,8 @@ more times display white) is a flat pale disk under AgX. So the first build of a
   the exposure is still the default 0. After that neither Build Lamp nor Apply Preset changes it,
   so a stop lamp looks brighter than a tail lamp; *Exposure from Design* is the explicit way to
   expose for the design again.
+- **views**: the 3D Views are framed on the lamp (``view_frame``), and an object of the user's that
+  encloses it (the startup Cube) is named in the report, never hidden or moved.
 
 The scene remembers that it was set up (``SETUP_KEY``), so a camera or an engine the user chose
 afterwards is never changed again by a build.
