@@ -25,6 +25,10 @@ LABELS = {
     (id(S.ENVIRONMENT), "strength"): "Surroundings Strength",
     (id(S.GLARE), "on"): "Glare",
     (id(S.GLARE), "strength"): "Glare Strength",
+    (id(S.LIGHT), "illuminance_lux"): "Sun Illuminance",
+    (id(S.ENVIRONMENT), "illuminance_lux"): "Surroundings Illuminance",
+    (id(S.ENVIRONMENT), "luminance_cd_m2"): "Surroundings Luminance",
+    (id(S.CAMERA), "ev100"): "EV100",
 }
 # The choices of a field in the designer's words, where the key's words are not.
 CHOICE_LABELS = {"collection": {"reflector": "Reflector", "prism_plate": "Prism Plate"}}

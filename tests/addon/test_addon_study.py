@@ -57,7 +57,8 @@ def test_run_study_operator_makes_the_sheet_image(design, lamp_addon):
     study = lamp_addon.study.settings.last_study()
     assert len(study) == 2 and study.size == (32, 32)
     # The sheet in Blender has the layout core_tracer computes, and each cell is the variant's render.
-    lay = study_sheet.layout(st.Study.from_json(study.to_json()))
+    # (labelled in the panel's words: ``study.settings.worded``)
+    lay = study_sheet.layout(lamp_addon.study.settings.worded(st.Study.from_json(study.to_json())))
     assert tuple(image.size) == (lay.width, lay.height)
     pixels = lamp_addon.image_view.image_to_array(image)
     renders = [core_tracer.render(v.scene, 32, 32) for v in study.variants]
