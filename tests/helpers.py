@@ -22,6 +22,9 @@ ROOT = Path(__file__).resolve().parent.parent
 PRESETS = ROOT / "presets"
 BASELINE = PRESETS / "paper-baseline.json"
 FOUR_LAMPS = PRESETS / "four-lamp-rear-combination.json"
+# The built-in presets that are parametric designs only (the free-form example carries its meshes in a
+# .glb beside it and is tested on its own: tests/addon/test_addon_freeform_example.py).
+PARAMETRIC_PRESETS = sorted(p for p in PRESETS.glob("*.json") if '"freeform"' not in p.read_text(encoding="utf-8"))
 
 
 def cli_command(*args: str | Path) -> list[str]:

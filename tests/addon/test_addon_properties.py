@@ -8,11 +8,11 @@ import math
 import re
 
 import pytest
-from helpers import PRESETS as PRESET_FOLDER
+from helpers import PARAMETRIC_PRESETS
 
 pytestmark = pytest.mark.blender
 
-PRESETS = sorted(PRESET_FOLDER.glob("*.json"))
+PRESETS = PARAMETRIC_PRESETS
 
 
 @pytest.fixture
