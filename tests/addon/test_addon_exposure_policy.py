@@ -139,7 +139,7 @@ def test_a_stop_lamp_beside_a_tail_lamp_in_one_study_is_brighter_by_their_bulbs(
     from core_tracer.study import definition as st
     from core_tracer.study import sheet as study_sheet
 
-    lay = study_sheet.layout(st.Study.from_json(study.to_json()))
+    lay = study_sheet.layout(lamp_addon.study.settings.worded(st.Study.from_json(study.to_json())))
     pixels = lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Study"])
     cells = [pixels[r.y:r.y + r.h, r.x:r.x + r.w] for r in lay.cells]  # row by row: (tail, stop) x (on, off)
     mask = lit_lens_mask(study.variants[0].scene)
