@@ -169,7 +169,8 @@ def test_a_study_of_lamp_types_runs_in_blender(design, lamp_addon):
     assert study.variants[5].label(study) == "cuts.type=flutes  collection=prism_plate"
     # The cells of the sheet differ from each other (mean absolute difference over 5 % of their mean).
     pixels = lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Study"])
-    cells = [pixels[r.y:r.y + r.h, r.x:r.x + r.w] for r in study_sheet.layout(study).cells]
+    lay = study_sheet.layout(lamp_addon.study.settings.worded(study))
+    cells = [pixels[r.y:r.y + r.h, r.x:r.x + r.w] for r in lay.cells]
     for a in range(len(cells)):
         for b in range(a):
             assert np.abs(cells[a] - cells[b]).mean() > 0.05 * 0.5 * (cells[a].mean() + cells[b].mean()), (a, b)
