@@ -22,6 +22,9 @@ ROOT = Path(__file__).resolve().parent.parent
 PRESETS = ROOT / "presets"
 BASELINE = PRESETS / "paper-baseline.json"
 FOUR_LAMPS = PRESETS / "four-lamp-rear-combination.json"
+# The built-in presets that are parametric designs only (the free-form example carries its meshes in a
+# .glb beside it and is tested on its own: tests/addon/test_addon_freeform_example.py).
+PARAMETRIC_PRESETS = sorted(p for p in PRESETS.glob("*.json") if '"freeform"' not in p.read_text(encoding="utf-8"))
 
 
 def cli_command(*args: str | Path) -> list[str]:
@@ -405,3 +408,12 @@ def write_tile_bomb(path: Path) -> None:
     raw[at:at + 4] = struct.pack("<I", 2**25)
     path.write_bytes(bytes(raw))
     made.unlink()
+
+
+def whole_report(error: str, out: str) -> str:
+    """The whole text of an operator's error report: ``error`` (the RuntimeError Blender raises with the
+    one-line report) unless it was cut to one line ("... (Info editor)"); then its lines in the Info
+    editor (``lamp_addon.reports.details``, printed as "Info: ..." in ``out``) joined again."""
+    if "(Info editor)" not in error:
+        return error
+    return " ".join(line.removeprefix("Info: ") for line in out.splitlines() if line.startswith("Info: "))

@@ -38,6 +38,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=os.path.join(ROOT, "docs"), help="folder to write into (default docs/)")
     parser.add_argument("--samples", type=int, default=32, help="Cycles samples of the Compare picture")
+    parser.add_argument("--panel-only", action="store_true",
+                        help="write docs/panel.txt only (no GPU, a few seconds; tests/addon/test_addon_panel_doc.py "
+                             "checks that the file is what this writes)")
     args = parser.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
     os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="lamp-docs-"))
@@ -51,6 +54,8 @@ def main(argv: list[str] | None = None) -> int:
         core = sys.modules[f"{package}.core_tracer"]
         bl_scene = startup_with_preset(bpy, core, addon)
         write_panel_outline(bpy, addon, bl_scene, os.path.join(args.out, "panel.txt"))
+        if args.panel_only:
+            return 0
         compare_picture(bpy, addon, bl_scene, os.path.join(args.out, "compare-startup-four-lamps.png"), args.samples)
         viewport_picture(bpy, addon, bl_scene, os.path.join(args.out, "viewport-preview-agx.png"))
     study_picture(os.path.join(args.out, "study-ior-cut-height.png"))
@@ -295,8 +300,15 @@ class _PanelProxy:
         return getattr(self._cls, name)
 
 
-def write_panel_outline(bpy, addon, bl_scene, path: str) -> None:
-    """The Lamp tab's panels in Blender's order (parents first, then children by ``bl_order``)."""
+PANEL_HEADER = ("The Lamp tab of the 3D Viewport's sidebar (N), after Build Lamp with the four-lamp preset in\n"
+                "Blender's startup file; written by tools/make_docs_images.py from the panels' draw calls\n"
+                "(--panel-only rewrites just this file; a test checks it is up to date).\n\n")
+
+
+def panel_outline(bpy, addon, bl_scene) -> str:
+    """The Lamp tab's panels in Blender's order (parents first, then children by ``bl_order``), as text.
+    The preset list is read first (synchronously), so the outline is the same on every run."""
+    addon.presets.library.sync(bpy.context)
     panels = [cls for cls in bpy.types.Panel.__subclasses__()
               if getattr(cls, "bl_category", "") == "Lamp" and getattr(cls, "bl_space_type", "") == "VIEW_3D"]
     context = SimpleNamespace(scene=bl_scene, window_manager=bpy.context.window_manager, mode="OBJECT",
@@ -313,6 +325,10 @@ def write_panel_outline(bpy, addon, bl_scene, path: str) -> None:
                 continue
             closed = "DEFAULT_CLOSED" in getattr(cls, "bl_options", set())
             lines.append("  " * depth + f"▸ {cls.bl_label}" + ("  (closed at first)" if closed else ""))
+            if hasattr(cls, "draw_header"):  # a switch in the header (Glare's On)
+                header: list[str] = []
+                cls.draw_header(_PanelProxy(cls, _Outline(header, 0)), context)
+                lines[-1] += "".join(f"   [header: {h.strip()}]" for h in header)
             proxy = _PanelProxy(cls, _Outline(lines, depth + 1))
             try:
                 cls.draw(proxy, context)
@@ -321,11 +337,14 @@ def write_panel_outline(bpy, addon, bl_scene, path: str) -> None:
             walk(cls.__name__, depth + 1)
 
     walk("", 0)
+    return PANEL_HEADER + "\n".join(lines) + "\n"
+
+
+def write_panel_outline(bpy, addon, bl_scene, path: str) -> None:
+    text = panel_outline(bpy, addon, bl_scene)
     with open(path, "w", encoding="utf-8") as f:
-        f.write("The Lamp tab of the 3D Viewport's sidebar (N), after Build Lamp with the four-lamp preset in\n"
-                "Blender's startup file; written by tools/make_docs_images.py from the panels' draw calls.\n\n")
-        f.write("\n".join(lines) + "\n")
-    print(f"panel outline ({len(lines)} lines) -> {path}")
+        f.write(text)
+    print(f"panel outline ({text.count(chr(10))} lines) -> {path}")
 
 
 if __name__ == "__main__":

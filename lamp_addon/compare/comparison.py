@@ -46,7 +46,14 @@ from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 from .. import image_view, jobs
 from ..convert import photometric_cycles
-from ..convert.sheet import differences, shown_side_by_side, side_by_side
+from ..convert.sheet import (
+    difference,
+    difference_labels,
+    differences,
+    lens_differences,
+    shown_side_by_side,
+    side_by_side,
+)
 from ..design import builder as design_builder
 from ..design import root as design_root
 from ..freeform import materials as freeform_materials
@@ -303,14 +310,17 @@ class CompareRun:
             "labels": names,
             # one exposure for both halves (photometric: both at the design's EV100 already)
             "exposure": 0.0 if self.ev100 is not None else display.auto_exposure([tracer, cycles]),
-            "side_by_side": side_by_side(tracer, cycles, *names),
+            "side_by_side": None,  # below, with the difference panel
             "seconds": seconds,
             "samples": self.samples,
             "size": (tracer.shape[1], tracer.shape[0]),
             "differences": differences(tracer, cycles),
+            "lens_differences": lens_differences(tracer, cycles, lens_pixels(self.scene, tracer.shape[:2])),
             "left_out": list(self.left_out),
             "camera_news": self.camera_news,
         }
+        comparison["side_by_side"] = side_by_side(tracer, cycles, *names, third=difference(tracer, cycles),
+                                                  third_labels=difference_labels(comparison["lens_differences"]))
         return comparison
 
     def close(self) -> None:
@@ -330,6 +340,18 @@ class CompareRun:
         if self._folder is not None:
             shutil.rmtree(self._folder, ignore_errors=True)
             self._folder = None
+
+
+def lens_pixels(scene: dict, shape: tuple[int, int]) -> np.ndarray:
+    """(H, W) bool: the pixels whose eye ray meets a lens, from the tracer's lens-surface pass (the
+    parametric lamp's lenses; the whole image when the design has free-form parts or no such pass)."""
+    from ...core_tracer import render_passes
+
+    if "freeform" in scene:
+        return np.ones(shape, bool)
+    passes = render_passes(scene, shape[1], shape[0]).passes
+    lens = passes.get("lens_surface")
+    return np.ones(shape, bool) if lens is None else lens.max(axis=2) > 0
 
 
 def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tuple[int, int] | None = None,

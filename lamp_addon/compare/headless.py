@@ -74,6 +74,12 @@ def report(comparison: dict, preset: str, output: str) -> str:
         "tracer - Cycles, linear RGB  " + "".join(f"{c:>10}" for c in CHANNELS),
     ]
     lines += [f"  {name:<27}" + "".join(f"{v:10.4f}" for v in values) for name, values in rows]
+    lens = comparison.get("lens_differences")
+    if lens is not None:
+        lines.append(f"over the {lens['pixels']} lens pixels (the third panel shows |tracer - Cycles|)")
+        lines += [f"  {name:<27}" + "".join(f"{v:10.4f}" for v in lens[key]) for name, key in (
+            ("lens mean, Lamp Tracer", "tracer_mean"), ("lens mean, Cycles", "cycles_mean"),
+            ("lens mean difference", "mean_difference"), ("lens RMS difference", "rms_difference"))]
     if comparison.get("left_out"):
         lines.append(left_out_text(comparison["left_out"]))
     lines.append(f"wrote {output}")

@@ -8,8 +8,10 @@ from __future__ import annotations
 import bpy
 
 from ...core_tracer.scene.reading import SceneError
-from .. import actions, image_view, jobs
+from .. import actions, image_view, jobs, reports
+from ..convert.sheet import lens_figures_text
 from ..design import properties as design_properties
+from ..design import validity as design_validity
 from .comparison import (
     COMPARE_IMAGE,
     CYCLES,
@@ -101,7 +103,7 @@ class LAMP_OT_compare_cycles(jobs.ModalJob, bpy.types.Operator):
         if bpy.app.is_job_running("RENDER"):
             return {"PASS_THROUGH"}  # Esc during a render goes on to Blender's render job, which stops
         self.end_modal(context)  # between the two renders: Esc is ours
-        self.report({"WARNING"}, "Compare with Cycles cancelled")
+        reports.say(self, "WARNING", "Compare with Cycles cancelled")
         return {"CANCELLED"}
 
     def step(self, context):
@@ -136,9 +138,11 @@ class LAMP_OT_compare_cycles(jobs.ModalJob, bpy.types.Operator):
     def _failed(self, error: Exception):
         """Report why the comparison stopped (one of ``REPORTED_ERRORS``)."""
         if isinstance(error, CompareCancelled):
-            self.report({"WARNING"}, f"Compare with Cycles cancelled: {error}")
+            reports.say(self, "WARNING", f"Compare with Cycles cancelled: {error}")
+        elif isinstance(error, SceneError):  # the design's error, in the panel's words
+            reports.say(self, "ERROR", design_validity.message(bpy.context.scene, error))
         else:
-            self.report({"ERROR"}, str(error).strip())
+            reports.say(self, "ERROR", str(error).strip())
         return {"CANCELLED"}
 
     def _finished(self, context, comparison: dict, path: str):
@@ -149,19 +153,22 @@ class LAMP_OT_compare_cycles(jobs.ModalJob, bpy.types.Operator):
                 write_comparison(path, comparison, view=image_view.scene_view(context.scene),
                                  exposure=comparison["exposure"])
             except (SceneError, OSError) as e:
-                self.report({"ERROR"}, str(e))
+                reports.say(self, "ERROR", str(e))
                 return {"CANCELLED"}
         if self._not_saved:
-            self.report({"WARNING"}, self._not_saved)
+            reports.say(self, "WARNING", self._not_saved)
         if comparison["not_restored"]:
-            self.report({"WARNING"}, "Settings not put back: " + "; ".join(comparison["not_restored"]))
+            reports.say(self, "WARNING", "Settings not put back: " + "; ".join(comparison["not_restored"]))
         seconds = comparison["seconds"]
         notes = [comparison["camera_news"]] if comparison["camera_news"] else []
         if comparison["left_out"]:
             notes.append(left_out_text(comparison["left_out"]))
-        self.report({"INFO"}, f"Lamp Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
-                              f"({comparison['samples']} samples)" + "".join(f"; {n}" for n in notes))
-        return {"FINISHED"}
+        lens = comparison["lens_differences"]
+        means = [f"{name} " + "/".join(f"{v:.3g}" for v in lens[key])
+                 for name, key in (("tracer", "tracer_mean"), ("Cycles", "cycles_mean"))]
+        notes.append(f"Lens pixels ({lens['pixels']}), linear RGB means: " + ", ".join(means))
+        return reports.finished(self, f"Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
+                                      f"({comparison['samples']} spp); {lens_figures_text(lens)}", notes)
 
 
 classes = (LAMP_OT_compare_cycles,)

@@ -16,6 +16,20 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
 
 MARGIN_MM = 5.0  # between a new lens and its neighbour, and at least between it and the body's edge
+IMAGE_LONGER_SIDE = 512  # px: a new design's image, its longer side
+IMAGE_MARGIN = 0.1  # of the body's larger side, around the body, in the image a new design gets
+
+
+def image_size_for_body(body_size, longer: int = IMAGE_LONGER_SIDE, margin: float = IMAGE_MARGIN) -> tuple[int, int]:
+    """The image a new design gets: the body's aspect with a margin around it (a 480 x 120 mm body:
+    512 x 192 px), so that the body fills the frame instead of a band of a square. Even sizes, the
+    longer side ``longer``."""
+    width, height = (float(v) for v in body_size)
+    pad = 2.0 * margin * max(width, height)
+    aspect = (width + pad) / (height + pad)
+    if aspect >= 1.0:
+        return longer, max(2, 2 * round(longer / aspect / 2))
+    return max(2, 2 * round(longer * aspect / 2)), longer
 
 
 def design_with_new_lamp(doc: dict, active_index: int) -> dict:

@@ -61,6 +61,10 @@ DEVIATION_KEY = "lamp_max_deviation"  # mesh: its measured distance from the ana
 DIGEST_KEY = "lamp_design_digest"  # root: digest of the design the objects were built from
 PREVIEW_KEY = "lamp_preview"  # root: some lens is a preview mesh
 PARTS_KEY = "lamp_parts"  # root: the parts of that build
+# part object and mesh: the name the build gave it ("Stop Lens"). While the part still has it, a
+# later build renames it when the design names it otherwise (the lamp's function changed: "Turn
+# Lens"); a name the designer gave is theirs and kept.
+NAME_KEY = "lamp_given_name"
 # Scene fields no object depends on: changing them leaves the objects up to date.
 NOT_BUILT_FROM = ("schema", "name", "author", "description", "tags", "camera", "image")
 
@@ -134,6 +138,27 @@ def is_up_to_date(bl_scene: bpy.types.Scene) -> bool:
 
 # ---------------------------------------------------------------------------------------------
 # Building
+
+
+def follow_name(block, name: str) -> None:
+    """Give ``block`` (a part's object or mesh) the name the design gives it, unless someone renamed
+    it since the build last named it (``NAME_KEY``). Blender's ".001" for a name taken elsewhere
+    counts as the given name."""
+    given = block.get(NAME_KEY)
+    if given is None:  # new, or built before names were followed: the current name is the build's
+        block[NAME_KEY] = block.name
+        given = block.name
+    if block.name != given:
+        return  # the designer's own name
+    if _base_name(given) != name:
+        block.name = name
+        block[NAME_KEY] = block.name
+
+
+def _base_name(name: str) -> str:
+    """A name without the ".001" Blender adds when it is taken."""
+    base, dot, number = name.rpartition(".")
+    return base if dot and number.isdigit() and len(number) == 3 else name
 
 
 def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False) -> BuildReport:
@@ -291,6 +316,9 @@ class _Build:
             self.coll.objects.link(obj)
         elif obj.data != data:
             obj.data = data
+        follow_name(obj, name)
+        if data is not None and data.users == 1:
+            follow_name(data, name)
         self.wanted.add(part)
         self.report.objects.append(obj.name)
         return obj

@@ -8,7 +8,9 @@ reports an error the user must act on, in one line, and cancels (no traceback fo
 
 from __future__ import annotations
 
-from . import properties
+from ...core_tracer.scene.reading import SceneError
+from .. import reports
+from . import properties, validity
 
 
 class DesignOperator:
@@ -30,5 +32,9 @@ class DesignOperator:
         return True
 
     def cancelled(self, error: Exception | str) -> set[str]:
-        self.report({"ERROR"}, str(error))
-        return {"CANCELLED"}
+        """Report ``error`` and cancel; an error of the design in the panel's words (``validity.message``)."""
+        if isinstance(error, SceneError):
+            import bpy
+
+            return reports.cancelled(self, validity.message(bpy.context.scene, error))
+        return reports.cancelled(self, str(error))

@@ -13,7 +13,13 @@ import bpy
 
 from ...core_tracer.scene import spec
 from ...core_tracer.scene.reading import SceneError
-from ..convert.layout import design_with_new_lamp, refusal_of_new_lamp, with_new_lamp_unchecked
+from .. import reports
+from ..convert.layout import (
+    design_with_new_lamp,
+    image_size_for_body,
+    refusal_of_new_lamp,
+    with_new_lamp_unchecked,
+)
 from ..render import lamp_camera, view_link
 from ..render import setup as render_setup
 from . import builder, properties
@@ -45,12 +51,36 @@ class LAMP_OT_lamp_add(DesignOperator, bpy.types.Operator):
         design.body.center = doc["body"]["center"]
         design.body.size = doc["body"]["size"]
         design.active_lamps_index = len(design.lamps) - 1
+        follow_body_aspect(context.scene)
         lamp_camera.keep_framed(context.scene)
         if len(design.lamps) == 1 and design.auto_build and not render_setup.is_set_up(context.scene):
             # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now.
             news = render_setup.set_up(context.scene)
-            self.report({"INFO"}, "Added the first lamp" + render_setup.news_text(news))
+            return reports.finished(self, "Added the first lamp" + render_setup.news_text(news),
+                                    render_setup.news_details(news))
         return {"FINISHED"}
+
+
+IMAGE_KEY = "lamp_image_from_body"  # design: the image size Add Lamp gave it from the body, [w, h]
+
+
+def follow_body_aspect(bl_scene) -> bool:
+    """Give a new design's image the body's aspect with a margin (``image_size_for_body``), and keep
+    it so as lamps are added or removed, for as long as the image has the size given (a size the
+    designer sets, or a preset's, is theirs). Returns whether the size changed."""
+    design = bl_scene.lamp_design
+    image = (design.image.width, design.image.height)
+    given = design.get(IMAGE_KEY)
+    default = (spec.IMAGE.fields["width"].default, spec.IMAGE.fields["height"].default)
+    new_design = len(design.lamps) == 1 and image == default
+    if not new_design and (given is None or tuple(given) != image):
+        return False
+    size = image_size_for_body(design.body.size)
+    design[IMAGE_KEY] = list(size)
+    if size == image:
+        return False
+    design.image.width, design.image.height = size
+    return True
 
 
 _refusal_memo: dict = {"key": None, "refusal": None}  # the last design poll checked, and its answer
@@ -91,6 +121,7 @@ class LAMP_OT_lamp_remove(DesignOperator, bpy.types.Operator):
         design.lamps.remove(design.active_lamps_index)
         design.active_lamps_index = min(design.active_lamps_index, len(design.lamps) - 1)
         properties.notify_edited(context.scene)  # removing from the list calls no update callback
+        follow_body_aspect(context.scene)
         lamp_camera.keep_framed(context.scene)
         return {"FINISHED"}
 
@@ -118,13 +149,20 @@ class LAMP_OT_build(DesignOperator, bpy.types.Operator):
         report = builder.build_lamp(context.scene, scene)
         view_link.sync_view(context.scene)
         news = render_setup.set_up(context.scene)
-        level = "WARNING" if report.worst_deviation > report.tolerance else "INFO"
-        self.report({level}, f"Built {len(report.objects)} objects; largest deviation from the model "
-                             f"{report.worst_deviation:.3f} mm (tolerance {report.tolerance:g} mm)"
-                             + render_setup.news_text(news))
-        if report.not_driven:
-            self.report({"WARNING"}, f"Not following the design (your edits kept): {'; '.join(report.not_driven)}")
-        return {"FINISHED"}
+        if report.not_driven:  # the designer's own edits, each named in the Info editor
+            reports.details(self, [f"Not following the design (your edit kept): {what}" for what in report.not_driven])
+            reports.say(self, "WARNING", f"{len(report.not_driven)} of your edits kept, not following the design "
+                                         "(Info editor)")
+        deviation = (f"Largest deviation of the lamp objects from the model {report.worst_deviation:.3f} mm "
+                     f"(tolerance {report.tolerance:g} mm)")
+        if report.worst_deviation > report.tolerance:
+            reports.details(self, [deviation, *render_setup.news_details(news)])
+            reports.say(self, "WARNING", f"Built {len(report.objects)} objects, {report.worst_deviation:.3f} mm from "
+                                         f"the model: over the {report.tolerance:g} mm tolerance"
+                                         f"{render_setup.news_text(news)}")
+            return {"FINISHED"}
+        return reports.finished(self, f"Built {len(report.objects)} objects{render_setup.news_text(news)}",
+                                [deviation, *render_setup.news_details(news)])
 
 
 classes = (

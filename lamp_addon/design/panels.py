@@ -159,8 +159,27 @@ class LAMP_PT_camera(DesignSection, bpy.types.Panel):
         draw_section(layout.column(), design.camera, S.CAMERA)
         layout.separator()
         draw_section(layout.column(), design.image, S.IMAGE)
-        layout.separator()
-        draw_section(layout.column(), design.glare, S.GLARE)
+
+
+class LAMP_PT_glare(DesignSection, bpy.types.Panel):
+    """The eye's glare around bright pixels, switched on in the header as Blender's own effects are."""
+
+    bl_label = "Glare"
+    bl_parent_id = "LAMP_PT_camera"
+    bl_options = {"DEFAULT_CLOSED"}
+    bl_order = 1
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.lamp_design.glare, "on", text="")
+
+    def draw(self, context):
+        layout = self._split(self.layout)
+        glare = context.scene.lamp_design.glare
+        layout.active = glare.on
+        status = validity.status(context.scene)
+        for key in leaf_keys(S.GLARE):
+            if key != "on":
+                validity.draw_field(layout, glare, properties.property_id(key), status)
 
 
 class LAMP_PT_lamps(DesignSection, bpy.types.Panel):
@@ -225,6 +244,7 @@ classes = (
     LAMP_PT_body,
     LAMP_PT_light,
     LAMP_PT_camera,
+    LAMP_PT_glare,
     LAMP_PT_lamps,
     *_part_panels,
 )

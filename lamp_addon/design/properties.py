@@ -46,7 +46,7 @@ from ...core_tracer.scene import functions, photometric_checks
 from ...core_tracer.scene import spec as S
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import normalize, parse_scene
-from . import photometric_words
+from . import photometric_words, words
 
 OPEN_BOUND_MARGIN = 1.0e-6  # an open bound lo < x becomes lo + margin * max(1, |lo|) <= x
 TAG_SEPARATOR = ","
@@ -144,12 +144,23 @@ def blender_range(spec: S.Num) -> tuple[float | None, float | None]:
 
 
 def _description(spec: S.Spec) -> str:
-    return f"{spec.doc}. Allowed: {spec.range_text()}" if spec.doc else f"Allowed: {spec.range_text()}"
+    return words.tooltip(spec)  # the designer's words first, the allowed values in words, the paper's symbol last
 
 
-def _num_property(key: str, spec: S.Num, name: str | None = None):
+def field_label(section: S.Section, key: str, unit: str = "") -> str:
+    """The panel's label of ``section``'s field ``key``: the designer's word for it (``words.LABELS``) or the
+    key's, with the unit ("Position (mm)")."""
+    own = words.label(section, key)
+    if own is None:
+        return display_name(key, unit)
+    return f"{own} ({unit})" if unit else own
+
+
+def _num_property(key: str, spec: S.Num, section: S.Section | None = None, name: str | None = None):
     lo, hi = blender_range(spec)
-    kw = {"name": name or display_name(key, spec.unit), "description": _description(spec), "update": _edited}
+    if name is None:
+        name = field_label(section, key, spec.unit) if section is not None else display_name(key, spec.unit)
+    kw = {"name": name, "description": _description(spec), "update": _edited}
     if spec.integer:
         if lo is not None:
             kw["min"] = kw["soft_min"] = int(lo)
@@ -190,22 +201,23 @@ def _leaf_property(key: str, spec: S.Spec, section: S.Section):
     if photometric_words.label(section, key) is not None:
         return _worded_property(key, spec, section)
     if isinstance(spec, S.Num):
-        return _num_property(key, spec)
+        return _num_property(key, spec, section)
     if isinstance(spec, S.Choice):
         is_function = section is S.LAMP and key == "function"
         items = tuple((c, display_name(c), functions.describe(c) if is_function else "") for c in spec.choices)
         update = _function_chosen if is_function else _edited
-        return EnumProperty(name=display_name(key), description=_description(spec), items=items,
+        return EnumProperty(name=field_label(section, key), description=_description(spec), items=items,
                             default=spec.default, update=update)
     if isinstance(spec, S.Flag):
-        return BoolProperty(name=display_name(key), description=_description(spec), default=spec.default,
+        return BoolProperty(name=field_label(section, key), description=_description(spec), default=spec.default,
                             update=_edited)
     if isinstance(spec, S.Text):
         return StringProperty(name=display_name(key), description=_description(spec), default=spec.default,
                               update=_edited)
     if isinstance(spec, S.Tags):
         return StringProperty(name=display_name(key), default="", update=_edited,
-                              description=f"{spec.doc}, separated by commas. Allowed: {spec.range_text()}")
+                              description=f"{words.designer_text(spec.doc)}, separated by commas. Allowed: "
+                                          f"{words.range_words(spec)}")
     raise TypeError(f"no property for {spec!r}")  # pragma: no cover - every leaf kind is handled above
 
 
@@ -219,7 +231,7 @@ def _worded_property(key: str, spec: S.Spec, section: S.Section):
         update = _bulb_type_chosen if section is S.BULB and key == "type" else _edited
         return EnumProperty(name=name, description=spec.doc, items=items, default=spec.default, update=update)
     if isinstance(spec, S.Num):
-        return _num_property(key, spec, name)
+        return _num_property(key, spec, name=name)
     if isinstance(spec, S.Text):
         return StringProperty(name=name, description=_description(spec), default=spec.default, update=_edited)
     raise TypeError(f"no worded property for {spec!r}")  # pragma: no cover - photometric_words names these kinds

@@ -21,17 +21,63 @@ from . import photometric_words, properties
 WRAP = 44  # characters per label line in the sidebar
 
 
+# Where a top-level section's fields are drawn: the panel's own words for it.
+PANEL_OF = {"camera": "Camera & Image", "image": "Camera & Image", "glare": "Camera & Image › Glare",
+            "environment": "Light › Surroundings", "background": "Light › Background", "light": "Light"}
+SEPARATOR = " › "
+_UNIT = re.compile(r" \([^)]*\)$")
+# A field's path inside a message: "lamps[0].lens.radius", "body.size", "lens.outline", "lamps[1]".
+_PATH_IN_TEXT = re.compile(r"(?<![\w.\[])((?:lamps\[\d+\]|[a-z][a-z_]*)(?:\.[a-z][a-z0-9_]*)+|lamps\[\d+\])(?![\w\[])")
+
+
+def field_words(path: str) -> str | None:
+    """A field's path in the panel's words: ``lamps[0].cuts.height`` -> "Lamp 1 › Cuts › Height";
+    ``lens.radius`` (a lamp's) -> "Lens › Radius"; None when the path is no field of the design."""
+    path = re.sub(r"\[\d+\]$", "", path) if not re.fullmatch(r"lamps\[\d+\]", path) else path
+    try:
+        S.lookup(re.sub(r"\[\d+\]", "[]", path))
+    except KeyError:
+        return None
+    words = []
+    for i, part in enumerate(path.split(".")):
+        m = re.fullmatch(r"lamps\[(\d+)\]", part)
+        if m:
+            words.append(f"Lamp {int(m[1]) + 1}")
+        elif i == 0 and part in PANEL_OF:
+            words.append(PANEL_OF[part])
+        else:
+            parent_path = re.sub(r"\[\d+\]", "[]", ".".join(path.split(".")[:i]))
+            try:
+                parent = S.lookup(parent_path) if parent_path else S.SCENE
+            except KeyError:
+                parent = None
+            if isinstance(parent, S.ListOf):
+                parent = parent.item
+            own = ((properties.words.label(parent, part) or photometric_words.label(parent, part))
+                   if isinstance(parent, S.Section) else None)  # a photometric field's own words ("Filament")
+            words.append(own or _UNIT.sub("", properties.display_name(part)))
+    return SEPARATOR.join(words)
+
+
+def in_panel_words(text: str) -> str:
+    """``text`` with every field path in it said in the panel's words (``field_words``)."""
+    return _PATH_IN_TEXT.sub(lambda m: field_words(m[1]) or m[1], text)
+
+
 @dataclass(frozen=True)
 class Problem:
-    """The first error of a design: the field's path (``lamps[2].cuts.height``) and the message."""
+    """The first error of a design: the field's path (``lamps[2].cuts.height``) and the message, and
+    the field to highlight: the one whose change back fixes the design (``fix_path``, the field the
+    designer just changed), else the field the error names."""
 
     path: str
     message: str
+    fix_path: str = ""
 
     @property
     def property_path(self) -> str:
         """The path of the property to change below ``lamp_design`` (a vector's component dropped)."""
-        return re.sub(r"\[\d+\]$", "", self.path)
+        return re.sub(r"\[\d+\]$", "", self.fix_path or self.path)
 
     def field(self, design):
         """``(group, key)`` of the property to change, or None when the error is not about one."""
@@ -46,19 +92,23 @@ class Problem:
         return group, key
 
     def label(self) -> str:
-        """The field in the panel's words: ``lamps[2].cuts.height`` -> "Lamp 3 Cuts: Height"."""
-        words = []
-        for part in self.property_path.split("."):
-            m = re.fullmatch(r"(\w+)\[(\d+)\]", part)
-            words.append(f"Lamp {int(m[2]) + 1}" if m and m[1] == "lamps" else properties.display_name(part))
-        owner, _, key = re.sub(r"\[\d+\]", "[]", self.property_path).rpartition(".")
-        section = _spec(owner) if owner else S.SCENE
-        if isinstance(section, S.Section):  # a photometric field's own words ("Filament", not "State")
-            words[-1] = photometric_words.label(section, key) or words[-1]
-        return " ".join(words[:-1]) + (": " if len(words) > 1 else "") + words[-1]
+        """The field to change in the panel's words: ``lamps[2].cuts.height`` -> "Lamp 3 › Cuts › Height"."""
+        return field_words(self.property_path) or self.property_path
+
+    def explanation(self) -> str:
+        """What is wrong, in the panel's words; when the field to change is another than the one the
+        error names, that field is named in the message, as the second way out."""
+        said = in_panel_words(self.message)
+        if self.fix_path and re.sub(r"\[\d+\]$", "", self.path) != self.property_path:
+            return f"{field_words(self.path) or self.path} {said}"  # the rule's own field, with its remedy
+        return said
+
+    def text(self) -> str:
+        """The one message every surface shows: "Lamp 1 › Cuts › Height: 8 is more than ..."."""
+        return f"{self.label()}: {self.explanation()}"
 
     def lines(self) -> list[str]:
-        return textwrap.wrap(self.message, WRAP)
+        return textwrap.wrap(self.explanation(), WRAP)
 
 
 @dataclass(frozen=True)
@@ -67,29 +117,92 @@ class Status:
     limits: dict[str, str]  # property path below lamp_design -> the limit that depends on other fields
 
 
-_memo: dict = {"key": None, "status": None}
+_memo: dict = {"key": None, "status": None, "valid": {}}  # "valid": the last valid design of each scene
 
 
 def status(bl_scene) -> Status:
     """The design's status, checked again only when the design (or the active lamp) changed."""
     doc = properties.design_document(bl_scene)
     active = bl_scene.lamp_design.active_lamps_index
-    key = (json.dumps(doc, sort_keys=True), active)
+    key = (json.dumps(doc, sort_keys=True), active, bl_scene.name)
     if _memo["key"] != key:
-        _memo.update(key=key, status=_check(doc, active))
+        _memo.update(key=key, status=_check(doc, active, _memo["valid"].get(bl_scene.name)))
+        if _memo["status"].problem is None:
+            _memo["valid"][bl_scene.name] = doc
     return _memo["status"]
 
 
-def _check(doc: dict, active: int) -> Status:
+def _leaves(doc, path: str = "") -> dict:
+    """The design's leaf values by path (``lamps[0].lens.radius``)."""
+    if isinstance(doc, dict):
+        out = {}
+        for key, value in doc.items():
+            out.update(_leaves(value, f"{path}.{key}" if path else key))
+        return out
+    if isinstance(doc, list) and doc and isinstance(doc[0], dict):
+        out = {}
+        for i, value in enumerate(doc):
+            out.update(_leaves(value, f"{path}[{i}]"))
+        return out
+    return {path: doc}
+
+
+def _set_leaf(doc: dict, path: str, value) -> None:
+    node = doc
+    parts = re.findall(r"[^.\[\]]+|\[\d+\]", path)
+    for part in parts[:-1]:
+        node = node[int(part[1:-1])] if part.startswith("[") else node[part]
+    node[parts[-1]] = value
+
+
+def _valid(doc: dict) -> bool:
+    try:
+        parse_scene(doc)
+    except SceneError:
+        return False
+    return True
+
+
+def fixing_field(doc: dict, valid: dict | None, error_path: str) -> str:
+    """Of the fields changed since the last valid design ``valid``, the one whose old value alone
+    makes ``doc`` valid again ("" when the error's own field is one of them, or none does): the field
+    the designer just changed, to highlight before the one the error names."""
+    if valid is None:
+        return ""
+    now, before = _leaves(doc), _leaves(valid)
+    if set(now) != set(before):
+        return ""  # lamps added or removed: no single field to go back on
+    changed = [path for path in now if now[path] != before[path]]
+    if re.sub(r"\[\d+\]$", "", error_path) in changed:
+        return ""
+    for path in changed:
+        trial = json.loads(json.dumps(doc))
+        _set_leaf(trial, path, before[path])
+        if _valid(trial):
+            return path
+    return ""
+
+
+def _check(doc: dict, active: int, valid: dict | None = None) -> Status:
     try:
         parse_scene(doc)
         problem = None
     except SceneError as e:
-        problem = Problem(e.path, e.message)
+        problem = Problem(e.path, e.message, fixing_field(doc, valid, e.path))
     limits = {}
     if 0 <= active < len(doc["lamps"]):  # the lamp the panel shows; the bulb's limits take a few ms
         limits = {f"lamps[{active}].{path}": text for path, text in lamp_limits(doc, active).items()}
     return Status(problem, limits)
+
+
+def message(bl_scene, error: SceneError) -> str:
+    """What an operator (Build, F12, Compare, ...) says of the design's error ``error``: the panel's own
+    message when it is the design's first error (the same words, the same field first), else the
+    error with its fields in the panel's words."""
+    problem = status(bl_scene).problem
+    if problem is not None and (problem.path, problem.message) == (error.path, error.message):
+        return problem.text()
+    return Problem(error.path, error.message).text() if field_words(error.path) else in_panel_words(str(error))
 
 
 def field_path(group, key: str) -> str:
@@ -112,7 +225,7 @@ def draw_status(layout, bl_scene) -> None:
         return
     col = box.column(align=True)
     col.alert = True
-    col.label(text=problem.label(), icon="ERROR")
+    col.label(text=problem.label(), icon="ERROR")  # the message's first words (``Problem.text``)
     field = problem.field(design)
     if field is not None:
         col.prop(*field)

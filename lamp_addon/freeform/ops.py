@@ -64,15 +64,15 @@ class LAMP_OT_role_assign(bpy.types.Operator):
                     materials.give_role_material(obj)
                 given.append(obj.name)
         if not given:
-            self.report({"ERROR"}, "No role given: " + "; ".join(skipped))
+            reports.say(self, "ERROR", "No role given: " + "; ".join(skipped))
             return {"CANCELLED"}
         text = f"{role_label(self.role)}: " + ", ".join(given)
         if self.material:
             text += " (with the role's Cycles material)"
         if skipped:
-            self.report({"WARNING"}, text + "; skipped " + "; ".join(skipped))
+            reports.say(self, "WARNING", text + "; skipped " + "; ".join(skipped))
         else:
-            self.report({"INFO"}, text)
+            reports.say(self, "INFO", text)
         return {"FINISHED"}
 
 
@@ -93,12 +93,12 @@ class LAMP_OT_role_clear(bpy.types.Operator):
     def execute(self, context):
         targets = [obj for obj in self._targets(context) if properties.has_role(obj)]
         if not targets:
-            self.report({"ERROR"}, f'"{self.object_name}" has no lamp role' if self.object_name
+            reports.say(self, "ERROR", f'"{self.object_name}" has no lamp role' if self.object_name
                         else "No selected object has a lamp role")
             return {"CANCELLED"}
         for obj in targets:
             properties.set_role(obj, NONE)
-        self.report({"INFO"}, "Cleared the role of " + ", ".join(obj.name for obj in targets))
+        reports.say(self, "INFO", "Cleared the role of " + ", ".join(obj.name for obj in targets))
         return {"FINISHED"}
 
 
@@ -128,13 +128,14 @@ class LAMP_OT_freeform_convert(DesignOperator, bpy.types.Operator):
         except SceneError as e:
             return self.cancelled(f"Not converted: {e}")
         built = "built the lamp, then " if report.built else ""
-        text = (f"Converted: {built}made {len(report.objects)} free-form parts; hid the {len(report.hidden)} "
-                "parametric parts they stand in for")
+        text = f"Converted: {built}made {len(report.objects)} free-form parts"
+        hidden = f"Hid the {len(report.hidden)} parametric parts they stand in for"
         if report.earlier_parts:
-            self.report({"WARNING"}, f"{text}; the {report.earlier_parts} parts the scene had already are traced "
-                                     "too (take their roles away if they are an earlier copy)")
+            reports.details(self, [hidden, "Take the earlier parts' roles away if they are an earlier copy"])
+            reports.say(self, "WARNING", f"{text}; the {report.earlier_parts} parts the scene had already are traced "
+                                         "too")
             return {"FINISHED"}
-        return reports.finished(self, text)
+        return reports.finished(self, f"{text}; {hidden[:1].lower()}{hidden[1:]}")
 
 
 class LAMP_OT_freeform_export(bpy.types.Operator, ExportHelper):

@@ -10,8 +10,8 @@ never moved. The operators that call these are in ``ops``.
 
 from __future__ import annotations
 
-import math
 import struct
+from typing import NamedTuple
 
 import bpy
 
@@ -24,16 +24,11 @@ from ..design import curves as design_curves
 from ..design import properties as design_properties
 from ..design import root as design_root
 from ..freeform import loading as freeform_loading
+from ..freeform import parametric as freeform_parametric
 from ..render import camera as render_camera
 from ..render import lamp_camera
 from ..render import setup as render_setup
 from .state import SceneState
-
-# Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
-# the camera object that differs from the design's by less than this, relative to the view's size, is
-# the design's view.
-SAME_VIEW = 1e-6
-
 
 # ---------------------------------------------------------------------------------------------
 # The view a preset records and shows
@@ -51,19 +46,6 @@ def _as_stored(value):
     return value
 
 
-def _same_view(a: dict, b: dict) -> bool:
-    """Whether two normalised camera sections show the same view, up to Blender's single precision."""
-    if (a["type"], a["sensor_fit"]) != (b["type"], b["sensor_fit"]):
-        return False
-    reach = max(math.dist(a["position"], a["target"]), a["width"], 1.0)  # mm: the size of the view
-    sizes = {"position": reach, "target": reach, "width": reach, "up": 1.0, "fov_deg": 180.0, "shift": 1.0}
-    for key, size in sizes.items():
-        x, y = (v if isinstance(v, list) else [v] for v in (a[key], b[key]))
-        if not all(abs(p - q) <= SAME_VIEW * size for p, q in zip(x, y, strict=True)):
-            return False
-    return True
-
-
 def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
     """The design as a preset records it: seen through the Blender scene camera at the render size
     when the scene has a camera, else through the design's own camera. Raises ``SceneError``.
@@ -78,32 +60,48 @@ def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
         own = design_properties.design_to_scene(bl_scene)["camera"]
     except SceneError:
         own = None  # the design's own camera section does not hold a valid view: the scene camera is the view
-    seen["camera"] = own if own is not None and _same_view(seen["camera"], own) else _as_stored(seen["camera"])
+    same = own is not None and render_camera.same_view(seen["camera"], own)
+    seen["camera"] = own if same else _as_stored(seen["camera"])
     return normalize(seen)
 
 
-def show_view(bl_scene: bpy.types.Scene, scene: dict) -> str:
+def show_view(bl_scene: bpy.types.Scene, scene: dict) -> render_setup.News | None:
     """Show the design's view (just set from a preset) through the add-on's Lamp Camera.
 
     The design's camera fields are the Lamp Camera (``render.view_link.sync_view``): it takes the
-    preset's view, made when the scene has none. A camera of the designer's stays as it is.
+    preset's view, made when the scene has none, and is framed on the body from that view's direction
+    when the view does not show the whole body, as the first lamp of a file does (so a preset is
+    framed the same whatever was applied before). A camera of the designer's stays as it is.
     Returns what happened, for the report."""
     mine = bl_scene.camera is not None and not render_camera.is_lamp_camera(bl_scene.camera)
     if mine and render_camera.find_lamp_camera(bl_scene) is None:
-        return (f"kept your camera \"{bl_scene.camera.name}\" (the preset's view is the design's camera; "
-                "Frame Lamp makes the Lamp Camera)")
+        return render_setup.News(f'your camera "{bl_scene.camera.name}" kept',
+                                 f'Kept your camera "{bl_scene.camera.name}": the preset\'s view is the design\'s '
+                                 "camera; Frame Lamp makes the Lamp Camera")
     ob, made = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    if not render_setup.design_view_shows_body(bl_scene) and ob.data.type in {"PERSP", "ORTHO"}:
+        lamp_camera.frame_on_body(bl_scene, ob, render_camera.scene_camera_to_dict(bl_scene, ob))
     if mine:
-        return (f"kept your camera \"{bl_scene.camera.name}\" (the preset's view is on \"{ob.name}\"; "
-                "Frame Lamp makes it the scene camera)")
-    return made or f"moved \"{ob.name}\" to its view"
+        return render_setup.News(f'your camera "{bl_scene.camera.name}" kept',
+                                 f'Kept your camera "{bl_scene.camera.name}": the preset\'s view is on '
+                                 f'"{ob.name}"; Frame Lamp makes it the scene camera')
+    return render_setup.News("", made[:1].upper() + made[1:] if made else f'Moved "{ob.name}" to the preset\'s view')
 
 
-def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None) -> str:
+class Applied(NamedTuple):
+    """What applying a preset did: a short clause for the report's one line, the rest for the Info editor."""
+
+    short: str
+    details: list[str]
+
+
+def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None) -> Applied:
     """Set the design from a preset, all or nothing, then show its view (``show_view``) and, when the
     lamp has been built in this scene, rebuild it so that its objects are the preset's too. A free-form
     preset (read from ``path``) also brings its parts in as objects with roles (``freeform.loading``),
-    its meshes read and checked first. Returns what happened, for the report."""
+    its meshes read and checked first. In a file not yet set up for the lamp (Auto Build on, nothing
+    built) the scene is set up as the first Add Lamp does, and the preset's view shown by that set-up.
+    Returns what happened, for the report."""
     parts = None
     if path is not None and scene["environment"]["world"] == "file":
         # The image beside the preset (refused when it leads elsewhere), held in the design by its path.
@@ -119,19 +117,31 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
     if path is not None:  # its measured curves (.csv) are found beside it (design.curves)
         design_curves.remember_preset_folder(bl_scene, path)
     design = design_properties.design_to_scene(bl_scene)
-    view = show_view(bl_scene, design)
+    built = any(ob.get(design_root.PART_KEY) for ob in bl_scene.objects)
+    first = not built and bl_scene.lamp_design.auto_build and not render_setup.is_set_up(bl_scene)
+    # Auto Build makes the lamp in a moment: its first build in this file, so the scene is set up now
+    # (the Lamp Camera at the preset's view, Lamp Tracer, the exposure once), as the first Add Lamp does.
+    news = [] if first else [show_view(bl_scene, design)]
     if parts is not None:
         made = freeform_loading.make_parts(bl_scene, scene, parts)
-        view += f"; made {len(made)} free-form parts"
-    if not any(ob.get(design_root.PART_KEY) for ob in bl_scene.objects):
-        if bl_scene.lamp_design.auto_build and not render_setup.is_set_up(bl_scene):
-            # Auto Build makes the lamp in a moment: its first build in this file, so set the scene up now
-            # (the Lamp Camera at the preset's view, Lamp Tracer, the design's exposure), as the first Add Lamp does.
-            view += render_setup.news_text(render_setup.set_up(bl_scene))
-        return view
-
-    design_builder.build_lamp(bl_scene, design)
-    return f"{view}; rebuilt the lamp objects"
+        news.append(render_setup.News(f"{len(made)} free-form parts", f"Made {len(made)} free-form parts"))
+    if first:
+        news += render_setup.set_up(bl_scene)
+    if parts is not None:
+        # The preset's meshes are the whole lamp: its parametric lamps are built now (not later by Auto
+        # Build) and hidden from view and renders, as Convert to Free-form leaves them, so the tracer does
+        # not meet the same lens twice.
+        design_builder.build_lamp(bl_scene, design)
+        hidden = freeform_parametric.used_parts(bl_scene, None)
+        for ob in hidden:
+            ob.hide_set(True)
+            ob.hide_render = True
+        news.append(render_setup.News("", f"Hid the {len(hidden)} parametric parts the free-form parts stand in for"))
+    elif built:
+        design_builder.build_lamp(bl_scene, design)
+        news.append(render_setup.News("", "Rebuilt the lamp objects"))
+    news = [n for n in news if n is not None]
+    return Applied(render_setup.news_text(news), render_setup.news_details(news))
 
 
 def apply_preset_whole(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None) -> str:

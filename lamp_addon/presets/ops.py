@@ -102,7 +102,7 @@ class LAMP_OT_preset_refresh(bpy.types.Operator):
     def execute(self, context):
         listing = preset_library.sync(context)
         if listing.warnings:
-            self.report({"WARNING"}, f"{len(listing.warnings)} files are not valid presets; see the list")
+            reports.say(self, "WARNING", f"{len(listing.warnings)} files are not valid presets; see the list")
         return {"FINISHED"}
 
 
@@ -130,10 +130,11 @@ class LAMP_OT_preset_apply(bpy.types.Operator):
             return _failed(self, "Not a preset of the listed libraries; refresh the preset list")
         try:
             # Read again: the file may have changed since it was listed.
-            view = apply_preset_whole(context.scene, P.load_preset(entry.file), entry.file)
+            applied = apply_preset_whole(context.scene, P.load_preset(entry.file), entry.file)
         except Exception as e:  # noqa: BLE001 - put back whole; the report says what failed
             return _not_applied(self, "Preset not applied, the design is unchanged", e)
-        return reports.finished(self, f"Applied \"{entry.name}\" from {entry.library.name}; {view}")
+        return reports.finished(self, f"Applied \"{entry.name}\"{applied.short}",
+                                [f"Applied \"{entry.name}\" from {entry.library.name}", *applied.details])
 
 
 class LAMP_OT_preset_save(bpy.types.Operator):
@@ -317,20 +318,21 @@ class LAMP_OT_preset_import(bpy.types.Operator, ImportHelper):
                     return _failed(self, f"{target} exists already with another design; tick \"Replace "
                                          "Existing\" or rename the preset first")
                 overwrite = True  # the very same design: saving again changes nothing
-        view = ""
+        view, more = "", []
         if self.apply:
             try:
-                view = f"; {apply_preset_whole(context.scene, scene, self.filepath)}"
+                applied = apply_preset_whole(context.scene, scene, self.filepath)
+                view, more = applied.short, applied.details
             except Exception as e:  # noqa: BLE001 - put back whole; the report says what failed
                 return _not_applied(self, "Not imported, the design is unchanged", e)
         if lib is not None:
             try:
                 entry = P.save_preset(lib, scene["name"], scene, overwrite=overwrite)
             except (SceneError, OSError) as e:
-                self.report({"WARNING"}, f"Applied, but not added to {lib.name}: {_error_text(e)}")
+                reports.say(self, "WARNING", f"Applied, but not added to {lib.name}: {_error_text(e)}")
                 return {"FINISHED"}
             preset_library.sync(context, select=entry.file)
-        return reports.finished(self, f"Imported \"{scene['name']}\"{view}")
+        return reports.finished(self, f"Imported \"{scene['name']}\"{view}", more)
 
 
 class LAMP_OT_preset_export(bpy.types.Operator, ExportHelper):

@@ -7,7 +7,8 @@ shading, the scene camera both renderers use, Render with Lamp Tracer and Exposu
   Scene Camera to Design and the Scene Camera area; ``setup``: what a file needs to show the lamp.
 - ``engine``: the ``RenderEngine``; ``viewport`` and ``preview``: its viewport session and the
   preview's stages.
-- ``ops``: Render with Lamp Tracer (a modal job); ``exposure``: Exposure from Design.
+- ``ops``: Render with Lamp Tracer (a modal job); ``exposure``: Exposure from Design; ``view_frame``:
+  the 3D View framed on the lamp, Hide Other Objects.
 """
 
 from ..registration import modules_factory
@@ -15,9 +16,9 @@ from ..registration import modules_factory
 
 def modules() -> tuple:
     """The modules that register, in order."""
-    from . import camera_ops, camera_panel, camera_sync, engine, exposure, ops
+    from . import camera_ops, camera_panel, camera_sync, engine, exposure, ops, view_frame
 
-    return (camera_ops, camera_panel, camera_sync, engine, ops, exposure)
+    return (camera_ops, camera_panel, camera_sync, engine, ops, exposure, view_frame)
 
 
 register, unregister = modules_factory(modules)

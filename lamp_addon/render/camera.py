@@ -178,9 +178,41 @@ def scene_for_render(bl_scene, *, camera_object=None, size: tuple[int, int] | No
         render.resolution_x, render.resolution_y, render.resolution_percentage)
     # The design's samples per pixel go with it (F12 renders them); only the size is Blender's.
     image = {"width": int(width), "height": int(height), "samples": int(bl_scene.lamp_design.image.samples)}
-    scene = design_properties.design_to_scene(bl_scene, camera=scene_camera_to_dict(bl_scene, camera_object),
-                                              image=image)
+    seen = scene_camera_to_dict(bl_scene, camera_object)
+    own = _design_camera(bl_scene)
+    if own is not None and same_view(seen, own):
+        seen = own  # the design's own view (a preset just applied): its numbers, free of single precision
+    scene = design_properties.design_to_scene(bl_scene, camera=seen, image=image)
     return design_curves.with_curves(bl_scene, scene)  # photometric: measured curves by their full paths
+
+
+# Blender keeps a camera in single precision (a relative error of about 1e-7): a view read back from
+# the camera object that differs from the design's by less than this, relative to the view's size, is
+# the design's view.
+SAME_VIEW = 1e-6
+
+
+def _design_camera(bl_scene) -> dict | None:
+    """The design's own camera section, normalised, or None when it is not a valid view."""
+    from ...core_tracer.scene.reading import SceneError
+
+    try:
+        return design_properties.design_to_scene(bl_scene)["camera"]
+    except SceneError:
+        return None
+
+
+def same_view(a: dict, b: dict) -> bool:
+    """Whether two normalised camera sections show the same view, up to Blender's single precision."""
+    if (a["type"], a["sensor_fit"]) != (b["type"], b["sensor_fit"]):
+        return False
+    reach = max(math.dist(a["position"], a["target"]), a["width"], 1.0)  # mm: the size of the view
+    sizes = {"position": reach, "target": reach, "width": reach, "up": 1.0, "fov_deg": 180.0, "shift": 1.0}
+    for key, size in sizes.items():
+        x, y = (v if isinstance(v, list) else [v] for v in (a[key], b[key]))
+        if not all(abs(p - q) <= SAME_VIEW * size for p, q in zip(x, y, strict=True)):
+            return False
+    return all(a[key] == b[key] for key in a if key not in sizes and key in b)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import bpy
 
-from .. import actions
+from .. import actions, reports
 from ..convert import camera as cm
 from ..design import root as design_root
 from ..design.operator import DesignOperator
+from . import view_frame
 from .camera import is_lamp_camera, scene_camera_to_dict, scene_for_render
 from .lamp_camera import ensure_lamp_camera, frame_on_body
 from .view_link import sync_view, write_design_camera
@@ -16,8 +17,8 @@ from .view_link import sync_view, write_design_camera
 
 class LAMP_OT_frame_design(DesignOperator, bpy.types.Operator):
     """Point the Lamp Camera at the whole lamp body with a margin, from the current viewing direction
-    (the 3D View's when used there, else the Lamp Camera's own); makes it the scene camera.
-    A camera of yours is never moved"""
+    (the 3D View's when used there, else the Lamp Camera's own), make it the scene camera and frame the
+    3D View on the lamp. A camera of yours is never moved"""
 
     bl_idname = "lamp.frame_design"
     bl_label = "Frame Lamp"
@@ -47,8 +48,12 @@ class LAMP_OT_frame_design(DesignOperator, bpy.types.Operator):
         frame_on_body(bl_scene, ob, view)
         if not made and previous is not ob and previous is not None:
             made = f'"{ob.name}" is the scene camera again (your "{previous.name}" was not moved)'
-        self.report({"INFO"}, f'Framed the lamp with "{ob.name}"' + (f"; {made}" if made else ""))
-        return {"FINISHED"}
+        views = view_frame.frame_views(bl_scene)
+        hidden = view_frame.hidden_note(bl_scene)
+        more = [made] if made else []
+        if views:
+            more.append(f"Framed {views} 3D Views on the lamp")
+        return reports.finished(self, f'Framed the lamp with "{ob.name}"' + (f"; {hidden}" if hidden else ""), more)
 
 
 class LAMP_OT_camera_to_design(DesignOperator, bpy.types.Operator):

@@ -16,6 +16,8 @@ from ...core_tracer.budget import check_rays
 from ...core_tracer.raytrace import band_pool
 from ...core_tracer.raytrace.engine import PASS_NAMES
 from ...core_tracer.scene.reading import SceneError
+from .. import reports
+from ..design import validity as design_validity
 from ..freeform import render as freeform_render
 from ..freeform import status as freeform_status
 from . import camera, photometric_display
@@ -139,11 +141,11 @@ class LampTracerEngine(bpy.types.RenderEngine):
             black = np.zeros((height, width, 3), np.float32)
             self._fill(black, 0, np.ones((height, width), np.float32),
                        dict.fromkeys(PASS_LABELS.values(), black) if with_passes else {})
-            self.report({"ERROR"}, f"Lamp Tracer: {e}")
+            reports.say(self, "ERROR", f"Lamp Tracer: {design_validity.message(depsgraph.scene, e)}")
             return
 
         if prepared.note is not None:
-            self.report({"WARNING"}, f"Lamp Tracer: {prepared.note}")
+            reports.say(self, "WARNING", f"Lamp Tracer: {prepared.note}")
         if prepared.geometry is not None:
             self._render_freeform(depsgraph.scene, prepared, width, height, with_passes)
             return
@@ -229,7 +231,7 @@ class LampTracerEngine(bpy.types.RenderEngine):
         except SceneError as e:
             freeform_status.note_mesh_problem(bl_scene, str(e))
             self._fill(black, 0, opaque, dict.fromkeys(PASS_LABELS.values(), black) if with_passes else {})
-            self.report({"ERROR"}, f"Lamp Tracer: {e}")
+            reports.say(self, "ERROR", f"Lamp Tracer: {e}")
             return
         freeform_status.note_mesh_problem(bl_scene, None)
         passes = {}

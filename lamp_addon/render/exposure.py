@@ -1,13 +1,14 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """*Exposure from Design*: the scene's exposure set to the design's automatic exposure.
 
-F12 renders with the Lamp Tracer engine and the viewport's Rendered shading are shown through the
-scene's colour management (Render Properties > Color Management), like any engine's. A lit lens is
-ten or more times brighter than display white, so at the default exposure it shows as a flat,
-pale disk. This operator measures the design from the scene camera on a small preview render
-(``image_view.design_exposure``) and sets the scene's exposure to it; the designer can set
-another value afterwards as usual. The add-on's own images (Lamp Tracer, Lamp Compare, Lamp
-Study) are shown at the design's exposure whatever the scene's is (``image_view.show_linear``).
+The exposure belongs to the view, not to the design (``setup``): F12 renders with the Lamp Tracer
+engine and the viewport's Rendered shading are shown through the scene's colour management (Render
+Properties > Color Management), like any engine's, and Build Lamp and Apply Preset never change it,
+so designs compare under one exposure. A lit lens is ten or more times brighter than display white;
+this operator is the explicit way to expose for the design in view: it measures the design from the
+scene camera on a small preview render (``image_view.design_exposure``, with the bulbs on when every
+bulb is off) and sets the scene's exposure to it. The add-on's own images (Lamp Tracer, Lamp
+Compare, Lamp Study) are each shown under one exposure of their own (``image_view.show_linear``).
 """
 
 from __future__ import annotations
@@ -15,14 +16,14 @@ from __future__ import annotations
 import bpy
 
 from ...core_tracer.scene.reading import SceneError
-from .. import actions
+from .. import actions, reports
 from ..design.operator import DesignOperator
-from . import camera, setup
+from . import setup
 
 
 class LAMP_OT_exposure_from_design(DesignOperator, bpy.types.Operator):
-    """Set the scene's exposure so the lit lens shows its cut pattern instead of a flat disk (measured
-    on a small render of the design from the scene camera)"""
+    """Expose the view for the design in it, so that the lit lens shows its cut pattern instead of a flat
+    disk (Build Lamp and Apply Preset keep the exposure, so designs compare)"""
 
     bl_idname = "lamp.exposure_from_design"
     bl_label = "Exposure from Design"
@@ -34,14 +35,13 @@ class LAMP_OT_exposure_from_design(DesignOperator, bpy.types.Operator):
 
     def execute(self, context):
         try:
-            camera.scene_for_render(context.scene)
+            exposure, lit = setup.set_design_exposure(context.scene)
         except SceneError as e:
             return self.cancelled(e)
-        setup.follow_design_exposure(context.scene, force=True)
-        settings = context.scene.view_settings
-        self.report({"INFO"}, f"Exposure {settings.exposure:+.1f} EV ({settings.view_transform}): the lit lens "
-                              "shows its cut pattern; Build Lamp keeps it at the design's until you set your own")
-        return {"FINISHED"}
+        if not lit:
+            return reports.finished(self, f"Nothing is lit (every bulb is off): exposure {exposure:+.1f} EV, "
+                                          "for the bulbs on")
+        return reports.finished(self, f"Exposure {exposure:+.1f} EV: the lit lens shows its cut pattern")
 
 
 classes = (LAMP_OT_exposure_from_design,)

@@ -23,6 +23,7 @@ from ...core_tracer.images import display, glare
 from ...core_tracer.raytrace import band_pool
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, image_view, jobs, reports
+from ..design import validity as design_validity
 from . import camera, photometric_display, view_link
 
 IMAGE_NAME = "Lamp Tracer"
@@ -126,7 +127,7 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
         try:
             image, seconds = render_to_image(context.scene)
         except SceneError as e:
-            return reports.cancelled(self, str(e))
+            return reports.cancelled(self, design_validity.message(context.scene, e))
         image_view.show_image(context, image)
         return reports.finished(self, f"Lamp Tracer: {image.size[0]}x{image.size[1]} in {seconds:.2f} s")
 
@@ -138,7 +139,7 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
             scene = camera.scene_for_render(context.scene)
             self._job = TracerJob(scene)
         except SceneError as e:
-            return reports.cancelled(self, str(e))
+            return reports.cancelled(self, design_validity.message(context.scene, e))
         exposure = image_view.design_exposure(scene)  # known before the rows arrive
         self._gain = image_view.shown_gain(context.scene, exposure)
         self._image = image_view.show_linear(IMAGE_NAME, self._job.rows, exposure, context.scene)
@@ -162,7 +163,7 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
         if job.error is not None:
             return reports.cancelled(self, f"Lamp Tracer failed: {job.error}")
         if job.cancelled:
-            self.report({"WARNING"}, "Lamp Tracer render cancelled")
+            reports.say(self, "WARNING", "Lamp Tracer render cancelled")
             return {"CANCELLED"}
         width, height = self._image.size
         return reports.finished(self, f"Lamp Tracer: {width}x{height} in {job.seconds:.2f} s")

@@ -11,11 +11,15 @@ more times display white) is a flat pale disk under AgX. So the first build of a
   no longer the scene camera (the Scene properties switch back).
 - **engine**: Lamp Tracer, when the scene still renders with EEVEE (the engine of a new file): F12
   and the viewport's Rendered shading then show the paper's model. Another engine is a choice.
-- **exposure**: the scene's exposure (Color Management) is set to the design's automatic exposure
-  (``image_view.design_exposure``), when it is still 0 (the default). Each later Build Lamp keeps it
-  at the design's exposure (a brighter bulb gets a lower exposure) for as long as it holds the value
-  the add-on set; once the user sets their own, it is theirs. Auto Build's builds leave it: the
-  picture is not re-exposed at every step of a drag.
+- **exposure**: the exposure belongs to the view, not to the design. The first lamp of a new file
+  sets the scene's exposure (Color Management) once, to the design's automatic exposure measured
+  with its bulbs on (``design_exposure_lit``: a design whose bulbs are all off, "Paper study: lamp
+  off" say, is exposed for the lamp lit, so the lit design applied next is not washed out), when
+  the exposure is still the default 0. After that neither Build Lamp nor Apply Preset changes it,
+  so a stop lamp looks brighter than a tail lamp; *Exposure from Design* is the explicit way to
+  expose for the design again.
+- **views**: the 3D Views are framed on the lamp (``view_frame``), and an object of the user's that
+  encloses it (the startup Cube) is named in the report, never hidden or moved.
 
 The scene remembers that it was set up (``SETUP_KEY``), so a camera or an engine the user chose
 afterwards is never changed again by a build.
@@ -24,13 +28,14 @@ afterwards is never changed again by a build.
 from __future__ import annotations
 
 import json
+from typing import NamedTuple
 
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
 from .. import image_view
 from ..convert import camera as cm
 from ..design import properties as design_properties
-from . import camera, lamp_camera
+from . import camera, lamp_camera, view_frame
 from .engine import ENGINE_ID
 
 SETUP_KEY = "lamp_scene_setup"  # scene custom property: JSON {"exposure": the value the add-on set, or null}
@@ -70,7 +75,16 @@ def design_view_shows_body(bl_scene) -> bool:
     return all(0.0 <= x <= size[0] and 0.0 <= y <= size[1] and depth > 0.0 for x, y, depth in corners)
 
 
-def _camera(bl_scene) -> str:
+class News(NamedTuple):
+    """One change the set-up made: a few words for the report's one line, and the whole of it for the
+    Info editor."""
+
+    short: str
+    detail: str
+    lead: bool = False  # said first: what the user must do to see the lamp
+
+
+def _camera(bl_scene) -> News | None:
     previous = bl_scene.camera
     if camera.find_lamp_camera(bl_scene) is None:
         ob, what = lamp_camera.ensure_lamp_camera(bl_scene, frame=not design_view_shows_body(bl_scene))
@@ -81,65 +95,104 @@ def _camera(bl_scene) -> str:
             what = f'made "{ob.name}" the scene camera' + (
                 f' (your "{previous.name}" is kept as it was)' if previous is not None else "")
     lamp_camera.carry_with_root(bl_scene, ob)  # the lamp's view moves with the lamp
-    return what
+    return News(f'"{ob.name}"', what[:1].upper() + what[1:]) if what else None
 
 
-def _engine(bl_scene) -> str:
+def _engine(bl_scene) -> News | None:
     engine = bl_scene.render.engine
     if engine not in DEFAULT_ENGINES:
-        return ""
+        return None
     bl_scene.render.engine = ENGINE_ID
-    return "render engine Lamp Tracer (was EEVEE; F12 and Rendered shading show the lamp)"
+    return News("Lamp Tracer", "Render engine Lamp Tracer (was EEVEE): F12 and Rendered shading show the lamp")
 
 
-def exposure_is_the_addons(bl_scene) -> bool:
-    """Whether the scene's exposure may follow the design: still the default 0 before the set-up,
-    afterwards still the value the add-on set."""
-    memory = _memory(bl_scene)
-    ours = 0.0 if memory is None else memory.get("exposure")
-    return isinstance(ours, int | float) and abs(bl_scene.view_settings.exposure - ours) <= EXPOSURE_TOLERANCE
+def is_lit(scene: dict) -> bool:
+    """Whether anything in a normalised design gives light: a bulb that is on (a parametric lamp's or
+    a free-form bulb's)."""
+    bulbs = [lamp["bulb"] for lamp in scene["lamps"]]
+    bulbs += [part["bulb"] for part in scene.get("freeform", {}).get("parts", []) if part["role"] == "bulb"]
+    return any(bulb["on"] for bulb in bulbs)
 
 
-def follow_design_exposure(bl_scene, *, force: bool = False) -> str:
-    """Set the scene's exposure to the design's automatic exposure, measured through the scene camera
-    (when it is still the add-on's to set, or ``force``: Exposure from Design); remembered as the
-    add-on's. Returns what changed, for a report ("" when nothing did)."""
-    if not force and not exposure_is_the_addons(bl_scene):
-        return ""
+def lit_version(scene: dict) -> dict:
+    """The design with every bulb on: what its exposure is measured on when nothing is lit."""
+    lamps = [{**lamp, "bulb": {**lamp["bulb"], "on": True}} for lamp in scene["lamps"]]
+    lit = {**scene, "lamps": lamps}
+    if "freeform" in scene:
+        parts = [{**part, "bulb": {**part["bulb"], "on": True}} if part["role"] == "bulb" else part
+                 for part in scene["freeform"]["parts"]]
+        lit["freeform"] = {**scene["freeform"], "parts": parts}
+    return lit
+
+
+def design_exposure_lit(scene: dict) -> float:
+    """The design's automatic exposure (``image_view.design_exposure``), measured with its bulbs on."""
+    return image_view.design_exposure(scene if is_lit(scene) else lit_version(scene))
+
+
+def set_design_exposure(bl_scene) -> tuple[float, bool]:
+    """Set the scene's exposure to the design's automatic exposure seen through the scene camera, measured
+    with the bulbs on (``design_exposure_lit``). Returns (the exposure, whether anything is lit).
+    Raises ``SceneError`` (no camera, an invalid design)."""
+    scene = camera.scene_for_render(bl_scene)
+    exposure = design_exposure_lit(scene)
+    bl_scene.view_settings.exposure = exposure
+    _remember(bl_scene, exposure)
+    return exposure, is_lit(scene)
+
+
+def _first_exposure(bl_scene) -> News | None:
+    """The exposure of a new file's first lamp, set once when the scene's is still the default 0 (one
+    the user set before is theirs)."""
+    settings = bl_scene.view_settings
+    if abs(settings.exposure) > EXPOSURE_TOLERANCE:
+        return None
     try:
-        scene = camera.scene_for_render(bl_scene)
-        exposure = image_view.design_exposure(scene)
+        exposure, lit = set_design_exposure(bl_scene)
     except SceneError:
         # No camera, an invalid design, or surroundings the tracer refuses to read (an image whose
         # header declares too much): the operator, the panel or the build's report says why.
-        return ""
-    settings = bl_scene.view_settings
-    changed = abs(settings.exposure - exposure) > EXPOSURE_TOLERANCE
-    if changed:
-        settings.exposure = exposure
-    _remember(bl_scene, exposure)
-    if not changed:
-        return ""
-    return (f"exposure {exposure:+.1f} EV ({settings.view_transform}), the design's: the lit lens shows its "
-            "cut pattern")
+        return None
+    return News(f"{exposure:+.1f} EV",
+                f"Exposure {exposure:+.1f} EV ({settings.view_transform}), the design's"
+                + ("" if lit else " with its bulbs on") + ": the lit lens shows its cut pattern. Build Lamp "
+                "and Apply Preset keep it; Exposure from Design exposes again")
 
 
-def set_up(bl_scene) -> list[str]:
-    """Set the scene up for the lamp after a build (see the module's doc): the first time, the camera,
-    the engine and the exposure; afterwards the exposure only, while it is still the add-on's.
-    Returns what changed, one phrase per change, for the operator's report."""
+def _views(bl_scene) -> News | None:
+    """The 3D Views framed on the design, and an object of the user's that hides it named."""
+    framed = view_frame.frame_views(bl_scene)
+    hidden = view_frame.enclosing(bl_scene)
+    if hidden:
+        return News(f'it is inside "{hidden[0]}": Hide Other Objects shows it',
+                    f'The lamp is inside "{hidden[0]}" (yours, not moved): Hide Other Objects (Lamp tab) hides '
+                    "the other objects in the viewport; Alt+H shows them again", lead=True)
+    return News("", f"Framed {framed} 3D Views on the lamp") if framed else None
+
+
+def set_up(bl_scene) -> list[News]:
+    """Set the scene up for the lamp after its first build or first lamp (see the module's doc): the
+    camera, the engine and the exposure, once, and the 3D Views framed on it. Returns what changed,
+    for the operator's report (``news_text``, ``news_details``)."""
     news = []
     if not is_set_up(bl_scene):
-        news += [_camera(bl_scene), _engine(bl_scene)]
-        _remember(bl_scene, 0.0 if exposure_is_the_addons(bl_scene) else None)  # None: the user's own exposure
+        news += [_camera(bl_scene), _engine(bl_scene), _first_exposure(bl_scene), _views(bl_scene)]
+        if not is_set_up(bl_scene):
+            _remember(bl_scene, None)  # the user's own exposure, or none measured: kept as it is
     ob = camera.find_lamp_camera(bl_scene)
     if ob is not None:
         lamp_camera.carry_with_root(bl_scene, ob)  # made before the root (Add Lamp, a preset)
-    news.append(follow_design_exposure(bl_scene))
-    return [n for n in news if n]
+    return [n for n in news if n is not None]
 
 
-def news_text(news: list[str]) -> str:
-    """The changes as one clause of a report: "; made ...; render engine ..." ("" for none)."""
-    return "".join(f"; {n}" for n in news)
+def news_text(news: list[News]) -> str:
+    """The changes as short clauses of a report: "; it is inside ...; set up "Lamp Camera", Lamp Tracer,
+    -3.9 EV" ("" for none)."""
+    leads = [n.short for n in news if n.short and n.lead]
+    others = [n.short for n in news if n.short and not n.lead]
+    return "".join(f"; {text}" for text in leads) + ("; set up " + ", ".join(others) if others else "")
 
+
+def news_details(news: list[News]) -> list[str]:
+    """The changes in full, for the Info editor."""
+    return [n.detail for n in news]

@@ -53,8 +53,7 @@ def invalid_design_text(bl_scene: bpy.types.Scene, error: SceneError) -> str:
     if not bl_scene.lamp_design.lamps:
         return "no lamp yet: Add Lamp (Lamp tab, Lamps) or apply a preset"
     built = "objects as last built" if design_root.find_root(bl_scene) is not None else "not built"
-    problem = design_validity.Problem(error.path, error.message)
-    return f"design not valid ({built}); {problem.label()}: {problem.message}"
+    return f"design not valid ({built}); {design_validity.message(bl_scene, error)}"
 
 
 class ViewportSession:

@@ -40,7 +40,7 @@ def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
     from ...core_tracer.study import sheet as study_sheet
 
     exposure = display.auto_exposure(list(images))  # one for every variant, so the cells compare
-    sheet = study_sheet.compose(study, images, exposure=exposure)
+    sheet = study_sheet.compose(settings.worded(study), images, exposure=exposure)  # labels in the panel's words
     image = image_view.show_linear(settings.SHEET_IMAGE, sheet, exposure, context.scene)
     text = study.to_json()
     image[settings.STUDY_PROPERTY] = text
@@ -151,7 +151,7 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
     def escape(self, context):
         self.abandon(context)
         self.end_modal(context)
-        self.report({"WARNING"}, "Lamp Study cancelled")
+        reports.say(self, "WARNING", "Lamp Study cancelled")
         return {"CANCELLED"}
 
     def step(self, context):

@@ -12,6 +12,8 @@ Both the panel (``study.panel``) and the operators (``study.ops``) sit above thi
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
@@ -20,6 +22,7 @@ from ...core_tracer.scene.functions import suggested_values
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from ...core_tracer.study.parameters import study_parameters
+from ..convert import camera as cm
 from ..design import photometric_words
 from ..design import properties as design_properties
 from ..render import camera as render_camera
@@ -157,9 +160,16 @@ def axis_doc(axis) -> dict:
     path = axis.parameter
     if axis.lamp != ALL_LAMPS and is_lamp_parameter(path):
         path = f"lamps[{axis.lamp}].{path}"
-    # Only a single number has a range; the others take the list the panel shows for them.
+    # Only a single number has a range; the others take the list the panel shows for them. The range's
+    # values are rounded to 4 significant digits, so a sheet says "0.7143", not "0.714286", and
+    # renders exactly the values it says.
     if axis.mode == "RANGE" and is_single_number(axis.parameter):
-        return {"parameter": path, "range": [axis.start, axis.stop], "steps": axis.steps}
+        steps = axis.steps
+        values = [axis.start + (axis.stop - axis.start) * i / (steps - 1) for i in range(steps)] if steps > 1 \
+            else [axis.start]
+        if S.lookup(axis.parameter).integer:
+            return {"parameter": path, "range": [axis.start, axis.stop], "steps": axis.steps}
+        return {"parameter": path, "values": [float(f"{v:.4g}") for v in values]}
     if not axis.values.strip():
         raise SceneError(path, "has no values; write them separated by commas")
     return st.parse_vary(f"{path}={axis.values}")
@@ -175,10 +185,44 @@ def study_from_settings(bl_scene) -> st.Study:
     else:  # no scene camera: the design's own camera section
         base = design_properties.design_to_scene(bl_scene)
         base["image"] = {**base["image"], "width": size[0], "height": size[1]}
+    if bl_scene.camera is None or render_camera.is_lamp_camera(bl_scene.camera):
+        # The add-on's own view: each cell frames the lamp's body at the cell's size (a camera of the
+        # designer's own is their choice of view, kept as it is).
+        base["camera"] = cm.frame_view(base["camera"], cm.body_box(base), size)
     axes = [axis_doc(settings.axis_1)]
     if settings.use_axis_2:
         axes.append(axis_doc(settings.axis_2))
     return st.Study.build(base, axes, size)
+
+
+def worded(study: st.Study) -> st.Study:
+    """``study`` with its parameters named in the panel's words for the sheet's labels ("Lens › IOR"
+    over the columns, "Lens IOR=1.5" under a cell; "Lamp 1 › Function" for one lamp's field). The
+    study itself (its JSON, its variants) is unchanged."""
+    from dataclasses import fields, replace
+
+    from ...core_tracer.study.parameters import Parameter
+    from ..design import validity
+
+    @dataclass(frozen=True)
+    class Worded(Parameter):
+        words: str = ""
+
+        @property
+        def short(self) -> str:
+            return self.words
+
+    axes = []
+    for axis in study.axes:
+        p = axis.parameter
+        full = validity.field_words(p.text) or p.text
+        words = [w for w in full.split(validity.SEPARATOR) if not w.startswith("Lamp ")]
+        short = " ".join(words[-2:])  # "Bulb On", "Cuts Height", "Function"
+        if p.component is not None:
+            short += f" {'XYZ'[p.component] if p.component < 3 else p.component}"
+        values = {f.name: getattr(p, f.name) for f in fields(p)}
+        axes.append(replace(axis, parameter=Worded(**{**values, "text": full}, words=short)))
+    return replace(study, axes=tuple(axes))
 
 
 # ---------------------------------------------------------------------------------------------

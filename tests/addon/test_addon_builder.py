@@ -322,7 +322,7 @@ def test_build_operator(lamp_addon, bl_scene, scene_mod):
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     design.lamps[1].center = design.lamps[0].center  # overlapping lenses
-    with pytest.raises(RuntimeError, match=r"lamps\[1\]\.center: lens overlaps"):
+    with pytest.raises(RuntimeError, match=r"Lamp 2 › Center: lens overlaps"):
         bpy.ops.lamp.build()
     assert not any(c.name.startswith("Lamp Design") for c in bl_scene.collection.children)
 

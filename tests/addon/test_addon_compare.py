@@ -209,6 +209,20 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     shown = lamp_addon.convert.sheet.shown_side_by_side(result, None, result["exposure"])
     np.testing.assert_allclose(lamp_addon.image_view.image_to_array(compare_image), shown * np.float32(2 ** -0.5),
                                rtol=1e-6)
+    # The figures over the lens pixels (an independent mask: the tracer's lens-surface pass), and the
+    # third panel: |tracer - Cycles| at the halves' exposure.
+    passes = core_tracer.render_passes(result["scene"]).passes
+    lens = passes["lens_surface"].max(axis=2) > 0
+    diff = result["tracer"][lens].astype(np.float64) - result["cycles"][lens].astype(np.float64)
+    figures = result["lens_differences"]
+    assert figures["pixels"] == int(lens.sum()) > 0.05 * lens.size
+    np.testing.assert_allclose(figures["mean_difference"], diff.mean(axis=0), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(figures["rms_difference"], np.sqrt((diff ** 2).mean(axis=0)), rtol=1e-9)
+    height, width = result["tracer"].shape[:2]
+    gap = max(2, width // 128)
+    third = shown[shown.shape[0] - height:, 2 * (width + gap):]
+    np.testing.assert_allclose(third, np.abs(result["tracer"] - result["cycles"]) * np.float32(2 ** result["exposure"]),
+                               rtol=1e-6, atol=1e-7)
 
 
 @pytest.mark.slow
@@ -374,7 +388,7 @@ def test_compare_operator_reports_design_errors(lamp_addon, bl_scene):
 
     lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=(24, 16)))
     bl_scene.lamp_design.lamps[0].cuts.pitch = 95.0  # larger than the lens
-    with pytest.raises(RuntimeError, match=r"lamps\[0\]\.cuts\.pitch: 95 is larger than the lens"):
+    with pytest.raises(RuntimeError, match=r"Lamp 1 › Cuts › Pitch: 95 is larger than the lens"):
         bpy.ops.lamp.compare_cycles(samples=1)
     assert _handlers_installed(lamp_addon.compare) == [] and lamp_addon.compare.comparison.running() is None
 

@@ -83,7 +83,8 @@ def test_compare_tool_png_shows_both_halves_through_one_transform(tmp_path):
     ev = float(imageio.read_attribute(png, imageio.EXPOSURE_ATTRIBUTE))
     assert imageio.read_attribute(png, imageio.VIEW_ATTRIBUTE) == "Filmic"
     strip = linear.shape[0] - 32
-    tracer, cycles = linear[strip:, :40], linear[strip:, 42:]
+    tracer, cycles, difference = linear[strip:, :40], linear[strip:, 42:82], linear[strip:, 84:]
+    np.testing.assert_allclose(difference, np.abs(tracer - cycles), rtol=1e-6, atol=1e-7)  # the third panel
     assert ev == display.auto_exposure([tracer, cycles]) < -2  # measured over both halves together
     codes = np.asarray(oiio.ImageBuf(str(png)).get_pixels(oiio.UINT8))[..., :3].astype(int)
     view = display.view_transform("Filmic")

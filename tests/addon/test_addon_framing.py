@@ -232,7 +232,7 @@ def test_applying_a_preset_to_a_built_lamp_rebuilds_it(lamp_addon, bl_scene):
     lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
     report = lamp_addon.presets.apply.apply_preset(bl_scene, core_tracer.load_scene(str(FOUR_LAMPS)))
-    assert "rebuilt the lamp objects" in report
+    assert "Rebuilt the lamp objects" in report.details
     lenses = [ob for ob in bl_scene.objects if str(ob.get("lamp_part", "")).endswith(".lens")]
     assert len(lenses) == 4  # the objects are the preset's
 

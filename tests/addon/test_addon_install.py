@@ -51,6 +51,7 @@ def test_zip_contents(built_zip):
         assert required in names
     presets = {p.name for p in (ROOT / "presets").glob("*.json")}
     assert presets and {f"presets/{p}" for p in presets} <= names  # the built-in presets travel
+    assert "presets/freeform-sculpted-wrap-lamp.glb" in names  # with the free-form example's meshes
     thumbnails = {p.name for p in (ROOT / "presets" / "thumbnails").glob("*.png")}
     assert len(thumbnails) == len(presets) and {f"presets/thumbnails/{t}" for t in thumbnails} <= names
     for name in names:

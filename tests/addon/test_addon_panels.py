@@ -557,7 +557,7 @@ def test_validity_is_checked_once_per_design(lamp_addon, addon_core, bl_scene, m
     design = _baseline(lamp_addon, addon_core, bl_scene)
     calls = []
     real = validity._check
-    monkeypatch.setattr(validity, "_check", lambda doc, active: calls.append(1) or real(doc, active))
+    monkeypatch.setattr(validity, "_check", lambda *args: calls.append(1) or real(*args))
     validity._memo.update(key=None, status=None)
     for _ in range(5):
         _status(bl_scene)
@@ -662,8 +662,8 @@ def test_tooltips_say_what_a_field_does_first(lamp_addon, bl_scene):
     assert bl_scene.lamp_design.design_name == "Saved before"
     assert lamp_addon.design.properties.design_document(bl_scene)["name"] == "Saved before"
     body = bl_scene.lamp_design.body.bl_rna.properties
-    assert body["specular"].description.startswith(
-        "How strongly the body reflects the light as a highlight (w in eq. 1)")
+    assert body["specular"].description == ("How strongly the body reflects the light as a highlight. Allowed: "
+                                            "from 0 to 1. Paper: w in eq. 1")  # the paper's symbol last
 
 
 def test_the_bulb_panel_states_where_the_bulb_fits(lamp_addon, addon_core, bl_scene):

@@ -24,16 +24,21 @@ def _state(lamp_addon, bl_scene) -> dict:
 
 @pytest.fixture
 def failing_after_changes(lamp_addon, monkeypatch):
-    """``show_view`` makes the Lamp Camera (as it does), then fails as a broken file or a Blender
-    failure would, after the design has been written."""
+    """``show_view`` (or, in a file not yet set up, ``set_up``) makes the Lamp Camera (as it does), then
+    fails as a broken file or a Blender failure would, after the design has been written."""
     ops = lamp_addon.presets.apply
-    real = ops.show_view
+    real_view, real_set_up = ops.show_view, ops.render_setup.set_up
 
     def show_view_then_fail(bl_scene, scene):
-        real(bl_scene, scene)
+        real_view(bl_scene, scene)
+        raise ValueError("negative image size in the header")
+
+    def set_up_then_fail(bl_scene):
+        real_set_up(bl_scene)
         raise ValueError("negative image size in the header")
 
     monkeypatch.setattr(ops, "show_view", show_view_then_fail)
+    monkeypatch.setattr(ops.render_setup, "set_up", set_up_then_fail)
     return ops
 
 

@@ -8,7 +8,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, whole_report
 from hostile_presets import leaves, make_hostile_folder
 
 pytestmark = pytest.mark.blender
@@ -198,7 +198,7 @@ def _design(props, bl_scene) -> dict:
 
 
 @pytest.mark.slow
-def test_apply_is_all_or_nothing(browser, add_library, bl_scene, tmp_path):
+def test_apply_is_all_or_nothing(browser, add_library, bl_scene, tmp_path, capfd):
     import bpy
 
     props = browser.design.properties
@@ -220,8 +220,10 @@ def test_apply_is_all_or_nothing(browser, add_library, bl_scene, tmp_path):
 
     (team / "changed-after-listing.json").write_text(json.dumps(doc).replace('"ior": 1.49', '"ior": 0.5'))
     select(wm, "changed-after-listing.json")
-    with pytest.raises(RuntimeError, match=r"lamps\[0\]\.lens\.ior: 0.5 is out of range"):
+    capfd.readouterr()
+    with pytest.raises(RuntimeError) as raised:
         bpy.ops.lamp.preset_apply()
+    assert "lamps[0].lens.ior: 0.5 is out of range" in whole_report(str(raised.value), capfd.readouterr().out)
     assert _design(props, bl_scene) == before
 
     select(wm, "deleted-after-listing.json")
@@ -351,7 +353,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     # changes the render size: the preset records that view, not the design's camera section.
     select(refresh(), "paper-lens-color.json")
     assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
-    assert "made the scene camera \"Lamp Camera\" at its view" in capfd.readouterr().out
+    assert "Made the scene camera \"Lamp Camera\" at its view" in capfd.readouterr().out
     design_camera = props.design_to_scene(bl_scene)["camera"]
     _move_camera(bl_scene.camera, (0.25, -1.4, 0.18), (82.0, 0.0, 9.5), 62.0)
     bl_scene.render.resolution_x, bl_scene.render.resolution_y, bl_scene.render.resolution_percentage = 160, 90, 50
@@ -457,9 +459,10 @@ def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(bro
     assert saved["camera"]["position"] == pytest.approx([0.0, -800.0, 0.0], abs=1e-4)  # where Studio is
 
 
-def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene, tmp_path):
-    """Huge numbers, lone surrogates, repeated keys...: each import is refused with the field named, and
-    the design stays as it was."""
+def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene, tmp_path, capfd):
+    """Huge numbers, lone surrogates, repeated keys...: each import is refused with the field named (in
+    the one-line error, or, when that is cut to one line, whole in the Info editor), and the design
+    stays as it was."""
     import bpy
 
     good, bad = make_hostile_folder(tmp_path / "hostile")
@@ -474,9 +477,14 @@ def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene,
         path = tmp_path / "hostile" / name
         if not path.is_file() or path.is_symlink() or name == "huge.json":
             continue
+        capfd.readouterr()
         with pytest.raises(RuntimeError) as info:
             bpy.ops.lamp.preset_import(filepath=str(path))
-        text = str(info.value)
+        error = str(info.value)
+        assert len(error.strip().removeprefix("Error: ")) <= browser.reports.LINE
+        info_lines = [line.removeprefix("Info: ") for line in capfd.readouterr().out.splitlines()
+                      if line.startswith("Info: ")]
+        text = whole_report(error, "\n".join(f"Info: {line}" for line in info_lines))
         assert "Not imported" in text and "Traceback" not in text, text
         assert printable(name) in text
         for needle in needles:

@@ -5,13 +5,14 @@ from __future__ import annotations
 import copy
 import json
 import math
+import re
 
 import pytest
-from helpers import PRESETS as PRESET_FOLDER
+from helpers import PARAMETRIC_PRESETS
 
 pytestmark = pytest.mark.blender
 
-PRESETS = sorted(PRESET_FOLDER.glob("*.json"))
+PRESETS = PARAMETRIC_PRESETS
 
 
 @pytest.fixture
@@ -44,7 +45,12 @@ def test_every_spec_field_is_a_property(lamp_addon, S):
         if lamp_addon.design.properties.is_constant(info.spec):
             continue
         rna = _group_rna(lamp_addon, info.path)
-        assert rna.description.startswith(info.spec.doc), info.path
+        words = lamp_addon.design.words
+        assert rna.description.startswith(words.designer_text(info.spec.doc).partition(". Paper: ")[0]), info.path
+        if not isinstance(info.spec, S.Tags):
+            assert rna.description == words.tooltip(info.spec), info.path
+        assert not re.search(r"\b[a-z]+_[a-z0-9_]+\b|[\[(]-?[0-9.e+]+, -?[0-9.e+]+[\])]", rna.description), (
+            info.path, rna.description)  # no snake_case, no interval notation
         if isinstance(info.spec, S.Num):
             kind = "INT" if info.spec.integer else "FLOAT"
             assert rna.type == kind, info.path

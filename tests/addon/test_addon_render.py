@@ -11,12 +11,13 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
 import numpy as np
 import pytest
-from helpers import BASELINE, ROOT, render_engine_exr
+from helpers import BASELINE, ROOT, render_engine_exr, whole_report
 
 import core_tracer
 import core_tracer.raytrace.camera  # the projection tests use it; the package loads its modules lazily
@@ -342,7 +343,7 @@ def test_engine_reports_design_errors_without_traceback(lamp_addon, bl_scene, tm
     _load_design(lamp_addon, bl_scene, _preset_scene(size=(16, 16)))
     bl_scene.camera.location.y = 0.5  # behind the lamp's front
     bl_scene.render.engine = "LAMP_TRACER"
-    with pytest.raises(RuntimeError, match=r"Lamp Tracer: camera.position: y = 500(\.0)? is not in front"):
+    with pytest.raises(RuntimeError, match=r"Lamp Tracer: Camera & Image › Position: y = 500(\.0)? is not in front"):
         bpy.ops.render.render()
     bl_scene.render.image_settings.file_format = "OPEN_EXR"
     bpy.data.images["Render Result"].save_render(str(tmp_path / "black.exr"), scene=bl_scene)
@@ -501,7 +502,7 @@ def test_engine_contribution_passes_are_black_after_a_design_error(lamp_addon, b
     bl_scene.view_layers["ViewLayer"].lamp_contribution_passes = True
     bl_scene.render.film_transparent = True
     bl_scene.camera.location.y = 0.5  # behind the lamp's front
-    with pytest.raises(RuntimeError, match=r"Lamp Tracer: camera.position"):
+    with pytest.raises(RuntimeError, match=r"Lamp Tracer: Camera & Image › Position"):
         _render_multilayer_exr(bl_scene, tmp_path / "unused.exr")
     path = tmp_path / "black.exr"
     bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
@@ -687,10 +688,11 @@ def test_headless_job_writes_the_side_by_side_image(tmp_path):
     done = _run_tool([PRESET, "-o", str(out), "--samples", "2", "--size", "40x32"], tmp_path)
     assert done.returncode == 0, done.stderr
     image, scene = imageio.read_image(out)
-    assert image.shape[1] == 2 * 40 + 2 and image.shape[0] > 32
+    assert image.shape[1] == 3 * 40 + 2 * 2 and image.shape[0] > 32  # tracer, Cycles, |difference|
     assert scene["image"] == {"width": 40, "height": 32, "samples": 1}
     assert "Lamp Tracer:  40x32 in" in done.stdout and "2 samples per pixel" in done.stdout
     assert "mean difference" in done.stdout
+    assert "lens mean difference" in done.stdout and "lens RMS difference" in done.stdout
 
 
 @pytest.mark.slow
@@ -707,7 +709,7 @@ def test_headless_job_bad_input_is_one_line_and_exit_2(tmp_path, args, message):
 
 
 @pytest.mark.slow
-def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
+def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path, capfd):
     import bpy
 
     scene = _preset_scene(size=(32, 24))
@@ -722,8 +724,11 @@ def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path):
     # Too many eye rays for one render: refused with the field and the range, as in the CLI.
     bl_scene.render.resolution_x = bl_scene.render.resolution_y = 4096
     bl_scene.lamp_design.image.samples = 256
-    with pytest.raises(RuntimeError, match=r"image\.samples: .* 1 to 64 samples"):
+    capfd.readouterr()
+    with pytest.raises(RuntimeError) as raised:
         bpy.ops.render.render()
+    assert re.search(r"Camera & Image › Samples: .* 1 to 64 samples", whole_report(str(raised.value),
+                                                                             capfd.readouterr().out))
 
 
 def test_engine_film_transparent_alpha_is_the_covered_fraction_with_samples(lamp_addon, bl_scene, tmp_path):

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import sys
 
 import numpy as np
 import pytest
-from helpers import BASELINE
+from helpers import BASELINE, whole_report
 
 import core_tracer
 from core_tracer.images import display
@@ -56,7 +57,8 @@ def test_run_study_operator_makes_the_sheet_image(design, lamp_addon):
     study = lamp_addon.study.settings.last_study()
     assert len(study) == 2 and study.size == (32, 32)
     # The sheet in Blender has the layout core_tracer computes, and each cell is the variant's render.
-    lay = study_sheet.layout(st.Study.from_json(study.to_json()))
+    # (labelled in the panel's words: ``study.settings.worded``)
+    lay = study_sheet.layout(lamp_addon.study.settings.worded(st.Study.from_json(study.to_json())))
     assert tuple(image.size) == (lay.width, lay.height)
     pixels = lamp_addon.image_view.image_to_array(image)
     renders = [core_tracer.render(v.scene, 32, 32) for v in study.variants]
@@ -167,7 +169,8 @@ def test_a_study_of_lamp_types_runs_in_blender(design, lamp_addon):
     assert study.variants[5].label(study) == "cuts.type=flutes  collection=prism_plate"
     # The cells of the sheet differ from each other (mean absolute difference over 5 % of their mean).
     pixels = lamp_addon.image_view.image_to_array(bpy.data.images["Lamp Study"])
-    cells = [pixels[r.y:r.y + r.h, r.x:r.x + r.w] for r in study_sheet.layout(study).cells]
+    lay = study_sheet.layout(lamp_addon.study.settings.worded(study))
+    cells = [pixels[r.y:r.y + r.h, r.x:r.x + r.w] for r in lay.cells]
     for a in range(len(cells)):
         for b in range(a):
             assert np.abs(cells[a] - cells[b]).mean() > 0.05 * 0.5 * (cells[a].mean() + cells[b].mean()), (a, b)
@@ -177,14 +180,35 @@ def test_a_study_of_lamp_types_runs_in_blender(design, lamp_addon):
     assert (lamp["cuts"]["type"], lamp["collection"]) == ("sawtooth", "prism_plate")
 
 
-def test_a_combination_the_scene_refuses_is_reported_without_rendering(design, lamp_addon):
+def test_a_combination_the_scene_refuses_is_reported_without_rendering(design, lamp_addon, capfd):
     import bpy
 
     settings = design.lamp_study
     settings.axis_1.parameter = "collection"
     settings.use_axis_2 = True
     settings.axis_2.parameter = "lens.outline"
-    with pytest.raises(RuntimeError, match=r"lamps\[0\]\.lens\.outline: a prism plate sits behind a round lens; "
-                                           r"allowed \"round\".*collection=prism_plate, lens\.outline=rectangular"):
+    capfd.readouterr()
+    with pytest.raises(RuntimeError) as raised:
         bpy.ops.lamp.study_run()
+    assert re.search(r"lamps\[0\]\.lens\.outline: a prism plate sits behind a round lens; allowed \"round\".*"
+                     r"collection=prism_plate, lens\.outline=rectangular",
+                     whole_report(str(raised.value), capfd.readouterr().out))
     assert "Lamp Study" not in bpy.data.images
+
+
+def test_sheet_labels_use_panel_words_and_rounded_values(design, lamp_addon):
+    """A range of 4 steps from 0.5 to 1.5 gives 0.8333, not 0.833333; the sheet names the fields as the
+    panel does (the study's own JSON keeps the paths)."""
+    settings = design.lamp_study
+    settings.axis_1.parameter = "cuts.height"
+    settings.axis_1.mode, settings.axis_1.start, settings.axis_1.stop, settings.axis_1.steps = "RANGE", 0.5, 1.5, 4
+    settings.use_axis_2 = True
+    settings.axis_2.parameter, settings.axis_2.mode, settings.axis_2.values = "bulb.on", "LIST", "on, off"
+    settings.axis_2.lamp = "0"
+    study = lamp_addon.study.settings.study_from_settings(design)
+    assert study.axes[0].values == (0.5, 0.8333, 1.167, 1.5)
+    lay = study_sheet.layout(lamp_addon.study.settings.worded(study))
+    texts = [box.text for box in lay.texts]
+    assert "Cuts Height=0.8333" in texts and "Bulb On=off" in texts
+    assert any("columns: Cuts › Height" in t and "rows: Lamp 1 › Bulb › On" in t for t in texts), texts
+    assert [a.parameter.text for a in study.axes] == ["cuts.height", "lamps[0].bulb.on"]

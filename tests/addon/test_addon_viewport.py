@@ -409,12 +409,12 @@ def test_the_viewport_says_why_an_invalid_design_shows_nothing(lamp_addon, bl_sc
     session.sync(bl_scene, 64, 48, _window_matrix(ob, 64, 48), ob.matrix_world.inverted())
     assert session.preview.generation == 0 and session.preview.frame() is None
     status = session.status()
-    assert status.startswith("Lamp Tracer: design not valid (not built); Lamp 1 Bulb: Radius: "), status
+    assert status.startswith("Lamp Tracer: design not valid (not built); Lamp 1 › Bulb › Radius: "), status
     assert "mm" in status.split("Radius: ", 1)[1]  # the allowed range, in mm
 
     lamp_addon.design.builder.build_lamp(bl_scene, _four_lamps())  # built before the bad edit
     session.update(bl_scene)
-    assert session.status().startswith("Lamp Tracer: design not valid (objects as last built); Lamp 1 Bulb")
+    assert session.status().startswith("Lamp Tracer: design not valid (objects as last built); Lamp 1 › Bulb")
     bl_scene.lamp_design.lamps.clear()
     session.update(bl_scene)
     assert session.status() == "Lamp Tracer: no lamp yet: Add Lamp (Lamp tab, Lamps) or apply a preset"
