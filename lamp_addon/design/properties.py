@@ -229,7 +229,7 @@ def _worded_property(key: str, spec: S.Spec, section: S.Section):
     if isinstance(spec, S.Choice):
         items = tuple((c, *photometric_words.choice_item(c, display_name(c))) for c in spec.choices)
         update = _bulb_type_chosen if section is S.BULB and key == "type" else _edited
-        return EnumProperty(name=name, description=spec.doc, items=items, default=spec.default, update=update)
+        return EnumProperty(name=name, description=_description(spec), items=items, default=spec.default, update=update)
     if isinstance(spec, S.Num):
         return _num_property(key, spec, name=name)
     if isinstance(spec, S.Text):

@@ -202,6 +202,16 @@ def _design_camera(bl_scene) -> dict | None:
         return None
 
 
+def _image_up(cam: dict) -> list[float]:
+    """The camera's up as the image shows it: ``up`` made square to the view direction, unit length."""
+    d = [t - p for t, p in zip(cam["target"], cam["position"], strict=True)]
+    d = [c / (math.hypot(*d) or 1.0) for c in d]
+    u = cam["up"]
+    along = sum(p * q for p, q in zip(u, d, strict=True))
+    u = [p - along * q for p, q in zip(u, d, strict=True)]
+    return [c / (math.hypot(*u) or 1.0) for c in u]
+
+
 def same_view(a: dict, b: dict) -> bool:
     """Whether two normalised camera sections show the same view, up to Blender's single precision."""
     if (a["type"], a["sensor_fit"]) != (b["type"], b["sensor_fit"]):
@@ -210,6 +220,8 @@ def same_view(a: dict, b: dict) -> bool:
     sizes = {"position": reach, "target": reach, "width": reach, "up": 1.0, "fov_deg": 180.0, "shift": 1.0}
     for key, size in sizes.items():
         x, y = (v if isinstance(v, list) else [v] for v in (a[key], b[key]))
+        if key == "up":  # the image's up: the design may give it unnormalised or not square to the view
+            x, y = _image_up(a), _image_up(b)
         if not all(abs(p - q) <= SAME_VIEW * size for p, q in zip(x, y, strict=True)):
             return False
     return all(a[key] == b[key] for key in a if key not in sizes and key in b)

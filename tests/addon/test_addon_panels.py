@@ -138,6 +138,8 @@ def draw(cls, bl_scene) -> RecordingLayout:
                               engine=bl_scene.render.engine, view_layer=bl_scene.view_layers[0])
     if hasattr(cls, "poll"):
         assert cls.poll(context)
+    if hasattr(cls, "draw_header"):  # a switch in the header (Glare's), as Blender's own effects have
+        cls.draw_header(PanelProxy(cls, layout), context)
     cls.draw(PanelProxy(cls, layout), context)
     return layout
 
@@ -354,7 +356,9 @@ def test_lengths_are_labelled_in_mm(lamp_addon, S, bl_scene, design, mode, colle
             if "index" in kw:  # one channel of absorption: "Absorption (1/mm) R", "G", "B"
                 assert kw["text"] in (f"{rna.name} R", "G", "B"), (path, kw["text"])
             else:
-                assert "text" not in kw, path  # the property's own name (with its unit) is shown
+                header_switch = hasattr(cls, "draw_header") and rna.type == "BOOLEAN" and kw.get("text") == ""
+                assert "text" not in kw or header_switch, path  # the property's own name (with its unit) is shown,
+                # or a switch in the panel's header, named by the panel's title (Glare)
             if getattr(spec, "unit", "") == "mm":
                 assert rna.name.endswith("(mm)"), (path, rna.name)
 

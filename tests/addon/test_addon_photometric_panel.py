@@ -92,7 +92,7 @@ def test_a_wrong_filament_is_named_in_panel_words(lamp_addon, addon_core, bl_sce
     lamp_addon.design.properties.write_section(bulb, addon_core.scene.spec.BULB, {"type": "R5W"})  # as a script
     problem = lamp_addon.design.validity.status(bl_scene).problem
     assert problem is not None and problem.path == "lamps[0].bulb.state"
-    assert problem.label() == "Lamp 1 Bulb: Filament"
+    assert problem.label() == "Lamp 1 › Bulb › Filament"
     assert "R5W" in problem.message and '"on"' in problem.message
 
 
