@@ -92,7 +92,10 @@ def test_a_wrong_filament_is_named_in_panel_words(lamp_addon, addon_core, bl_sce
     lamp_addon.design.properties.write_section(bulb, addon_core.scene.spec.BULB, {"type": "R5W"})  # as a script
     problem = lamp_addon.design.validity.status(bl_scene).problem
     assert problem is not None and problem.path == "lamps[0].bulb.state"
-    assert problem.label() == "Lamp 1 › Bulb › Filament"
+    # The field just changed is the one to change back (issue 24: the highlighted field fixes it); the
+    # rule's own field, the filament, is named in the message as the second way out.
+    assert problem.label() == "Lamp 1 › Bulb › Bulb Type"
+    assert "Lamp 1 › Bulb › Filament" in problem.text()
     assert "R5W" in problem.message and '"on"' in problem.message
 
 
