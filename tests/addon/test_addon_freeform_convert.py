@@ -234,13 +234,11 @@ def test_parametric_equals_mixed(lamp_addon, addon_core, bl_scene, path):
 
 
 def test_a_photometric_design_is_refused_by_the_freeform_tracer(lamp_addon, addon_core, bl_scene):
-    """Not a traceback and not a paper-mode image in disguise: one line naming the light model."""
-    import bpy
-
+    """A photometric design converted to free-form parts and traced: one line naming the light model, not a traceback
+    and not a paper-mode image in disguise."""
     assert PHOTOMETRIC
     design = _design(lamp_addon, addon_core, bl_scene, PHOTOMETRIC[0])
-    lamp_addon.design.builder.build_lamp(bl_scene, design)
     with pytest.raises(addon_core.SceneError) as err:
-        prepared = lamp_addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(), design)
-        lamp_addon.freeform.render.render_passes(prepared, 8, 8)
+        lamp_addon.freeform.conversion.convert_to_freeform(bl_scene)
+        _freeform_image(lamp_addon, bl_scene, design)
     assert "light_model" in str(err.value) and "\n" not in str(err.value)
