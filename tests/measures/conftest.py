@@ -37,3 +37,14 @@ def bare_bulb(repo_root, monkeypatch) -> dict:
     black cup, seen through a window."""
     monkeypatch.setattr(spectral, "finish_reflectance", lambda reflector, bands: np.zeros(bands.k))
     return parse_scene(paraboloid_document(repo_root))
+
+
+@pytest.fixture(scope="session")
+def colour():
+    """colour-science, the independent estimator of the colour tests (as tests/photometry/conftest.py)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import colour as colour_module
+    return colour_module
