@@ -64,27 +64,35 @@ def gonio_direction(c_deg: float, gamma_deg: float) -> np.ndarray:
     return np.array([math.sin(g) * math.cos(c), -math.cos(g), math.sin(g) * math.sin(c)])
 
 
-def measure_distribution(scene: dict, lamps: Sequence[int] | None = None, *, c_step: float = 30.0,
-                         gamma_step: float = 10.0, gamma_max: float = 90.0, name: str = "lamp",
+def measure_distribution(scene: dict, lamps: Sequence[int] | None = None, *, name: str = "lamp",
                          **options) -> Distribution:
-    """The intensity of ``lamps`` (None: all) on a (C, γ) grid by rendered views
-    (``intensity.rendered_intensities``; ``options`` as it takes them)."""
+    """The intensity of ``lamps`` (None: all) on a (C, γ) grid (``measure_distributions``)."""
+    return measure_distributions(scene, {name: None if lamps is None else list(lamps)}, **options)[name]
+
+
+def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], *, c_step: float = 30.0,
+                          gamma_step: float = 10.0, gamma_max: float = 90.0, **options) -> dict[str, Distribution]:
+    """The intensity of each named group of lamps (None: all) on a (C, γ) grid, by rendered views
+    (``intensity.rendered_intensities``, one render per direction for every group; ``options`` as it
+    takes them)."""
     for what, value, lo, hi in (("C step", c_step, 1.0, 180.0), ("γ step", gamma_step, 1.0, 90.0),
                                 ("γ max", gamma_max, 1.0, 90.0)):
         if not (math.isfinite(value) and lo <= value <= hi):
             raise ValueError(f"{what}: {value!r} degrees is outside {lo:g} to {hi:g}")
     c = np.arange(0.0, 360.0 - 1e-9, c_step)
     gamma = np.arange(0.0, gamma_max + 1e-9, gamma_step)
-    group = None if lamps is None else [list(lamps)]
-    cd = np.zeros((len(c), len(gamma)))
+    names = list(groups)
+    lamp_lists = [list(range(len(scene["lamps"]))) if groups[n] is None else list(groups[n]) for n in names]
+    cd = np.zeros((len(names), len(c), len(gamma)))
     for j, g in enumerate(gamma):
         for i, ci in enumerate(c):
             if g == 0.0 and i > 0:  # every C plane meets at the axis
-                cd[i, j] = cd[0, j]
+                cd[:, i, j] = cd[:, 0, j]
                 continue
             h, v = angles_of(gonio_direction(float(ci), float(g)))
-            cd[i, j] = rendered_intensities(scene, float(h), float(v), group, **options)[0].cd
-    return Distribution(c, gamma, cd, lamp_flux(scene, lamps), name)
+            for k, value in enumerate(rendered_intensities(scene, float(h), float(v), lamp_lists, **options)):
+                cd[k, i, j] = value.cd
+    return {n: Distribution(c, gamma, cd[k], lamp_flux(scene, lamp_lists[k]), n) for k, n in enumerate(names)}
 
 
 def lamp_flux(scene: dict, lamps: Sequence[int] | None = None) -> float:
