@@ -1,0 +1,75 @@
+"""``measure SCENE.json -o report/``: the measures a lamp engineer signs (docs/measures.md)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+from ..fileio import atomic_folder, check_replaceable_folder
+from ..scene.reading import SceneError
+from ..scene.safe_text import printable
+from .common import load_scene_file
+
+HELP = "measure a photometric design: intensity grids (UN R148, FMVSS 108), colour, homogeneity, IES/LDT, report"
+OUTPUTS = ("measures.json", "measures.png")
+FUNCTION_NAMES = ("tail", "stop", "turn", "reversing")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scene", metavar="SCENE.json", help="a photometric scene file")
+    parser.add_argument("-o", "--output", required=True, metavar="DIR",
+                        help="folder for measures.json, measures.png and one .ies and .ldt per function")
+    parser.add_argument("--function", action="append", default=[], metavar="LAMP=NAME",
+                        help="what lamp LAMP (from 0) is for, one of tail, stop, turn, reversing (default: its "
+                             "function field, or for a custom lamp its lens filter and bulb filament)")
+    parser.add_argument("--pixel-mm", type=float, default=2.0, metavar="MM",
+                        help="pixel size of the measuring views in mm (default 2)")
+    parser.add_argument("--replicates", type=int, default=2, metavar="N",
+                        help="shifted renders per direction, for the standard error (default 2)")
+    parser.add_argument("--distance-m", type=float, default=10.0, metavar="M",
+                        help="viewing distance for the homogeneity figures (default 10 m: the eye resolves 2.9 mm)")
+    parser.add_argument("--no-beam-files", action="store_true", help="skip the IES and EULUMDAT files")
+
+
+def _functions(values: list[str], lamps: int) -> dict[int, str]:
+    out = {}
+    for value in values:
+        lamp, _, name = value.partition("=")
+        if not lamp.isdigit() or int(lamp) >= lamps or name not in FUNCTION_NAMES:
+            raise SceneError("--function", f"{printable(value)!r} is not LAMP=NAME; allowed LAMP from 0 to "
+                                           f"{lamps - 1} and NAME one of {', '.join(FUNCTION_NAMES)}")
+        out[int(lamp)] = name
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    for option, value, lo, hi in (("--pixel-mm", args.pixel_mm, 0.05, 20.0), ("--replicates", args.replicates, 1, 64),
+                                  ("--distance-m", args.distance_m, 0.1, 1000.0)):
+        if not (lo <= value <= hi):
+            raise SceneError(option, f"{value!r} is outside the allowed {lo:g} to {hi:g}")
+    check_replaceable_folder(args.output, _ours, "measures")
+    scene = load_scene_file(args.scene)
+    functions = _functions(args.function, len(scene["lamps"]))
+    from ..measures import export, report  # numpy, the tracer and matplotlib: loaded once the input is checked
+
+    result = report.measure(scene, functions=functions, pixel_mm=args.pixel_mm, replicates=args.replicates,
+                            distance_m=args.distance_m, progress=lambda text: print(text, flush=True))
+    picture = report.lamp_picture(scene)
+    with atomic_folder(args.output, _ours, "measures") as folder:
+        if not args.no_beam_files:
+            print("beam files: a (C, γ) sweep of 30° × 10°", flush=True)
+            beams = export.measure_distributions(scene, result.functions, pixel_mm=args.pixel_mm, replicates=1)
+            for name, dist in beams.items():
+                export.write_ies(dist, os.path.join(folder, f"{name}.ies"))
+                export.write_ldt(dist, os.path.join(folder, f"{name}.ldt"))
+        report.write_json(result, os.path.join(folder, "measures.json"))
+        report.write_page(result, os.path.join(folder, "measures.png"), picture)
+    verdicts = result.verdicts()
+    failing = [k for k, ok in verdicts.items() if not ok]
+    print(f"{printable(args.output)}: {'fails ' + ', '.join(failing) if failing else 'passes every check'} "
+          f"({sum(verdicts.values())} of {len(verdicts)} regulations pass)")
+    return 0
+
+
+def _ours(name: str) -> bool:
+    return name in OUTPUTS or name.endswith((".ies", ".ldt"))
