@@ -394,7 +394,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     capfd.readouterr()
     select(refresh(), "paper-baseline.json", "Built-in")
     assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
-    assert "moved \"Lamp Camera\" to its view" in capfd.readouterr().out
+    assert "Moved \"Lamp Camera\" to the preset's view" in capfd.readouterr().out
     _assert_camera_shows(camera, scene, props.design_to_scene(scene))
 
 
