@@ -21,6 +21,8 @@ def _tables(text: str) -> dict[str, list[list[str]]]:
     for line in text.splitlines():
         if line.startswith("### "):
             heading = line[4:].strip()
+        elif line.startswith("## "):
+            heading = None
         elif line.startswith("|") and heading is not None and not re.match(r"^\|[-| ]+\|$", line):
             out.setdefault(heading, []).append([c.strip() for c in line.strip("|").split("|")])
     return out
