@@ -34,6 +34,12 @@ def remember(outcome: Outcome) -> None:
     _last[:] = [outcome]
 
 
+@bpy.app.handlers.persistent
+def _forget(*_args) -> None:
+    """A file opened (or a new one): the last optimisation was another file's, not shown here."""
+    _last.clear()
+
+
 class LAMP_PG_optimise(bpy.types.PropertyGroup):
     file: StringProperty(name="File", subtype="FILE_PATH", default="",
                          description="The optimisation, a lamp-optimise/1 JSON file (docs/cluster.md); without a "
@@ -50,10 +56,14 @@ class LAMP_PG_optimise(bpy.types.PropertyGroup):
     def register(cls):
         bpy.types.Scene.lamp_optimise = PointerProperty(type=cls, name="Lamp Optimisation",
                                                         description="Settings of the design optimisation")
+        if _forget not in bpy.app.handlers.load_post:
+            bpy.app.handlers.load_post.append(_forget)
 
     @classmethod
     def unregister(cls):
         del bpy.types.Scene.lamp_optimise
+        if _forget in bpy.app.handlers.load_post:
+            bpy.app.handlers.load_post.remove(_forget)
 
 
 classes = (LAMP_PG_optimise,)
