@@ -168,17 +168,21 @@ def view_for(args: argparse.Namespace) -> display.ViewTransform:
     return view
 
 
-def _exposure(text: str) -> float | str:
+def _auto_or_number(text: str, lo: float, hi: float, unit: str = "") -> float | str:
+    """An argparse type for ``EV|auto`` options: "auto", or a finite number in [lo, hi]."""
     if text.strip().lower() == "auto":
         return "auto"
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number or auto") from None
-    if not math.isfinite(value) or abs(value) > display.MAX_EXPOSURE:
-        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed auto or [-{display.MAX_EXPOSURE:g}, "
-                                         f"{display.MAX_EXPOSURE:g}] stops")
+    if not (math.isfinite(value) and lo <= value <= hi):
+        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed auto or [{lo:g}, {hi:g}]{unit}")
     return value
+
+
+def _exposure(text: str) -> float | str:
+    return _auto_or_number(text, -display.MAX_EXPOSURE, display.MAX_EXPOSURE, " stops")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -203,15 +207,8 @@ def add_photometric_arguments(parser: argparse.ArgumentParser, false_colour: boo
 
 
 def _ev100(text: str) -> float | str:
-    if text.strip().lower() == "auto":
-        return "auto"
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number or auto") from None
-    if not (math.isfinite(value) and -20.0 <= value <= 30.0):
-        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed auto or [-20, 30]")
-    return value
+    ev100 = S.CAMERA.fields["ev100"]  # the range the scene's camera.ev100 accepts
+    return _auto_or_number(text, ev100.lo, ev100.hi)
 
 
 def _luminance_range(text: str) -> tuple[float, float]:
