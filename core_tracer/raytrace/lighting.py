@@ -20,7 +20,8 @@ class Lighting:
 
     ``channels`` are the colour columns the rays carry: R, G, B in the paper mode, the wavelength
     bands in the photometric one (``photometric``, ``spectral.Photometric``; None in the paper
-    mode), whose environment is scaled to cd/m² and whose background is black."""
+    mode), whose environment is scaled to cd/m² and whose background is black. The passes hold
+    ``pass_channels``: R, G, B, or X, Y, Z, each leaf's bands turned to XYZ as it is added."""
 
     def __init__(self, scene: dict, bands: int | None = None):
         self.environment = environment.from_scene(scene)
@@ -30,6 +31,7 @@ class Lighting:
             self.sun = self.sun.under_surroundings()
         self.background = np.asarray(scene["background"], dtype=np.float64)
         self.channels = 3  # R, G, B
+        self.pass_channels = 3  # what the passes hold: R, G, B; photometric: X, Y, Z (``Band.add``)
         self.photometric = None
         if scene.get("light_model", "paper") == "photometric":
             self.photometric = spectral.setup(scene, bands, self.sun.direction)

@@ -141,7 +141,8 @@ class Band:
 
     def __init__(self, n_pixels: int, ctx, acc: np.ndarray | None = None):
         self.n = n_pixels
-        self.acc = np.zeros((len(PASS_NAMES), n_pixels, ctx.channels)) if acc is None else acc
+        self.acc = np.zeros((len(PASS_NAMES), n_pixels, ctx.pass_channels)) if acc is None else acc
+        self.to_xyz = ctx.to_xyz  # (K, 3): a photometric leaf's bands to X, Y, Z as added; None: kept (R, G, B)
         self.segments = 0
         self.max_depth = 0
         self.busy = 0  # pixels that took every sample (adaptive sampling)
@@ -149,7 +150,13 @@ class Band:
         self.record = ctx.record  # whether the render records path transitions (its context's flag)
 
     def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
-        add_to_pass(self.acc[pass_id], pix, values)
+        """Add ``values`` (N, C) to the pixels ``pix`` of a pass: R, G, B as they are; photometric
+        bands (N, K) as X, Y, Z, so that passes, samples and adaptive sampling work on 3 channels."""
+        add_to_pass(self.acc[pass_id], pix, self.in_pass(values))
+
+    def in_pass(self, values: np.ndarray) -> np.ndarray:
+        """Leaf values (N, C) as a pass holds them: photometric bands turned to X, Y, Z in cd/m²."""
+        return values if self.to_xyz is None else values @ self.to_xyz
 
     def note(self, pix: np.ndarray, parent: np.ndarray, branch: np.ndarray, child: np.ndarray) -> None:
         """Record the transitions (parent class, branch, child class) of the rays at slots ``pix``."""
