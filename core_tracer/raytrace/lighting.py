@@ -58,6 +58,15 @@ class Lighting:
             return self.environment.radiance(d)
         return np.broadcast_to(self.background, (len(d), self.channels))
 
+    def sky_seen(self, d: np.ndarray) -> np.ndarray:
+        """``sky(d)`` as a pass holds it (``Band.in_pass``), for eye rays that see the world: the
+        photometric environment straight to X, Y, Z, its bands never needed."""
+        if self.environment is not None and self.photometric is not None:
+            return self.photometric.light_xyz(self.environment.radiance(d))
+        if self.photometric is not None:
+            return self.sky(d) @ self.photometric.to_xyz
+        return self.sky(d)
+
     def lens_surface(self, normal: np.ndarray, d: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
         """What the reflected share of eye rays ``d`` at a lens's outer face of ``normal`` sees (its
         Fresnel weight applied by the caller): eq. (1) with the lens's colour (docs/model.md §4), and

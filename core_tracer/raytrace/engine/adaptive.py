@@ -171,7 +171,7 @@ def _world_samples(ctx: Context, band: Band, pixels: np.ndarray, idx: np.ndarray
             t_near, t_far, _ = body_box.hit_box(rows(o, rays), rows(d, rays), ctx.box_lo, ctx.box_hi)
             toward[near] = ((t_near <= t_far) & (t_near > 0)).reshape(len(rest), len(near)).any(axis=0)
         by_sample = np.empty((ctx.samples, len(part), ctx.pass_channels))
-        by_sample[rest] = band.in_pass(ctx.sky(d)).reshape(len(rest), len(part), ctx.pass_channels)
+        by_sample[rest] = ctx.sky_seen(d).reshape(len(rest), len(part), ctx.pass_channels)
         by_sample[pilot] = pilot_values[:, BACKGROUND_PASS][:, part]
         total = by_sample[0].copy()
         for k in range(1, ctx.samples):  # in sample order, as the traced pixels
