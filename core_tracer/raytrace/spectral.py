@@ -1,10 +1,12 @@
 """The photometric mode (docs/photometric.md): a scene's light in lm, lx and cd/m², its plastics,
 filters, finishes and paint, as values per wavelength band for the engine to carry.
 
-The engine carries K bands instead of R, G, B (``Lighting.channels``); every value here is a band
+The engine works on K bands instead of R, G, B (``Lighting.channels``); every value here is a band
 mean: spectral radiance in W/(m² sr nm), spectral irradiance in W/(m² nm), reflectances and
-transmittances. The image is turned to CIE XYZ with Y in cd/m² band by band (``to_xyz``) before it
-leaves a worker, so the render's image and passes are XYZ.
+transmittances. A ray carries its attenuation deferred (``Throughput``: Fresnel at a few wavelength
+nodes, lengths through absorbing materials, reflections off the finish), expanded to the K bands
+only where light is found (a leaf), whose bands are turned to CIE XYZ with Y in cd/m² (``to_xyz``)
+as they are added to a pass (``Band.add``): the render's image and passes are XYZ.
 
 What differs from the paper's model, surface by surface:
 
@@ -239,7 +241,12 @@ class Throughput:
 
     @classmethod
     def of(cls, lamps: LampTable, bands: Bands, nodes: int | None = None) -> Throughput:
-        nodes = max(2, min(int(nodes or FRESNEL_NODES), bands.k))
+        rows = np.stack([-lamps.absorption, -lamps.plate_absorption,
+                         np.log(np.maximum(lamps.reflector_bands, MIN_TRANSMITTANCE))], axis=1)  # (L, 3, K)
+        exponents, bounds = rows.reshape(-1, bands.k), rows.max(axis=2)
+        nodes = min(max(2, int(nodes or FRESNEL_NODES)), bands.k)
+        if nodes == bands.k:  # a node at each band's centre: Fresnel per band, exactly
+            return cls(bands.centres_nm, np.eye(bands.k), lamps.ior_bands, lamps.plate_ior_bands, exponents, bounds)
         u_bands = 1.0 / bands.centres_nm**2
         u_nodes = np.linspace(u_bands[0], u_bands[-1], nodes)  # blue to red
         nodes_nm = 1.0 / np.sqrt(u_nodes)
@@ -251,9 +258,7 @@ class Throughput:
             to_bands[i + 1, k] += t
         ior_nodes = np.stack([_index_at(row, nodes_nm, bands) for row in lamps.ior_bands])
         plate_ior_nodes = np.stack([_index_at(row, nodes_nm, bands) for row in lamps.plate_ior_bands])
-        rows = np.stack([-lamps.absorption, -lamps.plate_absorption,
-                         np.log(np.maximum(lamps.reflector_bands, MIN_TRANSMITTANCE))], axis=1)  # (L, 3, K)
-        return cls(nodes_nm, to_bands, ior_nodes, plate_ior_nodes, rows.reshape(-1, bands.k), rows.max(axis=2))
+        return cls(nodes_nm, to_bands, ior_nodes, plate_ior_nodes, exponents, bounds)
 
     def reach(self, travelled: np.ndarray, lamp: np.ndarray) -> np.ndarray:
         """(N,) upper bound over the bands of exp(−α_lens d_lens − α_plate d_plate) ρ^m."""
@@ -278,8 +283,6 @@ def _index_at(band_index: np.ndarray, nodes_nm: np.ndarray, bands: Bands) -> np.
     """A material's n at the nodes from its n at the band centres: n is linear in 1/λ² (two-term
     Cauchy, ``materials.refractive_index``), so the line through the first and last band's values."""
     u = 1.0 / bands.centres_nm**2
-    if len(u) == 1:
-        return np.full(len(nodes_nm), band_index[0])
     slope = (band_index[-1] - band_index[0]) / (u[-1] - u[0])
     return band_index[0] + slope * (1.0 / nodes_nm**2 - u[0])
 
