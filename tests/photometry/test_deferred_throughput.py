@@ -40,7 +40,7 @@ def test_bands_are_the_per_band_product(stop_lamp_context, rng):
     fresnel = rng.uniform(0.0, 1.0, (len(lamp), K))
     expected = (fresnel * np.exp(-lamps.absorption[lamp] * travelled[:, :1] - lamps.plate_absorption[lamp]
                                  * travelled[:, 1:2]) * lamps.reflector_bands[lamp] ** travelled[:, 2:])
-    np.testing.assert_allclose(throughput.bands(fresnel, travelled, lamp), expected, rtol=1e-12, atol=1e-300)
+    np.testing.assert_allclose(throughput.bands(fresnel, travelled, lamp), expected, rtol=1e-5, atol=1e-300)
 
 
 def test_nodes_interpolate_linearly_in_inverse_square_wavelength(stop_lamp_context):
@@ -51,8 +51,8 @@ def test_nodes_interpolate_linearly_in_inverse_square_wavelength(stop_lamp_conte
     throughput = spectral.Throughput.of(ctx.lamps, bands, nodes=8)
     u_nodes, u_bands = 1.0 / throughput.nodes_nm**2, 1.0 / bands.centres_nm**2
     values = 0.3 + 2e4 * u_nodes
-    np.testing.assert_allclose(values @ throughput.to_bands, 0.3 + 2e4 * u_bands, rtol=1e-12)
-    np.testing.assert_allclose(throughput.to_bands.sum(axis=0), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(values @ throughput.to_bands, 0.3 + 2e4 * u_bands, rtol=1e-6)
+    np.testing.assert_allclose(throughput.to_bands.sum(axis=0), 1.0, rtol=1e-6)
     assert (throughput.to_bands >= 0).all()
     lens = load_scene(PRESETS / "photometric-stop-lamp.json")["lamps"][0]["lens"]
     n_d, abbe = spectral.index_of(lens)
@@ -68,7 +68,7 @@ def test_cut_off_bound_never_ends_a_branch_the_bands_keep(stop_lamp_context, rng
     k = rng.uniform(0.0, 1.0, (len(lamp), len(throughput.nodes_nm))) * 10.0 ** rng.uniform(-4.5, 0, (len(lamp), 1))
     bands = throughput.bands(k, travelled, lamp)
     bound = k.max(axis=1) * throughput.reach(travelled, lamp)
-    assert (bound >= bands.max(axis=1) * (1 - 1e-12)).all()
+    assert (bound >= bands.max(axis=1) * (1 - 1e-6)).all()
     going = alive(k, (throughput, travelled, lamp))
     assert going[bands.max(axis=1) >= CUTOFF].all()
     assert not going[bound < CUTOFF].any()
