@@ -7,17 +7,22 @@ segments, and the ratio photometric / paper (issue 22: at most 2x).
         [--runs 5] [--size 512] [--bands K] [--threads N]
 
 Both renders run in this process on the same threads (``--threads``, default every core), so the
-ratio compares the models, not the machine's load at two moments.
+ratio compares the models, not the machine's load at two moments. numpy's BLAS runs single-threaded
+here, as in the band pool's worker processes that the CLI renders with (``processes.worker_environment``):
+the render's threads are the parallelism; a BLAS thread spinning beside each of them for the
+photometric mode's small matrix products (K bands to X, Y, Z) burned CPU and gained no time.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
 from pathlib import Path
 
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy is imported (docstring)
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
@@ -58,6 +63,7 @@ def main() -> int:
     for mode, (wall, cpu, segments) in median.items():
         what = f"K = {k}" if mode == "photometric" else "R, G, B"
         print(f"  {mode:12s} ({what:8s}) wall {wall:6.2f} s   cpu {cpu:6.2f} s   {segments} ray segments")
+    print(f"  load average {os.getloadavg()[0]:.2f}, BLAS threads {os.environ['OPENBLAS_NUM_THREADS']}")
     print(f"  ratio photometric / paper: wall {median['photometric'][0] / median['paper'][0]:.2f}x, "
           f"cpu {median['photometric'][1] / median['paper'][1]:.2f}x")
     return 0

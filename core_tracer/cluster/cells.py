@@ -213,7 +213,7 @@ def render_bands(cell: Cell, bands: list[tuple[int, int, int]], environment: byt
     out = []
     for index, band in worker_bands(ctx, take, stopped):
         y0, y1 = rows[index]
-        image = BandImage.of(band, False, ctx.to_xyz).image
+        image = BandImage.of(band, False).image
         out.append((y0, y1, image.reshape(y1 - y0, cell.width, 3)))
     return out
 

@@ -34,6 +34,7 @@ from ..raytrace.engine.rays import (
     BODY_PASS,
     BULB_PASS,
     LENS_SURFACE,
+    NOT_DEFERRED,
     REFLECTOR_CONSTANT,
     REFLECTOR_SCATTER,
     SIDE_WALL_PASS,
@@ -172,7 +173,7 @@ class _MeshWalk:
         rays = MeshRays(pix=pix, lamp=np.full(n, -1, np.int64), o=o, d=d, k=np.ones((n, 3)),
                         medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, EYE, np.int8),
                         parent=np.zeros(n, np.int8), branch=np.zeros(n, np.int8), seen_reflector=np.zeros(n, bool),
-                        k_s=UNPOLARISED, triangle=np.full(n, -1, np.int64))
+                        k_s=UNPOLARISED, travelled=NOT_DEFERRED, triangle=np.full(n, -1, np.int64))
         return _step(ctx, band, rays, first=True)
 
     @staticmethod
@@ -187,7 +188,7 @@ def _spawn(rays: MeshRays, sel: np.ndarray, o: np.ndarray, d: np.ndarray, k: np.
     go = np.nonzero(alive(k))[0]
     return MeshRays(pix=rays.pix[sel][go], lamp=part[go], o=o[go], d=d[go], k=k[go], medium=medium[go], src=src[go],
                     parent=cls[go], branch=np.full(len(go), branch, np.int8), seen_reflector=seen[go],
-                    k_s=UNPOLARISED, triangle=tri[go])
+                    k_s=UNPOLARISED, travelled=NOT_DEFERRED, triangle=tri[go])
 
 
 def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:

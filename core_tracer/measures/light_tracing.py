@@ -43,7 +43,7 @@ from ..raytrace import optics
 from ..raytrace import paths as P
 from ..raytrace.engine import make_context
 from ..raytrace.engine.context import Context
-from ..raytrace.engine.rays import CUTOFF, UNRECORDED, Rays, concat
+from ..raytrace.engine.rays import CUTOFF, NOT_DEFERRED, UNRECORDED, Rays, concat
 from ..raytrace.engine.surfaces import at_dielectric, at_plate_face, bulb_irradiance
 from ..raytrace.engine.walk import MAX_DEPTH, _normals_at, intersect
 from ..raytrace.parts.base import put_rows, rows
@@ -106,7 +106,7 @@ def _rays(lamp: int, o: np.ndarray, d: np.ndarray, k: int, src: int) -> Rays:
     ones = np.ones((n, k))
     return Rays(pix=np.arange(n), lamp=np.full(n, lamp), o=o, d=d, k=ones, medium=np.full(n, P.IN_AIR, np.int8),
                 src=np.full(n, src, np.int8), parent=UNRECORDED, branch=UNRECORDED, seen_reflector=np.zeros(n, bool),
-                k_s=0.5 * ones)  # unpolarised light: half of it s-polarised
+                k_s=0.5 * ones, travelled=NOT_DEFERRED)  # unpolarised light: half of it s-polarised
 
 
 def bulb_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> tuple[Rays, np.ndarray]:
@@ -178,7 +178,8 @@ def trace(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]
                                  d=optics.reflect(rows(d, going), normal), k=rows(k, going),
                                  medium=np.full(len(going), P.IN_AIR, np.int8),
                                  src=np.full(len(going), P.REFLECTOR, np.int8), parent=UNRECORDED,
-                                 branch=UNRECORDED, seen_reflector=np.ones(len(going), bool), k_s=rows(k_s, going)))
+                                 branch=UNRECORDED, seen_reflector=np.ones(len(going), bool), k_s=rows(k_s, going),
+                                 travelled=NOT_DEFERRED))
         met = np.nonzero((surface == P.OUTER) | (surface == P.CUT))[0]
         if len(met):
             d, hit = _end_points(rays, t, met)

@@ -264,6 +264,12 @@ def _basis_band_means(bands: Bands, illuminant: bool) -> np.ndarray:
     return means / float(means[0] @ luminance_weights(bands))
 
 
+def illuminant_basis(bands: Bands) -> np.ndarray:
+    """(7, K): the band means of Smits's seven basis spectra times D65, as ``rgb_to_illuminant``
+    weights them (``smits_weights(rgb) @ illuminant_basis(bands)`` is ``rgb_to_illuminant``)."""
+    return _basis_band_means(bands, True)
+
+
 def rgb_to_reflectance(rgb: np.ndarray, bands: Bands) -> np.ndarray:
     """(..., K) band-mean reflectance of body paint given as linear Rec.709 RGB (..., 3) (Smits 1999)."""
     return smits_weights(rgb) @ _basis_band_means(bands, False)

@@ -90,7 +90,7 @@ def main() -> int:
         try:
             ctx = make_context(scene, width, height, **options)
             for index, band in worker_bands(ctx, take, stopped):
-                rows = BandImage.of(band, keep_passes, ctx.to_xyz)
+                rows = BandImage.of(band, keep_passes)
                 write_message(outbox, ("band", serial, index, rows.image, rows.passes, rows.segments, rows.busy,
                                        rows.max_depth, rows.transitions, os.getpid()))
         except SystemExit:

@@ -20,7 +20,8 @@ class Lighting:
 
     ``channels`` are the colour columns the rays carry: R, G, B in the paper mode, the wavelength
     bands in the photometric one (``photometric``, ``spectral.Photometric``; None in the paper
-    mode), whose environment is scaled to cd/m² and whose background is black."""
+    mode), whose environment is scaled to cd/m² and whose background is black. The passes hold
+    ``pass_channels``: R, G, B, or X, Y, Z, each leaf's bands turned to XYZ as it is added."""
 
     def __init__(self, scene: dict, bands: int | None = None):
         self.environment = environment.from_scene(scene)
@@ -30,6 +31,7 @@ class Lighting:
             self.sun = self.sun.under_surroundings()
         self.background = np.asarray(scene["background"], dtype=np.float64)
         self.channels = 3  # R, G, B
+        self.pass_channels = 3  # what the passes hold: R, G, B; photometric: X, Y, Z (``Band.add``)
         self.photometric = None
         if scene.get("light_model", "paper") == "photometric":
             self.photometric = spectral.setup(scene, bands, self.sun.direction)
@@ -55,6 +57,15 @@ class Lighting:
                 return self.photometric.light(self.environment.radiance(d))
             return self.environment.radiance(d)
         return np.broadcast_to(self.background, (len(d), self.channels))
+
+    def sky_seen(self, d: np.ndarray) -> np.ndarray:
+        """``sky(d)`` as a pass holds it (``Band.in_pass``), for eye rays that see the world: the
+        photometric environment straight to X, Y, Z, its bands never needed."""
+        if self.environment is not None and self.photometric is not None:
+            return self.photometric.light_xyz(self.environment.radiance(d))
+        if self.photometric is not None:
+            return self.sky(d) @ self.photometric.to_xyz
+        return self.sky(d)
 
     def lens_surface(self, normal: np.ndarray, d: np.ndarray, diffuse: np.ndarray, specular, shininess) -> np.ndarray:
         """What the reflected share of eye rays ``d`` at a lens's outer face of ``normal`` sees (its

@@ -1,10 +1,12 @@
 """The photometric mode (docs/photometric.md): a scene's light in lm, lx and cd/m², its plastics,
 filters, finishes and paint, as values per wavelength band for the engine to carry.
 
-The engine carries K bands instead of R, G, B (``Lighting.channels``); every value here is a band
+The engine works on K bands instead of R, G, B (``Lighting.channels``); every value here is a band
 mean: spectral radiance in W/(m² sr nm), spectral irradiance in W/(m² nm), reflectances and
-transmittances. The image is turned to CIE XYZ with Y in cd/m² band by band (``to_xyz``) before it
-leaves a worker, so the render's image and passes are XYZ.
+transmittances. A ray carries its attenuation deferred (``Throughput``: Fresnel at a few wavelength
+nodes, lengths through absorbing materials, reflections off the finish), expanded to the K bands
+only where light is found (a leaf), whose bands are turned to CIE XYZ with Y in cd/m² (``to_xyz``)
+as they are added to a pass (``Band.add``): the render's image and passes are XYZ.
 
 What differs from the paper's model, surface by surface:
 
@@ -93,6 +95,7 @@ class Photometric:
     bands: Bands
     to_xyz: np.ndarray  # (K, 3): band-mean radiance → XYZ, Y in cd/m² (``photometry.cie.xyz_matrix``)
     sun: PhotometricSun
+    light_to_xyz: np.ndarray  # (7, 3): Smits's illuminant basis (``materials.illuminant_basis``) to XYZ
 
     @property
     def channels(self) -> int:
@@ -102,6 +105,11 @@ class Photometric:
         """Band values (N, K) of light given as linear Rec.709 (N, 3) in cd/m² per unit (an
         environment's radiance or irradiance, its scale applied): Smits spectra times D65."""
         return materials.rgb_to_illuminant(rgb, self.bands)
+
+    def light_xyz(self, rgb: np.ndarray) -> np.ndarray:
+        """``light(rgb) @ to_xyz`` without the bands: X, Y, Z (N, 3) of light seen as it is (an eye
+        ray that sees the world; no attenuation to apply per band)."""
+        return materials.smits_weights(rgb) @ self.light_to_xyz
 
     def reflectance(self, rgb) -> np.ndarray:
         """Band reflectances (K,) or (N, K) of paint given as linear RGB (Smits 1999)."""
@@ -114,7 +122,8 @@ def setup(scene: dict, k: int | None, sun_direction: np.ndarray) -> Photometric:
     lux = float(scene["light"]["illuminance_lux"])
     sun = PhotometricSun(np.asarray(sun_direction, dtype=np.float64), daylight.sun_spectral_irradiance(lux, bands),
                          lux)
-    return Photometric(bands, np.ascontiguousarray(xyz_matrix(bands)), sun)
+    to_xyz = np.ascontiguousarray(xyz_matrix(bands))
+    return Photometric(bands, to_xyz, sun, materials.illuminant_basis(bands) @ to_xyz)
 
 
 def environment_scale(scene: dict, pixels: np.ndarray) -> float:
@@ -194,6 +203,92 @@ def absorption(part: dict, bands: Bands, where: str) -> np.ndarray:
 def finish_reflectance(reflector: dict, bands: Bands) -> np.ndarray:
     """(K,) band-mean normal-incidence reflectance of the reflector's metal coat."""
     return materials.mirror_reflectance(FINISHES[reflector["finish"]]).band_means(bands)
+
+
+# The wavelength nodes Fresnel is evaluated at along a branch (``Throughput``): Fresnel's factors
+# depend on the wavelength only through n(λ), smooth in it, and are interpolated to the K bands at
+# a leaf. Chosen by measurement (docs/photometric.md, "Speed"): every photometric preset's lit lens
+# against Fresnel per band.
+FRESNEL_NODES = 8
+
+
+@dataclass(frozen=True)
+class Throughput:
+    """A branch's accumulated attenuation per band, kept deferred (docs/photometric.md, "Speed"):
+
+        k(λ) = F(λ) · exp(−α_lens(λ) d_lens − α_plate(λ) d_plate) · ρ(λ)^m
+
+    F, the product of the Fresnel factors (s and p shares, each surface's reflectance or
+    transmittance, and the reflector's mirror share 1 − s), depends on λ only through n(λ), smooth
+    in it: the rays carry it at a few wavelength nodes (``Rays.k``, ``k_s``: (N, J)), equally
+    spaced in 1/λ² (n is linear in 1/λ², two-term Cauchy), and it is interpolated piecewise
+    linearly in 1/λ² to the K bands at a leaf (``to_bands``). The rest is carried as three numbers a
+    ray (``Rays.travelled``): mm through the lens's material, mm through the plate's, and
+    reflections off the reflector's finish ρ. A leaf expands them to K bands (``bands``), so the
+    per-band work is done once per leaf, not at every surface.
+
+    The cut-off (a branch ends when every band is below it) takes an upper bound of max_λ k(λ):
+    max over nodes of F (the interpolation weights are convex: no band exceeds the largest node)
+    times exp(−min α_lens d_lens − min α_plate d_plate) · (max ρ)^m (``reach``); branches whose
+    bound is near the cut-off are tested band by band (``rays.alive``)."""
+
+    nodes_nm: np.ndarray  # (J,)
+    to_bands: np.ndarray  # (J, K) float32: node values to band values, each band's column summing to 1
+    ior_nodes: np.ndarray  # (L, J) lens index at the nodes, per lamp (Fresnel)
+    plate_ior_nodes: np.ndarray  # (L, J)
+    exponents: np.ndarray  # (3 L, K) float32: per lamp the rows −α_lens(λ), −α_plate(λ), ln ρ(λ)
+    bounds: np.ndarray  # (L, 3): per lamp max over bands of each row of ``exponents``
+
+    @classmethod
+    def of(cls, lamps: LampTable, bands: Bands, nodes: int | None = None) -> Throughput:
+        rows = np.stack([-lamps.absorption, -lamps.plate_absorption,
+                         np.log(np.maximum(lamps.reflector_bands, MIN_TRANSMITTANCE))], axis=1)  # (L, 3, K)
+        exponents, bounds = rows.reshape(-1, bands.k).astype(np.float32), rows.max(axis=2)  # bands(): float32
+        nodes = min(max(2, int(nodes or FRESNEL_NODES)), bands.k)
+        if nodes == bands.k:  # a node at each band's centre: Fresnel per band, exactly
+            return cls(bands.centres_nm, np.eye(bands.k, dtype=np.float32), lamps.ior_bands, lamps.plate_ior_bands,
+                       exponents, bounds)
+        u_bands = 1.0 / bands.centres_nm**2
+        u_nodes = np.linspace(u_bands[0], u_bands[-1], nodes)  # blue to red
+        nodes_nm = 1.0 / np.sqrt(u_nodes)
+        to_bands = np.zeros((nodes, bands.k))
+        for k, u in enumerate(u_bands):  # piecewise linear in 1/λ² between the two nodes around u
+            i = min(nodes - 2, int(np.searchsorted(-u_nodes, -u, side="right")) - 1)
+            t = (u - u_nodes[i]) / (u_nodes[i + 1] - u_nodes[i])
+            to_bands[i, k] += 1.0 - t
+            to_bands[i + 1, k] += t
+        ior_nodes = np.stack([_index_at(row, nodes_nm, bands) for row in lamps.ior_bands])
+        plate_ior_nodes = np.stack([_index_at(row, nodes_nm, bands) for row in lamps.plate_ior_bands])
+        return cls(nodes_nm, to_bands.astype(np.float32), ior_nodes, plate_ior_nodes, exponents, bounds)
+
+    def reach(self, travelled: np.ndarray, lamp: np.ndarray) -> np.ndarray:
+        """(N,) upper bound over the bands of exp(−α_lens d_lens − α_plate d_plate) ρ^m."""
+        bound = self.bounds.take(lamp, axis=0)
+        bound *= travelled
+        return np.exp(bound[:, 0] + bound[:, 1] + bound[:, 2])  # numpy sums short rows slowly
+
+    def bands(self, k: np.ndarray, travelled: np.ndarray, lamp: np.ndarray) -> np.ndarray:
+        """(N, K) accumulated attenuation per band of branches whose Fresnel product at the nodes
+        is ``k`` (N, J), having ``travelled`` (N, 3), in lamps ``lamp``. In float32 (relative error
+        below 1e-5 a band: the exponent's rounding times its size; twice as fast as float64, the
+        leaves' matrix products and exponentials being the mode's largest per-band work)."""
+        out = k.astype(np.float32) @ self.to_bands
+        n, lamps = len(k), len(self.bounds)
+        spread = np.zeros((n, 3 * lamps), np.float32)  # each ray's three numbers in its lamp's block of rows
+        rows = np.arange(n)
+        for j in range(3):
+            spread[rows, 3 * lamp + j] = travelled[:, j]
+        exponent = spread @ self.exponents
+        out *= np.exp(exponent, out=exponent)
+        return out
+
+
+def _index_at(band_index: np.ndarray, nodes_nm: np.ndarray, bands: Bands) -> np.ndarray:
+    """A material's n at the nodes from its n at the band centres: n is linear in 1/λ² (two-term
+    Cauchy, ``materials.refractive_index``), so the line through the first and last band's values."""
+    u = 1.0 / bands.centres_nm**2
+    slope = (band_index[-1] - band_index[0]) / (u[-1] - u[0])
+    return band_index[0] + slope * (1.0 / nodes_nm**2 - u[0])
 
 
 def photometric_lamps(table: LampTable, scene: dict, bands: Bands) -> LampTable:

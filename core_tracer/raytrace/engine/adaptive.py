@@ -37,7 +37,7 @@ def sample_rays(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
     # sums whatever the threads.
     for count, o, d in sample_groups(ctx.camera, pixels, ctx.samples, ctx.filter_name):
         group = yield o, d
-        per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, ctx.channels)
+        per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, ctx.pass_channels)
         band.acc += over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
@@ -66,10 +66,10 @@ def _trace_adaptive(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
     pilot_values = yield from sampling.per_sample(ctx, band, pixels, pilot)
     # Each pass's least and greatest pilot sample over the pixel's 3 x 3 neighbourhood, on the passes'
     # own planes (passes, rows, columns, channels): no transposed copies.
-    shape = (len(PASS_NAMES), y1 - y0, width, ctx.channels)
+    shape = (len(PASS_NAMES), y1 - y0, width, ctx.pass_channels)
     low = _neighbourhood(over_samples(np.minimum, pilot_values).reshape(shape), np.minimum)
     high = _neighbourhood(over_samples(np.maximum, pilot_values).reshape(shape), np.maximum)
-    per_pixel = (len(PASS_NAMES), -1, ctx.channels)  # views of the same planes, a pixel per column
+    per_pixel = (len(PASS_NAMES), -1, ctx.pass_channels)  # views of the same planes, a pixel per column
     pilot_mean = over_samples(np.add, pilot_values) / len(pilot)
     threshold = ctx.adaptive_threshold * pilot_mean.sum(axis=0).max(axis=1)
     busy = _spread(high.reshape(per_pixel), low.reshape(per_pixel)) > threshold
@@ -170,8 +170,8 @@ def _world_samples(ctx: Context, band: Band, pixels: np.ndarray, idx: np.ndarray
             rays = (np.arange(len(rest))[:, None] * len(part) + near).ravel()
             t_near, t_far, _ = body_box.hit_box(rows(o, rays), rows(d, rays), ctx.box_lo, ctx.box_hi)
             toward[near] = ((t_near <= t_far) & (t_near > 0)).reshape(len(rest), len(near)).any(axis=0)
-        by_sample = np.empty((ctx.samples, len(part), ctx.channels))
-        by_sample[rest] = ctx.sky(d).reshape(len(rest), len(part), ctx.channels)
+        by_sample = np.empty((ctx.samples, len(part), ctx.pass_channels))
+        by_sample[rest] = ctx.sky_seen(d).reshape(len(rest), len(part), ctx.pass_channels)
         by_sample[pilot] = pilot_values[:, BACKGROUND_PASS][:, part]
         total = by_sample[0].copy()
         for k in range(1, ctx.samples):  # in sample order, as the traced pixels

@@ -169,7 +169,7 @@ def _carried_wavefront(ctx: Context, tails: list[_Tail], wave: _Wavefront | None
             tail.put_back(wave.acc)
         carried_pixels = np.unique(image_pix)
     n_carried = len(carried_pixels)
-    acc = np.zeros((len(PASS_NAMES), n_carried + n, ctx.channels))
+    acc = np.zeros((len(PASS_NAMES), n_carried + n, ctx.pass_channels))
     for tail in tails:
         tail.lo, tail.hi = np.searchsorted(carried_pixels, [tail.first_pixel, tail.first_pixel + tail.band.n])
         tail.pixels = carried_pixels[tail.lo:tail.hi]

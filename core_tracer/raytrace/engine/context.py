@@ -26,8 +26,10 @@ class Context(Lighting):
         self.filter_name = filter_name
         self.adaptive_threshold = adaptive_threshold
         self.lamps = LampTable.from_scene(scene)
+        self.throughput = None  # the photometric mode's deferred bands (``spectral.Throughput``)
         if self.photometric is not None:
             self.lamps = spectral.photometric_lamps(self.lamps, scene, self.photometric.bands)
+            self.throughput = spectral.Throughput.of(self.lamps, self.photometric.bands)
         self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
         self.plates = bool(self.lamps.ring_count.any())  # else no ray meets a prism plate or its housing
         body = scene["body"]

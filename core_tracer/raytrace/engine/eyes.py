@@ -28,7 +28,7 @@ def rays_toward_body(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> 
     if len(miss) < len(o) // 8:
         return None
     if ctx.background_seen and ctx.world_seen:
-        put_slots(band.acc[BACKGROUND_PASS], miss, ctx.sky(d[miss]))
+        put_slots(band.acc[BACKGROUND_PASS], miss, ctx.sky_seen(d[miss]))
     band.segments += len(miss)
     band.max_depth = max(band.max_depth, 1)
     return np.nonzero(toward)[0]
@@ -65,7 +65,7 @@ def first_hits(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.n
     hit_box = (t_near <= t_far) & (t_near > 0)
 
     if ctx.background_seen and ctx.world_seen:
-        band.add(BACKGROUND_PASS, pix[~hit_box], ctx.sky(d[~hit_box]))
+        band.add_seen(BACKGROUND_PASS, pix[~hit_box], ctx.sky_seen(d[~hit_box]))
 
     # Only rays entering the front face can reach a lens: find their points there.
     front = np.nonzero(hit_box & (face == 1) & (d[:, 1] > 0))[0]
@@ -100,7 +100,7 @@ def _first_hits_wrapped(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, 
     n = len(o)
     t_near, hit_body, face, normal = body_box.hit_body(o, d, ctx.box_lo, ctx.box_hi, ctx.wraps)
     if ctx.background_seen and ctx.world_seen:
-        band.add(BACKGROUND_PASS, pix[~hit_body], ctx.sky(d[~hit_body]))
+        band.add_seen(BACKGROUND_PASS, pix[~hit_body], ctx.sky_seen(d[~hit_body]))
     front = np.nonzero(hit_body & (((face == 1) & (d[:, 1] > 0)) | (face == body_box.CURVED_FRONT)))[0]
     at_front = rows(o, front) + t_near[front, None] * rows(d, front)
     lamps = ctx.lamps

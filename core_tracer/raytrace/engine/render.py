@@ -128,7 +128,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
 
     def on_threads(some: list[tuple[int, int]]) -> Iterator[tuple[int, int, BandImage]]:
         for y0, y1, band in schedule.traced_bands(ctx, some, max(1, min(threads, len(some))), should_stop or never):
-            yield y0, y1, BandImage.of(band, keep_passes, ctx.to_xyz)
+            yield y0, y1, BandImage.of(band, keep_passes)
 
     if pool is not None and threads > 1:
         options = {"record_transitions": record_transitions, "samples": ctx.samples, "filter_name": filter_name,

@@ -69,10 +69,9 @@ class BandImage:
     process: int = 0  # the id of the worker process that traced it; 0: this process
 
     @classmethod
-    def of(cls, band: Band, keep_passes: bool, to_xyz: np.ndarray | None = None) -> BandImage:
-        """``band``'s image and passes; ``to_xyz`` (K, 3) turns the photometric mode's bands to CIE
-        XYZ (cd/m²) first (``Lighting.to_xyz``; None in the paper mode, whose RGB is kept)."""
-        acc = band.acc if to_xyz is None else np.einsum("pnk,kc->pnc", band.acc, to_xyz)
+    def of(cls, band: Band, keep_passes: bool) -> BandImage:
+        """``band``'s image and passes (R, G, B; photometric: CIE XYZ in cd/m², ``Band.add``)."""
+        acc = band.acc
         # the passes summed in float64, then stored in float32: as the image always was
         return cls(acc.sum(axis=0).astype(np.float32), acc.astype(np.float32) if keep_passes else None,
                    band.segments, band.busy, band.max_depth, band.transitions)

@@ -17,10 +17,12 @@ from .. import paths as P
 from ..lamp_table import LampTable
 from ..parts import reflector
 from ..parts.base import rows
+from ..spectral import Throughput
 from .context import Context
 from .rays import (
     BACKGROUND_PASS,
     LENS_SURFACE,
+    NOT_DEFERRED,
     REFLECTOR_CONSTANT,
     REFLECTOR_SCATTER,
     UNPOLARISED,
@@ -41,16 +43,22 @@ def into_lenses(ctx: Context, band: Band, pix: np.ndarray, lamp: np.ndarray, d: 
     lamps = ctx.lamps
     ior = lamps.ior[lamp]
     n = len(pix)
-    if ctx.photometric is None:
+    throughput = ctx.throughput
+    if throughput is None:
         split = fresnel_split(np.ones((n, ctx.channels)), d, face_normal, 1.0, ior)
-    else:  # unpolarised light: half of it s-polarised
-        split = fresnel_split(np.ones((n, ctx.channels)), d, face_normal, 1.0, ior, np.full((n, ctx.channels), 0.5),
-                              1.0, lamps.ior_bands[lamp])
+        travelled = NOT_DEFERRED
+        reflected = split.reflected
+    else:  # unpolarised light, half of it s-polarised; Fresnel at the nodes (``spectral.Throughput``)
+        nodes = len(throughput.nodes_nm)
+        split = fresnel_split(np.ones((n, nodes)), d, face_normal, 1.0, ior, np.full((n, nodes), 0.5),
+                              1.0, throughput.ior_nodes[lamp])
+        travelled = np.zeros((n, 3))
+        reflected = split.reflected @ throughput.to_bands  # nothing travelled yet
     surface = ctx.lens_surface(face_normal, d, lamps.lens_diffuse[lamp], lamps.lens_specular[lamp],
                                lamps.lens_shininess[lamp])
-    band.add(LENS_SURFACE, pix, split.reflected * surface)
+    band.add(LENS_SURFACE, pix, reflected * surface)
     if ctx.background_seen and ctx.environment is None:
-        band.add(BACKGROUND_PASS, pix, split.reflected * ctx.background)
+        band.add(BACKGROUND_PASS, pix, reflected * ctx.background)
     ones = np.ones(len(pix), dtype=np.int8)
     band.note(pix, ones, ones * P.REFLECTED, ones * P.LENS_OUTER_TO_OUTSIDE)
 
@@ -58,7 +66,7 @@ def into_lenses(ctx: Context, band: Band, pix: np.ndarray, lamp: np.ndarray, d: 
                 k=split.transmitted, medium=np.full(n, P.IN_LENS, np.int8), src=np.full(n, P.OUTER, np.int8),
                 parent=np.full(n, P.OUTSIDE_TO_LENS, np.int8) if ctx.record else UNRECORDED,
                 branch=np.full(n, P.TRANSMITTED, np.int8) if ctx.record else UNRECORDED,
-                seen_reflector=np.zeros(n, bool), k_s=split.transmitted_s)
+                seen_reflector=np.zeros(n, bool), k_s=split.transmitted_s, travelled=travelled)
     return rays.take(alive(split.transmitted))
 
 
@@ -73,27 +81,33 @@ def at_reflector(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
     to_bulb = optics.normalize(rows(lamps.bulb_center, lamp) - hit)
     scatter = optics.blinn(normal, -d, to_bulb, lamps.scatter.take(lamp), lamps.scatter_shininess.take(lamp))
     k_s = rows(rays.k_s, met)
-    if ctx.photometric is None:
+    throughput, travelled, deferred = ctx.throughput, NOT_DEFERRED, None
+    if throughput is None:
         first = np.nonzero(~rays.seen_reflector.take(met))[0]
         band.add(REFLECTOR_CONSTANT, pix.take(first), rows(k, first) * rows(lamps.reflector_color, lamp.take(first)))
         band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_intensity, lamp))
-    else:  # no appearance constant; the finish's reflectance spread by the normalised lobe over the bulb's light
-        finish = rows(lamps.reflector_bands, lamp)
-        k = k * finish
-        k_s = k_s * finish
+        k_bands = k
+    else:  # no appearance constant; the finish's reflectance (one more reflection off it, deferred)
+        # spread by the normalised lobe over the bulb's light
+        travelled = rows(rays.travelled, met)
+        travelled[:, 2] += 1.0
+        k_bands = throughput.bands(k, travelled, lamp)
         irradiance = bulb_irradiance(to_bulb, normal, hit, lamps, lamp)
-        band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter * irradiance) * rows(lamps.bulb_intensity, lamp))
+        scattered = optics.scaled(k_bands, scatter * irradiance)
+        band.add(REFLECTOR_SCATTER, pix, scattered * rows(lamps.bulb_intensity, lamp))
+        deferred = (throughput, travelled, lamp)
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
-        band.add(REFLECTOR_SCATTER, pix, k * sunlight.phantom(ctx.sun, ctx.phantom_lamps, lamp, hit, normal, -d))
+        band.add(REFLECTOR_SCATTER, pix, k_bands * sunlight.phantom(ctx.sun, ctx.phantom_lamps, lamp, hit, normal, -d))
     mirror = lamps.reflectance.take(lamp)
     mirrored = optics.scaled(k, mirror)
-    going_on = np.nonzero(alive(mirrored))[0]
+    going_on = np.nonzero(alive(mirrored, deferred))[0]
     n = len(going_on)
     return Rays(pix=pix.take(going_on), lamp=lamp.take(going_on), o=rows(hit, going_on),
                 d=optics.reflect(rows(d, going_on), rows(normal, going_on)), k=rows(mirrored, going_on),
                 medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, P.REFLECTOR, np.int8),
                 parent=cls.take(going_on), branch=branch_tags(cls, P.REFLECTED, n), seen_reflector=np.ones(n, bool),
-                k_s=k_s if k_s is UNPOLARISED else rows(optics.scaled(k_s, mirror), going_on))
+                k_s=k_s if k_s is UNPOLARISED else rows(optics.scaled(k_s, mirror), going_on),
+                travelled=rows(travelled, going_on))
 
 
 def bulb_irradiance(to_bulb: np.ndarray, normal: np.ndarray, hit: np.ndarray, lamps: LampTable,
@@ -171,16 +185,19 @@ class FaceHit:
     cls: np.ndarray  # the segments' path classes (UNRECORDED: not kept)
     seen_reflector: np.ndarray
     split: Split
+    travelled: np.ndarray = NOT_DEFERRED  # photometric: the rays' ``Rays.travelled``
+    deferred: tuple | None = None  # photometric: what the cut-off test takes (``rays.alive``)
 
     def reflected(self) -> Rays:
         """The mirror rays that stay above the cut-off, in the medium they came from."""
-        going_on = np.nonzero(alive(self.split.reflected))[0]
+        going_on = np.nonzero(alive(self.split.reflected, self.deferred))[0]
         return Rays(pix=self.pix.take(going_on), lamp=self.lamp.take(going_on), o=rows(self.hit, going_on),
                     d=optics.reflect(rows(self.d, going_on), rows(self.facing, going_on)),
                     k=rows(self.split.reflected, going_on), medium=self.medium.take(going_on),
                     src=self.surface.take(going_on), parent=self.cls.take(going_on),
                     branch=branch_tags(self.cls, P.REFLECTED, len(going_on)),
-                    seen_reflector=self.seen_reflector.take(going_on), k_s=rows(self.split.reflected_s, going_on))
+                    seen_reflector=self.seen_reflector.take(going_on), k_s=rows(self.split.reflected_s, going_on),
+                    travelled=rows(self.travelled, going_on))
 
     def through(self, sel: np.ndarray) -> Rays:
         """The transmitted rays ``sel``: bent by Snell's law into the other medium."""
@@ -190,14 +207,16 @@ class FaceHit:
         return Rays(pix=self.pix.take(sel), lamp=self.lamp.take(sel), o=rows(self.hit, sel), d=d_t,
                     k=rows(split.transmitted, sel), medium=medium, src=self.surface.take(sel),
                     parent=self.cls.take(sel), branch=branch_tags(self.cls, P.TRANSMITTED, len(sel)),
-                    seen_reflector=self.seen_reflector.take(sel), k_s=rows(split.transmitted_s, sel))
+                    seen_reflector=self.seen_reflector.take(sel), k_s=rows(split.transmitted_s, sel),
+                    travelled=rows(self.travelled, sel))
 
 
 def at_dielectric(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
                   surface: np.ndarray, out_normal: np.ndarray, ior: np.ndarray, material: int,
-                  band_ior: np.ndarray | None = None) -> FaceHit:
+                  band_ior: np.ndarray | None = None, throughput: Throughput | None = None) -> FaceHit:
     """The rays ``met`` (attenuation ``k``, directions ``d``) meeting faces of ``material`` (index
-    ``ior`` per lamp; photometric: ``band_ior`` per lamp and band for Fresnel) at ``hit``,
+    ``ior`` per lamp; photometric: ``band_ior`` per lamp and column of k for Fresnel: per band, or
+    per wavelength node with the deferred ``throughput``, whose bound the cut-off takes) at ``hit``,
     ``out_normal`` pointing out of the material: the Fresnel split."""
     lamp = rays.lamp.take(met)
     medium = rays.medium.take(met)
@@ -214,8 +233,12 @@ def at_dielectric(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit
         inside = from_inside[:, None]
         split = fresnel_split(k, d, facing, n1, n2, rows(rays.k_s, met), np.where(inside, n_bands, 1.0),
                               np.where(inside, 1.0, n_bands))
-    return FaceHit(rays.pix.take(met), lamp, hit, d, facing, medium, from_inside, material, surface, cls,
+    face = FaceHit(rays.pix.take(met), lamp, hit, d, facing, medium, from_inside, material, surface, cls,
                    rays.seen_reflector.take(met), split)
+    if throughput is not None:
+        face.travelled = rows(rays.travelled, met)
+        face.deferred = (throughput, face.travelled, lamp)
+    return face
 
 
 def at_lens_face(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray,
@@ -224,8 +247,9 @@ def at_lens_face(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
     the lens material (-y on the outer face, the cap's on the cuts). Light transmitted out through
     the outer face leaves the lamp (⑩) and shows the background; every other branch goes on where
     above the cut-off."""
+    throughput = ctx.throughput
     face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, ctx.lamps.ior, P.IN_LENS,
-                         ctx.lamps.ior_bands)
+                         None if throughput is None else throughput.ior_nodes, throughput)
     split = face.split
     partial = split.partial
     if ctx.background_seen or ctx.record:
@@ -234,21 +258,26 @@ def at_lens_face(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
             d_out = rows(d, leaving)
             if ctx.environment is not None:  # the surroundings along the refracted ray
                 d_out = optics.refract(d_out, rows(face.facing, leaving), split.eta.take(leaving))
-            band.add(BACKGROUND_PASS, face.pix.take(leaving), rows(split.transmitted, leaving) * ctx.sky(d_out))
+            transmitted = rows(split.transmitted, leaving)
+            if throughput is not None:
+                transmitted = throughput.bands(transmitted, rows(face.travelled, leaving), face.lamp.take(leaving))
+            band.add(BACKGROUND_PASS, face.pix.take(leaving), transmitted * ctx.sky(d_out))
         if ctx.record:
             band.note(face.pix.take(leaving), cls.take(leaving), np.full(len(leaving), P.TRANSMITTED),
                       np.full(len(leaving), P.LENS_OUTER_TO_OUTSIDE))
-    going_on = np.nonzero(partial & (surface != P.OUTER) & alive(split.transmitted))[0]
+    going_on = np.nonzero(partial & (surface != P.OUTER) & alive(split.transmitted, face.deferred))[0]
     return [face.reflected(), face.through(going_on)] if len(going_on) else [face.reflected()]
 
 
 def at_plate_face(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit: np.ndarray, cls: np.ndarray,
-                  surface: np.ndarray, out_normal: np.ndarray, lamps: LampTable) -> list[Rays]:
+                  surface: np.ndarray, out_normal: np.ndarray, lamps: LampTable,
+                  throughput: Throughput | None = None) -> list[Rays]:
     """A prism-plate face met from either side (docs/model.md, the prism plate): the lens's Fresnel split
-    with the plate's index; ``out_normal`` points out of the plate material. Nothing leaves the lamp
-    here, so both branches go on where above the cut-off."""
+    with the plate's index (photometric: per band, or at the nodes of a deferred ``throughput``);
+    ``out_normal`` points out of the plate material. Nothing leaves the lamp here, so both branches
+    go on where above the cut-off."""
     face = at_dielectric(rays, met, k, d, hit, cls, surface, out_normal, lamps.plate_ior, P.IN_PLATE,
-                         lamps.plate_ior_bands)
+                         lamps.plate_ior_bands if throughput is None else throughput.plate_ior_nodes, throughput)
     split = face.split
-    going_on = np.nonzero(split.partial & alive(split.transmitted))[0]
+    going_on = np.nonzero(split.partial & alive(split.transmitted, face.deferred))[0]
     return [face.reflected(), face.through(going_on)] if len(going_on) else [face.reflected()]

@@ -157,13 +157,22 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
     rays = _absorbed(ctx, rays, t)
     k = rays.k
 
-    # Surfaces that end a path: the luminance they show, times k.
-    for sid, pass_id, color in ((P.WALL, SIDE_WALL_PASS, lamps.wall_color), (P.BULB, BULB_PASS, lamps.bulb_intensity),
-                                (P.SOCKET, SOCKET_PASS, lamps.socket_color)):
+    # Surfaces that end a path: the luminance they show, times k. The photometric mode's side wall,
+    # socket and housing are unlit (``spectral``): only its bulb adds, k expanded to the bands.
+    throughput = ctx.throughput
+    ends = ((P.BULB, BULB_PASS, lamps.bulb_intensity),) if throughput is not None else (
+        (P.WALL, SIDE_WALL_PASS, lamps.wall_color), (P.BULB, BULB_PASS, lamps.bulb_intensity),
+        (P.SOCKET, SOCKET_PASS, lamps.socket_color))
+    for sid, pass_id, color in ends:
         met = np.nonzero(surface == sid)[0]
         if len(met):
-            band.add(pass_id, rays.pix.take(met), rows(k, met) * rows(color, rays.lamp.take(met)))
-    met = np.nonzero(surface == P.HOUSING)[0] if ctx.plates else ()  # a plate lamp's housing ends the path
+            lamp = rays.lamp.take(met)
+            k_met = rows(k, met)
+            if throughput is not None:
+                k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
+            band.add(pass_id, rays.pix.take(met), k_met * rows(color, lamp))
+    # a plate lamp's housing ends the path
+    met = np.nonzero(surface == P.HOUSING)[0] if ctx.plates and throughput is None else ()
     if len(met):
         band.add(SIDE_WALL_PASS, rays.pix.take(met), rows(k, met) * rows(lamps.housing_color, rays.lamp.take(met)))
 
@@ -184,7 +193,7 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
         d, hit = _end_points(rays, t, met)
         faces = surface.take(met)
         children.extend(at_plate_face(rays, met, rows(k, met), d, hit, cls.take(met), faces,
-                                      _normals_at(normals, met, faces), lamps))
+                                      _normals_at(normals, met, faces), lamps, throughput))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return concat(children) if len(children) > 1 else children[0]
@@ -192,7 +201,16 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
 
 def _absorbed(ctx: Context, rays: Rays, t: np.ndarray) -> Rays:
     """The rays with their accumulated attenuation k (and its s-polarised share) at the end of
-    their segments of length ``t``: eq. (2) along those inside a lens or a prism plate."""
+    their segments of length ``t``: eq. (2) along those inside a lens or a prism plate; in the
+    photometric mode the lengths are added to what the rays travelled in each material, the
+    bands' absorption taken at the leaves (``spectral.Throughput``)."""
+    if ctx.throughput is not None:
+        travelled = rays.travelled.copy()
+        for column, medium in ((0, P.IN_LENS), (1, P.IN_PLATE)):
+            inside = np.nonzero(rays.medium == medium)[0] if column == 0 or ctx.plates else ()
+            if len(inside):
+                travelled[inside, column] += t.take(inside)
+        return replace(rays, travelled=travelled)
     lamps = ctx.lamps
     k, k_s = rays.k, rays.k_s
     in_lens = np.nonzero(rays.medium == P.IN_LENS)[0]
