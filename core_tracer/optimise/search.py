@@ -336,14 +336,17 @@ def trial_bytes(opt: Optimisation) -> int:
         view = view_along(opt.base, direction(0.0, 0.0), request.front_pixel_mm)
         need = max(need, budget.render_bytes(view.width, view.height, False, "exr"))
     if request.grid_directions:
-        need = max(need, budget.BASE_BYTES + LIGHT_TRACING_BYTES)
+        from ..measures.light_tracing import BATCH
+
+        need = max(need, budget.BASE_BYTES + LIGHT_TRACING_BYTES_PER_PHOTON * min(request.photons, BATCH))
     return need
 
 
-# The light tracing's peak beyond the interpreter: batches of 50,000 rays with their spectral bands
-# and branches (measures.light_tracing.BATCH); measured with tracemalloc at 20,000 photons on the
-# photometric stop lamp (see docs/cluster.md), rounded up.
-LIGHT_TRACING_BYTES = 256 * 2**20
+# The light tracing's peak beyond the interpreter grows with its batch of photons (at most
+# measures.light_tracing.BATCH at once): their rays, spectral bands and branches. Measured with
+# tracemalloc on the photometric stop lamp, 20,000 photons, the 45 directions of R148 S1: 308 MB,
+# 15.4 kB a photon; rounded up.
+LIGHT_TRACING_BYTES_PER_PHOTON = 16 * 2**10
 
 
 # ---------------------------------------------------------------------------------------------
