@@ -18,8 +18,8 @@
   (``measures.MEASURES``); more than one is a multi-objective search (a Pareto front).
 - ``constraints``: ``{"measure", "min", "max"}``; a trial outside is infeasible. A search whose
   trials are all infeasible says so when it ends.
-- ``sampler``: ``tpe`` (default), ``cmaes`` (numbers only, one objective, no constraints),
-  ``nsga2`` (the default with several objectives), ``random``.
+- ``sampler``: ``tpe`` (default), ``cmaes`` (Optuna's CMA-ES, the ``cmaes`` package: numbers
+  only, one objective, no constraints), ``nsga2`` (the default with several objectives), ``random``.
 - ``storage``: any database URL Optuna accepts; default ``sqlite:///<this file>.optuna.db`` beside
   the file, so an interrupted optimisation resumes and several processes can share it. ``name``
   names the Optuna study in it (default: the file's name).

@@ -103,7 +103,7 @@ class OptimiseRun:
             best = search.best(self.opt, study)
             if best:
                 results.write_presets(self.opt, best, self.folder)
-                if self.opt.needs_render:
+                if self.opt.needs_task:
                     top = search.ranked(self.opt, study, results.SHEET_TRIALS)
                     results.write_sheet(self.opt, top, results.trial_images(self.opt, top, cache),
                                         os.path.join(self.folder, "sheet.png"))
