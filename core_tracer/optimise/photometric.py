@@ -21,6 +21,9 @@ the worker, in the trial's task (``figures``), at a cost kept small and stated:
   H-V to the nearest edge of the function's signal-colour region, positive inside, negative
   outside (UN R48 §2.29 and SAE J578, ``measures.colour``; the smaller of the two, or one of them
   by ``regulation``).
+- **Total flux** (``total_flux``, lm): the luminous flux leaving the ``function``'s lamps in every
+  direction, counted from the same photons as the grid (its standard error about 0.35 % at 20,000
+  photons: 51.6 ± 0.18 lm of the stop lamp's 440 lm bulb).
 - **Intensity at H-V** (``intensity_hv``, cd): the rendered estimator (``measures.intensity``,
   2 mm pixels, 2 shifted renders; about 1 % standard error).
 
@@ -56,15 +59,20 @@ class Request:
     grid_directions: tuple[tuple[float, float], ...] = ()  # light-traced intensities here
     photons: int = 0
     axis: bool = False  # the rendered intensity and colour at H-V
+    flux: bool = False  # the light-traced flux leaving the lamps (from the same photons as the grid)
 
     def merge(self, other: Request) -> Request:
         pixels = [p for p in (self.front_pixel_mm, other.front_pixel_mm) if p is not None]
         directions = tuple(dict.fromkeys(self.grid_directions + other.grid_directions))
         return Request(min(pixels) if pixels else None, directions, max(self.photons, other.photons),
-                       self.axis or other.axis)
+                       self.axis or other.axis, self.flux or other.flux)
+
+    @property
+    def traces(self) -> bool:
+        return bool(self.grid_directions) or self.flux
 
     def __bool__(self) -> bool:
-        return self.front_pixel_mm is not None or bool(self.grid_directions) or self.axis
+        return self.front_pixel_mm is not None or self.traces or self.axis
 
 
 @dataclass
@@ -77,6 +85,7 @@ class Figures:
     # lamp -> (h, v) -> (cd, variance), light-traced
     grid: dict[int, dict[tuple[float, float], tuple[float, float]]] = field(default_factory=dict)
     axis: dict[int, tuple[float, float, np.ndarray]] = field(default_factory=dict)  # lamp -> (cd, stderr, xyz)
+    flux: dict[int, tuple[float, float]] = field(default_factory=dict)  # lamp -> (lm leaving, variance)
     seconds: dict[str, float] = field(default_factory=dict)
 
 
@@ -90,7 +99,7 @@ def figures(scene: dict, request: Request) -> Figures:
 
     from ..measures import intensity as I
     from ..measures.directions import direction
-    from ..measures.light_tracing import traced_intensities
+    from ..measures.light_tracing import traced_beam
 
     out = Figures()
     lamps = lit_lamps(scene)
@@ -101,12 +110,16 @@ def figures(scene: dict, request: Request) -> Figures:
         out.front_owner = I.lamp_of_pixels(scene, view).astype(np.int16)
         out.front_pixel_mm = request.front_pixel_mm
         out.seconds["front view"] = time.perf_counter() - start
-    if request.grid_directions and lamps:
+    if request.traces and lamps:
         start = time.perf_counter()
-        per_lamp = traced_intensities(scene, list(request.grid_directions), [[i] for i in lamps],
-                                      photons=request.photons, cone_deg=CONE_DEG, seed=0)
-        for i, values in zip(lamps, per_lamp, strict=True):
-            out.grid[i] = {d: (v.cd, v.stderr ** 2) for d, v in zip(request.grid_directions, values, strict=True)}
+        directions = list(request.grid_directions) or [(0.0, 0.0)]
+        per_lamp, flux = traced_beam(scene, directions, [[i] for i in lamps], photons=request.photons,
+                                     cone_deg=CONE_DEG, seed=0)
+        for i, values, (lm, err) in zip(lamps, per_lamp, flux, strict=True):
+            if request.grid_directions:
+                out.grid[i] = {d: (v.cd, v.stderr ** 2) for d, v in zip(directions, values, strict=True)}
+            if request.flux:
+                out.flux[i] = (lm, err ** 2)
         out.seconds["light tracing"] = time.perf_counter() - start
     if request.axis and lamps:
         start = time.perf_counter()
@@ -154,15 +167,24 @@ def _prepare_homogeneity(options: dict, where: str, folder: str) -> Prepared:
                      "dark_below": _positive(options, "dark_below", where, 0.5, 0.01, 0.99)})
 
 
+def _photons(options: dict, where: str) -> int:
+    photons = options.get("photons", DEFAULT_PHOTONS)
+    if isinstance(photons, bool) or not isinstance(photons, int) or not 1000 <= photons <= MAX_PHOTONS:
+        raise SceneError(f"{where}.photons", f"{show_value(photons)} is out of range; allowed a whole number "
+                                             f"1000 to {MAX_PHOTONS}")
+    return photons
+
+
+def _prepare_flux(options: dict, where: str, folder: str) -> Prepared:
+    return Prepared(Request(photons=_photons(options, where), flux=True), _function(options, where), {})
+
+
 def _prepare_grid(options: dict, where: str, folder: str) -> Prepared:
     from ..measures import regulation_grid
     from ..measures.report import FUNCTIONS
 
     function = _function(options, where)
-    photons = options.get("photons", DEFAULT_PHOTONS)
-    if isinstance(photons, bool) or not isinstance(photons, int) or not 1000 <= photons <= MAX_PHOTONS:
-        raise SceneError(f"{where}.photons", f"{show_value(photons)} is out of range; allowed a whole number "
-                                             f"1000 to {MAX_PHOTONS}")
+    photons = _photons(options, where)
     keys = [FUNCTIONS[function][0]] if function else [FUNCTIONS[f][0] for f in FUNCTIONS]
     directions = tuple(dict.fromkeys(d for key in keys for d in regulation_grid.directions_for(key)))
     return Prepared(Request(grid_directions=directions, photons=photons), function, {})
@@ -264,6 +286,10 @@ def _intensity_hv(trial: Trial, prepared: Prepared) -> float:
     return _axis(trial, prepared)[0]
 
 
+def _total_flux(trial: Trial, prepared: Prepared) -> float:
+    return float(sum(trial.figures.flux[i][0] for i in _lamps(trial, prepared.function)))
+
+
 def signed_distance(xy, corners) -> float:
     """Distance in xy from ``xy`` to the polygon's nearest edge: positive inside, negative outside."""
     from ..measures import colour
@@ -308,6 +334,8 @@ for _name, _goal, _words, _compute in (
 register(Measure("grid_min_margin", "", "lowest margin over the function's UN R148 grid (>= 0: every point met; "
                  "light-traced)", False, _grid_min_margin, _prepare_grid, ("function", "photons"),
                  request=_request))
+register(Measure("total_flux", "lm", "luminous flux leaving the lamps, every direction (light-traced)", False,
+                 _total_flux, _prepare_flux, ("function", "photons"), request=_request))
 register(Measure("intensity_hv", "cd", "luminous intensity at H-V (rendered, about 1 % standard error)", False,
                  _intensity_hv, _prepare_axis, ("function",), request=_request))
 register(Measure("colour_distance", "xy", "distance inside the signal colour's region at H-V (UN R48, SAE J578; "

@@ -335,7 +335,7 @@ def trial_bytes(opt: Optimisation) -> int:
 
         view = view_along(opt.base, direction(0.0, 0.0), request.front_pixel_mm)
         need = max(need, budget.render_bytes(view.width, view.height, False, "exr"))
-    if request.grid_directions:
+    if request.traces:
         from ..measures.light_tracing import BATCH
 
         need = max(need, budget.BASE_BYTES + LIGHT_TRACING_BYTES_PER_PHOTON * min(request.photons, BATCH))

@@ -71,6 +71,11 @@ def cached_figures(cache: CellCache | None, key: str, scene: dict, request: P.Re
         if lum is None or owner is None or lum.shape != owner.shape:
             return None
         out.front_luminance, out.front_owner, out.front_pixel_mm = lum, owner, request.front_pixel_mm
+    if request.flux and lamps:
+        flux = cache.get_array(fkey + "-flux")
+        if flux is None or flux.shape != (len(lamps), 2):
+            return None
+        out.flux = {i: (float(flux[k, 0]), float(flux[k, 1])) for k, i in enumerate(lamps)}
     if request.grid_directions and lamps:
         grid = cache.get_array(fkey + "-grid")
         if grid is None or grid.shape != (len(lamps), len(request.grid_directions), 2):
@@ -90,6 +95,8 @@ def keep_figures(cache: CellCache | None, key: str, scene: dict, request: P.Requ
         return
     fkey = figures_key(key, request)
     lamps = P.lit_lamps(scene)
+    if figures.flux:
+        cache.put_array(fkey + "-flux", np.array([figures.flux[i] for i in lamps], dtype=np.float64))
     if figures.grid:
         cache.put_array(fkey + "-grid", np.array([[figures.grid[i][d] for d in request.grid_directions]
                                                   for i in lamps], dtype=np.float64))

@@ -55,11 +55,11 @@ def figures_of(opt, values):
 
 def test_every_measure_has_a_goal_a_unit_and_words():
     for name in ("lmin_over_lmax", "lmin_over_lmean", "luminance_cv", "dark_fraction", "grid_min_margin",
-                 "colour_distance", "intensity_hv", "lens_thickness"):
+                 "colour_distance", "intensity_hv", "total_flux", "lens_thickness"):
         m = MEASURES[name]
         assert m.goal in spec.GOALS and m.description and isinstance(m.unit, str)
     assert MEASURES["luminance_cv"].goal == "minimise" and MEASURES["grid_min_margin"].goal == "maximise"
-    assert MEASURES["intensity_hv"].unit == "cd"
+    assert MEASURES["intensity_hv"].unit == "cd" and MEASURES["total_flux"].unit == "lm"
 
 
 @pytest.mark.parametrize("edit, where, allowed", [
@@ -132,6 +132,25 @@ def test_intensity_at_hv_agrees_with_light_tracing_and_the_grid_margin_reads_it(
     # the same figures from light tracing by its own entry point, same seed and photons
     again = traced_intensity(scene, 0.0, 0.0, [0], photons=P.DEFAULT_PHOTONS, cone_deg=P.CONE_DEG, seed=0)
     assert again.cd == pytest.approx(traced, rel=0.25)
+
+
+@pytest.mark.slow
+def test_total_flux_is_the_integral_of_the_rendered_intensities(tmp_path):
+    """The light-traced flux leaving the stop lamp against ∫ I dΩ over the front hemisphere from an
+    independent estimator, the rendered intensities on a (C, γ) grid (30° by 5°, trapezoids in γ):
+    within 5 % (the grid's quadrature; measured 51.6 ± 0.18 lm against 49.6 lm), and below the
+    bulb's 440 lm."""
+    from core_tracer.measures.export import lamp_flux, measure_distribution
+
+    opt = spec.from_doc(opt_doc(tmp_path, objectives=[{"measure": "total_flux"}]), str(tmp_path))
+    scene, figures = figures_of(opt, {OFFSET: 0.0})
+    traced = search.measure(opt, scene, None, None, figures)[0][0]
+    stderr = np.sqrt(figures.flux[0][1])
+    beam = measure_distribution(scene, c_step=30.0, gamma_step=5.0, gamma_max=90.0, pixel_mm=2.0, replicates=1)
+    gamma = np.radians(beam.gamma_deg)
+    integral = 2 * np.pi * np.trapz(beam.cd.mean(axis=0) * np.sin(gamma), gamma)
+    assert traced == pytest.approx(integral, rel=0.05), (traced, stderr, integral)
+    assert stderr < 0.01 * traced and traced < lamp_flux(scene)
 
 
 def test_colour_distance_is_signed_inside_and_outside():
