@@ -180,6 +180,7 @@ class RunCount:
     from_cache: int = 0  # cells whose image the cache held
     task_bytes: int = 0  # the pickled size of the largest task (the cell and its arguments)
     band_tasks: int = 0  # tasks that traced runs of a large cell's bands
+    workers: list[str] | None = None  # the workers tasks went to when only some had the memory (None: any)
 
 
 class CellRun:
@@ -225,7 +226,7 @@ class CellRun:
         if not self.wanted:
             return
         need = max(cell_bytes(self.cells[ix[0]]) for ix in self.wanted.values())
-        self.workers = fitting_workers(self.client, need, "a variant")
+        self.workers = self.count.workers = fitting_workers(self.client, need, "a variant")
         needed = {self.cells[ix[0]].environment for ix in self.wanted.values()} - {None}
         self.sent = {d: self.client.scatter(self.inputs.data[d], hash=False) for d in needed}
         for key, indices in self.wanted.items():
