@@ -6,7 +6,7 @@ the worker, in the trial's task (``figures``), at a cost kept small and stated:
 
 - **Homogeneity** (``lmin_over_lmax``, ``lmin_over_lmean``, ``luminance_cv``, ``dark_fraction``):
   one orthographic luminance render of the lamp seen from H-V (``measures.intensity.view_along``),
-  pixels of ``pixel_mm`` (default 1 mm: 232 x 132 px for the photometric stop lamp, about 0.5 s),
+  pixels of ``pixel_mm`` (default 1 mm: 232 x 132 px for the photometric stop lamp, 0.3-0.5 s),
   the lit lens the pixels whose lens is a lit lamp's of the ``function`` (default every lit lamp);
   the figures as ``measures.homogeneity`` gives them, blurred to what an eye at ``distance_m``
   (default 10 m) resolves.
