@@ -224,8 +224,20 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
             progress(Progress(trial.number, count_finished(study), opt.trials, objective, feasible, values,
                               rendered))
 
-    def start_one() -> None:
+    def refuse(trial, values, e: SceneError) -> None:
+        """A design the scene or its measures refuse: a failed trial, with the reason, that counts."""
         import optuna
+
+        trial.set_user_attr("refused", f"{e.path}: {e.message}")
+        trial.set_user_attr("design", values)
+        study.tell(trial, state=optuna.trial.TrialState.FAIL)
+        outcome.told.append(trial.number)
+        outcome.refused += 1
+        if progress is not None:
+            progress(Progress(trial.number, count_finished(study), opt.trials, None, False, values, False,
+                              refused=f"{e.path}: {e.message}"))
+
+    def start_one() -> None:
 
         trial = study.ask()
         params = {k.name: suggest(trial, k) for k in opt.knobs}
@@ -234,14 +246,7 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
         try:
             scene = opt.scene_of(values)
         except SceneError as e:
-            trial.set_user_attr("refused", f"{e.path}: {e.message}")
-            trial.set_user_attr("design", values)
-            study.tell(trial, state=optuna.trial.TrialState.FAIL)
-            outcome.told.append(trial.number)
-            outcome.refused += 1
-            if progress is not None:
-                progress(Progress(trial.number, count_finished(study), opt.trials, None, False, values, False,
-                                  refused=f"{e.path}: {e.message}"))
+            refuse(trial, values, e)
             return
         if not opt.needs_task:
             tell(trial, scene, values, "", None, None, None, False)
@@ -254,7 +259,11 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
             tell(trial, scene, values, key, *found, figures, False)
             return
         if client is None:
-            image, mask, figures = T.run_trial(cell, inputs.data.get(cell.environment), None, camera, request)
+            try:
+                image, mask, figures = T.run_trial(cell, inputs.data.get(cell.environment), None, camera, request)
+            except SceneError as e:  # a design its measures cannot read (light tracing: a cylindrical lens)
+                refuse(trial, values, e)
+                return
             keep(key, scene, image, mask, figures)
             tell(trial, scene, values, key, image, mask, figures, True)
             return
@@ -292,6 +301,10 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
                 continue
             for future in done:
                 trial, scene, values, key = in_flight.pop(future)
+                if future.status == "error" and isinstance(future.exception(), SceneError):
+                    refuse(trial, values, future.exception())
+                    future.release()
+                    continue
                 if future.status != "finished":
                     raise RuntimeError(f"trial {trial.number} failed on a worker: {future.exception()}")
                 image, mask, figures = future.result()

@@ -170,6 +170,11 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
     objectives = tuple(_objective(o, f"objectives[{i}]", folder) for i, o in enumerate(_list(doc, "objectives", 1)))
     constraints = tuple(_constraint(c, f"constraints[{i}]", folder)
                         for i, c in enumerate(_list(doc, "constraints", 0) if "constraints" in doc else []))
+    photometric = [o.measure.name for o in objectives + constraints if o.measure.photometric]
+    for i, knob in enumerate(knobs):
+        if photometric and knob.name == "light_model":
+            raise SceneError(f"parameters[{i}].parameter", f"light_model cannot vary: {photometric[0]} needs light in "
+                                                           "cd in every trial; allowed any other parameter")
     for kind, items in (("objectives", objectives), ("constraints", constraints)):
         for i, item in enumerate(items):
             if item.measure.photometric and base.get("light_model") != "photometric":

@@ -71,6 +71,8 @@ def test_every_measure_has_a_goal_a_unit_and_words():
     ({"constraints": [{"measure": "grid_min_margin", "photons": 10, "min": 0}]}, "constraints[0].photons",
      "1000 to"),
     ({"objectives": [{"measure": "luminance_cv", "pixel_mm": 0}]}, "objectives[0].pixel_mm", "0.1 to 10"),
+    ({"parameters": [{"parameter": "light_model", "values": ["paper", "photometric"]}]}, "parameters[0].parameter",
+     "any other parameter"),
     ({"objectives": [{"measure": "colour_distance", "regulation": "JIS"}]}, "objectives[0].regulation",
      "UN R48, SAE J578"),
     ({"sampler": "cmaes", "constraints": [{"measure": "intensity_hv", "min": 60}]}, "sampler", "with constraints"),
@@ -227,6 +229,27 @@ def test_a_grid_margin_no_design_can_meet_is_said_after_the_search(tmp_path):
     trials = json.loads((tmp_path / "out" / "trials.json").read_text())["trials"]
     assert len(trials) == 3 and not any(t["feasible"] for t in trials)
     assert all(t["measures"]["grid_min_margin"] < -0.5 for t in trials)
+
+
+@pytest.mark.slow
+def test_designs_light_tracing_cannot_follow_are_refused_trials_not_a_crash(tmp_path):
+    """A cylindrical lens among the values: light tracing follows flat lenses only, so those trials
+    are refused with the reason (and counted); the flat ones are measured."""
+    base = read_json(str(STOP))
+    base["body"]["depth"] = 120.0  # room for the curved lens's reflector
+    base["lamps"][0]["lens"]["wrap_radius"] = 400.0
+    (tmp_path / "base.json").write_text(json.dumps(base))
+    opt = spec.from_doc(opt_doc(tmp_path, trials=4, base="base.json", parameters=[
+        {"parameter": "lens.shape", "values": ["flat", "cylindrical"]}],
+        objectives=[{"measure": "grid_min_margin", "function": "stop", "photons": 2000}]), str(tmp_path))
+    outcome = search.run(opt, None, None)
+    trials = outcome.study.get_trials(deepcopy=False)
+    refused = [t for t in trials if t.user_attrs.get("refused")]
+    measured = search.finished_trials(outcome.study)
+    assert refused and measured and len(refused) + len(measured) == 4 and outcome.refused == len(refused)
+    assert all(t.user_attrs["design"]["lens.shape"] == "cylindrical" for t in refused)
+    assert all("flat-lensed" in t.user_attrs["refused"] for t in refused), [t.user_attrs["refused"] for t in refused]
+    assert all(t.user_attrs["design"]["lens.shape"] == "flat" for t in measured)
 
 
 # ---------------------------------------------------------------------------------------------
