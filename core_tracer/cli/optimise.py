@@ -50,6 +50,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_folder(folder, "--output")
     os.makedirs(folder, exist_ok=True)
 
+    from .. import budget
     from ..cluster import engine
     from ..cluster.cache import CellCache
     from ..optimise import results, search
@@ -73,17 +74,19 @@ def run(args: argparse.Namespace) -> int:
     where = "in this process"
     with ctrl_c_sets() as stop:
         try:
-            if args.workers == 0 or not opt.needs_render:
+            if args.workers == 0 or not opt.needs_task:
                 outcome = search.run(opt, None, cache, progress=progress, should_stop=stop.is_set)
             else:
                 workers = args.workers or engine.default_workers()
                 parallel = opt.parallel or workers
-                limit = engine.worker_memory([], 0) + _render_bytes(opt)
+                limit = min(budget.MEMORY_BUDGET, search.trial_bytes(opt) + engine.DASK_BYTES + engine.KEPT_FREED_BYTES)
                 with engine.connect(args.scheduler, workers=workers, memory_limit=limit) as client:
                     where = "on the " + (client.local.describe() if client.local is not None else
                                          f"Dask scheduler {client.scheduler.address}")
                     outcome = search.run(opt, client, cache, parallel=parallel, progress=progress,
                                          should_stop=stop.is_set)
+                    if outcome.workers is not None:
+                        where += (f", only on the workers whose memory holds a trial: {', '.join(outcome.workers)}")
         except search.Cancelled:
             raise stop.interrupt() from None
         except OSError as e:
@@ -114,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
         return 1
     presets = results.write_presets(opt, best, folder)
     top = search.ranked(opt, study, results.SHEET_TRIALS)
-    if opt.needs_render:
+    if opt.needs_task:
         results.write_sheet(opt, top, results.trial_images(opt, top, cache), os.path.join(folder, "sheet.png"))
     first = search.finished_trials(study)[:1]
     if first and first[0].number == 0 and search.feasible(first[0]):
@@ -124,13 +127,6 @@ def run(args: argparse.Namespace) -> int:
         shown = ", ".join(f"{o.measure.name} {v:.4g}" for o, v in zip(opt.objectives, trial.values, strict=True))
         print(f"best: trial {trial.number}: {results.setting(trial.user_attrs['design'])} -> {shown}")
     print(f"results in {printable(folder)}: {', '.join(os.path.basename(p) for p in presets)}, "
-          f"{'sheet.png, ' if opt.needs_render else ''}history.png, trials.json")
+          f"{'sheet.png, ' if opt.needs_task else ''}history.png, trials.json")
     return 0
 
-
-def _render_bytes(opt) -> int:
-    """A trial keeps its passes: the eight pass images beside the image (``budget.render_bytes``)."""
-    from .. import budget
-
-    w, h = opt.size
-    return budget.render_bytes(w, h, True, "exr") - budget.BASE_BYTES

@@ -325,4 +325,6 @@ def _run_on_dask(args: argparse.Namespace, study: st.Study, world: int, on_progr
                                         f" ({e}); allowed the address of a running dask scheduler, "
                                         "or local") from None
     how = f"on the {where[0]}" if where else "all from the cache"
+    if count.workers is not None:
+        how += f", only on the workers whose memory holds a variant: {', '.join(count.workers)}"
     return images, how, f" ({count.rendered} rendered, {count.from_cache} from the cache)"

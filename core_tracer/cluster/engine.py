@@ -86,6 +86,36 @@ def worker_memory(cells: Sequence[Cell], environment: int = 0) -> int:
     return min(budget.MEMORY_BUDGET, need + DASK_BYTES + KEPT_FREED_BYTES)
 
 
+def megabytes(n: int) -> str:
+    return f"{n / 2**20:.0f} MB"
+
+
+def fitting_workers(client, need: int, what: str = "a render") -> list[str] | None:
+    """Before tasks are sent: the workers whose memory limit (the scheduler's ``memory_limit``; 0 or
+    none: unlimited) holds ``what``'s estimated peak, ``need`` bytes (``budget``), plus a Dask
+    worker's own share (``DASK_BYTES``). None when every worker fits (tasks go anywhere); the list
+    when only some do (tasks are sent to those alone); a one-line ``SceneError`` naming the largest
+    worker and both figures when none does. A cluster with no worker yet is left to Dask."""
+    from ..scene.reading import SceneError
+
+    workers = client.scheduler_info().get("workers", {})
+    want = need + DASK_BYTES
+    fit, small = [], []
+    for address, info in sorted(workers.items()):
+        limit = int(info.get("memory_limit") or 0)
+        (fit if limit == 0 or limit >= want else small).append((address, limit))
+    if not small:
+        return None
+    if not fit:
+        address, limit = max(small, key=lambda item: item[1])
+        others = f" (and {len(small) - 1} smaller)" if len(small) > 1 else ""
+        raise SceneError("--scheduler", f"worker {address} has a memory limit of {megabytes(limit)}{others}; {what} "
+                                        f"needs about {megabytes(want)} there ({megabytes(need)} for the render, "
+                                        f"{megabytes(DASK_BYTES)} for Dask); allowed workers started with "
+                                        f"--memory-limit {megabytes(want)} or more")
+    return [address for address, _ in fit]
+
+
 @dataclass
 class Local:
     """What a local cluster started: its processes, threads and memory limit per worker."""
@@ -150,6 +180,7 @@ class RunCount:
     from_cache: int = 0  # cells whose image the cache held
     task_bytes: int = 0  # the pickled size of the largest task (the cell and its arguments)
     band_tasks: int = 0  # tasks that traced runs of a large cell's bands
+    workers: list[str] | None = None  # the workers tasks went to when only some had the memory (None: any)
 
 
 class CellRun:
@@ -175,6 +206,7 @@ class CellRun:
         self.parts: dict[str, list] = {}  # key -> the rows of each run of bands of a large cell
         self.pending: set = set()
         self.sent: dict = {}
+        self.workers: list[str] | None = None  # where tasks went when only some workers' memory fits
 
     @property
     def total(self) -> int:
@@ -189,7 +221,12 @@ class CellRun:
         return self.done == self.total
 
     def submit(self) -> None:
-        """Send one task per key the cache lacked, and each environment image they need once."""
+        """Send one task per key the cache lacked, and each environment image they need once, to the
+        workers whose memory holds the largest cell's render (``fitting_workers``)."""
+        if not self.wanted:
+            return
+        need = max(cell_bytes(self.cells[ix[0]]) for ix in self.wanted.values())
+        self.workers = self.count.workers = fitting_workers(self.client, need, "a variant")
         needed = {self.cells[ix[0]].environment for ix in self.wanted.values()} - {None}
         self.sent = {d: self.client.scatter(self.inputs.data[d], hash=False) for d in needed}
         for key, indices in self.wanted.items():
@@ -199,14 +236,15 @@ class CellRun:
                 else [None]
             if len(groups) == 1:
                 future = self.client.submit(render_cell, cell, env, self.stop_name, key=f"lamp-cell-{key}",
-                                            pure=False)
+                                            pure=False, workers=self.workers, allow_other_workers=False)
                 self.futures[future] = (key, None)
                 continue
             self.parts[key] = [None] * len(groups)
             self.count.band_tasks += len(groups)
             for g, bands in enumerate(groups):
                 future = self.client.submit(render_bands, cell, bands, env, self.stop_name,
-                                            key=f"lamp-bands-{key}-{g}", pure=False)
+                                            key=f"lamp-bands-{key}-{g}", pure=False, workers=self.workers,
+                                            allow_other_workers=False)
                 self.futures[future] = (key, g)
         self.pending = set(self.futures)
         if self.wanted:

@@ -237,6 +237,16 @@ def traced_intensities(scene: dict, angles: Sequence[tuple[float, float]],
     """I(H, V) in cd at each of ``angles`` for each group of lamps (None: the whole design), as the
     mean over a cone of half angle ``cone_deg``, from ``photons`` samples of each source of each lit
     lamp: ``result[group][direction]``."""
+    return traced_beam(scene, angles, groups, photons=photons, cone_deg=cone_deg, seed=seed, bands=bands,
+                       batch=batch)[0]
+
+
+def traced_beam(scene: dict, angles: Sequence[tuple[float, float]],
+                groups: Sequence[Sequence[int]] | None = None, *, photons: int = DEFAULT_PHOTONS,
+                cone_deg: float = DEFAULT_CONE_DEG, seed: int = 0, bands: int | None = None,
+                batch: int = BATCH) -> tuple[list[list[Intensity]], list[tuple[float, float]]]:
+    """``traced_intensities`` and, from the same photons, each group's luminous flux leaving the lamp
+    in every direction (lm) with its standard error: ``(intensities, [(lm, stderr) per group])``."""
     if photons < 2:
         raise ValueError(f"photons: {photons!r} is not 2 or more")
     if not 0.0 < cone_deg < 90.0:
@@ -254,9 +264,10 @@ def traced_intensities(scene: dict, angles: Sequence[tuple[float, float]],
     rng = np.random.default_rng(seed)
     per_lamp: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     for lamp in sorted({i for g in groups for i in g}):
-        tally = Tally.empty(len(targets))
+        columns = len(targets) + 1  # the last counts every branch that leaves: the flux out
+        tally = Tally.empty(columns)
         if not ctx.lamps.bulb_intensity[lamp].any():
-            per_lamp[lamp] = (np.zeros(len(targets)), np.zeros(len(targets)), np.zeros((len(targets), 3)))
+            per_lamp[lamp] = (np.zeros(columns), np.zeros(columns), np.zeros((columns, 3)))
             continue
         for source in (bulb_photons, glow_photons):
             done = 0
@@ -269,8 +280,8 @@ def traced_intensities(scene: dict, angles: Sequence[tuple[float, float]],
                 # the flux of the batch as a share of the source's whole sample: n / photons
                 pix, d, k = trace(ctx, rays)
                 xyz = (k * rows(flux, pix) * (n / photons)) @ to_xyz  # lm per branch
-                inside = (d @ targets.T) >= cos_cone  # (E, directions)
-                for j in range(len(targets)):
+                inside = np.hstack([(d @ targets.T) >= cos_cone, np.ones((len(d), 1), bool)])  # (E, directions + 1)
+                for j in range(columns):
                     sel = np.nonzero(inside[:, j])[0]
                     c = np.bincount(pix.take(sel), weights=xyz[sel, 1], minlength=n)
                     tally.sum_y[j] += c.sum()
@@ -280,14 +291,15 @@ def traced_intensities(scene: dict, angles: Sequence[tuple[float, float]],
             if done:
                 tally.close_source(done)
         per_lamp[lamp] = (tally.total_y, tally.variance, tally.total_xyz)
-    result = []
+    result, flux = [], []
     for group in groups:
         y = sum(per_lamp[i][0] for i in group)
         var = sum(per_lamp[i][1] for i in group)
         xyz = sum(per_lamp[i][2] for i in group)
         result.append([Intensity(float(y[j] / solid), float(math.sqrt(var[j]) / solid), xyz[j] / solid)
                        for j in range(len(targets))])
-    return result
+        flux.append((float(y[-1]), float(math.sqrt(var[-1]))))
+    return result, flux
 
 
 def traced_intensity(scene: dict, h_deg: float, v_deg: float, lamps: Sequence[int] | None = None,

@@ -18,65 +18,23 @@ Built in:
 - ``lit_fraction``: the share of the lamp's pixels above half the brightest of them (a crude
   evenness: 1 when the whole lit lens is within a stop of its peak).
 - ``lens_thickness``: the sum of the lamps' lens thickness in mm (a cost-like term: material).
+
+The photometric report's measures (homogeneity, grid margin, colour distance, intensity at H-V) are
+in ``photometric``.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..photometry.daylight import REC709_LUMINANCE
 from ..scene.reading import SceneError
-from ..scene.safe_text import show_key
+from .registry import MEASURES, Measure, Trial, lookup, register
 
-
-@dataclass
-class Trial:
-    """A rendered trial as measures see it."""
-
-    scene: dict
-    image: np.ndarray | None  # linear (H, W, 3): RGB (paper) or XYZ (photometric); None if not rendered
-    lamp_mask: np.ndarray | None  # (H, W) bool: the pixels that see a lamp
-
-    @property
-    def photometric(self) -> bool:
-        return self.scene.get("light_model") == "photometric"
-
-    def luminance(self) -> np.ndarray:
-        if self.photometric:
-            return self.image[..., 1]
-        return self.image @ np.asarray(REC709_LUMINANCE, dtype=np.float32)
-
-
-@dataclass(frozen=True)
-class Measure:
-    name: str
-    unit: str
-    description: str
-    needs_render: bool
-    compute: Callable[[Trial, Any], float]
-    prepare: Callable[[dict, str, str], Any] = field(default=lambda options, where, folder: None)
-    options: tuple[str, ...] = ()  # the option keys an objective of this measure may give
-
-
-MEASURES: dict[str, Measure] = {}
-
-
-def register(measure: Measure) -> Measure:
-    if measure.name in MEASURES:
-        raise ValueError(f"measure {measure.name!r} is registered already")
-    MEASURES[measure.name] = measure
-    return measure
-
-
-def lookup(name: Any, where: str) -> Measure:
-    if not isinstance(name, str) or name not in MEASURES:
-        raise SceneError(where, f"{show_key(str(name))} is not a measure; allowed {', '.join(sorted(MEASURES))}")
-    return MEASURES[name]
+__all__ = ["MEASURES", "Measure", "Trial", "lookup", "register"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -152,4 +110,9 @@ register(Measure("lens_luminance", "cd/m² or paper units",
                  "mean luminance of the pixels that see a lamp (linear)", True, _lens_luminance))
 register(Measure("lit_fraction", "", "share of the lamp's pixels within a stop of its brightest", True,
                  _lit_fraction))
-register(Measure("lens_thickness", "mm", "sum of the lamps' lens thickness (material)", False, _lens_thickness))
+register(Measure("lens_thickness", "mm", "sum of the lamps' lens thickness (material)", False, _lens_thickness,
+                 goal="minimise"))
+
+
+# The photometric report's measures register themselves (they use the names above).
+from . import photometric  # noqa: E402, F401

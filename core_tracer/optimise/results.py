@@ -88,7 +88,7 @@ def compose_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarr
     cols = min(SHEET_COLUMNS, len(trials))
     rows = -(-len(trials) // cols)
     gap = 4 * scale
-    cell_w = max(w, 20 * bitmap_font.ADVANCE_W * scale)
+    cell_w = max(w, 26 * bitmap_font.ADVANCE_W * scale)  # "colour_distance 0.0001476"
     title_h = line_h + gap
     cell_h = h + rows_of_text * line_h + gap
     width, height = cols * (cell_w + gap) + gap, title_h + rows * cell_h + gap

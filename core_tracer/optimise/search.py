@@ -59,6 +59,7 @@ class Outcome:
     from_cache: int = 0
     refused: int = 0  # designs the scene refused (failed trials, counted)
     told: list[int] = field(default_factory=list)  # trial numbers this process finished
+    workers: list[str] | None = None  # the workers trials were sent to (those whose memory fits), None: any
 
 
 def directions(opt: Optimisation) -> list[str]:
@@ -165,10 +166,10 @@ def count_finished(study) -> int:
     return len(study.get_trials(deepcopy=False, states=finished_states()))
 
 
-def measure(opt: Optimisation, scene: dict, image: np.ndarray | None, mask: np.ndarray | None
-            ) -> tuple[list[float], dict[str, float], list[float]]:
+def measure(opt: Optimisation, scene: dict, image: np.ndarray | None, mask: np.ndarray | None,
+            figures=None) -> tuple[list[float], dict[str, float], list[float]]:
     """(objective values, every measure by name, constraint excesses) of one rendered trial."""
-    trial = Trial(scene, image, mask)
+    trial = Trial(scene, image, mask, figures)
     values = [o.measure.compute(trial, o.prepared) for o in opt.objectives]
     named = {o.measure.name: v for o, v in zip(opt.objectives, values, strict=True)}
     excess = []
@@ -195,9 +196,16 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
     stop_name = f"lamp-stop-{uuid.uuid4().hex}"
     in_flight: dict[Any, tuple[Any, dict, dict, str]] = {}  # future -> (optuna trial, scene, values, key)
     sent: dict[str, Any] = {}
+    camera, request = opt.needs_render, opt.request
+    workers = None
+    if client is not None and opt.needs_task:  # before anything is sent: every worker's memory
+        from ..cluster import engine
 
-    def tell(trial, scene, values, key, image, mask, rendered) -> None:
-        objective, named, excess = measure(opt, scene, image, mask)
+        workers = engine.fitting_workers(client, trial_bytes(opt), "a trial")
+        outcome.workers = workers
+
+    def tell(trial, scene, values, key, image, mask, figures, rendered) -> None:
+        objective, named, excess = measure(opt, scene, image, mask, figures)
         feasible = all(e <= 0 for e in excess)
         trial.set_user_attr("measures", named)
         trial.set_user_attr("constraints", excess or [0.0])
@@ -216,8 +224,20 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
             progress(Progress(trial.number, count_finished(study), opt.trials, objective, feasible, values,
                               rendered))
 
-    def start_one() -> None:
+    def refuse(trial, values, e: SceneError) -> None:
+        """A design the scene or its measures refuse: a failed trial, with the reason, that counts."""
         import optuna
+
+        trial.set_user_attr("refused", f"{e.path}: {e.message}")
+        trial.set_user_attr("design", values)
+        study.tell(trial, state=optuna.trial.TrialState.FAIL)
+        outcome.told.append(trial.number)
+        outcome.refused += 1
+        if progress is not None:
+            progress(Progress(trial.number, count_finished(study), opt.trials, None, False, values, False,
+                              refused=f"{e.path}: {e.message}"))
+
+    def start_one() -> None:
 
         trial = study.ask()
         params = {k.name: suggest(trial, k) for k in opt.knobs}
@@ -226,37 +246,42 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
         try:
             scene = opt.scene_of(values)
         except SceneError as e:
-            trial.set_user_attr("refused", f"{e.path}: {e.message}")
-            trial.set_user_attr("design", values)
-            study.tell(trial, state=optuna.trial.TrialState.FAIL)
-            outcome.told.append(trial.number)
-            outcome.refused += 1
-            if progress is not None:
-                progress(Progress(trial.number, count_finished(study), opt.trials, None, False, values, False,
-                                  refused=f"{e.path}: {e.message}"))
+            refuse(trial, values, e)
             return
-        if not opt.needs_render:
-            tell(trial, scene, values, "", None, None, False)
+        if not opt.needs_task:
+            tell(trial, scene, values, "", None, None, None, False)
             return
         cell = make_cell(scene, width, height, inputs)
         key = cell.key
-        found = T.cached(cache, key)
-        if found is not None:
-            tell(trial, scene, values, key, *found, False)
+        found = T.cached(cache, key) if camera else (None, None)
+        figures = T.cached_figures(cache, key, scene, request) if request else None
+        if found is not None and (figures is not None or not request):
+            tell(trial, scene, values, key, *found, figures, False)
             return
         if client is None:
-            image, mask = T.render_trial(cell, inputs.data.get(cell.environment), None)
-            T.keep(cache, key, image, mask)
-            tell(trial, scene, values, key, image, mask, True)
+            try:
+                image, mask, figures = T.run_trial(cell, inputs.data.get(cell.environment), None, camera, request)
+            except SceneError as e:  # a design its measures cannot read (light tracing: a cylindrical lens)
+                refuse(trial, values, e)
+                return
+            keep(key, scene, image, mask, figures)
+            tell(trial, scene, values, key, image, mask, figures, True)
             return
         env = None
-        if cell.environment is not None:
+        if cell.environment is not None and camera:
             if cell.environment not in sent:
                 sent[cell.environment] = client.scatter(inputs.data[cell.environment], hash=False)
             env = sent[cell.environment]
-        future = client.submit(T.render_trial, cell, env, stop_name, key=f"lamp-trial-{key}-{uuid.uuid4().hex[:8]}",
-                               pure=False)
+        future = client.submit(T.run_trial, cell, env, stop_name, camera, request,
+                               key=f"lamp-trial-{key}-{uuid.uuid4().hex[:8]}", pure=False, workers=workers,
+                               allow_other_workers=False)
         in_flight[future] = (trial, scene, values, key)
+
+    def keep(key, scene, image, mask, figures) -> None:
+        if image is not None:
+            T.keep(cache, key, image, mask)
+        if figures is not None:
+            T.keep_figures(cache, key, scene, request, figures)
 
     try:
         while True:
@@ -276,12 +301,16 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
                 continue
             for future in done:
                 trial, scene, values, key = in_flight.pop(future)
+                if future.status == "error" and isinstance(future.exception(), SceneError):
+                    refuse(trial, values, future.exception())
+                    future.release()
+                    continue
                 if future.status != "finished":
                     raise RuntimeError(f"trial {trial.number} failed on a worker: {future.exception()}")
-                image, mask = future.result()
+                image, mask, figures = future.result()
                 future.release()
-                T.keep(cache, key, image, mask)
-                tell(trial, scene, values, key, image, mask, True)
+                keep(key, scene, image, mask, figures)
+                tell(trial, scene, values, key, image, mask, figures, True)
         return outcome
     except BaseException:
         import optuna
@@ -299,6 +328,38 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
     finally:
         for f in sent.values():
             f.release()
+
+
+def trial_bytes(opt: Optimisation) -> int:
+    """A trial task's estimated peak (``budget.render_bytes``): the camera's view with its passes
+    kept, or the photometric work (the front view's image; the light tracing's batches of rays,
+    ``LIGHT_TRACING_BYTES``), whichever is larger."""
+    from .. import budget
+
+    need = budget.BASE_BYTES
+    if opt.needs_render:
+        w, h = opt.size
+        glare = bool((opt.base.get("glare") or {}).get("on", False))
+        need = max(need, budget.render_bytes(w, h, True, "exr", glare))
+    request = opt.request
+    if request.front_pixel_mm is not None:
+        from ..measures.directions import direction
+        from ..measures.intensity import view_along
+
+        view = view_along(opt.base, direction(0.0, 0.0), request.front_pixel_mm)
+        need = max(need, budget.render_bytes(view.width, view.height, False, "exr"))
+    if request.traces:
+        from ..measures.light_tracing import BATCH
+
+        need = max(need, budget.BASE_BYTES + LIGHT_TRACING_BYTES_PER_PHOTON * min(request.photons, BATCH))
+    return need
+
+
+# The light tracing's peak beyond the interpreter grows with its batch of photons (at most
+# measures.light_tracing.BATCH at once): their rays, spectral bands and branches. Measured with
+# tracemalloc on the photometric stop lamp, 20,000 photons, the 45 directions of R148 S1: 308 MB,
+# 15.4 kB a photon; rounded up.
+LIGHT_TRACING_BYTES_PER_PHOTON = 16 * 2**10
 
 
 # ---------------------------------------------------------------------------------------------

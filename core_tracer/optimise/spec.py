@@ -18,8 +18,8 @@
   (``measures.MEASURES``); more than one is a multi-objective search (a Pareto front).
 - ``constraints``: ``{"measure", "min", "max"}``; a trial outside is infeasible. A search whose
   trials are all infeasible says so when it ends.
-- ``sampler``: ``tpe`` (default), ``cmaes`` (numbers only, one objective, no constraints),
-  ``nsga2`` (the default with several objectives), ``random``.
+- ``sampler``: ``tpe`` (default), ``cmaes`` (Optuna's CMA-ES, the ``cmaes`` package: numbers
+  only, one objective, no constraints), ``nsga2`` (the default with several objectives), ``random``.
 - ``storage``: any database URL Optuna accepts; default ``sqlite:///<this file>.optuna.db`` beside
   the file, so an interrupted optimisation resumes and several processes can share it. ``name``
   names the Optuna study in it (default: the file's name).
@@ -113,8 +113,27 @@ class Optimisation:
 
     @property
     def needs_render(self) -> bool:
+        """Whether a trial renders the camera's view (for the measures of the image)."""
         return any(o.measure.needs_render for o in self.objectives) or \
             any(c.measure.needs_render for c in self.constraints)
+
+    @property
+    def request(self):
+        """The photometric work each trial's task does for the measures (``photometric.Request``;
+        false when none asks for any)."""
+        from .photometric import Request
+
+        out = Request()
+        for m, prepared in [(o.measure, o.prepared) for o in self.objectives] + \
+                [(c.measure, c.prepared) for c in self.constraints]:
+            if m.request is not None:
+                out = out.merge(m.request(prepared))
+        return out
+
+    @property
+    def needs_task(self) -> bool:
+        """Whether a trial is work for a worker (a render of any kind), not only the design's figures."""
+        return self.needs_render or bool(self.request)
 
     def scene_of(self, values: dict[str, Any]) -> dict:
         """The design of one trial: the base with ``values`` (by parameter name) applied, checked."""
@@ -151,6 +170,18 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
     objectives = tuple(_objective(o, f"objectives[{i}]", folder) for i, o in enumerate(_list(doc, "objectives", 1)))
     constraints = tuple(_constraint(c, f"constraints[{i}]", folder)
                         for i, c in enumerate(_list(doc, "constraints", 0) if "constraints" in doc else []))
+    photometric = [o.measure.name for o in objectives + constraints if o.measure.photometric]
+    for i, knob in enumerate(knobs):
+        if photometric and knob.name == "light_model":
+            raise SceneError(f"parameters[{i}].parameter", f"light_model cannot vary: {photometric[0]} needs light in "
+                                                           "cd in every trial; allowed any other parameter")
+    for kind, items in (("objectives", objectives), ("constraints", constraints)):
+        for i, item in enumerate(items):
+            if item.measure.photometric and base.get("light_model") != "photometric":
+                raise SceneError(f"{kind}[{i}].measure", f"{item.measure.name} needs light in cd, which the base's "
+                                 f"light_model \"{base.get('light_model', 'paper')}\" has not; allowed a base with "
+                                 "light_model \"photometric\" (or a measure of the image: ssim, lens_luminance, "
+                                 "lit_fraction, lens_thickness)")
     trials = _whole(doc.get("trials", 30), "trials", 1, MAX_TRIALS)
     default_sampler = "nsga2" if len(objectives) > 1 else "tpe"
     sampler = doc.get("sampler", default_sampler)
@@ -316,7 +347,7 @@ def _objective(doc: Any, where: str, folder: str) -> Objective:
         raise SceneError(where, f"expected an object with measure and goal, got {show_value(doc)}")
     measure = M.lookup(doc.get("measure"), f"{where}.measure")
     options = _options(doc, measure, where, ("goal",))
-    goal = doc.get("goal", "maximise")
+    goal = doc.get("goal", measure.goal)
     if goal not in GOALS:
         raise SceneError(f"{where}.goal", f"{show_value(goal)} is not a goal; allowed {', '.join(GOALS)}")
     prepared = measure.prepare(options, where, folder)

@@ -103,7 +103,7 @@ class OptimiseRun:
             best = search.best(self.opt, study)
             if best:
                 results.write_presets(self.opt, best, self.folder)
-                if self.opt.needs_render:
+                if self.opt.needs_task:
                     top = search.ranked(self.opt, study, results.SHEET_TRIALS)
                     results.write_sheet(self.opt, top, results.trial_images(self.opt, top, cache),
                                         os.path.join(self.folder, "sheet.png"))
@@ -123,7 +123,10 @@ def _finish(operator, run: OptimiseRun) -> set[str]:
         operator.report({"WARNING"}, "Lamp Optimise stopped; run it again to resume")
         return {"CANCELLED"}
     if isinstance(run.error, SceneError):
-        return reports.cancelled(operator, str(run.error))
+        error = run.error
+        if error.path == "--scheduler":  # the workers' memory, said in the panel's words
+            error = SceneError("Scheduler", error.message)
+        return reports.cancelled(operator, str(error))
     if run.error is not None:
         return reports.cancelled(operator, f"Lamp Optimise failed: {type(run.error).__name__}: {run.error}")
     settings.remember(run.outcome)
