@@ -221,6 +221,37 @@ for group_name, group in (("light", design.light), ("lamp", design.lamps[0]), ("
         words[f"{group_name}.{prop.identifier}"] = [prop.name, prop.description]
 record["words"] = words
 
+# The free-form example (when the zip ships it): F12 against the zip's own command line, pixel by pixel.
+startup()
+example = "freeform-sculpted-wrap-lamp.json"
+listed = [item.file for item in bpy.context.window_manager.lamp_presets]
+if any(f.endswith(example) for f in listed):
+    import subprocess
+
+    import numpy as np
+    import OpenImageIO as oiio
+
+    apply(example)
+    scene = bpy.context.scene
+    settings = scene.render.image_settings
+    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
+    captured(bpy.ops.render.render)
+    bpy.data.images["Render Result"].save_render(os.path.join(OUT, "f12.exr"), scene=scene)
+    f12("10-freeform-f12", 100)
+    preset = next(f for f in listed if f.endswith(example))
+    installed = os.path.dirname(os.path.dirname(preset))  # the extension's folder: presets/ is in it
+    subprocess.run([sys.executable, "-m", "core_tracer", "render", preset, "-o", os.path.join(OUT, "cli.exr")],
+                   cwd=installed, check=True, capture_output=True)
+
+    def exr(name):
+        buf = oiio.ImageBuf(os.path.join(OUT, name))
+        return np.asarray(buf.get_pixels(oiio.FLOAT))[..., :3]
+
+    a, b = exr("f12.exr"), exr("cli.exr")
+    record["freeform"] = {"equal": float((a == b).all(axis=2).mean()) if a.shape == b.shape else 0.0,
+                          "largest": float(np.abs(a - b).max()) if a.shape == b.shape else None,
+                          "size": list(a.shape[:2])}
+
 with open(os.path.join(OUT, "walk.json"), "w", encoding="utf-8") as f:
     json.dump(record, f, indent=1)
 print("walk done", OUT, flush=True)

@@ -173,6 +173,15 @@ def compose(before_dir: Path, after_dir: Path, out: Path) -> list[str]:
              ([f"BEFORE: four-lamp preset, F12 {fb['size'][0]}x{fb['size'][1]}"],
               [f"AFTER: four-lamp preset, F12 {fa['size'][0]}x{fa['size'][1]} (the preset's own image size)"]),
              ["7-framing-four-lamps.png"])
+    if "freeform" in a:
+        ff = a["freeform"]
+        shipped = read_png(after_dir / "10-freeform-f12.png")
+        before = (read_png(before_dir / "10-freeform-f12.png") if "freeform" in b
+                  else text_panel(["The preset browser lists no free-form example."], shipped.shape[1]))
+        save("10-freeform-example.png", side_by_side(
+            before, shipped, ["BEFORE: no free-form example ships"],
+            [f"AFTER: the free-form example's F12 from the zip; against the zip's command line "
+             f"{ff['equal']:.1%} of the pixels equal (largest difference {ff['largest']:g})"]))
     keys = [k for k in a["words"] if k.startswith(("light.", "lamp.", "lens.ior", "lens.absorption", "bulb."))]
     keys += [k for k in b["words"] if k.startswith("lamp.") and k not in keys]
 
