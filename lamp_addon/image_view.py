@@ -5,7 +5,10 @@ is set before any pixel is written: changing it afterwards resets the pixels (BL
 
 Colour: the images hold linear values and are shown with Blender's own colour management, the
 scene's view transform (AgX, Standard, False Color, ...) applied exactly as to a render
-(``use_view_as_render``). Images of the lamp are shown at the design's automatic exposure
+(``use_view_as_render``). The exposure belongs to the view: the "Lamp Tracer" image holds the
+render as F12 makes it and is shown at the scene's exposure, as F12 is (``show_as_render``), so two
+designs rendered in turn keep their difference in brightness. Sheets of several pictures (Lamp
+Compare, Lamp Study) are shown under one exposure for all of them, measured over them all
 (``core_tracer.images.display.auto_exposure``) whatever the scene's exposure is when they are made:
 their pixels carry the difference (recorded in the image's ``lamp_exposure`` property), so the lit
 lens's cut pattern reads and labels keep their grey. The scene's exposure (which *Exposure from
@@ -66,11 +69,6 @@ def image_from_array(name: str, rgb: np.ndarray, alpha: np.ndarray | None = None
     return image
 
 
-def shown_gain(bl_scene, exposure: float) -> np.float32:
-    """The factor that makes pictures show at ``exposure`` stops under the scene's own exposure."""
-    return np.float32(2.0 ** (exposure - bl_scene.view_settings.exposure))
-
-
 def show_linear(name: str, rgb: np.ndarray, exposure: float, bl_scene) -> bpy.types.Image:
     """The image ``name`` showing ``rgb`` (H, W, 3, linear; its pictures already at ``exposure``
     stops, its labels as they are) through the scene's view transform, like a render, and as if the
@@ -79,6 +77,15 @@ def show_linear(name: str, rgb: np.ndarray, exposure: float, bl_scene) -> bpy.ty
     image = image_from_array(name, rgb * np.float32(2.0 ** -scene_exposure) if scene_exposure else rgb)
     image.use_view_as_render = True
     image[EXPOSURE_PROPERTY] = float(exposure - scene_exposure)
+    return image
+
+
+def show_as_render(name: str, rgb: np.ndarray) -> bpy.types.Image:
+    """The image ``name`` holding ``rgb`` (H, W, 3, linear) as F12's Render Result holds it: shown
+    through the scene's view transform at the scene's exposure (nothing applied to its pixels)."""
+    image = image_from_array(name, rgb)
+    image.use_view_as_render = True
+    image[EXPOSURE_PROPERTY] = 0.0
     return image
 
 

@@ -5,8 +5,10 @@ The meshes are read and checked by the core (``core_tracer.freeform.loading.load
 beside the JSON, never outside its folder, within the size and triangle limits) *before* anything in
 the scene changes, so a missing or hostile mesh file refuses the whole preset. The objects go into a
 new collection "Lamp Free-form", in the design root's frame (children of the root when there is one),
-with the file's normals as custom normals and their role material, as Convert to Free-form makes
-them. The scene's other objects, parts with roles included, are left as they are.
+with the file's normals as free custom normals (``normals_exporting_as``: the tracer inside Blender,
+and Blender's exporter, give back the file's very numbers, so F12 equals the command line's render
+pixel for pixel) and their role material, as Convert to Free-form makes them. The scene's other
+objects, parts with roles included, are left as they are.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import numpy as np
 from ..convert import units
 from ..design import root as design_root
 from . import materials, properties
+from . import meshes as freeform_meshes
 
 COLLECTION_NAME = "Lamp Free-form"
 
@@ -43,9 +46,14 @@ def _mesh(name: str, data) -> bpy.types.Mesh:
     mesh.polygons.add(len(tris))
     mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(tris), 3, dtype=np.int32))
     mesh.update(calc_edges=True)
-    if data.corner_normals is not None:
-        mesh.normals_split_custom_set(np.asarray(data.corner_normals, np.float32).reshape(-1, 3))
     mesh.validate(clean_customdata=False)
+    if data.corner_normals is not None:
+        # Free custom normals (a float ``custom_normal`` attribute), which Blender gives back as
+        # stored; its encoded custom normals would move them by up to 1e-4 and average a fan's.
+        normals = mesh.attributes.new("custom_normal", "FLOAT_VECTOR", "CORNER")
+        normals.data.foreach_set("vector", freeform_meshes.normals_exporting_as(
+            np.asarray(data.corner_normals).reshape(-1, 3)).ravel())
+        mesh.update()
     return mesh
 
 

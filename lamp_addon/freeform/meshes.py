@@ -67,22 +67,61 @@ def mesh_data(mesh: bpy.types.Mesh, name: str) -> MeshData:
     return MeshData(name, vertices, triangles.reshape(-1, 3), normals)
 
 
-def exported_normals(corner: np.ndarray) -> np.ndarray:
-    """Blender's corner normals (float32, (N, 3)) as the ``.glb`` gives them to the tracer: Blender's
-    glTF exporter rounds them to ``ROUNDING_DIGIT`` (4) decimals and normalises them in 32 bits
-    (``primitive_extract.__get_normals``); ``core_tracer.freeform.gltf`` scales them to millimetres with
-    the axes (a rotation times 1000) and normalises them in 64 bits. The same operations here give
-    the same bits. (Rounding to 1e-4 turns a normal by at most about 1e-4 rad.)"""
+def _rounding_digit() -> int:
     try:
         from io_scene_gltf2.io.com.constants import ROUNDING_DIGIT
     except ImportError:  # pragma: no cover - the glTF add-on ships with Blender
         ROUNDING_DIGIT = 4
-    n = np.round(np.asarray(corner, np.float32), ROUNDING_DIGIT)
+    return ROUNDING_DIGIT
+
+
+def exported_normals(corner: np.ndarray) -> np.ndarray:
+    """Blender's corner normals (float32, (N, 3)) as the ``.glb`` gives them to the tracer: Blender's
+    glTF exporter rounds them to ``ROUNDING_DIGIT`` (4) decimals, normalises them in 32 bits and
+    writes a zero normal (a degenerate triangle's) as up, (0, 0, 1) (``primitive_extract
+    .__get_normals``); ``core_tracer.freeform.gltf`` scales them to millimetres with the axes (a
+    rotation times 1000) and normalises them in 64 bits. The same operations here give the same
+    bits. (Rounding to 1e-4 turns a normal by at most about 1e-4 rad.)"""
+    n = np.round(np.asarray(corner, np.float32), _rounding_digit())
     norms = np.linalg.norm(n, axis=1, keepdims=True)
     np.divide(n, norms, out=n, where=norms != 0)
+    n[~n.any(axis=1), 2] = 1.0
     n = n.astype(np.float64) * units.MM_PER_BU
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     return n
+
+
+# The steps (in units of the exporter's last decimal) tried around a file normal's rounded
+# components, nearest first: the 4-decimal vector the exporter normalised lies within one step.
+_STEPS = sorted(np.ndindex(3, 3, 3), key=lambda k: (sum(abs(i - 1) for i in k), k))
+_STEPS = np.array(_STEPS, np.float64) - 1.0
+
+
+def normals_exporting_as(target: np.ndarray) -> np.ndarray:
+    """Corner normals for a Blender mesh (float32, (N, 3)) that ``exported_normals`` turns into
+    ``target`` (unit float64 normals, (N, 3), as ``core_tracer.freeform.gltf`` read them from a .glb)
+    bit for bit: so parts made from a .glb are traced inside Blender, and exported again, with the
+    file's very normals. A normal Blender's exporter wrote is a 4-decimal vector normalised in 32
+    bits; that vector is found among the 27 within one last decimal of the normal's rounded
+    components (the rounded components themselves for about 98 % of them). A normal no 4-decimal
+    vector gives (a file from another exporter) is kept in 32 bits: exported, it moves by the
+    exporter's rounding (under about 1e-4). When the rounded components give fewer than half of the
+    normals, the file is not Blender's and the other 26 are not searched (a second a million)."""
+    target = np.asarray(target, np.float64).reshape(-1, 3)
+    scale = 10.0 ** _rounding_digit()
+    base = np.rint(target * scale)
+    out = target.astype(np.float32)
+    todo = np.arange(len(target))
+    for step in _STEPS:
+        if not len(todo):
+            break
+        candidate = np.round(((base[todo] + step) / scale).astype(np.float32), _rounding_digit())
+        hit = (exported_normals(candidate) == target[todo]).all(axis=1)
+        out[todo[hit]] = candidate[hit]
+        if len(todo) == len(target) and hit.sum() < len(target) / 2:
+            break
+        todo = todo[~hit]
+    return out
 
 
 def scene_meshes(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, objects) -> dict[str, MeshData]:

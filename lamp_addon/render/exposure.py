@@ -7,8 +7,9 @@ Properties > Color Management), like any engine's, and Build Lamp and Apply Pres
 so designs compare under one exposure. A lit lens is ten or more times brighter than display white;
 this operator is the explicit way to expose for the design in view: it measures the design from the
 scene camera on a small preview render (``image_view.design_exposure``, with the bulbs on when every
-bulb is off) and sets the scene's exposure to it. The add-on's own images (Lamp Tracer, Lamp
-Compare, Lamp Study) are each shown under one exposure of their own (``image_view.show_linear``).
+bulb is off) and sets the scene's exposure to it. Render with Lamp Tracer's image is shown at the
+scene's exposure too, as F12 is; the add-on's sheets (Lamp Compare, Lamp Study) are each shown under
+one exposure for all their pictures (``image_view.show_linear``).
 """
 
 from __future__ import annotations

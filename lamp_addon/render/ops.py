@@ -5,6 +5,12 @@ operator polls it on a timer: the image fills in band by band, the progress show
 status bar, Esc cancels, the interface keeps responding. Called from a script, or in
 background mode where there are no windows, the operator renders synchronously (``execute``).
 
+The image follows the one exposure policy: the exposure belongs to the view. It holds what F12
+renders (the paper model's linear values, or a photometric design's at its EV100) and is shown at
+the scene's exposure, as F12 is; rendering never changes the exposure or exposes the image on its
+own, so a stop lamp rendered after a tail lamp shows brighter by the ratio of their bulbs. *Exposure
+from Design* is the explicit way to expose for the design in view.
+
 Only ``{'REGISTER'}``, like Blender's own ``render.render``: the operator makes a picture of
 the design and changes nothing the design is made of, so there is nothing for undo to take
 back (and an undo step pushed when a background render ends would land between whatever
@@ -19,7 +25,7 @@ import time
 import bpy
 import numpy as np
 
-from ...core_tracer.images import display, glare
+from ...core_tracer.images import glare
 from ...core_tracer.raytrace import band_pool
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, image_view, jobs, reports
@@ -88,8 +94,8 @@ class TracerJob:
 
 
 def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
-    """Render the scene with the tracer synchronously into the "Lamp Tracer" image.
-    Returns the image and the render time in seconds. Raises ``SceneError``."""
+    """Render the scene with the tracer synchronously into the "Lamp Tracer" image, shown at the
+    scene's exposure as F12 is. Returns the image and the render time in seconds. Raises ``SceneError``."""
     from ... import core_tracer
 
     view_link.sync_view(bl_scene)
@@ -98,12 +104,10 @@ def render_to_image(bl_scene) -> tuple[bpy.types.Image, float]:
     shown_as = photometric_display.for_scene(scene)
     if shown_as is not None:  # photometric: the design's EV100 is in the pixels (render.photometric_display)
         rgb = glare.apply(shown_as.linear(core_tracer.render(scene)), scene)
-        seconds = time.perf_counter() - start
-        return image_view.show_linear(IMAGE_NAME, rgb, 0.0, bl_scene), seconds
-    rgb = glare.apply(core_tracer.render(scene), scene)
+    else:
+        rgb = glare.apply(core_tracer.render(scene), scene)
     seconds = time.perf_counter() - start
-    exposure = display.auto_exposure(rgb)
-    return image_view.show_linear(IMAGE_NAME, rgb * np.float32(2.0 ** exposure), exposure, bl_scene), seconds
+    return image_view.show_as_render(IMAGE_NAME, rgb), seconds
 
 
 class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
@@ -140,9 +144,7 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
             self._job = TracerJob(scene)
         except SceneError as e:
             return reports.cancelled(self, design_validity.message(context.scene, e))
-        exposure = image_view.design_exposure(scene)  # known before the rows arrive
-        self._gain = image_view.shown_gain(context.scene, exposure)
-        self._image = image_view.show_linear(IMAGE_NAME, self._job.rows, exposure, context.scene)
+        self._image = image_view.show_as_render(IMAGE_NAME, self._job.rows)
         image_view.show_image(context, self._image)
         self._shown_updates = 0
         outcome = self.begin_modal(context, self._job)
@@ -183,7 +185,7 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
     def _show_rows(self, context) -> None:
         if self._job.updates != self._shown_updates:
             self._shown_updates = self._job.updates
-            self._image.pixels.foreach_set(image_view.rgba_rows(self._job.rows * self._gain))
+            self._image.pixels.foreach_set(image_view.rgba_rows(self._job.rows))
             self._image.update()
             image_view.redraw_image_editors(context, self._image)
 

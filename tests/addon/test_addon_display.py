@@ -34,6 +34,8 @@ def test_lamp_tracer_image_in_blender_equals_the_cli_png(lamp_addon, bl_scene, t
     import bpy
 
     scene = _load(lamp_addon, bl_scene, FOUR_LAMPS, (96, 64))
+    # The image is shown at the view's exposure, as F12 is: exposed for the design, the explicit way.
+    assert bpy.ops.lamp.exposure_from_design() == {"FINISHED"}
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     image = bpy.data.images["Lamp Tracer"]
     # What Blender shows: the image through the scene's view transform (use_view_as_render), written

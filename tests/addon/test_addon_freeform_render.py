@@ -205,13 +205,11 @@ def test_an_exported_pair_imports_back_as_parts_with_roles(lamp_addon, addon_cor
     assert all(lamp_addon.freeform.materials.role_material(o) is not None for o in parts)
     bl_scene.render.engine = "LAMP_TRACER"
     imported = _f12(bl_scene, tmp_path / "imported.exr")
-    # Blender keeps positions in 32 bits and custom normals in its own compressed form: the same
-    # picture up to those roundings.
-    value = np.maximum(exported[:, :, :3].max(axis=2), 1e-3 * exported.max())
-    error = np.abs(imported[:, :, :3] - exported[:, :, :3]).max(axis=2) / value
-    print(f"\nimported pair vs Blender's own render: {(error == 0).mean():.1%} of the pixels equal, "
-          f"{(error <= 0.01).mean():.1%} within 1 %, largest {error.max():.2%}")
-    assert (error <= 0.01).mean() >= 0.99
+    # The parts made from the .glb carry the file's positions and, as free custom normals, normals the
+    # exporter writes back as the file's (freeform.meshes.normals_exporting_as): the same picture.
+    equal = (imported[:, :, :3] == exported[:, :, :3]).all(axis=2)
+    print(f"\nimported pair vs Blender's own render: {equal.mean():.1%} of the pixels equal")
+    assert equal.all()
 
 
 def test_a_freeform_preset_with_a_missing_mesh_file_changes_nothing(lamp_addon, addon_core, bl_scene, tmp_path):

@@ -21,7 +21,7 @@ from helpers import BASELINE, ROOT, render_engine_exr, whole_report
 
 import core_tracer
 import core_tracer.raytrace.camera  # the projection tests use it; the package loads its modules lazily
-from core_tracer.images import display, imageio
+from core_tracer.images import imageio
 
 pytestmark = pytest.mark.blender
 
@@ -172,10 +172,8 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     assert rc.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     image = bpy.data.images["Lamp Tracer"]
-    # What renders is the design's view up to Blender's single-precision camera (the image's pixels
-    # carry the exposure it is shown at).
-    gain = np.float32(2.0 ** lamp_addon.image_view.image_exposure(image))
-    rendered = lamp_addon.image_view.image_to_array(image) / gain
+    # What renders is the design's view up to Blender's single-precision camera.
+    rendered = lamp_addon.image_view.image_to_array(image)
     np.testing.assert_allclose(rendered, core_tracer.render(lamp_addon.design.properties.design_to_scene(bl_scene)),
                                atol=1e-4, rtol=1e-5)
     # The design's image size is the render size.
@@ -621,12 +619,10 @@ def test_render_operator_image_equals_core_render(lamp_addon, bl_scene):
 
 
 def _assert_shown(lamp_addon, image, expected) -> None:
-    """The image holds the tracer's render at the design's automatic exposure, shown through the
-    scene's view transform like a render."""
-    exposure = display.auto_exposure(expected)
-    assert image.use_view_as_render and image["lamp_exposure"] == exposure and exposure < -2
-    np.testing.assert_allclose(lamp_addon.image_view.image_to_array(image), expected * np.float32(2.0 ** exposure),
-                               rtol=1e-6)
+    """The image holds the tracer's render as F12 does, shown through the scene's view transform at the
+    scene's exposure like a render (the exposure belongs to the view)."""
+    assert image.use_view_as_render and image["lamp_exposure"] == 0.0
+    np.testing.assert_array_equal(lamp_addon.image_view.image_to_array(image), expected)
 
 
 def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):
