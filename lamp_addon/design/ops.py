@@ -22,7 +22,7 @@ from ..convert.layout import (
 )
 from ..render import lamp_camera, view_link
 from ..render import setup as render_setup
-from . import builder, properties
+from . import builder, properties, validity
 from .operator import DesignOperator
 
 
@@ -147,6 +147,7 @@ class LAMP_OT_build(DesignOperator, bpy.types.Operator):
         except SceneError as e:
             return self.cancelled(e)
         report = builder.build_lamp(context.scene, scene)
+        validity.remember(context.scene)
         view_link.sync_view(context.scene)
         news = render_setup.set_up(context.scene)
         if report.not_driven:  # the designer's own edits, each named in the Info editor

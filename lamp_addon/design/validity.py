@@ -132,6 +132,15 @@ def status(bl_scene) -> Status:
     return _memo["status"]
 
 
+def remember(bl_scene) -> None:
+    """Check the design as it is now, so that a valid one becomes the design the next error is
+    measured from (``fixing_field``). The panel does this as it draws; Apply Preset and Build call it
+    too, so that an edit made before the panel is drawn again (a script, a driver, a headless walk)
+    still highlights the field changed rather than the one the rule names."""
+    if status(bl_scene).problem is None:
+        _memo["valid"][bl_scene.name] = properties.design_document(bl_scene)
+
+
 def _leaves(doc, path: str = "") -> dict:
     """The design's leaf values by path (``lamps[0].lens.radius``)."""
     if isinstance(doc, dict):

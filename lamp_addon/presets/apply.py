@@ -23,6 +23,7 @@ from ..design import builder as design_builder
 from ..design import curves as design_curves
 from ..design import properties as design_properties
 from ..design import root as design_root
+from ..design import validity as design_validity
 from ..freeform import loading as freeform_loading
 from ..freeform import parametric as freeform_parametric
 from ..render import camera as render_camera
@@ -150,7 +151,9 @@ def apply_preset_whole(bl_scene: bpy.types.Scene, scene: dict, path: str | None 
     again; the operator's one undo step then holds no change."""
     before = SceneState(bl_scene)
     try:
-        return apply_preset(bl_scene, scene, path)
+        applied = apply_preset(bl_scene, scene, path)
     except Exception:
         before.restore(bl_scene)
         raise
+    design_validity.remember(bl_scene)
+    return applied

@@ -91,3 +91,23 @@ def test_the_command_line_keeps_the_json_paths(tmp_path):
     path.write_text(core_tracer.scene_to_json(scene), encoding="utf-8")
     done = run_cli("validate", path)
     assert done.returncode != 0 and "lamps[0].cuts.height: 8 is more than a hemisphere" in done.stdout + done.stderr
+
+
+@pytest.mark.parametrize("then", ["Apply Preset", "Build"])
+def test_an_edit_made_before_the_panel_draws_still_highlights_the_field_changed(lamp_addon, bl_scene, capfd, then):
+    """Apply Preset and Build remember the valid design they leave (``validity.remember``): a lens
+    radius set too large right after them, with no panel drawn in between (a script, a headless walk),
+    is named first by Build, not the body the rule names (the issue-24 walk's finding)."""
+    import bpy
+
+    lamp_addon.design.validity._memo["valid"].clear()  # no design seen valid yet in this file
+    scene = core_tracer.load_scene(str(BASELINE))
+    scene["image"] = {"width": 24, "height": 16}
+    lamp_addon.presets.apply.apply_preset_whole(bl_scene, scene, str(BASELINE))
+    bl_scene.lamp_design.auto_build = False
+    if then == "Build":
+        lamp_addon.design.validity._memo["valid"].clear()
+        bpy.ops.lamp.build()
+    bl_scene.lamp_design.lamps[0].lens.radius = 80.0
+    error = _error_of(bpy.ops.lamp.build, capfd)
+    assert "Lamp 1 › Lens › Radius: Body › Size" in error, error
