@@ -25,11 +25,15 @@ from collections.abc import Callable
 
 from ..scene.reading import SceneError
 from ..scene.safe_text import show_key
-from . import colour
-from .report import FUNCTIONS
+
+# The functions of ``report.FUNCTIONS``, named here so that checking a name imports no numpy (a study
+# file is checked before anything heavy loads); tests/measures/test_measures_by_name.py keeps them equal.
+FUNCTION_NAMES = ("tail", "stop", "turn", "reversing")
 
 
 def _rows(measured: dict, function: str | None) -> list[dict]:
+    from .report import FUNCTIONS
+
     if function is None:
         return measured["rows"]
     keys = set(FUNCTIONS[function][:2])
@@ -50,6 +54,8 @@ def _hv_cd(measured: dict, function: str) -> float:
 
 
 def _colour_distance(measured: dict, function: str) -> float:
+    from . import colour
+
     found = measured["functions"].get(function, {}).get("colour")
     if not found:
         return math.nan
@@ -80,13 +86,13 @@ NAMES: tuple[str, ...] = tuple(sorted((*_PER_FUNCTION, *_OF_ROWS)))
 
 def allowed_text() -> str:
     return (f"allowed {', '.join(NAMES)}, each optionally followed by @function "
-            f"({', '.join(FUNCTIONS)})")
+            f"({', '.join(FUNCTION_NAMES)})")
 
 
 def check_name(name, where: str) -> str:
     """``name`` if it names a measure, else a ``SceneError`` at ``where`` listing the allowed names."""
     base, _, function = str(name).partition("@")
-    if not isinstance(name, str) or base not in NAMES or (function and function not in FUNCTIONS):
+    if not isinstance(name, str) or base not in NAMES or (function and function not in FUNCTION_NAMES):
         raise SceneError(where, f"{show_key(str(name))} is not a measure; {allowed_text()}")
     return name
 
