@@ -24,7 +24,7 @@ class Line:
     required: str
     simulated: str
     margin: str
-    passed: bool
+    passed: bool | None  # None for a figure without a limit (homogeneity)
 
 
 def _function_of(key: str) -> str:
@@ -71,17 +71,19 @@ def summary(measured: dict) -> str:
 
 
 def lines(measured: dict) -> list[Line]:
-    """Every regulation row, failed rows of a function first, then the homogeneity and colour figures."""
+    """Every regulation row, failed rows of a function first, then the homogeneity figures (no limit:
+    ``passed`` None) and the colours."""
     out = []
     for r in sorted(measured["rows"], key=lambda r: (_function_of(r["function"]), r["passed"])):
         unit = "" if r["kind"] == "ratio" else " cd"
         margin = r["margin"]
-        out.append(Line(_function_of(r["function"]), f"{_short(r['function'])} {r['point']} {r['kind']}",
+        kind = "min" if r["kind"] == "group min" else r["kind"]  # "group 1 min", not "group 1 group min"
+        out.append(Line(_function_of(r["function"]), f"{_short(r['function'])} {r['point']} {kind}",
                         f"{_cd(r['required'])}{unit}", f"{_cd(r['simulated'])}{unit}",
                         f"{100 * margin:+.0f} %" if margin is not None and math.isfinite(margin) else "—",
                         bool(r["passed"])))
     for name, h in measured["homogeneity"].items():
-        out.append(Line(name, "Lmin/Lmax (lit lens)", "—", f"{h['lmin_over_lmax']:.2f}", "—", True))
+        out.append(Line(name, "Lmin/Lmax (lit lens)", "—", f"{h['lmin_over_lmax']:.2f}", "—", None))
     for name, f in measured["functions"].items():
         c = f.get("colour")
         if c:

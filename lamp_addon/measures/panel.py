@@ -38,7 +38,7 @@ class LAMP_PT_measures(DesignSection, bpy.types.Panel):
         box.operator("lamp.measures_open_report", icon="IMAGE_DATA")
         box.prop(settings, "show_all")
         lines = table.lines(measured)
-        shown = lines if settings.show_all else [line for line in lines if not line.passed or line.required == "—"
+        shown = lines if settings.show_all else [line for line in lines if line.passed is not True
                                                  or line.point.startswith("colour")]
         col = box.column(align=True)  # a row's labels share its width equally: the columns line up
         row = col.row()
@@ -48,7 +48,10 @@ class LAMP_PT_measures(DesignSection, bpy.types.Panel):
             row = col.row()
             for text in (line.function, line.point, line.required, line.simulated, line.margin):
                 row.label(text=text)
-            row.label(text="pass" if line.passed else "FAIL", icon="CHECKMARK" if line.passed else "CANCEL")
+            if line.passed is None:  # a figure without a limit
+                row.label(text="—")
+            else:
+                row.label(text="pass" if line.passed else "FAIL", icon="CHECKMARK" if line.passed else "CANCEL")
         if len(shown) > ROWS_SHOWN:
             box.label(text=f"{len(shown) - ROWS_SHOWN} more rows in measures.json and the report")
         box.label(text=f"Folder: {settings.folder}")

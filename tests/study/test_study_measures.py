@@ -129,5 +129,7 @@ def test_the_summary_line_names_the_worst_failing_point():
                                    "300 cd (+10 more)")
     assert table.summary(json.loads(STOP_MEASURED.read_text())) == "Stop: pass"
     lines = table.lines(four)
-    assert len([line for line in lines if not line.passed]) == 11
+    assert len([line for line in lines if line.passed is False]) == 11
+    assert [line.passed for line in lines if line.point == "Lmin/Lmax (lit lens)"] == [None] * 4
+    assert "FMVSS backup group 1 min" in {line.point for line in lines}
     assert (lines[0].function, lines[0].point, lines[0].passed) == ("reversing", "AR H-V max", False)  # failed first
