@@ -103,7 +103,11 @@ def parse(doc: dict, base: dict) -> Choice:
     if sort != "":
         if not isinstance(sort, str):
             raise SceneError("sort", f"expected a measure name, got {show_value(sort)}; {by_name.allowed_text()}")
-        by_name.check_name(sort.removeprefix("-"), "sort")
+        try:
+            by_name.check_name(sort.removeprefix("-"), "sort")
+        except SceneError:
+            raise SceneError("sort", f"{show_value(sort)} is not a measure, or \"-\" and one; "
+                                     f"{by_name.allowed_text()}") from None
     filters = doc.get("filter", [])
     if isinstance(filters, str):
         filters = [filters]

@@ -88,3 +88,17 @@ def test_a_study_with_measures_runs_and_the_worker_path_gives_the_same_values(la
         for name in study.measured.names:
             assert by_worker[name] == pytest.approx(here[name], rel=1e-6), name
     assert direct[0]["intensity.hv_cd"] != direct[1]["intensity.hv_cd"]  # the variants differ
+
+
+def test_closing_the_measures_under_way_stops_the_worker_and_removes_its_folder(lamp_addon, stop_study):
+    import os
+
+    stop_study.lamp_study.measures = "grid.pass"
+    study = lamp_addon.study.settings.study_from_settings(stop_study)
+    measures = lamp_addon.study.ops.VariantMeasures(study)
+    assert not measures.poll()  # the first variant's worker started
+    process = measures._run._process
+    folder = measures._folder
+    measures.close()  # what Esc does
+    assert process.poll() is not None and not os.path.exists(folder)
+    assert measures.values == []
