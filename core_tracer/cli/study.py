@@ -264,7 +264,7 @@ def run(args: argparse.Namespace) -> int:
                 raise stop.interrupt() from None
         checkpoint("study:rendered")
     seconds = time.perf_counter() - start
-    measured = _measure(study, runnable) if study.measured else None
+    measured = _measure(args, study, runnable) if study.measured else None
     checkpoint("study:composed")
     shown = _write_sheet(args, study, images, view, measured)
     _save_side_files(args, study)
@@ -277,9 +277,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _measure(study: st.Study, runnable: st.Study) -> list[dict]:
-    """Each variant's values of the study's measures (printed as they come), and the variants a
-    filter leaves out, named."""
+def _measure(args: argparse.Namespace, study: st.Study, runnable: st.Study) -> list[dict]:
+    """Each variant's values of the study's measures (printed as they come; kept in the cell cache
+    unless ``--no-cache``), and the variants a filter leaves out, named."""
+    from ..cluster.cache import CellCache
     from ..study import measured as study_measured
 
     start = time.perf_counter()
@@ -289,7 +290,8 @@ def _measure(study: st.Study, runnable: st.Study) -> list[dict]:
         if done < total:
             print(f"measures: variant {done + 1} of {total}", flush=True)
 
-    values = study_measured.measure_variants([v.scene for v in runnable.variants], names, progress)
+    cache = None if args.no_cache else CellCache(args.cache)
+    values = study_measured.measure_variants([v.scene for v in runnable.variants], names, progress, cache)
     _kept, dropped = study_measured.arrange(study.measured, values)
     print(f"measured {len(values)} variants in {time.perf_counter() - start:.1f} s"
           + (f"; left out by the filter: {', '.join(f'#{i + 1}' for i in dropped)}" if dropped else ""))

@@ -121,18 +121,43 @@ def parse(doc: dict, base: dict) -> Choice:
 
 
 def measure_variants(scenes: Sequence[dict], names: Sequence[str],
-                     progress: Callable[[int, int], None] | None = None) -> list[dict[str, float]]:
-    """Each scene's values of ``names``, measured as the ``measure`` command measures a design."""
+                     progress: Callable[[int, int], None] | None = None, cache=None) -> list[dict[str, float]]:
+    """Each scene's values of ``names``, measured as the ``measure`` command measures a design.
+
+    ``cache``: a ``cluster.cache.CellCache`` (or None): the values are kept there by content (the
+    whole variant scene and the names), so a re-run measures only what is new."""
     from ..measures import report
 
     out = []
     for k, scene in enumerate(scenes):
         if progress is not None:
             progress(k, len(scenes))
-        out.append(by_name.values(report.measure(scene).as_dict(), names))
+        key = measures_key(scene, names)
+        kept = cache.get_array(key) if cache is not None else None
+        if kept is not None and kept.shape == (len(names),):
+            out.append(dict(zip(names, (float(v) for v in kept), strict=True)))
+            continue
+        values = by_name.values(report.measure(scene).as_dict(), names)
+        if cache is not None:
+            import numpy as np
+
+            cache.put_array(key, np.array([values[n] for n in names], dtype=np.float64))
+        out.append(values)
     if progress is not None:
         progress(len(scenes), len(scenes))
     return out
+
+
+MEASURES_KEY_VERSION = "lamp-study-measures/1"  # change it when what a measure computes changes
+
+
+def measures_key(scene: dict, names: Sequence[str]) -> str:
+    """The cache key of a variant's measures: its whole scene (canonical JSON) and the names."""
+    import hashlib
+    import json
+
+    text = json.dumps([MEASURES_KEY_VERSION, scene, list(names)], sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
 def arrange(choice: Choice, values: Sequence[dict[str, float]]) -> tuple[list[int], list[int]]:

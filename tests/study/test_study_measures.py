@@ -133,3 +133,19 @@ def test_the_summary_line_names_the_worst_failing_point():
     assert [line.passed for line in lines if line.point == "Lmin/Lmax (lit lens)"] == [None] * 4
     assert "FMVSS backup group 1 min" in {line.point for line in lines}
     assert (lines[0].function, lines[0].point, lines[0].passed) == ("reversing", "AR H-V max", False)  # failed first
+
+
+def test_measured_values_are_kept_in_the_cell_cache_by_content(tmp_path):
+    from core_tracer.cluster.cache import CellCache
+
+    study = _study({"measures": ["grid.pass"]})
+    scenes = [v.scene for v in study.variants]
+    cache = CellCache(tmp_path)
+    names = ("grid.pass", "intensity.hv_cd")
+    # Values kept under a variant's key are what a re-run gets, without measuring (which takes seconds).
+    for k, scene in enumerate(scenes):
+        cache.put_array(sm.measures_key(scene, names), np.array([1.0, 100.0 + k]))
+    got = sm.measure_variants(scenes, names, cache=cache)
+    assert got == [{"grid.pass": 1.0, "intensity.hv_cd": 100.0 + k} for k in range(len(scenes))]
+    assert sm.measures_key(scenes[0], names) != sm.measures_key(scenes[1], names)
+    assert sm.measures_key(scenes[0], names) != sm.measures_key(scenes[0], names[:1])

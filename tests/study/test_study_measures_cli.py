@@ -30,10 +30,13 @@ def test_measures_of_a_paper_design_are_refused(tmp_path):
 def test_a_filtered_study_names_the_left_out_and_keeps_its_fields(tmp_path):
     sheet = tmp_path / "s.png"
     # A deep cut spreads the light: its H-V intensity is the lower (see docs/study-sorted-by-measure.png).
-    done = run_cli("study", STOP, "--vary", "cuts.height=0.5,3", "--size", "32x24", "--workers", "1",
-                   "--engine", "processes", "--measure", "intensity.hv_cd", "--filter", "intensity.hv_cd>100",
-                   "-o", sheet, timeout=600)
+    args = ("study", STOP, "--vary", "cuts.height=0.5,3", "--size", "32x24", "--workers", "1", "--engine",
+            "processes", "--measure", "intensity.hv_cd", "--filter", "intensity.hv_cd>100", "--cache", tmp_path / "c")
+    done = run_cli(*args, "-o", sheet, timeout=600)
     assert done.returncode == 0, done.stderr
     assert "measured 2 variants in" in done.stdout and "left out by the filter: #2" in done.stdout
+    again = run_cli(*args, "-o", tmp_path / "again.png", timeout=600)  # the values come from the cache
+    seconds = float(again.stdout.split("measured 2 variants in ")[1].split(" s")[0])
+    assert seconds < 2.0 and "left out by the filter: #2" in again.stdout
     study = st.Study.load(sheet)  # the sheet carries the measures with the study
     assert study.measured.names == ("intensity.hv_cd",) and str(study.measured.filters[0]) == "intensity.hv_cd>100"
