@@ -9,6 +9,7 @@
 - ``presets``: the preset libraries, their browser and operators.
 - ``study``: design studies and their contact sheets.
 - ``optimise``: optimisations (Optuna) and applying what they found.
+- ``measures``: the design's measures (regulation grids, colour, homogeneity) and their report.
 - ``freeform``: lamp roles on the designer's own meshes, their rendering, Convert to Free-form and
   export.
 - ``convert``: the bpy-free layer they share (units, camera mathematics, Cycles numbers, meshes).
@@ -28,9 +29,9 @@ from .registration import modules_factory
 
 def modules() -> tuple:
     """Every sub-package (or module) that registers, in registration order."""
-    from . import compare, design, freeform, optimise, preferences, presets, render, study
+    from . import compare, design, freeform, measures, optimise, preferences, presets, render, study
 
-    return (design, freeform, render, compare, preferences, presets, study, optimise)
+    return (design, freeform, render, compare, preferences, presets, study, optimise, measures)
 
 
 register, unregister = modules_factory(modules)

@@ -66,6 +66,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_display_arguments(parser)
     add_photometric_arguments(parser, false_colour=False)
     parser.add_argument("--list", action="store_true", help="list the parameters a study can vary and exit")
+    parser.add_argument("--measure", action="append", default=[], metavar="NAME",
+                        help="a measure to put under each cell (photometric designs; e.g. homogeneity.lmin_lmax, "
+                             "grid.min_margin, intensity.hv_cd@stop: docs/measures.md); tens of seconds a variant")
+    parser.add_argument("--sort", metavar="[-]NAME",
+                        help="order the cells by a measure; --sort=-NAME for highest first")
+    parser.add_argument("--filter", action="append", default=[], metavar="NAME<OP>NUMBER",
+                        help="keep the variants where a measure holds, e.g. 'grid.pass==1' (the others are listed "
+                             "in the sheet's footer)")
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -79,20 +87,45 @@ def _size(text: str) -> tuple[int, int]:
     return st.parse_size(size, "--size")
 
 
+def _measured(args: argparse.Namespace) -> dict:
+    """The study fields of ``--measure``, ``--sort`` and ``--filter`` (those given)."""
+    doc: dict = {}
+    if args.measure:
+        doc["measures"] = list(args.measure)
+    if args.sort:
+        doc["sort"] = args.sort
+    if args.filter:
+        doc["filter"] = list(args.filter)
+    return doc
+
+
+def _with_options(error: SceneError) -> SceneError:
+    """A study-field error in the words of the command line (``measures[0]`` -> ``--measure``)."""
+    for field, option in (("measures", "--measure"), ("sort", "--sort"), ("filter", "--filter")):
+        if error.path == field or error.path.startswith(f"{field}["):
+            return SceneError(option, error.message)
+    return error
+
+
 def _build(args: argparse.Namespace) -> st.Study:
     size = _size(args.size) if args.size else None
+    measured = _measured(args)
     if args.study:
         if args.base or args.vary:
             raise SceneError("--study", "re-runs a saved study; give it without BASE.json and --vary")
         study = st.Study.load(args.study)
-        if size is None and args.title is None:
+        if size is None and args.title is None and not measured:
             return study
         doc = study.to_doc()
         if size is not None:
             doc["size"] = list(size)
         if args.title is not None:
             doc["title"] = args.title
-        return st.Study.from_doc(doc)
+        doc.update(measured)
+        try:
+            return st.Study.from_doc(doc)
+        except SceneError as e:
+            raise _with_options(e) from None
     if not args.base:
         raise SceneError("study", "give BASE.json with --vary, or --study STUDY")
     if not args.vary:
@@ -102,11 +135,11 @@ def _build(args: argparse.Namespace) -> st.Study:
     base = read_json(args.base)
     axes = [st.parse_vary(v) for v in args.vary]
     try:
-        return st.Study.build(base, axes, size or st.DEFAULT_SIZE, args.title or "")
+        return st.Study.build(base, axes, size or st.DEFAULT_SIZE, args.title or "", measured)
     except SceneError as e:
         if e.path == "base" or e.path.startswith("base."):  # a problem of the design file itself
             raise in_file(SceneError(e.path[len("base."):], e.message), args.base) from None
-        raise
+        raise _with_options(e) from None
 
 
 def _with_environment(study: st.Study, document: str) -> tuple[st.Study, int]:
@@ -231,8 +264,9 @@ def run(args: argparse.Namespace) -> int:
                 raise stop.interrupt() from None
         checkpoint("study:rendered")
     seconds = time.perf_counter() - start
+    measured = _measure(args, study, runnable) if study.measured else None
     checkpoint("study:composed")
-    shown = _write_sheet(args, study, images, view)
+    shown = _write_sheet(args, study, images, view, measured)
     _save_side_files(args, study)
     if engine != "dask":
         workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
@@ -241,6 +275,27 @@ def run(args: argparse.Namespace) -> int:
     shape = " x ".join(str(len(a.values)) for a in study.axes)
     print(f"{printable(args.output)}: {shape} variants of {w}x{h} px in {seconds:.2f} s {how}{counted}{shown}")
     return 0
+
+
+def _measure(args: argparse.Namespace, study: st.Study, runnable: st.Study) -> list[dict]:
+    """Each variant's values of the study's measures (printed as they come; kept in the cell cache
+    unless ``--no-cache``), and the variants a filter leaves out, named."""
+    from ..cluster.cache import CellCache
+    from ..study import measured as study_measured
+
+    start = time.perf_counter()
+    names = study.measured.names
+
+    def progress(done: int, total: int) -> None:
+        if done < total:
+            print(f"measures: variant {done + 1} of {total}", flush=True)
+
+    cache = None if args.no_cache else CellCache(args.cache)
+    values = study_measured.measure_variants([v.scene for v in runnable.variants], names, progress, cache)
+    _kept, dropped = study_measured.arrange(study.measured, values)
+    print(f"measured {len(values)} variants in {time.perf_counter() - start:.1f} s"
+          + (f"; left out by the filter: {', '.join(f'#{i + 1}' for i in dropped)}" if dropped else ""))
+    return values
 
 
 def _check_photometric_options(args: argparse.Namespace, study: st.Study) -> None:
@@ -253,7 +308,7 @@ def _check_photometric_options(args: argparse.Namespace, study: st.Study) -> Non
                                       "sheet for it")
 
 
-def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view) -> str:
+def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view, measured: list | None = None) -> str:
     """Write the sheet under ONE exposure for all its cells (never one per cell, issue 22 item 7):
     the paper mode's ``--exposure`` ("auto" measured over every cell); the photometric mode's
     EV100 (``--ev100``, else the design's camera; "auto" measured over every cell) with
@@ -263,19 +318,19 @@ def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view) 
 
     scenes = [v.scene for v in study.variants]
     if not any(photometric.is_photometric(scene) for scene in scenes):
-        ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure)
+        ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure, measured=measured)
         return f", {view.view} at {ev:+.1f} EV" if view is not None else ""
     if view is None:  # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
         from ..photometry import output
 
-        sheet = study_sheet.compose(study, images, text="bitmap")
+        sheet = study_sheet.compose(study, images, text="bitmap", measured=measured)
         output.write_photometric_exr(args.output, sheet, channels=("X", "Y", "Z"), attributes={
             study_sheet.STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()})
         return ", XYZ (Y in cd/m2)"
     stops = photometric_stops(args)
     cells, ev100, paper_ev = photometric.shown_together(scenes, images, ev100=args.ev100, stops=stops,
                                                         exposure=args.exposure)
-    study_sheet.write_sheet(args.output, study, cells, view=view, exposure=0.0)
+    study_sheet.write_sheet(args.output, study, cells, view=view, exposure=0.0, measured=measured)
     extra = f" {stops:+.1f} EV" if stops else ""
     paper = f", paper-mode cells at {paper_ev:+.1f} EV" if paper_ev is not None else ""
     return f", {view.view} at EV100 {ev100:.1f}{extra} for every cell{paper}"

@@ -10,6 +10,9 @@ values or over a range with a number of steps, at most ``MAX_VARIANTS`` variants
               {"parameter": "lamps[1].cuts.height", "values": [0.5, 1, 2]}],
      "size": [256, 256]}
 
+Optional: ``measures``, ``sort`` and ``filter`` put measures of a photometric design under each
+cell and order the sheet by them (``measured``).
+
 The base is embedded, so a study file (or a contact sheet carrying one) can be handed to another
 machine and re-run. A *parameter* is a dotted path of ``spec.py``:
 
@@ -55,6 +58,8 @@ from ..scene.messages import show_value
 from ..scene.reading import SceneError, parse_json_text, read_json, scene_to_json
 from ..scene.safe_text import has_surrogate, show_key
 from ..scene.validate import parse_scene
+from .measured import Choice
+from .measured import parse as parse_measures
 from .parameters import Parameter, apply_values, check_value, resolve_parameter, sets_same
 
 SCHEMA = "lamp-study/1"
@@ -179,6 +184,7 @@ class Study:
     size: tuple[int, int]  # (width, height) of each variant image
     title: str = ""
     variants: tuple[Variant, ...] = ()  # built and checked by ``from_doc``, row-major
+    measured: Choice = Choice()  # measures under the cells, sort, filter (``measured``)
 
     # -- construction ------------------------------------------------------------------------
 
@@ -189,7 +195,7 @@ class Study:
             raise SceneError("", f"a {SCHEMA} document is a JSON object, got {_show(doc)}")
         if doc.get("schema") != SCHEMA:
             raise SceneError("schema", f"{_show(doc.get('schema'))} is missing or wrong; allowed \"{SCHEMA}\"")
-        allowed = ("schema", "title", "base", "axes", "size")
+        allowed = ("schema", "title", "base", "axes", "size", "measures", "sort", "filter")
         for key in doc:
             if key not in allowed:
                 raise SceneError(show_key(key), f"unknown key; allowed keys here: {', '.join(allowed)}")
@@ -228,9 +234,10 @@ class Study:
             shape = " x ".join(str(len(a.values)) for a in axes)
             raise SceneError("axes", f"{shape} = {count} variants; allowed at most {MAX_VARIANTS}")
         budget.check_study_pixels(size, count)
+        measured = parse_measures(doc, base)
         variants = _build_variants(base, axes)
         budget.check_study_rays(size, [v.scene["image"]["samples"] for v in variants])
-        return cls(base, axes, size, title, variants)
+        return cls(base, axes, size, title, variants, measured)
 
     @classmethod
     def from_json(cls, text: str, name: str = "") -> Study:
@@ -254,9 +261,11 @@ class Study:
             raise SceneError(f"{name}: {e.path}" if e.path else name, e.message) from None
 
     @classmethod
-    def build(cls, base: dict, axes: list[dict], size: tuple[int, int] = DEFAULT_SIZE, title: str = "") -> Study:
-        """A study from a base scene document and axis documents (the Python API, the CLI, Blender)."""
-        doc = {"schema": SCHEMA, "base": base, "axes": axes, "size": list(size)}
+    def build(cls, base: dict, axes: list[dict], size: tuple[int, int] = DEFAULT_SIZE, title: str = "",
+              measured: dict | None = None) -> Study:
+        """A study from a base scene document and axis documents (the Python API, the CLI, Blender);
+        ``measured``: its ``measures``, ``sort`` and ``filter`` fields, if any."""
+        doc = {"schema": SCHEMA, "base": base, "axes": axes, "size": list(size), **(measured or {})}
         if title:
             doc["title"] = title
         return cls.from_doc(doc)
@@ -297,6 +306,7 @@ class Study:
         doc["base"] = copy.deepcopy(self.base)
         doc["axes"] = [copy.deepcopy(a.doc) for a in self.axes]
         doc["size"] = list(self.size)
+        doc.update(self.measured.to_doc())  # nothing when the study names no measures
         return doc
 
     def to_json(self) -> str:

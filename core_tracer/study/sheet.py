@@ -18,6 +18,7 @@ reads it back.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -27,6 +28,7 @@ import numpy as np
 from ..images import bitmap_font, display, labels
 from ..images.imageio import EXPOSURE_ATTRIBUTE, image_format, load_writer, write_display, write_image
 from .definition import STUDY_ATTRIBUTE, Study, format_value
+from .measured import arrange, format_measure
 
 BACKGROUND = (0.018, 0.018, 0.02)  # linear; a dark grey that sets off the black of each render
 TEXT_COLOR = (0.75, 0.75, 0.75)
@@ -53,7 +55,7 @@ class SheetLayout:
     width: int
     height: int
     scale: int  # text scale: a line is 8*scale px high (bitmap font), a character 6*scale px wide
-    cells: tuple[Rect, ...]  # where each variant's image goes, in variant order
+    cells: tuple[Rect | None, ...]  # where each variant's image goes, in variant order (None: filtered out)
     texts: tuple[TextBox, ...]
 
     @property
@@ -67,14 +69,23 @@ def text_scale(size: tuple[int, int]) -> int:
     return 1 if side < 96 else 2 if side < 384 else 3
 
 
-def cell_lines(study: Study, index: int) -> list[str]:
-    """The label under one variant: one line per axis, ``name=value``."""
+def cell_lines(study: Study, index: int, measured: Sequence[dict] | None = None) -> list[str]:
+    """The label under one variant: one line per axis, ``name=value``, then one per measure."""
     v = study.variants[index]
-    return [f"{a.parameter.short}={format_value(x)}" for a, x in zip(study.axes, v.values, strict=True)]
+    lines = [f"{a.parameter.short}={format_value(x)}" for a, x in zip(study.axes, v.values, strict=True)]
+    if measured is not None:
+        lines += [format_measure(name, measured[index][name]) for name in study.measured.names]
+    return lines
 
 
-def layout(study: Study) -> SheetLayout:
-    """Every rectangle of the sheet of ``study`` (pixels, origin top-left)."""
+def layout(study: Study, measured: Sequence[dict] | None = None) -> SheetLayout:
+    """Every rectangle of the sheet of ``study`` (pixels, origin top-left); with ``measured`` (each
+    variant's values of ``study.measured.names``) the values go under the cells, and a sorted or
+    filtered study places the kept cells in its order, row by row, and lists the others in a footer."""
+    if measured is not None and len(measured) != len(study):
+        raise ValueError(f"expected {len(study)} measured variants, got {len(measured)}")
+    if measured is not None and study.measured.reorders:
+        return _ordered_layout(study, measured)
     w, h = study.size
     s = text_scale(study.size)
     adv = bitmap_font.ADVANCE_W * s
@@ -82,9 +93,9 @@ def layout(study: Study) -> SheetLayout:
     pad = 4 * s
     gap = pad
     axes = study.axes
-    n_lines = len(axes)
+    n_lines = len(axes) + (len(study.measured.names) if measured is not None else 0)
 
-    widest_cell = max(len(t) for i in range(len(study)) for t in cell_lines(study, i))
+    widest_cell = max(len(t) for i in range(len(study)) for t in cell_lines(study, i, measured))
     column_labels = [f"{axes[0].parameter.short}={format_value(x)}" for x in axes[0].values]
     cell_w = max(w, widest_cell * adv, max(len(t) for t in column_labels) * adv)
     cell_h = h + pad // 2 + n_lines * line
@@ -119,8 +130,53 @@ def layout(study: Study) -> SheetLayout:
         x0 = grid_x + v.column * (cell_w + gap)
         y0 = grid_y + v.row * (cell_h + gap)
         cells.append(Rect(x0 + (cell_w - w) // 2, y0, w, h))
-        for k, text in enumerate(cell_lines(study, v.index)):
+        for k, text in enumerate(cell_lines(study, v.index, measured)):
             texts.append(TextBox(text, Rect(x0, y0 + h + pad // 2 + k * line, cell_w, line), "cell"))
+    return SheetLayout(width, height, s, tuple(cells), tuple(texts))
+
+
+def _ordered_layout(study: Study, measured: Sequence[dict]) -> SheetLayout:
+    """The sheet of a sorted or filtered study: the kept cells in order, ``study.columns`` a row (the
+    position no longer says the axis values: each cell's label does), the rest in the footer."""
+    w, h = study.size
+    s = text_scale(study.size)
+    adv = bitmap_font.ADVANCE_W * s
+    line = (bitmap_font.LINE_H + 2) * s
+    pad = gap = 4 * s
+    order, dropped = arrange(study.measured, measured)
+    labels_of = {i: cell_lines(study, i, measured) for i in range(len(study))}
+    columns = max(1, min(study.columns, len(order)))
+    rows = math.ceil(len(order) / columns)
+    cell_w = max(w, max(len(t) for lines in labels_of.values() for t in lines) * adv)
+    cell_h = h + pad // 2 + len(labels_of[0]) * line
+    choice = study.measured
+    how = "   ".join(([f"sorted by {choice.sort}"] if choice.sort else [])
+                     + ([f"filter {' and '.join(str(f) for f in choice.filters)}"] if choice.filters else []))
+    axes_text = "varied: " + ", ".join(a.parameter.text for a in study.axes)
+    grid_w = columns * cell_w + (columns - 1) * gap
+    footer = [f"left out by the filter ({len(dropped)}):" if dropped else "left out by the filter: none"]
+    footer += [f"  #{i + 1} " + "  ".join(labels_of[i]) for i in dropped] if choice.filters else []
+    if not choice.filters:
+        footer = []
+    width = max(pad + grid_w + pad, 2 * pad + max(MIN_TEXT_CHARS, len(axes_text), len(how),
+                                                  *(len(t) for t in footer)) * adv)
+    top = pad + 3 * line + pad  # title, axes and order lines
+    grid_y = top
+    grid_h = rows * cell_h + max(0, rows - 1) * gap
+    height = grid_y + grid_h + pad + len(footer) * line + pad
+    texts = [TextBox(study.heading(), Rect(pad, pad, width - 2 * pad, line), "title"),
+             TextBox(axes_text, Rect(pad, pad + line, width - 2 * pad, line), "axes"),
+             TextBox(how, Rect(pad, pad + 2 * line, width - 2 * pad, line), "axes")]
+    cells: list[Rect | None] = [None] * len(study)
+    for k, index in enumerate(order):
+        x0 = pad + (k % columns) * (cell_w + gap)
+        y0 = grid_y + (k // columns) * (cell_h + gap)
+        cells[index] = Rect(x0 + (cell_w - w) // 2, y0, w, h)
+        for j, text in enumerate(labels_of[index]):
+            texts.append(TextBox(text, Rect(x0, y0 + h + pad // 2 + j * line, cell_w, line), "cell"))
+    y = grid_y + grid_h + pad
+    for k, text in enumerate(footer):
+        texts.append(TextBox(text, Rect(pad, y + k * line, width - 2 * pad, line), "footer"))
     return SheetLayout(width, height, s, tuple(cells), tuple(texts))
 
 
@@ -136,17 +192,19 @@ def preload_writers() -> None:
 
 
 def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float = 0.0,
-            view: display.ViewTransform | None = None) -> np.ndarray:
+            view: display.ViewTransform | None = None, measured: Sequence[dict] | None = None) -> np.ndarray:
     """The contact sheet (H, W, 3 float32, top row first) of the rendered variants, each scaled by
     ``exposure`` stops. Without ``view`` the sheet is linear; with it the variants are shown
     through ``view`` and the sheet holds display values in [0, 1] (background and labels too).
+
+    ``measured``: each variant's measure values (``layout``).
 
     ``text``: ``"auto"`` (OpenImageIO's ``render_text`` where it works, else the bitmap font),
     ``"oiio"``, ``"bitmap"`` or ``"none"``.
     """
     if len(images) != len(study):
         raise ValueError(f"expected {len(study)} images, got {len(images)}")
-    lay = layout(study)
+    lay = layout(study, measured)
     w, h = study.size
     for i, img in enumerate(images):
         if np.shape(img) != (h, w, 3):
@@ -159,6 +217,8 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", e
     canvas = np.empty((lay.height, lay.width, 3), dtype=np.float32)
     canvas[:] = background
     for rect, img in zip(lay.cells, images, strict=True):
+        if rect is None:  # left out by the filter: named in the footer
+            continue
         if view is not None:
             cell = view.to_display(img, exposure)
         else:
@@ -185,18 +245,18 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", e
 
 def write_sheet(path: str | os.PathLike, study: Study, images: Sequence[np.ndarray], *,
                 view: display.ViewTransform | None = None, exposure: float | str | None = "auto",
-                text: str = "auto") -> float:
+                text: str = "auto", measured: Sequence[dict] | None = None) -> float:
     """Compose the sheet of the rendered variants and write it, with the study JSON in the
     ``lamp:study`` attribute: EXR linear (no exposure), PNG through ``view`` (default
     ``display.view_transform()``) at ``exposure`` stops ("auto": ``display.auto_exposure`` over all
     variants). Returns the exposure applied. Atomic: never a partial file."""
     attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()}
     if image_format(path) == "exr":
-        write_image(path, compose(study, images, text=text), attributes=attributes)
+        write_image(path, compose(study, images, text=text, measured=measured), attributes=attributes)
         return 0.0
     view = view or display.view_transform()
     ev = display.resolve_exposure(exposure, list(images))
-    shown = compose(study, images, text=text, exposure=ev, view=view)
+    shown = compose(study, images, text=text, exposure=ev, view=view, measured=measured)
     write_display(path, shown, attributes=attributes, view=view.view, exposure=ev)
     return ev
 

@@ -15,6 +15,8 @@ nothing the design is made of. Applying a variant changes the design, so that on
 
 from __future__ import annotations
 
+import json
+import os
 import time
 
 import bpy
@@ -34,13 +36,15 @@ from .settings import last_study, sheet_image
 # The sheet image
 
 
-def show_sheet(context, study: st.Study, images: list) -> bpy.types.Image:
-    """Compose the contact sheet into the "Lamp Study" image and show it in an Image Editor."""
+def show_sheet(context, study: st.Study, images: list, measured: list | None = None) -> bpy.types.Image:
+    """Compose the contact sheet into the "Lamp Study" image and show it in an Image Editor; with
+    ``measured`` (each variant's values of the study's measures) the values go under the cells."""
     from ...core_tracer.images import display
     from ...core_tracer.study import sheet as study_sheet
 
     exposure = display.auto_exposure(list(images))  # one for every variant, so the cells compare
-    sheet = study_sheet.compose(settings.worded(study), images, exposure=exposure)  # labels in the panel's words
+    sheet = study_sheet.compose(settings.worded(study), images, exposure=exposure,  # labels in the panel's words
+                                measured=measured)
     image = image_view.show_linear(settings.SHEET_IMAGE, sheet, exposure, context.scene)
     text = study.to_json()
     image[settings.STUDY_PROPERTY] = text
@@ -69,8 +73,63 @@ def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, 
             run.close()
     else:
         images = study_run.run_study(study, workers)
+    measured = None
+    if study.measured:
+        from ...core_tracer.study import measured as study_measured
+
+        measured = study_measured.measure_variants([v.scene for v in study.variants], study.measured.names)
     seconds = time.perf_counter() - start
-    return show_sheet(context, study, images), study, seconds
+    return show_sheet(context, study, images, measured), study, seconds
+
+
+class VariantMeasures:
+    """The study's measures of each variant, one ``measure`` worker process after another (the
+    Measures panel's ``MeasureRun``), so the interface keeps responding and Esc stops them."""
+
+    def __init__(self, study: st.Study):
+        import tempfile
+
+        self.study = study
+        self.values: list[dict] = []
+        self._folder = tempfile.mkdtemp(prefix="lamp_study_measures_")
+        self._run = None
+
+    @property
+    def fraction(self) -> float:
+        current = self._run.fraction if self._run is not None else 0.0
+        return min(1.0, (len(self.values) + current) / len(self.study))
+
+    def poll(self) -> bool:
+        """True once every variant is measured; raises ``RuntimeError`` when a measure fails."""
+        from ...core_tracer.measures import by_name
+        from ..measures.ops import MeasureRun
+
+        if self._run is not None and self._run.poll():
+            problem = self._run.error()
+            self._run.close()
+            if problem is not None:
+                self._run = None
+                raise RuntimeError(f"measuring variant {len(self.values) + 1}: {problem}")
+            path = os.path.join(self._run.folder, "measures.json")
+            with open(path, encoding="utf-8") as f:
+                self.values.append(by_name.values(json.load(f), self.study.measured.names))
+            self._run = None
+        if len(self.values) == len(self.study):
+            return True
+        if self._run is None:
+            index = len(self.values)
+            self._run = MeasureRun(self.study.variants[index].scene, os.path.join(self._folder, f"variant-{index:02d}"),
+                                   beam_files=False)
+            self._run.start()
+        return False
+
+    def close(self) -> None:
+        import shutil
+
+        if self._run is not None:
+            self._run.close()
+            self._run = None
+        shutil.rmtree(self._folder, ignore_errors=True)
 
 
 def _cluster_run(context, study: st.Study):
@@ -146,6 +205,7 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
         except OSError as e:
             return reports.cancelled(self, f"Lamp Study cannot start its workers: {e}")
         self._start = time.perf_counter()
+        self._measures = None
         return self.begin_modal(context, self._run)
 
     def escape(self, context):
@@ -164,24 +224,44 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
             return reports.cancelled(self, f"Lamp Study failed: {e}")
         if not finished:
             return None
+        if self._study.measured:  # then each variant is measured, one worker process after another
+            if self._measures is None:
+                self._measures = VariantMeasures(self._study)
+            try:
+                if not self._measures.poll():
+                    return None
+            except (RuntimeError, OSError) as e:
+                self.end_modal(context)
+                return reports.cancelled(self, f"Lamp Study failed: {e}")
         seconds = time.perf_counter() - self._start
         images = list(self._run.images)
+        measured = self._measures.values if self._measures is not None else None
         self.end_modal(context)
-        show_sheet(context, self._study, images)
+        show_sheet(context, self._study, images, measured)
         return reports.finished(self, _summary(self._study, seconds))
 
     def abandon(self, context):
         self._run.cancel()
+        if self._measures is not None:
+            self._measures.close()
 
     def end_modal(self, context) -> None:
         super().end_modal(context)
         self._run.close()
+        if self._measures is not None:
+            self._measures.close()
 
     def status(self) -> str:
+        if self._measures is not None:
+            done = len(self._measures.values)
+            return (f"Lamp Study: measuring variant {min(done + 1, len(self._study))}/{len(self._study)}, "
+                    f"{100 * self._measures.fraction:.0f}% (Esc to cancel)")
         run = self._run
         return f"Lamp Study: {run.done}/{run.total} variants, {100 * run.fraction:.0f}% (Esc to cancel)"
 
     def fraction(self) -> float:
+        if self._measures is not None:
+            return self._measures.fraction
         return self._run.fraction
 
 

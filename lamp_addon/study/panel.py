@@ -59,6 +59,13 @@ class LAMP_PT_study(DesignSection, bpy.types.Panel):
             col.label(text="Variants render as Dask tasks", icon="NETWORK_DRIVE")
         else:
             col.prop(settings, "workers")
+        if context.scene.lamp_design.light_model == "photometric":
+            col = layout.column(align=True)
+            col.use_property_split = True
+            col.use_property_decorate = False
+            col.prop(settings, "measures")
+            col.prop(settings, "sort_by")
+            col.prop(settings, "filter")
         layout.operator("lamp.study_run", icon="IMGDISPLAY")
 
         study = study_settings.last_study()

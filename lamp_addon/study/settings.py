@@ -142,6 +142,16 @@ class LAMP_PG_study(bpy.types.PropertyGroup):
                               description="Where the variants render: \"local\" (worker processes on this "
                                           "computer) or a Dask scheduler's address, tcp://HOST:8786, to render "
                                           "them as tasks on the studio's cluster (docs/cluster.md)")
+    measures: StringProperty(name="Measures", default="", maxlen=400,
+                             description="Measures to put under each cell, separated by commas (photometric designs; "
+                                         "e.g. homogeneity.lmin_lmax, grid.min_margin, intensity.hv_cd@stop: "
+                                         "docs/measures.md); each variant is measured, tens of seconds each")
+    sort_by: StringProperty(name="Sort By", default="", maxlen=100,
+                            description="Order the cells by a measure, highest first with a leading \"-\" "
+                                        "(e.g. -homogeneity.lmin_lmax); empty keeps the grid")
+    filter: StringProperty(name="Filter", default="", maxlen=300,
+                           description="Keep the variants where a measure holds, e.g. grid.pass==1 (several separated "
+                                       "by commas); the others are listed under the sheet")
     variant: IntProperty(name="Variant", default=1, min=1, max=st.MAX_VARIANTS,
                          description="A variant of the last study (numbered along the rows of the sheet)")
 
@@ -192,7 +202,32 @@ def study_from_settings(bl_scene) -> st.Study:
     axes = [axis_doc(settings.axis_1)]
     if settings.use_axis_2:
         axes.append(axis_doc(settings.axis_2))
-    return st.Study.build(base, axes, size)
+    try:
+        return st.Study.build(base, axes, size, measured=measured_doc(settings))
+    except SceneError as e:
+        for field, words in MEASURE_WORDS.items():
+            if e.path == field or e.path.startswith(f"{field}["):
+                raise SceneError(words, e.message) from None
+        raise
+
+
+# The study fields of the measures in the panel's words (errors name them so)
+MEASURE_WORDS = {"measures": "Measures", "sort": "Sort By", "filter": "Filter"}
+
+
+def measured_doc(settings) -> dict:
+    """The ``measures``, ``sort`` and ``filter`` fields of the settings (none when they are empty, so a
+    study without measures is what it always was)."""
+    doc: dict = {}
+    measures = [m.strip() for m in settings.measures.split(",") if m.strip()]
+    filters = [f.strip() for f in settings.filter.split(",") if f.strip()]
+    if measures:
+        doc["measures"] = measures
+    if settings.sort_by.strip():
+        doc["sort"] = settings.sort_by.strip()
+    if filters:
+        doc["filter"] = filters
+    return doc
 
 
 def worded(study: st.Study) -> st.Study:
