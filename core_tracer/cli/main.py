@@ -21,7 +21,7 @@ from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import Terminated
 
-COMMANDS = ("render", "validate", "presets", "study", "optimise", "measure")
+COMMANDS = ("render", "validate", "presets", "study", "optimise", "measure", "states", "relight")
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2

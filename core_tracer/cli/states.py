@@ -1,0 +1,49 @@
+"""``states SCENE.json -o STATES.npz``: render a design's lighting states once, to re-weight later
+with ``relight`` (docs/measures.md, "Lighting states")."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..fileio import atomic_write_bytes
+from ..scene.reading import SceneError
+from ..scene.safe_text import printable
+from .common import check_output, ctrl_c_sets, load_scene_file
+
+HELP = ("render the surroundings and one pass per bulb and filament of a design, so that 'relight' switches "
+        "functions and changes fluxes without rendering")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scene", metavar="SCENE.json", help="the scene file (parametric designs)")
+    parser.add_argument("-o", "--output", required=True, metavar="STATES.npz", help="the light-states file")
+    parser.add_argument("--width", type=int, metavar="W", help="image width in pixels (overrides the scene)")
+    parser.add_argument("--height", type=int, metavar="H", help="image height in pixels (overrides the scene)")
+    parser.add_argument("--samples", type=int, metavar="N", help="samples per pixel (overrides the scene)")
+
+
+def run(args: argparse.Namespace) -> int:
+    if not args.output.lower().endswith(".npz"):
+        raise SceneError("--output", f"{printable(args.output)!r} is not a light-states file; allowed a name ending "
+                                     ".npz")
+    check_output(args.output, "output")
+    scene = load_scene_file(args.scene, args.width, args.height, args.samples)
+    from ..measures import states as S
+    from ..raytrace.engine import RenderCancelled
+
+    def progress(done: int, total: int, label: str) -> None:
+        print(f"state {done + 1} of {total}: {label}", flush=True)
+
+    with ctrl_c_sets() as stop:
+        try:
+            light = S.render_states(scene, progress=progress, should_stop=stop.is_set)
+        except RenderCancelled:
+            raise stop.interrupt() from None
+    atomic_write_bytes(args.output, S.to_bytes(light))
+    for state in light.states:
+        lit = "on " if state.lit_in_design else "off"
+        level = f"{state.rendered:g} lm" if state.unit else "x1"
+        print(f"  {lit} {state.key:<16} {level:>8}  {state.label}")
+    print(f"{printable(args.output)}: {len(light.states) - 1} states and the surroundings", file=sys.stdout)
+    return 0

@@ -1,0 +1,342 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The Light Panel: switch the design's functions on and off and change bulb fluxes without rendering
+(``core_tracer.measures.states``; Speos calls its version the Light Panel).
+
+``Render Light States`` renders the surroundings and one pass per bulb and filament (a modal job on a
+thread: progress in the status bar, Esc cancels); each state then has a switch and a level (lm for a
+photometric bulb, a scale for a paper bulb and the surroundings) whose change re-weights the held
+passes into the "Lamp Light Panel" image at once (the time shows in the panel). The passes live in
+memory for this session, keyed by scene; a change to the design makes them stale, which the panel
+says in one line. Nothing here changes the design, except ``Apply to Design`` (undoable).
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, CollectionProperty, FloatProperty, PointerProperty, StringProperty
+
+from ...core_tracer.images import glare
+from ...core_tracer.scene.reading import SceneError
+from .. import image_view, jobs, reports
+from ..design import properties as design_properties
+from ..design.panels import DesignSection
+from ..render import photometric_display
+
+IMAGE_NAME = "Lamp Light Panel"
+_held: dict[str, dict] = {}  # scene name -> {"key": design JSON, "light": LightStates, "display", "ms"}
+
+
+def _design_key(bl_scene) -> str:
+    return json.dumps(design_properties.design_document(bl_scene), sort_keys=True)
+
+
+def held(bl_scene) -> dict | None:
+    """The passes held for ``bl_scene`` (None when none)."""
+    return _held.get(bl_scene.name)
+
+
+def stale(bl_scene) -> bool:
+    entry = held(bl_scene)
+    return entry is not None and entry["key"] != _design_key(bl_scene)
+
+
+def _changed(self, context) -> None:
+    if context is not None and context.scene is not None:
+        refresh(context.scene)
+
+
+class LAMP_PG_light_state(bpy.types.PropertyGroup):
+    key: StringProperty(options=set())
+    label: StringProperty(options=set())
+    unit: StringProperty(options=set())
+    on: BoolProperty(name="On", default=True, update=_changed, options=set(),
+                     description="Whether this light is on in the Light Panel's image (the design is not changed)")
+    level: FloatProperty(name="Level", default=1.0, min=0.0, max=1.0e5, soft_max=2000.0, update=_changed,
+                         options=set(),
+                         description="The bulb's luminous flux in lm (photometric), or a scale of its brightness "
+                                     "(paper bulbs and the surroundings)")
+
+
+class LAMP_PG_light_panel(bpy.types.PropertyGroup):
+    states: CollectionProperty(type=LAMP_PG_light_state)
+
+    @classmethod
+    def register(cls):
+        bpy.types.Scene.lamp_light_panel = PointerProperty(type=cls, name="Lamp Light Panel",
+                                                           description="Lighting states re-weighted without "
+                                                                       "rendering")
+
+    @classmethod
+    def unregister(cls):
+        del bpy.types.Scene.lamp_light_panel
+
+
+def _weights(bl_scene, light) -> dict[str, float]:
+    from ...core_tracer.measures import states as S
+
+    items = {item.key: item for item in bl_scene.lamp_light_panel.states}
+    on = {key: item.on for key, item in items.items()}
+    level = {key: item.level for key, item in items.items()}
+    return S.weights_for(light, on, level)
+
+
+def refresh(bl_scene) -> float | None:
+    """Re-weight the held passes into the Light Panel's image; returns the milliseconds it took (None
+    when there is nothing current to re-weight)."""
+    from ...core_tracer.measures import states as S
+
+    entry = held(bl_scene)
+    if entry is None or stale(bl_scene):
+        return None
+    start = time.perf_counter()
+    light = entry["light"]
+    rgb = S.relight(light, _weights(bl_scene, light), entry["buffer"])
+    if entry["display"] is not None:
+        rgb = entry["display"].linear(rgb)
+    rgb = glare.apply(rgb, light.scene)
+    image_view.show_as_render(IMAGE_NAME, rgb)
+    entry["ms"] = 1000.0 * (time.perf_counter() - start)
+    return entry["ms"]
+
+
+def hold(bl_scene, light, design_key: str) -> None:
+    """Keep ``light`` as the scene's passes, fill the panel's switches from its states, show it."""
+    scene = light.scene
+    display = photometric_display.for_scene(scene)
+    _held[bl_scene.name] = {"key": design_key, "light": light, "display": display,
+                            "buffer": np.empty_like(light.surroundings), "ms": None}
+    items = bl_scene.lamp_light_panel.states
+    items.clear()
+    for state in light.states:
+        item = items.add()
+        item.key, item.label, item.unit = state.key, state.label, state.unit
+        item["on"] = state.lit_in_design  # no update per item: one refresh below
+        item["level"] = state.rendered
+    refresh(bl_scene)
+
+
+def forget_all() -> None:
+    _held.clear()
+
+
+class StatesRun:
+    """``render_states`` on a thread, with its progress and a stop."""
+
+    def __init__(self, scene: dict):
+        self.scene = scene
+        self.fraction = 0.0
+        self.stage = "starting"
+        self.result = None
+        self.error: str | None = None
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._work, name="lamp-light-states", daemon=True)
+
+    def _work(self) -> None:
+        from ...core_tracer.measures import states as S
+        from ...core_tracer.raytrace.engine import RenderCancelled
+
+        def progress(done: int, total: int, label: str) -> None:
+            self.fraction, self.stage = done / total, f"{label} ({done + 1} of {total})"
+
+        try:
+            self.result = S.render_states(self.scene, progress=progress, should_stop=self._stop.is_set)
+        except RenderCancelled:
+            self.error = "cancelled"
+        except SceneError as e:
+            self.error = str(e)
+        except MemoryError:
+            self.error = "out of memory; allowed a smaller image (Camera & Image › Width, Height)"
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def done(self) -> bool:
+        return not self._thread.is_alive()
+
+    def cancel(self) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
+def _finish(operator, context, run: StatesRun, design_key: str, seconds: float) -> set[str]:
+    if run.error is not None:
+        return reports.cancelled(operator, f"Light states not rendered: {run.error}")
+    hold(context.scene, run.result, design_key)
+    entry = held(context.scene)
+    image = bpy.data.images.get(IMAGE_NAME)
+    if image is not None and context.window is not None:
+        image_view.show_image(context, image)
+    return reports.finished(operator, f"{len(run.result.states) - 1} light states in {seconds:.0f} s; switch them in "
+                                      f"the Light Panel ({entry['ms']:.0f} ms a change)")
+
+
+class LAMP_OT_light_states_render(jobs.ModalJob, bpy.types.Operator):
+    """Render the design once per bulb and filament (and its surroundings), so that the Light Panel switches
+    functions and changes fluxes without rendering"""
+
+    bl_idname = "lamp.light_states_render"
+    bl_label = "Render Light States"
+    bl_options = {"REGISTER"}
+
+    job_key = bl_idname
+    busy_message = "Light states are being rendered (Esc cancels them)"
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or not hasattr(context.scene, "lamp_light_panel"):
+            cls.poll_message_set("No scene")
+            return False
+        if not context.scene.lamp_design.lamps:
+            cls.poll_message_set("Add a lamp first")
+            return False
+        return cls.poll_not_running()
+
+    def _run(self, context) -> StatesRun:
+        from .ops import measured_scene
+
+        self._key = _design_key(context.scene)
+        return StatesRun(measured_scene(context.scene))
+
+    def execute(self, context):
+        try:
+            run = self._run(context)
+        except SceneError as e:
+            return reports.cancelled(self, str(e))
+        start = time.perf_counter()
+        run.start()
+        run._thread.join()
+        return _finish(self, context, run, self._key, time.perf_counter() - start)
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        try:
+            self._states = self._run(context)
+        except SceneError as e:
+            return reports.cancelled(self, str(e))
+        self._start = time.perf_counter()
+        self._states.start()
+        return self.begin_modal(context, self._states)
+
+    def escape(self, context):
+        self.abandon(context)
+        self.end_modal(context)
+        reports.say(self, "WARNING", "Light states cancelled")
+        return {"CANCELLED"}
+
+    def step(self, context):
+        if not self._states.done():
+            return None
+        self.end_modal(context)
+        return _finish(self, context, self._states, self._key, time.perf_counter() - self._start)
+
+    def abandon(self, context):
+        self._states.cancel()
+
+    def status(self) -> str:
+        return f"Light states: {self._states.stage}, {100 * self._states.fraction:.0f}% (Esc to cancel)"
+
+    def fraction(self) -> float:
+        return self._states.fraction
+
+
+class LAMP_OT_light_states_apply(bpy.types.Operator):
+    """Set the design's bulbs as the Light Panel has them: which lamps are on, which filament of a two-filament
+    bulb, a custom bulb's flux (photometric) or a paper bulb's brightness"""
+
+    bl_idname = "lamp.light_states_apply"
+    bl_label = "Apply to Design"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or held(context.scene) is None or stale(context.scene):
+            cls.poll_message_set("Render the light states of this design first")
+            return False
+        return True
+
+    def execute(self, context):
+        light = held(context.scene)["light"]
+        items = {item.key: item for item in context.scene.lamp_light_panel.states}
+        design = context.scene.lamp_design
+        kept = []
+        for i, lamp in enumerate(design.lamps):
+            mine = [s for s in light.states if s.lamp == i]
+            lit = [s for s in mine if items[s.key].on]
+            lamp.bulb.on = bool(lit)
+            if not lit:
+                continue
+            chosen = next((s for s in lit if s.filament == "stop"), lit[0])
+            if len(lit) > 1:
+                kept.append(f"Lamp {i + 1}: both filaments on; the design lights one, {chosen.filament}")
+            if chosen.filament in ("stop", "tail"):
+                lamp.bulb.state = chosen.filament
+            level = items[chosen.key].level
+            if chosen.unit == "lm" and chosen.filament == "on":
+                lamp.bulb.flux_lm = level
+            elif chosen.unit == "" and abs(level - 1.0) > 1e-9:
+                lamp.bulb.intensity = [v * level for v in lamp.bulb.intensity]
+            elif chosen.unit == "lm" and abs(level - chosen.rendered) > 1e-6:
+                kept.append(f"Lamp {i + 1}: a {lamp.bulb.type} bulb's flux is its type's; set its bulb to Custom "
+                            f"for {level:g} lm")
+        surroundings = items.get("surroundings")
+        if surroundings is not None and (not surroundings.on or abs(surroundings.level - 1.0) > 1e-9):
+            kept.append("Surroundings: switch or scale them in the Light and Surroundings panels")
+        return reports.finished(self, "Applied the Light Panel's bulbs to the design"
+                                + (f" ({len(kept)} kept as they were: Info editor)" if kept else ""), kept)
+
+
+class LAMP_PT_light_panel(DesignSection, bpy.types.Panel):
+    bl_label = "Light Panel"
+    bl_options = {"DEFAULT_CLOSED"}
+    bl_order = 23
+
+    def draw(self, context):
+        layout = self.layout
+        layout.operator("lamp.light_states_render", icon="LIGHT")
+        entry = held(context.scene)
+        if entry is None:
+            layout.label(text="Render the light states to switch lamps without rendering", icon="INFO")
+            return
+        if stale(context.scene):
+            layout.label(text="The design changed since its light states: render them again", icon="ERROR")
+            return
+        col = layout.column(align=True)
+        for item in context.scene.lamp_light_panel.states:
+            row = col.row(align=True)
+            row.prop(item, "on", text="")
+            row.label(text=item.label)
+            sub = row.row(align=True)
+            sub.active = item.on
+            sub.prop(item, "level", text="lm" if item.unit else "×")
+        if entry["ms"] is not None:
+            layout.label(text=f"Re-weighted in {entry['ms']:.0f} ms (image \"{IMAGE_NAME}\")")
+        layout.operator("lamp.light_states_apply", icon="CHECKMARK")
+
+
+def _forget_on_load(*_args) -> None:
+    forget_all()
+
+
+classes = (LAMP_PG_light_state, LAMP_PG_light_panel, LAMP_OT_light_states_render, LAMP_OT_light_states_apply,
+           LAMP_PT_light_panel)
+
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register() -> None:
+    _register_classes()
+    if _forget_on_load not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(_forget_on_load)
+
+
+def unregister() -> None:
+    if _forget_on_load in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(_forget_on_load)
+    forget_all()
+    _unregister_classes()

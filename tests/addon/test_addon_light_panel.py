@@ -1,0 +1,90 @@
+"""The Light Panel (``lamp_addon.measures.light_panel``): the design's lighting states rendered once,
+then switched and dimmed without rendering; the design untouched unless Apply to Design."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from helpers import PRESETS
+from test_addon_panels import draw
+
+pytestmark = pytest.mark.blender
+
+
+@pytest.fixture
+def night(lamp_addon, addon_core, bl_scene):
+    scene = addon_core.scene.load_scene(PRESETS / "four-lamp-night-lit-photometric.json")
+    scene["image"] = {"width": 96, "height": 64}
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    bl_scene.lamp_design.auto_build = False
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+    bl_scene.render.engine = "LAMP_TRACER"
+    return bl_scene
+
+
+def _pixels(name: str) -> np.ndarray:
+    import bpy
+
+    image = bpy.data.images[name]
+    return np.array(image.pixels[:], np.float32).reshape(image.size[1], image.size[0], 4)[..., :3]
+
+
+def test_registration_is_symmetric_and_repeatable(lamp_addon, night):
+    import bpy
+
+    for _ in range(2):
+        lamp_addon.measures.unregister()
+        assert not hasattr(bpy.types.Scene, "lamp_light_panel") and not hasattr(bpy.types, "LAMP_PT_light_panel")
+        assert lamp_addon.measures.light_panel._forget_on_load not in bpy.app.handlers.load_post
+        lamp_addon.measures.register()
+        assert hasattr(bpy.types.Scene, "lamp_light_panel") and hasattr(bpy.types, "LAMP_OT_light_states_render")
+
+
+def test_switching_a_lamp_re_weights_without_rendering_and_keeps_the_design(lamp_addon, night):
+    import bpy
+
+    light_panel = lamp_addon.measures.light_panel
+    before = json.dumps(lamp_addon.design.properties.design_document(night), sort_keys=True)
+    assert bpy.ops.lamp.light_states_render() == {"FINISHED"}
+    items = {item.key: item for item in night.lamp_light_panel.states}
+    assert list(items) == ["surroundings", *(f"lamps[{i}].{f}" for i in range(4) for f in ("stop", "tail"))]
+    assert items["lamps[0].tail"].on and not items["lamps[0].stop"].on  # the design's own: lamp 1 a tail lamp
+    assert items["lamps[0].stop"].level == 440.0 and items["lamps[0].tail"].level == 35.0
+    design_view = _pixels(light_panel.IMAGE_NAME).copy()
+
+    # The design's own states show what the tracer's render shows (Render with Lamp Tracer: F12's pixels,
+    # tests/addon/test_addon_tracer_exposure.py), the same scene, glare and exposure.
+    image, _seconds = lamp_addon.render.ops.render_to_image(night)
+    rendered = _pixels(image.name)
+    assert np.abs(rendered - design_view).max() <= 1e-4 * max(1.0, float(rendered.max()))
+
+    # Lamps 2-4 off: only the tail lamp and the surroundings; a change re-weights in milliseconds.
+    for i in (1, 2, 3):
+        items[f"lamps[{i}].stop"].on = False
+    only_tail = _pixels(light_panel.IMAGE_NAME)
+    assert only_tail.sum() < 0.5 * design_view.sum()
+    assert light_panel.held(night)["ms"] < 50.0  # 96×64 here; benchmarks/bench_light_states.py at 512²
+    # Its stop filament on too: brighter than the tail alone.
+    items["lamps[0].stop"].on = True
+    assert _pixels(light_panel.IMAGE_NAME).sum() > only_tail.sum()
+    assert json.dumps(lamp_addon.design.properties.design_document(night), sort_keys=True) == before
+
+
+def test_a_design_change_makes_the_states_stale_and_apply_sets_the_bulbs(lamp_addon, night):
+    import bpy
+
+    light_panel = lamp_addon.measures.light_panel
+    assert bpy.ops.lamp.light_states_render() == {"FINISHED"}
+    items = {item.key: item for item in night.lamp_light_panel.states}
+    items["lamps[0].tail"].on = False
+    items["lamps[0].stop"].on = True
+    items["lamps[3].stop"].on = False
+    assert bpy.ops.lamp.light_states_apply() == {"FINISHED"}
+    bulbs = [lamp.bulb for lamp in night.lamp_design.lamps]
+    assert (bulbs[0].on, bulbs[0].state) == (True, "stop") and not bulbs[3].on
+    assert light_panel.stale(night)  # the design changed: render again
+    layout = draw(bpy.types.LAMP_PT_light_panel, night)
+    assert "The design changed since its light states: render them again" in layout.labels()
+    assert not bpy.types.LAMP_OT_light_states_apply.poll(bpy.context)
