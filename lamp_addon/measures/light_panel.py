@@ -319,6 +319,7 @@ class LAMP_PT_light_panel(DesignSection, bpy.types.Panel):
         layout.operator("lamp.light_states_apply", icon="CHECKMARK")
 
 
+@bpy.app.handlers.persistent  # kept across file loads, which it is for
 def _forget_on_load(*_args) -> None:
     forget_all()
 

@@ -88,3 +88,12 @@ def test_a_design_change_makes_the_states_stale_and_apply_sets_the_bulbs(lamp_ad
     layout = draw(bpy.types.LAMP_PT_light_panel, night)
     assert "The design changed since its light states: render them again" in layout.labels()
     assert not bpy.types.LAMP_OT_light_states_apply.poll(bpy.context)
+
+
+def test_the_held_passes_are_forgotten_when_a_file_is_opened(lamp_addon, night):
+    import bpy
+
+    assert bpy.ops.lamp.light_states_render() == {"FINISHED"}
+    assert lamp_addon.measures.light_panel.held(night) is not None
+    bpy.ops.wm.read_homefile(use_empty=True)  # a new file: another design, the same scene name
+    assert lamp_addon.measures.light_panel.held(bpy.context.scene) is None
