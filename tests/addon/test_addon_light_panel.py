@@ -97,3 +97,32 @@ def test_the_held_passes_are_forgotten_when_a_file_is_opened(lamp_addon, night):
     assert lamp_addon.measures.light_panel.held(night) is not None
     bpy.ops.wm.read_homefile(use_empty=True)  # a new file: another design, the same scene name
     assert lamp_addon.measures.light_panel.held(bpy.context.scene) is None
+
+
+def test_in_the_startup_file_the_light_panel_shows_what_f12_shows(lamp_addon, addon):
+    """A new user's file (Cube, Camera, Light): apply the photometric stop lamp from the preset browser,
+    render the light states; the design's own states give the tracer's render of the scene camera, the
+    user's objects are untouched, and switching the lamp off leaves the surroundings only."""
+    import bpy
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    scene = bpy.context.scene
+    bpy.ops.lamp.preset_refresh()
+    wm = bpy.context.window_manager
+    wm.lamp_presets_index = next(i for i, item in enumerate(wm.lamp_presets)
+                                 if item.file.endswith("photometric-stop-lamp.json"))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    scene.lamp_design.auto_build = False
+    scene.lamp_design.image.width, scene.lamp_design.image.height = 64, 48
+    users = {name: tuple(bpy.data.objects[name].location) for name in ("Cube", "Camera", "Light")}
+    assert bpy.ops.lamp.light_states_render() == {"FINISHED"}
+    light_panel = lamp_addon.measures.light_panel
+    shown = _pixels(light_panel.IMAGE_NAME).copy()
+    image, _seconds = lamp_addon.render.ops.render_to_image(scene)
+    rendered = _pixels(image.name)
+    assert np.abs(rendered - shown).max() <= 1e-4 * max(1.0, float(rendered.max()))
+    assert {name: tuple(bpy.data.objects[name].location) for name in users} == users
+    items = {item.key: item for item in scene.lamp_light_panel.states}
+    assert list(items) == ["surroundings", "lamps[0].stop", "lamps[0].tail"]
+    items["lamps[0].stop"].on = False
+    assert _pixels(light_panel.IMAGE_NAME).max() < 0.1 * shown.max()
