@@ -13,6 +13,8 @@ the operators run synchronously.
 
 from __future__ import annotations
 
+from . import reports
+
 POLL_SECONDS = 0.2  # how often a modal job looks at its work
 
 _runs: dict[str, object] = {}  # key -> the run under way: the one registry of running jobs
@@ -117,8 +119,14 @@ class ModalJob:
     def step(self, context) -> set[str] | None:  # pragma: no cover - every job overrides it
         raise NotImplementedError
 
-    def escape(self, context) -> set[str]:  # pragma: no cover - every job overrides it
-        raise NotImplementedError
+    cancelled_message = "Cancelled"  # what the default ``escape`` reports
+
+    def escape(self, context) -> set[str]:
+        """Esc: stop the work now, end the modal and say so (jobs whose work stops later override it)."""
+        self.abandon(context)
+        self.end_modal(context)
+        reports.say(self, "WARNING", self.cancelled_message)
+        return {"CANCELLED"}
 
     def abandon(self, context) -> None:  # pragma: no cover - every job overrides it
         raise NotImplementedError

@@ -4,6 +4,7 @@ built for the tracer's tests (each isolates one part of the model)."""
 from __future__ import annotations
 
 import ast
+import contextlib
 import copy
 import json
 import math
@@ -417,3 +418,26 @@ def whole_report(error: str, out: str) -> str:
     if "(Info editor)" not in error:
         return error
     return " ".join(line.removeprefix("Info: ") for line in out.splitlines() if line.startswith("Info: "))
+
+
+@contextlib.contextmanager
+def small_and_large_worker(small_mb: int = 200):
+    """A local Dask cluster of one worker with ``small_mb`` MB and one started beside it with 2 GiB,
+    as `dask worker --memory-limit` starts a studio's node: yields (client, small, large), the
+    workers' addresses; the large worker is stopped on the way out."""
+    from core_tracer.cluster import engine
+
+    with engine.connect(workers=1, memory_limit=small_mb * 2**20) as client:
+        small = next(iter(client.scheduler_info()["workers"]))
+        big = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", client.scheduler.address,
+                                "--nthreads", "1", "--memory-limit", "2GiB", "--no-dashboard", "--preload",
+                                engine.PRELOAD], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               env={**os.environ, "PYTHONPATH": str(ROOT)})
+        try:
+            client.wait_for_workers(2, timeout=60)
+            large = next(a for a in client.scheduler_info()["workers"] if a != small)
+            yield client, small, large
+        finally:
+            big.terminate()
+            big.wait(timeout=30)
+

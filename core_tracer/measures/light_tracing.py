@@ -45,7 +45,7 @@ from ..raytrace.engine import make_context
 from ..raytrace.engine.context import Context
 from ..raytrace.engine.rays import CUTOFF, NOT_DEFERRED, UNRECORDED, Rays, concat
 from ..raytrace.engine.surfaces import at_dielectric, at_plate_face, bulb_irradiance
-from ..raytrace.engine.walk import MAX_DEPTH, _normals_at, intersect
+from ..raytrace.engine.walk import MAX_DEPTH, intersect, normals_at
 from ..raytrace.parts.base import put_rows, rows
 from ..raytrace.parts.reflector import reflector_normal
 from ..scene.reading import SceneError
@@ -185,7 +185,7 @@ def trace(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]
             d, hit = _end_points(rays, t, met)
             faces = surface.take(met)
             face = at_dielectric(rays, met, rows(rays.k, met), d, hit, UNRECORDED, faces,
-                                 _normals_at(normals, met, faces), lamps.ior, P.IN_LENS, lamps.ior_bands)
+                                 normals_at(normals, met, faces), lamps.ior, P.IN_LENS, lamps.ior_bands)
             partial = face.split.partial
             alive = face.split.transmitted.max(axis=1) >= CUTOFF
             leaving = np.nonzero(partial & (faces == P.OUTER) & face.from_inside)[0]
@@ -203,7 +203,7 @@ def trace(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]
             d, hit = _end_points(rays, t, met)
             faces = surface.take(met)
             children.extend(at_plate_face(rays, met, rows(rays.k, met), d, hit, UNRECORDED, faces,
-                                          _normals_at(normals, met, faces), lamps))
+                                          normals_at(normals, met, faces), lamps))
         # the bulb, the socket, the side wall, the housing absorb; nothing met: lost inside the body
         children = [c for c in children if len(c)]
         rays = concat(children) if len(children) > 1 else (children[0] if children else rays.take(np.zeros(0, int)))

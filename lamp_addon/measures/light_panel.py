@@ -185,6 +185,7 @@ class LAMP_OT_light_states_render(jobs.ModalJob, bpy.types.Operator):
 
     job_key = bl_idname
     busy_message = "Light states are being rendered (Esc cancels them)"
+    cancelled_message = "Light states cancelled"
 
     @classmethod
     def poll(cls, context):
@@ -222,12 +223,6 @@ class LAMP_OT_light_states_render(jobs.ModalJob, bpy.types.Operator):
         self._start = time.perf_counter()
         self._states.start()
         return self.begin_modal(context, self._states)
-
-    def escape(self, context):
-        self.abandon(context)
-        self.end_modal(context)
-        reports.say(self, "WARNING", "Light states cancelled")
-        return {"CANCELLED"}
 
     def step(self, context):
         if not self._states.done():

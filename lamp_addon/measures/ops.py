@@ -168,6 +168,7 @@ class LAMP_OT_measures_run(jobs.ModalJob, bpy.types.Operator):
 
     job_key = bl_idname
     busy_message = "The design is being measured (Esc cancels it)"
+    cancelled_message = "Measures cancelled"
 
     @classmethod
     def poll(cls, context):
@@ -206,12 +207,6 @@ class LAMP_OT_measures_run(jobs.ModalJob, bpy.types.Operator):
             return reports.cancelled(self, f"Measures cannot start their worker: {e}")
         self._start = time.perf_counter()
         return self.begin_modal(context, self._run)
-
-    def escape(self, context):
-        self.abandon(context)
-        self.end_modal(context)
-        reports.say(self, "WARNING", "Measures cancelled")
-        return {"CANCELLED"}
 
     def step(self, context):
         if not self._run.poll():

@@ -165,6 +165,7 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
 
     job_key = bl_idname
     busy_message = "A study is running (Esc cancels it)"
+    cancelled_message = "Lamp Study cancelled"
 
     @classmethod
     def poll(cls, context):
@@ -207,12 +208,6 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
         self._start = time.perf_counter()
         self._measures = None
         return self.begin_modal(context, self._run)
-
-    def escape(self, context):
-        self.abandon(context)
-        self.end_modal(context)
-        reports.say(self, "WARNING", "Lamp Study cancelled")
-        return {"CANCELLED"}
 
     def step(self, context):
         from ...core_tracer.study.run import StudyError

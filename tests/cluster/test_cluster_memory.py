@@ -4,13 +4,9 @@ cluster whose worker is given too little is refused in one line naming it and bo
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-
 import pytest
 from distributed import get_task_stream
-from helpers import ROOT, baseline_doc
+from helpers import baseline_doc, small_and_large_worker
 
 from core_tracer import budget
 from core_tracer.cluster import engine
@@ -53,20 +49,9 @@ def test_variants_go_only_to_the_workers_whose_memory_holds_them():
     for height in (0.5, 1.0, 2.0):
         doc["lamps"][0]["cuts"]["height"] = height
         cells.append(make_cell(parse_scene(doc), 24, 24, Inputs()))
-    with engine.connect(workers=1, memory_limit=200 * 2**20) as client:
-        small = next(iter(client.scheduler_info()["workers"]))
-        big = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", client.scheduler.address,
-                                "--nthreads", "1", "--memory-limit", "2GiB", "--no-dashboard", "--preload",
-                                engine.PRELOAD], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                               env={**os.environ, "PYTHONPATH": str(ROOT)})
-        try:
-            client.wait_for_workers(2, timeout=60)
-            large = next(a for a in client.scheduler_info()["workers"] if a != small)
-            with get_task_stream(client) as stream:
-                images, count = engine.run_cells(client, cells, Inputs())
-            ran_on = {t["worker"] for t in stream.data if str(t["key"]).startswith("lamp-cell-")}
-        finally:
-            big.terminate()
-            big.wait(timeout=30)
+    with small_and_large_worker() as (client, small, large):
+        with get_task_stream(client) as stream:
+            images, count = engine.run_cells(client, cells, Inputs())
+        ran_on = {t["worker"] for t in stream.data if str(t["key"]).startswith("lamp-cell-")}
     assert count.workers == [large] and ran_on == {large}, (count.workers, ran_on)
     assert count.rendered == 3 and all(image.shape == (24, 24, 3) for image in images)

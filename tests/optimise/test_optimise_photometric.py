@@ -6,15 +6,12 @@ checked on real local Dask clusters."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import optuna
 import pytest
 from distributed import get_task_stream
-from helpers import BASELINE, ROOT, run_cli
+from helpers import BASELINE, ROOT, run_cli, small_and_large_worker
 
 from core_tracer.cluster import engine
 from core_tracer.cluster.cache import CellCache
@@ -277,21 +274,10 @@ def test_trials_go_only_to_the_workers_whose_memory_holds_them(tmp_path):
     """A local cluster of one worker too small (200 MB) and one started beside it with room (2 GiB),
     as `dask worker --memory-limit` starts a studio's node: every trial runs on the large one."""
     opt = spec.from_doc(opt_doc(tmp_path, trials=3), str(tmp_path))
-    with engine.connect(workers=1, memory_limit=200 * 2**20) as client:
-        small = next(iter(client.scheduler_info()["workers"]))
-        big = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", client.scheduler.address,
-                                "--nthreads", "1", "--memory-limit", "2GiB", "--no-dashboard", "--preload",
-                                engine.PRELOAD], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                               env={**os.environ, "PYTHONPATH": str(ROOT)})
-        try:
-            client.wait_for_workers(2, timeout=60)
-            large = next(a for a in client.scheduler_info()["workers"] if a != small)
-            with get_task_stream(client) as stream:
-                outcome = search.run(opt, client, None, parallel=2)
-            ran_on = {t["worker"] for t in stream.data if str(t["key"]).startswith("lamp-trial-")}
-        finally:
-            big.terminate()
-            big.wait(timeout=30)
+    with small_and_large_worker() as (client, small, large):
+        with get_task_stream(client) as stream:
+            outcome = search.run(opt, client, None, parallel=2)
+        ran_on = {t["worker"] for t in stream.data if str(t["key"]).startswith("lamp-trial-")}
     assert outcome.workers == [large] and small not in outcome.workers
     assert ran_on == {large}, ran_on
     assert len(search.finished_trials(outcome.study)) == 3 and outcome.rendered == 3

@@ -76,7 +76,7 @@ _Normals = list[tuple[int, np.ndarray | None, np.ndarray]]
 def intersect(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, _Normals]:
     """Nearest surface of every ray among the parts its medium can reach (``parts.PARTS``, in
     order; ties keep the earlier part): (t, surface id, the normals out of the lens material that
-    the parts gave, the lens faces': ``_normals_at`` reads those of the rays that need them)."""
+    the parts gave, the lens faces': ``normals_at`` reads those of the rays that need them)."""
     n = len(rays)
     t_best = np.full(n, np.inf)
     surface = np.full(n, P.NOTHING, np.int8)
@@ -117,7 +117,7 @@ def _runs_of_media(parts: tuple) -> list[tuple[tuple[int, ...], list]]:
     return runs
 
 
-def _normals_at(normals: _Normals, met: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def normals_at(normals: _Normals, met: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """The normals (len(met), 3) where the segments ``met`` end, on the surfaces ``faces``: each
     from the part that surface is (the nearest part, so the last that gave the ray a normal)."""
     normal = np.zeros((len(met), 3))
@@ -187,13 +187,13 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
         d, hit = _end_points(rays, t, met)
         faces = surface.take(met)
         children.extend(at_lens_face(ctx, band, rays, met, rows(k, met), d, hit, cls.take(met), faces,
-                                     _normals_at(normals, met, faces)))
+                                     normals_at(normals, met, faces)))
     met = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
     if len(met):
         d, hit = _end_points(rays, t, met)
         faces = surface.take(met)
         children.extend(at_plate_face(rays, met, rows(k, met), d, hit, cls.take(met), faces,
-                                      _normals_at(normals, met, faces), lamps, throughput))
+                                      normals_at(normals, met, faces), lamps, throughput))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return concat(children) if len(children) > 1 else children[0]
