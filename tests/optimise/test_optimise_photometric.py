@@ -228,6 +228,23 @@ def test_a_grid_margin_no_design_can_meet_is_said_after_the_search(tmp_path):
     assert all(t["measures"]["grid_min_margin"] < -0.5 for t in trials)
 
 
+def test_the_sheet_shows_a_red_stop_lamp_red(tmp_path):
+    """The trials' images are XYZ in cd/m²: the sheet shows them through the base's camera EV100
+    (images.photometric.shown_together), not as if X, Y, Z were R, G, B (which turned the red stop
+    lamp orange: G/R about 0.7 on its lit lens)."""
+    import OpenImageIO as oiio
+
+    path = tmp_path / "opt.json"
+    path.write_text(json.dumps(opt_doc(tmp_path, trials=2, size=[48, 48])))
+    proc = run_cli("optimise", path, "--workers", "0", "-o", tmp_path / "out", "--no-cache")
+    assert proc.returncode == 0, proc.stderr
+    sheet = oiio.ImageBuf(str(tmp_path / "out" / "sheet.png")).get_pixels(oiio.FLOAT)[..., :3]
+    lit = sheet[..., 0] > 0.5  # the lit lens (the background and the text are grey)
+    lit &= np.abs(sheet[..., 0] - sheet[..., 1]) > 0.1
+    assert lit.sum() > 50
+    assert float(np.median(sheet[..., 1][lit] / sheet[..., 0][lit])) < 0.5
+
+
 @pytest.mark.slow
 def test_designs_light_tracing_cannot_follow_are_refused_trials_not_a_crash(tmp_path):
     """A cylindrical lens among the values: light tracing follows flat lenses only, so those trials
