@@ -70,9 +70,11 @@ def _bits(a: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.seed(6)
-def test_radiance_and_irradiance_are_the_plain_formulas_bit_for_bit(rng):
+def test_radiance_and_irradiance_are_the_plain_formulas_to_the_last_bits(rng):
     # The lookups work in place, a channel at a time on a padded copy of the image: the same
-    # operations on every element as the plain expressions below, so the same bits.
+    # operations on every element as the plain expressions below. Equal within 2 ulp, not bit for
+    # bit: numpy's vectorised arctan2/arcsin (AVX-512 here) gave 1-ulp differences once in a full
+    # CI run (fresh clone of 41dc24e) and never alone; the lookups' own arithmetic is exact.
     pixels = (rng.random((16, 32, 3)) * 10.0).astype(np.float32)
     env = environment.Environment(pixels, 1.7, math.radians(30.0))
     d = rng.normal(size=(20_000, 3))
@@ -82,14 +84,15 @@ def test_radiance_and_irradiance_are_the_plain_formulas_bit_for_bit(rng):
     u = -np.arctan2(y, x) / (2.0 * math.pi) + 0.5
     v = np.arctan2(d[:, 2], np.hypot(x, y)) / math.pi + 0.5
     got_u, got_v = env.texture_coordinates(d)
-    assert (_bits(got_u) == _bits(u)).all() and (_bits(got_v) == _bits(v)).all()
+    np.testing.assert_array_max_ulp(got_u, u, maxulp=2)
+    np.testing.assert_array_max_ulp(got_v, v, maxulp=2)
     h, w = pixels.shape[:2]
     px, py = u * w - 0.5, (1.0 - v) * h - 0.5
     i, j = np.floor(px).astype(int), np.floor(py).astype(int)
     tx, ty = (px - np.floor(px))[:, None], (py - np.floor(py))[:, None]
     top = pixels[j % h, i % w] * (1.0 - tx) + pixels[j % h, (i + 1) % w] * tx  # float32 x float64: float64
     bottom = pixels[(j + 1) % h, i % w] * (1.0 - tx) + pixels[(j + 1) % h, (i + 1) % w] * tx
-    assert (_bits(env.radiance(d)) == _bits((top * (1.0 - ty) + bottom * ty) * env.strength)).all()
+    np.testing.assert_allclose(env.radiance(d), (top * (1.0 - ty) + bottom * ty) * env.strength, rtol=1e-12, atol=0)
     n = environment.IRRADIANCE_LON, environment.IRRADIANCE_LAT
     ex = (np.arctan2(d[:, 1], d[:, 0]) + math.pi) / (2.0 * math.pi) * n[0]
     ey = (np.arcsin(np.clip(d[:, 2], -1.0, 1.0)) + 0.5 * math.pi) / math.pi * n[1]
@@ -100,7 +103,7 @@ def test_radiance_and_irradiance_are_the_plain_formulas_bit_for_bit(rng):
     m = env._irradiance_map
     expected = ((m[j0, i0] * (1.0 - tx) + m[j0, i1] * tx) * (1.0 - ty)
                 + (m[j0 + 1, i0] * (1.0 - tx) + m[j0 + 1, i1] * tx) * ty)
-    assert (_bits(env.irradiance(d)) == _bits(expected)).all()
+    np.testing.assert_allclose(env.irradiance(d), expected, rtol=1e-12, atol=0)
 
 
 @pytest.mark.seed(4)
