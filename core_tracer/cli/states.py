@@ -9,7 +9,7 @@ import sys
 from ..fileio import atomic_write_bytes
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
-from .common import check_output, ctrl_c_sets, load_scene_file
+from .common import check_output, ctrl_c_sets, design_meshes, load_scene_file, traced_scene
 
 HELP = ("render the surroundings and one pass per bulb and filament of a design, so that 'relight' switches "
         "functions and changes fluxes without rendering")
@@ -29,6 +29,8 @@ def run(args: argparse.Namespace) -> int:
                                      ".npz")
     check_output(args.output, "output")
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
+    traced = traced_scene(args.scene, scene)
+    meshes = design_meshes(args.scene, scene)
     from ..measures import states as S
     from ..raytrace.engine import RenderCancelled
 
@@ -37,7 +39,8 @@ def run(args: argparse.Namespace) -> int:
 
     with ctrl_c_sets() as stop:
         try:
-            light = S.render_states(scene, progress=progress, should_stop=stop.is_set)
+            light = S.render_states(traced, progress=progress, should_stop=stop.is_set, meshes=meshes,
+                                    recorded=scene)
         except RenderCancelled:
             raise stop.interrupt() from None
     atomic_write_bytes(args.output, S.to_bytes(light))
