@@ -67,20 +67,24 @@ def environment_file(document: str | os.PathLike, env: dict) -> str | None:
     return path_beside(document, name, where, "an .exr or .hdr", "")[0]
 
 
-def named_curves(scene: dict) -> list[tuple[tuple, str]]:
+SECTIONS = ("lamps", "freeform")  # where a scene names curves: its lamps, its free-form parts
+
+
+def named_curves(scene: dict, sections: tuple[str, ...] = SECTIONS) -> list[tuple[tuple, str]]:
     """The measured curves a normalised photometric scene reads, as (where the name sits: a key path
     into the scene, the JSON path shown in messages): a bulb's ``spectrum_file``, a lens's or prism
-    plate's ``filter_file``, the same of free-form bulbs and lenses (none in the paper mode)."""
+    plate's ``filter_file``, the same of free-form bulbs and lenses (none in the paper mode); of
+    the lamps, the free-form parts or both (``sections``)."""
     if scene.get("light_model") != "photometric":
         return []
     named: list[tuple[tuple, str]] = []
-    for i, lamp in enumerate(scene["lamps"]):
+    for i, lamp in enumerate(scene["lamps"] if "lamps" in sections else ()):
         sections = [("bulb", lamp["bulb"]), ("lens", lamp["lens"])]
         if lamp.get("collection", "reflector") == "prism_plate":
             sections.append(("prism_plate", lamp["prism_plate"]))
         named += [(("lamps", i, name, key), f"lamps[{i}].{name}.{key}") for name, section in sections
                   for key in _curve_keys(section)]
-    for i, part in enumerate(scene.get("freeform", {}).get("parts", ())):
+    for i, part in enumerate(scene.get("freeform", {}).get("parts", ()) if "freeform" in sections else ()):
         role = part["role"]
         named += [(("freeform", "parts", i, role, key), f"freeform.parts[{i}].{role}.{key}")
                   for key in _curve_keys(part[role])]
@@ -97,11 +101,12 @@ def _curve_keys(section: dict) -> list[str]:
     return keys
 
 
-def spectrum_files(document: str | os.PathLike, scene: dict) -> dict[tuple, str]:
+def spectrum_files(document: str | os.PathLike, scene: dict, sections: tuple[str, ...] = SECTIONS
+                   ) -> dict[tuple, str]:
     """The measured curves (.csv) a normalised photometric scene names beside ``document``, by key
     path (``named_curves``); each confined to the document's folder as ``environment_file`` is."""
     found: dict[tuple, str] = {}
-    for keys, where in named_curves(scene):
+    for keys, where in named_curves(scene, sections):
         name = _at(scene, keys)
         check_plain_name(name, (".csv",), where)
         found[keys] = path_beside(document, name, where, "a .csv", "")[0]
@@ -132,7 +137,7 @@ def with_curves_at(scene: dict, paths: dict[tuple, str]) -> dict:
     return out
 
 
-def with_spectrum_files(document: str | os.PathLike, scene: dict) -> dict:
-    """``scene`` with the measured curves it names (``spectrum_files``) by their full paths, to be
-    traced whatever the working directory (the scene itself, when it names none)."""
-    return with_curves_at(scene, spectrum_files(document, scene))
+def with_spectrum_files(document: str | os.PathLike, scene: dict, sections: tuple[str, ...] = SECTIONS) -> dict:
+    """``scene`` with the measured curves it names (``spectrum_files``; of ``sections``) by their full
+    paths, to be traced whatever the working directory (the scene itself, when it names none)."""
+    return with_curves_at(scene, spectrum_files(document, scene, sections))
