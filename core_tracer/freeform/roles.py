@@ -77,7 +77,7 @@ class PartTable:
                 if photometric is None:
                     self.color[i] = v["intensity"] if v["on"] else (0.0, 0.0, 0.0)
                 else:
-                    self.color[i] = emitter_radiance(v, part_areas(geometry, i)[1].sum(), photometric, where)
+                    self.color[i] = emitter_radiance(v, emitting_area(v, geometry, i), photometric, where)
             elif role in ("socket", "side_wall"):
                 if photometric is None:  # photometric: unlit, as the parametric socket and side wall
                     self.color[i] = v["color"]
@@ -92,7 +92,7 @@ class PartTable:
         for b, i in enumerate(bulbs):
             centre, area = part_areas(geometry, i)
             self.bulb_center[b] = (centre * area[:, None]).sum(axis=0) / max(area.sum(), 1e-300)
-            self.bulb_radius[b] = math.sqrt(area.sum() / (4.0 * math.pi))
+            self.bulb_radius[b] = math.sqrt(emitting_area(parts[i]["bulb"], geometry, i) / (4.0 * math.pi))
         self.bulb_intensity = self.color[bulbs] if bulbs else np.zeros((0, channels))
         self.bulbs_of = np.zeros((n, max(1, len(bulbs))), bool)  # [reflector part, bulb]
         for i, part in enumerate(parts):
@@ -106,6 +106,14 @@ class PartTable:
             else:
                 centre = (lo + hi) / 2
                 self.bulbs_of[i, int(np.argmin(np.linalg.norm(self.bulb_center - centre, axis=1)))] = True
+
+
+def emitting_area(source: dict, geometry: Geometry, part: int) -> float:
+    """mm² of a bulb part's emitting surface: the sphere it stands for (``radius``, as Convert to
+    Free-form gives a converted bulb: the parametric bulb's, whose tessellation is a little smaller),
+    else the mesh's own area."""
+    radius = source.get("radius", 0.0)
+    return 4.0 * math.pi * radius * radius if radius > 0.0 else float(part_areas(geometry, part)[1].sum())
 
 
 def emitter_radiance(source: dict, area_mm2: float, photometric: spectral.Photometric, where: str) -> np.ndarray:

@@ -469,9 +469,13 @@ FREEFORM_ROLE_SECTIONS = {
     "reflector": Section({key: REFLECTOR.fields[key] for key in ("color", "reflectance", "scatter", "shininess",
                                                                  "finish", "scatter_share")},
                          "A mirror: constant colour on the first hit, Blinn scatter toward the bulbs (eq. 3)"),
-    "bulb": Section({key: BULB.fields[key] for key in _BULB_SOURCE},
+    "bulb": Section({key: BULB.fields[key] for key in _BULB_SOURCE}
+                    | {"radius": _length(0.0, "Photometric: the radius of the sphere the mesh stands for (a "
+                                              "converted bulb's), which sets its luminance Φ/(4π² r²) and the "
+                                              "glow it lights; 0: a Lambertian emitter of the mesh's own area",
+                                         hi=1000.0, lo_open=False)},
                     "A light source; rays that reach it end with its intensity (photometric: its luminance, "
-                    "a Lambertian emitter of its flux over the mesh's area)",
+                    "a Lambertian emitter of its flux over the mesh's area, or over the sphere it stands for)",
                     shown_when=tuple(rule for rule in BULB.shown_when if rule[0] in _BULB_SOURCE)),
     "socket": Section({"color": SOCKET.fields["color"]}, "Opaque, ends a ray with its colour"),
     "side_wall": Section({"color": LENS.fields["side_wall_color"]}, "Opaque, ends a ray with its colour"),
