@@ -79,11 +79,11 @@ def named_curves(scene: dict, sections: tuple[str, ...] = SECTIONS) -> list[tupl
         return []
     named: list[tuple[tuple, str]] = []
     for i, lamp in enumerate(scene["lamps"] if "lamps" in sections else ()):
-        sections = [("bulb", lamp["bulb"]), ("lens", lamp["lens"])]
+        parts = [("bulb", lamp["bulb"]), ("lens", lamp["lens"])]
         if lamp.get("collection", "reflector") == "prism_plate":
-            sections.append(("prism_plate", lamp["prism_plate"]))
-        named += [(("lamps", i, name, key), f"lamps[{i}].{name}.{key}") for name, section in sections
-                  for key in _curve_keys(section)]
+            parts.append(("prism_plate", lamp["prism_plate"]))
+        named += [(("lamps", i, name, key), f"lamps[{i}].{name}.{key}") for name, part in parts
+                  for key in _curve_keys(part)]
     for i, part in enumerate(scene.get("freeform", {}).get("parts", ()) if "freeform" in sections else ()):
         role = part["role"]
         named += [(("freeform", "parts", i, role, key), f"freeform.parts[{i}].{role}.{key}")
