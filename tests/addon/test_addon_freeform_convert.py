@@ -247,7 +247,7 @@ FRONT_PIXEL_MM = 0.5  # the measures' front view (``report.measure``'s homogenei
 # enough that a cut cell's edge moved by the chord tolerance moves the sum by far less than 1 %.
 GRID_PIXEL_MM = 0.5
 GRID_REPLICATES = 3
-# Measured (3 replicates at 0.5 mm): every point within ±10° of H agrees within 0.40 %; the four points at
+# Measured (3 replicates at 0.5 mm): every point within ±10° of H agrees within 0.40 %; the points at
 # H = ±20°, where the light leaves through the rim's clipped cut cells, are 0.44-1.15 % dimmer in the meshes
 # (standard errors 0.06-0.35 cd of 23-28 cd): the 1 % is not met at H = -20°, V = -10° (-1.15 %).
 WIDE_H_DEG = 15.0
