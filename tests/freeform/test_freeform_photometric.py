@@ -123,3 +123,23 @@ def test_file_fields_their_kind_does_not_read_are_refused_in_one_line():
     with pytest.raises(SceneError) as err:
         parse_scene(doc)
     assert err.value.path == "freeform.parts[1].bulb.spectrum_file" and "\n" not in str(err.value)
+
+
+def test_a_free_form_design_is_measured_on_its_meshes_and_not_light_traced_as_its_lamps():
+    """Rendered views measure the meshes (a bare bulb mesh: I = L · its projected area, Φ/(4π) for a
+    convex Lambertian emitter, within the view's sampling); forward light tracing, which follows the
+    parametric lamps, refuses a free-form design in one line rather than count its lamps' light."""
+    from core_tracer.freeform.cache import DesignMeshes
+    from core_tracer.measures import intensity, light_tracing
+
+    sphere = shapes.uv_sphere("Bulb", (0.0, 40.0, 0.0), RADIUS, segments=64)
+    scene, meshes = design([bulb(radius=0.0)], [sphere])
+    scene["body"] = {**scene["body"], "size": [30.0, 30.0], "depth": 60.0}
+    measured = intensity.rendered_intensity(scene, 0.0, 0.0, pixel_mm=0.25, replicates=4,
+                                            meshes=DesignMeshes(meshes))
+    # a convex Lambertian emitter of flux Φ = π L A: I = L A/4 = Φ/(4π) in every direction (its projected
+    # area a quarter of its surface, averaged over directions: Cauchy's formula; a fine sphere's in each)
+    assert measured.cd == pytest.approx(FLUX / (4.0 * math.pi), rel=0.005)
+    with pytest.raises(SceneError) as err:
+        light_tracing.traced_intensity(scene, 0.0, 0.0, photons=100)
+    assert err.value.path == "freeform" and "\n" not in str(err.value)
