@@ -97,3 +97,43 @@ def test_applied_over_a_built_parametric_lamp_nothing_is_traced_twice(lamp_addon
     bl_scene.render.resolution_percentage = 25
     assert lamp_addon.freeform.parametric.used_parts(bl_scene, None) == []
     assert bpy.ops.render.render() == {"FINISHED"}  # no "overlaps lens ... (Parametric)"
+
+
+TWIN = PRESETS / "freeform-sculpted-wrap-lamp-photometric.json"
+
+
+def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_addon, addon, tmp_path):
+    """The example's photometric twin (the same .glb, a P21/5W tail filament, a red PMMA lens, night at
+    3 lx): applied from the browser, F12 shows the command line's XYZ (cd/m²) as scene-linear Rec.709
+    at the preset's EV100 15, the one display path of photometric images (``spectral.display_linear``)."""
+    import bpy
+
+    from core_tracer.photometry import output
+    from core_tracer.raytrace import spectral
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    bl_scene = bpy.context.scene
+    bpy.ops.lamp.preset_refresh()
+    wm = bpy.context.window_manager
+    listed = [item.file for item in wm.lamp_presets]
+    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith(TWIN.name))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    parts = lamp_addon.freeform.properties.role_objects(bl_scene)
+    bulb = next(o for o in parts if o.lamp_role.role == "bulb")
+    assert bulb.lamp_role.bulb.type == "P21/5W" and bulb.lamp_role.bulb.state == "tail"
+    settings = bl_scene.render.image_settings
+    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
+    assert bpy.ops.render.render() == {"FINISHED"}
+    bpy.data.images["Render Result"].save_render(str(tmp_path / "f12.exr"), scene=bl_scene)
+    f12 = _exr(tmp_path / "f12.exr")
+
+    done = run_cli("render", TWIN, "-o", tmp_path / "cli.exr")
+    assert done.returncode == 0, done.stderr
+    channels = output.read_photometric_exr(tmp_path / "cli.exr")[0]
+    xyz = np.stack([channels[c] for c in "XYZ"], axis=-1)
+    shown = spectral.display_linear(xyz, 15.0)
+    assert f12.shape == shown.shape == (256, 320, 3)
+    lit = channels["Y"] > 0.05 * channels["Y"].max()
+    print(f"F12 vs CLI at EV100 15: largest |difference| {np.abs(f12 - shown).max():.3g} of {shown.max():.3g}")
+    assert lit.sum() > 1000 and channels["x"][lit].mean() > 0.6  # a red tail lamp
+    np.testing.assert_allclose(f12, shown, rtol=1e-4, atol=1e-6 * shown.max())
