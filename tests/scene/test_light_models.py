@@ -42,3 +42,19 @@ def test_used_follows_the_light_model():
     assert light_models.used(S.LENS, "ior", "photometric", custom)
     assert light_models.used(S.PRISM_PLATE, "ior", "photometric", pmma)  # it shapes the rings in both modes
     assert not light_models.used(S.LENS, "transmitted_color", "photometric", custom)
+
+
+def test_free_form_roles_show_the_fields_of_the_light_model_as_the_parts_they_stand_for():
+    lens, bulb = S.FREEFORM_ROLE_SECTIONS["lens"], S.FREEFORM_ROLE_SECTIONS["bulb"]
+    pmma = {"material": "pmma"}.get
+    assert light_models.used(lens, "absorption", "paper", pmma)
+    assert not light_models.used(lens, "absorption", "photometric", pmma)  # its filter stands for it
+    assert not light_models.used(lens, "filter", "paper", pmma)
+    assert light_models.used(lens, "filter", "photometric", pmma)
+    assert not light_models.used(lens, "ior", "photometric", pmma)  # the material's
+    assert light_models.used(lens, "ior", "photometric", {"material": "custom"}.get)
+    assert not light_models.used(bulb, "intensity", "photometric", pmma)
+    assert light_models.used(bulb, "radius", "photometric", pmma)
+    assert not light_models.used(bulb, "radius", "paper", pmma)
+    for role in ("socket", "side_wall"):  # unlit in the photometric mode
+        assert not light_models.used(S.FREEFORM_ROLE_SECTIONS[role], "color", "photometric", pmma)
