@@ -137,3 +137,20 @@ def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_add
     print(f"F12 vs CLI at EV100 15: largest |difference| {np.abs(f12 - shown).max():.3g} of {shown.max():.3g}")
     assert lit.sum() > 1000 and channels["x"][lit].mean() > 0.6  # a red tail lamp
     np.testing.assert_allclose(f12, shown, rtol=1e-4, atol=1e-6 * shown.max())
+
+
+def test_the_measures_and_light_panels_refuse_free_form_parts_in_one_line(lamp_addon, addon):
+    """In Blender the Measures and Light Panel operators measure the parametric lamp, which a free-form
+    design's parts stand in for: they say so in one line rather than measure the hidden lamp."""
+    import bpy
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    bpy.ops.lamp.preset_refresh()
+    wm = bpy.context.window_manager
+    listed = [item.file for item in wm.lamp_presets]
+    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith(TWIN.name))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    for operator in (bpy.ops.lamp.light_states_render, bpy.ops.lamp.measures_run):
+        with pytest.raises(RuntimeError, match="Free-form Parts: are not measured here yet") as err:
+            operator()
+        assert "Export Free-form Design" in str(err.value) and "\n" not in str(err.value).strip()
