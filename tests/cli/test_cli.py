@@ -55,6 +55,8 @@ BAD_SCENES = {
                        ("body.size[0]", "0 is out of range", "(0, 10000] mm")),
     "zero-thickness": (_edit(lambda d: d["lamps"][0]["lens"].update(thickness=0)),
                        ("lamps[0].lens.thickness", "0", "(0, 100] mm")),
+    "negative-thickness": (_edit(lambda d: d["lamps"][0]["lens"].update(thickness=-2)),
+                           ("lamps[0].lens.thickness", "-2 is out of range", "(0, 100] mm")),
     "ior-below-1": (_edit(lambda d: d["lamps"][0]["lens"].update(ior=0.9)),
                     ("lamps[0].lens.ior", "0.9", "[1, 3]")),
     "five-lamps": (_edit(lambda d: d.update(lamps=[_lamp([0, 0]) for _ in range(5)])),
