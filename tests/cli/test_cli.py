@@ -188,6 +188,20 @@ def test_validate_ok():
     assert "valid lamp-scene/2" in proc.stdout and "Round red tail lamp" in proc.stdout
 
 
+def test_validate_reports_photometric_fields_a_paper_design_ignores(tmp_path):
+    """Issue 31: reported in one line on stderr, not refused (exit 0)."""
+    doc = baseline_doc()
+    doc["lamps"][0]["bulb"]["flux_lm"] = 900
+    path = tmp_path / "paper.json"
+    path.write_text(json.dumps(doc))
+    proc = run_cli("validate", path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.splitlines() == [
+        f"note: {path}: the paper light model ignores photometric fields: lamps[0].bulb.flux_lm = 900.0; "
+        'they take effect with light_model "photometric"']
+    assert run_cli("validate", BASELINE).stderr == ""
+
+
 def test_render_exr_with_passes(tmp_path):
     out = tmp_path / "out.exr"
     passes = tmp_path / "passes"
