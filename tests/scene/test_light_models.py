@@ -50,8 +50,9 @@ def test_a_paper_design_reports_the_photometric_values_it_ignores():
     """Issue 31: photometric fields on a paper design were ignored without a word. They are reported
     (not refused: a shared preset may carry them for a switch of model), and only when not at their
     defaults, so a preset that writes every field keeps loading silently."""
-    from core_tracer.scene.validate import load_scene, parse_scene
     from helpers import BASELINE, PRESETS
+
+    from core_tracer.scene.validate import load_scene, parse_scene
 
     baseline = load_scene(BASELINE)
     assert light_models.ignored_note(baseline) is None
