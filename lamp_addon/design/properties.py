@@ -201,6 +201,11 @@ def _function_chosen(self, context) -> None:
 _writing = [0]  # > 0 while a design is being written: update callbacks leave the values alone
 
 
+def is_writing() -> bool:
+    """Whether a whole design (a preset) is being written into the properties right now."""
+    return _writing[0] > 0
+
+
 def _leaf_property(key: str, spec: S.Spec, section: S.Section):
     if photometric_words.label(section, key) is not None:
         return _worded_property(key, spec, section)
