@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 
@@ -219,3 +220,32 @@ def test_ctrl_c_stops_the_search_in_one_line_and_keeps_what_finished(folder, wor
     states = [t.state for t in search.open_study(opt).trials]
     assert optuna.trial.TrialState.RUNNING not in states  # the trials under way were told as failed
     assert states.count(optuna.trial.TrialState.COMPLETE) >= 1
+
+
+@pytest.mark.slow
+def test_the_dashboard_link_is_printed_while_the_cluster_runs(folder):
+    """Issue 31: ``optimise`` printed the local cluster's dashboard link in its summary, after the
+    cluster had gone. The link comes first, while the cluster answers at it; the summary names the
+    cluster without it."""
+    import urllib.request
+
+    path = folder / "opt.json"
+    path.write_text(json.dumps(opt_doc(folder, trials=500)))
+    proc = start_cli_at("optimise:trial", folder / "reached", "optimise", path, "--workers", "2",
+                        "-o", folder / "out", "--no-cache")
+    try:
+        line = proc.stdout.readline()  # the command waits at its first trial, the cluster running
+        assert line.startswith("local Dask cluster: 2 worker processes x 1 thread") and ", dashboard http" in line
+        status = line.rsplit("dashboard ", 1)[1].strip()
+        with urllib.request.urlopen(status.removesuffix("status") + "health", timeout=30) as answer:
+            assert answer.status == 200  # the scheduler's web server behind the link (/health: no bokeh needed)
+    finally:
+        signal_and_wait(proc, signal.SIGINT)
+    path.write_text(json.dumps(opt_doc(folder, trials=2, storage=f"sqlite:///{folder / 'two.db'}")))
+    done = run_cli("optimise", path, "--workers", "2", "-o", folder / "two", "--no-cache")
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("local Dask cluster: 2 worker processes") and "dashboard" in lines[0]
+    summary = next(x for x in lines if " trials in " in x)
+    ends = r" on the local Dask cluster: 2 worker processes x 1 thread, [0-9.]+ [GM]B each$"
+    assert re.search(ends, summary), summary
