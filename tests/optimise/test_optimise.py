@@ -76,6 +76,8 @@ def folder(tmp_path):
     ({"sampler": "annealing"}, "sampler", "tpe, cmaes, nsga2, random"),
     ({"trials": 0}, "trials", "1 to 10000"),
     ({"size": [5000, 10]}, "size", "[1, 2048]"),
+    ({"size": [64, 48]}, "size", "objectives[0].reference 'ref.exr' (40x40 px), which SSIM compares pixel by pixel; "
+                                 "allowed [40, 40]"),  # issue 31: a traceback at the first trial
     ({"storage": "opt.db"}, "storage", "sqlite:///"),
     ({"colour": 1}, "colour", "allowed keys"),
 ])
@@ -91,6 +93,16 @@ def test_the_cli_names_the_file_and_the_path_in_one_line(folder):
     proc = run_cli("optimise", path, "--workers", "0")
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
     assert "opt.json: parameters[0].range" in proc.stderr and "allowed lo < hi" in proc.stderr
+
+
+def test_a_size_the_reference_is_not_is_refused_in_one_line_before_any_trial(folder):
+    """Issue 31: changing ``size`` after rendering the ssim reference gave a traceback."""
+    path = folder / "opt.json"
+    path.write_text(json.dumps(opt_doc(folder, size=[64, 48])))
+    proc = run_cli("optimise", path, "--workers", "0", "-o", folder / "out")
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert "opt.json: size: [64, 48] is not the size of objectives[0].reference" in proc.stderr
+    assert not (folder / "out").exists() and not (folder / "opt.db").exists()
 
 
 def test_lens_luminance_is_the_mean_over_the_lamps_pixels():
