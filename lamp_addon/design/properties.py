@@ -8,7 +8,7 @@ scene declaration. Kinds map as follows:
   ``COLOR`` for colours, ``XYZ`` for 3-vectors), soft limits from the spec range (an open bound such as
   ``(0, 1000] mm`` becomes a closed one just inside it, ``OPEN_BOUND_MARGIN``) and no hard limits: a
   value typed outside the range is kept as typed and refused by the design's check in one line
-  ("Lamp 1 › Lens › Thickness: -2 is out of range; allowed (0, 100] mm"), never clamped to the
+  ("Lamp 1 › Lens › Thickness: -2.0 is out of range; allowed (0, 100] mm"), never clamped to the
   nearest allowed value, which would make a design the designer did not ask for and call it valid.
 - ``Choice`` -> ``EnumProperty`` (identifiers are the JSON strings); a choice with a single allowed
   value (``schema``) is a constant, not a property.
