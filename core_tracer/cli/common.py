@@ -15,6 +15,7 @@ from ..fileio import check_writable
 from ..images import display
 from ..scene import spec as S
 from ..scene.beside import environment_file, with_spectrum_files
+from ..scene.light_models import ignored_note
 from ..scene.messages import show_value
 from ..scene.reading import SceneError, read_json
 from ..scene.safe_text import printable
@@ -66,6 +67,9 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
     except SceneError as e:
         raise in_file(e, path) from None
     traced_scene(path, scene)  # the measured curves it names are beside it, or refused
+    note = ignored_note(scene)
+    if note:  # reported, not refused: the fields are kept for a switch to the photometric model
+        print(f"note: {printable(os.fspath(path))}: {note}", file=sys.stderr)
     return scene
 
 
