@@ -68,7 +68,9 @@ def notify_edited(bl_scene: bpy.types.Scene) -> None:
 
 
 def _edited(self, context) -> None:
-    notify_edited(self.id_data)  # the scene that owns the edited group, whichever scene is active
+    owner = self.id_data  # the scene that owns the edited group, whichever scene is active
+    if isinstance(owner, bpy.types.Scene):  # a free-form role's values live on its object: not the design
+        notify_edited(owner)
 
 
 # ---------------------------------------------------------------------------------------------

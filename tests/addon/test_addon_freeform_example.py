@@ -22,6 +22,30 @@ def _exr(path) -> np.ndarray:
     return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)[:, :, :3]
 
 
+def _f12(bl_scene, path) -> np.ndarray:
+    """F12 of ``bl_scene`` saved as a 32-bit EXR at ``path``, read back."""
+    import bpy
+
+    settings = bl_scene.render.image_settings
+    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
+    assert bpy.ops.render.render() == {"FINISHED"}
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    return _exr(path)
+
+
+def _applied(preset):
+    """Blender's startup file with ``preset`` applied from the preset browser; the scene."""
+    import bpy
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    bpy.ops.lamp.preset_refresh()
+    wm = bpy.context.window_manager
+    listed = [item.file for item in wm.lamp_presets]
+    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith(preset.name))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    return bpy.context.scene
+
+
 def test_the_example_ships_with_its_mesh_file():
     import json
 
@@ -64,11 +88,7 @@ def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, addon,
         for field in ("vertices", "triangles", "corner_normals"):
             assert np.array_equal(getattr(in_blender[name], field), getattr(mesh, field)), (name, field)
 
-    settings = bl_scene.render.image_settings
-    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
-    assert bpy.ops.render.render() == {"FINISHED"}
-    bpy.data.images["Render Result"].save_render(str(tmp_path / "f12.exr"), scene=bl_scene)
-    f12 = _exr(tmp_path / "f12.exr")
+    f12 = _f12(bl_scene, tmp_path / "f12.exr")
 
     done = run_cli("render", EXAMPLE, "-o", tmp_path / "cli.exr")
     assert done.returncode == 0, done.stderr
@@ -106,26 +126,14 @@ def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_add
     """The example's photometric twin (the same .glb, a P21/5W tail filament, a red PMMA lens, night at
     3 lx): applied from the browser, F12 shows the command line's XYZ (cd/m²) as scene-linear Rec.709
     at the preset's EV100 15, the one display path of photometric images (``spectral.display_linear``)."""
-    import bpy
-
     from core_tracer.photometry import output
     from core_tracer.raytrace import spectral
 
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    bl_scene = bpy.context.scene
-    bpy.ops.lamp.preset_refresh()
-    wm = bpy.context.window_manager
-    listed = [item.file for item in wm.lamp_presets]
-    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith(TWIN.name))
-    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    bl_scene = _applied(TWIN)
     parts = lamp_addon.freeform.properties.role_objects(bl_scene)
     bulb = next(o for o in parts if o.lamp_role.role == "bulb")
     assert bulb.lamp_role.bulb.type == "P21/5W" and bulb.lamp_role.bulb.state == "tail"
-    settings = bl_scene.render.image_settings
-    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
-    assert bpy.ops.render.render() == {"FINISHED"}
-    bpy.data.images["Render Result"].save_render(str(tmp_path / "f12.exr"), scene=bl_scene)
-    f12 = _exr(tmp_path / "f12.exr")
+    f12 = _f12(bl_scene, tmp_path / "f12.exr")
 
     done = run_cli("render", TWIN, "-o", tmp_path / "cli.exr")
     assert done.returncode == 0, done.stderr
@@ -144,12 +152,7 @@ def test_the_measures_and_light_panels_refuse_free_form_parts_in_one_line(lamp_a
     design's parts stand in for: they say so in one line rather than measure the hidden lamp."""
     import bpy
 
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    bpy.ops.lamp.preset_refresh()
-    wm = bpy.context.window_manager
-    listed = [item.file for item in wm.lamp_presets]
-    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith(TWIN.name))
-    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    _applied(TWIN)
     for operator in (bpy.ops.lamp.light_states_render, bpy.ops.lamp.measures_run):
         with pytest.raises(RuntimeError, match="Free-form Parts: are not measured here yet") as err:
             operator()
