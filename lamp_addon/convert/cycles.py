@@ -10,6 +10,10 @@ import math
 
 from . import units
 
+# A reflector key (set by ``photometric_cycles.equivalent``): its glow is built as a Glossy lobe lit by the
+# bulb (physical), not as the paper's eq. 3 emission (``design.materials.reflector``).
+SCATTER_AS_LOBE = "cycles_scatter_as_lobe"
+
 
 def absorption_volume(absorption: list[float]) -> tuple[float, tuple[float, float, float]]:
     """(Density, Color) of a Volume Absorption node absorbing ``absorption`` per mm (eq. 2).

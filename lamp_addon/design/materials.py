@@ -7,16 +7,25 @@ part:
   Volume Absorption node on the Volume output absorbing A per mm (eq. 2).
 - **Bulb**: Emission showing exactly I0 to the camera; a bulb that is off has Strength 0.
 - **Reflector**: the sum of (a) a sharp mirror (Glossy, GGX, Roughness 0) of colour = reflectance, the
-  paper's recursive mirror ray; (b) the Blinn scatter lobe of eq. 3 as a Glossy BSDF with the Beckmann
-  distribution, colour = scatter w (``cycles.blinn_roughness``); (c) the constant colour C of the first
-  reflector hit as an Emission of colour C, seen only by rays that have not yet made a glossy bounce
-  (Light Path's Glossy Depth 0: the reflector's own mirror and lobe are glossy bounces, so a path sees C
-  at its first reflector hit, as in docs/model.md §5.2) and never by diffuse rays (so it lights nothing).
-  Approximations: the Beckmann lobe is normalised where the paper's term is not, and, being a BSDF, it
-  scatters every light that reaches it, the surroundings too, where eq. 3 scatters only the bulb's (and
-  the sun's) light (docs/model.md, surroundings); a path that reflected inside the lens before its first
+  paper's recursive mirror ray; (b) the paper's scatter of eq. 3, w I0 (cos beta)^n, as an Emission
+  ("Reflector Eq. 3") whose strength is computed by shader nodes at every shading point: beta between
+  the normal and the half vector of the direction to the bulb's centre (given in the reflector's own
+  frame and carried to the world by a Vector Transform, so a moved lamp keeps it) and Geometry's
+  Incoming (toward the viewer); seen on every reflector hit of a path from the eye, as in the model,
+  and never by diffuse rays, with the material's emission sampling off, so it lights nothing (eq. 3 is
+  a glow toward the eye, not a light); (c) the constant colour C of the first reflector hit as an
+  Emission of colour C, seen only by rays that have not yet made a glossy bounce (Light Path's Glossy
+  Depth 0: the reflector's own mirror is a glossy bounce, so a path sees C at its first reflector hit,
+  as in docs/model.md §5.2) and never by diffuse rays. A Glossy BSDF ("Reflector Scatter", Beckmann,
+  ``cycles.blinn_roughness``) is there too, of colour 0 in the paper's mode: eq. 3 is unnormalised and
+  does not depend on the bulb's solid angle, so a lobe lit by the bulb returns about a fifth of it on
+  the paper's baseline (docs/model.md §5.2). The photometric mode, whose glow is physical, uses that
+  lobe (colour = its glow share) and no eq. 3 emission (``convert.cycles.SCATTER_AS_LOBE``,
+  set by ``convert.photometric_cycles``). A reflector without a bulb to aim at (a free-form part whose bulb
+  is not known) keeps the lobe. Approximations: a path that reflected inside the lens before its first
   reflector hit does not see C in Cycles (about r², 0.2 % of it; on the cut lenses of the evening preset
-  Cycles' C stayed within 1 % of the tracer's).
+  Cycles' C stayed within 1 % of the tracer's); the sun's phantom scatter (``light.phantom``) is not
+  built.
 - **Body, socket, lens side wall**: Diffuse BSDF of their colour. The paper's body adds the specular term
   of eq. 1 and treats socket and side wall as constant colours; only the diffuse part is reproduced.
 - **Light** (the diffuse part of eq. 1, ``[d + (1 - d) cos theta] R0``): a sun of strength ``pi (1 - d)``
@@ -46,9 +55,9 @@ import math
 import bpy
 
 from ...core_tracer.raytrace import sunlight
-from ...core_tracer.scene.derived import lens_absorption
+from ...core_tracer.scene.derived import lamp_geometry, lens_absorption
 from ...core_tracer.scene.reading import SceneError
-from ..convert import cycles
+from ..convert import cycles, units
 
 
 def _tree(idblock, new: bool) -> bpy.types.NodeTree | None:
@@ -180,7 +189,13 @@ def bulb(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
 # Reflector
 
 
-def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+EQ3_NODES = ("Eq. 3 Bulb Centre", "Eq. 3 Shininess", "Eq. 3 Weight", "Reflector Eq. 3")
+
+
+def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool, bulb_center=None) -> list[str]:
+    """The reflector's material (module docstring). ``bulb_center``: the centre (mm) of the bulb eq. 3
+    scatters toward, in the reflector object's own frame; by default the lamp's bulb (``lamp_geometry``),
+    whose reflector is placed on the lamp's axis. ``lamp["bulb"]`` gives I0."""
     tree = _tree(mat, new)
     if new:
         _lay_out_reflector(tree)
@@ -189,13 +204,36 @@ def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
         mat.roughness = 0.1
     elif tree is not None:
         _gate_constant_to_first_hit(tree)  # a reflector built when C was seen on every hit
+    if tree is not None and tree.nodes.get("Reflector Eq. 3") is None:
+        _add_eq3(tree)  # new, or a reflector built when eq. 3 was a lobe
+    if hasattr(mat, "cycles"):  # the emissions are glows toward the eye: never sampled as lights
+        mat.cycles.emission_sampling = "NONE"
     r = lamp["reflector"]
+    if bulb_center is None and "lens" in lamp:
+        bulb_center = lamp_geometry(lamp)["bulb_center"]
+    lobe = bool(r.get(cycles.SCATTER_AS_LOBE)) or bulb_center is None or "bulb" not in lamp
     missing: list[str] = []
     _drive(tree, "Reflector Mirror", missing, Color=_grey(r["reflectance"]))
-    _drive(tree, "Reflector Scatter", missing, Color=_grey(r["scatter"]),
+    _drive(tree, "Reflector Scatter", missing, Color=_grey(r["scatter"] if lobe else 0.0),
            Roughness=cycles.blinn_roughness(r["shininess"]))
     _drive(tree, "Reflector Constant", missing, Color=_rgba(r["color"]))
+    peak, color = (0.0, (1.0, 1.0, 1.0)) if lobe else cycles.emission_of(lamp["bulb"]["intensity"], lamp["bulb"]["on"])
+    if bulb_center is not None:
+        x, y, z = (units.BU_PER_MM * float(c) for c in bulb_center)
+        _drive(tree, "Eq. 3 Bulb Centre", missing, X=x, Y=y, Z=z)
+    _drive_input(tree, "Eq. 3 Shininess", 1, float(r["shininess"]), missing)
+    _drive_input(tree, "Eq. 3 Weight", 1, float(r["scatter"]) * peak, missing)
+    _drive(tree, "Reflector Eq. 3", missing, Color=(*color, 1.0))
     return missing
+
+
+def _drive_input(tree, name: str, index: int, value: float, missing: list[str]) -> None:
+    """``_drive`` for a Math node, whose two inputs share one name: input ``index`` of node ``name``."""
+    node = tree.nodes.get(name) if tree is not None else None
+    if node is None:
+        missing.append(name)
+    elif not _same(node.inputs[index].default_value, value):
+        node.inputs[index].default_value = value
 
 
 def _lay_out_reflector(tree) -> None:
@@ -217,6 +255,56 @@ def _lay_out_reflector(tree) -> None:
     tree.links.new(add1.outputs["Shader"], add2.inputs[0])
     tree.links.new(gate.outputs["Shader"], add2.inputs[1])
     tree.links.new(add2.outputs["Shader"], out.inputs["Surface"])
+
+
+def _add_eq3(tree) -> None:
+    """The eq. 3 emission (module docstring), added to what feeds the Output's Surface:
+    w I0 max(0, N . normalize(normalize(bulb - P) + I))^n, hidden from diffuse rays."""
+    out, path = tree.nodes.get("Output"), tree.nodes.get("Light Path")
+    if out is None or path is None:
+        return  # a tree the designer rebuilt: left alone (the build reports the nodes it cannot drive)
+    geometry = _node(tree, "ShaderNodeNewGeometry", "Eq. 3 Geometry", (-1500, -800))
+    centre = _node(tree, "ShaderNodeCombineXYZ", "Eq. 3 Bulb Centre", (-1500, -1100))
+    to_world = _node(tree, "ShaderNodeVectorTransform", "Eq. 3 Bulb Centre In World", (-1300, -1100))
+    to_world.vector_type, to_world.convert_from, to_world.convert_to = "POINT", "OBJECT", "WORLD"
+    tree.links.new(centre.outputs["Vector"], to_world.inputs["Vector"])
+
+    def vector_math(name: str, operation: str, a, b, x: float) -> bpy.types.Node:
+        node = _node(tree, "ShaderNodeVectorMath", name, (x, -900))
+        node.operation = operation
+        tree.links.new(a, node.inputs[0])
+        if b is not None:
+            tree.links.new(b, node.inputs[1])
+        return node
+
+    gap = vector_math("Eq. 3 To Bulb", "SUBTRACT", to_world.outputs["Vector"], geometry.outputs["Position"], -1100)
+    to_bulb = vector_math("Eq. 3 Bulb Direction", "NORMALIZE", gap.outputs["Vector"], None, -950)
+    both = vector_math("Eq. 3 Bulb + View", "ADD", to_bulb.outputs["Vector"], geometry.outputs["Incoming"], -800)
+    half = vector_math("Eq. 3 Half Vector", "NORMALIZE", both.outputs["Vector"], None, -650)
+    cos_beta = vector_math("Eq. 3 cos beta", "DOT_PRODUCT", geometry.outputs["Normal"], half.outputs["Vector"], -500)
+
+    def scalar_math(name: str, operation: str, a, value: float, x: float) -> bpy.types.Node:
+        node = _node(tree, "ShaderNodeMath", name, (x, -900))
+        node.operation = operation
+        tree.links.new(a, node.inputs[0])
+        node.inputs[1].default_value = value
+        return node
+
+    facing = scalar_math("Eq. 3 cos beta >= 0", "MAXIMUM", cos_beta.outputs["Value"], 0.0, -350)
+    powered = scalar_math("Eq. 3 Shininess", "POWER", facing.outputs["Value"], 20.0, -200)
+    weight = scalar_math("Eq. 3 Weight", "MULTIPLY", powered.outputs["Value"], 0.0, -50)
+    glow = _node(tree, "ShaderNodeEmission", "Reflector Eq. 3", (100, -700))
+    tree.links.new(weight.outputs["Value"], glow.inputs["Strength"])
+    gate = _node(tree, "ShaderNodeMixShader", "Eq. 3 Not For Diffuse Rays", (300, -700))
+    tree.links.new(path.outputs["Is Diffuse Ray"], gate.inputs[0])
+    tree.links.new(glow.outputs["Emission"], gate.inputs[1])  # second shader left empty: nothing
+    fed = out.inputs["Surface"].links
+    total = _node(tree, "ShaderNodeAddShader", "Reflector + Eq. 3", (750, -200))
+    if fed:
+        tree.links.new(fed[0].from_socket, total.inputs[0])
+    tree.links.new(gate.outputs["Shader"], total.inputs[1])
+    tree.links.new(total.outputs["Shader"], out.inputs["Surface"])
+    out.location = (950, -200)
 
 
 CONSTANT_GATE = "Constant Only On First Reflector Hit"
