@@ -1,0 +1,114 @@
+"""Compare (the tracer against Cycles, ``lamp_addon.compare``) on every preset of the paper's light model:
+the lens mean luminance of both renders, their difference in % of Cycles', and Cycles' noise on it.
+
+    .venv/bin/python benchmarks/bench_compare_presets.py [--size 128x128] [--samples 32] [PRESET ...]
+
+Each preset is loaded into an empty scene and compared as ``tools/compare_preset.py`` does (the same
+``compare_design`` steps: build, Lamp Camera from the preset, both renders into their slots), at a
+small size so that the whole set runs in minutes. The lens pixels are found by geometry (the eye ray
+through the pixel centre meets a lens's outer face; ``core_tracer.raytrace.engine.lens_pixels``);
+luminance is Y of linear Rec.709. Cycles' noise on the lens mean is measured, not assumed: Cycles
+renders the design a second time with another seed, and the noise of one render's lens mean is
+sqrt(mean((Y1 - Y2)^2) / 2 / N) over the N lens pixels (pixels taken as independent), in % of the
+mean. The tracer at the preset's samples has no random numbers. Prints a Markdown table
+(benchmarks/RESULTS.md, "Compare on every paper preset"). Needs the bpy module (the project's .venv).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import math
+import os
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from core_tracer import load_scene  # noqa: E402
+
+TOLERANCE_PERCENT = 3.0
+
+
+def paper_presets() -> list[Path]:
+    """Every preset of the paper's light model (the photometric ones are compared elsewhere)."""
+    return sorted(p for p in (ROOT / "presets").glob("*.json")
+                  if load_scene(str(p)).get("light_model") != "photometric")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("presets", nargs="*", help="preset files (default: every paper preset)")
+    parser.add_argument("--size", default="128x128")
+    parser.add_argument("--samples", type=int, default=32, help="Cycles samples per pixel")
+    args = parser.parse_args()
+    size = tuple(int(v) for v in args.size.lower().split("x"))
+    presets = [Path(p) for p in args.presets] or paper_presets()
+    own_resources = tempfile.mkdtemp(prefix="lamp-blender-user-")
+    os.environ.setdefault("BLENDER_USER_RESOURCES", own_resources)
+    try:
+        import bpy
+
+        from tools import dev_extension
+
+        bpy.ops.wm.read_homefile(use_empty=True)
+        with dev_extension.enabled_from_source(bpy, "lamp_styling_dev") as package:
+            rows = [_row(bpy, package, preset, size, args.samples) for preset in presets]
+    finally:
+        shutil.rmtree(own_resources, ignore_errors=True)
+    command = f"`.venv/bin/python benchmarks/bench_compare_presets.py --size {args.size} --samples {args.samples}`"
+    print(f"\n{len(rows)} presets at {size[0]}x{size[1]}, Cycles {args.samples} spp; {command}\n")
+    print("| preset | lens px | tracer lens Y | Cycles lens Y | tracer − Cycles | Cycles noise (1σ) | R, G, B |")
+    print("|---|---|---|---|---|---|---|")
+    for row in rows:
+        print(row)
+    return 0
+
+
+def _row(bpy, package: str, preset: Path, size: tuple[int, int], samples: int) -> str:
+    comparison = importlib.import_module(f"{package}.lamp_addon.compare.comparison")
+    design = importlib.import_module(f"{package}.lamp_addon.design.properties")
+    lamp_camera = importlib.import_module(f"{package}.lamp_addon.render.lamp_camera")
+    sheet = importlib.import_module(f"{package}.lamp_addon.convert.sheet")
+    bpy.ops.wm.read_homefile(use_empty=True)
+    bl_scene = bpy.context.scene
+    name = preset.stem
+    try:
+        design.scene_to_design(bl_scene, load_scene(str(preset)))
+        bl_scene.camera, _ = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+        start = time.perf_counter()
+        with comparison.CompareRun(bl_scene, samples=samples, resolution=size) as run:
+            run.prepare()
+            for stage in comparison.STAGES:
+                run.start(stage)
+                run.collect()
+            result = run.compose()
+            first = run.images["cycles"]
+            bl_scene.cycles.seed = 1  # the comparison's own seed is 0: a second, independent render
+            run.start(comparison.CYCLES)
+            run.collect()
+            second = run.images["cycles"]
+    except Exception as e:  # noqa: BLE001 - a preset Compare cannot run is a row of the table, not the end
+        return f"| {name} | fails: {type(e).__name__}: {e} | | | | | |"
+    lens = result["lens_differences"]
+    mask = comparison.lens_pixels(result["scene"], first.shape[:2])
+    y1, y2 = sheet.luminance(first)[mask], sheet.luminance(second)[mask]
+    noise = 100.0 * math.sqrt(np.mean((y1 - y2) ** 2) / 2.0 / max(1, mask.sum())) / max(y1.mean(), 1e-300)
+    channels = ", ".join(sheet.percent_text(v) for v in lens["percent"])
+    within = lens["luminance_percent"] is not None and abs(lens["luminance_percent"]) <= TOLERANCE_PERCENT
+    print(f"{name}: lens Y tracer {lens['tracer_luminance']:.4g}, Cycles {lens['cycles_luminance']:.4g}, "
+          f"{sheet.percent_text(lens['luminance_percent'])} (noise {noise:.2f} %), {lens['pixels']} px, "
+          f"{time.perf_counter() - start:.1f} s", flush=True)
+    mark = "" if within else " **over 3 %**"
+    return (f"| {name} | {lens['pixels']} | {lens['tracer_luminance']:.4g} | {lens['cycles_luminance']:.4g} | "
+            f"{sheet.percent_text(lens['luminance_percent'])}{mark} | {noise:.2f} % | {channels} |")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
