@@ -13,6 +13,8 @@ from . import units
 # A reflector key (set by ``photometric_cycles.equivalent``): its glow is built as a Glossy lobe lit by the
 # bulb (physical), not as the paper's eq. 3 emission (``design.materials.reflector``).
 SCATTER_AS_LOBE = "cycles_scatter_as_lobe"
+# A lamp key (set by ``design.builder`` from ``phantoms``): what the reflector's phantom emission needs.
+PHANTOM = "cycles_phantom"
 
 
 def absorption_volume(absorption: list[float]) -> tuple[float, tuple[float, float, float]]:
@@ -50,3 +52,26 @@ def sun_strength(ambient: float) -> float:
 def transmitted_color(absorption: list[float], thickness: float) -> tuple[float, float, float]:
     """The colour seen through ``thickness`` mm of glass absorbing ``absorption`` per mm (eq. 2)."""
     return tuple(math.exp(-a * thickness) for a in absorption)
+
+
+def phantoms(scene: dict) -> list[dict | None]:
+    """Per lamp of a normalised paper scene, what Cycles' phantom emission needs (``design.reflector_glow``):
+    ``direction`` toward the sun (the lamp's frame = the scene's axes), ``light`` s S T_sun (RGB, the lens as
+    a flat plate, ``raytrace.sunlight``), the apex plane ``plane_b`` (mm) and the lens outline's ``core``
+    half sizes and ``corner`` radius (mm); None for every lamp where the design has no phantom light, or
+    where the sun lets none into that lamp. Reads the environment image when the sun follows it."""
+    from ...core_tracer.raytrace import sunlight
+    from ...core_tracer.raytrace.lamp_table import LampTable
+
+    if not scene["light"].get("phantom", False) or scene.get("light_model") == "photometric":
+        return [None] * len(scene["lamps"])
+    sun = sunlight.from_scene(scene, sunlight.sun_direction(scene))
+    lamps = LampTable.from_scene(scene)
+    per_lamp = sunlight.PhantomLamps.of(sun, lamps)
+    light = sun.light
+    return [{"direction": [float(c) for c in sun.direction],
+             "light": [float(c) for c in light * per_lamp.transmit[i]],
+             "plane_b": float(lamps.plane_b[i]),
+             "core": (float(per_lamp.core_x[i]), float(per_lamp.core_z[i])),
+             "corner": float(lamps.corner[i])} if per_lamp.lets_in[i] else None
+            for i in range(len(scene["lamps"]))]

@@ -8,12 +8,10 @@ part:
 - **Bulb**: Emission showing exactly I0 to the camera; a bulb that is off has Strength 0.
 - **Reflector**: the sum of (a) a sharp mirror (Glossy, GGX, Roughness 0) of colour = reflectance, the
   paper's recursive mirror ray; (b) the paper's scatter of eq. 3, w I0 (cos beta)^n, as an Emission
-  ("Reflector Eq. 3") whose strength is computed by shader nodes at every shading point: beta between
-  the normal and the half vector of the direction to the bulb's centre (given in the reflector's own
-  frame and carried to the world by a Vector Transform, so a moved lamp keeps it) and Geometry's
-  Incoming (toward the viewer); seen on every reflector hit of a path from the eye, as in the model,
-  and never by diffuse rays, with the material's emission sampling off, so it lights nothing (eq. 3 is
-  a glow toward the eye, not a light); (c) the constant colour C of the first reflector hit as an
+  ("Reflector Eq. 3") whose strength shader nodes compute at every shading point, and the sun's
+  phantom light in the same form (``reflector_glow``); seen on every reflector hit of a path from the
+  eye, as in the model, never by diffuse rays, with the material's emission sampling off, so they light
+  nothing (eq. 3 is a glow toward the eye, not a light); (c) the constant colour C of the first reflector hit as an
   Emission of colour C, seen only by rays that have not yet made a glossy bounce (Light Path's Glossy
   Depth 0: the reflector's own mirror is a glossy bounce, so a path sees C at its first reflector hit,
   as in docs/model.md §5.2) and never by diffuse rays. A Glossy BSDF ("Reflector Scatter", Beckmann,
@@ -24,8 +22,7 @@ part:
   set by ``convert.photometric_cycles``). A reflector without a bulb to aim at (a free-form part whose bulb
   is not known) keeps the lobe. Approximations: a path that reflected inside the lens before its first
   reflector hit does not see C in Cycles (about r², 0.2 % of it; on the cut lenses of the evening preset
-  Cycles' C stayed within 1 % of the tracer's); the sun's phantom scatter (``light.phantom``) is not
-  built.
+  Cycles' C stayed within 1 % of the tracer's).
 - **Body, socket, lens side wall**: Diffuse BSDF of their colour. The paper's body adds the specular term
   of eq. 1 and treats socket and side wall as constant colours; only the diffuse part is reproduced.
 - **Light** (the diffuse part of eq. 1, ``[d + (1 - d) cos theta] R0``): a sun of strength ``pi (1 - d)``
@@ -57,7 +54,8 @@ import bpy
 from ...core_tracer.raytrace import sunlight
 from ...core_tracer.scene.derived import lamp_geometry, lens_absorption
 from ...core_tracer.scene.reading import SceneError
-from ..convert import cycles, units
+from ..convert import cycles
+from . import reflector_glow
 
 
 def _tree(idblock, new: bool) -> bpy.types.NodeTree | None:
@@ -204,8 +202,8 @@ def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool, bulb_center=Non
         mat.roughness = 0.1
     elif tree is not None:
         _gate_constant_to_first_hit(tree)  # a reflector built when C was seen on every hit
-    if tree is not None and tree.nodes.get("Reflector Eq. 3") is None:
-        _add_eq3(tree)  # new, or a reflector built when eq. 3 was a lobe
+    if tree is not None and not all(tree.nodes.get(name) for name in (reflector_glow.GLOW, reflector_glow.PHANTOM)):
+        reflector_glow.add_nodes(tree)  # new, or a reflector built when eq. 3 was a lobe
     if hasattr(mat, "cycles"):  # the emissions are glows toward the eye: never sampled as lights
         mat.cycles.emission_sampling = "NONE"
     r = lamp["reflector"]
@@ -217,17 +215,11 @@ def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool, bulb_center=Non
     _drive(tree, "Reflector Scatter", missing, Color=_grey(r["scatter"] if lobe else 0.0),
            Roughness=cycles.blinn_roughness(r["shininess"]))
     _drive(tree, "Reflector Constant", missing, Color=_rgba(r["color"]))
-    peak, color = (0.0, (1.0, 1.0, 1.0)) if lobe else cycles.emission_of(lamp["bulb"]["intensity"], lamp["bulb"]["on"])
-    if bulb_center is not None:
-        x, y, z = (units.BU_PER_MM * float(c) for c in bulb_center)
-        _drive(tree, "Eq. 3 Bulb Centre", missing, X=x, Y=y, Z=z)
-    _drive_input(tree, "Eq. 3 Shininess", 1, float(r["shininess"]), missing)
-    _drive_input(tree, "Eq. 3 Weight", 1, float(r["scatter"]) * peak, missing)
-    _drive(tree, "Reflector Eq. 3", missing, Color=(*color, 1.0))
+    reflector_glow.drive(tree, lamp, bulb_center, lobe, _drive, _drive_input, missing)
     return missing
 
 
-def _drive_input(tree, name: str, index: int, value: float, missing: list[str]) -> None:
+def _drive_input(tree, name: str, index: int, value, missing: list[str]) -> None:
     """``_drive`` for a Math node, whose two inputs share one name: input ``index`` of node ``name``."""
     node = tree.nodes.get(name) if tree is not None else None
     if node is None:
@@ -255,56 +247,6 @@ def _lay_out_reflector(tree) -> None:
     tree.links.new(add1.outputs["Shader"], add2.inputs[0])
     tree.links.new(gate.outputs["Shader"], add2.inputs[1])
     tree.links.new(add2.outputs["Shader"], out.inputs["Surface"])
-
-
-def _add_eq3(tree) -> None:
-    """The eq. 3 emission (module docstring), added to what feeds the Output's Surface:
-    w I0 max(0, N . normalize(normalize(bulb - P) + I))^n, hidden from diffuse rays."""
-    out, path = tree.nodes.get("Output"), tree.nodes.get("Light Path")
-    if out is None or path is None:
-        return  # a tree the designer rebuilt: left alone (the build reports the nodes it cannot drive)
-    geometry = _node(tree, "ShaderNodeNewGeometry", "Eq. 3 Geometry", (-1500, -800))
-    centre = _node(tree, "ShaderNodeCombineXYZ", "Eq. 3 Bulb Centre", (-1500, -1100))
-    to_world = _node(tree, "ShaderNodeVectorTransform", "Eq. 3 Bulb Centre In World", (-1300, -1100))
-    to_world.vector_type, to_world.convert_from, to_world.convert_to = "POINT", "OBJECT", "WORLD"
-    tree.links.new(centre.outputs["Vector"], to_world.inputs["Vector"])
-
-    def vector_math(name: str, operation: str, a, b, x: float) -> bpy.types.Node:
-        node = _node(tree, "ShaderNodeVectorMath", name, (x, -900))
-        node.operation = operation
-        tree.links.new(a, node.inputs[0])
-        if b is not None:
-            tree.links.new(b, node.inputs[1])
-        return node
-
-    gap = vector_math("Eq. 3 To Bulb", "SUBTRACT", to_world.outputs["Vector"], geometry.outputs["Position"], -1100)
-    to_bulb = vector_math("Eq. 3 Bulb Direction", "NORMALIZE", gap.outputs["Vector"], None, -950)
-    both = vector_math("Eq. 3 Bulb + View", "ADD", to_bulb.outputs["Vector"], geometry.outputs["Incoming"], -800)
-    half = vector_math("Eq. 3 Half Vector", "NORMALIZE", both.outputs["Vector"], None, -650)
-    cos_beta = vector_math("Eq. 3 cos beta", "DOT_PRODUCT", geometry.outputs["Normal"], half.outputs["Vector"], -500)
-
-    def scalar_math(name: str, operation: str, a, value: float, x: float) -> bpy.types.Node:
-        node = _node(tree, "ShaderNodeMath", name, (x, -900))
-        node.operation = operation
-        tree.links.new(a, node.inputs[0])
-        node.inputs[1].default_value = value
-        return node
-
-    facing = scalar_math("Eq. 3 cos beta >= 0", "MAXIMUM", cos_beta.outputs["Value"], 0.0, -350)
-    powered = scalar_math("Eq. 3 Shininess", "POWER", facing.outputs["Value"], 20.0, -200)
-    weight = scalar_math("Eq. 3 Weight", "MULTIPLY", powered.outputs["Value"], 0.0, -50)
-    glow = _node(tree, "ShaderNodeEmission", "Reflector Eq. 3", (100, -700))
-    tree.links.new(weight.outputs["Value"], glow.inputs["Strength"])
-    gate = _node(tree, "ShaderNodeMixShader", "Eq. 3 Not For Diffuse Rays", (300, -700))
-    tree.links.new(path.outputs["Is Diffuse Ray"], gate.inputs[0])
-    tree.links.new(glow.outputs["Emission"], gate.inputs[1])  # second shader left empty: nothing
-    fed = out.inputs["Surface"].links
-    total = _node(tree, "ShaderNodeAddShader", "Reflector + Eq. 3", (750, -200))
-    if fed:
-        tree.links.new(fed[0].from_socket, total.inputs[0])
-    tree.links.new(gate.outputs["Shader"], total.inputs[1])
-    tree.links.new(total.outputs["Shader"], out.inputs["Surface"])
-    out.location = (950, -200)
 
 
 CONSTANT_GATE = "Constant Only On First Reflector Hit"
