@@ -13,8 +13,10 @@ from . import units
 # A reflector key (set by ``photometric_cycles.equivalent``): its glow is built as a Glossy lobe lit by the
 # bulb (physical), not as the paper's eq. 3 emission (``design.materials.reflector``).
 SCATTER_AS_LOBE = "cycles_scatter_as_lobe"
-# A lamp key (set by ``design.builder`` from ``phantoms``): what the reflector's phantom emission needs.
+# Lamp keys (set by ``design.builder``): what the reflector's phantom emission needs (``phantoms``), and
+# the sun of the lens's own eq. 1 term (``lens_sun``).
 PHANTOM = "cycles_phantom"
+LENS_SUN = "cycles_lens_sun"
 
 
 def absorption_volume(absorption: list[float]) -> tuple[float, tuple[float, float, float]]:
@@ -75,3 +77,19 @@ def phantoms(scene: dict) -> list[dict | None]:
              "core": (float(per_lamp.core_x[i]), float(per_lamp.core_z[i])),
              "corner": float(lamps.corner[i])} if per_lamp.lets_in[i] else None
             for i in range(len(scene["lamps"]))]
+
+
+def lens_sun(scene: dict) -> dict | None:
+    """The sun as the lens's eq. 1 term sees it (``design.lens_surface``), as the tracer's ``Lighting``
+    makes it: ``direction`` toward it (the scene's axes), ``light`` (1 - d) s S, ``ambient`` d where it is
+    added (not under surroundings), ``highlight`` s C1; None for a photometric design (its lens colour is
+    black). Reads the environment image when the sun follows it."""
+    from ...core_tracer.raytrace.lighting import Lighting
+
+    if scene.get("light_model") == "photometric":
+        return None
+    sun = Lighting(scene).sun
+    return {"direction": [float(c) for c in sun.direction],
+            "light": [float((1.0 - sun.ambient) * sun.strength * c) for c in sun.color],
+            "ambient": float(sun.ambient) if sun.ambient_seen else 0.0,
+            "highlight": [float(sun.strength * c) for c in sun.highlight]}

@@ -170,12 +170,12 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False)
     except SceneError as e:  # a measured curve not found: the objects keep the paper's values until it is
         shown = scene
         not_driven.append(f"photometric values: {e}")
-    try:  # the sun's phantom light in the reflectors (design.reflector_glow)
-        phantoms = cycles.phantoms(shown)
+    try:  # the sun's phantom light in the reflectors, its light on the lenses (reflector_glow, lens_surface)
+        phantoms, sun = cycles.phantoms(shown), cycles.lens_sun(shown)
     except SceneError as e:  # an environment image that cannot be read: the sun reports it too
-        phantoms = [None] * len(shown["lamps"])
-        not_driven.append(f"phantom light ({e})")
-    lamps = [design_parts.lamp_parts(i, {**lamp, cycles.PHANTOM: phantom}, preview,
+        phantoms, sun = [None] * len(shown["lamps"]), None
+        not_driven.append(f"the sun's light on the lenses and in the reflectors ({e})")
+    lamps = [design_parts.lamp_parts(i, {**lamp, cycles.PHANTOM: phantom, cycles.LENS_SUN: sun}, preview,
                                      functions.lamp_label(shown["lamps"], i))
              for i, (lamp, phantom) in enumerate(zip(shown["lamps"], phantoms, strict=True))]
     body = design_parts.body_part(shown, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps])

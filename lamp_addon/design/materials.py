@@ -4,7 +4,9 @@ The numbers come from ``convert.cycles``; this module puts them into node trees.
 part:
 
 - **Lens glass**: Principled BSDF (Transmission Weight 1, Roughness 0, Base Color white, IOR = n) and a
-  Volume Absorption node on the Volume output absorbing A per mm (eq. 2).
+  Volume Absorption node on the Volume output absorbing A per mm (eq. 2); the lens's own surface term
+  of eq. 1 (its diffuse colour and highlight under the sun, times the Fresnel reflectance) as an
+  Emission seen by camera rays alone (``lens_surface``).
 - **Bulb**: Emission showing exactly I0 to the camera; a bulb that is off has Strength 0.
 - **Reflector**: the sum of (a) a sharp mirror (Glossy, GGX, Roughness 0) of colour = reflectance, the
   paper's recursive mirror ray; (b) the paper's scatter of eq. 3, w I0 (cos beta)^n, as an Emission
@@ -55,7 +57,7 @@ from ...core_tracer.raytrace import sunlight
 from ...core_tracer.scene.derived import lamp_geometry, lens_absorption
 from ...core_tracer.scene.reading import SceneError
 from ..convert import cycles
-from . import reflector_glow
+from . import lens_surface, reflector_glow
 
 
 def _tree(idblock, new: bool) -> bpy.types.NodeTree | None:
@@ -114,9 +116,17 @@ def _grey(value: float) -> tuple[float, float, float, float]:
 
 
 def lens_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+    """The lens: clear glass absorbing as eq. 2 (``_glass``) and its own surface term of eq. 1 for eye
+    rays (``lens_surface``)."""
     lens = lamp["lens"]
     a = lens_absorption(lens)
     missing = _glass(mat, new, "Lens", lens["ior"], a)
+    tree = mat.node_tree
+    if tree is not None:
+        lens_surface.add_nodes(tree)  # new, or a lens built before the term was
+        lens_surface.drive(tree, lamp, _drive, _drive_input, missing)
+    if hasattr(mat, "cycles"):  # a term toward the eye, not a light
+        mat.cycles.emission_sampling = "NONE"
     mat.diffuse_color = (*cycles.transmitted_color(a, lens["thickness"]), 0.5)  # solid view: seen through
     return missing
 

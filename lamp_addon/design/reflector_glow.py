@@ -31,7 +31,7 @@ GLOW = "Reflector Eq. 3"
 PHANTOM = "Reflector Phantom"
 
 
-def _node(tree, kind: str, name: str, location: tuple[float, float], **props):
+def new_node(tree, kind: str, name: str, location: tuple[float, float], **props):
     node = tree.nodes.new(kind)
     node.name = node.label = name
     node.location = location
@@ -40,54 +40,62 @@ def _node(tree, kind: str, name: str, location: tuple[float, float], **props):
     return node
 
 
-def _vector_math(tree, name: str, operation: str, location, a, b=None):
-    node = _node(tree, "ShaderNodeVectorMath", name, location, operation=operation)
-    tree.links.new(a, node.inputs[0])
+def vector_math(tree, name: str, operation: str, location, a, b=None):
+    made = new_node(tree, "ShaderNodeVectorMath", name, location, operation=operation)
+    tree.links.new(a, made.inputs[0])
     if b is not None:
-        tree.links.new(b, node.inputs[1])
-    return node
+        tree.links.new(b, made.inputs[1])
+    return made
 
 
-def _math(tree, name: str, operation: str, location, a, b=None, value: float = 0.0):
+def math_node(tree, name: str, operation: str, location, a, b=None, value: float = 0.0):
     """A Math node: ``a`` (socket) into its first input, ``b`` (socket) or ``value`` into its second."""
-    node = _node(tree, "ShaderNodeMath", name, location, operation=operation)
-    tree.links.new(a, node.inputs[0])
+    made = new_node(tree, "ShaderNodeMath", name, location, operation=operation)
+    tree.links.new(a, made.inputs[0])
     if b is not None:
-        tree.links.new(b, node.inputs[1])
+        tree.links.new(b, made.inputs[1])
     else:
-        node.inputs[1].default_value = value
-    return node
+        made.inputs[1].default_value = value
+    return made
 
 
-def _to_world(tree, name: str, kind: str, location, source):
-    node = _node(tree, "ShaderNodeVectorTransform", name, location, vector_type=kind, convert_from="OBJECT",
+def to_world(tree, name: str, kind: str, location, source):
+    made = new_node(tree, "ShaderNodeVectorTransform", name, location, vector_type=kind, convert_from="OBJECT",
                  convert_to="WORLD")
-    tree.links.new(source, node.inputs["Vector"])
-    return node
+    tree.links.new(source, made.inputs["Vector"])
+    return made
 
 
-def _blinn(tree, prefix: str, y: float, geometry, toward) -> bpy.types.Node:
+def blinn(tree, prefix: str, y: float, geometry, toward) -> bpy.types.Node:
     """max(0, N . normalize(toward + I))^n (n in the node "<prefix> Shininess", input 1)."""
-    both = _vector_math(tree, f"{prefix} Light + View", "ADD", (-800, y), toward, geometry.outputs["Incoming"])
-    half = _vector_math(tree, f"{prefix} Half Vector", "NORMALIZE", (-650, y), both.outputs["Vector"])
-    cos_beta = _vector_math(tree, f"{prefix} cos beta", "DOT_PRODUCT", (-500, y), geometry.outputs["Normal"],
+    both = vector_math(tree, f"{prefix} Light + View", "ADD", (-800, y), toward, geometry.outputs["Incoming"])
+    half = vector_math(tree, f"{prefix} Half Vector", "NORMALIZE", (-650, y), both.outputs["Vector"])
+    cos_beta = vector_math(tree, f"{prefix} cos beta", "DOT_PRODUCT", (-500, y), geometry.outputs["Normal"],
                             half.outputs["Vector"])
-    facing = _math(tree, f"{prefix} cos beta >= 0", "MAXIMUM", (-350, y), cos_beta.outputs["Value"])
-    return _math(tree, f"{prefix} Shininess", "POWER", (-200, y), facing.outputs["Value"], value=20.0)
+    facing = math_node(tree, f"{prefix} cos beta >= 0", "MAXIMUM", (-350, y), cos_beta.outputs["Value"])
+    return math_node(tree, f"{prefix} Shininess", "POWER", (-200, y), facing.outputs["Value"], value=20.0)
 
 
-def _emission(tree, name: str, y: float, strength, path, out_socket):
-    """An Emission of ``strength`` hidden from diffuse rays, added to what feeds ``out_socket``."""
-    glow = _node(tree, "ShaderNodeEmission", name, (250, y))
-    tree.links.new(strength, glow.inputs["Strength"])
-    gate = _node(tree, "ShaderNodeMixShader", f"{name} Not For Diffuse Rays", (450, y))
-    tree.links.new(path.outputs["Is Diffuse Ray"], gate.inputs[0])
-    tree.links.new(glow.outputs["Emission"], gate.inputs[1])  # second shader left empty: nothing
-    total = _node(tree, "ShaderNodeAddShader", f"+ {name}", (700, y))
+def emission(tree, name: str, y: float, strength, path, out_socket, *, seen_by: str = "") -> bpy.types.Node:
+    """An Emission of ``strength`` (a socket, or None: the node's own Strength) added to what feeds
+    ``out_socket``, hidden from diffuse rays, or (``seen_by`` "Is Camera Ray") seen by camera rays alone."""
+    glow = new_node(tree, "ShaderNodeEmission", name, (250, y))
+    if strength is not None:
+        tree.links.new(strength, glow.inputs["Strength"])
+    if seen_by:
+        gate = new_node(tree, "ShaderNodeMixShader", f"{name} For Camera Rays Only", (450, y))
+        tree.links.new(path.outputs[seen_by], gate.inputs[0])
+        tree.links.new(glow.outputs["Emission"], gate.inputs[2])  # the first shader left empty: nothing
+    else:
+        gate = new_node(tree, "ShaderNodeMixShader", f"{name} Not For Diffuse Rays", (450, y))
+        tree.links.new(path.outputs["Is Diffuse Ray"], gate.inputs[0])
+        tree.links.new(glow.outputs["Emission"], gate.inputs[1])  # second shader left empty: nothing
+    total = new_node(tree, "ShaderNodeAddShader", f"+ {name}", (700, y))
     if out_socket.links:
         tree.links.new(out_socket.links[0].from_socket, total.inputs[0])
     tree.links.new(gate.outputs["Shader"], total.inputs[1])
     tree.links.new(total.outputs["Shader"], out_socket)
+    return glow
 
 
 def add_nodes(tree) -> None:
@@ -98,58 +106,58 @@ def add_nodes(tree) -> None:
     if out is None or path is None:
         return
     out.location = (950, -200)
-    geometry = tree.nodes.get("Eq. 3 Geometry") or _node(tree, "ShaderNodeNewGeometry", "Eq. 3 Geometry",
+    geometry = tree.nodes.get("Eq. 3 Geometry") or new_node(tree, "ShaderNodeNewGeometry", "Eq. 3 Geometry",
                                                          (-1500, -900))
     if tree.nodes.get(GLOW) is None:
         y = -800
-        centre = _node(tree, "ShaderNodeCombineXYZ", "Eq. 3 Bulb Centre", (-1500, y - 300))
-        bulb = _to_world(tree, "Eq. 3 Bulb Centre In World", "POINT", (-1300, y - 300), centre.outputs["Vector"])
-        gap = _vector_math(tree, "Eq. 3 To Bulb", "SUBTRACT", (-1100, y), bulb.outputs["Vector"],
+        centre = new_node(tree, "ShaderNodeCombineXYZ", "Eq. 3 Bulb Centre", (-1500, y - 300))
+        bulb = to_world(tree, "Eq. 3 Bulb Centre In World", "POINT", (-1300, y - 300), centre.outputs["Vector"])
+        gap = vector_math(tree, "Eq. 3 To Bulb", "SUBTRACT", (-1100, y), bulb.outputs["Vector"],
                            geometry.outputs["Position"])
-        to_bulb = _vector_math(tree, "Eq. 3 Bulb Direction", "NORMALIZE", (-950, y), gap.outputs["Vector"])
-        powered = _blinn(tree, "Eq. 3", y, geometry, to_bulb.outputs["Vector"])
-        weight = _math(tree, "Eq. 3 Weight", "MULTIPLY", (-50, y), powered.outputs["Value"])
-        _emission(tree, GLOW, y, weight.outputs["Value"], path, out.inputs["Surface"])
+        to_bulb = vector_math(tree, "Eq. 3 Bulb Direction", "NORMALIZE", (-950, y), gap.outputs["Vector"])
+        powered = blinn(tree, "Eq. 3", y, geometry, to_bulb.outputs["Vector"])
+        weight = math_node(tree, "Eq. 3 Weight", "MULTIPLY", (-50, y), powered.outputs["Value"])
+        emission(tree, GLOW, y, weight.outputs["Value"], path, out.inputs["Surface"])
     if tree.nodes.get(PHANTOM) is None:
         _add_phantom(tree, geometry, path, out)
 
 
 def _add_phantom(tree, geometry, path, out) -> None:
     y = -1600
-    sun = _node(tree, "ShaderNodeCombineXYZ", "Phantom Sun Direction", (-1700, y - 300))  # the lamp's frame
-    sun_world = _to_world(tree, "Phantom Sun Direction In World", "VECTOR", (-1500, y), sun.outputs["Vector"])
-    to_sun = _vector_math(tree, "Phantom Sun", "NORMALIZE", (-950, y), sun_world.outputs["Vector"])
-    powered = _blinn(tree, "Phantom", y, geometry, to_sun.outputs["Vector"])
-    facing = _vector_math(tree, "Phantom N . Sun", "DOT_PRODUCT", (-500, y - 200), geometry.outputs["Normal"],
+    sun = new_node(tree, "ShaderNodeCombineXYZ", "Phantom Sun Direction", (-1700, y - 300))  # the lamp's frame
+    sun_world = to_world(tree, "Phantom Sun Direction In World", "VECTOR", (-1500, y), sun.outputs["Vector"])
+    to_sun = vector_math(tree, "Phantom Sun", "NORMALIZE", (-950, y), sun_world.outputs["Vector"])
+    powered = blinn(tree, "Phantom", y, geometry, to_sun.outputs["Vector"])
+    facing = vector_math(tree, "Phantom N . Sun", "DOT_PRODUCT", (-500, y - 200), geometry.outputs["Normal"],
                           to_sun.outputs["Vector"])
-    lit = _math(tree, "Phantom Faces The Sun", "GREATER_THAN", (-350, y - 200), facing.outputs["Value"])
+    lit = math_node(tree, "Phantom Faces The Sun", "GREATER_THAN", (-350, y - 200), facing.outputs["Value"])
     # Where the line toward the sun crosses the apex plane (the lamp's frame): P + t L, t = (y_B - P_y) / L_y.
-    local = _node(tree, "ShaderNodeVectorTransform", "Phantom Point In Lamp", (-1700, y - 600), vector_type="POINT",
+    local = new_node(tree, "ShaderNodeVectorTransform", "Phantom Point In Lamp", (-1700, y - 600), vector_type="POINT",
                   convert_from="WORLD", convert_to="OBJECT")
     tree.links.new(geometry.outputs["Position"], local.inputs["Vector"])
-    split = _node(tree, "ShaderNodeSeparateXYZ", "Phantom Point Y", (-1500, y - 600))
+    split = new_node(tree, "ShaderNodeSeparateXYZ", "Phantom Point Y", (-1500, y - 600))
     tree.links.new(local.outputs["Vector"], split.inputs["Vector"])
-    rise = _node(tree, "ShaderNodeMath", "Phantom Apex Plane", (-1300, y - 600), operation="SUBTRACT")
+    rise = new_node(tree, "ShaderNodeMath", "Phantom Apex Plane", (-1300, y - 600), operation="SUBTRACT")
     tree.links.new(split.outputs["Y"], rise.inputs[1])
-    t = _math(tree, "Phantom Sun Y", "DIVIDE", (-1100, y - 600), rise.outputs["Value"], value=-1.0)
-    along = _node(tree, "ShaderNodeVectorMath", "Phantom Along The Sun", (-950, y - 600), operation="SCALE")
+    t = math_node(tree, "Phantom Sun Y", "DIVIDE", (-1100, y - 600), rise.outputs["Value"], value=-1.0)
+    along = new_node(tree, "ShaderNodeVectorMath", "Phantom Along The Sun", (-950, y - 600), operation="SCALE")
     tree.links.new(sun.outputs["Vector"], along.inputs[0])
     tree.links.new(t.outputs["Value"], along.inputs["Scale"])
-    cross = _vector_math(tree, "Phantom Crossing", "ADD", (-800, y - 600), local.outputs["Vector"],
+    cross = vector_math(tree, "Phantom Crossing", "ADD", (-800, y - 600), local.outputs["Vector"],
                          along.outputs["Vector"])
-    flat = _vector_math(tree, "Phantom Crossing x, z", "MULTIPLY", (-650, y - 600), cross.outputs["Vector"])
+    flat = vector_math(tree, "Phantom Crossing x, z", "MULTIPLY", (-650, y - 600), cross.outputs["Vector"])
     flat.inputs[1].default_value = (1.0, 0.0, 1.0)
-    size = _vector_math(tree, "Phantom |x, z|", "ABSOLUTE", (-500, y - 600), flat.outputs["Vector"])
-    beyond = _vector_math(tree, "Phantom Outline Core", "SUBTRACT", (-350, y - 600), size.outputs["Vector"])
-    past = _vector_math(tree, "Phantom Past The Core", "MAXIMUM", (-200, y - 600), beyond.outputs["Vector"])
+    size = vector_math(tree, "Phantom |x, z|", "ABSOLUTE", (-500, y - 600), flat.outputs["Vector"])
+    beyond = vector_math(tree, "Phantom Outline Core", "SUBTRACT", (-350, y - 600), size.outputs["Vector"])
+    past = vector_math(tree, "Phantom Past The Core", "MAXIMUM", (-200, y - 600), beyond.outputs["Vector"])
     past.inputs[1].default_value = (0.0, 0.0, 0.0)
-    reach = _vector_math(tree, "Phantom Past The Core, Length", "LENGTH", (-50, y - 600), past.outputs["Vector"])
-    inside = _math(tree, "Phantom Outline Corner", "LESS_THAN", (100, y - 600), reach.outputs["Value"])
-    gates = _math(tree, "Phantom Lit And Inside", "MULTIPLY", (100, y - 300), lit.outputs["Value"],
+    reach = vector_math(tree, "Phantom Past The Core, Length", "LENGTH", (-50, y - 600), past.outputs["Vector"])
+    inside = math_node(tree, "Phantom Outline Corner", "LESS_THAN", (100, y - 600), reach.outputs["Value"])
+    gates = math_node(tree, "Phantom Lit And Inside", "MULTIPLY", (100, y - 300), lit.outputs["Value"],
                   inside.outputs["Value"])
-    seen = _math(tree, "Phantom Seen", "MULTIPLY", (-50, y), powered.outputs["Value"], gates.outputs["Value"])
-    weight = _math(tree, "Phantom Weight", "MULTIPLY", (100, y), seen.outputs["Value"])
-    _emission(tree, PHANTOM, y, weight.outputs["Value"], path, out.inputs["Surface"])
+    seen = math_node(tree, "Phantom Seen", "MULTIPLY", (-50, y), powered.outputs["Value"], gates.outputs["Value"])
+    weight = math_node(tree, "Phantom Weight", "MULTIPLY", (100, y), seen.outputs["Value"])
+    emission(tree, PHANTOM, y, weight.outputs["Value"], path, out.inputs["Surface"])
 
 
 def drive(tree, lamp: dict, bulb_center, as_lobe: bool, drive_node, drive_input, missing: list[str]) -> None:
