@@ -344,14 +344,28 @@ class CompareRun:
 
 
 def lens_pixels(scene: dict, shape: tuple[int, int]) -> np.ndarray:
-    """(H, W) bool: the pixels whose eye ray through the centre meets a lens's outer face first, found
-    by the tracer's geometry (``raytrace.engine.lens_pixels``), lit or not; the whole image when the
-    design has free-form parts (their lenses are meshes the tracer finds only while it traces)."""
+    """(H, W) bool: the pixels that see only lenses, found by the tracer's geometry, lit or not
+    (``raytrace.engine.lens_pixels``: the eye ray through the centre meets a lens's outer face first).
+    With more than one sample per pixel the samples spread over the pixel filter's support
+    (``raytrace.pixel_filter``), so a pixel counts only where every pixel within that reach is a lens
+    pixel too: a rim pixel that also sees the body (whose Phong highlight Cycles lacks by design) is
+    left out. The whole image when the design has free-form parts (their lenses are meshes the
+    tracer finds only while it traces)."""
+    from ...core_tracer.raytrace import pixel_filter
     from ...core_tracer.raytrace.engine import lens_pixels as lamp_seen
 
     if "freeform" in scene:
         return np.ones(shape, bool)
-    return lamp_seen(scene, shape[1], shape[0]) >= 0
+    lens = lamp_seen(scene, shape[1], shape[0]) >= 0
+    if scene["image"].get("samples", 1) <= 1:
+        return lens
+    reach = int(np.ceil(pixel_filter.filter_support(pixel_filter.DEFAULT_FILTER)))
+    padded = np.pad(lens, reach, constant_values=False)
+    height, width = shape
+    for dy in range(-reach, reach + 1):
+        for dx in range(-reach, reach + 1):
+            lens &= padded[reach + dy:reach + dy + height, reach + dx:reach + dx + width]
+    return lens
 
 
 def by_design(scene: dict) -> str:
