@@ -112,6 +112,7 @@ def _row(bpy, package: str, preset: Path, size: tuple[int, int], samples: int, t
     mask = comparison.lens_pixels(result["scene"], first.shape[:2])
     lamp = importlib.import_module(f"{package}.core_tracer.raytrace.engine").lens_pixels(result["scene"], *size)
     y_t, y_c = sheet.luminance(result["tracer"]), sheet.luminance(first)
+    lamp[~mask] = -1  # the same lens pixels as the whole row's
     per_lamp = " ".join(f"{i}: {sheet.percent_text(sheet.percent(y_t[lamp == i].mean(), y_c[lamp == i].mean()))}"
                         for i in range(lamp.max() + 1) if (lamp == i).any())
     y1, y2 = sheet.luminance(first)[mask], sheet.luminance(second)[mask]
