@@ -176,7 +176,7 @@ def difference_labels(lens: dict) -> tuple[str, ...]:
     if not lens["pixels"]:
         return ("Luminance (Tracer - Cycles) / Cycles  no lens", "(Tracer - Cycles) / Cycles", "Difference")
     mean = percent_text(lens["luminance_percent"])
-    return (f"Luminance (Tracer - Cycles) / Cycles  lens mean {mean}", f"(Tracer - Cycles) / Cycles  lens {mean}",
+    return (f"Luminance (Tracer - Cycles) / Cycles  lens mean {mean}", f"Luminance difference  lens {mean}",
             f"Difference  lens {mean}", "Difference")
 
 

@@ -224,3 +224,37 @@ def test_the_difference_panel_is_a_signed_map_with_its_legend(lamp_addon):
     np.testing.assert_allclose(right, sheet.WARM, atol=0.02)
     ink = (foot > 0.95).all(axis=2)
     assert ink[:bar_rows[0]].sum() > 20 and ink[bar_rows[-1] + 1:].sum() > 40  # "-20 %  0  +20 %", the words
+
+
+@pytest.mark.slow
+def test_a_free_form_reflector_aims_eq3_at_its_bulb_and_agrees_with_cycles(lamp_addon, bl_scene):
+    """The paper baseline converted to free-form parts: the reflector's role material aims eq. 3 at the
+    bulb part the tracer picks (its centroid, in the reflector object's frame), and the lens agrees."""
+    from mathutils import Vector
+
+    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
+    size = (64, 64)
+    doc["image"] = {"width": size[0], "height": size[1], "samples": 16}
+    scene = core_tracer.parse_scene(doc)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    lamp_addon.freeform.conversion.convert_to_freeform(bl_scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=64, resolution=size)
+    reflector = next(o for o in lamp_addon.freeform.properties.role_objects(bl_scene)
+                     if o.lamp_role.role == "reflector")
+    tree = lamp_addon.freeform.materials.role_material(reflector).node_tree
+    bulb = scene["lamps"][0]["bulb"]
+    assert tree.nodes["Eq. 3 Weight"].inputs[1].default_value == pytest.approx(0.8 * max(bulb["intensity"]))
+    assert list(tree.nodes["Reflector Scatter"].inputs["Color"].default_value)[:3] == [0.0, 0.0, 0.0]
+    mm = lamp_addon.convert.units.BU_PER_MM
+    local = Vector([tree.nodes["Eq. 3 Bulb Centre"].inputs[k].default_value for k in "XYZ"])
+    centre = np.asarray(reflector.matrix_world @ local) / mm  # back in the scene's mm
+    lamp = scene["lamps"][0]
+    expected = np.asarray(core_tracer.scene.derived.lamp_geometry(lamp)["bulb_center"]) + \
+        np.array([lamp["center"][0], 0.0, lamp["center"][1]])
+    np.testing.assert_allclose(centre, expected, atol=0.1)  # mm: the sphere's facets
+    # The lens (the parametric design's lens pixels: the converted meshes are the same lamp).
+    parametric = lamp_addon.compare.comparison.lens_pixels(scene, result["tracer"].shape[:2])
+    t, c = _luminance(result["tracer"])[parametric].mean(), _luminance(result["cycles"])[parametric].mean()
+    print(f"\nfree-form baseline {size[0]}x{size[1]}: lens mean luminance tracer {t:.4f}, Cycles {c:.4f}, "
+          f"{100 * (t / c - 1):+.2f} % over {parametric.sum()} px")
+    assert abs(100 * (t / c - 1)) < TOLERANCE_PERCENT
