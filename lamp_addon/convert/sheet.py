@@ -127,8 +127,7 @@ def difference_panel(tracer: np.ndarray, cycles: np.ndarray, *, clip: float = CL
 
 def _draw_legend(panel: np.ndarray, clip: float, oiio_text: bool) -> None:
     """The scale bar across the panel's foot on a black band, "-clip %  0  +clip %" above it and
-    "blue: Cycles brighter  red: tracer brighter" below (the shorter "-: Cycles  +: tracer" where
-    the panel is narrow)."""
+    "blue: Cycles brighter  red: tracer brighter" below (shorter where the panel is narrow)."""
     height, width = panel.shape[:2]
     scale = _label_scale(height)
     line = bitmap_font.GLYPH_H * scale + 2
@@ -155,7 +154,7 @@ def _draw_legend(panel: np.ndarray, clip: float, oiio_text: bool) -> None:
                              top=1)
     np.maximum(panel[top:top + line], middle[..., None], out=panel[top:top + line])
     meaning = labels.fitting(("blue: Cycles brighter  red: tracer brighter", "blue Cycles  red tracer brighter",
-                              "-: Cycles  +: tracer"), width - 2 * margin,
+                              "blue Cycles, red tracer"), width - 2 * margin,
                              lambda t: labels.text_width(t, line - 2, oiio_text))
     write(meaning, top + line + bar + 3, "left")
 
