@@ -83,9 +83,12 @@ def report(comparison: dict, preset: str, output: str) -> str:
             ("lens mean, Lamp Tracer", "tracer_mean"), ("lens mean, Cycles", "cycles_mean"),
             ("lens mean difference", "mean_difference"), ("lens RMS difference", "rms_difference"))]
         lines.append(f"  {'lens mean difference, %':<27}" + "".join(f"{percent_text(v):>10}" for v in lens["percent"]))
-        lines.append(f"lens mean luminance: tracer {lens['tracer_luminance']:.4g}, Cycles "
-                     f"{lens['cycles_luminance']:.4g}, tracer - Cycles {percent_text(lens['luminance_percent'])} "
-                     f"of Cycles'")
+        if lens["pixels"] and not (lens["tracer_luminance"] or lens["cycles_luminance"]):
+            lines.append("lens mean luminance: 0 in both (nothing lights the lens)")
+        else:
+            lines.append(f"lens mean luminance: tracer {lens['tracer_luminance']:.4g}, Cycles "
+                         f"{lens['cycles_luminance']:.4g}, tracer - Cycles {percent_text(lens['luminance_percent'])} "
+                         f"of Cycles'")
     if comparison.get("by_design"):
         lines.append(comparison["by_design"])
     if comparison.get("left_out"):
