@@ -178,7 +178,7 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False)
     lamps = [design_parts.lamp_parts(i, {**lamp, cycles.PHANTOM: phantom, cycles.LENS_SUN: sun}, preview,
                                      functions.lamp_label(shown["lamps"], i))
              for i, (lamp, phantom) in enumerate(zip(shown["lamps"], phantoms, strict=True))]
-    body = design_parts.body_part(shown, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps])
+    body = design_parts.body_part(shown, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps], sun)
     specs = [body, *(part for parts, _, _, _ in lamps for part in parts)]
     # Every shape that changed is made before the first change to the scene: a design whose geometry
     # fails (or an interrupt while a deep-cut lens is meshed) leaves the objects as they were, so an

@@ -1,4 +1,6 @@
-"""The lens's own surface term of eq. 1 in a Cycles lens material, as the tracer adds it.
+"""The surface terms of eq. 1 that Cycles' BSDFs cannot make, as the tracer adds them: the lens's own
+term, and the body's highlight (``add_body_nodes``: the body's Diffuse BSDF makes the rest of eq. 1 under
+Cycles' sun and world, but a delta sun makes no Phong highlight).
 
 Where an eye ray meets a lens's outer face the tracer adds r × eq. (1) with the lens's colours
 (docs/model.md §4 and §5.2, ``Lighting.lens_surface``): r the Fresnel reflectance there, and
@@ -21,6 +23,29 @@ from ..convert import cycles
 from .reflector_glow import blinn, emission, math_node, new_node, to_world, vector_math
 
 SURFACE = "Lens Eq. 1"
+BODY = "Body Eq. 1 Highlight"
+
+
+def _sun_nodes(tree, prefix: str, y: float):
+    """The nodes eq. 1 needs at a shading point, in the part's object frame carried to the world: the
+    Geometry, the Light Path, the unit vector toward the sun (node "<prefix> Sun Direction", the lamp's
+    frame), (cos beta)^n (``blinn``) and cos theta with its sign test."""
+    geometry = new_node(tree, "ShaderNodeNewGeometry", f"{prefix} Geometry", (-1500, y))
+    path = (tree.nodes.get(f"{prefix} Light Path")
+            or new_node(tree, "ShaderNodeLightPath", f"{prefix} Light Path", (0, y - 500)))
+    sun = new_node(tree, "ShaderNodeCombineXYZ", f"{prefix} Sun Direction", (-1700, y - 300))  # the lamp's frame
+    sun_world = to_world(tree, f"{prefix} Sun Direction In World", "VECTOR", (-1500, y - 300), sun.outputs["Vector"])
+    to_sun = vector_math(tree, f"{prefix} Sun", "NORMALIZE", (-1300, y - 300), sun_world.outputs["Vector"])
+    powered = blinn(tree, prefix, y, geometry, to_sun.outputs["Vector"])
+    cos_theta = vector_math(tree, f"{prefix} N . Sun", "DOT_PRODUCT", (-1100, y - 300), geometry.outputs["Normal"],
+                            to_sun.outputs["Vector"])
+    in_sun = math_node(tree, f"{prefix} Faces The Sun", "GREATER_THAN", (-800, y - 400), cos_theta.outputs["Value"])
+    # s w (cos beta)^n C1 where cos theta > 0
+    shown = math_node(tree, f"{prefix} Highlight Where Lit", "MULTIPLY", (-50, y), powered.outputs["Value"],
+                      in_sun.outputs["Value"])
+    highlight = new_node(tree, "ShaderNodeVectorMath", f"{prefix} Highlight", (100, y), operation="SCALE")
+    tree.links.new(shown.outputs["Value"], highlight.inputs["Scale"])
+    return path, cos_theta, highlight
 
 
 def add_nodes(tree) -> None:
@@ -30,26 +55,13 @@ def add_nodes(tree) -> None:
     if out is None or tree.nodes.get(SURFACE) is not None:
         return
     y = -700
-    geometry = new_node(tree, "ShaderNodeNewGeometry", "Lens Geometry", (-1500, y))
-    path = tree.nodes.get("Lens Light Path") or new_node(tree, "ShaderNodeLightPath", "Lens Light Path", (0, y - 500))
-    sun = new_node(tree, "ShaderNodeCombineXYZ", "Lens Sun Direction", (-1700, y - 300))  # the lamp's frame
-    sun_world = to_world(tree, "Lens Sun Direction In World", "VECTOR", (-1500, y - 300), sun.outputs["Vector"])
-    to_sun = vector_math(tree, "Lens Sun", "NORMALIZE", (-1300, y - 300), sun_world.outputs["Vector"])
-    powered = blinn(tree, "Lens", y, geometry, to_sun.outputs["Vector"])
-    cos_theta = vector_math(tree, "Lens N . Sun", "DOT_PRODUCT", (-1100, y - 300), geometry.outputs["Normal"],
-                            to_sun.outputs["Vector"])
+    path, cos_theta, highlight = _sun_nodes(tree, "Lens", y)
     lit = math_node(tree, "Lens cos theta", "MAXIMUM", (-950, y - 300), cos_theta.outputs["Value"])
-    in_sun = math_node(tree, "Lens Faces The Sun", "GREATER_THAN", (-800, y - 400), cos_theta.outputs["Value"])
     # [d + (1 - d) s S cos theta] C0
     sunlit = new_node(tree, "ShaderNodeVectorMath", "Lens Sun Light", (-650, y - 300), operation="SCALE")
     tree.links.new(lit.outputs["Value"], sunlit.inputs["Scale"])
     ambient = vector_math(tree, "Lens Ambient", "ADD", (-500, y - 300), sunlit.outputs["Vector"])
     diffuse = vector_math(tree, "Lens Diffuse Colour", "MULTIPLY", (-350, y - 300), ambient.outputs["Vector"])
-    # s w (cos beta)^n C1 where cos theta > 0
-    shown = math_node(tree, "Lens Highlight Where Lit", "MULTIPLY", (-50, y), powered.outputs["Value"],
-                      in_sun.outputs["Value"])
-    highlight = new_node(tree, "ShaderNodeVectorMath", "Lens Highlight", (100, y), operation="SCALE")
-    tree.links.new(shown.outputs["Value"], highlight.inputs["Scale"])
     both = vector_math(tree, "Lens Eq. 1 Sum", "ADD", (250, y - 200), diffuse.outputs["Vector"],
                        highlight.outputs["Vector"])
     fresnel = new_node(tree, "ShaderNodeFresnel", "Lens Fresnel", (250, y - 400))
@@ -61,13 +73,40 @@ def add_nodes(tree) -> None:
     tree.links.new(reflected.outputs["Vector"], glow.inputs["Color"])
 
 
+def add_body_nodes(tree) -> None:
+    """Add the body's highlight of eq. 1, s w (cos beta)^n C1 where the sun lights it, as an Emission seen
+    by camera rays alone (its diffuse part is the Diffuse BSDF under Cycles' sun and world); a tree
+    without the builder's Output node, or that has it already, is left alone."""
+    out = tree.nodes.get("Output")
+    if out is None or tree.nodes.get(BODY) is not None:
+        return
+    y = -400
+    path, _, highlight = _sun_nodes(tree, "Body", y)
+    glow = emission(tree, BODY, y - 900, None, path, out.inputs["Surface"], seen_by="Is Camera Ray")
+    glow.inputs["Strength"].default_value = 1.0
+    tree.links.new(highlight.outputs["Vector"], glow.inputs["Color"])
+
+
+def _no_sun() -> dict:
+    return {"direction": (0.0, -1.0, 0.0), "light": (0.0, 0.0, 0.0), "ambient": 0.0, "highlight": (0.0, 0.0, 0.0)}
+
+
+def drive_body(tree, sun: dict | None, body: dict, drive_node, drive_input, missing: list[str]) -> None:
+    """Write the body's highlight colour and shininess and the sun (``cycles.lens_sun``; None: no highlight)."""
+    sun = sun or _no_sun()
+    x, y, z = sun["direction"]
+    drive_node(tree, "Body Sun Direction", missing, X=x, Y=y, Z=z)
+    drive_input(tree, "Body Highlight", 0, tuple(float(body["specular"]) * c for c in sun["highlight"]), missing)
+    drive_input(tree, "Body Shininess", 1, float(body["shininess"]), missing)
+
+
 def drive(tree, lamp: dict, drive_node, drive_input, missing: list[str]) -> None:
     """Write the lens's colours and the sun (``lamp[cycles.LENS_SUN]``, from ``cycles.lens_suns``) into
     the nodes; without a sun every term is 0."""
     sun = lamp.get(cycles.LENS_SUN)
     lens = lamp["lens"]
     if sun is None:
-        sun = {"direction": (0.0, -1.0, 0.0), "light": (0.0, 0.0, 0.0), "ambient": 0.0, "highlight": (0.0, 0.0, 0.0)}
+        sun = _no_sun()
     x, y, z = sun["direction"]
     drive_node(tree, "Lens Sun Direction", missing, X=x, Y=y, Z=z)
     drive_input(tree, "Lens Sun Light", 0, tuple(sun["light"]), missing)  # (1 - d) s S

@@ -25,8 +25,10 @@ part:
   is not known) keeps the lobe. Approximations: a path that reflected inside the lens before its first
   reflector hit does not see C in Cycles (about r², 0.2 % of it; on the cut lenses of the evening preset
   Cycles' C stayed within 1 % of the tracer's).
-- **Body, socket, lens side wall**: Diffuse BSDF of their colour. The paper's body adds the specular term
-  of eq. 1 and treats socket and side wall as constant colours; only the diffuse part is reproduced.
+- **Body, socket, lens side wall**: Diffuse BSDF of their colour. The body's specular term of eq. 1,
+  s w (cos beta)^n C1 under the sun, is an Emission seen by camera rays alone (``lens_surface``), as the
+  tracer adds it for eye rays only. The paper treats socket and side wall as constant colours; Cycles
+  shades them diffuse (the lamp-off preset's +2.3 % on the lens, benchmarks/RESULTS.md).
 - **Light** (the diffuse part of eq. 1, ``[d + (1 - d) cos theta] R0``): a sun of strength ``pi (1 - d)``
   shining along ``-light.direction`` and a world of colour d seen by diffuse rays only (adds ``R0 d``).
   Every other ray that leaves the scene sees the scene's ``background`` colour (black in the paper).
@@ -172,6 +174,17 @@ def diffuse(mat: bpy.types.Material, color, node_name: str, *, new: bool) -> lis
     missing: list[str] = []
     _drive(tree, node_name, missing, Color=_rgba(color))
     mat.diffuse_color = _rgba(color)
+    return missing
+
+
+def body(mat: bpy.types.Material, body: dict, sun: dict | None, *, new: bool) -> list[str]:
+    """The body's paint: ``diffuse`` and its highlight of eq. 1 (``lens_surface.add_body_nodes``) under
+    ``sun`` (``cycles.lens_sun``; None: a photometric design, whose paint is Lambertian)."""
+    missing = diffuse(mat, body["color"], "Body BSDF", new=new)
+    tree = _tree(mat, False)
+    if tree is not None:
+        lens_surface.add_body_nodes(tree)  # new, or a body built before the highlight was
+        lens_surface.drive_body(tree, sun, body, _drive, _drive_input, missing)
     return missing
 
 
