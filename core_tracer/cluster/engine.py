@@ -195,7 +195,7 @@ class CellRun:
         self.wanted: dict[str, list[int]] = {}
         for i, cell in enumerate(self.cells):
             key = cell.key
-            image = cache.get(key) if cache is not None else None
+            image = cache.get(key, (cell.width, cell.height)) if cache is not None else None
             if image is not None:
                 self.images[i] = image
                 self.count.from_cache += 1
