@@ -41,7 +41,7 @@ def run_study(study: Study, scheduler: str | None = None, workers: int | None = 
             return engine.run_cells(None, cells, inputs, cache, progress=progress, should_stop=should_stop)
     limit = engine.worker_memory(cells, environment)
     with engine.connect(scheduler, workers=min(workers or engine.default_workers(), len(cells)),
-                        memory_limit=limit) as client:
+                        memory_limit=limit, should_stop=should_stop) as client:
         if on_start is not None:
             on_start(client)
         return engine.run_cells(client, cells, inputs, cache, progress=progress, should_stop=should_stop)
