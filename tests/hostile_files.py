@@ -174,3 +174,60 @@ def hostile_states_file(rng: random.Random, good: bytes) -> tuple[str, bytes]:
     others = {k: v for k, v in parts.items() if k != name}
     header = npy_header((h, w, 3))
     return kind, zeros_bomb(name, header, inflated, others, claimed=len(header) + h * w * 12)
+
+
+# ---------------------------------------------------------------------------------------------
+# Spectra and measured curves
+
+
+HOSTILE_NUMBERS = ["0", "1", "1e-320", "1e-300", "1.7e308", "1e30", "1e31", "-0", "-1", "nan", "inf", "0.5", "1e-9"]
+
+
+def hostile_curve(rng: random.Random) -> tuple[str, str]:
+    """(what it is, a .csv of nm,value rows) of the kinds a careless or hostile teammate writes."""
+    kind = rng.choice(["outside-visible", "one-zero-row", "all-zero", "huge", "tiny", "narrow", "partial",
+                       "random", "few", "decreasing", "text"])
+    if kind == "outside-visible":
+        lo = rng.choice([200.0, 250.0, 790.0, 1000.0])
+        rows = [(lo + 5 * i, rng.random()) for i in range(rng.randint(2, 20))]
+    elif kind == "one-zero-row":
+        rows = [(380.0 + 10 * i, rng.choice([0.9, 0.5, 1.0])) for i in range(41)]
+        zero = rng.randrange(len(rows))
+        rows[zero] = (rows[zero][0], 0.0)
+    elif kind == "all-zero":
+        rows = [(380.0, 0.0), (780.0, 0.0)]
+    elif kind in ("huge", "tiny"):
+        value = float(rng.choice(["1.7e308", "1e300", "1e31"] if kind == "huge" else ["1e-320", "5e-324", "1e-300"]))
+        rows = [(380.0 + 100 * i, value) for i in range(5)]
+    elif kind == "narrow":
+        centre = rng.uniform(375.0, 790.0)
+        rows = [(centre - 0.01, 0.0), (centre, 1.0), (centre + 0.01, 0.0)]
+    elif kind == "partial":
+        lo = rng.uniform(600.0, 779.0)
+        rows = [(lo, rng.random()), (lo + 50.0, rng.random())]
+    elif kind == "few":
+        rows = [(rng.uniform(200.0, 2000.0), rng.random())]
+    elif kind == "decreasing":
+        rows = [(700.0, 1.0), (500.0, 1.0)]
+    elif kind == "text":
+        return kind, rng.choice(["nm,value\n", "", "\x00\x01", "380;0.5\n780;0.5\n", "380,0.5,1\n", "a,b\nc,d\n"])
+    else:
+        rows = sorted({round(rng.uniform(200.0, 2000.0), 3): rng.choice(HOSTILE_NUMBERS) for _ in range(
+            rng.randint(2, 30))}.items())
+        return kind, "".join(f"{nm},{v}\n" for nm, v in rows)
+    return kind, "".join(f"{nm!r},{v!r}\n" for nm, v in rows)
+
+
+def hostile_bulb(rng: random.Random) -> tuple[str, dict]:
+    """(what it is, fields to set on a photometric lamp's bulb section)."""
+    kind = rng.choice(["led", "radius", "flux", "named"])
+    if kind == "led":
+        return kind, {"type": "custom", "spectrum": "led", "flux_lm": rng.choice([1.0, 100.0, 1e5]),
+                      "led_peak_nm": rng.choice([360.0, 370.0, 379.0, 781.0, 800.0, 830.0, rng.uniform(360, 830)]),
+                      "led_width_nm": rng.choice([0.1, 1.0, 5.0, 100.0, rng.uniform(0.1, 200.0)])}
+    if kind == "radius":
+        return kind, {"radius": rng.choice([1e-320, 5e-324, 1e-300, 1e-160, 1e-155, 1e-9, 1e-3, 0.5])}
+    if kind == "flux":
+        return kind, {"type": "custom", "spectrum": rng.choice(["incandescent", "red_led", "white_led"]),
+                      "flux_lm": rng.choice([0.0, 1e-300, 1e5, 1e-320]), "radius": rng.choice([1e-3, 1e-150, 8.0])}
+    return kind, {"type": rng.choice(["P21/5W", "R5W", "PY21/5W"]), "radius": rng.choice([1e-320, 1e-3, 4.0])}
