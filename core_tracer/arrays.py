@@ -11,6 +11,8 @@ spend; only then is the data read, and a float array is refused if it holds NaN 
 from __future__ import annotations
 
 import io
+import os
+import stat
 import zipfile
 import zlib
 from collections.abc import Sequence
@@ -81,8 +83,12 @@ def read_npy(fp: BinaryIO, size: int, *, dtype: str | np.dtype | None = None,
 
 
 def read_npy_file(path: str, **checks) -> np.ndarray:
-    """``read_npy`` of a file on disk (its size from the file system). Raises ``BadArray`` or ``OSError``."""
-    with open(path, "rb") as fp:
+    """``read_npy`` of a regular file on disk (its size from the file system; a FIFO or a device in
+    its place is refused without blocking on it). Raises ``BadArray`` or ``OSError``."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    with os.fdopen(fd, "rb") as fp:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise BadArray("is not a regular file")
         size = fp.seek(0, io.SEEK_END)
         fp.seek(0)
         return read_npy(fp, size, **checks)

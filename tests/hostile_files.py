@@ -231,3 +231,150 @@ def hostile_bulb(rng: random.Random) -> tuple[str, dict]:
         return kind, {"type": "custom", "spectrum": rng.choice(["incandescent", "red_led", "white_led"]),
                       "flux_lm": rng.choice([0.0, 1e-300, 1e5, 1e-320]), "radius": rng.choice([1e-3, 1e-150, 8.0])}
     return kind, {"type": rng.choice(["P21/5W", "R5W", "PY21/5W"]), "radius": rng.choice([1e-320, 1e-3, 4.0])}
+
+
+# ---------------------------------------------------------------------------------------------
+# Cache cells
+
+
+def hostile_cell(rng: random.Random, good: np.ndarray) -> tuple[str, object]:
+    """(what it is, the bytes to put where a cell of ``good``'s shape is kept, or "fifo"/"folder"/"link")."""
+    kind = rng.choice(["nan", "inf", "shape", "dtype", "object", "huge-header", "truncate", "flip", "fortran",
+                       "empty", "fifo", "folder", "link", "huge-values", "negative-shape"])
+    h, w, _ = good.shape
+    if kind in ("fifo", "folder", "link"):
+        return kind, kind
+    if kind in ("nan", "inf"):
+        bad = good.copy()
+        bad.flat[rng.randrange(bad.size)] = np.nan if kind == "nan" else -np.inf
+        return kind, npy_bytes(bad)
+    if kind == "shape":
+        return kind, npy_bytes(np.zeros(rng.choice([(h, w), (w, h, 3), (h, w, 4), (1, 1, 3), (0, w, 3)]), np.float32))
+    if kind == "dtype":
+        return kind, npy_bytes(good.astype(rng.choice(["<f8", "<f2", "<i4", ">f4", "u1", "<c8"])))
+    if kind == "object":
+        return kind, npy_bytes(np.array([{"a": 1}], dtype=object))
+    if kind == "huge-header":
+        return kind, npy_header(rng.choice([(100000, 100000, 3), (2**40, 1, 3), (h, w, 3 * 10**9)])) + bytes(64)
+    if kind == "negative-shape":
+        return kind, npy_header((h, w, 3)).replace(f"({h}, {w}, 3)".encode(), f"(-{h}, {w}, 3)".encode()) + bytes(64)
+    if kind == "truncate":
+        data = npy_bytes(good)
+        return kind, data[:rng.randrange(len(data))]
+    if kind == "flip":
+        data = bytearray(npy_bytes(good))
+        for _ in range(rng.randint(1, 6)):
+            data[rng.randrange(min(len(data), 128))] ^= 1 << rng.randrange(8)
+        return kind, bytes(data)
+    if kind == "fortran":
+        return kind, npy_bytes(np.asfortranarray(good))
+    if kind == "huge-values":
+        return kind, npy_bytes(np.full(good.shape, 3e38, np.float32))
+    return kind, b""
+
+
+# ---------------------------------------------------------------------------------------------
+# Optimise files, study and scheduler flags
+
+
+HOSTILE_STORAGE = ["sqlite:////etc/passwd", "sqlite:///../x.db", "sqlite:///~/x.db", "sqlite://", "sqlite:///",
+                   "sqlite:///file:x.db?mode=rwc&uri=true", "file:///tmp/x.db", "sqlite:///x.db?timeout=1",
+                   "sqlite:///" + "a" * 5000 + ".db", "sqlite:///\x00.db", "sqlite:///\ud800.db", "postgresql://",
+                   "oracle://u@h/d", "sqlite:////dev/zero", "sqlite:///.", "sqlite:///sub/../../x.db", 1, None,
+                   [], {"a": 1}, "", "://", "sqlite:///%2e%2e/x.db", "sqlite:///db\nname.db", "mysql+bad://x"]
+HOSTILE_BASES = ["/etc/passwd", "~/x.json", "../x.json", "a/../../x.json", "/dev/zero", ".", "", "\x00",
+                 "x" * 5000, "\ud800.json", 1, None, [], {"lamps": "x"}, True, "sub/../base.json"]
+
+
+def hostile_optimise_doc(rng: random.Random, good: dict) -> tuple[str, dict]:
+    """One mutation of a good ``lamp-optimise/1`` document."""
+    doc = json.loads(json.dumps(good))
+    kind = rng.choice(["storage", "base", "step", "range", "values", "parameter", "name", "trials", "size",
+                       "parallel", "objective", "unknown"])
+    if kind == "storage":
+        doc["storage"] = rng.choice(HOSTILE_STORAGE)
+    elif kind == "base":
+        doc["base"] = rng.choice(HOSTILE_BASES)
+    elif kind == "step":
+        doc["parameters"][0]["step"] = rng.choice([1e-300, 5e-324, -1.0, 0.0, float("nan"), 1e308, "1", None, 2.0])
+    elif kind == "range":
+        doc["parameters"][0]["range"] = rng.choice([[0.0, 1e308], [float("nan"), 1.0], [1.0, 1.0], [2, 1], [1], "x",
+                                                    [None, 1.0], [-1e308, 1e308], [0.5, float("inf")]])
+    elif kind == "values":
+        doc["parameters"][0] = {"parameter": "cuts.height", "values": rng.choice(
+            [[], [1e308], [float("nan")], list(range(100000)), ["x"], [[1]], None, [0.5] * 3])}
+    elif kind == "parameter":
+        doc["parameters"][0]["parameter"] = rng.choice(["", "lamps[9999].lens.ior", "__class__", "cuts.height[0]",
+                                                       "x" * 10000, None, "bulb.offset", "\ud800"])
+    elif kind == "name":
+        doc["name"] = rng.choice(["", "a" * 201, "\x1b[31mred", "\ud800", 1, None, "name\nwith newline"])
+    elif kind == "trials":
+        doc["trials"] = rng.choice([0, -1, 10**400, 1e308, "5", None, 10001, True])
+    elif kind == "size":
+        doc["size"] = rng.choice([[0, 0], [10**9, 1], "x", [16], [16.5, 16], None, [-1, 16]])
+    elif kind == "parallel":
+        doc["parallel"] = rng.choice([0, 10**6, -1, "2", 1e308])
+    elif kind == "objective":
+        doc["objectives"] = rng.choice([[], [{"measure": "ssim", "reference": "/etc/passwd"}],
+                                        [{"measure": "ssim", "reference": "../x.exr"}], [{"measure": None}],
+                                        "x", [{"measure": "lens_luminance", "goal": "up"}]])
+    else:
+        doc[rng.choice(["__proto__", "\ud800", "x" * 300, ""])] = 1
+    return kind, doc
+
+
+def hostile_study_flags(rng: random.Random) -> tuple[str, list[str], dict[str, str]]:
+    """(what it is, extra command-line arguments for ``study``, extra environment)."""
+    kind = rng.choice(["scheduler", "env", "workers", "size", "engine", "cache"])
+    printable = "".join(chr(rng.randrange(32, 127)) for _ in range(rng.randint(0, 40)))
+    addresses = ["tcp://", "tcp://host:99999", "tcp://[::1", ":::", "tcp://h\x01:1", "inproc://x", "x" * 300,
+                 "tcp://host:port", "ws://host:1", "tcp://256.1.1.1:80", "tcp://-x-:1", printable, "local",
+                 "tcp://127.0.0.1:0", "tls://:1", "tcp://user:pw@h:1", "tcp://h:1/x?y#z"]
+    if kind == "scheduler":
+        return kind, ["--scheduler", rng.choice(addresses)], {}
+    if kind == "env":
+        return kind, ["--engine", "dask"], {"DASK_SCHEDULER_ADDRESS": rng.choice(addresses).replace("\x00", "")}
+    if kind == "workers":
+        return kind, ["--workers", rng.choice(["100000", "-1", "2" * 30, "0", "x", "1e3", "7", "4096"])], {}
+    if kind == "size":
+        return kind, ["--size", rng.choice(["0x0", "100000x100000", "x", "16x16x16", "-16x16", "16", "1e9x1"])], {}
+    if kind == "engine":
+        return kind, ["--engine", rng.choice(["dask", "processes", "threads", "", "\x00"]).replace("\x00", "?")], {}
+    return kind, ["--cache", rng.choice(["/dev/null", "/proc/self", "\ud800", ".", "x" * 5000])], {}
+
+
+def spectrum_scene_file(folder, bulb: dict | None = None, lens_curve: str | None = None,
+                        bulb_curve: str | None = None):
+    """A 12 x 8 px photometric stop lamp in ``folder``, its bulb edited, with a measured filter or bulb curve."""
+    from helpers import PRESETS
+
+    doc = json.loads((PRESETS / "photometric-stop-lamp.json").read_text())
+    doc["image"].update(width=12, height=8, samples=1)
+    doc["lamps"][0]["bulb"].update(bulb or {})
+    if lens_curve is not None:
+        doc["lamps"][0]["lens"].update(filter="file", filter_file="filter.csv")
+        (folder / "filter.csv").write_text(lens_curve)
+    if bulb_curve is not None:
+        doc["lamps"][0]["bulb"].update(type="custom", spectrum="file", spectrum_file="bulb.csv", flux_lm=100.0)
+        (folder / "bulb.csv").write_text(bulb_curve)
+    path = folder / "scene.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def refused_or_renders(path) -> str:
+    """'refused' (a one-line ``SceneError`` naming a field of lamps[0], as ``validate`` says it) or
+    'rendered' (a finite image); anything else fails the caller's test."""
+    from core_tracer.cli.common import load_scene_file
+    from core_tracer.raytrace.engine import render_passes
+    from core_tracer.scene.beside import with_spectrum_files
+    from core_tracer.scene.reading import SceneError
+
+    try:
+        scene = load_scene_file(path)
+    except SceneError as e:
+        assert "\n" not in str(e) and "lamps[0]" in e.path, str(e)
+        return "refused"
+    image = render_passes(with_spectrum_files(path, scene), keep_passes=False).image
+    assert np.isfinite(image).all(), path.read_text()[:300]
+    return "rendered"

@@ -7,7 +7,6 @@ bulb or curve is either refused in one line naming its field, or renders a finit
 
 from __future__ import annotations
 
-import json
 import os
 import random
 
@@ -19,39 +18,9 @@ from helpers import PRESETS
 from core_tracer.cli.common import load_scene_file
 from core_tracer.photometry import sources
 from core_tracer.raytrace import spectral
-from core_tracer.raytrace.engine import render_passes
-from core_tracer.scene.beside import with_spectrum_files
 from core_tracer.scene.reading import SceneError
 
 SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
-STOP = json.loads((PRESETS / "photometric-stop-lamp.json").read_text())
-
-
-def _scene_file(folder, bulb: dict | None = None, lens_curve: str | None = None, bulb_curve: str | None = None):
-    doc = json.loads(json.dumps(STOP))
-    doc["image"].update(width=12, height=8, samples=1)
-    doc["lamps"][0]["bulb"].update(bulb or {})
-    if lens_curve is not None:
-        doc["lamps"][0]["lens"].update(filter="file", filter_file="filter.csv")
-        (folder / "filter.csv").write_text(lens_curve)
-    if bulb_curve is not None:
-        doc["lamps"][0]["bulb"].update(type="custom", spectrum="file", spectrum_file="bulb.csv", flux_lm=100.0)
-        (folder / "bulb.csv").write_text(bulb_curve)
-    path = folder / "scene.json"
-    path.write_text(json.dumps(doc))
-    return path
-
-
-def _refused_or_renders(path) -> str:
-    """'refused' (one line naming a field of lamps[0]) or 'rendered' (a finite image)."""
-    try:
-        scene = load_scene_file(path)
-    except SceneError as e:
-        assert "\n" not in str(e) and "lamps[0]" in e.path, str(e)
-        return "refused"
-    image = render_passes(with_spectrum_files(path, scene), keep_passes=False).image
-    assert np.isfinite(image).all(), path.read_text()[:300]
-    return "rendered"
 
 
 @pytest.mark.parametrize("bulb, field, words", [
@@ -63,7 +32,7 @@ def _refused_or_renders(path) -> str:
 ])
 def test_a_bulb_the_render_cannot_light_is_refused_when_loaded(tmp_path, bulb, field, words):
     with pytest.raises(SceneError) as e:
-        load_scene_file(_scene_file(tmp_path, bulb))
+        load_scene_file(H.spectrum_scene_file(tmp_path, bulb))
     assert e.value.path.endswith(field) and words in e.value.message
 
 
@@ -74,7 +43,7 @@ def test_a_bulb_the_render_cannot_light_is_refused_when_loaded(tmp_path, bulb, f
 ])
 def test_a_curve_the_render_would_misread_is_refused_in_one_line(tmp_path, curve, words):
     with pytest.raises(SceneError) as e:
-        load_scene_file(_scene_file(tmp_path, bulb_curve=curve))
+        load_scene_file(H.spectrum_scene_file(tmp_path, bulb_curve=curve))
     assert e.value.path.endswith("lamps[0].bulb.spectrum_file") and words in e.value.message
 
 
@@ -87,7 +56,7 @@ def test_a_spectrum_only_outside_the_visible_range_is_not_flat_white(tmp_path):
 
 def test_a_filter_with_one_zero_row_renders_finite(tmp_path):
     curve = "".join(f"{380 + 10 * i},{0.0 if i == 12 else 0.9}\n" for i in range(41))
-    assert _refused_or_renders(_scene_file(tmp_path, lens_curve=curve)) == "rendered"
+    assert H.refused_or_renders(H.spectrum_scene_file(tmp_path, lens_curve=curve)) == "rendered"
 
 
 def test_bulb_luminance_is_refused_where_it_overflows_not_divided_by_zero():
@@ -111,13 +80,13 @@ def test_generated_hostile_spectra_are_refused_or_render_finite(tmp_path):
         what = rng.choice(["bulb", "filter", "spectrum"])
         if what == "bulb":
             kind, fields = H.hostile_bulb(rng)
-            path = _scene_file(folder, bulb=fields)
+            path = H.spectrum_scene_file(folder, bulb=fields)
         elif what == "filter":
             kind, text = H.hostile_curve(rng)
-            path = _scene_file(folder, lens_curve=text)
+            path = H.spectrum_scene_file(folder, lens_curve=text)
         else:
             kind, text = H.hostile_curve(rng)
-            path = _scene_file(folder, bulb_curve=text)
-        outcome = _refused_or_renders(path)
+            path = H.spectrum_scene_file(folder, bulb_curve=text)
+        outcome = H.refused_or_renders(path)
         counts[f"{what}:{kind}:{outcome}"] = counts.get(f"{what}:{kind}:{outcome}", 0) + 1
     assert any(k.endswith("refused") for k in counts) and any(k.endswith("rendered") for k in counts), counts
