@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import os
 import stat
+import tokenize  # numpy parses an .npy header with it: a damaged one raises its TokenError
 import zipfile
 import zlib
 from collections.abc import Sequence
@@ -38,7 +39,7 @@ def _header(fp: BinaryIO) -> tuple[tuple[int, ...], np.dtype, bool, int]:
             shape, fortran, dtype = npy_format.read_array_header_2_0(fp, max_header_size=MAX_NPY_HEADER)
         else:
             raise BadArray(f"npy version {version} is not one numpy writes")
-    except (ValueError, EOFError, SyntaxError, TypeError) as e:
+    except (ValueError, EOFError, SyntaxError, TypeError, OverflowError, KeyError, tokenize.TokenError) as e:
         if isinstance(e, BadArray):
             raise
         raise BadArray("its array header cannot be read") from None

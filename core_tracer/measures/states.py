@@ -282,7 +282,8 @@ def _check_states(given: object, states: list[State], bad: Callable[[str], Scene
         if not isinstance(found, dict) or found.get("key") != state.key:
             raise bad(f"its states do not match its scene's sources (expected {state.key})")
         rendered = found.get("rendered")
-        if type(rendered) not in (int, float) or not math.isclose(rendered, state.rendered, rel_tol=1e-9):
+        if type(rendered) not in (int, float) or abs(rendered) > 1e300 or \
+                not math.isclose(rendered, state.rendered, rel_tol=1e-9):
             raise bad(f"state {state.key} was rendered at {show_value(rendered)}, not the {state.rendered:g} "
                       "this version renders")
 

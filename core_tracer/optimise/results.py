@@ -173,7 +173,8 @@ def write_history(opt: Optimisation, study, path: str) -> None:
         ax.set_ylabel(opt.objectives[1].label)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    fig.suptitle(f"{opt.name}: {len(done)} trials ({opt.sampler})", fontsize=10)
+    # parse_math off: a name is the user's text, never mathtext ("$\\frac{" in one stopped the plot, issue 33)
+    fig.suptitle(f"{opt.name}: {len(done)} trials ({opt.sampler})", fontsize=10, parse_math=False)
     fig.tight_layout()
     with atomic_path(path) as partial:
         fig.savefig(partial, dpi=110, format="png")

@@ -212,8 +212,9 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
     if seed is not None:
         seed = _whole(seed, "seed", 0, 2**32 - 1)
     name = doc.get("name", stem)
-    if not isinstance(name, str) or not name or len(name) > 200:
-        raise SceneError("name", f"expected a non-empty string of at most 200 characters, got {show_value(name)}")
+    if not isinstance(name, str) or not name or len(name) > 200 or not name.isprintable():
+        raise SceneError("name", f"expected a non-empty string of at most 200 printable characters (no control "
+                                 f"characters), got {show_value(name)}")
     storage = _storage(doc.get("storage"), folder, stem)
     parallel = doc.get("parallel")
     if parallel is not None:

@@ -81,3 +81,12 @@ def test_a_study_rerun_with_a_tampered_cell_renders_it_again_and_writes_a_finite
     assert again.stderr.count("rendering it again") == 2 and "Traceback" not in again.stderr
     third = run_cli(*study, "-o", tmp_path / "c.exr", env=env)
     assert "(0 rendered, 2 from the cache)" in third.stdout and "rendering it again" not in third.stderr
+
+
+def test_a_header_numpy_cannot_tokenize_is_dropped(tmp_path, capsys):
+    """Found by the campaign: an unclosed brace in the header raised tokenize's TokenError."""
+    data = H.npy_bytes(GOOD)
+    end = data.index(b"}")
+    cache = CellCache(tmp_path)
+    _tampered(cache, data[:end] + b" " + data[end + 1:])
+    assert cache.get(KEY, (6, 4)) is None and "header" in capsys.readouterr().err

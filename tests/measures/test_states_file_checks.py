@@ -118,3 +118,12 @@ def test_relight_never_writes_a_non_finite_image(good, tmp_path):
         done = helpers.run_cli("relight", path, "-o", tmp_path / out, "--level", "surroundings=100")
         helpers.assert_bad_input(done, "not finite")
         assert not (tmp_path / out).exists()
+
+
+def test_a_state_rendered_at_a_number_of_400_digits_is_refused(good):
+    """Found by the campaign: math.isclose overflowed on it."""
+    parts = H.members(good)
+    header = json.loads(np.lib.format.read_array(io.BytesIO(parts["header.npy"])).tobytes())
+    header["states"][1]["rendered"] = 10**400
+    text = json.dumps(header).encode()
+    _refused(H.npz_of({**parts, "header.npy": H.npy_bytes(np.frombuffer(text, np.uint8))}), "rendered at")

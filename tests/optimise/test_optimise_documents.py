@@ -145,3 +145,18 @@ def test_the_examples_bases_are_copies_of_the_presets_beside_them():
         base = json.loads((examples / f"{name}.optimise.json").read_text())["base"]
         assert (examples / base).read_bytes() == (PRESETS / base).read_bytes(), f"{base} drifted from presets/"
         assert opt.storage == "sqlite:///" + str(examples / f"{name}.optimise.optuna.db")
+
+
+@pytest.mark.parametrize("name", ["\x1b[31mred", "two\nlines", "\ud800"])
+def test_a_name_with_control_characters_is_refused(tmp_path, name):
+    with pytest.raises(SceneError) as e:
+        spec.from_doc(doc(name=name), str(tmp_path))
+    assert e.value.path == "name" and "printable" in e.value.message
+
+
+def test_a_name_with_dollars_draws_its_history(tmp_path):
+    path = tmp_path / "o.optimise.json"
+    path.write_text(json.dumps(doc(name="$\\frac{x}{$ cost $5")))
+    done = run_cli("optimise", path, "--workers", "0", timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "o.optimise-results" / "history.png").stat().st_size > 0
