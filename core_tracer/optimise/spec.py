@@ -261,10 +261,11 @@ def base_path(value: str, folder: str) -> str:
     """The base design's file: a relative path within the optimisation file's folder (no absolute
     path, ``~`` or ``..``, no link out of it), as a preset's files are confined to its folder."""
     shown = show_value(value)
-    if not value or "\0" in value or os.path.isabs(value) or value.startswith("~") or \
+    if not value or not value.isprintable() or os.path.isabs(value) or value.startswith("~") or \
             ".." in value.replace("\\", "/").split("/"):
-        raise SceneError("base", f"{shown} is outside this file's folder (absolute, ~ or ..); allowed a lamp-scene/1 "
-                                 "file in this file's folder (copy it there), or the design itself as the value")
+        raise SceneError("base", f"{shown} is outside this file's folder (absolute, ~, .. or not printable); "
+                                 "allowed a lamp-scene/1 file in this file's folder (copy it there), or the design "
+                                 "itself as the value")
     path = os.path.join(folder, value)
     if os.path.commonpath([os.path.realpath(path), os.path.realpath(folder)]) != os.path.realpath(folder):
         raise SceneError("base", f"{shown} leads outside this file's folder (a link); allowed a lamp-scene/1 file in "

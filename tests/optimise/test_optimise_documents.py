@@ -59,7 +59,8 @@ def test_a_link_out_of_the_folder_is_refused(tmp_path):
         spec.from_doc(doc(base="link/base.json"), str(inside))
 
 
-@pytest.mark.parametrize("base", [str(BASELINE), "~/base.json", "../presets/paper-baseline.json", "a/../../b.json"])
+@pytest.mark.parametrize("base", [str(BASELINE), "~/base.json", "../presets/paper-baseline.json", "a/../../b.json",
+                                  "\ud800.json", "a\x00.json"])
 def test_a_base_outside_the_folder_is_refused(tmp_path, base):
     with pytest.raises(SceneError) as e:
         spec.from_doc(doc(base=base), str(tmp_path))
