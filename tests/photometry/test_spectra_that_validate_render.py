@@ -6,8 +6,6 @@ generated cases: tests/test_fuzz_round3.py, "spectra and curves")."""
 
 from __future__ import annotations
 
-import os
-
 import hostile_files as H
 import numpy as np
 import pytest
@@ -17,8 +15,6 @@ from core_tracer.cli.common import load_scene_file
 from core_tracer.photometry import sources
 from core_tracer.raytrace import spectral
 from core_tracer.scene.reading import SceneError
-
-SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
 
 
 @pytest.mark.parametrize("bulb, field, words", [
