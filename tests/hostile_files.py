@@ -340,7 +340,7 @@ def hostile_study_flags(rng: random.Random) -> tuple[str, list[str], dict[str, s
         return kind, ["--size", rng.choice(["0x0", "100000x100000", "x", "16x16x16", "-16x16", "16", "1e9x1"])], {}
     if kind == "engine":
         return kind, ["--engine", rng.choice(["dask", "processes", "threads", "", "\x00"]).replace("\x00", "?")], {}
-    return kind, ["--cache", rng.choice(["/dev/null", "/proc/self", "\ud800", ".", "x" * 5000])], {}
+    return kind, ["--cache", rng.choice(["/dev/null", "/proc/self", "\udcff", ".", "x" * 5000])], {}
 
 
 def spectrum_scene_file(folder, bulb: dict | None = None, lens_curve: str | None = None,

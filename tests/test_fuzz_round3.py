@@ -218,11 +218,13 @@ def test_study_and_scheduler_flags_find_no_traceback_or_hang(tmp_path):
     _clean(counts)
 
 
-if __name__ == "__main__":  # python tests/test_fuzz_round3.py N: a campaign of N inputs a surface
+if __name__ == "__main__":  # python tests/test_fuzz_round3.py N [SURFACE...]: N inputs a surface
     count = int(sys.argv[1]) if len(sys.argv) > 1 else 100
+    chosen = [s for s in SURFACES if not sys.argv[2:] or any(a in s for a in sys.argv[2:])]
     print("| surface | inputs | refused | accepted | tracebacks | hangs | non-finite | seconds |")
     print("|---|---|---|---|---|---|---|---|")
-    for name, run in SURFACES.items():
+    for name in chosen:
+        run = SURFACES[name]
         start = time.monotonic()
         with tempfile.TemporaryDirectory() as tmp:
             work = Path(tmp) / "f"

@@ -161,3 +161,24 @@ def test_a_name_with_dollars_draws_its_history(tmp_path):
     done = run_cli("optimise", path, "--workers", "0", timeout=300)
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "o.optimise-results" / "history.png").stat().st_size > 0
+
+
+def test_trials_json_holds_no_nan_even_when_a_measure_had_none(tmp_path):
+    import optuna
+
+    from core_tracer.optimise import results
+
+    opt = spec.from_doc(doc(storage="sqlite:///t.db"), str(tmp_path))
+    study = search.open_study(opt)
+    trial = study.ask()
+    trial.set_user_attr("measures", {"lens_luminance": float("nan"), "lit_fraction": float("inf")})
+    study.tell(trial, 1.0)
+    assert isinstance(study, optuna.Study)
+    results.write_trials(opt, study, str(tmp_path / "trials.json"))
+    text = (tmp_path / "trials.json").read_text()
+
+    def no_constants(name):
+        raise ValueError(name)
+
+    row = json.loads(text, parse_constant=no_constants)["trials"][0]
+    assert row["measures"] == {"lens_luminance": None, "lit_fraction": None}
