@@ -45,6 +45,8 @@ def run(args: argparse.Namespace) -> int:
     from ..cluster import engine
 
     engine.check_workers(args.workers)
+    if args.cache is not None and not args.no_cache:
+        check_output_folder(args.cache, "--cache")  # its own cause, before any cell is looked for
     if args.workers == 0 and args.scheduler:
         raise SceneError("--workers", "0 renders in this process; allowed 1 or more with --scheduler")
     if args.workers != 0 and opt.needs_task:

@@ -127,3 +127,10 @@ def test_the_worker_bound_follows_the_machine():
     engine.check_workers(engine.max_workers())
     with pytest.raises(SceneError):
         engine.check_workers(engine.max_workers() + 1)
+
+
+def test_a_cache_that_is_not_a_folder_names_the_cache_not_the_scheduler(tmp_path):
+    """Every OSError used to be 'cannot reach the scheduler', even a file where the cache folder should be."""
+    done = run_cli(*STUDY[:-1], "--engine", "dask", "--cache", "/dev/null", "-o", tmp_path / "s.png")
+    line = assert_bad_input(done, "--cache must name a folder")
+    assert "scheduler" not in line
