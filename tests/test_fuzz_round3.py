@@ -186,7 +186,7 @@ def spectra(n: int, folder: Path, rng: random.Random) -> collections.Counter:
             kind, text = H.hostile_curve(rng)
             path = H.spectrum_scene_file(place, **({"lens_curve": text} if what == "filter" else {"bulb_curve": text}))
         try:
-            out[H.refused_or_renders(path)] += 1
+            out["accepted" if H.refused_or_renders(path) == "rendered" else "refused"] += 1
         except AssertionError:
             out["non-finite"] += 1
             out[f"non-finite {what} {kind}"] += 1

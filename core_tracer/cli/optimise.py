@@ -46,7 +46,9 @@ def run(args: argparse.Namespace) -> int:
 
     engine.check_workers(args.workers)
     if args.cache is not None and not args.no_cache:
-        check_output_folder(args.cache, "--cache")  # its own cause, before any cell is looked for
+        from ..cluster.cache import CellCache
+
+        CellCache(args.cache).ready()  # its own cause, before any cell is looked for
     if args.workers == 0 and args.scheduler:
         raise SceneError("--workers", "0 renders in this process; allowed 1 or more with --scheduler")
     if args.workers != 0 and opt.needs_task:

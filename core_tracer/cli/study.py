@@ -209,7 +209,9 @@ def run(args: argparse.Namespace) -> int:
 
     dask_engine.check_workers(args.workers)
     if args.cache is not None and not args.no_cache:
-        check_output_folder(args.cache, "--cache")  # its own cause, before any cell is looked for
+        from ..cluster.cache import CellCache
+
+        CellCache(args.cache).ready()  # its own cause, before any cell is looked for
     if args.output is None and not (args.save_study or args.save_variants):
         raise SceneError("--output", "is required: the contact sheet to write (.png or .exr)")
     view = None

@@ -17,6 +17,7 @@ import sys
 import numpy as np
 
 from ..raytrace.world_cache import ENV_FOLDER
+from ..scene.safe_text import printable
 
 SUBFOLDER = "cells"
 MAX_BYTES = 4 * 2**30  # the cache's size after a prune: a 64-variant study of 2048 px is 3.2 GB
@@ -50,15 +51,33 @@ class CellCache:
         path = self.path(key)
         try:
             array = arrays.read_npy_file(path, max_bytes=budget.MEMORY_BUDGET, **checks)
-        except FileNotFoundError:
+        except IsADirectoryError:  # a folder in the cell's place: dropped like a damaged cell
+            why = "is a folder"
+        except OSError:  # missing, or the folder itself unusable: rendered again, and keeping it says why
             return None
-        except (OSError, arrays.BadArray) as e:  # cut short, tampered, or unreadable: render it again
-            why = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
-            dropped = "dropped" if self._drop(path) else "left in place (cannot remove it)"
-            print(f"cache: cell {key[:12]} in {self.folder} {why}; {dropped}, rendering it again", file=sys.stderr)
-            return None
-        self._used(key)
-        return array
+        except arrays.BadArray as e:  # cut short or tampered: render it again
+            why = str(e)
+        else:
+            self._used(key)
+            return array
+        dropped = "dropped" if self._drop(path) else "left in place (cannot remove it)"
+        print(f"cache: cell {key[:12]} in {printable(self.folder, 80)} {why}; {dropped}, rendering it again",
+              file=sys.stderr)
+        return None
+
+    def ready(self, option: str = "--cache") -> None:
+        """Before any work: the folder exists (made now if need be) and may be written, else a one-line
+        ``SceneError`` naming ``option`` and the cause (issue 33: it was "cannot reach the scheduler")."""
+        from ..fileio import check_writable
+        from ..scene.reading import SceneError
+
+        try:
+            os.makedirs(self.folder, exist_ok=True)
+            check_writable(os.path.join(self.folder, "probe"))
+        except (OSError, ValueError) as e:
+            cause = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
+            raise SceneError(option, f"{printable(self.folder, 80)!r} cannot hold the cache ({cause}); allowed a "
+                                     "folder you may write to") from None
 
     @staticmethod
     def _drop(path: str) -> bool:

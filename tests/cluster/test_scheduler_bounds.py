@@ -129,8 +129,9 @@ def test_the_worker_bound_follows_the_machine():
         engine.check_workers(engine.max_workers() + 1)
 
 
-def test_a_cache_that_is_not_a_folder_names_the_cache_not_the_scheduler(tmp_path):
+@pytest.mark.parametrize("cache", ["/dev/null", "x" * 5000])
+def test_a_cache_that_cannot_be_a_folder_names_the_cache_not_the_scheduler(tmp_path, cache):
     """Every OSError used to be 'cannot reach the scheduler', even a file where the cache folder should be."""
-    done = run_cli(*STUDY[:-1], "--engine", "dask", "--cache", "/dev/null", "-o", tmp_path / "s.png")
-    line = assert_bad_input(done, "--cache must name a folder")
+    done = run_cli(*STUDY[:-1], "--engine", "dask", "--cache", cache, "-o", tmp_path / "s.png")
+    line = assert_bad_input(done, "--cache", "cannot hold the cache")
     assert "scheduler" not in line
