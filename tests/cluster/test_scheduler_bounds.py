@@ -135,3 +135,13 @@ def test_a_cache_that_cannot_be_a_folder_names_the_cache_not_the_scheduler(tmp_p
     done = run_cli(*STUDY[:-1], "--engine", "dask", "--cache", cache, "-o", tmp_path / "s.png")
     line = assert_bad_input(done, "--cache", "cannot hold the cache")
     assert "scheduler" not in line
+
+
+@pytest.mark.slow
+def test_optimise_on_a_mute_scheduler_ends_in_one_line(tmp_path, mute):
+    spec = ROOT / "docs" / "examples" / "liked-look.optimise.json"
+    env = dict(os.environ, DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT="2s")
+    done = run_cli("optimise", spec, "--scheduler", mute.address, "--no-cache", "-o", tmp_path / "out", env=env,
+                   timeout=120)
+    assert mute.accepted.is_set()
+    assert_bad_input(done, "--scheduler", "no answer from")
