@@ -117,7 +117,7 @@ def test_100000_workers_are_refused_in_one_line(tmp_path, command):
     if command == "study":
         done = run_cli(*STUDY, "--workers", "100000", "-o", tmp_path / "s.png", timeout=60)
     else:
-        spec = ROOT / "docs" / "examples" / "even-stop-lamp.optimise.json"
+        spec = ROOT / "docs" / "examples" / "even-stop-lamp.optimise.json"  # refused before its study opens
         done = run_cli("optimise", spec, "--workers", "100000", "-o", tmp_path / "out", timeout=60)
     assert_bad_input(done, "--workers", "100000 is out of range", f"to {engine.max_workers()} on this machine")
 
@@ -139,7 +139,11 @@ def test_a_cache_that_cannot_be_a_folder_names_the_cache_not_the_scheduler(tmp_p
 
 @pytest.mark.slow
 def test_optimise_on_a_mute_scheduler_ends_in_one_line(tmp_path, mute):
-    spec = ROOT / "docs" / "examples" / "liked-look.optimise.json"
+    import shutil
+
+    for name in ("liked-look.optimise.json", "liked-look.exr", "paper-baseline.json"):  # its study stays in tmp
+        shutil.copy(ROOT / "docs" / "examples" / name, tmp_path / name)
+    spec = tmp_path / "liked-look.optimise.json"
     env = dict(os.environ, DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT="2s")
     done = run_cli("optimise", spec, "--scheduler", mute.address, "--no-cache", "-o", tmp_path / "out", env=env,
                    timeout=120)
