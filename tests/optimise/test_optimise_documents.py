@@ -182,3 +182,12 @@ def test_trials_json_holds_no_nan_even_when_a_measure_had_none(tmp_path):
 
     row = json.loads(text, parse_constant=no_constants)["trials"][0]
     assert row["measures"] == {"lens_luminance": None, "lit_fraction": None}
+
+
+@pytest.mark.parametrize("title", ["\x1b[2J cleared", "bell\x07", "two\nlines"])
+def test_a_study_title_with_control_characters_is_refused(title):
+    from core_tracer.study import definition as st
+
+    with pytest.raises(SceneError) as e:
+        st.Study.build(baseline_doc(), [{"parameter": "lens.ior", "values": [1.45, 1.6]}], (16, 16), title=title)
+    assert e.value.path == "title" and "printable" in e.value.message
