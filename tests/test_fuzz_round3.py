@@ -32,11 +32,13 @@ CLI_TIMEOUT = 120  # seconds before a command counts as hung
 BAD = ("traceback", "hang", "non-finite")
 
 
-def _cli(args: list, env: dict | None = None, timeout: float = CLI_TIMEOUT) -> tuple[str, str]:
-    """(outcome, detail) of one command: refused, accepted, traceback or hang."""
+def _cli(args: list, folder: Path, env: dict | None = None, timeout: float = CLI_TIMEOUT) -> tuple[str, str]:
+    """(outcome, detail) of one command run in ``folder`` (a relative path it is given lands there, never
+    in the work tree): refused, accepted, traceback or hang."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
     try:
-        done = subprocess.run(cli_command(*args), cwd=ROOT, capture_output=True, text=True, timeout=timeout,
-                              env=dict(os.environ, **(env or {})), errors="replace")
+        done = subprocess.run(cli_command(*args), cwd=folder, capture_output=True, text=True, timeout=timeout,
+                              env=env, errors="replace")
     except subprocess.TimeoutExpired:
         return "hang", " ".join(map(str, args))[:200]
     lines = done.stderr.splitlines()
@@ -78,7 +80,7 @@ def states_files(n: int, folder: Path, rng: random.Random, cli_every: int = 6) -
             path.write_bytes(data)
             image = folder / f"relit{i}.exr"
             outcome, detail = _cli(["relight", path, "-o", image, "--level", "surroundings=" + rng.choice(
-                ["1", "100000", "0"])])
+                ["1", "100000", "0"])], folder)
             out[f"relight {outcome}"] += 1
             if outcome == "accepted" and not np.isfinite(read_image(image)[0]).all():
                 out["non-finite"] += 1
@@ -161,15 +163,23 @@ def optimise_files(n: int, folder: Path, rng: random.Random) -> collections.Coun
 def study_flags(n: int, folder: Path, rng: random.Random) -> collections.Counter:
     """Hostile ``study`` flags and scheduler addresses, through the command."""
     out: collections.Counter = collections.Counter()
+    tree = _listing(ROOT)
     for i in range(n):
         kind, args, env = H.hostile_study_flags(rng)
         env = {"DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "2s", "LAMP_STYLING_CACHE": str(folder / "cache"), **env}
         outcome, detail = _cli(["study", BASELINE, "--vary", "lens.ior=1.4,1.6", "--size", "16x16", *args, "-o",
-                                folder / f"s{i}.png"], env)
+                                folder / f"s{i}.png"], folder, env)
         out[outcome] += 1
         if outcome in BAD:
-            out[f"{outcome} {kind} {args}: {detail[-120:]}"] += 1
+            out[f"{outcome} {kind} {[a[:60] for a in args]}: {detail[-120:]}"] += 1
+    if _listing(ROOT) != tree:
+        out["touched outside"] += 1
     return out
+
+
+def _listing(root: Path) -> set[str]:
+    """The work tree's top-level names (what a command given a relative folder would add to)."""
+    return set(os.listdir(root))
 
 
 def spectra(n: int, folder: Path, rng: random.Random) -> collections.Counter:
