@@ -10,6 +10,10 @@ distinct key, and returns every image in order with a ``RunCount``. A worker los
 out of memory, its machine gone) is replaced and its tasks run again elsewhere by the scheduler;
 the images are the same bit for bit, since a render depends only on its cell. Cancelling sets the
 run's stop event, which running renders poll between bands, and cancels every task.
+
+Bounds (issue 33): an address is checked before use (``check_address``); reaching a scheduler takes at
+most ``connect_seconds()`` whatever the peer does and ends at once on Ctrl-C or SIGTERM
+(``client_within``); a local cluster has at most ``max_workers()`` processes (``check_workers``).
 """
 
 from __future__ import annotations
