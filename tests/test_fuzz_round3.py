@@ -244,5 +244,5 @@ if __name__ == "__main__":  # python tests/test_fuzz_round3.py N [SURFACE...]: N
         print(f"| {name} | {inputs} | {got['refused']} | {got['accepted']} | {got['traceback']} | {got['hang']} | "
               f"{got['non-finite']} | {time.monotonic() - start:.0f} |", flush=True)
         for key, value in sorted(got.items()):
-            if key.split(" ")[0] in BAD or key.startswith("relight"):
+            if key.split(" ")[0] in BAD or key.startswith(("relight", "touched")):
                 print(f"    {key}: {value}", flush=True)
