@@ -194,12 +194,13 @@ def bulb_radiance(bulb: dict, bands: Bands, where: str = "bulb") -> np.ndarray:
 MIN_BULB_RADIUS_MM = 1e-3  # what the messages offer: 1 µm, far above where Φ/(4π² r²) overflows
 
 
-def check_lamps(scene: dict, k: int | None = None) -> None:
+def check_lamps(scene: dict, k: int | None = None, curves: bool = True) -> None:
     """Everything a photometric render computes from each lamp's spectra, computed now on ``k`` bands
     (None: the render's default) and checked, so that a scene that passes ``validate`` or the panel
     renders (issue 33): every bulb's radiance as if lit (visible light, a finite luminance for its
     radius), every filter's band transmittance (0 to 1, finite) and absorption. Measured curves are
-    read by the full paths ``scene.beside.with_spectrum_files`` gave. Raises ``SceneError``."""
+    read by the full paths ``scene.beside.with_spectrum_files`` gave; ``curves`` False leaves out what
+    needs them (Blender's panel, which checks at every redraw without the files). Raises ``SceneError``."""
     if scene.get("light_model", "paper") != "photometric":
         return
     bands = bands_of(k)
@@ -209,11 +210,15 @@ def check_lamps(scene: dict, k: int | None = None) -> None:
         if lamp.get("collection", "reflector") == "prism_plate":
             parts.append(("prism_plate", lamp["prism_plate"]))
         for name, part in parts:
+            if not curves and part["filter"] == "file":
+                continue
             mu = absorption(part, bands, f"{where}.{name}")
             if not np.isfinite(mu).all():
                 raise SceneError(f"{where}.{name}.filter", "its absorption is not a finite number; allowed "
                                                            "transmittances above 0")
-        bulb_radiance({**lamp["bulb"], "on": True}, bands, f"{where}.bulb")
+        bulb = lamp["bulb"]
+        if curves or not (bulb["type"] == "custom" and bulb["spectrum"] == "file"):
+            bulb_radiance({**bulb, "on": True}, bands, f"{where}.bulb")
 
 
 def index_of(part: dict) -> tuple[float, float]:

@@ -194,7 +194,11 @@ def fixing_field(doc: dict, valid: dict | None, error_path: str) -> str:
 
 def _check(doc: dict, active: int, valid: dict | None = None) -> Status:
     try:
-        parse_scene(doc)
+        scene = parse_scene(doc)
+        if scene.get("light_model") == "photometric":  # what F12 computes from the spectra (issue 33)
+            from ...core_tracer.raytrace import spectral
+
+            spectral.check_lamps(scene, curves=False)  # the measured curves: at render (curves.with_curves)
         problem = None
     except SceneError as e:
         problem = Problem(e.path, e.message, fixing_field(doc, valid, e.path))
