@@ -247,10 +247,10 @@ FRONT_PIXEL_MM = 0.5  # the measures' front view (``report.measure``'s homogenei
 # enough that a cut cell's edge moved by the chord tolerance moves the sum by far less than 1 %.
 GRID_PIXEL_MM = 0.5
 GRID_REPLICATES = 3
-# Measured (3 replicates at 0.5 mm): every point within ±10° of H agrees within 0.40 %; the points at
-# H = ±20°, where the light leaves through the rim's clipped cut cells, are 0.44-1.15 % dimmer in the meshes
-# (standard errors 0.06-0.35 cd of 23-28 cd): the 1 % is not met at H = -20°, V = -10° (-1.15 %).
-WIDE_H_DEG = 15.0
+# Measured (3 replicates at 0.5 mm, the 45 points): within 0.40 % at |H| <= 10°, 0.79 % at |H| = 15°; at
+# H = ±20°, where the light leaves through the rim's clipped cut cells, the meshes are 0.44-1.45 % dimmer
+# (standard errors 0.04-0.37 cd of 23-31 cd): the 1 % is not met at the four points H = ±20°, V = ±10°.
+WIDE_H_DEG = 17.5
 WIDE_GRID_TOLERANCE = 0.015
 
 
@@ -310,4 +310,4 @@ def test_photometric_stop_lamp_equals_its_freeform_meshes(lamp_addon, addon_core
         print(f"  H {h:+5.1f} V {v:+5.1f}: {a.cd:8.2f} ± {a.stderr:.2f} cd parametric, {b.cd:8.2f} ± {b.stderr:.2f} "
               f"free-form ({error:+.3%})")
         assert abs(error) <= (GRID_TOLERANCE if abs(h) < WIDE_H_DEG else WIDE_GRID_TOLERANCE), (h, v)
-    print(f"R148 S1 grid within ±{WIDE_H_DEG:g}° of H: worst {worst:.3%}")
+    print(f"R148 S1 grid within ±{WIDE_H_DEG:g}° of H: worst {worst:.3%}")  # measured 0.79 %
