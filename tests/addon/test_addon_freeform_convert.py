@@ -236,8 +236,8 @@ def test_parametric_equals_mixed(lamp_addon, addon_core, bl_scene, path):
 # lens +0.52 %, of which +0.06 % on the pixels whose every branch meets the same surfaces in both
 # (the physics: the same engine, the bulb of the same luminance) and the rest where a ray reflected
 # at grazing incidence meets the bulb in one and the socket in the other: Convert's meshes are
-# inscribed in the parametric surfaces within its chord tolerance (0.05 mm; the socket a 23-gon of
-# radius 5 mm), so the mesh shows a little more of the bulb beside the socket. The lit lens is held
+# inscribed in the parametric surfaces within its chord tolerance (0.05 mm; the 5 mm socket a polygon of
+# some two dozen sides), so the mesh shows a little more of the bulb beside the socket. The lit lens is held
 # to 0.6 % (the chord error's share stated), the pixels that agree surface by surface to 0.1 %.
 LIT_LENS_TOLERANCE = 0.006
 SAME_SURFACES_TOLERANCE = 0.001
