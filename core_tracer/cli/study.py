@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import os
 import re
 import sys
@@ -166,6 +167,23 @@ def _with_environment(study: st.Study, document: str) -> tuple[st.Study, int]:
     return runnable, world
 
 
+def _with_curves(study: st.Study, document: str) -> st.Study:
+    """The study whose variants are traced with the measured curves they name (``filter_file``,
+    ``spectrum_file``) by their full paths beside ``document`` (the base design or the study file),
+    confined to its folder (``scene.beside``); a Dask worker is sent their contents
+    (``cluster.cells``). The study itself (its sheet, its saved files) keeps the plain names."""
+    from ..scene.beside import spectrum_files, with_curves_at
+
+    variants = []
+    for v in study.variants:
+        try:
+            found = spectrum_files(document, v.scene)
+        except SceneError as e:
+            raise in_file(SceneError(f"base.{e.path}", e.message), document) from None
+        variants.append(dataclasses.replace(v, scene=with_curves_at(v.scene, found)))
+    return dataclasses.replace(study, variants=tuple(variants))
+
+
 def _is_variant_file(name: str) -> bool:
     return re.fullmatch(r"variant-\d+\.json", name) is not None
 
@@ -235,6 +253,7 @@ def run(args: argparse.Namespace) -> int:
         from ..study import sheet as study_sheet  # numpy: only for a sheet
 
         runnable, world = _with_environment(study, args.base or args.study)
+        runnable = _with_curves(runnable, args.base or args.study)
         sheet_layout = study_sheet.layout(study)
         budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height), environment=world)
 

@@ -33,12 +33,16 @@ import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..scene.derived import lens_absorption
 from ..scene.messages import show_value
 from ..scene.reading import SceneError
+
+if TYPE_CHECKING:
+    from ..freeform.cache import DesignMeshes
 
 SURROUNDINGS = "surroundings"
 FORMAT = "lamp-light-states/1"
@@ -114,12 +118,35 @@ def lamp_names(scene: dict) -> list[tuple[str, str | None]]:
     return out
 
 
+def sources(scene: dict) -> list[tuple[str, str, dict]]:
+    """The bulbs of a normalised scene that can be switched, as (key prefix, name, bulb section): the
+    lamps' bulbs, or a free-form design's bulb parts (its lamps are not traced). A ``State``'s
+    ``lamp`` is an index into this list."""
+    if "freeform" in scene:
+        return [(f"freeform.parts[{i}]", part["object"], part["bulb"])
+                for i, part in enumerate(scene["freeform"]["parts"]) if part["role"] == "bulb"]
+    return [(f"lamps[{i}]", f"Lamp {i + 1}", lamp["bulb"]) for i, lamp in enumerate(scene["lamps"])]
+
+
 def states_of(scene: dict) -> list[State]:
     """The switchable sources of a normalised scene, the surroundings first. A two-filament bulb's
     filament that makes the lamp's function (the tail filament of a tail lamp, the stop filament of
     any other) is the state named by the function; the other filament is named after it."""
     photometric = scene.get("light_model", "paper") == "photometric"
     out = [State(SURROUNDINGS, "Surroundings (sun, sky, street light)", None, "", 1.0, "", True)]
+    if "freeform" in scene:  # its bulb parts, by the part: its lamps are not traced
+        for i, (prefix, name, bulb) in enumerate(sources(scene)):
+            if photometric and bulb.get("type", "custom") != "custom":
+                from ..photometry.sources import BULB_TYPES
+
+                for filament, state in BULB_TYPES[bulb["type"]].states.items():
+                    out.append(State(f"{prefix}.{filament}", f"{name} · {bulb['type']} {filament}", i, filament,
+                                     state.flux_lm, "lm", bool(bulb["on"]) and bulb["state"] == filament))
+            else:
+                rendered = float(bulb["flux_lm"]) if photometric else 1.0
+                out.append(State(f"{prefix}.on", f"{name} · bulb", i, "on", rendered, "lm" if photometric else "",
+                                 bool(bulb["on"])))
+        return out
     for i, ((name, words), lamp) in enumerate(zip(lamp_names(scene), scene["lamps"], strict=True)):
         bulb = lamp["bulb"]
         named = photometric and bulb.get("type", "custom") != "custom"
@@ -146,8 +173,7 @@ def scene_for(scene: dict, state: State | None) -> dict:
     """The scene with only ``state`` lit (None: every bulb off), glare off."""
     out = copy.deepcopy(scene)
     out["glare"]["on"] = False
-    for i, lamp in enumerate(out["lamps"]):
-        bulb = lamp["bulb"]
+    for i, (_prefix, _name, bulb) in enumerate(sources(out)):
         bulb["on"] = state is not None and state.lamp == i
         if bulb["on"] and state.filament in ("stop", "tail"):
             bulb["state"] = state.filament
@@ -176,20 +202,24 @@ class LightStates:
 
 
 def render_states(scene: dict, *, progress: Callable[[int, int, str], None] | None = None,
-                  should_stop: Callable[[], bool] | None = None, threads: int | None = None) -> LightStates:
-    """Render the surroundings and one pass per state of a normalised scene (parametric designs;
-    ``freeform`` is refused in one line). ``progress(done, total, label)`` before each render."""
+                  should_stop: Callable[[], bool] | None = None, threads: int | None = None,
+                  meshes: DesignMeshes | None = None, recorded: dict | None = None) -> LightStates:
+    """Render the surroundings and one pass per state of a normalised scene (a free-form design's on
+    its ``meshes``, its bulb parts the states). ``progress(done, total, label)`` before each render.
+    ``recorded`` is the scene the file keeps, when ``scene`` is traced with full paths (its curves)."""
     from ..raytrace.engine import render_passes
 
-    if "freeform" in scene:
-        raise SceneError("freeform", "light states are for parametric designs so far; allowed a scene without "
-                                     "a freeform section")
+    if "freeform" in scene and meshes is None:
+        raise SceneError("freeform", "the design's meshes were not given; allowed a free-form design loaded with "
+                                     "its .glb")
     states = states_of(scene)
     total = len(states)
 
     def one(state: State | None, k: int):
         if progress is not None:
             progress(k, total, state.label if state is not None else states[0].label)
+        if meshes is not None:  # every sample of every pixel, as the free-form tracer always traces
+            return meshes.render_passes(scene_for(scene, state), should_stop=should_stop, threads=threads)
         return render_passes(scene_for(scene, state), keep_passes=False, should_stop=should_stop,
                              threads=threads, adaptive_threshold=ADAPTIVE_OFF)
 
@@ -200,7 +230,7 @@ def render_states(scene: dict, *, progress: Callable[[int, int, str], None] | No
         lit = one(state, k).image.astype(np.float32)
         passes[state.key] = lit - surroundings
     stats = {"light_model": base.stats.get("light_model", "paper"), "bands": base.stats.get("bands")}
-    return LightStates(copy.deepcopy(scene), states, surroundings, passes, stats)
+    return LightStates(copy.deepcopy(scene if recorded is None else recorded), states, surroundings, passes, stats)
 
 
 def weights_for(light: LightStates, on: dict[str, bool] | None = None,

@@ -55,7 +55,7 @@ def trial_images(opt: Optimisation, trials: Sequence, cache: CellCache | None) -
     inputs = Inputs()
     images = []
     for trial in trials:
-        cell = make_cell(opt.scene_of(trial.user_attrs["design"]), *opt.size, inputs)
+        cell = make_cell(opt.traced(opt.scene_of(trial.user_attrs["design"])), *opt.size, inputs)
         found = T.cached(cache, cell.key)
         if found is None:
             found = T.render_trial(cell, inputs.data.get(cell.environment))

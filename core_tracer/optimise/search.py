@@ -372,7 +372,7 @@ def run(opt: Optimisation, client=None, cache: CellCache | None = None, *, paral
         if not opt.needs_task:
             tell(trial, scene, values, "", None, None, None, False)
             return
-        cell = make_cell(scene, width, height, inputs)
+        cell = make_cell(opt.traced(scene), width, height, inputs)
         key = cell.key
         found = T.cached(cache, key) if camera else (None, None)
         figures = T.cached_figures(cache, key, scene, request) if request else None

@@ -116,6 +116,9 @@ class Optimisation:
     parallel: int | None
     folder: str  # where relative paths are read from
     doc: dict = field(default_factory=dict)
+    # the document the base's measured curves (``filter_file``, ``spectrum_file``) lie beside: the
+    # base's file, or this file when the base is embedded
+    base_document: str = ""
 
     @property
     def needs_render(self) -> bool:
@@ -140,6 +143,16 @@ class Optimisation:
     def needs_task(self) -> bool:
         """Whether a trial is work for a worker (a render of any kind), not only the design's figures."""
         return self.needs_render or bool(self.request)
+
+    def traced(self, scene: dict) -> dict:
+        """A trial's design as the tracer takes it: its measured curves by their full paths beside the
+        base's document (``scene.beside``); a Dask worker is sent their bytes (``cluster.cells``)."""
+        from ..scene.beside import with_spectrum_files
+
+        try:
+            return with_spectrum_files(self.base_document or os.path.join(self.folder, "optimisation.json"), scene)
+        except SceneError as e:
+            raise SceneError(f"base.{e.path}", e.message) from None
 
     def scene_of(self, values: dict[str, Any]) -> dict:
         """The design of one trial: the base with ``values`` (by parameter name) applied, checked."""
@@ -172,6 +185,8 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
             raise SceneError(show_key(key), f"unknown key; allowed keys here: {', '.join(KEYS)}")
     size = st.parse_size(doc.get("size", list(DEFAULT_SIZE)))
     base = _base(doc.get("base"), folder, size)
+    base_document = (os.path.join(folder, os.path.expanduser(doc["base"])) if isinstance(doc.get("base"), str)
+                     else os.path.join(folder, f"{stem}.json"))
     knobs = _knobs(doc.get("parameters"), base)
     objectives = tuple(_objective(o, f"objectives[{i}]", folder) for i, o in enumerate(_list(doc, "objectives", 1)))
     constraints = tuple(_constraint(c, f"constraints[{i}]", folder)
@@ -220,8 +235,10 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
     parallel = doc.get("parallel")
     if parallel is not None:
         parallel = _whole(parallel, "parallel", 1, 1024)
-    return Optimisation(name, base, knobs, objectives, constraints, size, trials, sampler, seed, storage, parallel,
-                        folder, doc)
+    opt = Optimisation(name, base, knobs, objectives, constraints, size, trials, sampler, seed, storage, parallel,
+                       folder, doc, base_document)
+    opt.traced(base)  # the base's measured curves are beside it, or refused before any trial
+    return opt
 
 
 SERVER_SCHEMES = ("postgresql", "mysql")  # a database server a team shares (checked before use, search.py)

@@ -298,3 +298,35 @@ def test_trials_go_only_to_the_workers_whose_memory_holds_them(tmp_path):
     assert outcome.workers == [large] and small not in outcome.workers
     assert ran_on == {large}, ran_on
     assert len(search.finished_trials(outcome.study)) == 3 and outcome.rendered == 3
+
+
+def test_a_measured_filter_beside_the_base_reaches_every_trial(tmp_path):
+    """The base names its lens filter by a measured curve beside it (issue 32, item 4): the optimisation
+    file elsewhere finds it beside the base, each trial's cell carries it (a Dask worker need not see
+    the folder), and a missing curve is refused in one line before any trial."""
+    import json
+
+    from core_tracer.photometry import materials
+
+    folder = tmp_path / "design"
+    folder.mkdir()
+    curve = materials.FILTERS["red"].spectrum()
+    doc = json.loads(STOP.read_text())
+    doc["lamps"][0]["lens"].update(filter="file", filter_file="red.csv")
+    (folder / "stop.json").write_text(json.dumps(doc))
+    with pytest.raises(SceneError) as err:
+        spec.from_doc(opt_doc(tmp_path, base="design/stop.json"), str(tmp_path))
+    assert "base.lamps[0].lens.filter_file" in str(err.value) and "missing" in str(err.value)
+    (folder / "red.csv").write_text("nm,t\n" + "".join(f"{a:g},{b:.8f}\n" for a, b in
+                                                       zip(curve.wavelengths_nm, curve.values, strict=True)))
+    opt = spec.from_doc(opt_doc(tmp_path, base="design/stop.json"), str(tmp_path))
+    scene = opt.scene_of({OFFSET: 0.0})
+    assert scene["lamps"][0]["lens"]["filter_file"] == "red.csv"  # the trial's design keeps the name
+    cell = make_cell(opt.traced(scene), *opt.size, Inputs())
+    assert len(cell.curves) == 1
+    named = opt_doc(tmp_path)  # the preset itself: the same filter by name
+    _, _, by_file = T.run_trial(cell, None, None, False, opt.request)
+    _, by_name = figures_of(spec.from_doc(named, str(tmp_path)), {OFFSET: 0.0})
+    lit = by_name.front_owner == 0
+    assert lit.sum() > 50
+    assert by_file.front_luminance[lit].mean() == pytest.approx(by_name.front_luminance[lit].mean(), rel=2e-3)
