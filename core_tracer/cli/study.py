@@ -317,23 +317,24 @@ def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view, 
     from ..study import sheet as study_sheet
 
     scenes = [v.scene for v in study.variants]
-    if not any(photometric.is_photometric(scene) for scene in scenes):
-        ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure, measured=measured)
-        return f", {view.view} at {ev:+.1f} EV" if view is not None else ""
-    if view is None:  # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
+    if view is None and any(photometric.is_photometric(scene) for scene in scenes):
+        # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
         from ..photometry import output
 
-        sheet = study_sheet.compose(study, images, text="bitmap", measured=measured)
+        sheet = study_sheet.compose(study, images, text="bitmap", measured=measured, as_values=True)
         output.write_photometric_exr(args.output, sheet, channels=("X", "Y", "Z"), attributes={
             study_sheet.STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()})
         return ", XYZ (Y in cd/m2)"
-    stops = photometric_stops(args)
-    cells, ev100, paper_ev = photometric.shown_together(scenes, images, ev100=args.ev100, stops=stops,
-                                                        exposure=args.exposure)
-    study_sheet.write_sheet(args.output, study, cells, view=view, exposure=0.0, measured=measured)
+    stops = photometric_stops(args)  # on top of the photometric cells' EV100 only
+    used = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure, measured=measured,
+                                   ev100=args.ev100, stops=stops)
+    if view is None:
+        return ""
+    if used.ev100 is None:
+        return f", {view.view} at {used.paper_stops:+.1f} EV"
     extra = f" {stops:+.1f} EV" if stops else ""
-    paper = f", paper-mode cells at {paper_ev:+.1f} EV" if paper_ev is not None else ""
-    return f", {view.view} at EV100 {ev100:.1f}{extra} for every cell{paper}"
+    paper = f", paper-mode cells at {used.paper_stops:+.1f} EV" if used.paper_stops is not None else ""
+    return f", {view.view} at EV100 {used.ev100:.1f}{extra} for every cell{paper}"
 
 
 def _engine(args: argparse.Namespace) -> str:

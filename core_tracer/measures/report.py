@@ -328,10 +328,8 @@ def lamp_picture(scene: dict, width: int = 520) -> np.ndarray:
     """The design as its camera sees it (photometric render, the scene's exposure, Blender's default
     view), as display RGB in [0, 1]."""
     from ..images import display
-    from ..raytrace import spectral
     from ..raytrace.engine import render_passes
 
     height = max(1, round(width * scene["image"]["height"] / scene["image"]["width"]))
     image = render_passes(scene, width, height, keep_passes=False, samples=min(4, scene["image"]["samples"])).image
-    ev100 = spectral.exposure_ev100(image, scene)
-    return display.view_transform().to_display(spectral.display_linear(image, ev100))
+    return display.shown(image, scene, view=display.view_transform()).pixels[0]

@@ -7,8 +7,8 @@ and is a pure function of the study, so the geometry is testable without renderi
 
 Composition is numpy; labels come from ``images.labels`` (OpenImageIO's font where it can draw
 text, else the bitmap font), so a sheet is made without OpenImageIO and only the files need it.
-Every variant shares one exposure (chosen over all of them by ``display.auto_exposure``), so the
-cells compare: a brighter bulb shows as a brighter cell.
+Every cell goes to the screen through ``display.shown`` (as its variant's light model says: RGB, or
+XYZ in cd/m²), all at one exposure, so the cells compare: a brighter bulb shows as a brighter cell.
 
 Files: EXR is linear float with the study JSON in the header attribute ``lamp:study``; PNG shows
 the variants through a view transform (``images.display``) with the labels drawn on the display
@@ -191,11 +191,28 @@ def preload_writers() -> None:
     labels.render_text_available()
 
 
-def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float = 0.0,
-            view: display.ViewTransform | None = None, measured: Sequence[dict] | None = None) -> np.ndarray:
-    """The contact sheet (H, W, 3 float32, top row first) of the rendered variants, each scaled by
-    ``exposure`` stops. Without ``view`` the sheet is linear; with it the variants are shown
-    through ``view`` and the sheet holds display values in [0, 1] (background and labels too).
+def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float | str = 0.0,
+            view: display.ViewTransform | None = None, measured: Sequence[dict] | None = None,
+            ev100: float | str | None = None, stops: float = 0.0, as_values: bool = False) -> np.ndarray:
+    """The contact sheet (H, W, 3 float32, top row first) of the rendered variants; ``composed``
+    without the exposure it chose."""
+    return composed(study, images, text=text, exposure=exposure, view=view, measured=measured, ev100=ev100,
+                    stops=stops, as_values=as_values)[0]
+
+
+def composed(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float | str = 0.0,
+             view: display.ViewTransform | None = None, measured: Sequence[dict] | None = None,
+             ev100: float | str | None = None, stops: float = 0.0,
+             as_values: bool = False) -> tuple[np.ndarray, display.Exposure]:
+    """(the contact sheet, H, W, 3 float32, top row first; the exposure of its cells).
+
+    The cells are the variants' renders shown through ``display.shown`` (each as its variant's light
+    model says: XYZ in cd/m² or RGB), all at ONE exposure: paper-mode cells at ``exposure`` stops
+    ("auto": measured over all of them), photometric cells at ONE EV100 (``ev100``; None: the first
+    photometric variant's camera; "auto": measured over all) and ``stops`` more. Without ``view`` the
+    sheet is scene-linear (for an EXR, or for Blender to show through its view); with it the sheet
+    holds display values in [0, 1] (background and labels too). ``as_values``: the cells as they
+    are (the XYZ of a photometric sheet's .exr), no exposure.
 
     ``measured``: each variant's measure values (``layout``).
 
@@ -210,19 +227,21 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", e
         if np.shape(img) != (h, w, 3):
             raise ValueError(f"image {i}: expected shape {(h, w, 3)}, got {np.shape(img)}")
     oiio_text = labels.use_oiio(text)
+    if as_values:
+        cells, used = [np.asarray(img, np.float32) for img in images], display.Exposure()
+    else:
+        shown = display.shown(list(images), [v.scene for v in study.variants], view=view, ev100=ev100, stops=stops,
+                              exposure=exposure)
+        cells, used = shown.pixels, shown.exposure
 
     background, color = np.asarray(BACKGROUND, np.float32), np.asarray(TEXT_COLOR, np.float32)
     if view is not None:  # the same greys as a linear sheet shows under Standard
         background, color = (display.srgb_encode(c).astype(np.float32) for c in (background, color))
     canvas = np.empty((lay.height, lay.width, 3), dtype=np.float32)
     canvas[:] = background
-    for rect, img in zip(lay.cells, images, strict=True):
+    for rect, cell in zip(lay.cells, cells, strict=True):
         if rect is None:  # left out by the filter: named in the footer
             continue
-        if view is not None:
-            cell = view.to_display(img, exposure)
-        else:
-            cell = np.asarray(img, np.float32) * np.float32(2.0 ** exposure) if exposure else img
         canvas[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w] = cell
 
     if text != "none":
@@ -236,7 +255,7 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", e
                                 align="right" if box.kind == "row" else "left")[..., None]
             region = canvas[r.y:r.y + r.h, r.x:r.x + r.w]
             region[:] = region * (1.0 - m) + color * m
-    return canvas
+    return canvas, used
 
 
 # ---------------------------------------------------------------------------------------------
@@ -245,30 +264,40 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", e
 
 def write_sheet(path: str | os.PathLike, study: Study, images: Sequence[np.ndarray], *,
                 view: display.ViewTransform | None = None, exposure: float | str | None = "auto",
-                text: str = "auto", measured: Sequence[dict] | None = None) -> float:
+                text: str = "auto", measured: Sequence[dict] | None = None, ev100: float | str | None = None,
+                stops: float = 0.0) -> display.Exposure:
     """Compose the sheet of the rendered variants and write it, with the study JSON in the
-    ``lamp:study`` attribute: EXR linear (no exposure), PNG through ``view`` (default
-    ``display.view_transform()``) at ``exposure`` stops ("auto": ``display.auto_exposure`` over all
-    variants). Returns the exposure applied. Atomic: never a partial file."""
+    ``lamp:study`` attribute: EXR scene-linear (paper cells as rendered), PNG through ``view``
+    (default ``display.view_transform()``) at one exposure for every cell (``composed``). Returns
+    the exposure applied. Atomic: never a partial file."""
     attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()}
     if image_format(path) == "exr":
-        write_image(path, compose(study, images, text=text, measured=measured), attributes=attributes)
-        return 0.0
+        sheet, used = composed(study, images, text=text, measured=measured, ev100=ev100, stops=stops)
+        write_image(path, sheet, attributes={**attributes, **_exposure_attributes(used)})
+        return used
     view = view or display.view_transform()
-    ev = display.resolve_exposure(exposure, list(images))
-    shown = compose(study, images, text=text, exposure=ev, view=view, measured=measured)
-    write_display(path, shown, attributes=attributes, view=view.view, exposure=ev)
-    return ev
+    shown, used = composed(study, images, text=text, exposure="auto" if exposure is None else exposure, view=view,
+                           measured=measured, ev100=ev100, stops=stops)
+    write_display(path, shown, attributes={**attributes, **_exposure_attributes(used)}, view=view.view,
+                  exposure=used.paper_stops if used.paper_stops is not None else used.stops)
+    return used
+
+
+def _exposure_attributes(used: display.Exposure) -> dict[str, str]:
+    """The photometric cells' EV100 in the header (``images.photometric.EV100_ATTRIBUTE``)."""
+    return {"lamp:ev100": f"{used.ev100:g}"} if used.ev100 is not None else {}
 
 
 def write_composed(path: str | os.PathLike, study: Study, sheet: np.ndarray, *,
                    view: display.ViewTransform | None = None, exposure: float = 0.0,
-                   view_exposure: float = 0.0) -> None:
+                   view_exposure: float = 0.0, ev100: float | None = None) -> None:
     """Write a sheet composed already (linear, its variants scaled by ``exposure`` stops, as Blender
-    shows it): EXR as it is, with ``lamp:exposure`` saying how the variants were scaled; PNG
+    shows it): EXR as it is, with ``lamp:exposure`` saying how the variants were scaled (and
+``lamp:ev100`` the EV100 of its photometric cells); PNG
     through ``view`` at ``view_exposure`` more stops (Blender's own exposure slider). Atomic: never
     a partial file."""
-    attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()}
+    attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading(),
+                  **_exposure_attributes(display.Exposure(ev100))}
     if image_format(path) == "exr":
         write_image(path, sheet, attributes={**attributes, EXPOSURE_ATTRIBUTE: f"{exposure:g}"})
         return

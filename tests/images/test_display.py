@@ -148,8 +148,8 @@ def preset_renders():
         on = any(lamp["bulb"]["on"] for lamp in scene["lamps"])
         image, surface = result.image, p["lens_surface"]
         if photometric.is_photometric(scene):  # XYZ in cd/m²: the scene-linear Rec.709 its camera's EV100 shows
-            ev100 = photometric.ev100_for(image, scene)
-            image, surface = (photometric.scene_linear(a, ev100) for a in (image, surface))
+            fixed = display.shown(image, scene, view=None).exposure
+            image, surface = display.shown([image, surface], scene, view=None, fixed=fixed).pixels
         # With surroundings the lens mirrors the sun: glints that clip as in a photograph, not the lens's light.
         glint = surface.max(axis=2) if scene["environment"]["world"] != "none" else None
         out[path.stem] = (image, lens, lit, on, glint)

@@ -332,7 +332,8 @@ def test_sheet_file_carries_the_study(tmp_path, suffix):
     images = [np.full((32, 32, 3), 0.25 * (i + 1), dtype=np.float32) for i in range(4)]
     standard = display.view_transform("Standard")
     path = tmp_path / f"sheet{suffix}"
-    assert study_sheet.write_sheet(path, s, images, view=standard, exposure=-1) == (-1 if suffix == ".png" else 0)
+    used = study_sheet.write_sheet(path, s, images, view=standard, exposure=-1)
+    assert (used.paper_stops, used.ev100) == ((-1 if suffix == ".png" else 0), None)
     assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
     inp = oiio.ImageInput.open(str(path))
     spec = inp.spec()
