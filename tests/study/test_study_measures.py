@@ -88,7 +88,7 @@ def test_a_sorted_filtered_sheet_places_cells_in_order_and_lists_the_rest():
     assert "grid.pass=0" in footer[1]
     # The images land where the layout says; the left-out one is nowhere.
     images = [np.full((16, 24, 3), 0.1 * (k + 1), np.float32) for k in range(4)]
-    sheet = study_sheet.compose(study, images, text="none", measured=values)
+    sheet = study_sheet.compose(study, images, text="none", measured=values, as_values=True)  # placement only
     assert sheet.shape == (lay.height, lay.width, 3)
     for k, rect in enumerate(lay.cells):
         if rect is not None:
