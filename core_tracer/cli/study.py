@@ -16,6 +16,7 @@ import time
 from .. import budget
 from ..checkpoints import checkpoint
 from ..fileio import atomic_folder, check_replaceable_folder
+from ..images import display
 from ..images.imageio import image_format
 from ..scene.reading import SceneError, read_json
 from ..scene.safe_text import printable
@@ -46,8 +47,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--study", metavar="STUDY", help="re-run a study: a .json definition or a sheet .exr/.png")
     parser.add_argument("-o", "--output", metavar="SHEET",
                         help="the contact sheet, .png (view transform) or .exr (linear)")
-    parser.add_argument("--size", metavar="WxH", help=f"size of each variant image (default "
-                                                      f"{st.DEFAULT_SIZE[0]}x{st.DEFAULT_SIZE[1]})")
+    parser.add_argument("--size", metavar="WxH", help="size of each variant image (default: framed on the lamp, "
+                                                      "the body's aspect at about "
+                                                      f"{st.DEFAULT_SIZE[0]}x{st.DEFAULT_SIZE[1]} pixels)")
     parser.add_argument("--title", help="the sheet's title (default: the design's name)")
     parser.add_argument("--workers", type=int, metavar="N",
                         help="worker processes of a local cluster or pool (default: one per core; 0 renders in "
@@ -63,7 +65,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-cache", action="store_true", help="render every variant, keep none")
     parser.add_argument("--save-study", metavar="STUDY.json", help="write the study definition (base embedded)")
     parser.add_argument("--save-variants", metavar="DIR", help="write every variant as a lamp-scene/1 preset")
-    add_display_arguments(parser)
+    add_display_arguments(parser, view=display.LAMP_VIEW)  # a sheet of lamps: the project's lamp view
     add_photometric_arguments(parser, false_colour=False)
     parser.add_argument("--list", action="store_true", help="list the parameters a study can vary and exit")
     parser.add_argument("--measure", action="append", default=[], metavar="NAME",
@@ -135,7 +137,7 @@ def _build(args: argparse.Namespace) -> st.Study:
     base = read_json(args.base)
     axes = [st.parse_vary(v) for v in args.vary]
     try:
-        return st.Study.build(base, axes, size or st.DEFAULT_SIZE, args.title or "", measured)
+        return st.Study.build(base, axes, size, args.title or "", measured)  # None: framed on the lamp
     except SceneError as e:
         if e.path == "base" or e.path.startswith("base."):  # a problem of the design file itself
             raise in_file(SceneError(e.path[len("base."):], e.message), args.base) from None

@@ -38,6 +38,15 @@ STANDARD = "Standard"
 # should look like the same design rendered in Blender, and AgX rolls bright colours off
 # instead of clipping them.
 DEFAULT_VIEW = "AgX"
+# The view the project chooses for pictures of lamps where the choice is ours (study and optimiser
+# sheets, the measure report, Blender's "Lamp View" button): lit red and amber keep their hue.
+# Measured on the four-lamp night preset (photometric, EV100 12, then +1 and +2 stops), the median
+# display colour of the lit stop lens and the amber turn lens (tools/make_lamp_view_image.py):
+# AgX washes red to salmon (+2: 1.00, 0.35, 0.35) and amber to peach (0.96, 0.61, 0.40, hue 23°);
+# Khronos PBR Neutral washes further (0.99, 0.48, 0.48); Standard keeps the hue but clips (no
+# roll-off: a lit lens turns flat); Filmic keeps red red (0.92, 0, 0) and amber amber (hue 36–42°,
+# saturation 0.93–1.0) while rolling the highlights off. Filmic ships with Blender 4.2 to 5.0.
+LAMP_VIEW = "Filmic"
 # The views of Blender 4.2–5.0's configuration for the sRGB display, for help texts and for
 # checking a name before a long render when no configuration is at hand.
 KNOWN_VIEWS = ("AgX", "Standard", "Filmic", "Filmic Log", "Khronos PBR Neutral", "False Color",

@@ -325,11 +325,11 @@ def _chromaticity_plot(ax, result: Measures) -> None:
 
 
 def lamp_picture(scene: dict, width: int = 520) -> np.ndarray:
-    """The design as its camera sees it (photometric render, the scene's exposure, Blender's default
-    view), as display RGB in [0, 1]."""
+    """The design as its camera sees it (photometric render, the scene's exposure, the lamp view
+    ``display.LAMP_VIEW``, through ``display.shown``), as display RGB in [0, 1]."""
     from ..images import display
     from ..raytrace.engine import render_passes
 
     height = max(1, round(width * scene["image"]["height"] / scene["image"]["width"]))
     image = render_passes(scene, width, height, keep_passes=False, samples=min(4, scene["image"]["samples"])).image
-    return display.shown(image, scene, view=display.view_transform()).pixels[0]
+    return display.shown(image, scene, view=display.view_transform(display.LAMP_VIEW)).pixels[0]

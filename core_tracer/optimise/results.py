@@ -77,7 +77,7 @@ def _short(value) -> str:
 
 def compose_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarray]) -> tuple[np.ndarray, float]:
     """The sheet in display values and the exposure used (one for every trial, so they compare)."""
-    view = display.view_transform()
+    view = display.view_transform(display.LAMP_VIEW)
     # one exposure for every trial (the base's camera EV100 for XYZ in cd/m², else "auto" over all)
     shown = display.shown(list(images), opt.base, view=view)
     images = shown.pixels
@@ -121,7 +121,7 @@ def compose_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarr
 def write_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarray], path: str) -> float:
     shown, ev = compose_sheet(opt, trials, images)
     write_display(path, shown, attributes={"ImageDescription": f"{opt.name}: best trials"},
-                  view=display.view_transform().view, exposure=ev)
+                  view=display.LAMP_VIEW, exposure=ev)
     return ev
 
 

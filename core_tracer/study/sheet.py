@@ -2,7 +2,9 @@
 
 Axis 1 runs along the columns, axis 2 (if any) down the rows. Above the grid: the title and the
 names of the two parameters; above each column its value of axis 1, left of each row its value
-of axis 2; under each image the variant's values. ``layout(study)`` computes every rectangle
+of axis 2, each with its unit (``spec``: "height=0.5 mm"), each said once; under each image its
+measures, if any. A sorted or filtered sheet, whose places no longer say the values, gives each
+cell its values under it instead. ``layout(study)`` computes every rectangle
 and is a pure function of the study, so the geometry is testable without rendering.
 
 Composition is numpy; labels come from ``images.labels`` (OpenImageIO's font where it can draw
@@ -69,13 +71,25 @@ def text_scale(size: tuple[int, int]) -> int:
     return 1 if side < 96 else 2 if side < 384 else 3
 
 
+def value_label(parameter, value) -> str:
+    """``name=value unit``: "height=0.5 mm", "ior=1.5", "cuts.type=fisheye" (the field's unit, ``spec``)."""
+    unit = getattr(parameter.spec, "unit", "")
+    return f"{parameter.short}={format_value(value)}" + (f" {unit}" if unit else "")
+
+
+def measure_lines(study: Study, index: int, measured: Sequence[dict] | None) -> list[str]:
+    """One line per measure of one variant (none without ``measured``)."""
+    if measured is None:
+        return []
+    return [format_measure(name, measured[index][name]) for name in study.measured.names]
+
+
 def cell_lines(study: Study, index: int, measured: Sequence[dict] | None = None) -> list[str]:
-    """The label under one variant: one line per axis, ``name=value``, then one per measure."""
+    """A variant's full label: one line per axis, ``name=value unit``, then one per measure (under the
+    cells of a sorted or filtered sheet, in its footer; a grid says the values in its headers)."""
     v = study.variants[index]
-    lines = [f"{a.parameter.short}={format_value(x)}" for a, x in zip(study.axes, v.values, strict=True)]
-    if measured is not None:
-        lines += [format_measure(name, measured[index][name]) for name in study.measured.names]
-    return lines
+    lines = [value_label(a.parameter, x) for a, x in zip(study.axes, v.values, strict=True)]
+    return lines + measure_lines(study, index, measured)
 
 
 def layout(study: Study, measured: Sequence[dict] | None = None) -> SheetLayout:
@@ -93,14 +107,14 @@ def layout(study: Study, measured: Sequence[dict] | None = None) -> SheetLayout:
     pad = 4 * s
     gap = pad
     axes = study.axes
-    n_lines = len(axes) + (len(study.measured.names) if measured is not None else 0)
+    n_lines = len(study.measured.names) if measured is not None else 0  # the axis values are in the headers
 
-    widest_cell = max(len(t) for i in range(len(study)) for t in cell_lines(study, i, measured))
-    column_labels = [f"{axes[0].parameter.short}={format_value(x)}" for x in axes[0].values]
+    widest_cell = max((len(t) for i in range(len(study)) for t in measure_lines(study, i, measured)), default=0)
+    column_labels = [value_label(axes[0].parameter, x) for x in axes[0].values]
     cell_w = max(w, widest_cell * adv, max(len(t) for t in column_labels) * adv)
-    cell_h = h + pad // 2 + n_lines * line
+    cell_h = h + (pad // 2 + n_lines * line if n_lines else 0)
     if len(axes) > 1:
-        row_labels = [f"{axes[1].parameter.short}={format_value(x)}" for x in axes[1].values]
+        row_labels = [value_label(axes[1].parameter, x) for x in axes[1].values]
         row_header = max(len(t) for t in row_labels) * adv + pad
     else:
         row_labels = []
@@ -130,7 +144,7 @@ def layout(study: Study, measured: Sequence[dict] | None = None) -> SheetLayout:
         x0 = grid_x + v.column * (cell_w + gap)
         y0 = grid_y + v.row * (cell_h + gap)
         cells.append(Rect(x0 + (cell_w - w) // 2, y0, w, h))
-        for k, text in enumerate(cell_lines(study, v.index, measured)):
+        for k, text in enumerate(measure_lines(study, v.index, measured)):
             texts.append(TextBox(text, Rect(x0, y0 + h + pad // 2 + k * line, cell_w, line), "cell"))
     return SheetLayout(width, height, s, tuple(cells), tuple(texts))
 
@@ -268,14 +282,14 @@ def write_sheet(path: str | os.PathLike, study: Study, images: Sequence[np.ndarr
                 stops: float = 0.0) -> display.Exposure:
     """Compose the sheet of the rendered variants and write it, with the study JSON in the
     ``lamp:study`` attribute: EXR scene-linear (paper cells as rendered), PNG through ``view``
-    (default ``display.view_transform()``) at one exposure for every cell (``composed``). Returns
+    (default the lamp view, ``display.LAMP_VIEW``) at one exposure for every cell (``composed``). Returns
     the exposure applied. Atomic: never a partial file."""
     attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()}
     if image_format(path) == "exr":
         sheet, used = composed(study, images, text=text, measured=measured, ev100=ev100, stops=stops)
         write_image(path, sheet, attributes={**attributes, **_exposure_attributes(used)})
         return used
-    view = view or display.view_transform()
+    view = view or display.view_transform(display.LAMP_VIEW)
     shown, used = composed(study, images, text=text, exposure="auto" if exposure is None else exposure, view=view,
                            measured=measured, ev100=ev100, stops=stops)
     write_display(path, shown, attributes={**attributes, **_exposure_attributes(used)}, view=view.view,
