@@ -40,12 +40,13 @@ STANDARD = "Standard"
 DEFAULT_VIEW = "AgX"
 # The view the project chooses for pictures of lamps where the choice is ours (study and optimiser
 # sheets, the measure report, Blender's "Lamp View" button): lit red and amber keep their hue.
-# Measured on the four-lamp night preset (photometric, EV100 12, then +1 and +2 stops), the median
-# display colour of the lit stop lens and the amber turn lens (tools/make_lamp_view_image.py):
-# AgX washes red to salmon (+2: 1.00, 0.35, 0.35) and amber to peach (0.96, 0.61, 0.40, hue 23°);
-# Khronos PBR Neutral washes further (0.99, 0.48, 0.48); Standard keeps the hue but clips (no
-# roll-off: a lit lens turns flat); Filmic keeps red red (0.92, 0, 0) and amber amber (hue 36–42°,
-# saturation 0.93–1.0) while rolling the highlights off. Filmic ships with Blender 4.2 to 5.0.
+# Measured on the four-lamp night preset (photometric, EV100 12 and one stop more), the median
+# display codes of the lit stop lens and amber turn lens (tools/make_lamp_view_image.py,
+# docs/lamp-view-agx-filmic.png): AgX washes red to salmon (255, 155, 154) and amber to peach
+# (246, 160, 108, hue 22°); Khronos PBR Neutral washes further (254, 184, 184; amber hue 12°);
+# Standard keeps the hue (255, 0, 0; amber hue 40°) but clips, with no roll-off; Filmic keeps red
+# red (250, 0, 0) and amber amber (236, 166, 0, hue 42°) and rolls the highlights off. Filmic
+# ships with Blender 4.2 to 5.0.
 LAMP_VIEW = "Filmic"
 # The views of Blender 4.2–5.0's configuration for the sRGB display, for help texts and for
 # checking a name before a long render when no configuration is at hand.

@@ -259,7 +259,7 @@ def test_study_sheet_png_shares_one_exposure_and_keeps_labels_readable(tmp_path)
     proc = run_cli("study", BASELINE, "--vary", "bulb.intensity=2/2/2,8/8/8", "-o", out, "--size", "48x48",
                    "--workers", "0")
     assert proc.returncode == 0, proc.stderr
-    assert "AgX at " in proc.stdout and " EV" in proc.stdout
+    assert f"{display.LAMP_VIEW} at " in proc.stdout and " EV" in proc.stdout  # a sheet: the lamp view
     from core_tracer.study import definition as st
     from core_tracer.study import sheet as study_sheet
 
