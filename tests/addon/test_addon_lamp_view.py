@@ -24,18 +24,12 @@ NIGHT = PRESETS / "four-lamp-night-lit-photometric.json"
 
 
 def _lens_colours(shown: np.ndarray, XYZ: np.ndarray) -> list[tuple[float, float]]:
-    """(hue in degrees, saturation) of the median colour of each of the four lit lenses, left to right."""
-    Y = XYZ[..., 1]
-    lit = Y > 0.02 * np.percentile(Y, 99.5)
-    columns = np.nonzero(lit)[1]
-    out = []
-    for part in np.array_split(np.arange(columns.min(), columns.max() + 1), 4):
-        mask = lit.copy()
-        mask[:, :part[0]] = False
-        mask[:, part[-1] + 1:] = False
-        h, s, _v = colorsys.rgb_to_hsv(*np.median(shown[mask], axis=0))
-        out.append(((h * 360.0 + 180.0) % 360.0 - 180.0, s))  # red near 0, either side
-    return out
+    """(hue in degrees, red near 0 either side; saturation) of each lit lens's median colour, left to right
+    (the lenses as the docs picture finds them: tools/make_lamp_view_image.py)."""
+    from tools.make_lamp_view_image import lens_colours
+
+    hsv = [colorsys.rgb_to_hsv(*rgb) for rgb in lens_colours(shown, XYZ)]
+    return [((h * 360.0 + 180.0) % 360.0 - 180.0, s) for h, s, _v in hsv]
 
 
 def test_the_lamp_view_keeps_red_and_amber_where_agx_washes_them():
