@@ -209,6 +209,6 @@ def test_sheet_labels_use_panel_words_and_rounded_values(design, lamp_addon):
     assert study.axes[0].values == (0.5, 0.8333, 1.167, 1.5)
     lay = study_sheet.layout(lamp_addon.study.settings.worded(study))
     texts = [box.text for box in lay.texts]
-    assert "Cuts Height=0.8333" in texts and "Bulb On=off" in texts
+    assert "Cuts Height=0.8333 mm" in texts and "Bulb On=off" in texts  # each value with its unit
     assert any("columns: Cuts › Height" in t and "rows: Lamp 1 › Bulb › On" in t for t in texts), texts
     assert [a.parameter.text for a in study.axes] == ["cuts.height", "lamps[0].bulb.on"]
