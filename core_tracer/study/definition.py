@@ -357,20 +357,20 @@ def _setting(axes: tuple[Axis, ...], values: tuple[Any, ...]) -> str:
     return ", ".join(f"{a.parameter.text}={format_value(v)}" for a, v in zip(axes, values, strict=True))
 
 
-def framed_size(base_doc: Any) -> tuple[int, int]:
+def framed_size(base_doc: Any, pixels: int = DEFAULT_SIZE[0] * DEFAULT_SIZE[1]) -> tuple[int, int]:
     """A cell framed on the lamp when a study gives no size: the body's aspect (its front, width over
-    height, a little taller by ``CELL_MARGIN``; at most ``MAX_CELL_ASPECT`` either way) at about the
-    pixels of ``DEFAULT_SIZE``, even sides. A camera fits its field of view to the longer side
-    (``camera.sensor_fit`` auto), so a wide body fills the cell's width instead of a band across a
-    square with black above and below (the four-lamp combination, 480 x 120 mm: 458 x 144 px, not
-    256 x 256 with 70 % black). ``DEFAULT_SIZE`` when the base is not a valid design (its parse says why)."""
+    height, a little taller by ``CELL_MARGIN``; at most ``MAX_CELL_ASPECT`` either way) at about
+    ``pixels`` pixels (those of ``DEFAULT_SIZE``), even sides, each at least 8 and at most ``MAX_SIZE``.
+    A camera fits its field of view to the longer side (``camera.sensor_fit`` auto), so a wide body
+    fills the cell's width instead of a band across a square with black above and below (the
+    four-lamp combination, 480 x 120 mm: 458 x 144 px, not 256 x 256 with 70 % black).
+    ``DEFAULT_SIZE`` when the base is not a valid design (its parse says why)."""
     try:
         width, height = parse_scene(base_doc)["body"]["size"]
     except (SceneError, TypeError, KeyError):
         return DEFAULT_SIZE
     aspect = min(MAX_CELL_ASPECT, max(1.0 / MAX_CELL_ASPECT, width / height * CELL_MARGIN))
-    pixels = DEFAULT_SIZE[0] * DEFAULT_SIZE[1]
-    return 2 * round(math.sqrt(pixels * aspect) / 2), 2 * round(math.sqrt(pixels / aspect) / 2)
+    return tuple(min(MAX_SIZE, max(8, 2 * round(math.sqrt(pixels * a) / 2))) for a in (aspect, 1.0 / aspect))
 
 
 def parse_size(value: Any, where: str = "size") -> tuple[int, int]:

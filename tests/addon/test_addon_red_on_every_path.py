@@ -80,6 +80,9 @@ def test_run_study_and_save_sheet_show_red(lamp_addon, stop_lamp, tmp_path):
     study.axis_1.parameter, study.axis_1.mode, study.axis_1.values = "lens.ior", "LIST", "1.45, 1.6"
     study.use_axis_2 = False
     assert bpy.ops.lamp.study_run() == {"FINISHED"}
+    # Fit to Lamp (the default): the cells take the body's aspect (220 x 120 mm) at Width x Height pixels
+    cell = lamp_addon.study.settings.last_study().size
+    assert cell == (58, 40) and abs(cell[0] * cell[1] - SIZE * SIZE) < 0.05 * SIZE * SIZE
     image = bpy.data.images["Lamp Study"]
     assert image["lamp_ev100"] == 15.0  # the design's camera, for every cell
     _assert_red(_as_shown(lamp_addon, stop_lamp, image), "Lamp Study image")
