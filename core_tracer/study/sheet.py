@@ -66,8 +66,9 @@ class SheetLayout:
 
 
 def text_scale(size: tuple[int, int]) -> int:
-    """Label size follows the image size: 1 below 96 px, 2 below 384 px, 3 above."""
-    side = min(size)
+    """Label size follows the image size (the side of a square of as many pixels, so a cell framed on
+    a wide lamp keeps readable labels): 1 below 96 px, 2 below 384 px, 3 above."""
+    side = math.sqrt(size[0] * size[1])
     return 1 if side < 96 else 2 if side < 384 else 3
 
 
