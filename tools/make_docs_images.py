@@ -8,7 +8,7 @@ from this source tree, and goes through the add-on's own operators and draw path
 - ``viewport-preview-agx.png``: the four-lamp preset, Build Lamp (which sets the scene up: Lamp
   Camera, Lamp Tracer, the design's exposure), then the 3D Viewport's Rendered shading orbited to the
   front left: the engine's viewport draw path into a GPU offscreen, shown through the scene's colour
-  management (AgX at the design's exposure) as Blender shows the viewport.
+  management (Filmic, the lamp view the first Build sets, at the design's exposure) as Blender shows it.
 - ``compare-startup-four-lamps.png``: Compare with Cycles after that Build, as the operator writes it
   (both halves at one automatic exposure through the scene's view transform).
 - ``study-ior-cut-height.png``: a 2 x 2 study of the paper baseline (lens IOR x cut height, cells
