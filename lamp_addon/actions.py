@@ -13,7 +13,7 @@ import bpy
 
 ACTION_OPERATORS: list[tuple[str, str, str]] = [("lamp.build", "Build Lamp", "MESH_CYLINDER")]
 ORDER = ("lamp.build", "lamp.frame_design", "lamp.hide_others", "lamp.render_tracer", "lamp.compare_cycles",
-         "lamp.exposure_from_design")
+         "lamp.exposure_from_design", "lamp.lamp_view")
 
 
 def add_action(idname: str, text: str, icon: str = "NONE") -> None:

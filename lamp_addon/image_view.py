@@ -23,6 +23,7 @@ import numpy as np
 from ..core_tracer.images import display
 
 EXPOSURE_PROPERTY = "lamp_exposure"  # stops already applied to an image's pictures
+EV100_PROPERTY = "lamp_ev100"  # the camera EV100 its photometric pictures are shown at (display.shown)
 NO_OPENIMAGEIO = "this Blender has no OpenImageIO Python module to write image files"
 
 
@@ -78,6 +79,12 @@ def show_linear(name: str, rgb: np.ndarray, exposure: float, bl_scene) -> bpy.ty
     image.use_view_as_render = True
     image[EXPOSURE_PROPERTY] = float(exposure - scene_exposure)
     return image
+
+
+def stops_of(used: display.Exposure) -> float:
+    """The stops ``display.shown`` applied to pictures on top of their light model's own scale: the
+    paper mode's exposure, else the stops on top of the photometric EV100."""
+    return used.paper_stops if used.paper_stops is not None else used.stops
 
 
 def show_as_render(name: str, rgb: np.ndarray) -> bpy.types.Image:

@@ -443,3 +443,21 @@ def small_and_large_worker(small_mb: int = 200):
             big.terminate()
             big.wait(timeout=30)
 
+
+
+STOP_LAMP = PRESETS / "photometric-stop-lamp.json"
+
+
+def lit_lens_ratios(shown):
+    """(G/R, B/R, pixels): the medians over the lit lens of a picture as shown (H, W, 3 display values
+    in [0, 1], or linear): the pixels whose red is above half the picture's brightest red, leaving out
+    neutral greys (a sheet's background and labels: R, G and B within 0.02 of each other). A red stop
+    lamp shows G/R and B/R well below 0.5; its XYZ taken for R, G, B shows it gold (G/R ~0.7 and more)."""
+    import numpy as np
+
+    rgb = np.asarray(shown, np.float64)[..., :3]
+    red = rgb[..., 0]
+    neutral = (np.abs(red - rgb[..., 1]) < 0.02) & (np.abs(red - rgb[..., 2]) < 0.02)
+    lit = (red > 0.5 * red[~neutral].max()) & ~neutral
+    r = red[lit]
+    return float(np.median(rgb[..., 1][lit] / r)), float(np.median(rgb[..., 2][lit] / r)), int(lit.sum())

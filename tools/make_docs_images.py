@@ -8,11 +8,11 @@ from this source tree, and goes through the add-on's own operators and draw path
 - ``viewport-preview-agx.png``: the four-lamp preset, Build Lamp (which sets the scene up: Lamp
   Camera, Lamp Tracer, the design's exposure), then the 3D Viewport's Rendered shading orbited to the
   front left: the engine's viewport draw path into a GPU offscreen, shown through the scene's colour
-  management (AgX at the design's exposure) as Blender shows the viewport.
+  management (Filmic, the lamp view the first Build sets, at the design's exposure) as Blender shows it.
 - ``compare-startup-four-lamps.png``: Compare with Cycles after that Build, as the operator writes it
   (both halves at one automatic exposure through the scene's view transform).
-- ``study-ior-cut-height.png``: a 2 x 2 study of the paper baseline (lens IOR x cut height, 128 x 128
-  cells) from the command line, which shares the display pipeline.
+- ``study-ior-cut-height.png``: a 2 x 2 study of the paper baseline (lens IOR x cut height, cells
+  framed on the lamp: the body's aspect) from the command line, which shares the display pipeline.
 - ``panel.txt``: the Lamp tab of the sidebar after that Build, as its draw code lays it out (headless
   Blender draws no interface: the panels' draw calls are recorded and written as an outline).
 
@@ -205,7 +205,7 @@ def _start_gpu(bpy, bl_scene) -> None:
 def study_picture(path: str) -> None:
     started = time.perf_counter()
     subprocess.run([sys.executable, "-m", "core_tracer", "study", os.path.join(ROOT, "presets", "paper-baseline.json"),
-                    "--vary", "lens.ior=1.45,1.6", "--vary", "cuts.height=0.5,2", "--size", "128x128",
+                    "--vary", "lens.ior=1.45,1.6", "--vary", "cuts.height=0.5,2",
                     "--title", "IOR x cut height", "-o", path], cwd=ROOT, check=True)
     _timed(f"study 2 x 2 -> {path}", started)
 

@@ -74,10 +74,10 @@ def main(argv: list[str] | None = None) -> int:
         stats.append(result.stats)
     # ONE exposure: the presets' common EV100 (both say 15), else one automatic EV100 over both
     evs = {float(s["camera"]["ev100"]) for s in scenes if s["camera"].get("exposure") == "ev100"}
-    ev100 = evs.pop() if len(evs) == 1 and all(s["camera"].get("exposure") == "ev100" for s in scenes) else \
-        photometric.ev100_for(images, scenes[0], "auto")
+    common = evs.pop() if len(evs) == 1 and all(s["camera"].get("exposure") == "ev100" for s in scenes) else "auto"
     view = display.view_transform()
-    shown = [view.to_display(photometric.scene_linear(XYZ, ev100)) for XYZ in images]
+    together = display.shown(images, scenes, view=view, ev100=common)
+    shown, ev100 = together.pixels, together.exposure.ev100
     lo, hi = output.luminance_range(np.concatenate([XYZ[..., 1].ravel() for XYZ in images]))
     false = [output.false_colour(XYZ[..., 1], lo, hi, legend=False) for XYZ in images]
     legend = output.false_colour(images[0][..., 1], lo, hi)[:, args.size:]

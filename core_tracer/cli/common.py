@@ -186,13 +186,14 @@ def check_output_folder(folder: str, what: str) -> None:
                                  "to") from None
 
 
-def add_display_arguments(parser: argparse.ArgumentParser) -> None:
+def add_display_arguments(parser: argparse.ArgumentParser, view: str = display.DEFAULT_VIEW) -> None:
     """``--view NAME`` and ``--exposure EV|auto``: how a .png shows the linear image (an .exr keeps
-    the linear values). The values are checked by ``check_view`` and ``_exposure``."""
-    parser.add_argument("--view", default=display.DEFAULT_VIEW, metavar="VIEW",
+    the linear values). The values are checked by ``check_view`` and ``_exposure``. ``view``: the
+    default view (AgX, as a new Blender scene, for a render; the lamp view for a sheet)."""
+    why = "as in a new Blender scene" if view == display.DEFAULT_VIEW else "the lamp view: red and amber keep their hue"
+    parser.add_argument("--view", default=view, metavar="VIEW",
                         help=f"view transform of Blender's colour management for a .png: "
-                             f"{', '.join(display.KNOWN_VIEWS)} (default {display.DEFAULT_VIEW}, as in a new "
-                             f"Blender scene); Standard is plain sRGB")
+                             f"{', '.join(display.KNOWN_VIEWS)} (default {view}, {why}); Standard is plain sRGB")
     parser.add_argument("--exposure", type=_exposure, default="auto", metavar="EV|auto",
                         help="brighten (+) or darken (-) a .png by this many stops before its view transform; "
                              "auto (the default) puts the lit lens just below the view's shoulder so its cut "

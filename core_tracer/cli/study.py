@@ -17,6 +17,7 @@ import time
 from .. import budget
 from ..checkpoints import checkpoint
 from ..fileio import atomic_folder, check_replaceable_folder
+from ..images import display
 from ..images.imageio import image_format
 from ..scene.reading import SceneError, read_json
 from ..scene.safe_text import printable
@@ -47,8 +48,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--study", metavar="STUDY", help="re-run a study: a .json definition or a sheet .exr/.png")
     parser.add_argument("-o", "--output", metavar="SHEET",
                         help="the contact sheet, .png (view transform) or .exr (linear)")
-    parser.add_argument("--size", metavar="WxH", help=f"size of each variant image (default "
-                                                      f"{st.DEFAULT_SIZE[0]}x{st.DEFAULT_SIZE[1]})")
+    parser.add_argument("--size", metavar="WxH", help="size of each variant image (default: framed on the lamp, "
+                                                      "the body's aspect at about "
+                                                      f"{st.DEFAULT_SIZE[0]}x{st.DEFAULT_SIZE[1]} pixels)")
     parser.add_argument("--title", help="the sheet's title (default: the design's name)")
     parser.add_argument("--workers", type=int, metavar="N",
                         help="worker processes of a local cluster or pool (default: one per core; 0 renders in "
@@ -64,7 +66,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-cache", action="store_true", help="render every variant, keep none")
     parser.add_argument("--save-study", metavar="STUDY.json", help="write the study definition (base embedded)")
     parser.add_argument("--save-variants", metavar="DIR", help="write every variant as a lamp-scene/1 preset")
-    add_display_arguments(parser)
+    add_display_arguments(parser, view=display.LAMP_VIEW)  # a sheet of lamps: the project's lamp view
     add_photometric_arguments(parser, false_colour=False)
     parser.add_argument("--list", action="store_true", help="list the parameters a study can vary and exit")
     parser.add_argument("--measure", action="append", default=[], metavar="NAME",
@@ -136,7 +138,7 @@ def _build(args: argparse.Namespace) -> st.Study:
     base = read_json(args.base)
     axes = [st.parse_vary(v) for v in args.vary]
     try:
-        return st.Study.build(base, axes, size or st.DEFAULT_SIZE, args.title or "", measured)
+        return st.Study.build(base, axes, size, args.title or "", measured)  # None: framed on the lamp
     except SceneError as e:
         if e.path == "base" or e.path.startswith("base."):  # a problem of the design file itself
             raise in_file(SceneError(e.path[len("base."):], e.message), args.base) from None
@@ -343,23 +345,24 @@ def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view, 
     from ..study import sheet as study_sheet
 
     scenes = [v.scene for v in study.variants]
-    if not any(photometric.is_photometric(scene) for scene in scenes):
-        ev = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure, measured=measured)
-        return f", {view.view} at {ev:+.1f} EV" if view is not None else ""
-    if view is None:  # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
+    if view is None and any(photometric.is_photometric(scene) for scene in scenes):
+        # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
         from ..photometry import output
 
-        sheet = study_sheet.compose(study, images, text="bitmap", measured=measured)
+        sheet = study_sheet.compose(study, images, text="bitmap", measured=measured, as_values=True)
         output.write_photometric_exr(args.output, sheet, channels=("X", "Y", "Z"), attributes={
             study_sheet.STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()})
         return ", XYZ (Y in cd/m2)"
-    stops = photometric_stops(args)
-    cells, ev100, paper_ev = photometric.shown_together(scenes, images, ev100=args.ev100, stops=stops,
-                                                        exposure=args.exposure)
-    study_sheet.write_sheet(args.output, study, cells, view=view, exposure=0.0, measured=measured)
+    stops = photometric_stops(args)  # on top of the photometric cells' EV100 only
+    used = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure, measured=measured,
+                                   ev100=args.ev100, stops=stops)
+    if view is None:
+        return ""
+    if used.ev100 is None:
+        return f", {view.view} at {used.paper_stops:+.1f} EV"
     extra = f" {stops:+.1f} EV" if stops else ""
-    paper = f", paper-mode cells at {paper_ev:+.1f} EV" if paper_ev is not None else ""
-    return f", {view.view} at EV100 {ev100:.1f}{extra} for every cell{paper}"
+    paper = f", paper-mode cells at {used.paper_stops:+.1f} EV" if used.paper_stops is not None else ""
+    return f", {view.view} at EV100 {used.ev100:.1f}{extra} for every cell{paper}"
 
 
 def _engine(args: argparse.Namespace) -> str:

@@ -38,6 +38,16 @@ STANDARD = "Standard"
 # should look like the same design rendered in Blender, and AgX rolls bright colours off
 # instead of clipping them.
 DEFAULT_VIEW = "AgX"
+# The view the project chooses for pictures of lamps where the choice is ours (study and optimiser
+# sheets, the measure report, Blender's "Lamp View" button): lit red and amber keep their hue.
+# Measured on the four-lamp night preset (photometric, EV100 12 and one stop more), the median
+# display codes of the lit stop lens and amber turn lens (tools/make_lamp_view_image.py,
+# docs/lamp-view-agx-filmic.png): AgX washes red to salmon (255, 155, 154) and amber to peach
+# (246, 160, 108, hue 22°); Khronos PBR Neutral washes further (254, 184, 184; amber hue 12°);
+# Standard keeps the hue (255, 0, 0; amber hue 40°) but clips, with no roll-off; Filmic keeps red
+# red (250, 0, 0) and amber amber (236, 166, 0, hue 42°) and rolls the highlights off. Filmic
+# ships with Blender 4.2 to 5.0.
+LAMP_VIEW = "Filmic"
 # The views of Blender 4.2–5.0's configuration for the sRGB display, for help texts and for
 # checking a name before a long render when no configuration is at hand.
 KNOWN_VIEWS = ("AgX", "Standard", "Filmic", "Filmic Log", "Khronos PBR Neutral", "False Color",
@@ -304,3 +314,118 @@ def srgb_decode(encoded: np.ndarray) -> np.ndarray:
     """The inverse of ``srgb_encode``: display values in [0, 1] back to linear."""
     v = np.asarray(encoded, dtype=np.float64)
     return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4))
+
+
+# ---------------------------------------------------------------------------------------------
+# From an image to a display: the one path (issue 31 item 1)
+#
+# Every picture made for a person (F12 and the viewport through Blender's own view, the Image
+# Editor's images, study and optimiser sheets, Compare, the Light Panel, thumbnails, the measure
+# report) goes through ``shown``: what its pixels are is said by its scene's light model, never
+# guessed by the caller. Two conversions done apart once showed a red photometric lamp gold on a
+# study sheet (XYZ taken for R, G, B) while F12 showed it red.
+
+PAPER = "paper"  # linear Rec.709 radiance in the paper's units (eq. 1): Blender's scene-linear as it is
+PHOTOMETRIC = "photometric"  # CIE 1931 XYZ, Y = luminance in cd/m² (raytrace.spectral)
+
+
+def light_model(scene: dict) -> str:
+    """What a scene's image holds: ``PAPER`` or ``PHOTOMETRIC``."""
+    return scene.get("light_model", PAPER)
+
+
+@dataclass(frozen=True)
+class Exposure:
+    """How a group of images shown together was exposed: ``ev100`` the camera EV100 of its
+    photometric images (None when there are none), ``stops`` brighter on top of it (Blender's
+    exposure slider), ``paper_stops`` the exposure of its paper-mode images (None when none)."""
+
+    ev100: float | None = None
+    stops: float = 0.0
+    paper_stops: float | None = None
+
+    def words(self) -> str:
+        """How the pictures are exposed, for a caption ("EV100 9.6 +1.0 EV", "+2.3 EV")."""
+        parts = []
+        if self.ev100 is not None:
+            parts.append(f"EV100 {self.ev100:.1f}" + (f" {self.stops:+.1f} EV" if self.stops else ""))
+        if self.paper_stops is not None:
+            parts.append(f"{self.paper_stops:+.1f} EV")
+        return ", ".join(parts)
+
+
+@dataclass(frozen=True)
+class Shown:
+    """What ``shown`` returns: the pictures (one per image, float32 H, W, 3) and their exposure."""
+
+    pixels: list[np.ndarray]
+    exposure: Exposure
+
+
+def exposure_for(images: list[np.ndarray], scenes: list[dict], *, ev100: float | str | None = None,
+                 stops: float = 0.0, exposure: float | str | None = "auto") -> Exposure:
+    """ONE exposure for images shown together (``shown``'s parameters)."""
+    photometric = [i for i, scene in enumerate(scenes) if light_model(scene) == PHOTOMETRIC]
+    paper = [i for i in range(len(scenes)) if i not in set(photometric)]
+    camera = None
+    if photometric:
+        from ..raytrace import spectral  # numpy only; imported on use (it imports this module)
+
+        xyz = [np.asarray(images[i]) for i in photometric]
+        first = scenes[photometric[0]]
+        if ev100 is None:
+            camera = spectral.exposure_ev100(xyz, first)
+        elif ev100 == "auto":
+            camera = spectral.exposure_ev100(xyz, {**first, "camera": {**first["camera"], "exposure": "auto"}})
+        else:
+            camera = float(ev100)
+    paper_stops = resolve_exposure(exposure, [np.asarray(images[i]) for i in paper]) if paper else None
+    return Exposure(camera, float(stops), paper_stops)
+
+
+def scene_linear(image: np.ndarray, model: str, exposure: Exposure) -> np.ndarray:
+    """Blender's scene-linear (linear Rec.709, float32, unclipped) of one image of light model
+    ``model`` at ``exposure``: what a view transform takes at exposure 0. Photometric:
+    XYZ → Rec.709 scaled by 1 / (1.2 · 2^EV100) (``photometry.output.exposure_scale``) and 2^stops;
+    paper: the RGB scaled by 2^paper_stops."""
+    if model == PHOTOMETRIC:
+        from ..photometry import output  # imported on use: output imports this module's package
+
+        if exposure.ev100 is None:
+            raise ValueError("a photometric image needs an EV100 to be shown")
+        rgb = output.scene_linear_rec709(image, exposure.ev100) * 2.0 ** exposure.stops
+        return np.asarray(rgb, dtype=np.float32)
+    if model != PAPER:
+        raise ValueError(f"light_model: {model!r} is not one of {PAPER}, {PHOTOMETRIC}")
+    rgb = np.asarray(image, dtype=np.float32)
+    return rgb * np.float32(2.0 ** exposure.paper_stops) if exposure.paper_stops else rgb
+
+
+def shown(images: np.ndarray | list[np.ndarray], scenes: dict | list[dict], *, view: ViewTransform | None,
+          ev100: float | str | None = None, stops: float = 0.0, exposure: float | str | None = "auto",
+          fixed: Exposure | None = None) -> Shown:
+    """The one way from rendered images to what a person sees.
+
+    ``images``: one image or several shown together, each (H, W, 3) as its scene's light model makes
+    it (``scenes``: one normalised scene per image, or one for all): paper, linear Rec.709 radiance;
+    photometric, CIE XYZ with Y in cd/m².
+
+    Exposure, one for the group so that a brighter lamp shows brighter: every photometric image at
+    ONE camera EV100 (``ev100`` a number, "auto" measured over all of them, None the first
+    photometric scene's camera) and ``stops`` more; every paper image at ONE ``exposure`` (stops, or
+    "auto" measured over all of them). ``fixed`` gives the exposure outright (a render shown band by
+    band keeps the one chosen before it started).
+
+    ``view``: display values in [0, 1] through that view of Blender's configuration (files); None:
+    scene-linear Rec.709 at that exposure, for Blender to apply the scene's view as to any render
+    (F12, the viewport, the Image Editor's images).
+    """
+    group = [images] if isinstance(images, np.ndarray) else list(images)
+    models_of = [scenes] * len(group) if isinstance(scenes, dict) else list(scenes)
+    if len(models_of) != len(group):
+        raise ValueError(f"expected one scene per image ({len(group)}), got {len(models_of)}")
+    chosen = fixed or exposure_for(group, models_of, ev100=ev100, stops=stops, exposure=exposure)
+    pixels = [scene_linear(image, light_model(scene), chosen) for image, scene in zip(group, models_of, strict=True)]
+    if view is not None:
+        pixels = [view.to_display(p) for p in pixels]
+    return Shown(pixels, chosen)

@@ -28,6 +28,16 @@ EXPOSURE_ATTRIBUTE = "lamp:exposure"  # stops applied to a PNG before its view; 
 SUFFIXES = (".exr", ".png")
 RGB = ("R", "G", "B")
 
+# CIE XYZ in an EXR that other tools read as XYZ (issue 31 item 3). OpenEXR's ``chromaticities``
+# give the CIE xy of the file's three primaries and its white; ``whiteLuminance`` the luminance in
+# cd/m² of the value (1, 1, 1) (openexr.com, "Standard Optional Attributes"). With the X, Y and Z
+# axes as primaries, (1, 0), (0, 1) and (0, 0), the value (1, 1, 1) is XYZ (1, 1, 1): white
+# (1/3, 1/3), illuminant E, and luminance Y = 1 cd/m² when Y is in cd/m². Blender then reads the
+# file as "Linear CIE-XYZ E" by itself, whatever the channels are named (checked with bpy 5.0.1);
+# without them every reader takes the values for Rec.709 R, G, B.
+XYZ_CHROMATICITIES = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0 / 3.0, 1.0 / 3.0)
+XYZ_WHITE_LUMINANCE = 1.0  # cd/m² of X = Y = Z = 1, with Y in cd/m²
+
 
 def _oiio():
     # Imported on use: core_tracer renders without OpenImageIO; only files need it.
@@ -86,6 +96,7 @@ def write_image(
     attributes: Mapping[str, str] | None = None,
     view: display.ViewTransform | None = None,
     exposure: float | str | None = "auto",
+    xyz: bool = False,
 ) -> float:
     """Write ``image`` (H, W, 3 linear RGB, top row first) as EXR or PNG, chosen by the suffix.
 
@@ -93,15 +104,18 @@ def write_image(
     are further string attributes of the header. An EXR keeps the linear values. A PNG shows the
     image through ``view`` (default: ``display.view_transform()``, Blender's AgX) at ``exposure``
     stops (a number, or "auto"/None for ``display.auto_exposure``). Returns the exposure applied
-    (0 for an EXR). Raises ``SceneError`` for an unsupported suffix, ``OSError`` when the file
-    cannot be written.
+    (0 for an EXR). ``xyz``: an EXR whose three channels hold CIE XYZ (Y in cd/m²) and say so
+    (``XYZ_CHROMATICITIES``). Raises ``SceneError`` for an unsupported suffix, ``OSError`` when the
+    file cannot be written.
     """
     name = os.fspath(path)
     fmt = image_format(name)
     rgb = _check_image(image, "image")
     if fmt == "exr":
-        _write(name, rgb, scene, attributes)
+        _write(name, rgb, scene, attributes, xyz=xyz)
         return 0.0
+    if xyz:
+        raise ValueError("a .png shows XYZ through display.shown first; xyz is for an .exr")
     view = view or display.view_transform()
     ev = display.resolve_exposure(exposure, rgb)
     extra = {VIEW_ATTRIBUTE: view.view, EXPOSURE_ATTRIBUTE: f"{ev:g}", **(attributes or {})}
@@ -130,15 +144,17 @@ def write_display(
 
 
 def write_channels(path: str | os.PathLike, pixels: np.ndarray, channel_names: Sequence[str], *,
-                   scene: dict | None = None, attributes: Mapping[str, str] | None = None) -> None:
+                   scene: dict | None = None, attributes: Mapping[str, str] | None = None,
+                   xyz: bool = False) -> None:
     """Write float ``pixels`` (H, W, C, top row first) as an EXR whose channels are named
-    ``channel_names``, with the scene and string ``attributes`` in its header; atomically, as every image."""
+    ``channel_names``, with the scene and string ``attributes`` in its header; atomically, as every image.
+    ``xyz``: the first three channels are CIE XYZ with Y in cd/m² (``XYZ_CHROMATICITIES``)."""
     _write(os.fspath(path), _finite(np.asarray(pixels, dtype=np.float32), "image"), scene, attributes,
-           tuple(channel_names))
+           tuple(channel_names), xyz=xyz)
 
 
 def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mapping[str, str] | None,
-           channel_names: tuple[str, ...] = RGB) -> None:
+           channel_names: tuple[str, ...] = RGB, *, xyz: bool = False) -> None:
     scene_text = scene_to_json(normalize(scene)) if scene is not None else None
     oiio = _oiio()
     height, width = pixels.shape[:2]
@@ -149,6 +165,9 @@ def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mappin
         spec = oiio.ImageSpec(width, height, len(channel_names), oiio.FLOAT)
         spec.attribute("compression", "zip")
     spec.channelnames = channel_names
+    if xyz:
+        spec.attribute("chromaticities", oiio.TypeDesc("float[8]"), XYZ_CHROMATICITIES)
+        spec.attribute("whiteLuminance", XYZ_WHITE_LUMINANCE)
     if scene_text is not None:
         spec.attribute(SCENE_ATTRIBUTE, scene_text)
     for key, value in (attributes or {}).items():

@@ -12,8 +12,9 @@ What leaves here:
 - a false-colour .png maps log10 luminance on a ramp with a cd/m² legend
   (``photometry.output.false_colour``).
 
-Several images shown together (a study's cells, a side-by-side) take ONE EV100
-(``spectral.exposure_ev100`` over all of them), so a brighter lamp shows brighter.
+The conversion to the screen is ``display.shown``, the one every picture goes through. Several
+images shown together (a study's cells, a side-by-side) take ONE EV100 there, so a brighter lamp
+shows brighter.
 """
 
 from __future__ import annotations
@@ -32,28 +33,15 @@ EV100_ATTRIBUTE = "lamp:ev100"
 
 
 def is_photometric(scene: dict) -> bool:
-    return scene.get("light_model", "paper") == "photometric"
+    return display.light_model(scene) == display.PHOTOMETRIC
 
 
 def ev100_for(XYZ: np.ndarray | Sequence[np.ndarray], scene: dict, override: float | str | None = None) -> float:
     """The camera EV100 of one XYZ image or of several shown together: ``override`` (a number, or
     "auto" for the project's automatic exposure as an EV100), else the scene's camera
-    (``camera.exposure`` "ev100" with ``camera.ev100``, or "auto")."""
-    from ..raytrace import spectral  # the tracer's module: loaded only for a photometric image
-
+    (``camera.exposure`` "ev100" with ``camera.ev100``, or "auto"); ``display.exposure_for``."""
     images = [np.asarray(a) for a in XYZ] if isinstance(XYZ, (list, tuple)) else [np.asarray(XYZ)]
-    if override is None:
-        return spectral.exposure_ev100(images, scene)
-    if override == "auto":
-        return spectral.exposure_ev100(images, {**scene, "camera": {**scene["camera"], "exposure": "auto"}})
-    return float(override)
-
-
-def scene_linear(XYZ: np.ndarray, ev100: float) -> np.ndarray:
-    """Blender's scene-linear (linear Rec.709, float32) of XYZ in cd/m² at camera ``ev100``."""
-    from ..raytrace import spectral
-
-    return spectral.display_linear(XYZ, ev100)
+    return display.exposure_for(images, [scene] * len(images), ev100=override).ev100
 
 
 def write_render(path: str | os.PathLike, XYZ: np.ndarray, scene: dict, *, ev100: float,
@@ -69,34 +57,11 @@ def write_render(path: str | os.PathLike, XYZ: np.ndarray, scene: dict, *, ev100
     if false_colour is not None:
         output.write_false_colour_png(path, np.asarray(XYZ)[..., 1], *false_colour, scene=scene)
         return
-    write_image(path, scene_linear(XYZ, ev100), scene, view=view, exposure=stops, attributes=attributes)
+    # ``stops`` go to the view as Blender's exposure slider does (lamp:exposure records them)
+    linear = display.shown(XYZ, scene, view=None, fixed=display.Exposure(ev100)).pixels[0]
+    write_image(path, linear, scene, view=view, exposure=stops, attributes=attributes)
 
 
 def write_pass(path: str | os.PathLike, XYZ: np.ndarray, scene: dict, bands: Bands | None = None) -> None:
     """One contribution pass of a photometric render (XYZ, Y in cd/m²) as an .exr with units."""
     output.write_photometric_exr(path, XYZ, channels=("X", "Y", "Z"), bands=bands, scene=scene)
-
-
-def shown_together(scenes: Sequence[dict], images: Sequence[np.ndarray], *, ev100: float | str | None = None,
-                   stops: float = 0.0, exposure: float | str | None = "auto") -> tuple[list[np.ndarray], float | None,
-                                                                                     float | None]:
-    """(linear images ready for the view at exposure 0, the EV100 of the photometric ones, the
-    stops of the paper ones) for images shown side by side (a study's cells): every photometric
-    image at ONE EV100 (``ev100`` or the first photometric scene's camera; "auto" is one automatic
-    exposure over all of them) and ``stops`` more; every paper-mode image at ONE ``exposure``
-    ("auto": ``display.auto_exposure`` over all of them). None where there is no image of a kind."""
-    photometric = [i for i, scene in enumerate(scenes) if is_photometric(scene)]
-    paper = [i for i in range(len(scenes)) if i not in set(photometric)]
-    shown: list[np.ndarray] = [np.asarray(a, dtype=np.float32) for a in images]
-    camera = None
-    if photometric:
-        camera = ev100_for([shown[i] for i in photometric], scenes[photometric[0]], ev100)
-        gain = np.float32(2.0 ** stops)
-        for i in photometric:
-            shown[i] = scene_linear(shown[i], camera) * gain
-    paper_ev = None
-    if paper:
-        paper_ev = display.resolve_exposure(exposure, [shown[i] for i in paper])
-        for i in paper:
-            shown[i] = shown[i] * np.float32(2.0 ** paper_ev)
-    return shown, camera, paper_ev

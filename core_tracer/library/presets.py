@@ -444,14 +444,13 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     else:
         image = render(traced, size, size)
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
-    if scene.get("light_model") == "photometric":
-        from ..images import photometric
+    from ..images import display, photometric
 
-        ev100 = photometric.ev100_for(image, scene)
-        write_image(target, photometric.scene_linear(image, ev100), scene, view=view, exposure=0.0,
-                    attributes={photometric.EV100_ATTRIBUTE: f"{ev100:g}"})
-    else:
-        write_image(target, image, scene, view=view)
+    # the paper mode at its automatic exposure, the photometric one at its own camera (display.shown)
+    shown = display.shown(image, scene, view=None)
+    used = shown.exposure
+    write_image(target, shown.pixels[0], scene, view=view, exposure=used.paper_stops or 0.0,
+                attributes={photometric.EV100_ATTRIBUTE: f"{used.ev100:g}"} if used.ev100 is not None else None)
     stem = os.path.splitext(os.path.basename(entry.file))[0]
     _remove_thumbnails(os.path.dirname(os.path.abspath(target)), stem, keep=os.path.abspath(target))
     return target

@@ -355,10 +355,10 @@ def _chromaticity_plot(ax, result: Measures) -> None:
 
 
 def lamp_picture(scene: dict, width: int = 520, meshes: DesignMeshes | None = None) -> np.ndarray:
-    """The design as its camera sees it (photometric render, the scene's exposure, Blender's default
-    view), as display RGB in [0, 1]; a free-form design's on its ``meshes``."""
+    """The design as its camera sees it (photometric render, the scene's exposure, the lamp view
+    ``display.LAMP_VIEW``, through ``display.shown``), as display RGB in [0, 1]; a free-form design's on
+    its ``meshes``."""
     from ..images import display
-    from ..raytrace import spectral
     from ..raytrace.engine import render_passes
 
     height = max(1, round(width * scene["image"]["height"] / scene["image"]["width"]))
@@ -367,5 +367,4 @@ def lamp_picture(scene: dict, width: int = 520, meshes: DesignMeshes | None = No
         image = meshes.render_passes(scene, width, height, samples=samples).image
     else:
         image = render_passes(scene, width, height, keep_passes=False, samples=samples).image
-    ev100 = spectral.exposure_ev100(image, scene)
-    return display.view_transform().to_display(spectral.display_linear(image, ev100))
+    return display.shown(image, scene, view=display.view_transform(display.LAMP_VIEW)).pixels[0]

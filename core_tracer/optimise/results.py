@@ -14,7 +14,7 @@ import numpy as np
 from ..cluster.cache import CellCache
 from ..cluster.cells import Inputs, make_cell
 from ..fileio import atomic_path, atomic_write_text
-from ..images import bitmap_font, display, labels, photometric
+from ..images import bitmap_font, display, labels
 from ..images.imageio import write_display
 from ..scene.reading import scene_to_json
 from ..study.definition import format_value
@@ -78,12 +78,11 @@ def _short(value) -> str:
 
 def compose_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarray]) -> tuple[np.ndarray, float]:
     """The sheet in display values and the exposure used (one for every trial, so they compare)."""
-    view = display.view_transform()
-    if photometric.is_photometric(opt.base):  # XYZ in cd/m²: one EV100 for every trial, the base's camera
-        images, _camera, _ = photometric.shown_together([opt.base] * len(images), images)
-        ev = 0.0  # the exposure is in the pixels
-    else:
-        ev = display.auto_exposure(list(images))
+    view = display.view_transform(display.LAMP_VIEW)
+    # one exposure for every trial (the base's camera EV100 for XYZ in cd/m², else "auto" over all)
+    shown = display.shown(list(images), opt.base, view=view)
+    images = shown.pixels
+    ev = shown.exposure.paper_stops or 0.0
     zoom = max(1, SHEET_SIDE // max(opt.size))  # small trial images shown larger, pixel for pixel
     images = [np.repeat(np.repeat(image, zoom, axis=0), zoom, axis=1) for image in images]
     w, h = opt.size[0] * zoom, opt.size[1] * zoom
@@ -114,7 +113,7 @@ def compose_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarr
     for i, (trial, image) in enumerate(zip(trials, images, strict=True)):
         x = gap + (i % cols) * (cell_w + gap)
         y = title_h + (i // cols) * cell_h
-        canvas[y:y + h, x:x + w] = view.to_display(image, ev)
+        canvas[y:y + h, x:x + w] = image
         for k, line in enumerate(trial_lines(opt, trial)):
             text(line, x, y + h + k * line_h, cell_w)
     return canvas, ev
@@ -123,7 +122,7 @@ def compose_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarr
 def write_sheet(opt: Optimisation, trials: Sequence, images: Sequence[np.ndarray], path: str) -> float:
     shown, ev = compose_sheet(opt, trials, images)
     write_display(path, shown, attributes={"ImageDescription": f"{opt.name}: best trials"},
-                  view=display.view_transform().view, exposure=ev)
+                  view=display.LAMP_VIEW, exposure=ev)
     return ev
 
 

@@ -105,7 +105,9 @@ def write_photometric_exr(path: str | os.PathLike, XYZ: np.ndarray, *,
                           scene: dict | None = None, attributes: Mapping[str, str] | None = None) -> None:
     """Write XYZ (H, W, 3; Y in cd/m², top row first) as a float EXR with named channels, their
     units in ``lamp:units`` (one ``name: unit`` per line), the bands in ``lamp:bands`` and the scene
-    JSON in ``lamp:scene``. Written atomically (never a partial file)."""
+    JSON in ``lamp:scene``. Channels X, Y, Z first (the default) carry OpenEXR's ``chromaticities``
+    and ``whiteLuminance`` for CIE XYZ (``imageio.XYZ_CHROMATICITIES``), so Blender and other
+    readers take them for XYZ, not Rec.709. Written atomically (never a partial file)."""
     name = os.fspath(path)
     if imageio.image_format(name) != "exr":
         raise imageio.SceneError(name, "photometric images are written as .exr")
@@ -118,7 +120,8 @@ def write_photometric_exr(path: str | os.PathLike, XYZ: np.ndarray, *,
     extra = {UNITS_ATTRIBUTE: units, "lamp:km": f"{KM:g}", **(attributes or {})}
     if bands is not None:
         extra[BANDS_ATTRIBUTE] = " ".join(f"{e:g}" for e in bands.edges_nm)
-    imageio.write_channels(name, pixels, tuple(planes), scene=scene, attributes=extra)
+    xyz = tuple(planes)[:3] == ("X", "Y", "Z")  # a luminance-only or xy file is no colour image
+    imageio.write_channels(name, pixels, tuple(planes), scene=scene, attributes=extra, xyz=xyz)
 
 
 def read_photometric_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict[str, str]]:

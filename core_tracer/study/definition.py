@@ -66,7 +66,9 @@ SCHEMA = "lamp-study/1"
 STUDY_ATTRIBUTE = "lamp:study"  # the header attribute of a contact sheet that holds the study
 MAX_VARIANTS = 64
 MAX_AXES = 2
-DEFAULT_SIZE = (256, 256)
+DEFAULT_SIZE = (256, 256)  # a cell's pixels when the body's aspect is not known; framed_size keeps their count
+CELL_MARGIN = 0.8  # of the body's width/height: the cell a little taller than the body, so the lens is not cut
+MAX_CELL_ASPECT = 4.0
 MAX_SIZE = 2048  # per variant image side; a study is for comparing, not for final images
 
 # ---------------------------------------------------------------------------------------------
@@ -201,8 +203,8 @@ class Study:
                 raise SceneError(show_key(key), f"unknown key; allowed keys here: {', '.join(allowed)}")
         if "base" not in doc:
             raise SceneError("base", "is required: the lamp-scene design the study varies")
-        size = parse_size(doc.get("size", list(DEFAULT_SIZE)))
         base_doc = doc["base"]
+        size = parse_size(doc["size"]) if "size" in doc else framed_size(base_doc)
         if isinstance(base_doc, dict):
             # The variants are rendered at the study's size: a default camera frames the body for it,
             # and a variant kept as a preset says what was rendered.
@@ -263,11 +265,13 @@ class Study:
             raise SceneError(f"{name}: {e.path}" if e.path else name, e.message) from None
 
     @classmethod
-    def build(cls, base: dict, axes: list[dict], size: tuple[int, int] = DEFAULT_SIZE, title: str = "",
+    def build(cls, base: dict, axes: list[dict], size: tuple[int, int] | None = DEFAULT_SIZE, title: str = "",
               measured: dict | None = None) -> Study:
         """A study from a base scene document and axis documents (the Python API, the CLI, Blender);
-        ``measured``: its ``measures``, ``sort`` and ``filter`` fields, if any."""
-        doc = {"schema": SCHEMA, "base": base, "axes": axes, "size": list(size), **(measured or {})}
+        ``size`` None: framed on the lamp (``framed_size``); ``measured``: its ``measures``, ``sort``
+        and ``filter`` fields, if any."""
+        doc = {"schema": SCHEMA, "base": base, "axes": axes, **({"size": list(size)} if size else {}),
+               **(measured or {})}
         if title:
             doc["title"] = title
         return cls.from_doc(doc)
@@ -353,6 +357,22 @@ def _build_variants(base: dict, axes: tuple[Axis, ...]) -> tuple[Variant, ...]:
 
 def _setting(axes: tuple[Axis, ...], values: tuple[Any, ...]) -> str:
     return ", ".join(f"{a.parameter.text}={format_value(v)}" for a, v in zip(axes, values, strict=True))
+
+
+def framed_size(base_doc: Any, pixels: int = DEFAULT_SIZE[0] * DEFAULT_SIZE[1]) -> tuple[int, int]:
+    """A cell framed on the lamp when a study gives no size: the body's aspect (its front, width over
+    height, a little taller by ``CELL_MARGIN``; at most ``MAX_CELL_ASPECT`` either way) at about
+    ``pixels`` pixels (those of ``DEFAULT_SIZE``), even sides, each at least 8 and at most ``MAX_SIZE``.
+    A camera fits its field of view to the longer side (``camera.sensor_fit`` auto), so a wide body
+    fills the cell's width instead of a band across a square with black above and below (the
+    four-lamp combination, 480 x 120 mm: 458 x 144 px, not 256 x 256 with 70 % black).
+    ``DEFAULT_SIZE`` when the base is not a valid design (its parse says why)."""
+    try:
+        width, height = parse_scene(base_doc)["body"]["size"]
+    except (SceneError, TypeError, KeyError):
+        return DEFAULT_SIZE
+    aspect = min(MAX_CELL_ASPECT, max(1.0 / MAX_CELL_ASPECT, width / height * CELL_MARGIN))
+    return tuple(min(MAX_SIZE, max(8, 2 * round(math.sqrt(pixels * a) / 2))) for a in (aspect, 1.0 / aspect))
 
 
 def parse_size(value: Any, where: str = "size") -> tuple[int, int]:

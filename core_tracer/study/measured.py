@@ -173,4 +173,8 @@ def arrange(choice: Choice, values: Sequence[dict[str, float]]) -> tuple[list[in
 
 
 def format_measure(name: str, value: float) -> str:
-    return f"{name}={'n/a' if math.isnan(value) else f'{value:.3g}'}"
+    """``name=value unit`` (``by_name.unit``: "intensity.hv_cd=121 cd"; ratios have none)."""
+    if math.isnan(value):
+        return f"{name}=n/a"
+    unit = by_name.unit(name)
+    return f"{name}={value:.3g}" + (f" {unit}" if unit else "")

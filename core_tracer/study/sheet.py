@@ -2,13 +2,15 @@
 
 Axis 1 runs along the columns, axis 2 (if any) down the rows. Above the grid: the title and the
 names of the two parameters; above each column its value of axis 1, left of each row its value
-of axis 2; under each image the variant's values. ``layout(study)`` computes every rectangle
+of axis 2, each with its unit (``spec``: "height=0.5 mm"), each said once; under each image its
+measures, if any. A sorted or filtered sheet, whose places no longer say the values, gives each
+cell its values under it instead. ``layout(study)`` computes every rectangle
 and is a pure function of the study, so the geometry is testable without rendering.
 
 Composition is numpy; labels come from ``images.labels`` (OpenImageIO's font where it can draw
 text, else the bitmap font), so a sheet is made without OpenImageIO and only the files need it.
-Every variant shares one exposure (chosen over all of them by ``display.auto_exposure``), so the
-cells compare: a brighter bulb shows as a brighter cell.
+Every cell goes to the screen through ``display.shown`` (as its variant's light model says: RGB, or
+XYZ in cd/m²), all at one exposure, so the cells compare: a brighter bulb shows as a brighter cell.
 
 Files: EXR is linear float with the study JSON in the header attribute ``lamp:study``; PNG shows
 the variants through a view transform (``images.display``) with the labels drawn on the display
@@ -64,18 +66,31 @@ class SheetLayout:
 
 
 def text_scale(size: tuple[int, int]) -> int:
-    """Label size follows the image size: 1 below 96 px, 2 below 384 px, 3 above."""
-    side = min(size)
+    """Label size follows the image size (the side of a square of as many pixels, so a cell framed on
+    a wide lamp keeps readable labels): 1 below 96 px, 2 below 384 px, 3 above."""
+    side = math.sqrt(size[0] * size[1])
     return 1 if side < 96 else 2 if side < 384 else 3
 
 
+def value_label(parameter, value) -> str:
+    """``name=value unit``: "height=0.5 mm", "ior=1.5", "cuts.type=fisheye" (the field's unit, ``spec``)."""
+    unit = getattr(parameter.spec, "unit", "")
+    return f"{parameter.short}={format_value(value)}" + (f" {unit}" if unit else "")
+
+
+def measure_lines(study: Study, index: int, measured: Sequence[dict] | None) -> list[str]:
+    """One line per measure of one variant (none without ``measured``)."""
+    if measured is None:
+        return []
+    return [format_measure(name, measured[index][name]) for name in study.measured.names]
+
+
 def cell_lines(study: Study, index: int, measured: Sequence[dict] | None = None) -> list[str]:
-    """The label under one variant: one line per axis, ``name=value``, then one per measure."""
+    """A variant's full label: one line per axis, ``name=value unit``, then one per measure (under the
+    cells of a sorted or filtered sheet, in its footer; a grid says the values in its headers)."""
     v = study.variants[index]
-    lines = [f"{a.parameter.short}={format_value(x)}" for a, x in zip(study.axes, v.values, strict=True)]
-    if measured is not None:
-        lines += [format_measure(name, measured[index][name]) for name in study.measured.names]
-    return lines
+    lines = [value_label(a.parameter, x) for a, x in zip(study.axes, v.values, strict=True)]
+    return lines + measure_lines(study, index, measured)
 
 
 def layout(study: Study, measured: Sequence[dict] | None = None) -> SheetLayout:
@@ -93,14 +108,14 @@ def layout(study: Study, measured: Sequence[dict] | None = None) -> SheetLayout:
     pad = 4 * s
     gap = pad
     axes = study.axes
-    n_lines = len(axes) + (len(study.measured.names) if measured is not None else 0)
+    n_lines = len(study.measured.names) if measured is not None else 0  # the axis values are in the headers
 
-    widest_cell = max(len(t) for i in range(len(study)) for t in cell_lines(study, i, measured))
-    column_labels = [f"{axes[0].parameter.short}={format_value(x)}" for x in axes[0].values]
+    widest_cell = max((len(t) for i in range(len(study)) for t in measure_lines(study, i, measured)), default=0)
+    column_labels = [value_label(axes[0].parameter, x) for x in axes[0].values]
     cell_w = max(w, widest_cell * adv, max(len(t) for t in column_labels) * adv)
-    cell_h = h + pad // 2 + n_lines * line
+    cell_h = h + (pad // 2 + n_lines * line if n_lines else 0)
     if len(axes) > 1:
-        row_labels = [f"{axes[1].parameter.short}={format_value(x)}" for x in axes[1].values]
+        row_labels = [value_label(axes[1].parameter, x) for x in axes[1].values]
         row_header = max(len(t) for t in row_labels) * adv + pad
     else:
         row_labels = []
@@ -130,7 +145,7 @@ def layout(study: Study, measured: Sequence[dict] | None = None) -> SheetLayout:
         x0 = grid_x + v.column * (cell_w + gap)
         y0 = grid_y + v.row * (cell_h + gap)
         cells.append(Rect(x0 + (cell_w - w) // 2, y0, w, h))
-        for k, text in enumerate(cell_lines(study, v.index, measured)):
+        for k, text in enumerate(measure_lines(study, v.index, measured)):
             texts.append(TextBox(text, Rect(x0, y0 + h + pad // 2 + k * line, cell_w, line), "cell"))
     return SheetLayout(width, height, s, tuple(cells), tuple(texts))
 
@@ -191,11 +206,28 @@ def preload_writers() -> None:
     labels.render_text_available()
 
 
-def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float = 0.0,
-            view: display.ViewTransform | None = None, measured: Sequence[dict] | None = None) -> np.ndarray:
-    """The contact sheet (H, W, 3 float32, top row first) of the rendered variants, each scaled by
-    ``exposure`` stops. Without ``view`` the sheet is linear; with it the variants are shown
-    through ``view`` and the sheet holds display values in [0, 1] (background and labels too).
+def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float | str = 0.0,
+            view: display.ViewTransform | None = None, measured: Sequence[dict] | None = None,
+            ev100: float | str | None = None, stops: float = 0.0, as_values: bool = False) -> np.ndarray:
+    """The contact sheet (H, W, 3 float32, top row first) of the rendered variants; ``composed``
+    without the exposure it chose."""
+    return composed(study, images, text=text, exposure=exposure, view=view, measured=measured, ev100=ev100,
+                    stops=stops, as_values=as_values)[0]
+
+
+def composed(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", exposure: float | str = 0.0,
+             view: display.ViewTransform | None = None, measured: Sequence[dict] | None = None,
+             ev100: float | str | None = None, stops: float = 0.0,
+             as_values: bool = False) -> tuple[np.ndarray, display.Exposure]:
+    """(the contact sheet, H, W, 3 float32, top row first; the exposure of its cells).
+
+    The cells are the variants' renders shown through ``display.shown`` (each as its variant's light
+    model says: XYZ in cd/m² or RGB), all at ONE exposure: paper-mode cells at ``exposure`` stops
+    ("auto": measured over all of them), photometric cells at ONE EV100 (``ev100``; None: the first
+    photometric variant's camera; "auto": measured over all) and ``stops`` more. Without ``view`` the
+    sheet is scene-linear (for an EXR, or for Blender to show through its view); with it the sheet
+    holds display values in [0, 1] (background and labels too). ``as_values``: the cells as they
+    are (the XYZ of a photometric sheet's .exr), no exposure.
 
     ``measured``: each variant's measure values (``layout``).
 
@@ -210,19 +242,21 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", e
         if np.shape(img) != (h, w, 3):
             raise ValueError(f"image {i}: expected shape {(h, w, 3)}, got {np.shape(img)}")
     oiio_text = labels.use_oiio(text)
+    if as_values:
+        cells, used = [np.asarray(img, np.float32) for img in images], display.Exposure()
+    else:
+        shown = display.shown(list(images), [v.scene for v in study.variants], view=view, ev100=ev100, stops=stops,
+                              exposure=exposure)
+        cells, used = shown.pixels, shown.exposure
 
     background, color = np.asarray(BACKGROUND, np.float32), np.asarray(TEXT_COLOR, np.float32)
     if view is not None:  # the same greys as a linear sheet shows under Standard
         background, color = (display.srgb_encode(c).astype(np.float32) for c in (background, color))
     canvas = np.empty((lay.height, lay.width, 3), dtype=np.float32)
     canvas[:] = background
-    for rect, img in zip(lay.cells, images, strict=True):
+    for rect, cell in zip(lay.cells, cells, strict=True):
         if rect is None:  # left out by the filter: named in the footer
             continue
-        if view is not None:
-            cell = view.to_display(img, exposure)
-        else:
-            cell = np.asarray(img, np.float32) * np.float32(2.0 ** exposure) if exposure else img
         canvas[rect.y:rect.y + rect.h, rect.x:rect.x + rect.w] = cell
 
     if text != "none":
@@ -236,7 +270,7 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", e
                                 align="right" if box.kind == "row" else "left")[..., None]
             region = canvas[r.y:r.y + r.h, r.x:r.x + r.w]
             region[:] = region * (1.0 - m) + color * m
-    return canvas
+    return canvas, used
 
 
 # ---------------------------------------------------------------------------------------------
@@ -245,30 +279,40 @@ def compose(study: Study, images: Sequence[np.ndarray], *, text: str = "auto", e
 
 def write_sheet(path: str | os.PathLike, study: Study, images: Sequence[np.ndarray], *,
                 view: display.ViewTransform | None = None, exposure: float | str | None = "auto",
-                text: str = "auto", measured: Sequence[dict] | None = None) -> float:
+                text: str = "auto", measured: Sequence[dict] | None = None, ev100: float | str | None = None,
+                stops: float = 0.0) -> display.Exposure:
     """Compose the sheet of the rendered variants and write it, with the study JSON in the
-    ``lamp:study`` attribute: EXR linear (no exposure), PNG through ``view`` (default
-    ``display.view_transform()``) at ``exposure`` stops ("auto": ``display.auto_exposure`` over all
-    variants). Returns the exposure applied. Atomic: never a partial file."""
+    ``lamp:study`` attribute: EXR scene-linear (paper cells as rendered), PNG through ``view``
+    (default the lamp view, ``display.LAMP_VIEW``) at one exposure for every cell (``composed``). Returns
+    the exposure applied. Atomic: never a partial file."""
     attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()}
     if image_format(path) == "exr":
-        write_image(path, compose(study, images, text=text, measured=measured), attributes=attributes)
-        return 0.0
-    view = view or display.view_transform()
-    ev = display.resolve_exposure(exposure, list(images))
-    shown = compose(study, images, text=text, exposure=ev, view=view, measured=measured)
-    write_display(path, shown, attributes=attributes, view=view.view, exposure=ev)
-    return ev
+        sheet, used = composed(study, images, text=text, measured=measured, ev100=ev100, stops=stops)
+        write_image(path, sheet, attributes={**attributes, **_exposure_attributes(used)})
+        return used
+    view = view or display.view_transform(display.LAMP_VIEW)
+    shown, used = composed(study, images, text=text, exposure="auto" if exposure is None else exposure, view=view,
+                           measured=measured, ev100=ev100, stops=stops)
+    write_display(path, shown, attributes={**attributes, **_exposure_attributes(used)}, view=view.view,
+                  exposure=used.paper_stops if used.paper_stops is not None else used.stops)
+    return used
+
+
+def _exposure_attributes(used: display.Exposure) -> dict[str, str]:
+    """The photometric cells' EV100 in the header (``images.photometric.EV100_ATTRIBUTE``)."""
+    return {"lamp:ev100": f"{used.ev100:g}"} if used.ev100 is not None else {}
 
 
 def write_composed(path: str | os.PathLike, study: Study, sheet: np.ndarray, *,
                    view: display.ViewTransform | None = None, exposure: float = 0.0,
-                   view_exposure: float = 0.0) -> None:
+                   view_exposure: float = 0.0, ev100: float | None = None) -> None:
     """Write a sheet composed already (linear, its variants scaled by ``exposure`` stops, as Blender
-    shows it): EXR as it is, with ``lamp:exposure`` saying how the variants were scaled; PNG
+    shows it): EXR as it is, with ``lamp:exposure`` saying how the variants were scaled (and
+``lamp:ev100`` the EV100 of its photometric cells); PNG
     through ``view`` at ``view_exposure`` more stops (Blender's own exposure slider). Atomic: never
     a partial file."""
-    attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()}
+    attributes = {STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading(),
+                  **_exposure_attributes(display.Exposure(ev100))}
     if image_format(path) == "exr":
         write_image(path, sheet, attributes={**attributes, EXPOSURE_ATTRIBUTE: f"{exposure:g}"})
         return

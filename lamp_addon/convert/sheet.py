@@ -28,6 +28,8 @@ DARK = (0.12, 0.12, 0.12)
 # A diverging scale (Moreland's "cool to warm", display sRGB): Cycles brighter, equal, tracer brighter.
 COOL, NEUTRAL, WARM = (0.230, 0.299, 0.754), (0.865, 0.865, 0.865), (0.706, 0.016, 0.150)
 
+SCENE_LINEAR = {"light_model": display.PAPER}  # what Blender's renders hand back: scene-linear RGB
+
 
 def differences(tracer: np.ndarray, cycles: np.ndarray) -> dict:
     """Per-channel statistics of tracer - Cycles over the whole image (linear RGB)."""
@@ -219,10 +221,8 @@ def side_by_side(left: np.ndarray, right: np.ndarray, left_labels: Sequence[str]
 def shown_side_by_side(comparison: dict, view: display.ViewTransform | None, exposure: float) -> np.ndarray:
     """The side-by-side image of ``comparison`` with both halves at ``exposure`` stops: linear
     without ``view``, else display values through ``view`` (both halves through the one transform)."""
-    def shown(image: np.ndarray) -> np.ndarray:
-        if view is not None:
-            return view.to_display(image, exposure)
-        return image * np.float32(2.0 ** exposure)
+    def shown(image: np.ndarray) -> np.ndarray:  # both halves are scene-linear RGB (Blender's renders)
+        return display.shown(image, SCENE_LINEAR, view=view, fixed=display.Exposure(paper_stops=exposure)).pixels[0]
 
     left, right = comparison["labels"]
     tracer, cycles = comparison["tracer"], comparison["cycles"]

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import bpy
 
+from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, reports
 from ..design import properties as design_properties
@@ -48,10 +49,41 @@ class LAMP_OT_exposure_from_design(DesignOperator, bpy.types.Operator):
         return reports.finished(self, f"Exposure {exposure:+.1f} EV: the lit lens shows its cut pattern")
 
 
-classes = (LAMP_OT_exposure_from_design,)
+class LAMP_OT_lamp_view(bpy.types.Operator):
+    """Show the scene through the lamp view (Filmic): lit red and amber lamps keep their hue, where AgX,
+    Blender's default, washes red to salmon and amber to peach"""
+
+    bl_idname = "lamp.lamp_view"
+    bl_label = "Lamp View"
+    bl_options = {"REGISTER", "UNDO"}  # changes the scene's colour management, on request only
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None:
+            return False
+        if context.scene.view_settings.view_transform == display.LAMP_VIEW:
+            cls.poll_message_set(f"The scene is shown through {display.LAMP_VIEW} already")
+            return False
+        return True
+
+    def execute(self, context):
+        settings = context.scene.view_settings
+        before = settings.view_transform
+        try:
+            settings.view_transform = display.LAMP_VIEW
+        except TypeError:  # a colour configuration without it (OCIO set to another one)
+            return reports.cancelled(self, f"This Blender's colour management has no {display.LAMP_VIEW} view; "
+                                           "choose a view in Render Properties > Color Management")
+        settings.look = "None"  # a look belongs to the view it was made for
+        return reports.finished(self, f"View transform {display.LAMP_VIEW} (was {before}): lit red and amber "
+                                      "keep their hue; Ctrl+Z goes back")
+
+
+classes = (LAMP_OT_exposure_from_design, LAMP_OT_lamp_view)
 
 _register, _unregister = actions.register_actions_factory(
-    classes, (("lamp.exposure_from_design", "Exposure from Design", "LIGHT_SUN"),))
+    classes, (("lamp.exposure_from_design", "Exposure from Design", "LIGHT_SUN"),
+              ("lamp.lamp_view", "Lamp View", "COLOR")))
 
 
 def register() -> None:

@@ -27,7 +27,7 @@ import re
 import bpy
 import numpy as np
 
-from ...core_tracer.raytrace import spectral
+from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 
 REC709 = "Linear Rec.709"
@@ -83,8 +83,12 @@ def from_rec709(space: str | None = None) -> np.ndarray | None:
     return target @ np.linalg.inv(rec709)
 
 
+PHOTOMETRIC = {"light_model": display.PHOTOMETRIC}  # what the pixels handed to ``display.shown`` are
+
+
 class Display:
-    """XYZ (cd/m²) to the working space's scene-linear RGB at a fixed EV100."""
+    """XYZ (cd/m²) to the working space's scene-linear RGB at a fixed EV100: ``display.shown`` (the
+    one way from an image to the screen), then Blender's working space when it is not Rec.709."""
 
     def __init__(self, ev100: float, space: str | None = None):
         self.ev100 = float(ev100)
@@ -92,7 +96,7 @@ class Display:
 
     def linear(self, XYZ: np.ndarray) -> np.ndarray:
         """(…, 3) float32 scene-linear of XYZ in cd/m² (unclipped)."""
-        rgb = spectral.display_linear(XYZ, self.ev100)
+        rgb = display.shown(np.asarray(XYZ), PHOTOMETRIC, view=None, fixed=display.Exposure(self.ev100)).pixels[0]
         if self._matrix is not None:
             rgb = (rgb @ self._matrix.T.astype(np.float32)).astype(np.float32)
         return rgb
@@ -106,7 +110,7 @@ def auto_ev100(scene: dict) -> float:
     width, height = scene["image"]["width"], scene["image"]["height"]
     scale = min(1.0, PREVIEW_SIDE / max(width, height))
     preview = render(scene, max(1, round(width * scale)), max(1, round(height * scale)))
-    return spectral.exposure_ev100(preview, scene)
+    return display.exposure_for([preview], [scene]).ev100
 
 
 def scene_ev100(scene: dict) -> float:

@@ -20,6 +20,9 @@ more times display white) is a flat pale disk under AgX. So the first build of a
   expose for the design again. The paper and photometric models' images differ in scale (the
   photometric one is already exposed by its EV100), so each light model keeps its own exposure
   (``follow_light_model``): switching model sets the new model's, and the old one's is kept.
+- **view transform**: when the scene still shows through Blender's default view (AgX, no look),
+  the lamp view (``display.LAMP_VIEW``, Filmic), under which lit red and amber lamps keep their
+  hue (AgX washes them to salmon and peach). A view or look the user chose is theirs: kept.
 - **views**: the 3D Views are framed on the lamp (``view_frame``), and an object of the user's that
   encloses it (the startup Cube) is named in the report, never hidden or moved.
 
@@ -32,6 +35,7 @@ from __future__ import annotations
 import json
 from typing import NamedTuple
 
+from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
 from .. import image_view
@@ -237,6 +241,23 @@ def _first_exposure(bl_scene) -> News | None:
                 "and Apply Preset keep it; Exposure from Design exposes again")
 
 
+BLENDER_DEFAULT_VIEW = ("AgX", "None")  # a new file's view transform and look (Blender 4.0-5.0)
+
+
+def _first_view(bl_scene) -> News | None:
+    """The lamp view for a new file's first lamp, when the scene still has Blender's default view."""
+    settings = bl_scene.view_settings
+    if (settings.view_transform, settings.look) != BLENDER_DEFAULT_VIEW:
+        return None
+    try:
+        settings.view_transform = display.LAMP_VIEW
+    except TypeError:  # a colour configuration without it: keep Blender's
+        return None
+    return News(display.LAMP_VIEW,
+                f"View transform {display.LAMP_VIEW} (was AgX, Blender's default): lit red and amber lamps keep "
+                "their hue. Render Properties > Color Management changes it back")
+
+
 def _views(bl_scene) -> News | None:
     """The 3D Views framed on the design, and an object of the user's that hides it named."""
     framed = view_frame.frame_views(bl_scene)
@@ -254,7 +275,8 @@ def set_up(bl_scene) -> list[News]:
     for the operator's report (``news_text``, ``news_details``)."""
     news = []
     if not is_set_up(bl_scene):
-        news += [_camera(bl_scene), _engine(bl_scene), _first_exposure(bl_scene), _views(bl_scene)]
+        news += [_camera(bl_scene), _engine(bl_scene), _first_view(bl_scene), _first_exposure(bl_scene),
+                 _views(bl_scene)]
         if not is_set_up(bl_scene):
             _remember(bl_scene, None)  # the user's own exposure, or none measured: kept as it is
     ob = camera.find_lamp_camera(bl_scene)

@@ -20,7 +20,7 @@ import weakref
 import bpy
 import numpy as np
 
-from ...core_tracer.raytrace import spectral
+from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 from ..convert import viewport
 from ..design import curves as design_curves
@@ -185,7 +185,7 @@ class ViewportSession:
             ev100 = self.design["camera"]["ev100"]
         else:
             if self._auto_ev100[0] != frame.generation:
-                self._auto_ev100 = (frame.generation, spectral.exposure_ev100(frame.image, self.design))
+                self._auto_ev100 = (frame.generation, display.exposure_for([frame.image], [self.design]).ev100)
             ev100 = self._auto_ev100[1]
         try:
             shown = photometric_display.Display(ev100).linear(frame.image)

@@ -39,13 +39,17 @@ from .settings import last_study, sheet_image
 def show_sheet(context, study: st.Study, images: list, measured: list | None = None) -> bpy.types.Image:
     """Compose the contact sheet into the "Lamp Study" image and show it in an Image Editor; with
     ``measured`` (each variant's values of the study's measures) the values go under the cells."""
-    from ...core_tracer.images import display
     from ...core_tracer.study import sheet as study_sheet
 
-    exposure = display.auto_exposure(list(images))  # one for every variant, so the cells compare
-    sheet = study_sheet.compose(settings.worded(study), images, exposure=exposure,  # labels in the panel's words
-                                measured=measured)
-    image = image_view.show_linear(settings.SHEET_IMAGE, sheet, exposure, context.scene)
+    # One exposure for every variant, so the cells compare; each cell through display.shown, as its
+    # light model says (a photometric variant's XYZ at one EV100), scene-linear for Blender's view.
+    sheet, used = study_sheet.composed(settings.worded(study), images, exposure="auto",  # labels in the panel's words
+                                       measured=measured)
+    image = image_view.show_linear(settings.SHEET_IMAGE, sheet, image_view.stops_of(used), context.scene)
+    if used.ev100 is not None:
+        image[image_view.EV100_PROPERTY] = used.ev100
+    elif image_view.EV100_PROPERTY in image:
+        del image[image_view.EV100_PROPERTY]
     text = study.to_json()
     image[settings.STUDY_PROPERTY] = text
     settings.remember_study(study, text)
@@ -363,7 +367,8 @@ class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
             study_sheet.write_composed(self.filepath, study, image_view.image_to_array(image),
                                        view=image_view.scene_view(context.scene),
                                        exposure=image_view.image_exposure(image),
-                                       view_exposure=context.scene.view_settings.exposure)
+                                       view_exposure=context.scene.view_settings.exposure,
+                                       ev100=image.get(image_view.EV100_PROPERTY))
         except (SceneError, OSError) as e:
             return reports.cancelled(self, str(e))
         return reports.finished(self, f"Saved {self.filepath}")

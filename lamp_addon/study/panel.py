@@ -54,6 +54,7 @@ class LAMP_PT_study(DesignSection, bpy.types.Panel):
         col.use_property_decorate = False
         col.prop(settings, "width")
         col.prop(settings, "height")
+        col.prop(settings, "fit_lamp")
         col.prop(settings, "scheduler")
         if study_settings.uses_cluster(settings):
             col.label(text="Variants render as Dask tasks", icon="NETWORK_DRIVE")

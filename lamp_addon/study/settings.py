@@ -136,6 +136,9 @@ class LAMP_PG_study(bpy.types.PropertyGroup):
                        description="Width of each variant image")
     height: IntProperty(name="Height", default=128, min=8, max=st.MAX_SIZE, subtype="PIXEL",
                         description="Height of each variant image")
+    fit_lamp: BoolProperty(name="Fit to Lamp", default=True,
+                           description="Give each cell the lamp body's aspect, with as many pixels as Width x "
+                                       "Height, so the lamp fills it instead of a band with black around it")
     workers: IntProperty(name="Workers", default=0, min=0, max=256,
                          description="Worker processes rendering the variants (0: one per core)")
     scheduler: StringProperty(name="Scheduler", default="local", maxlen=300,
@@ -190,6 +193,8 @@ def study_from_settings(bl_scene) -> st.Study:
     Raises ``SceneError`` (with the parameter, value and range) for a bad setting or design."""
     settings = bl_scene.lamp_study
     size = (settings.width, settings.height)
+    if settings.fit_lamp:  # the body's aspect at the pixels asked for (st.framed_size)
+        size = st.framed_size(design_properties.design_to_scene(bl_scene), settings.width * settings.height)
     if bl_scene.camera is not None:
         base = render_camera.scene_for_render(bl_scene, size=size)
     else:  # no scene camera: the design's own camera section

@@ -65,10 +65,13 @@ def test_first_build_in_the_startup_file_sets_the_scene_up_for_the_lamp(lamp_add
     expected = lamp_addon.image_view.design_exposure(lamp_addon.render.camera.scene_for_render(startup))
     assert expected < -1.0  # a lit lens is many times display white
     assert startup.view_settings.exposure == pytest.approx(expected, abs=1e-6)
+    view = core_tracer.images.display.LAMP_VIEW  # lit red and amber keep their hue (issue 31)
+    assert startup.view_settings.view_transform == view
     for said in ('Made the scene camera "Lamp Camera"', 'your "Camera" is kept as it was',
                  "Render engine Lamp Tracer (was EEVEE", f"Exposure {expected:+.1f} EV",
+                 f"View transform {view} (was AgX, Blender's default)",
                  f'Built 6 objects; it is inside "Cube": Hide Other Objects shows it; set up "Lamp Camera", '
-                 f"Lamp Tracer, {expected:+.1f} EV"):
+                 f"Lamp Tracer, {view}, {expected:+.1f} EV"):
         assert said in report, (said, report)
     assert all(len(line) <= len("Info: ") + 120 for line in report.splitlines())  # each report one line
 
@@ -81,12 +84,13 @@ def test_later_builds_keep_what_the_user_chose(lamp_addon, startup, capfd):
     startup.camera = startup.objects["Camera"]  # the user's choices after the first build
     startup.render.engine = "CYCLES"
     startup.view_settings.exposure = 1.5
+    startup.view_settings.view_transform = "AgX"
     startup.lamp_design.lamps[0].lens.ior = 1.6  # an edit: the objects are out of date
     capfd.readouterr()
     assert bpy.ops.lamp.build() == {"FINISHED"}
     report = capfd.readouterr().out
     assert startup.camera.name == "Camera" and startup.render.engine == "CYCLES"
-    assert startup.view_settings.exposure == 1.5
+    assert startup.view_settings.exposure == 1.5 and startup.view_settings.view_transform == "AgX"
     assert "scene camera" not in report and "engine" not in report and "exposure" not in report
 
 

@@ -29,7 +29,7 @@ def design(lamp_addon, bl_scene):
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     settings = bl_scene.lamp_study
-    settings.width, settings.height = 32, 32
+    settings.width, settings.height, settings.fit_lamp = 32, 32, False  # cells of exactly that size
     settings.workers = 2
     return bl_scene
 
@@ -209,6 +209,6 @@ def test_sheet_labels_use_panel_words_and_rounded_values(design, lamp_addon):
     assert study.axes[0].values == (0.5, 0.8333, 1.167, 1.5)
     lay = study_sheet.layout(lamp_addon.study.settings.worded(study))
     texts = [box.text for box in lay.texts]
-    assert "Cuts Height=0.8333" in texts and "Bulb On=off" in texts
+    assert "Cuts Height=0.8333 mm" in texts and "Bulb On=off" in texts  # each value with its unit
     assert any("columns: Cuts › Height" in t and "rows: Lamp 1 › Bulb › On" in t for t in texts), texts
     assert [a.parameter.text for a in study.axes] == ["cuts.height", "lamps[0].bulb.on"]

@@ -25,7 +25,7 @@ def design(lamp_addon, bl_scene, tmp_path, monkeypatch):
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     settings = bl_scene.lamp_study
-    settings.width, settings.height = 32, 32
+    settings.width, settings.height, settings.fit_lamp = 32, 32, False
     settings.axis_1.parameter = "lens.ior"
     settings.axis_1.mode = "LIST"
     settings.axis_1.values = "1.45, 1.6"

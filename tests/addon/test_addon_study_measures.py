@@ -15,7 +15,7 @@ def stop_study(lamp_addon, addon_core, bl_scene):
     scene = addon_core.scene.load_scene(PRESETS / "photometric-stop-lamp.json")
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     settings = bl_scene.lamp_study
-    settings.width, settings.height = 24, 16
+    settings.width, settings.height, settings.fit_lamp = 24, 16, False
     settings.workers = 1
     settings.axis_1.parameter = "cuts.height"
     settings.axis_1.mode = "LIST"

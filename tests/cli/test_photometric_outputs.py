@@ -117,7 +117,7 @@ def test_a_study_shows_the_brighter_filament_brighter(tmp_path, exposure):
     proc = run_cli("study", STOP, "--vary", "bulb.state=tail,stop", "--size", "64x64", "-o", out, "--workers", "1",
                    *exposure)
     assert proc.returncode == 0, proc.stderr
-    assert re.search(r"AgX at EV100 -?\d+\.\d for every cell", proc.stdout), proc.stdout
+    assert re.search(r"Filmic at EV100 -?\d+\.\d for every cell", proc.stdout), proc.stdout  # the lamp view
     if not exposure:
         assert "EV100 15.0" in proc.stdout
     tail, stop = _cells(out)

@@ -148,8 +148,8 @@ def preset_renders():
         on = any(lamp["bulb"]["on"] for lamp in scene["lamps"])
         image, surface = result.image, p["lens_surface"]
         if photometric.is_photometric(scene):  # XYZ in cd/m²: the scene-linear Rec.709 its camera's EV100 shows
-            ev100 = photometric.ev100_for(image, scene)
-            image, surface = (photometric.scene_linear(a, ev100) for a in (image, surface))
+            fixed = display.shown(image, scene, view=None).exposure
+            image, surface = display.shown([image, surface], scene, view=None, fixed=fixed).pixels
         # With surroundings the lens mirrors the sun: glints that clip as in a photograph, not the lens's light.
         glint = surface.max(axis=2) if scene["environment"]["world"] != "none" else None
         out[path.stem] = (image, lens, lit, on, glint)
@@ -259,7 +259,7 @@ def test_study_sheet_png_shares_one_exposure_and_keeps_labels_readable(tmp_path)
     proc = run_cli("study", BASELINE, "--vary", "bulb.intensity=2/2/2,8/8/8", "-o", out, "--size", "48x48",
                    "--workers", "0")
     assert proc.returncode == 0, proc.stderr
-    assert "AgX at " in proc.stdout and " EV" in proc.stdout
+    assert f"{display.LAMP_VIEW} at " in proc.stdout and " EV" in proc.stdout  # a sheet: the lamp view
     from core_tracer.study import definition as st
     from core_tracer.study import sheet as study_sheet
 

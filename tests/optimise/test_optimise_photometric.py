@@ -230,7 +230,7 @@ def test_a_grid_margin_no_design_can_meet_is_said_after_the_search(tmp_path):
 
 def test_the_sheet_shows_a_red_stop_lamp_red(tmp_path):
     """The trials' images are XYZ in cd/m²: the sheet shows them through the base's camera EV100
-    (images.photometric.shown_together), not as if X, Y, Z were R, G, B (which turned the red stop
+    (images.display.shown), not as if X, Y, Z were R, G, B (which turned the red stop
     lamp orange: G/R about 0.7 on its lit lens)."""
     import OpenImageIO as oiio
 

@@ -8,6 +8,11 @@ deliberate change to the model, or for a new preset, regenerate the references o
     .venv/bin/python tests/raytrace/test_reference_images.py --regenerate [case ...]
 
 (every case when none is named; a case is a preset's file name without .json).
+
+The photometric references hold CIE XYZ (Y in cd/m²) under the channel names R, G, B, as
+``core_tracer.render`` returns it; their header carries OpenEXR's ``chromaticities`` of CIE XYZ
+((1, 0), (0, 1), (0, 0), white (1/3, 1/3)) and ``whiteLuminance`` 1, so Blender, OpenImageIO or
+any other reader takes them for XYZ, not Rec.709 (``imageio.XYZ_CHROMATICITIES``).
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ import OpenImageIO as oiio  # noqa: E402
 from helpers import PRESETS  # noqa: E402
 
 from core_tracer import load_scene, render  # noqa: E402
-from core_tracer.images.imageio import read_image, write_image  # noqa: E402
+from core_tracer.images.imageio import XYZ_CHROMATICITIES, read_image, write_image  # noqa: E402
 from core_tracer.raytrace import environment  # noqa: E402
 
 REFERENCES = HERE / "references"
@@ -75,11 +80,25 @@ def test_render_matches_reference(case):
         f"see {FAILURES}")
 
 
+@pytest.mark.parametrize("case", CASES)
+def test_a_reference_says_what_its_values_are(case):
+    """A photometric reference's R, G, B are CIE XYZ: its header says so (chromaticities of XYZ,
+    whiteLuminance 1 cd/m²), so another reader does not take them for Rec.709; a paper one is RGB."""
+    spec = oiio.ImageInput.open(str(REFERENCES / f"{case}.exr")).spec()
+    chromaticities = spec.getattribute("chromaticities")
+    if load_scene(PRESETS / f"{case}.json")["light_model"] == "photometric":
+        assert chromaticities == pytest.approx(XYZ_CHROMATICITIES) and spec.getattribute("whiteLuminance") == 1.0
+    else:
+        assert chromaticities is None
+
+
 def regenerate(cases: list[str]) -> None:
     REFERENCES.mkdir(exist_ok=True)
     for case in cases or CASES:
         image, scene = _render(case)
-        write_image(REFERENCES / f"{case}.exr", image, scene)
+        # a photometric render is CIE XYZ (Y in cd/m²) under the channel names R, G, B, which the
+        # comparison reads; the header's chromaticities say so to every other reader (Blender too)
+        write_image(REFERENCES / f"{case}.exr", image, scene, xyz=scene["light_model"] == "photometric")
         print(f"wrote {REFERENCES / case}.exr  peak {image.max():.4g}")
 
 

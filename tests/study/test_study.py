@@ -272,10 +272,11 @@ def test_layout_follows_from_the_study(size):
     w, h = size
     scale = study_sheet.text_scale(size)
     adv, line, pad = 6 * scale, 10 * scale, 4 * scale
-    # Column width: the image or the widest label ("height=0.5" is 10 characters), whichever is wider.
-    cell_w = max(w, 10 * adv)
-    cell_h = h + pad // 2 + 2 * line
-    row_header = len("height=0.5") * adv + pad
+    # Column width: the image or the widest column label ("ior=1.525"), whichever is wider; each value
+    # is said once, in its column's or row's header with its unit, so nothing goes under the cells.
+    cell_w = max(w, len("ior=1.525") * adv)
+    cell_h = h
+    row_header = len("height=0.5 mm") * adv + pad
     assert lay.width == max(pad + row_header + 3 * cell_w + 2 * pad + pad, 2 * pad + 28 * adv)
     assert lay.height == pad + 2 * line + pad + line + 2 * cell_h + pad + pad
     assert len(lay.cells) == 6
@@ -290,10 +291,12 @@ def test_layout_follows_from_the_study(size):
         for b in boxes[i + 1:]:
             assert not _rects_overlap(a, b), (a, b)
     kinds = [b.kind for b in lay.texts]
-    assert kinds.count("column") == 3 and kinds.count("row") == 2 and kinds.count("cell") == 12
+    assert kinds.count("column") == 3 and kinds.count("row") == 2 and kinds.count("cell") == 0
     texts = [b.text for b in lay.texts]
     assert "columns: lens.ior   rows: cuts.height" in texts
     assert ["ior=1.45", "ior=1.525", "ior=1.6"] == [b.text for b in lay.texts if b.kind == "column"]
+    assert ["height=0.5 mm", "height=2 mm"] == [b.text for b in lay.texts if b.kind == "row"]  # spec's unit
+    assert len(texts) == len(set(texts))  # each label once
 
 
 def test_one_axis_sheet_is_one_row_without_row_labels():
@@ -332,7 +335,8 @@ def test_sheet_file_carries_the_study(tmp_path, suffix):
     images = [np.full((32, 32, 3), 0.25 * (i + 1), dtype=np.float32) for i in range(4)]
     standard = display.view_transform("Standard")
     path = tmp_path / f"sheet{suffix}"
-    assert study_sheet.write_sheet(path, s, images, view=standard, exposure=-1) == (-1 if suffix == ".png" else 0)
+    used = study_sheet.write_sheet(path, s, images, view=standard, exposure=-1)
+    assert (used.paper_stops, used.ev100) == ((-1 if suffix == ".png" else 0), None)
     assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
     inp = oiio.ImageInput.open(str(path))
     spec = inp.spec()

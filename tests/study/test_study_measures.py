@@ -88,7 +88,7 @@ def test_a_sorted_filtered_sheet_places_cells_in_order_and_lists_the_rest():
     assert "grid.pass=0" in footer[1]
     # The images land where the layout says; the left-out one is nowhere.
     images = [np.full((16, 24, 3), 0.1 * (k + 1), np.float32) for k in range(4)]
-    sheet = study_sheet.compose(study, images, text="none", measured=values)
+    sheet = study_sheet.compose(study, images, text="none", measured=values, as_values=True)  # placement only
     assert sheet.shape == (lay.height, lay.width, 3)
     for k, rect in enumerate(lay.cells):
         if rect is not None:
@@ -101,9 +101,12 @@ def test_measures_without_order_keep_the_grid_and_add_lines():
     values = [{"grid.min_margin": m} for m in (0.5, -0.25, math.nan, 1.0)]
     plain, with_values = study_sheet.layout(study), study_sheet.layout(study, values)
     assert [r.x for r in plain.cells] == [r.x for r in with_values.cells] or plain.width < with_values.width
-    cells = [t.text for t in with_values.texts if t.kind == "cell"]
-    assert cells == ["ior=1.45", "grid.min_margin=0.5", "ior=1.5", "grid.min_margin=-0.25", "ior=1.55",
-                     "grid.min_margin=n/a", "ior=1.6", "grid.min_margin=1"]
+    cells = [t.text for t in with_values.texts if t.kind == "cell"]  # the values are in the column headers
+    assert cells == ["grid.min_margin=0.5", "grid.min_margin=-0.25", "grid.min_margin=n/a", "grid.min_margin=1"]
+    assert [t.text for t in with_values.texts if t.kind == "column"] == ["ior=1.45", "ior=1.5", "ior=1.55", "ior=1.6"]
+    hv = {"intensity.hv_cd": 121.66}
+    assert study_sheet.measure_lines(_study({"measures": ["intensity.hv_cd"]}), 0, [hv] * 4) == [
+        "intensity.hv_cd=122 cd"]  # with its unit (measures.by_name)
 
 
 def test_measures_by_name_read_the_committed_reports():
