@@ -86,7 +86,18 @@ def test_compare_tool_png_shows_both_halves_through_one_transform(tmp_path):
     assert imageio.read_attribute(png, imageio.VIEW_ATTRIBUTE) == "Filmic"
     strip = linear.shape[0] - 32
     tracer, cycles, difference = linear[strip:, :40], linear[strip:, 42:82], linear[strip:, 84:]
-    np.testing.assert_allclose(difference, np.abs(tracer - cycles), rtol=1e-6, atol=1e-7)  # the third panel
+    # the third panel: the signed relative difference of luminance (red: tracer brighter, blue: Cycles), held
+    # linear so that the Standard view shows its colours
+    shown_difference = display.view_transform("Standard").to_display(difference)
+    luminance = np.array([0.2126, 0.7152, 0.0722])
+    bright = np.minimum(tracer @ luminance, cycles @ luminance) > 0.05 * (tracer @ luminance).max()
+    relative = np.where(bright, (tracer @ luminance) / np.maximum(cycles @ luminance, 1e-12) - 1.0, 0.0)
+    assert (bright & (np.abs(relative) > 0.05)).any()  # 40x32 px at 2 samples: edges differ
+    for sign, (warm, cool) in ((1, (0, 2)), (-1, (2, 0))):
+        clear = bright & (sign * relative > 0.05)
+        if clear.any():
+            assert np.mean(shown_difference[clear][:, warm] > shown_difference[clear][:, cool]) > 0.9
+    assert not np.allclose(difference, np.abs(tracer - cycles), atol=1e-3)  # no longer |tracer - Cycles|
     assert ev == display.auto_exposure([tracer, cycles]) < -2  # measured over both halves together
     codes = np.asarray(oiio.ImageBuf(str(png)).get_pixels(oiio.UINT8))[..., :3].astype(int)
     view = display.view_transform("Filmic")
