@@ -235,6 +235,7 @@ class Pattern:
         theta = np.arange(0.0, 90.0 + 1e-9, THETA_STEP_DEG)
         phi = np.arange(0.0, 360.0 + 1e-9, PHI_STEP_DEG)
         intensity = far.at(phi[None, :], theta[:, None])  # (thetas, phis)
+        intensity[-1] = 0.0  # light in the die's own plane (θ = 90°) does not leave a flat die
         flux = front_flux(theta, phi, intensity)
         if not flux > 0:
             raise FarFieldError(f"{far.name}: no light in front of the die (gamma below 90 degrees); allowed a file "
