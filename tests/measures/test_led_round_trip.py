@@ -91,3 +91,23 @@ def test_a_lamps_exported_beam_as_an_led_far_field_gives_the_r148_grid_again(exp
         worst = max(worst, error)
         assert error < 0.02, (point, h, v, got.cd, expected)
     print(f"{name}: worst of {len(grid)} R148 S1 points {100 * worst:.2f} %")
+
+
+def test_light_tracing_follows_the_far_field_file_too(exported, monkeypatch):
+    """The second estimator with the same LED: photons leave the die cosine-distributed, weighted by
+    the file's f(θ, φ) (``light_tracing.led_photons``); counted over cones of 5°, against the file's
+    mean over each cone by the disc rule (``intensity.cone_directions``), within 2.5 %."""
+    from core_tracer.measures import light_tracing
+
+    monkeypatch.setattr(spectral, "finish_reflectance", lambda reflector, bands: np.zeros(bands.k))
+    folder, dist = exported
+    scene = _led_scene(folder, "lamp.ies")
+    scale = LED_FLUX_LM / _file_flux(dist)
+    angles = [(0.0, 0.0), (-10.0, 5.0), (20.0, -5.0)]
+    cone = 5.0
+    got = light_tracing.traced_intensities(scene, angles, photons=1_500_000, cone_deg=cone, seed=4)[0]
+    for (h, v), value in zip(angles, got, strict=True):
+        expected = scale * sum(w * dist.at(*_c_gamma(hi, vi)) for hi, vi, w in
+                               intensity.cone_directions(h, v, cone))
+        assert value.stderr < 0.008 * expected, (h, v, value)
+        assert value.cd == pytest.approx(expected, rel=0.025), (h, v, value.cd, expected)
