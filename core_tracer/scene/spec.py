@@ -387,11 +387,8 @@ LED = Section(
         "spectrum": Choice("red_led", LED_SPECTRA,
                            "Photometric: the colour of the LEDs' light (red or amber LED of Ohno 2005's model; "
                            "white: phosphor-converted, CIE LED-B5; led: peak and width; file: a measured curve)"),
-        "led_peak_nm": Num(630.0, 360.0, 830.0, unit="nm", doc="Photometric, LED spectrum: the peak wavelength"),
-        "led_width_nm": Num(20.0, 1.0, 300.0, unit="nm",
-                            doc="Photometric, LED spectrum: the half spectral width (Ohno 2005's model)"),
-        "spectrum_file": Text("", "Photometric, spectrum file: a .csv of nm,value rows beside the document",
-                              max_len=120),
+        # the LED spectrum's peak and width, or its file, as the bulb's
+        **{key: BULB.fields[key] for key in ("led_peak_nm", "led_width_nm", "spectrum_file")},
         "distribution": Choice("lambertian", LED_DISTRIBUTIONS,
                                "Photometric: how each die's light spreads with direction: lambertian (I = I0 cos "
                                "theta), or file: the supplier's far-field intensity, applied as the die's luminance "

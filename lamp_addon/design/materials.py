@@ -168,6 +168,11 @@ def bulb(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
         out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
         em = _node(tree, "ShaderNodeEmission", "Bulb Emission", (0, 0))
         tree.links.new(em.outputs["Emission"], out.inputs["Surface"])
+    return _bulb_emission(mat, tree, lamp)
+
+
+def _bulb_emission(mat: bpy.types.Material, tree, lamp: dict) -> list[str]:
+    """The "Bulb Emission" node driven by the bulb's intensity and switch (the bulb's, or the LEDs')."""
     b = lamp["bulb"]
     strength, color = cycles.emission_of(b["intensity"], b["on"])
     missing: list[str] = []
@@ -193,12 +198,7 @@ def led_die(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
         tree.links.new(em.outputs["Emission"], mix.inputs[1])
         tree.links.new(back.outputs["BSDF"], mix.inputs[2])
         tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
-    b = lamp["bulb"]
-    strength, color = cycles.emission_of(b["intensity"], b["on"])
-    missing: list[str] = []
-    _drive(tree, "Bulb Emission", missing, Color=(*color, 1.0), Strength=strength)
-    mat.diffuse_color = (*color, 1.0) if b["on"] else (0.05, 0.05, 0.05, 1.0)
-    return missing
+    return _bulb_emission(mat, tree, lamp)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, bare_led_document
 
 from core_tracer.measures import export, intensity, regulation_grid
 from core_tracer.measures.directions import direction
@@ -48,17 +48,9 @@ def _c_gamma(h: float, v: float) -> tuple[float, float]:
 
 
 def _led_scene(folder, far_field_file: str) -> dict:
-    doc = json.loads((PRESETS / "photometric-stop-lamp.json").read_text())
-    doc["light"] = {"direction": [0.3, -1.0, 0.6], "ambient": 0.0, "illuminance_lux": 0.0}
-    doc["environment"] = {"world": "none"}
-    doc["body"] = {**doc["body"], "size": [30.0, 30.0], "depth": 5.0}
-    lamp = doc["lamps"][0]
-    lamp["cuts"]["height"] = 0.0
-    lamp["lens"] = {**lamp["lens"], "material": "custom", "ior": 1.0001, "abbe": 100.0, "filter": "clear",
-                    "radius": 12.0, "thickness": 0.1}
-    lamp["source"] = "led"
-    lamp["led"] = {"position": [0.0, 0.3, 0.0], "die_size": [DIE_MM, DIE_MM], "flux_lm": LED_FLUX_LM,
-                   "spectrum": "red_led", "distribution": "file", "far_field_file": far_field_file}
+    doc = bare_led_document(depth_mm=0.3, die_mm=DIE_MM, window_radius=12.0, window_thickness=0.1,
+                            body=(30.0, 30.0, 5.0), flux_lm=LED_FLUX_LM, distribution="file",
+                            far_field_file=far_field_file)
     path = folder / "led.json"
     path.write_text(json.dumps(doc))
     return beside.with_spectrum_files(path, parse_scene(doc))

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, bare_led_document
 
 from core_tracer import render_passes
 from core_tracer.raytrace import spectral
@@ -27,22 +27,14 @@ DIE_MM = 3.0
 
 
 def die_document(die_mm: float = DIE_MM, depth_mm: float = 1.0, **led) -> dict:
-    """The photometric stop lamp reduced to one bare LED die facing the lens (−y), ``depth_mm`` behind a
-    0.5 mm window of radius 25 mm: seen unhidden to 80° off its axis (1 mm × tan 80° = 5.7 mm)."""
-    doc = json.loads((PRESETS / "photometric-stop-lamp.json").read_text())
+    """One bare LED die facing the lens, ``depth_mm`` behind a 0.5 mm window of radius 25 mm (seen
+    unhidden to 80° off its axis: 1 mm × tan 80° = 5.7 mm), seen on its axis by an orthographic camera
+    inside the die's outline."""
+    doc = bare_led_document(depth_mm=depth_mm, die_mm=die_mm, window_radius=25.0, window_thickness=0.5,
+                            body=(60.0, 60.0, 20.0), flux_lm=FLUX_LM, **led)
     doc["camera"] = {"type": "orthographic", "position": [0, -500, 0], "target": [0, 0, 0], "up": [0, 0, 1],
                      "width": 0.9 * die_mm, "exposure": "ev100", "ev100": 15.0}
     doc["image"] = {"width": 9, "height": 9, "samples": 1}
-    doc["light"] = {"direction": [0.3, -1.0, 0.6], "ambient": 0.0, "illuminance_lux": 0.0}
-    doc["environment"] = {"world": "none"}
-    doc["body"] = {**doc["body"], "size": [60.0, 60.0], "depth": 20.0}
-    lamp = doc["lamps"][0]
-    lamp["cuts"]["height"] = 0.0
-    lamp["lens"] = {**lamp["lens"], "material": "custom", "ior": 1.0001, "abbe": 100.0, "filter": "clear",
-                    "radius": 25.0, "thickness": 0.5, "specular": 0.0, "diffuse_color": [0.0, 0.0, 0.0]}
-    lamp["source"] = "led"
-    lamp["led"] = {"position": [0.0, depth_mm, 0.0], "die_size": [die_mm, die_mm], "flux_lm": FLUX_LM,
-                   "spectrum": "red_led", **led}
     return doc
 
 
