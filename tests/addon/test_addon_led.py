@@ -80,3 +80,40 @@ def test_the_led_panel_shows_for_led_lamps_only(lamp_addon, bl_scene):
     lamp.source = "led"
     back = lamp_addon.design.properties.design_to_scene(bl_scene)
     assert back["lamps"][0]["led"] == scene["lamps"][0]["led"]
+
+
+@pytest.mark.slow
+def test_a_white_die_through_a_clear_lens_agrees_with_cycles(lamp_addon, bl_scene):
+    """Compare on an LED die of white_led (inside Rec.709: Cycles can carry its colour) filling the
+    view's centre through a flat clear PMMA lens: Cycles' emission plane of Φ_e / (π A) against the
+    tracer's Φ / (π A), luminance within 2 % and xy within 0.005 (as the bulb's in
+    tests/addon/test_addon_photometric_compare.py)."""
+    from helpers import BASELINE
+
+    from core_tracer.photometry import cie
+
+    doc = json.loads(BASELINE.read_text())
+    doc["light_model"] = "photometric"
+    doc["image"] = {"width": 32, "height": 32}
+    doc["light"]["illuminance_lux"] = 0.0
+    doc["camera"].update(fov_deg=2.0, exposure="ev100", ev100=17.0)
+    lamp = doc["lamps"][0]
+    lamp["cuts"]["height"] = 0.0
+    lamp["lens"].update(diffuse_color=[0.0, 0.0, 0.0], specular=0.0, material="pmma", filter="clear")
+    lamp["source"] = "led"
+    lamp["led"] = {"position": [0.0, 10.0, 0.0], "die_size": [12.0, 12.0], "flux_lm": 100.0, "spectrum": "white_led"}
+    scene = core_tracer.parse_scene(doc)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=64)
+
+    def xyz(half):
+        rows = half[12:20, 12:20].reshape(-1, 3).astype(np.float64)
+        return (rows @ cie.LINEAR_REC709_TO_XYZ.T * (1.2 * 2.0 ** 17.0)).mean(axis=0)
+
+    tracer, cycles = xyz(result["tracer"]), xyz(result["cycles"])
+    print(f"LED die: tracer {tracer[1]:.0f} cd/m2, Cycles {cycles[1] / tracer[1] - 1:+.2%}, "
+          f"xy {float(np.hypot(*(cie.xy(cycles) - cie.xy(tracer)))):.4f} apart")
+    expected = 100.0 / (math.pi * 144e-6) * 0.92  # Φ/(πA) through two PMMA faces (about 4 % each)
+    assert tracer[1] == pytest.approx(expected, rel=0.01)
+    assert cycles[1] / tracer[1] - 1.0 == pytest.approx(0.0, abs=0.02)
+    assert float(np.hypot(*(cie.xy(cycles) - cie.xy(tracer)))) < 0.005

@@ -175,3 +175,15 @@ def test_the_cone_mean_is_the_closed_form_where_the_cone_stays_in_front():
     """The test's cone integral against the exact mean of a linear function over a cap, (1 + cos α)/2."""
     assert _cone_mean_cd(40.0, 25.0) == pytest.approx(_lambertian_cd(40.0) * (1 + math.cos(math.radians(25))) / 2,
                                                       rel=1e-5)
+
+
+def test_in_the_paper_mode_a_die_shows_the_bulbs_intensity():
+    """The paper mode has no flux: the die stands in for the bulb and shows its RGB intensity I0 head-on
+    (and at every angle in front), nothing from behind."""
+    doc = die_document()
+    doc["light_model"] = "paper"
+    doc["background"] = [0.0, 0.0, 0.0]
+    doc["lamps"][0]["lens"].update(specular=0.0, absorption=[0.0, 0.0, 0.0])  # the paper's RGB absorption: none
+    doc["lamps"][0]["bulb"]["intensity"] = [3.0, 2.0, 1.0]
+    image = render_passes(parse_scene(doc)).image
+    np.testing.assert_allclose(image, np.broadcast_to([3.0, 2.0, 1.0], image.shape), rtol=1e-6)
