@@ -74,6 +74,9 @@ def test_the_led_panel_shows_for_led_lamps_only(lamp_addon, bl_scene):
     lamp = bl_scene.lamp_design.lamps[0]
     in_use = lamp_addon.design.panels.section_in_use
     assert in_use(lamp, "led") and not in_use(lamp, "bulb") and not in_use(lamp, "socket")
+    names = {key: lamp.led.bl_rna.properties[key].name for key in ("far_field_file", "flux_lm", "die_size")}
+    assert names == {"far_field_file": "Far-Field File (.ies, .ldt)", "flux_lm": "Flux per LED (lm)",
+                     "die_size": "Die Size (mm)"}
     lamp.source = "bulb"
     assert not in_use(lamp, "led") and in_use(lamp, "bulb")
     # the design reads back as the preset (the LED fields follow from the spec)

@@ -97,9 +97,10 @@ def test_light_tracing_follows_the_far_field_file_too(exported, monkeypatch):
     scale = LED_FLUX_LM / _file_flux(dist)
     angles = [(0.0, 0.0), (-10.0, 5.0), (20.0, -5.0)]
     cone = 5.0
-    got = light_tracing.traced_intensities(scene, angles, photons=1_500_000, cone_deg=cone, seed=4)[0]
+    got = light_tracing.traced_intensities(scene, angles, photons=3_000_000, cone_deg=cone, seed=4)[0]
     for (h, v), value in zip(angles, got, strict=True):
         expected = scale * sum(w * dist.at(*_c_gamma(hi, vi)) for hi, vi, w in
                                intensity.cone_directions(h, v, cone))
-        assert value.stderr < 0.008 * expected, (h, v, value)
+        assert value.stderr < 0.01 * expected, (h, v, value)
+        print(f"light traced at ({h:g}, {v:g}): {value.cd:.3f} ± {value.stderr:.3f} cd, the file's {expected:.3f} cd")
         assert value.cd == pytest.approx(expected, rel=0.025), (h, v, value.cd, expected)
