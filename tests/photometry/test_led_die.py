@@ -75,6 +75,14 @@ def test_an_array_has_its_dies_where_the_pitch_puts_them():
     np.testing.assert_allclose(t[hit], 11.0)
 
 
+def test_a_single_die_needs_no_pitch():
+    """A pitch of 0 is allowed for one die (it spaces nothing): the die is whole (before, the rays
+    through its centre lines missed it: 0 / 0 in the cell look-up)."""
+    expected = FLUX_LM / (math.pi * (DIE_MM * 1e-3) ** 2)
+    luminance = render_passes(parse_scene(die_document(pitch=[0.0, 0.0]))).image[..., 1]
+    np.testing.assert_allclose(luminance, expected, rtol=1e-5)
+
+
 def test_a_lamp_without_leds_has_no_die_part():
     from core_tracer.raytrace.parts import led_die, parts_for
 

@@ -20,7 +20,9 @@ def _on_a_die(offset: np.ndarray, half: np.ndarray, pitch: np.ndarray, count: np
     """Whether points at ``offset`` from the array's centre along one of its axes fall on a die of the
     row: the nearest die centre (i − (count − 1)/2) pitch, i clipped to the row, within ``half``."""
     first = (count - 1.0) / 2.0
-    i = np.clip(np.rint(offset / pitch + first), 0.0, np.maximum(count - 1.0, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):  # a single die's pitch may be 0: its one cell
+        cell = np.where(count > 1.0, offset / pitch, 0.0)
+    i = np.clip(np.rint(cell + first), 0.0, np.maximum(count - 1.0, 0.0))
     return np.abs(offset - (i - first) * pitch) <= half
 
 
