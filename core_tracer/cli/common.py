@@ -15,8 +15,10 @@ from ..fileio import check_writable
 from ..images import display
 from ..scene import spec as S
 from ..scene.beside import environment_file
+from ..scene.light_models import ignored_note
 from ..scene.messages import show_value
 from ..scene.reading import SceneError, read_json
+from ..scene.safe_text import printable
 from ..scene.validate import parse_scene
 
 
@@ -64,6 +66,9 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
         environment_file(path, scene["environment"])  # beside the file, or refused
     except SceneError as e:
         raise in_file(e, path) from None
+    note = ignored_note(scene)
+    if note:  # reported, not refused: the fields are kept for a switch to the photometric model
+        print(f"note: {printable(os.fspath(path))}: {note}", file=sys.stderr)
     return scene
 
 

@@ -81,7 +81,9 @@ def run(args: argparse.Namespace) -> int:
                 parallel = opt.parallel or workers
                 limit = min(budget.MEMORY_BUDGET, search.trial_bytes(opt) + engine.DASK_BYTES + engine.KEPT_FREED_BYTES)
                 with engine.connect(args.scheduler, workers=workers, memory_limit=limit) as client:
-                    where = "on the " + (client.local.describe() if client.local is not None else
+                    if client.local is not None:  # its dashboard now, while it is there to open
+                        print(client.local.describe(), file=sys.stderr if tty else sys.stdout, flush=True)
+                    where = "on the " + (client.local.describe(live=False) if client.local is not None else
                                          f"Dask scheduler {client.scheduler.address}")
                     outcome = search.run(opt, client, cache, parallel=parallel, progress=progress,
                                          should_stop=stop.is_set)

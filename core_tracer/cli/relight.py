@@ -22,7 +22,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", metavar="OUT", help="image file, .exr or .png")
     parser.add_argument("--list", action="store_true", help="list the states and what the design has lit")
     parser.add_argument("--on", action="append", default=[], metavar="KEY[,KEY]",
-                        help="switch these states on (e.g. lamps[0].stop; 'surroundings' for sun and sky)")
+                        help="switch these states on, named by the lamp's function (e.g. stop, turn, "
+                             "tail.stop_filament; 'surroundings' for sun and sky; --list names them; the "
+                             "keys of earlier versions, lamps[0].stop, still work)")
     parser.add_argument("--off", action="append", default=[], metavar="KEY[,KEY]", help="switch these states off")
     parser.add_argument("--level", action="append", default=[], metavar="KEY=VALUE",
                         help="a state's flux in lm (photometric bulbs) or scale (paper bulbs, surroundings); "
@@ -43,7 +45,7 @@ def _levels(values: list[str]) -> dict[str, float]:
             level = float(number)
         except ValueError:
             raise SceneError("--level", f"{printable(value)!r} is not KEY=VALUE; allowed e.g. "
-                                        "lamps[0].stop=500") from None
+                                        "stop=500") from None
         if not math.isfinite(level):
             raise SceneError("--level", f"{printable(value)!r} is not a finite number; allowed [0, 100000]")
         out[key.strip()] = level
@@ -67,14 +69,15 @@ def run(args: argparse.Namespace) -> int:
         for state in light.states:
             lit = "on " if state.lit_in_design else "off"
             level = f"{state.rendered:g} lm" if state.unit else "x1"
-            print(f"{lit} {state.key:<16} {level:>8}  {state.label}")
+            also = f" (also {state.alias})" if state.alias else ""
+            print(f"{lit} {state.key:<24} {level:>8}  {state.label}{also}")
         if args.output is None:
             return 0
-    on = {key: True for key in _keys(args.on)}
+    on = {light.state(key).key: True for key in _keys(args.on)}  # an earlier version's key: the state's own
     for key in _keys(args.off):
-        if key in on:
+        if light.state(key).key in on:
             raise SceneError("--off", f"{printable(key)} is also given to --on; allowed each state once")
-        on[key] = False
+        on[light.state(key).key] = False
     start = time.perf_counter()
     weights = S.weights_for(light, on, _levels(args.level))
     image = S.with_glare(light, S.relight(light, weights))

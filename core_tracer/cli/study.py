@@ -365,9 +365,10 @@ def _run_on_dask(args: argparse.Namespace, study: st.Study, world: int, on_progr
 
     def started(client) -> None:
         local = client.local
-        where.append(local.describe() if local is not None else f"Dask scheduler {client.scheduler.address}")
+        # The summary is printed after the cluster has stopped: its dashboard only in the line said now.
+        where.append(local.describe(live=False) if local is not None else f"Dask scheduler {client.scheduler.address}")
         if sys.stderr.isatty():
-            print(where[0], file=sys.stderr)
+            print(local.describe() if local is not None else where[0], file=sys.stderr)
         checkpoint("study:started")
 
     try:

@@ -125,9 +125,12 @@ class Local:
     memory_limit: int
     dashboard: str
 
-    def describe(self) -> str:
+    def describe(self, live: bool = True) -> str:
+        """The cluster in words; its dashboard's address only while it runs (``live``): a summary
+        written after the cluster has stopped would give a link to nothing."""
+        dashboard = f", dashboard {self.dashboard}" if live else ""
         return (f"local Dask cluster: {self.workers} worker process{'es' if self.workers != 1 else ''} x "
-                f"{self.threads} thread, {budget.gib(self.memory_limit)} each, dashboard {self.dashboard}")
+                f"{self.threads} thread, {budget.gib(self.memory_limit)} each{dashboard}")
 
 
 @contextlib.contextmanager

@@ -29,12 +29,14 @@ from __future__ import annotations
 import copy
 import io
 import json
+import math
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..scene.derived import lens_absorption
 from ..scene.led_array import LedArray, uses_leds
 from ..scene.reading import SceneError
 
@@ -46,7 +48,10 @@ ADAPTIVE_OFF = 0.0  # adaptive_threshold of render_passes: every pixel gets the 
 @dataclass(frozen=True)
 class State:
     """One source that can be switched and dimmed: a lamp's bulb (or one filament of it), or the
-    surroundings. ``key``: ``lamps[0].stop``, ``lamps[1].on``, ``surroundings``."""
+    surroundings. ``key``: the lamp's function, as a designer names it (``stop``, ``turn``,
+    ``tail.stop_filament``: the other filament of a tail lamp's two-filament bulb; ``stop2``: the second
+    stop lamp; ``lamp3``: a lamp with no function), or ``surroundings``. ``alias``: the key files
+    written before had (``lamps[0].stop``, ``lamps[1].on``), still accepted."""
 
     key: str
     label: str
@@ -55,36 +60,87 @@ class State:
     rendered: float  # the flux (lm, photometric) or intensity scale (paper, 1) the pass was rendered with
     unit: str  # "lm" or "" (a scale)
     lit_in_design: bool  # whether the design itself has it lit
+    alias: str = ""
 
 
-def _lamp_name(scene: dict, i: int) -> str:
-    function = scene["lamps"][i].get("function", "")
-    return f"Lamp {i + 1}" + (f" ({function.replace('_', ' ').title()})" if function not in ("", "custom") else "")
+# A paper lens's colour, seen through its thickness (linear RGB): clear when its weakest channel is at
+# least half its strongest, amber when green is at least this share of red (the four-lamp preset's
+# amber 0.13, its red 0.012), else red.
+_AMBER_GREEN_SHARE = 0.05
+# A red paper lamp whose bulb is at most this bright (the sum of its RGB intensity) is a tail lamp:
+# the tail function's 8/7/6 (21) against the stop's 20/17.5/15 (``scene.functions``).
+_TAIL_INTENSITY = 21.0
+
+
+def _paper_function(lamp: dict) -> str:
+    """What a "custom" lamp of a paper design is for, from its lens colour and bulb (as
+    ``report.lamp_function`` says it from the filter and filament of a photometric one)."""
+    t = lamp["lens"]["thickness"]
+    red, green, blue = (math.exp(-a * t) for a in lens_absorption(lamp["lens"]))
+    if min(red, green, blue) >= 0.5 * max(red, green, blue):
+        return "reversing"
+    if green >= _AMBER_GREEN_SHARE * red:
+        return "turn"
+    return "tail" if sum(lamp["bulb"]["intensity"]) <= _TAIL_INTENSITY else "stop"
+
+
+def _function_of(scene: dict, lamp: dict) -> str | None:
+    """What ``lamp`` is for: its ``function``; for a "custom" lamp, the one its lens and bulb say
+    (photometric: ``report.lamp_function``, the measures' own rule, so a state and a report row
+    agree; paper: ``_paper_function``). None for a function with no name here."""
+    declared = lamp.get("function", "custom")
+    if declared != "custom":
+        return declared
+    if scene.get("light_model", "paper") != "photometric":
+        return _paper_function(lamp)
+    from .report import lamp_function
+
+    return lamp_function(lamp)
+
+
+def lamp_names(scene: dict) -> list[tuple[str, str | None]]:
+    """``(key, words)`` of each lamp by its function: ``("turn", "Turn")``; lamps sharing a function
+    numbered (``stop1``, ``stop2``: "Stop 1", "Stop 2"); ``("lamp2", None)`` for a lamp with none."""
+    functions = [_function_of(scene, lamp) for lamp in scene["lamps"]]
+    out: list[tuple[str, str | None]] = []
+    for i, function in enumerate(functions):
+        if function is None:
+            out.append((f"lamp{i + 1}", None))
+            continue
+        same = [j for j, f in enumerate(functions) if f == function]
+        number = f"{same.index(i) + 1}" if len(same) > 1 else ""
+        words = function.replace("_", " ").capitalize()
+        out.append((f"{function}{number}", f"{words} {number}".strip()))
+    return out
 
 
 def states_of(scene: dict) -> list[State]:
-    """The switchable sources of a normalised scene, the surroundings first."""
+    """The switchable sources of a normalised scene, the surroundings first. A two-filament bulb's
+    filament that makes the lamp's function (the tail filament of a tail lamp, the stop filament of
+    any other) is the state named by the function; the other filament is named after it."""
     photometric = scene.get("light_model", "paper") == "photometric"
     out = [State(SURROUNDINGS, "Surroundings (sun, sky, street light)", None, "", 1.0, "", True)]
-    for i, lamp in enumerate(scene["lamps"]):
+    for i, ((name, words), lamp) in enumerate(zip(lamp_names(scene), scene["lamps"], strict=True)):
         bulb = lamp["bulb"]
-        if uses_leds(lamp):  # the dies, switched by the lamp's bulb.on
-            leds = LedArray.of(lamp["led"])
-            rendered = float(lamp["led"]["flux_lm"]) * leds.count if photometric else 1.0
-            out.append(State(f"lamps[{i}].on", f"{_lamp_name(scene, i)} · {leds.count} LEDs", i, "on", rendered,
-                             "lm" if photometric else "", bool(bulb["on"])))
-        elif photometric and bulb.get("type", "custom") != "custom":
+        leds = LedArray.of(lamp["led"]) if uses_leds(lamp) else None  # the dies, switched by bulb.on
+        named = photometric and leds is None and bulb.get("type", "custom") != "custom"
+        where = f"lamp {i + 1}" + (f", {bulb['type']}" if named else "") + (f", {leds.count} LEDs" if leds else "")
+        label = f"{words} ({where})" if words else where[:1].upper() + where[1:]
+        if named:
             from ..photometry.sources import BULB_TYPES
 
             kind = BULB_TYPES[bulb["type"]]
-            for filament, state in kind.states.items():
-                label = f"{_lamp_name(scene, i)} · {bulb['type']} {filament}"
-                out.append(State(f"lamps[{i}].{filament}", label, i, filament, state.flux_lm, "lm",
-                                 bool(bulb["on"]) and bulb["state"] == filament))
+            own = "tail" if name.startswith("tail") and "tail" in kind.states else next(iter(kind.states))
+            for filament, state in sorted(kind.states.items(), key=lambda item: item[0] != own):
+                key = name if filament == own else f"{name}.{filament}_filament"
+                out.append(State(key, label if filament == own else f"{label} · {filament} filament", i, filament,
+                                 state.flux_lm, "lm", bool(bulb["on"]) and bulb["state"] == filament,
+                                 f"lamps[{i}].{filament}"))
         else:
-            rendered = float(bulb["flux_lm"]) if photometric else 1.0
-            out.append(State(f"lamps[{i}].on", f"{_lamp_name(scene, i)} · bulb", i, "on", rendered,
-                             "lm" if photometric else "", bool(bulb["on"])))
+            flux = float(lamp["led"]["flux_lm"]) * leds.count if leds is not None else float(bulb["flux_lm"])
+            rendered = flux if photometric else 1.0
+            out.append(State(name, label, i, "on", rendered, "lm" if photometric else "", bool(bulb["on"]),
+                             f"lamps[{i}].on"))
     return out
 
 
@@ -114,8 +170,9 @@ class LightStates:
         return {s.key: 1.0 if s.lit_in_design else 0.0 for s in self.states}
 
     def state(self, key: str) -> State:
+        """The state of ``key``, or of the key files written before gave it (``lamps[0].stop``)."""
         for s in self.states:
-            if s.key == key:
+            if key in (s.key, s.alias):
                 return s
         raise SceneError(key, f"not a state of this design; allowed {', '.join(s.key for s in self.states)}")
 
@@ -154,16 +211,18 @@ def weights_for(light: LightStates, on: dict[str, bool] | None = None,
     level's ratio to what the pass was rendered with (``level``: lm for photometric bulbs, a scale
     for paper bulbs and the surroundings). Raises ``SceneError`` naming the state."""
     weights = light.default_weights()
+    switched = set()
     for key, value in (on or {}).items():
-        light.state(key)
-        weights[key] = 1.0 if value else 0.0
+        state = light.state(key)
+        weights[state.key] = 1.0 if value else 0.0
+        switched.add(state.key)
     for key, value in (level or {}).items():
         state = light.state(key)
         if not (np.isfinite(value) and 0.0 <= value <= 1.0e5):
             raise SceneError(key, f"{value} is out of range; allowed [0, 100000]{' lm' if state.unit else ''}")
-        if weights[key] == 0.0 and key not in (on or {}):
-            weights[key] = 1.0  # giving a level switches the state on
-        weights[key] *= value / state.rendered if state.rendered > 0 else 0.0
+        if weights[state.key] == 0.0 and state.key not in switched:
+            weights[state.key] = 1.0  # giving a level switches the state on
+        weights[state.key] *= value / state.rendered if state.rendered > 0 else 0.0
     return weights
 
 

@@ -11,7 +11,8 @@ Built in:
 - ``ssim``: closeness to a reference image the designer likes, the SSIM (``ssim``) of the trial and
   the reference on their display luma: both shown through one view transform at one exposure (the
   reference's auto exposure, or ``exposure`` stops); 1 is identical. Options: ``reference`` (an
-  EXR or PNG of the trial's size, relative to the optimisation file), ``view``, ``exposure``.
+  EXR or PNG of the trial's size, relative to the optimisation file; another size is refused,
+  ``check_size``), ``view``, ``exposure``.
 - ``lens_luminance``: mean luminance of the pixels that see a lamp (lens, bulb, reflector, socket,
   side walls: the passes other than body and background), linear; Rec. 709 Y of the image in the
   paper's light model, Y in cd/m² in the photometric one.
@@ -64,6 +65,20 @@ class Reference:
     shown_luma: np.ndarray  # (H, W) display luma of the reference
     view: Any  # display.ViewTransform
     exposure: float
+    name: str = ""  # the file as the optimisation file gives it
+
+
+def check_size(prepared: Any, size: tuple[int, int], where: str) -> None:
+    """Refuse, naming ``size``, a reference image (``prepared`` by ``ssim``) that is not the trials'
+    size: SSIM compares two images pixel by pixel, and a ``size`` changed after the reference was
+    rendered gave a traceback from the first trial."""
+    if not isinstance(prepared, Reference):
+        return
+    height, width = prepared.shown_luma.shape
+    if (width, height) != tuple(size):
+        raise SceneError("size", f"[{size[0]}, {size[1]}] is not the size of {where}.reference {prepared.name!r} "
+                                 f"({width}x{height} px), which SSIM compares pixel by pixel; allowed "
+                                 f"[{width}, {height}], or a reference of the new size")
 
 
 def _prepare_ssim(options: dict, where: str, folder: str) -> Reference:
@@ -94,7 +109,7 @@ def _prepare_ssim(options: dict, where: str, folder: str) -> Reference:
     if min(luma.shape) < ssim.WINDOW:
         raise SceneError(f"{where}.reference", f"{path!r} is {luma.shape[1]}x{luma.shape[0]} px; allowed at least "
                                                f"{ssim.WINDOW}x{ssim.WINDOW}")
-    return Reference(luma, view, ev)
+    return Reference(luma, view, ev, path)
 
 
 def _ssim(trial: Trial, reference: Reference) -> float:

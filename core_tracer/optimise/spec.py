@@ -177,6 +177,7 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
                                                            "cd in every trial; allowed any other parameter")
     for kind, items in (("objectives", objectives), ("constraints", constraints)):
         for i, item in enumerate(items):
+            M.check_size(item.prepared, size, f"{kind}[{i}]")
             if item.measure.photometric and base.get("light_model") != "photometric":
                 raise SceneError(f"{kind}[{i}].measure", f"{item.measure.name} needs light in cd, which the base's "
                                  f"light_model \"{base.get('light_model', 'paper')}\" has not; allowed a base with "

@@ -14,9 +14,11 @@ refractive index is its material's unless the material is custom.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 
 from . import spec as S
+from .messages import show_value
 
 PHOTOMETRIC_PREFIX = "Photometric"
 
@@ -55,3 +57,49 @@ def used(section: S.Section, key: str, light_model: str, value_of: Callable[[str
         return all(value_of(choice) in values for sec, k, choice, values in _PHOTOMETRIC_SHOWN_WHEN
                    if sec is section and k == key)
     return not is_photometric_only(section, key)
+
+
+# At most this many fields are named in the note; the rest are counted.
+_NAMED_AT_MOST = 3
+
+
+def ignored_fields(scene: dict) -> list[tuple[str, object]]:
+    """``(path, value)`` of each photometric field a paper-mode ``scene`` (normalised) sets to other
+    than its default: the values the paper light model ignores. A field at its default is not
+    listed, so a document that writes every field (a preset saved by Blender) says nothing."""
+    if scene.get("light_model", "paper") != "paper":
+        return []
+    out = []
+    for path, value in _leaves(scene, S.SCENE, ""):
+        spec = S.lookup(re.sub(r"\[\d+\]", "[]", path))
+        default = list(spec.default) if isinstance(spec.default, tuple) else spec.default
+        if spec.doc.startswith(PHOTOMETRIC_PREFIX) and value != default:
+            out.append((path, value))
+    return out
+
+
+def ignored_note(scene: dict, name: Callable[[str], str] = str) -> str | None:
+    """One line saying which photometric fields a paper-mode ``scene`` ignores (None when none),
+    with ``name`` turning a field's path into the reader's words (the panel's, in Blender)."""
+    fields = ignored_fields(scene)
+    if not fields:
+        return None
+    named = ", ".join(f"{name(path)} = {show_value(value)}" for path, value in fields[:_NAMED_AT_MOST])
+    more = f" and {len(fields) - _NAMED_AT_MOST} more" if len(fields) > _NAMED_AT_MOST else ""
+    return (f"the paper light model ignores photometric fields: {named}{more}; "
+            f'they take effect with {name("light_model")} "photometric"')
+
+
+def _leaves(doc: dict, section: S.Section, path: str):
+    """``(path, value)`` of every leaf field of a normalised ``doc`` below ``section``."""
+    for key, spec in section.fields.items():
+        if key not in doc:
+            continue
+        where = f"{path}{key}"
+        if isinstance(spec, S.Section):
+            yield from _leaves(doc[key], spec, where + ".")
+        elif isinstance(spec, S.ListOf):
+            for i, item in enumerate(doc[key]):
+                yield from _leaves(item, spec.item, f"{where}[{i}].")
+        else:
+            yield where, doc[key]

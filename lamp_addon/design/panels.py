@@ -17,6 +17,7 @@ import bpy
 from ...core_tracer.scene import functions, light_models
 from ...core_tracer.scene import spec as S
 from ..actions import ACTION_OPERATORS
+from ..render import setup as render_setup
 from . import properties, validity
 
 
@@ -142,6 +143,9 @@ class LAMP_PT_light(DesignSection, bpy.types.Panel):
         layout = self._split(self.layout)
         design = context.scene.lamp_design
         layout.row().prop(design, "light_model", expand=True)  # which fields follow: the paper's or lm, lx
+        kept = render_setup.kept_exposure_text(context.scene)
+        if kept:
+            layout.label(text=kept, icon="INFO")
         draw_section(layout, design.light, S.LIGHT)
         draw_section(layout, design, S.SCENE, (S.Num,))  # the background colour
         layout.separator()

@@ -5,8 +5,11 @@ No field is listed here by hand: the PropertyGroups are made by walking ``spec.S
 scene declaration. Kinds map as follows:
 
 - ``Num`` -> ``FloatProperty`` / ``IntProperty``, or ``FloatVectorProperty`` (size 2 or 3, subtype
-  ``COLOR`` for colours, ``XYZ`` for 3-vectors), hard and soft limits from the spec range; an open
-  bound such as ``(0, 1000] mm`` becomes a closed one just inside it (``OPEN_BOUND_MARGIN``).
+  ``COLOR`` for colours, ``XYZ`` for 3-vectors), soft limits from the spec range (an open bound such as
+  ``(0, 1000] mm`` becomes a closed one just inside it, ``OPEN_BOUND_MARGIN``) and no hard limits: a
+  value typed outside the range is kept as typed and refused by the design's check in one line
+  ("Lamp 1 › Lens › Thickness: -2.0 is out of range; allowed (0, 100] mm"), never clamped to the
+  nearest allowed value, which would make a design the designer did not ask for and call it valid.
 - ``Choice`` -> ``EnumProperty`` (identifiers are the JSON strings); a choice with a single allowed
   value (``schema``) is a constant, not a property.
 - ``Flag`` -> ``BoolProperty``; ``Text`` -> ``StringProperty``; ``Tags`` -> ``StringProperty`` holding
@@ -134,7 +137,7 @@ def is_constant(spec: S.Spec) -> bool:
 
 
 def blender_range(spec: S.Num) -> tuple[float | None, float | None]:
-    """The closed (min, max) of the Blender property for a spec range; ``None`` is unbounded."""
+    """The closed (soft min, soft max) of the Blender property for a spec range; ``None`` is unbounded."""
     lo, hi = spec.lo, spec.hi
     if lo is not None and spec.lo_open:
         lo = lo + OPEN_BOUND_MARGIN * max(1.0, abs(lo))
@@ -161,16 +164,17 @@ def _num_property(key: str, spec: S.Num, section: S.Section | None = None, name:
     if name is None:
         name = field_label(section, key, spec.unit) if section is not None else display_name(key, spec.unit)
     kw = {"name": name, "description": _description(spec), "update": _edited}
+    # Soft limits only: dragging stays in range, a typed value is kept and the check refuses it.
     if spec.integer:
         if lo is not None:
-            kw["min"] = kw["soft_min"] = int(lo)
+            kw["soft_min"] = int(lo)
         if hi is not None:
-            kw["max"] = kw["soft_max"] = int(hi)
+            kw["soft_max"] = int(hi)
         return IntProperty(default=int(spec.default), **kw)
     if lo is not None:
-        kw["min"] = kw["soft_min"] = lo
+        kw["soft_min"] = lo
     if hi is not None:
-        kw["max"] = kw["soft_max"] = hi
+        kw["soft_max"] = hi
     kw["precision"] = 4
     if spec.size > 1:
         if spec.subtype == "color":
@@ -195,6 +199,11 @@ def _function_chosen(self, context) -> None:
 
 
 _writing = [0]  # > 0 while a design is being written: update callbacks leave the values alone
+
+
+def is_writing() -> bool:
+    """Whether a whole design (a preset) is being written into the properties right now."""
+    return _writing[0] > 0
 
 
 def _leaf_property(key: str, spec: S.Spec, section: S.Section):
@@ -375,14 +384,25 @@ def _check_section(data: dict, section: S.Section, path: str) -> None:
                 if TAG_SEPARATOR in tag or tag != tag.strip() or not tag:
                     raise SceneError(where, f'"{tag}" cannot be kept in the comma-separated tag field; '
                                                        "allowed tags without commas or surrounding spaces")
-        elif isinstance(spec, S.Num):
-            lo, hi = blender_range(spec)
+        elif isinstance(spec, S.Num) and not spec.integer:
             for x in value if spec.size > 1 else (value,):
-                if (lo is not None and x < lo) or (hi is not None and x > hi):
-                    low = "-inf" if lo is None else f"{lo:g}"
-                    high = "inf" if hi is None else f"{hi:g}"
-                    raise SceneError(where, f"{x:g} is too close to the open bound; allowed "
-                                                       f"[{low}, {high}] in Blender")
+                if not _in_range(_as_float32(x), spec):
+                    raise SceneError(where, f"{x:g} cannot be kept in Blender's 32-bit number inside the "
+                                            f"allowed range {spec.range_text()}")
+
+
+def _as_float32(x: float) -> float:
+    try:
+        return struct.unpack("<f", struct.pack("<f", x))[0]
+    except OverflowError:
+        return float("inf") if x > 0 else float("-inf")
+
+
+def _in_range(x: float, spec: S.Num) -> bool:
+    """Whether ``x`` lies in ``spec``'s range, its open bounds excluded."""
+    above = spec.lo is None or (x > spec.lo if spec.lo_open else x >= spec.lo)
+    below = spec.hi is None or (x < spec.hi if spec.hi_open else x <= spec.hi)
+    return above and below
 
 
 def _write_section(group, section: S.Section, data: dict) -> None:

@@ -13,6 +13,7 @@ import textwrap
 from dataclasses import dataclass
 
 from ...core_tracer.scene import spec as S
+from ...core_tracer.scene.light_models import ignored_note
 from ...core_tracer.scene.limits import lamp_limits
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
@@ -115,6 +116,7 @@ class Problem:
 class Status:
     problem: Problem | None
     limits: dict[str, str]  # property path below lamp_design -> the limit that depends on other fields
+    note: str | None = None  # what a valid design sets that its light model ignores (``light_models.ignored_note``)
 
 
 _memo: dict = {"key": None, "status": None, "valid": {}}  # "valid": the last valid design of each scene
@@ -193,15 +195,16 @@ def fixing_field(doc: dict, valid: dict | None, error_path: str) -> str:
 
 
 def _check(doc: dict, active: int, valid: dict | None = None) -> Status:
+    note = None
     try:
-        parse_scene(doc)
+        note = ignored_note(parse_scene(doc), lambda path: field_words(path) or path)
         problem = None
     except SceneError as e:
         problem = Problem(e.path, e.message, fixing_field(doc, valid, e.path))
     limits = {}
     if 0 <= active < len(doc["lamps"]):  # the lamp the panel shows; the bulb's limits take a few ms
         limits = {f"lamps[{active}].{path}": text for path, text in lamp_limits(doc, active).items()}
-    return Status(problem, limits)
+    return Status(problem, limits, note)
 
 
 def message(bl_scene, error: SceneError) -> str:
@@ -228,9 +231,13 @@ def draw_status(layout, bl_scene) -> None:
     if not design.lamps:
         box.label(text="No lamp yet: add one in Lamps below", icon="INFO")
         return
-    problem = status(bl_scene).problem
+    st = status(bl_scene)
+    problem = st.problem
     if problem is None:
         box.label(text="Design is valid", icon="CHECKMARK")
+        if st.note:  # reported, not refused: the fields are kept for a switch of light model
+            for i, line in enumerate(textwrap.wrap(st.note[0].upper() + st.note[1:], WRAP)):
+                box.label(text=line, icon="INFO" if i == 0 else "BLANK1")
         return
     col = box.column(align=True)
     col.alert = True

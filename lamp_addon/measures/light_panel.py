@@ -242,7 +242,7 @@ class LAMP_OT_light_states_render(jobs.ModalJob, bpy.types.Operator):
 
 class LAMP_OT_light_states_apply(bpy.types.Operator):
     """Set the design's bulbs as the Light Panel has them: which lamps are on, which filament of a two-filament
-    bulb, a custom bulb's flux (photometric) or a paper bulb's brightness"""
+    bulb, a bulb's flux (photometric) or brightness (paper)"""
 
     bl_idname = "lamp.light_states_apply"
     bl_label = "Apply to Design"
@@ -258,32 +258,55 @@ class LAMP_OT_light_states_apply(bpy.types.Operator):
     def execute(self, context):
         light = held(context.scene)["light"]
         items = {item.key: item for item in context.scene.lamp_light_panel.states}
-        design = context.scene.lamp_design
-        kept = []
-        for i, lamp in enumerate(design.lamps):
-            mine = [s for s in light.states if s.lamp == i]
-            lit = [s for s in mine if items[s.key].on]
+        changed = []  # what was kept another way, said in the report's one line
+        for i, lamp in enumerate(context.scene.lamp_design.lamps):
+            lit = [s for s in light.states if s.lamp == i and items[s.key].on]
             lamp.bulb.on = bool(lit)
-            if not lit:
-                continue
-            chosen = next((s for s in lit if s.filament == "stop"), lit[0])
-            if len(lit) > 1:
-                kept.append(f"Lamp {i + 1}: both filaments on; the design lights one, {chosen.filament}")
-            if chosen.filament in ("stop", "tail"):
-                lamp.bulb.state = chosen.filament
-            level = items[chosen.key].level
-            if chosen.unit == "lm" and chosen.filament == "on":
-                lamp.bulb.flux_lm = level
-            elif chosen.unit == "" and abs(level - 1.0) > 1e-9:
-                lamp.bulb.intensity = [v * level for v in lamp.bulb.intensity]
-            elif chosen.unit == "lm" and abs(level - chosen.rendered) > 1e-6:
-                kept.append(f"Lamp {i + 1}: a {lamp.bulb.type} bulb's flux is its type's; set its bulb to Custom "
-                            f"for {level:g} lm")
+            if lit:
+                changed += _apply_bulb(lamp.bulb, lit, {s.key: items[s.key].level for s in lit})
         surroundings = items.get("surroundings")
-        if surroundings is not None and (not surroundings.on or abs(surroundings.level - 1.0) > 1e-9):
-            kept.append("Surroundings: switch or scale them in the Light and Surroundings panels")
-        return reports.finished(self, "Applied the Light Panel's bulbs to the design"
-                                + (f" ({len(kept)} kept as they were: Info editor)" if kept else ""), kept)
+        lost = []
+        if surroundings is not None and not surroundings.on:
+            lost.append("the surroundings off")
+        elif surroundings is not None and abs(surroundings.level - 1.0) > 1e-9:
+            lost.append(f"the surroundings x{surroundings.level:g}")
+        text = "Applied the Light Panel's bulbs to the design"
+        if changed:
+            text += f"; {len(changed)} made Custom to keep {'its' if len(changed) == 1 else 'their'} level"
+        if lost:
+            text += f"; not kept: {', '.join(lost)}"
+        more = changed + ([f"Not kept: {', '.join(lost)}; the Light panel sets the sun, sky and street light"]
+                          if lost else [])
+        return reports.finished(self, text, more)  # the one line last, what it counts in the Info editor
+
+
+def _apply_bulb(bulb, lit: list, level: dict[str, float]) -> list[str]:
+    """Set one lamp's ``bulb`` (its properties) to its lit states ``lit`` at ``level`` (state key ->
+    lm or scale), keeping every level: a named bulb (P21/5W) whose filaments' levels are not the
+    type's own, or with both filaments on, becomes a Custom bulb of the type's spectrum and the
+    levels' sum (its light is linear in the flux: the same image). Returns what it changed beyond
+    the switch, in words."""
+    state = lit[0]
+    if state.unit == "":  # paper: a scale of the bulb's intensity
+        if abs(level[state.key] - 1.0) > 1e-9:
+            bulb.intensity = [v * level[state.key] for v in bulb.intensity]
+        return []
+    if state.filament == "on" and bulb.type == "custom":  # a photometric custom bulb: its flux
+        bulb.flux_lm = level[state.key]
+        return []
+    if len(lit) == 1 and abs(level[state.key] - state.rendered) <= 1e-6 * state.rendered:
+        if state.filament in ("stop", "tail"):
+            bulb.state = state.filament
+        return []
+    from ...core_tracer.photometry.sources import BULB_TYPES
+
+    kind = BULB_TYPES[bulb.type]
+    flux = sum(level.values())
+    bulb.type = "custom"
+    bulb.spectrum, bulb.flux_lm = kind.spectrum, flux
+    filaments = " and ".join(f"{s.filament} {level[s.key]:g} lm" for s in lit)
+    return [f"{state.label.split(' · ')[0]}: a Custom {kind.spectrum.replace('_', ' ')} bulb of {flux:g} lm "
+            f"({filaments}; a {kind.name}'s flux is its filament's)"]
 
 
 class LAMP_PT_light_panel(DesignSection, bpy.types.Panel):

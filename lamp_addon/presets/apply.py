@@ -122,7 +122,9 @@ def apply_preset(bl_scene: bpy.types.Scene, scene: dict, path: str | None = None
     first = not built and bl_scene.lamp_design.auto_build and not render_setup.is_set_up(bl_scene)
     # Auto Build makes the lamp in a moment: its first build in this file, so the scene is set up now
     # (the Lamp Camera at the preset's view, Lamp Tracer, the exposure once), as the first Add Lamp does.
-    news = [] if first else [show_view(bl_scene, design)]
+    # The exposure of the preset's light model first, said in the report (an edit's listener would set it unsaid).
+    news = [render_setup.follow_light_model(bl_scene, design)]
+    news += [] if first else [show_view(bl_scene, design)]
     if parts is not None:
         made = freeform_loading.make_parts(bl_scene, scene, parts)
         news.append(render_setup.News(f"{len(made)} free-form parts", f"Made {len(made)} free-form parts"))

@@ -9,7 +9,9 @@ this operator is the explicit way to expose for the design in view: it measures 
 scene camera on a small preview render (``image_view.design_exposure``, with the bulbs on when every
 bulb is off) and sets the scene's exposure to it. Render with Lamp Tracer's image is shown at the
 scene's exposure too, as F12 is; the add-on's sheets (Lamp Compare, Lamp Study) are each shown under
-one exposure for all their pictures (``image_view.show_linear``).
+one exposure for all their pictures (``image_view.show_linear``). Each light model keeps its own
+exposure (``setup.follow_light_model``): a photometric image is already exposed by its EV100, so
+the paper model's exposure would show it nearly black.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import bpy
 
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, reports
+from ..design import properties as design_properties
 from ..design.operator import DesignOperator
 from . import setup
 
@@ -47,5 +50,16 @@ class LAMP_OT_exposure_from_design(DesignOperator, bpy.types.Operator):
 
 classes = (LAMP_OT_exposure_from_design,)
 
-register, unregister = actions.register_actions_factory(
+_register, _unregister = actions.register_actions_factory(
     classes, (("lamp.exposure_from_design", "Exposure from Design", "LIGHT_SUN"),))
+
+
+def register() -> None:
+    _register()
+    design_properties.EDIT_LISTENERS.append(setup.light_model_edited)  # one exposure per light model
+
+
+def unregister() -> None:
+    if setup.light_model_edited in design_properties.EDIT_LISTENERS:
+        design_properties.EDIT_LISTENERS.remove(setup.light_model_edited)
+    _unregister()

@@ -17,7 +17,9 @@ more times display white) is a flat pale disk under AgX. So the first build of a
   off" say, is exposed for the lamp lit, so the lit design applied next is not washed out), when
   the exposure is still the default 0. After that neither Build Lamp nor Apply Preset changes it,
   so a stop lamp looks brighter than a tail lamp; *Exposure from Design* is the explicit way to
-  expose for the design again.
+  expose for the design again. The paper and photometric models' images differ in scale (the
+  photometric one is already exposed by its EV100), so each light model keeps its own exposure
+  (``follow_light_model``): switching model sets the new model's, and the old one's is kept.
 - **views**: the 3D Views are framed on the lamp (``view_frame``), and an object of the user's that
   encloses it (the startup Cube) is named in the report, never hidden or moved.
 
@@ -38,7 +40,9 @@ from ..design import properties as design_properties
 from . import camera, lamp_camera, view_frame
 from .engine import ENGINE_ID
 
-SETUP_KEY = "lamp_scene_setup"  # scene custom property: JSON {"exposure": the value the add-on set, or null}
+# scene custom property: JSON {"exposure": the value the add-on set, or null, "model": the light model
+# last seen, "exposures": {light model: the exposure kept for it}}
+SETUP_KEY = "lamp_scene_setup"
 DEFAULT_ENGINES = ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")  # what a new file renders with (4.2-5.0)
 EXPOSURE_TOLERANCE = 1e-3  # stops: Blender stores the exposure in single precision
 
@@ -55,7 +59,81 @@ def _memory(bl_scene) -> dict | None:
 
 
 def _remember(bl_scene, exposure: float | None) -> None:
-    bl_scene[SETUP_KEY] = json.dumps({"exposure": exposure})
+    """Remember that the scene is set up, under its design's light model, with the exposure the
+    add-on set for that model (None: the user's own, kept)."""
+    memory = _memory(bl_scene) or {}
+    model = bl_scene.lamp_design.light_model
+    exposures = _exposures(memory)
+    if exposure is not None:
+        exposures[model] = exposure
+    bl_scene[SETUP_KEY] = json.dumps({"exposure": exposure, "model": model, "exposures": exposures})
+
+
+def _exposures(memory: dict) -> dict[str, float]:
+    """The exposure kept for each light model (none in a file set up before there were two)."""
+    kept = memory.get("exposures")
+    if not isinstance(kept, dict):
+        return {}
+    return {model: float(x) for model, x in kept.items() if isinstance(x, int | float) and not isinstance(x, bool)}
+
+
+def follow_light_model(bl_scene, design: dict | None = None) -> News | None:
+    """One exposure per light model: when the design's light model changed since the scene was last
+    seen, the scene's exposure is kept as the old model's and the new model's is set, the one kept
+    for it or, the first time, its automatic exposure (``design_exposure_lit``: 0 EV for a
+    photometric design, whose EV100 already puts display white at 1; a paper design's measured). A
+    paper design exposed at -4 EV made the first photometric F12 nearly black; the two models' images
+    differ in scale, so one exposure cannot serve both. Nothing happens in a scene not set up yet
+    (its first build exposes it) or while the design is invalid (tried again at the next edit).
+    A paper design is measured as ``design`` (a normalised scene: a preset's own view) or, without
+    it, through the scene camera. Returns what changed, for a report."""
+    memory = _memory(bl_scene)
+    model = bl_scene.lamp_design.light_model
+    if memory is None:
+        return None
+    before = memory.get("model")
+    if before == model:
+        return None
+    exposures = _exposures(memory)
+    if before is not None:
+        exposures[before] = bl_scene.view_settings.exposure
+    exposure = exposures.get(model)
+    if exposure is None and before is not None:
+        try:
+            exposure = design_exposure_lit(design if design is not None else camera.scene_for_render(bl_scene))
+        except SceneError:
+            return None  # not measurable now: the panel says why; the next edit tries again
+    if exposure is not None:
+        bl_scene.view_settings.exposure = exposure
+    bl_scene[SETUP_KEY] = json.dumps({**memory, "model": model, "exposures": exposures | (
+        {model: exposure} if exposure is not None else {})})
+    if before is None:
+        return None  # a file set up before there were two exposures: its exposure is this model's
+    return News(f"{exposure:+.1f} EV for the {model} model",
+                f"Exposure {exposure:+.1f} EV, the {model} model's; the {before} model's "
+                f"{exposures[before]:+.1f} EV is kept for it")
+
+
+def light_model_edited(bl_scene) -> None:
+    """A design edit (``design.properties.EDIT_LISTENERS``): the exposure follows a change of light
+    model at once (the Light panel says which exposure is the model's). A preset being written is
+    left to Apply Preset, which follows it once the whole design is written and reports it."""
+    if not design_properties.is_writing():
+        follow_light_model(bl_scene)
+
+
+def kept_exposure_text(bl_scene) -> str | None:
+    """What the Light panel says under the light model when another model keeps its own exposure:
+    "Exposure +0.0 EV for this model (paper: -3.9 EV)"."""
+    memory = _memory(bl_scene)
+    model = bl_scene.lamp_design.light_model
+    if memory is None or memory.get("model") != model:
+        return None
+    others = {m: x for m, x in _exposures(memory).items() if m != model}
+    if not others:
+        return None
+    kept = ", ".join(f"{m}: {x:+.1f} EV" for m, x in sorted(others.items()))
+    return f"Exposure {bl_scene.view_settings.exposure:+.1f} EV for this model ({kept})"
 
 
 def is_set_up(bl_scene) -> bool:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 
+from ...core_tracer.scene import spec as S
 from ..design import properties as design_properties
 from .camera import apply_camera, find_lamp_camera, is_lamp_camera, scene_camera_to_dict, set_render_size
 
@@ -34,6 +35,14 @@ def write_design_camera(bl_scene, camera: dict) -> None:
             continue  # the design's own, carried by the camera dict (Blender's camera has no exposure)
         if hasattr(group, key) and getattr(group, key) != value:
             setattr(group, key, value)
+
+
+def _fits(image: dict) -> bool:
+    """Whether the design's image size is in its allowed range: a size out of it (a negative width
+    typed in the panel) is not handed to Blender, whose render resolution would clamp it and the
+    link would then write the clamped size back, a silent change the design's check never saw."""
+    sides = (S.IMAGE.fields["width"], S.IMAGE.fields["height"])
+    return all(side.lo <= image[key] <= side.hi for key, side in zip(("width", "height"), sides, strict=True))
 
 
 def _blender_view(bl_scene) -> dict:
@@ -105,8 +114,8 @@ def sync_view(bl_scene) -> str:
                 apply_camera(ob, camera, bl_scene)
             except (ZeroDivisionError, ValueError):
                 pass  # target = position or up along the view: the panel shows the design's error
-        if image != last["design"]["image"]:
-            set_render_size(bl_scene, image)
+        if image != last["design"]["image"] and _fits(image):
+            set_render_size(bl_scene, image)  # an image size out of range stays in the design, refused there
         written = "blender"
     if written:
         remember(bl_scene)

@@ -148,3 +148,37 @@ def test_a_stop_lamp_beside_a_tail_lamp_in_one_study_is_brighter_by_their_bulbs(
     measured = added_stop[mask].sum(axis=0) / added_tail[mask].sum(axis=0)
     print(f"\nstop / tail, light the bulb adds over the lit lens: {np.round(measured, 4)} (bulbs {ratio})")
     np.testing.assert_allclose(measured, ratio, rtol=1e-3)
+
+
+def test_each_light_model_keeps_its_own_exposure(lamp_addon, startup, tmp_path, capfd):
+    """Issue 31: the exposure kept from a paper design (about -4 EV) made the first photometric F12
+    nearly black (its EV100 already puts display white at 1). Each light model keeps its own: the
+    switch sets the new model's (0 EV the first time for a photometric design) and keeps the old one's."""
+    import bpy
+
+    apply_preset(BASELINE.name)
+    paper = startup.view_settings.exposure
+    assert paper < -2.0  # the first lamp of the file exposed it
+    said = apply_preset("photometric-stop-lamp.json", capfd)
+    assert startup.view_settings.exposure == 0.0
+    assert "+0.0 EV for the photometric model" in said
+    startup.lamp_design.image.width, startup.lamp_design.image.height = SMALL
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    codes = f12_codes(startup, tmp_path / "f12.png")
+    bright = np.percentile(codes[..., 0], 99)
+    print(f"\nfirst photometric F12 after a paper design: red p99 {bright:.0f} codes")
+    assert bright > 150  # the lit stop lamp, not a nearly black image
+
+    startup.view_settings.exposure = 0.5  # the user's own, for the photometric model
+    startup.lamp_design.light_model = "paper"  # in the panel: the paper model's exposure comes back
+    assert startup.view_settings.exposure == pytest.approx(paper)
+    startup.lamp_design.light_model = "photometric"
+    assert startup.view_settings.exposure == 0.5
+    labels = _labels(bpy.types.LAMP_PT_light, startup)
+    assert f"Exposure +0.5 EV for this model (paper: {paper:+.1f} EV)" in labels
+
+
+def _labels(panel, scene) -> list[str]:
+    from test_addon_panels import draw
+
+    return draw(panel, scene).labels()

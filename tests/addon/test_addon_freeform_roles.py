@@ -39,7 +39,7 @@ def test_every_role_field_is_a_property_with_the_spec_default(lamp_addon, addon_
             if isinstance(spec, S.Num) and spec.size == 1:
                 assert prop.default == pytest.approx(spec.default), (role, key)
                 lo, hi = lamp_addon.design.properties.blender_range(spec)
-                assert (prop.hard_min, prop.hard_max) == pytest.approx((lo, hi)), (role, key)
+                assert (prop.soft_min, prop.soft_max) == pytest.approx((lo, hi)), (role, key)
             elif isinstance(spec, S.Num):
                 assert tuple(prop.default_array) == pytest.approx(spec.default), (role, key)
             elif isinstance(spec, S.Flag):

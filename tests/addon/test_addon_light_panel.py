@@ -49,9 +49,11 @@ def test_switching_a_lamp_re_weights_without_rendering_and_keeps_the_design(lamp
     before = json.dumps(lamp_addon.design.properties.design_document(night), sort_keys=True)
     assert bpy.ops.lamp.light_states_render() == {"FINISHED"}
     items = {item.key: item for item in night.lamp_light_panel.states}
-    assert list(items) == ["surroundings", *(f"lamps[{i}].{f}" for i in range(4) for f in ("stop", "tail"))]
-    assert items["lamps[0].tail"].on and not items["lamps[0].stop"].on  # the design's own: lamp 1 a tail lamp
-    assert items["lamps[0].stop"].level == 440.0 and items["lamps[0].tail"].level == 35.0
+    assert list(items) == ["surroundings", "tail", "tail.stop_filament", "stop", "stop.tail_filament", "turn",
+                           "turn.tail_filament", "reversing", "reversing.tail_filament"]  # by function (issue 31)
+    assert items["turn"].label == "Turn (lamp 3, P21/5W)"
+    assert items["tail"].on and not items["tail.stop_filament"].on  # the design's own: lamp 1 a tail lamp
+    assert items["tail.stop_filament"].level == 440.0 and items["tail"].level == 35.0
     design_view = _pixels(light_panel.IMAGE_NAME).copy()
 
     # The design's own states show what the tracer's render shows (Render with Lamp Tracer: F12's pixels,
@@ -61,13 +63,13 @@ def test_switching_a_lamp_re_weights_without_rendering_and_keeps_the_design(lamp
     assert np.abs(rendered - design_view).max() <= 1e-4 * max(1.0, float(rendered.max()))
 
     # Lamps 2-4 off: only the tail lamp and the surroundings; a change re-weights in milliseconds.
-    for i in (1, 2, 3):
-        items[f"lamps[{i}].stop"].on = False
+    for key in ("stop", "turn", "reversing"):
+        items[key].on = False
     only_tail = _pixels(light_panel.IMAGE_NAME)
     assert only_tail.sum() < 0.5 * design_view.sum()
     assert light_panel.held(night)["ms"] < 50.0  # 96×64 here; benchmarks/bench_light_states.py at 512²
     # Its stop filament on too: brighter than the tail alone.
-    items["lamps[0].stop"].on = True
+    items["tail.stop_filament"].on = True
     assert _pixels(light_panel.IMAGE_NAME).sum() > only_tail.sum()
     assert json.dumps(lamp_addon.design.properties.design_document(night), sort_keys=True) == before
 
@@ -78,9 +80,9 @@ def test_a_design_change_makes_the_states_stale_and_apply_sets_the_bulbs(lamp_ad
     light_panel = lamp_addon.measures.light_panel
     assert bpy.ops.lamp.light_states_render() == {"FINISHED"}
     items = {item.key: item for item in night.lamp_light_panel.states}
-    items["lamps[0].tail"].on = False
-    items["lamps[0].stop"].on = True
-    items["lamps[3].stop"].on = False
+    items["tail"].on = False
+    items["tail.stop_filament"].on = True
+    items["reversing"].on = False
     assert bpy.ops.lamp.light_states_apply() == {"FINISHED"}
     bulbs = [lamp.bulb for lamp in night.lamp_design.lamps]
     assert (bulbs[0].on, bulbs[0].state) == (True, "stop") and not bulbs[3].on
@@ -88,6 +90,39 @@ def test_a_design_change_makes_the_states_stale_and_apply_sets_the_bulbs(lamp_ad
     layout = draw(bpy.types.LAMP_PT_light_panel, night)
     assert "The design changed since its light states: render them again" in layout.labels()
     assert not bpy.types.LAMP_OT_light_states_apply.poll(bpy.context)
+
+
+def test_apply_keeps_every_level_or_says_what_it_cannot_keep(lamp_addon, night, capfd):
+    """Issue 31: Apply to Design dropped a level without a word. A named bulb's level (or both its
+    filaments lit) becomes a Custom bulb of its spectrum and that flux, the same light; the
+    surroundings' level cannot be kept, and the report's one line says so."""
+    import bpy
+
+    light_panel = lamp_addon.measures.light_panel
+    assert bpy.ops.lamp.light_states_render() == {"FINISHED"}
+    items = {item.key: item for item in night.lamp_light_panel.states}
+    items["turn"].level = 300.0
+    items["stop.tail_filament"].on = True  # the stop lamp's both filaments: 440 + 35 lm
+    relit = _pixels(light_panel.IMAGE_NAME).copy()  # what the applied design must render
+    items["surroundings"].level = 0.5
+    dark = relit.max(axis=2) < 1e-3 * relit.max()  # mostly the surroundings (a night street)
+    assert np.median(_pixels(light_panel.IMAGE_NAME)[dark] / relit[dark]) == pytest.approx(0.5, abs=1e-3)
+    capfd.readouterr()
+    assert bpy.ops.lamp.light_states_apply() == {"FINISHED"}
+    said = capfd.readouterr().out.splitlines()
+    assert said[-1] == ("Info: Applied the Light Panel's bulbs to the design; 2 made Custom to keep their level; "
+                        "not kept: the surroundings x0.5")
+    assert "Info: Turn (lamp 3, P21/5W): a Custom incandescent bulb of 300 lm (stop 300 lm; a P21/5W's flux is its " \
+           "filament's)" in said
+    assert any(line.startswith("Info: Stop (lamp 2, P21/5W): a Custom incandescent bulb of 475 lm") for line in said)
+    bulbs = [lamp.bulb for lamp in night.lamp_design.lamps]
+    assert (bulbs[2].type, bulbs[2].spectrum, bulbs[2].flux_lm) == ("custom", "incandescent", 300.0)
+    assert (bulbs[1].type, bulbs[1].flux_lm) == ("custom", 475.0)
+    assert (bulbs[0].type, bulbs[0].state) == ("P21/5W", "tail")  # at its own level: as it was
+    # The design as applied renders as the panel showed it, but for the surroundings' level.
+    image, _seconds = lamp_addon.render.ops.render_to_image(night)
+    rendered = _pixels(image.name)
+    assert np.abs(rendered - relit).max() <= 1e-4 * float(rendered.max())
 
 
 def test_the_held_passes_are_forgotten_when_a_file_is_opened(lamp_addon, night):
@@ -123,6 +158,6 @@ def test_in_the_startup_file_the_light_panel_shows_what_f12_shows(lamp_addon, ad
     assert np.abs(rendered - shown).max() <= 1e-4 * max(1.0, float(rendered.max()))
     assert {name: tuple(bpy.data.objects[name].location) for name in users} == users
     items = {item.key: item for item in scene.lamp_light_panel.states}
-    assert list(items) == ["surroundings", "lamps[0].stop", "lamps[0].tail"]
-    items["lamps[0].stop"].on = False
+    assert list(items) == ["surroundings", "stop", "stop.tail_filament"]
+    items["stop"].on = False
     assert _pixels(light_panel.IMAGE_NAME).max() < 0.1 * shown.max()

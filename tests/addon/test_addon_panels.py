@@ -513,6 +513,8 @@ INVALID_EDITS = {
                               "outside the body"),
     "reflector deeper than the body": (lambda d: setattr(d.lamps[0].reflector, "focal_length", 5.0),
                                        "lamps[0].reflector.focal_length", "deeper than the body"),
+    "negative lens thickness": (lambda d: setattr(d.lamps[0].lens, "thickness", -2.0), "lamps[0].lens.thickness",
+                                "-2.0 is out of range"),
     "prism plate focus too near": (lambda d: (setattr(d.lamps[0], "collection", "prism_plate"),
                                               setattr(d.lamps[0].prism_plate, "focal_length", 30.0)),
                                    "lamps[0].prism_plate.focal_length", "cannot bend it parallel"),
@@ -553,7 +555,7 @@ def test_the_cut_height_panel_states_the_limit_of_the_pitch(lamp_addon, addon_co
 
     design = _baseline(lamp_addon, addon_core, bl_scene)
     height = design.lamps[0].cuts.bl_rna.properties["height"]
-    assert height.hard_max == 100.0  # a property's range is fixed: the panel states the real limit
+    assert height.soft_max == 100.0  # a property's range is fixed: the panel states the real limit
     labels = draw(bpy.types.LAMP_PT_cuts, bl_scene).labels()
     assert "At most 6.363 mm for pitch 9 mm (pitch / sqrt 2)" in labels
     design.lamps[0].cuts.pitch = 4.0

@@ -73,6 +73,26 @@ def test_each_light_model_shows_its_own_bulb_fields(lamp_addon, addon_core, bl_s
     assert "lamps[].lens.filter" not in draw(bpy.types.LAMP_PT_lens, bl_scene).spec_paths()
 
 
+def test_a_paper_design_says_which_photometric_values_it_ignores(lamp_addon, addon_core, bl_scene):
+    """Issue 31: the panel said only "Design is valid" for a paper design with a photometric bulb."""
+    import bpy
+
+    scene = addon_core.scene.load_scene(PRESETS / "photometric-stop-lamp.json")
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    design = bl_scene.lamp_design
+    assert draw(bpy.types.LAMP_PT_design, bl_scene).labels() == ["Design is valid"]  # used there
+    design.light_model = "paper"
+    labels = draw(bpy.types.LAMP_PT_design, bl_scene).labels()
+    assert labels[0] == "Design is valid"
+    note = " ".join(labels[1:])
+    assert note.startswith("The paper light model ignores photometric fields:")
+    assert 'Camera & Image › Exposure = "ev100"' in note and " and 2 more;" in note
+    assert note.endswith('they take effect with Light Model "photometric"')
+    assert not SNAKE.search(note), note  # the panel's words, no JSON keys
+    lamp_addon.design.properties.scene_to_design(bl_scene, addon_core.scene.load_scene(PRESETS / "paper-baseline.json"))
+    assert draw(bpy.types.LAMP_PT_design, bl_scene).labels() == ["Design is valid"]
+
+
 def test_a_named_bulb_keeps_a_filament_it_has(lamp_addon, addon_core, bl_scene):
     scene = addon_core.scene.load_scene(PRESETS / "photometric-stop-lamp.json")
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)

@@ -8,7 +8,7 @@ import math
 import re
 
 import pytest
-from helpers import PARAMETRIC_PRESETS
+from helpers import BASELINE, PARAMETRIC_PRESETS
 
 pytestmark = pytest.mark.blender
 
@@ -69,6 +69,8 @@ def test_every_spec_field_is_a_property(lamp_addon, S):
 
 
 def test_ranges_and_defaults_follow_the_spec(lamp_addon, S):
+    """Soft limits from the spec (an open bound just inside it); no hard limits, so Blender keeps a
+    value typed outside the range and the design's check refuses it (never clamped)."""
     margin = lamp_addon.design.properties.OPEN_BOUND_MARGIN
     for info in S.iter_fields():
         spec = info.spec
@@ -77,26 +79,43 @@ def test_ranges_and_defaults_follow_the_spec(lamp_addon, S):
         rna = _group_rna(lamp_addon, info.path)
         if spec.lo is not None:
             lo = spec.lo + (margin * max(1.0, abs(spec.lo)) if spec.lo_open else 0.0)
-            assert rna.hard_min == pytest.approx(lo, rel=1e-6, abs=1e-12), info.path
             assert rna.soft_min == pytest.approx(lo, rel=1e-6, abs=1e-12), info.path
-            if spec.lo_open:
-                assert rna.hard_min > spec.lo, info.path
+            assert rna.hard_min < min(spec.lo, -1e9), info.path
         if spec.hi is not None:
-            assert rna.hard_max == pytest.approx(spec.hi, rel=1e-6), info.path
+            assert rna.soft_max == pytest.approx(spec.hi, rel=1e-6), info.path
+            assert rna.hard_max > max(spec.hi, 1e9), info.path
         default = rna.default_array[:] if spec.size > 1 else rna.default
         expected = spec.default if spec.size > 1 else [spec.default]
         got = list(default) if spec.size > 1 else [default]
         assert got == pytest.approx(list(expected), rel=1e-6), info.path
 
 
-def test_blender_clamps_to_the_spec_range(lamp_addon, bl_scene, S):
-    lens = bl_scene.lamp_design.lamps.add().lens
+def test_a_value_out_of_range_is_kept_and_refused_never_clamped(lamp_addon, bl_scene, S):
+    """Issue 31: a negative lens thickness was clamped to 1e-6 mm and the panel said "Design is
+    valid". Blender keeps what was typed; the check names the field and its range in the panel's words."""
+    design = bl_scene.lamp_design
+    lens = design.lamps.add().lens
+    lens.thickness = -2.0
+    assert lens.thickness == -2.0
+    problem = lamp_addon.design.validity.status(bl_scene).problem
+    assert problem.text() == "Lamp 1 › Lens › Thickness: -2.0 is out of range; allowed (0, 100] mm"
+    lens.thickness = 3.0
     lens.ior = 0.5
-    assert lens.ior == 1.0
-    lens.radius = -3.0
-    assert lens.radius > 0.0  # an open bound: (0, 1000] mm
-    bl_scene.lamp_design.image.width = 100000
-    assert bl_scene.lamp_design.image.width == S.MAX_IMAGE_SIDE
+    assert lens.ior == 0.5
+    validity = lamp_addon.design.validity
+    assert validity.status(bl_scene).problem.text().startswith("Lamp 1 › Lens › IOR: 0.5 is out of range")
+    lens.ior = 1.49
+    design.image.width = 100000
+    assert design.image.width == 100000
+    assert "allowed [1, 8192]" in validity.status(bl_scene).problem.text()
+
+
+def test_a_preset_value_blender_cannot_hold_is_refused(lamp_addon, bl_scene, scene_mod, addon_core):
+    """A value that rounds out of its range in Blender's 32-bit float is refused before anything is written."""
+    scene = scene_mod.load_scene(PRESETS[0])
+    scene["lamps"][0]["lens"]["thickness"] = 1e-50  # valid, (0, 100] mm, but 0 in 32 bits
+    with pytest.raises(addon_core.scene.reading.SceneError, match="32-bit"):
+        lamp_addon.design.properties.scene_to_design(bl_scene, scene)
 
 
 def test_there_are_presets():
@@ -215,3 +234,22 @@ def test_tags_and_text(lamp_addon, bl_scene, S, scene_mod):
     bl_scene.lamp_design.tags = " x ,, y,"
     assert props.design_to_scene(bl_scene)["tags"] == ["x", "y"]
     assert json.loads(scene_mod.scene_to_json(props.design_to_scene(bl_scene)))["name"] == "Ünïcode lamp ✓"
+
+
+def test_an_image_size_out_of_range_is_not_clamped_through_the_render_resolution(lamp_addon, bl_scene, scene_mod):
+    """The design's image size is Blender's render resolution (``render.view_link``): a width out of
+    range is not handed to Blender, whose resolution would clamp it and write the clamped size back."""
+    import bpy
+
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene_mod.load_scene(BASELINE))
+    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+    before = bl_scene.render.resolution_x
+    bl_scene.lamp_design.image.width = -5
+    assert bpy.ops.lamp.lamp_add() == {"FINISHED"}  # frames the view again and syncs the link
+    lamp_addon.render.view_link.sync_view(bl_scene)
+    assert bl_scene.lamp_design.image.width == -5 and bl_scene.render.resolution_x == before
+    text = lamp_addon.design.validity.status(bl_scene).problem.text()
+    assert text == "Camera & Image › Width: -5 is out of range; allowed [1, 8192] px"
+    bl_scene.lamp_design.image.width = 200
+    lamp_addon.render.view_link.sync_view(bl_scene)
+    assert bl_scene.render.resolution_x == 200

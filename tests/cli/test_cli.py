@@ -55,6 +55,8 @@ BAD_SCENES = {
                        ("body.size[0]", "0 is out of range", "(0, 10000] mm")),
     "zero-thickness": (_edit(lambda d: d["lamps"][0]["lens"].update(thickness=0)),
                        ("lamps[0].lens.thickness", "0", "(0, 100] mm")),
+    "negative-thickness": (_edit(lambda d: d["lamps"][0]["lens"].update(thickness=-2)),
+                           ("lamps[0].lens.thickness", "-2 is out of range", "(0, 100] mm")),
     "ior-below-1": (_edit(lambda d: d["lamps"][0]["lens"].update(ior=0.9)),
                     ("lamps[0].lens.ior", "0.9", "[1, 3]")),
     "five-lamps": (_edit(lambda d: d.update(lamps=[_lamp([0, 0]) for _ in range(5)])),
@@ -184,6 +186,20 @@ def test_validate_ok():
     proc = run_cli("validate", BASELINE)
     assert proc.returncode == 0, proc.stderr
     assert "valid lamp-scene/2" in proc.stdout and "Round red tail lamp" in proc.stdout
+
+
+def test_validate_reports_photometric_fields_a_paper_design_ignores(tmp_path):
+    """Issue 31: reported in one line on stderr, not refused (exit 0)."""
+    doc = baseline_doc()
+    doc["lamps"][0]["bulb"]["flux_lm"] = 900
+    path = tmp_path / "paper.json"
+    path.write_text(json.dumps(doc))
+    proc = run_cli("validate", path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.splitlines() == [
+        f"note: {path}: the paper light model ignores photometric fields: lamps[0].bulb.flux_lm = 900.0; "
+        'they take effect with light_model "photometric"']
+    assert run_cli("validate", BASELINE).stderr == ""
 
 
 def test_render_exr_with_passes(tmp_path):

@@ -30,11 +30,15 @@ def states(tmp_path_factory) -> Path:
 def test_relight_lists_the_states_and_writes_images(states, tmp_path):
     listed = _run("relight", states, "--list")
     assert listed.returncode == 0
-    assert "on  lamps[0].tail" in listed.stdout and "off lamps[0].stop" in listed.stdout
+    assert "Turn (lamp 3, P21/5W) (also lamps[2].stop)" in listed.stdout  # named by function (issue 31)
+    assert listed.stdout.splitlines()[1].split()[:2] == ["on", "tail"]
+    assert listed.stdout.splitlines()[2].split()[:2] == ["off", "tail.stop_filament"]
     exr, only_tail = tmp_path / "design.exr", tmp_path / "tail.exr"
     assert _run("relight", states, "-o", exr).returncode == 0
-    done = _run("relight", states, "-o", only_tail, "--off", "lamps[1].stop,lamps[2].stop,lamps[3].stop")
-    assert done.returncode == 0 and "lit: surroundings, lamps[0].tail" in done.stdout, done.stdout
+    done = _run("relight", states, "-o", only_tail, "--off", "stop,turn,reversing")
+    assert done.returncode == 0 and "lit: surroundings, tail" in done.stdout, done.stdout
+    old_keys = tmp_path / "tail-old-keys.exr"  # the keys of earlier versions still work
+    assert _run("relight", states, "-o", old_keys, "--off", "lamps[1].stop,lamps[2].stop,lamps[3].stop").returncode == 0
     import OpenImageIO as oiio
 
     def luminance(path):
@@ -42,18 +46,20 @@ def test_relight_lists_the_states_and_writes_images(states, tmp_path):
         return image.get_pixels(oiio.FLOAT)[..., image.spec().channelnames.index("Y")]
 
     design, tail = luminance(exr), luminance(only_tail)
+    assert np.array_equal(tail, luminance(old_keys))
     off = design - tail  # cd/m2: the three lamps switched off
     assert off.min() >= -1e-5 * design.max() and off.max() > 1000.0
     png = tmp_path / "stop.png"
-    assert _run("relight", states, "-o", png, "--level", "lamps[0].stop=500", "--ev100", "12").returncode == 0
+    assert _run("relight", states, "-o", png, "--level", "stop=500", "--ev100", "12").returncode == 0
     assert png.stat().st_size > 0
 
 
 @pytest.mark.parametrize("args, words", [
     (["--on", "lamps[7].stop"], "error: lamps[7].stop: not a state of this design; allowed surroundings"),
     (["--level", "lamps[0].stop=lots"], "error: --level: 'lamps[0].stop=lots' is not KEY=VALUE"),
-    (["--level", "lamps[0].stop=-5"], "error: lamps[0].stop: -5.0 is out of range; allowed [0, 100000] lm"),
+    (["--level", "turn=-5"], "error: turn: -5.0 is out of range; allowed [0, 100000] lm"),
     (["--on", "lamps[0].stop", "--off", "lamps[0].stop"], "error: --off: lamps[0].stop is also given to --on"),
+    (["--on", "turn", "--off", "lamps[2].stop"], "error: --off: lamps[2].stop is also given to --on"),
 ])
 def test_bad_states_are_refused_in_one_line(states, tmp_path, args, words):
     out = tmp_path / "x.png"

@@ -81,7 +81,7 @@ def test_switching_a_lamp_and_a_filament_equals_a_fresh_render(night):
 def test_a_paper_bulb_twice_as_bright_equals_a_render_with_twice_the_intensity(baseline):
     scene = copy.deepcopy(baseline.scene)
     scene["lamps"][0]["bulb"]["intensity"] = [2 * v for v in scene["lamps"][0]["bulb"]["intensity"]]
-    relit = S.relight(baseline, S.weights_for(baseline, level={"lamps[0].on": 2.0}))
+    relit = S.relight(baseline, S.weights_for(baseline, level={"tail": 2.0}))
     assert _close(relit, _render(scene)) < TOLERANCE
 
 
@@ -91,15 +91,15 @@ def test_a_custom_bulb_flux_in_lm_equals_a_render_with_that_flux():
     bulb["type"] = "custom"
     bulb["flux_lm"] = 300.0
     light = S.render_states(scene)
-    relit = S.relight(light, S.weights_for(light, level={"lamps[0].on": 450.0}))
+    relit = S.relight(light, S.weights_for(light, level={"stop": 450.0}))
     bulb["flux_lm"] = 450.0
     assert _close(relit, _render(scene)) < TOLERANCE
 
 
 def test_both_filaments_lit_is_their_sum(night):
-    stop, tail = night.passes["lamps[0].stop"], night.passes["lamps[0].tail"]
-    weights = {**night.default_weights(), "lamps[0].stop": 1.0, "lamps[0].tail": 1.0}
-    only_stop = {**weights, "lamps[0].tail": 0.0}
+    stop, tail = night.passes["tail.stop_filament"], night.passes["tail"]  # lamp 1, a tail lamp
+    weights = {**night.default_weights(), "tail.stop_filament": 1.0, "tail": 1.0}
+    only_stop = {**weights, "tail": 0.0}
     assert np.allclose(S.relight(night, weights) - S.relight(night, only_stop), tail, atol=1e-6 * stop.max())
     # tail over stop filament, lit lens pixels: the ratio of their fluxes, 35/440
     lit = stop[..., 1] > 0.05 * stop[..., 1].max()
@@ -109,11 +109,52 @@ def test_both_filaments_lit_is_their_sum(night):
 def test_unknown_states_and_levels_are_refused_in_one_line(night):
     with pytest.raises(core_tracer.SceneError) as e:
         S.weights_for(night, on={"lamps[9].stop": True})
-    assert "not a state of this design; allowed surroundings, lamps[0].stop" in str(e.value)
+    assert "not a state of this design; allowed surroundings, tail, tail.stop_filament, stop" in str(e.value)
     assert "\n" not in str(e.value)
-    out_of_range = r"lamps\[0\].stop: -1.0 is out of range; allowed \[0, 100000\] lm"
+    out_of_range = r"turn: -1.0 is out of range; allowed \[0, 100000\] lm"
     with pytest.raises(core_tracer.SceneError, match=out_of_range):
-        S.weights_for(night, level={"lamps[0].stop": -1.0})
+        S.weights_for(night, level={"turn": -1.0})
+
+
+def test_states_are_named_by_the_lamps_function(night, baseline):
+    """Issue 31: "Lamp 3 · P21/5W stop" was the turn lamp. The four-lamp preset's lamps are "custom":
+    their functions come from the lens and filament (photometric, the measures' rule) or the lens
+    colour and bulb (paper)."""
+    named = {s.key: s.label for s in night.states}
+    assert list(named) == ["surroundings", "tail", "tail.stop_filament", "stop", "stop.tail_filament", "turn",
+                           "turn.tail_filament", "reversing", "reversing.tail_filament"]
+    assert named["turn"] == "Turn (lamp 3, P21/5W)"
+    assert named["tail.stop_filament"] == "Tail (lamp 1, P21/5W) · stop filament"
+    turn = night.state("turn")
+    assert (turn.lamp, turn.filament, turn.rendered, turn.lit_in_design) == (2, "stop", 440.0, True)
+    paper = S.states_of(_scene("four-lamp-rear-combination.json"))
+    assert [(s.key, s.label) for s in paper[1:]] == [
+        ("tail", "Tail (lamp 1)"), ("stop", "Stop (lamp 2)"), ("turn", "Turn (lamp 3)"),
+        ("reversing", "Reversing (lamp 4)")]
+    two_stops = _scene("four-lamp-rear-combination.json")
+    for lamp in two_stops["lamps"]:
+        lamp["function"] = "stop"
+    assert [s.key for s in S.states_of(two_stops)[1:]] == ["stop1", "stop2", "stop3", "stop4"]
+    assert S.states_of(two_stops)[2].label == "Stop 2 (lamp 2)"
+    assert [s.key for s in baseline.states] == ["surroundings", "tail"]
+
+
+def test_the_keys_of_earlier_versions_still_work(night):
+    """``lamps[2].stop`` (the turn lamp's stop filament) as before; a file written before, whose states
+    carry those keys and no alias, still loads and relights by them."""
+    assert S.weights_for(night, on={"lamps[2].stop": False}) == S.weights_for(night, on={"turn": False})
+    assert S.weights_for(night, level={"lamps[0].stop": 500.0}) == S.weights_for(
+        night, level={"tail.stop_filament": 500.0})
+    import dataclasses
+
+    old_states = [dataclasses.replace(s, key=s.alias or s.key, alias="") for s in night.states]
+    old = S.LightStates(night.scene, old_states, night.surroundings,
+                        {old_states[k].key: night.passes[s.key] for k, s in enumerate(night.states[1:], start=1)},
+                        night.stats)
+    again = S.from_bytes(_without_aliases(S.to_bytes(old)))
+    assert [s.key for s in again.states][:3] == ["surroundings", "lamps[0].tail", "lamps[0].stop"]
+    assert np.array_equal(S.relight(again, S.weights_for(again, on={"lamps[2].stop": False})),
+                          S.relight(night, S.weights_for(night, on={"turn": False})))
 
 
 def test_the_file_round_trip_and_a_foreign_file(night, tmp_path):
@@ -142,3 +183,19 @@ def test_relighting_512_pixels_square_is_a_few_milliseconds():
     assert time.perf_counter() - start < 5.0  # sanity only
     expected = light.surroundings + sum(0.5 * p for p in light.passes.values())
     assert np.allclose(out, expected, rtol=1e-5)
+
+
+def _without_aliases(data: bytes) -> bytes:
+    """A states file as written before states had aliases: its header's states without the field."""
+    import io
+    import json
+
+    with np.load(io.BytesIO(data)) as npz:
+        arrays = {name: npz[name] for name in npz.files}
+    header = json.loads(arrays["header"].tobytes())
+    for state in header["states"]:
+        del state["alias"]
+    arrays["header"] = np.frombuffer(json.dumps(header).encode(), np.uint8)
+    out = io.BytesIO()
+    np.savez_compressed(out, **arrays)
+    return out.getvalue()

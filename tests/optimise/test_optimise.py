@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 
@@ -75,6 +76,8 @@ def folder(tmp_path):
     ({"sampler": "annealing"}, "sampler", "tpe, cmaes, nsga2, random"),
     ({"trials": 0}, "trials", "1 to 10000"),
     ({"size": [5000, 10]}, "size", "[1, 2048]"),
+    ({"size": [64, 48]}, "size", "objectives[0].reference 'ref.exr' (40x40 px), which SSIM compares pixel by pixel; "
+                                 "allowed [40, 40]"),  # issue 31: a traceback at the first trial
     ({"storage": "opt.db"}, "storage", "sqlite:///"),
     ({"colour": 1}, "colour", "allowed keys"),
 ])
@@ -90,6 +93,16 @@ def test_the_cli_names_the_file_and_the_path_in_one_line(folder):
     proc = run_cli("optimise", path, "--workers", "0")
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
     assert "opt.json: parameters[0].range" in proc.stderr and "allowed lo < hi" in proc.stderr
+
+
+def test_a_size_the_reference_is_not_is_refused_in_one_line_before_any_trial(folder):
+    """Issue 31: changing ``size`` after rendering the ssim reference gave a traceback."""
+    path = folder / "opt.json"
+    path.write_text(json.dumps(opt_doc(folder, size=[64, 48])))
+    proc = run_cli("optimise", path, "--workers", "0", "-o", folder / "out")
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert "opt.json: size: [64, 48] is not the size of objectives[0].reference" in proc.stderr
+    assert not (folder / "out").exists() and not (folder / "opt.db").exists()
 
 
 def test_lens_luminance_is_the_mean_over_the_lamps_pixels():
@@ -219,3 +232,32 @@ def test_ctrl_c_stops_the_search_in_one_line_and_keeps_what_finished(folder, wor
     states = [t.state for t in search.open_study(opt).trials]
     assert optuna.trial.TrialState.RUNNING not in states  # the trials under way were told as failed
     assert states.count(optuna.trial.TrialState.COMPLETE) >= 1
+
+
+@pytest.mark.slow
+def test_the_dashboard_link_is_printed_while_the_cluster_runs(folder):
+    """Issue 31: ``optimise`` printed the local cluster's dashboard link in its summary, after the
+    cluster had gone. The link comes first, while the cluster answers at it; the summary names the
+    cluster without it."""
+    import urllib.request
+
+    path = folder / "opt.json"
+    path.write_text(json.dumps(opt_doc(folder, trials=500)))
+    proc = start_cli_at("optimise:trial", folder / "reached", "optimise", path, "--workers", "2",
+                        "-o", folder / "out", "--no-cache")
+    try:
+        line = proc.stdout.readline()  # the command waits at its first trial, the cluster running
+        assert line.startswith("local Dask cluster: 2 worker processes x 1 thread") and ", dashboard http" in line
+        status = line.rsplit("dashboard ", 1)[1].strip()
+        with urllib.request.urlopen(status.removesuffix("status") + "health", timeout=30) as answer:
+            assert answer.status == 200  # the scheduler's web server behind the link (/health: no bokeh needed)
+    finally:
+        signal_and_wait(proc, signal.SIGINT)
+    path.write_text(json.dumps(opt_doc(folder, trials=2, storage=f"sqlite:///{folder / 'two.db'}")))
+    done = run_cli("optimise", path, "--workers", "2", "-o", folder / "two", "--no-cache")
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("local Dask cluster: 2 worker processes") and "dashboard" in lines[0]
+    summary = next(x for x in lines if " trials in " in x)
+    ends = r" on the local Dask cluster: 2 worker processes x 1 thread, [0-9.]+ [GM]B each$"
+    assert re.search(ends, summary), summary

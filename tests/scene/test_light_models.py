@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 from core_tracer.photometry import sources
 from core_tracer.scene import light_models, photometric_checks
 from core_tracer.scene import spec as S
@@ -42,3 +44,29 @@ def test_used_follows_the_light_model():
     assert light_models.used(S.LENS, "ior", "photometric", custom)
     assert light_models.used(S.PRISM_PLATE, "ior", "photometric", pmma)  # it shapes the rings in both modes
     assert not light_models.used(S.LENS, "transmitted_color", "photometric", custom)
+
+
+def test_a_paper_design_reports_the_photometric_values_it_ignores():
+    """Issue 31: photometric fields on a paper design were ignored without a word. They are reported
+    (not refused: a shared preset may carry them for a switch of model), and only when not at their
+    defaults, so a preset that writes every field keeps loading silently."""
+    from helpers import BASELINE, PRESETS
+
+    from core_tracer.scene.validate import load_scene, parse_scene
+
+    baseline = load_scene(BASELINE)
+    assert light_models.ignored_note(baseline) is None
+    every_field = parse_scene(baseline)  # normalised: every photometric field written at its default
+    assert "flux_lm" in every_field["lamps"][0]["bulb"] and light_models.ignored_note(every_field) is None
+    every_field["lamps"][0]["bulb"]["flux_lm"] = 900.0
+    every_field["lamps"][0]["lens"]["filter"] = "amber"
+    assert light_models.ignored_fields(parse_scene(every_field)) == [
+        ("lamps[0].lens.filter", "amber"), ("lamps[0].bulb.flux_lm", 900.0)]
+    assert light_models.ignored_note(parse_scene(every_field)) == (
+        'the paper light model ignores photometric fields: lamps[0].lens.filter = "amber", '
+        'lamps[0].bulb.flux_lm = 900.0; they take effect with light_model "photometric"')
+    stop = load_scene(PRESETS / "photometric-stop-lamp.json")
+    assert light_models.ignored_note(stop) is None  # used there
+    stop["light_model"] = "paper"
+    note = light_models.ignored_note(parse_scene(stop))
+    assert note.count(" = ") == 3 and re.search(r" and \d+ more;", note)
