@@ -139,6 +139,7 @@ def test_a_bare_die_rendered_is_flux_over_pi_cos_theta(black_reflector):
         h, v = angles_of(_direction(theta))
         got = intensity.rendered_intensity(scene, float(h), float(v), pixel_mm=0.05, replicates=8, seed=1)
         expected = _lambertian_cd(theta)
+        print(f"rendered at {theta:g}°: {got.cd / expected - 1:+.2%} ± {got.stderr / expected:.2%}")
         assert got.cd == pytest.approx(expected, rel=0.01), (theta, got)
         assert got.stderr < 0.006 * expected, (theta, got)
 
@@ -174,6 +175,7 @@ def test_a_bare_die_light_traced_is_flux_over_pi_cos_theta(black_reflector):
     got, flux = light_tracing.traced_beam(scene, angles, photons=3_000_000, cone_deg=cone, seed=5)
     for theta, value in zip(THETAS, got[0], strict=True):
         expected = _cone_mean_cd(theta, cone)
+        print(f"light traced at {theta:g}°: {value.cd / expected - 1:+.2%} ± {value.stderr / expected:.2%}")
         assert value.stderr < 0.0035 * expected, (theta, value)
         assert value.cd == pytest.approx(expected, rel=0.01), (theta, value, expected)
     assert flux[0][0] == pytest.approx(FLUX_LM, rel=0.002)
