@@ -1,7 +1,8 @@
 """What the photometric mode costs: a photometric preset rendered in its own mode (K bands) and the
 same document with ``"light_model": "paper"`` (the same geometry, cuts, lamps and camera; R, G, B),
 alternately in one run, at 512x512. Prints the median wall-clock and CPU time of each, the ray
-segments, and the ratio photometric / paper (issue 22: at most 2x).
+segments, and the ratio photometric / paper (issue 22: at most 2x). A free-form preset is traced on
+its meshes (the .glb beside it), both modes on the same geometry.
 
     .venv/bin/python benchmarks/bench_photometric.py [--preset presets/four-lamp-night-lit-photometric.json]
         [--runs 5] [--size 512] [--bands K] [--threads N]
@@ -30,10 +31,11 @@ from core_tracer import load_scene, render_passes  # noqa: E402
 from core_tracer.raytrace import spectral  # noqa: E402
 
 
-def timed(scene: dict, size: int, bands: int | None, threads: int | None) -> tuple[float, float, int]:
-    """(wall s, CPU s, ray segments) of one render."""
+def timed(scene: dict, size: int, bands: int | None, threads: int | None, meshes=None) -> tuple[float, float, int]:
+    """(wall s, CPU s, ray segments) of one render (a free-form design's on its ``meshes``)."""
     wall, cpu = time.perf_counter(), time.process_time()
-    result = render_passes(scene, size, size, bands=bands, threads=threads)
+    render = render_passes if meshes is None else meshes.render_passes
+    result = render(scene, size, size, bands=bands, threads=threads)
     return time.perf_counter() - wall, time.process_time() - cpu, int(result.stats.get("segments", 0))
 
 
@@ -49,13 +51,19 @@ def main() -> int:
     if photometric.get("light_model") != "photometric":
         raise SystemExit(f"{args.preset}: not a photometric preset")
     paper = {**photometric, "light_model": "paper"}
+    meshes = None
+    if "freeform" in photometric:
+        from core_tracer.freeform.cache import DesignMeshes
+        from core_tracer.freeform.loading import load_meshes
+
+        meshes = DesignMeshes(load_meshes(args.preset, photometric))
     k = args.bands or spectral.DEFAULT_BANDS
-    timed(paper, 64, None, args.threads)  # imports, caches, world image: out of the figures
-    timed(photometric, 64, k, args.threads)
+    timed(paper, 64, None, args.threads, meshes)  # imports, caches, world image, Embree: out of the figures
+    timed(photometric, 64, k, args.threads, meshes)
     runs: dict[str, list[tuple[float, float, int]]] = {"paper": [], "photometric": []}
     for _ in range(args.runs):
-        runs["paper"].append(timed(paper, args.size, None, args.threads))
-        runs["photometric"].append(timed(photometric, args.size, k, args.threads))
+        runs["paper"].append(timed(paper, args.size, None, args.threads, meshes))
+        runs["photometric"].append(timed(photometric, args.size, k, args.threads, meshes))
     median = {mode: (statistics.median(r[0] for r in rs), statistics.median(r[1] for r in rs), rs[0][2])
               for mode, rs in runs.items()}
     print(f"{Path(args.preset).name} at {args.size}x{args.size}, {photometric['image'].get('samples', 1)} "

@@ -292,8 +292,10 @@ def slab_series(r: float, transmittance, cutoff: float):
     """
     import numpy as np
 
-    total = np.zeros(3)
-    k = np.full(3, 1.0 - r)  # inside the lens, heading to the inner face
+    # R, G, B; or as many channels as ``r`` or ``transmittance`` give (the photometric mode's bands)
+    channels = np.broadcast(np.asarray(r, float), np.asarray(transmittance, float)).shape or (3,)
+    total = np.zeros(channels)
+    k = np.broadcast_to(1.0 - np.asarray(r, float), channels)  # inside the lens, heading to the inner face
     while True:
         k = k * transmittance  # cross the lens
         to_bulb = k * (1.0 - r)

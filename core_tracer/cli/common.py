@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from ..fileio import check_writable
 from ..images import display
 from ..scene import spec as S
-from ..scene.beside import environment_file
+from ..scene.beside import environment_file, with_spectrum_files
 from ..scene.light_models import ignored_note
 from ..scene.messages import show_value
 from ..scene.reading import SceneError, read_json
@@ -64,12 +64,50 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
     try:
         scene = parse_scene(doc)
         environment_file(path, scene["environment"])  # beside the file, or refused
+        if scene.get("light_model") == "photometric":  # what the render computes from the spectra (issue 33)
+            from ..raytrace import spectral
+            from ..scene.beside import with_spectrum_files
+
+            spectral.check_lamps(with_spectrum_files(path, scene))
     except SceneError as e:
         raise in_file(e, path) from None
+    traced_scene(path, scene)  # the measured curves it names are beside it, or refused
     note = ignored_note(scene)
     if note:  # reported, not refused: the fields are kept for a switch to the photometric model
         print(f"note: {printable(os.fspath(path))}: {note}", file=sys.stderr)
     return scene
+
+
+def traced_scene(path: str | os.PathLike, scene: dict) -> dict:
+    """The scene loaded from ``path`` as the tracer takes it: the measured curves it names
+    (``filter_file``, ``spectrum_file``) by their full paths beside the file, confined to its folder
+    (``scene.beside``). The files written keep the plain names (``scene`` itself)."""
+    try:
+        return with_spectrum_files(path, scene)
+    except SceneError as e:
+        raise in_file(e, path) from None
+
+
+def design_meshes(path: str | os.PathLike, scene: dict):
+    """The meshes of a free-form design beside ``path``, their geometry checked before any render
+    (the meshes, their roles, the lens volumes) in a ``freeform.cache.DesignMeshes`` that every
+    render of them shares; None for a parametric design."""
+    if "freeform" not in scene:
+        return None
+    # free-form only: the mesh modules load when a design has meshes (start-up speed)
+    from ..freeform import available
+    from ..freeform.cache import DesignMeshes
+    from ..freeform.loading import load_meshes
+
+    ok, reason = available()
+    if not ok:
+        raise SceneError(printable(os.fspath(path)), reason)
+    meshes = DesignMeshes(load_meshes(path, scene))
+    try:
+        meshes.cache.get(scene, meshes.meshes)
+    except SceneError as e:
+        raise in_file(SceneError(e.path, e.message), printable(os.fspath(path))) from None
+    return meshes
 
 
 class Terminated(KeyboardInterrupt):

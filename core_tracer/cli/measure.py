@@ -8,7 +8,7 @@ import os
 from ..fileio import atomic_folder, check_replaceable_folder
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
-from .common import load_scene_file
+from .common import design_meshes, load_scene_file, traced_scene
 
 HELP = "measure a photometric design: intensity grids (UN R148, FMVSS 108), colour, homogeneity, IES/LDT, report"
 OUTPUTS = ("measures.json", "measures.png")
@@ -48,17 +48,22 @@ def run(args: argparse.Namespace) -> int:
         if not (lo <= value <= hi):
             raise SceneError(option, f"{value!r} is outside the allowed {lo:g} to {hi:g}")
     check_replaceable_folder(args.output, _ours, "measures")
-    scene = load_scene_file(args.scene)
-    functions = _functions(args.function, len(scene["lamps"]))
+    scene = traced_scene(args.scene, load_scene_file(args.scene))
+    meshes = design_meshes(args.scene, scene)  # a free-form design is measured on its meshes, as one lamp
+    functions = _functions(args.function, 1 if meshes is not None else len(scene["lamps"]))
     from ..measures import export, report  # numpy, the tracer and matplotlib: loaded once the input is checked
 
+    report.check_memory(scene, args.pixel_mm)  # the whole footprint before the first view (issue 33)
+
     result = report.measure(scene, functions=functions, pixel_mm=args.pixel_mm, replicates=args.replicates,
-                            distance_m=args.distance_m, progress=lambda text: print(text, flush=True))
-    picture = report.lamp_picture(scene)
+                            distance_m=args.distance_m, progress=lambda text: print(text, flush=True),
+                            meshes=meshes)
+    picture = report.lamp_picture(scene, meshes=meshes)
     with atomic_folder(args.output, _ours, "measures") as folder:
         if not args.no_beam_files:
             print("beam files: a (C, γ) sweep of 30° × 10°", flush=True)
-            beams = export.measure_distributions(scene, result.functions, pixel_mm=args.pixel_mm, replicates=1)
+            beams = export.measure_distributions(scene, result.functions, pixel_mm=args.pixel_mm, replicates=1,
+                                                 meshes=meshes)
             for name, dist in beams.items():
                 export.write_ies(dist, os.path.join(folder, f"{name}.ies"))
                 export.write_ldt(dist, os.path.join(folder, f"{name}.ldt"))

@@ -19,8 +19,10 @@ from .common import (
     check_output,
     check_output_folder,
     ctrl_c_sets,
+    design_meshes,
     load_scene_file,
     photometric_stops,
+    traced_scene,
     view_for,
 )
 
@@ -56,7 +58,8 @@ def run(args: argparse.Namespace) -> int:
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
     _check_photometric_options(args, scene)
     traced, scene = _with_environment(args, scene)
-    meshes, geometry = _freeform_meshes(args.scene, scene)
+    traced = traced_scene(args.scene, traced)
+    meshes = design_meshes(args.scene, scene)
     keep_passes = args.passes is not None
     size = scene["image"]
     from ..raytrace import environment  # numpy and OpenImageIO: the image's header is read here
@@ -90,10 +93,8 @@ def run(args: argparse.Namespace) -> int:
                 result = render_passes(traced, should_stop=stop.is_set, keep_passes=keep_passes,
                                        progress=lambda fraction: checkpoint("render:band"), pool=pool)
             else:
-                from ..freeform import render_passes as render_freeform  # free-form only (start-up speed)
-
-                result = render_freeform(traced, meshes, should_stop=stop.is_set, geometry_cache=geometry,
-                                         progress=lambda fraction: checkpoint("render:band"))
+                result = meshes.render_passes(traced, should_stop=stop.is_set,
+                                              progress=lambda fraction: checkpoint("render:band"))
         except RenderCancelled:
             raise stop.interrupt() from None
         image = glare.apply(result.image, scene)  # the image file holds the glare; the passes do not
@@ -213,25 +214,3 @@ def _check_passes_folder(passes: str, output: str) -> None:
     if os.path.realpath(os.path.dirname(os.path.abspath(output))) == os.path.realpath(passes):
         raise SceneError(passes, "--passes holds the output image; allowed a folder apart from -o (it is "
                                  "replaced whole by the passes)")
-
-
-def _freeform_meshes(scene_path: str, scene: dict) -> tuple[dict | None, object]:
-    """The meshes of a free-form design and its geometry, checked before the render (the meshes,
-    their roles, the lens volumes), or (None, None) for a parametric design."""
-    if "freeform" not in scene:
-        return None, None
-    # free-form only: the mesh modules load when a design has meshes (start-up speed)
-    from ..freeform import available
-    from ..freeform.cache import GeometryCache
-    from ..freeform.loading import load_meshes
-
-    ok, reason = available()
-    if not ok:
-        raise SceneError(printable(scene_path), reason)
-    meshes = load_meshes(scene_path, scene)
-    cache = GeometryCache()
-    try:
-        cache.get(scene, meshes)
-    except SceneError as e:
-        raise SceneError(f"{printable(scene_path)}: {e.path}" if e.path else printable(scene_path), e.message) from None
-    return meshes, cache

@@ -9,7 +9,7 @@ import sys
 from ..fileio import atomic_write_bytes
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
-from .common import check_output, ctrl_c_sets, load_scene_file
+from .common import check_output, ctrl_c_sets, design_meshes, load_scene_file, traced_scene
 
 HELP = ("render the surroundings and one pass per bulb and filament of a design, so that 'relight' switches "
         "functions and changes fluxes without rendering")
@@ -29,15 +29,28 @@ def run(args: argparse.Namespace) -> int:
                                      ".npz")
     check_output(args.output, "output")
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
+    meshes = design_meshes(args.scene, scene)
+    from .. import budget
     from ..measures import states as S
+    from ..raytrace import environment
     from ..raytrace.engine import RenderCancelled
+    from ..scene.beside import environment_file
+
+    # The whole footprint before the first render (issue 33), as ``render`` counts its own.
+    size = scene["image"]
+    path = environment_file(args.scene, scene["environment"])
+    traced = traced_scene(args.scene, scene)  # the measured curves by their full paths beside the file
+    traced = traced if path is None else {**traced, "environment": {**traced["environment"], "file": path}}
+    budget.check_states(size["width"], size["height"], size["samples"], len(S.states_of(scene)) - 1,
+                        environment=environment.world_bytes(traced))
 
     def progress(done: int, total: int, label: str) -> None:
         print(f"state {done + 1} of {total}: {label}", flush=True)
 
     with ctrl_c_sets() as stop:
         try:
-            light = S.render_states(scene, progress=progress, should_stop=stop.is_set)
+            light = S.render_states(traced, progress=progress, should_stop=stop.is_set, meshes=meshes,
+                                    recorded=scene)
         except RenderCancelled:
             raise stop.interrupt() from None
     atomic_write_bytes(args.output, S.to_bytes(light))

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import os
 import re
 import sys
@@ -166,6 +167,23 @@ def _with_environment(study: st.Study, document: str) -> tuple[st.Study, int]:
     return runnable, world
 
 
+def _with_curves(study: st.Study, document: str) -> st.Study:
+    """The study whose variants are traced with the measured curves they name (``filter_file``,
+    ``spectrum_file``) by their full paths beside ``document`` (the base design or the study file),
+    confined to its folder (``scene.beside``); a Dask worker is sent their contents
+    (``cluster.cells``). The study itself (its sheet, its saved files) keeps the plain names."""
+    from ..scene.beside import spectrum_files, with_curves_at
+
+    variants = []
+    for v in study.variants:
+        try:
+            found = spectrum_files(document, v.scene)
+        except SceneError as e:
+            raise in_file(SceneError(f"base.{e.path}", e.message), document) from None
+        variants.append(dataclasses.replace(v, scene=with_curves_at(v.scene, found)))
+    return dataclasses.replace(study, variants=tuple(variants))
+
+
 def _is_variant_file(name: str) -> bool:
     return re.fullmatch(r"variant-\d+\.json", name) is not None
 
@@ -205,8 +223,13 @@ def run(args: argparse.Namespace) -> int:
             print(name)
         return 0
     # Every check on the user's input happens before the first worker starts.
-    if args.workers is not None and args.workers < 0:
-        raise SceneError("--workers", f"{args.workers} is out of range; allowed 0 (this process) or more")
+    from ..cluster import engine as dask_engine
+
+    dask_engine.check_workers(args.workers)
+    if args.cache is not None and not args.no_cache:
+        from ..cluster.cache import CellCache
+
+        CellCache(args.cache).ready()  # its own cause, before any cell is looked for
     if args.output is None and not (args.save_study or args.save_variants):
         raise SceneError("--output", "is required: the contact sheet to write (.png or .exr)")
     view = None
@@ -230,6 +253,7 @@ def run(args: argparse.Namespace) -> int:
         from ..study import sheet as study_sheet  # numpy: only for a sheet
 
         runnable, world = _with_environment(study, args.base or args.study)
+        runnable = _with_curves(runnable, args.base or args.study)
         sheet_layout = study_sheet.layout(study)
         budget.check_study(study.size, len(study), (sheet_layout.width, sheet_layout.height), environment=world)
 
@@ -252,6 +276,8 @@ def run(args: argparse.Namespace) -> int:
             checkpoint("study:variant")
 
     engine = _engine(args)
+    if engine == "dask":
+        dask_engine.scheduler_address(args.scheduler)  # checked before the first worker starts
     counted = ""
     with ctrl_c_sets() as stop:
         if engine == "dask":
@@ -376,10 +402,9 @@ def _run_on_dask(args: argparse.Namespace, study: st.Study, world: int, on_progr
                                              progress=on_progress, should_stop=stop.is_set, on_start=started)
     except dask_engine.Cancelled:
         raise stop.interrupt() from None
-    except OSError as e:  # no scheduler at the address
-        raise SceneError("--scheduler", f"cannot reach {args.scheduler or os.environ.get('DASK_SCHEDULER_ADDRESS')}"
-                                        f" ({e}); allowed the address of a running dask scheduler, "
-                                        "or local") from None
+    except dask_engine.Unreachable as e:  # only the connection: any other OSError names its own file
+        raise SceneError("--scheduler" if args.scheduler else dask_engine.SCHEDULER_VARIABLE,
+                         f"{e}; allowed the address of a running dask scheduler, or local") from None
     how = f"on the {where[0]}" if where else "all from the cache"
     if count.workers is not None:
         how += f", only on the workers whose memory holds a variant: {', '.join(count.workers)}"

@@ -4,6 +4,8 @@ A *cell* is a variant scene at a size. What a worker needs travels with it: the 
 (never a path the worker may not have) and, when the scene sees an environment image, the image's
 bytes, sent once per study and named by their SHA-256 (``Inputs``); the worker writes them into
 its own cache folder under that name and renders the scene pointed at that copy (``render_cell``).
+The measured curves a photometric scene reads (``filter_file``, ``spectrum_file``: a few kB each)
+travel inside the cell itself, each named by its SHA-256 and written beside the images.
 
 A cell's *key* is the SHA-256 of everything its image depends on: the scene (with the image file
 replaced by the hash of its bytes), the size, and the tracer's own source (``tracer_version``), so a
@@ -71,23 +73,49 @@ class Cell:
     height: int
     environment: str | None = None  # SHA-256 of the environment image's bytes
     suffix: str = ""  # the image's file suffix (.exr, .hdr): its reader goes by it
+    # the measured curves: (where the scene names it, ``scene.beside.named_curves``; SHA-256; bytes)
+    curves: tuple[tuple[tuple, str, bytes], ...] = ()
 
     @property
     def key(self) -> str:
+        from ..scene.beside import with_curves_at
+
         scene = copy.deepcopy(self.scene)
         if self.environment is not None:
             scene["environment"]["world"] = "file"
             scene["environment"]["file"] = f"sha256:{self.environment}{self.suffix}"
+        scene = with_curves_at(scene, {keys: f"sha256:{digest}.csv" for keys, digest, _data in self.curves})
         doc = {"scene": scene, "size": [self.width, self.height], "tracer": tracer_version()}
         return hashlib.sha256(json.dumps(doc, sort_keys=True, separators=(",", ":")).encode("utf-8")).hexdigest()
 
 
 def make_cell(scene: dict, width: int, height: int, inputs: Inputs) -> Cell:
+    """The cell of a scene whose files are given by full paths (its environment image, its curves)."""
+    curves = tuple(_curve(keys, path) for keys, path in curve_paths(scene).items())
     path = environment_path(scene)
     if path is None:
-        return Cell(scene, width, height)
+        return Cell(scene, width, height, curves=curves)
     digest, suffix = inputs.add(path)
-    return Cell(scene, width, height, digest, suffix)
+    return Cell(scene, width, height, digest, suffix, curves)
+
+
+def curve_paths(scene: dict) -> dict[tuple, str]:
+    """The measured curves a scene reads, by where it names them (``beside.named_curves``): the
+    full paths the loader gave them (``beside.with_spectrum_files``)."""
+    from ..scene.beside import named_curves
+
+    out = {}
+    for keys, _where in named_curves(scene):
+        node = scene
+        for key in keys:
+            node = node[key]
+        out[keys] = node
+    return out
+
+
+def _curve(keys: tuple, path: str) -> tuple[tuple, str, bytes]:
+    data = Path(path).read_bytes()
+    return keys, hashlib.sha256(data).hexdigest(), data
 
 
 def inputs_folder() -> str:
@@ -152,7 +180,13 @@ def render_cell(cell: Cell, environment: bytes | None = None, stop: str | None =
 
 
 def worker_scene(cell: Cell, environment: bytes | None) -> dict:
-    """The cell's scene as this worker renders it: its environment image the copy of the bytes sent."""
+    """The cell's scene as this worker renders it: its environment image and its curves the copies
+    of the bytes sent (whatever folder the design came from: this worker may not see it)."""
+    if cell.curves:
+        from ..scene.beside import with_curves_at
+
+        curves = {keys: _materialise(digest, ".csv", data) for keys, digest, data in cell.curves}
+        cell = Cell(with_curves_at(cell.scene, curves), cell.width, cell.height, cell.environment, cell.suffix)
     if cell.environment is None:
         return cell.scene
     if environment is None:

@@ -47,7 +47,7 @@ from ..raytrace.engine.rays import (
 )
 from ..raytrace.engine.render import Film, RenderResult
 from ..raytrace.engine.schedule import BandImage, band_rows, never, traced_bands
-from ..raytrace.engine.surfaces import fresnel_split
+from ..raytrace.engine.surfaces import sphere_irradiance, split_at_face
 from ..raytrace.lighting import Lighting
 from .cache import GeometryCache
 from .embree import EmbreeScene
@@ -95,14 +95,14 @@ class _Context(Lighting):
     """Everything constant during one render of a free-form design."""
 
     def __init__(self, scene: dict, camera: Camera, geometry: Geometry, embree: EmbreeScene, samples: int,
-                 filter_name: str, record: bool):
-        super().__init__(scene)  # the surroundings and the sun as the parametric tracer's
+                 filter_name: str, record: bool, bands: int | None = None):
+        super().__init__(scene, bands)  # the surroundings, the sun and the light model as the parametric tracer's
         self.camera, self.geometry, self.embree = camera, geometry, embree
         self.samples, self.filter_name, self.record = samples, filter_name, record
         self.adaptive_threshold = 0.0  # every sample of every pixel
         self.walker = _MeshWalk()  # the engine's rays find the meshes' surfaces through Embree
         self.box_lo = self.box_hi = self.window = None  # no body's box: every eye ray is traced
-        self.parts = PartTable(scene, geometry)
+        self.parts = PartTable(scene, geometry, self.photometric)
         self.sun_transmit = sunlight.plate_transmittance(self.sun, self.parts.ior, self.parts.absorption,
                                                          mean_thickness(geometry, len(self.parts.ior)))
         self.phantom = scene["light"].get("phantom", False) and bool(self.sun_transmit.any())
@@ -128,7 +128,8 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
                   on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
                   threads: int | None = None,
                   record_transitions: bool = False,
-                  filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True) -> RenderResult:
+                  filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True,
+                  bands: int | None = None) -> RenderResult:
     """Render a free-form design (a normalised scene with a ``freeform`` section and its meshes by
     name): the image and the contribution passes, as ``raytrace.engine.render_passes``.
 
@@ -137,6 +138,8 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
     (0 when reused). ``on_rows(row_start, row_stop, rows)`` and ``on_band(row_start, row_stop, rows,
     pass_rows)`` are called from the calling thread as bands finish, as in the parametric tracer;
     ``world_seen=False`` leaves out what eye rays that miss everything see (a transparent film).
+    A photometric scene is traced on ``bands`` wavelength bands, its image and passes CIE XYZ in cd/m²,
+    as the parametric tracer's (``stats["light_model"]``).
     Raises ``SceneError`` for a bad mesh or role, ``RenderCancelled`` when ``should_stop()`` (polled
     between bands) says so."""
     start = time.perf_counter()
@@ -148,7 +151,7 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
     samples = int(samples or scene["image"].get("samples", 1))
     pixel_filter.filter_support(filter_name)
     ctx = _Context(scene, make_camera(scene["camera"], width, height), geometry, embree, samples, filter_name,
-                   record_transitions)
+                   record_transitions, bands)
     ctx.world_seen = world_seen
     bands = band_rows(ctx)
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
@@ -160,6 +163,9 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
     result.stats["trace_seconds"] = time.perf_counter() - trace_start
     result.stats["build_seconds"] = build_seconds
     result.stats["triangles"] = len(geometry.triangles)
+    result.stats["light_model"] = "paper" if ctx.photometric is None else "photometric"
+    if ctx.photometric is not None:
+        result.stats["bands"] = ctx.channels
     return result
 
 
@@ -170,10 +176,12 @@ class _MeshWalk:
     def first_hits(ctx: _Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> MeshRays:
         """The eye rays ``o, d`` of slots ``pix`` to their first surface, and the rays that go on."""
         n = len(o)
-        rays = MeshRays(pix=pix, lamp=np.full(n, -1, np.int64), o=o, d=d, k=np.ones((n, 3)),
+        # photometric: every column of k a band, unpolarised light half s-polarised (``Rays.k_s``)
+        rays = MeshRays(pix=pix, lamp=np.full(n, -1, np.int64), o=o, d=d, k=np.ones((n, ctx.channels)),
                         medium=np.full(n, P.IN_AIR, np.int8), src=np.full(n, EYE, np.int8),
                         parent=np.zeros(n, np.int8), branch=np.zeros(n, np.int8), seen_reflector=np.zeros(n, bool),
-                        k_s=UNPOLARISED, travelled=NOT_DEFERRED, triangle=np.full(n, -1, np.int64))
+                        k_s=UNPOLARISED if ctx.photometric is None else np.full((n, ctx.channels), 0.5),
+                        travelled=NOT_DEFERRED, triangle=np.full(n, -1, np.int64))
         return _step(ctx, band, rays, first=True)
 
     @staticmethod
@@ -181,14 +189,14 @@ class _MeshWalk:
         return _step(ctx, band, rays, first=False)
 
 
-def _spawn(rays: MeshRays, sel: np.ndarray, o: np.ndarray, d: np.ndarray, k: np.ndarray, part: np.ndarray,
-           medium: np.ndarray, tri: np.ndarray, src: np.ndarray, cls: np.ndarray, branch: int,
+def _spawn(rays: MeshRays, sel: np.ndarray, o: np.ndarray, d: np.ndarray, k: np.ndarray, k_s: np.ndarray,
+           part: np.ndarray, medium: np.ndarray, tri: np.ndarray, src: np.ndarray, cls: np.ndarray, branch: int,
            seen: np.ndarray) -> MeshRays:
     """Child rays of the rays ``sel`` (indices into the generation) that stay above the cut-off."""
     go = np.nonzero(alive(k))[0]
     return MeshRays(pix=rays.pix[sel][go], lamp=part[go], o=o[go], d=d[go], k=k[go], medium=medium[go], src=src[go],
                     parent=cls[go], branch=np.full(len(go), branch, np.int8), seen_reflector=seen[go],
-                    k_s=UNPOLARISED, travelled=NOT_DEFERRED, triangle=tri[go])
+                    k_s=k_s[go], travelled=NOT_DEFERRED, triangle=tri[go])
 
 
 def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
@@ -208,12 +216,18 @@ def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
     t[hits] = t_hit  # from the segment's true start, in double precision
     normal = shading_normal(g, tri_hit, uv[hits])
 
-    k = rays.k
+    k, k_s = rays.k, rays.k_s
     inside = np.nonzero(rays.medium == P.IN_LENS)[0]
-    if len(inside):  # eq. (2) over the path inside the lens
+    if len(inside):  # eq. (2) over the path inside the lens (photometric: per band, Beer-Lambert)
+        # Applied at once, not deferred to the leaves as the parametric lamp's (``spectral.Throughput``):
+        # a ray here may cross several lenses of different filters.
         k = k.copy()
         length = np.where(np.isfinite(t[inside]), t[inside], 0.0)
-        k[inside] *= optics.absorption(parts.absorption[rays.lamp[inside]], length)
+        transmittance = optics.absorption(parts.absorption[rays.lamp[inside]], length)
+        k[inside] *= transmittance
+        if k_s is not UNPOLARISED:
+            k_s = k_s.copy()
+            k_s[inside] *= transmittance
 
     miss = np.nonzero(~hit_any)[0]
     if not (first and not ctx.world_seen) and ctx.background_seen and len(miss):
@@ -224,6 +238,7 @@ def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
     part_hit = g.part[tri_hit]
     surface_hit = surface[hits]
     k_hit = k[hits]
+    k_s_hit = k_s[hits]
     d_hit = rays.d[hits]
 
     for sid, pass_id in ((P.WALL, SIDE_WALL_PASS), (P.BULB, BULB_PASS), (P.SOCKET, SOCKET_PASS)):
@@ -241,21 +256,24 @@ def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
     children: list[MeshRays] = []
     met = np.nonzero(surface_hit == P.REFLECTOR)[0]
     if len(met):
-        children.append(_reflector(ctx, band, rays, hits[met], k_hit[met], point[met], normal[met], tri_hit[met],
-                                   part_hit[met], cls[hits[met]]))
+        children.append(_reflector(ctx, band, rays, hits[met], k_hit[met], k_s_hit[met], point[met], normal[met],
+                                   tri_hit[met], part_hit[met], cls[hits[met]]))
     met = np.nonzero((surface_hit == P.OUTER) | (surface_hit == P.CUT))[0]
     if len(met):
-        children.extend(_dielectric(ctx, band, rays, hits[met], k_hit[met], point[met], normal[met], tri_hit[met],
-                                    part_hit[met], cls[hits[met]], surface_hit[met]))
+        children.extend(_dielectric(ctx, band, rays, hits[met], k_hit[met], k_s_hit[met], point[met], normal[met],
+                                    tri_hit[met], part_hit[met], cls[hits[met]], surface_hit[met]))
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return concat(children) if len(children) > 1 else children[0]
 
 
-def _reflector(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np.ndarray, hit: np.ndarray,
-               normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray) -> MeshRays:
+def _reflector(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np.ndarray, k_s: np.ndarray,
+               hit: np.ndarray, normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray) -> MeshRays:
     """A reflector hit (③ ④): the first-hit constant, Blinn's scatter toward its bulbs (eq. 3),
-    then the mirror ray (k × reflectance) where it stays above the cut-off."""
+    then the mirror ray (k × reflectance) where it stays above the cut-off. Photometric: no
+    constant (0), the glow tinted by the finish and spread over each bulb's irradiance (its sphere
+    of the mesh's area, ``surfaces.sphere_irradiance``), the mirror (1 - s) ρ(λ), as the parametric
+    reflector's (``surfaces.at_reflector``)."""
     parts = ctx.parts
     d = rays.d[met]
     pix = rays.pix[met]
@@ -266,21 +284,27 @@ def _reflector(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np
         sel = np.nonzero(parts.bulbs_of[part, bulb])[0]
         if len(sel) == 0:
             continue
-        to_bulb = optics.normalize(parts.bulb_center[bulb] - hit[sel])
+        gap = parts.bulb_center[bulb] - hit[sel]
+        to_bulb = optics.normalize(gap)
         scatter = optics.blinn(facing[sel], -d[sel], to_bulb, parts.scatter[part[sel]], parts.shininess[part[sel]])
-        band.add(REFLECTOR_SCATTER, pix[sel], k[sel] * scatter[:, None] * parts.bulb_intensity[bulb])
+        if ctx.photometric is not None:
+            scatter = scatter * sphere_irradiance(gap, parts.bulb_radius[bulb], facing[sel], to_bulb)
+        glow = k[sel] * parts.glow_tint[part[sel]]  # exactly k in the paper mode (a tint of ones)
+        band.add(REFLECTOR_SCATTER, pix[sel], glow * scatter[:, None] * parts.bulb_intensity[bulb])
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         lens = _lens_toward_sun(ctx, hit, tri, facing)
         lit = lens >= 0
-        band.add(REFLECTOR_SCATTER, pix, k * sunlight.scattered(ctx.sun, facing, -d, parts.scatter[part],
+        band.add(REFLECTOR_SCATTER, pix, k * parts.glow_tint[part] * sunlight.scattered(ctx.sun, facing, -d,
+                                                                                      parts.scatter[part],
                                                                 parts.shininess[part],
                                                                 ctx.sun_transmit[np.maximum(lens, 0)], lit))
-    mirrored = k * parts.reflectance[part, None]
+    mirrored = k * parts.mirror[part]
+    mirrored_s = k_s if k_s is UNPOLARISED else k_s * parts.mirror[part]
     count = len(met)
     geometric = ctx.geometry.normal[tri]
     mirror = on_side(optics.reflect(d, facing), d, geometric,
                      lambda sel: optics.reflect(d[sel], toward(geometric[sel], d[sel])), same=False)
-    return _spawn(rays, met, hit, mirror, mirrored, part, np.full(count, P.IN_AIR, np.int8), tri,
+    return _spawn(rays, met, hit, mirror, mirrored, mirrored_s, part, np.full(count, P.IN_AIR, np.int8), tri,
                   np.full(count, P.REFLECTOR, np.int8), cls, P.REFLECTED, np.ones(count, bool))
 
 
@@ -311,11 +335,12 @@ def _lens_toward_sun(ctx: _Context, p: np.ndarray, tri: np.ndarray, n: np.ndarra
     return lens
 
 
-def _dielectric(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np.ndarray, hit: np.ndarray,
-                normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray,
+def _dielectric(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np.ndarray, k_s: np.ndarray,
+                hit: np.ndarray, normal: np.ndarray, tri: np.ndarray, part: np.ndarray, cls: np.ndarray,
                 surface: np.ndarray) -> list[MeshRays]:
-    """A lens surface hit from either side: the engine's Fresnel split (TIR gives R = 1). Entering
-    through the outer face from the air (①), the reflected branch is the lens surface's eq. (1) × R."""
+    """A lens surface hit from either side: the engine's Fresnel split (TIR gives R = 1; photometric:
+    per band and polarisation). Entering through the outer face from the air (①), the reflected
+    branch is the lens surface's eq. (1) × R."""
     parts, g = ctx.parts, ctx.geometry
     d = rays.d[met]
     pix, seen = rays.pix[met], rays.seen_reflector[met]
@@ -328,9 +353,8 @@ def _dielectric(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: n
     away = optics.dot(d, facing) >= 0.0
     if away.any():
         facing[away] = geometric_facing[away]
-    ior = parts.ior[part]
-    split = fresnel_split(k, d, facing, np.where(entering, 1.0, ior), np.where(entering, ior, 1.0))
-    reflectance = split.reflectance
+    split = split_at_face(k, k_s, d, facing, ~entering, parts.ior[part],
+                          None if parts.band_ior is None else parts.band_ior[part])
     src = surface.astype(np.int8)
     medium_before = np.where(entering, P.IN_AIR, P.IN_LENS).astype(np.int8)
     medium_after = np.where(entering, P.IN_LENS, P.IN_AIR).astype(np.int8)
@@ -350,16 +374,16 @@ def _dielectric(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: n
     d_r, facing_r, geometric_r = d[mirrored], facing[mirrored], geometric_facing[mirrored]
     mirror = on_side(optics.reflect(d_r, facing_r), d_r, geometric[mirrored],
                      lambda sel: optics.reflect(d_r[sel], geometric_r[sel]), same=False)
-    out.append(_spawn(rays, met[mirrored], hit[mirrored], mirror, split.reflected[mirrored], part[mirrored],
-                      medium_before[mirrored], tri[mirrored], src[mirrored], cls[mirrored], P.REFLECTED,
-                      seen[mirrored]))
+    out.append(_spawn(rays, met[mirrored], hit[mirrored], mirror, split.reflected[mirrored],
+                      split.reflected_s[mirrored], part[mirrored], medium_before[mirrored], tri[mirrored],
+                      src[mirrored], cls[mirrored], P.REFLECTED, seen[mirrored]))
 
-    through = np.nonzero(reflectance < 1.0)[0]
+    through = np.nonzero(split.partial)[0]  # no total internal reflection
     d_t, facing_t, geometric_t = d[through], facing[through], geometric_facing[through]
     eta = split.eta[through]
     bent = on_side(optics.refract(d_t, facing_t, eta, split.cos_i[through]), d_t, geometric[through],
                    lambda sel: optics.refract(d_t[sel], geometric_t[sel], eta[sel]), same=True)
-    out.append(_spawn(rays, met[through], hit[through], bent, split.transmitted[through], part[through],
-                      medium_after[through], tri[through], src[through], cls[through], P.TRANSMITTED,
-                      seen[through]))
+    out.append(_spawn(rays, met[through], hit[through], bent, split.transmitted[through],
+                      split.transmitted_s[through], part[through], medium_after[through], tri[through],
+                      src[through], cls[through], P.TRANSMITTED, seen[through]))
     return out

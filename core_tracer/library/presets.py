@@ -28,7 +28,7 @@ from .. import fileio
 from ..freeform.loading import mesh_file_path
 from ..images import display
 from ..images.display import ViewTransform
-from ..scene.beside import environment_file
+from ..scene.beside import environment_file, with_spectrum_files
 from ..scene.derived import without_defaults
 from ..scene.freeform_section import freeform_without_defaults
 from ..scene.reading import SceneError, read_json, scene_to_json
@@ -435,6 +435,7 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
     scene["image"] = {"width": int(size), "height": int(size)}
     image_file = environment_file(entry.file, scene["environment"])  # beside the preset, by its full path
     traced = scene if image_file is None else {**scene, "environment": {**scene["environment"], "file": image_file}}
+    traced = with_spectrum_files(entry.file, traced)  # the measured curves beside the preset, by their full paths
     if "freeform" in scene:  # the meshes are read and checked now, before they are used
         from ..freeform import render_passes as render_freeform  # free-form only: loads Embree
         from ..freeform.loading import load_meshes

@@ -96,11 +96,17 @@ def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], 
 
 
 def lamp_flux(scene: dict, lamps: Sequence[int] | None = None) -> float:
-    """The luminous flux in lm of the lit bulbs (or LED dies) of ``lamps`` (None: all)."""
+    """The luminous flux in lm of the lit bulbs (or LED dies) of ``lamps`` (None: all); of a free-form
+    design, of its lit bulb parts (the design is one lamp, ``intensity.lamp_of_pixels``)."""
     from ..raytrace.spectral import bulb_spectrum
     from ..scene.led_array import LedArray, uses_leds
 
     total = 0.0
+    if "freeform" in scene:
+        for i, part in enumerate(scene["freeform"]["parts"]):
+            if part["role"] == "bulb" and part["bulb"]["on"]:
+                total += bulb_spectrum(part["bulb"], f"freeform.parts[{i}].bulb")[0]
+        return float(total)
     for i, lamp in enumerate(scene["lamps"]):
         if (lamps is None or i in lamps) and lamp["bulb"]["on"]:
             if uses_leds(lamp):  # the dies' flux, each into its half space

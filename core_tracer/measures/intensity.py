@@ -25,6 +25,7 @@ import copy
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from ..raytrace.lamp_table import LampTable
 from ..raytrace.parts import body_box, outer_face
 from ..scene.reading import SceneError
 from .directions import direction
+
+if TYPE_CHECKING:
+    from ..freeform.cache import DesignMeshes
 
 DEFAULT_PIXEL_MM = 1.0
 DEFAULT_REPLICATES = 4
@@ -108,18 +112,30 @@ def view_along(scene: dict, d: np.ndarray, pixel_mm: float, offset: tuple[float,
     return View(camera, width, height, pixel_mm, right, up)
 
 
-def render_view(measured: dict, view: View, bands: int | None = None, threads: int | None = None) -> np.ndarray:
-    """The XYZ image (H, W, 3), Y in cd/m², of a measurement scene seen in ``view``."""
+def render_view(measured: dict, view: View, bands: int | None = None, threads: int | None = None,
+                meshes: DesignMeshes | None = None) -> np.ndarray:
+    """The XYZ image (H, W, 3), Y in cd/m², of a measurement scene seen in ``view``; a free-form
+    design's on its ``meshes`` (the same engine, its surfaces found on the meshes)."""
     scene = dict(measured)
     scene["camera"] = {**measured["camera"], **view.camera}
-    result = render_passes(scene, view.width, view.height, samples=1, world_seen=False, keep_passes=False,
-                           threads=threads, bands=bands)
+    if "freeform" in scene:
+        if meshes is None:
+            raise SceneError("freeform", "the design's meshes were not given; allowed a free-form design loaded "
+                                         "with its .glb")
+        result = meshes.render_passes(scene, view.width, view.height, samples=1, world_seen=False, threads=threads,
+                                      bands=bands)
+    else:
+        result = render_passes(scene, view.width, view.height, samples=1, world_seen=False, keep_passes=False,
+                               threads=threads, bands=bands)
     return result.image.astype(np.float64)
 
 
 def lamp_of_pixels(scene: dict, view: View) -> np.ndarray:
     """(H, W) the lamp whose lens each pixel's ray crosses in the front plane y = 0 (-1: none).
-    Exact for flat lenses: a lamp's light leaves through its own outer face, in that plane."""
+    Exact for flat lenses: a lamp's light leaves through its own outer face, in that plane. A
+    free-form design is one lamp, lamp 0 (``design_groups``): every pixel is its."""
+    if "freeform" in scene:
+        return np.zeros((view.height, view.width), np.int64)
     cam = view.camera
     centre = np.asarray(cam["target"], dtype=np.float64)
     forward = centre - np.asarray(cam["position"], dtype=np.float64)
@@ -134,8 +150,9 @@ def lamp_of_pixels(scene: dict, view: View) -> np.ndarray:
 
 
 def splits_by_lens(scene: dict) -> bool:
-    """Whether one render can be split into the lamps' intensities by their lenses (flat lenses)."""
-    return not LampTable.from_scene(scene).any_cylindrical
+    """Whether one render can be split into the lamps' intensities by their lenses (flat lenses;
+    a free-form design is measured whole, ``lamp_of_pixels``)."""
+    return "freeform" in scene or not LampTable.from_scene(scene).any_cylindrical
 
 
 def _estimate(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -149,10 +166,11 @@ def _estimate(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def rendered_intensities(scene: dict, h_deg: float, v_deg: float, groups: Sequence[Sequence[int]] | None = None, *,
                          pixel_mm: float = DEFAULT_PIXEL_MM, replicates: int = DEFAULT_REPLICATES, seed: int = 0,
-                         bands: int | None = None, threads: int | None = None) -> list[Intensity]:
+                         bands: int | None = None, threads: int | None = None,
+                         meshes: DesignMeshes | None = None) -> list[Intensity]:
     """I(H, V) of each group of lamps (None: one group, the whole design), with the bulbs that are on
     in the scene. Flat lenses: each replicate is one render, split by lens (``lamp_of_pixels``);
-    otherwise one render per group."""
+    otherwise one render per group. A free-form design (its ``meshes``) is one group, measured whole."""
     if replicates < 1:
         raise ValueError(f"replicates: {replicates!r} is not 1 or more")
     groups = [list(range(len(scene["lamps"])))] if groups is None else [list(g) for g in groups]
@@ -166,13 +184,13 @@ def rendered_intensities(scene: dict, h_deg: float, v_deg: float, groups: Sequen
         offset = tuple(rng.uniform(-0.5, 0.5, 2))
         view = view_along(scene, d, pixel_mm, offset)
         if split:
-            image = render_view(measured, view, bands, threads)
+            image = render_view(measured, view, bands, threads, meshes)
             owner = lamp_of_pixels(scene, view)
             for g, group in enumerate(groups):
                 per_replicate[r, g] = image[np.isin(owner, group)].sum(axis=0) * area_m2
         else:
             for g, group in enumerate(groups):
-                image = render_view(measurement_scene(scene, group), view, bands, threads)
+                image = render_view(measurement_scene(scene, group), view, bands, threads, meshes)
                 per_replicate[r, g] = image.reshape(-1, 3).sum(axis=0) * area_m2
     mean, err = _estimate(per_replicate)
     return [Intensity(float(mean[g, 1]), float(err[g, 1]), mean[g]) for g in range(len(groups))]

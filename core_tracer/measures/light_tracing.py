@@ -279,6 +279,9 @@ def traced_beam(scene: dict, angles: Sequence[tuple[float, float]],
         raise ValueError(f"photons: {photons!r} is not 2 or more")
     if not 0.0 < cone_deg < 90.0:
         raise ValueError(f"cone: {cone_deg!r} degrees is not between 0 and 90")
+    if "freeform" in scene:  # its lamps are not what is traced: counting them would be another lamp's light
+        raise SceneError("freeform", "light tracing follows parametric lamps so far; allowed the rendered views "
+                                     "(intensity.rendered_intensities, measure) for a free-form design")
     measured = measurement_scene(scene)
     ctx = make_context(measured, 1, 1, bands=bands)
     if ctx.walker is not None or ctx.lamps.any_cylindrical:

@@ -15,6 +15,7 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +23,9 @@ from . import colour, regulation_grid
 from .directions import direction
 from .homogeneity import DEFAULT_DISTANCE_M, homogeneity
 from .intensity import lamp_of_pixels, measurement_scene, render_view, rendered_intensities, view_along
+
+if TYPE_CHECKING:
+    from ..freeform.cache import DesignMeshes
 
 # function -> (UN R148 key, FMVSS 108 key, signal colour)
 FUNCTIONS: dict[str, tuple[str, str, str]] = {
@@ -84,16 +88,41 @@ class Measures:
         }
 
 
+def largest_view(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5) -> tuple[int, int]:
+    """(width, height) px of the largest view ``measure`` renders: the front view at ``front_pixel_mm``,
+    or a view at ``pixel_mm`` from a direction of the beam files' (C, γ) sweep, which spans every
+    direction the regulation grids read too (γ up to 90°: side views included)."""
+    from .export import angles_of, gonio_direction
+
+    views = [view_along(scene, direction(0.0, 0.0), front_pixel_mm)]
+    for c in range(0, 360, 30):
+        for gamma in range(0, 91, 10):
+            h, v = angles_of(gonio_direction(float(c), float(gamma)))
+            views.append(view_along(scene, direction(float(h), float(v)), pixel_mm))
+    view = max(views, key=lambda w: w.width * w.height)
+    return view.width, view.height
+
+
+def check_memory(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5) -> None:
+    """Refuse, before anything is rendered, a ``measure`` past the memory budget (``budget.check_measure``)."""
+    from .. import budget
+
+    budget.check_measure(*largest_view(scene, pixel_mm, front_pixel_mm))
+
+
 def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: float = 2.0, replicates: int = 2,
             distance_m: float = DEFAULT_DISTANCE_M, front_pixel_mm: float = 0.5,
-            progress: Callable[[str], None] | None = None) -> Measures:
-    """Every measure of a photometric design (module docstring)."""
+            progress: Callable[[str], None] | None = None, meshes: DesignMeshes | None = None) -> Measures:
+    """Every measure of a photometric design (module docstring); a free-form design's on its
+    ``meshes``, measured whole as one lamp of the function of its first lamp (``--function 0=NAME``
+    names another), its bulbs as its parts have them."""
     say = progress or (lambda text: None)
     measurement_scene(scene)  # refuses a paper-mode scene at once, naming light_model
     by_function: dict[str, list[int]] = {}
-    for i, lamp in enumerate(scene["lamps"]):
+    freeform = "freeform" in scene
+    for i, lamp in enumerate(scene["lamps"][:1] if freeform else scene["lamps"]):
         name = (functions or {}).get(i) or lamp_function(lamp)
-        if name is not None and lamp["bulb"]["on"]:
+        if name is not None and (lamp["bulb"]["on"] or freeform):
             by_function.setdefault(name, []).append(i)
     names = list(by_function)
     groups = [by_function[n] for n in names]
@@ -110,7 +139,8 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
         if k % 10 == 0:
             say(f"intensity: direction {k + 1} of {len(wanted)}")
         for name, value in zip(names, rendered_intensities(scene, h, v, groups, pixel_mm=pixel_mm,
-                                                           replicates=replicates, seed=k), strict=True):
+                                                           replicates=replicates, seed=k, meshes=meshes),
+                               strict=True):
             measured[name][(h, v)] = (value.cd, value.stderr)
             if (h, v) == (0.0, 0.0):
                 xyz_at_axis[name] = value.xyz
@@ -139,7 +169,7 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
     start = time.perf_counter()
     say("homogeneity: front view")
     view = view_along(scene, direction(0.0, 0.0), front_pixel_mm)
-    image = render_view(measurement_scene(scene), view)
+    image = render_view(measurement_scene(scene), view, meshes=meshes)
     luminance = image[..., 1]
     owner = lamp_of_pixels(scene, view)
     lit = {}
@@ -324,14 +354,18 @@ def _chromaticity_plot(ax, result: Measures) -> None:
     ax.grid(True, color="0.92")
 
 
-def lamp_picture(scene: dict, width: int = 520) -> np.ndarray:
+def lamp_picture(scene: dict, width: int = 520, meshes: DesignMeshes | None = None) -> np.ndarray:
     """The design as its camera sees it (photometric render, the scene's exposure, Blender's default
-    view), as display RGB in [0, 1]."""
+    view), as display RGB in [0, 1]; a free-form design's on its ``meshes``."""
     from ..images import display
     from ..raytrace import spectral
     from ..raytrace.engine import render_passes
 
     height = max(1, round(width * scene["image"]["height"] / scene["image"]["width"]))
-    image = render_passes(scene, width, height, keep_passes=False, samples=min(4, scene["image"]["samples"])).image
+    samples = min(4, scene["image"]["samples"])
+    if meshes is not None and "freeform" in scene:
+        image = meshes.render_passes(scene, width, height, samples=samples).image
+    else:
+        image = render_passes(scene, width, height, keep_passes=False, samples=samples).image
     ev100 = spectral.exposure_ev100(image, scene)
     return display.view_transform().to_display(spectral.display_linear(image, ev100))

@@ -68,50 +68,83 @@ def environment_file(document: str | os.PathLike, env: dict) -> str | None:
     return path_beside(document, name, where, "an .exr or .hdr", "")[0]
 
 
-def spectrum_files(document: str | os.PathLike, scene: dict) -> dict[tuple[int, str, str], str]:
-    """The measured curves (.csv) a normalised photometric scene names beside ``document``, by (lamp,
-    section, key): a bulb's ``spectrum_file``, a lens's or prism plate's ``filter_file``, an LED
-    section's ``spectrum_file`` and ``far_field_file``; each
-    confined to the document's folder as ``environment_file`` is (none in the paper mode)."""
-    found: dict[tuple[int, str, str], str] = {}
+SECTIONS = ("lamps", "freeform")  # where a scene names curves: its lamps, its free-form parts
+
+
+def named_curves(scene: dict, sections: tuple[str, ...] = SECTIONS) -> list[tuple[tuple, str]]:
+    """The measured curves a normalised photometric scene reads, as (where the name sits: a key path
+    into the scene, the JSON path shown in messages): a bulb's ``spectrum_file``, a lens's or prism
+    plate's ``filter_file``, an LED section's ``spectrum_file`` and ``far_field_file``, the same of
+    free-form bulbs and lenses (none in the paper mode); of
+    the lamps, the free-form parts or both (``sections``)."""
     if scene.get("light_model") != "photometric":
-        return found
-    for i, lamp in enumerate(scene["lamps"]):
-        named = []
-        if lamp["bulb"]["type"] == "custom" and lamp["bulb"]["spectrum"] == "file":
-            named.append(("bulb", "spectrum_file"))
-        if lamp["lens"]["filter"] == "file":
-            named.append(("lens", "filter_file"))
-        if lamp.get("collection", "reflector") == "prism_plate" and lamp["prism_plate"]["filter"] == "file":
-            named.append(("prism_plate", "filter_file"))
-        if lamp.get("source", "bulb") == "led":
-            named += led_files(lamp["led"])
-        for section, key in named:
-            where = f"lamps[{i}].{section}.{key}"
-            name = lamp[section][key]
-            suffixes = FAR_FIELD_SUFFIXES if key == "far_field_file" else (".csv",)
-            check_plain_name(name, suffixes, where)
-            found[(i, section, key)] = path_beside(document, name, where, " or ".join(suffixes), "")[0]
-    return found
-
-
-def led_files(led: dict) -> list[tuple[str, str]]:
-    """(section, key) of the files an LED section reads: its spectrum and its far field."""
-    named = []
-    if led["spectrum"] == "file":
-        named.append(("led", "spectrum_file"))
-    if led["distribution"] == "file":
-        named.append(("led", "far_field_file"))
+        return []
+    named: list[tuple[tuple, str]] = []
+    for i, lamp in enumerate(scene["lamps"] if "lamps" in sections else ()):
+        parts = [("bulb", lamp["bulb"]), ("lens", lamp["lens"])]
+        if lamp.get("collection", "reflector") == "prism_plate":
+            parts.append(("prism_plate", lamp["prism_plate"]))
+        if lamp.get("source", "bulb") == "led":  # its dies' spectrum and far field
+            parts.append(("led", lamp["led"]))
+        named += [(("lamps", i, name, key), f"lamps[{i}].{name}.{key}") for name, part in parts
+                  for key in _curve_keys(part)]
+    for i, part in enumerate(scene.get("freeform", {}).get("parts", ()) if "freeform" in sections else ()):
+        role = part["role"]
+        named += [(("freeform", "parts", i, role, key), f"freeform.parts[{i}].{role}.{key}")
+                  for key in _curve_keys(part[role])]
     return named
 
 
-def with_spectrum_files(document: str | os.PathLike, scene: dict) -> dict:
-    """``scene`` with the measured curves it names (``spectrum_files``) by their full paths, to be
-    traced whatever the working directory (the scene itself, when it names none)."""
-    found = spectrum_files(document, scene)
-    if not found:
+def _curve_keys(section: dict) -> list[str]:
+    """The curve files a bulb, lens or plate section reads: its spectrum or filter given by file."""
+    keys = []
+    if section.get("type", "custom") == "custom" and section.get("spectrum") == "file":
+        keys.append("spectrum_file")
+    if section.get("filter") == "file":
+        keys.append("filter_file")
+    if section.get("distribution") == "file":  # an LED's far-field file
+        keys.append("far_field_file")
+    return keys
+
+
+def spectrum_files(document: str | os.PathLike, scene: dict, sections: tuple[str, ...] = SECTIONS
+                   ) -> dict[tuple, str]:
+    """The measured curves (.csv) a normalised photometric scene names beside ``document``, by key
+    path (``named_curves``); each confined to the document's folder as ``environment_file`` is."""
+    found: dict[tuple, str] = {}
+    for keys, where in named_curves(scene, sections):
+        name = _at(scene, keys)
+        suffixes = FAR_FIELD_SUFFIXES if keys[-1] == "far_field_file" else (".csv",)
+        check_plain_name(name, suffixes, where)
+        found[keys] = path_beside(document, name, where, " or ".join(suffixes), "")[0]
+    return found
+
+
+def _at(scene: dict, keys: tuple):
+    node = scene
+    for key in keys:
+        node = node[key]
+    return node
+
+
+def with_curves_at(scene: dict, paths: dict[tuple, str]) -> dict:
+    """``scene`` with the file names at ``paths``' key paths replaced by their values (full paths);
+    the sections on the way copied, the rest shared."""
+    if not paths:
         return scene
-    lamps = [dict(lamp) for lamp in scene["lamps"]]
-    for (i, section, key), path in found.items():
-        lamps[i][section] = {**lamps[i][section], key: path}
-    return {**scene, "lamps": lamps}
+    out = dict(scene)
+    for keys, path in paths.items():
+        node = out
+        for key in keys[:-1]:
+            child = node[key]
+            child = list(child) if isinstance(child, list) else dict(child)
+            node[key] = child
+            node = child
+        node[keys[-1]] = path
+    return out
+
+
+def with_spectrum_files(document: str | os.PathLike, scene: dict, sections: tuple[str, ...] = SECTIONS) -> dict:
+    """``scene`` with the measured curves it names (``spectrum_files``; of ``sections``) by their full
+    paths, to be traced whatever the working directory (the scene itself, when it names none)."""
+    return with_curves_at(scene, spectrum_files(document, scene, sections))

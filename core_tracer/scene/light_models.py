@@ -32,10 +32,17 @@ _PAPER_ONLY = (
     (S.BULB, ("intensity",)),
     (S.SOCKET, ("color",)),
     (S.PRISM_PLATE, ("absorption", "housing_color")),
+    # free-form parts: as the parametric parts they stand for (docs/photometric.md, "Free-form parts")
+    (S.FREEFORM_ROLE_SECTIONS["lens"], ("absorption", "transmitted_color", "reference_thickness", "diffuse_color")),
+    (S.FREEFORM_ROLE_SECTIONS["reflector"], ("color", "reflectance", "scatter")),
+    (S.FREEFORM_ROLE_SECTIONS["bulb"], ("intensity",)),
+    (S.FREEFORM_ROLE_SECTIONS["socket"], ("color",)),
+    (S.FREEFORM_ROLE_SECTIONS["side_wall"], ("color",)),
 )
 # (section, key, choice key, values): shown in the photometric mode only while the choice holds
 # one of the values (the paper mode always uses the field)
-_PHOTOMETRIC_SHOWN_WHEN = ((S.LENS, "ior", "material", ("custom",)),)
+_PHOTOMETRIC_SHOWN_WHEN = ((S.LENS, "ior", "material", ("custom",)),
+                           (S.FREEFORM_ROLE_SECTIONS["lens"], "ior", "material", ("custom",)))
 
 
 def is_photometric_only(section: S.Section, key: str) -> bool:

@@ -494,21 +494,35 @@ FREEFORM_ROLES = ("lens", "reflector", "bulb", "socket", "side_wall", "body")
 MAX_FREEFORM_PARTS = 256
 MAX_MESH_NAME = 63  # Blender's longest object name
 
+# The photometric fields (docs/photometric.md) come with each role as the parametric part has them:
+# the lens's plastic and filter, the reflector's finish and glow share, the bulb's flux and spectrum
+# (its size is its mesh's: a Lambertian emitter of the mesh's area, docs/model.md "Free-form").
+_BULB_SOURCE = ("intensity", "on", "type", "state", "flux_lm", "spectrum", "led_peak_nm", "led_width_nm",
+                "spectrum_file")
+
 FREEFORM_ROLE_SECTIONS = {
     "lens": Section(
         {key: LENS.fields[key] for key in ("ior", "absorption", "transmitted_color", "reference_thickness",
-                                           "diffuse_color", "specular", "shininess")},
+                                           "diffuse_color", "specular", "shininess", *_optics("red", "the lens"))},
         "A closed lens mesh: refracts (Fresnel, Snell), absorbs over the path inside it (eq. 2)",
         one_of=(OneOf("color",
                       (Alternative(("transmitted_color", "reference_thickness"), "Transmitted Colour",
                                    "The colour seen through reference_thickness of the lens"),
                        Alternative(("absorption",), "Absorption", "Absorption per mm (A in eq. 2)")),
                       default="absorption", preferred="transmitted_color", doc="How the lens colour is given"),),
+        shown_when=_OPTICS_SHOWN,
     ),
-    "reflector": Section({key: REFLECTOR.fields[key] for key in ("color", "reflectance", "scatter", "shininess")},
+    "reflector": Section({key: REFLECTOR.fields[key] for key in ("color", "reflectance", "scatter", "shininess",
+                                                                 "finish", "scatter_share")},
                          "A mirror: constant colour on the first hit, Blinn scatter toward the bulbs (eq. 3)"),
-    "bulb": Section({key: BULB.fields[key] for key in ("intensity", "on")},
-                    "A light source; rays that reach it end with its intensity"),
+    "bulb": Section({key: BULB.fields[key] for key in _BULB_SOURCE}
+                    | {"radius": _length(0.0, "Photometric: the radius of the sphere the mesh stands for (a "
+                                              "converted bulb's), which sets its luminance Φ/(4π² r²) and the "
+                                              "glow it lights; 0: a Lambertian emitter of the mesh's own area",
+                                         hi=1000.0, lo_open=False)},
+                    "A light source; rays that reach it end with its intensity (photometric: its luminance, "
+                    "a Lambertian emitter of its flux over the mesh's area, or over the sphere it stands for)",
+                    shown_when=tuple(rule for rule in BULB.shown_when if rule[0] in _BULB_SOURCE)),
     "socket": Section({"color": SOCKET.fields["color"]}, "Opaque, ends a ray with its colour"),
     "side_wall": Section({"color": LENS.fields["side_wall_color"]}, "Opaque, ends a ray with its colour"),
     "body": Section({key: BODY.fields[key] for key in ("color", "specular", "shininess")},

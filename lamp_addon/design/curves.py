@@ -36,26 +36,37 @@ def folders(bl_scene) -> list[str]:
     return out
 
 
-def with_curves(bl_scene, scene: dict) -> dict:
+def with_curves(bl_scene, scene: dict, sections: tuple[str, ...] = beside.SECTIONS) -> dict:
     """``scene`` (normalised) with the curves it names by their full paths, found in ``folders``;
     the scene itself when it names none. Raises ``SceneError`` naming the field when a curve is in
-    none of them."""
+    none of them. ``sections``: the lamps', the free-form parts' or both (``beside.named_curves``)."""
     if scene.get("light_model", "paper") != "photometric":
         return scene
     places = folders(bl_scene)
     first_error = None
     for folder in places:
         try:
-            return beside.with_spectrum_files(os.path.join(folder, "design.json"), scene)
+            found = beside.with_spectrum_files(os.path.join(folder, "design.json"), scene, sections)
         except SceneError as e:
             first_error = first_error or e
+            continue
+        return checked(found)
     if first_error is None:  # no folder to look in: fine only when no curve is named
         try:
-            beside.with_spectrum_files(os.path.join(os.sep, "nowhere", "design.json"), scene)
+            beside.with_spectrum_files(os.path.join(os.sep, "nowhere", "design.json"), scene, sections)
         except SceneError as e:
             raise SceneError(e.path, "is read beside the .blend file: save the .blend file in the curve's folder "
                                      "first; allowed a .csv file beside the saved .blend file or the preset") from None
-        return scene
+        return checked(scene)
     where = " or ".join(f'"{folder}"' for folder in places)
     raise SceneError(first_error.path, f"{first_error.message.split(';')[0]} in {where}; allowed a .csv file beside "
                                        "the saved .blend file or the preset it came from")
+
+
+def checked(scene: dict) -> dict:
+    """``scene`` once every check its render makes on its spectra passed (``raytrace.spectral.check_lamps``:
+    visible light, finite luminance, filters' transmittance), as ``validate`` makes them."""
+    from ...core_tracer.raytrace import spectral
+
+    spectral.check_lamps(scene)
+    return scene

@@ -68,7 +68,9 @@ def notify_edited(bl_scene: bpy.types.Scene) -> None:
 
 
 def _edited(self, context) -> None:
-    notify_edited(self.id_data)  # the scene that owns the edited group, whichever scene is active
+    owner = self.id_data  # the scene that owns the edited group, whichever scene is active
+    if isinstance(owner, bpy.types.Scene):  # a free-form role's values live on its object: not the design
+        notify_edited(owner)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -336,6 +338,8 @@ def _read_section(group, section: S.Section) -> dict:
             out[key] = [_read_section(item, spec.item) for item in getattr(group, key)]
         elif form_used(group, section, key):
             out[key] = _read_leaf(getattr(group, property_id(key)), spec)
+    for key in photometric_checks.unused_files(out):  # a name the panel hides (its kind reads none): not the design's
+        out[key] = ""
     return out
 
 

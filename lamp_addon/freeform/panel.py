@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import bpy
 
+from ...core_tracer.scene import light_models
 from ...core_tracer.scene import spec as S
 from ..design import panels as design_panels
 from ..design import validity as design_validity
@@ -44,16 +45,23 @@ def selected_part(context):
     return obj if properties.has_role(obj) else None
 
 
-def draw_role_values(layout, obj) -> None:
-    """The role of ``obj`` and its values, the lens colour as its either/or row."""
+def draw_role_values(layout, obj, light_model: str = "paper") -> None:
+    """The role of ``obj`` and its values, the lens colour as its either/or row: the fields the
+    design's ``light_model`` uses and the role's choices call for, as the parametric parts' panels."""
     layout.prop(obj.lamp_role, "role")
     role = obj.lamp_role.role
     section = S.FREEFORM_ROLE_SECTIONS[role]
     group = getattr(obj.lamp_role, role)
+
+    def value_of(key):
+        return getattr(group, key)
+
     for key in design_panels.leaf_keys(section):
-        layout.prop(group, key)
+        if section.shown(key, value_of) and light_models.used(section, key, light_model, value_of):
+            layout.prop(group, key)
     for rule in section.one_of:
-        design_panels.draw_rule(layout, group, rule, _NO_STATUS)
+        if any(light_models.used(section, key, light_model, value_of) for key in rule.keys):
+            design_panels.draw_rule(layout, group, rule, _NO_STATUS)
 
 
 class LAMP_PT_freeform(design_panels.DesignSection, bpy.types.Panel):
@@ -73,7 +81,8 @@ class LAMP_PT_freeform(design_panels.DesignSection, bpy.types.Panel):
         clear = col.operator("lamp.role_clear", text="", icon="REMOVE")
         clear.object_name = obj.name if obj is not None else ""
         if obj is not None:
-            draw_role_values(design_panels.LampTab._split(layout.column()), obj)
+            draw_role_values(design_panels.LampTab._split(layout.column()), obj,
+                             context.scene.lamp_design.light_model)
         elif not properties.role_objects(context.scene):
             layout.label(text="Select mesh objects and give them a role with +", icon="INFO")
         col = layout.column(align=True)

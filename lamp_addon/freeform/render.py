@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import bpy
 
+from ..design import curves as design_curves
 from . import geometry as freeform_geometry
 from . import parametric as freeform_parametric
 from . import scene as freeform_scene
@@ -56,6 +57,9 @@ def prepare(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, scene: di
         with_parts = freeform_scene.with_freeform(scene, parts, built=freeform_parametric.part_documents(built, scene))
     except freeform_scene.SceneError as e:
         raise freeform_scene.SceneError("free-form part", status.part_error_text(e, parts)) from None
+    # photometric: the parts' measured curves by their full paths, beside the .blend file or the preset
+    # (the lamps' were found with the design, ``render.camera.scene_for_render``)
+    with_parts = design_curves.with_curves(bl_scene, with_parts, ("freeform",))
     return Prepared(with_parts, freeform_geometry.geometry(bl_scene, depsgraph, parts, built))
 
 
@@ -68,7 +72,7 @@ def render_passes(prepared: Prepared, width: int, height: int, **options):
         return parametric(prepared.scene, width, height, **options)
     from ...core_tracer import freeform
 
-    known = {key: options[key] for key in ("progress", "should_stop", "samples", "threads", "world_seen")
+    known = {key: options[key] for key in ("progress", "should_stop", "samples", "threads", "world_seen", "bands")
              if key in options}
     return freeform.render_passes(prepared.scene, prepared.geometry.meshes, width, height,
                                   geometry_cache=prepared.geometry.cache, **known)

@@ -39,7 +39,14 @@ _STAGES = (("homogeneity", 0.75), ("beam files", 0.8))
 
 def measured_scene(bl_scene) -> dict:
     """The design as the measures see it: through Blender's scene camera when there is one (the
-    report's picture of the lamp), else the design's own camera. Raises ``SceneError``."""
+    report's picture of the lamp), else the design's own camera. Raises ``SceneError``, and for a
+    design with free-form parts, which the panel would not measure (it measures the parametric lamp,
+    which Convert hides): the command line measures and relights such a design from its files."""
+    from ..freeform import geometry as freeform_geometry
+
+    if freeform_geometry.parts_in(bpy.context.evaluated_depsgraph_get()):
+        raise SceneError("Free-form Parts", "are not measured here yet; allowed: Export Free-form Design, then "
+                                            "python -m core_tracer measure (or states) on the exported .json")
     if bl_scene.camera is not None:
         return render_camera.scene_for_render(bl_scene)
     return design_properties.design_to_scene(bl_scene)

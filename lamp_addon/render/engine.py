@@ -238,7 +238,15 @@ class LampTracerEngine(bpy.types.RenderEngine):
         if with_passes:
             passes = {PASS_LABELS[name]: np.asarray(result.passes[name], np.float32) for name in PASS_NAMES
                       if name in (result.passes or {})}
-        self._fill(np.asarray(glare.apply(result.image, prepared.scene), np.float32), 0, opaque, passes)
+        image = result.image
+        # photometric: XYZ in cd/m² shown as the parametric tracer's are (render.photometric_display),
+        # glare's threshold applied to the shown image
+        shown_as = photometric_display.for_image(prepared.scene, image)
+        if shown_as is not None:
+            image = shown_as.linear(image)
+            passes = {label: shown_as.linear(values) for label, values in passes.items()}
+            self.update_stats("", f"Lamp Tracer: photometric, EV100 {shown_as.ev100:.2f}")
+        self._fill(np.asarray(glare.apply(image, prepared.scene), np.float32), 0, opaque, passes)
 
     def _fill(self, rows: np.ndarray, row_start: int, alpha: np.ndarray,
               passes: dict[str, np.ndarray] | None = None) -> None:

@@ -122,3 +122,14 @@ def for_scene(scene: dict) -> Display | None:
     if scene.get("light_model", "paper") != "photometric":
         return None
     return Display(scene_ev100(scene))
+
+
+def for_image(scene: dict, XYZ: np.ndarray) -> Display | None:
+    """``for_scene`` of a design rendered whole before it is shown (the free-form tracer's): "auto"
+    measured on the image itself rather than on a preview of the parametric lamp."""
+    if scene.get("light_model", "paper") != "photometric":
+        return None
+    camera = scene["camera"]
+    if camera.get("exposure", "auto") == "ev100":
+        return Display(float(camera["ev100"]))
+    return Display(spectral.exposure_ev100(XYZ, scene))

@@ -22,6 +22,30 @@ def _exr(path) -> np.ndarray:
     return np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(buf.spec().height, buf.spec().width, -1)[:, :, :3]
 
 
+def _f12(bl_scene, path) -> np.ndarray:
+    """F12 of ``bl_scene`` saved as a 32-bit EXR at ``path``, read back."""
+    import bpy
+
+    settings = bl_scene.render.image_settings
+    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
+    assert bpy.ops.render.render() == {"FINISHED"}
+    bpy.data.images["Render Result"].save_render(str(path), scene=bl_scene)
+    return _exr(path)
+
+
+def _applied(preset):
+    """Blender's startup file with ``preset`` applied from the preset browser; the scene."""
+    import bpy
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    bpy.ops.lamp.preset_refresh()
+    wm = bpy.context.window_manager
+    listed = [item.file for item in wm.lamp_presets]
+    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith(preset.name))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    return bpy.context.scene
+
+
 def test_the_example_ships_with_its_mesh_file():
     import json
 
@@ -64,11 +88,7 @@ def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, addon,
         for field in ("vertices", "triangles", "corner_normals"):
             assert np.array_equal(getattr(in_blender[name], field), getattr(mesh, field)), (name, field)
 
-    settings = bl_scene.render.image_settings
-    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
-    assert bpy.ops.render.render() == {"FINISHED"}
-    bpy.data.images["Render Result"].save_render(str(tmp_path / "f12.exr"), scene=bl_scene)
-    f12 = _exr(tmp_path / "f12.exr")
+    f12 = _f12(bl_scene, tmp_path / "f12.exr")
 
     done = run_cli("render", EXAMPLE, "-o", tmp_path / "cli.exr")
     assert done.returncode == 0, done.stderr
@@ -97,3 +117,43 @@ def test_applied_over_a_built_parametric_lamp_nothing_is_traced_twice(lamp_addon
     bl_scene.render.resolution_percentage = 25
     assert lamp_addon.freeform.parametric.used_parts(bl_scene, None) == []
     assert bpy.ops.render.render() == {"FINISHED"}  # no "overlaps lens ... (Parametric)"
+
+
+TWIN = PRESETS / "freeform-sculpted-wrap-lamp-photometric.json"
+
+
+def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_addon, addon, tmp_path):
+    """The example's photometric twin (the same .glb, a P21/5W tail filament, a red PMMA lens, night at
+    3 lx): applied from the browser, F12 shows the command line's XYZ (cd/m²) as scene-linear Rec.709
+    at the preset's EV100 15, the one display path of photometric images (``spectral.display_linear``)."""
+    from core_tracer.photometry import output
+    from core_tracer.raytrace import spectral
+
+    bl_scene = _applied(TWIN)
+    parts = lamp_addon.freeform.properties.role_objects(bl_scene)
+    bulb = next(o for o in parts if o.lamp_role.role == "bulb")
+    assert bulb.lamp_role.bulb.type == "P21/5W" and bulb.lamp_role.bulb.state == "tail"
+    f12 = _f12(bl_scene, tmp_path / "f12.exr")
+
+    done = run_cli("render", TWIN, "-o", tmp_path / "cli.exr")
+    assert done.returncode == 0, done.stderr
+    channels = output.read_photometric_exr(tmp_path / "cli.exr")[0]
+    xyz = np.stack([channels[c] for c in "XYZ"], axis=-1)
+    shown = spectral.display_linear(xyz, 15.0)
+    assert f12.shape == shown.shape == (256, 320, 3)
+    lit = channels["Y"] > 0.05 * channels["Y"].max()
+    print(f"F12 vs CLI at EV100 15: largest |difference| {np.abs(f12 - shown).max():.3g} of {shown.max():.3g}")
+    assert lit.sum() > 1000 and channels["x"][lit].mean() > 0.6  # a red tail lamp
+    np.testing.assert_allclose(f12, shown, rtol=1e-4, atol=1e-6 * shown.max())
+
+
+def test_the_measures_and_light_panels_refuse_free_form_parts_in_one_line(lamp_addon, addon):
+    """In Blender the Measures and Light Panel operators measure the parametric lamp, which a free-form
+    design's parts stand in for: they say so in one line rather than measure the hidden lamp."""
+    import bpy
+
+    _applied(TWIN)
+    for operator in (bpy.ops.lamp.light_states_render, bpy.ops.lamp.measures_run):
+        with pytest.raises(RuntimeError, match="Free-form Parts: are not measured here yet") as err:
+            operator()
+        assert "Export Free-form Design" in str(err.value) and "\n" not in str(err.value).strip()

@@ -64,8 +64,10 @@ def test_assign_and_clear(lamp_addon, bl_scene):
     assert len(b.material_slots) == 0
     doc = lamp_addon.freeform.properties.part_document(a)
     assert doc["object"] == "Lens A" and doc["role"] == "lens"
+    photometric = {"material", "abbe", "filter", "filter_edge_nm", "filter_slope_nm", "filter_range", "filter_file",
+                   "filter_thickness"}  # the lens's plastic and filter (docs/photometric.md, "Free-form parts")
     assert set(doc["lens"]) == {"ior", "transmitted_color", "reference_thickness", "diffuse_color", "specular",
-                                "shininess"}  # the preferred colour form, the picker
+                                "shininess"} | photometric  # the preferred colour form, the picker
     a.lamp_role.lens.ior = 1.6
     assert lamp_addon.freeform.properties.part_document(a)["lens"]["ior"] == 1.6
     assert bpy.ops.lamp.role_clear(object_name="Lens A") == {"FINISHED"}
@@ -130,8 +132,32 @@ def test_panel_lists_parts_and_shows_the_selected_role(lamp_addon, addon_core, b
         shown = {prop for _, data, prop, _kw in _draw_panel(bl_scene).props() if data == obj.lamp_role.lens}
         lens = S.FREEFORM_ROLE_SECTIONS["lens"]
         form = lens.one_of[0].alternative(mode).keys
-        always = {k for k in lens.fields if lens.rule_of(k) is None}
+        # the paper model's fields (a new scene's light model) and those the role's choices call for
+        def value_of(key):
+            return getattr(obj.lamp_role.lens, key)
+
+        always = {k for k in lens.fields if lens.rule_of(k) is None and lens.shown(k, value_of)
+                  and addon_core.scene.light_models.used(lens, k, "paper", value_of)}
         assert shown == always | set(form) | {"color_mode"}
+        assert "ior" in shown and "filter" not in shown  # the photometric fields are the other model's
+    bl_scene.lamp_design.light_model = "photometric"
+    shown = {prop for _, data, prop, _kw in _draw_panel(bl_scene).props() if data == obj.lamp_role.lens}
+    assert {"material", "filter", "filter_thickness"} <= shown and not {"ior", "absorption", "abbe"} & shown
+
+
+def test_editing_a_role_value_tells_no_design_listener(lamp_addon, bl_scene):
+    """A role's values belong to its object, not to the scene's design: an edit of them is not a design
+    edit (the listeners take a scene; an object made them fail in every role edit's update)."""
+    obj = _mesh("Lens")
+    lamp_addon.freeform.properties.set_role(obj, "lens")
+    heard = []
+    lamp_addon.design.properties.EDIT_LISTENERS.append(heard.append)
+    try:
+        lamp_addon.design.properties._edited(obj.lamp_role.lens, None)
+        lamp_addon.design.properties._edited(bl_scene.lamp_design, None)
+    finally:
+        lamp_addon.design.properties.EDIT_LISTENERS.remove(heard.append)
+    assert heard == [bl_scene]
 
 
 def test_role_list_filters_to_parts(lamp_addon, bl_scene):

@@ -221,3 +221,47 @@ def test_the_cache_keeps_the_cells_used_last_within_its_size(tmp_path):
     assert cache.prune(2 * size) == 3 * size
     kept = [k for k in range(5) if cache.get(f"{k:02d}" * 32) is not None]
     assert kept == [0, 4]
+
+
+def test_the_measured_curves_travel_with_the_task_to_a_worker_that_cannot_see_the_design(client, tmp_path):
+    """A photometric study whose lens filter is a measured curve beside its design: the cells carry the
+    curve's bytes (named by their SHA-256, not by the folder), so the study renders on the cluster after
+    the design's folder is renamed, as it rendered in this process before (issue 32, item 4)."""
+    import dataclasses
+    import json
+    import shutil
+
+    from helpers import PRESETS
+
+    from core_tracer.photometry import materials
+    from core_tracer.scene.beside import spectrum_files, with_curves_at
+
+    folder = tmp_path / "design"
+    folder.mkdir()
+    curve = materials.FILTERS["amber"].spectrum()
+    (folder / "amber.csv").write_text("nm,t\n" + "".join(f"{a:g},{b:.8f}\n" for a, b in
+                                                          zip(curve.wavelengths_nm, curve.values, strict=True)))
+    doc = json.loads((PRESETS / "photometric-stop-lamp.json").read_text())
+    doc["lamps"][0]["lens"].update(filter="file", filter_file="amber.csv")
+    study = st.Study.build(doc, [{"parameter": "lens.filter_thickness", "values": [2.0, 4.0]}], (20, 20))
+    document = folder / "stop.json"
+
+    def traced(scene: dict, beside: object) -> dict:  # as ``study`` on the command line (cli.study._with_curves)
+        return with_curves_at(scene, spectrum_files(beside, scene))
+
+    runnable = dataclasses.replace(study, variants=tuple(dataclasses.replace(v, scene=traced(v.scene, document))
+                                                         for v in study.variants))
+    here = study_run.run_study(runnable, 0)
+    cells, inputs = dask_study.study_cells(runnable)
+    assert all(len(c.curves) == 1 for c in cells)
+    moved = tmp_path / "elsewhere"
+    shutil.move(folder, moved)  # neither this process nor a worker sees the design's folder now
+    assert not (folder / "amber.csv").exists()
+    images, count = engine.run_cells(client, cells, inputs, None)
+    assert count.rendered == 2
+    assert all(np.array_equal(a, b) for a, b in zip(here, images, strict=True))
+    assert not np.array_equal(images[0], images[1])  # the thickness reaches the filter read from the file
+    # The cell's key is its content: the same curve from another folder is the same cell.
+    shutil.move(moved, folder.parent / "third")
+    again = traced(study.variants[0].scene, folder.parent / "third" / "stop.json")
+    assert make_cell(again, 20, 20, Inputs()).key == cells[0].key

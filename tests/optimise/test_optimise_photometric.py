@@ -32,10 +32,10 @@ OFFSET = "bulb.offset[1]"  # the bulb along the lamp's axis (toward the lens: ne
 
 
 def opt_doc(tmp_path, **edits) -> dict:
-    doc = {"schema": spec.SCHEMA, "base": str(STOP),
+    doc = {"schema": spec.SCHEMA, "base": read_json(str(STOP)),  # a base file is confined to the file's folder
            "parameters": [{"parameter": OFFSET, "range": [-2.0, 4.0]}],
            "objectives": [{"measure": "luminance_cv", "pixel_mm": 2.0}],
-           "size": [16, 16], "trials": 10, "seed": 0, "storage": f"sqlite:///{tmp_path / 'opt.db'}"}
+           "size": [16, 16], "trials": 10, "seed": 0, "storage": "sqlite:///opt.db"}
     doc.update(edits)
     return doc
 
@@ -61,7 +61,7 @@ def test_every_measure_has_a_goal_a_unit_and_words():
 
 @pytest.mark.parametrize("edit, where, allowed", [
     ({"objectives": [{"measure": "evenness"}]}, "objectives[0].measure", "luminance_cv"),
-    ({"base": str(BASELINE), "parameters": [{"parameter": "cuts.height", "range": [0.5, 2.0]}]},
+    ({"base": read_json(str(BASELINE)), "parameters": [{"parameter": "cuts.height", "range": [0.5, 2.0]}]},
      "objectives[0].measure", 'light_model "photometric"'),
     ({"constraints": [{"measure": "grid_min_margin", "function": "fog", "min": 0}]}, "constraints[0].function",
      "tail, stop, turn, reversing"),
@@ -87,7 +87,7 @@ def test_bad_input_is_one_error_naming_the_json_path(tmp_path, edit, where, allo
 
 def test_a_paper_design_asking_for_a_photometric_measure_is_one_line_from_the_cli(tmp_path):
     path = tmp_path / "opt.json"
-    path.write_text(json.dumps(opt_doc(tmp_path, base=str(BASELINE),
+    path.write_text(json.dumps(opt_doc(tmp_path, base=read_json(str(BASELINE)),
                                        parameters=[{"parameter": "cuts.height", "range": [0.5, 2.0]}])))
     proc = run_cli("optimise", path, "--workers", "0")
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
@@ -298,3 +298,35 @@ def test_trials_go_only_to_the_workers_whose_memory_holds_them(tmp_path):
     assert outcome.workers == [large] and small not in outcome.workers
     assert ran_on == {large}, ran_on
     assert len(search.finished_trials(outcome.study)) == 3 and outcome.rendered == 3
+
+
+def test_a_measured_filter_beside_the_base_reaches_every_trial(tmp_path):
+    """The base names its lens filter by a measured curve beside it (issue 32, item 4): the optimisation
+    file elsewhere finds it beside the base, each trial's cell carries it (a Dask worker need not see
+    the folder), and a missing curve is refused in one line before any trial."""
+    import json
+
+    from core_tracer.photometry import materials
+
+    folder = tmp_path / "design"
+    folder.mkdir()
+    curve = materials.FILTERS["red"].spectrum()
+    doc = json.loads(STOP.read_text())
+    doc["lamps"][0]["lens"].update(filter="file", filter_file="red.csv")
+    (folder / "stop.json").write_text(json.dumps(doc))
+    with pytest.raises(SceneError) as err:
+        spec.from_doc(opt_doc(tmp_path, base="design/stop.json"), str(tmp_path))
+    assert "base.lamps[0].lens.filter_file" in str(err.value) and "missing" in str(err.value)
+    (folder / "red.csv").write_text("nm,t\n" + "".join(f"{a:g},{b:.8f}\n" for a, b in
+                                                       zip(curve.wavelengths_nm, curve.values, strict=True)))
+    opt = spec.from_doc(opt_doc(tmp_path, base="design/stop.json"), str(tmp_path))
+    scene = opt.scene_of({OFFSET: 0.0})
+    assert scene["lamps"][0]["lens"]["filter_file"] == "red.csv"  # the trial's design keeps the name
+    cell = make_cell(opt.traced(scene), *opt.size, Inputs())
+    assert len(cell.curves) == 1
+    named = opt_doc(tmp_path)  # the preset itself: the same filter by name
+    _, _, by_file = T.run_trial(cell, None, None, False, opt.request)
+    _, by_name = figures_of(spec.from_doc(named, str(tmp_path)), {OFFSET: 0.0})
+    lit = by_name.front_owner == 0
+    assert lit.sum() > 50
+    assert by_file.front_luminance[lit].mean() == pytest.approx(by_name.front_luminance[lit].mean(), rel=2e-3)

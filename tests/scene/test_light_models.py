@@ -46,6 +46,22 @@ def test_used_follows_the_light_model():
     assert not light_models.used(S.LENS, "transmitted_color", "photometric", custom)
 
 
+def test_free_form_roles_show_the_fields_of_the_light_model_as_the_parts_they_stand_for():
+    lens, bulb = S.FREEFORM_ROLE_SECTIONS["lens"], S.FREEFORM_ROLE_SECTIONS["bulb"]
+    pmma = {"material": "pmma"}.get
+    assert light_models.used(lens, "absorption", "paper", pmma)
+    assert not light_models.used(lens, "absorption", "photometric", pmma)  # its filter stands for it
+    assert not light_models.used(lens, "filter", "paper", pmma)
+    assert light_models.used(lens, "filter", "photometric", pmma)
+    assert not light_models.used(lens, "ior", "photometric", pmma)  # the material's
+    assert light_models.used(lens, "ior", "photometric", {"material": "custom"}.get)
+    assert not light_models.used(bulb, "intensity", "photometric", pmma)
+    assert light_models.used(bulb, "radius", "photometric", pmma)
+    assert not light_models.used(bulb, "radius", "paper", pmma)
+    for role in ("socket", "side_wall"):  # unlit in the photometric mode
+        assert not light_models.used(S.FREEFORM_ROLE_SECTIONS[role], "color", "photometric", pmma)
+
+
 def test_a_paper_design_reports_the_photometric_values_it_ignores():
     """Issue 31: photometric fields on a paper design were ignored without a word. They are reported
     (not refused: a shared preset may carry them for a switch of model), and only when not at their

@@ -3,7 +3,7 @@ reflector (③ ④, eq. 3), and the faces of a dielectric (a lens or a prism pla
 side, where one Fresnel split (docs/model.md §5) gives the reflected and the transmitted branch.
 
 The free-form tracer (``freeform.render``) splits its meshes' lens faces with the same
-``fresnel_split``.
+``split_at_face`` and lights its reflectors with the same ``sphere_irradiance``.
 """
 
 from __future__ import annotations
@@ -116,10 +116,16 @@ def bulb_irradiance(to_bulb: np.ndarray, normal: np.ndarray, hit: np.ndarray, la
     from the bulb (a sphere of uniform radiance): its solid angle Ω = 2π (1 - √(1 - r²/D²)) at the
     distance D of its centre, times the cosine toward it (the whole bulb taken in the direction of
     its centre; neither the socket's shadow nor a part of the bulb below the horizon is taken)."""
-    gap = rows(lamps.bulb_center, lamp) - hit
-    ratio = np.minimum(1.0, lamps.bulb_radius.take(lamp) ** 2 / optics.dot(gap, gap))
+    return sphere_irradiance(rows(lamps.bulb_center, lamp) - hit, lamps.bulb_radius.take(lamp), normal, to_bulb)
+
+
+def sphere_irradiance(gap: np.ndarray, radius: np.ndarray, normal: np.ndarray, toward: np.ndarray) -> np.ndarray:
+    """Per unit of radiance, the irradiance on surfaces of ``normal`` from spheres of uniform radiance
+    of ``radius`` whose centres lie ``gap`` away (unit ``toward``: along ``gap``): the solid angle
+    Ω = 2π (1 - √(1 - r²/D²)) times the cosine toward the centre."""
+    ratio = np.minimum(1.0, radius**2 / optics.dot(gap, gap))
     solid_angle = 2.0 * np.pi * (1.0 - np.sqrt(1.0 - ratio))
-    return solid_angle * np.maximum(0.0, optics.dot(normal, to_bulb))
+    return solid_angle * np.maximum(0.0, optics.dot(normal, toward))
 
 
 @dataclass
@@ -165,6 +171,19 @@ def fresnel_split(k: np.ndarray, d: np.ndarray, facing: np.ndarray, n1: np.ndarr
     transmitted_s, transmitted_p = k_s * (1.0 - r_s), k_p * (1.0 - r_p)
     return Split(cos_i, eta, r_s, reflected_s + reflected_p, transmitted_s + transmitted_p, partial, reflected_s,
                  transmitted_s)
+
+
+def split_at_face(k: np.ndarray, k_s: np.ndarray, d: np.ndarray, facing: np.ndarray, from_inside: np.ndarray,
+                  n_material: np.ndarray, band_n: np.ndarray | None = None) -> Split:
+    """``fresnel_split`` of rays meeting a face of a material of index ``n_material`` (per ray) from
+    inside it (``from_inside``) or from the air; photometric: with the s-polarised shares ``k_s`` and
+    the material's index per column of k, ``band_n`` (None in the paper mode)."""
+    n1 = np.where(from_inside, n_material, 1.0)
+    n2 = np.where(from_inside, 1.0, n_material)
+    if band_n is None:
+        return fresnel_split(k, d, facing, n1, n2)
+    inside = from_inside[:, None]
+    return fresnel_split(k, d, facing, n1, n2, k_s, np.where(inside, band_n, 1.0), np.where(inside, 1.0, band_n))
 
 
 @dataclass
@@ -223,16 +242,8 @@ def at_dielectric(rays: Rays, met: np.ndarray, k: np.ndarray, d: np.ndarray, hit
     from_inside = medium == material
     # Toward the incident side: the normal negated for rays inside (a sign flip is exact).
     facing = optics.scaled(out_normal, np.where(from_inside, -1.0, 1.0))
-    n_material = ior.take(lamp)
-    n1 = np.where(from_inside, n_material, 1.0)
-    n2 = np.where(from_inside, 1.0, n_material)
-    if band_ior is None:
-        split = fresnel_split(k, d, facing, n1, n2)
-    else:
-        n_bands = rows(band_ior, lamp)
-        inside = from_inside[:, None]
-        split = fresnel_split(k, d, facing, n1, n2, rows(rays.k_s, met), np.where(inside, n_bands, 1.0),
-                              np.where(inside, 1.0, n_bands))
+    split = split_at_face(k, rows(rays.k_s, met), d, facing, from_inside, ior.take(lamp),
+                          None if band_ior is None else rows(band_ior, lamp))
     face = FaceHit(rays.pix.take(met), lamp, hit, d, facing, medium, from_inside, material, surface, cls,
                    rays.seen_reflector.take(met), split)
     if throughput is not None:
