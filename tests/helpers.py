@@ -461,3 +461,22 @@ def lit_lens_ratios(shown):
     lit = (red > 0.5 * red[~neutral].max()) & ~neutral
     r = red[lit]
     return float(np.median(rgb[..., 1][lit] / r)), float(np.median(rgb[..., 2][lit] / r)), int(lit.sum())
+
+
+def bare_led_document(*, depth_mm: float, die_mm: float, window_radius: float, window_thickness: float,
+                      body: tuple[float, float, float], **led) -> dict:
+    """The photometric stop lamp made into one LED die facing the lens (−y), ``depth_mm`` behind a
+    window that is not there (index 1.0001, clear, no cuts: tests/measures/conftest.py), at night with
+    no light but the die's; ``led`` sets further fields of the LED section (the spectrum is red)."""
+    doc = json.loads((PRESETS / "photometric-stop-lamp.json").read_text())
+    doc["light"] = {"direction": [0.3, -1.0, 0.6], "ambient": 0.0, "illuminance_lux": 0.0}
+    doc["environment"] = {"world": "none"}
+    doc["body"] = {**doc["body"], "size": [body[0], body[1]], "depth": body[2]}
+    lamp = doc["lamps"][0]
+    lamp["cuts"]["height"] = 0.0
+    lamp["lens"] = {**lamp["lens"], "material": "custom", "ior": 1.0001, "abbe": 100.0, "filter": "clear",
+                    "radius": window_radius, "thickness": window_thickness, "specular": 0.0,
+                    "diffuse_color": [0.0, 0.0, 0.0]}
+    lamp["source"] = "led"
+    lamp["led"] = {"position": [0.0, depth_mm, 0.0], "die_size": [die_mm, die_mm], "spectrum": "red_led", **led}
+    return doc

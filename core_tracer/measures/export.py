@@ -96,9 +96,10 @@ def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], 
 
 
 def lamp_flux(scene: dict, lamps: Sequence[int] | None = None) -> float:
-    """The luminous flux in lm of the lit bulbs of ``lamps`` (None: all); of a free-form design, of
-    its lit bulb parts (the design is one lamp, ``intensity.lamp_of_pixels``)."""
+    """The luminous flux in lm of the lit bulbs (or LED dies) of ``lamps`` (None: all); of a free-form
+    design, of its lit bulb parts (the design is one lamp, ``intensity.lamp_of_pixels``)."""
     from ..raytrace.spectral import bulb_spectrum
+    from ..scene.led_array import LedArray, uses_leds
 
     total = 0.0
     if "freeform" in scene:
@@ -108,7 +109,10 @@ def lamp_flux(scene: dict, lamps: Sequence[int] | None = None) -> float:
         return float(total)
     for i, lamp in enumerate(scene["lamps"]):
         if (lamps is None or i in lamps) and lamp["bulb"]["on"]:
-            total += bulb_spectrum(lamp["bulb"], f"lamps[{i}].bulb")[0]
+            if uses_leds(lamp):  # the dies' flux, each into its half space
+                total += lamp["led"]["flux_lm"] * LedArray.of(lamp["led"]).count
+            else:
+                total += bulb_spectrum(lamp["bulb"], f"lamps[{i}].bulb")[0]
     return float(total)
 
 

@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..scene.derived import lens_absorption
+from ..scene.led_array import LedArray, uses_leds
 from ..scene.messages import show_value
 from ..scene.reading import SceneError
 
@@ -149,8 +150,9 @@ def states_of(scene: dict) -> list[State]:
         return out
     for i, ((name, words), lamp) in enumerate(zip(lamp_names(scene), scene["lamps"], strict=True)):
         bulb = lamp["bulb"]
-        named = photometric and bulb.get("type", "custom") != "custom"
-        where = f"lamp {i + 1}" + (f", {bulb['type']}" if named else "")
+        leds = LedArray.of(lamp["led"]) if uses_leds(lamp) else None  # the dies, switched by bulb.on
+        named = photometric and leds is None and bulb.get("type", "custom") != "custom"
+        where = f"lamp {i + 1}" + (f", {bulb['type']}" if named else "") + (f", {leds.count} LEDs" if leds else "")
         label = f"{words} ({where})" if words else where[:1].upper() + where[1:]
         if named:
             from ..photometry.sources import BULB_TYPES
@@ -163,7 +165,8 @@ def states_of(scene: dict) -> list[State]:
                                  state.flux_lm, "lm", bool(bulb["on"]) and bulb["state"] == filament,
                                  f"lamps[{i}].{filament}"))
         else:
-            rendered = float(bulb["flux_lm"]) if photometric else 1.0
+            flux = float(lamp["led"]["flux_lm"]) * leds.count if leds is not None else float(bulb["flux_lm"])
+            rendered = flux if photometric else 1.0
             out.append(State(name, label, i, "on", rendered, "lm" if photometric else "", bool(bulb["on"]),
                              f"lamps[{i}].on"))
     return out

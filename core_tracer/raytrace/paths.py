@@ -111,18 +111,21 @@ def allowed(parent: int, branch: int, child: int) -> bool:
 
 
 # Surfaces a segment can start from or reach, used to classify it (the plate's after the paper's).
-OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING = range(10)
+OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING, LED = range(11)
+# LED: a lamp's LED dies, the light source in place of the bulb: reaching them is ⑪ as the bulb
 IN_LENS, IN_AIR, IN_PLATE = 0, 1, 2
 
 
 def _build_lookup() -> np.ndarray:
     """CLASS_OF[medium, source surface, hit surface] -> path class (0 = impossible)."""
-    table = np.zeros((3, 10, 10), dtype=np.int8)
+    table = np.zeros((3, 11, 11), dtype=np.int8)
     table[IN_LENS, OUTER, CUT] = LENS_OUTER_TO_CUT
     table[IN_LENS, OUTER, WALL] = TO_SIDE_WALL
     table[IN_LENS, CUT, OUTER] = CUT_TO_LENS_OUTER
     table[IN_LENS, CUT, CUT] = CUT_TO_CUT_IN_LENS
     table[IN_LENS, CUT, WALL] = TO_SIDE_WALL
+    for src in (CUT, REFLECTOR, RINGS):
+        table[IN_AIR, src, LED] = TO_BULB
     for src in (CUT, REFLECTOR):
         table[IN_AIR, src, BULB] = TO_BULB
         table[IN_AIR, src, SOCKET] = TO_SOCKET

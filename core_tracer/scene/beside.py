@@ -16,6 +16,7 @@ from .reading import SceneError
 from .safe_text import printable
 
 ENVIRONMENT_SUFFIXES = (".exr", ".hdr")
+FAR_FIELD_SUFFIXES = (".ies", ".ldt")  # an LED's far-field file (spec.FAR_FIELD_SUFFIXES)
 
 
 def check_plain_name(name: str, suffixes: Sequence[str], where: str) -> None:
@@ -73,7 +74,8 @@ SECTIONS = ("lamps", "freeform")  # where a scene names curves: its lamps, its f
 def named_curves(scene: dict, sections: tuple[str, ...] = SECTIONS) -> list[tuple[tuple, str]]:
     """The measured curves a normalised photometric scene reads, as (where the name sits: a key path
     into the scene, the JSON path shown in messages): a bulb's ``spectrum_file``, a lens's or prism
-    plate's ``filter_file``, the same of free-form bulbs and lenses (none in the paper mode); of
+    plate's ``filter_file``, an LED section's ``spectrum_file`` and ``far_field_file``, the same of
+    free-form bulbs and lenses (none in the paper mode); of
     the lamps, the free-form parts or both (``sections``)."""
     if scene.get("light_model") != "photometric":
         return []
@@ -82,6 +84,8 @@ def named_curves(scene: dict, sections: tuple[str, ...] = SECTIONS) -> list[tupl
         parts = [("bulb", lamp["bulb"]), ("lens", lamp["lens"])]
         if lamp.get("collection", "reflector") == "prism_plate":
             parts.append(("prism_plate", lamp["prism_plate"]))
+        if lamp.get("source", "bulb") == "led":  # its dies' spectrum and far field
+            parts.append(("led", lamp["led"]))
         named += [(("lamps", i, name, key), f"lamps[{i}].{name}.{key}") for name, part in parts
                   for key in _curve_keys(part)]
     for i, part in enumerate(scene.get("freeform", {}).get("parts", ()) if "freeform" in sections else ()):
@@ -98,6 +102,8 @@ def _curve_keys(section: dict) -> list[str]:
         keys.append("spectrum_file")
     if section.get("filter") == "file":
         keys.append("filter_file")
+    if section.get("distribution") == "file":  # an LED's far-field file
+        keys.append("far_field_file")
     return keys
 
 
@@ -108,8 +114,9 @@ def spectrum_files(document: str | os.PathLike, scene: dict, sections: tuple[str
     found: dict[tuple, str] = {}
     for keys, where in named_curves(scene, sections):
         name = _at(scene, keys)
-        check_plain_name(name, (".csv",), where)
-        found[keys] = path_beside(document, name, where, "a .csv", "")[0]
+        suffixes = FAR_FIELD_SUFFIXES if keys[-1] == "far_field_file" else (".csv",)
+        check_plain_name(name, suffixes, where)
+        found[keys] = path_beside(document, name, where, " or ".join(suffixes), "")[0]
     return found
 
 

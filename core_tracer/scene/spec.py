@@ -362,6 +362,48 @@ SOCKET = Section(
     "The cylindrical socket from the reflector vertex to the bulb centre",
 )
 
+# The LED source (docs/photometric.md, "LED sources"): flat emitting dies instead of the bulb.
+LIGHT_SOURCES = ("bulb", "led")
+LED_SPECTRA = ("red_led", "amber_led", "white_led", "led", "file")
+LED_DISTRIBUTIONS = ("lambertian", "file")
+FAR_FIELD_SUFFIXES = (".ies", ".ldt")
+MAX_LED_COUNT = 32  # dies across (or up) an array at most
+
+LED = Section(
+    {
+        "position": _position((0.0, 30.0, 0.0), "Centre of the LED array in the lamp's frame [x, y, z]: x and z "
+                                                "from the lens axis, y the depth behind the outer lens face"),
+        "normal": Num((0.0, -1.0, 0.0), -1.0, 1.0, size=3, nonzero=True, subtype="direction",
+                      doc="The direction the dies face, their emitting side (-y: toward the lens); the array's "
+                          "rows run across it, level with the lamp (its columns up, toward +z)"),
+        "die_size": Num((1.0, 1.0), 0.0, 100.0, lo_open=True, unit="mm", size=2, subtype="xyz",
+                        doc="Width (across) and height (up) of each emitting die"),
+        "columns": Num(1, 1, MAX_LED_COUNT, integer=True, doc="LEDs across the array (1: a single LED)"),
+        "rows": Num(1, 1, MAX_LED_COUNT, integer=True, doc="LEDs up the array"),
+        "pitch": Num((5.0, 5.0), 0.0, 1000.0, unit="mm", size=2, subtype="xyz",
+                     doc="Centre-to-centre spacing of the LEDs across and up; at least the die size"),
+        "flux_lm": Num(20.0, 0.0, 10000.0, unit="lm",
+                       doc="Photometric: the luminous flux each die emits into the half space it faces"),
+        "spectrum": Choice("red_led", LED_SPECTRA,
+                           "Photometric: the colour of the LEDs' light (red or amber LED of Ohno 2005's model; "
+                           "white: phosphor-converted, CIE LED-B5; led: peak and width; file: a measured curve)"),
+        # the LED spectrum's peak and width, or its file, as the bulb's
+        **{key: BULB.fields[key] for key in ("led_peak_nm", "led_width_nm", "spectrum_file")},
+        "distribution": Choice("lambertian", LED_DISTRIBUTIONS,
+                               "Photometric: how each die's light spreads with direction: lambertian (I = I0 cos "
+                               "theta), or file: the supplier's far-field intensity, applied as the die's luminance "
+                               "I / (A cos theta) (wrong for an eye closer than about ten die sizes)"),
+        "far_field_file": Text("", "Photometric, far-field file: the LED's intensity distribution as an IES LM-63 "
+                                   "(.ies) or EULUMDAT (.ldt) file beside the document; its axis (gamma 0) is the "
+                                   "die's normal, its C 0 plane the array's across direction; only its shape is "
+                                   "used, the die emits flux_lm", max_len=120),
+    },
+    "LED dies, the light source when the lamp's source is led: flat emitters of given size in a grid "
+    "(in the paper mode each die shows the bulb's intensity)",
+    shown_when=(("led_peak_nm", "spectrum", ("led",)), ("led_width_nm", "spectrum", ("led",)),
+                ("spectrum_file", "spectrum", ("file",)), ("far_field_file", "distribution", ("file",))),
+)
+
 # At most this many prism rings across the plate's radius: the ring walk then crosses a bounded
 # number of rings and the profile stays a table of a few hundred numbers.
 MAX_RINGS = 500
@@ -409,8 +451,12 @@ LAMP = Section(
         "prism_plate": PRISM_PLATE,
         "bulb": BULB,
         "socket": SOCKET,
+        "source": Choice("bulb", LIGHT_SOURCES,
+                         "The light source: bulb, the spherical bulb on its socket (the paper's); or led, flat "
+                         "LED dies (the led section) in place of bulb and socket"),
+        "led": LED,
     },
-    "One lamp: lens, cuts, reflector, bulb and socket",
+    "One lamp: lens, cuts, reflector, bulb and socket (or LEDs)",
 )
 
 SCENE = Section(

@@ -22,6 +22,7 @@ luminous efficiency:
 - the bulb (a Lambertian sphere of radius r) is an Emission of radiance L_e = Φ_e / (4π² r²)
   W/(m² sr) and colour C, so Strength × Color = L_e × C: what a Blender point light of radius r,
   power Φ_e W and colour C shows;
+- an LED die (flat, area A) is an Emission of radiance L_e = Φ_e / (π A) on its front, black behind;
 - the sun is a Sun light of strength E_e = E_v / K_r W/m² (E_v its illuminance in lx, its spectrum
   CIE daylight at 5500 K) and colour C;
 - a lens or prism plate is glass of the material's n_d (a plate's rings keep the shape its own ior
@@ -49,6 +50,7 @@ import numpy as np
 from ...core_tracer.photometry import cie, daylight, materials
 from ...core_tracer.photometry.spectrum import Spectrum
 from ...core_tracer.raytrace import spectral
+from ...core_tracer.scene.led_array import LedArray, uses_leds
 from . import cycles
 
 MIN_TRANSMITTANCE = 1e-6  # a channel the filter blocks: absorption stays finite
@@ -93,6 +95,18 @@ def bulb_light(bulb: dict, where: str = "bulb") -> dict:
     r = bulb["radius"] * 1e-3
     return {"flux_lm": flux, "efficacy_lm_per_w": efficacy, "power_w": power,
             "radiance": power / (4.0 * math.pi ** 2 * r * r), "color": light_color(spectrum), "spectrum": spectrum}
+
+
+def led_light(lamp: dict, where: str = "lamps[0]") -> dict:
+    """A lamp's LED dies' Cycles values, as ``bulb_light``'s: a die of area A and flux Φ is an Emission
+    of radiance L_e = Φ_e / (π A) (a Lambertian die; Cycles does not carry a far-field file's shape)."""
+    led = lamp["led"]
+    spectrum = spectral.led_spectrum(led, f"{where}.led")
+    efficacy = cie.luminous_efficacy(spectrum)
+    power = led["flux_lm"] / efficacy
+    area = LedArray.of(led).die_area_mm2 * 1e-6
+    return {"flux_lm": led["flux_lm"], "efficacy_lm_per_w": efficacy, "power_w": power,
+            "radiance": power / (math.pi * area), "color": light_color(spectrum), "spectrum": spectrum}
 
 
 def sun_light(illuminance_lux: float) -> dict:
@@ -151,7 +165,7 @@ def equivalent(scene: dict) -> dict:
         env["strength"] = spectral.environment_scale(scene, pixels) / cie.KM
     for i, lamp in enumerate(out["lamps"]):
         where = f"lamps[{i}]"
-        bulb = bulb_light(lamp["bulb"], f"{where}.bulb")
+        bulb = led_light(lamp, where) if uses_leds(lamp) else bulb_light(lamp["bulb"], f"{where}.bulb")
         source = bulb["spectrum"]
         lamp["bulb"]["intensity"] = [float(c) for c in bulb["radiance"] * bulb["color"]]
         lens = lamp["lens"]

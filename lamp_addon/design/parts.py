@@ -24,6 +24,7 @@ from mathutils.geometry import tessellate_polygon
 
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geometry, lens_cylinder
+from ...core_tracer.scene.led_array import LedArray, uses_leds
 from ...core_tracer.scene.outline import Outline
 from ..convert import units
 from ..convert.meshes import builder as mesh_builder
@@ -145,6 +146,8 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
                   partial(part_meshes.socket_mesh, rs, g["vertex"], by),
                   [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
+    if uses_leds(lamp):  # the LED dies in place of bulb and socket
+        parts[-2:] = [led_part(base, label, lamp, axis)]
     if lens_cylinder(lamp) is not None:
         if preview and k > CYLINDER_PREVIEW_QUADS:  # its mesh is made in Python: 1.5 s at 6 x 6 quads a cell
             k, lighter = CYLINDER_PREVIEW_QUADS, True
@@ -168,6 +171,15 @@ def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outlin
     parts[0] = MeshPart(old.part, old.name, key, lambda: data, old.slots, old.matrix)
     opening = wrap.outer_rim(data, lamp) + np.array(lamp["center"])
     return parts, opening, (g["plane_b"], g["rim"]), lighter
+
+
+def led_part(base: str, label: str, lamp: dict, axis: Matrix) -> MeshPart:
+    """A lamp's LED dies as one object of flat rectangles facing their normal (``scene.led_array``),
+    emitting on their front only (``materials.led_die``)."""
+    led = lamp["led"]
+    shape = ("led", *(tuple(led[k]) for k in ("position", "normal", "die_size", "pitch")), led["columns"], led["rows"])
+    return MeshPart(f"{base}.led", f"{label} LEDs", shape, partial(part_meshes.led_mesh, LedArray.of(led)),
+                    [Slot(f"{base}.led", f"{label} LEDs", partial(materials.led_die, lamp=lamp))], axis)
 
 
 def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[MeshPart]:

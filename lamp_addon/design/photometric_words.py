@@ -35,6 +35,13 @@ _LABELS = [
     (S.BULB, "led_peak_nm", "LED Peak"),
     (S.BULB, "led_width_nm", "LED Width"),
     (S.BULB, "spectrum_file", "Spectrum File (.csv)"),
+    # the LEDs' (their distribution keeps its own words: Lambertian, File)
+    (S.LED, "flux_lm", "Flux per LED"),
+    (S.LED, "spectrum", "Spectrum"),
+    (S.LED, "led_peak_nm", "LED Peak"),
+    (S.LED, "led_width_nm", "LED Width"),
+    (S.LED, "spectrum_file", "Spectrum File (.csv)"),
+    (S.LED, "far_field_file", "Far-Field File (.ies, .ldt)"),
     *((S.LENS, key, words) for key, words in _OPTICS.items()),
     *((S.PRISM_PLATE, key, words) for key, words in _OPTICS.items()),
 ]

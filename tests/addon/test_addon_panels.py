@@ -210,6 +210,10 @@ def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
             design.environment.world = "none" if outline == "round" else "file"  # the file row shows only then
             for cut_type in S.CUT_TYPES:  # each type shows its own fields
                 lamp.cuts.type = cut_type
+                # the lamp's source: the bulb's sections or the LEDs' (their spectrum and far field as the bulb's)
+                lamp.source = "led" if cut_type == "sawtooth" else "bulb"
+                lamp.led.spectrum = spectrum if spectrum in S.LED_SPECTRA else "red_led"
+                lamp.led.distribution = "file" if filter_kind == "file" else "lambertian"
                 for cls in _shown_panels(lamp_addon, bl_scene):
                     shown |= draw(cls, bl_scene).spec_paths()
     wanted = {info.path for info in S.iter_fields() if not lamp_addon.design.properties.is_constant(info.spec)}
@@ -444,8 +448,9 @@ def test_every_panel_of_the_addon_is_drawn(addon, lamp_addon, bl_scene, design):
     drawn = set()
     context = SimpleNamespace(scene=bl_scene, window_manager=wm, engine=bl_scene.render.engine,
                               view_layer=bl_scene.view_layers[0])
-    for collection in ("reflector", "prism_plate"):  # each shows its own sub-panel
+    for collection, source in (("reflector", "bulb"), ("prism_plate", "led")):  # each shows its own sub-panel
         design.lamps[2].collection = collection
+        design.lamps[2].source = source
         for cls in panels:
             if hasattr(cls, "poll") and not cls.poll(context):
                 continue

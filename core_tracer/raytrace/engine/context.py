@@ -32,6 +32,7 @@ class Context(Lighting):
             self.throughput = spectral.Throughput.of(self.lamps, self.photometric.bands)
         self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
         self.plates = bool(self.lamps.ring_count.any())  # else no ray meets a prism plate or its housing
+        self.leds = self.lamps.any_leds  # else no ray meets an LED die
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
         self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body

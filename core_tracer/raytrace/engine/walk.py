@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import optics
 from .. import paths as P
+from ..parts import led_die
 from ..parts.base import Segments, put_rows, rows
 from .context import Context
 from .eyes import first_hits, put_traced, rays_toward_body
@@ -171,6 +172,14 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
             if throughput is not None:
                 k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
             band.add(pass_id, rays.pix.take(met), k_met * rows(color, lamp))
+    # LED dies end the path with their luminance toward the eye, k · L(θ, φ) (``parts.led_die``)
+    met = np.nonzero(surface == P.LED)[0] if ctx.leds else ()
+    if len(met):
+        lamp = rays.lamp.take(met)
+        k_met = rows(k, met)
+        if throughput is not None:
+            k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
+        band.add(BULB_PASS, rays.pix.take(met), k_met * led_die.emitted(lamps, lamp, rows(rays.d, met)))
     # a plate lamp's housing ends the path
     met = np.nonzero(surface == P.HOUSING)[0] if ctx.plates and throughput is None else ()
     if len(met):
