@@ -11,6 +11,7 @@ import numpy as np
 from ..scene.derived import cut_sphere_radius, flute_radius, lamp_geometry, lens_absorption, lens_cylinder
 from ..scene.outline import Outline
 from ..scene.prism_profile import ring_slopes
+from .guide_table import GuideTable
 
 CYLINDER_KEYS = ("axis_x", "radius", "side", "base", "apex", "phi_center", "corner")
 
@@ -87,6 +88,8 @@ class LampTable:
     ior_bands: np.ndarray | None = None
     plate_ior_bands: np.ndarray | None = None
     reflector_bands: np.ndarray | None = None
+    # The lamps' light guides (``guide_table``); None when no lamp has one (every lamp renders as before).
+    guide: GuideTable | None = None
 
     @classmethod
     def from_scene(cls, scene: dict) -> LampTable:
@@ -124,7 +127,9 @@ class LampTable:
         table = np.zeros((len(rows), max(len(s) for s in slopes)))
         for row, s in zip(table, slopes, strict=True):
             row[:len(s)] = s
-        return cls(ring_slopes=table, **{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
+        guide = GuideTable.from_scene(scene)
+        return cls(ring_slopes=table, guide=guide if guide.any else None,
+                   **{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
 
 
 def _plate_row(lamp: dict, g: dict) -> dict:

@@ -97,7 +97,14 @@ PLATE_TABLE: dict[int, tuple[frozenset[int], frozenset[int]]] = {
     19: (frozenset(), frozenset()),
 }
 
-ENDS = frozenset({7, 10, 11, 12, 19})
+# The light guide's classes (docs/photometric.md, light guides), numbered on from the plate's. A guide
+# lamp has no prism plate: its rod is the lamp's second dielectric (IN_GUIDE is the plate's medium).
+AIR_TO_GUIDE = 20  # ⑳ from any surface of the lamp's air to the guide's surface
+IN_GUIDE_SEGMENT = 21  # ㉑ from the guide's surface to itself, inside the rod
+GUIDE_TO_LED = 22  # ㉒ from the guide's surface to its LED, in the air (ends)
+GUIDE_TO_LAMP = 23  # ㉓ from the guide's surface to the lamp's other parts, in the air
+
+ENDS = frozenset({7, 10, 11, 12, 19, 22})
 
 REFLECTED, TRANSMITTED = 0, 1
 
@@ -107,17 +114,30 @@ _NONE = (frozenset(), frozenset())
 def allowed(parent: int, branch: int, child: int) -> bool:
     """Whether a transition is one of Table 1's, the documented air side-wall band's, or the
     prism plate's continuation of Table 1."""
+    if 20 in (parent, child) or 21 in (parent, child) or 22 in (parent, child) or 23 in (parent, child):
+        return _guide_allowed(parent, branch, child)
     return any(child in table.get(parent, _NONE)[branch] for table in (TABLE_1, AIR_SIDE_WALL, PLATE_TABLE))
 
 
+def _guide_allowed(parent: int, branch: int, child: int) -> bool:
+    """The guide's transitions: light goes from the lamp's air into the rod and back (⑳ ㉑ ㉓), ends
+    at its LED (㉒); a ray reflected off the rod stays in the air, one transmitted changes medium."""
+    in_air_after = {AIR_TO_GUIDE: branch == REFLECTED, IN_GUIDE_SEGMENT: branch == TRANSMITTED}
+    if parent in in_air_after:
+        return child in ((AIR_TO_GUIDE, GUIDE_TO_LED, GUIDE_TO_LAMP) if in_air_after[parent]
+                         else (IN_GUIDE_SEGMENT,))
+    return child == AIR_TO_GUIDE
+
+
 # Surfaces a segment can start from or reach, used to classify it (the plate's after the paper's).
-OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING = range(10)
+OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING, GUIDE, GUIDE_LED = range(12)
 IN_LENS, IN_AIR, IN_PLATE = 0, 1, 2
+IN_GUIDE = IN_PLATE  # a lamp has a prism plate or a light guide, never both: the guide's rod is its second dielectric
 
 
 def _build_lookup() -> np.ndarray:
     """CLASS_OF[medium, source surface, hit surface] -> path class (0 = impossible)."""
-    table = np.zeros((3, 10, 10), dtype=np.int8)
+    table = np.zeros((3, 12, 12), dtype=np.int8)
     table[IN_LENS, OUTER, CUT] = LENS_OUTER_TO_CUT
     table[IN_LENS, OUTER, WALL] = TO_SIDE_WALL
     table[IN_LENS, CUT, OUTER] = CUT_TO_LENS_OUTER
@@ -143,6 +163,12 @@ def _build_lookup() -> np.ndarray:
     table[IN_AIR, RINGS, SOCKET] = TO_SOCKET
     for medium, src in ((IN_PLATE, PLATE_FRONT), (IN_PLATE, RINGS), (IN_AIR, RINGS)):
         table[medium, src, HOUSING] = TO_HOUSING
+    # the light guide
+    table[IN_AIR, :, GUIDE] = AIR_TO_GUIDE
+    table[IN_GUIDE, GUIDE, GUIDE] = IN_GUIDE_SEGMENT
+    table[IN_AIR, GUIDE, GUIDE_LED] = GUIDE_TO_LED
+    for surface in (CUT, REFLECTOR, WALL, BULB, SOCKET, PLATE_FRONT, HOUSING):
+        table[IN_AIR, GUIDE, surface] = GUIDE_TO_LAMP
     return table
 
 

@@ -306,11 +306,13 @@ def photometric_lamps(table: LampTable, scene: dict, bands: Bands) -> LampTable:
         rows["ior"].append(index_of(lens)[0])
         rows["ior_bands"].append(band_index(lens, bands))
         rows["absorption"].append(absorption(lens, bands, f"{where}.lens"))
-        if lamp.get("collection", "reflector") == "prism_plate":
-            plate = lamp["prism_plate"]
+        guide = lamp.get("light_guide", {})
+        if lamp.get("collection", "reflector") == "prism_plate" or guide.get("enabled"):
+            # a guide's rod is the lamp's second dielectric, as a plate is (``paths.IN_GUIDE``)
+            plate, part = (guide, "light_guide") if guide.get("enabled") else (lamp["prism_plate"], "prism_plate")
             rows["plate_ior"].append(index_of(plate)[0])
             rows["plate_ior_bands"].append(band_index(plate, bands))
-            rows["plate_absorption"].append(absorption(plate, bands, f"{where}.prism_plate"))
+            rows["plate_absorption"].append(absorption(plate, bands, f"{where}.{part}"))
         else:
             rows["plate_ior"].append(1.0)
             rows["plate_ior_bands"].append(np.ones(k))
@@ -323,8 +325,21 @@ def photometric_lamps(table: LampTable, scene: dict, bands: Bands) -> LampTable:
         # Real-Time Rendering, 3rd ed. 2008, eq. 7.49)
         rows["scatter"].append(share * (refl["shininess"] + 8.0) / (8.0 * math.pi))
     values = {key: np.array(value, dtype=np.float64) for key, value in rows.items()}
+    if table.guide is not None:
+        values["guide"] = table.guide.with_radiance([guide_led_radiance(lamp.get("light_guide", {}), bands)
+                                                     for lamp in scene["lamps"]])
     return replace(table, **values, wall_color=zeros, lens_diffuse=zeros, reflector_color=zeros,
                    socket_color=zeros, housing_color=zeros)
+
+
+def guide_led_radiance(guide: dict, bands: Bands) -> np.ndarray:
+    """(K,) spectral radiance of a light guide's LED die, W/(m² sr nm): a Lambertian square of side a
+    emitting Φ into its half space has the luminance Φ / (π a²); 0 without a guide."""
+    if not guide.get("enabled"):
+        return np.zeros(bands.k)
+    side = guide["led_size"] * 1e-3  # m
+    luminance = guide["led_flux_lm"] / (math.pi * side * side)
+    return luminance * sources.spectral_shape(sources.led(guide["led_peak_nm"], guide["led_width_nm"]), bands)
 
 
 def _read_curve(path: str, where: str) -> Spectrum:

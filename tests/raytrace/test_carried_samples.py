@@ -76,7 +76,7 @@ def test_carried_samples_give_what_bands_traced_apart_give(monkeypatch, adaptive
         assert 0 < sum(band.busy for band in apart) < WIDTH * HEIGHT
     for index, band in enumerate(apart):
         np.testing.assert_array_equal(carried[index].acc, band.acc)
-        for key in ("segments", "max_depth", "busy", "transitions"):
+        for key in ("segments", "max_depth", "cut_at_depth", "busy", "transitions"):
             assert getattr(carried[index], key) == getattr(band, key), (index, key)
 
 

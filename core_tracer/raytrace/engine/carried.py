@@ -114,6 +114,7 @@ def _end_tails(tails: list[_Tail], wave: _Wavefront, rays: Rays) -> tuple[list[_
         tail.put_back(wave.acc)
         tail.band.max_depth = tail.depth
         if count:  # MAX_DEPTH: its rays go no further
+            tail.band.cut_at_depth += count
             rays = rays.take((rays.pix < tail.lo) | (rays.pix >= tail.hi))
     return [tail for tail, _ in ended], counts, rays
 

@@ -18,7 +18,9 @@ from .eyes import first_hits, put_traced, rays_toward_body
 from .rays import BULB_PASS, SIDE_WALL_PASS, SOCKET_PASS, UNPOLARISED, UNRECORDED, Band, Rays, concat
 from .surfaces import at_lens_face, at_plate_face, at_reflector
 
-MAX_DEPTH = 64  # safety net on the number of segments along one branch
+# The depth limit (docs/photometric.md, light guides): at most this many segments along one branch;
+# the branches still alive there end, counted in ``Band.cut_at_depth`` and the render's statistics.
+MAX_DEPTH = 64
 
 
 def trace_eye_rays(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> None:
@@ -45,6 +47,7 @@ def trace_rays(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, slots: np
         rays = next_generation(ctx, band, rays)
         depth += 1
     band.max_depth = depth
+    band.cut_at_depth += len(rays)
 
 
 class Walker(Protocol):
@@ -163,6 +166,8 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
     ends = ((P.BULB, BULB_PASS, lamps.bulb_intensity),) if throughput is not None else (
         (P.WALL, SIDE_WALL_PASS, lamps.wall_color), (P.BULB, BULB_PASS, lamps.bulb_intensity),
         (P.SOCKET, SOCKET_PASS, lamps.socket_color))
+    if lamps.guide is not None:  # a light guide's LED: its die's radiance (the bulb's pass: the lamp's source)
+        ends += ((P.GUIDE_LED, BULB_PASS, lamps.guide.led_radiance),)
     for sid, pass_id, color in ends:
         met = np.nonzero(surface == sid)[0]
         if len(met):
@@ -188,7 +193,7 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
         faces = surface.take(met)
         children.extend(at_lens_face(ctx, band, rays, met, rows(k, met), d, hit, cls.take(met), faces,
                                      normals_at(normals, met, faces)))
-    met = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
+    met = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS) | (surface == P.GUIDE))[0] if ctx.plates else ()
     if len(met):
         d, hit = _end_points(rays, t, met)
         faces = surface.take(met)

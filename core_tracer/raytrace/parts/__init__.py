@@ -16,17 +16,19 @@ eye rays, in the world frame, meet it.
 
 from __future__ import annotations
 
-from . import bulb, cut_surface, housing, outer_face, plate_front, prism_rings, reflector, side_wall, socket
+from . import (bulb, cut_surface, guide_led, housing, light_guide, outer_face, plate_front, prism_rings, reflector,
+               side_wall, socket)
 from .base import Part
 
 # ``cut_surface`` hands each ray to its lamp's cut type: ``cuts`` (fish-eye), ``sawtooth`` or ``flutes``.
-PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, reflector, bulb, socket, cut_surface,
-                           outer_face)
+PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, reflector, bulb, socket, light_guide,
+                           guide_led, cut_surface, outer_face)
 
 
 def parts_for(lamps) -> tuple[Part, ...]:
-    """``PARTS`` for these lamps: without the prism plate's parts when no lamp has a plate (every
-    ray would only find ``inf`` there, at the cost of their gathers)."""
-    if lamps.ring_count.any():
-        return PARTS
-    return tuple(part for part in PARTS if part not in (housing, plate_front, prism_rings))
+    """``PARTS`` for these lamps: without the prism plate's parts when no lamp has a plate, nor the
+    light guide's when no lamp has a guide (every ray would only find ``inf`` there, at the cost of
+    their gathers)."""
+    unused = () if lamps.ring_count.any() else (housing, plate_front, prism_rings)
+    unused += () if lamps.guide is not None else (light_guide, guide_led)
+    return tuple(part for part in PARTS if part not in unused)
