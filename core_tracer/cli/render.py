@@ -10,7 +10,6 @@ from .. import budget
 from ..checkpoints import checkpoint
 from ..fileio import atomic_folder, check_replaceable_folder, is_pass_file
 from ..images.imageio import image_format
-from ..raytrace.engine.walk import MAX_DEPTH
 from ..scene.beside import environment_file
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
@@ -118,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     if segments is not None and result.stats.get("max_depth"):
         # how deep the paths went, and the branches the depth limit ended (never dropped silently)
         traced += (f" ({segments / (w * h * size['samples']):.1f} a ray, deepest {result.stats['max_depth']}, "
-                   f"{result.stats.get('cut_at_depth', 0)} ended at the depth limit {MAX_DEPTH})")
+                   f"{result.stats.get('cut_at_depth', 0)} ended at the depth limit)")
     samples = f" at {size['samples']} samples" if size["samples"] > 1 else ""
     print(f"{printable(args.output)}: {w}x{h} px{samples} in {seconds:.2f} s{traced}{shown}")
     return 0

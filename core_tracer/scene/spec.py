@@ -398,9 +398,9 @@ MAX_GUIDE_PRISMS = 2000
 
 LIGHT_GUIDE = Section(
     {
-        "enabled": Flag(False, "Photometric: whether the lamp has a light guide, a transparent rod lit by an LED at "
-                               "its end, whose extraction prisms send the light out toward the lens (docs/photometric.md, "
-                               "light guides)"),
+        "enabled": Flag(False, "Photometric: whether the lamp has a light guide, a transparent rod lit by an LED "
+                               "at its end, whose extraction prisms send the light out toward the lens "
+                               "(docs/photometric.md, light guides)"),
         "section": Choice("round", GUIDE_SECTIONS,
                           "Photometric: the cross-section of the guide: round (diameter) or rectangular (width across "
                           "the guide in the lens plane, thickness along the lamp axis)"),

@@ -16,8 +16,19 @@ eye rays, in the world frame, meet it.
 
 from __future__ import annotations
 
-from . import (bulb, cut_surface, guide_led, housing, light_guide, outer_face, plate_front, prism_rings, reflector,
-               side_wall, socket)
+from . import (
+    bulb,
+    cut_surface,
+    guide_led,
+    housing,
+    light_guide,
+    outer_face,
+    plate_front,
+    prism_rings,
+    reflector,
+    side_wall,
+    socket,
+)
 from .base import Part
 
 # ``cut_surface`` hands each ray to its lamp's cut type: ``cuts`` (fish-eye), ``sawtooth`` or ``flutes``.

@@ -152,8 +152,9 @@ def _offer_facets(offer, s0, v0, ds, dv, g, best) -> None:
     idx = np.nonzero(live)[0]
     if not len(idx):
         return
-    k_in = nearest_prism(s0[idx] + t_in[idx] * ds[idx], {key: g[key][idx] for key in ("first_prism", "pitch", "prisms")})
-    k_out = nearest_prism(s0[idx] + t_out[idx] * ds[idx], {key: g[key][idx] for key in ("first_prism", "pitch", "prisms")})
+    row = {key: g[key][idx] for key in ("first_prism", "pitch", "prisms")}
+    k_in = nearest_prism(s0[idx] + t_in[idx] * ds[idx], row)
+    k_out = nearest_prism(s0[idx] + t_out[idx] * ds[idx], row)
     step = np.sign(k_out - k_in)
     cells = np.abs(k_out - k_in).astype(np.int64)
     m = g["slope"]
