@@ -198,7 +198,9 @@ def trace(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]
             inner = np.nonzero(partial & (faces != P.OUTER) & alive)[0]
             if len(inner):
                 children.append(face.through(inner))
-        met = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS) | (surface == P.GUIDE))[0] if ctx.plates else ()
+        # the lamp's second dielectric: a prism plate's faces or a light guide's rod
+        second = (surface == P.PLATE_FRONT) | (surface == P.RINGS) | (surface == P.GUIDE) if ctx.plates else None
+        met = np.nonzero(second)[0] if ctx.plates else ()
         if len(met):
             d, hit = _end_points(rays, t, met)
             faces = surface.take(met)

@@ -104,6 +104,29 @@ IN_GUIDE_SEGMENT = 21  # ㉑ from the guide's surface to itself, inside the rod
 GUIDE_TO_LED = 22  # ㉒ from the guide's surface to its LED, in the air (ends)
 GUIDE_TO_LAMP = 23  # ㉓ from the guide's surface to the lamp's other parts, in the air
 
+
+def _guide_table() -> dict[int, tuple[frozenset[int], frozenset[int]]]:
+    """Table 1 continued for the guide: every branch that goes on in the lamp's air can meet the rod
+    (⑳) or its LED (㉒); the rod's surface reflects into the medium the ray came from and transmits
+    into the other; ㉓ ends on the lamp's other parts as the air classes that reach them do."""
+    air = {3, 4, 5, 9, 11, 12, 13, 14, 18}
+    table: dict[int, tuple[frozenset[int], frozenset[int]]] = {}
+    for source in (TABLE_1, PLATE_TABLE):
+        for parent, branches in source.items():
+            table[parent] = tuple(frozenset({AIR_TO_GUIDE, GUIDE_TO_LED}) if children & air else frozenset()
+                                  for children in branches)
+    into_air = frozenset({AIR_TO_GUIDE, GUIDE_TO_LED, GUIDE_TO_LAMP})
+    table[AIR_TO_GUIDE] = (into_air, frozenset({IN_GUIDE_SEGMENT}))
+    table[IN_GUIDE_SEGMENT] = (frozenset({IN_GUIDE_SEGMENT}), into_air)
+    table[GUIDE_TO_LED] = (frozenset(), frozenset())
+    # ㉓ reaches a cut (as ⑤ does), the reflector (as ④), or ends on the wall, bulb or socket
+    table[GUIDE_TO_LAMP] = (frozenset({3, 4, 5, 7, 9, 11, 12, 13, AIR_TO_GUIDE, GUIDE_TO_LED}),
+                            frozenset({6, 7, 8}))
+    return table
+
+
+GUIDE_TABLE = _guide_table()
+
 ENDS = frozenset({7, 10, 11, 12, 19, 22})
 
 REFLECTED, TRANSMITTED = 0, 1
@@ -114,19 +137,8 @@ _NONE = (frozenset(), frozenset())
 def allowed(parent: int, branch: int, child: int) -> bool:
     """Whether a transition is one of Table 1's, the documented air side-wall band's, or the
     prism plate's continuation of Table 1."""
-    if 20 in (parent, child) or 21 in (parent, child) or 22 in (parent, child) or 23 in (parent, child):
-        return _guide_allowed(parent, branch, child)
-    return any(child in table.get(parent, _NONE)[branch] for table in (TABLE_1, AIR_SIDE_WALL, PLATE_TABLE))
-
-
-def _guide_allowed(parent: int, branch: int, child: int) -> bool:
-    """The guide's transitions: light goes from the lamp's air into the rod and back (⑳ ㉑ ㉓), ends
-    at its LED (㉒); a ray reflected off the rod stays in the air, one transmitted changes medium."""
-    in_air_after = {AIR_TO_GUIDE: branch == REFLECTED, IN_GUIDE_SEGMENT: branch == TRANSMITTED}
-    if parent in in_air_after:
-        return child in ((AIR_TO_GUIDE, GUIDE_TO_LED, GUIDE_TO_LAMP) if in_air_after[parent]
-                         else (IN_GUIDE_SEGMENT,))
-    return child == AIR_TO_GUIDE
+    return any(child in table.get(parent, _NONE)[branch]
+               for table in (TABLE_1, AIR_SIDE_WALL, PLATE_TABLE, GUIDE_TABLE))
 
 
 # Surfaces a segment can start from or reach, used to classify it (the plate's after the paper's).
@@ -166,7 +178,7 @@ def _build_lookup() -> np.ndarray:
     # the light guide
     table[IN_AIR, :, GUIDE] = AIR_TO_GUIDE
     table[IN_GUIDE, GUIDE, GUIDE] = IN_GUIDE_SEGMENT
-    table[IN_AIR, GUIDE, GUIDE_LED] = GUIDE_TO_LED
+    table[IN_AIR, :, GUIDE_LED] = GUIDE_TO_LED
     for surface in (CUT, REFLECTOR, WALL, BULB, SOCKET, PLATE_FRONT, HOUSING):
         table[IN_AIR, GUIDE, surface] = GUIDE_TO_LAMP
     return table

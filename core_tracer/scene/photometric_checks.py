@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from . import spec as S
 from .beside import check_plain_name
+from .guide_checks import check_light_guide
 from .messages import show_value
 from .reading import SceneError
 
@@ -31,8 +32,11 @@ def check_photometric(scene: dict) -> None:
         parts = [("lens", lamp["lens"])]
         if lamp.get("collection", "reflector") == "prism_plate":
             parts.append(("prism_plate", lamp["prism_plate"]))
+        if lamp.get("light_guide", {}).get("enabled"):
+            parts.append(("light_guide", lamp["light_guide"]))
         for name, part in parts:
             _check_filter(part, f"{where}.{name}")
+        check_light_guide(scene, i)
     if scene.get("light_model") == "photometric" and "freeform" in scene:
         raise SceneError("light_model", '"photometric" is not available for free-form parts yet; allowed "paper" '
                                         "with a freeform section")

@@ -104,8 +104,8 @@ def carrying_tails(ctx: Context, take: Callable[[], tuple[int, int, int] | None]
 def _end_tails(tails: list[_Tail], wave: _Wavefront, rays: Rays, limit: int) -> tuple[list[_Tail], list[int], Rays]:
     """Take out of ``tails`` the bands (or groups) whose branches have all ended, or reached
     the depth ``limit`` (``walk.depth_limit``, as ``trace_rays``'s loop ends): their passes go back
-    to their own accumulators and the rays of those cut at the depth leave the wavefront. Returns them, every tail's count of
-    rays before (``_rays_per_tail``) and the rays left."""
+    to their own accumulators and the rays of those cut at the depth leave the wavefront. Returns
+    them, every tail's count of rays before (``_rays_per_tail``) and the rays left."""
     counts = _rays_per_tail(tails, rays.pix)
     ended = [(tail, count) for tail, count in zip(tails, counts, strict=True)
              if count == 0 or tail.depth >= limit]

@@ -203,7 +203,9 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
         faces = surface.take(met)
         children.extend(at_lens_face(ctx, band, rays, met, rows(k, met), d, hit, cls.take(met), faces,
                                      normals_at(normals, met, faces)))
-    met = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS) | (surface == P.GUIDE))[0] if ctx.plates else ()
+    # the lamp's second dielectric: a prism plate's faces or a light guide's rod
+    second = (surface == P.PLATE_FRONT) | (surface == P.RINGS) | (surface == P.GUIDE) if ctx.plates else None
+    met = np.nonzero(second)[0] if ctx.plates else ()
     if len(met):
         d, hit = _end_points(rays, t, met)
         faces = surface.take(met)
