@@ -29,6 +29,8 @@ luminous efficiency:
   transmittance under the lamp's own bulb, T_c = RGB_c(S·T) / RGB_c(S), as −ln(T_c) / thickness per
   mm (Beer–Lambert at the filter's thickness); a colour outside Rec.709 (legal red) is clipped into it
   at its own luminance: Cycles cannot carry the colour;
+- a light guide is glass of its material's n_d absorbing as a lens does under its LEDs' spectrum, and
+  each LED an Emission square of radiance L_e = Φ_e / (π a²) and colour C (a Lambertian die of side a);
 - the reflector mirrors and glows with its finish's reflectance under the bulb (its luminance
   share: aluminium and silver are near-neutral), split by the glow share; no appearance constant;
 - the environment image's Background strength is the tracer's scale (cd/m² per pixel unit) / 683;
@@ -46,7 +48,7 @@ import math
 
 import numpy as np
 
-from ...core_tracer.photometry import cie, daylight, materials
+from ...core_tracer.photometry import cie, daylight, materials, sources
 from ...core_tracer.photometry.spectrum import Spectrum
 from ...core_tracer.raytrace import spectral
 
@@ -92,6 +94,15 @@ def bulb_light(bulb: dict, where: str = "bulb") -> dict:
     r = bulb["radius"] * 1e-3
     return {"flux_lm": flux, "efficacy_lm_per_w": efficacy, "power_w": power,
             "radiance": power / (4.0 * math.pi ** 2 * r * r), "color": light_color(spectrum), "spectrum": spectrum}
+
+
+def guide_led_light(guide: dict) -> dict:
+    """A light guide's LED in Cycles values: ``radiance`` L_e = Φ_e / (π a²) W/(m² sr) of its square
+    die of side a (Lambertian), ``color`` C and its ``spectrum``."""
+    spectrum = sources.led(guide["led_peak_nm"], guide["led_width_nm"])
+    power = guide["led_flux_lm"] / cie.luminous_efficacy(spectrum)
+    side = guide["led_size"] * 1e-3
+    return {"radiance": power / (math.pi * side * side), "color": light_color(spectrum), "spectrum": spectrum}
 
 
 def sun_light(illuminance_lux: float) -> dict:
@@ -153,6 +164,13 @@ def equivalent(scene: dict) -> dict:
         bulb = bulb_light(lamp["bulb"], f"{where}.bulb")
         source = bulb["spectrum"]
         lamp["bulb"]["intensity"] = [float(c) for c in bulb["radiance"] * bulb["color"]]
+        guide = lamp.get("light_guide")
+        if guide and guide["enabled"]:  # the guide's LEDs light the lamp: its colours are taken under them
+            led = guide_led_light(guide)
+            source = led["spectrum"]
+            guide.update(glass_ior=spectral.index_of(guide)[0],
+                         absorption=filter_absorption(guide, source, f"{where}.light_guide"),
+                         led_intensity=[float(c) for c in led["radiance"] * led["color"]])
         lens = lamp["lens"]
         for key in ("transmitted_color", "reference_thickness"):
             lens.pop(key, None)

@@ -136,3 +136,28 @@ def test_lamps_without_a_guide_have_no_guide_parts():
     ctx = make_context(parse_scene(copy.deepcopy(scene)), 1, 1)
     assert ctx.lamps.guide is None
     assert light_guide not in ctx.parts
+
+
+@pytest.mark.parametrize(("change", "field", "words"), [
+    (dict(light_model="paper"), "lamps[0].light_guide.enabled", 'needs light_model "photometric"'),
+    (dict(prism_depth=2.5), "lamps[0].light_guide.prism_depth", "allowed [0, 2)"),
+    (dict(prism_depth=1.5, prism_pitch=2.0), "lamps[0].light_guide.prism_depth", "wider than their pitch"),
+    (dict(led_size=4.5), "lamps[0].light_guide.led_size", "allowed (0, 4]"),
+    (dict(depth=4.0), "lamps[0].light_guide.depth", "into the lens"),
+])
+def test_a_guide_that_cannot_be_is_refused_in_one_line_naming_the_field(change, field, words):
+    from core_tracer.scene.reading import SceneError
+    scene = json.loads((ROOT / "presets" / "photometric-tail-lamp.json").read_text())
+    lamp = scene["lamps"][0]
+    lamp["reflector"]["focal_length"] = 10.0
+    lamp["bulb"]["on"] = False
+    guide = dict(enabled=True, section="rectangular", width=4.0, thickness=4.0, length=60.0, depth=15.0)
+    if "light_model" in change:
+        scene["light_model"] = change["light_model"]
+    else:
+        guide.update(change)
+    lamp["light_guide"] = guide
+    with pytest.raises(SceneError) as caught:
+        parse_scene(scene)
+    assert caught.value.path == field, str(caught.value)
+    assert words in str(caught.value) and "\n" not in str(caught.value)

@@ -88,85 +88,129 @@ def gathered(guide: GuideTable, lamp: np.ndarray) -> dict:
 
 def hit_guide(o: np.ndarray, d: np.ndarray, guide: GuideTable, lamp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per ray, the nearest hit on the rod of its lamp's guide (inf for none) and the unit normal
-    there pointing out of the rod's material, in the lamp frame."""
+    there pointing out of the rod's material, in the lamp frame.
+
+    The rod without its grooves is convex: the ray's span inside it is [t_enter, t_exit], the
+    largest entry and the smallest exit over its end planes and its side (slabs, or the cylinder's
+    two roots), and its hit the entry, or the exit for a ray inside. The grooves only take material
+    away near the back: that hit is dropped where its point lies in a groove, and the facets the ray
+    crosses within the span, cell by cell, are offered instead (``_facets``)."""
     g = gathered(guide, lamp)
     s0, u0, v0, ds, du, dv = to_guide(o, d, guide, lamp)
     n = len(o)
-    best = np.full(n, np.inf)
-    ns, nu, nv = np.zeros(n), np.zeros(n), np.zeros(n)  # the normal in the guide frame
+    # (axis of the normal in the guide frame: 0 s, 1 u, 2 v, 3 the cylinder's radial; its sign)
+    enter, exit_ = np.full(n, -np.inf), np.full(n, np.inf)
+    enter_axis, exit_axis = np.zeros(n, np.int8), np.zeros(n, np.int8)
+    enter_sign, exit_sign = np.zeros(n), np.zeros(n)
 
-    def offer(t: np.ndarray, normal: tuple, extra: np.ndarray | None = None) -> None:
-        """Keep ``t`` where it is past T_MIN, nearer than the best, and its point lies on the rod."""
-        with np.errstate(invalid="ignore"):
-            ok = (t > T_MIN) & (t < best)
-        if extra is not None:
-            ok &= extra
-        idx = np.nonzero(ok)[0]
-        if not len(idx):
-            return
-        ti = t[idx]
-        on = inside(s0[idx] + ti * ds[idx], u0[idx] + ti * du[idx], v0[idx] + ti * dv[idx],
-                    {key: value[idx] for key, value in g.items()})
-        idx = idx[on]
-        best[idx] = t[idx]
-        for out, value in zip((ns, nu, nv), normal, strict=True):
-            out[idx] = value if np.isscalar(value) else value[idx]
+    def slab(origin, direction, lo, hi, axis):
+        """Narrow the span to the slab lo <= x <= hi along one axis of the guide's frame."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_lo, t_hi = (lo - origin) / direction, (hi - origin) / direction
+        near, far = np.fmin(t_lo, t_hi), np.fmax(t_lo, t_hi)
+        parallel = direction == 0  # in the slab for ever, or never
+        outside = parallel & ((origin < lo) | (origin > hi))
+        near = np.where(parallel, np.where(outside, np.inf, -np.inf), near)
+        far = np.where(parallel, np.where(outside, -np.inf, np.inf), far)
+        sign_near = np.where(direction > 0, -1.0, 1.0)  # entering through the lo side when moving up
+        take = near > enter
+        np.copyto(enter, near, where=take)
+        np.copyto(enter_axis, axis, where=take)
+        np.copyto(enter_sign, sign_near, where=take)
+        take = far < exit_
+        np.copyto(exit_, far, where=take)
+        np.copyto(exit_axis, axis, where=take)
+        np.copyto(exit_sign, -sign_near, where=take)
 
-    with np.errstate(divide="ignore", invalid="ignore"):
-        # the end faces
-        offer(-s0 / ds, (-1.0, 0.0, 0.0))
-        offer((g["length"] - s0) / ds, (1.0, 0.0, 0.0))
-        # the side
-        rnd = g["round"] > 0
-        if rnd.any():
-            lo, hi = solve_quadratic(du * du + dv * dv, 2.0 * (u0 * du + v0 * dv),
-                                     u0 * u0 + v0 * v0 - g["half_u"] ** 2)
-            for root in (lo, hi):
-                r = g["half_u"]
-                offer(root, (0.0, (u0 + root * du) / r, (v0 + root * dv) / r), rnd)
-        square = ~rnd
-        if square.any():
-            for sign in (-1.0, 1.0):
-                offer((sign * g["half_u"] - u0) / du, (0.0, sign, 0.0), square)
-                offer((sign * g["half_v"] - v0) / dv, (0.0, 0.0, sign), square)
-        # the prisms' facets, cell by cell between the grooves' bottom and the back
-        _offer_facets(offer, s0, v0, ds, dv, g, best)
+    slab(s0, ds, 0.0, g["length"], 0)
+    rnd = g["round"] > 0
+    if (~rnd).any():
+        inf = np.where(rnd, np.inf, 1.0)  # round rods are bounded by the cylinder below, not by slabs
+        slab(u0, du, -g["half_u"] * inf, g["half_u"] * inf, 1)
+        slab(v0, dv, -g["half_v"] * inf, g["half_v"] * inf, 2)
+    if rnd.any():
+        a = du * du + dv * dv
+        c = u0 * u0 + v0 * v0 - g["half_u"] ** 2
+        lo, hi = solve_quadratic(a, 2.0 * (u0 * du + v0 * dv), c)
+        along = a < 1e-15  # parallel to the axis: inside the cylinder for ever, or never
+        lo = np.where(along, np.where(c <= 0, -np.inf, np.inf), np.where(np.isnan(lo), np.inf, lo))
+        hi = np.where(along, np.where(c <= 0, np.inf, -np.inf), np.where(np.isnan(hi), -np.inf, hi))
+        lo, hi = np.where(rnd, lo, -np.inf), np.where(rnd, hi, np.inf)
+        take = lo > enter
+        np.copyto(enter, lo, where=take)
+        np.copyto(enter_axis, 3, where=take)
+        take = hi < exit_
+        np.copyto(exit_, hi, where=take)
+        np.copyto(exit_axis, 3, where=take)
+
+    span = (enter <= exit_) & (exit_ > T_MIN)
+    from_outside = enter > T_MIN
+    t = np.where(span, np.where(from_outside, enter, exit_), np.inf)
+    axis_hit = np.where(from_outside, enter_axis, exit_axis)
+    sign_hit = np.where(from_outside, enter_sign, exit_sign)
+    ns, nu, nv = np.zeros(n), np.zeros(n), np.zeros(n)
+    for out, axis in ((ns, 0), (nu, 1), (nv, 2)):
+        np.copyto(out, sign_hit, where=axis_hit == axis)
+    radial = np.nonzero((axis_hit == 3) & np.isfinite(t))[0]
+    if len(radial):
+        tr = t[radial]
+        r = g["half_u"][radial]
+        nu[radial] = (u0[radial] + tr * du[radial]) / r
+        nv[radial] = (v0[radial] + tr * dv[radial]) / r
+
+    has = np.nonzero(span & (g["prisms"] > 0))[0]
+    if len(has):
+        _grooves(has, t, (ns, nu, nv), s0, v0, ds, dv, g, enter, exit_)
 
     axis, across = rows(guide.axis, lamp), rows(guide.across, lamp)
     normal = axis * ns[:, None] + across * nu[:, None]
     normal[:, 1] += nv
-    return best, normal
+    return t, normal
 
 
-def _offer_facets(offer, s0, v0, ds, dv, g, best) -> None:
-    """The V grooves' facets the rays can meet: the cells of the prisms crossed while between the
-    grooves' bottom (v_back − δ) and the back (v_back), nearer than the best hit so far."""
-    has = np.nonzero(g["prisms"] > 0)[0]
-    if not len(has):
-        return
-    bottom = g["half_v"] - g["prism_depth"]
-    t_in, t_out = slab_span(v0, dv, bottom, g["half_v"], best)
-    live = np.zeros(len(s0), bool)
-    live[has] = True
-    live &= t_in <= t_out
-    idx = np.nonzero(live)[0]
-    if not len(idx):
-        return
-    row = {key: g[key][idx] for key in ("first_prism", "pitch", "prisms")}
-    k_in = nearest_prism(s0[idx] + t_in[idx] * ds[idx], row)
-    k_out = nearest_prism(s0[idx] + t_out[idx] * ds[idx], row)
-    step = np.sign(k_out - k_in)
-    cells = np.abs(k_out - k_in).astype(np.int64)
-    m = g["slope"]
-    sec = np.sqrt(1.0 + m * m)
-    for j in range(int(cells.max()) + 1):
-        going = idx[cells >= j]
-        k = np.full(len(s0), np.nan)
-        k[going] = (k_in + j * step)[cells >= j]
-        apex = g["first_prism"] + k * g["pitch"]
-        for side in (1.0, -1.0):  # the facet beyond the apex (s > s_k) rises with s, the other falls
-            # v = bottom + side m (s − apex) along the ray: v0 + t dv = bottom + side m (s0 + t ds − apex)
-            t = (bottom + side * m * (s0 - apex) - v0) / (dv - side * m * ds)
-            s_hit = s0 + t * ds
-            on_side = side * (s_hit - apex) >= -EPS
-            offer(t, (-side * m / sec, 0.0, 1.0 / sec), on_side & np.isfinite(k))
+def _grooves(has, t, normal, s0, v0, ds, dv, g, enter, exit_) -> None:
+    """The rays ``has`` whose lamps' rods have prisms: their convex hit dropped where it lies in a
+    groove, then the facets of the prisms whose cells they cross between the grooves' bottom and the
+    back, within their span of the rod, offered (in place on ``t`` and ``normal``)."""
+    sub = {key: value[has] for key, value in g.items()}
+    s0, v0, ds, dv = s0[has], v0[has], ds[has], dv[has]
+    t_sub = t[has]
+    with np.errstate(invalid="ignore"):
+        grooved = in_groove(s0 + t_sub * ds, v0 + t_sub * dv, sub)
+    t_sub = np.where(grooved, np.inf, t_sub)
+    ns, nu, nv = (part[has] for part in normal)
+    bottom = sub["half_v"] - sub["prism_depth"]
+    lo = np.maximum(enter[has], 0.0)
+    t_in, t_out = slab_span(v0, dv, bottom, sub["half_v"], np.minimum(exit_[has], t_sub))
+    t_in = np.maximum(t_in, lo)
+    live = np.nonzero(t_in <= t_out)[0]
+    if len(live):
+        row = {key: sub[key][live] for key in ("first_prism", "pitch", "prisms")}
+        k_in = nearest_prism(s0[live] + t_in[live] * ds[live], row)
+        k_out = nearest_prism(s0[live] + t_out[live] * ds[live], row)
+        step = np.sign(k_out - k_in)
+        cells = np.abs(k_out - k_in).astype(np.int64)
+        m = sub["slope"][live]
+        sec = np.sqrt(1.0 + m * m)
+        span_lo, span_hi = enter[has][live] - EPS, exit_[has][live] + EPS
+        for j in range(int(cells.max()) + 1):
+            going = np.nonzero(cells >= j)[0]
+            rays = live[going]
+            apex = sub["first_prism"][rays] + (k_in + j * step)[going] * sub["pitch"][rays]
+            for side in (1.0, -1.0):  # the facet beyond the apex (s > s_k) rises with s, the other falls
+                # v = bottom + side m (s − apex) along the ray: v0 + t dv = bottom + side m (s0 + t ds − apex)
+                mg = m[going]
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    tf = (bottom[rays] + side * mg * (s0[rays] - apex) - v0[rays]) / (dv[rays] - side * mg * ds[rays])
+                s_hit = s0[rays] + tf * ds[rays]
+                ok = (tf > T_MIN) & (tf < t_sub[rays]) & (side * (s_hit - apex) >= -EPS)
+                ok &= (tf >= span_lo[going]) & (tf <= span_hi[going])
+                ok &= v0[rays] + tf * dv[rays] <= sub["half_v"][rays] + EPS
+                take = rays[ok]
+                t_sub[take] = tf[ok]
+                ns[take] = -side * mg[ok] / sec[going][ok]
+                nu[take] = 0.0
+                nv[take] = 1.0 / sec[going][ok]
+    t[has] = t_sub
+    for part, values in zip(normal, (ns, nu, nv), strict=True):
+        part[has] = values
