@@ -37,7 +37,6 @@ _LABELS = [
     (S.BULB, "spectrum_file", "Spectrum File (.csv)"),
     *((S.LENS, key, words) for key, words in _OPTICS.items()),
     *((S.PRISM_PLATE, key, words) for key, words in _OPTICS.items()),
-    (S.LIGHT_GUIDE, "enabled", "Light Guide"),
     (S.LIGHT_GUIDE, "led_ends", "LEDs At"),
     (S.LIGHT_GUIDE, "led_size", "LED Die Size"),
     (S.LIGHT_GUIDE, "led_gap", "LED Gap"),

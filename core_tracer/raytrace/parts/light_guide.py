@@ -96,8 +96,40 @@ def hit_guide(o: np.ndarray, d: np.ndarray, guide: GuideTable, lamp: np.ndarray)
     away near the back: that hit is dropped where its point lies in a groove, and the facets the ray
     crosses within the span, cell by cell, are offered instead (``_facets``)."""
     g = gathered(guide, lamp)
-    s0, u0, v0, ds, du, dv = to_guide(o, d, guide, lamp)
-    n = len(o)
+    frame = to_guide(o, d, guide, lamp)
+    t, normal = np.full(len(o), np.inf), np.zeros((len(o), 3))
+    near = np.nonzero(_meets_box(frame, g))[0]  # most rays pass far from a thin rod: the rest only for these
+    if len(near):
+        sub = {key: value[near] for key, value in g.items()}
+        t_near, n_frame = _hit_in_frame(tuple(part[near] for part in frame), sub)
+        t[near] = t_near
+        axis, across = rows(guide.axis, lamp.take(near)), rows(guide.across, lamp.take(near))
+        n_near = axis * n_frame[0][:, None] + across * n_frame[1][:, None]
+        n_near[:, 1] += n_frame[2]
+        put_rows(normal, near, n_near)
+    return t, normal
+
+
+def _meets_box(frame: tuple, g: dict) -> np.ndarray:
+    """Whether each ray meets the rod's bounding box (ahead of it): a cheap test before the exact one."""
+    s0, u0, v0, ds, du, dv = frame
+    t_near, t_far = np.zeros(len(s0)), np.full(len(s0), np.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for origin, direction, lo, hi in ((v0, dv, -g["half_v"], g["half_v"]), (u0, du, -g["half_u"], g["half_u"]),
+                                          (s0, ds, 0.0, g["length"])):
+            t_lo, t_hi = (lo - EPS - origin) / direction, (hi + EPS - origin) / direction
+            # a ray parallel to a slab: inside it for ever (NaN where it starts on a bound: kept) or never
+            parallel = direction == 0
+            outside = parallel & ((origin < lo - EPS) | (origin > hi + EPS))
+            np.fmax(t_near, np.where(parallel, np.where(outside, np.inf, 0.0), np.fmin(t_lo, t_hi)), out=t_near)
+            np.fmin(t_far, np.where(parallel, np.where(outside, -np.inf, np.inf), np.fmax(t_lo, t_hi)), out=t_far)
+    return (t_near <= t_far) & (t_far > T_MIN)
+
+
+def _hit_in_frame(frame: tuple, g: dict) -> tuple[np.ndarray, tuple]:
+    """``hit_guide`` in the guide's frame: t and the normal's (s, u, v) components."""
+    s0, u0, v0, ds, du, dv = frame
+    n = len(s0)
     # (axis of the normal in the guide frame: 0 s, 1 u, 2 v, 3 the cylinder's radial; its sign)
     enter, exit_ = np.full(n, -np.inf), np.full(n, np.inf)
     enter_axis, exit_axis = np.zeros(n, np.int8), np.zeros(n, np.int8)
@@ -162,10 +194,7 @@ def hit_guide(o: np.ndarray, d: np.ndarray, guide: GuideTable, lamp: np.ndarray)
     if len(has):
         _grooves(has, t, (ns, nu, nv), s0, v0, ds, dv, g, enter, exit_)
 
-    axis, across = rows(guide.axis, lamp), rows(guide.across, lamp)
-    normal = axis * ns[:, None] + across * nu[:, None]
-    normal[:, 1] += nv
-    return t, normal
+    return t, (ns, nu, nv)
 
 
 def _grooves(has, t, normal, s0, v0, ds, dv, g, enter, exit_) -> None:

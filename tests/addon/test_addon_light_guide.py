@@ -1,0 +1,89 @@
+"""A light-guide lamp built as Blender objects (docs/model.md §8.7a): the rod's mesh against the rod
+as the docs state it (written out again here, not taken from the add-on's mesh code), its LEDs, their
+materials from the photometric equivalents, the panel's Light Guide section, and a lamp without a
+guide keeping no guide objects."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from helpers import PRESETS
+
+import core_tracer
+
+pytestmark = pytest.mark.blender
+
+PRESET = PRESETS / "led-light-guide-tail-lamp.json"
+
+
+def _build(lamp_addon, bl_scene, scene: dict) -> dict:
+    import bpy
+
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    return {obj.get("lamp_part"): obj for obj in bl_scene.objects if obj.get("lamp_part")}
+
+
+def _local_mm(obj, lamp) -> np.ndarray:
+    n = len(obj.data.vertices)
+    co = np.empty(n * 3, dtype=np.float32)
+    obj.data.vertices.foreach_get("co", co)
+    m = np.array(obj.matrix_world)
+    world = (co.reshape(-1, 3).astype(np.float64) @ m[:3, :3].T + m[:3, 3]) * 1000.0
+    cx, cz = lamp["center"]
+    return world - np.array([cx, 0.0, cz])
+
+
+def _rod_height(s: np.ndarray, guide: dict) -> np.ndarray:
+    """The back of the rod at s from its first end, as docs/model.md §8.7a states it: V grooves of
+    depth δ whose facets rise at α, at the pitch, as many as fit, the row centred."""
+    depth, pitch, slope = guide["prism_depth"], guide["prism_pitch"], math.tan(math.radians(guide["prism_angle"]))
+    width, length = 2.0 * depth / slope, guide["length"]
+    count = int(math.floor((length - width) / pitch + 1e-9)) + 1
+    first = 0.5 * (length - (count - 1) * pitch)
+    apexes = first + pitch * np.arange(count)
+    half = guide["thickness"] / 2.0
+    return np.minimum(half, (half - depth + slope * np.abs(s[:, None] - apexes[None, :])).min(axis=1))
+
+
+def test_the_guide_lamp_is_built_with_its_rod_and_leds(lamp_addon, bl_scene):
+    scene = core_tracer.load_scene(PRESET)
+    lamp = scene["lamps"][0]
+    guide = lamp["light_guide"]
+    parts = _build(lamp_addon, bl_scene, scene)
+    rod, led = parts["lamps[0].light_guide"], parts["lamps[0].guide_led"]
+    points = _local_mm(rod, lamp)
+    cx, cz = guide["center"]
+    s = points[:, 0] - (cx - guide["length"] / 2)  # orientation 0: along x
+    u, v = points[:, 2] - cz, points[:, 1] - guide["depth"]
+    assert s.min() == pytest.approx(0.0, abs=1e-3) and s.max() == pytest.approx(guide["length"], abs=1e-3)
+    assert np.abs(u).max() == pytest.approx(guide["width"] / 2, abs=1e-3)
+    assert v.min() == pytest.approx(-guide["thickness"] / 2, abs=1e-3)
+    # every vertex on the back lies on the prisms' profile (the grooves exact), none above it
+    back = v > -guide["thickness"] / 2 + 1e-6
+    assert np.all(v[back] <= _rod_height(s[back], guide) + 2e-3)
+    assert np.any(v[back] < guide["thickness"] / 2 - guide["prism_depth"] + 1e-3)  # the grooves' bottoms
+    # an LED die at each end, a square of the die's side across the gap
+    die = _local_mm(led, lamp)
+    assert len(die) == 8
+    assert np.ptp(die[:, 2]) == pytest.approx(guide["led_size"], abs=1e-3)
+    assert die[:, 0].min() == pytest.approx(cx - guide["length"] / 2 - guide["led_gap"], abs=1e-3)
+    # materials from the photometric equivalents: the rod glass of PMMA's n_d, the LEDs emitting red
+    bsdf = rod.data.materials[0].node_tree.nodes["Light Guide BSDF"]
+    assert bsdf.inputs["IOR"].default_value == pytest.approx(1.491, abs=1e-3)
+    emission = led.data.materials[0].node_tree.nodes["LED Emission"]
+    color = emission.inputs["Color"].default_value
+    assert emission.inputs["Strength"].default_value > 0 and color[0] > 5 * color[1]
+
+
+def test_a_lamp_without_a_guide_keeps_no_guide_objects(lamp_addon, bl_scene):
+    scene = core_tracer.load_scene(PRESET)
+    _build(lamp_addon, bl_scene, scene)
+    raw = json.loads(PRESET.read_text())
+    raw["lamps"][0]["light_guide"]["enabled"] = False
+    parts = _build(lamp_addon, bl_scene, core_tracer.normalize(raw))
+    assert "lamps[0].light_guide" not in parts and "lamps[0].guide_led" not in parts
+    assert "lamps[0].lens" in parts
