@@ -442,6 +442,9 @@ def make_thumbnail(entry: PresetEntry, path: str | os.PathLike, size: int = THUM
         image = render_freeform(traced, load_meshes(entry.file, scene), size, size).image
     else:
         image = render(traced, size, size)
+    from ..images import glare
+
+    image = glare.apply(image, scene)  # the design's glare, as the CLI and Blender show it
     os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
     if scene.get("light_model") == "photometric":
         from ..images import photometric

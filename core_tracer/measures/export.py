@@ -96,13 +96,17 @@ def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], 
 
 
 def lamp_flux(scene: dict, lamps: Sequence[int] | None = None) -> float:
-    """The luminous flux in lm of the lit bulbs of ``lamps`` (None: all)."""
+    """The luminous flux in lm of the lit bulbs (or LED dies) of ``lamps`` (None: all)."""
     from ..raytrace.spectral import bulb_spectrum
+    from ..scene.led_array import LedArray, uses_leds
 
     total = 0.0
     for i, lamp in enumerate(scene["lamps"]):
         if (lamps is None or i in lamps) and lamp["bulb"]["on"]:
-            total += bulb_spectrum(lamp["bulb"], f"lamps[{i}].bulb")[0]
+            if uses_leds(lamp):  # the dies' flux, each into its half space
+                total += lamp["led"]["flux_lm"] * LedArray.of(lamp["led"]).count
+            else:
+                total += bulb_spectrum(lamp["bulb"], f"lamps[{i}].bulb")[0]
     return float(total)
 
 

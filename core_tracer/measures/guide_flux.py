@@ -1,9 +1,9 @@
 """A light guide's flux tally (docs/photometric.md, light guides): light traced forward from a
 guide's LED through the rod, counting the luminous flux that leaves through its far end face.
 
-The LED is the renderer's (``raytrace.spectral.guide_led_radiance``): a Lambertian square die of
-side a and radiance L(λ), flux Φ(λ) = π L a²; a photon starts at a uniform point of the die in a
-cosine-distributed direction about the guide's axis, carrying Φ / N. The rod's optics are the
+The light is the lamp's LED dies' (``light_tracing.led_photons``: a uniform point of a die, a
+cosine-distributed direction about its normal, carrying Φ(λ) f(θ, φ) / N), placed by the design
+facing the guide's first end face. The rod's optics are the
 renderer's own: its intersections (``parts.light_guide``), the Fresnel split per band and
 polarisation (``surfaces.at_dielectric``) and Beer–Lambert along the segments inside (eq. 2). Light
 that leaves the rod anywhere else, or goes back to the die, is not counted; a branch below the
@@ -16,7 +16,6 @@ a closed form (tests/photometry/test_light_guide.py).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -29,9 +28,7 @@ from ..raytrace.engine.surfaces import at_dielectric
 from ..raytrace.engine.walk import GUIDE_MAX_DEPTH
 from ..raytrace.parts import light_guide
 from ..raytrace.parts.base import Segments, put_rows, rows
-from .light_tracing import cosine_directions
-
-START_GAP = 1e-4  # mm: photons start this far in front of the end face at least (the face itself is t = 0)
+from .light_tracing import led_photons
 
 
 @dataclass(frozen=True)
@@ -45,25 +42,18 @@ class GuideFlux:
 
 def far_end_flux(scene: dict, lamp: int = 0, *, photons: int = 200_000, seed: int = 0,
                  bands: int | None = None) -> GuideFlux:
-    """The luminous flux of lamp ``lamp``'s guide LED (at the first end) that leaves the far end face."""
+    """The luminous flux of lamp ``lamp``'s LEDs that leaves its guide's far end face."""
     ctx = make_context(scene, 1, 1, bands=bands)
     lamps, guide = ctx.lamps, ctx.lamps.guide
     if guide is None or not guide.present[lamp]:
         raise ValueError(f"lamps[{lamp}] has no light guide")
     rng = np.random.default_rng(seed)
-    half, gap = float(guide.led_half[lamp]), max(float(guide.led_gap[lamp]), START_GAP)
-    axis, across, start = guide.axis[lamp], guide.across[lamp], guide.start[lamp]
-    u, v = rng.uniform(-half, half, photons), rng.uniform(-half, half, photons)
-    o = start - gap * axis + u[:, None] * across + v[:, None] * np.array([0.0, 1.0, 0.0])
-    d = cosine_directions(np.broadcast_to(axis, (photons, 3)), rng)
-    area = (2.0 * half * 1e-3) ** 2  # m²
-    flux = math.pi * guide.led_radiance[lamp] * area / photons  # W/nm per photon per band
-    lm_per_band = flux * ctx.photometric.to_xyz[:, 1]  # lm per photon per band of unit attenuation
-    k = np.ones((photons, ctx.channels))
-    rays = Rays(pix=np.arange(photons), lamp=np.full(photons, lamp), o=o, d=d, k=k,
-                medium=np.full(photons, P.IN_AIR, np.int8), src=np.full(photons, P.GUIDE_LED, np.int8),
-                parent=UNRECORDED, branch=UNRECORDED, seen_reflector=np.zeros(photons, bool), k_s=0.5 * k,
-                travelled=UNRECORDED)  # unpolarised light: half of it s-polarised
+    emitted = led_photons(ctx, lamp, photons, rng)
+    if emitted is None:
+        raise ValueError(f"lamps[{lamp}] has no LEDs to light its guide")
+    rays, flux = emitted
+    lm_per_photon = flux * ctx.photometric.to_xyz[:, 1]  # lm per photon and band at unit attenuation
+    axis, start = guide.axis[lamp], guide.start[lamp]
     per_photon = np.zeros(photons)
     depth = 0
     length = float(guide.length[lamp])
@@ -85,14 +75,14 @@ def far_end_flux(scene: dict, lamp: int = 0, *, photons: int = 200_000, seed: in
         out = np.nonzero(partial & face.from_inside & (s_hit >= length - 1e-6))[0]
         if len(out):
             gone = face.through(out)
-            np.add.at(per_photon, gone.pix, gone.k @ lm_per_band)
+            np.add.at(per_photon, gone.pix, (gone.k * rows(lm_per_photon, gone.pix)).sum(axis=1))
         entering = np.nonzero(partial & ~face.from_inside & (face.split.transmitted.max(axis=1) > 0))[0]
         children = [face.reflected()] + ([face.through(entering)] if len(entering) else [])
         children = [c for c in children if len(c)]
         rays = concat(children) if len(children) > 1 else (children[0] if children else rays.take(np.zeros(0, int)))
     total = float(per_photon.sum())
     stderr = float(np.sqrt(photons / max(photons - 1, 1) * ((per_photon**2).sum() - total**2 / photons)))
-    return GuideFlux(float(flux @ ctx.photometric.to_xyz[:, 1]) * photons, total, stderr, len(rays), depth)
+    return GuideFlux(float(lm_per_photon.sum()), total, stderr, len(rays), depth)
 
 
 def _absorbed(rays: Rays, t: np.ndarray, coefficients: np.ndarray) -> Rays:

@@ -13,6 +13,9 @@ The sources of the photometric model (``raytrace.spectral``), each sampled by it
 - the bulb, a Lambertian sphere of radiance L(λ) and radius r: flux Φ(λ) = π L · 4π r²; a photon
   starts at a uniform point of the sphere in a cosine-distributed direction about its normal
   (the normal plus a uniform unit vector, normalised), carrying Φ / N;
+- the LED dies (a lamp lit by LEDs has no bulb and no glow): flat, of radiance L_0(λ) f(θ, φ)
+  (``parts.led_die.emitted``); a photon starts at a uniform point of a die in a cosine-distributed
+  direction about its normal, carrying π L_0 f A_dies / N;
 - the reflector's glow, which the renderer adds at every reflector hit as a radiance
   L_g(x, ω) = ρ(λ) s (n + 8)/(8π) cos^n β · Ω_b(x) cos θ_b · L(λ) (``surfaces.at_reflector`` and
   ``bulb_irradiance``: the glow share s on the normalised Blinn lobe of the bulb's irradiance): a
@@ -46,6 +49,7 @@ from ..raytrace.engine.context import Context
 from ..raytrace.engine.rays import CUTOFF, NOT_DEFERRED, UNRECORDED, Rays, concat
 from ..raytrace.engine.surfaces import at_dielectric, at_plate_face, bulb_irradiance
 from ..raytrace.engine.walk import MAX_DEPTH, intersect, normals_at
+from ..raytrace.parts import led_die
 from ..raytrace.parts.base import put_rows, rows
 from ..raytrace.parts.reflector import reflector_normal
 from ..scene.reading import SceneError
@@ -125,6 +129,30 @@ def bulb_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> t
     rays = _rays(lamp, o, d, ctx.channels, P.BULB).take(free)
     rays.pix = free
     return rays, np.broadcast_to(flux / n, (n, ctx.channels))
+
+
+def led_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> tuple[Rays, np.ndarray] | None:
+    """``n`` photons from the LED dies of ``lamp`` (lamp frame) and their flux per band (n, K), W/nm;
+    None for a lamp lit by its bulb. A photon leaves a uniform point of a uniformly chosen die in a
+    cosine-distributed direction about its normal, carrying Φ_dies(λ) f(θ, φ) / N: the radiance
+    L_0(λ) f(θ, φ) of ``parts.led_die.emitted`` sampled with the pdf cos θ / π, so that the flux is
+    π L_0 A per die whatever the pattern (f's mean over that pdf is 1, ``photometry.far_field``)."""
+    lamps = ctx.lamps
+    columns, rows_ = int(lamps.led_columns[lamp]), int(lamps.led_rows[lamp])
+    if columns == 0:
+        return None
+    half, pitch = lamps.led_half[lamp], lamps.led_pitch[lamp]
+    across, up, normal = lamps.led_across[lamp], lamps.led_up[lamp], lamps.led_normal[lamp]
+    i = rng.integers(0, columns, n) - (columns - 1) / 2.0
+    j = rng.integers(0, rows_, n) - (rows_ - 1) / 2.0
+    a = i * pitch[0] + rng.uniform(-half[0], half[0], n)
+    b = j * pitch[1] + rng.uniform(-half[1], half[1], n)
+    o = lamps.led_center[lamp] + a[:, None] * across + b[:, None] * up
+    index = np.full(n, lamp)
+    d = cosine_directions(np.broadcast_to(normal, (n, 3)), rng)
+    area = columns * rows_ * 4.0 * half[0] * half[1] * 1e-6  # m²
+    radiance = led_die.emitted(lamps, index, -d)  # the luminance seen looking back along the light
+    return _rays(lamp, o, d, ctx.channels, P.LED), radiance * (math.pi * area / n)
 
 
 def glow_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> tuple[Rays, np.ndarray] | None:
@@ -268,10 +296,10 @@ def traced_beam(scene: dict, angles: Sequence[tuple[float, float]],
     for lamp in sorted({i for g in groups for i in g}):
         columns = len(targets) + 1  # the last counts every branch that leaves: the flux out
         tally = Tally.empty(columns)
-        if not ctx.lamps.bulb_intensity[lamp].any():
+        if not (ctx.lamps.bulb_intensity[lamp].any() or ctx.lamps.led_radiance[lamp].any()):
             per_lamp[lamp] = (np.zeros(columns), np.zeros(columns), np.zeros((columns, 3)))
             continue
-        for source in (bulb_photons, glow_photons):
+        for source in (bulb_photons, glow_photons) if ctx.lamps.has_bulb[lamp] else (led_photons,):
             done = 0
             while done < photons:
                 n = min(batch, photons - done)

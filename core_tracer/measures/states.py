@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..scene.led_array import LedArray, uses_leds
 from ..scene.reading import SceneError
 
 SURROUNDINGS = "surroundings"
@@ -67,7 +68,12 @@ def states_of(scene: dict) -> list[State]:
     out = [State(SURROUNDINGS, "Surroundings (sun, sky, street light)", None, "", 1.0, "", True)]
     for i, lamp in enumerate(scene["lamps"]):
         bulb = lamp["bulb"]
-        if photometric and bulb.get("type", "custom") != "custom":
+        if uses_leds(lamp):  # the dies, switched by the lamp's bulb.on
+            leds = LedArray.of(lamp["led"])
+            rendered = float(lamp["led"]["flux_lm"]) * leds.count if photometric else 1.0
+            out.append(State(f"lamps[{i}].on", f"{_lamp_name(scene, i)} · {leds.count} LEDs", i, "on", rendered,
+                             "lm" if photometric else "", bool(bulb["on"])))
+        elif photometric and bulb.get("type", "custom") != "custom":
             from ..photometry.sources import BULB_TYPES
 
             kind = BULB_TYPES[bulb["type"]]

@@ -1,6 +1,9 @@
 """Light sources: spectra (incandescent, amber-coated, LEDs, measured CSV), named bulbs, and the
 spectral radiance of a bulb of given flux.
 
+An LED die is a flat Lambertian emitter of area A radiating Φ into its half space: L_v = Φ / (π A)
+(``die_spectral_radiance``; a far-field file reshapes it, ``far_field``).
+
 A bulb in the tracer is a Lambertian sphere of radius r: a sphere radiating flux Φ uniformly has
 exitance M = Φ / (4π r²) and luminance L_v = M / π = Φ / (4π² r²) (r in metres, L_v in cd/m²).
 ``bulb_spectral_radiance`` gives that luminance the bulb's spectral shape, band by band, scaled
@@ -237,3 +240,19 @@ def bulb_spectral_radiance(flux_lm: float, spectrum: Spectrum, radius_mm: float,
     """(K,) band-mean spectral radiance in W/(m² sr nm) of a Lambertian sphere bulb of flux
     ``flux_lm``: its luminance Φ/(4π² r²) with the spectral shape of ``spectrum``."""
     return bulb_luminance(flux_lm, radius_mm) * spectral_shape(spectrum, bands)
+
+
+def die_luminance(flux_lm: float, area_mm2: float) -> float:
+    """Luminance in cd/m² of a flat Lambertian die of area ``area_mm2`` emitting ``flux_lm`` into the
+    half space it faces: M = Φ / A and L = M / π."""
+    if not (np.isfinite(flux_lm) and flux_lm >= 0):
+        raise ValueError(f"LED flux: {flux_lm!r} lm is not 0 or more")
+    if not (np.isfinite(area_mm2) and area_mm2 > 0):
+        raise ValueError(f"LED die area: {area_mm2!r} mm2 is not above 0")
+    return float(flux_lm / (math.pi * area_mm2 * 1e-6))
+
+
+def die_spectral_radiance(flux_lm: float, spectrum: Spectrum, area_mm2: float, bands: Bands) -> np.ndarray:
+    """(K,) band-mean spectral radiance in W/(m² sr nm) of a flat Lambertian die of flux ``flux_lm``:
+    its luminance Φ/(π A) with the spectral shape of ``spectrum``."""
+    return die_luminance(flux_lm, area_mm2) * spectral_shape(spectrum, bands)

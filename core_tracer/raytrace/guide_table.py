@@ -1,11 +1,11 @@
 """The light guides of a design's lamps as arrays indexed by lamp number (docs/photometric.md, light
-guides): where each guide lies in its lamp's frame, its cross-section, its extraction prisms and its
-LEDs. A lamp without a guide has ``present`` 0 and no ray meets its row."""
+guides): where each guide lies in its lamp's frame, its cross-section and its extraction prisms (its
+LEDs are the lamp's own dies). A lamp without a guide has ``present`` 0 and no ray meets its row."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -30,17 +30,10 @@ class GuideTable:
     slope: np.ndarray  # tan of the facets' angle to the axis
     prisms: np.ndarray  # (L,) number of prisms
     first_prism: np.ndarray  # s of the first prism's apex line
-    led_half: np.ndarray  # half the die's side
-    led_gap: np.ndarray  # air between die and end face
-    led_ends: np.ndarray  # 1: an LED before s = 0; 2: also one beyond s = length
-    led_radiance: np.ndarray  # (L, K) the die's radiance per band (photometric), (L, 1) zeros before
 
     @property
     def any(self) -> bool:
         return bool(self.present.any())
-
-    def with_radiance(self, radiance: np.ndarray) -> GuideTable:
-        return replace(self, led_radiance=np.asarray(radiance, dtype=np.float64))
 
     @classmethod
     def from_scene(cls, scene: dict) -> GuideTable:
@@ -65,8 +58,7 @@ def _row(guide: dict | None) -> dict:
     if not guide or not guide.get("enabled"):
         zero3 = [0.0, 0.0, 0.0]
         return dict(present=0.0, start=zero3, axis=[1.0, 0.0, 0.0], across=[0.0, 0.0, 1.0], round=1.0, half_u=1.0,
-                    half_v=1.0, length=1.0, pitch=1.0, prism_depth=0.0, slope=1.0, prisms=0.0, first_prism=0.0,
-                    led_half=0.0, led_gap=0.0, led_ends=1.0, led_radiance=[0.0])
+                    half_v=1.0, length=1.0, pitch=1.0, prism_depth=0.0, slope=1.0, prisms=0.0, first_prism=0.0,)
     theta = math.radians(guide["orientation"])
     axis = [math.cos(theta), 0.0, math.sin(theta)]
     across = [-math.sin(theta), 0.0, math.cos(theta)]
@@ -81,6 +73,4 @@ def _row(guide: dict | None) -> dict:
     count, first = prism_layout(length, guide["prism_pitch"], guide["prism_depth"], slope)
     return dict(present=1.0, start=start, axis=axis, across=across, round=float(guide["section"] == "round"),
                 half_u=half_u, half_v=half_v, length=length, pitch=guide["prism_pitch"],
-                prism_depth=guide["prism_depth"] if count else 0.0, slope=slope, prisms=float(count),
-                first_prism=first, led_half=0.5 * guide["led_size"], led_gap=guide["led_gap"],
-                led_ends=2.0 if guide["led_ends"] == "both" else 1.0, led_radiance=[0.0])
+                prism_depth=guide["prism_depth"] if count else 0.0, slope=slope, prisms=float(count),first_prism=first)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.derived import cut_sphere_radius, flute_radius, lamp_geometry, lens_absorption, lens_cylinder
+from ..scene.led_array import LedArray, uses_leds
 from ..scene.outline import Outline
 from ..scene.prism_profile import ring_slopes
 from .guide_table import GuideTable
@@ -82,14 +83,34 @@ class LampTable:
     housing_color: np.ndarray  # (L, 3)
     ring_slopes: np.ndarray  # (L, most rings) facet slope of each ring (``prism_profile``), 0 past the last
     ring_count: np.ndarray  # (L,) rings of each plate (0 without one)
+    # The LED dies (``scene.led_array``; docs/photometric.md, "LED sources"): a lamp whose source is
+    # its LEDs has led_columns > 0, its bulb and socket out of reach (``has_bulb`` 0, bulb radius 0).
+    has_bulb: np.ndarray  # 1 where the lamp's source is its bulb
+    led_center: np.ndarray  # (L, 3) the array's centre
+    led_normal: np.ndarray  # (L, 3) the side the dies emit from
+    led_across: np.ndarray  # (L, 3)
+    led_up: np.ndarray  # (L, 3)
+    led_half: np.ndarray  # (L, 2) half width and half height of a die
+    led_pitch: np.ndarray  # (L, 2)
+    led_columns: np.ndarray  # dies across (0: no LEDs)
+    led_rows: np.ndarray
+    # The luminance of a die seen straight on, per channel: the paper mode's bulb intensity (RGB),
+    # photometric: the spectral radiance of a Lambertian die of its flux (``spectral.led_radiance``);
+    # times ``led_patterns[lamp].factor`` in other directions. 0 when the lamp is off.
+    led_radiance: np.ndarray  # (L, 3) or (L, K)
     # The photometric mode's values per lamp and band (``spectral.photometric_lamps``; None in the
     # paper mode): the lens's and the plate's refractive index per band for Fresnel (their ``ior``
     # being n_d, which the rays' directions follow), and the reflector finish's spectral reflectance.
     ior_bands: np.ndarray | None = None
     plate_ior_bands: np.ndarray | None = None
     reflector_bands: np.ndarray | None = None
+    led_patterns: tuple = ()  # per lamp its dies' ``photometry.far_field.Pattern`` (() in the paper mode: Lambertian)
     # The lamps' light guides (``guide_table``); None when no lamp has one (every lamp renders as before).
     guide: GuideTable | None = None
+
+    @property
+    def any_leds(self) -> bool:
+        return bool(self.led_columns.any())
 
     @classmethod
     def from_scene(cls, scene: dict) -> LampTable:
@@ -122,6 +143,7 @@ class LampTable:
                 cylindrical=cyl is not None, **{"cyl_" + k: math.nan if cyl is None else cyl[k] for k in CYLINDER_KEYS},
             )
             row.update(_plate_row(lamp, g))
+            row.update(_led_row(lamp, row))
             rows.append(row)
         slopes = [r.pop("ring_slopes") for r in rows]
         table = np.zeros((len(rows), max(len(s) for s in slopes)))
@@ -130,6 +152,20 @@ class LampTable:
         guide = GuideTable.from_scene(scene)
         return cls(ring_slopes=table, guide=guide if guide.any else None,
                    **{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
+
+
+def _led_row(lamp: dict, row: dict) -> dict:
+    """The LED entries of one lamp's row; a lamp lit by LEDs has no bulb to meet, glow toward or
+    trace light from (its radius 0), and the paper's Blinn glow toward the bulb is off."""
+    if not uses_leds(lamp):
+        zero3 = [0.0, 0.0, 0.0]
+        return dict(has_bulb=1.0, led_center=zero3, led_normal=[0.0, -1.0, 0.0], led_across=[1.0, 0.0, 0.0],
+                    led_up=[0.0, 0.0, 1.0], led_half=[0.0, 0.0], led_pitch=[1.0, 1.0], led_columns=0, led_rows=0,
+                    led_radiance=zero3)
+    leds = LedArray.of(lamp["led"])
+    return dict(has_bulb=0.0, bulb_radius=0.0, scatter=0.0, led_center=leds.center, led_normal=leds.normal,
+                led_across=leds.across, led_up=leds.up, led_half=leds.half_size, led_pitch=leds.pitch,
+                led_columns=leds.columns, led_rows=leds.rows, led_radiance=row["bulb_intensity"])
 
 
 def _plate_row(lamp: dict, g: dict) -> dict:

@@ -97,37 +97,35 @@ PLATE_TABLE: dict[int, tuple[frozenset[int], frozenset[int]]] = {
     19: (frozenset(), frozenset()),
 }
 
-# The light guide's classes (docs/photometric.md, light guides), numbered on from the plate's. A guide
-# lamp has no prism plate: its rod is the lamp's second dielectric (IN_GUIDE is the plate's medium).
+# The light guide's classes (docs/model.md §8.7a), numbered on from the plate's. A guide lamp has no
+# prism plate: its rod is the lamp's second dielectric (IN_GUIDE is the plate's medium). Its LEDs are
+# the lamp's own dies (``LED``): a ray leaving the rod that reaches them is ⑪, as the bulb.
 AIR_TO_GUIDE = 20  # ⑳ from any surface of the lamp's air to the guide's surface
 IN_GUIDE_SEGMENT = 21  # ㉑ from the guide's surface to itself, inside the rod
-GUIDE_TO_LED = 22  # ㉒ from the guide's surface to its LED, in the air (ends)
-GUIDE_TO_LAMP = 23  # ㉓ from the guide's surface to the lamp's other parts, in the air
+GUIDE_TO_LAMP = 22  # ㉒ from the guide's surface to the lamp's other parts (or its LEDs: ⑪), in the air
 
 
 def _guide_table() -> dict[int, tuple[frozenset[int], frozenset[int]]]:
     """Table 1 continued for the guide: every branch that goes on in the lamp's air can meet the rod
-    (⑳) or its LED (㉒); the rod's surface reflects into the medium the ray came from and transmits
-    into the other; ㉓ ends on the lamp's other parts as the air classes that reach them do."""
+    (⑳); the rod's surface reflects into the medium the ray came from and transmits into the other;
+    ㉒ reaches the lamp's other parts as the air classes that reach them do."""
     air = {3, 4, 5, 9, 11, 12, 13, 14, 18}
     table: dict[int, tuple[frozenset[int], frozenset[int]]] = {}
     for source in (TABLE_1, PLATE_TABLE):
         for parent, branches in source.items():
-            table[parent] = tuple(frozenset({AIR_TO_GUIDE, GUIDE_TO_LED}) if children & air else frozenset()
+            table[parent] = tuple(frozenset({AIR_TO_GUIDE}) if children & air else frozenset()
                                   for children in branches)
-    into_air = frozenset({AIR_TO_GUIDE, GUIDE_TO_LED, GUIDE_TO_LAMP})
+    into_air = frozenset({AIR_TO_GUIDE, TO_BULB, GUIDE_TO_LAMP})
     table[AIR_TO_GUIDE] = (into_air, frozenset({IN_GUIDE_SEGMENT}))
     table[IN_GUIDE_SEGMENT] = (frozenset({IN_GUIDE_SEGMENT}), into_air)
-    table[GUIDE_TO_LED] = (frozenset(), frozenset())
-    # ㉓ reaches a cut (as ⑤ does), the reflector (as ④), or ends on the wall, bulb or socket
-    table[GUIDE_TO_LAMP] = (frozenset({3, 4, 5, 7, 9, 11, 12, 13, AIR_TO_GUIDE, GUIDE_TO_LED}),
-                            frozenset({6, 7, 8}))
+    # ㉒ reaches a cut (as ⑤ does), the reflector (as ④), or ends on the wall, bulb or socket
+    table[GUIDE_TO_LAMP] = (frozenset({3, 4, 5, 7, 9, 11, 12, 13, AIR_TO_GUIDE}), frozenset({6, 7, 8}))
     return table
 
 
 GUIDE_TABLE = _guide_table()
 
-ENDS = frozenset({7, 10, 11, 12, 19, 22})
+ENDS = frozenset({7, 10, 11, 12, 19})
 
 REFLECTED, TRANSMITTED = 0, 1
 
@@ -142,7 +140,8 @@ def allowed(parent: int, branch: int, child: int) -> bool:
 
 
 # Surfaces a segment can start from or reach, used to classify it (the plate's after the paper's).
-OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING, GUIDE, GUIDE_LED = range(12)
+OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING, LED, GUIDE = range(12)
+# LED: a lamp's LED dies, the light source in place of the bulb: reaching them is ⑪ as the bulb
 IN_LENS, IN_AIR, IN_PLATE = 0, 1, 2
 IN_GUIDE = IN_PLATE  # a lamp has a prism plate or a light guide, never both: the guide's rod is its second dielectric
 
@@ -155,6 +154,8 @@ def _build_lookup() -> np.ndarray:
     table[IN_LENS, CUT, OUTER] = CUT_TO_LENS_OUTER
     table[IN_LENS, CUT, CUT] = CUT_TO_CUT_IN_LENS
     table[IN_LENS, CUT, WALL] = TO_SIDE_WALL
+    for src in (CUT, REFLECTOR, RINGS):
+        table[IN_AIR, src, LED] = TO_BULB
     for src in (CUT, REFLECTOR):
         table[IN_AIR, src, BULB] = TO_BULB
         table[IN_AIR, src, SOCKET] = TO_SOCKET
@@ -178,7 +179,7 @@ def _build_lookup() -> np.ndarray:
     # the light guide
     table[IN_AIR, :, GUIDE] = AIR_TO_GUIDE
     table[IN_GUIDE, GUIDE, GUIDE] = IN_GUIDE_SEGMENT
-    table[IN_AIR, :, GUIDE_LED] = GUIDE_TO_LED
+    table[IN_AIR, GUIDE, LED] = TO_BULB
     for surface in (CUT, REFLECTOR, WALL, BULB, SOCKET, PLATE_FRONT, HOUSING):
         table[IN_AIR, GUIDE, surface] = GUIDE_TO_LAMP
     return table

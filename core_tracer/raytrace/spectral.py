@@ -12,6 +12,9 @@ What differs from the paper's model, surface by surface:
 
 - bulb: a Lambertian sphere of flux Φ, radiance Φ / (4π² r²) with its spectrum's shape
   (``photometry.sources.bulb_spectral_radiance``), 0 when off;
+- LED dies (in place of the bulb): flat, of area A and flux Φ each, radiance Φ / (π A) head-on with
+  their spectrum's shape times the far-field file's f(θ, φ) (``photometry.far_field``; 1 when
+  Lambertian); the reflector's glow has no LED term (docs/photometric.md);
 - lens and prism plate: Fresnel per band and per polarisation (the rays carry their s-polarised
   share, ``Rays.k_s``) with n(λ) from the material's n_d and Abbe number; the rays' directions
   follow n_d (dispersion in Fresnel only: the measured difference on the cut lenses is in
@@ -37,10 +40,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..images import display
-from ..photometry import daylight, materials, output, sources
+from ..photometry import daylight, far_field, materials, output, sources
 from ..photometry.bands import Bands
 from ..photometry.cie import xyz_matrix
 from ..photometry.spectrum import Spectrum
+from ..scene.led_array import LedArray, uses_leds
 from ..scene.reading import SceneError
 from . import optics
 from .lamp_table import LampTable
@@ -163,6 +167,42 @@ def bulb_radiance(bulb: dict, bands: Bands, where: str = "bulb") -> np.ndarray:
         return np.zeros(bands.k)
     flux, spectrum = bulb_spectrum(bulb, where)
     return sources.bulb_spectral_radiance(flux, spectrum, bulb["radius"], bands)
+
+
+def led_spectrum(led: dict, where: str) -> Spectrum:
+    """The spectrum of a normalised ``led`` section's dies."""
+    if led["spectrum"] == "led":
+        return sources.led(led["led_peak_nm"], led["led_width_nm"])
+    if led["spectrum"] == "file":
+        return _read_curve(led["spectrum_file"], f"{where}.spectrum_file")
+    return sources.named_spectrum(led["spectrum"])
+
+
+def led_radiance(lamp: dict, bands: Bands, where: str) -> np.ndarray:
+    """(K,) spectral radiance of one of a lamp's LED dies seen head-on if it were Lambertian:
+    L = Φ / (π A) with its spectrum's shape (``photometry.sources.die_spectral_radiance``); 0 when the
+    lamp is off or lit by its bulb."""
+    if not (uses_leds(lamp) and lamp["bulb"]["on"]):
+        return np.zeros(bands.k)
+    led = lamp["led"]
+    area = LedArray.of(led).die_area_mm2
+    return sources.die_spectral_radiance(led["flux_lm"], led_spectrum(led, f"{where}.led"), area, bands)
+
+
+def led_pattern(lamp: dict, where: str) -> far_field.Pattern:
+    """The dies' luminance relative to a Lambertian die's (``photometry.far_field``): 1 for a
+    Lambertian die, from the far-field file (its full path, ``scene.beside``) otherwise."""
+    led = lamp.get("led")
+    if not uses_leds(lamp) or led["distribution"] == "lambertian":
+        return far_field.Pattern.lambertian()
+    path, field = led["far_field_file"], f"{where}.led.far_field_file"
+    if not os.path.isabs(path):
+        raise SceneError(field, f'"{path}" was not found beside the document; allowed an .ies or .ldt file beside '
+                                "the JSON, given when the document is loaded from its file")
+    try:
+        return far_field.Pattern.of(far_field.read_far_field(path))
+    except ValueError as e:
+        raise SceneError(field, str(e)) from None
 
 
 def index_of(part: dict) -> tuple[float, float]:
@@ -299,7 +339,8 @@ def photometric_lamps(table: LampTable, scene: dict, bands: Bands) -> LampTable:
     zeros = np.zeros((n, k))
     rows: dict[str, list] = {key: [] for key in ("ior", "ior_bands", "absorption", "plate_ior", "plate_ior_bands",
                                                   "plate_absorption", "bulb_intensity", "reflector_bands",
-                                                  "reflectance", "scatter")}
+                                                  "reflectance", "scatter", "led_radiance")}
+    patterns = []
     for i, lamp in enumerate(scene["lamps"]):
         where = f"lamps[{i}]"
         lens, refl = lamp["lens"], lamp["reflector"]
@@ -317,29 +358,19 @@ def photometric_lamps(table: LampTable, scene: dict, bands: Bands) -> LampTable:
             rows["plate_ior"].append(1.0)
             rows["plate_ior_bands"].append(np.ones(k))
             rows["plate_absorption"].append(np.zeros(k))
-        rows["bulb_intensity"].append(bulb_radiance(lamp["bulb"], bands, f"{where}.bulb"))
+        rows["bulb_intensity"].append(bulb_radiance(lamp["bulb"], bands, f"{where}.bulb")
+                                      if not uses_leds(lamp) else np.zeros(k))
+        rows["led_radiance"].append(led_radiance(lamp, bands, where))
+        patterns.append(led_pattern(lamp, where))
         rows["reflector_bands"].append(finish_reflectance(refl, bands))
         share = refl["scatter_share"]
         rows["reflectance"].append(1.0 - share)
         # the glow's share on the normalised Blinn lobe (n + 8)/(8 pi) (Akenine-Moeller et al.,
         # Real-Time Rendering, 3rd ed. 2008, eq. 7.49)
-        rows["scatter"].append(share * (refl["shininess"] + 8.0) / (8.0 * math.pi))
+        rows["scatter"].append(share * (refl["shininess"] + 8.0) / (8.0 * math.pi) if not uses_leds(lamp) else 0.0)
     values = {key: np.array(value, dtype=np.float64) for key, value in rows.items()}
-    if table.guide is not None:
-        values["guide"] = table.guide.with_radiance([guide_led_radiance(lamp.get("light_guide", {}), bands)
-                                                     for lamp in scene["lamps"]])
-    return replace(table, **values, wall_color=zeros, lens_diffuse=zeros, reflector_color=zeros,
-                   socket_color=zeros, housing_color=zeros)
-
-
-def guide_led_radiance(guide: dict, bands: Bands) -> np.ndarray:
-    """(K,) spectral radiance of a light guide's LED die, W/(m² sr nm): a Lambertian square of side a
-    emitting Φ into its half space has the luminance Φ / (π a²); 0 without a guide."""
-    if not guide.get("enabled"):
-        return np.zeros(bands.k)
-    side = guide["led_size"] * 1e-3  # m
-    luminance = guide["led_flux_lm"] / (math.pi * side * side)
-    return luminance * sources.spectral_shape(sources.led(guide["led_peak_nm"], guide["led_width_nm"]), bands)
+    return replace(table, **values, led_patterns=tuple(patterns), wall_color=zeros, lens_diffuse=zeros,
+                   reflector_color=zeros, socket_color=zeros, housing_color=zeros)
 
 
 def _read_curve(path: str, where: str) -> Spectrum:

@@ -16,6 +16,7 @@ from .reading import SceneError
 from .safe_text import printable
 
 ENVIRONMENT_SUFFIXES = (".exr", ".hdr")
+FAR_FIELD_SUFFIXES = (".ies", ".ldt")  # an LED's far-field file (spec.FAR_FIELD_SUFFIXES)
 
 
 def check_plain_name(name: str, suffixes: Sequence[str], where: str) -> None:
@@ -69,7 +70,8 @@ def environment_file(document: str | os.PathLike, env: dict) -> str | None:
 
 def spectrum_files(document: str | os.PathLike, scene: dict) -> dict[tuple[int, str, str], str]:
     """The measured curves (.csv) a normalised photometric scene names beside ``document``, by (lamp,
-    section, key): a bulb's ``spectrum_file``, a lens's or prism plate's ``filter_file``; each
+    section, key): a bulb's ``spectrum_file``, a lens's or prism plate's ``filter_file``, an LED
+    section's ``spectrum_file`` and ``far_field_file``; each
     confined to the document's folder as ``environment_file`` is (none in the paper mode)."""
     found: dict[tuple[int, str, str], str] = {}
     if scene.get("light_model") != "photometric":
@@ -82,12 +84,25 @@ def spectrum_files(document: str | os.PathLike, scene: dict) -> dict[tuple[int, 
             named.append(("lens", "filter_file"))
         if lamp.get("collection", "reflector") == "prism_plate" and lamp["prism_plate"]["filter"] == "file":
             named.append(("prism_plate", "filter_file"))
+        if lamp.get("source", "bulb") == "led":
+            named += led_files(lamp["led"])
         for section, key in named:
             where = f"lamps[{i}].{section}.{key}"
             name = lamp[section][key]
-            check_plain_name(name, (".csv",), where)
-            found[(i, section, key)] = path_beside(document, name, where, "a .csv", "")[0]
+            suffixes = FAR_FIELD_SUFFIXES if key == "far_field_file" else (".csv",)
+            check_plain_name(name, suffixes, where)
+            found[(i, section, key)] = path_beside(document, name, where, " or ".join(suffixes), "")[0]
     return found
+
+
+def led_files(led: dict) -> list[tuple[str, str]]:
+    """(section, key) of the files an LED section reads: its spectrum and its far field."""
+    named = []
+    if led["spectrum"] == "file":
+        named.append(("led", "spectrum_file"))
+    if led["distribution"] == "file":
+        named.append(("led", "far_field_file"))
+    return named
 
 
 def with_spectrum_files(document: str | os.PathLike, scene: dict) -> dict:

@@ -10,6 +10,8 @@ import math
 from . import spec as S
 from .bulb_checks import HALVINGS, check_bulb
 from .derived import body_wraps, lamp_geometry, lens_cylinder, tooth_height
+from .led_array import uses_leds
+from .led_checks import check_leds
 from .messages import interval, rounded, show_value
 from .outline import Outline
 from .prism_checks import check_prism_plate
@@ -89,7 +91,10 @@ def check_geometry(scene: dict) -> None:
         else:
             if g["vertex"] > body["depth"]:
                 _reflector_too_deep(scene, i, g)
-            check_bulb(lamp, g, where)
+            if not uses_leds(lamp):
+                check_bulb(lamp, g, where)
+        if uses_leds(lamp):
+            check_leds(lamp, g, where)
         rs = lamp["socket"]["radius"]
         rs_hi = min(shape.half_w, shape.half_h)
         if rs >= rs_hi:

@@ -1,6 +1,6 @@
 """The rules of a light guide (docs/photometric.md, light guides) that relate several fields: the
-photometric mode, no prism plate beside it, prisms that fit the rod and each other, an LED die that
-fits the end face, a rod behind the lens's cuts. Each raises ``SceneError`` naming the field to change."""
+photometric mode, the lamp's LEDs to light it, no prism plate beside it, prisms that fit the rod and
+each other, a rod behind the lens's cuts. Each raises ``SceneError`` naming the field to change."""
 
 from __future__ import annotations
 
@@ -22,6 +22,9 @@ def check_light_guide(scene: dict, i: int) -> None:
     if scene.get("light_model", "paper") != "photometric":
         raise SceneError(f"{where}.enabled", 'a light guide needs light_model "photometric"; allowed false in the '
                                              "paper mode")
+    if lamp.get("source", "bulb") != "led":
+        raise SceneError(f"{where}.enabled", 'a light guide is lit by the lamp\'s LEDs; allowed with source "led" '
+                                             "(the led section placed facing an end face)")
     if lamp.get("collection", "reflector") == "prism_plate":
         raise SceneError(f"{where}.enabled", "a lamp with a prism plate cannot have a light guide too; allowed false "
                                              'with collection "prism_plate"')
@@ -41,11 +44,6 @@ def check_light_guide(scene: dict, i: int) -> None:
             raise SceneError(f"{where}.prism_pitch", f"{pitch:g} gives more than {S.MAX_GUIDE_PRISMS} prisms along "
                                                      f"{guide['length']:g} mm; allowed at least "
                                                      f"{guide['length'] / S.MAX_GUIDE_PRISMS:.3g} mm")
-    # the die within the end face: a square inside the circle or the rectangle
-    face = guide["diameter"] / math.sqrt(2.0) if round_rod else min(guide["width"], guide["thickness"])
-    if guide["led_size"] > face:
-        raise SceneError(f"{where}.led_size", f"{guide['led_size']:g} is larger than the guide's end face; allowed "
-                                              f"(0, {rounded(face, False)}] mm")
     front = guide["depth"] - 0.5 * thickness
     apexes = lamp_geometry(lamp)["plane_b"]
     if front <= apexes:

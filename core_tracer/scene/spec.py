@@ -362,6 +362,51 @@ SOCKET = Section(
     "The cylindrical socket from the reflector vertex to the bulb centre",
 )
 
+# The LED source (docs/photometric.md, "LED sources"): flat emitting dies instead of the bulb.
+LIGHT_SOURCES = ("bulb", "led")
+LED_SPECTRA = ("red_led", "amber_led", "white_led", "led", "file")
+LED_DISTRIBUTIONS = ("lambertian", "file")
+FAR_FIELD_SUFFIXES = (".ies", ".ldt")
+MAX_LED_COUNT = 32  # dies across (or up) an array at most
+
+LED = Section(
+    {
+        "position": _position((0.0, 30.0, 0.0), "Centre of the LED array in the lamp's frame [x, y, z]: x and z "
+                                                "from the lens axis, y the depth behind the outer lens face"),
+        "normal": Num((0.0, -1.0, 0.0), -1.0, 1.0, size=3, nonzero=True, subtype="direction",
+                      doc="The direction the dies face, their emitting side (-y: toward the lens); the array's "
+                          "rows run across it, level with the lamp (its columns up, toward +z)"),
+        "die_size": Num((1.0, 1.0), 0.0, 100.0, lo_open=True, unit="mm", size=2, subtype="xyz",
+                        doc="Width (across) and height (up) of each emitting die"),
+        "columns": Num(1, 1, MAX_LED_COUNT, integer=True, doc="LEDs across the array (1: a single LED)"),
+        "rows": Num(1, 1, MAX_LED_COUNT, integer=True, doc="LEDs up the array"),
+        "pitch": Num((5.0, 5.0), 0.0, 1000.0, unit="mm", size=2, subtype="xyz",
+                     doc="Centre-to-centre spacing of the LEDs across and up; at least the die size"),
+        "flux_lm": Num(20.0, 0.0, 10000.0, unit="lm",
+                       doc="Photometric: the luminous flux each die emits into the half space it faces"),
+        "spectrum": Choice("red_led", LED_SPECTRA,
+                           "Photometric: the colour of the LEDs' light (red or amber LED of Ohno 2005's model; "
+                           "white: phosphor-converted, CIE LED-B5; led: peak and width; file: a measured curve)"),
+        "led_peak_nm": Num(630.0, 360.0, 830.0, unit="nm", doc="Photometric, LED spectrum: the peak wavelength"),
+        "led_width_nm": Num(20.0, 1.0, 300.0, unit="nm",
+                            doc="Photometric, LED spectrum: the half spectral width (Ohno 2005's model)"),
+        "spectrum_file": Text("", "Photometric, spectrum file: a .csv of nm,value rows beside the document",
+                              max_len=120),
+        "distribution": Choice("lambertian", LED_DISTRIBUTIONS,
+                               "Photometric: how each die's light spreads with direction: lambertian (I = I0 cos "
+                               "theta), or file: the supplier's far-field intensity, applied as the die's luminance "
+                               "I / (A cos theta) (wrong for an eye closer than about ten die sizes)"),
+        "far_field_file": Text("", "Photometric, far-field file: the LED's intensity distribution as an IES LM-63 "
+                                   "(.ies) or EULUMDAT (.ldt) file beside the document; its axis (gamma 0) is the "
+                                   "die's normal, its C 0 plane the array's across direction; only its shape is "
+                                   "used, the die emits flux_lm", max_len=120),
+    },
+    "LED dies, the light source when the lamp's source is led: flat emitters of given size in a grid "
+    "(in the paper mode each die shows the bulb's intensity)",
+    shown_when=(("led_peak_nm", "spectrum", ("led",)), ("led_width_nm", "spectrum", ("led",)),
+                ("spectrum_file", "spectrum", ("file",)), ("far_field_file", "distribution", ("file",))),
+)
+
 # At most this many prism rings across the plate's radius: the ring walk then crosses a bounded
 # number of rings and the profile stays a table of a few hundred numbers.
 MAX_RINGS = 500
@@ -392,15 +437,14 @@ PRISM_PLATE = Section(
 
 
 GUIDE_SECTIONS = ("round", "rectangular")
-GUIDE_LED_ENDS = ("one", "both")
 # At most this many extraction prisms along a guide: the prism walk crosses a bounded number of cells.
 MAX_GUIDE_PRISMS = 2000
 
 LIGHT_GUIDE = Section(
     {
-        "enabled": Flag(False, "Photometric: whether the lamp has a light guide, a transparent rod lit by an LED "
-                               "at its end, whose extraction prisms send the light out toward the lens "
-                               "(docs/photometric.md, light guides)"),
+        "enabled": Flag(False, "Photometric: whether the lamp has a light guide, a transparent rod lit at its "
+                               "end by the lamp's LEDs (source led, placed facing an end face), whose "
+                               "extraction prisms send the light out toward the lens (docs/model.md 8.7a)"),
         "section": Choice("round", GUIDE_SECTIONS,
                           "Photometric: the cross-section of the guide: round (diameter) or rectangular (width across "
                           "the guide in the lens plane, thickness along the lamp axis)"),
@@ -424,21 +468,10 @@ LIGHT_GUIDE = Section(
         "prism_angle": Num(45.0, 5.0, 85.0, unit="deg",
                            doc="Photometric: the angle of each prism facet to the guide's axis (45: light running "
                                "along the guide is sent straight out toward the lens)"),
-        "led_ends": Choice("one", GUIDE_LED_ENDS,
-                           "Photometric: the guide's LED at its first end only, or an LED at each end"),
-        "led_size": _length(1.0, "Photometric: the side of the LED's square emitting die, facing the end face",
-                            hi=50.0),
-        "led_gap": Num(0.2, 0.0, 50.0, unit="mm", subtype="distance",
-                       doc="Photometric: the air gap between the LED's die and the guide's end face"),
-        "led_flux_lm": Num(20.0, 0.0, 10000.0, unit="lm",
-                           doc="Photometric: the luminous flux of each LED, Lambertian from its die"),
-        "led_peak_nm": Num(630.0, 360.0, 830.0, unit="nm", doc="Photometric: the LED's peak wavelength"),
-        "led_width_nm": Num(20.0, 1.0, 300.0, unit="nm",
-                            doc="Photometric: the LED's half spectral width (Ohno 2005's model)"),
         **_optics("clear", "the guide"),
     },
-    "Photometric: a light guide behind the lens, a rod of acrylic or polycarbonate lit at its end by an LED, "
-    "with V-shaped extraction prisms cut along its back",
+    "Photometric: a light guide behind the lens, a rod of acrylic or polycarbonate lit at its end by the lamp's "
+    "LEDs, with V-shaped extraction prisms cut along its back",
     shown_when=(("diameter", "section", ("round",)), ("width", "section", ("rectangular",)),
                 ("thickness", "section", ("rectangular",)), *_OPTICS_SHOWN),
 )
@@ -462,9 +495,13 @@ LAMP = Section(
         "prism_plate": PRISM_PLATE,
         "bulb": BULB,
         "socket": SOCKET,
+        "source": Choice("bulb", LIGHT_SOURCES,
+                         "The light source: bulb, the spherical bulb on its socket (the paper's); or led, flat "
+                         "LED dies (the led section) in place of bulb and socket"),
+        "led": LED,
         "light_guide": LIGHT_GUIDE,
     },
-    "One lamp: lens, cuts, reflector, bulb and socket (and, photometric, a light guide)",
+    "One lamp: lens, cuts, reflector, bulb and socket (or LEDs; photometric, a light guide they light)",
 )
 
 SCENE = Section(

@@ -22,6 +22,7 @@ luminous efficiency:
 - the bulb (a Lambertian sphere of radius r) is an Emission of radiance L_e = Φ_e / (4π² r²)
   W/(m² sr) and colour C, so Strength × Color = L_e × C: what a Blender point light of radius r,
   power Φ_e W and colour C shows;
+- an LED die (flat, area A) is an Emission of radiance L_e = Φ_e / (π A) on its front, black behind;
 - the sun is a Sun light of strength E_e = E_v / K_r W/m² (E_v its illuminance in lx, its spectrum
   CIE daylight at 5500 K) and colour C;
 - a lens or prism plate is glass of the material's n_d (a plate's rings keep the shape its own ior
@@ -29,8 +30,7 @@ luminous efficiency:
   transmittance under the lamp's own bulb, T_c = RGB_c(S·T) / RGB_c(S), as −ln(T_c) / thickness per
   mm (Beer–Lambert at the filter's thickness); a colour outside Rec.709 (legal red) is clipped into it
   at its own luminance: Cycles cannot carry the colour;
-- a light guide is glass of its material's n_d absorbing as a lens does under its LEDs' spectrum, and
-  each LED an Emission square of radiance L_e = Φ_e / (π a²) and colour C (a Lambertian die of side a);
+- a light guide is glass of its material's n_d absorbing as a lens does under the lamp's source;
 - the reflector mirrors and glows with its finish's reflectance under the bulb (its luminance
   share: aluminium and silver are near-neutral), split by the glow share; no appearance constant;
 - the environment image's Background strength is the tracer's scale (cd/m² per pixel unit) / 683;
@@ -48,9 +48,10 @@ import math
 
 import numpy as np
 
-from ...core_tracer.photometry import cie, daylight, materials, sources
+from ...core_tracer.photometry import cie, daylight, materials
 from ...core_tracer.photometry.spectrum import Spectrum
 from ...core_tracer.raytrace import spectral
+from ...core_tracer.scene.led_array import LedArray, uses_leds
 
 MIN_TRANSMITTANCE = 1e-6  # a channel the filter blocks: absorption stays finite
 BLACK = [0.0, 0.0, 0.0]
@@ -96,13 +97,16 @@ def bulb_light(bulb: dict, where: str = "bulb") -> dict:
             "radiance": power / (4.0 * math.pi ** 2 * r * r), "color": light_color(spectrum), "spectrum": spectrum}
 
 
-def guide_led_light(guide: dict) -> dict:
-    """A light guide's LED in Cycles values: ``radiance`` L_e = Φ_e / (π a²) W/(m² sr) of its square
-    die of side a (Lambertian), ``color`` C and its ``spectrum``."""
-    spectrum = sources.led(guide["led_peak_nm"], guide["led_width_nm"])
-    power = guide["led_flux_lm"] / cie.luminous_efficacy(spectrum)
-    side = guide["led_size"] * 1e-3
-    return {"radiance": power / (math.pi * side * side), "color": light_color(spectrum), "spectrum": spectrum}
+def led_light(lamp: dict, where: str = "lamps[0]") -> dict:
+    """A lamp's LED dies' Cycles values, as ``bulb_light``'s: a die of area A and flux Φ is an Emission
+    of radiance L_e = Φ_e / (π A) (a Lambertian die; Cycles does not carry a far-field file's shape)."""
+    led = lamp["led"]
+    spectrum = spectral.led_spectrum(led, f"{where}.led")
+    efficacy = cie.luminous_efficacy(spectrum)
+    power = led["flux_lm"] / efficacy
+    area = LedArray.of(led).die_area_mm2 * 1e-6
+    return {"flux_lm": led["flux_lm"], "efficacy_lm_per_w": efficacy, "power_w": power,
+            "radiance": power / (math.pi * area), "color": light_color(spectrum), "spectrum": spectrum}
 
 
 def sun_light(illuminance_lux: float) -> dict:
@@ -161,16 +165,13 @@ def equivalent(scene: dict) -> dict:
         env["strength"] = spectral.environment_scale(scene, pixels) / cie.KM
     for i, lamp in enumerate(out["lamps"]):
         where = f"lamps[{i}]"
-        bulb = bulb_light(lamp["bulb"], f"{where}.bulb")
+        bulb = led_light(lamp, where) if uses_leds(lamp) else bulb_light(lamp["bulb"], f"{where}.bulb")
         source = bulb["spectrum"]
         lamp["bulb"]["intensity"] = [float(c) for c in bulb["radiance"] * bulb["color"]]
         guide = lamp.get("light_guide")
-        if guide and guide["enabled"]:  # the guide's LEDs light the lamp: its colours are taken under them
-            led = guide_led_light(guide)
-            source = led["spectrum"]
+        if guide and guide["enabled"]:  # glass under the lamp's light (its LEDs)
             guide.update(glass_ior=spectral.index_of(guide)[0],
-                         absorption=filter_absorption(guide, source, f"{where}.light_guide"),
-                         led_intensity=[float(c) for c in led["radiance"] * led["color"]])
+                         absorption=filter_absorption(guide, source, f"{where}.light_guide"))
         lens = lamp["lens"]
         for key in ("transmitted_color", "reference_thickness"):
             lens.pop(key, None)

@@ -134,21 +134,6 @@ def light_guide_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list
     return missing
 
 
-def guide_led(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
-    """A light guide's LED die: an Emission of its radiance and colour (``led_intensity``, set by
-    ``convert.photometric_cycles.equivalent``)."""
-    tree = _tree(mat, new)
-    if new:
-        out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
-        em = _node(tree, "ShaderNodeEmission", "LED Emission", (0, 0))
-        tree.links.new(em.outputs["Emission"], out.inputs["Surface"])
-    strength, color = cycles.emission_of(lamp["light_guide"].get("led_intensity", [0.0, 0.0, 0.0]))
-    missing: list[str] = []
-    _drive(tree, "LED Emission", missing, Color=(*color, 1.0), Strength=strength)
-    mat.diffuse_color = (*color, 1.0)
-    return missing
-
-
 def spectral_index(part: dict) -> float:
     """n_d of a photometric part's material (``raytrace.spectral.index_of``)."""
     from ...core_tracer.raytrace.spectral import index_of
@@ -200,6 +185,31 @@ def bulb(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
         out = _node(tree, "ShaderNodeOutputMaterial", "Output", (300, 0))
         em = _node(tree, "ShaderNodeEmission", "Bulb Emission", (0, 0))
         tree.links.new(em.outputs["Emission"], out.inputs["Surface"])
+    b = lamp["bulb"]
+    strength, color = cycles.emission_of(b["intensity"], b["on"])
+    missing: list[str] = []
+    _drive(tree, "Bulb Emission", missing, Color=(*color, 1.0), Strength=strength)
+    mat.diffuse_color = (*color, 1.0) if b["on"] else (0.05, 0.05, 0.05, 1.0)
+    return missing
+
+
+def led_die(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+    """The LED dies: the bulb's emission (its intensity, or in the photometric mode the dies' radiance
+    that ``convert.photometric_cycles`` puts there) on their front, black on their back (a die is
+    opaque and emits into the half space it faces). Lambertian in Cycles: a far-field file is the
+    tracer's only (docs/photometric.md)."""
+    tree = _tree(mat, new)
+    if new:
+        out = _node(tree, "ShaderNodeOutputMaterial", "Output", (500, 0))
+        em = _node(tree, "ShaderNodeEmission", "Bulb Emission", (0, 100))
+        back = _node(tree, "ShaderNodeBsdfDiffuse", "Die Back", (0, -100))
+        back.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+        facing = _node(tree, "ShaderNodeNewGeometry", "Geometry", (0, 300))
+        mix = _node(tree, "ShaderNodeMixShader", "Die Sides", (250, 0))
+        tree.links.new(facing.outputs["Backfacing"], mix.inputs["Fac"])
+        tree.links.new(em.outputs["Emission"], mix.inputs[1])
+        tree.links.new(back.outputs["BSDF"], mix.inputs[2])
+        tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
     b = lamp["bulb"]
     strength, color = cycles.emission_of(b["intensity"], b["on"])
     missing: list[str] = []

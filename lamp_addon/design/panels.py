@@ -223,9 +223,14 @@ class _LampPartPanel(LampTab):
 
 def section_in_use(lamp, part: str) -> bool:
     """Whether the lamp's ``part`` section shapes it: the reflector's and the prism plate's only for
-    the lamp's collection (docs/model.md, the prism plate); every other section always."""
+    the lamp's collection (docs/model.md, the prism plate), the bulb's and socket's or the LEDs' only
+    for its light source; every other section always."""
     if part in S.COLLECTIONS:
         return lamp.collection == part
+    if part == "led":  # the LEDs in place of bulb and socket (the lamp list's switch stays)
+        return lamp.source == "led"
+    if part in ("bulb", "socket"):
+        return lamp.source == "bulb"
     return True
 
 

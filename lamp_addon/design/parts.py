@@ -24,6 +24,7 @@ from mathutils.geometry import tessellate_polygon
 
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geometry, lens_cylinder
+from ...core_tracer.scene.led_array import LedArray, uses_leds
 from ...core_tracer.scene.outline import Outline
 from ..convert import units
 from ..convert.meshes import builder as mesh_builder
@@ -146,6 +147,8 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
                   partial(part_meshes.socket_mesh, rs, g["vertex"], by),
                   [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
+    if uses_leds(lamp):  # the LED dies in place of bulb and socket
+        parts[-2:] = [led_part(base, label, lamp, axis)]
     guide = lamp.get("light_guide")
     if guide and guide["enabled"]:
         parts.extend(light_guide_parts(base, label, lamp, axis))
@@ -174,6 +177,15 @@ def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outlin
     return parts, opening, (g["plane_b"], g["rim"]), lighter
 
 
+def led_part(base: str, label: str, lamp: dict, axis: Matrix) -> MeshPart:
+    """A lamp's LED dies as one object of flat rectangles facing their normal (``scene.led_array``),
+    emitting on their front only (``materials.led_die``)."""
+    led = lamp["led"]
+    shape = ("led", *(tuple(led[k]) for k in ("position", "normal", "die_size", "pitch")), led["columns"], led["rows"])
+    return MeshPart(f"{base}.led", f"{label} LEDs", shape, partial(part_meshes.led_mesh, LedArray.of(led)),
+                    [Slot(f"{base}.led", f"{label} LEDs", partial(materials.led_die, lamp=lamp))], axis)
+
+
 def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[MeshPart]:
     """A prism-plate lamp's plate (glass) and housing (diffuse) in place of the reflector (docs/model.md, the
     prism plate); their matrices are set by ``lamp_parts``."""
@@ -195,18 +207,15 @@ def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[
 
 
 def light_guide_parts(base: str, label: str, lamp: dict, axis: Matrix) -> list[MeshPart]:
-    """A lamp's light guide (glass) and its LED dies (emission), docs/model.md §8.7a."""
+    """A lamp's light guide (glass), docs/model.md §8.7a; its LEDs are the lamp's (``led_part``)."""
     guide = lamp["light_guide"]
     shape = tuple((key, tuple(value) if isinstance(value, list) else value) for key, value in sorted(guide.items())
-                  if key not in ("glass_ior", "absorption", "led_intensity"))
+                  if key not in ("glass_ior", "absorption"))
     return [
         MeshPart(f"{base}.light_guide", f"{label} Light Guide", ("light_guide", shape, CHORD_TOLERANCE_MM),
                   partial(guide_meshes.guide_mesh, lamp),
                   [Slot(f"{base}.light_guide", f"{label} Light Guide",
                         partial(materials.light_guide_glass, lamp=lamp))], axis),
-        MeshPart(f"{base}.guide_led", f"{label} Guide LED", ("guide_led", shape),
-                  partial(guide_meshes.led_meshes, lamp),
-                  [Slot(f"{base}.guide_led", f"{label} Guide LED", partial(materials.guide_led, lamp=lamp))], axis),
     ]
 
 

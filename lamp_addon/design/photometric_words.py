@@ -37,12 +37,6 @@ _LABELS = [
     (S.BULB, "spectrum_file", "Spectrum File (.csv)"),
     *((S.LENS, key, words) for key, words in _OPTICS.items()),
     *((S.PRISM_PLATE, key, words) for key, words in _OPTICS.items()),
-    (S.LIGHT_GUIDE, "led_ends", "LEDs At"),
-    (S.LIGHT_GUIDE, "led_size", "LED Die Size"),
-    (S.LIGHT_GUIDE, "led_gap", "LED Gap"),
-    (S.LIGHT_GUIDE, "led_flux_lm", "LED Flux"),
-    (S.LIGHT_GUIDE, "led_peak_nm", "LED Peak"),
-    (S.LIGHT_GUIDE, "led_width_nm", "LED Width"),
     *((S.LIGHT_GUIDE, key, words) for key, words in _OPTICS.items()),
 ]
 
@@ -80,8 +74,6 @@ _CHOICES = {
     "smoke": ("Smoke", "A grey tint"),
     "aluminised": ("Aluminised", "Vacuum-deposited aluminium"),
     "silvered": ("Silvered", "A silver coat"),
-    "one": ("One End", "An LED at the guide's first end only"),
-    "both": ("Both Ends", "An LED at each end of the guide"),
     "illuminance": ("Illuminance", "By the illuminance it gives on an upward-facing surface (lx)"),
     "luminance": ("Luminance", "By its mean luminance over all directions (cd/m2)"),
 }

@@ -51,7 +51,7 @@ from . import photometric_words, words
 OPEN_BOUND_MARGIN = 1.0e-6  # an open bound lo < x becomes lo + margin * max(1, |lo|) <= x
 TAG_SEPARATOR = ","
 
-_ACRONYMS = {"fov": "FOV", "ior": "IOR", "rgb": "RGB"}
+_ACRONYMS = {"fov": "FOV", "ior": "IOR", "rgb": "RGB", "led": "LED"}
 
 # Called with the scene after every edit of its design (Auto Build listens); see ``notify_edited``.
 EDIT_LISTENERS: list = []

@@ -31,7 +31,9 @@ LABELS = {
     (id(S.CAMERA), "ev100"): "EV100",
 }
 # The choices of a field in the designer's words, where the key's words are not.
-CHOICE_LABELS = {"collection": {"reflector": "Reflector", "prism_plate": "Prism Plate"}}
+CHOICE_LABELS = {"collection": {"reflector": "Reflector", "prism_plate": "Prism Plate"},
+                 "source": {"bulb": "Bulb", "led": "LEDs"},
+                 "distribution": {"lambertian": "Lambertian", "file": "Far-Field File"}}
 
 _SNAKE = re.compile(r"\b[a-z][a-z0-9]*(?:_[a-z0-9]+)+\b")
 # A parenthesis that cites the paper: a symbol and an equation or table ("(w in eq. 1)", "(I0 per R, G, B)").

@@ -21,17 +21,19 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def guide_scene(**guide) -> dict:
-    """The photometric tail lamp with its bulb off and a light guide behind its lens."""
+    """The photometric tail lamp lit by an LED and a light guide behind its lens (``on``: the lamp's switch)."""
     scene = json.loads((ROOT / "presets" / "photometric-tail-lamp.json").read_text())
     lamp = scene["lamps"][0]
-    lamp["bulb"]["on"] = False
     lamp["reflector"]["focal_length"] = 10.0
     settings = dict(enabled=True, section="rectangular", width=4.0, thickness=4.0, length=60.0, depth=15.0,
-                    prism_depth=0.0, led_size=1.0, led_gap=1e-4, led_flux_lm=20.0, material="pmma",
-                    filter="custom", filter_edge_nm=500.0, filter_slope_nm=40.0, filter_range=[0.90, 0.97],
-                    filter_thickness=10.0)
+                    prism_depth=0.0, material="pmma", filter="custom", filter_edge_nm=500.0, filter_slope_nm=40.0,
+                    filter_range=[0.90, 0.97], filter_thickness=10.0)
     settings.update(guide)
     lamp["light_guide"] = settings
+    # the lamp's LED: one 1 mm die of 20 lm facing the first end face, 0.1 µm from it
+    lamp["source"] = "led"
+    lamp["led"] = dict(position=[-settings["length"] / 2 - 1e-4, settings["depth"], 0.0], normal=[1.0, 0.0, 0.0],
+                       die_size=[1.0, 1.0], flux_lm=20.0, spectrum="red_led")
     return parse_scene(scene)
 
 
@@ -59,8 +61,8 @@ def closed_form_out(scene: dict) -> float:
     lamps, guide = ctx.lamps, ctx.lamps.guide
     n_bands = lamps.plate_ior_bands[0]
     alpha = lamps.plate_absorption[0]
-    half = guide.led_half[0] * 1e-3
-    flux_lm = math.pi * guide.led_radiance[0] * (2 * half) ** 2 * ctx.photometric.to_xyz[:, 1]  # lm per band
+    area = 4.0 * lamps.led_half[0, 0] * lamps.led_half[0, 1] * 1e-6  # m²
+    flux_lm = math.pi * lamps.led_radiance[0] * area * ctx.photometric.to_xyz[:, 1]  # lm per band: Φ = π L A
     theta = (np.arange(20000) + 0.5) * (0.5 * math.pi / 20000)
     weight = 2.0 * np.sin(theta) * np.cos(theta) * (0.5 * math.pi / 20000)
     out = 0.0
@@ -142,7 +144,7 @@ def test_lamps_without_a_guide_have_no_guide_parts():
     (dict(light_model="paper"), "lamps[0].light_guide.enabled", 'needs light_model "photometric"'),
     (dict(prism_depth=2.5), "lamps[0].light_guide.prism_depth", "allowed [0, 2)"),
     (dict(prism_depth=1.5, prism_pitch=2.0), "lamps[0].light_guide.prism_depth", "wider than their pitch"),
-    (dict(led_size=4.5), "lamps[0].light_guide.led_size", "allowed (0, 4]"),
+    (dict(source="bulb"), "lamps[0].light_guide.enabled", 'allowed with source "led"'),
     (dict(depth=4.0), "lamps[0].light_guide.depth", "into the lens"),
 ])
 def test_a_guide_that_cannot_be_is_refused_in_one_line_naming_the_field(change, field, words):
@@ -152,8 +154,12 @@ def test_a_guide_that_cannot_be_is_refused_in_one_line_naming_the_field(change, 
     lamp["reflector"]["focal_length"] = 10.0
     lamp["bulb"]["on"] = False
     guide = dict(enabled=True, section="rectangular", width=4.0, thickness=4.0, length=60.0, depth=15.0)
+    lamp["source"] = "led"
+    lamp["led"] = dict(position=[-30.5, 15.0, 0.0], normal=[1.0, 0.0, 0.0])
     if "light_model" in change:
         scene["light_model"] = change["light_model"]
+    elif "source" in change:
+        lamp["source"] = change["source"]
     else:
         guide.update(change)
     lamp["light_guide"] = guide

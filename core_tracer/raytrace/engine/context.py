@@ -33,6 +33,7 @@ class Context(Lighting):
         self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
         # else no ray meets a prism plate, its housing or a light guide (whose rod is the plate's medium)
         self.plates = bool(self.lamps.ring_count.any()) or self.lamps.guide is not None
+        self.leds = self.lamps.any_leds  # else no ray meets an LED die
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
         self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body

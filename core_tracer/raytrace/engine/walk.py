@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import optics
 from .. import paths as P
+from ..parts import led_die
 from ..parts.base import Segments, put_rows, rows
 from .context import Context
 from .eyes import first_hits, put_traced, rays_toward_body
@@ -176,8 +177,6 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
     ends = ((P.BULB, BULB_PASS, lamps.bulb_intensity),) if throughput is not None else (
         (P.WALL, SIDE_WALL_PASS, lamps.wall_color), (P.BULB, BULB_PASS, lamps.bulb_intensity),
         (P.SOCKET, SOCKET_PASS, lamps.socket_color))
-    if lamps.guide is not None:  # a light guide's LED: its die's radiance (the bulb's pass: the lamp's source)
-        ends += ((P.GUIDE_LED, BULB_PASS, lamps.guide.led_radiance),)
     for sid, pass_id, color in ends:
         met = np.nonzero(surface == sid)[0]
         if len(met):
@@ -186,6 +185,14 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
             if throughput is not None:
                 k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
             band.add(pass_id, rays.pix.take(met), k_met * rows(color, lamp))
+    # LED dies end the path with their luminance toward the eye, k · L(θ, φ) (``parts.led_die``)
+    met = np.nonzero(surface == P.LED)[0] if ctx.leds else ()
+    if len(met):
+        lamp = rays.lamp.take(met)
+        k_met = rows(k, met)
+        if throughput is not None:
+            k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
+        band.add(BULB_PASS, rays.pix.take(met), k_met * led_die.emitted(lamps, lamp, rows(rays.d, met)))
     # a plate lamp's housing ends the path
     met = np.nonzero(surface == P.HOUSING)[0] if ctx.plates and throughput is None else ()
     if len(met):

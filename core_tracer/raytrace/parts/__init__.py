@@ -8,7 +8,7 @@ and the cut walk stops there, so the side wall, which bounds the cuts, comes fir
 a prism-plate lamp precedes it (the same cylinder behind the plate: the tie keeps the housing).
 The prism plate's faces come before the cuts: a ray inside the plate or behind it then gives the cut
 walk a limit short of the cuts, and the walk does nothing for it (the plate and the cuts never touch:
-the plate's gap is > 0). The cheap closed-form parts of the air (reflector, bulb, socket) come before
+the plate's gap is > 0). The cheap closed-form parts of the air (reflector, bulb, socket, LED dies) come before
 the walk too: an air ray bound for the bulb or the reflector then never walks the cells. Ties keep the
 earlier part (the cuts touch none of those). The body box (``body_box``) is not in the table: only
 eye rays, in the world frame, meet it.
@@ -19,8 +19,8 @@ from __future__ import annotations
 from . import (
     bulb,
     cut_surface,
-    guide_led,
     housing,
+    led_die,
     light_guide,
     outer_face,
     plate_front,
@@ -32,14 +32,22 @@ from . import (
 from .base import Part
 
 # ``cut_surface`` hands each ray to its lamp's cut type: ``cuts`` (fish-eye), ``sawtooth`` or ``flutes``.
-PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, reflector, bulb, socket, light_guide,
-                           guide_led, cut_surface, outer_face)
+PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, reflector, bulb, socket, led_die,
+                           light_guide, cut_surface, outer_face)
 
 
 def parts_for(lamps) -> tuple[Part, ...]:
-    """``PARTS`` for these lamps: without the prism plate's parts when no lamp has a plate, nor the
-    light guide's when no lamp has a guide (every ray would only find ``inf`` there, at the cost of
+    """``PARTS`` for these lamps: without the prism plate's parts when no lamp has a plate, without
+    the LED dies when no lamp has LEDs, without the bulb and socket when every lamp has LEDs, without
+    the light guide when no lamp has one (every ray would only find ``inf`` there, at the cost of
     their gathers)."""
-    unused = () if lamps.ring_count.any() else (housing, plate_front, prism_rings)
-    unused += () if lamps.guide is not None else (light_guide, guide_led)
-    return tuple(part for part in PARTS if part not in unused)
+    left_out: set = set()
+    if not lamps.ring_count.any():
+        left_out |= {housing, plate_front, prism_rings}
+    if not lamps.any_leds:
+        left_out.add(led_die)
+    if not lamps.has_bulb.any():
+        left_out |= {bulb, socket}
+    if lamps.guide is None:
+        left_out.add(light_guide)
+    return tuple(part for part in PARTS if part not in left_out)

@@ -25,4 +25,12 @@ def hit_sphere(o: np.ndarray, d: np.ndarray, center: np.ndarray, radius: np.ndar
 
 
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
-    return hit_sphere(rays.o, rays.d, rows(lamps.bulb_center, rays.lamp), lamps.bulb_radius.take(rays.lamp)), None
+    t = hit_sphere(rays.o, rays.d, rows(lamps.bulb_center, rays.lamp), lamps.bulb_radius.take(rays.lamp))
+    return without_bulbs(t, lamps, rays.lamp), None
+
+
+def without_bulbs(t: np.ndarray, lamps: LampTable, lamp: np.ndarray) -> np.ndarray:
+    """``t`` with ``inf`` for the rays of lamps lit by LEDs, which have no bulb or socket."""
+    if lamps.has_bulb.all():
+        return t
+    return np.where(lamps.has_bulb.take(lamp) > 0.0, t, np.inf)

@@ -8,6 +8,7 @@ import numpy as np
 from .. import paths as P
 from ..lamp_table import LampTable
 from .base import T_MIN, Segments, axis_cylinder_terms, quadratic_roots
+from .bulb import without_bulbs
 
 SURFACE = P.SOCKET
 MEDIA = (P.IN_AIR,)
@@ -34,5 +35,6 @@ def hit_socket(o: np.ndarray, d: np.ndarray, radius: np.ndarray, y_start: np.nda
 def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np.ndarray, None]:
     li = rays.lamp
     # (the lamps' values gathered with take: faster than indexing)
-    return hit_socket(rays.o, rays.d, lamps.socket_radius.take(li), lamps.bulb_center[:, 1].take(li),
-                      lamps.vertex.take(li)), None
+    t = hit_socket(rays.o, rays.d, lamps.socket_radius.take(li), lamps.bulb_center[:, 1].take(li),
+                   lamps.vertex.take(li))
+    return without_bulbs(t, lamps, li), None

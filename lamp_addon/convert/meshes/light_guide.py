@@ -4,7 +4,7 @@ The rod: its cross-section (a polygon of the circle within ``CHORD_TOLERANCE_MM`
 swept along the axis, at every s where the prisms' profile bends: each ring of the sweep is the
 section cut by the prisms' height v <= g(s) (points above it lowered onto it, which for a convex
 section is exactly the cut), so the V grooves are exact between the rings; both end faces closed.
-The LEDs: a square of the die's side facing each lit end face across the gap.
+The guide's LEDs are the lamp's own dies (``design.parts.led_part``).
 """
 
 from __future__ import annotations
@@ -95,17 +95,3 @@ def signed_volume(data: MeshData) -> float:
         for i in range(1, len(face) - 1):
             total += float(np.dot(p0, np.cross(data.verts[face[i]], data.verts[face[i + 1]])))
     return total / 6.0
-
-
-def led_meshes(lamp: dict) -> MeshData:
-    """The LED dies: a square of side a at each lit end, across the gap, facing the end face."""
-    guide, start, axis, across = _frame(lamp)
-    half, gap, length = float(guide.led_half[0]), float(guide.led_gap[0]), float(guide.length[0])
-    y_axis = np.array([0.0, 1.0, 0.0])
-    mb = MeshBuilder()
-    corners = [(-half, -half), (half, -half), (half, half), (-half, half)]
-    ends = [(-gap, 1.0)] + ([(length + gap, -1.0)] if guide.led_ends[0] > 1 else [])
-    for s, facing in ends:
-        ids = [mb.vertex(*(start + s * axis + u * across + v * y_axis)) for u, v in corners]
-        mb.face(ids if facing < 0 else list(reversed(ids)), FLAT)
-    return mb.result()
