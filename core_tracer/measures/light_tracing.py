@@ -48,7 +48,7 @@ from ..raytrace.engine import make_context
 from ..raytrace.engine.context import Context
 from ..raytrace.engine.rays import CUTOFF, NOT_DEFERRED, UNRECORDED, Rays, concat
 from ..raytrace.engine.surfaces import at_dielectric, at_plate_face, bulb_irradiance
-from ..raytrace.engine.walk import MAX_DEPTH, intersect, normals_at
+from ..raytrace.engine.walk import depth_limit, intersect, normals_at
 from ..raytrace.parts import led_die
 from ..raytrace.parts.base import put_rows, rows
 from ..raytrace.parts.reflector import reflector_normal
@@ -189,7 +189,7 @@ def trace(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     lamps = ctx.lamps
     out_pix, out_d, out_k = [], [], []
     depth = 0
-    while len(rays) and depth < MAX_DEPTH:
+    while len(rays) and depth < depth_limit(ctx):  # a light guide's paths are walked deeper
         depth += 1
         t, surface, normals = intersect(ctx, rays)
         rays = _absorbed(ctx, rays, t)

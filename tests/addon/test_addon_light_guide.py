@@ -1,7 +1,7 @@
 """A light-guide lamp built as Blender objects (docs/model.md §8.7a): the rod's mesh against the rod
 as the docs state it (written out again here, not taken from the add-on's mesh code), its LEDs, their
-materials from the photometric equivalents, the panel's Light Guide section, and a lamp without a
-guide keeping no guide objects."""
+material from the photometric equivalents, the lamp's LED facing its end, and a lamp without a guide
+keeping no guide object."""
 
 from __future__ import annotations
 
@@ -54,7 +54,7 @@ def test_the_guide_lamp_is_built_with_its_rod_and_leds(lamp_addon, bl_scene):
     lamp = scene["lamps"][0]
     guide = lamp["light_guide"]
     parts = _build(lamp_addon, bl_scene, scene)
-    rod, led = parts["lamps[0].light_guide"], parts["lamps[0].guide_led"]
+    rod = parts["lamps[0].light_guide"]
     points = _local_mm(rod, lamp)
     cx, cz = guide["center"]
     s = points[:, 0] - (cx - guide["length"] / 2)  # orientation 0: along x
@@ -66,17 +66,15 @@ def test_the_guide_lamp_is_built_with_its_rod_and_leds(lamp_addon, bl_scene):
     back = v > -guide["thickness"] / 2 + 1e-6
     assert np.all(v[back] <= _rod_height(s[back], guide) + 2e-3)
     assert np.any(v[back] < guide["thickness"] / 2 - guide["prism_depth"] + 1e-3)  # the grooves' bottoms
-    # an LED die at each end, a square of the die's side across the gap
-    die = _local_mm(led, lamp)
-    assert len(die) == 8
-    assert np.ptp(die[:, 2]) == pytest.approx(guide["led_size"], abs=1e-3)
-    assert die[:, 0].min() == pytest.approx(cx - guide["length"] / 2 - guide["led_gap"], abs=1e-3)
-    # materials from the photometric equivalents: the rod glass of PMMA's n_d, the LEDs emitting red
+    # the lamp's LED faces the first end face (its own object, the LED source's)
+    die = _local_mm(parts["lamps[0].led"], lamp)
+    assert np.ptp(die[:, 2]) == pytest.approx(lamp["led"]["die_size"][0], abs=1e-3)
+    assert die[:, 0].max() < cx - guide["length"] / 2
+    # its material from the photometric equivalents: glass of PMMA's n_d, clear
     bsdf = rod.data.materials[0].node_tree.nodes["Light Guide BSDF"]
     assert bsdf.inputs["IOR"].default_value == pytest.approx(1.491, abs=1e-3)
-    emission = led.data.materials[0].node_tree.nodes["LED Emission"]
-    color = emission.inputs["Color"].default_value
-    assert emission.inputs["Strength"].default_value > 0 and color[0] > 5 * color[1]
+    absorption = rod.data.materials[0].node_tree.nodes["Light Guide Absorption"]
+    assert absorption.inputs["Density"].default_value == pytest.approx(0.0, abs=1e-9)
 
 
 def test_a_lamp_without_a_guide_keeps_no_guide_objects(lamp_addon, bl_scene):
@@ -85,5 +83,5 @@ def test_a_lamp_without_a_guide_keeps_no_guide_objects(lamp_addon, bl_scene):
     raw = json.loads(PRESET.read_text())
     raw["lamps"][0]["light_guide"]["enabled"] = False
     parts = _build(lamp_addon, bl_scene, core_tracer.normalize(raw))
-    assert "lamps[0].light_guide" not in parts and "lamps[0].guide_led" not in parts
+    assert "lamps[0].light_guide" not in parts
     assert "lamps[0].lens" in parts
