@@ -201,14 +201,17 @@ def _grooves(has, t, normal, s0, v0, ds, dv, g, enter, exit_) -> None:
     """The rays ``has`` whose lamps' rods have prisms: their convex hit dropped where it lies in a
     groove, then the facets of the prisms whose cells they cross between the grooves' bottom and the
     back, within their span of the rod, offered (in place on ``t`` and ``normal``)."""
-    sub = {key: value[has] for key, value in g.items()}
-    s0, v0, ds, dv = s0[has], v0[has], ds[has], dv[has]
-    t_sub = t[has]
-    with np.errstate(invalid="ignore"):
-        grooved = in_groove(s0 + t_sub * ds, v0 + t_sub * dv, sub)
-    t_sub = np.where(grooved, np.inf, t_sub)
-    ns, nu, nv = (part[has] for part in normal)
+    sub = {key: g[key].take(has) for key in ("half_v", "prism_depth", "first_prism", "pitch", "prisms", "slope")}
+    s0, v0, ds, dv = s0.take(has), v0.take(has), ds.take(has), dv.take(has)
+    t_sub = t.take(has)
     bottom = sub["half_v"] - sub["prism_depth"]
+    v_hit = v0 + t_sub * dv
+    high = np.nonzero(v_hit > bottom)[0]  # only there can the hit lie in a groove
+    if len(high):
+        at_high = {key: value[high] for key, value in sub.items()}
+        grooved = in_groove(s0[high] + t_sub[high] * ds[high], v_hit[high], at_high)
+        t_sub[high[grooved]] = np.inf
+    ns, nu, nv = (part.take(has) for part in normal)
     lo = np.maximum(enter[has], 0.0)
     t_in, t_out = slab_span(v0, dv, bottom, sub["half_v"], np.minimum(exit_[has], t_sub))
     t_in = np.maximum(t_in, lo)
