@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, build_parts, local_mm
 
 import core_tracer
 
@@ -19,22 +19,6 @@ pytestmark = pytest.mark.blender
 PRESET = PRESETS / "led-light-guide-tail-lamp.json"
 
 
-def _build(lamp_addon, bl_scene, scene: dict) -> dict:
-    import bpy
-
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    assert bpy.ops.lamp.build() == {"FINISHED"}
-    return {obj.get("lamp_part"): obj for obj in bl_scene.objects if obj.get("lamp_part")}
-
-
-def _local_mm(obj, lamp) -> np.ndarray:
-    n = len(obj.data.vertices)
-    co = np.empty(n * 3, dtype=np.float32)
-    obj.data.vertices.foreach_get("co", co)
-    m = np.array(obj.matrix_world)
-    world = (co.reshape(-1, 3).astype(np.float64) @ m[:3, :3].T + m[:3, 3]) * 1000.0
-    cx, cz = lamp["center"]
-    return world - np.array([cx, 0.0, cz])
 
 
 def _rod_height(s: np.ndarray, guide: dict) -> np.ndarray:
@@ -53,9 +37,9 @@ def test_the_guide_lamp_is_built_with_its_rod_and_leds(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(PRESET)
     lamp = scene["lamps"][0]
     guide = lamp["light_guide"]
-    parts = _build(lamp_addon, bl_scene, scene)
+    parts = build_parts(lamp_addon, bl_scene, scene)
     rod = parts["lamps[0].light_guide"]
-    points = _local_mm(rod, lamp)
+    points = local_mm(rod, lamp)
     cx, cz = guide["center"]
     s = points[:, 0] - (cx - guide["length"] / 2)  # orientation 0: along x
     u, v = points[:, 2] - cz, points[:, 1] - guide["depth"]
@@ -67,7 +51,7 @@ def test_the_guide_lamp_is_built_with_its_rod_and_leds(lamp_addon, bl_scene):
     assert np.all(v[back] <= _rod_height(s[back], guide) + 2e-3)
     assert np.any(v[back] < guide["thickness"] / 2 - guide["prism_depth"] + 1e-3)  # the grooves' bottoms
     # the lamp's LED faces the first end face (its own object, the LED source's)
-    die = _local_mm(parts["lamps[0].led"], lamp)
+    die = local_mm(parts["lamps[0].led"], lamp)
     assert np.ptp(die[:, 2]) == pytest.approx(lamp["led"]["die_size"][0], abs=1e-3)
     assert die[:, 0].max() < cx - guide["length"] / 2
     # its material from the photometric equivalents: glass of PMMA's n_d, clear
@@ -79,9 +63,9 @@ def test_the_guide_lamp_is_built_with_its_rod_and_leds(lamp_addon, bl_scene):
 
 def test_a_lamp_without_a_guide_keeps_no_guide_objects(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(PRESET)
-    _build(lamp_addon, bl_scene, scene)
+    build_parts(lamp_addon, bl_scene, scene)
     raw = json.loads(PRESET.read_text())
     raw["lamps"][0]["light_guide"]["enabled"] = False
-    parts = _build(lamp_addon, bl_scene, core_tracer.normalize(raw))
+    parts = build_parts(lamp_addon, bl_scene, core_tracer.normalize(raw))
     assert "lamps[0].light_guide" not in parts
     assert "lamps[0].lens" in parts
