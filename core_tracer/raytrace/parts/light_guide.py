@@ -190,7 +190,11 @@ def _hit_in_frame(frame: tuple, g: dict) -> tuple[np.ndarray, tuple]:
         nu[radial] = (u0[radial] + tr * du[radial]) / r
         nv[radial] = (v0[radial] + tr * dv[radial]) / r
 
-    has = np.nonzero(span & (g["prisms"] > 0))[0]
+    # the grooves matter only to rays whose span inside the rod rises above the grooves' bottom (v is
+    # linear along a ray: its highest point is one end of the span)
+    with np.errstate(invalid="ignore"):
+        v_top = np.maximum(v0 + np.maximum(enter, 0.0) * dv, v0 + np.minimum(exit_, 1e30) * dv)
+    has = np.nonzero(span & (g["prisms"] > 0) & (v_top > g["half_v"] - g["prism_depth"]))[0]
     if len(has):
         _grooves(has, t, (ns, nu, nv), s0, v0, ds, dv, g, enter, exit_)
 
