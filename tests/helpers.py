@@ -480,3 +480,25 @@ def bare_led_document(*, depth_mm: float, die_mm: float, window_radius: float, w
     lamp["source"] = "led"
     lamp["led"] = {"position": [0.0, depth_mm, 0.0], "die_size": [die_mm, die_mm], "spectrum": "red_led", **led}
     return doc
+
+
+def build_parts(lamp_addon, bl_scene, scene: dict) -> dict:
+    """Build a normalised ``scene`` in ``bl_scene`` with the Build operator: its objects by lamp part."""
+    import bpy
+
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    assert bpy.ops.lamp.build() == {"FINISHED"}
+    return {obj.get("lamp_part"): obj for obj in bl_scene.objects if obj.get("lamp_part")}
+
+
+def local_mm(obj, lamp: dict):
+    """The vertices (N, 3) of a built object in mm in its lamp's frame (x, z from the lens axis)."""
+    import numpy as np
+
+    n = len(obj.data.vertices)
+    co = np.empty(n * 3, dtype=np.float32)
+    obj.data.vertices.foreach_get("co", co)
+    m = np.array(obj.matrix_world)
+    world = (co.reshape(-1, 3).astype(np.float64) @ m[:3, :3].T + m[:3, 3]) * 1000.0
+    cx, cz = lamp["center"]
+    return world - np.array([cx, 0.0, cz])

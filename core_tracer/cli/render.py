@@ -115,6 +115,10 @@ def run(args: argparse.Namespace) -> int:
     h, w = image.shape[:2]
     segments = result.stats.get("segments")
     traced = f", {segments} ray segments" if segments is not None else ""
+    if segments is not None and result.stats.get("max_depth"):
+        # how deep the paths went, and the branches the depth limit ended (never dropped silently)
+        traced += (f" ({segments / (w * h * size['samples']):.1f} a ray, deepest {result.stats['max_depth']}, "
+                   f"{result.stats.get('cut_at_depth', 0)} ended at the depth limit)")
     samples = f" at {size['samples']} samples" if size["samples"] > 1 else ""
     print(f"{printable(args.output)}: {w}x{h} px{samples} in {seconds:.2f} s{traced}{shown}")
     return 0

@@ -48,7 +48,7 @@ from ..raytrace.engine import make_context
 from ..raytrace.engine.context import Context
 from ..raytrace.engine.rays import CUTOFF, NOT_DEFERRED, UNRECORDED, Rays, concat
 from ..raytrace.engine.surfaces import at_dielectric, at_plate_face, bulb_irradiance
-from ..raytrace.engine.walk import MAX_DEPTH, intersect, normals_at
+from ..raytrace.engine.walk import depth_limit, intersect, normals_at
 from ..raytrace.parts import led_die
 from ..raytrace.parts.base import put_rows, rows
 from ..raytrace.parts.reflector import reflector_normal
@@ -189,7 +189,7 @@ def trace(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     lamps = ctx.lamps
     out_pix, out_d, out_k = [], [], []
     depth = 0
-    while len(rays) and depth < MAX_DEPTH:
+    while len(rays) and depth < depth_limit(ctx):  # a light guide's paths are walked deeper
         depth += 1
         t, surface, normals = intersect(ctx, rays)
         rays = _absorbed(ctx, rays, t)
@@ -226,7 +226,9 @@ def trace(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray]
             inner = np.nonzero(partial & (faces != P.OUTER) & alive)[0]
             if len(inner):
                 children.append(face.through(inner))
-        met = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
+        # the lamp's second dielectric: a prism plate's faces or a light guide's rod
+        second = (surface == P.PLATE_FRONT) | (surface == P.RINGS) | (surface == P.GUIDE) if ctx.plates else None
+        met = np.nonzero(second)[0] if ctx.plates else ()
         if len(met):
             d, hit = _end_points(rays, t, met)
             faces = surface.take(met)

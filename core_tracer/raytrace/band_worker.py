@@ -11,7 +11,7 @@ Protocol: pickles, each after its length (8 bytes, little-endian), over stdin an
   (``options``: the keywords of ``engine.make_context`` and ``keep_passes``); ``("job", job)``
   answers a take, ``job`` being (index, y0, y1) or None for no more. End of input: exit.
 - worker to parent: ``("ready", pid)`` once, then per render ``("take", serial)`` for each band it
-  wants, ``("band", serial, index, image, passes, segments, busy, max_depth, transitions, pid)`` as each
+  wants, ``("band", serial, index, image, passes, segments, busy, max_depth, transitions, pid, cut_at_depth)`` as each
   band completes, ``("error", serial, text)`` if the render failed, and ``("idle", serial)`` last.
 
 The flag file's first 4 bytes hold the serial of the render the parent wants traced; once they
@@ -92,7 +92,7 @@ def main() -> int:
             for index, band in worker_bands(ctx, take, stopped):
                 rows = BandImage.of(band, keep_passes)
                 write_message(outbox, ("band", serial, index, rows.image, rows.passes, rows.segments, rows.busy,
-                                       rows.max_depth, rows.transitions, os.getpid()))
+                                       rows.max_depth, rows.transitions, os.getpid(), rows.cut_at_depth))
         except SystemExit:
             raise
         except BaseException:  # reported to the parent, which raises it in the render's thread

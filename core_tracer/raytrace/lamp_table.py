@@ -12,6 +12,7 @@ from ..scene.derived import cut_sphere_radius, flute_radius, lamp_geometry, lens
 from ..scene.led_array import LedArray, uses_leds
 from ..scene.outline import Outline
 from ..scene.prism_profile import ring_slopes
+from .guide_table import GuideTable
 
 CYLINDER_KEYS = ("axis_x", "radius", "side", "base", "apex", "phi_center", "corner")
 
@@ -104,6 +105,8 @@ class LampTable:
     plate_ior_bands: np.ndarray | None = None
     reflector_bands: np.ndarray | None = None
     led_patterns: tuple = ()  # per lamp its dies' ``photometry.far_field.Pattern`` (() in the paper mode: Lambertian)
+    # The lamps' light guides (``guide_table``); None when no lamp has one (every lamp renders as before).
+    guide: GuideTable | None = None
 
     @property
     def any_leds(self) -> bool:
@@ -146,7 +149,9 @@ class LampTable:
         table = np.zeros((len(rows), max(len(s) for s in slopes)))
         for row, s in zip(table, slopes, strict=True):
             row[:len(s)] = s
-        return cls(ring_slopes=table, **{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
+        guide = GuideTable.from_scene(scene)
+        return cls(ring_slopes=table, guide=guide if guide.any else None,
+                   **{k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]})
 
 
 def _led_row(lamp: dict, row: dict) -> dict:

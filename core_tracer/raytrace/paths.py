@@ -97,6 +97,34 @@ PLATE_TABLE: dict[int, tuple[frozenset[int], frozenset[int]]] = {
     19: (frozenset(), frozenset()),
 }
 
+# The light guide's classes (docs/model.md §8.7a), numbered on from the plate's. A guide lamp has no
+# prism plate: its rod is the lamp's second dielectric (IN_GUIDE is the plate's medium). Its LEDs are
+# the lamp's own dies (``LED``): a ray leaving the rod that reaches them is ⑪, as the bulb.
+AIR_TO_GUIDE = 20  # ⑳ from any surface of the lamp's air to the guide's surface
+IN_GUIDE_SEGMENT = 21  # ㉑ from the guide's surface to itself, inside the rod
+GUIDE_TO_LAMP = 22  # ㉒ from the guide's surface to the lamp's other parts (or its LEDs: ⑪), in the air
+
+
+def _guide_table() -> dict[int, tuple[frozenset[int], frozenset[int]]]:
+    """Table 1 continued for the guide: every branch that goes on in the lamp's air can meet the rod
+    (⑳); the rod's surface reflects into the medium the ray came from and transmits into the other;
+    ㉒ reaches the lamp's other parts as the air classes that reach them do."""
+    air = {3, 4, 5, 9, 11, 12, 13, 14, 18}
+    table: dict[int, tuple[frozenset[int], frozenset[int]]] = {}
+    for source in (TABLE_1, PLATE_TABLE):
+        for parent, branches in source.items():
+            table[parent] = tuple(frozenset({AIR_TO_GUIDE}) if children & air else frozenset()
+                                  for children in branches)
+    into_air = frozenset({AIR_TO_GUIDE, TO_BULB, GUIDE_TO_LAMP})
+    table[AIR_TO_GUIDE] = (into_air, frozenset({IN_GUIDE_SEGMENT}))
+    table[IN_GUIDE_SEGMENT] = (frozenset({IN_GUIDE_SEGMENT}), into_air)
+    # ㉒ reaches a cut (as ⑤ does), the reflector (as ④), or ends on the wall, bulb or socket
+    table[GUIDE_TO_LAMP] = (frozenset({3, 4, 5, 7, 9, 11, 12, 13, AIR_TO_GUIDE}), frozenset({6, 7, 8}))
+    return table
+
+
+GUIDE_TABLE = _guide_table()
+
 ENDS = frozenset({7, 10, 11, 12, 19})
 
 REFLECTED, TRANSMITTED = 0, 1
@@ -107,18 +135,20 @@ _NONE = (frozenset(), frozenset())
 def allowed(parent: int, branch: int, child: int) -> bool:
     """Whether a transition is one of Table 1's, the documented air side-wall band's, or the
     prism plate's continuation of Table 1."""
-    return any(child in table.get(parent, _NONE)[branch] for table in (TABLE_1, AIR_SIDE_WALL, PLATE_TABLE))
+    return any(child in table.get(parent, _NONE)[branch]
+               for table in (TABLE_1, AIR_SIDE_WALL, PLATE_TABLE, GUIDE_TABLE))
 
 
 # Surfaces a segment can start from or reach, used to classify it (the plate's after the paper's).
-OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING, LED = range(11)
+OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING, LED, GUIDE = range(12)
 # LED: a lamp's LED dies, the light source in place of the bulb: reaching them is ⑪ as the bulb
 IN_LENS, IN_AIR, IN_PLATE = 0, 1, 2
+IN_GUIDE = IN_PLATE  # a lamp has a prism plate or a light guide, never both: the guide's rod is its second dielectric
 
 
 def _build_lookup() -> np.ndarray:
     """CLASS_OF[medium, source surface, hit surface] -> path class (0 = impossible)."""
-    table = np.zeros((3, 11, 11), dtype=np.int8)
+    table = np.zeros((3, 12, 12), dtype=np.int8)
     table[IN_LENS, OUTER, CUT] = LENS_OUTER_TO_CUT
     table[IN_LENS, OUTER, WALL] = TO_SIDE_WALL
     table[IN_LENS, CUT, OUTER] = CUT_TO_LENS_OUTER
@@ -146,6 +176,12 @@ def _build_lookup() -> np.ndarray:
     table[IN_AIR, RINGS, SOCKET] = TO_SOCKET
     for medium, src in ((IN_PLATE, PLATE_FRONT), (IN_PLATE, RINGS), (IN_AIR, RINGS)):
         table[medium, src, HOUSING] = TO_HOUSING
+    # the light guide
+    table[IN_AIR, :, GUIDE] = AIR_TO_GUIDE
+    table[IN_GUIDE, GUIDE, GUIDE] = IN_GUIDE_SEGMENT
+    table[IN_AIR, GUIDE, LED] = TO_BULB
+    for surface in (CUT, REFLECTOR, WALL, BULB, SOCKET, PLATE_FRONT, HOUSING):
+        table[IN_AIR, GUIDE, surface] = GUIDE_TO_LAMP
     return table
 
 

@@ -408,11 +408,13 @@ def photometric_lamps(table: LampTable, scene: dict, bands: Bands) -> LampTable:
         rows["ior"].append(index_of(lens)[0])
         rows["ior_bands"].append(band_index(lens, bands))
         rows["absorption"].append(absorption(lens, bands, f"{where}.lens"))
-        if lamp.get("collection", "reflector") == "prism_plate":
-            plate = lamp["prism_plate"]
+        guide = lamp.get("light_guide", {})
+        if lamp.get("collection", "reflector") == "prism_plate" or guide.get("enabled"):
+            # a guide's rod is the lamp's second dielectric, as a plate is (``paths.IN_GUIDE``)
+            plate, part = (guide, "light_guide") if guide.get("enabled") else (lamp["prism_plate"], "prism_plate")
             rows["plate_ior"].append(index_of(plate)[0])
             rows["plate_ior_bands"].append(band_index(plate, bands))
-            rows["plate_absorption"].append(absorption(plate, bands, f"{where}.prism_plate"))
+            rows["plate_absorption"].append(absorption(plate, bands, f"{where}.{part}"))
         else:
             rows["plate_ior"].append(1.0)
             rows["plate_ior_bands"].append(np.ones(k))

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from . import spec as S
 from .beside import check_plain_name
+from .guide_checks import check_light_guide
 from .messages import show_value
 from .reading import SceneError
 
@@ -24,6 +25,9 @@ def check_photometric(scene: dict) -> None:
         _check_filter(lamp["lens"], f"{where}.lens")
         if lamp.get("collection", "reflector") == "prism_plate":  # else the plate is not traced at all
             _check_filter(lamp["prism_plate"], f"{where}.prism_plate")
+        if lamp.get("light_guide", {}).get("enabled"):
+            _check_filter(lamp["light_guide"], f"{where}.light_guide")
+        check_light_guide(scene, i)
     for i, part in enumerate(scene.get("freeform", {}).get("parts", ())):
         role = part["role"]
         if role == "lens":

@@ -432,6 +432,47 @@ PRISM_PLATE = Section(
     shown_when=_OPTICS_SHOWN,
 )
 
+
+GUIDE_SECTIONS = ("round", "rectangular")
+# At most this many extraction prisms along a guide: the prism walk crosses a bounded number of cells.
+MAX_GUIDE_PRISMS = 2000
+
+LIGHT_GUIDE = Section(
+    {
+        "enabled": Flag(False, "Photometric: whether the lamp has a light guide, a transparent rod lit at its "
+                               "end by the lamp's LEDs (source led, placed facing an end face), whose "
+                               "extraction prisms send the light out toward the lens (docs/model.md 8.7a)"),
+        "section": Choice("round", GUIDE_SECTIONS,
+                          "Photometric: the cross-section of the guide: round (diameter) or rectangular (width across "
+                          "the guide in the lens plane, thickness along the lamp axis)"),
+        "diameter": _length(6.0, "Photometric, round guide: the diameter of the rod", hi=100.0),
+        "width": _length(6.0, "Photometric, rectangular guide: its width across the guide, in the lens plane",
+                         hi=100.0),
+        "thickness": _length(4.0, "Photometric, rectangular guide: its thickness along the lamp axis", hi=100.0),
+        "length": _length(80.0, "Photometric: the length of the straight guide from end face to end face",
+                          hi=2000.0),
+        "center": _position((0.0, 0.0), "Photometric: the middle of the guide [x, z] from the lamp axis, in the "
+                                         "lens plane", size=2),
+        "depth": _length(15.0, "Photometric: how far behind the lens's outer face the guide's axis lies (y)",
+                         hi=1000.0),
+        "orientation": Num(0.0, -180.0, 180.0, unit="deg",
+                           doc="Photometric: the guide's direction in the lens plane, from the x axis toward z"),
+        "prism_pitch": _length(2.0, "Photometric: the spacing of the extraction prisms along the guide's back",
+                               hi=100.0),
+        "prism_depth": Num(0.4, 0.0, 50.0, unit="mm", subtype="distance",
+                           doc="Photometric: how deep each V-shaped extraction prism is cut into the guide's back "
+                               "(0: a clear guide, no prisms)"),
+        "prism_angle": Num(45.0, 5.0, 85.0, unit="deg",
+                           doc="Photometric: the angle of each prism facet to the guide's axis (45: light running "
+                               "along the guide is sent straight out toward the lens)"),
+        **_optics("clear", "the guide"),
+    },
+    "Photometric: a light guide behind the lens, a rod of acrylic or polycarbonate lit at its end by the lamp's "
+    "LEDs, with V-shaped extraction prisms cut along its back",
+    shown_when=(("diameter", "section", ("round",)), ("width", "section", ("rectangular",)),
+                ("thickness", "section", ("rectangular",)), *_OPTICS_SHOWN),
+)
+
 COLLECTIONS = ("reflector", "prism_plate")
 
 LAMP_FUNCTIONS = ("custom", "tail", "stop", "turn", "reversing", "position", "fog")
@@ -455,8 +496,9 @@ LAMP = Section(
                          "The light source: bulb, the spherical bulb on its socket (the paper's); or led, flat "
                          "LED dies (the led section) in place of bulb and socket"),
         "led": LED,
+        "light_guide": LIGHT_GUIDE,
     },
-    "One lamp: lens, cuts, reflector, bulb and socket (or LEDs)",
+    "One lamp: lens, cuts, reflector, bulb and socket (or LEDs; photometric, a light guide they light)",
 )
 
 SCENE = Section(

@@ -30,6 +30,7 @@ luminous efficiency:
   transmittance under the lamp's own bulb, T_c = RGB_c(S·T) / RGB_c(S), as −ln(T_c) / thickness per
   mm (Beer–Lambert at the filter's thickness); a colour outside Rec.709 (legal red) is clipped into it
   at its own luminance: Cycles cannot carry the colour;
+- a light guide is glass of its material's n_d absorbing as a lens does under the lamp's source;
 - the reflector mirrors and glows with its finish's reflectance under the bulb (its luminance
   share: aluminium and silver are near-neutral), split by the glow share; no appearance constant;
 - the environment image's Background strength is the tracer's scale (cd/m² per pixel unit) / 683;
@@ -168,6 +169,10 @@ def equivalent(scene: dict) -> dict:
         bulb = led_light(lamp, where) if uses_leds(lamp) else bulb_light(lamp["bulb"], f"{where}.bulb")
         source = bulb["spectrum"]
         lamp["bulb"]["intensity"] = [float(c) for c in bulb["radiance"] * bulb["color"]]
+        guide = lamp.get("light_guide")
+        if guide and guide["enabled"]:  # glass under the lamp's light (its LEDs)
+            guide.update(glass_ior=spectral.index_of(guide)[0],
+                         absorption=filter_absorption(guide, source, f"{where}.light_guide"))
         lens = lamp["lens"]
         for key in ("transmitted_color", "reference_thickness"):
             lens.pop(key, None)

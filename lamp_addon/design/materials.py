@@ -143,6 +143,23 @@ def prism_plate_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list
     return missing
 
 
+def light_guide_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+    """The light guide (docs/model.md §8.7a): glass like the lens's, its material's n_d, its filter's
+    absorption under its LEDs (``convert.photometric_cycles.equivalent``; clear before that)."""
+    guide = lamp["light_guide"]
+    absorption = guide.get("absorption", [0.0, 0.0, 0.0])
+    missing = _glass(mat, new, "Light Guide", guide.get("glass_ior", spectral_index(guide)), absorption)
+    mat.diffuse_color = (*cycles.transmitted_color(absorption, guide["length"]), 0.3)
+    return missing
+
+
+def spectral_index(part: dict) -> float:
+    """n_d of a photometric part's material (``raytrace.spectral.index_of``)."""
+    from ...core_tracer.raytrace.spectral import index_of
+
+    return index_of(part)[0]
+
+
 def _glass(mat: bpy.types.Material, new: bool, label: str, ior: float, absorption) -> list[str]:
     """A clear dielectric (Principled BSDF transmitting, "<label> BSDF") with a Volume Absorption of
     eq. (2)'s coefficients ("<label> Absorption"); the nodes are made only in a new material."""

@@ -30,6 +30,7 @@ from ..convert import units
 from ..convert.meshes import builder as mesh_builder
 from ..convert.meshes import fisheye, flutes, prism_plate, wrap
 from ..convert.meshes import lens as lens_meshes
+from ..convert.meshes import light_guide as guide_meshes
 from ..convert.meshes import parts as part_meshes
 from . import materials
 
@@ -148,6 +149,9 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     ]
     if uses_leds(lamp):  # the LED dies in place of bulb and socket
         parts[-2:] = [led_part(base, label, lamp, axis)]
+    guide = lamp.get("light_guide")
+    if guide and guide["enabled"]:
+        parts.extend(light_guide_parts(base, label, lamp, axis))
     if lens_cylinder(lamp) is not None:
         if preview and k > CYLINDER_PREVIEW_QUADS:  # its mesh is made in Python: 1.5 s at 6 x 6 quads a cell
             k, lighter = CYLINDER_PREVIEW_QUADS, True
@@ -199,6 +203,19 @@ def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[
                   partial(prism_plate.housing_mesh, lamp, segments),
                   [_diffuse_slot(f"{base}.housing", f"{label} Housing", plate["housing_color"], "Housing BSDF")],
                   None),
+    ]
+
+
+def light_guide_parts(base: str, label: str, lamp: dict, axis: Matrix) -> list[MeshPart]:
+    """A lamp's light guide (glass), docs/model.md §8.7a; its LEDs are the lamp's (``led_part``)."""
+    guide = lamp["light_guide"]
+    shape = tuple((key, tuple(value) if isinstance(value, list) else value) for key, value in sorted(guide.items())
+                  if key not in ("glass_ior", "absorption"))
+    return [
+        MeshPart(f"{base}.light_guide", f"{label} Light Guide", ("light_guide", shape, CHORD_TOLERANCE_MM),
+                  partial(guide_meshes.guide_mesh, lamp),
+                  [Slot(f"{base}.light_guide", f"{label} Light Guide",
+                        partial(materials.light_guide_glass, lamp=lamp))], axis),
     ]
 
 

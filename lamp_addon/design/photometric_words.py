@@ -44,6 +44,7 @@ _LABELS = [
     (S.LED, "far_field_file", "Far-Field File (.ies, .ldt)"),
     *((S.LENS, key, words) for key, words in _OPTICS.items()),
     *((S.PRISM_PLATE, key, words) for key, words in _OPTICS.items()),
+    *((S.LIGHT_GUIDE, key, words) for key, words in _OPTICS.items()),
 ]
 
 

@@ -28,6 +28,7 @@ import bpy
 import numpy as np
 
 from ...core_tracer.images import display
+from ...core_tracer.raytrace import spectral
 from ...core_tracer.scene.reading import SceneError
 
 REC709 = "Linear Rec.709"

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, build_parts
 
 import core_tracer
 
@@ -18,17 +18,10 @@ pytestmark = pytest.mark.blender
 PRESET = PRESETS / "led-stop-lamp.json"
 
 
-def _build(lamp_addon, bl_scene, scene: dict) -> dict:
-    import bpy
-
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    assert bpy.ops.lamp.build() == {"FINISHED"}
-    return {obj.get("lamp_part"): obj for obj in bl_scene.objects if obj.get("lamp_part")}
-
 
 def test_an_led_lamp_is_built_with_its_dies_instead_of_bulb_and_socket(lamp_addon, bl_scene):
     scene = core_tracer.normalize(json.loads(PRESET.read_text()))
-    parts = _build(lamp_addon, bl_scene, scene)
+    parts = build_parts(lamp_addon, bl_scene, scene)
     assert "lamps[0].led" in parts and "lamps[0].bulb" not in parts and "lamps[0].socket" not in parts
     obj = parts["lamps[0].led"]
     mesh = obj.data
@@ -62,9 +55,9 @@ def test_a_photometric_die_carries_flux_over_pi_a_in_watts(lamp_addon, bl_scene)
 
 def test_switching_back_to_the_bulb_removes_the_dies(lamp_addon, bl_scene):
     scene = core_tracer.normalize(json.loads(PRESET.read_text()))
-    _build(lamp_addon, bl_scene, scene)
+    build_parts(lamp_addon, bl_scene, scene)
     scene["lamps"][0]["source"] = "bulb"
-    parts = _build(lamp_addon, bl_scene, core_tracer.normalize(scene))
+    parts = build_parts(lamp_addon, bl_scene, core_tracer.normalize(scene))
     assert "lamps[0].led" not in parts and "lamps[0].bulb" in parts and "lamps[0].socket" in parts
 
 

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import PRESETS
+from helpers import PRESETS, build_parts, local_mm
 
 import core_tracer
 
@@ -21,28 +21,12 @@ SAMPLES = 64
 TOLERANCE = 0.02  # per channel, relative (issue 12: the plate's on-axis transmission within 2 %)
 
 
-def _build(lamp_addon, bl_scene, scene: dict) -> dict:
-    import bpy
-
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    assert bpy.ops.lamp.build() == {"FINISHED"}
-    return {obj.get("lamp_part"): obj for obj in bl_scene.objects if obj.get("lamp_part")}
-
-
-def _local_mm(obj, lamp) -> np.ndarray:
-    n = len(obj.data.vertices)
-    co = np.empty(n * 3, dtype=np.float32)
-    obj.data.vertices.foreach_get("co", co)
-    m = np.array(obj.matrix_world)
-    world = (co.reshape(-1, 3).astype(np.float64) @ m[:3, :3].T + m[:3, 3]) * 1000.0
-    cx, cz = lamp["center"]
-    return world - np.array([cx, 0.0, cz])
 
 
 def _samples(obj, lamp, samples: int = 6) -> np.ndarray:
     mesh = obj.data
     mesh.calc_loop_triangles()
-    verts = _local_mm(obj, lamp)
+    verts = local_mm(obj, lamp)
     tris = np.array([t.vertices[:] for t in mesh.loop_triangles])
     w = np.array([(1 - i / samples - j / samples, i / samples, j / samples)
                   for i in range(samples + 1) for j in range(samples + 1 - i)])
@@ -78,7 +62,7 @@ def _ring_face_distance(points: np.ndarray, lamp: dict, g: dict) -> np.ndarray:
 
 def test_prism_plate_lamp_is_built_with_plate_and_housing_instead_of_a_reflector(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(PRESET)
-    parts = _build(lamp_addon, bl_scene, scene)
+    parts = build_parts(lamp_addon, bl_scene, scene)
     assert {"lamps[0].prism_plate", "lamps[0].housing", "lamps[0].lens", "lamps[0].bulb", "lamps[0].socket"} \
         <= set(parts)
     assert "lamps[0].reflector" not in parts
@@ -88,18 +72,18 @@ def test_prism_plate_lamp_is_built_with_plate_and_housing_instead_of_a_reflector
     deviation = _ring_face_distance(_samples(plate, lamp), lamp, g)
     assert deviation.max() <= TOL_MM
     # the plate spans the lens between its front face and the highest ring top
-    verts = _local_mm(plate, lamp)
+    verts = local_mm(plate, lamp)
     assert verts[:, 1].min() == pytest.approx(g["plate_front"], abs=1e-3)
     assert verts[:, 1].max() == pytest.approx(g["plate_peak"], abs=1e-3)
     assert np.hypot(verts[:, 0], verts[:, 2]).max() == pytest.approx(lamp["lens"]["radius"], abs=1e-3)
-    housing = _local_mm(parts["lamps[0].housing"], lamp)
+    housing = local_mm(parts["lamps[0].housing"], lamp)
     assert housing[:, 1].max() == pytest.approx(g["vertex"], abs=1e-3)
     assert np.abs(np.hypot(housing[:, 0], housing[:, 2]) - lamp["lens"]["radius"]).max() < 1e-3
 
 
 def test_prism_plate_materials_follow_the_design(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(PRESET)
-    parts = _build(lamp_addon, bl_scene, scene)
+    parts = build_parts(lamp_addon, bl_scene, scene)
     plate = scene["lamps"][0]["prism_plate"]
     glass = parts["lamps[0].prism_plate"].data.materials[0].node_tree.nodes
     assert glass["Prism Plate BSDF"].inputs["IOR"].default_value == pytest.approx(plate["ior"])
@@ -112,11 +96,11 @@ def test_prism_plate_materials_follow_the_design(lamp_addon, bl_scene):
 
 def test_switching_back_to_the_reflector_removes_plate_and_housing(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(PRESET)
-    _build(lamp_addon, bl_scene, scene)
+    build_parts(lamp_addon, bl_scene, scene)
     scene["lamps"][0]["collection"] = "reflector"
     scene["lamps"][0]["bulb"]["radius"] = 8.0  # a reflector of this lens holds a smaller bulb
     scene["lamps"][0]["reflector"]["focal_length"] = 16.0
-    parts = _build(lamp_addon, bl_scene, core_tracer.normalize(scene))
+    parts = build_parts(lamp_addon, bl_scene, core_tracer.normalize(scene))
     assert "lamps[0].reflector" in parts
     assert not {"lamps[0].prism_plate", "lamps[0].housing"} & set(parts)
 

@@ -72,11 +72,13 @@ def test_carried_samples_give_what_bands_traced_apart_give(monkeypatch, adaptive
     assert sorted(carried) == list(range(len(bands)))
     assert max(started) >= (3 if carry > 10**6 else 1)  # groups were carried, several at once
     assert (max(band.max_depth for band in apart) == max_depth) == (max_depth < 1000)
+    if max_depth == 7:  # branches alive at the depth limit end there and are counted
+        assert sum(band.cut_at_depth for band in apart) > 0
     if adaptive_threshold:
         assert 0 < sum(band.busy for band in apart) < WIDTH * HEIGHT
     for index, band in enumerate(apart):
         np.testing.assert_array_equal(carried[index].acc, band.acc)
-        for key in ("segments", "max_depth", "busy", "transitions"):
+        for key in ("segments", "max_depth", "cut_at_depth", "busy", "transitions"):
             assert getattr(carried[index], key) == getattr(band, key), (index, key)
 
 

@@ -21,9 +21,12 @@ def test_table_1_is_the_papers():
     assert paths.TABLE_1[2] == (frozenset({6, 7, 8}), frozenset({3, 9, 11, 12}))
     assert paths.TABLE_1[5] == (frozenset({3, 9, 11, 12}), frozenset({6, 7, 8}))
     for end in paths.ENDS:
-        assert (paths.TABLE_1 if end in paths.TABLE_1 else paths.PLATE_TABLE)[end] == (frozenset(), frozenset())
-    # every class the classifier can produce is a class of the paper or of the prism plate's table
-    assert set(np.unique(paths.CLASS_OF)) - {0} <= set(range(1, 13)) | set(paths.PLATE_TABLE) - set(range(1, 13))
+        table = paths.TABLE_1 if end in paths.TABLE_1 else paths.PLATE_TABLE if end in paths.PLATE_TABLE else \
+            paths.GUIDE_TABLE
+        assert table[end] == (frozenset(), frozenset())
+    # every class the classifier can produce is a class of the paper, of the prism plate's or the guide's table
+    assert set(np.unique(paths.CLASS_OF)) - {0} <= set(range(1, 13)) | set(paths.PLATE_TABLE) | set(paths.GUIDE_TABLE)
+    assert set(paths.GUIDE_TABLE) - set(paths.PLATE_TABLE) - set(range(1, 13)) == set(range(20, 23))
     assert set(paths.PLATE_TABLE) - set(range(1, 13)) == set(range(13, 20))
 
 

@@ -41,6 +41,7 @@ def sample_rays(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
         band.acc += over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
+        band.cut_at_depth += group.cut_at_depth
         band.transitions |= group.transitions
     # The samples are placed by the filter (importance sampling), so the pixel is their plain mean.
     band.acc /= ctx.samples

@@ -73,7 +73,7 @@ def carrying_tails(ctx: Context, take: Callable[[], tuple[int, int, int] | None]
     generations, first; only its last band's tail is traced alone. Every value is the same bit for
     bit as tracing the bands apart: every operation on the rays is row by row, a band's rays keep
     their order among the others, each band sums into its own slots in ray order (``add_to_pass``),
-    and each band counts its own depth (it stops at ``MAX_DEPTH`` as it would alone)."""
+    and each band counts its own depth (it stops at ``walk.depth_limit`` as it would alone)."""
     tails: list[_Tail] = []
     wave: _Wavefront | None = None
     rays: Rays | None = None
@@ -89,7 +89,7 @@ def carrying_tails(ctx: Context, take: Callable[[], tuple[int, int, int] | None]
         while True:
             if stopped():
                 return
-            ended, counts, rays = _end_tails(tails, wave, rays)
+            ended, counts, rays = _end_tails(tails, wave, rays, walk.depth_limit(ctx))
             for tail in ended:
                 yield tail.index, tail.band
             if not tails or (more and len(rays) < CARRY_RAYS):
@@ -101,19 +101,20 @@ def carrying_tails(ctx: Context, take: Callable[[], tuple[int, int, int] | None]
             rays = walk.next_generation(ctx, wave, rays)
 
 
-def _end_tails(tails: list[_Tail], wave: _Wavefront, rays: Rays) -> tuple[list[_Tail], list[int], Rays]:
+def _end_tails(tails: list[_Tail], wave: _Wavefront, rays: Rays, limit: int) -> tuple[list[_Tail], list[int], Rays]:
     """Take out of ``tails`` the bands (or groups) whose branches have all ended, or reached
-    ``MAX_DEPTH`` (as ``trace_rays``'s loop ends): their passes go back to their own accumulators
-    and the rays of those cut at the depth leave the wavefront. Returns them, every tail's count of
-    rays before (``_rays_per_tail``) and the rays left."""
+    the depth ``limit`` (``walk.depth_limit``, as ``trace_rays``'s loop ends): their passes go back
+    to their own accumulators and the rays of those cut at the depth leave the wavefront. Returns
+    them, every tail's count of rays before (``_rays_per_tail``) and the rays left."""
     counts = _rays_per_tail(tails, rays.pix)
     ended = [(tail, count) for tail, count in zip(tails, counts, strict=True)
-             if count == 0 or tail.depth >= walk.MAX_DEPTH]
+             if count == 0 or tail.depth >= limit]
     for tail, count in ended:
         tails.remove(tail)
         tail.put_back(wave.acc)
         tail.band.max_depth = tail.depth
-        if count:  # MAX_DEPTH: its rays go no further
+        if count:  # the depth limit: its rays go no further
+            tail.band.cut_at_depth += count
             rays = rays.take((rays.pix < tail.lo) | (rays.pix >= tail.hi))
     return [tail for tail, _ in ended], counts, rays
 
@@ -237,7 +238,7 @@ def carrying_samples(ctx: Context, take: Callable[[], tuple[int, int, int] | Non
             return
         if stopped():
             return
-        ended, counts, rays = _end_tails(tails, wave, rays)
+        ended, counts, rays = _end_tails(tails, wave, rays, walk.depth_limit(ctx))
         for tail in ended:
             group = tracing.pop(tail.index)
             if group.toward is None:

@@ -31,7 +31,8 @@ class Context(Lighting):
             self.lamps = spectral.photometric_lamps(self.lamps, scene, self.photometric.bands)
             self.throughput = spectral.Throughput.of(self.lamps, self.photometric.bands)
         self.parts = parts_for(self.lamps)  # the parts a ray can meet, in PARTS's order
-        self.plates = bool(self.lamps.ring_count.any())  # else no ray meets a prism plate or its housing
+        # else no ray meets a prism plate, its housing or a light guide (whose rod is the plate's medium)
+        self.plates = bool(self.lamps.ring_count.any()) or self.lamps.guide is not None
         self.leds = self.lamps.any_leds  # else no ray meets an LED die
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)

@@ -40,6 +40,7 @@ def put_traced(band: Band, toward: np.ndarray, traced: Band) -> None:
         put_slots(acc, toward, values)
     band.segments += traced.segments
     band.max_depth = max(band.max_depth, traced.max_depth)
+    band.cut_at_depth += traced.cut_at_depth
     band.transitions |= traced.transitions
 
 

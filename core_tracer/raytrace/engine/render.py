@@ -47,7 +47,7 @@ class Film:
         self.on_rows, self.on_band = on_rows, on_band
         self.passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
         self.image = np.zeros((height, width, 3), dtype=np.float32)
-        self.stats = {"segments": 0, "max_depth": 0, "transitions": set(), "busy_pixels": 0}
+        self.stats = {"segments": 0, "max_depth": 0, "cut_at_depth": 0, "transitions": set(), "busy_pixels": 0}
         self.workers: set[int] = set()  # the processes that traced bands (0: this one)
 
     def add(self, y0: int, y1: int, band: BandImage) -> None:
@@ -58,6 +58,7 @@ class Film:
         self.stats["segments"] += band.segments
         self.stats["busy_pixels"] += band.busy
         self.stats["max_depth"] = max(self.stats["max_depth"], band.max_depth)
+        self.stats["cut_at_depth"] += band.cut_at_depth
         self.stats["transitions"] |= band.transitions
         self.workers.add(band.process)
         if self.on_rows is not None:

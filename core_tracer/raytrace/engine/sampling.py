@@ -82,6 +82,7 @@ def per_sample(ctx: Context, band: Band, pixels: np.ndarray,
             values[:, :, i0:i0 + len(group_pixels)] = traced
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
+        band.cut_at_depth += group.cut_at_depth
         band.transitions |= group.transitions
     return values
 

@@ -67,6 +67,7 @@ class BandImage:
     max_depth: int
     transitions: set[tuple[int, int, int]]
     process: int = 0  # the id of the worker process that traced it; 0: this process
+    cut_at_depth: int = 0  # branches ended at the depth limit (``Band.cut_at_depth``)
 
     @classmethod
     def of(cls, band: Band, keep_passes: bool) -> BandImage:
@@ -74,7 +75,7 @@ class BandImage:
         acc = band.acc
         # the passes summed in float64, then stored in float32: as the image always was
         return cls(acc.sum(axis=0).astype(np.float32), acc.astype(np.float32) if keep_passes else None,
-                   band.segments, band.busy, band.max_depth, band.transitions)
+                   band.segments, band.busy, band.max_depth, band.transitions, cut_at_depth=band.cut_at_depth)
 
 
 def worker_bands(ctx: Context, take: Callable[[], tuple[int, int, int] | None],

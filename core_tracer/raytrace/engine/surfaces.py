@@ -163,9 +163,13 @@ def fresnel_split(k: np.ndarray, d: np.ndarray, facing: np.ndarray, n1: np.ndarr
     cos_i_clipped = np.clip(cos_i, 0.0, 1.0)
     eta = n1 / n2
     partial = (1.0 - cos_i_clipped * cos_i_clipped) * (eta * eta) < 1.0  # Snell has a transmitted ray
-    r_s, r_p = optics.fresnel_polarised(cos_i_clipped[:, None], band_n1, band_n2)
-    r_s = np.where(partial[:, None], r_s, 1.0)
-    r_p = np.where(partial[:, None], r_p, 1.0)
+    # Fresnel's equations only where some light crosses: total internal reflection reflects every band
+    # whole (most of a light guide's segments), the same values as the equations' own TIR branch
+    r_s, r_p = np.ones(k.shape), np.ones(k.shape)
+    crossing = np.nonzero(partial)[0]
+    if len(crossing):
+        r_s[crossing], r_p[crossing] = optics.fresnel_polarised(
+            cos_i_clipped[crossing, None], _rows_of(band_n1, crossing), _rows_of(band_n2, crossing))
     k_p = k - k_s
     reflected_s, reflected_p = k_s * r_s, k_p * r_p
     transmitted_s, transmitted_p = k_s * (1.0 - r_s), k_p * (1.0 - r_p)
@@ -184,6 +188,11 @@ def split_at_face(k: np.ndarray, k_s: np.ndarray, d: np.ndarray, facing: np.ndar
         return fresnel_split(k, d, facing, n1, n2)
     inside = from_inside[:, None]
     return fresnel_split(k, d, facing, n1, n2, k_s, np.where(inside, band_n, 1.0), np.where(inside, 1.0, band_n))
+
+
+def _rows_of(values: np.ndarray | float, sel: np.ndarray) -> np.ndarray | float:
+    """The rows ``sel`` of per-ray values (N, K), or a value shared by all rays as it is."""
+    return rows(values, sel) if isinstance(values, np.ndarray) and values.ndim == 2 else values
 
 
 @dataclass

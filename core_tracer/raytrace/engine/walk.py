@@ -19,7 +19,19 @@ from .eyes import first_hits, put_traced, rays_toward_body
 from .rays import BULB_PASS, SIDE_WALL_PASS, SOCKET_PASS, UNPOLARISED, UNRECORDED, Band, Rays, concat
 from .surfaces import at_lens_face, at_plate_face, at_reflector
 
-MAX_DEPTH = 64  # safety net on the number of segments along one branch
+# The depth limit (docs/photometric.md, light guides): at most this many segments along one branch;
+# the branches still alive there end, counted in ``Band.cut_at_depth`` and the render's statistics.
+MAX_DEPTH = 64
+# A light guide's paths are long: light runs along the rod by total internal reflection, one segment
+# a reflection, some 30 to 100 of them from a prism to the LED along a guide 50 to 150 mm long and 4 to
+# 6 mm thick (a ray at the critical angle meets a wall every thickness / tan 42° of its length). A
+# lamp with a guide is walked to this depth instead.
+GUIDE_MAX_DEPTH = 256
+
+
+def depth_limit(ctx: Context) -> int:
+    """The depth limit of a render: ``GUIDE_MAX_DEPTH`` when a lamp has a light guide, else ``MAX_DEPTH``."""
+    return GUIDE_MAX_DEPTH if ctx.lamps.guide is not None else MAX_DEPTH
 
 
 def trace_eye_rays(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> None:
@@ -40,12 +52,13 @@ def trace_rays(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, slots: np
     every branch."""
     band.segments += len(o)
     rays = first_generation(ctx, band, o, d, np.arange(len(o)) if slots is None else slots)
-    depth = 1
-    while len(rays) and depth < MAX_DEPTH:
+    depth, limit = 1, depth_limit(ctx)
+    while len(rays) and depth < limit:
         band.segments += len(rays)
         rays = next_generation(ctx, band, rays)
         depth += 1
     band.max_depth = depth
+    band.cut_at_depth += len(rays)
 
 
 class Walker(Protocol):
@@ -197,7 +210,9 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
         faces = surface.take(met)
         children.extend(at_lens_face(ctx, band, rays, met, rows(k, met), d, hit, cls.take(met), faces,
                                      normals_at(normals, met, faces)))
-    met = np.nonzero((surface == P.PLATE_FRONT) | (surface == P.RINGS))[0] if ctx.plates else ()
+    # the lamp's second dielectric: a prism plate's faces or a light guide's rod
+    second = (surface == P.PLATE_FRONT) | (surface == P.RINGS) | (surface == P.GUIDE) if ctx.plates else None
+    met = np.nonzero(second)[0] if ctx.plates else ()
     if len(met):
         d, hit = _end_points(rays, t, met)
         faces = surface.take(met)

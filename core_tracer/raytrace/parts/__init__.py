@@ -16,18 +16,31 @@ eye rays, in the world frame, meet it.
 
 from __future__ import annotations
 
-from . import bulb, cut_surface, housing, led_die, outer_face, plate_front, prism_rings, reflector, side_wall, socket
+from . import (
+    bulb,
+    cut_surface,
+    housing,
+    led_die,
+    light_guide,
+    outer_face,
+    plate_front,
+    prism_rings,
+    reflector,
+    side_wall,
+    socket,
+)
 from .base import Part
 
 # ``cut_surface`` hands each ray to its lamp's cut type: ``cuts`` (fish-eye), ``sawtooth`` or ``flutes``.
 PARTS: tuple[Part, ...] = (housing, side_wall, plate_front, prism_rings, reflector, bulb, socket, led_die,
-                           cut_surface, outer_face)
+                           light_guide, cut_surface, outer_face)
 
 
 def parts_for(lamps) -> tuple[Part, ...]:
     """``PARTS`` for these lamps: without the prism plate's parts when no lamp has a plate, without
-    the LED dies when no lamp has LEDs, without the bulb and socket when every lamp has LEDs (every
-    ray would only find ``inf`` there, at the cost of their gathers)."""
+    the LED dies when no lamp has LEDs, without the bulb and socket when every lamp has LEDs, without
+    the light guide when no lamp has one (every ray would only find ``inf`` there, at the cost of
+    their gathers)."""
     left_out: set = set()
     if not lamps.ring_count.any():
         left_out |= {housing, plate_front, prism_rings}
@@ -35,4 +48,6 @@ def parts_for(lamps) -> tuple[Part, ...]:
         left_out.add(led_die)
     if not lamps.has_bulb.any():
         left_out |= {bulb, socket}
+    if lamps.guide is None:
+        left_out.add(light_guide)
     return tuple(part for part in PARTS if part not in left_out)

@@ -1,0 +1,76 @@
+"""The light guides of a design's lamps as arrays indexed by lamp number (docs/photometric.md, light
+guides): where each guide lies in its lamp's frame, its cross-section and its extraction prisms (its
+LEDs are the lamp's own dies). A lamp without a guide has ``present`` 0 and no ray meets its row."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class GuideTable:
+    """Per lamp (L rows): a straight rod from its first end face (``start``, s = 0) along ``axis`` to
+    s = ``length``; u across it in the lens plane, v along the lamp axis (+y, the guide's back).
+    Material: the lamp's second dielectric (``LampTable.plate_ior``, ``plate_absorption``): a lamp
+    has a prism plate or a guide, never both."""
+
+    present: np.ndarray  # (L,) 1 where the lamp has a guide
+    start: np.ndarray  # (L, 3) centre of the first end face, lamp frame
+    axis: np.ndarray  # (L, 3) unit vector along the guide
+    across: np.ndarray  # (L, 3) unit vector across it in the lens plane (u)
+    round: np.ndarray  # (L,) 1 for a round rod (radius half_u), 0 for a rectangular one
+    half_u: np.ndarray  # half width across (the radius when round)
+    half_v: np.ndarray  # half thickness along y (the radius when round)
+    length: np.ndarray
+    pitch: np.ndarray  # prism spacing along s
+    prism_depth: np.ndarray  # 0: no prisms
+    slope: np.ndarray  # tan of the facets' angle to the axis
+    prisms: np.ndarray  # (L,) number of prisms
+    first_prism: np.ndarray  # s of the first prism's apex line
+
+    @property
+    def any(self) -> bool:
+        return bool(self.present.any())
+
+    @classmethod
+    def from_scene(cls, scene: dict) -> GuideTable:
+        rows = [_row(lamp.get("light_guide")) for lamp in scene["lamps"]]
+        return cls(**{key: np.array([r[key] for r in rows], dtype=np.float64) for key in rows[0]})
+
+
+def prism_layout(length: float, pitch: float, depth: float, slope: float) -> tuple[int, float]:
+    """(number of prisms, s of the first apex): V grooves of depth ``depth`` whose facets rise at
+    ``slope`` (tan) are 2 depth / slope wide; as many as fit along ``length`` at ``pitch``, the row
+    centred on the guide."""
+    if depth <= 0.0:
+        return 0, 0.0
+    width = 2.0 * depth / slope
+    if width > length:
+        return 0, 0.0
+    count = int(math.floor((length - width) / pitch + 1e-9)) + 1
+    return count, 0.5 * (length - (count - 1) * pitch)
+
+
+def _row(guide: dict | None) -> dict:
+    if not guide or not guide.get("enabled"):
+        zero3 = [0.0, 0.0, 0.0]
+        return dict(present=0.0, start=zero3, axis=[1.0, 0.0, 0.0], across=[0.0, 0.0, 1.0], round=1.0, half_u=1.0,
+                    half_v=1.0, length=1.0, pitch=1.0, prism_depth=0.0, slope=1.0, prisms=0.0, first_prism=0.0,)
+    theta = math.radians(guide["orientation"])
+    axis = [math.cos(theta), 0.0, math.sin(theta)]
+    across = [-math.sin(theta), 0.0, math.cos(theta)]
+    length = guide["length"]
+    cx, cz = guide["center"]
+    start = [cx - 0.5 * length * axis[0], guide["depth"], cz - 0.5 * length * axis[2]]
+    if guide["section"] == "round":
+        half_u = half_v = 0.5 * guide["diameter"]
+    else:
+        half_u, half_v = 0.5 * guide["width"], 0.5 * guide["thickness"]
+    slope = math.tan(math.radians(guide["prism_angle"]))
+    count, first = prism_layout(length, guide["prism_pitch"], guide["prism_depth"], slope)
+    return dict(present=1.0, start=start, axis=axis, across=across, round=float(guide["section"] == "round"),
+                half_u=half_u, half_v=half_v, length=length, pitch=guide["prism_pitch"],
+                prism_depth=guide["prism_depth"] if count else 0.0, slope=slope, prisms=float(count),first_prism=first)

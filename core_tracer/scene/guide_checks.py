@@ -1,0 +1,52 @@
+"""The rules of a light guide (docs/photometric.md, light guides) that relate several fields: the
+photometric mode, the lamp's LEDs to light it, no prism plate beside it, prisms that fit the rod and
+each other, a rod behind the lens's cuts. Each raises ``SceneError`` naming the field to change."""
+
+from __future__ import annotations
+
+import math
+
+from . import spec as S
+from .derived import lamp_geometry
+from .messages import rounded
+from .reading import SceneError
+
+
+def check_light_guide(scene: dict, i: int) -> None:
+    """Raise for the first rule lamps[i]'s light guide breaks (nothing without a guide)."""
+    lamp = scene["lamps"][i]
+    guide = lamp.get("light_guide")
+    if not guide or not guide["enabled"]:
+        return
+    where = f"lamps[{i}].light_guide"
+    if scene.get("light_model", "paper") != "photometric":
+        raise SceneError(f"{where}.enabled", 'a light guide needs light_model "photometric"; allowed false in the '
+                                             "paper mode")
+    if lamp.get("source", "bulb") != "led":
+        raise SceneError(f"{where}.enabled", 'a light guide is lit by the lamp\'s LEDs; allowed with source "led" '
+                                             "(the led section placed facing an end face)")
+    if lamp.get("collection", "reflector") == "prism_plate":
+        raise SceneError(f"{where}.enabled", "a lamp with a prism plate cannot have a light guide too; allowed false "
+                                             'with collection "prism_plate"')
+    round_rod = guide["section"] == "round"
+    thickness = guide["diameter"] if round_rod else guide["thickness"]
+    depth, pitch = guide["prism_depth"], guide["prism_pitch"]
+    if depth >= 0.5 * thickness:
+        raise SceneError(f"{where}.prism_depth", f"{depth:g} cuts half through the rod ({thickness:g} mm thick); "
+                                                 f"allowed [0, {rounded(0.5 * thickness, False)}) mm")
+    if depth > 0:
+        width = 2.0 * depth / math.tan(math.radians(guide["prism_angle"]))
+        if width > pitch:
+            deepest = 0.5 * pitch * math.tan(math.radians(guide["prism_angle"]))
+            raise SceneError(f"{where}.prism_depth", f"{depth:g} makes each prism {width:.3g} mm wide, wider than "
+                                                     f"their pitch {pitch:g} mm; allowed at most {deepest:.3g} mm")
+        if guide["length"] / pitch > S.MAX_GUIDE_PRISMS:
+            raise SceneError(f"{where}.prism_pitch", f"{pitch:g} gives more than {S.MAX_GUIDE_PRISMS} prisms along "
+                                                     f"{guide['length']:g} mm; allowed at least "
+                                                     f"{guide['length'] / S.MAX_GUIDE_PRISMS:.3g} mm")
+    front = guide["depth"] - 0.5 * thickness
+    apexes = lamp_geometry(lamp)["plane_b"]
+    if front <= apexes:
+        raise SceneError(f"{where}.depth", f"{guide['depth']:g} puts the guide's front {front:.3g} mm deep, into the "
+                                           f"lens (its cuts reach {apexes:.3g} mm); allowed more than "
+                                           f"{apexes + 0.5 * thickness:.4g} mm")

@@ -1,0 +1,169 @@
+"""The light guide (docs/photometric.md, light guides): its geometry against brute force, and the
+flux through a clear guide against its closed form."""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from core_tracer.measures.guide_flux import far_end_flux
+from core_tracer.raytrace.engine import make_context
+from core_tracer.raytrace.parts import light_guide
+from core_tracer.raytrace.parts.base import Segments
+from core_tracer.scene.validate import parse_scene
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def guide_scene(**guide) -> dict:
+    """The photometric tail lamp lit by an LED and a light guide behind its lens (``on``: the lamp's switch)."""
+    scene = json.loads((ROOT / "presets" / "photometric-tail-lamp.json").read_text())
+    lamp = scene["lamps"][0]
+    lamp["reflector"]["focal_length"] = 10.0
+    settings = dict(enabled=True, section="rectangular", width=4.0, thickness=4.0, length=60.0, depth=15.0,
+                    prism_depth=0.0, material="pmma", filter="custom", filter_edge_nm=500.0, filter_slope_nm=40.0,
+                    filter_range=[0.90, 0.97], filter_thickness=10.0)
+    settings.update(guide)
+    lamp["light_guide"] = settings
+    # the lamp's LED: one 1 mm die of 20 lm facing the first end face, 0.1 µm from it
+    lamp["source"] = "led"
+    lamp["led"] = dict(position=[-settings["length"] / 2 - 1e-4, settings["depth"], 0.0], normal=[1.0, 0.0, 0.0],
+                       die_size=[1.0, 1.0], flux_lm=20.0, spectrum="red_led")
+    return parse_scene(scene)
+
+
+def fresnel_sp(cos_i: np.ndarray, n1: float, n2: float) -> tuple[np.ndarray, np.ndarray]:
+    """The s and p reflectances (Hecht, Optics, 5th ed., eqs. 4.34 and 4.40); 1 in total reflection."""
+    sin_t = n1 / n2 * np.sqrt(1.0 - cos_i**2)
+    cos_t = np.sqrt(np.clip(1.0 - sin_t**2, 0.0, None))
+    rs = ((n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)) ** 2
+    rp = ((n1 * cos_t - n2 * cos_i) / (n1 * cos_t + n2 * cos_i)) ** 2
+    total = sin_t >= 1.0
+    return np.where(total, 1.0, rs), np.where(total, 1.0, rp)
+
+
+def closed_form_out(scene: dict) -> float:
+    """Flux (lm) out of the far end of a clear guide lit by a Lambertian die at its first end:
+
+        Φ_out = Σ_λ Φ(λ) ∫₀^{π/2} 2 sin θ cos θ Σ_{s,p} ½ T(θ)² a / (1 − R(θ)² a²) dθ,
+
+    a = exp(−α(λ) L / cos θ') the internal transmittance along the rod at the refracted angle θ'
+    (sin θ' = sin θ / n(λ)); T = 1 − R the transmittance of each end face, the same from inside at θ'
+    as from the air at θ (Stokes), the geometric series the light reflected back and forth between
+    the end faces. Every ray that enters is trapped: θ' ≤ θ_c, so the side walls meet it at ≥ 90° − θ_c
+    > θ_c (n > √2)."""
+    ctx = make_context(scene, 1, 1)
+    lamps, guide = ctx.lamps, ctx.lamps.guide
+    n_bands = lamps.plate_ior_bands[0]
+    alpha = lamps.plate_absorption[0]
+    area = 4.0 * lamps.led_half[0, 0] * lamps.led_half[0, 1] * 1e-6  # m²
+    flux_lm = math.pi * lamps.led_radiance[0] * area * ctx.photometric.to_xyz[:, 1]  # lm per band: Φ = π L A
+    theta = (np.arange(20000) + 0.5) * (0.5 * math.pi / 20000)
+    weight = 2.0 * np.sin(theta) * np.cos(theta) * (0.5 * math.pi / 20000)
+    out = 0.0
+    for n, a_mm, lm in zip(n_bands, alpha, flux_lm, strict=True):
+        cos_t = np.sqrt(1.0 - (np.sin(theta) / n) ** 2)
+        a = np.exp(-a_mm * guide.length[0] / cos_t)
+        per_angle = 0.0
+        for r in fresnel_sp(np.cos(theta), 1.0, n):
+            per_angle = per_angle + 0.5 * (1.0 - r) ** 2 * a / (1.0 - r**2 * a**2)
+        out += lm * float((weight * per_angle).sum())
+    return out
+
+
+def test_a_clear_guide_passes_its_closed_form_flux():
+    scene = guide_scene()
+    expected = closed_form_out(scene)
+    measured = far_end_flux(scene, photons=40_000, seed=3)
+    assert measured.emitted_lm == pytest.approx(20.0, rel=1e-9)
+    # the rod absorbs a little: out of 20 lm, the two end faces' Fresnel losses and the bulk's
+    assert 0.6 * 20.0 < expected < 0.9 * 20.0
+    assert measured.out_lm == pytest.approx(expected, rel=0.01), (measured, expected)
+    assert measured.stderr_lm < 0.003 * expected
+    # the few branches near the critical angle at the end faces, bouncing between them, end at the limit
+    assert measured.cut_at_depth < 0.01 * 40_000
+
+
+def _brute_inside(points: np.ndarray, scene: dict) -> np.ndarray:
+    ctx = make_context(scene, 1, 1)
+    g = ctx.lamps.guide
+    lamp = np.zeros(len(points), int)
+    s, u, v, *_ = light_guide.to_guide(points, np.zeros_like(points), g, lamp)
+    return light_guide.inside(s, u, v, light_guide.gathered(g, lamp))
+
+
+@pytest.mark.parametrize("section", ["round", "rectangular"])
+def test_guide_hits_are_where_a_fine_march_finds_the_boundary(section):
+    """Random rays from points in and around the rod: the hit is the first change of inside/outside
+    along a fine march (0.01 mm steps), to within the step, and the normal points out of the rod."""
+    scene = guide_scene(section=section, diameter=5.0, prism_depth=0.8, prism_pitch=3.0, prism_angle=50.0,
+                        length=20.0)
+    ctx = make_context(scene, 1, 1)
+    rng = np.random.default_rng(5)
+    n = 400
+    g = ctx.lamps.guide
+    centre = g.start[0] + 10.0 * g.axis[0]
+    o = centre + rng.uniform(-1, 1, (n, 3)) * np.array([12.0, 3.5, 3.5])
+    d = rng.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    lamp = np.zeros(n, int)
+    t, normal = light_guide.intersect(Segments(o, d, lamp, np.zeros(n, np.int8), np.zeros(n, np.int8)),
+                                      ctx.lamps, np.full(n, np.inf))
+    steps = np.arange(1, 4001) * 0.01
+    start_inside = _brute_inside(o, scene)
+    checked = 0
+    for i in range(n):
+        inside = _brute_inside(o[i] + steps[:, None] * d[i], scene)
+        change = np.nonzero(inside != start_inside[i])[0]
+        if not len(change):
+            assert not np.isfinite(t[i]) or t[i] > steps[-1] - 0.02
+            continue
+        checked += 1
+        first = steps[change[0]]
+        assert first - 0.011 <= t[i] <= first + 1e-9, (i, t[i], first)
+        # out of the material: the inside lies behind the normal
+        hit = o[i] + t[i] * d[i]
+        assert _brute_inside((hit - 0.003 * normal[i])[None], scene)[0]
+        assert not _brute_inside((hit + 0.003 * normal[i])[None], scene)[0]
+    assert checked > 100
+
+
+def test_lamps_without_a_guide_have_no_guide_parts():
+    scene = json.loads((ROOT / "presets" / "photometric-tail-lamp.json").read_text())
+    ctx = make_context(parse_scene(copy.deepcopy(scene)), 1, 1)
+    assert ctx.lamps.guide is None
+    assert light_guide not in ctx.parts
+
+
+@pytest.mark.parametrize(("change", "field", "words"), [
+    (dict(light_model="paper"), "lamps[0].light_guide.enabled", 'needs light_model "photometric"'),
+    (dict(prism_depth=2.5), "lamps[0].light_guide.prism_depth", "allowed [0, 2)"),
+    (dict(prism_depth=1.5, prism_pitch=2.0), "lamps[0].light_guide.prism_depth", "wider than their pitch"),
+    (dict(source="bulb"), "lamps[0].light_guide.enabled", 'allowed with source "led"'),
+    (dict(depth=4.0), "lamps[0].light_guide.depth", "into the lens"),
+])
+def test_a_guide_that_cannot_be_is_refused_in_one_line_naming_the_field(change, field, words):
+    from core_tracer.scene.reading import SceneError
+    scene = json.loads((ROOT / "presets" / "photometric-tail-lamp.json").read_text())
+    lamp = scene["lamps"][0]
+    lamp["reflector"]["focal_length"] = 10.0
+    lamp["bulb"]["on"] = False
+    guide = dict(enabled=True, section="rectangular", width=4.0, thickness=4.0, length=60.0, depth=15.0)
+    lamp["source"] = "led"
+    lamp["led"] = dict(position=[-30.5, 15.0, 0.0], normal=[1.0, 0.0, 0.0])
+    if "light_model" in change:
+        scene["light_model"] = change["light_model"]
+    elif "source" in change:
+        lamp["source"] = change["source"]
+    else:
+        guide.update(change)
+    lamp["light_guide"] = guide
+    with pytest.raises(SceneError) as caught:
+        parse_scene(scene)
+    assert caught.value.path == field, str(caught.value)
+    assert words in str(caught.value) and "\n" not in str(caught.value)
