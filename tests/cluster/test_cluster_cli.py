@@ -10,7 +10,16 @@ import subprocess
 import time
 
 import pytest
-from helpers import BASELINE, ROOT, cli_command, process_gone, run_cli, signal_and_wait, start_cli_at
+from helpers import (
+    BASELINE,
+    ROOT,
+    cli_command,
+    descendants,
+    process_gone,
+    run_cli,
+    signal_and_wait,
+    start_cli_at,
+)
 
 from core_tracer.checkpoints import ENV_MARKER, ENV_POINT
 
@@ -18,21 +27,6 @@ pytestmark = [pytest.mark.slow, pytest.mark.skipif(not os.path.isdir("/proc"), r
 
 STUDY = ("study", BASELINE, "--vary", "lens.ior=1.4:1.6:3", "--size", "64x64", "--workers", "2",
          "--engine", "dask")
-
-
-def descendants(pid: int) -> list[int]:
-    out, todo = [], [pid]
-    while todo:
-        p = todo.pop()
-        try:
-            for task in os.listdir(f"/proc/{p}/task"):
-                with open(f"/proc/{p}/task/{task}/children") as f:
-                    kids = [int(c) for c in f.read().split()]
-                out += kids
-                todo += kids
-        except FileNotFoundError:
-            continue
-    return out
 
 
 def environment(tmp_path) -> dict:
