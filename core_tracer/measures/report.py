@@ -21,7 +21,7 @@ import numpy as np
 from . import colour, regulation_grid
 from .directions import direction
 from .homogeneity import DEFAULT_DISTANCE_M, homogeneity
-from .intensity import lamp_of_pixels, measurement_scene, render_view, rendered_intensities, view_along
+from .intensity import intensities_at, lamp_of_pixels, measurement_scene, render_view, view_along
 
 # function -> (UN R148 key, FMVSS 108 key, signal colour)
 FUNCTIONS: dict[str, tuple[str, str, str]] = {
@@ -106,11 +106,16 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
             wanted.update(dict.fromkeys(regulation_grid.directions_for(key)))
     measured: dict[str, dict] = {n: {} for n in names}
     xyz_at_axis: dict[str, np.ndarray] = {}
-    for k, (h, v) in enumerate(wanted):
-        if k % 10 == 0:
-            say(f"intensity: direction {k + 1} of {len(wanted)}")
-        for name, value in zip(names, rendered_intensities(scene, h, v, groups, pixel_mm=pixel_mm,
-                                                           replicates=replicates, seed=k), strict=True):
+
+    def counted(done: int, total: int) -> None:
+        if done % 10 == 0 and done < total:
+            say(f"intensity: direction {done + 1} of {total}")
+
+    say(f"intensity: direction 1 of {len(wanted)}")
+    values = intensities_at(scene, list(wanted), groups, seeds=range(len(wanted)), progress=counted,
+                            pixel_mm=pixel_mm, replicates=replicates)  # on the local pool: intensity.py
+    for (h, v), at in zip(wanted, values, strict=True):
+        for name, value in zip(names, at, strict=True):
             measured[name][(h, v)] = (value.cd, value.stderr)
             if (h, v) == (0.0, 0.0):
                 xyz_at_axis[name] = value.xyz
