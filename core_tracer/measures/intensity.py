@@ -229,13 +229,15 @@ def pool_workers(scene: dict, directions: int, pixel_mm: float) -> int:
     """How many processes measure ``directions`` directions: one per core, at most one per
     direction, and as many as the memory budget holds beside this process (``budget``): each a band
     worker's figure (``budget.WORKER_BYTES``) and its largest view's image. 1 below
-    ``MIN_POOLED_DIRECTIONS`` and inside Blender, whose process is not to be forked."""
+    ``MIN_POOLED_DIRECTIONS``, inside Blender, whose process is not to be forked, and in a worker
+    process (a study's or a trial's task, on the pool or on Dask: its siblings have the cores)."""
+    import multiprocessing
     import os
     import sys
 
     from .. import budget
 
-    if directions < MIN_POOLED_DIRECTIONS or "bpy" in sys.modules:
+    if directions < MIN_POOLED_DIRECTIONS or "bpy" in sys.modules or multiprocessing.parent_process() is not None:
         return 1
     lo, hi = body_box.body_box(scene["body"])  # no view is wider than the window's diagonal
     side = math.ceil(float(np.linalg.norm(hi - lo)) / pixel_mm + 2 * WINDOW_MARGIN_MM / pixel_mm) + 2

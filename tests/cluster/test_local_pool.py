@@ -1,49 +1,37 @@
 """The local worker pool (``cluster.local_pool``, issue 34 item 3): a study's cells on this machine
-without Dask's start-up, the same images as one process, the cell cache, and Ctrl-C/SIGTERM ending
-in one line with no worker left."""
+without Dask's start-up and without Dask, the same images as one process. (Its cache and its
+Ctrl-C/SIGTERM are checked with the Dask engine's, tests/cluster/test_cluster_cli.py.)"""
 
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
-from helpers import BASELINE, ROOT, descendants, process_gone, run_cli, signal_and_wait, start_cli_at
+from helpers import BASELINE, ROOT, run_cli
 
 from core_tracer.cluster import local_pool
 from core_tracer.images.imageio import read_image
 
 pytestmark = [pytest.mark.slow, pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads /proc")]
 
-STUDY = ("study", BASELINE, "--vary", "lens.ior=1.4:1.6:3", "--size", "48x48", "--workers", "2")
+STUDY = ("study", BASELINE, "--vary", "lens.ior=1.4:1.6:3", "--size", "48x48")
 
 
 def environment(tmp_path) -> dict:
-    temp = tmp_path / "tmp"
-    temp.mkdir(exist_ok=True)
-    env = dict(os.environ, TMPDIR=str(temp), LAMP_STYLING_CACHE=str(tmp_path / "cache"))
-    env.pop("DASK_SCHEDULER_ADDRESS", None)
+    env = dict(os.environ, LAMP_STYLING_CACHE=str(tmp_path / "cache"))
+    env.pop("DASK_SCHEDULER_ADDRESS", None)  # the default engine is then the local pool
     return env
 
 
-def test_a_default_study_runs_on_the_pool_as_one_process_renders_it_and_then_from_its_cache(tmp_path):
+def test_a_study_on_the_pool_is_the_same_sheet_as_in_one_process(tmp_path):
     env = environment(tmp_path)
-    first = run_cli(*STUDY, "-o", tmp_path / "pool.exr", env=env)
-    assert first.returncode == 0, first.stderr
-    assert "on the local worker pool: 2 worker processes x 1 thread" in first.stdout
-    assert "(3 rendered, 0 from the cache)" in first.stdout
-    here = run_cli(*STUDY[:-2], "--workers", "0", "-o", tmp_path / "here.exr", env=env)
-    assert here.returncode == 0, here.stderr
+    for name, engine in (("pool.exr", ()), ("here.exr", ("--workers", "0"))):
+        done = run_cli(*STUDY, *engine, "--no-cache", "-o", tmp_path / name, env=env)
+        assert done.returncode == 0, done.stderr
     assert np.array_equal(read_image(str(tmp_path / "pool.exr"))[0], read_image(str(tmp_path / "here.exr"))[0])
-    wider = [a if a != "lens.ior=1.4:1.6:3" else "lens.ior=1.4,1.5,1.6,1.7" for a in STUDY]
-    second = run_cli(*wider, "-o", tmp_path / "b.exr", env=env)
-    assert second.returncode == 0, second.stderr
-    assert "(1 rendered, 3 from the cache)" in second.stdout  # 1.7 is new
-    assert os.listdir(tmp_path / "tmp") == []
 
 
 def test_the_local_path_needs_no_dask_and_starts_at_once(tmp_path):
@@ -78,24 +66,3 @@ def test_a_scheduler_by_name_or_address_goes_to_dask(monkeypatch):
     assert local_pool.dask_wanted("local") and local_pool.dask_wanted("tcp://10.0.0.1:8786")
     monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://10.0.0.1:8786")
     assert local_pool.dask_wanted(None)
-
-
-@pytest.mark.parametrize("point, sig", [("study:started", signal.SIGINT), ("study:variant", signal.SIGTERM),
-                                        ("study:variant", signal.SIGINT)])
-def test_a_signal_during_a_pool_study_leaves_nothing(tmp_path, point, sig):
-    env = environment(tmp_path)
-    out = tmp_path / "out"
-    out.mkdir()
-    big = [a if a != "48x48" else "256x256" for a in STUDY]
-    proc = start_cli_at(point, tmp_path / "reached", *big, "-o", out / "sheet.png", env=env)
-    family = descendants(proc.pid)
-    stdout, err = signal_and_wait(proc, sig)
-    expected = (130, "interrupted") if sig == signal.SIGINT else (143, "terminated")
-    assert (proc.returncode, err.strip()) == expected, err
-    assert stdout == "" and os.listdir(out) == [] and os.listdir(tmp_path / "tmp") == []
-    if point == "study:variant":
-        assert len(family) >= 2  # the pool's workers ran (they are forked at the first task, after study:started)
-    deadline = time.monotonic() + 10
-    while not all(process_gone(p) for p in family):
-        assert time.monotonic() < deadline, [p for p in family if not process_gone(p)]
-        time.sleep(0.05)

@@ -39,3 +39,14 @@ def test_the_pool_is_sized_by_the_memory_budget_before_it_starts(repo_root, monk
     assert intensity.pool_workers(scene, 3, 2.0) == 1  # too few directions to share
     monkeypatch.setattr(budget, "MEMORY_BUDGET", budget.BASE_BYTES + budget.WORKER_BYTES + 2**20)
     assert intensity.pool_workers(scene, 45, 2.0) == 1  # one worker's figure does not fit beside this process
+
+
+@pytest.mark.slow
+def test_a_worker_measures_its_directions_itself(repo_root):
+    """A study's or a trial's task already runs in a worker beside others: it starts no pool of its own."""
+    from core_tracer.cluster.local_pool import LocalPool
+
+    scene = load_scene(repo_root / "presets" / "photometric-stop-lamp.json")
+    with LocalPool(1) as pool:
+        assert pool.submit(intensity.pool_workers, scene, 45, 2.0).result() == 1
+    assert intensity.pool_workers(scene, 45, 2.0) > 1 or (__import__("os").cpu_count() or 1) == 1
