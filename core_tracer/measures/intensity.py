@@ -227,8 +227,9 @@ def _direction_task(scene: dict, h_deg: float, v_deg: float, groups, seed: int, 
 
 def pool_workers(scene: dict, directions: int, pixel_mm: float) -> int:
     """How many processes measure ``directions`` directions: one per core, at most one per
-    direction, and as many as the memory budget holds beside this process (``budget``): each a band
-    worker's figure (``budget.WORKER_BYTES``) and its largest view's image. 1 below
+    direction, and as many as the memory budget holds beside this process and its band pool's
+    workers (``budget``): each a band worker's figure (``budget.WORKER_BYTES``) and its largest
+    view's image. 1 below
     ``MIN_POOLED_DIRECTIONS``, inside Blender, whose process is not to be forked, and in a worker
     process (a study's or a trial's task, on the pool or on Dask: its siblings have the cores)."""
     import multiprocessing
@@ -242,7 +243,10 @@ def pool_workers(scene: dict, directions: int, pixel_mm: float) -> int:
     lo, hi = body_box.body_box(scene["body"])  # no view is wider than the window's diagonal
     side = math.ceil(float(np.linalg.norm(hi - lo)) / pixel_mm + 2 * WINDOW_MARGIN_MM / pixel_mm) + 2
     per_worker = budget.WORKER_BYTES + budget.render_bytes(side, side, False, "exr") - budget.BASE_BYTES
-    fits = (budget.MEMORY_BUDGET - budget.BASE_BYTES) // per_worker
+    from ..raytrace import band_pool
+
+    beside = budget.BASE_BYTES + band_pool.running_workers() * budget.WORKER_BYTES  # this process and its band pool
+    fits = (budget.MEMORY_BUDGET - beside) // per_worker
     return int(max(1, min(os.cpu_count() or 1, directions, fits)))
 
 

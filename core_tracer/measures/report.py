@@ -90,6 +90,7 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
     """Every measure of a photometric design (module docstring)."""
     say = progress or (lambda text: None)
     measurement_scene(scene)  # refuses a paper-mode scene at once, naming light_model
+    _band_pool(PICTURE_WIDTH, PICTURE_WIDTH)  # started now, its workers are ready for lamp_picture
     by_function: dict[str, list[int]] = {}
     for i, lamp in enumerate(scene["lamps"]):
         name = (functions or {}).get(i) or lamp_function(lamp)
@@ -329,7 +330,27 @@ def _chromaticity_plot(ax, result: Measures) -> None:
     ax.grid(True, color="0.92")
 
 
-def lamp_picture(scene: dict, width: int = 520) -> np.ndarray:
+def _band_pool(width: int, height: int):
+    """The band pool for the picture, when its workers fit the memory budget beside this process
+    (``budget.render_bytes``) and this process is not itself a worker: a measure lasts long enough
+    for the pool's 0.2 s start-up to pay even below ``budget.POOL_RAYS``; None: threads."""
+    import multiprocessing
+    import os
+
+    from .. import budget
+    from ..raytrace import band_pool
+
+    workers = os.cpu_count() or 1
+    if workers < 2 or multiprocessing.parent_process() is not None or \
+            budget.render_bytes(width, height, False, "exr", workers=workers) > budget.MEMORY_BUDGET:
+        return None
+    return band_pool.shared()
+
+
+PICTURE_WIDTH = 520
+
+
+def lamp_picture(scene: dict, width: int = PICTURE_WIDTH) -> np.ndarray:
     """The design as its camera sees it (photometric render, the scene's exposure, Blender's default
     view), as display RGB in [0, 1]."""
     from ..images import display
@@ -337,6 +358,8 @@ def lamp_picture(scene: dict, width: int = 520) -> np.ndarray:
     from ..raytrace.engine import render_passes
 
     height = max(1, round(width * scene["image"]["height"] / scene["image"]["width"]))
-    image = render_passes(scene, width, height, keep_passes=False, samples=min(4, scene["image"]["samples"])).image
+    samples = min(4, scene["image"]["samples"])
+    pool = _band_pool(width, height)
+    image = render_passes(scene, width, height, keep_passes=False, samples=samples, pool=pool).image
     ev100 = spectral.exposure_ev100(image, scene)
     return display.view_transform().to_display(spectral.display_linear(image, ev100))
