@@ -123,7 +123,7 @@ class LocalPool:
         context = multiprocessing.get_context("fork" if sys.platform.startswith("linux") else "spawn")
         self.stop = context.Event()
         self.executor = concurrent.futures.ProcessPoolExecutor(count, mp_context=context, initializer=_start_worker,
-                                                               initargs=(self.stop,))
+                                                               initargs=(self.stop, os.getpid()))
         self.cancelled = False
 
     def submit(self, function: Callable, *args, key: str | None = None, pure: bool = False, workers=None,
@@ -175,12 +175,14 @@ class LocalPool:
 # glibc's mallopt parameters (malloc.h), set to processes._KEEP_FREED_MEMORY's values: a forked
 # worker's allocator was set up by its parent, so the environment variables would come too late.
 M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+PR_SET_PDEATHSIG = 1  # prctl option (linux/prctl.h)
 
 
-def _start_worker(stop) -> None:
+def _start_worker(stop, parent: int) -> None:
     """A pool worker's set-up: the stop event; Ctrl-C ignored and a session of its own (the command
-    stops its workers itself); SIGTERM ends it (the parent's handler came with the fork); freed
-    memory kept mapped; numpy's own threads at one, the workers being the parallelism."""
+    stops its workers itself); SIGTERM ends it (the parent's handler came with the fork), and so
+    does its parent's death; freed memory kept mapped; numpy's own threads at one, the workers
+    being the parallelism."""
     global worker_stop
     worker_stop = stop
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -192,6 +194,11 @@ def _start_worker(stop) -> None:
     if sys.platform.startswith("linux"):
         with contextlib.suppress(OSError, AttributeError):
             libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+            # A forked worker holds both ends of its task queue, so it would wait on it for ever if
+            # the command were killed (SIGKILL: no cleanup runs): the kernel ends it with its parent.
+            libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+            if os.getppid() != parent:  # the parent died before the line above
+                os._exit(1)
             keep = processes._KEEP_FREED_MEMORY
             libc.mallopt(M_MMAP_THRESHOLD, int(keep["MALLOC_MMAP_THRESHOLD_"]))
             libc.mallopt(M_TRIM_THRESHOLD, int(keep["MALLOC_TRIM_THRESHOLD_"]))

@@ -7,10 +7,11 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
-from helpers import BASELINE, ROOT, run_cli
+from helpers import BASELINE, ROOT, process_gone, run_cli
 
 from core_tracer.cluster import local_pool
 from core_tracer.images.imageio import read_image
@@ -66,3 +67,28 @@ def test_a_scheduler_by_name_or_address_goes_to_dask(monkeypatch):
     assert local_pool.dask_wanted("local") and local_pool.dask_wanted("tcp://10.0.0.1:8786")
     monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://10.0.0.1:8786")
     assert local_pool.dask_wanted(None)
+
+
+def test_the_workers_end_with_a_command_killed_outright(tmp_path):
+    """SIGKILL leaves no cleanup to run: a forked worker, which holds both ends of its task queue,
+    would wait on it for ever; the kernel ends it with its parent (PR_SET_PDEATHSIG)."""
+    code = f"""
+import os, sys, time
+sys.path.insert(0, {str(ROOT)!r})
+from core_tracer.cluster import local_pool
+pool = local_pool.LocalPool(2)
+pool.submit(time.sleep, 0.01).result()
+print(" ".join(str(p) for p in pool.executor._processes), flush=True)
+time.sleep(600)
+"""
+    proc = subprocess.Popen([sys.executable, "-c", code], env=environment(tmp_path), stdout=subprocess.PIPE, text=True)
+    try:
+        workers = [int(p) for p in proc.stdout.readline().split()]
+        assert len(workers) == 2 and not any(process_gone(p) for p in workers)
+    finally:
+        proc.kill()
+        proc.wait()
+    deadline = time.monotonic() + 10
+    while not all(process_gone(p) for p in workers):
+        assert time.monotonic() < deadline, [p for p in workers if not process_gone(p)]
+        time.sleep(0.05)
