@@ -136,3 +136,42 @@ def check_study(size: tuple[int, int], count: int, sheet_size: tuple[int, int], 
     if need > MEMORY_BUDGET:
         raise SceneError(where, f"the study needs about {gib(need)} of memory; allowed at most "
                                 f"{gib(MEMORY_BUDGET)} (smaller variants or fewer of them)")
+
+
+# ``measure``: its peak is the largest measuring view's, about 830 bytes a pixel of it (tracemalloc
+# over ``measures.report.measure`` of photometric-stop-lamp: 826 at 462 x 262 px, 839 at 232 x 132;
+# the float64 XYZ, the lamp of each pixel's points, the luminance, its blur and the kept front view);
+# rounded up. Its views are rendered one at a time, on threads.
+MEASURE_BYTES_PER_PIXEL = 1024
+
+
+def measure_bytes(view_pixels: int) -> int:
+    """Peak bytes of ``measure`` whose largest view has ``view_pixels`` pixels."""
+    return BASE_BYTES + view_pixels * MEASURE_BYTES_PER_PIXEL
+
+
+def check_measure(width: int, height: int, where: str = "--pixel-mm") -> None:
+    """Refuse a ``measure`` whose largest view (``width`` x ``height`` px) is past ``MEMORY_BUDGET``."""
+    need = measure_bytes(width * height)
+    if need > MEMORY_BUDGET:
+        raise SceneError(where, f"the largest measuring view is {width}x{height} px, which needs about {gib(need)} "
+                                f"of memory; allowed at most {gib(MEMORY_BUDGET)} (larger pixels)")
+
+
+def states_bytes(width: int, height: int, states: int, file_format: str = "exr", workers: int = 0,
+                 environment: int = 0) -> int:
+    """Peak bytes of ``states``: one render at a time (``render_bytes``, no passes, no glare), the
+    surroundings and ``states`` passes kept, their difference's temporary, and the file's bytes in
+    memory before they are written (at most the arrays' size: deflate does not grow them much)."""
+    kept = (states + 1) * width * height * RGB_BYTES
+    one = render_bytes(width, height, False, file_format, False, environment, workers)
+    return one + 2 * kept + width * height * RGB_BYTES
+
+
+def check_states(width: int, height: int, samples: int, states: int, workers: int = 0, environment: int = 0) -> None:
+    """Refuse a ``states`` run past ``MAX_EYE_RAYS`` (every render's together) or ``MEMORY_BUDGET``."""
+    check_rays(width, height, samples * (states + 1))
+    need = states_bytes(width, height, states, "exr", workers, environment)
+    if need > MEMORY_BUDGET:
+        raise SceneError("image", f"{width}x{height} px with {states} states and the surroundings: states needs about "
+                                  f"{gib(need)} of memory; allowed at most {gib(MEMORY_BUDGET)} (render smaller)")

@@ -64,6 +64,11 @@ def load_scene_file(path: str | os.PathLike, width: int | None = None, height: i
     try:
         scene = parse_scene(doc)
         environment_file(path, scene["environment"])  # beside the file, or refused
+        if scene.get("light_model") == "photometric":  # what the render computes from the spectra (issue 33)
+            from ..raytrace import spectral
+            from ..scene.beside import with_spectrum_files
+
+            spectral.check_lamps(with_spectrum_files(path, scene))
     except SceneError as e:
         raise in_file(e, path) from None
     note = ignored_note(scene)

@@ -52,6 +52,8 @@ def run(args: argparse.Namespace) -> int:
     functions = _functions(args.function, len(scene["lamps"]))
     from ..measures import export, report  # numpy, the tracer and matplotlib: loaded once the input is checked
 
+    report.check_memory(scene, args.pixel_mm)  # the whole footprint before the first view (issue 33)
+
     result = report.measure(scene, functions=functions, pixel_mm=args.pixel_mm, replicates=args.replicates,
                             distance_m=args.distance_m, progress=lambda text: print(text, flush=True))
     picture = report.lamp_picture(scene)

@@ -45,16 +45,23 @@ def run(args: argparse.Namespace) -> int:
         if not 1 <= args.trials <= spec.MAX_TRIALS:
             raise SceneError("--trials", f"{args.trials} is out of range; allowed 1 to {spec.MAX_TRIALS}")
         opt = spec.Optimisation(**{**opt.__dict__, "trials": args.trials})
-    if args.workers is not None and args.workers < 0:
-        raise SceneError("--workers", f"{args.workers} is out of range; allowed 0 (this process) or more")
+    from ..cluster import engine
+
+    engine.check_workers(args.workers)
+    if args.cache is not None and not args.no_cache:
+        from ..cluster.cache import CellCache
+
+        CellCache(args.cache).ready()  # its own cause, before any cell is looked for
     if args.workers == 0 and args.scheduler:
         raise SceneError("--workers", "0 renders in this process; allowed 1 or more with --scheduler")
+    if args.workers != 0 and opt.needs_task:
+        engine.scheduler_address(args.scheduler)  # checked before anything starts
     folder = args.output or os.path.splitext(args.spec)[0] + "-results"
     check_output_folder(folder, "--output")
     os.makedirs(folder, exist_ok=True)
 
     from .. import budget
-    from ..cluster import engine, local_pool
+    from ..cluster import local_pool
     from ..cluster.cache import CellCache
     from ..optimise import results, search
 
@@ -83,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
                 workers = args.workers or engine.default_workers()
                 parallel = opt.parallel or workers
                 limit = min(budget.MEMORY_BUDGET, search.trial_bytes(opt) + engine.DASK_BYTES + engine.KEPT_FREED_BYTES)
-                with local_pool.connect(args.scheduler, workers=workers, memory_limit=limit) as client:
+                with local_pool.connect(args.scheduler, workers=workers, memory_limit=limit,
+                                        should_stop=stop.is_set) as client:
                     if client.local is not None:  # a local Dask cluster's dashboard now, while it is there to open
                         print(client.local.describe(), file=sys.stderr if tty else sys.stdout, flush=True)
                     where = "on the " + (client.local.describe(live=False) if client.local is not None else
@@ -92,13 +100,11 @@ def run(args: argparse.Namespace) -> int:
                                          should_stop=stop.is_set)
                     if outcome.workers is not None:
                         where += (f", only on the workers whose memory holds a trial: {', '.join(outcome.workers)}")
-        except search.Cancelled:
+        except (search.Cancelled, engine.Cancelled):
             raise stop.interrupt() from None
-        except OSError as e:
-            if args.scheduler or os.environ.get(engine.SCHEDULER_VARIABLE):
-                raise SceneError("--scheduler", f"cannot reach the scheduler ({e}); allowed the address of a "
-                                                "running dask scheduler, or local") from None
-            raise
+        except engine.Unreachable as e:  # only the connection: any other OSError names its own file
+            raise SceneError("--scheduler" if args.scheduler else engine.SCHEDULER_VARIABLE,
+                             f"{e}; allowed the address of a running dask scheduler, or local") from None
     seconds = time.perf_counter() - start
     if cache is not None:
         cache.prune()

@@ -63,8 +63,17 @@ def run(args: argparse.Namespace) -> int:
         raise SceneError("--output", "is missing; allowed -o OUT.png or OUT.exr, or --list")
     if args.output is not None:
         check_output(args.output, "output")
+    from .. import budget
+
+    def beside(scene: dict) -> int:  # relight's own footprint beside the arrays (budget.render_bytes)
+        if args.output is None:
+            return 0
+        size = scene["image"]
+        return budget.render_bytes(size["width"], size["height"], False, image_format(args.output),
+                                   scene["glare"]["on"]) - budget.BASE_BYTES
+
     with open(args.states, "rb") as f:
-        light = S.from_bytes(f.read(), printable(args.states))
+        light = S.from_bytes(f.read(), printable(args.states), beside=beside)
     if args.list:
         for state in light.states:
             lit = "on " if state.lit_in_design else "off"

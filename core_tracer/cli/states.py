@@ -29,8 +29,18 @@ def run(args: argparse.Namespace) -> int:
                                      ".npz")
     check_output(args.output, "output")
     scene = load_scene_file(args.scene, args.width, args.height, args.samples)
+    from .. import budget
     from ..measures import states as S
+    from ..raytrace import environment
     from ..raytrace.engine import RenderCancelled
+    from ..scene.beside import environment_file
+
+    # The whole footprint before the first render (issue 33), as ``render`` counts its own.
+    size = scene["image"]
+    path = environment_file(args.scene, scene["environment"])
+    traced = scene if path is None else {**scene, "environment": {**scene["environment"], "file": path}}
+    budget.check_states(size["width"], size["height"], size["samples"], len(S.states_of(scene)) - 1,
+                        environment=environment.world_bytes(traced))
 
     def progress(done: int, total: int, label: str) -> None:
         print(f"state {done + 1} of {total}: {label}", flush=True)

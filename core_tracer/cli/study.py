@@ -206,8 +206,13 @@ def run(args: argparse.Namespace) -> int:
             print(name)
         return 0
     # Every check on the user's input happens before the first worker starts.
-    if args.workers is not None and args.workers < 0:
-        raise SceneError("--workers", f"{args.workers} is out of range; allowed 0 (this process) or more")
+    from ..cluster import engine as dask_engine
+
+    dask_engine.check_workers(args.workers)
+    if args.cache is not None and not args.no_cache:
+        from ..cluster.cache import CellCache
+
+        CellCache(args.cache).ready()  # its own cause, before any cell is looked for
     if args.output is None and not (args.save_study or args.save_variants):
         raise SceneError("--output", "is required: the contact sheet to write (.png or .exr)")
     view = None
@@ -253,6 +258,8 @@ def run(args: argparse.Namespace) -> int:
             checkpoint("study:variant")
 
     engine = _engine(args)
+    if engine == "dask":
+        dask_engine.scheduler_address(args.scheduler)  # checked before the first worker starts
     counted = ""
     with ctrl_c_sets() as stop:
         if engine in ("dask", "pool"):
@@ -382,10 +389,9 @@ def _run_cells(args: argparse.Namespace, study: st.Study, world: int, on_progres
                                              dask=dask)
     except dask_engine.Cancelled:
         raise stop.interrupt() from None
-    except OSError as e:  # no scheduler at the address
-        raise SceneError("--scheduler", f"cannot reach {args.scheduler or os.environ.get('DASK_SCHEDULER_ADDRESS')}"
-                                        f" ({e}); allowed the address of a running dask scheduler, "
-                                        "or local") from None
+    except dask_engine.Unreachable as e:  # only the connection: any other OSError names its own file
+        raise SceneError("--scheduler" if args.scheduler else dask_engine.SCHEDULER_VARIABLE,
+                         f"{e}; allowed the address of a running dask scheduler, or local") from None
     how = f"on the {where[0]}" if where else "all from the cache"
     if count.workers is not None:
         how += f", only on the workers whose memory holds a variant: {', '.join(count.workers)}"

@@ -10,6 +10,10 @@ distinct key, and returns every image in order with a ``RunCount``. A worker los
 out of memory, its machine gone) is replaced and its tasks run again elsewhere by the scheduler;
 the images are the same bit for bit, since a render depends only on its cell. Cancelling sets the
 run's stop event, which running renders poll between bands, and cancels every task.
+
+Bounds (issue 33): an address is checked before use (``check_address``); reaching a scheduler takes at
+most ``connect_seconds()`` whatever the peer does and ends at once on Ctrl-C or SIGTERM
+(``client_within``); a local cluster has at most ``max_workers()`` processes (``check_workers``).
 """
 
 from __future__ import annotations
@@ -64,13 +68,71 @@ def available() -> bool:
 
 def scheduler_address(given: str | None) -> str | None:
     """The scheduler to use: ``given``, else ``$DASK_SCHEDULER_ADDRESS``; None (or "local") for a
-    local cluster."""
+    local cluster. The address is checked before use (``check_address``)."""
     address = given if given is not None else os.environ.get(SCHEDULER_VARIABLE) or None
-    return None if address in (None, "", LOCAL) else address
+    if address in (None, "", LOCAL):
+        return None
+    return check_address(address, "--scheduler" if given is not None else SCHEDULER_VARIABLE)
+
+
+SCHEMES = ("tcp", "tls")
+MAX_ADDRESS = 255
+
+
+def check_address(address: str, where: str = "--scheduler") -> str:
+    """``tcp://HOST:PORT``, ``tls://HOST:PORT`` or ``HOST:PORT`` (a name, IPv4 or [IPv6] host, port 1 to
+    65535), as Dask takes it; anything else is a one-line ``SceneError`` naming ``where`` (issue 33:
+    14 of 24 malformed forms gave a 40-line traceback from inside Dask)."""
+    import ipaddress
+    import re
+    from urllib.parse import urlsplit
+
+    from ..scene.reading import SceneError
+    from ..scene.safe_text import printable
+
+    allowed = "allowed tcp://HOST:PORT (or tls://, or HOST:PORT) with a port from 1 to 65535, or local"
+    shown = printable(address, 80)
+    if len(address) > MAX_ADDRESS or not address.isprintable() or any(c.isspace() for c in address):
+        raise SceneError(where, f"{shown!r} is not a scheduler address; {allowed}")
+    text = address if "://" in address else f"tcp://{address}"
+    try:
+        parts = urlsplit(text)
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        raise SceneError(where, f"{shown!r} is not a scheduler address; {allowed}") from None
+    if parts.scheme not in SCHEMES or parts.path not in ("", "/") or parts.query or parts.fragment or \
+            parts.username is not None or not host or port is None or not 1 <= port <= 65535:
+        raise SceneError(where, f"{shown!r} is not a scheduler address; {allowed}")
+    try:
+        ipaddress.ip_address(host)
+    except ValueError:
+        if not re.fullmatch(r"(?=.{1,253}$)[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?"
+                            r"(\.[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?)*\.?", host):
+            raise SceneError(where, f"{shown!r} has a host that is not a name or an IP address; {allowed}") from None
+    return f"{parts.scheme}://{parts.netloc}"
 
 
 def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
+
+
+def max_workers() -> int:
+    """The most worker processes this machine runs for one command: ``WORKERS_PER_CORE`` a core, and
+    no more than ``budget.MEMORY_BUDGET`` holds at a band worker's figure (``budget.WORKER_BYTES``)."""
+    return max(1, min(WORKERS_PER_CORE * default_workers(), budget.MEMORY_BUDGET // budget.WORKER_BYTES))
+
+
+WORKERS_PER_CORE = 4
+
+
+def check_workers(workers: int | None, where: str = "--workers") -> None:
+    """``--workers`` from 0 (this process) to ``max_workers()`` (issue 33: 100000 grew memory until killed)."""
+    from ..scene.reading import SceneError
+
+    most = max_workers()
+    if workers is not None and not 0 <= workers <= most:
+        raise SceneError(where, f"{workers} is out of range; allowed 0 (this process) to {most} on this machine "
+                                f"({default_workers()} cores, {budget.gib(budget.MEMORY_BUDGET)} of memory)")
 
 
 def cell_bytes(cell: Cell, environment: int = 0) -> int:
@@ -133,17 +195,91 @@ class Local:
                 f"{self.threads} thread, {budget.gib(self.memory_limit)} each{dashboard}")
 
 
+class Unreachable(OSError):
+    """The scheduler at an address did not answer as a Dask scheduler in time; the message says why."""
+
+
+CONNECT_SECONDS = 20.0  # the most a connection may take, whatever the peer does
+HANDSHAKE_GRACE = 2.0  # beyond Dask's own connect timeout, for its handshake
+
+
+def connect_seconds() -> float:
+    """Dask's connect timeout (``distributed.comm.timeouts.connect``), at most ``CONNECT_SECONDS``, plus
+    ``HANDSHAKE_GRACE``."""
+    import dask
+    from dask.utils import parse_timedelta
+
+    try:
+        seconds = float(parse_timedelta(dask.config.get("distributed.comm.timeouts.connect", CONNECT_TIMEOUT)))
+    except (ValueError, TypeError, KeyError):
+        seconds = CONNECT_SECONDS
+    return min(max(seconds, 0.1), CONNECT_SECONDS) + HANDSHAKE_GRACE
+
+
+def client_within(address: str, seconds: float, should_stop: Callable[[], bool] | None = None):
+    """A ``distributed.Client`` to ``address``, or ``Unreachable`` once ``seconds`` have passed, whatever
+    the peer does (a server that accepts and never answers held Dask's own ``Client`` for good,
+    issue 33), or ``Cancelled`` as soon as ``should_stop()``. The client is made on a daemon thread
+    the caller never waits on past the deadline; one that arrives after it is closed there."""
+    import threading
+
+    from distributed import Client
+
+    box: dict = {}
+    lock = threading.Lock()
+
+    def make() -> None:
+        try:
+            client = Client(address, timeout=f"{seconds}s")
+        except BaseException as e:  # noqa: BLE001 (handed to the caller's thread)
+            box["error"] = e
+            return
+        with lock:
+            if box.get("abandoned"):
+                with contextlib.suppress(Exception):
+                    client.close(timeout=1)
+                return
+            box["client"] = client
+
+    thread = threading.Thread(target=make, name="lamp-connect", daemon=True)
+    thread.start()
+    deadline = time.monotonic() + seconds
+    try:
+        while thread.is_alive():
+            if should_stop is not None and should_stop():
+                raise Cancelled()
+            if time.monotonic() > deadline:
+                raise Unreachable(f"no answer from {address} as a Dask scheduler within {seconds:.0f} s")
+            thread.join(POLL)
+    except BaseException:
+        with lock:
+            box["abandoned"] = True
+            client = box.pop("client", None)
+        if client is not None:
+            with contextlib.suppress(Exception):
+                client.close(timeout=1)
+        raise
+    if "error" in box:
+        e = box["error"]
+        if isinstance(e, (OSError, TimeoutError, ValueError, TypeError)):
+            raise Unreachable(f"cannot reach {address} ({type(e).__name__}: {str(e)[:200]})") from None
+        raise e
+    return box["client"]
+
+
 @contextlib.contextmanager
 def connect(scheduler: str | None = None, workers: int | None = None, memory_limit: int | None = None,
-            dashboard: str | None = ":0") -> Iterator:
+            dashboard: str | None = ":0", should_stop: Callable[[], bool] | None = None) -> Iterator:
     """A ``distributed.Client`` (its ``.local`` is a ``Local`` for a local cluster, else None); closed,
-    and a local cluster stopped with its processes, on leaving."""
+    and a local cluster stopped with its processes, on leaving. A scheduler's address is checked
+    first (``check_address``); reaching it takes at most ``connect_seconds()`` (``Unreachable``), and
+    ``should_stop()`` ends the wait (``Cancelled``)."""
     import dask
     from distributed import Client, LocalCluster
 
     address = scheduler_address(scheduler)
     if address is not None:
-        client = Client(address, timeout=CONNECT_TIMEOUT)
+        client = client_within(address, connect_seconds(), should_stop)
         client.local = None
         try:
             yield client
@@ -151,6 +287,7 @@ def connect(scheduler: str | None = None, workers: int | None = None, memory_lim
             client.close()
         return
     count = workers or default_workers()
+    check_workers(count)
     limit = memory_limit or budget.MEMORY_BUDGET
     # The workers' scratch space is the run's own, removed however the run ends (Dask's default
     # <temp>/dask-scratch-space would outlive it).
@@ -198,7 +335,7 @@ class CellRun:
         self.wanted: dict[str, list[int]] = {}
         for i, cell in enumerate(self.cells):
             key = cell.key
-            image = cache.get(key) if cache is not None else None
+            image = cache.get(key, (cell.width, cell.height)) if cache is not None else None
             if image is not None:
                 self.images[i] = image
                 self.count.from_cache += 1

@@ -47,13 +47,14 @@ def dask_wanted(scheduler: str | None) -> bool:
 
 @contextlib.contextmanager
 def connect(scheduler: str | None = None, workers: int | None = None, memory_limit: int | None = None,
-            dask: bool = False) -> Iterator:
-    """``engine.connect`` when Dask is wanted (``dask``, or ``dask_wanted(scheduler)``), else a
-    ``LocalPool`` of ``workers`` processes; closed on leaving."""
+            dask: bool = False, should_stop: Callable[[], bool] | None = None) -> Iterator:
+    """``engine.connect`` when Dask is wanted (``dask``, or ``dask_wanted(scheduler)``; ``should_stop``
+    ends its wait for a scheduler), else a ``LocalPool`` of ``workers`` processes, which has nothing
+    to wait for; closed on leaving."""
     if dask or dask_wanted(scheduler):
         from . import engine
 
-        with engine.connect(scheduler, workers=workers, memory_limit=memory_limit) as client:
+        with engine.connect(scheduler, workers=workers, memory_limit=memory_limit, should_stop=should_stop) as client:
             yield client
         return
     pool = LocalPool(workers, memory_limit)

@@ -39,12 +39,12 @@ def run_study(study: Study, scheduler: str | None = None, workers: int | None = 
     worker's memory limit); ``on_start(client)`` once the cluster is up."""
     cells, inputs = study_cells(study)
     if cache is not None:
-        missing = [c for c in cells if cache.get(c.key) is None]
+        missing = [c for c in cells if cache.get(c.key, (c.width, c.height)) is None]
         if not missing:
             return engine.run_cells(None, cells, inputs, cache, progress=progress, should_stop=should_stop)
     limit = engine.worker_memory(cells, environment)
     with local_pool.connect(scheduler, workers=min(workers or engine.default_workers(), len(cells)),
-                            memory_limit=limit, dask=dask) as client:
+                            memory_limit=limit, dask=dask, should_stop=should_stop) as client:
         if on_start is not None:
             on_start(client)
         return engine.run_cells(client, cells, inputs, cache, progress=progress, should_stop=should_stop)
@@ -86,7 +86,7 @@ class DaskStudyRun:
     def start(self) -> None:
         cells, inputs = study_cells(self.study)
         try:
-            if self.cache is not None and all(self.cache.get(c.key) is not None for c in cells):
+            if self.cache is not None and all(self.cache.get(c.key, (c.width, c.height)) is not None for c in cells):
                 self._run = engine.CellRun(None, cells, inputs, self.cache)
                 return
             limit = engine.worker_memory(cells, self.environment)

@@ -67,7 +67,15 @@ def _check_image(image: np.ndarray, what: str) -> np.ndarray:
     a = np.asarray(image)
     if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] < 1 or a.shape[1] < 1:
         raise ValueError(f"{what}: expected an array of shape (height, width, 3), got {a.shape}")
-    return a.astype(np.float32, copy=False)
+    return _finite(a.astype(np.float32, copy=False), what)
+
+
+def _finite(a: np.ndarray, what: str) -> np.ndarray:
+    """The writers' last guard (issue 33): no NaN or inf reaches a file, whatever command made the image."""
+    if not np.isfinite(a).all():
+        raise SceneError(what, "holds values that are not finite numbers (NaN or inf); allowed finite images only "
+                               "(nothing was written)")
+    return a
 
 
 def write_image(
@@ -125,7 +133,8 @@ def write_channels(path: str | os.PathLike, pixels: np.ndarray, channel_names: S
                    scene: dict | None = None, attributes: Mapping[str, str] | None = None) -> None:
     """Write float ``pixels`` (H, W, C, top row first) as an EXR whose channels are named
     ``channel_names``, with the scene and string ``attributes`` in its header; atomically, as every image."""
-    _write(os.fspath(path), np.asarray(pixels, dtype=np.float32), scene, attributes, tuple(channel_names))
+    _write(os.fspath(path), _finite(np.asarray(pixels, dtype=np.float32), "image"), scene, attributes,
+           tuple(channel_names))
 
 
 def _write(name: str, pixels: np.ndarray, scene: dict | None, attributes: Mapping[str, str] | None,

@@ -84,6 +84,28 @@ class Measures:
         }
 
 
+def largest_view(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5) -> tuple[int, int]:
+    """(width, height) px of the largest view ``measure`` renders: the front view at ``front_pixel_mm``,
+    or a view at ``pixel_mm`` from a direction of the beam files' (C, γ) sweep, which spans every
+    direction the regulation grids read too (γ up to 90°: side views included)."""
+    from .export import angles_of, gonio_direction
+
+    views = [view_along(scene, direction(0.0, 0.0), front_pixel_mm)]
+    for c in range(0, 360, 30):
+        for gamma in range(0, 91, 10):
+            h, v = angles_of(gonio_direction(float(c), float(gamma)))
+            views.append(view_along(scene, direction(float(h), float(v)), pixel_mm))
+    view = max(views, key=lambda w: w.width * w.height)
+    return view.width, view.height
+
+
+def check_memory(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5) -> None:
+    """Refuse, before anything is rendered, a ``measure`` past the memory budget (``budget.check_measure``)."""
+    from .. import budget
+
+    budget.check_measure(*largest_view(scene, pixel_mm, front_pixel_mm))
+
+
 def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: float = 2.0, replicates: int = 2,
             distance_m: float = DEFAULT_DISTANCE_M, front_pixel_mm: float = 0.5,
             progress: Callable[[str], None] | None = None) -> Measures:

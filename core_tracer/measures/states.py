@@ -27,16 +27,17 @@ states and their labels, the light model and bands, and the size.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import io
 import json
 import math
-import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..scene.derived import lens_absorption
+from ..scene.messages import show_value
 from ..scene.reading import SceneError
 
 SURROUNDINGS = "surroundings"
@@ -228,11 +229,13 @@ def relight(light: LightStates, weights: dict[str, float], out: np.ndarray | Non
     written into ``out`` when given (no allocation: the Light Panel's redraw)."""
     if out is None:
         out = np.empty_like(light.surroundings)
-    np.multiply(light.surroundings, np.float32(weights.get(SURROUNDINGS, 1.0)), out=out)
-    for key, data in light.passes.items():
-        w = weights.get(key, 0.0)
-        if w:
-            out += np.float32(w) * data if w != 1.0 else data
+    # An overflow gives inf, which the image writers refuse (imageio._finite): no warning on the way.
+    with np.errstate(over="ignore", invalid="ignore"):
+        np.multiply(light.surroundings, np.float32(weights.get(SURROUNDINGS, 1.0)), out=out)
+        for key, data in light.passes.items():
+            w = weights.get(key, 0.0)
+            if w:
+                out += np.float32(w) * data if w != 1.0 else data
     return out
 
 
@@ -250,6 +253,11 @@ def with_glare(light: LightStates, image: np.ndarray) -> np.ndarray:
 
 
 def to_bytes(light: LightStates) -> bytes:
+    """The file's bytes; a pass holding NaN or inf is refused (``SceneError``), never written."""
+    for key, data in (("surroundings", light.surroundings), *light.passes.items()):
+        if not np.isfinite(data).all():
+            raise SceneError(key, "the render holds values that are not finite numbers; allowed finite images "
+                                  "only (nothing was written)")
     header = {
         "format": FORMAT,
         "scene": light.scene,
@@ -264,26 +272,97 @@ def to_bytes(light: LightStates) -> bytes:
 
 
 MAX_HEADER = 10_000_000
+_NOT_OURS = f"allowed a file written by 'states' ({FORMAT})"
 
 
-def from_bytes(data: bytes, name: str = "light states") -> LightStates:
-    """Read a file ``to_bytes`` wrote; anything else raises ``SceneError`` naming it."""
+def file_bytes(width: int, height: int, count: int) -> int:
+    """The inflated size of a light-states file's arrays: the surroundings and ``count`` passes."""
+    return (count + 1) * width * height * 3 * 4
+
+
+def from_bytes(data: bytes, name: str = "light states", *,
+               beside: Callable[[dict], int] | None = None) -> LightStates:
+    """Read a file ``to_bytes`` wrote, trusting nothing in it (issue 33): the zip directory's sizes are
+    counted before anything is inflated (the arrays and ``beside(scene)``, the bytes the caller needs
+    with them, at most the memory budget),
+    the header's scene is validated again and its states must be the ones that scene has, and each
+    array must be float32 of the scene's image size, finite. Anything else raises ``SceneError``
+    naming the file and what is wrong."""
+    from .. import arrays, budget
+    from ..scene.validate import parse_scene
+
+    limit = budget.MEMORY_BUDGET - budget.BASE_BYTES
+
+    def bad(why: str) -> SceneError:
+        return SceneError(name, f"is not a light-states file of this version ({why}); {_NOT_OURS}")
+
     try:
-        with np.load(io.BytesIO(data), allow_pickle=False) as npz:
-            raw = npz["header"]
-            if raw.dtype != np.uint8 or raw.size > MAX_HEADER:
-                raise ValueError("bad header")
-            header = json.loads(raw.tobytes().decode("utf-8"))
-            if header.get("format") != FORMAT:
-                raise ValueError("not a light-states file")
-            states = [State(**s) for s in header["states"]]
-            surroundings = npz["surroundings"]
-            passes = {s.key: npz[f"pass_{i}"] for i, s in enumerate(states[1:])}
-    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError):
-        raise SceneError(name, f"is not a light-states file of this version; allowed a file written by "
-                               f"'states' ({FORMAT})") from None
-    shape = surroundings.shape
-    if surroundings.dtype != np.float32 or len(shape) != 3 or shape[2] != 3 or \
-            any(p.shape != shape or p.dtype != np.float32 for p in passes.values()):
-        raise SceneError(name, "holds arrays of different shapes; allowed a file written by 'states'")
-    return LightStates(header["scene"], states, surroundings, passes, header["stats"])
+        sizes = arrays.npz_sizes(data, max_members=2 + 64, max_total=MAX_HEADER + limit)
+        if "header" not in sizes or sizes["header"] > MAX_HEADER + arrays.MAX_NPY_HEADER:
+            raise bad("it has no header, or one too large to be ours")
+        raw = arrays.read_npz_member(data, "header", sizes["header"], dtype=np.uint8, shape=(None,))
+        header = json.loads(raw.tobytes().decode("utf-8"))
+    except arrays.BadArray as e:
+        raise bad(f"{e}") from None
+    except (ValueError, UnicodeDecodeError, RecursionError):
+        raise bad("its header is not JSON") from None
+    if not isinstance(header, dict) or header.get("format") != FORMAT:
+        raise bad("its header names another format")
+    try:
+        scene = parse_scene(header.get("scene"))
+    except SceneError as e:
+        raise SceneError(name, f"its scene is not valid ({e.path}: {e.message}); {_NOT_OURS}") from None
+    if "freeform" in scene:
+        raise bad("its scene is a free-form design")
+    states = _check_states(header.get("states"), states_of(scene), bad)
+    stats = _checked_stats(header.get("stats"), scene, bad)
+    width, height = scene["image"]["width"], scene["image"]["height"]
+    expected = {"header", "surroundings", *(f"pass_{i}" for i in range(len(states) - 1))}
+    if set(sizes) != expected:
+        raise bad(f"it holds arrays {', '.join(sorted(set(sizes) ^ expected))} that its states do not match")
+    need = budget.BASE_BYTES + file_bytes(width, height, len(states) - 1) + (beside(scene) if beside else 0)
+    if need > budget.MEMORY_BUDGET:
+        raise SceneError(name, f"its {len(states)} images of {width}x{height} px and the work on them need about "
+                               f"{budget.gib(need)} of memory; allowed at most {budget.gib(budget.MEMORY_BUDGET)}")
+    shape = (height, width, 3)
+    try:
+        surroundings = arrays.read_npz_member(data, "surroundings", sizes["surroundings"], dtype=np.float32,
+                                              shape=shape)
+        passes = {s.key: arrays.read_npz_member(data, f"pass_{i}", sizes[f"pass_{i}"], dtype=np.float32, shape=shape)
+                  for i, s in enumerate(states[1:])}
+    except arrays.BadArray as e:
+        raise bad(f"{e}") from None
+    return LightStates(scene, states, surroundings, passes, stats)
+
+
+def _check_states(given: object, states: list[State], bad: Callable[[str], SceneError]) -> list[State]:
+    """The header's states are those of its scene, rendered at the fluxes this version's bulbs have; returns
+    them as the file names them (a file written before states were named by function keeps its keys,
+    ``lamps[0].stop``, which are this version's aliases)."""
+    if not isinstance(given, list) or len(given) != len(states):
+        raise bad(f"its states do not match its scene's {len(states)} sources")
+    earlier = all(isinstance(found, dict) and found.get("key") == (state.alias or state.key) and "alias" not in found
+                  for found, state in zip(given, states, strict=True))
+    if earlier:
+        states = [dataclasses.replace(state, key=state.alias or state.key, alias="") for state in states]
+    for found, state in zip(given, states, strict=True):
+        if not isinstance(found, dict) or found.get("key") != state.key:
+            raise bad(f"its states do not match its scene's sources (expected {state.key})")
+        rendered = found.get("rendered")
+        if type(rendered) not in (int, float) or abs(rendered) > 1e300 or \
+                not math.isclose(rendered, state.rendered, rel_tol=1e-9):
+            raise bad(f"state {state.key} was rendered at {show_value(rendered)}, not the {state.rendered:g} "
+                      "this version renders")
+    return states
+
+
+def _checked_stats(given: object, scene: dict, bad: Callable[[str], SceneError]) -> dict:
+    from ..photometry.bands import MAX_BANDS
+
+    model = scene.get("light_model", "paper")
+    if not isinstance(given, dict) or given.get("light_model") != model:
+        raise bad(f"its stats do not say the scene's light model ({model})")
+    bands = given.get("bands")
+    if model == "photometric" and not (type(bands) is int and 1 <= bands <= MAX_BANDS):
+        raise bad(f"its stats give {show_value(bands)} bands; allowed 1 to {MAX_BANDS}")
+    return {"light_model": model, "bands": bands if model == "photometric" else None}

@@ -5,6 +5,7 @@ figures in ``trials.json``; all in one folder, each file written atomically."""
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Sequence
 
@@ -173,7 +174,8 @@ def write_history(opt: Optimisation, study, path: str) -> None:
         ax.set_ylabel(opt.objectives[1].label)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    fig.suptitle(f"{opt.name}: {len(done)} trials ({opt.sampler})", fontsize=10)
+    # parse_math off: a name is the user's text, never mathtext ("$\\frac{" in one stopped the plot, issue 33)
+    fig.suptitle(f"{opt.name}: {len(done)} trials ({opt.sampler})", fontsize=10, parse_math=False)
     fig.tight_layout()
     with atomic_path(path) as partial:
         fig.savefig(partial, dpi=110, format="png")
@@ -188,4 +190,17 @@ def write_trials(opt: Optimisation, study, path: str) -> None:
                      "feasible": t.user_attrs.get("feasible"), "refused": t.user_attrs.get("refused")})
     doc = {"name": opt.name, "objectives": [o.label for o in opt.objectives], "sampler": opt.sampler,
            "trials": rows}
-    atomic_write_text(path, json.dumps(doc, indent=1) + "\n")
+    atomic_write_text(path, json.dumps(strict_json(doc), indent=1, allow_nan=False) + "\n")
+
+
+def strict_json(value):
+    """``value`` with every NaN or ±inf as null: a JSON file another program reads holds no
+    ``NaN`` (not JSON), and nothing non-finite is written (issue 33); a measure that had no value
+    (a lamp without lit pixels, say) reads as null."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: strict_json(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [strict_json(v) for v in value]
+    return value

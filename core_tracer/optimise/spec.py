@@ -20,9 +20,14 @@
   trials are all infeasible says so when it ends.
 - ``sampler``: ``tpe`` (default), ``cmaes`` (Optuna's CMA-ES, the ``cmaes`` package: numbers
   only, one objective, no constraints), ``nsga2`` (the default with several objectives), ``random``.
-- ``storage``: any database URL Optuna accepts; default ``sqlite:///<this file>.optuna.db`` beside
-  the file, so an interrupted optimisation resumes and several processes can share it. ``name``
-  names the Optuna study in it (default: the file's name).
+- ``base``: a lamp-scene/1 file in this file's folder (no absolute path, ``~`` or ``..``), or the
+  design itself.
+- ``storage``: ``sqlite:///NAME.db``, a file in this file's folder (default ``<this file>.optuna.db``
+  beside it), so an interrupted optimisation resumes and several processes can share it; or a
+  database server's URL (``postgresql://``, ``mysql://``). A database that holds anything but
+  Optuna's tables, or a study of that name this program did not make, is refused untouched; so is
+  resuming a study whose parameters changed (``search.open_study``). ``name`` names the Optuna
+  study in it (default: the file's name).
 
 Every error is a ``SceneError`` naming the JSON path, with the allowed range.
 """
@@ -48,6 +53,7 @@ SCHEMA = "lamp-optimise/1"
 SAMPLERS = ("tpe", "cmaes", "nsga2", "random")
 GOALS = ("maximise", "minimise")
 MAX_TRIALS = 10_000
+MAX_STEPS = 1_000_000  # steps in a range: a step of 1e-300 overflowed Optuna's grid (issue 33)
 DEFAULT_SIZE = (96, 96)
 KEYS = ("schema", "name", "base", "parameters", "objectives", "constraints", "size", "trials", "sampler", "seed",
         "storage", "parallel")
@@ -207,14 +213,10 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
     if seed is not None:
         seed = _whole(seed, "seed", 0, 2**32 - 1)
     name = doc.get("name", stem)
-    if not isinstance(name, str) or not name or len(name) > 200:
-        raise SceneError("name", f"expected a non-empty string of at most 200 characters, got {show_value(name)}")
-    storage = doc.get("storage")
-    if storage is None:
-        storage = "sqlite:///" + os.path.join(folder, f"{stem}.optuna.db")
-    elif not isinstance(storage, str) or "://" not in storage:
-        raise SceneError("storage", f"{show_value(storage)} is not a database URL; allowed e.g. "
-                                    "\"sqlite:///opt.db\" or \"postgresql://user@host/db\"")
+    if not isinstance(name, str) or not name or len(name) > 200 or not name.isprintable():
+        raise SceneError("name", f"expected a non-empty string of at most 200 printable characters (no control "
+                                 f"characters), got {show_value(name)}")
+    storage = _storage(doc.get("storage"), folder, stem)
     parallel = doc.get("parallel")
     if parallel is not None:
         parallel = _whole(parallel, "parallel", 1, 1024)
@@ -222,12 +224,62 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
                         folder, doc)
 
 
+SERVER_SCHEMES = ("postgresql", "mysql")  # a database server a team shares (checked before use, search.py)
+
+
+def _storage(value: Any, folder: str, stem: str) -> str:
+    """The study's database URL: SQLite in a file within this file's folder (default
+    ``<stem>.optuna.db`` beside it; a relative name is resolved there, never against the working
+    directory), or a database server's URL. ``file:`` URIs, query options, ``~``, ``..``, absolute
+    paths and in-memory databases are refused (issue 33: ``storage`` created or altered databases
+    anywhere)."""
+    allowed = ('allowed "sqlite:///NAME.db" (a file in this file\'s folder, which is where it is looked for) '
+               'or "postgresql://user@host/db"')
+    if value is None:
+        return "sqlite:///" + os.path.join(folder, f"{stem}.optuna.db")
+    if not isinstance(value, str) or "://" not in value or len(value) > 1000 or not value.isprintable():
+        raise SceneError("storage", f"{show_value(value)} is not a database URL; {allowed}")
+    scheme, _, rest = value.partition("://")
+    if scheme.split("+")[0] in SERVER_SCHEMES:
+        return value
+    if scheme != "sqlite":
+        raise SceneError("storage", f"{show_value(value)} is not a database this runs on; {allowed}")
+    if not rest.startswith("/") or rest == "/":
+        raise SceneError("storage", f"{show_value(value)} is an in-memory or unnamed database, which no run can "
+                                    f"resume; {allowed}")
+    name = rest[1:]
+    if "?" in name or "#" in name or name.startswith(("file:", "~")) or os.path.isabs(name) or \
+            ".." in name.replace("\\", "/").split("/") or "\0" in name:
+        raise SceneError("storage", f"{show_value(value)} names a database outside this file's folder (absolute, "
+                                    f"~, .., file: or options); {allowed}")
+    path = os.path.join(folder, name)
+    if os.path.commonpath([os.path.realpath(path), os.path.realpath(folder)]) != os.path.realpath(folder):
+        raise SceneError("storage", f"{show_value(value)} leads outside this file's folder; {allowed}")
+    return "sqlite:///" + path
+
+
+def base_path(value: str, folder: str) -> str:
+    """The base design's file: a relative path within the optimisation file's folder (no absolute
+    path, ``~`` or ``..``, no link out of it), as a preset's files are confined to its folder."""
+    shown = show_value(value)
+    if not value or not value.isprintable() or os.path.isabs(value) or value.startswith("~") or \
+            ".." in value.replace("\\", "/").split("/"):
+        raise SceneError("base", f"{shown} is outside this file's folder (absolute, ~, .. or not printable); "
+                                 "allowed a lamp-scene/1 file in this file's folder (copy it there), or the design "
+                                 "itself as the value")
+    path = os.path.join(folder, value)
+    if os.path.commonpath([os.path.realpath(path), os.path.realpath(folder)]) != os.path.realpath(folder):
+        raise SceneError("base", f"{shown} leads outside this file's folder (a link); allowed a lamp-scene/1 file in "
+                                 "this file's folder, or the design itself as the value")
+    return path
+
+
 def _base(value: Any, folder: str, size: tuple[int, int]) -> dict:
     if isinstance(value, str):
-        path = os.path.join(folder, os.path.expanduser(value))
+        path = base_path(value, folder)
         if not os.path.isfile(path):
-            raise SceneError("base", f"{value!r} does not exist; allowed a lamp-scene/1 file (relative to this one) "
-                                     "or the design itself")
+            raise SceneError("base", f"{show_value(value)} does not exist; allowed a lamp-scene/1 file in this file's "
+                                     "folder, or the design itself")
         value = read_json(path)
         from ..scene.beside import environment_file  # the base's environment image is the one beside it
 
@@ -322,9 +374,10 @@ def _knobs(value: Any, base: dict) -> tuple[Knob, ...]:
         step = doc.get("step")
         if step is not None:
             step = _number(step, f"{where}.step")
-            if not 0 < step <= hi - lo:
-                raise SceneError(f"{where}.step", f"{step:g} is out of range; allowed above 0 up to {hi - lo:g} "
-                                                  "(the range's width)")
+            if not (hi - lo) / MAX_STEPS <= step <= hi - lo:
+                least = (hi - lo) / MAX_STEPS
+                raise SceneError(f"{where}.step", f"{step:g} is out of range; allowed {least:g} (a {MAX_STEPS:,}th of "
+                                                  f"the range) up to {hi - lo:g} (the range's width)")
         log = doc.get("log", False)
         if not isinstance(log, bool):
             raise SceneError(f"{where}.log", f"expected true or false, got {show_value(log)}")

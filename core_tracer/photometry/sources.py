@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .bands import Bands
+from .bands import VISIBLE_NM, Bands
 from .cie import luminance_weights
 from .illuminants import illuminant_a, led_b5
 from .materials import FILTERS
@@ -41,6 +41,7 @@ from .spectrum import Spectrum
 CSV_MAX_BYTES = 1_000_000
 CSV_MAX_ROWS = 20_000
 CSV_RANGE_NM = (200.0, 2000.0)  # a spectrum's wavelengths must lie in this range
+CSV_MAX_VALUE = 1e30  # above this, a curve's integrals over the bands may overflow (1.7e308 did, issue 33)
 
 
 def incandescent() -> Spectrum:
@@ -154,6 +155,9 @@ def from_csv(path: str | os.PathLike, *, max_bytes: int = CSV_MAX_BYTES) -> Spec
             raise fail(f"line {number}: wavelength {nm:g} nm is outside {CSV_RANGE_NM[0]:g} to {CSV_RANGE_NM[1]:g} nm")
         if value < 0:
             raise fail(f"line {number}: value {value:g} is negative; allowed 0 or more")
+        if value > CSV_MAX_VALUE:
+            raise fail(f"line {number}: value {value:g} is too large to integrate; allowed 0 to {CSV_MAX_VALUE:g} "
+                       "(a spectrum is relative: any unit will do)")
         if rows and nm <= rows[-1][0]:
             raise fail(f"line {number}: wavelength {nm:g} nm does not increase (previous {rows[-1][0]:g} nm)")
         rows.append((nm, value))
@@ -164,6 +168,10 @@ def from_csv(path: str | os.PathLike, *, max_bytes: int = CSV_MAX_BYTES) -> Spec
     data = np.array(rows)
     if not np.any(data[:, 1] > 0):
         raise fail("every value is 0; a spectrum needs some power")
+    lo, hi = VISIBLE_NM
+    if data[-1, 0] < lo or data[0, 0] > hi:  # held at its end value, it would be flat over the visible range
+        raise fail(f"its wavelengths {data[0, 0]:g} to {data[-1, 0]:g} nm lie outside the visible range {lo:g} to "
+                   f"{hi:g} nm, over which it would be held flat; allowed a curve with samples in {lo:g} to {hi:g} nm")
     return Spectrum(data[:, 0], data[:, 1], shown)
 
 
@@ -220,17 +228,27 @@ def bulb_luminance(flux_lm: float, radius_mm: float) -> float:
         raise ValueError(f"bulb flux: {flux_lm!r} lm is not 0 or more")
     if not (np.isfinite(radius_mm) and radius_mm > 0):
         raise ValueError(f"bulb radius: {radius_mm!r} mm is not above 0")
-    r = radius_mm * 1e-3
-    return float(flux_lm / (4.0 * math.pi ** 2 * r * r))
+    area = 4.0 * math.pi ** 2 * (radius_mm * 1e-3) ** 2
+    luminance = flux_lm / area if area > 0 else math.inf  # a radius of 1e-320 mm squares to 0
+    if not math.isfinite(luminance):
+        raise ValueError(f"bulb radius: {radius_mm!r} mm is too small: its luminance Φ/(4π² r²) is not a finite "
+                         "number")
+    return float(luminance)
 
 
 def spectral_shape(spectrum: Spectrum, bands: Bands) -> np.ndarray:
     """(K,) band means of ``spectrum`` scaled to luminance 1 cd/m² in these bands."""
-    means = spectrum.band_means(bands)
-    luminance = float(means @ luminance_weights(bands))
+    with np.errstate(over="ignore", invalid="ignore", under="ignore"):
+        means = spectrum.band_means(bands)
+        luminance = float(means @ luminance_weights(bands))
+    if not math.isfinite(luminance) or not np.isfinite(means).all():
+        raise ValueError(f"{spectrum.name}: its integral over {bands!r} is not a finite number")
     if not luminance > 0:
         raise ValueError(f"{spectrum.name}: no visible light in {bands!r}")
-    return means / luminance
+    shape = means / luminance
+    if not np.isfinite(shape).all():
+        raise ValueError(f"{spectrum.name}: too little visible light in {bands!r} to scale")
+    return shape
 
 
 def bulb_spectral_radiance(flux_lm: float, spectrum: Spectrum, radius_mm: float, bands: Bands) -> np.ndarray:

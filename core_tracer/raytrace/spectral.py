@@ -38,7 +38,7 @@ import numpy as np
 
 from ..images import display
 from ..photometry import daylight, materials, output, sources
-from ..photometry.bands import Bands
+from ..photometry.bands import VISIBLE_NM, Bands
 from ..photometry.cie import xyz_matrix
 from ..photometry.spectrum import Spectrum
 from ..scene.reading import SceneError
@@ -157,12 +157,68 @@ def bulb_spectrum(bulb: dict, where: str) -> tuple[float, Spectrum]:
     return bulb["flux_lm"], sources.named_spectrum(bulb["spectrum"])
 
 
+def _spectrum_field(bulb: dict, where: str) -> str:
+    """The field that chose a bulb's spectrum, for a message."""
+    if bulb["type"] != "custom":
+        return f"{where}.type"
+    return f"{where}.{ {'led': 'led_peak_nm', 'file': 'spectrum_file'}.get(bulb['spectrum'], 'spectrum')}"
+
+
 def bulb_radiance(bulb: dict, bands: Bands, where: str = "bulb") -> np.ndarray:
-    """(K,) spectral radiance of a bulb, W/(m² sr nm); 0 when it is off."""
+    """(K,) spectral radiance of a bulb, W/(m² sr nm); 0 when it is off. A spectrum without visible
+    light or a radius whose luminance is not finite is a ``SceneError`` naming the field."""
     if not bulb["on"]:
         return np.zeros(bands.k)
     flux, spectrum = bulb_spectrum(bulb, where)
-    return sources.bulb_spectral_radiance(flux, spectrum, bulb["radius"], bands)
+    try:
+        shape = sources.spectral_shape(spectrum, bands)
+    except ValueError as e:
+        detail = (f"an LED of {bulb['led_peak_nm']:g} nm and half width {bulb['led_width_nm']:g} nm"
+                  if bulb["type"] == "custom" and bulb["spectrum"] == "led" else str(e).split(":")[0])
+        raise SceneError(_spectrum_field(bulb, where), f"{detail} gives no usable light in {VISIBLE_NM[0]:g} to "
+                                                       f"{VISIBLE_NM[1]:g} nm ({str(e).split(': ', 1)[-1]}); "
+                                                       "allowed a spectrum with visible light") from None
+    try:
+        luminance = sources.bulb_luminance(flux, bulb["radius"])
+    except ValueError:
+        raise SceneError(f"{where}.radius", f"{bulb['radius']:g} mm is too small: the bulb's luminance "
+                                            f"Φ/(4π² r²) at {flux:g} lm is not a finite number; allowed "
+                                            f"{MIN_BULB_RADIUS_MM:g} mm or more") from None
+    radiance = luminance * shape
+    if not np.isfinite(radiance).all():
+        raise SceneError(f"{where}.radius", f"{bulb['radius']:g} mm is too small: the bulb's radiance at {flux:g} lm "
+                                            f"is not a finite number; allowed {MIN_BULB_RADIUS_MM:g} mm or more")
+    return radiance
+
+
+MIN_BULB_RADIUS_MM = 1e-3  # what the messages offer: 1 µm, far above where Φ/(4π² r²) overflows
+
+
+def check_lamps(scene: dict, k: int | None = None, curves: bool = True) -> None:
+    """Everything a photometric render computes from each lamp's spectra, computed now on ``k`` bands
+    (None: the render's default) and checked, so that a scene that passes ``validate`` or the panel
+    renders (issue 33): every bulb's radiance as if lit (visible light, a finite luminance for its
+    radius), every filter's band transmittance (0 to 1, finite) and absorption. Measured curves are
+    read by the full paths ``scene.beside.with_spectrum_files`` gave; ``curves`` False leaves out what
+    needs them (Blender's panel, which checks at every redraw without the files). Raises ``SceneError``."""
+    if scene.get("light_model", "paper") != "photometric":
+        return
+    bands = bands_of(k)
+    for i, lamp in enumerate(scene["lamps"]):
+        where = f"lamps[{i}]"
+        parts = [("lens", lamp["lens"])]
+        if lamp.get("collection", "reflector") == "prism_plate":
+            parts.append(("prism_plate", lamp["prism_plate"]))
+        for name, part in parts:
+            if not curves and part["filter"] == "file":
+                continue
+            mu = absorption(part, bands, f"{where}.{name}")
+            if not np.isfinite(mu).all():
+                raise SceneError(f"{where}.{name}.filter", "its absorption is not a finite number; allowed "
+                                                           "transmittances above 0")
+        bulb = lamp["bulb"]
+        if curves or not (bulb["type"] == "custom" and bulb["spectrum"] == "file"):
+            bulb_radiance({**bulb, "on": True}, bands, f"{where}.bulb")
 
 
 def index_of(part: dict) -> tuple[float, float]:

@@ -217,9 +217,11 @@ class Study:
             raise SceneError("base.freeform", "a free-form design cannot be studied; allowed a design without "
                                               "freeform (vary the parametric lamp)")
         title = doc.get("title", "")
-        if not isinstance(title, str) or len(title) > 200 or has_surrogate(title):
-            # A lone surrogate cannot be stored in the sheet's header: refused now, not after rendering.
-            raise SceneError("title", f"expected a string of at most 200 Unicode characters, got {_show(title)}")
+        if not isinstance(title, str) or len(title) > 200 or has_surrogate(title) or not title.isprintable():
+            # A lone surrogate cannot be stored in the sheet's header, and a control character would reach
+            # the sheet and the terminal (issue 33): refused now, not after rendering.
+            raise SceneError("title", f"expected a string of at most 200 Unicode characters, printable (no control "
+                                      f"characters), got {_show(title)}")
         axes_doc = doc.get("axes")
         if not isinstance(axes_doc, list) or not 1 <= len(axes_doc) <= MAX_AXES:
             raise SceneError("axes", f"expected a list of 1 or {MAX_AXES} axes, got {_show(axes_doc)}")

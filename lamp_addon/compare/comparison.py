@@ -47,8 +47,8 @@ from ...core_tracer.scene.reading import SceneError
 from .. import image_view, jobs
 from ..convert import photometric_cycles
 from ..convert.sheet import (
-    difference,
     difference_labels,
+    difference_shown,
     differences,
     lens_differences,
     shown_side_by_side,
@@ -316,10 +316,11 @@ class CompareRun:
             "size": (tracer.shape[1], tracer.shape[0]),
             "differences": differences(tracer, cycles),
             "lens_differences": lens_differences(tracer, cycles, lens_pixels(self.scene, tracer.shape[:2])),
+            "by_design": by_design(self.scene),
             "left_out": list(self.left_out),
             "camera_news": self.camera_news,
         }
-        comparison["side_by_side"] = side_by_side(tracer, cycles, *names, third=difference(tracer, cycles),
+        comparison["side_by_side"] = side_by_side(tracer, cycles, *names, third=difference_shown(comparison, None),
                                                   third_labels=difference_labels(comparison["lens_differences"]))
         return comparison
 
@@ -343,15 +344,41 @@ class CompareRun:
 
 
 def lens_pixels(scene: dict, shape: tuple[int, int]) -> np.ndarray:
-    """(H, W) bool: the pixels whose eye ray meets a lens, from the tracer's lens-surface pass (the
-    parametric lamp's lenses; the whole image when the design has free-form parts or no such pass)."""
-    from ...core_tracer import render_passes
+    """(H, W) bool: the pixels that see only lenses, found by the tracer's geometry, lit or not
+    (``raytrace.engine.lens_pixels``: the eye ray through the centre meets a lens's outer face first).
+    With more than one sample per pixel the samples spread over the pixel filter's support
+    (``raytrace.pixel_filter``), so a pixel counts only where every pixel within that reach is a lens
+    pixel too: a rim pixel that also sees the body (whose Phong highlight Cycles lacks by design) is
+    left out. The whole image when the design has free-form parts (their lenses are meshes the
+    tracer finds only while it traces)."""
+    from ...core_tracer.raytrace import pixel_filter
+    from ...core_tracer.raytrace.engine import lens_pixels as lamp_seen
 
     if "freeform" in scene:
         return np.ones(shape, bool)
-    passes = render_passes(scene, shape[1], shape[0]).passes
-    lens = passes.get("lens_surface")
-    return np.ones(shape, bool) if lens is None else lens.max(axis=2) > 0
+    lens = lamp_seen(scene, shape[1], shape[0]) >= 0
+    if scene["image"].get("samples", 1) <= 1:
+        return lens
+    reach = int(np.ceil(pixel_filter.filter_support(pixel_filter.DEFAULT_FILTER)))
+    padded = np.pad(lens, reach, constant_values=False)
+    height, width = shape
+    for dy in range(-reach, reach + 1):
+        for dx in range(-reach, reach + 1):
+            lens &= padded[reach + dy:reach + dy + height, reach + dx:reach + dx + width]
+    return lens
+
+
+def by_design(scene: dict) -> str:
+    """One sentence: what differs between the tracer and Cycles by design on the lens (docs/model.md §8.17)."""
+    if scene.get("light_model") == "photometric":
+        return ("By design: a legal red (or amber) lies outside Rec.709, so Cycles' RGB cannot hold the "
+                "filtered light's colour and clips it into the gamut at its own luminance; the rest is physics "
+                "both model alike.")
+    text = ("By design: nothing on the lens (Cycles builds eq. 3 as the paper states it); off it, Cycles' "
+            "body has no Phong highlight and its bulb also lights the lamp's other parts.")
+    if scene["light"].get("phantom"):
+        text += " The sun's phantom light in the reflectors is not built in Cycles."
+    return text
 
 
 def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tuple[int, int] | None = None,
@@ -378,7 +405,9 @@ def show_comparison(bl_scene, comparison: dict) -> None:
     """The "Lamp Compare" image: both halves at the comparison's one exposure, through the scene's
     view transform. Made once the scene's own colour settings are back (after ``close``)."""
     exposure = comparison["exposure"]
-    image_view.show_linear(COMPARE_IMAGE, shown_side_by_side(comparison, None, exposure), exposure, bl_scene)
+    # The difference map's colours as the scene's view transform shows them (convert.sheet.difference_shown).
+    shown = shown_side_by_side({**comparison, "linear_view": image_view.scene_view(bl_scene)}, None, exposure)
+    image_view.show_linear(COMPARE_IMAGE, shown, exposure, bl_scene)
 
 
 def write_comparison(path: str, comparison: dict, *, view: display.ViewTransform | None = None,

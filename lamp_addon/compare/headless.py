@@ -13,6 +13,7 @@ import bpy
 from ...core_tracer.images import display, imageio
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import load_scene
+from ..convert.sheet import CLIP_PERCENT, percent_text
 from ..design import properties as design_properties
 from ..render import lamp_camera
 from .comparison import DEFAULT_SAMPLES, compare_design, write_comparison
@@ -76,10 +77,20 @@ def report(comparison: dict, preset: str, output: str) -> str:
     lines += [f"  {name:<27}" + "".join(f"{v:10.4f}" for v in values) for name, values in rows]
     lens = comparison.get("lens_differences")
     if lens is not None:
-        lines.append(f"over the {lens['pixels']} lens pixels (the third panel shows |tracer - Cycles|)")
+        lines.append(f"over the {lens['pixels']} lens pixels (found by geometry; the third panel maps "
+                     f"(tracer - Cycles) / Cycles of the luminance, clipped at ±{CLIP_PERCENT:g} %)")
         lines += [f"  {name:<27}" + "".join(f"{v:10.4f}" for v in lens[key]) for name, key in (
             ("lens mean, Lamp Tracer", "tracer_mean"), ("lens mean, Cycles", "cycles_mean"),
             ("lens mean difference", "mean_difference"), ("lens RMS difference", "rms_difference"))]
+        lines.append(f"  {'lens mean difference, %':<27}" + "".join(f"{percent_text(v):>10}" for v in lens["percent"]))
+        if lens["pixels"] and not (lens["tracer_luminance"] or lens["cycles_luminance"]):
+            lines.append("lens mean luminance: 0 in both (nothing lights the lens)")
+        else:
+            lines.append(f"lens mean luminance: tracer {lens['tracer_luminance']:.4g}, Cycles "
+                         f"{lens['cycles_luminance']:.4g}, tracer - Cycles {percent_text(lens['luminance_percent'])} "
+                         f"of Cycles'")
+    if comparison.get("by_design"):
+        lines.append(comparison["by_design"])
     if comparison.get("left_out"):
         lines.append(left_out_text(comparison["left_out"]))
     lines.append(f"wrote {output}")

@@ -166,7 +166,8 @@ class LAMP_OT_compare_cycles(jobs.ModalJob, bpy.types.Operator):
         lens = comparison["lens_differences"]
         means = [f"{name} " + "/".join(f"{v:.3g}" for v in lens[key])
                  for name, key in (("tracer", "tracer_mean"), ("Cycles", "cycles_mean"))]
-        notes.append(f"Lens pixels ({lens['pixels']}), linear RGB means: " + ", ".join(means))
+        notes.append(f"Lens pixels ({lens['pixels']}, found by geometry), linear RGB means: " + ", ".join(means))
+        notes.append(comparison["by_design"])
         return reports.finished(self, f"Tracer {seconds['tracer']:.2f} s, Cycles {seconds['cycles']:.1f} s "
                                       f"({comparison['samples']} spp); {lens_figures_text(lens)}", notes)
 

@@ -10,6 +10,14 @@ import math
 
 from . import units
 
+# A reflector key (set by ``photometric_cycles.equivalent``): its glow is built as a Glossy lobe lit by the
+# bulb (physical), not as the paper's eq. 3 emission (``design.materials.reflector``).
+SCATTER_AS_LOBE = "cycles_scatter_as_lobe"
+# Lamp keys (set by ``design.builder``): what the reflector's phantom emission needs (``phantoms``), and
+# the sun of the lens's own eq. 1 term (``lens_sun``).
+PHANTOM = "cycles_phantom"
+LENS_SUN = "cycles_lens_sun"
+
 
 def absorption_volume(absorption: list[float]) -> tuple[float, tuple[float, float, float]]:
     """(Density, Color) of a Volume Absorption node absorbing ``absorption`` per mm (eq. 2).
@@ -46,3 +54,42 @@ def sun_strength(ambient: float) -> float:
 def transmitted_color(absorption: list[float], thickness: float) -> tuple[float, float, float]:
     """The colour seen through ``thickness`` mm of glass absorbing ``absorption`` per mm (eq. 2)."""
     return tuple(math.exp(-a * thickness) for a in absorption)
+
+
+def phantoms(scene: dict) -> list[dict | None]:
+    """Per lamp of a normalised paper scene, what Cycles' phantom emission needs (``design.reflector_glow``):
+    ``direction`` toward the sun (the lamp's frame = the scene's axes), ``light`` s S T_sun (RGB, the lens as
+    a flat plate, ``raytrace.sunlight``), the apex plane ``plane_b`` (mm) and the lens outline's ``core``
+    half sizes and ``corner`` radius (mm); None for every lamp where the design has no phantom light, or
+    where the sun lets none into that lamp. Reads the environment image when the sun follows it."""
+    from ...core_tracer.raytrace import sunlight
+    from ...core_tracer.raytrace.lamp_table import LampTable
+
+    if not scene["light"].get("phantom", False) or scene.get("light_model") == "photometric":
+        return [None] * len(scene["lamps"])
+    sun = sunlight.from_scene(scene, sunlight.sun_direction(scene))
+    lamps = LampTable.from_scene(scene)
+    per_lamp = sunlight.PhantomLamps.of(sun, lamps)
+    light = sun.light
+    return [{"direction": [float(c) for c in sun.direction],
+             "light": [float(c) for c in light * per_lamp.transmit[i]],
+             "plane_b": float(lamps.plane_b[i]),
+             "core": (float(per_lamp.core_x[i]), float(per_lamp.core_z[i])),
+             "corner": float(lamps.corner[i])} if per_lamp.lets_in[i] else None
+            for i in range(len(scene["lamps"]))]
+
+
+def lens_sun(scene: dict) -> dict | None:
+    """The sun as the lens's eq. 1 term sees it (``design.lens_surface``), as the tracer's ``Lighting``
+    makes it: ``direction`` toward it (the scene's axes), ``light`` (1 - d) s S, ``ambient`` d where it is
+    added (not under surroundings), ``highlight`` s C1; None for a photometric design (its lens colour is
+    black). Reads the environment image when the sun follows it."""
+    from ...core_tracer.raytrace.lighting import Lighting
+
+    if scene.get("light_model") == "photometric":
+        return None
+    sun = Lighting(scene).sun
+    return {"direction": [float(c) for c in sun.direction],
+            "light": [float((1.0 - sun.ambient) * sun.strength * c) for c in sun.color],
+            "ambient": float(sun.ambient) if sun.ambient_seen else 0.0,
+            "highlight": [float(sun.strength * c) for c in sun.highlight]}

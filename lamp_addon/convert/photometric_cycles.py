@@ -49,6 +49,7 @@ import numpy as np
 from ...core_tracer.photometry import cie, daylight, materials
 from ...core_tracer.photometry.spectrum import Spectrum
 from ...core_tracer.raytrace import spectral
+from . import cycles
 
 MIN_TRANSMITTANCE = 1e-6  # a channel the filter blocks: absorption stays finite
 BLACK = [0.0, 0.0, 0.0]
@@ -168,5 +169,6 @@ def equivalent(scene: dict) -> dict:
         rho = float(rgb_under(finish, source) @ np.asarray(daylight.REC709_LUMINANCE))
         share = refl["scatter_share"]
         refl.update(color=list(BLACK), reflectance=(1.0 - share) * rho, scatter=share * rho)
+        refl[cycles.SCATTER_AS_LOBE] = True  # its glow is physical: the lobe, not eq. 3's emission
         lamp["socket"]["color"] = list(BLACK)
     return out

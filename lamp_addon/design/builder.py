@@ -43,7 +43,7 @@ from ...core_tracer.raytrace import environment, sunlight, world_file
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
-from ..convert import photometric_cycles, units
+from ..convert import cycles, photometric_cycles, units
 from ..convert.meshes import builder as mesh_builder
 from . import curves, materials, properties
 from . import parts as design_parts
@@ -170,9 +170,15 @@ def build_lamp(bl_scene: bpy.types.Scene, scene: dict, *, preview: bool = False)
     except SceneError as e:  # a measured curve not found: the objects keep the paper's values until it is
         shown = scene
         not_driven.append(f"photometric values: {e}")
-    lamps = [design_parts.lamp_parts(i, lamp, preview, functions.lamp_label(shown["lamps"], i))
-             for i, lamp in enumerate(shown["lamps"])]
-    body = design_parts.body_part(shown, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps])
+    try:  # the sun's phantom light in the reflectors, its light on the lenses (reflector_glow, lens_surface)
+        phantoms, sun = cycles.phantoms(shown), cycles.lens_sun(shown)
+    except SceneError as e:  # an environment image that cannot be read: the sun reports it too
+        phantoms, sun = [None] * len(shown["lamps"]), None
+        not_driven.append(f"the sun's light on the lenses and in the reflectors ({e})")
+    lamps = [design_parts.lamp_parts(i, {**lamp, cycles.PHANTOM: phantom, cycles.LENS_SUN: sun}, preview,
+                                     functions.lamp_label(shown["lamps"], i))
+             for i, (lamp, phantom) in enumerate(zip(shown["lamps"], phantoms, strict=True))]
+    body = design_parts.body_part(shown, [rim for _, rim, _, _ in lamps], [bore for _, _, bore, _ in lamps], sun)
     specs = [body, *(part for parts, _, _, _ in lamps for part in parts)]
     # Every shape that changed is made before the first change to the scene: a design whose geometry
     # fails (or an interrupt while a deep-cut lens is meshed) leaves the objects as they were, so an

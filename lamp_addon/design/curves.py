@@ -46,16 +46,27 @@ def with_curves(bl_scene, scene: dict) -> dict:
     first_error = None
     for folder in places:
         try:
-            return beside.with_spectrum_files(os.path.join(folder, "design.json"), scene)
+            found = beside.with_spectrum_files(os.path.join(folder, "design.json"), scene)
         except SceneError as e:
             first_error = first_error or e
+            continue
+        return checked(found)
     if first_error is None:  # no folder to look in: fine only when no curve is named
         try:
             beside.with_spectrum_files(os.path.join(os.sep, "nowhere", "design.json"), scene)
         except SceneError as e:
             raise SceneError(e.path, "is read beside the .blend file: save the .blend file in the curve's folder "
                                      "first; allowed a .csv file beside the saved .blend file or the preset") from None
-        return scene
+        return checked(scene)
     where = " or ".join(f'"{folder}"' for folder in places)
     raise SceneError(first_error.path, f"{first_error.message.split(';')[0]} in {where}; allowed a .csv file beside "
                                        "the saved .blend file or the preset it came from")
+
+
+def checked(scene: dict) -> dict:
+    """``scene`` once every check its render makes on its spectra passed (``raytrace.spectral.check_lamps``:
+    visible light, finite luminance, filters' transmittance), as ``validate`` makes them."""
+    from ...core_tracer.raytrace import spectral
+
+    spectral.check_lamps(scene)
+    return scene

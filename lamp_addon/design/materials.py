@@ -4,21 +4,31 @@ The numbers come from ``convert.cycles``; this module puts them into node trees.
 part:
 
 - **Lens glass**: Principled BSDF (Transmission Weight 1, Roughness 0, Base Color white, IOR = n) and a
-  Volume Absorption node on the Volume output absorbing A per mm (eq. 2).
+  Volume Absorption node on the Volume output absorbing A per mm (eq. 2); the lens's own surface term
+  of eq. 1 (its diffuse colour and highlight under the sun, times the Fresnel reflectance) as an
+  Emission seen by camera rays alone (``lens_surface``).
 - **Bulb**: Emission showing exactly I0 to the camera; a bulb that is off has Strength 0.
 - **Reflector**: the sum of (a) a sharp mirror (Glossy, GGX, Roughness 0) of colour = reflectance, the
-  paper's recursive mirror ray; (b) the Blinn scatter lobe of eq. 3 as a Glossy BSDF with the Beckmann
-  distribution, colour = scatter w (``cycles.blinn_roughness``); (c) the constant colour C of the first
-  reflector hit as an Emission of colour C, seen only by rays that have not yet made a glossy bounce
-  (Light Path's Glossy Depth 0: the reflector's own mirror and lobe are glossy bounces, so a path sees C
-  at its first reflector hit, as in docs/model.md §5.2) and never by diffuse rays (so it lights nothing).
-  Approximations: the Beckmann lobe is normalised where the paper's term is not, and, being a BSDF, it
-  scatters every light that reaches it, the surroundings too, where eq. 3 scatters only the bulb's (and
-  the sun's) light (docs/model.md, surroundings); a path that reflected inside the lens before its first
+  paper's recursive mirror ray; (b) the paper's scatter of eq. 3, w I0 (cos beta)^n, as an Emission
+  ("Reflector Eq. 3") whose strength shader nodes compute at every shading point, and the sun's
+  phantom light in the same form (``reflector_glow``); seen on every reflector hit of a path from the
+  eye, as in the model, never by diffuse rays, with the material's emission sampling off, so they light
+  nothing (eq. 3 is a glow toward the eye, not a light); (c) the constant colour C of the first reflector hit as an
+  Emission of colour C, seen only by rays that have not yet made a glossy bounce (Light Path's Glossy
+  Depth 0: the reflector's own mirror is a glossy bounce, so a path sees C at its first reflector hit,
+  as in docs/model.md §5.2) and never by diffuse rays. A Glossy BSDF ("Reflector Scatter", Beckmann,
+  ``cycles.blinn_roughness``) is there too, of colour 0 in the paper's mode: eq. 3 is unnormalised and
+  does not depend on the bulb's solid angle, so a lobe lit by the bulb returns about a fifth of it on
+  the paper's baseline (docs/model.md §5.2). The photometric mode, whose glow is physical, uses that
+  lobe (colour = its glow share) and no eq. 3 emission (``convert.cycles.SCATTER_AS_LOBE``,
+  set by ``convert.photometric_cycles``). A reflector without a bulb to aim at (a free-form part whose bulb
+  is not known) keeps the lobe. Approximations: a path that reflected inside the lens before its first
   reflector hit does not see C in Cycles (about r², 0.2 % of it; on the cut lenses of the evening preset
   Cycles' C stayed within 1 % of the tracer's).
-- **Body, socket, lens side wall**: Diffuse BSDF of their colour. The paper's body adds the specular term
-  of eq. 1 and treats socket and side wall as constant colours; only the diffuse part is reproduced.
+- **Body, socket, lens side wall**: Diffuse BSDF of their colour. The body's specular term of eq. 1,
+  s w (cos beta)^n C1 under the sun, is an Emission seen by camera rays alone (``lens_surface``), as the
+  tracer adds it for eye rays only. The paper treats socket and side wall as constant colours; Cycles
+  shades them diffuse (the lamp-off preset's +2.3 % on the lens, benchmarks/RESULTS.md).
 - **Light** (the diffuse part of eq. 1, ``[d + (1 - d) cos theta] R0``): a sun of strength ``pi (1 - d)``
   shining along ``-light.direction`` and a world of colour d seen by diffuse rays only (adds ``R0 d``).
   Every other ray that leaves the scene sees the scene's ``background`` colour (black in the paper).
@@ -46,9 +56,10 @@ import math
 import bpy
 
 from ...core_tracer.raytrace import sunlight
-from ...core_tracer.scene.derived import lens_absorption
+from ...core_tracer.scene.derived import lamp_geometry, lens_absorption
 from ...core_tracer.scene.reading import SceneError
 from ..convert import cycles
+from . import lens_surface, reflector_glow
 
 
 def _tree(idblock, new: bool) -> bpy.types.NodeTree | None:
@@ -107,9 +118,17 @@ def _grey(value: float) -> tuple[float, float, float, float]:
 
 
 def lens_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+    """The lens: clear glass absorbing as eq. 2 (``_glass``) and its own surface term of eq. 1 for eye
+    rays (``lens_surface``)."""
     lens = lamp["lens"]
     a = lens_absorption(lens)
     missing = _glass(mat, new, "Lens", lens["ior"], a)
+    tree = mat.node_tree
+    if tree is not None:
+        lens_surface.add_nodes(tree)  # new, or a lens built before the term was
+        lens_surface.drive(tree, lamp, _drive, _drive_input, missing)
+    if hasattr(mat, "cycles"):  # a term toward the eye, not a light
+        mat.cycles.emission_sampling = "NONE"
     mat.diffuse_color = (*cycles.transmitted_color(a, lens["thickness"]), 0.5)  # solid view: seen through
     return missing
 
@@ -158,6 +177,17 @@ def diffuse(mat: bpy.types.Material, color, node_name: str, *, new: bool) -> lis
     return missing
 
 
+def body(mat: bpy.types.Material, body: dict, sun: dict | None, *, new: bool) -> list[str]:
+    """The body's paint: ``diffuse`` and its highlight of eq. 1 (``lens_surface.add_body_nodes``) under
+    ``sun`` (``cycles.lens_sun``; None: a photometric design, whose paint is Lambertian)."""
+    missing = diffuse(mat, body["color"], "Body BSDF", new=new)
+    tree = _tree(mat, False)
+    if tree is not None:
+        lens_surface.add_body_nodes(tree)  # new, or a body built before the highlight was
+        lens_surface.drive_body(tree, sun, body, _drive, _drive_input, missing)
+    return missing
+
+
 # ---------------------------------------------------------------------------------------------
 # Bulb
 
@@ -180,7 +210,13 @@ def bulb(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
 # Reflector
 
 
-def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
+EQ3_NODES = ("Eq. 3 Bulb Centre", "Eq. 3 Shininess", "Eq. 3 Weight", "Reflector Eq. 3")
+
+
+def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool, bulb_center=None) -> list[str]:
+    """The reflector's material (module docstring). ``bulb_center``: the centre (mm) of the bulb eq. 3
+    scatters toward, in the reflector object's own frame; by default the lamp's bulb (``lamp_geometry``),
+    whose reflector is placed on the lamp's axis. ``lamp["bulb"]`` gives I0."""
     tree = _tree(mat, new)
     if new:
         _lay_out_reflector(tree)
@@ -189,13 +225,30 @@ def reflector(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list[str]:
         mat.roughness = 0.1
     elif tree is not None:
         _gate_constant_to_first_hit(tree)  # a reflector built when C was seen on every hit
+    if tree is not None and not all(tree.nodes.get(name) for name in (reflector_glow.GLOW, reflector_glow.PHANTOM)):
+        reflector_glow.add_nodes(tree)  # new, or a reflector built when eq. 3 was a lobe
+    if hasattr(mat, "cycles"):  # the emissions are glows toward the eye: never sampled as lights
+        mat.cycles.emission_sampling = "NONE"
     r = lamp["reflector"]
+    if bulb_center is None and "lens" in lamp:
+        bulb_center = lamp_geometry(lamp)["bulb_center"]
+    lobe = bool(r.get(cycles.SCATTER_AS_LOBE)) or bulb_center is None or "bulb" not in lamp
     missing: list[str] = []
     _drive(tree, "Reflector Mirror", missing, Color=_grey(r["reflectance"]))
-    _drive(tree, "Reflector Scatter", missing, Color=_grey(r["scatter"]),
+    _drive(tree, "Reflector Scatter", missing, Color=_grey(r["scatter"] if lobe else 0.0),
            Roughness=cycles.blinn_roughness(r["shininess"]))
     _drive(tree, "Reflector Constant", missing, Color=_rgba(r["color"]))
+    reflector_glow.drive(tree, lamp, bulb_center, lobe, _drive, _drive_input, missing)
     return missing
+
+
+def _drive_input(tree, name: str, index: int, value, missing: list[str]) -> None:
+    """``_drive`` for a Math node, whose two inputs share one name: input ``index`` of node ``name``."""
+    node = tree.nodes.get(name) if tree is not None else None
+    if node is None:
+        missing.append(name)
+    elif not _same(node.inputs[index].default_value, value):
+        node.inputs[index].default_value = value
 
 
 def _lay_out_reflector(tree) -> None:

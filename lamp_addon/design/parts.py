@@ -221,17 +221,19 @@ def cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
     return min(k, light), k > light
 
 
-def body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple]) -> MeshPart:
+def body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple], sun: dict | None = None) -> MeshPart:
+    """The body with its opening for each lens; ``sun`` lights its highlight in Cycles (``materials.body``)."""
     body = scene["body"]
+    paint = [Slot("body", "Lamp Body", partial(materials.body, body=body, sun=sun))]
     shape = ("body", tuple(body["center"]), tuple(body["size"]), body["depth"],
              tuple(tuple(map(tuple, rim.round(9).tolist())) for rim in rims), tuple(bores))
     wraps = body_wraps(scene)
     if wraps:  # a front that curves round to the side (cylindrical lenses)
         return MeshPart("body", "Lamp Body", (*shape, tuple(wraps)),
                         partial(wrap.body_mesh_wrapped, scene, rims, bores, wraps, tessellate_polygon),
-                        [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
+                        paint, Matrix.Identity(4))
     return MeshPart("body", "Lamp Body", shape, partial(part_meshes.body_mesh, scene, rims, bores, tessellate_polygon),
-                     [_diffuse_slot("body", "Lamp Body", body["color"], "Body BSDF")], Matrix.Identity(4))
+                    paint, Matrix.Identity(4))
 
 
 def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:

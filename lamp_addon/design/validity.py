@@ -12,6 +12,7 @@ import re
 import textwrap
 from dataclasses import dataclass
 
+from ...core_tracer.raytrace import spectral
 from ...core_tracer.scene import spec as S
 from ...core_tracer.scene.light_models import ignored_note
 from ...core_tracer.scene.limits import lamp_limits
@@ -197,7 +198,10 @@ def fixing_field(doc: dict, valid: dict | None, error_path: str) -> str:
 def _check(doc: dict, active: int, valid: dict | None = None) -> Status:
     note = None
     try:
-        note = ignored_note(parse_scene(doc), lambda path: field_words(path) or path)
+        scene = parse_scene(doc)
+        note = ignored_note(scene, lambda path: field_words(path) or path)
+        if scene.get("light_model") == "photometric":  # what F12 computes from the spectra (issue 33)
+            spectral.check_lamps(scene, curves=False)  # the measured curves: at render (curves.with_curves)
         problem = None
     except SceneError as e:
         problem = Problem(e.path, e.message, fixing_field(doc, valid, e.path))

@@ -92,7 +92,7 @@ class OptimiseRun:
                 if not engine.available():
                     raise SceneError("Scheduler", "needs Dask (distributed) in Blender's Python, which is not "
                                                   "installed; allowed \"local\"")
-                with engine.connect(self.scheduler) as client:
+                with engine.connect(self.scheduler, should_stop=self.stop.is_set) as client:
                     workers = len(client.scheduler_info()["workers"]) or 1
                     outcome = search.run(self.opt, client, cache, parallel=self.opt.parallel or workers,
                                          progress=self._progress, should_stop=self.stop.is_set)

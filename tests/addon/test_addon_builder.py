@@ -427,7 +427,9 @@ def test_material_values_follow_the_mapping(lamp_addon, bl_scene, scene_mod, pre
         assert [density * (1 - c) / 1000 for c in color] == pytest.approx(a, rel=1e-5, abs=1e-7)
         out = lens.node_tree.nodes["Output"]
         assert out.inputs["Volume"].links[0].from_node.name == "Lens Absorption"
-        assert out.inputs["Surface"].links[0].from_node.name == "Lens BSDF"
+        # the glass, then the lens's own eq. 1 term for camera rays (design.lens_surface) added to it
+        surface = out.inputs["Surface"].links[0].from_node
+        assert surface.name == "+ Lens Eq. 1" and surface.inputs[0].links[0].from_node.name == "Lens BSDF"
 
         bulb = bpy.data.materials[f"{label} Bulb"]
         shown = [_input(bulb, "Bulb Emission", "Strength") * c for c in _input(bulb, "Bulb Emission", "Color")[:3]]
@@ -438,7 +440,11 @@ def test_material_values_follow_the_mapping(lamp_addon, bl_scene, scene_mod, pre
         n = lamp["reflector"]["shininess"]
         assert _input(refl, "Reflector Scatter", "Roughness") == pytest.approx((2 / (n + 2)) ** 0.25, rel=1e-6)
         assert _node(refl, "Reflector Scatter").distribution == "BECKMANN"
-        assert _input(refl, "Reflector Scatter", "Color")[:3] == pytest.approx([lamp["reflector"]["scatter"]] * 3)
+        # the paper's mode builds eq. 3 as an emission (design.reflector_glow): the lobe is dark
+        assert _input(refl, "Reflector Scatter", "Color")[:3] == pytest.approx([0.0] * 3)
+        peak = max(lamp["bulb"]["intensity"]) if lamp["bulb"]["on"] else 0.0
+        assert refl.node_tree.nodes["Eq. 3 Weight"].inputs[1].default_value == \
+            pytest.approx(lamp["reflector"]["scatter"] * peak, rel=1e-6)
         assert _input(refl, "Reflector Mirror", "Roughness") == 0.0
         assert _input(refl, "Reflector Mirror", "Color")[:3] == pytest.approx([lamp["reflector"]["reflectance"]] * 3)
         assert _input(refl, "Reflector Constant", "Color")[:3] == pytest.approx(lamp["reflector"]["color"])

@@ -206,11 +206,14 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     assert result["exposure"] == display.auto_exposure([result["tracer"], result["cycles"]]) < -2
     assert compare_image.use_view_as_render
     assert compare_image["lamp_exposure"] == pytest.approx(result["exposure"] - 0.5)
-    shown = lamp_addon.convert.sheet.shown_side_by_side(result, None, result["exposure"])
+    # the difference map's display colours as the scene's view transform (AgX here) shows them
+    view = lamp_addon.image_view.scene_view(bl_scene)
+    shown = lamp_addon.convert.sheet.shown_side_by_side({**result, "linear_view": view}, None, result["exposure"])
     np.testing.assert_allclose(lamp_addon.image_view.image_to_array(compare_image), shown * np.float32(2 ** -0.5),
                                rtol=1e-6)
-    # The figures over the lens pixels (an independent mask: the tracer's lens-surface pass), and the
-    # third panel: |tracer - Cycles| at the halves' exposure.
+    # The figures over the lens pixels (an independent mask: the tracer's lens-surface pass, non-zero
+    # where an eye ray meets the lit lens), and the third panel: the relative difference of luminance
+    # on the diverging scale (display values), as the scene's view transform shows it.
     passes = core_tracer.render_passes(result["scene"]).passes
     lens = passes["lens_surface"].max(axis=2) > 0
     diff = result["tracer"][lens].astype(np.float64) - result["cycles"][lens].astype(np.float64)
@@ -221,8 +224,9 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     height, width = result["tracer"].shape[:2]
     gap = max(2, width // 128)
     third = shown[shown.shape[0] - height:, 2 * (width + gap):]
-    np.testing.assert_allclose(third, np.abs(result["tracer"] - result["cycles"]) * np.float32(2 ** result["exposure"]),
-                               rtol=1e-6, atol=1e-7)
+    panel = lamp_addon.convert.sheet.difference_panel(result["tracer"], result["cycles"])
+    # AgX cannot show the scale's most saturated colours exactly: its round trip leaves them 0.044 off at most.
+    np.testing.assert_allclose(view.to_display(third), panel, atol=0.05)
 
 
 @pytest.mark.slow

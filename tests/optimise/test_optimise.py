@@ -13,7 +13,7 @@ import subprocess
 import numpy as np
 import optuna
 import pytest
-from helpers import BASELINE, ROOT, baseline_doc, cli_command, run_cli, signal_and_wait, start_cli_at
+from helpers import ROOT, baseline_doc, cli_command, run_cli, signal_and_wait, start_cli_at
 
 from core_tracer.cluster import engine, local_pool
 from core_tracer.cluster.cache import CellCache
@@ -40,11 +40,11 @@ def render_reference(path, height: float = REFERENCE_HEIGHT) -> None:
 
 
 def opt_doc(tmp_path, **edits) -> dict:
-    doc = {"schema": spec.SCHEMA, "base": str(BASELINE),
+    doc = {"schema": spec.SCHEMA, "base": baseline_doc(),  # a base file is confined to the file's folder
            "parameters": [{"parameter": "cuts.height", "range": [0.2, 6.0]}],
            "objectives": [{"measure": "ssim", "goal": "maximise", "reference": "ref.exr"}],
            "size": [SIZE, SIZE], "trials": 8, "seed": 7,
-           "storage": f"sqlite:///{tmp_path / 'opt.db'}"}
+           "storage": "sqlite:///opt.db"}  # in the file's folder, tmp_path
     doc.update(edits)
     return doc
 

@@ -32,10 +32,10 @@ OFFSET = "bulb.offset[1]"  # the bulb along the lamp's axis (toward the lens: ne
 
 
 def opt_doc(tmp_path, **edits) -> dict:
-    doc = {"schema": spec.SCHEMA, "base": str(STOP),
+    doc = {"schema": spec.SCHEMA, "base": read_json(str(STOP)),  # a base file is confined to the file's folder
            "parameters": [{"parameter": OFFSET, "range": [-2.0, 4.0]}],
            "objectives": [{"measure": "luminance_cv", "pixel_mm": 2.0}],
-           "size": [16, 16], "trials": 10, "seed": 0, "storage": f"sqlite:///{tmp_path / 'opt.db'}"}
+           "size": [16, 16], "trials": 10, "seed": 0, "storage": "sqlite:///opt.db"}
     doc.update(edits)
     return doc
 
@@ -61,7 +61,7 @@ def test_every_measure_has_a_goal_a_unit_and_words():
 
 @pytest.mark.parametrize("edit, where, allowed", [
     ({"objectives": [{"measure": "evenness"}]}, "objectives[0].measure", "luminance_cv"),
-    ({"base": str(BASELINE), "parameters": [{"parameter": "cuts.height", "range": [0.5, 2.0]}]},
+    ({"base": read_json(str(BASELINE)), "parameters": [{"parameter": "cuts.height", "range": [0.5, 2.0]}]},
      "objectives[0].measure", 'light_model "photometric"'),
     ({"constraints": [{"measure": "grid_min_margin", "function": "fog", "min": 0}]}, "constraints[0].function",
      "tail, stop, turn, reversing"),
@@ -87,7 +87,7 @@ def test_bad_input_is_one_error_naming_the_json_path(tmp_path, edit, where, allo
 
 def test_a_paper_design_asking_for_a_photometric_measure_is_one_line_from_the_cli(tmp_path):
     path = tmp_path / "opt.json"
-    path.write_text(json.dumps(opt_doc(tmp_path, base=str(BASELINE),
+    path.write_text(json.dumps(opt_doc(tmp_path, base=read_json(str(BASELINE)),
                                        parameters=[{"parameter": "cuts.height", "range": [0.5, 2.0]}])))
     proc = run_cli("optimise", path, "--workers", "0")
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr

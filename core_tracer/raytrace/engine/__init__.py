@@ -13,7 +13,7 @@
 """
 
 from .rays import PASS_NAMES
-from .render import RenderResult, make_context, render, render_passes
+from .render import RenderResult, lens_pixels, make_context, render, render_passes
 from .schedule import RenderCancelled
 
-__all__ = ["PASS_NAMES", "RenderCancelled", "RenderResult", "make_context", "render", "render_passes"]
+__all__ = ["PASS_NAMES", "RenderCancelled", "RenderResult", "lens_pixels", "make_context", "render", "render_passes"]

@@ -94,6 +94,25 @@ def first_hits(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.n
                        local)
 
 
+def lens_seen(ctx: Context, o: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """The lamp whose lens's outer face each eye ray ``o, d`` meets first, or -1 (the body, the
+    background): geometry only, as ``first_hits`` classifies, whatever the lens shows (an unlit lens
+    too). A free-form design has no body's box: every ray gives -1."""
+    lamp = np.full(len(o), -1)
+    if ctx.box_lo is None:
+        return lamp
+    if ctx.wraps:
+        t_near, hit, face, _normal = body_box.hit_body(o, d, ctx.box_lo, ctx.box_hi, ctx.wraps)
+        front = hit & (((face == 1) & (d[:, 1] > 0)) | (face == body_box.CURVED_FRONT))
+    else:
+        t_near, t_far, face = body_box.hit_box(o, d, ctx.box_lo, ctx.box_hi)
+        front = (t_near <= t_far) & (t_near > 0) & (face == 1) & (d[:, 1] > 0)
+    front = np.nonzero(front)[0]
+    at_front = rows(o, front) + t_near[front, None] * rows(d, front)
+    lamp[front] = outer_face.lens_at(at_front[:, 0], at_front[:, 2], ctx.lamps)
+    return lamp
+
+
 def _first_hits_wrapped(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray, pix: np.ndarray) -> Rays:
     """``first_hits`` for a body whose front curves round to the side (cylindrical lenses): the
     same classification, with the curved panel's normals and the cylindrical outer faces'."""

@@ -162,6 +162,18 @@ def make_context(scene: dict, width: int, height: int, *, record_transitions: bo
     return ctx
 
 
+def lens_pixels(scene: dict, width: int, height: int) -> np.ndarray:
+    """(height, width) int: the lamp whose lens the eye ray through each pixel's centre meets first,
+    -1 where none (the body, the background; every pixel of a free-form design), found by geometry
+    (``eyes.lens_seen``), so an unlit lens counts as a lens."""
+    from ..camera import eye_rays
+    from .eyes import lens_seen
+
+    ctx = make_context(scene, width, height, samples=1)
+    o, d = eye_rays(ctx.camera, np.arange(width * height))
+    return lens_seen(ctx, o, d).reshape(height, width)
+
+
 def render(scene: dict, width: int | None = None, height: int | None = None, *,
            progress: Callable[[float], None] | None = None,
            should_stop: Callable[[], bool] | None = None) -> np.ndarray:
