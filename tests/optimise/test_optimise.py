@@ -256,7 +256,7 @@ def test_the_dashboard_link_is_printed_while_the_cluster_runs(folder):
             assert answer.status == 200  # the scheduler's web server behind the link (/health: no bokeh needed)
     finally:
         signal_and_wait(proc, signal.SIGINT)
-    path.write_text(json.dumps(opt_doc(folder, trials=2, storage=f"sqlite:///{folder / 'two.db'}")))
+    path.write_text(json.dumps(opt_doc(folder, trials=2, storage="sqlite:///two.db")))
     done = run_cli("optimise", path, "--workers", "2", "--scheduler", "local", "-o", folder / "two", "--no-cache")
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
