@@ -12,7 +12,8 @@ same work in one process, measured in one run.
 
 Each figure is the command's own "in X s" (from its start of work to its end: a local Dask cluster's
 start-up included, Python's own start and the imports not) and the whole command's wall time; the
-runs alternate, ``--rounds`` times, and the best of each is kept. ``--dask`` adds the same runs on
+runs alternate, ``--rounds`` times, and the best of each is kept, with the largest proportional set
+size of the command's process tree seen (sampled every 0.2 s). ``--dask`` adds the same runs on
 a local Dask cluster (``--engine dask`` / ``--scheduler local``) for reference. The load average is
 printed before and after: on a shared machine only the ratios mean anything.
 """
@@ -41,16 +42,40 @@ def load() -> str:
     return ", ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
-def timed(arguments: list[str], env: dict) -> tuple[float, float, str]:
-    """(the command's own seconds, its wall time, its last line)."""
+def tree_pss(pid: int) -> int:
+    """The proportional set size of ``pid`` and every process under it (shared pages counted once
+    over the processes sharing them: a forked worker's pages shared with its parent are not counted
+    twice), from /proc; 0 where it cannot be read."""
+    total, todo = 0, [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            with open(f"/proc/{p}/smaps_rollup") as f:
+                total += next(int(x.split()[1]) for x in f if x.startswith("Pss:")) * 1024
+            for task in os.listdir(f"/proc/{p}/task"):
+                with open(f"/proc/{p}/task/{task}/children") as f:
+                    todo += [int(c) for c in f.read().split()]
+        except (OSError, StopIteration):
+            continue
+    return total
+
+
+def timed(arguments: list[str], env: dict) -> tuple[float, float, str, int]:
+    """(the command's own seconds, its wall time, its last line, its process tree's peak PSS in bytes
+    sampled every 0.2 s)."""
     start = time.perf_counter()
-    done = subprocess.run([PYTHON, "-m", "core_tracer", *arguments], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=3600)
+    proc = subprocess.Popen([PYTHON, "-m", "core_tracer", *arguments], cwd=ROOT, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    peak = 0
+    while proc.poll() is None:
+        peak = max(peak, tree_pss(proc.pid))
+        time.sleep(0.2)
+    stdout, stderr = proc.communicate()
     wall = time.perf_counter() - start
-    if done.returncode != 0:
-        raise SystemExit(f"{' '.join(arguments)} failed:\n{done.stderr}")
-    line = next(x for x in done.stdout.splitlines() if SECONDS.search(x))
-    return float(SECONDS.search(line).group(1)), wall, line
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(arguments)} failed:\n{stderr}")
+    line = next(x for x in stdout.splitlines() if SECONDS.search(x))
+    return float(SECONDS.search(line).group(1)), wall, line, peak
 
 
 def optimise_file(folder: str, trials: int, run: str) -> str:
@@ -102,13 +127,13 @@ def main() -> int:
     return 0
 
 
-def report(title: str, runs: dict[str, list[tuple[float, float, str]]]) -> None:
+def report(title: str, runs: dict[str, list[tuple[float, float, str, int]]]) -> None:
     print(title)
-    best = {name: (min(r[0] for r in rs), min(r[1] for r in rs)) for name, rs in runs.items()}
+    best = {name: (min(r[0] for r in rs), min(r[1] for r in rs), max(r[3] for r in rs)) for name, rs in runs.items()}
     one = best["one process (--workers 0)"]
-    for name, (own, wall) in best.items():
-        print(f"  {name:42s} {own:7.2f} s ({own / one[0]:.2f}x), whole command {wall:6.2f} s ({wall / one[1]:.2f}x)"
-              f"  [{', '.join(f'{r[0]:.2f}' for r in runs[name])}]")
+    for name, (own, wall, pss) in best.items():
+        print(f"  {name:42s} {own:7.2f} s ({own / one[0]:.2f}x), whole command {wall:6.2f} s ({wall / one[1]:.2f}x),"
+              f" process tree {pss / 2**20:5.0f} MB PSS at most  [{', '.join(f'{r[0]:.2f}' for r in runs[name])}]")
 
 
 if __name__ == "__main__":
