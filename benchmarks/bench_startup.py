@@ -24,6 +24,7 @@ import argparse
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -80,9 +81,11 @@ def timed(arguments: list[str], env: dict) -> tuple[float, float, str, int]:
 
 def optimise_file(folder: str, trials: int, run: str) -> str:
     doc = json.loads(EXAMPLE.read_text())
-    doc["base"] = str((EXAMPLE.parent / doc["base"]).resolve())
+    base = (EXAMPLE.parent / doc["base"]).resolve()
+    shutil.copy(base, os.path.join(folder, base.name))  # a spec reads its base from its own folder
+    doc["base"] = base.name
     doc["trials"] = trials
-    doc["storage"] = f"sqlite:///{folder}/{run}.db"
+    doc["storage"] = f"sqlite:///{run}.db"
     path = os.path.join(folder, f"{run}.optimise.json")
     Path(path).write_text(json.dumps(doc))
     return path
