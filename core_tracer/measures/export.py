@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .directions import angles_of
-from .intensity import rendered_intensities
+from .intensity import intensities_at
 
 IES_LINE = 256  # LM-63-2002: no line longer than 256 characters
 
@@ -73,8 +73,8 @@ def measure_distribution(scene: dict, lamps: Sequence[int] | None = None, *, nam
 def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], *, c_step: float = 30.0,
                           gamma_step: float = 10.0, gamma_max: float = 90.0, **options) -> dict[str, Distribution]:
     """The intensity of each named group of lamps (None: all) on a (C, γ) grid, by rendered views
-    (``intensity.rendered_intensities``, one render per direction for every group; ``options`` as it
-    takes them)."""
+    (``intensity.intensities_at``, one render per direction for every group; ``options`` as
+    ``rendered_intensities`` takes them)."""
     for what, value, lo, hi in (("C step", c_step, 1.0, 180.0), ("γ step", gamma_step, 1.0, 90.0),
                                 ("γ max", gamma_max, 1.0, 90.0)):
         if not (math.isfinite(value) and lo <= value <= hi):
@@ -84,14 +84,16 @@ def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], 
     names = list(groups)
     lamp_lists = [list(range(len(scene["lamps"]))) if groups[n] is None else list(groups[n]) for n in names]
     cd = np.zeros((len(names), len(c), len(gamma)))
+    # Every C plane meets at the axis: γ = 0 is measured once (C = 0). The directions are measured
+    # together, on the local pool (``intensity.intensities_at``).
+    grid = [(i, j) for j, g in enumerate(gamma) for i in range(len(c)) if not (g == 0.0 and i > 0)]
+    directions = [tuple(float(a) for a in angles_of(gonio_direction(float(c[i]), float(gamma[j])))) for i, j in grid]
+    for (i, j), at in zip(grid, intensities_at(scene, directions, lamp_lists, **options), strict=True):
+        for k, value in enumerate(at):
+            cd[k, i, j] = value.cd
     for j, g in enumerate(gamma):
-        for i, ci in enumerate(c):
-            if g == 0.0 and i > 0:  # every C plane meets at the axis
-                cd[:, i, j] = cd[:, 0, j]
-                continue
-            h, v = angles_of(gonio_direction(float(ci), float(g)))
-            for k, value in enumerate(rendered_intensities(scene, float(h), float(v), lamp_lists, **options)):
-                cd[k, i, j] = value.cd
+        if g == 0.0:
+            cd[:, 1:, j] = cd[:, :1, j]
     return {n: Distribution(c, gamma, cd[k], lamp_flux(scene, lamp_lists[k]), n) for k, n in enumerate(names)}
 
 

@@ -22,7 +22,7 @@ import numpy as np
 from . import colour, regulation_grid
 from .directions import direction
 from .homogeneity import DEFAULT_DISTANCE_M, homogeneity
-from .intensity import lamp_of_pixels, measurement_scene, render_view, rendered_intensities, view_along
+from .intensity import intensities_at, lamp_of_pixels, measurement_scene, render_view, view_along
 
 if TYPE_CHECKING:
     from ..freeform.cache import DesignMeshes
@@ -118,6 +118,7 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
     names another), its bulbs as its parts have them."""
     say = progress or (lambda text: None)
     measurement_scene(scene)  # refuses a paper-mode scene at once, naming light_model
+    _band_pool(PICTURE_WIDTH, PICTURE_WIDTH)  # started now, its workers are ready for lamp_picture
     by_function: dict[str, list[int]] = {}
     freeform = "freeform" in scene
     for i, lamp in enumerate(scene["lamps"][:1] if freeform else scene["lamps"]):
@@ -135,12 +136,16 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
             wanted.update(dict.fromkeys(regulation_grid.directions_for(key)))
     measured: dict[str, dict] = {n: {} for n in names}
     xyz_at_axis: dict[str, np.ndarray] = {}
-    for k, (h, v) in enumerate(wanted):
-        if k % 10 == 0:
-            say(f"intensity: direction {k + 1} of {len(wanted)}")
-        for name, value in zip(names, rendered_intensities(scene, h, v, groups, pixel_mm=pixel_mm,
-                                                           replicates=replicates, seed=k, meshes=meshes),
-                               strict=True):
+
+    def counted(done: int, total: int) -> None:
+        if done % 10 == 0 and done < total:
+            say(f"intensity: direction {done + 1} of {total}")
+
+    say(f"intensity: direction 1 of {len(wanted)}")
+    values = intensities_at(scene, list(wanted), groups, seeds=range(len(wanted)), progress=counted,
+                            pixel_mm=pixel_mm, replicates=replicates, meshes=meshes)  # the local pool: intensity.py
+    for (h, v), at in zip(wanted, values, strict=True):
+        for name, value in zip(names, at, strict=True):
             measured[name][(h, v)] = (value.cd, value.stderr)
             if (h, v) == (0.0, 0.0):
                 xyz_at_axis[name] = value.xyz
@@ -354,7 +359,27 @@ def _chromaticity_plot(ax, result: Measures) -> None:
     ax.grid(True, color="0.92")
 
 
-def lamp_picture(scene: dict, width: int = 520, meshes: DesignMeshes | None = None) -> np.ndarray:
+def _band_pool(width: int, height: int):
+    """The band pool for the picture, when its workers fit the memory budget beside this process
+    (``budget.render_bytes``) and this process is not itself a worker: a measure lasts long enough
+    for the pool's 0.2 s start-up to pay even below ``budget.POOL_RAYS``; None: threads."""
+    import multiprocessing
+    import os
+
+    from .. import budget
+    from ..raytrace import band_pool
+
+    workers = os.cpu_count() or 1
+    if workers < 2 or multiprocessing.parent_process() is not None or \
+            budget.render_bytes(width, height, False, "exr", workers=workers) > budget.MEMORY_BUDGET:
+        return None
+    return band_pool.shared()
+
+
+PICTURE_WIDTH = 520
+
+
+def lamp_picture(scene: dict, width: int = PICTURE_WIDTH, meshes: DesignMeshes | None = None) -> np.ndarray:
     """The design as its camera sees it (photometric render, the scene's exposure, the lamp view
     ``display.LAMP_VIEW``, through ``display.shown``), as display RGB in [0, 1]; a free-form design's on
     its ``meshes``."""
@@ -366,5 +391,6 @@ def lamp_picture(scene: dict, width: int = 520, meshes: DesignMeshes | None = No
     if meshes is not None and "freeform" in scene:
         image = meshes.render_passes(scene, width, height, samples=samples).image
     else:
-        image = render_passes(scene, width, height, keep_passes=False, samples=samples).image
+        pool = _band_pool(width, height)
+        image = render_passes(scene, width, height, keep_passes=False, samples=samples, pool=pool).image
     return display.shown(image, scene, view=display.view_transform(display.LAMP_VIEW)).pixels[0]
