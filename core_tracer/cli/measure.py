@@ -8,11 +8,12 @@ import os
 from ..fileio import atomic_folder, check_replaceable_folder
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
-from .common import load_scene_file
+from .common import check_output_folder, load_scene_file
 
 HELP = "measure a photometric design: intensity grids (UN R148, FMVSS 108), colour, homogeneity, IES/LDT, report"
 OUTPUTS = ("measures.json", "measures.png")
 FUNCTION_NAMES = ("tail", "stop", "turn", "reversing")
+EXIT_FAILS = 1  # a regulation fails (``--exit-zero`` keeps 0); bad input is 2 (cli.main)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -29,6 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--distance-m", type=float, default=10.0, metavar="M",
                         help="viewing distance for the homogeneity figures (default 10 m: the eye resolves 2.9 mm)")
     parser.add_argument("--no-beam-files", action="store_true", help="skip the IES and EULUMDAT files")
+    parser.add_argument("--exit-zero", action="store_true",
+                        help="exit 0 when a regulation fails (default: exit 1, so a script or CI job notices)")
 
 
 def _functions(values: list[str], lamps: int) -> dict[int, str]:
@@ -47,6 +50,7 @@ def run(args: argparse.Namespace) -> int:
                                   ("--distance-m", args.distance_m, 0.1, 1000.0)):
         if not (lo <= value <= hi):
             raise SceneError(option, f"{value!r} is outside the allowed {lo:g} to {hi:g}")
+    check_output_folder(args.output, "--output")  # its parent exists and is writable: before a minute's work
     check_replaceable_folder(args.output, _ours, "measures")
     scene = load_scene_file(args.scene)
     functions = _functions(args.function, len(scene["lamps"]))
@@ -68,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     failing = [k for k, ok in verdicts.items() if not ok]
     print(f"{printable(args.output)}: {'fails ' + ', '.join(failing) if failing else 'passes every check'} "
           f"({sum(verdicts.values())} of {len(verdicts)} regulations pass)")
-    return 0
+    return EXIT_FAILS if failing and not args.exit_zero else 0
 
 
 def _ours(name: str) -> bool:

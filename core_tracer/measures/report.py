@@ -9,6 +9,7 @@ stop (the four-lamp presets' lamps are custom and follow this). ``functions`` ov
 
 from __future__ import annotations
 
+import datetime
 import json
 import math
 import os
@@ -30,6 +31,7 @@ FUNCTIONS: dict[str, tuple[str, str, str]] = {
     "turn": ("R148 2a", "FMVSS rear turn amber", "amber"),
     "reversing": ("R148 AR", "FMVSS backup", "white"),
 }
+SCHEMA = "lamp-measures/1"  # measures.json's format; readers of earlier files (no schema) still read them
 NOTE = ("Simulated figures of a design, for choosing between variants; a homologation laboratory's measurement "
         "of a built lamp decides approval.")
 
@@ -61,6 +63,8 @@ class Measures:
     seconds: dict[str, float]
     pixel_mm: float
     front_view: dict = field(default_factory=dict)  # luminance image, mask and blurred map for the picture
+    scene_digest: str = ""  # library.presets.digest of the scene measured: which design these figures are of
+    date: str = ""  # when it was measured, UTC, ISO 8601
 
     def verdicts(self) -> dict[str, bool]:
         out: dict[str, bool] = {}
@@ -69,8 +73,11 @@ class Measures:
         return out
 
     def as_dict(self) -> dict:
+        from .. import __version__
+
         return {
-            "scene": self.scene_name, "note": NOTE,
+            "schema": SCHEMA, "tool": {"name": "core_tracer", "version": __version__}, "date": self.date,
+            "scene": self.scene_name, "scene_digest": self.scene_digest, "note": NOTE,
             "sources": {k: v["document"] for k, v in regulation_grid.data()["sources"].items()},
             "functions": {name: {"lamps": lamps, "regulations": list(FUNCTIONS[name][:2]),
                                  "colour": self.colours.get(name)} for name, lamps in self.functions.items()},
@@ -154,24 +161,35 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
             blurred[mask] = figures.blurred[mask]
     seconds["homogeneity"] = time.perf_counter() - start
     front = {"luminance": luminance, "blurred": blurred, "dark": dark, "pixel_mm": front_pixel_mm}
-    return Measures(scene.get("name", ""), by_function, rows, colours, lit, measured, seconds, pixel_mm, front)
+    from ..library.presets import digest
+
+    date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    return Measures(scene.get("name", ""), by_function, rows, colours, lit, measured, seconds, pixel_mm, front,
+                    digest(scene), date)
 
 
 def write_json(result: Measures, path: str | os.PathLike) -> None:
+    """measures.json as strict JSON (RFC 8259): a figure that is missing (a standard error from one
+    replicate, a margin against a limit of 0) is null, never NaN or Infinity, which strict readers refuse."""
     tmp = f"{os.fspath(path)}.part"
     with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(result.as_dict(), f, indent=1, ensure_ascii=False, default=_plain)
+        json.dump(strict(result.as_dict()), f, indent=1, ensure_ascii=False, allow_nan=False)
     os.replace(tmp, path)
 
 
-def _plain(value):
-    if isinstance(value, (np.floating, np.integer)):
-        return value.item()
+def strict(value):
+    """``value`` with numpy numbers and arrays made plain and every non-finite float made None."""
+    if isinstance(value, dict):
+        return {k: strict(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [strict(v) for v in value]
     if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, float) and math.isinf(value):
+        return strict(value.tolist())
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
         return None
-    raise TypeError(type(value))
+    return value
 
 
 # ---------------------------------------------------------------------------------------------

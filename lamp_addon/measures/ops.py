@@ -61,7 +61,8 @@ class MeasureRun:
         self._scene_path = os.path.join(self._scratch, "scene.json")
         with open(self._scene_path, "w", encoding="utf-8") as f:
             json.dump(scene, f)
-        arguments = [self._scene_path, "-o", folder] + ([] if beam_files else ["--no-beam-files"])
+        # --exit-zero: a failing regulation is a finding the panel shows, not a failed run
+        arguments = [self._scene_path, "-o", folder, "--exit-zero"] + ([] if beam_files else ["--no-beam-files"])
         self._command = processes.worker_command("measures.job", *arguments)
         self._process: subprocess.Popen | None = None
         self._reader: threading.Thread | None = None
