@@ -232,7 +232,7 @@ def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], 
     if photons:
         say("beam files: the flux leaving the lamp, light-traced")
         try:
-            traced = traced_beam(scene, [], lamp_lists, photons=photons)[1]
+            traced = traced_beam(scene, [(0.0, 0.0)], lamp_lists, photons=photons)[1]  # its flux out, not the cone
         except SceneError:  # optics light tracing does not follow: the file's integral stands for the flux out
             pass
     date = datetime.datetime.now(datetime.UTC).date().isoformat()
