@@ -332,8 +332,9 @@ def _verdicts(page: Canvas, result, names, x: int, y: int) -> None:
     page.text(x, row, f"failed points ({len(failed)}):", 2, FAIL if failed else INK)
     row += 2 * LINE_H + 6
     room = max(0, (HEIGHT - 60 - row) // (LINE_H + 6))
-    for r in failed[:room]:
-        more = f" (+{len(failed) - room} more in measures.json)" if r is failed[room - 1] and len(failed) > room else ""
+    shown = failed[:room]
+    for k, r in enumerate(shown):
+        more = f" (+{len(failed) - room} more in measures.json)" if k == len(shown) - 1 < len(failed) - 1 else ""
         page.text(x + 24, row, f"{r.function} {r.point} {r.kind}: {r.simulated:.3g} vs {r.required:.3g} "
                                f"({100 * r.margin:+.0f} %){more}", 1, FAIL)
         row += LINE_H + 6
