@@ -15,5 +15,5 @@ def test_a_png_reads_back_exactly(tmp_path):
     buf = oiio.ImageBuf(str(tmp_path / "page.png"))
     assert (buf.spec().width, buf.spec().height, buf.spec().nchannels) == (53, 37, 3)
     np.testing.assert_array_equal(buf.get_pixels(oiio.UINT8), rgb)
-    assert {a.name: a.value for a in buf.spec().extra_attribs}.get("Title") == "Measures of a lamp"
+    assert {a.name: a.value for a in buf.spec().extra_attribs}.get("DocumentName") == "Measures of a lamp"  # PNG Title
     assert [p.name for p in tmp_path.iterdir()] == ["page.png"]  # no temporary file left beside it
