@@ -32,8 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-beam-files", action="store_true", help="skip the IES and EULUMDAT files")
     parser.add_argument("--beam-grid", default="10,2.5,5", metavar="C,GAMMA[,FAR]",
                         help="the beam files' angles in degrees: C every C, γ every GAMMA to 50° and every FAR "
-                             "beyond (default 10,2.5,5: interpolating the files gives the report's grid within 2 %% "
-                             "beyond the standard errors; 30,10,10 is quick and coarse)")
+                             "beyond (default 10,2.5,5: 1009 directions, the files integrate to the flux out within "
+                             "0.1 %%; 30,10,10 is quick and coarse)")
     parser.add_argument("--exit-zero", action="store_true",
                         help="exit 0 when a regulation fails (default: exit 1, so a script or CI job notices)")
 
