@@ -47,8 +47,10 @@ STEPS: tuple[Step, ...] = (
     _measure("four-lamp-night-lit-photometric"),
     _measure("photometric-stop-lamp"),
     _measure("photometric-tail-lamp"),
+    _measure("led-stop-lamp"),
     Step("measures-panel", ("{python}", "tools/make_measures_panel_image.py"), ("docs/measures-panel.png",)),
     Step("stop-vs-tail", ("{python}", "tools/make_stop_vs_tail.py"), ("docs/images/stop-vs-tail-photometric.png",)),
+    Step("lamp-view", ("{python}", "tools/make_lamp_view_image.py"), ("docs/lamp-view-agx-filmic.png",)),
     Step("docs-images", ("{python}", "tools/make_docs_images.py"),
          ("docs/viewport-preview-agx.png", "docs/compare-startup-four-lamps.png", "docs/study-ior-cut-height.png"),
          display=True),
@@ -80,8 +82,12 @@ NOT_REGENERATED: dict[str, str] = {
     "docs/cut-types-four-lamps.png": "no recorded command",
     "docs/new-lamp-types.png": "no recorded command",
     "docs/study-lamp-types.png": "no recorded command",
+    "docs/study-four-lamp-ior-cut-height.png": "no recorded command",
     "docs/study-sorted-by-measure.png": "no recorded command",
     "docs/images/light-states-tail-only-vs-design.png": "no recorded command",
+    "docs/images/led-light-guide-close-up.png": "no recorded command",
+    "docs/images/led-light-guide-tail-lamp-night.png": "no recorded command",
+    "docs/led-stop-lamp-night.png": "no recorded command",
     **{f"docs/surroundings-{when}-{lit}.png": "no recorded command"
        for when in ("day", "evening", "night") for lit in ("lit", "unlit")},
 }
