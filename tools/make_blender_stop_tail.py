@@ -4,7 +4,8 @@
 
 As a user gets them: the add-on enabled from this source tree in Blender's factory startup file,
 *Apply Preset* of each photometric preset, F12 with the Lamp Tracer at the preset's camera (320², EV100
-15, AgX), written as Blender writes a still; the two pasted side by side, stop left, tail right.
+15) under AgX (the user guide's caption; the first lamp of a new file sets the Lamp View, Filmic),
+written as Blender writes a still; the two pasted side by side, stop left, tail right.
 """
 
 from __future__ import annotations
@@ -40,6 +41,8 @@ def main(argv: list[str] | None = None) -> int:
         for name in PRESETS:
             apply_preset(bpy, name)
             assert bpy.ops.lamp.build() == {"FINISHED"}
+            # the user guide's caption says AgX: a new file's first lamp sets the Lamp View (Filmic)
+            bl_scene.view_settings.view_transform = "AgX"
             path = os.path.join(scratch, name.replace(".json", ".png"))
             f12(bpy, bl_scene, path)
             made.append(path)
