@@ -3,14 +3,19 @@
     .venv/bin/python tools/regenerate_outputs.py            # every step
     .venv/bin/python tools/regenerate_outputs.py --list     # the steps and what each writes
     .venv/bin/python tools/regenerate_outputs.py measures-stop measures-tail
+    .venv/bin/python tools/regenerate_outputs.py --into /tmp/try led-stop-lamp-night   # beside, not over
 
 Each step is the command a reader of the docs runs (the README's and docs/measures.md's ``measure``,
 the picture scripts of tools/), its outputs written where the docs show them. The measure reports are
 checked against fresh runs by ``tests/measures/test_committed_reports.py``, which fails when a report
 no longer matches within its standard errors: run the step it names, look at the new page, commit.
 
-Pictures no recorded command makes yet are listed in ``NOT_REGENERATED`` with why; a test keeps
-every picture under docs/ in one list or the other, so none goes stale unnoticed.
+Pictures no recorded command makes are listed in ``NOT_REGENERATED`` with why (only issue 24's
+before/after, of a past tree); a test keeps every picture under docs/ in one list or the other, so
+none goes stale unnoticed. Study sheets are re-run from the study in their own header; the two
+renders of a changed preset (the cut types, the light guide close up) from its scene, saved from the
+committed picture's header into docs/examples/. ``--into DIR`` writes a step's outputs under DIR
+(same relative paths) to try it; a script that writes in place is refused there.
 """
 
 from __future__ import annotations
