@@ -52,6 +52,41 @@ def test_every_committed_picture_is_regenerated_or_listed(repo_root):
             f"{relative} is made by no step of tools/regenerate_outputs.py and not listed as such"
 
 
+def _regenerate_outputs(repo_root):
+    sys.path.insert(0, str(repo_root / "tools"))
+    try:
+        import regenerate_outputs
+    finally:
+        sys.path.remove(str(repo_root / "tools"))
+    return regenerate_outputs
+
+
+def test_every_step_names_files_of_this_tree(repo_root):
+    """A step's scripts, presets and example scenes exist (a renamed preset breaks its step here, not in a
+    long run), and each output is under docs/."""
+    tool = _regenerate_outputs(repo_root)
+    for s in tool.STEPS:
+        for part in s.command:
+            if part.endswith((".py", ".json")):
+                assert (repo_root / part).is_file(), f"step {s.name}: {part} does not exist"
+        assert all(out.startswith("docs/") for out in s.outputs), s.name
+
+
+def test_into_writes_a_step_under_the_folder_not_over_the_committed_file(repo_root, tmp_path):
+    tool = _regenerate_outputs(repo_root)
+    led = tool.step("led-stop-lamp-night")
+    command, root = tool.redirected(led, str(tmp_path))
+    assert root == str(tmp_path)
+    assert command[command.index("-o") + 1] == str(tmp_path / "docs" / "led-stop-lamp-night.png")
+    assert "presets/led-stop-lamp.json" in command  # inputs stay where they are
+    sheet = tool.step("study-lamp-types")  # reads the committed sheet, writes the new one elsewhere
+    command, _ = tool.redirected(sheet, str(tmp_path))
+    assert command[command.index("--study") + 1] == "docs/study-lamp-types.png"
+    assert command[command.index("-o") + 1] == str(tmp_path / "docs" / "study-lamp-types.png")
+    with pytest.raises(SystemExit, match="in place"):  # a script with no output argument
+        tool.redirected(tool.step("measures-panel"), str(tmp_path))
+
+
 def _agrees(new: float, new_se, old: float, old_se) -> bool:
     spread = math.hypot(new_se or 0.0, old_se or 0.0)
     return abs(new - old) <= 4.0 * max(spread, 0.005 * abs(old))
