@@ -215,7 +215,19 @@ class _LampPartPanel(LampTab):
     @classmethod
     def poll(cls, context):
         lamp = active_lamp(context)
-        return lamp is not None and section_in_use(lamp, cls.part)
+        return lamp is not None and section_in_use(lamp, cls.part) and cls._has_a_field_shown(lamp)
+
+    @classmethod
+    def _has_a_field_shown(cls, lamp) -> bool:
+        """Whether the design's light model uses a field of the section: no empty sub-panel (the light
+        guide's, all photometric, in the paper mode)."""
+        if cls.part == "cuts":
+            return True
+        group = getattr(lamp, cls.part)
+        section = S.LAMP.fields[cls.part]
+        model = lamp.id_data.lamp_design.light_model
+        return any(light_models.used(section, key, model, lambda k: getattr(group, properties.property_id(k)))
+                   for key in leaf_keys(section))
 
     def draw(self, context):
         group = getattr(active_lamp(context), self.part)
