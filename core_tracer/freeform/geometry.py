@@ -21,8 +21,9 @@ from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .meshes import MAX_TRIANGLES, MeshData, area_normals, check_lens_volume, check_mesh, face_normals
 
-# a surface beyond Table 1's and the prism plate's: the housing, shaded by eq. (1), ends the path
-BODY = P.HOUSING + 1
+# a surface beyond every parametric one (Table 1's, the prism plate's, the LEDs' and the light guide's):
+# the housing, shaded by eq. (1), ends the path
+BODY = P.GUIDE + 1
 SURFACE_OF_ROLE = {"reflector": P.REFLECTOR, "bulb": P.BULB, "socket": P.SOCKET, "side_wall": P.WALL, "body": BODY}
 
 # Rays leave a surface this far along its geometric normal (relative to the design's size, at

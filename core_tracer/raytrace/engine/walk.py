@@ -30,8 +30,10 @@ GUIDE_MAX_DEPTH = 256
 
 
 def depth_limit(ctx: Context) -> int:
-    """The depth limit of a render: ``GUIDE_MAX_DEPTH`` when a lamp has a light guide, else ``MAX_DEPTH``."""
-    return GUIDE_MAX_DEPTH if ctx.lamps.guide is not None else MAX_DEPTH
+    """The depth limit of a render: ``GUIDE_MAX_DEPTH`` when a lamp has a light guide, else ``MAX_DEPTH``
+    (also for a free-form design, whose context has meshes and no parametric lamps)."""
+    lamps = getattr(ctx, "lamps", None)
+    return GUIDE_MAX_DEPTH if lamps is not None and lamps.guide is not None else MAX_DEPTH
 
 
 def trace_eye_rays(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> None:
