@@ -4,11 +4,11 @@
 
 A free-form design traces its meshes only, not the parametric lamps beside them (docs/photometric.md,
 "Free-form parts"), and Convert to Free-form converts lens, reflector, bulb and socket, not LED dies.
-So the LED stop lamp (``presets/led-stop-lamp.json``: nine 1 x 1 mm red dies, 35 lm each) is built in
+So the LED stop lamp (``presets/led-stop-lamp.json``: nine 1 x 1 mm red dies) is built in
 Blender's Python module, converted, its lens bowed into a dome 6 mm high (its cuts following), and its LED
 dies given to the tracer as what a free-form design has: one **bulb** part made of the nine die
-rectangles (the LED object's own mesh, 9 mm²) with the nine dies' flux 315 lm and the red LED's
-spectrum, so its luminance Φ / (π A) is the parametric die's 35 lm / (π 1 mm²); and behind each die a
+rectangles (the LED object's own mesh, 9 mm²) with the nine dies' flux and the red LED's spectrum,
+so its luminance Φ / (π A) is that of a parametric die of a ninth of it (``DIE_LM``); and behind each die a
 dark **socket** box (the LED package, 1.6 x 1.6 x 0.6 mm), since a free-form bulb glows on both
 sides of its mesh and the parametric die only in front. *Export Free-form Design* writes the pair.
 """
@@ -26,6 +26,10 @@ sys.path.insert(0, ROOT)
 
 NAME = "led-stop-lamp-freeform-lens-photometric"
 RISE_MM = 6.0  # how far the dome's top stands out toward the viewer from the flat lens
+# Each die's flux (lm). The dome spreads the fish-eye cuts' beam: with the parametric lamp's 35 lm a die,
+# `measure` gives 32.5 cd at H-V, under UN R148 S1's 60 cd (docs/measures.md); 80 lm a die (a 1 mm² red
+# die driven harder) brings H-V back above it.
+DIE_LM = 80.0
 PACKAGE_MM = (1.6, 0.6)  # the LED package behind each die: its side and its depth along the die's normal
 PACKAGE_GAP_MM = 0.02  # between the die and the package's front, so the two meshes do not touch
 
@@ -50,17 +54,20 @@ def design(core) -> dict:
     """The LED stop lamp as the parametric preset has it, named and described as the free-form twin."""
     scene = core.load_scene(os.path.join(ROOT, "presets", "led-stop-lamp.json"))
     led = scene["lamps"][0]["led"]
+    led["flux_lm"] = DIE_LM  # the lamp's own LED section says so too, though a free-form design traces its meshes
     count = led["columns"] * led["rows"]
     scene["name"] = "LED stop lamp behind a free-form lens (photometric)"
     scene["description"] = (
         f"The LED stop lamp's {count} red dies ({led['die_size'][0]:g} x {led['die_size'][1]:g} mm, "
         f"{led['flux_lm']:g} lm each, {led['pitch'][0]:g} mm pitch) behind a free-form lens: the red PMMA "
-        f"fish-eye lens converted to a mesh and bowed, cuts and all, into a dome {RISE_MM:g} mm high toward the viewer "
-        "(tools/make_freeform_led_example.py). A free-form design traces only "
-        f"meshes, so the dies are one Lambertian bulb part of their area ({count} mm², {count * led['flux_lm']:g} "
-        "lm, the red LED spectrum: the same luminance as each parametric die) with a dark package box behind each "
-        "die; unlike the parametric LED, the reflector's scatter share is lit as by a sphere of the dies' area at "
-        "their centre. At night (3 lx), EV100 15, as the parametric LED stop lamp.")
+        f"fish-eye lens converted to a mesh and bowed, cuts and all, into a dome {RISE_MM:g} mm high toward "
+        "the viewer (tools/make_freeform_led_example.py). A free-form design traces only meshes, so the dies "
+        f"are one Lambertian bulb part of their area ({count} mm², {count * led['flux_lm']:g} lm, the red LED "
+        "spectrum: each die's luminance as a parametric die's) with a dark package box behind each die. The "
+        f"dome spreads the cuts' beam, so the dies run at {DIE_LM:g} lm where the flat lens's take 35 (with 35 "
+        "the dome gives 32.5 cd at H-V, under S1's 60); unlike the parametric LED, the reflector's scatter "
+        "share is lit as by a sphere of the dies' area at their centre. At night (3 lx), EV100 15, as the "
+        "parametric LED stop lamp.")
     scene["tags"] = ["photometric", "stop", "LED", "free-form"]
     return scene
 

@@ -51,17 +51,17 @@ def test_the_rear_combination_sets_each_lamps_function():
     assert [lamp["led"]["spectrum"] for lamp in lamps[1:]] == ["red_led", "amber_led", "white_led"]
 
 
-def test_the_free_form_dies_are_as_bright_as_the_parametric_ones():
-    """The dies' bulb part: its luminance Φ / (π A) over the mesh's area equals the parametric die's
-    35 lm / (π · 1 mm²), so the mesh must be the nine 1 mm² dies and the flux nine times 35 lm."""
+def test_the_free_form_dies_are_as_bright_as_parametric_ones():
+    """The dies' bulb part: its luminance Φ / (π A) over the mesh's area equals that of a parametric
+    die of the lamp's LED section, Φ_die / (π A_die), so the mesh must be the nine dies' rectangles
+    and its flux nine times the die's."""
     path = PRESETS / "led-stop-lamp-freeform-lens-photometric.json"
     scene = load_scene(path)
-    led = load_scene(PRESETS / "led-stop-lamp.json")["lamps"][0]["led"]
+    led = scene["lamps"][0]["led"]
     parts = {part["object"]: part for part in scene["freeform"]["parts"]}
     dies = parts["Lamp 1 LED Dies (Free-form)"]
-    assert dies["role"] == "bulb" and dies["bulb"]["spectrum"] == led["spectrum"]
-    meshes = load_meshes(path, scene)
-    mesh = meshes["Lamp 1 LED Dies (Free-form)"]
+    assert dies["role"] == "bulb" and dies["bulb"]["spectrum"] == led["spectrum"] == "red_led"
+    mesh = load_meshes(path, scene)["Lamp 1 LED Dies (Free-form)"]
     c = mesh.vertices[mesh.triangles]
     area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum()
     die_area = led["die_size"][0] * led["die_size"][1]
