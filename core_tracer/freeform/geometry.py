@@ -21,9 +21,8 @@ from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .meshes import MAX_TRIANGLES, MeshData, area_normals, check_lens_volume, check_mesh, face_normals
 
-# a surface beyond every parametric one (Table 1's, the prism plate's, the LEDs' and the light guide's):
-# the housing, shaded by eq. (1), ends the path
-BODY = P.GUIDE + 1
+# a surface beyond those of the parametric lamp (``paths.SURFACES``): the housing, shaded by eq. (1), ends the path
+BODY = P.SURFACES
 SURFACE_OF_ROLE = {"reflector": P.REFLECTOR, "bulb": P.BULB, "socket": P.SOCKET, "side_wall": P.WALL, "body": BODY}
 
 # Rays leave a surface this far along its geometric normal (relative to the design's size, at

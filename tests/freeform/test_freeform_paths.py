@@ -57,9 +57,9 @@ def test_every_transition_is_table_1s_or_a_documented_addition(lens_shape):
 
 
 def test_the_body_is_a_surface_of_its_own():
-    """The mesh body's surface id lies beyond every parametric surface (the LED merge added LED and
-    GUIDE after the housing, and BODY = HOUSING + 1 became the LEDs' id: every free-form render failed
-    building its class table)."""
+    """The mesh body's surface id lies beyond every parametric surface (the LED and guide merges added
+    LED and GUIDE after the housing, and BODY = HOUSING + 1 had become the LEDs' id: every free-form
+    render failed building its class table)."""
     from core_tracer.freeform import render
     from core_tracer.freeform.geometry import BODY
 
