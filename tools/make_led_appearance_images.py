@@ -23,6 +23,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PRESETS = ("led-stop-lamp", "led-light-guide-tail-lamp", "led-stop-lamp-freeform-lens-photometric",
            "led-rear-combination-photometric")
 DAY = "four-lamp-day-lit-photometric"
+# Render options for a night picture other than the preset's own size (docs/photometric.md's command for it).
+NIGHT_OPTIONS = {"led-light-guide-tail-lamp": ("--width", "512", "--height", "512", "--samples", "16")}
 
 
 def _read(path: str) -> dict:
@@ -39,8 +41,8 @@ def day_twin(scene: dict) -> dict:
     return twin
 
 
-def render(path: str, out: str) -> None:
-    cmd = [sys.executable, "-m", "core_tracer", "render", path, "-o", out]
+def render(path: str, out: str, *options: str) -> None:
+    cmd = [sys.executable, "-m", "core_tracer", "render", path, "-o", out, *options]
     proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
         raise SystemExit(proc.stderr.strip().splitlines()[-1])
@@ -55,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     for stem in args.presets:
         path = os.path.join(ROOT, "presets", stem + ".json")
         scene = _read(path)
-        render(path, os.path.join(images, f"{stem}-night.png"))
+        render(path, os.path.join(images, f"{stem}-night.png"), *NIGHT_OPTIONS.get(stem, ()))
         with tempfile.TemporaryDirectory(prefix="lamp-day-") as folder:
             mesh_file = scene.get("freeform", {}).get("mesh_file")
             if mesh_file:

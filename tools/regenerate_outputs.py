@@ -36,11 +36,20 @@ class Step:
     copies: tuple[tuple[str, str], ...] = ()  # (file in the step's scratch folder "{scratch}", committed path)
 
 
-def _measure(preset: str) -> Step:
+def _measure(preset: str, *options: str) -> Step:
+    """The measure report of ``preset`` (``options``: the settings docs/measures.md gives it)."""
     folder = f"docs/measures/{preset}"
     return Step(f"measures-{preset.removeprefix('photometric-').removesuffix('-photometric')}",
-                ("{python}", "-m", "core_tracer", "measure", f"presets/{preset}.json", "-o", folder, "--exit-zero"),
+                ("{python}", "-m", "core_tracer", "measure", f"presets/{preset}.json", "-o", folder, "--exit-zero",
+                 *options),
                 (folder,))
+
+
+# The LED presets' lit appearance by night and by day (tools/make_led_appearance_images.py).
+LED_APPEARANCE = tuple(f"docs/images/{preset}-{when}.png"
+                       for preset in ("led-stop-lamp", "led-light-guide-tail-lamp",
+                                      "led-stop-lamp-freeform-lens-photometric", "led-rear-combination-photometric")
+                       for when in ("night", "day"))
 
 
 STEPS: tuple[Step, ...] = (
@@ -48,6 +57,10 @@ STEPS: tuple[Step, ...] = (
     _measure("photometric-stop-lamp"),
     _measure("photometric-tail-lamp"),
     _measure("led-stop-lamp"),
+    _measure("led-light-guide-tail-lamp", "--function", "0=tail", "--pixel-mm", "1"),
+    _measure("led-stop-lamp-freeform-lens-photometric", "--function", "0=stop", "--pixel-mm", "1"),
+    _measure("led-rear-combination-photometric", "--pixel-mm", "1"),
+    Step("led-appearance", ("{python}", "tools/make_led_appearance_images.py"), LED_APPEARANCE),
     Step("measures-panel", ("{python}", "tools/make_measures_panel_image.py"), ("docs/measures-panel.png",)),
     Step("stop-vs-tail", ("{python}", "tools/make_stop_vs_tail.py"), ("docs/images/stop-vs-tail-photometric.png",)),
     Step("lamp-view", ("{python}", "tools/make_lamp_view_image.py"), ("docs/lamp-view-agx-filmic.png",)),
@@ -89,7 +102,6 @@ NOT_REGENERATED: dict[str, str] = {
     "docs/study-sorted-by-measure.png": "no recorded command",
     "docs/images/light-states-tail-only-vs-design.png": "no recorded command",
     "docs/images/led-light-guide-close-up.png": "no recorded command",
-    "docs/images/led-light-guide-tail-lamp-night.png": "no recorded command",
     "docs/led-stop-lamp-night.png": "no recorded command",
     **{f"docs/surroundings-{when}-{lit}.png": "no recorded command"
        for when in ("day", "evening", "night") for lit in ("lit", "unlit")},
