@@ -41,11 +41,20 @@ class Step:
     copies: tuple[tuple[str, str], ...] = ()  # (file in the step's scratch folder "{scratch}", committed path)
 
 
-def _measure(preset: str) -> Step:
+def _measure(preset: str, *options: str) -> Step:
+    """The measure report of ``preset`` (``options``: the settings docs/measures.md gives it)."""
     folder = f"docs/measures/{preset}"
     return Step(f"measures-{preset.removeprefix('photometric-').removesuffix('-photometric')}",
-                ("{python}", "-m", "core_tracer", "measure", f"presets/{preset}.json", "-o", folder, "--exit-zero"),
+                ("{python}", "-m", "core_tracer", "measure", f"presets/{preset}.json", "-o", folder, "--exit-zero",
+                 *options),
                 (folder,))
+
+
+# The LED presets' lit appearance by night and by day (tools/make_led_appearance_images.py).
+LED_APPEARANCE = tuple(f"docs/images/{preset}-{when}.png"
+                       for preset in ("led-stop-lamp", "led-light-guide-tail-lamp",
+                                      "led-stop-lamp-freeform-lens-photometric", "led-rear-combination-photometric")
+                       for when in ("night", "day"))
 
 
 STEPS: tuple[Step, ...] = (
@@ -53,6 +62,13 @@ STEPS: tuple[Step, ...] = (
     _measure("photometric-stop-lamp"),
     _measure("photometric-tail-lamp"),
     _measure("led-stop-lamp"),
+    # The three LED presets' reports without beam files: their (C, γ) grid of 1009 directions had not passed
+    # its first direction after 7 minutes on the loaded machine they were made on (the grids, 45-55 directions,
+    # take 4-8 minutes).
+    _measure("led-light-guide-tail-lamp", "--function", "0=tail", "--pixel-mm", "1", "--no-beam-files"),
+    _measure("led-stop-lamp-freeform-lens-photometric", "--function", "0=stop", "--pixel-mm", "1", "--no-beam-files"),
+    _measure("led-rear-combination-photometric", "--pixel-mm", "1", "--no-beam-files"),
+    Step("led-appearance", ("{python}", "tools/make_led_appearance_images.py"), LED_APPEARANCE),
     Step("measures-panel", ("{python}", "tools/make_measures_panel_image.py"), ("docs/measures-panel.png",)),
     Step("stop-vs-tail", ("{python}", "tools/make_stop_vs_tail.py"), ("docs/images/stop-vs-tail-photometric.png",)),
     Step("lamp-view", ("{python}", "tools/make_lamp_view_image.py"), ("docs/lamp-view-agx-filmic.png",)),

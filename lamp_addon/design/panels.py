@@ -215,7 +215,19 @@ class _LampPartPanel(LampTab):
     @classmethod
     def poll(cls, context):
         lamp = active_lamp(context)
-        return lamp is not None and section_in_use(lamp, cls.part)
+        return lamp is not None and section_in_use(lamp, cls.part) and cls._has_a_field_shown(lamp)
+
+    @classmethod
+    def _has_a_field_shown(cls, lamp) -> bool:
+        """Whether the design's light model uses a field of the section: no empty sub-panel (the light
+        guide's, all photometric, in the paper mode)."""
+        if cls.part == "cuts":
+            return True
+        group = getattr(lamp, cls.part)
+        section = S.LAMP.fields[cls.part]
+        model = lamp.id_data.lamp_design.light_model
+        return any(light_models.used(section, key, model, lambda k: getattr(group, properties.property_id(k)))
+                   for key in leaf_keys(section))
 
     def draw(self, context):
         group = getattr(active_lamp(context), self.part)
@@ -228,10 +240,8 @@ class _LampPartPanel(LampTab):
 def section_in_use(lamp, part: str) -> bool:
     """Whether the lamp's ``part`` section shapes it: the reflector's and the prism plate's only for
     the lamp's collection (docs/model.md, the prism plate), the bulb's and socket's or the LEDs' only
-    for its light source; the light guide's only in the photometric mode (the paper's refuses a guide);
-    every other section always."""
-    if part == "light_guide":
-        return lamp.id_data.lamp_design.light_model == "photometric"
+    for its light source; every other section always (a section none of whose fields the light model
+    uses, the light guide's in the paper mode, is hidden by ``_has_a_field_shown``)."""
     if part in S.COLLECTIONS:
         return lamp.collection == part
     if part == "led":  # the LEDs in place of bulb and socket (the lamp list's switch stays)

@@ -54,3 +54,15 @@ def test_every_transition_is_table_1s_or_a_documented_addition(lens_shape):
     # The paper's main walk is there: through the lens to the reflector, the bulb, and back out.
     assert {(1, 1, 2), (2, 1, 3), (3, 0, 5), (5, 1, 6), (6, 1, 10)} <= seen
     assert result.image.max() > 0
+
+
+def test_the_body_is_a_surface_of_its_own():
+    """The mesh body's surface id lies beyond every parametric surface (the LED and guide merges added
+    LED and GUIDE after the housing, and BODY = HOUSING + 1 had become the LEDs' id: every free-form
+    render failed building its class table)."""
+    from core_tracer.freeform import render
+    from core_tracer.freeform.geometry import BODY
+
+    assert BODY > max(P.OUTER, P.CUT, P.REFLECTOR, P.WALL, P.BULB, P.SOCKET, P.NOTHING, P.PLATE_FRONT, P.RINGS,
+                      P.HOUSING, P.LED, P.GUIDE)
+    assert render.CLASS[P.IN_AIR, P.OUTER, BODY] == TO_BODY

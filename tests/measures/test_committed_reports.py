@@ -17,7 +17,8 @@ import pytest
 from core_tracer.library.presets import digest
 from core_tracer.scene import load_scene
 
-REPORTS = ("four-lamp-night-lit-photometric", "photometric-stop-lamp", "photometric-tail-lamp")
+REPORTS = ("four-lamp-night-lit-photometric", "photometric-stop-lamp", "photometric-tail-lamp",
+           "led-light-guide-tail-lamp", "led-stop-lamp-freeform-lens-photometric", "led-rear-combination-photometric")
 
 
 def _committed(repo_root, preset: str) -> dict:

@@ -17,9 +17,15 @@ def _scene() -> dict:
 
 
 def test_old_presets_read_as_custom_lamps():
+    """A lamp written without a function (every preset before the field) reads as custom; one that
+    names its function (the LED rear combination's) keeps it."""
+    named = 0
     for path in PRESETS.glob("*.json"):
-        for lamp in load_scene(path)["lamps"]:
-            assert lamp["function"] == "custom"
+        written = json.loads(path.read_text())["lamps"]
+        for raw, lamp in zip(written, load_scene(path)["lamps"], strict=True):
+            assert lamp["function"] == raw.get("function", "custom")
+            named += "function" in raw and raw["function"] != "custom"
+    assert named >= 4  # the LED rear combination's tail, stop, turn and reversing lamps
     assert S.LAMP.fields["function"].default == "custom"
 
 

@@ -1,0 +1,71 @@
+"""The LED presets (issue 32 item 5): the LED stop lamp, the light-guide tail lamp, the LED stop lamp
+behind a free-form lens and the four-function LED rear combination. Each validates and renders small
+from the command line, is listed by the preset browser, and carries what its description says."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import PRESETS, run_cli
+
+from core_tracer.freeform.loading import load_meshes
+from core_tracer.images import imageio
+from core_tracer.library import presets as P
+from core_tracer.scene.validate import load_scene
+
+LED_PRESETS = ("led-stop-lamp", "led-light-guide-tail-lamp", "led-stop-lamp-freeform-lens-photometric",
+               "led-rear-combination-photometric")
+
+
+@pytest.mark.parametrize("stem", LED_PRESETS)
+def test_validates_and_renders_small_from_the_cli(stem, tmp_path):
+    path = PRESETS / f"{stem}.json"
+    proc = run_cli("validate", path)
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "small.png"
+    proc = run_cli("render", path, "-o", out, "--width", "40", "--height", "40", "--samples", "1")
+    assert proc.returncode == 0, proc.stderr
+    image, _ = imageio.read_image(out)
+    assert image.shape == (40, 40, 3)
+    assert image.max() > 0.2  # the lit lamp shows at night, not a black frame
+
+
+def test_the_preset_browser_lists_them():
+    entries, warnings = P.list_presets([P.builtin_library()])
+    assert warnings == []
+    listed = {Path(entry.file).stem: entry for entry in entries}
+    assert set(LED_PRESETS) <= set(listed)
+    assert all("photometric" in listed[stem].tags and "LED" in listed[stem].tags for stem in LED_PRESETS)
+
+
+def test_the_rear_combination_sets_each_lamps_function():
+    scene = load_scene(PRESETS / "led-rear-combination-photometric.json")
+    lamps = scene["lamps"]
+    assert [lamp["function"] for lamp in lamps] == ["tail", "stop", "turn", "reversing"]
+    assert all(lamp["source"] == "led" for lamp in lamps)
+    assert lamps[0]["light_guide"]["enabled"] and not any(lamp["light_guide"]["enabled"] for lamp in lamps[1:])
+    assert [lamp["lens"]["filter"] for lamp in lamps] == ["red", "red", "amber", "clear"]
+    assert [lamp["led"]["spectrum"] for lamp in lamps[1:]] == ["red_led", "amber_led", "white_led"]
+
+
+def test_the_free_form_dies_are_as_bright_as_parametric_ones():
+    """The dies' bulb part: its luminance Φ / (π A) over the mesh's area equals that of a parametric
+    die of the lamp's LED section, Φ_die / (π A_die), so the mesh must be the nine dies' rectangles
+    and its flux nine times the die's."""
+    path = PRESETS / "led-stop-lamp-freeform-lens-photometric.json"
+    scene = load_scene(path)
+    led = scene["lamps"][0]["led"]
+    parts = {part["object"]: part for part in scene["freeform"]["parts"]}
+    dies = parts["Lamp 1 LED Dies (Free-form)"]
+    assert dies["role"] == "bulb" and dies["bulb"]["spectrum"] == led["spectrum"] == "red_led"
+    mesh = load_meshes(path, scene)["Lamp 1 LED Dies (Free-form)"]
+    c = mesh.vertices[mesh.triangles]
+    area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum()
+    die_area = led["die_size"][0] * led["die_size"][1]
+    assert area == pytest.approx(led["columns"] * led["rows"] * die_area, rel=1e-5)
+    assert dies["bulb"]["flux_lm"] / (math.pi * area) == pytest.approx(led["flux_lm"] / (math.pi * die_area),
+                                                                       rel=1e-5)
+    assert parts["Lamp 1 LED Packages (Free-form)"]["role"] == "socket"  # no glow from the dies' backs
