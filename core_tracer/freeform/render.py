@@ -59,7 +59,9 @@ from .roles import PartTable
 __all__ = ["NOT_IN_TABLE", "TO_BODY", "render_passes", "surface_hits"]
 
 EYE = BODY + 1  # the source "surface" of an eye ray
-TO_BODY = 20  # a class beyond Table 1 and the prism plate's ⑬-⑲: a segment that reaches a body (housing) and ends there
+# a class beyond Table 1, the prism plate's ⑬-⑲ and the light guide's ⑳-㉒: a segment that reaches a
+# body (housing) and ends there
+TO_BODY = P.GUIDE_TO_LAMP + 1
 NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (docs/model.md, "Free-form")
 SUN_PASSES = 16  # surfaces a phantom-light ray toward the sun may pass through (lens faces, bulbs, sockets)
 

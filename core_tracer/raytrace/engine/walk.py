@@ -30,8 +30,9 @@ GUIDE_MAX_DEPTH = 256
 
 
 def depth_limit(ctx: Context) -> int:
-    """The depth limit of a render: ``GUIDE_MAX_DEPTH`` when a lamp has a light guide, else ``MAX_DEPTH``."""
-    return GUIDE_MAX_DEPTH if ctx.lamps.guide is not None else MAX_DEPTH
+    """The depth limit of a render: ``GUIDE_MAX_DEPTH`` when a lamp has a light guide, else ``MAX_DEPTH``
+    (a free-form design, walked by its own ``walker``, has no parametric lamps and no guide)."""
+    return GUIDE_MAX_DEPTH if ctx.walker is None and ctx.lamps.guide is not None else MAX_DEPTH
 
 
 def trace_eye_rays(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> None:
