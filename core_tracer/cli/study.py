@@ -11,6 +11,7 @@ import contextlib
 import dataclasses
 import os
 import re
+import shutil
 import sys
 import time
 
@@ -196,7 +197,8 @@ def _with_curves(study: st.Study, document: str) -> st.Study:
 
 
 def _is_variant_file(name: str) -> bool:
-    return re.fullmatch(r"variant-\d+\.json", name) is not None
+    """A file ``--save-variants`` writes: a variant, or the meshes a free-form study's variants name."""
+    return re.fullmatch(r"variant-\d+\.json|[^/]+\.glb", name) is not None
 
 
 def _save_side_files(args: argparse.Namespace, study: st.Study) -> None:
@@ -210,6 +212,11 @@ def _save_side_files(args: argparse.Namespace, study: st.Study) -> None:
         if args.save_variants:
             with atomic_folder(args.save_variants, _is_variant_file, VARIANTS) as folder:
                 study.save_variants(folder)
+                if "freeform" in study.base:  # each variant names the design's meshes beside it
+                    from ..freeform.loading import mesh_file_path
+
+                    name = study.base["freeform"]["mesh_file"]
+                    shutil.copyfile(mesh_file_path(args.base or args.study, name), os.path.join(folder, name))
     except BaseException:
         for path in saved:
             with contextlib.suppress(OSError):

@@ -95,10 +95,19 @@ def test_the_study_command_writes_a_free_form_designs_sheet(tmp_path):
     document = write_design(tmp_path)
     sheet = tmp_path / "sheet.png"
     done = run_cli("study", document, "--vary", "freeform.parts[].lens.transmitted_color=0.9/0.05/0.05,0.05/0.1/0.9",
-                   "--size", "24x20", "--engine", "processes", "--workers", "1", "-o", sheet)
+                   "--size", "24x20", "--engine", "processes", "--workers", "1", "-o", sheet,
+                   "--save-variants", tmp_path / "variants")
     assert done.returncode == 0, done.stderr
     image, _ = read_image(sheet)
     assert image.shape[2] >= 3 and image.max() > 0
+    # A kept variant is a free-form design with its meshes beside it: it renders as the cell showed it.
+    assert sorted(p.name for p in (tmp_path / "variants").iterdir()) == ["lamp.glb", "variant-00.json",
+                                                                          "variant-01.json"]
+    done = run_cli("render", tmp_path / "variants" / "variant-01.json", "-o", tmp_path / "blue.exr")
+    assert done.returncode == 0, done.stderr
+    blue, _ = read_image(tmp_path / "blue.exr")
+    expected = direct(tmp_path, lens_study())[1]
+    assert blue.shape == expected.shape and np.abs(blue - expected).max() < 1e-3 * max(expected.max(), 1e-6)
     done = run_cli("study", document, "--vary", "lens.ior=1.4,1.5", "--size", "24x20", "-o", sheet)
     assert done.returncode != 0 and "is a field of the parametric lamps" in done.stderr
     assert "Traceback" not in done.stderr
