@@ -10,6 +10,10 @@ from __future__ import annotations
 
 import importlib
 
+# The tool's version: the extension's (blender_manifest.toml) and the package's (pyproject.toml), which a
+# test keeps equal; ``--version`` prints it and measures.json records it.
+__version__ = "0.1.0"
+
 _EXPORTS = {
     "PASS_NAMES": ".raytrace.engine", "RenderCancelled": ".raytrace.engine", "RenderResult": ".raytrace.engine",
     "render": ".raytrace.engine", "render_passes": ".raytrace.engine",

@@ -82,6 +82,22 @@ def child_pids(pid: int) -> list[int]:
     return out
 
 
+def descendants(pid: int) -> list[int]:
+    """Every process started by ``pid`` and by those, from /proc."""
+    out, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            for task in os.listdir(f"/proc/{p}/task"):
+                with open(f"/proc/{p}/task/{task}/children") as f:
+                    kids = [int(c) for c in f.read().split()]
+                out += kids
+                todo += kids
+        except FileNotFoundError:
+            continue
+    return out
+
+
 def process_gone(pid: int) -> bool:
     """Whether the process ``pid`` has ended (a zombie waiting for its parent has)."""
     try:

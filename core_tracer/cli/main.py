@@ -17,6 +17,7 @@ import sys
 import threading
 from collections.abc import Iterator, Sequence
 
+from .. import __version__
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import Terminated
@@ -42,6 +43,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser of every command, or, given the ``command`` the arguments start with, of that one
     in full (the others by name only: their modules' imports are a render's fixed cost)."""
     parser = _Parser(prog=PROG, description="The 1990 IPSJ lamp renderer, without Blender.")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
     for name in COMMANDS:
         if command in COMMANDS and name != command:

@@ -1,7 +1,8 @@
 """``optimise OPT.json [-o FOLDER]``: let the computer search a design (docs/cluster.md).
 
-Trials render as Dask tasks on ``--scheduler`` (or ``$DASK_SCHEDULER_ADDRESS``), else on a local
-cluster; ``--workers 0`` renders them in this process one by one. The Optuna study is kept in the
+Trials render as Dask tasks on ``--scheduler`` (or ``$DASK_SCHEDULER_ADDRESS``; "local" starts a
+local Dask cluster), else on the local worker pool (``cluster.local_pool``: no start-up to wait
+for); ``--workers 0`` renders them in this process one by one. The Optuna study is kept in the
 file's storage, so running the command again resumes it (``--trials`` raises the count).
 """
 
@@ -17,7 +18,7 @@ from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import check_output_folder, ctrl_c_sets
 
-HELP = "search a design's parameters for the best measures (Optuna, trials on a Dask cluster)"
+HELP = "search a design's parameters for the best measures (Optuna; trials on the local worker pool or Dask)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -27,9 +28,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "pareto-NN.json, sheet.png, history.png, trials.json")
     parser.add_argument("--trials", type=int, metavar="N", help="finish N trials in all (default: the file's)")
     parser.add_argument("--workers", type=int, metavar="N",
-                        help="local cluster worker processes (default: one per core; 0 renders in this process)")
+                        help="local pool or cluster worker processes (default: one per core; 0 renders in this "
+                             "process)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="a Dask scheduler, tcp://HOST:8786 (default: $DASK_SCHEDULER_ADDRESS, else local)")
+                        help="a Dask scheduler, tcp://HOST:8786 (default: $DASK_SCHEDULER_ADDRESS, else the local "
+                             "worker pool; \"local\" starts a local Dask cluster)")
     parser.add_argument("--cache", metavar="DIR", help="the folder of rendered cells (default: the per-user cache)")
     parser.add_argument("--no-cache", action="store_true", help="keep no rendered trial")
 
@@ -58,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
     os.makedirs(folder, exist_ok=True)
 
     from .. import budget
+    from ..cluster import local_pool
     from ..cluster.cache import CellCache
     from ..optimise import results, search
 
@@ -86,9 +90,9 @@ def run(args: argparse.Namespace) -> int:
                 workers = args.workers or engine.default_workers()
                 parallel = opt.parallel or workers
                 limit = min(budget.MEMORY_BUDGET, search.trial_bytes(opt) + engine.DASK_BYTES + engine.KEPT_FREED_BYTES)
-                with engine.connect(args.scheduler, workers=workers, memory_limit=limit,
-                                    should_stop=stop.is_set) as client:
-                    if client.local is not None:  # its dashboard now, while it is there to open
+                with local_pool.connect(args.scheduler, workers=workers, memory_limit=limit,
+                                        should_stop=stop.is_set) as client:
+                    if client.local is not None:  # a local Dask cluster's dashboard now, while it is there to open
                         print(client.local.describe(), file=sys.stderr if tty else sys.stdout, flush=True)
                     where = "on the " + (client.local.describe(live=False) if client.local is not None else
                                          f"Dask scheduler {client.scheduler.address}")

@@ -58,11 +58,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="worker processes of a local cluster or pool (default: one per core; 0 renders in "
                              "this process)")
     parser.add_argument("--engine", choices=("dask", "processes"),
-                        help="dask: each variant a task on a Dask cluster, results cached by content (the default "
-                             "when Dask is installed); processes: the project's own worker processes")
+                        help="dask: each variant a task on a Dask cluster (a local one without --scheduler); "
+                             "processes: the project's own worker processes, no cache (default: each variant a task "
+                             "on the local worker pool, results cached by content; Dask with --scheduler)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="a Dask scheduler, tcp://HOST:8786 (default: $DASK_SCHEDULER_ADDRESS, else a local "
-                             "cluster; \"local\" forces one); docs/cluster.md")
+                        help="a Dask scheduler, tcp://HOST:8786 (default: $DASK_SCHEDULER_ADDRESS, else the local "
+                             "worker pool; \"local\" starts a local Dask cluster); docs/cluster.md")
     parser.add_argument("--cache", metavar="DIR", help="the folder of rendered cells kept by content (default: "
                                                        "the per-user cache, lamp-styling/cells)")
     parser.add_argument("--no-cache", action="store_true", help="render every variant, keep none")
@@ -298,8 +299,8 @@ def run(args: argparse.Namespace) -> int:
         dask_engine.scheduler_address(args.scheduler)  # checked before the first worker starts
     counted = ""
     with ctrl_c_sets() as stop:
-        if engine == "dask":
-            images, how, counted = _run_on_dask(args, runnable, world, on_progress, stop)
+        if engine in ("dask", "pool"):
+            images, how, counted = _run_cells(args, runnable, world, on_progress, stop, dask=engine == "dask")
         else:
             try:
                 images = study_run.run_study(runnable, args.workers, progress=on_progress, should_stop=stop.is_set,
@@ -312,7 +313,7 @@ def run(args: argparse.Namespace) -> int:
     checkpoint("study:composed")
     shown = _write_sheet(args, study, images, view, measured)
     _save_side_files(args, study)
-    if engine != "dask":
+    if engine == "processes":
         workers = args.workers if args.workers is not None else min(study_run.default_workers(), len(study))
         how = "in this process" if workers == 0 else f"on {workers} worker{'s' if workers != 1 else ''}"
     w, h = study.size
@@ -382,16 +383,19 @@ def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view, 
 
 
 def _engine(args: argparse.Namespace) -> str:
-    """dask or processes: ``--engine``, else Dask when installed (and always for ``--scheduler``);
-    ``--workers 0`` renders in this process through the processes path."""
+    """dask, pool or processes: ``--engine``; else Dask for a scheduler (``--scheduler``,
+    ``$DASK_SCHEDULER_ADDRESS``, "local") and the local worker pool otherwise (cells and the cache as
+    on Dask, without its start-up: docs/cluster.md); ``--workers 0`` renders in this process through
+    the processes path."""
     from ..cluster import engine as dask_engine
+    from ..cluster import local_pool
 
     if args.workers == 0:
         if args.scheduler or args.engine == "dask":
             raise SceneError("--workers", "0 renders in this process; allowed 1 or more with --engine dask "
                                           "or --scheduler")
         return "processes"
-    wanted = args.engine or ("dask" if args.scheduler or dask_engine.available() else "processes")
+    wanted = args.engine or ("dask" if local_pool.dask_wanted(args.scheduler) else "pool")
     if wanted == "processes" and args.scheduler:
         raise SceneError("--scheduler", "needs the Dask engine; allowed with --engine dask (or without --engine)")
     if wanted == "dask" and not dask_engine.available():
@@ -399,8 +403,9 @@ def _engine(args: argparse.Namespace) -> str:
     return wanted
 
 
-def _run_on_dask(args: argparse.Namespace, study: st.Study, world: int, on_progress, stop):
-    """(the images, how they were rendered, what the cache gave) on a Dask cluster."""
+def _run_cells(args: argparse.Namespace, study: st.Study, world: int, on_progress, stop, dask: bool):
+    """(the images, how they were rendered, what the cache gave) on a Dask cluster (``dask``) or the
+    local worker pool."""
     from ..cluster import engine as dask_engine
     from ..cluster import study as dask_study
     from ..cluster.cache import CellCache
@@ -418,7 +423,8 @@ def _run_on_dask(args: argparse.Namespace, study: st.Study, world: int, on_progr
 
     try:
         images, count = dask_study.run_study(study, args.scheduler, args.workers, cache=cache, environment=world,
-                                             progress=on_progress, should_stop=stop.is_set, on_start=started)
+                                             progress=on_progress, should_stop=stop.is_set, on_start=started,
+                                             dask=dask)
     except dask_engine.Cancelled:
         raise stop.interrupt() from None
     except dask_engine.Unreachable as e:  # only the connection: any other OSError names its own file

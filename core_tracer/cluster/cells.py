@@ -155,9 +155,14 @@ def _materialise(digest: str, suffix: str, data: bytes) -> str:
 
 def stop_flag(name: str | None):
     """A ``should_stop`` that looks at the study's ``distributed.Event`` at most every ``STOP_POLL``
-    seconds (each look is a message to the scheduler), or None outside a Dask worker."""
+    seconds (each look is a message to the scheduler), the pool's event in a ``local_pool`` worker,
+    or None elsewhere."""
     if name is None:
         return None
+    from . import local_pool
+
+    if local_pool.worker_stop is not None:  # a local pool's worker: its shared event, cheap to read
+        return local_pool.worker_stop.is_set
     try:
         from distributed import Event, get_worker
 

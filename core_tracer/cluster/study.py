@@ -1,4 +1,5 @@
-"""A design study rendered on Dask: each variant a cell (``cells``), the cache first (``cache``).
+"""A design study rendered as cells on Dask or the local worker pool (``local_pool``): each variant
+a cell (``cells``), the cache first (``cache``).
 
 ``run_study(study, scheduler=...)`` is ``study.run.run_study``'s counterpart: the same images, in
 variant order, plus a ``RunCount`` (how many rendered, how many came from the cache). When the
@@ -15,7 +16,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..study.definition import Study
-from . import engine
+from . import engine, local_pool
 from .cache import CellCache
 from .cells import Inputs, make_cell
 
@@ -30,9 +31,11 @@ def run_study(study: Study, scheduler: str | None = None, workers: int | None = 
               cache: CellCache | None = None, environment: int = 0,
               progress: Callable[[int, int], None] | None = None,
               should_stop: Callable[[], bool] | None = None,
-              on_start: Callable[[object], None] | None = None) -> tuple[list[np.ndarray], engine.RunCount]:
-    """Every variant's image and the run's count. ``scheduler`` as ``engine.connect`` takes it;
-    ``workers`` sizes a local cluster; ``environment`` is the largest world's bytes (for a local
+              on_start: Callable[[object], None] | None = None,
+              dask: bool = False) -> tuple[list[np.ndarray], engine.RunCount]:
+    """Every variant's image and the run's count. ``scheduler`` as ``local_pool.connect`` takes it:
+    Dask for a scheduler's address, "local" or ``dask``, else the local worker pool; ``workers``
+    sizes a local cluster or pool; ``environment`` is the largest world's bytes (for a local
     worker's memory limit); ``on_start(client)`` once the cluster is up."""
     cells, inputs = study_cells(study)
     if cache is not None:
@@ -40,8 +43,8 @@ def run_study(study: Study, scheduler: str | None = None, workers: int | None = 
         if not missing:
             return engine.run_cells(None, cells, inputs, cache, progress=progress, should_stop=should_stop)
     limit = engine.worker_memory(cells, environment)
-    with engine.connect(scheduler, workers=min(workers or engine.default_workers(), len(cells)),
-                        memory_limit=limit, should_stop=should_stop) as client:
+    with local_pool.connect(scheduler, workers=min(workers or engine.default_workers(), len(cells)),
+                            memory_limit=limit, dask=dask, should_stop=should_stop) as client:
         if on_start is not None:
             on_start(client)
         return engine.run_cells(client, cells, inputs, cache, progress=progress, should_stop=should_stop)

@@ -34,7 +34,6 @@ from ..raytrace import paths as P
 from ..raytrace.camera import make_camera
 from ..raytrace.engine.rays import NOT_DEFERRED, Band
 from ..raytrace.engine.surfaces import sphere_irradiance
-from ..raytrace.engine.walk import MAX_DEPTH
 from .cache import DesignMeshes
 from .hits import nearest, shading_normal
 from .render import MeshRays, _Context, _step
@@ -118,7 +117,7 @@ def trace(ctx: _Context, rays: MeshRays) -> tuple[np.ndarray, np.ndarray, np.nda
     (``pix``), direction and attenuation (per band) of every branch that leaves the lamp."""
     out_pix, out_d, out_k = [], [], []
     band = Band(int(rays.pix.max()) + 1 if len(rays) else 0, ctx)  # the walk's passes: not used
-    for _depth in range(MAX_DEPTH):
+    for _depth in range(ctx.max_depth):
         if not len(rays):
             break
         _t, tri, _uv = nearest(ctx.geometry, ctx.embree, rays.o, rays.d, rays.triangle)

@@ -29,6 +29,7 @@ import numpy as np
 from ..raytrace import optics, pixel_filter, sunlight
 from ..raytrace import paths as P
 from ..raytrace.camera import Camera, make_camera
+from ..raytrace.engine.context import MAX_DEPTH
 from ..raytrace.engine.rays import (
     BACKGROUND_PASS,
     BODY_PASS,
@@ -59,9 +60,9 @@ from .roles import PartTable
 __all__ = ["NOT_IN_TABLE", "TO_BODY", "render_passes", "surface_hits"]
 
 EYE = BODY + 1  # the source "surface" of an eye ray
-# a class beyond Table 1, the prism plate's ⑬-⑲ and the light guide's ⑳-㉒: a segment that reaches a
+# a class beyond Table 1 and its continuations (the prism plate's ⑬-⑲, the guide's ⑳-㉒): a segment that reaches a
 # body (housing) and ends there
-TO_BODY = P.GUIDE_TO_LAMP + 1
+TO_BODY = P.LAST_CLASS + 1
 NOT_IN_TABLE = 0  # a segment meshes allow and the paper's lamp does not (docs/model.md, "Free-form")
 SUN_PASSES = 16  # surfaces a phantom-light ray toward the sun may pass through (lens faces, bulbs, sockets)
 
@@ -103,6 +104,7 @@ class _Context(Lighting):
         self.samples, self.filter_name, self.record = samples, filter_name, record
         self.adaptive_threshold = 0.0  # every sample of every pixel
         self.walker = _MeshWalk()  # the engine's rays find the meshes' surfaces through Embree
+        self.max_depth = MAX_DEPTH  # meshes hold no light guide (``walk.depth_limit``)
         self.box_lo = self.box_hi = self.window = None  # no body's box: every eye ray is traced
         self.parts = PartTable(scene, geometry, self.photometric)
         self.sun_transmit = sunlight.plate_transmittance(self.sun, self.parts.ior, self.parts.absorption,

@@ -7,7 +7,7 @@ facing the guide's first end face. The rod's optics are the
 renderer's own: its intersections (``parts.light_guide``), the Fresnel split per band and
 polarisation (``surfaces.at_dielectric``) and Beer–Lambert along the segments inside (eq. 2). Light
 that leaves the rod anywhere else, or goes back to the die, is not counted; a branch below the
-cut-off (``rays.CUTOFF``) is dropped, one alive at ``walk.GUIDE_MAX_DEPTH`` is counted in ``cut_at_depth``.
+cut-off (``rays.CUTOFF``) is dropped, one alive at ``context.GUIDE_MAX_DEPTH`` is counted in ``cut_at_depth``.
 
 With no prisms every ray that enters the end face is trapped by total internal reflection (its
 angle to the side walls is at least 90° − θ_c > θ_c for n > √2), so the flux out of the far end has
@@ -23,9 +23,9 @@ import numpy as np
 from ..raytrace import optics
 from ..raytrace import paths as P
 from ..raytrace.engine import make_context
+from ..raytrace.engine.context import GUIDE_MAX_DEPTH
 from ..raytrace.engine.rays import UNRECORDED, Rays, concat
 from ..raytrace.engine.surfaces import at_dielectric
-from ..raytrace.engine.walk import GUIDE_MAX_DEPTH
 from ..raytrace.parts import light_guide
 from ..raytrace.parts.base import Segments, put_rows, rows
 from .light_tracing import led_photons

@@ -21,9 +21,10 @@ structure.
 
 from __future__ import annotations
 
+import concurrent.futures
 import copy
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -196,6 +197,79 @@ def rendered_intensities(scene: dict, h_deg: float, v_deg: float, groups: Sequen
     return [Intensity(float(mean[g, 1]), float(err[g, 1]), mean[g]) for g in range(len(groups))]
 
 
+# Directions measured in worker processes at once: each direction's renders are one task on the
+# local worker pool (``cluster.local_pool``: forked, so no start-up), since a measuring view is one
+# or two bands of rows, too few for the band pool, which shares one render's bands among its workers.
+MIN_POOLED_DIRECTIONS = 4
+
+
+def intensities_at(scene: dict, directions: Sequence[tuple[float, float]],
+                   groups: Sequence[Sequence[int]] | None = None, *, seeds: Sequence[int] | None = None,
+                   workers: int | None = None, progress: Callable[[int, int], None] | None = None,
+                   **options) -> list[list[Intensity]]:
+    """``rendered_intensities`` at each (H, V) of ``directions`` (seed ``seeds[k]``, default 0), the
+    same values bit for bit, with the directions shared among ``workers`` processes (None: one per
+    core, as many as the memory budget holds, ``pool_workers``; 1: this process alone).
+    ``progress(done, total)`` as directions finish."""
+    seeds = [0] * len(directions) if seeds is None else list(seeds)
+    count = pool_workers(scene, len(directions), options.get("pixel_mm", DEFAULT_PIXEL_MM)) if workers is None \
+        else max(1, min(workers, len(directions)))
+    if options.get("meshes") is not None:  # a free-form design's Embree scenes stay in this process
+        count = 1
+    out: list[list[Intensity] | None] = [None] * len(directions)
+    if count < 2:
+        for k, (h, v) in enumerate(directions):
+            out[k] = rendered_intensities(scene, h, v, groups, seed=seeds[k], **options)
+            if progress is not None:
+                progress(k + 1, len(directions))
+        return out  # type: ignore[return-value]
+    from ..cluster.local_pool import LocalPool
+
+    with LocalPool(count) as pool:
+        futures = {pool.submit(_direction_task, scene, h, v, groups, seeds[k], options).future: k
+                   for k, (h, v) in enumerate(directions)}
+        try:
+            for done, future in enumerate(concurrent.futures.as_completed(futures), 1):
+                out[futures[future]] = future.result()
+                if progress is not None:
+                    progress(done, len(directions))
+        except BaseException:
+            pool.cancel([])
+            raise
+    return out  # type: ignore[return-value]
+
+
+def _direction_task(scene: dict, h_deg: float, v_deg: float, groups, seed: int, options: dict) -> list[Intensity]:
+    """One direction in a pool worker: its renders on the worker's one thread (the workers are the
+    parallelism); the values do not depend on the thread count."""
+    return rendered_intensities(scene, h_deg, v_deg, groups, seed=seed, **{**options, "threads": 1})
+
+
+def pool_workers(scene: dict, directions: int, pixel_mm: float) -> int:
+    """How many processes measure ``directions`` directions: one per core, at most one per
+    direction, and as many as the memory budget holds beside this process and its band pool's
+    workers (``budget``): each a band worker's figure (``budget.WORKER_BYTES``) and its largest
+    view's image. 1 below
+    ``MIN_POOLED_DIRECTIONS``, inside Blender, whose process is not to be forked, and in a worker
+    process (a study's or a trial's task, on the pool or on Dask: its siblings have the cores)."""
+    import multiprocessing
+    import os
+    import sys
+
+    from .. import budget
+
+    if directions < MIN_POOLED_DIRECTIONS or "bpy" in sys.modules or multiprocessing.parent_process() is not None:
+        return 1
+    lo, hi = body_box.body_box(scene["body"])  # no view is wider than the window's diagonal
+    side = math.ceil(float(np.linalg.norm(hi - lo)) / pixel_mm + 2 * WINDOW_MARGIN_MM / pixel_mm) + 2
+    per_worker = budget.WORKER_BYTES + budget.render_bytes(side, side, False, "exr") - budget.BASE_BYTES
+    from ..raytrace import band_pool
+
+    beside = budget.BASE_BYTES + band_pool.running_workers() * budget.WORKER_BYTES  # this process and its band pool
+    fits = (budget.MEMORY_BUDGET - beside) // per_worker
+    return int(max(1, min(os.cpu_count() or 1, directions, fits)))
+
+
 def rendered_intensity(scene: dict, h_deg: float, v_deg: float, lamps: Sequence[int] | None = None,
                        **options) -> Intensity:
     """I(H, V) in cd of the lamps ``lamps`` (None: the whole design) with their bulbs as the scene
@@ -220,15 +294,16 @@ class Sweep:
 
 def sweep(scene: dict, h_deg: Sequence[float], v_deg: Sequence[float], groups: Sequence[Sequence[int]] | None = None,
           **options) -> Sweep:
-    """``rendered_intensities`` at every (H, V) of the grid ``h_deg`` × ``v_deg``."""
+    """``rendered_intensities`` at every (H, V) of the grid ``h_deg`` × ``v_deg`` (``intensities_at``)."""
     h, v = np.asarray(h_deg, dtype=np.float64), np.asarray(v_deg, dtype=np.float64)
     n_groups = 1 if groups is None else len(groups)
     cd = np.zeros((n_groups, len(h), len(v)))
     err, xyz = np.zeros_like(cd), np.zeros((*cd.shape, 3))
-    for i, hi in enumerate(h):
-        for j, vj in enumerate(v):
-            for g, value in enumerate(rendered_intensities(scene, float(hi), float(vj), groups, **options)):
-                cd[g, i, j], err[g, i, j], xyz[g, i, j] = value.cd, value.stderr, value.xyz
+    grid = [(i, j) for i in range(len(h)) for j in range(len(v))]
+    values = intensities_at(scene, [(float(h[i]), float(v[j])) for i, j in grid], groups, **options)
+    for (i, j), at in zip(grid, values, strict=True):
+        for g, value in enumerate(at):
+            cd[g, i, j], err[g, i, j], xyz[g, i, j] = value.cd, value.stderr, value.xyz
     return Sweep(h, v, cd, err, xyz)
 
 
@@ -263,8 +338,9 @@ def rendered_cone_means(scene: dict, h_deg: float, v_deg: float, cone_deg: float
     ``rendered_intensities``: what ``light_tracing`` estimates, for comparing the two."""
     points = cone_directions(h_deg, v_deg, cone_deg)
     total: list[list] = []
-    for h, v, w in points:
-        for g, value in enumerate(rendered_intensities(scene, h, v, groups, **options)):
+    values = intensities_at(scene, [(h, v) for h, v, _ in points], groups, **options)
+    for (_, _, w), at in zip(points, values, strict=True):
+        for g, value in enumerate(at):
             if g == len(total):
                 total.append([0.0, 0.0, np.zeros(3)])
             total[g][0] += w * value.cd

@@ -285,6 +285,13 @@ def shared() -> BandPool | None:
         return _shared
 
 
+def running_workers() -> int:
+    """How many worker processes the interpreter's band pool holds now (0: none started, or broken),
+    without starting one: other work counts their memory (``budget.WORKER_BYTES`` each)."""
+    with _shared_lock:
+        return _shared.size if _shared is not None and _shared.broken is None else 0
+
+
 def shutdown() -> None:
     """Close the shared pool (the add-on's unregister, the interpreter's exit); ``shared()``
     starts a new one afterwards."""

@@ -61,7 +61,7 @@ LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec. 709, Blender's scene-line
 def bundled_folder() -> Path | None:
     """Blender's folder of world images: inside Blender its own, else the installed ``bpy`` module's;
     None where neither is on this machine."""
-    running = _running_blender_folder()
+    running = _running_blender_folder() or _beside_blenders_python()
     if running is not None:
         return running
     try:
@@ -87,6 +87,14 @@ def _running_blender_folder() -> Path | None:
     except (TypeError, ValueError, AttributeError):
         return None
     return Path(folder) if folder and os.path.isdir(folder) else None
+
+
+def _beside_blenders_python() -> Path | None:
+    # A worker process Blender starts (measures, studies) runs Blender's own Python,
+    # <version>/python/bin/python3.x on every platform, without bpy: the data files are <version>/datafiles.
+    parents = Path(sys.executable).absolute().parents if sys.executable else ()
+    folder = parents[2].joinpath(*WORLD_FOLDER) if len(parents) > 2 else None
+    return folder if folder is not None and folder.is_dir() else None
 
 
 def image_path(env: dict) -> str:

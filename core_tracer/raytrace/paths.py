@@ -103,6 +103,7 @@ PLATE_TABLE: dict[int, tuple[frozenset[int], frozenset[int]]] = {
 AIR_TO_GUIDE = 20  # ⑳ from any surface of the lamp's air to the guide's surface
 IN_GUIDE_SEGMENT = 21  # ㉑ from the guide's surface to itself, inside the rod
 GUIDE_TO_LAMP = 22  # ㉒ from the guide's surface to the lamp's other parts (or its LEDs: ⑪), in the air
+LAST_CLASS = GUIDE_TO_LAMP  # classes that only meshes have are numbered after it (``freeform.render``)
 
 
 def _guide_table() -> dict[int, tuple[frozenset[int], frozenset[int]]]:
@@ -141,6 +142,7 @@ def allowed(parent: int, branch: int, child: int) -> bool:
 
 # Surfaces a segment can start from or reach, used to classify it (the plate's after the paper's).
 OUTER, CUT, REFLECTOR, WALL, BULB, SOCKET, NOTHING, PLATE_FRONT, RINGS, HOUSING, LED, GUIDE = range(12)
+SURFACES = GUIDE + 1  # how many there are: a free-form body is numbered after them (``freeform.geometry.BODY``)
 # LED: a lamp's LED dies, the light source in place of the bulb: reaching them is ⑪ as the bulb
 IN_LENS, IN_AIR, IN_PLATE = 0, 1, 2
 IN_GUIDE = IN_PLATE  # a lamp has a prism plate or a light guide, never both: the guide's rod is its second dielectric
@@ -148,7 +150,7 @@ IN_GUIDE = IN_PLATE  # a lamp has a prism plate or a light guide, never both: th
 
 def _build_lookup() -> np.ndarray:
     """CLASS_OF[medium, source surface, hit surface] -> path class (0 = impossible)."""
-    table = np.zeros((3, 12, 12), dtype=np.int8)
+    table = np.zeros((3, SURFACES, SURFACES), dtype=np.int8)
     table[IN_LENS, OUTER, CUT] = LENS_OUTER_TO_CUT
     table[IN_LENS, OUTER, WALL] = TO_SIDE_WALL
     table[IN_LENS, CUT, OUTER] = CUT_TO_LENS_OUTER

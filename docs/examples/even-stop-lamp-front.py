@@ -1,9 +1,10 @@
 """The front view of the photometric example's start and best designs (docs/optimise-photometric-front.png):
 the luminance seen from H-V, as the homogeneity measures see it. From the repository root:
 
-    .venv/bin/python docs/examples/even-stop-lamp-front.py
+    .venv/bin/python docs/examples/even-stop-lamp-front.py [--out docs/optimise-photometric-front.png]
 """
 
+import argparse
 import copy
 import os
 import sys
@@ -26,6 +27,9 @@ from core_tracer.scene.validate import parse_scene  # noqa: E402
 DESIGNS = [("start (trial 0)", 0.0, 9.0, 1.5), ("best (trial 21)", 3.62219, 12.1502, 0.885761)]
 PIXEL_MM = 1.0
 
+parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+parser.add_argument("--out", default=os.path.join(ROOT, "docs", "optimise-photometric-front.png"))
+args = parser.parse_args()
 base = read_json(os.path.join(ROOT, "presets", "photometric-stop-lamp.json"))
 fig, axes = plt.subplots(1, 2, figsize=(10, 4.4))
 for ax, (what, offset, pitch, height) in zip(axes, DESIGNS, strict=True):
@@ -50,4 +54,4 @@ bar = fig.colorbar(shown, ax=axes, fraction=0.03)
 bar.set_label("luminance from H-V, cd/m²")
 fig.suptitle("photometric stop lamp seen from H-V (1 mm pixels, eye at 10 m; cyan: below half the mean)", fontsize=9)
 fig.subplots_adjust(top=0.8, left=0.02, right=0.88, wspace=0.1)
-fig.savefig(os.path.join(ROOT, "docs", "optimise-photometric-front.png"), dpi=100)
+fig.savefig(args.out, dpi=100)

@@ -348,8 +348,8 @@ def lens_pixels(scene: dict, shape: tuple[int, int]) -> np.ndarray:
     (``raytrace.engine.lens_pixels``: the eye ray through the centre meets a lens's outer face first).
     With more than one sample per pixel the samples spread over the pixel filter's support
     (``raytrace.pixel_filter``), so a pixel counts only where every pixel within that reach is a lens
-    pixel too: a rim pixel that also sees the body (whose Phong highlight Cycles lacks by design) is
-    left out. The whole image when the design has free-form parts (their lenses are meshes the
+    pixel too: a rim pixel that also sees the body or the lens's rim (a constant colour in the paper, diffuse in
+    Cycles) is left out. The whole image when the design has free-form parts (their lenses are meshes the
     tracer finds only while it traces)."""
     from ...core_tracer.raytrace import pixel_filter
     from ...core_tracer.raytrace.engine import lens_pixels as lamp_seen
@@ -374,11 +374,9 @@ def by_design(scene: dict) -> str:
         return ("By design: a legal red (or amber) lies outside Rec.709, so Cycles' RGB cannot hold the "
                 "filtered light's colour and clips it into the gamut at its own luminance; the rest is physics "
                 "both model alike.")
-    text = ("By design: nothing on the lens (Cycles builds eq. 3 as the paper states it); off it, Cycles' "
-            "body has no Phong highlight and its bulb also lights the lamp's other parts.")
-    if scene["light"].get("phantom"):
-        text += " The sun's phantom light in the reflectors is not built in Cycles."
-    return text
+    return ("By design: nothing on the lens or the body (Cycles builds eq. 3, the phantom light and eq. 1's "
+            "highlights as the paper states them); Cycles' socket and lens rim are diffuse where the paper's are "
+            "constant colours, and its bulb also lights the lamp's other parts.")
 
 
 def compare_design(bl_scene, *, samples: int = DEFAULT_SAMPLES, resolution: tuple[int, int] | None = None,

@@ -228,7 +228,10 @@ class _LampPartPanel(LampTab):
 def section_in_use(lamp, part: str) -> bool:
     """Whether the lamp's ``part`` section shapes it: the reflector's and the prism plate's only for
     the lamp's collection (docs/model.md, the prism plate), the bulb's and socket's or the LEDs' only
-    for its light source; every other section always."""
+    for its light source; the light guide's only in the photometric mode (the paper's refuses a guide);
+    every other section always."""
+    if part == "light_guide":
+        return lamp.id_data.lamp_design.light_model == "photometric"
     if part in S.COLLECTIONS:
         return lamp.collection == part
     if part == "led":  # the LEDs in place of bulb and socket (the lamp list's switch stays)

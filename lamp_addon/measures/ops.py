@@ -33,6 +33,7 @@ from . import settings
 
 REPORT_IMAGE = "Lamp Measures"
 _DIRECTION = re.compile(r"intensity: direction (\d+) of (\d+)")
+_BEAM_DIRECTION = re.compile(r"beam files: direction (\d+) of (\d+)")
 # Share of the run each stage starts at (the intensity grid is most of it: benchmarks/bench_measures.py).
 _STAGES = (("homogeneity", 0.75), ("beam files", 0.8))
 
@@ -66,7 +67,8 @@ class MeasureRun:
         self._scene_path = os.path.join(self._scratch, "scene.json")
         with open(self._scene_path, "w", encoding="utf-8") as f:
             json.dump(scene, f)
-        arguments = [self._scene_path, "-o", folder] + ([] if beam_files else ["--no-beam-files"])
+        # --exit-zero: a failing regulation is a finding the panel shows, not a failed run
+        arguments = [self._scene_path, "-o", folder, "--exit-zero"] + ([] if beam_files else ["--no-beam-files"])
         self._command = processes.worker_command("measures.job", *arguments)
         self._process: subprocess.Popen | None = None
         self._reader: threading.Thread | None = None
@@ -92,6 +94,11 @@ class MeasureRun:
             for stage, start in _STAGES:
                 if line.startswith(stage):
                     self.fraction, self.stage = start, stage
+            found = _BEAM_DIRECTION.match(line)
+            if found:  # the beam files' sweep, printed every 200 directions
+                done, total = int(found.group(1)), int(found.group(2))
+                self.fraction = 0.8 + 0.2 * (done - 1) / max(1, total)
+                self.stage = f"beam files, direction {done} of {total}"
 
     def poll(self, timeout: float = 0.0) -> bool:
         """True once the worker has ended."""

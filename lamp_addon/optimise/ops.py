@@ -11,6 +11,7 @@ scheduler the settings name. The results go where the command line puts them (``
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import threading
@@ -21,6 +22,15 @@ from ...core_tracer.scene.reading import SceneError, read_json
 from .. import jobs, reports
 from ..design import properties as design_properties
 from . import settings
+
+
+def importable(module: str) -> bool:
+    """Whether ``module`` imports in this Python (a real Blender's has numpy and little else)."""
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        return False
+    return True
 
 
 def load_optimisation(context):
@@ -102,7 +112,8 @@ class OptimiseRun:
             study = outcome.study
             os.makedirs(self.folder, exist_ok=True)
             results.write_trials(self.opt, study, os.path.join(self.folder, "trials.json"))
-            results.write_history(self.opt, study, os.path.join(self.folder, "history.png"))
+            if importable("matplotlib"):  # the history plot is matplotlib's; Blender's Python has none
+                results.write_history(self.opt, study, os.path.join(self.folder, "history.png"))
             best = search.best(self.opt, study)
             if best:
                 results.write_presets(self.opt, best, self.folder)
@@ -158,6 +169,8 @@ class LAMP_OT_optimise_run(jobs.ModalJob, bpy.types.Operator):
         return cls.poll_not_running()
 
     def _run(self, context) -> OptimiseRun:
+        if not importable("optuna"):
+            raise SceneError("Optimise", "needs Optuna, not in Blender's Python; run python -m core_tracer optimise")
         opt, folder = load_optimisation(context)
         return OptimiseRun(opt, folder, context.scene.lamp_optimise.scheduler)
 

@@ -35,18 +35,23 @@ def _interior(mask: np.ndarray) -> np.ndarray:
     return inner
 
 
+def _both(lamp_addon, bl_scene, doc: dict, size: tuple[int, int], samples: int):
+    """The design ``doc`` at ``size`` and ``samples`` per pixel: (Compare's result with Cycles at 32 samples,
+    the tracer's passes)."""
+    doc["image"] = {"width": size[0], "height": size[1], "samples": samples}
+    scene = core_tracer.parse_scene(doc)
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=32, resolution=size)
+    return result, core_tracer.render_passes(scene, *size, samples=samples).passes
+
+
 @pytest.mark.slow
 def test_the_eq3_emission_shows_the_tracers_reflector_scatter(lamp_addon, bl_scene):
     """Only eq. 3 lights the reflector: mirror 0, constant 0, the bulb on, a flat clear lens seen
     obliquely. Where the reflector is seen (not the bulb, not the socket) both show T w I0 (cos beta)^n."""
     doc = dark_clear_lens_doc({"reflectance": 0.0, "scatter": 0.8, "color": [0.0, 0.0, 0.0], "shininess": 20.0})
     doc["lamps"][0]["bulb"]["on"] = True
-    size = (48, 32)
-    doc["image"] = {"width": size[0], "height": size[1], "samples": 1}
-    scene = core_tracer.parse_scene(doc)
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=32, resolution=size)
-    passes = core_tracer.render_passes(scene, *size, samples=1).passes
+    result, passes = _both(lamp_addon, bl_scene, doc, (48, 32), 1)
     scatter = passes["reflector_scatter"].max(axis=2) > 0
     elsewhere = (passes["bulb"].max(axis=2) > 0) | (passes["socket"].max(axis=2) > 0)
     seen = _interior(scatter & ~elsewhere)
@@ -81,13 +86,7 @@ def test_the_body_shows_its_eq1_highlight_in_cycles_as_in_the_tracer(lamp_addon,
     """The body's Phong highlight of eq. 1 (a delta sun gives none in a Diffuse BSDF) is an emission seen by
     camera rays: over the body's pixels both renderers agree within 3 %. Before it Cycles showed the paper
     baseline's body without its highlight, and the Compare panel painted the whole body red."""
-    doc = json.loads(BASELINE.read_text(encoding="utf-8"))
-    size = (64, 48)
-    doc["image"] = {"width": size[0], "height": size[1], "samples": 4}
-    scene = core_tracer.parse_scene(doc)
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=32, resolution=size)
-    passes = core_tracer.render_passes(scene, *size, samples=4).passes
+    result, passes = _both(lamp_addon, bl_scene, json.loads(BASELINE.read_text(encoding="utf-8")), (64, 48), 4)
     others = sum(passes[name].max(axis=2) for name in passes if name not in ("body", "background"))
     body = _interior((passes["body"].max(axis=2) > 0) & (others == 0))
     assert body.sum() > 500

@@ -64,3 +64,16 @@ def test_a_bad_file_is_one_line_naming_the_path(design, lamp_addon, tmp_path):
     design.lamp_optimise.file = str(tmp_path / "bad.json")
     with pytest.raises(RuntimeError, match=r"bad.json: parameters\[0\].range: .*allowed lo < hi"):
         bpy.ops.lamp.optimise_run()
+
+
+def test_without_optuna_the_optimiser_says_so_in_one_line(design, lamp_addon, monkeypatch):
+    """A real Blender's Python has no Optuna (nor the extension's wheels): one line naming the command
+    that can run it, before any work (before: ModuleNotFoundError from the search thread)."""
+    import sys
+
+    import bpy
+
+    monkeypatch.setitem(sys.modules, "optuna", None)
+    one_line = r"^Error: Optimise: needs Optuna.*python -m core_tracer optimise\n$"
+    with pytest.raises(RuntimeError, match=one_line):
+        bpy.ops.lamp.optimise_run()

@@ -197,7 +197,7 @@ def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
     for model, bulb_type, spectrum, material, filter_kind, scale_by in PHOTOMETRIC_CHOICES:
         design.light_model = model
         lamp.bulb.type, lamp.bulb.spectrum = bulb_type, spectrum
-        for part in (lamp.lens, lamp.prism_plate):
+        for part in (lamp.lens, lamp.prism_plate, lamp.light_guide):
             part.material, part.filter = material, filter_kind
         design.environment.scale_by = scale_by
         for collection, mode, outline, shape in (("reflector", "transmitted_color", "round", "flat"),
@@ -207,6 +207,7 @@ def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
             lamp.lens.color_mode = mode
             lamp.lens.outline = outline
             lamp.lens.shape = shape
+            lamp.light_guide.section = "round" if outline == "round" else "rectangular"  # each its own sizes
             design.environment.world = "none" if outline == "round" else "file"  # the file row shows only then
             for cut_type in S.CUT_TYPES:  # each type shows its own fields
                 lamp.cuts.type = cut_type
@@ -448,9 +449,10 @@ def test_every_panel_of_the_addon_is_drawn(addon, lamp_addon, bl_scene, design):
     drawn = set()
     context = SimpleNamespace(scene=bl_scene, window_manager=wm, engine=bl_scene.render.engine,
                               view_layer=bl_scene.view_layers[0])
-    for collection, source in (("reflector", "bulb"), ("prism_plate", "led")):  # each shows its own sub-panel
-        design.lamps[2].collection = collection
+    for collection, source, model in (("reflector", "bulb", "paper"), ("prism_plate", "led", "photometric")):
+        design.lamps[2].collection = collection  # each shows its own sub-panel
         design.lamps[2].source = source
+        design.light_model = model  # the light guide's panel shows in the photometric mode
         for cls in panels:
             if hasattr(cls, "poll") and not cls.poll(context):
                 continue

@@ -129,7 +129,7 @@ def test_the_study_panel_offers_bulb_type_and_lens_material(lamp_addon):
 
 @pytest.mark.parametrize("fields, path", [
     ({"type": "custom", "spectrum": "led", "led_peak_nm": 830.0, "led_width_nm": 1.0}, "lamps[0].bulb.led_peak_nm"),
-    ({"type": "custom", "spectrum": "led", "led_peak_nm": 360.0, "led_width_nm": 0.5}, "lamps[0].bulb.led_peak_nm"),
+    ({"type": "custom", "spectrum": "led", "led_peak_nm": 360.0, "led_width_nm": 1.0}, "lamps[0].bulb.led_peak_nm"),
 ])  # a bulb radius of 1e-320 cannot reach Blender: its float32 property holds 0 (clamped to its minimum)
 def test_the_panel_says_what_the_render_would_refuse_in_a_spectrum(lamp_addon, addon_core, bl_scene, fields, path):
     """Issue 33: a spectrum that passed the panel crashed F12 (an LED without visible light)."""

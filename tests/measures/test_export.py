@@ -153,7 +153,7 @@ def test_ies_round_trip_in_cycles_of_the_stop_lamp(tmp_path, repo_root):
     from core_tracer.scene import load_scene
 
     scene = load_scene(repo_root / "presets" / "photometric-stop-lamp.json")
-    dist = E.measure_distribution(scene, c_step=30.0, gamma_step=10.0, gamma_max=90.0, pixel_mm=1.0, replicates=1)
+    dist = E.measure_distribution(scene, grid=E.COARSE_GRID, photons=0, pixel_mm=1.0, replicates=1)
     assert dist.flux_lm == pytest.approx(440.0)
     E.write_ies(dist, tmp_path / "stop.ies")
     checks = _floor_checks(dist, _cycles_floor(bpy, tmp_path / "stop.ies", tmp_path))

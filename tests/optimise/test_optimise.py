@@ -15,7 +15,7 @@ import optuna
 import pytest
 from helpers import ROOT, baseline_doc, cli_command, run_cli, signal_and_wait, start_cli_at
 
-from core_tracer.cluster import engine
+from core_tracer.cluster import engine, local_pool
 from core_tracer.cluster.cache import CellCache
 from core_tracer.cluster.cells import Inputs, make_cell
 from core_tracer.images import glare
@@ -206,9 +206,10 @@ def test_two_objectives_give_a_pareto_front_of_presets(folder):
 
 
 @pytest.mark.slow
-def test_trials_run_as_tasks_on_a_local_cluster(folder):
+@pytest.mark.parametrize("dask", [True, False], ids=["local Dask cluster", "local pool"])
+def test_trials_run_as_tasks_on_a_local_cluster(folder, dask):
     opt = spec.from_doc(opt_doc(folder, trials=4), str(folder))
-    with engine.connect(workers=2, memory_limit=engine.worker_memory([])) as client:
+    with local_pool.connect(workers=2, memory_limit=engine.worker_memory([]), dask=dask) as client:
         outcome = search.run(opt, client, CellCache(folder / "cache"), parallel=2)
     assert outcome.rendered == 4 and len(search.finished_trials(outcome.study)) == 4
     # The same designs rendered here measure the same: the task is the render.
@@ -219,11 +220,12 @@ def test_trials_run_as_tasks_on_a_local_cluster(folder):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("workers", ["0", "2"])
+@pytest.mark.parametrize("workers", [("0",), ("2",), ("2", "--scheduler", "local")],
+                         ids=["this process", "local pool", "local Dask cluster"])
 def test_ctrl_c_stops_the_search_in_one_line_and_keeps_what_finished(folder, workers):
     path = folder / "opt.json"
     path.write_text(json.dumps(opt_doc(folder, trials=500)))
-    proc = start_cli_at("optimise:trial", folder / "reached", "optimise", path, "--workers", workers,
+    proc = start_cli_at("optimise:trial", folder / "reached", "optimise", path, "--workers", *workers,
                         "-o", folder / "out", "--no-cache")
     _, err = signal_and_wait(proc, signal.SIGINT)
     assert (proc.returncode, err.strip().splitlines()[-1]) == (130, "interrupted"), err
@@ -238,13 +240,14 @@ def test_ctrl_c_stops_the_search_in_one_line_and_keeps_what_finished(folder, wor
 def test_the_dashboard_link_is_printed_while_the_cluster_runs(folder):
     """Issue 31: ``optimise`` printed the local cluster's dashboard link in its summary, after the
     cluster had gone. The link comes first, while the cluster answers at it; the summary names the
-    cluster without it."""
+    cluster without it. (A local Dask cluster is asked for by name: by default trials run on the
+    local worker pool, which has no dashboard.)"""
     import urllib.request
 
     path = folder / "opt.json"
     path.write_text(json.dumps(opt_doc(folder, trials=500)))
     proc = start_cli_at("optimise:trial", folder / "reached", "optimise", path, "--workers", "2",
-                        "-o", folder / "out", "--no-cache")
+                        "--scheduler", "local", "-o", folder / "out", "--no-cache")
     try:
         line = proc.stdout.readline()  # the command waits at its first trial, the cluster running
         assert line.startswith("local Dask cluster: 2 worker processes x 1 thread") and ", dashboard http" in line
@@ -253,8 +256,8 @@ def test_the_dashboard_link_is_printed_while_the_cluster_runs(folder):
             assert answer.status == 200  # the scheduler's web server behind the link (/health: no bokeh needed)
     finally:
         signal_and_wait(proc, signal.SIGINT)
-    path.write_text(json.dumps(opt_doc(folder, trials=2, storage=f"sqlite:///{folder / 'two.db'}")))
-    done = run_cli("optimise", path, "--workers", "2", "-o", folder / "two", "--no-cache")
+    path.write_text(json.dumps(opt_doc(folder, trials=2, storage="sqlite:///two.db")))
+    done = run_cli("optimise", path, "--workers", "2", "--scheduler", "local", "-o", folder / "two", "--no-cache")
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert lines[0].startswith("local Dask cluster: 2 worker processes") and "dashboard" in lines[0]

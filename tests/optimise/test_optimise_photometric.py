@@ -139,13 +139,13 @@ def test_total_flux_is_the_integral_of_the_rendered_intensities(tmp_path):
     independent estimator, the rendered intensities on a (C, γ) grid (30° by 5°, trapezoids in γ):
     within 5 % (the grid's quadrature; measured 51.6 ± 0.18 lm against 49.6 lm), and below the
     bulb's 440 lm."""
-    from core_tracer.measures.export import lamp_flux, measure_distribution
+    from core_tracer.measures.export import BeamGrid, lamp_flux, measure_distribution
 
     opt = spec.from_doc(opt_doc(tmp_path, objectives=[{"measure": "total_flux"}]), str(tmp_path))
     scene, figures = figures_of(opt, {OFFSET: 0.0})
     traced = search.measure(opt, scene, None, None, figures)[0][0]
     stderr = np.sqrt(figures.flux[0][1])
-    beam = measure_distribution(scene, c_step=30.0, gamma_step=5.0, gamma_max=90.0, pixel_mm=2.0, replicates=1)
+    beam = measure_distribution(scene, grid=BeamGrid(30.0, 5.0, 5.0), photons=0, pixel_mm=2.0, replicates=1)
     gamma = np.radians(beam.gamma_deg)
     integral = 2 * np.pi * np.trapz(beam.cd.mean(axis=0) * np.sin(gamma), gamma)
     assert traced == pytest.approx(integral, rel=0.05), (traced, stderr, integral)

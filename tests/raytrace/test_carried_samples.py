@@ -54,7 +54,7 @@ def test_carried_samples_give_what_bands_traced_apart_give(monkeypatch, adaptive
     # Groups of at most 4 rows of pilot samples: bands of 2 rows ask for several groups each, the
     # rest of their busy pixels' samples in groups of their own. carry-all starts every group in the
     # wavefront of all the rays still live (several groups at once).
-    monkeypatch.setattr(engine.walk, "MAX_DEPTH", max_depth)
+    monkeypatch.setattr(engine.context, "MAX_DEPTH", max_depth)
     monkeypatch.setattr(engine.sampling, "TILE_RAYS", WIDTH * 4 * 3)
     monkeypatch.setattr(engine.carried, "CARRY_RAYS", carry)
     ctx = _context(adaptive_threshold)

@@ -59,9 +59,9 @@ def test_carried_tails_give_what_bands_traced_apart_give(monkeypatch, threads, m
     # With MAX_DEPTH at 64 or 7 branches are cut in many bands: each carried band must count its own
     # depth; at 1000 every branch ends by the cut-off.
     # carry-all carries every band's rays from its first hits on (several bands at once).
-    monkeypatch.setattr(engine.walk, "MAX_DEPTH", max_depth)
+    monkeypatch.setattr(engine.context, "MAX_DEPTH", max_depth)
     apart = _render(monkeypatch, None, threads)
-    monkeypatch.setattr(engine.walk, "MAX_DEPTH", max_depth)
+    monkeypatch.setattr(engine.context, "MAX_DEPTH", max_depth)
     carried_counts = _carried_counts(monkeypatch)
     carried = _render(monkeypatch, carry, threads)
     assert max(carried_counts) >= (3 if carry > 10**6 else 1)  # tails were carried, several at once

@@ -12,6 +12,15 @@ from ..lamp_table import LampTable
 from ..lighting import Lighting
 from ..parts import body_box, parts_for
 
+# The depth limit (docs/photometric.md, light guides): at most this many segments along one branch;
+# the branches still alive there end, counted in ``Band.cut_at_depth`` and the render's statistics.
+MAX_DEPTH = 64
+# A light guide's paths are long: light runs along the rod by total internal reflection, one segment
+# a reflection, some 30 to 100 of them from a prism to the LED along a guide 50 to 150 mm long and 4 to
+# 6 mm thick (a ray at the critical angle meets a wall every thickness / tan 42° of its length). A
+# lamp with a guide is walked to this depth instead.
+GUIDE_MAX_DEPTH = 256
+
 
 class Context(Lighting):
     """Everything constant during one render."""
@@ -34,6 +43,7 @@ class Context(Lighting):
         # else no ray meets a prism plate, its housing or a light guide (whose rod is the plate's medium)
         self.plates = bool(self.lamps.ring_count.any()) or self.lamps.guide is not None
         self.leds = self.lamps.any_leds  # else no ray meets an LED die
+        self.max_depth = GUIDE_MAX_DEPTH if self.lamps.guide is not None else MAX_DEPTH  # ``walk.depth_limit``
         body = scene["body"]
         self.box_lo, self.box_hi = body_box.body_box(body)
         self.window = body_box.screen_window(camera, self.box_lo, self.box_hi)  # the pixels that can see the body

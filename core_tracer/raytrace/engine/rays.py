@@ -156,7 +156,7 @@ class Band:
         self.to_xyz = ctx.to_xyz  # (K, 3): a photometric leaf's bands to X, Y, Z as added; None: kept (R, G, B)
         self.segments = 0
         self.max_depth = 0
-        self.cut_at_depth = 0  # branches still alive at walk.MAX_DEPTH, ended there (counted, not dropped silently)
+        self.cut_at_depth = 0  # branches alive at the depth limit (walk.depth_limit), ended there: counted, not dropped
         self.busy = 0  # pixels that took every sample (adaptive sampling)
         self.transitions: set[tuple[int, int, int]] = set()
         self.record = ctx.record  # whether the render records path transitions (its context's flag)

@@ -19,20 +19,11 @@ from .eyes import first_hits, put_traced, rays_toward_body
 from .rays import BULB_PASS, SIDE_WALL_PASS, SOCKET_PASS, UNPOLARISED, UNRECORDED, Band, Rays, concat
 from .surfaces import at_lens_face, at_plate_face, at_reflector
 
-# The depth limit (docs/photometric.md, light guides): at most this many segments along one branch;
-# the branches still alive there end, counted in ``Band.cut_at_depth`` and the render's statistics.
-MAX_DEPTH = 64
-# A light guide's paths are long: light runs along the rod by total internal reflection, one segment
-# a reflection, some 30 to 100 of them from a prism to the LED along a guide 50 to 150 mm long and 4 to
-# 6 mm thick (a ray at the critical angle meets a wall every thickness / tan 42° of its length). A
-# lamp with a guide is walked to this depth instead.
-GUIDE_MAX_DEPTH = 256
-
 
 def depth_limit(ctx: Context) -> int:
-    """The depth limit of a render: ``GUIDE_MAX_DEPTH`` when a lamp has a light guide, else ``MAX_DEPTH``
-    (a free-form design, walked by its own ``walker``, has no parametric lamps and no guide)."""
-    return GUIDE_MAX_DEPTH if ctx.walker is None and ctx.lamps.guide is not None else MAX_DEPTH
+    """The depth limit of a render (``context.MAX_DEPTH``, or ``context.GUIDE_MAX_DEPTH`` where a lamp
+    has a light guide): the context's ``max_depth``."""
+    return ctx.max_depth
 
 
 def trace_eye_rays(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> None:

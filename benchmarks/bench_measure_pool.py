@@ -1,0 +1,66 @@
+"""``measure`` against one render, before and after the measures went on the local pool (issue 34
+item 2), in one run.
+
+    .venv/bin/python benchmarks/bench_measure_pool.py [--before /work/main] [--rounds 1]
+
+The four-lamp night photometric preset: ``render -o x.exr --width 512 --height 512 --samples 8``
+(the band pool, as the command renders), then ``measure -o DIR`` with this tree's code and, given
+``--before``, with that checkout's (the same command there), alternated ``--rounds`` times; each
+whole command's wall time, best of the rounds, and its ratio to the render. Target: measure <= 3x
+the render. The load average is printed: on a shared machine only the ratios mean anything.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PRESET = ROOT / "presets" / "four-lamp-night-lit-photometric.json"
+
+
+def load() -> str:
+    return ", ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def timed(tree: Path, arguments: list[str]) -> float:
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "core_tracer", *arguments], cwd=tree, capture_output=True,
+                          text=True, timeout=7200)
+    if done.returncode != 0:
+        raise SystemExit(f"{tree}: {' '.join(arguments)} failed:\n{done.stderr}")
+    return time.perf_counter() - start
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--before", type=Path, help="a checkout of the code before (e.g. /work/main)")
+    parser.add_argument("--rounds", type=int, default=1)
+    args = parser.parse_args()
+    print(f"{os.cpu_count()} cores; load average before: {load()}")
+    runs: dict[str, list[float]] = {"render 512x512, 8 samples": [], "measure (this tree)": []}
+    if args.before:
+        runs["measure (before)"] = []
+    with tempfile.TemporaryDirectory() as folder:
+        for r in range(args.rounds):
+            runs["render 512x512, 8 samples"].append(timed(ROOT, ["render", str(PRESET), "-o", f"{folder}/r.exr",
+                                                                  "--width", "512", "--height", "512",
+                                                                  "--samples", "8"]))
+            runs["measure (this tree)"].append(timed(ROOT, ["measure", str(PRESET), "-o", f"{folder}/m{r}"]))
+            if args.before:
+                runs["measure (before)"].append(timed(args.before, ["measure", str(PRESET), "-o", f"{folder}/b{r}"]))
+    render = min(runs["render 512x512, 8 samples"])
+    for name, times in runs.items():
+        print(f"  {name:28s} {min(times):8.1f} s  {min(times) / render:5.2f}x the render  "
+              f"[{', '.join(f'{t:.1f}' for t in times)}]")
+    print(f"load average after: {load()}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
