@@ -160,6 +160,11 @@ STEPS += tuple(
     _study("docs/study-lamp-types.png"),
     _study("docs/study-four-lamp-ior-cut-height.png"),
     _study("docs/study-sorted-by-measure.png"),
+    # a free-form design's study: from its preset (its .glb lies beside the preset, not beside the sheet)
+    Step("study-freeform-filter-bulb",
+         ("{python}", "-m", "core_tracer", "study", "presets/freeform-sculpted-wrap-lamp-photometric.json", "--vary",
+          "freeform.parts[].lens.filter=red,amber", "--vary", "freeform.parts[].bulb.state=tail,stop",
+          "-o", "docs/study-freeform-filter-bulb.png"), ("docs/study-freeform-filter-bulb.png",)),
 )
 
 # Committed pictures without a recorded command.

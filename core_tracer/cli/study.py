@@ -11,6 +11,7 @@ import contextlib
 import dataclasses
 import os
 import re
+import shutil
 import sys
 import time
 
@@ -29,6 +30,7 @@ from .common import (
     check_output,
     check_output_folder,
     ctrl_c_sets,
+    design_meshes,
     in_file,
     photometric_stops,
     view_for,
@@ -172,23 +174,32 @@ def _with_environment(study: st.Study, document: str) -> tuple[st.Study, int]:
 
 def _with_curves(study: st.Study, document: str) -> st.Study:
     """The study whose variants are traced with the measured curves they name (``filter_file``,
-    ``spectrum_file``) by their full paths beside ``document`` (the base design or the study file),
-    confined to its folder (``scene.beside``); a Dask worker is sent their contents
+    ``spectrum_file``) and a free-form design's mesh file by their full paths beside ``document``
+    (the base design or the study file), confined to its folder (``scene.beside``); a Dask worker is sent their contents
     (``cluster.cells``). The study itself (its sheet, its saved files) keeps the plain names."""
     from ..scene.beside import spectrum_files, with_curves_at
 
+    mesh_file = None
+    if "freeform" in study.base:  # its meshes beside the document too, checked before any worker starts
+        design_meshes(document, study.base)
+        from ..freeform.loading import mesh_file_path
+
+        mesh_file = mesh_file_path(document, study.base["freeform"]["mesh_file"])
     variants = []
     for v in study.variants:
         try:
             found = spectrum_files(document, v.scene)
         except SceneError as e:
             raise in_file(SceneError(f"base.{e.path}", e.message), document) from None
+        if mesh_file is not None:
+            found[("freeform", "mesh_file")] = mesh_file
         variants.append(dataclasses.replace(v, scene=with_curves_at(v.scene, found)))
     return dataclasses.replace(study, variants=tuple(variants))
 
 
 def _is_variant_file(name: str) -> bool:
-    return re.fullmatch(r"variant-\d+\.json", name) is not None
+    """A file ``--save-variants`` writes: a variant, or the meshes a free-form study's variants name."""
+    return re.fullmatch(r"variant-\d+\.json|[^/]+\.glb", name) is not None
 
 
 def _save_side_files(args: argparse.Namespace, study: st.Study) -> None:
@@ -202,6 +213,11 @@ def _save_side_files(args: argparse.Namespace, study: st.Study) -> None:
         if args.save_variants:
             with atomic_folder(args.save_variants, _is_variant_file, VARIANTS) as folder:
                 study.save_variants(folder)
+                if "freeform" in study.base:  # each variant names the design's meshes beside it
+                    from ..freeform.loading import mesh_file_path
+
+                    name = study.base["freeform"]["mesh_file"]
+                    shutil.copyfile(mesh_file_path(args.base or args.study, name), os.path.join(folder, name))
     except BaseException:
         for path in saved:
             with contextlib.suppress(OSError):

@@ -5,12 +5,13 @@ A *cell* is a variant scene at a size. What a worker needs travels with it: the 
 bytes, sent once per study and named by their SHA-256 (``Inputs``); the worker writes them into
 its own cache folder under that name and renders the scene pointed at that copy (``render_cell``).
 The measured curves a photometric scene reads (``filter_file``, ``spectrum_file``: a few kB each)
-travel inside the cell itself, each named by its SHA-256 and written beside the images.
+and a free-form design's meshes (its ``.glb``, ``freeform.mesh_file``) travel inside the cell
+itself, each named by its SHA-256 and written beside the images.
 
-A cell's *key* is the SHA-256 of everything its image depends on: the scene (with the image file
-replaced by the hash of its bytes), the size, and the tracer's own source (``tracer_version``), so a
-result kept under a key is the image that cell would render now, on any machine, and a change to
-the tracer renders everything again.
+A cell's *key* is the SHA-256 of everything its image depends on: the scene (with the image file,
+the curves and the mesh file replaced by the hashes of their bytes), the size, and the tracer's own
+source (``tracer_version``), so a result kept under a key is the image that cell would render now,
+on any machine, and a change to the tracer renders everything again.
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ class Cell:
     height: int
     environment: str | None = None  # SHA-256 of the environment image's bytes
     suffix: str = ""  # the image's file suffix (.exr, .hdr): its reader goes by it
-    # the measured curves: (where the scene names it, ``scene.beside.named_curves``; SHA-256; bytes)
+    # the measured curves and the mesh file: (where the scene names it, ``curve_paths``; SHA-256; bytes)
     curves: tuple[tuple[tuple, str, bytes], ...] = ()
 
     @property
@@ -84,7 +85,7 @@ class Cell:
         if self.environment is not None:
             scene["environment"]["world"] = "file"
             scene["environment"]["file"] = f"sha256:{self.environment}{self.suffix}"
-        scene = with_curves_at(scene, {keys: f"sha256:{digest}.csv" for keys, digest, _data in self.curves})
+        scene = with_curves_at(scene, {keys: f"sha256:{digest}{_suffix(keys)}" for keys, digest, _data in self.curves})
         doc = {"scene": scene, "size": [self.width, self.height], "tracer": tracer_version()}
         return hashlib.sha256(json.dumps(doc, sort_keys=True, separators=(",", ":")).encode("utf-8")).hexdigest()
 
@@ -100,8 +101,9 @@ def make_cell(scene: dict, width: int, height: int, inputs: Inputs) -> Cell:
 
 
 def curve_paths(scene: dict) -> dict[tuple, str]:
-    """The measured curves a scene reads, by where it names them (``beside.named_curves``): the
-    full paths the loader gave them (``beside.with_spectrum_files``)."""
+    """The measured curves a scene reads, by where it names them (``beside.named_curves``), and a
+    free-form design's mesh file (``MESH_FILE``): the full paths the loader gave them
+    (``beside.with_spectrum_files``, ``study``'s runnable variants)."""
     from ..scene.beside import named_curves
 
     out = {}
@@ -110,7 +112,17 @@ def curve_paths(scene: dict) -> dict[tuple, str]:
         for key in keys:
             node = node[key]
         out[keys] = node
+    if "freeform" in scene:
+        out[MESH_FILE] = scene["freeform"]["mesh_file"]
     return out
+
+
+MESH_FILE = ("freeform", "mesh_file")
+
+
+def _suffix(keys: tuple) -> str:
+    """The suffix a sent file is written with: its reader goes by it for the mesh file."""
+    return ".glb" if keys == MESH_FILE else ".csv"
 
 
 def _curve(keys: tuple, path: str) -> tuple[tuple, str, bytes]:
@@ -175,11 +187,11 @@ def render_cell(cell: Cell, environment: bytes | None = None, stop: str | None =
     """The task: the cell's displayed-before-view image, float32 (H, W, 3) linear, glare applied as
     the study's workers apply it. ``environment`` is the bytes of the cell's environment image;
     ``stop`` names the study's stop event (a cancelled study ends its running renders between bands)."""
+    from ..freeform.traced import render_scene
     from ..images import glare
-    from ..raytrace.engine import render_passes
 
     scene = worker_scene(cell, environment)
-    result = render_passes(scene, cell.width, cell.height, should_stop=stop_flag(stop), threads=threads,
+    result = render_scene(scene, cell.width, cell.height, should_stop=stop_flag(stop), threads=threads,
                            keep_passes=False)
     return glare.apply(result.image, scene)
 
@@ -190,7 +202,7 @@ def worker_scene(cell: Cell, environment: bytes | None) -> dict:
     if cell.curves:
         from ..scene.beside import with_curves_at
 
-        curves = {keys: _materialise(digest, ".csv", data) for keys, digest, data in cell.curves}
+        curves = {keys: _materialise(digest, _suffix(keys), data) for keys, digest, data in cell.curves}
         cell = Cell(with_curves_at(cell.scene, curves), cell.width, cell.height, cell.environment, cell.suffix)
     if cell.environment is None:
         return cell.scene
@@ -218,6 +230,8 @@ def band_groups(cell: Cell) -> list[list[tuple[int, int, int]]]:
     from ..raytrace.engine import make_context
     from ..raytrace.engine.schedule import band_rows
 
+    if "freeform" in cell.scene:  # its meshes' tracer renders a whole cell (``render_cell``)
+        return [[]]
     ctx = make_context(cell.scene, cell.width, cell.height)
     rays_per_row = cell.width * ctx.samples
     groups: list[list[tuple[int, int, int]]] = [[]]

@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -55,6 +56,9 @@ from ..raytrace.parts.reflector import reflector_normal
 from ..scene.reading import SceneError
 from .directions import cone_solid_angle, direction
 from .intensity import Intensity, measurement_scene
+
+if TYPE_CHECKING:
+    from ..freeform.cache import DesignMeshes
 
 DEFAULT_CONE_DEG = 3.0
 DEFAULT_PHOTONS = 400_000  # per lamp and source
@@ -263,74 +267,97 @@ def _end_points(rays: Rays, t: np.ndarray, met: np.ndarray) -> tuple[np.ndarray,
 def traced_intensities(scene: dict, angles: Sequence[tuple[float, float]],
                        groups: Sequence[Sequence[int]] | None = None, *, photons: int = DEFAULT_PHOTONS,
                        cone_deg: float = DEFAULT_CONE_DEG, seed: int = 0, bands: int | None = None,
-                       batch: int = BATCH) -> list[list[Intensity]]:
+                       batch: int = BATCH, meshes: DesignMeshes | None = None) -> list[list[Intensity]]:
     """I(H, V) in cd at each of ``angles`` for each group of lamps (None: the whole design), as the
     mean over a cone of half angle ``cone_deg``, from ``photons`` samples of each source of each lit
-    lamp: ``result[group][direction]``."""
+    lamp: ``result[group][direction]``. A free-form design is traced on its ``meshes``, as one lamp."""
     return traced_beam(scene, angles, groups, photons=photons, cone_deg=cone_deg, seed=seed, bands=bands,
-                       batch=batch)[0]
+                       batch=batch, meshes=meshes)[0]
 
 
 def traced_beam(scene: dict, angles: Sequence[tuple[float, float]],
                 groups: Sequence[Sequence[int]] | None = None, *, photons: int = DEFAULT_PHOTONS,
                 cone_deg: float = DEFAULT_CONE_DEG, seed: int = 0, bands: int | None = None,
-                batch: int = BATCH) -> tuple[list[list[Intensity]], list[tuple[float, float]]]:
+                batch: int = BATCH, meshes: DesignMeshes | None = None
+                ) -> tuple[list[list[Intensity]], list[tuple[float, float]]]:
     """``traced_intensities`` and, from the same photons, each group's luminous flux leaving the lamp
     in every direction (lm) with its standard error: ``(intensities, [(lm, stderr) per group])``."""
     if photons < 2:
         raise ValueError(f"photons: {photons!r} is not 2 or more")
     if not 0.0 < cone_deg < 90.0:
         raise ValueError(f"cone: {cone_deg!r} degrees is not between 0 and 90")
-    if "freeform" in scene:  # its lamps are not what is traced: counting them would be another lamp's light
-        raise SceneError("freeform", "light tracing follows parametric lamps so far; allowed the rendered views "
-                                     "(intensity.rendered_intensities, measure) for a free-form design")
+    targets = np.array([direction(h, v) for h, v in angles])
+    solid = cone_solid_angle(cone_deg)
+    rng = np.random.default_rng(seed)
     measured = measurement_scene(scene)
+    if "freeform" in scene:  # its meshes, one lamp: the sources and the walk of ``freeform.light_tracing``
+        if meshes is None or groups not in (None, [[0]]):
+            raise SceneError("freeform", "a free-form design is light-traced on its meshes, as one lamp; allowed "
+                                         "its meshes (DesignMeshes) and no lamp groups")
+        from ..freeform import light_tracing as mesh_light
+
+        ctx = mesh_light.context(measured, meshes, bands)
+        counted = _counted(mesh_light.sources(ctx, measured), lambda rays: mesh_light.trace(ctx, rays), targets,
+                           math.cos(math.radians(cone_deg)), ctx.photometric.to_xyz, photons, batch, rng)
+        return _grouped([[0]], {0: counted}, solid, len(targets))
     ctx = make_context(measured, 1, 1, bands=bands)
     if ctx.walker is not None or ctx.lamps.any_cylindrical:
         raise SceneError("lamps", "light tracing follows flat-lensed parametric lamps; allowed lamps without "
                                   "cylindrical lenses")
-    targets = np.array([direction(h, v) for h, v in angles])
-    cos_cone = math.cos(math.radians(cone_deg))
-    solid = cone_solid_angle(cone_deg)
-    to_xyz = ctx.photometric.to_xyz
     groups = [list(range(len(scene["lamps"])))] if groups is None else [list(g) for g in groups]
-    rng = np.random.default_rng(seed)
     per_lamp: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     for lamp in sorted({i for g in groups for i in g}):
-        columns = len(targets) + 1  # the last counts every branch that leaves: the flux out
-        tally = Tally.empty(columns)
         if not (ctx.lamps.bulb_intensity[lamp].any() or ctx.lamps.led_radiance[lamp].any()):
+            columns = len(targets) + 1
             per_lamp[lamp] = (np.zeros(columns), np.zeros(columns), np.zeros((columns, 3)))
             continue
-        for source in (bulb_photons, glow_photons) if ctx.lamps.has_bulb[lamp] else (led_photons,):
-            done = 0
-            while done < photons:
-                n = min(batch, photons - done)
-                emitted = source(ctx, lamp, n, rng)
-                if emitted is None:
-                    break
-                rays, flux = emitted
-                # the flux of the batch as a share of the source's whole sample: n / photons
-                pix, d, k = trace(ctx, rays)
-                xyz = (k * rows(flux, pix) * (n / photons)) @ to_xyz  # lm per branch
-                inside = np.hstack([(d @ targets.T) >= cos_cone, np.ones((len(d), 1), bool)])  # (E, directions + 1)
-                for j in range(columns):
-                    sel = np.nonzero(inside[:, j])[0]
-                    c = np.bincount(pix.take(sel), weights=xyz[sel, 1], minlength=n)
-                    tally.sum_y[j] += c.sum()
-                    tally.sum_y2[j] += (c * c).sum()
-                    tally.total_xyz[j] += xyz[sel].sum(axis=0)
-                done += n
-            if done:
-                tally.close_source(done)
-        per_lamp[lamp] = (tally.total_y, tally.variance, tally.total_xyz)
+        emitters = (bulb_photons, glow_photons) if ctx.lamps.has_bulb[lamp] else (led_photons,)
+        emit = [lambda n, rng, source=source, lamp=lamp: source(ctx, lamp, n, rng) for source in emitters]
+        per_lamp[lamp] = _counted(emit, lambda rays: trace(ctx, rays), targets, math.cos(math.radians(cone_deg)),
+                                  ctx.photometric.to_xyz, photons, batch, rng)
+    return _grouped(groups, per_lamp, solid, len(targets))
+
+
+def _counted(sources: Sequence, follow, targets: np.ndarray, cos_cone: float, to_xyz: np.ndarray, photons: int,
+             batch: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Y, its variance, X Y Z) of the flux leaving within each cone about ``targets`` and, last, in every
+    direction, from ``photons`` samples of each source (``source(n, rng)`` -> rays and their flux per
+    band, or None for no light), each followed out of the lamp by ``follow``."""
+    columns = len(targets) + 1  # the last counts every branch that leaves: the flux out
+    tally = Tally.empty(columns)
+    for source in sources:
+        done = 0
+        while done < photons:
+            n = min(batch, photons - done)
+            emitted = source(n, rng)
+            if emitted is None:
+                break
+            rays, flux = emitted
+            # the flux of the batch as a share of the source's whole sample: n / photons
+            pix, d, k = follow(rays)
+            xyz = (k * rows(flux, pix) * (n / photons)) @ to_xyz  # lm per branch
+            inside = np.hstack([(d @ targets.T) >= cos_cone, np.ones((len(d), 1), bool)])  # (E, directions + 1)
+            for j in range(columns):
+                sel = np.nonzero(inside[:, j])[0]
+                c = np.bincount(pix.take(sel), weights=xyz[sel, 1], minlength=n)
+                tally.sum_y[j] += c.sum()
+                tally.sum_y2[j] += (c * c).sum()
+                tally.total_xyz[j] += xyz[sel].sum(axis=0)
+            done += n
+        if done:
+            tally.close_source(done)
+    return tally.total_y, tally.variance, tally.total_xyz
+
+
+def _grouped(groups: Sequence[Sequence[int]], per_lamp: dict, solid: float, directions: int
+             ) -> tuple[list[list[Intensity]], list[tuple[float, float]]]:
     result, flux = [], []
     for group in groups:
         y = sum(per_lamp[i][0] for i in group)
         var = sum(per_lamp[i][1] for i in group)
         xyz = sum(per_lamp[i][2] for i in group)
         result.append([Intensity(float(y[j] / solid), float(math.sqrt(var[j]) / solid), xyz[j] / solid)
-                       for j in range(len(targets))])
+                       for j in range(directions)])
         flux.append((float(y[-1]), float(math.sqrt(var[-1]))))
     return result, flux
 

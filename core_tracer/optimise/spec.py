@@ -145,14 +145,21 @@ class Optimisation:
         return self.needs_render or bool(self.request)
 
     def traced(self, scene: dict) -> dict:
-        """A trial's design as the tracer takes it: its measured curves by their full paths beside the
-        base's document (``scene.beside``); a Dask worker is sent their bytes (``cluster.cells``)."""
-        from ..scene.beside import with_spectrum_files
+        """A trial's design as the tracer takes it: its measured curves and a free-form design's mesh
+        file by their full paths beside the base's document (``scene.beside``, ``freeform.loading``);
+        a Dask worker is sent their bytes (``cluster.cells``)."""
+        from ..scene.beside import spectrum_files, with_curves_at
 
+        document = self.base_document or os.path.join(self.folder, "optimisation.json")
         try:
-            return with_spectrum_files(self.base_document or os.path.join(self.folder, "optimisation.json"), scene)
+            found = spectrum_files(document, scene)
+            if "freeform" in scene:
+                from ..freeform.loading import mesh_file_path
+
+                found[("freeform", "mesh_file")] = mesh_file_path(document, scene["freeform"]["mesh_file"])
         except SceneError as e:
             raise SceneError(f"base.{e.path}", e.message) from None
+        return with_curves_at(scene, found)
 
     def scene_of(self, values: dict[str, Any]) -> dict:
         """The design of one trial: the base with ``values`` (by parameter name) applied, checked."""
@@ -199,6 +206,10 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
     for kind, items in (("objectives", objectives), ("constraints", constraints)):
         for i, item in enumerate(items):
             M.check_size(item.prepared, size, f"{kind}[{i}]")
+            if "freeform" in base and (item.measure.photometric or not item.measure.needs_render):
+                raise SceneError(f"{kind}[{i}].measure", f"{item.measure.name} is measured on the parametric lamps, "
+                                 "which a free-form design does not trace; allowed a measure of its camera view "
+                                 "(ssim, lens_luminance, lit_fraction)")
             if item.measure.photometric and base.get("light_model") != "photometric":
                 raise SceneError(f"{kind}[{i}].measure", f"{item.measure.name} needs light in cd, which the base's "
                                  f"light_model \"{base.get('light_model', 'paper')}\" has not; allowed a base with "
@@ -237,7 +248,15 @@ def from_doc(doc: Any, folder: str, stem: str = "optimisation") -> Optimisation:
         parallel = _whole(parallel, "parallel", 1, 1024)
     opt = Optimisation(name, base, knobs, objectives, constraints, size, trials, sampler, seed, storage, parallel,
                        folder, doc, base_document)
-    opt.traced(base)  # the base's measured curves are beside it, or refused before any trial
+    traced = opt.traced(base)  # the base's measured curves are beside it, or refused before any trial
+    if "freeform" in base:  # and its meshes, their geometry checked
+        from ..freeform.traced import meshes_of
+
+        meshes = meshes_of(traced)
+        try:
+            meshes.cache.get(traced, meshes.meshes)
+        except SceneError as e:
+            raise SceneError(f"base.{e.path}", e.message) from None
     return opt
 
 
@@ -312,8 +331,6 @@ def _base(value: Any, folder: str, size: tuple[int, int]) -> dict:
         base = parse_scene({**value, "image": {**image, "width": size[0], "height": size[1]}})
     except SceneError as e:
         raise SceneError(f"base.{e.path}" if e.path else "base", e.message) from None
-    if "freeform" in base:
-        raise SceneError("base.freeform", "a free-form design cannot be optimised; allowed a parametric design")
     return base
 
 

@@ -20,11 +20,11 @@ MASK_SUFFIX = "-lamp"
 def render_trial(cell: Cell, environment: bytes | None = None, stop: str | None = None,
                  threads: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """The camera's view: (the linear image with glare as a study shows it, the lamp mask (H, W) bool)."""
+    from ..freeform.traced import render_scene
     from ..images import glare
-    from ..raytrace.engine import render_passes
 
     scene = worker_scene(cell, environment)
-    result = render_passes(scene, cell.width, cell.height, should_stop=stop_flag(stop), threads=threads,
+    result = render_scene(scene, cell.width, cell.height, should_stop=stop_flag(stop), threads=threads,
                            keep_passes=True)
     mask = np.zeros((cell.height, cell.width), dtype=bool)
     for name in LAMP_PASSES:

@@ -215,9 +215,6 @@ class Study:
             base = parse_scene(base_doc)
         except SceneError as e:
             raise SceneError(f"base.{e.path}" if e.path else "base", e.message) from None
-        if "freeform" in base:  # a study renders the parametric lamp: it would silently drop the meshes
-            raise SceneError("base.freeform", "a free-form design cannot be studied; allowed a design without "
-                                              "freeform (vary the parametric lamp)")
         title = doc.get("title", "")
         if not isinstance(title, str) or len(title) > 200 or has_surrogate(title) or not title.isprintable():
             # A lone surrogate cannot be stored in the sheet's header, and a control character would reach

@@ -126,18 +126,19 @@ def measure_variants(scenes: Sequence[dict], names: Sequence[str],
 
     ``cache``: a ``cluster.cache.CellCache`` (or None): the values are kept there by content (the
     whole variant scene and the names), so a re-run measures only what is new."""
+    from ..freeform.traced import by_content, meshes_of
     from ..measures import report
 
     out = []
     for k, scene in enumerate(scenes):
         if progress is not None:
             progress(k, len(scenes))
-        key = measures_key(scene, names)
+        key = measures_key(by_content(scene), names)  # a free-form design's meshes by their bytes
         kept = cache.get_array(key) if cache is not None else None
         if kept is not None and kept.shape == (len(names),):
             out.append(dict(zip(names, (float(v) for v in kept), strict=True)))
             continue
-        values = by_name.values(report.measure(scene).as_dict(), names)
+        values = by_name.values(report.measure(scene, meshes=meshes_of(scene)).as_dict(), names)
         if cache is not None:
             import numpy as np
 

@@ -21,8 +21,12 @@ from ..scene.safe_text import show_key
 from ..scene.validate import check_number
 
 _PARAMETER = re.compile(
-    r"^(?:lamps\[(?P<lamp>\d*)\]\.)?(?P<path>[a-z_][a-z0-9_]*(?:\.[a-z_][a-z0-9_]*)*)(?:\[(?P<component>\d+)\])?$"
+    r"^(?:lamps\[(?P<lamp>\d*)\]\.|freeform\.parts\[(?P<part>\d*)\]\.)?"
+    r"(?P<path>[a-z_][a-z0-9_]*(?:\.[a-z_][a-z0-9_]*)*)(?:\[(?P<component>\d+)\])?$"
 )
+# A free-form part's values are varied under its role (``freeform.parts[2].lens.filter``; ``parts[]``:
+# every part of that role); its mesh, name and role are the design's geometry, which a study keeps.
+_PART_PREFIX = "freeform.parts[]."
 # Scene-level sections and fields a study may vary; image is the study's own size, but its
 # samples per pixel vary like any parameter, and a study may set one design in both light models.
 _SCENE_PARTS = ("camera", "light", "background", "body", "environment")
@@ -45,6 +49,13 @@ class Parameter:
     lamp_scope: bool  # a lamp field
     lamp: int | None  # one lamp; None = every lamp
     component: int | None  # one component of a vector field
+    part_scope: bool = False  # a free-form part's value (keys start with its role)
+    part: int | None = None  # one part; None = every part of the role
+
+    @property
+    def scope(self) -> tuple[str, int | None]:
+        """What the field belongs to: ("lamp", index), ("part", index) or ("scene", None)."""
+        return ("lamp", self.lamp) if self.lamp_scope else ("part", self.part) if self.part_scope else ("scene", None)
 
     @property
     def short(self) -> str:
@@ -62,6 +73,8 @@ class Parameter:
         """The section that holds the field (the lens for ``lens.ior``)."""
         if self.lamp_scope:
             return S.lookup(".".join(("lamps[]",) + self.keys[:-1])) if len(self.keys) > 1 else S.LAMP
+        if self.part_scope:
+            return _part_spec(self.keys[:-1])
         return S.lookup(".".join(self.keys[:-1])) if len(self.keys) > 1 else S.SCENE
 
     @property
@@ -72,7 +85,13 @@ class Parameter:
 
     def nodes(self, scene: dict) -> list[dict]:
         """The dicts of ``scene`` that hold the field: one per lamp it applies to."""
-        roots = [scene] if not self.lamp_scope else scene["lamps"] if self.lamp is None else [scene["lamps"][self.lamp]]
+        if self.part_scope:
+            parts = scene["freeform"]["parts"]
+            roots = [p for p in parts if p["role"] == self.keys[0]] if self.part is None else [parts[self.part]]
+        elif self.lamp_scope:
+            roots = scene["lamps"] if self.lamp is None else [scene["lamps"][self.lamp]]
+        else:
+            roots = [scene]
         out = []
         for node in roots:
             for key in self.keys[:-1]:
@@ -99,6 +118,9 @@ def study_parameters() -> list[str]:
         elif path.split(".")[0] not in _SCENE_PARTS and path not in _SCENE_FIELDS:
             continue
         out.append(path)
+    # a free-form part's values under its role; its object and role are its geometry
+    out += [info.path for info in S.iter_fields(S.FREEFORM_PART, _PART_PREFIX)
+            if info.path.count(".") >= 3 and isinstance(info.spec, S.Num | S.Flag | S.Choice)]
     return out
 
 
@@ -111,6 +133,8 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
         raise SceneError(show_key(text), "is not a parameter name; write e.g. lens.ior, lamps[1].cuts.height, "
                                          "body.color or bulb.offset[1]")
     keys = tuple(m["path"].split("."))
+    if m["part"] is not None:
+        return _part_parameter(text, keys, m, base)
     explicit_lamp = m["lamp"] is not None
     lamp_scope = explicit_lamp or (keys[0] in S.LAMP.fields and keys[0] not in S.SCENE.fields)
     if not lamp_scope and keys[0] not in _SCENE_PARTS and ".".join(keys) not in _SCENE_FIELDS:
@@ -122,9 +146,11 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
     except KeyError:
         raise SceneError(show_key(text), "unknown parameter; see `python -m core_tracer study --list` "
                                "for the names") from None
-    if not isinstance(field_spec, S.Num | S.Flag | S.Choice):
-        raise SceneError(show_key(text), "is not a field a study can vary; allowed numbers, switches and choices "
-                                         "(see `python -m core_tracer study --list`)")
+    _check_variable(text, field_spec)
+    if lamp_scope and base is not None and "freeform" in base:  # its lamps are not what is traced
+        raise SceneError(show_key(text), "is a field of the parametric lamps, which a free-form design does not "
+                                         "trace; allowed its parts' values, freeform.parts[i].<role>.<field> "
+                                         "(e.g. freeform.parts[].lens.filter), and scene fields")
     lamp = None
     if explicit_lamp and m["lamp"] != "":
         n = len(base["lamps"]) if base is not None else S.MAX_LAMPS
@@ -132,16 +158,71 @@ def resolve_parameter(text: Any, base: dict | None = None) -> Parameter:
         if lamp >= n:
             raise SceneError(show_key(text), f"lamp index {show_key(m['lamp'])} does not exist; the base design has "
                                              f"{n} lamp{'s' if n != 1 else ''} (allowed 0 to {n - 1})")
-    component = None
-    if m["component"] is not None:
-        component = _index(m["component"])
-        size = field_spec.size if isinstance(field_spec, S.Num) else 1
-        if size == 1:
-            raise SceneError(show_key(text), "is a single number; a component [k] only applies to vectors")
-        if component >= size:
-            raise SceneError(show_key(text), f"component {show_key(m['component'])} does not exist; "
-                                             f"allowed 0 to {size - 1}")
+    component = _component(text, m, field_spec)
     return Parameter(text, keys, field_spec, lamp_scope, lamp, component)
+
+
+def _part_spec(keys: tuple[str, ...]) -> S.Spec:
+    """The spec at ``keys`` inside a free-form part (``("lens", "filter")``); KeyError if none."""
+    node: S.Spec = S.FREEFORM_PART
+    for key in keys:
+        if not isinstance(node, S.Section) or key not in node.fields:
+            raise KeyError(".".join(keys))
+        node = node.fields[key]
+    return node
+
+
+def _check_variable(text: str, field_spec: S.Spec) -> None:
+    if not isinstance(field_spec, S.Num | S.Flag | S.Choice):
+        raise SceneError(show_key(text), "is not a field a study can vary; allowed numbers, switches and choices "
+                                         "(see `python -m core_tracer study --list`)")
+
+
+def _component(text: str, m: re.Match, field_spec: S.Spec) -> int | None:
+    """The component [k] of a vector field a parameter names, checked; None for the whole field."""
+    if m["component"] is None:
+        return None
+    component = _index(m["component"])
+    size = field_spec.size if isinstance(field_spec, S.Num) else 1
+    if size == 1:
+        raise SceneError(show_key(text), "is a single number; a component [k] only applies to vectors")
+    if component >= size:
+        raise SceneError(show_key(text), f"component {show_key(m['component'])} does not exist; "
+                                         f"allowed 0 to {size - 1}")
+    return component
+
+
+def _part_parameter(text: str, keys: tuple[str, ...], m: re.Match, base: dict | None) -> Parameter:
+    """A free-form part's value, ``freeform.parts[i].<role>.<field>``: the role must be the part's
+    (every part of it for ``parts[]``), and the base a free-form design."""
+    if keys[0] not in S.FREEFORM_ROLES or len(keys) < 2:
+        raise SceneError(show_key(text), f"is not a value of a free-form part; write freeform.parts[i].<role>.<field> "
+                                         f"with a role of {', '.join(S.FREEFORM_ROLES)} (the mesh and the role are "
+                                         "the design's geometry, which a study keeps)")
+    try:
+        field_spec = _part_spec(keys)
+    except KeyError:
+        raise SceneError(show_key(text), "unknown parameter; see `python -m core_tracer study --list` "
+                                         "for the names") from None
+    _check_variable(text, field_spec)
+    part = None
+    if base is not None and "freeform" not in base:
+        raise SceneError(show_key(text), "varies a free-form part, and the base design has no freeform section; "
+                                         "allowed only for a free-form design")
+    if m["part"] != "":
+        part = _index(m["part"])
+        parts = base["freeform"]["parts"] if base is not None else None
+        n = len(parts) if parts is not None else S.MAX_FREEFORM_PARTS
+        if part >= n:
+            raise SceneError(show_key(text), f"part index {show_key(m['part'])} does not exist; the base design has "
+                                             f"{n} part{'s' if n != 1 else ''} (allowed 0 to {n - 1})")
+        if parts is not None and parts[part]["role"] != keys[0]:
+            raise SceneError(show_key(text), f"part {part} is a {parts[part]['role']}, not a {keys[0]}; allowed "
+                                             f"freeform.parts[{part}].{parts[part]['role']}.<field>")
+    elif base is not None and not any(p["role"] == keys[0] for p in base["freeform"]["parts"]):
+        raise SceneError(show_key(text), f"the base design has no {keys[0]} part; allowed the roles it has")
+    component = _component(text, m, field_spec)
+    return Parameter(text, keys, field_spec, False, None, component, True, part)
 
 
 def _index(digits: str) -> int:
@@ -206,7 +287,7 @@ def apply_value(scene: dict, param: Parameter, value: Any) -> None:
             vector = list(node[last])
             vector[param.component] = value
             node[last] = vector
-        if param.section is S.BULB and last == "type":
+        if param.section in (S.BULB, S.FREEFORM_ROLE_SECTIONS["bulb"]) and last == "type":
             _keep_filament(node)
 
 
@@ -221,7 +302,8 @@ def _keep_filament(bulb: dict) -> None:
 def sets_same(a: Parameter, b: Parameter) -> bool:
     """Whether two axes would set the same number (or the two exclusive forms of one lens colour, or
     a lamp's function and a field it sets)."""
-    lamps_meet = a.lamp_scope == b.lamp_scope and (a.lamp is None or b.lamp is None or a.lamp == b.lamp)
+    (kind_a, at_a), (kind_b, at_b) = a.scope, b.scope
+    lamps_meet = kind_a == kind_b and (at_a is None or at_b is None or at_a == at_b)
     if lamps_meet and a.lamp_scope and ("function",) in (a.keys, b.keys) and a.keys != b.keys:
         other = b if a.keys == ("function",) else a
         return other.keys in _FUNCTION_SETS

@@ -32,8 +32,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import processes
+from ..freeform.traced import render_scene
 from ..images import glare
-from ..raytrace.engine import RenderCancelled, render_passes
+from ..raytrace.engine import RenderCancelled
 from .definition import Study
 
 TERMINATE_TIMEOUT = 3.0  # seconds a worker gets to exit after terminate() before kill()
@@ -321,7 +322,7 @@ def _run_here(study: Study, threads: int | None, progress, should_stop) -> list[
         progress(0, len(study))
     for v in study.variants:
         try:
-            image = render_passes(v.scene, width, height, should_stop=should_stop, threads=threads,
+            image = render_scene(v.scene, width, height, should_stop=should_stop, threads=threads,
                                   keep_passes=False).image
             images.append(glare.apply(image, v.scene))
         except RenderCancelled:

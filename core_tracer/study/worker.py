@@ -38,8 +38,9 @@ def main() -> int:
     # imported once stdout is the protocol's own copy: whatever an import prints goes to stderr
     import numpy as np
 
+    from ..freeform.traced import render_scene
     from ..images import glare
-    from ..raytrace.engine import RenderCancelled, render_passes
+    from ..raytrace.engine import RenderCancelled
 
     parent = os.getppid()
 
@@ -64,7 +65,7 @@ def main() -> int:
 
         start = time.perf_counter()
         try:
-            result = render_passes(job["scene"], job["width"], job["height"], progress=progress,
+            result = render_scene(job["scene"], job["width"], job["height"], progress=progress,
                                    should_stop=orphaned, threads=job.get("threads", 1), keep_passes=False)
             partial = job["out"] + ".part.npy"
             np.save(partial, glare.apply(result.image, job["scene"]))

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import bpy
 from bpy.app.handlers import persistent
 
+from ...core_tracer.scene.reading import SceneError
 from ..design import root as design_root
 from . import meshes as freeform_meshes
 from . import parametric, properties
@@ -49,6 +50,14 @@ def parts_in(depsgraph: bpy.types.Depsgraph) -> list[bpy.types.Object]:
     """The scene's parts that ``depsgraph`` shows (hidden ones are left out, as every renderer does)."""
     shown = {obj.original.name for obj in depsgraph.objects if obj.type == "MESH"}
     return [obj for obj in properties.role_objects(depsgraph.scene) if obj.name in shown]
+
+
+def refuse_parts(what: str, command: str) -> None:
+    """A panel that works on the parametric lamp (which the free-form parts stand in for, Convert hides
+    it) says so in one line instead of working on the hidden lamp: ``SceneError`` when parts are shown."""
+    if parts_in(bpy.context.evaluated_depsgraph_get()):
+        raise SceneError("Free-form Parts", f"are not {what} here yet; allowed: Export Free-form Design, then "
+                                            f"python -m core_tracer {command} on the exported .json")
 
 
 def part_key(objects) -> tuple:

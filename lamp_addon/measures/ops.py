@@ -45,9 +45,7 @@ def measured_scene(bl_scene) -> dict:
     which Convert hides): the command line measures and relights such a design from its files."""
     from ..freeform import geometry as freeform_geometry
 
-    if freeform_geometry.parts_in(bpy.context.evaluated_depsgraph_get()):
-        raise SceneError("Free-form Parts", "are not measured here yet; allowed: Export Free-form Design, then "
-                                            "python -m core_tracer measure (or states) on the exported .json")
+    freeform_geometry.refuse_parts("measured", "measure (or states)")
     if bl_scene.camera is not None:
         return render_camera.scene_for_render(bl_scene)
     return design_properties.design_to_scene(bl_scene)

@@ -42,6 +42,9 @@ def load_optimisation(context):
         raise SceneError("File", "is empty; allowed a lamp-optimise/1 JSON file (docs/cluster.md)")
     doc = read_json(path)
     if isinstance(doc, dict) and "base" not in doc:
+        from ..freeform import geometry as freeform_geometry
+
+        freeform_geometry.refuse_parts("optimised", "optimise")  # the scene's design is its parametric lamp
         doc = {**doc, "base": design_properties.design_to_scene(context.scene)}
     stem = os.path.splitext(os.path.basename(path))[0]
     try:

@@ -52,6 +52,8 @@ def _parameter_label(path: str) -> str:
 def _parameter_items() -> tuple[tuple[str, str, str], ...]:
     items = []
     for path in study_parameters():
+        if path.startswith("freeform."):  # the panel studies the parametric design (free-form: the command line)
+            continue
         spec = S.lookup(path)
         vector = isinstance(spec, S.Num) and spec.size > 1
         how = "a list of values written a/b/c" if vector else "a list of names" if isinstance(spec, S.Choice) \
@@ -191,6 +193,9 @@ def axis_doc(axis) -> dict:
 def study_from_settings(bl_scene) -> st.Study:
     """The study the settings describe, of the scene's current design seen through its camera.
     Raises ``SceneError`` (with the parameter, value and range) for a bad setting or design."""
+    from ..freeform import geometry as freeform_geometry
+
+    freeform_geometry.refuse_parts("studied", "study")  # the panel's parameters are the parametric lamp's
     settings = bl_scene.lamp_study
     size = (settings.width, settings.height)
     if settings.fit_lamp:  # the body's aspect at the pixels asked for (st.framed_size)

@@ -6,6 +6,8 @@ hand the tracer the file's very positions and normals (``freeform.loading``, ``f
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from helpers import PRESETS, run_cli
@@ -147,13 +149,21 @@ def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_add
     np.testing.assert_allclose(f12, shown, rtol=1e-4, atol=1e-6 * shown.max())
 
 
-def test_the_measures_and_light_panels_refuse_free_form_parts_in_one_line(lamp_addon, addon):
-    """In Blender the Measures and Light Panel operators measure the parametric lamp, which a free-form
-    design's parts stand in for: they say so in one line rather than measure the hidden lamp."""
+def test_the_measures_light_study_and_optimise_panels_refuse_free_form_parts_in_one_line(lamp_addon, addon,
+                                                                                         tmp_path):
+    """In Blender the Measures, Light Panel, Study and Optimise operators work on the parametric lamp,
+    which a free-form design's parts stand in for: they say so in one line rather than measure, study
+    or optimise the hidden lamp (the command line does all four on the exported pair)."""
     import bpy
 
-    _applied(TWIN)
-    for operator in (bpy.ops.lamp.light_states_render, bpy.ops.lamp.measures_run):
-        with pytest.raises(RuntimeError, match="Free-form Parts: are not measured here yet") as err:
+    bl_scene = _applied(TWIN)
+    optimisation = tmp_path / "liked.optimise.json"  # no base: it would start from the scene's design
+    optimisation.write_text(json.dumps({"schema": "lamp-optimise/1", "parameters": [
+        {"parameter": "freeform.parts[].lens.filter_thickness", "range": [2, 4]}],
+        "objectives": [{"measure": "lens_luminance", "goal": "maximise"}]}))
+    bl_scene.lamp_optimise.file = str(optimisation)
+    for operator, what in ((bpy.ops.lamp.light_states_render, "measured"), (bpy.ops.lamp.measures_run, "measured"),
+                           (bpy.ops.lamp.study_run, "studied"), (bpy.ops.lamp.optimise_run, "optimised")):
+        with pytest.raises(RuntimeError, match=f"Free-form Parts: are not {what} here yet") as err:
             operator()
         assert "Export Free-form Design" in str(err.value) and "\n" not in str(err.value).strip()

@@ -150,12 +150,3 @@ def test_a_free_form_preset_is_listed_and_gets_its_thumbnail(tmp_path):
     (folder / "lamp.glb").unlink()
     entries, warnings = list_library(Library("Team", str(folder), writable=True))
     assert not entries and 'freeform.mesh_file: "lamp.glb" is missing' in str(warnings[0])
-
-
-def test_a_study_refuses_a_free_form_base_in_one_line():
-    from core_tracer.study.definition import Study
-
-    with pytest.raises(SceneError) as err:
-        Study.from_doc({"schema": "lamp-study/1", "base": DESIGN, "axes": [{"field": "lens.ior",
-                                                                             "values": [1.4, 1.5]}]})
-    assert str(err.value).startswith("base.freeform: a free-form design cannot be studied")

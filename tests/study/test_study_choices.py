@@ -31,6 +31,9 @@ def _types_by_collection(size=(64, 48)) -> st.Study:
 def test_every_choice_of_the_scene_is_a_study_parameter():
     choices = {info.path.removeprefix("lamps[].") for info in S.iter_fields()
                if isinstance(info.spec, S.Choice) and info.path != "schema"}
+    # a free-form part's choices under its role (its role itself is the design's geometry)
+    choices |= {info.path for info in S.iter_fields(S.FREEFORM_PART, "freeform.parts[].")
+                if isinstance(info.spec, S.Choice) and info.path != "freeform.parts[].role"}
     offered = {name for name in study_parameters() if isinstance(resolve_parameter(name).spec, S.Choice)}
     assert offered == choices
     assert {"cuts.type", "lens.outline", "lens.shape", "lens.wrap_toward", "collection", "function",
