@@ -2,7 +2,7 @@
 
     .venv/bin/python tools/make_spectral_data.py [--out core_tracer/photometry/data] [--check]
 
-The extension carries these tables as small CSV text (about 22 kB in all) so that it never imports
+The extension carries these tables as small CSV text (about 27 kB in all) so that it never imports
 colour-science at run time; ``tests/photometry/test_data_files.py`` regenerates them and checks
 that the shipped files are byte for byte what this script writes, so they cannot go stale.
 

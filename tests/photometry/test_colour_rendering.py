@@ -17,7 +17,8 @@ pytestmark = pytest.mark.filterwarnings("ignore")
 
 
 def _theirs(colour, wavelengths, values) -> float:
-    return float(colour.colour_rendering_index(colour.SpectralDistribution(np.asarray(values), np.asarray(wavelengths))))
+    sd = colour.SpectralDistribution(np.asarray(values), np.asarray(wavelengths))
+    return float(colour.colour_rendering_index(sd))
 
 
 @pytest.mark.parametrize("name, expected", [("A", 100.0), ("FL2", 64.2), ("LED-B5", 80.3)])
