@@ -2,7 +2,7 @@
 
     .venv/bin/python tools/make_spectral_data.py [--out core_tracer/photometry/data] [--check]
 
-The extension carries these tables as small CSV text (about 22 kB in all) so that it never imports
+The extension carries these tables as small CSV text (about 27 kB in all) so that it never imports
 colour-science at run time; ``tests/photometry/test_data_files.py`` regenerates them and checks
 that the shipped files are byte for byte what this script writes, so they cannot go stale.
 
@@ -19,6 +19,9 @@ nm, values written with 10 significant digits (the sources have at most 7).
   D-series daylight is built (``photometry.daylight.daylight_spectrum``).
 - ``led_b5.csv``: CIE illuminant LED-B5, a phosphor-converted white LED, 380–780 nm at 5 nm
   (CIE 015:2018 Table 10 as ``SDS_ILLUMINANTS['LED-B5']``).
+- ``cie133_tcs.csv``: the CIE 13.3-1995 test colour samples TCS01–TCS08 (spectral radiance factors
+  of eight Munsell samples), 360–830 nm at 5 nm, from which the general colour rendering index Ra is
+  computed (``photometry.colour_rendering``; ``colour.quality.datasets.tcs.SDS_TCS``).
 - ``smits1999.csv``: the seven basis spectra of Smits (1999), 10 samples 380–720 nm
   (``colour.recovery.SDS_SMITS1999``).
 """
@@ -72,6 +75,14 @@ def tables() -> dict[str, str]:
     out["daylight_basis.csv"] = _file(
         ["CIE daylight basis functions S0 S1 S2 (CIE 015:2018 Table 6)", generated, "wavelength in nm"],
         ["nm", "S0", "S1", "S2"], basis["S0"].wavelengths, [basis[k].values for k in ("S0", "S1", "S2")])
+
+    from colour.quality.datasets.tcs import SDS_TCS
+
+    samples = [f"TCS{i:02d}" for i in range(1, 9)]
+    out["cie133_tcs.csv"] = _file(
+        ["CIE 13.3-1995 test colour samples TCS01-TCS08 (the eight of the general colour rendering index Ra)",
+         generated, "wavelength in nm; spectral radiance factor in [0, 1]"],
+        ["nm", *samples], SDS_TCS["TCS01"].wavelengths, [SDS_TCS[n].values for n in samples])
 
     smits = colour.recovery.SDS_SMITS1999
     names = ("white", "cyan", "magenta", "yellow", "red", "green", "blue")

@@ -38,11 +38,17 @@ is the file's own integral, and the file says which. DFF is the share of the fil
 (the lamp's own hemisphere; the body hides the other).
 
 Colour. A red or amber signal's light has no correlated colour temperature (CIE 015:2018 §9.5 defines
-one only near the Planckian locus): the files say "n/a" with the light's xy. White light (a reversing
-lamp) gets its CCT from its xy by McCamy's cubic (McCamy, "Correlated color temperature as an explicit
-function of chromaticity coordinates", Color Res. Appl. 17, 142–144, 1992; within 2 K of the exact
-CCT from 2856 to 6504 K). The colour rendering index is not computed (it needs the CIE 13.3 test
-colour samples): "n/a".
+one only near the Planckian locus) and no colour rendering index: the files say "n/a" with the
+light's xy. White light (a reversing lamp) gets its CCT from its xy (traced on the axis) by McCamy's
+cubic (McCamy, "Correlated color temperature as an explicit function of chromaticity coordinates",
+Color Res. Appl. 17, 142–144, 1992; within 2 K of the exact CCT from 2856 to 6504 K), and its CIE
+13.3-1995 general colour rendering index Ra (``photometry.colour_rendering.general_cri``) from the
+spectrum the lamp sends out (``emitted_spectrum``). The render gives only the traced light's xy, not
+its spectrum, so that spectrum is an approximation: each lit source's spectrum at its flux times its
+lens's (and prism plate's) filter transmittance at its thickness, summed; Fresnel losses and the
+reflector's finish, both nearly flat over the visible, are left out. A paper design (no spectra) or
+free-form parts give "n/a". Ra goes in the IES [LAMP] line and a user keyword [_COLORRENDERING]
+(LM-63-2002 allows keywords beginning "_"), and in EULUMDAT's colour rendering field of the lamp set.
 """
 
 from __future__ import annotations
@@ -55,6 +61,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..photometry import sources
+from ..photometry.bands import Bands
+from ..photometry.colour_rendering import general_cri
+from ..photometry.spectrum import Spectrum
 from .directions import angles_of
 from .intensity import intensities_at
 
@@ -126,6 +136,7 @@ class Distribution:
     design: str = ""  # the scene's name
     date: str = ""  # ISO date of the measurement
     stderr: np.ndarray | None = None  # standard error of each ``cd`` (None: one replicate, not known)
+    emitted: Spectrum | None = None  # the light's spectrum, for the colour rendering index (``emitted_spectrum``)
 
     def _weights(self, c: float, gamma: float) -> list[tuple[int, int, float]]:
         """The nodes (C index, γ index, weight) bilinear interpolation at (C, γ) sums, C periodic."""
@@ -242,7 +253,8 @@ def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], 
         out[n] = Distribution(c, gamma, cd[k], lamp_flux(scene, lamp_lists[k]), n,
                               traced[k][0] if traced[k] else None, traced[k][1] if traced[k] else None,
                               xy, str(scene.get("name", "")), date,
-                              err[k] if np.isfinite(err[k]).all() else None)
+                              err[k] if np.isfinite(err[k]).all() else None,
+                              emitted_spectrum(scene, lamp_lists[k]))
     return out
 
 
@@ -274,8 +286,43 @@ def mccamy_cct(xy: tuple[float, float]) -> float:
     return 449.0 * n**3 + 3525.0 * n**2 + 6823.3 * n + 5520.33
 
 
+# 5 nm bands centred on 360, 365, ..., 830 nm: CIE 13.3's grid for the colour rendering index
+RA_BANDS = Bands(np.arange(357.5, 832.5 + 1e-9, 5.0))
+
+
+def emitted_spectrum(scene: dict, lamps: Sequence[int] | None = None) -> Spectrum | None:
+    """The relative spectral power ``lamps`` (None: all) send out, approximated as each lit source's
+    spectrum at its flux (per lumen, times lm) times its lens's and prism plate's filter transmittance
+    at their thickness, summed over the lamps (module docstring); None for a paper design, free-form
+    parts, or no lit source."""
+    from ..raytrace import spectral
+    from ..scene.led_array import LedArray, uses_leds
+
+    if scene.get("light_model", "paper") != "photometric" or "freeform" in scene:
+        return None
+    total = np.zeros(RA_BANDS.k)
+    for i in range(len(scene["lamps"])) if lamps is None else lamps:
+        lamp, where = scene["lamps"][i], f"lamps[{i}]"
+        if not lamp["bulb"]["on"]:
+            continue
+        if uses_leds(lamp):
+            flux = lamp["led"]["flux_lm"] * LedArray.of(lamp["led"]).count
+            spectrum = spectral.led_spectrum(lamp["led"], f"{where}.led")
+        else:
+            flux, spectrum = spectral.bulb_spectrum(lamp["bulb"], f"{where}.bulb")
+        light = flux * sources.spectral_shape(spectrum, RA_BANDS)
+        parts = ["lens"] + (["prism_plate"] if lamp.get("collection", "reflector") == "prism_plate" else [])
+        for part in parts:
+            light = light * spectral.filter_transmittance(lamp[part], RA_BANDS, f"{where}.{part}")
+        total += light
+    if not total.any():
+        return None
+    return Spectrum(RA_BANDS.centres_nm, total, "the lamp's light")
+
+
 def light_colour(dist: Distribution) -> tuple[str, str, str]:
-    """(what the light is, the CCT field, the colour rendering field) for the files' lamp data."""
+    """(what the light is, the CCT field, the colour rendering field) for the files' lamp data: CCT
+    and Ra for white light (Ra "n/a" without the emitted spectrum), "n/a" for both otherwise."""
     from . import colour
 
     if dist.xy is None:
@@ -284,11 +331,15 @@ def light_colour(dist: Distribution) -> tuple[str, str, str]:
     where = f"x {x:.3f} y {y:.3f}"
     for name in ("red", "amber"):
         if colour.inside(dist.xy, colour.REGIONS["UN R48 §2.29"][name]):
-            return f"{name} light ({where}): no CCT", "n/a", "n/a"
+            return f"{name} light ({where}): no CCT, colour rendering n/a", "n/a", "n/a"
     if colour.inside(dist.xy, colour.REGIONS["UN R48 §2.29"]["white"]):
         cct = mccamy_cct(dist.xy)
-        return f"white light ({where}), CCT {cct:.0f} K", f"{cct:.0f}K", "n/a"
-    return f"coloured light ({where}): no CCT", "n/a", "n/a"
+        if dist.emitted is None:
+            return f"white light ({where}), CCT {cct:.0f} K, colour rendering not known", f"{cct:.0f}K", "n/a"
+        ra = general_cri(dist.emitted.wavelengths_nm, dist.emitted.values)
+        return (f"white light ({where}), CCT {cct:.0f} K, Ra {ra:.0f} (CIE 13.3, source spectrum times lens filter)",
+                f"{cct:.0f}K", f"{ra:.0f}")
+    return f"coloured light ({where}): no CCT, colour rendering n/a", "n/a", "n/a"
 
 
 def _lines_of(values: Sequence[float], fmt: str = "{:.6g}") -> list[str]:
@@ -333,10 +384,10 @@ def ies_text(dist: Distribution, *, test: str = "simulated by core_tracer.measur
     vertical = list(dist.gamma_deg) + behind
     horizontal = list(dist.c_deg) + [360.0]
     date = dist.date or datetime.date.today().isoformat()
-    what, _, _ = light_colour(dist)
+    what, _, rendering = light_colour(dist)
     lines = ["IESNA:LM-63-2002", f"[TEST] {test}", "[TESTLAB] Lamp Styling (simulation, not a laboratory)",
              f"[ISSUEDATE] {date}", f"[MANUFAC] {MANUFACTURER}", f"[LUMINAIRE] {_safe(_title(dist))}",
-             f"[LAMP] lit bulbs, {dist.flux_lm:g} lm in all; {_safe(what)}; colour rendering not computed",
+             f"[LAMP] lit bulbs, {dist.flux_lm:g} lm in all; {_safe(what)}", f"[_COLORRENDERING] {rendering}",
              f"[OTHER] {_flux_note(dist)}: light output ratio {dist.lorl_percent:.1f} %",
              "[MORE] lamp axis = nadir; C0 toward +x, C90 toward +z (docs/measures.md)", "TILT=NONE",
              f"1 -1 1 {len(vertical)} {len(horizontal)} 1 2 {opening_m[0]:g} {opening_m[1]:g} {opening_m[2]:g}",

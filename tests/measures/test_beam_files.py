@@ -81,6 +81,31 @@ def test_white_light_gets_a_cct_by_mccamy():
     assert cct == "2857K" and rendering == "n/a" and "white light" in what
 
 
+def test_white_light_gets_its_colour_rendering_index_in_both_files(tmp_path, repo_root):
+    """Before: "n/a" for every lamp. The four-lamp preset's reversing lamp (P21/5W behind a clear
+    lens) gets Ra 100 from its emitted spectrum in the IES [LAMP] and [_COLORRENDERING] lines and the
+    EULUMDAT lamp set read by pyldt; a red stop lamp's stays "n/a"."""
+    import dataclasses
+
+    import pyldt
+
+    from core_tracer.scene import load_scene
+
+    scene = load_scene(repo_root / "presets" / "four-lamp-night-lit-photometric.json")
+    white = dataclasses.replace(cosine_beam(E.BeamGrid(), xy=(0.44757, 0.40745)), name="reversing",
+                                emitted=E.emitted_spectrum(scene, [3]))
+    what, cct, rendering = E.light_colour(white)
+    assert cct == "2857K" and rendering == "100" and "Ra 100" in what
+    E.write_ies(white, tmp_path / "reversing.ies")
+    keywords = photompy.IESFile.read(tmp_path / "reversing.ies", strict=True).header.keywords
+    assert keywords["_COLORRENDERING"] == "100" and "Ra 100" in keywords["LAMP"]
+    E.write_ldt(white, tmp_path / "reversing.ldt")
+    assert pyldt.LdtReader.read(tmp_path / "reversing.ldt").header.lamp_cri == ["100"]
+    red = dataclasses.replace(cosine_beam(E.BeamGrid()), emitted=E.emitted_spectrum(scene, [1]))
+    assert E.light_colour(red)[1:] == ("n/a", "n/a")
+    assert E.emitted_spectrum(load_scene(repo_root / "presets" / "paper-baseline.json")) is None  # no spectra
+
+
 @pytest.mark.parametrize("text", ["10", "10,x", "7,2.5", "10,0.1", "10,2.5,5,1"])
 def test_a_bad_beam_grid_is_refused_in_one_line(repo_root, tmp_path, text):
     proc = subprocess.run([sys.executable, "-m", "core_tracer", "measure", str(repo_root / "presets" /
