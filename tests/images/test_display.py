@@ -181,8 +181,12 @@ def test_auto_exposure_keeps_every_presets_lit_lens_unclipped(preset_renders, pr
         return
     # Nearly every lens pixel of a lit lamp sees the bulb or the reflector's glow; a prism-plate lamp has
     # no glow, and where its cuts bend the view past the bulb the pixel sees the dark housing.
-    prism = any(lamp["collection"] == "prism_plate" for lamp in load_scene(PRESETS / f"{preset}.json")["lamps"])
-    assert lit.sum() > (0.8 if prism else 0.9) * lens.sum()
+    # LED dies are points a few pixels wide behind the cuts: most of an LED lamp's lens is dark (75 % of the
+    # LED stop lamp's at 10 m, docs/measures.md), its lit pixels are the dies' images.
+    lamps = load_scene(PRESETS / f"{preset}.json")["lamps"]
+    prism = any(lamp["collection"] == "prism_plate" for lamp in lamps)
+    if not any(lamp.get("source") == "led" for lamp in lamps):
+        assert lit.sum() > (0.8 if prism else 0.9) * lens.sum()
     clipped, spread = _lens_reading(image, lit, view, ev)
     # With surroundings the lit region the exposure is keyed to also holds sky and sunlit body, so under
     # Standard (a hard clip) the brightest lens pixels clip more: 1.7 % in the evening preset.
