@@ -61,3 +61,17 @@ def enabled_from_source(bpy, repo_module: str, *, reuse_enabled: bool = True,
                 prefs.extensions.repos.remove(repo)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def blender_with_addon(repo_module: str) -> Iterator[tuple]:
+    """For the tools that draw or build with the add-on: ``bpy`` imported with Blender's configuration in a
+    temporary folder (``BLENDER_USER_RESOURCES``, unless set), Lamp Styling enabled from this tree
+    (``enabled_from_source``); yields ``(bpy, lamp_addon, core_tracer)`` as the extension has them."""
+    import sys
+
+    os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix=f"{repo_module}-"))
+    import bpy
+
+    with enabled_from_source(bpy, repo_module) as package:
+        yield bpy, sys.modules[f"{package}.lamp_addon"], sys.modules[f"{package}.core_tracer"]

@@ -25,7 +25,6 @@ import argparse
 import os
 import subprocess
 import sys
-import tempfile
 import time
 from types import SimpleNamespace
 
@@ -43,15 +42,10 @@ def main(argv: list[str] | None = None) -> int:
                              "checks that the file is what this writes)")
     args = parser.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
-    os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="lamp-docs-"))
     sys.path.insert(0, ROOT)
-    import bpy
-
     from tools import dev_extension
 
-    with dev_extension.enabled_from_source(bpy, "lamp_docs") as package:
-        addon = sys.modules[f"{package}.lamp_addon"]
-        core = sys.modules[f"{package}.core_tracer"]
+    with dev_extension.blender_with_addon("lamp_docs") as (bpy, addon, core):
         bl_scene = startup_with_preset(bpy, core, addon)
         write_panel_outline(bpy, addon, bl_scene, os.path.join(args.out, "panel.txt"))
         if args.panel_only:

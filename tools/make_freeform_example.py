@@ -16,7 +16,6 @@ import argparse
 import math
 import os
 import sys
-import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 NAME = "freeform-sculpted-wrap-lamp"
@@ -83,15 +82,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=os.path.join(ROOT, "presets"), help="folder to write into")
     parser.add_argument("--ridge", type=float, default=RIDGE_MM, help="ridge height, mm (0: the lens unsculpted)")
     args = parser.parse_args(argv)
-    os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="lamp-freeform-"))
     sys.path.insert(0, ROOT)
-    import bpy
-
     from tools import dev_extension
 
-    with dev_extension.enabled_from_source(bpy, "lamp_freeform") as package:
-        addon = sys.modules[f"{package}.lamp_addon"]
-        core = sys.modules[f"{package}.core_tracer"]
+    with dev_extension.blender_with_addon("lamp_freeform") as (bpy, addon, core):
         bpy.ops.wm.read_homefile(use_empty=True)
         bl_scene = bpy.context.scene
         addon.design.properties.scene_to_design(bl_scene, design(core))

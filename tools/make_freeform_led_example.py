@@ -19,7 +19,6 @@ import argparse
 import json
 import os
 import sys
-import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -126,14 +125,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=os.path.join(ROOT, "presets"), help="folder to write into")
     parser.add_argument("--rise", type=float, default=RISE_MM, help="the dome's height, mm (0: the flat lens)")
     args = parser.parse_args(argv)
-    os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="lamp-freeform-led-"))
-    import bpy
-
     from tools import dev_extension
 
-    with dev_extension.enabled_from_source(bpy, "lamp_freeform_led") as package:
-        addon = sys.modules[f"{package}.lamp_addon"]
-        core = sys.modules[f"{package}.core_tracer"]
+    with dev_extension.blender_with_addon("lamp_freeform_led") as (bpy, addon, core):
         bpy.ops.wm.read_homefile(use_empty=True)
         bl_scene = bpy.context.scene
         scene = design(core)

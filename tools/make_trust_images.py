@@ -104,15 +104,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=os.path.join(ROOT, "docs", "images"), help="folder to write into")
     args = parser.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
-    os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="lamp-trust-"))
     sys.path.insert(0, ROOT)
-    import bpy
-
     from tools import dev_extension
 
-    with dev_extension.enabled_from_source(bpy, "lamp_trust") as package:
-        addon = sys.modules[f"{package}.lamp_addon"]
-        core = sys.modules[f"{package}.core_tracer"]
+    with dev_extension.blender_with_addon("lamp_trust") as (bpy, addon, core):
         study_sheet(bpy, core, addon, os.path.join(args.out, "blender-study-sheet-photometric.png"))
         exr_in_blender(bpy, core, os.path.join(args.out, "blender-reads-photometric-exr.png"))
     return 0
