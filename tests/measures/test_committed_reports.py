@@ -19,6 +19,10 @@ from core_tracer.scene import load_scene
 
 REPORTS = ("four-lamp-night-lit-photometric", "photometric-stop-lamp", "photometric-tail-lamp",
            "led-light-guide-tail-lamp", "led-stop-lamp-freeform-lens-photometric", "led-rear-combination-photometric")
+# Re-measured in full by the slow test: the README's report and the stop and tail lamps' (2 mm pixels, a few
+# minutes each). The LED reports are measured at 1 mm pixels, four times the work each: their scene digests
+# (above) say when they are stale.
+RERUN = REPORTS[:3]
 
 
 def _committed(repo_root, preset: str) -> dict:
@@ -94,13 +98,15 @@ def _agrees(new: float, new_se, old: float, old_se) -> bool:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("preset", REPORTS)
+@pytest.mark.parametrize("preset", RERUN)
 def test_a_fresh_run_matches_the_committed_report(repo_root, preset):
     from core_tracer.measures import report
 
     old = _committed(repo_root, preset)
     scene = load_scene(repo_root / "presets" / f"{preset}.json")
-    new = json.loads(json.dumps(report.strict(report.measure(scene, pixel_mm=old["pixel_mm"]).as_dict())))
+    functions = {lamp: name for name, f in old["functions"].items() for lamp in f["lamps"]}  # as it was measured
+    new = json.loads(json.dumps(report.strict(report.measure(scene, functions=functions,
+                                                             pixel_mm=old["pixel_mm"]).as_dict())))
     assert new["verdicts"] == old["verdicts"]
     old_rows = {(r["function"], r["point"], r["kind"]): r for r in old["rows"]}
     new_rows = {(r["function"], r["point"], r["kind"]): r for r in new["rows"]}
