@@ -25,15 +25,13 @@ from collections.abc import Callable
 
 from ..scene.reading import SceneError
 from ..scene.safe_text import show_key
+from .functions import FUNCTIONS
 
-# The functions of ``report.FUNCTIONS``, named here so that checking a name imports no numpy (a study
-# file is checked before anything heavy loads); tests/measures/test_measures_by_name.py keeps them equal.
-FUNCTION_NAMES = ("tail", "stop", "turn", "reversing")
+# The functions' names: checking a name imports no numpy (a study file is checked before anything heavy loads).
+FUNCTION_NAMES = tuple(FUNCTIONS)
 
 
 def _rows(measured: dict, function: str | None) -> list[dict]:
-    from .report import FUNCTIONS
-
     if function is None:
         return measured["rows"]
     keys = set(FUNCTIONS[function][:2])

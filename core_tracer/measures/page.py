@@ -26,6 +26,7 @@ import numpy as np
 
 from ..images.bitmap_font import ADVANCE_W, LINE_H, text_mask
 from ..images.png import write_png
+from .functions import FUNCTIONS, NOTE
 
 WIDTH, HEIGHT = 1800, 1300
 INK = (0.1, 0.1, 0.1)
@@ -161,7 +162,6 @@ def outline(mask: np.ndarray) -> np.ndarray:
 
 def draw(result, lamp_image: np.ndarray | None = None) -> np.ndarray:
     """The page of ``result`` (a ``report.Measures``) as RGB in [0, 1] (module docstring)."""
-    from .report import FUNCTIONS, NOTE
 
     page = Canvas(WIDTH, HEIGHT)
     verdicts = result.verdicts()
@@ -305,7 +305,6 @@ def _chromaticity(page: Canvas, result, x: int, y: int, width: int, height: int)
 
 
 def _verdicts(page: Canvas, result, names, x: int, y: int) -> None:
-    from .report import FUNCTIONS
 
     lines: list[tuple[str, tuple]] = [("FMVSS 108 and ratios:", INK)]
     for name in names:

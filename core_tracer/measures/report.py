@@ -20,24 +20,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import colour, regulation_grid
+from . import colour, page, regulation_grid
 from .directions import direction
+from .functions import FUNCTIONS, NOTE
 from .homogeneity import DEFAULT_DISTANCE_M, homogeneity
 from .intensity import intensities_at, lamp_of_pixels, measurement_scene, render_view, view_along
 
 if TYPE_CHECKING:
     from ..freeform.cache import DesignMeshes
 
-# function -> (UN R148 key, FMVSS 108 key, signal colour)
-FUNCTIONS: dict[str, tuple[str, str, str]] = {
-    "tail": ("R148 R1", "FMVSS taillamp", "red"),
-    "stop": ("R148 S1", "FMVSS stop", "red"),
-    "turn": ("R148 2a", "FMVSS rear turn amber", "amber"),
-    "reversing": ("R148 AR", "FMVSS backup", "white"),
-}
 SCHEMA = "lamp-measures/1"  # measures.json's format; readers of earlier files (no schema) still read them
-NOTE = ("Simulated figures of a design, for choosing between variants; a homologation laboratory's measurement "
-        "of a built lamp decides approval.")
 
 
 def lamp_function(lamp: dict) -> str | None:
@@ -235,8 +227,6 @@ def write_page(result: Measures, path: str | os.PathLike, lamp_image: np.ndarray
     """The one-page report: the rendered lamp, the front luminance with homogeneity figures, each
     function's UN R148 grid in pass/fail colours, and the chromaticity diagram (``page``: numpy only,
     as a real Blender's Python has it)."""
-    from . import page
-
     page.write(result, path, lamp_image)
 
 

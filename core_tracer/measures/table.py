@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .report import FUNCTIONS
+from .functions import FUNCTIONS
 
 RATIOS = {"R148 stop/position 5:1": "stop", "FMVSS stop/taillamp": "stop"}
 

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..measures.functions import FUNCTIONS
 from ..scene.messages import show_value
 from ..scene.reading import SceneError
 from .registry import Measure, Trial, register
@@ -142,8 +143,6 @@ class Prepared:
 
 
 def _function(options: dict, where: str) -> str | None:
-    from ..measures.report import FUNCTIONS
-
     name = options.get("function")
     if name is None:
         return None
@@ -181,8 +180,6 @@ def _prepare_flux(options: dict, where: str, folder: str) -> Prepared:
 
 def _prepare_grid(options: dict, where: str, folder: str) -> Prepared:
     from ..measures import regulation_grid
-    from ..measures.report import FUNCTIONS
-
     function = _function(options, where)
     photons = _photons(options, where)
     keys = [FUNCTIONS[function][0]] if function else [FUNCTIONS[f][0] for f in FUNCTIONS]
@@ -260,8 +257,6 @@ def _summed(grid: dict, lamps: list[int]):
 def grid_rows(trial: Trial, prepared: Prepared) -> list:
     """The UN R148 rows of each function asked for (``regulation_grid.check``)."""
     from ..measures import regulation_grid
-    from ..measures.report import FUNCTIONS
-
     rows = []
     for name, lamps in function_lamps(trial.scene, prepared.function).items():
         key = FUNCTIONS[name][0]
@@ -305,8 +300,6 @@ def signed_distance(xy, corners) -> float:
 
 def _colour_distance(trial: Trial, prepared: Prepared) -> float:
     from ..measures import colour
-    from ..measures.report import FUNCTIONS
-
     _, xyz = _axis(trial, prepared)
     if not xyz.sum() > 0:
         return -1.0  # no light: no colour, outside every region
