@@ -28,12 +28,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..measures.light_tracing import cosine_directions
 from ..raytrace import optics, pixel_filter
 from ..raytrace import paths as P
 from ..raytrace.camera import make_camera
 from ..raytrace.engine.rays import NOT_DEFERRED, Band
 from ..raytrace.engine.surfaces import sphere_irradiance
+from ..raytrace.optics import cosine_directions
 from .cache import DesignMeshes
 from .hits import nearest, shading_normal
 from .render import MeshRays, _Context, _step

@@ -50,6 +50,7 @@ from ..raytrace.engine.context import Context
 from ..raytrace.engine.rays import CUTOFF, NOT_DEFERRED, UNRECORDED, Rays, concat
 from ..raytrace.engine.surfaces import at_dielectric, at_plate_face, bulb_irradiance
 from ..raytrace.engine.walk import depth_limit, intersect, normals_at
+from ..raytrace.optics import cosine_directions, uniform_sphere
 from ..raytrace.parts import led_die
 from ..raytrace.parts.base import put_rows, rows
 from ..raytrace.parts.reflector import reflector_normal
@@ -88,25 +89,6 @@ class Tally:
         self.total_y += self.sum_y
         self.sum_y[:] = 0.0
         self.sum_y2[:] = 0.0
-
-
-def cosine_directions(normal: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Unit directions (N, 3) distributed as cos θ about unit ``normal`` (N, 3): the normal plus a
-    uniform point of the unit sphere, normalised (a point uniform on the sphere tangent to the
-    surface projects to a cosine-distributed direction)."""
-    while True:
-        d = normal + uniform_sphere(len(normal), rng)
-        length = np.linalg.norm(d, axis=1)
-        if np.all(length > 1e-9):
-            return d / length[:, None]
-
-
-def uniform_sphere(n: int, rng: np.random.Generator) -> np.ndarray:
-    """``n`` unit vectors uniform on the sphere (Archimedes: z uniform in [−1, 1])."""
-    z = rng.uniform(-1.0, 1.0, n)
-    phi = rng.uniform(0.0, 2.0 * math.pi, n)
-    s = np.sqrt(1.0 - z * z)
-    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
 
 
 def _rays(lamp: int, o: np.ndarray, d: np.ndarray, k: int, src: int) -> Rays:

@@ -6,6 +6,8 @@ vectors, scalars broadcast.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -139,3 +141,25 @@ def blinn(normal: np.ndarray, view: np.ndarray, to_light: np.ndarray, weight: np
     cos_beta = dot(normal, normalize(view + to_light))
     np.maximum(0.0, cos_beta, out=cos_beta)
     return weight * np.power(cos_beta, shininess)
+
+
+# Directions for light leaving a surface or a point (the forward light tracing of the measures, on the
+# parametric parts and on meshes)
+
+def cosine_directions(normal: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Unit directions (N, 3) distributed as cos θ about unit ``normal`` (N, 3): the normal plus a
+    uniform point of the unit sphere, normalised (a point uniform on the sphere tangent to the
+    surface projects to a cosine-distributed direction)."""
+    while True:
+        d = normal + uniform_sphere(len(normal), rng)
+        length = np.linalg.norm(d, axis=1)
+        if np.all(length > 1e-9):
+            return d / length[:, None]
+
+
+def uniform_sphere(n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` unit vectors uniform on the sphere (Archimedes: z uniform in [−1, 1])."""
+    z = rng.uniform(-1.0, 1.0, n)
+    phi = rng.uniform(0.0, 2.0 * math.pi, n)
+    s = np.sqrt(1.0 - z * z)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
