@@ -4,6 +4,8 @@ memory budget before any starts."""
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -35,6 +37,7 @@ def test_directions_on_the_pool_equal_one_process_bit_for_bit(repo_root):
 
 def test_the_pool_is_sized_by_the_memory_budget_before_it_starts(repo_root, monkeypatch):
     scene = load_scene(repo_root / "presets" / "photometric-stop-lamp.json")
+    monkeypatch.delitem(sys.modules, "bpy", raising=False)  # as the command line: the Blender tests import bpy
     monkeypatch.setattr("os.cpu_count", lambda: 8)
     assert intensity.pool_workers(scene, 45, 2.0) == 6  # (4 GB - 160 MB) over 640 MB and a view a worker
     assert intensity.pool_workers(scene, 3, 2.0) == 1  # too few directions to share
@@ -46,9 +49,11 @@ def test_the_pool_is_sized_by_the_memory_budget_before_it_starts(repo_root, monk
 
 
 @pytest.mark.slow
-def test_a_worker_measures_its_directions_itself(repo_root):
+def test_a_worker_measures_its_directions_itself(repo_root, monkeypatch):
     """A study's or a trial's task already runs in a worker beside others: it starts no pool of its own."""
     from core_tracer.cluster.local_pool import LocalPool
+
+    monkeypatch.delitem(sys.modules, "bpy", raising=False)  # as the command line: the Blender tests import bpy
 
     scene = load_scene(repo_root / "presets" / "photometric-stop-lamp.json")
     with LocalPool(1) as pool:
