@@ -30,6 +30,8 @@ class GuideTable:
     slope: np.ndarray  # tan of the facets' angle to the axis
     prisms: np.ndarray  # (L,) number of prisms
     first_prism: np.ndarray  # s of the first prism's apex line
+    # lit_ends "both": the lamp's LED array has a mirror image through the plane s = L/2 (``mirror``)
+    both_ends: np.ndarray  # (L,) 1 where the guide is lit at both ends
 
     @property
     def any(self) -> bool:
@@ -39,6 +41,15 @@ class GuideTable:
     def from_scene(cls, scene: dict) -> GuideTable:
         rows = [_row(lamp.get("light_guide")) for lamp in scene["lamps"]]
         return cls(**{key: np.array([r[key] for r in rows], dtype=np.float64) for key in rows[0]})
+
+    def mirror(self, points: np.ndarray, directions: np.ndarray, lamp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Points and directions (N, 3) reflected through their lamps' guides' middle planes s = L/2:
+        x' = x − 2 ((x − m)·a) a, d' = d − 2 (d·a) a, with a the axis and m the middle of the guide."""
+        axis = self.axis.take(lamp, axis=0)
+        middle = self.start.take(lamp, axis=0) + 0.5 * self.length.take(lamp)[:, None] * axis
+        off = np.einsum("ij,ij->i", points - middle, axis)
+        along = np.einsum("ij,ij->i", directions, axis)
+        return points - 2.0 * off[:, None] * axis, directions - 2.0 * along[:, None] * axis
 
 
 def prism_layout(length: float, pitch: float, depth: float, slope: float) -> tuple[int, float]:
@@ -58,7 +69,8 @@ def _row(guide: dict | None) -> dict:
     if not guide or not guide.get("enabled"):
         zero3 = [0.0, 0.0, 0.0]
         return dict(present=0.0, start=zero3, axis=[1.0, 0.0, 0.0], across=[0.0, 0.0, 1.0], round=1.0, half_u=1.0,
-                    half_v=1.0, length=1.0, pitch=1.0, prism_depth=0.0, slope=1.0, prisms=0.0, first_prism=0.0,)
+                    half_v=1.0, length=1.0, pitch=1.0, prism_depth=0.0, slope=1.0, prisms=0.0, first_prism=0.0,
+                    both_ends=0.0)
     theta = math.radians(guide["orientation"])
     axis = [math.cos(theta), 0.0, math.sin(theta)]
     across = [-math.sin(theta), 0.0, math.cos(theta)]
@@ -73,4 +85,5 @@ def _row(guide: dict | None) -> dict:
     count, first = prism_layout(length, guide["prism_pitch"], guide["prism_depth"], slope)
     return dict(present=1.0, start=start, axis=axis, across=across, round=float(guide["section"] == "round"),
                 half_u=half_u, half_v=half_v, length=length, pitch=guide["prism_pitch"],
-                prism_depth=guide["prism_depth"] if count else 0.0, slope=slope, prisms=float(count),first_prism=first)
+                prism_depth=guide["prism_depth"] if count else 0.0, slope=slope, prisms=float(count), first_prism=first,
+                both_ends=float(guide.get("lit_ends", "one") == "both"))

@@ -6,8 +6,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from . import spec as S
 from .derived import lamp_geometry
+from .led_array import LedArray
 from .messages import rounded
 from .reading import SceneError
 
@@ -50,3 +53,20 @@ def check_light_guide(scene: dict, i: int) -> None:
         raise SceneError(f"{where}.depth", f"{guide['depth']:g} puts the guide's front {front:.3g} mm deep, into the "
                                            f"lens (its cuts reach {apexes:.3g} mm); allowed more than "
                                            f"{apexes + 0.5 * thickness:.4g} mm")
+    if guide.get("lit_ends", "one") == "both":
+        _check_mirror(lamp, guide, where)
+
+
+def _check_mirror(lamp: dict, guide: dict, where: str) -> None:
+    """A guide lit at both ends mirrors the lamp's LED array through its middle (s = L/2): the array must
+    lie wholly on one side of that plane, else it and its image overlap."""
+    leds = LedArray.of(lamp["led"])
+    theta = math.radians(guide["orientation"])
+    axis = np.array([math.cos(theta), 0.0, math.sin(theta)])
+    middle = np.array([guide["center"][0], guide["depth"], guide["center"][1]])
+    corners = np.array([c + sa * leds.half_size[0] * leds.across + sb * leds.half_size[1] * leds.up
+                        for c in leds.die_centres() for sa in (-1, 1) for sb in (-1, 1)])
+    side = (corners - middle) @ axis
+    if side.min() <= 0.0 <= side.max():
+        raise SceneError(f"{where}.lit_ends", "the LEDs straddle the guide's middle, where their mirror image "
+                                              'would overlap them; allowed "one", or the LEDs at an end face')

@@ -59,3 +59,11 @@ class LedArray:
 def uses_leds(lamp: dict) -> bool:
     """Whether a normalised lamp's light source is its LED dies (else its bulb)."""
     return lamp.get("source", "bulb") == "led"
+
+
+def die_count(lamp: dict) -> int:
+    """How many dies light a normalised LED lamp: its array's, twice over when its light guide is lit
+    at both ends (the array and its mirror image, ``GuideTable.both_ends``)."""
+    guide = lamp.get("light_guide") or {}
+    both = bool(guide.get("enabled")) and guide.get("lit_ends", "one") == "both"
+    return LedArray.of(lamp["led"]).count * (2 if both else 1)

@@ -434,6 +434,7 @@ PRISM_PLATE = Section(
 
 
 GUIDE_SECTIONS = ("round", "rectangular")
+GUIDE_LIT_ENDS = ("one", "both")
 # At most this many extraction prisms along a guide: the prism walk crosses a bounded number of cells.
 MAX_GUIDE_PRISMS = 2000
 
@@ -465,6 +466,10 @@ LIGHT_GUIDE = Section(
         "prism_angle": Num(45.0, 5.0, 85.0, unit="deg",
                            doc="Photometric: the angle of each prism facet to the guide's axis (45: light running "
                                "along the guide is sent straight out toward the lens)"),
+        "lit_ends": Choice("one", GUIDE_LIT_ENDS,
+                           "Photometric: which ends of the guide its LEDs light: one (the lamp's LED array, facing "
+                           "an end face) or both (that array and its mirror image through the guide's middle, "
+                           "facing the other end face, each die with the same flux)"),
         **_optics("clear", "the guide"),
     },
     "Photometric: a light guide behind the lens, a rod of acrylic or polycarbonate lit at its end by the lamp's "

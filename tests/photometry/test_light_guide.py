@@ -167,3 +167,72 @@ def test_a_guide_that_cannot_be_is_refused_in_one_line_naming_the_field(change, 
         parse_scene(scene)
     assert caught.value.path == field, str(caught.value)
     assert words in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_a_guide_lit_at_both_ends_passes_each_end_the_one_end_far_plus_near_flux():
+    """Superposition and symmetry: the mirrored array's light leaves the far end as the first array's
+    leaves the first end, so each end of the guide lit at both ends passes Φ_far + Φ_near of one end."""
+    one = far_end_flux(guide_scene(), photons=40_000, seed=3)
+    both = far_end_flux(guide_scene(lit_ends="both"), photons=40_000, seed=4)
+    assert both.emitted_lm == pytest.approx(2.0 * one.emitted_lm, rel=1e-9)  # the same flux per die, twice the dies
+    # light back out of the first end: the Fresnel reflection at the far face, some 4 % of what reaches it
+    assert 0.02 * one.out_lm < one.near_lm < 0.1 * one.out_lm
+    expected = one.out_lm + one.near_lm
+    spread = 4.0 * math.hypot(both.stderr_lm, one.stderr_lm)
+    assert abs(both.out_lm - expected) < spread + 0.01 * one.near_lm, (both, one)
+    assert both.near_lm == pytest.approx(both.out_lm, rel=0.02), both  # the two ends alike
+    # (not twice the far flux: the second array's light leaves by the far end only once reflected at the first)
+
+
+def test_the_mirrored_leds_are_where_the_engine_meets_and_sees_them():
+    """The second array is the first's mirror image through the guide's middle: a ray toward the far end
+    face's die meets it at the mirrored distance and sees the same luminance as the first die head-on."""
+    from core_tracer.raytrace.parts import led_die
+
+    ctx = make_context(guide_scene(lit_ends="both"), 1, 1)
+    lamps = ctx.lamps
+    depth = lamps.guide.start[0, 1]
+    o = np.array([[0.0, depth, 0.0], [0.0, depth, 0.0], [0.0, depth, 0.0], [40.0, depth, 0.0], [-40.0, depth, 0.0]])
+    d = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    lamp = np.zeros(5, int)
+    t = led_die.hit_dies(o, d, lamps, lamp)
+    # the die at x = −30 − 1e-4 and its image at +30 + 1e-4, met from the middle; nothing beyond them
+    assert t[0] == pytest.approx(30.0 + 1e-4) and t[1] == pytest.approx(30.0 + 1e-4)
+    assert np.isinf(t[2]) and np.isinf(t[3]) and t[4] == pytest.approx(10.0 - 1e-4)
+    at = o + np.where(np.isfinite(t), t, 0.0)[:, None] * d
+    seen = led_die.emitted(lamps, lamp, d, at)
+    assert seen[0] == pytest.approx(seen[1]) and seen[0].max() > 0  # each die seen from its front
+    assert not seen[4].any()  # the die's back, met from outside the guide, is dark
+    one = make_context(guide_scene(), 1, 1).lamps
+    assert np.isinf(led_die.hit_dies(o[:1], d[:1], one, lamp[:1])[0])  # lit at one end: no image
+
+
+def test_the_guide_lit_at_both_ends_is_the_sum_of_its_two_one_end_pictures():
+    """The preset's guide seen head-on (128 × 48, 16 samples, the same seed): lit at both ends, its picture
+    is the one-end picture plus that of the same lamp with its LED moved by hand to the far end face
+    (light adds; the dies are opaque, so the sum differs a little where one die hides the other's
+    light), and its two halves pass alike within the noise of the LED's sparse bright images in the
+    prisms (lit at one end, the near half is several times the far one)."""
+    from core_tracer.raytrace.engine import render
+
+    base = json.loads((ROOT / "presets" / "led-light-guide-tail-lamp.json").read_text())
+
+    def picture(ends: str, far_end: bool = False) -> np.ndarray:
+        scene = copy.deepcopy(base)
+        scene["camera"].update(position=[0.0, -240.0, 0.0], target=[0.0, 0.0, 0.0])
+        scene["image"].update(width=128, height=48, samples=16)
+        scene["environment"] = {"world": "none"}
+        lamp = scene["lamps"][0]
+        lamp["light_guide"]["lit_ends"] = ends
+        if far_end:
+            x, y, z = lamp["led"]["position"]
+            lamp["led"].update(position=[-x, y, z], normal=[-1.0, 0.0, 0.0])
+        return render(parse_scene(scene)).sum(axis=2)
+
+    near, far, both = picture("one"), picture("one", far_end=True), picture("both")
+    assert far.sum() > 0.5 * near.sum()
+    assert np.abs(both - near - far).sum() < 0.08 * both.sum()  # measured 0.039
+    half = both.shape[1] // 2
+    left, right = both[:, :half].sum(), both[:, half:].sum()
+    assert abs(left - right) < 0.15 * (left + right) / 2, (left, right)  # measured 0.89 : 1
+    assert near[:, :half].sum() > 3.0 * near[:, half:].sum()  # measured 3.9 : 1
