@@ -10,7 +10,7 @@ import numpy as np
 
 from . import spec as S
 from .derived import lamp_geometry
-from .led_array import LedArray
+from .led_array import LedArray, mirror_plane
 from .messages import rounded
 from .reading import SceneError
 
@@ -61,9 +61,7 @@ def _check_mirror(lamp: dict, guide: dict, where: str) -> None:
     """A guide lit at both ends mirrors the lamp's LED array through its middle (s = L/2): the array must
     lie wholly on one side of that plane, else it and its image overlap."""
     leds = LedArray.of(lamp["led"])
-    theta = math.radians(guide["orientation"])
-    axis = np.array([math.cos(theta), 0.0, math.sin(theta)])
-    middle = np.array([guide["center"][0], guide["depth"], guide["center"][1]])
+    middle, axis = mirror_plane(guide)
     corners = np.array([c + sa * leds.half_size[0] * leds.across + sb * leds.half_size[1] * leds.up
                         for c in leds.die_centres() for sa in (-1, 1) for sb in (-1, 1)])
     side = (corners - middle) @ axis

@@ -69,3 +69,27 @@ def test_a_lamp_without_a_guide_keeps_no_guide_objects(lamp_addon, bl_scene):
     parts = build_parts(lamp_addon, bl_scene, core_tracer.normalize(raw))
     assert "lamps[0].light_guide" not in parts
     assert "lamps[0].lens" in parts
+
+
+def test_a_guide_lit_at_both_ends_has_its_leds_mirrored_at_the_far_end(lamp_addon, bl_scene):
+    """lit_ends "both": the LEDs object holds the lamp's die and its mirror image through the guide's
+    middle, facing the far end face (its faces' normals toward the rod), with the same material."""
+    raw = json.loads(PRESET.read_text())
+    raw["lamps"][0]["light_guide"]["lit_ends"] = "both"
+    scene = core_tracer.normalize(raw)
+    lamp, guide = scene["lamps"][0], scene["lamps"][0]["light_guide"]
+    leds = build_parts(lamp_addon, bl_scene, scene)["lamps[0].led"]
+    assert len(leds.data.polygons) == 2
+    die = local_mm(leds, lamp)
+    cx, half = guide["center"][0], guide["length"] / 2
+    near, far = die[die[:, 0] < cx], die[die[:, 0] > cx]
+    assert len(near) == len(far) == 4
+    x = lamp["led"]["position"][0]
+    assert near[:, 0] == pytest.approx(np.full(4, x), abs=1e-3)
+    assert far[:, 0] == pytest.approx(np.full(4, 2 * cx - x), abs=1e-3) and far[:, 0].min() > cx + half
+    assert sorted(far[:, 2].round(3)) == sorted(near[:, 2].round(3))
+    # each die wound to face the rod: the near one toward +x, the far one toward −x (in the lamp's frame)
+    turn = np.array(leds.matrix_world)[:3, :3]
+    normals = sorted(round(float((turn @ np.array(p.normal))[0] / np.linalg.norm(turn @ np.array(p.normal))))
+                     for p in leds.data.polygons)
+    assert normals == [-1, 1]

@@ -236,3 +236,22 @@ def test_the_guide_lit_at_both_ends_is_the_sum_of_its_two_one_end_pictures():
     left, right = both[:, :half].sum(), both[:, half:].sum()
     assert abs(left - right) < 0.15 * (left + right) / 2, (left, right)  # measured 0.89 : 1
     assert near[:, :half].sum() > 3.0 * near[:, half:].sum()  # measured 3.9 : 1
+
+
+def test_a_guide_lit_at_both_ends_counts_both_arrays_in_the_lamps_flux_and_refuses_leds_in_its_middle():
+    from core_tracer.measures.export import lamp_flux
+    from core_tracer.measures.states import states_of
+    from core_tracer.scene.reading import SceneError
+
+    one, both = guide_scene(), guide_scene(lit_ends="both")
+    assert lamp_flux(one) == pytest.approx(20.0) and lamp_flux(both) == pytest.approx(40.0)
+    state = states_of(both)[1]  # after the surroundings
+    assert state.rendered == pytest.approx(40.0) and "2 LEDs" in state.label
+    raw = json.loads((ROOT / "presets" / "led-light-guide-tail-lamp.json").read_text())
+    raw["lamps"][0]["light_guide"]["lit_ends"] = "both"
+    raw["lamps"][0]["led"]["position"] = [0.0, 20.0, 0.0]  # behind the guide's middle
+    raw["lamps"][0]["led"]["normal"] = [0.0, -1.0, 0.0]
+    with pytest.raises(SceneError) as caught:
+        parse_scene(raw)
+    assert caught.value.path == "lamps[0].light_guide.lit_ends" and "straddle" in str(caught.value)
+    assert "\n" not in str(caught.value)
