@@ -57,7 +57,6 @@ def far_end_flux(scene: dict, lamp: int = 0, *, photons: int = 200_000, seed: in
         raise ValueError(f"lamps[{lamp}] has no LEDs to light its guide")
     rays, flux = emitted
     lm_per_photon = flux * ctx.photometric.to_xyz[:, 1]  # lm per photon and band at unit attenuation
-    axis, start = guide.axis[lamp], guide.start[lamp]
     per_photon = np.zeros(photons)
     near = 0.0
     depth = 0
@@ -76,7 +75,7 @@ def far_end_flux(scene: dict, lamp: int = 0, *, photons: int = 200_000, seed: in
         face = at_dielectric(rays, met, rows(rays.k, met), d, hit, UNRECORDED, np.full(len(met), P.GUIDE, np.int8),
                              rows(normal, met), lamps.plate_ior, P.IN_GUIDE, lamps.plate_ior_bands)
         partial = face.split.partial
-        s_hit = (hit - start) @ axis
+        s_hit = guide.along(hit, np.full(len(hit), lamp))
         out = np.nonzero(partial & face.from_inside & (s_hit >= length - 1e-6))[0]
         if len(out):
             gone = face.through(out)

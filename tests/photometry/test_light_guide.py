@@ -97,6 +97,32 @@ def _brute_inside(points: np.ndarray, scene: dict) -> np.ndarray:
     return light_guide.inside(s, u, v, light_guide.gathered(g, lamp))
 
 
+def _march_checked(ctx, o: np.ndarray, d: np.ndarray, inside, reach: float) -> np.ndarray:
+    """Assert each ray's hit is the first change of ``inside`` along a 0.01 mm march up to ``reach``, to
+    within the step, with the rod behind its normal and not in front; the normals of the rays whose
+    march found a change (NaN rows for the others)."""
+    n = len(o)
+    lamp = np.zeros(n, int)
+    t, normal = light_guide.intersect(Segments(o, d, lamp, np.zeros(n, np.int8), np.zeros(n, np.int8)),
+                                      ctx.lamps, np.full(n, np.inf))
+    steps = np.arange(1, int(round(reach / 0.01)) + 1) * 0.01
+    start_inside = inside(o)
+    out = np.full((n, 3), np.nan)
+    for i in range(n):
+        change = np.nonzero(inside(o[i] + steps[:, None] * d[i]) != start_inside[i])[0]
+        if not len(change):
+            assert not np.isfinite(t[i]) or t[i] > steps[-1] - 0.02
+            continue
+        first = steps[change[0]]
+        assert first - 0.011 <= t[i] <= first + 1e-9, (i, t[i], first)
+        # out of the material: the inside lies behind the normal
+        hit = o[i] + t[i] * d[i]
+        assert inside((hit - 0.003 * normal[i])[None])[0]
+        assert not inside((hit + 0.003 * normal[i])[None])[0]
+        out[i] = normal[i]
+    return out
+
+
 @pytest.mark.parametrize("section", ["round", "rectangular"])
 def test_guide_hits_are_where_a_fine_march_finds_the_boundary(section):
     """Random rays from points in and around the rod: the hit is the first change of inside/outside
@@ -111,26 +137,8 @@ def test_guide_hits_are_where_a_fine_march_finds_the_boundary(section):
     o = centre + rng.uniform(-1, 1, (n, 3)) * np.array([12.0, 3.5, 3.5])
     d = rng.normal(size=(n, 3))
     d /= np.linalg.norm(d, axis=1)[:, None]
-    lamp = np.zeros(n, int)
-    t, normal = light_guide.intersect(Segments(o, d, lamp, np.zeros(n, np.int8), np.zeros(n, np.int8)),
-                                      ctx.lamps, np.full(n, np.inf))
-    steps = np.arange(1, 4001) * 0.01
-    start_inside = _brute_inside(o, scene)
-    checked = 0
-    for i in range(n):
-        inside = _brute_inside(o[i] + steps[:, None] * d[i], scene)
-        change = np.nonzero(inside != start_inside[i])[0]
-        if not len(change):
-            assert not np.isfinite(t[i]) or t[i] > steps[-1] - 0.02
-            continue
-        checked += 1
-        first = steps[change[0]]
-        assert first - 0.011 <= t[i] <= first + 1e-9, (i, t[i], first)
-        # out of the material: the inside lies behind the normal
-        hit = o[i] + t[i] * d[i]
-        assert _brute_inside((hit - 0.003 * normal[i])[None], scene)[0]
-        assert not _brute_inside((hit + 0.003 * normal[i])[None], scene)[0]
-    assert checked > 100
+    normal = _march_checked(ctx, o, d, lambda p: _brute_inside(p, scene), 40.0)
+    assert np.isfinite(normal[:, 0]).sum() > 100
 
 
 def test_lamps_without_a_guide_have_no_guide_parts():
@@ -255,3 +263,84 @@ def test_a_guide_lit_at_both_ends_counts_both_arrays_in_the_lamps_flux_and_refus
         parse_scene(raw)
     assert caught.value.path == "lamps[0].light_guide.lit_ends" and "straddle" in str(caught.value)
     assert "\n" not in str(caught.value)
+
+
+def arc_scene(radius: float = 30.0, sweep: float = 90.0, **guide) -> dict:
+    """``guide_scene`` with its guide along an arc (orientation 0: its middle's tangent +x, bending toward
+    +z about C = (0, depth, R)), the LED 0.1 µm before the first end face facing along its tangent."""
+    scene = guide_scene(path="arc", arc_radius=radius, arc_sweep=sweep, **guide)
+    half = math.radians(sweep) / 2
+    depth = scene["lamps"][0]["light_guide"]["depth"]
+    tangent = np.array([math.cos(half), 0.0, -math.sin(half)])
+    end = np.array([-radius * math.sin(half), depth, radius - radius * math.cos(half)])
+    scene["lamps"][0]["led"].update(position=list(end - 1e-4 * tangent), normal=list(tangent))
+    return scene
+
+
+def _arc_inside(points: np.ndarray, guide: dict) -> np.ndarray:
+    """The arc rod as docs/model.md §8.7a states it, written out here: |ρ − R| <= w/2, |v| <= h/2,
+    |φ| <= Φ/2, and off the V groove of the prism nearest along the axis (planar facets, τ from the
+    radial plane of its apex)."""
+    from core_tracer.raytrace.guide_table import prism_layout
+
+    radius, sweep = guide["arc_radius"], math.radians(guide["arc_sweep"])
+    rel = points - np.array([0.0, guide["depth"], radius])
+    rho, v = np.hypot(rel[:, 0], rel[:, 2]), rel[:, 1]
+    phi = np.arctan2(rel[:, 0], -rel[:, 2])
+    ok = (np.abs(rho - radius) <= guide["width"] / 2) & (np.abs(v) <= guide["thickness"] / 2)
+    ok &= np.abs(phi) <= sweep / 2
+    slope = math.tan(math.radians(guide["prism_angle"]))
+    count, first = prism_layout(radius * sweep, guide["prism_pitch"], guide["prism_depth"], slope)
+    k = np.clip(np.floor((radius * (phi + sweep / 2) - first) / guide["prism_pitch"] + 0.5), 0, count - 1)
+    apex = (first + k * guide["prism_pitch"]) / radius - sweep / 2
+    tau = rel[:, 0] * np.cos(apex) + rel[:, 2] * np.sin(apex)
+    return ok & (v <= guide["thickness"] / 2 - guide["prism_depth"] + slope * np.abs(tau))
+
+
+def test_arc_guide_hits_are_where_a_fine_march_finds_the_boundary():
+    """Random rays from points in and around a 90° arc of radius 30 mm with prisms: the hit is the first
+    change of inside/outside along a 0.01 mm march, to within the step, and the normal points out."""
+    scene = arc_scene(prism_depth=0.8, prism_pitch=3.0, prism_angle=50.0)
+    guide = scene["lamps"][0]["light_guide"]
+    ctx = make_context(scene, 1, 1)
+    rng = np.random.default_rng(7)
+    n = 400
+    # points near the arc's axis: a random angle in and a little beyond the sweep, offsets across it
+    phi = rng.uniform(-0.9, 0.9, n) * math.radians(90.0) * 0.6
+    rho = 30.0 + rng.uniform(-3.5, 3.5, n)
+    o = np.stack([rho * np.sin(phi), guide["depth"] + rng.uniform(-3.5, 3.5, n), 30.0 - rho * np.cos(phi)], axis=1)
+    d = rng.normal(size=(n, 3))
+    d[: n // 4, 1] *= 0.05  # a quarter of them nearly along the lens plane, through many prisms' cells
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    normal = _march_checked(ctx, o, d, lambda p: _arc_inside(p, guide), 60.0)
+    checked = np.isfinite(normal[:, 0])
+    crossed_facets = int((checked & (np.abs(normal[:, 1]) != 0.0) & (np.abs(normal[:, 1]) != 1.0)).sum())
+    assert checked.sum() > 150 and crossed_facets > 10, (checked.sum(), crossed_facets)
+
+
+def test_total_internal_reflection_carries_light_around_a_gentle_arc():
+    """A clear rod 4 × 4 mm bent along a 60° arc of radius 100 mm (≫ its thickness) passes more than
+    80 % of what the straight rod of the same length (104.7 mm) passes out of its far end (the light
+    that enters stays within θ_c of the axis; a gentle bend tilts it against the walls by w / R at most)."""
+    straight = far_end_flux(guide_scene(length=100.0 * math.radians(60.0)), photons=20_000, seed=3)
+    bent = far_end_flux(arc_scene(radius=100.0, sweep=60.0), photons=20_000, seed=3)
+    ratio = bent.out_lm / straight.out_lm
+    assert 0.8 < ratio <= 1.0 + 4 * bent.stderr_lm / bent.out_lm, (bent, straight)  # measured 0.996
+    # a tight bend (radius 1.5 widths, 120°) lets much of it out through its outer wall: the test can fail
+    short = far_end_flux(guide_scene(length=6.0 * math.radians(120.0)), photons=20_000, seed=3)
+    tight = far_end_flux(arc_scene(radius=6.0, sweep=120.0), photons=20_000, seed=3)
+    assert tight.out_lm < 0.8 * short.out_lm  # measured 0.65
+
+
+@pytest.mark.parametrize(("change", "field", "words"), [
+    (dict(section="round"), "lamps[0].light_guide.path", "torus"),
+    (dict(radius=3.0), "lamps[0].light_guide.arc_radius", "allowed more than 4 mm"),
+    (dict(radius=6.0, prism_depth=1.0, prism_pitch=2.4, prism_angle=50.0), "lamps[0].light_guide.prism_depth",
+     "at the inside of the arc"),
+])
+def test_an_arc_guide_that_cannot_be_is_refused_in_one_line(change, field, words):
+    from core_tracer.scene.reading import SceneError
+
+    with pytest.raises(SceneError) as caught:
+        arc_scene(**change)
+    assert caught.value.path == field and words in str(caught.value) and "\n" not in str(caught.value)

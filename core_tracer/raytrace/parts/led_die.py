@@ -74,8 +74,7 @@ def emitted(lamps: LampTable, lamp: np.ndarray, d: np.ndarray, at: np.ndarray | 
     sel = _mirrored(lamps, lamp) if at is not None else ()
     if len(sel):
         guide, index = lamps.guide, lamp.take(sel)
-        axis, centre = rows(guide.axis, index), rows(lamps.led_center, index)
-        middle = rows(guide.start, index) + 0.5 * guide.length.take(index)[:, None] * axis
+        axis, centre, middle = rows(guide.axis, index), rows(lamps.led_center, index), rows(guide.middle, index)
         image = optics.dot(rows(at, sel) - middle, axis) * optics.dot(centre - middle, axis) < 0.0
         flip = sel[image]
         if len(flip):
