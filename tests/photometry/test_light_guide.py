@@ -344,3 +344,14 @@ def test_an_arc_guide_that_cannot_be_is_refused_in_one_line(change, field, words
     with pytest.raises(SceneError) as caught:
         arc_scene(**change)
     assert caught.value.path == field and words in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_an_arc_guide_lit_at_both_ends_passes_the_same_flux_out_of_each_end():
+    """The mirror plane of an arc guide is the radial plane through its middle: the image of the LED
+    at the first end faces the far end along its tangent, so both ends pass alike (symmetry), each the
+    one-end arc's far plus near flux (superposition)."""
+    one = far_end_flux(arc_scene(radius=40.0, sweep=90.0), photons=20_000, seed=3)
+    both = far_end_flux(arc_scene(radius=40.0, sweep=90.0, lit_ends="both"), photons=20_000, seed=4)
+    assert both.near_lm == pytest.approx(both.out_lm, rel=0.03), both
+    spread = 4.0 * math.hypot(both.stderr_lm, one.stderr_lm)
+    assert abs(both.out_lm - one.out_lm - one.near_lm) < spread + 0.01 * one.near_lm, (both, one)
