@@ -262,7 +262,7 @@ def lamp_flux(scene: dict, lamps: Sequence[int] | None = None) -> float:
     """The luminous flux in lm of the lit bulbs (or LED dies) of ``lamps`` (None: all); of a free-form
     design, of its lit bulb parts (the design is one lamp, ``intensity.lamp_of_pixels``)."""
     from ..raytrace.spectral import bulb_spectrum
-    from ..scene.led_array import LedArray, uses_leds
+    from ..scene.led_array import die_count, uses_leds
 
     total = 0.0
     if "freeform" in scene:
@@ -273,7 +273,7 @@ def lamp_flux(scene: dict, lamps: Sequence[int] | None = None) -> float:
     for i, lamp in enumerate(scene["lamps"]):
         if (lamps is None or i in lamps) and lamp["bulb"]["on"]:
             if uses_leds(lamp):  # the dies' flux, each into its half space
-                total += lamp["led"]["flux_lm"] * LedArray.of(lamp["led"]).count
+                total += lamp["led"]["flux_lm"] * die_count(lamp)
             else:
                 total += bulb_spectrum(lamp["bulb"], f"lamps[{i}].bulb")[0]
     return float(total)
@@ -296,7 +296,7 @@ def emitted_spectrum(scene: dict, lamps: Sequence[int] | None = None) -> Spectru
     at their thickness, summed over the lamps (module docstring); None for a paper design, free-form
     parts, or no lit source."""
     from ..raytrace import spectral
-    from ..scene.led_array import LedArray, uses_leds
+    from ..scene.led_array import die_count, uses_leds
 
     if scene.get("light_model", "paper") != "photometric" or "freeform" in scene:
         return None
@@ -306,7 +306,7 @@ def emitted_spectrum(scene: dict, lamps: Sequence[int] | None = None) -> Spectru
         if not lamp["bulb"]["on"]:
             continue
         if uses_leds(lamp):
-            flux = lamp["led"]["flux_lm"] * LedArray.of(lamp["led"]).count
+            flux = lamp["led"]["flux_lm"] * die_count(lamp)
             spectrum = spectral.led_spectrum(lamp["led"], f"{where}.led")
         else:
             flux, spectrum = spectral.bulb_spectrum(lamp["bulb"], f"{where}.bulb")

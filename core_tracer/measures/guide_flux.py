@@ -5,8 +5,11 @@ The light is the lamp's LED dies' (``light_tracing.led_photons``: a uniform poin
 cosine-distributed direction about its normal, carrying Φ(λ) f(θ, φ) / N), placed by the design
 facing the guide's first end face. The rod's optics are the
 renderer's own: its intersections (``parts.light_guide``), the Fresnel split per band and
-polarisation (``surfaces.at_dielectric``) and Beer–Lambert along the segments inside (eq. 2). Light
-that leaves the rod anywhere else, or goes back to the die, is not counted; a branch below the
+polarisation (``surfaces.at_dielectric``) and Beer–Lambert along the segments inside (eq. 2). The light
+that leaves the rod through its first end face from inside is counted apart (``near_lm``); a guide
+lit at both ends has a second array, the first's mirror image (``led_photons``), so by symmetry its
+two end faces pass the same flux, each the one-end guide's far plus near flux. Light
+that leaves the rod anywhere else is not counted; a branch below the
 cut-off (``rays.CUTOFF``) is dropped, one alive at ``context.GUIDE_MAX_DEPTH`` is counted in ``cut_at_depth``.
 
 With no prisms every ray that enters the end face is trapped by total internal reflection (its
@@ -36,13 +39,14 @@ class GuideFlux:
     emitted_lm: float  # the LED's flux
     out_lm: float  # the flux out of the far end face
     stderr_lm: float  # its standard error over the photons
+    near_lm: float  # the flux out of the first end face from inside the rod (lit at both ends: ≈ out_lm)
     cut_at_depth: int  # branches still alive at the depth limit, ended there
     deepest: int  # the most segments a photon's branches took
 
 
 def far_end_flux(scene: dict, lamp: int = 0, *, photons: int = 200_000, seed: int = 0,
                  bands: int | None = None) -> GuideFlux:
-    """The luminous flux of lamp ``lamp``'s LEDs that leaves its guide's far end face."""
+    """The luminous flux of lamp ``lamp``'s LEDs that leaves its guide's far end face (and its first)."""
     ctx = make_context(scene, 1, 1, bands=bands)
     lamps, guide = ctx.lamps, ctx.lamps.guide
     if guide is None or not guide.present[lamp]:
@@ -53,8 +57,8 @@ def far_end_flux(scene: dict, lamp: int = 0, *, photons: int = 200_000, seed: in
         raise ValueError(f"lamps[{lamp}] has no LEDs to light its guide")
     rays, flux = emitted
     lm_per_photon = flux * ctx.photometric.to_xyz[:, 1]  # lm per photon and band at unit attenuation
-    axis, start = guide.axis[lamp], guide.start[lamp]
     per_photon = np.zeros(photons)
+    near = 0.0
     depth = 0
     length = float(guide.length[lamp])
     while len(rays) and depth < GUIDE_MAX_DEPTH:
@@ -71,18 +75,22 @@ def far_end_flux(scene: dict, lamp: int = 0, *, photons: int = 200_000, seed: in
         face = at_dielectric(rays, met, rows(rays.k, met), d, hit, UNRECORDED, np.full(len(met), P.GUIDE, np.int8),
                              rows(normal, met), lamps.plate_ior, P.IN_GUIDE, lamps.plate_ior_bands)
         partial = face.split.partial
-        s_hit = (hit - start) @ axis
+        s_hit = guide.along(hit, np.full(len(hit), lamp))
         out = np.nonzero(partial & face.from_inside & (s_hit >= length - 1e-6))[0]
         if len(out):
             gone = face.through(out)
             np.add.at(per_photon, gone.pix, (gone.k * rows(lm_per_photon, gone.pix)).sum(axis=1))
+        back = np.nonzero(partial & face.from_inside & (s_hit <= 1e-6))[0]
+        if len(back):
+            gone = face.through(back)
+            near += float((gone.k * rows(lm_per_photon, gone.pix)).sum())
         entering = np.nonzero(partial & ~face.from_inside & (face.split.transmitted.max(axis=1) > 0))[0]
         children = [face.reflected()] + ([face.through(entering)] if len(entering) else [])
         children = [c for c in children if len(c)]
         rays = concat(children) if len(children) > 1 else (children[0] if children else rays.take(np.zeros(0, int)))
     total = float(per_photon.sum())
     stderr = float(np.sqrt(photons / max(photons - 1, 1) * ((per_photon**2).sum() - total**2 / photons)))
-    return GuideFlux(float(lm_per_photon.sum()), total, stderr, len(rays), depth)
+    return GuideFlux(float(lm_per_photon.sum()), total, stderr, near, len(rays), depth)
 
 
 def _absorbed(rays: Rays, t: np.ndarray, coefficients: np.ndarray) -> Rays:

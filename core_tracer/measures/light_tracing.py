@@ -122,7 +122,9 @@ def led_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> tu
     None for a lamp lit by its bulb. A photon leaves a uniform point of a uniformly chosen die in a
     cosine-distributed direction about its normal, carrying Φ_dies(λ) f(θ, φ) / N: the radiance
     L_0(λ) f(θ, φ) of ``parts.led_die.emitted`` sampled with the pdf cos θ / π, so that the flux is
-    π L_0 A per die whatever the pattern (f's mean over that pdf is 1, ``photometry.far_field``)."""
+    π L_0 A per die whatever the pattern (f's mean over that pdf is 1, ``photometry.far_field``).
+    A guide lit at both ends (``GuideTable.both_ends``) has the array's mirror image too, with the same
+    flux: every other photon is reflected through the guide's middle, each carrying twice as much."""
     lamps = ctx.lamps
     columns, rows_ = int(lamps.led_columns[lamp]), int(lamps.led_rows[lamp])
     if columns == 0:
@@ -138,7 +140,12 @@ def led_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> tu
     d = cosine_directions(np.broadcast_to(normal, (n, 3)), rng)
     area = columns * rows_ * 4.0 * half[0] * half[1] * 1e-6  # m²
     radiance = led_die.emitted(lamps, index, -d)  # the luminance seen looking back along the light
-    return _rays(lamp, o, d, ctx.channels, P.LED), radiance * (math.pi * area / n)
+    arrays = 1
+    if lamps.guide is not None and lamps.guide.both_ends[lamp]:
+        arrays, image = 2, np.arange(1, n, 2)
+        o_m, d_m = lamps.guide.mirror(o.take(image, axis=0), d.take(image, axis=0), index.take(image))
+        o[image], d[image] = o_m, d_m
+    return _rays(lamp, o, d, ctx.channels, P.LED), radiance * (math.pi * area * arrays / n)
 
 
 def glow_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> tuple[Rays, np.ndarray] | None:

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..scene.derived import lens_absorption
-from ..scene.led_array import LedArray, uses_leds
+from ..scene.led_array import LedArray, die_count, uses_leds
 from ..scene.messages import show_value
 from ..scene.reading import SceneError
 
@@ -152,7 +152,7 @@ def states_of(scene: dict) -> list[State]:
         bulb = lamp["bulb"]
         leds = LedArray.of(lamp["led"]) if uses_leds(lamp) else None  # the dies, switched by bulb.on
         named = photometric and leds is None and bulb.get("type", "custom") != "custom"
-        where = f"lamp {i + 1}" + (f", {bulb['type']}" if named else "") + (f", {leds.count} LEDs" if leds else "")
+        where = f"lamp {i + 1}" + (f", {bulb['type']}" if named else "") + (f", {die_count(lamp)} LEDs" if leds else "")
         label = f"{words} ({where})" if words else where[:1].upper() + where[1:]
         if named:
             from ..photometry.sources import BULB_TYPES
@@ -165,7 +165,7 @@ def states_of(scene: dict) -> list[State]:
                                  state.flux_lm, "lm", bool(bulb["on"]) and bulb["state"] == filament,
                                  f"lamps[{i}].{filament}"))
         else:
-            flux = float(lamp["led"]["flux_lm"]) * leds.count if leds is not None else float(bulb["flux_lm"])
+            flux = float(lamp["led"]["flux_lm"]) * die_count(lamp) if leds is not None else float(bulb["flux_lm"])
             rendered = flux if photometric else 1.0
             out.append(State(name, label, i, "on", rendered, "lm" if photometric else "", bool(bulb["on"]),
                              f"lamps[{i}].on"))

@@ -40,6 +40,15 @@ class LedArray:
                    0.5 * np.asarray(led["die_size"], dtype=np.float64), np.asarray(led["pitch"], dtype=np.float64),
                    int(led["columns"]), int(led["rows"]))
 
+    def mirrored(self, point: np.ndarray, axis: np.ndarray) -> LedArray:
+        """The array's mirror image through the plane through ``point`` normal to unit ``axis``: x' = x −
+        2 ((x − p)·a) a. A reflection turns across × up into −(across' × up'), so across' is the image of
+        −across: the dies keep facing their normal (their grid, symmetric about its centre, is the image's)."""
+        def image(v: np.ndarray) -> np.ndarray:
+            return v - 2.0 * (v @ axis) * axis
+        return LedArray(self.center - 2.0 * ((self.center - point) @ axis) * axis, image(self.normal),
+                        -image(self.across), image(self.up), self.half_size, self.pitch, self.columns, self.rows)
+
     @property
     def count(self) -> int:
         return self.columns * self.rows
@@ -59,3 +68,27 @@ class LedArray:
 def uses_leds(lamp: dict) -> bool:
     """Whether a normalised lamp's light source is its LED dies (else its bulb)."""
     return lamp.get("source", "bulb") == "led"
+
+
+def mirror_plane(guide: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The middle of a normalised light guide and its unit axis (lamp frame): the plane s = L/2 through
+    which a guide lit at both ends mirrors its lamp's LED array (``raytrace.guide_table``)."""
+    theta = np.radians(guide["orientation"])
+    return (np.array([guide["center"][0], guide["depth"], guide["center"][1]], dtype=np.float64),
+            np.array([np.cos(theta), 0.0, np.sin(theta)]))
+
+
+def lit_arrays(lamp: dict) -> list[LedArray]:
+    """The LED arrays that light a normalised LED lamp: its own, and when its light guide is lit at both
+    ends (``lit_ends`` "both") that array's mirror image through the guide's middle."""
+    leds = LedArray.of(lamp["led"])
+    guide = lamp.get("light_guide") or {}
+    if not guide.get("enabled") or guide.get("lit_ends", "one") != "both":
+        return [leds]
+    return [leds, leds.mirrored(*mirror_plane(guide))]
+
+
+def die_count(lamp: dict) -> int:
+    """How many dies light a normalised LED lamp: its array's, twice over when its light guide is lit
+    at both ends (the array and its mirror image, ``lit_arrays``)."""
+    return sum(leds.count for leds in lit_arrays(lamp))

@@ -434,6 +434,8 @@ PRISM_PLATE = Section(
 
 
 GUIDE_SECTIONS = ("round", "rectangular")
+GUIDE_LIT_ENDS = ("one", "both")
+GUIDE_PATHS = ("straight", "arc")
 # At most this many extraction prisms along a guide: the prism walk crosses a bounded number of cells.
 MAX_GUIDE_PRISMS = 2000
 
@@ -449,14 +451,22 @@ LIGHT_GUIDE = Section(
         "width": _length(6.0, "Photometric, rectangular guide: its width across the guide, in the lens plane",
                          hi=100.0),
         "thickness": _length(4.0, "Photometric, rectangular guide: its thickness along the lamp axis", hi=100.0),
+        "path": Choice("straight", GUIDE_PATHS,
+                       "Photometric: the guide's axis: straight (length), or a circular arc in the lens plane "
+                       "(arc_radius, arc_sweep; rectangular section only) bending toward the left of orientation"),
         "length": _length(80.0, "Photometric: the length of the straight guide from end face to end face",
                           hi=2000.0),
+        "arc_radius": _length(100.0, "Photometric, arc guide: the radius of its axis, from the arc's centre",
+                              hi=10000.0),
+        "arc_sweep": Num(60.0, 1.0, 180.0, unit="deg",
+                         doc="Photometric, arc guide: the angle its axis turns through from end face to end face"),
         "center": _position((0.0, 0.0), "Photometric: the middle of the guide [x, z] from the lamp axis, in the "
-                                         "lens plane", size=2),
+                                         "lens plane (of an arc guide: the middle of its axis)", size=2),
         "depth": _length(15.0, "Photometric: how far behind the lens's outer face the guide's axis lies (y)",
                          hi=1000.0),
         "orientation": Num(0.0, -180.0, 180.0, unit="deg",
-                           doc="Photometric: the guide's direction in the lens plane, from the x axis toward z"),
+                           doc="Photometric: the guide's direction in the lens plane, from the x axis toward z (of an "
+                               "arc guide: its direction at its middle)"),
         "prism_pitch": _length(2.0, "Photometric: the spacing of the extraction prisms along the guide's back",
                                hi=100.0),
         "prism_depth": Num(0.4, 0.0, 50.0, unit="mm", subtype="distance",
@@ -465,12 +475,17 @@ LIGHT_GUIDE = Section(
         "prism_angle": Num(45.0, 5.0, 85.0, unit="deg",
                            doc="Photometric: the angle of each prism facet to the guide's axis (45: light running "
                                "along the guide is sent straight out toward the lens)"),
+        "lit_ends": Choice("one", GUIDE_LIT_ENDS,
+                           "Photometric: which ends of the guide its LEDs light: one (the lamp's LED array, facing "
+                           "an end face) or both (that array and its mirror image through the guide's middle, "
+                           "facing the other end face, each die with the same flux)"),
         **_optics("clear", "the guide"),
     },
     "Photometric: a light guide behind the lens, a rod of acrylic or polycarbonate lit at its end by the lamp's "
     "LEDs, with V-shaped extraction prisms cut along its back",
     shown_when=(("diameter", "section", ("round",)), ("width", "section", ("rectangular",)),
-                ("thickness", "section", ("rectangular",)), *_OPTICS_SHOWN),
+                ("thickness", "section", ("rectangular",)), ("length", "path", ("straight",)),
+                ("arc_radius", "path", ("arc",)), ("arc_sweep", "path", ("arc",)), *_OPTICS_SHOWN),
 )
 
 COLLECTIONS = ("reflector", "prism_plate")

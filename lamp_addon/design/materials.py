@@ -149,7 +149,9 @@ def light_guide_glass(mat: bpy.types.Material, lamp: dict, *, new: bool) -> list
     guide = lamp["light_guide"]
     absorption = guide.get("absorption", [0.0, 0.0, 0.0])
     missing = _glass(mat, new, "Light Guide", guide.get("glass_ior", spectral_index(guide)), absorption)
-    mat.diffuse_color = (*cycles.transmitted_color(absorption, guide["length"]), 0.3)
+    arc = guide.get("path", "straight") == "arc"  # the viewport's colour: seen along the rod's whole length
+    length = guide["arc_radius"] * math.radians(guide["arc_sweep"]) if arc else guide["length"]
+    mat.diffuse_color = (*cycles.transmitted_color(absorption, length), 0.3)
     return missing
 
 

@@ -24,7 +24,7 @@ from mathutils.geometry import tessellate_polygon
 
 from ...core_tracer.scene import functions
 from ...core_tracer.scene.derived import body_wraps, cut_sphere_radius, lamp_geometry, lens_cylinder
-from ...core_tracer.scene.led_array import LedArray, uses_leds
+from ...core_tracer.scene.led_array import lit_arrays, uses_leds
 from ...core_tracer.scene.outline import Outline
 from ..convert import units
 from ..convert.meshes import builder as mesh_builder
@@ -181,8 +181,11 @@ def led_part(base: str, label: str, lamp: dict, axis: Matrix) -> MeshPart:
     """A lamp's LED dies as one object of flat rectangles facing their normal (``scene.led_array``),
     emitting on their front only (``materials.led_die``)."""
     led = lamp["led"]
-    shape = ("led", *(tuple(led[k]) for k in ("position", "normal", "die_size", "pitch")), led["columns"], led["rows"])
-    return MeshPart(f"{base}.led", f"{label} LEDs", shape, partial(part_meshes.led_mesh, LedArray.of(led)),
+    arrays = lit_arrays(lamp)  # a guide lit at both ends: the array and its mirror image, one object
+    mirror = (tuple(arrays[-1].center), tuple(arrays[-1].normal)) if len(arrays) > 1 else ()
+    shape = ("led", *(tuple(led[k]) for k in ("position", "normal", "die_size", "pitch")), led["columns"], led["rows"],
+             mirror)
+    return MeshPart(f"{base}.led", f"{label} LEDs", shape, partial(part_meshes.led_mesh, *arrays),
                     [Slot(f"{base}.led", f"{label} LEDs", partial(materials.led_die, lamp=lamp))], axis)
 
 

@@ -208,6 +208,7 @@ def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
             lamp.lens.outline = outline
             lamp.lens.shape = shape
             lamp.light_guide.section = "round" if outline == "round" else "rectangular"  # each its own sizes
+            lamp.light_guide.path = "straight" if outline == "round" else "arc"  # an arc's radius and sweep
             design.environment.world = "none" if outline == "round" else "file"  # the file row shows only then
             for cut_type in S.CUT_TYPES:  # each type shows its own fields
                 lamp.cuts.type = cut_type

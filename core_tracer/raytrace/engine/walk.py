@@ -184,7 +184,9 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
         k_met = rows(k, met)
         if throughput is not None:
             k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
-        band.add(BULB_PASS, rays.pix.take(met), k_met * led_die.emitted(lamps, lamp, rows(rays.d, met)))
+        d_met = rows(rays.d, met)
+        at = rows(rays.o, met) + optics.scaled(d_met, t.take(met))  # which die: a guide lit at both ends has two arrays
+        band.add(BULB_PASS, rays.pix.take(met), k_met * led_die.emitted(lamps, lamp, d_met, at))
     # a plate lamp's housing ends the path
     met = np.nonzero(surface == P.HOUSING)[0] if ctx.plates and throughput is None else ()
     if len(met):

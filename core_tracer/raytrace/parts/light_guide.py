@@ -24,6 +24,7 @@ import numpy as np
 from .. import paths as P
 from ..guide_table import GuideTable
 from ..lamp_table import LampTable
+from . import guide_arc
 from .base import T_MIN, Segments, put_rows, rows, slab_span, solve_quadratic
 
 SURFACE = P.GUIDE
@@ -38,11 +39,12 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
     guide = lamps.guide
     if guide is None:
         return t, normal
-    sel = np.nonzero(guide.present.take(rays.lamp) > 0)[0]
-    if len(sel):
-        t_sel, n_sel = hit_guide(rows(rays.o, sel), rows(rays.d, sel), guide, rays.lamp.take(sel))
-        t[sel] = t_sel
-        put_rows(normal, sel, n_sel)
+    present, arc = guide.present.take(rays.lamp) > 0, guide.arc.take(rays.lamp) > 0
+    for sel, hit in ((np.nonzero(present & ~arc)[0], hit_guide), (np.nonzero(present & arc)[0], guide_arc.hit_arc)):
+        if len(sel):
+            t_sel, n_sel = hit(rows(rays.o, sel), rows(rays.d, sel), guide, rays.lamp.take(sel))
+            t[sel] = t_sel
+            put_rows(normal, sel, n_sel)
     return t, normal
 
 

@@ -1,7 +1,8 @@
 """Meshes of a lamp's light guide (docs/model.md §8.7a), in the lamp's local frame in mm, bpy-free.
 
 The rod: its cross-section (a polygon of the circle within ``CHORD_TOLERANCE_MM``, or the rectangle)
-swept along the axis, at every s where the prisms' profile bends: each ring of the sweep is the
+swept along the axis (straight, or an arc: ``arc_points``), at every s where the prisms' profile
+bends: each ring of the sweep is the
 section cut by the prisms' height v <= g(s) (points above it lowered onto it, which for a convex
 section is exactly the cut), so the V grooves are exact between the rings; both end faces closed.
 The guide's LEDs are the lamp's own dies (``design.parts.led_part``).
@@ -58,7 +59,34 @@ def sweep_stations(guide: GuideTable, section: np.ndarray) -> np.ndarray:
             for h in heights:
                 reach = (h - bottom) / slope
                 stations.extend((apex - reach, apex + reach))
+    if guide.arc[0]:  # the arc's walls as chords within the tolerance (a full circle's segments, pro rata)
+        outer = float(guide.radius[0] + guide.half_u[0])
+        step = 2.0 * np.pi * float(guide.radius[0]) / circle_segments(outer, CHORD_TOLERANCE_MM)
+        stations.extend(np.linspace(0.0, length, int(np.ceil(length / step)) + 1))
     return np.unique(np.clip(np.array(stations), 0.0, length))
+
+
+def arc_points(guide: GuideTable, s: float, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Points of an arc guide's ring at s (lamp frame): within a prism's groove on the planar facets'
+    own terms (at τ = s − s_k from the radial plane of its apex, on the cylinder ρ = R − u), elsewhere
+    on the radial plane at φ = s / R − Φ/2 (so the end faces are radial)."""
+    radius, sweep = float(guide.radius[0]), float(guide.sweep[0])
+    centre, a, c = guide.arc_centre[0], guide.axis[0], guide.across[0]
+    rho = radius - u
+    phi, tau = s / radius - 0.5 * sweep, np.zeros_like(u)
+    count = int(guide.prisms[0])
+    if count and 0.0 < s < float(guide.length[0]):
+        pitch, first = float(guide.pitch[0]), float(guide.first_prism[0])
+        k = min(max(int(np.floor((s - first) / pitch + 0.5)), 0), count - 1)
+        reach = float(guide.prism_depth[0] / guide.slope[0])
+        if abs(s - first - k * pitch) <= reach + 1e-9:
+            phi, tau = (first + k * pitch) / radius - 0.5 * sweep, np.full_like(u, s - first - k * pitch)
+    t_k = np.cos(phi) * a + np.sin(phi) * c
+    r_k = np.sin(phi) * a - np.cos(phi) * c
+    along_r = np.sqrt(rho * rho - tau * tau)
+    points = centre + along_r[:, None] * r_k + tau[:, None] * t_k
+    points[:, 1] = centre[1] + v
+    return points
 
 
 def guide_mesh(lamp: dict) -> MeshData:
@@ -71,7 +99,10 @@ def guide_mesh(lamp: dict) -> MeshData:
     rings = []
     for s in stations:
         v = np.minimum(section[:, 1], prism_height(np.array([s]), guide)[0])
-        points = start + s * axis + section[:, :1] * across + v[:, None] * y_axis
+        if guide.arc[0]:
+            points = arc_points(guide, float(s), section[:, 0], v)
+        else:
+            points = start + s * axis + section[:, :1] * across + v[:, None] * y_axis
         rings.append([mb.vertex(*p) for p in points])
     n = len(section)
     for a, b in zip(rings[:-1], rings[1:], strict=True):

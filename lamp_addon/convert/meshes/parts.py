@@ -183,14 +183,15 @@ def socket_mesh(radius: float, y0: float, y1: float, tol: float = CHORD_TOLERANC
     return data
 
 
-def led_mesh(leds) -> MeshData:
-    """The dies of an ``LedArray`` as flat rectangles in the lamp's frame, each wound so that its normal
-    is the dies' (across × up = normal)."""
+def led_mesh(*arrays) -> MeshData:
+    """The dies of ``LedArray``s (a lamp's, and its mirror image for a guide lit at both ends) as flat
+    rectangles in the lamp's frame, each wound so that its normal is the dies' (across × up = normal)."""
     mb = MeshBuilder()
-    a, b = leds.half_size[0] * leds.across, leds.half_size[1] * leds.up
-    for centre in leds.die_centres():
-        corners = [centre - a - b, centre + a - b, centre + a + b, centre - a + b]
-        mb.face([mb.vertex(*map(float, c)) for c in corners], FLAT)
+    for leds in arrays:
+        a, b = leds.half_size[0] * leds.across, leds.half_size[1] * leds.up
+        for centre in leds.die_centres():
+            corners = [centre - a - b, centre + a - b, centre + a + b, centre - a + b]
+            mb.face([mb.vertex(*map(float, c)) for c in corners], FLAT)
     data = mb.result()
     data.max_deviation = 0.0  # flat: exact
     return data
