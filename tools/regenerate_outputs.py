@@ -133,6 +133,15 @@ STEPS += tuple(
     Step("led-light-guide-close-up",
          _render("docs/examples/led-light-guide-close-up.json", "docs/images/led-light-guide-close-up.png"),
          ("docs/images/led-light-guide-close-up.png",)),
+    # docs/photometric.md's commands: a guide lit at both ends, a guide along an arc
+    Step("led-light-guide-both-ends",
+         _render("docs/examples/led-light-guide-both-ends.json", "docs/images/led-light-guide-both-ends.png",
+                 "--width", "512", "--height", "192", "--samples", "16"),
+         ("docs/images/led-light-guide-both-ends.png",)),
+    Step("led-light-guide-arc",
+         _render("docs/examples/led-light-guide-arc.json", "docs/images/led-light-guide-arc.png",
+                 "--width", "384", "--height", "256", "--samples", "8"),
+         ("docs/images/led-light-guide-arc.png",)),
     # docs/model.md §8.6: fish-eye tail, saw-tooth stop, flutes on the turn lamp; the scene is the
     # committed picture's header, saved as an example
     Step("cut-types-four-lamps",
