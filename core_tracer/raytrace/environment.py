@@ -90,7 +90,7 @@ def _running_blender_folder() -> Path | None:
 
 
 def _beside_blenders_python() -> Path | None:
-    """A worker Blender starts runs its Python, <version>/python/bin/python3.x, without bpy: worlds in <version>/datafiles."""
+    """A worker Blender starts runs <version>/python/bin/python3.x without bpy: worlds in <version>/datafiles."""
     parents = Path(sys.executable).absolute().parents if sys.executable else ()
     folder = parents[2].joinpath(*WORLD_FOLDER) if len(parents) > 2 else None
     return folder if folder is not None and folder.is_dir() else None
