@@ -38,6 +38,7 @@ def test_directions_on_the_pool_equal_one_process_bit_for_bit(repo_root):
 def test_the_pool_is_sized_by_the_memory_budget_before_it_starts(repo_root, monkeypatch):
     scene = load_scene(repo_root / "presets" / "photometric-stop-lamp.json")
     monkeypatch.delitem(sys.modules, "bpy", raising=False)  # as the command line: the Blender tests import bpy
+    monkeypatch.setattr(band_pool, "running_workers", lambda: 0)  # no band pool left by an earlier test
     monkeypatch.setattr("os.cpu_count", lambda: 8)
     assert intensity.pool_workers(scene, 45, 2.0) == 6  # (4 GB - 160 MB) over 640 MB and a view a worker
     assert intensity.pool_workers(scene, 3, 2.0) == 1  # too few directions to share
