@@ -33,8 +33,8 @@ from ..raytrace.engine.context import MAX_DEPTH
 from ..raytrace.engine.rays import (
     BACKGROUND_PASS,
     BODY_PASS,
-    BY_PASS,
     BULB_PASS,
+    BY_PASS,
     LENS_SURFACE,
     NOT_DEFERRED,
     REFLECTOR_CONSTANT,

@@ -20,8 +20,8 @@ pixel filter) whose light is added in another order; the tracer's cut-off is on 
 attenuation, not its brightness, so it is the same whatever is lit; its adaptive sampling is off here
 (``ADAPTIVE_OFF``) because it chooses pixels by their values (a direct render would choose others). A
 free-form design (its own tracer) is still rendered once with every bulb off and once per state, its
-pass that render minus the surroundings'. Glare is not linear (a threshold): the passes are without it, and a re-weighted image gets
-glare, when the design has it on, after the sum (``images.glare``).
+pass that render minus the surroundings'. Glare is not linear (a threshold): the passes are without it,
+and a re-weighted image gets glare, when the design has it on, after the sum (``images.glare``).
 
 The file (``save``/``load``) is an .npz of float32 arrays with a JSON header: the scene rendered, the
 states and their labels, the light model and bands, and the size.
