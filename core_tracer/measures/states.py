@@ -232,8 +232,8 @@ def render_states(scene: dict, *, progress: Callable[[int, int, str], None] | No
                   pool: BandsElsewhere | None = None) -> LightStates:
     """The surroundings and one pass per state of a normalised scene: a parametric design's from one
     walk (``one_walk``), a free-form design's on its ``meshes`` by a render per state (its bulb parts
-    the states). ``progress(done, total, label)`` as the work goes on (``total`` bands of the walk,
-    or renders). ``recorded`` is the scene the file keeps, when ``scene`` is traced with full paths
+    the states). ``progress(done, total, label)`` as the work goes on (the walk's percent done of
+    100, or the renders done). ``recorded`` is the scene the file keeps, when ``scene`` is traced with full paths
     (its curves). ``pool`` (``band_pool.shared()``) traces the walk's bands as a render's."""
     if "freeform" in scene and meshes is None:
         raise SceneError("freeform", "the design's meshes were not given; allowed a free-form design loaded with "

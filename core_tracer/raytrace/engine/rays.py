@@ -162,6 +162,8 @@ class ByPass:
 
     def add(self, acc: np.ndarray, pass_id: int, pix: np.ndarray, values: np.ndarray,
             lamp: np.ndarray | None = None) -> None:
+        """Add ``values`` (N, C) of pass ``pass_id`` to the pixels ``pix`` of the planes ``acc``;
+        ``lamp``: the lamp that emitted each value (None: no lamp did)."""
         add_to_pass(acc[pass_id], pix, values)
 
 

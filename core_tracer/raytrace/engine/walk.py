@@ -176,6 +176,7 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
             k_met = rows(k, met)
             if throughput is not None:
                 k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
+            # a bulb's light is its lamp's (``rays.BySource``); a wall's or socket's colour the surroundings'
             band.add(pass_id, rays.pix.take(met), k_met * rows(color, lamp), lamp if sid == P.BULB else None)
     # LED dies end the path with their luminance toward the eye, k · L(θ, φ) (``parts.led_die``)
     met = np.nonzero(surface == P.LED)[0] if ctx.leds else ()
