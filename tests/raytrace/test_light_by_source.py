@@ -68,9 +68,9 @@ def test_each_source_plane_is_a_render_of_that_source_alone(name, size, samples)
 
 
 def test_adaptive_sampling_gives_every_source_the_same_samples():
-    """With adaptive sampling the planes still sum to the walked image (one choice of pixels for all)
-    and the walk traces the samples a render of the same design traces to within the planes' wider
-    spread test (more busy pixels, never fewer: a pixel busy in the sum is busy in some plane)."""
+    """With adaptive sampling the planes still sum to the walked image (one choice of pixels for every
+    source), which is the design's adaptive render within adaptive sampling's own error (its pixels
+    chosen by the sources' spread instead of the passes': about as many)."""
     scene = _lit(_scene("four-lamp-night-lit-photometric.json", 64, 48, 8), {0, 1, 2, 3})
     walked = render_passes(scene, by_source=True)
     plain = render_passes(scene)
