@@ -3,6 +3,9 @@
 the passes, XYZ to the scene-linear display, glare, the pixels into Blender's image).
 
     xvfb-run -a .venv/bin/python benchmarks/bench_light_panel.py [--size 512] [--changes 40]
+
+It also times Render Light States against one F12 of the same design (Lamp Tracer, the design's samples;
+an F12 first, untimed, so that both find the band pool's workers started).
 """
 
 from __future__ import annotations
@@ -43,6 +46,11 @@ def main() -> None:
             addon.design.properties.scene_to_design(bl_scene, scene)
             bl_scene.lamp_design.auto_build = False
             addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+            bl_scene.render.engine = "LAMP_TRACER"
+            bpy.ops.render.render()  # the band pool's workers started
+            start = time.perf_counter()
+            bpy.ops.render.render()
+            f12 = time.perf_counter() - start
             start = time.perf_counter()
             bpy.ops.lamp.light_states_render()
             rendered = time.perf_counter() - start
@@ -54,8 +62,8 @@ def main() -> None:
                 item.on = not item.on  # the update re-weights and fills the image
                 walls.append(1000 * (time.perf_counter() - start))
                 inner.append(addon.measures.light_panel.held(bl_scene)["ms"])
-            print(f"{args.preset} at {args.size}x{args.size}: {len(items) - 1} states rendered in {rendered:.1f} s; "
-                  f"load average {os.getloadavg()[0]:.2f}")
+            print(f"{args.preset} at {args.size}x{args.size}: {len(items) - 1} states rendered in {rendered:.1f} s, "
+                  f"one F12 {f12:.1f} s ({rendered / f12:.2f}x); load average {os.getloadavg()[0]:.2f}")
             print(f"  a switch to the image updated: median {statistics.median(walls):.1f} ms, max {max(walls):.1f} ms "
                   f"(re-weighting and display {statistics.median(inner):.1f} ms) over {args.changes} changes")
     finally:

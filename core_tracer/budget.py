@@ -159,19 +159,23 @@ def check_measure(width: int, height: int, where: str = "--pixel-mm") -> None:
 
 
 def states_bytes(width: int, height: int, states: int, file_format: str = "exr", workers: int = 0,
-                 environment: int = 0) -> int:
-    """Peak bytes of ``states``: one render at a time (``render_bytes``, no passes, no glare), the
-    surroundings and ``states`` passes kept, their difference's temporary, and the file's bytes in
-    memory before they are written (at most the arrays' size: deflate does not grow them much)."""
+                 environment: int = 0, sources: int = 0) -> int:
+    """Peak bytes of ``states``: one render at a time (``render_bytes``, no passes, no glare) with
+    the image of each of ``sources`` kept (a parametric design's one walk: the surroundings and one
+    per lamp, ``rays.BySource``; 0: a free-form design's render per state), the surroundings and
+    ``states`` passes kept, a temporary of one, and the file's bytes in memory before they are written
+    (at most the arrays' size: deflate does not grow them much)."""
     kept = (states + 1) * width * height * RGB_BYTES
     one = render_bytes(width, height, False, file_format, False, environment, workers)
-    return one + 2 * kept + width * height * RGB_BYTES
+    return one + sources * width * height * RGB_BYTES + 2 * kept + width * height * RGB_BYTES
 
 
-def check_states(width: int, height: int, samples: int, states: int, workers: int = 0, environment: int = 0) -> None:
-    """Refuse a ``states`` run past ``MAX_EYE_RAYS`` (every render's together) or ``MEMORY_BUDGET``."""
-    check_rays(width, height, samples * (states + 1))
-    need = states_bytes(width, height, states, "exr", workers, environment)
+def check_states(width: int, height: int, samples: int, states: int, workers: int = 0, environment: int = 0,
+                 sources: int = 0) -> None:
+    """Refuse a ``states`` run past ``MAX_EYE_RAYS`` (one walk's; a render per state: all of theirs
+    together) or ``MEMORY_BUDGET`` (``states_bytes``)."""
+    check_rays(width, height, samples if sources else samples * (states + 1))
+    need = states_bytes(width, height, states, "exr", workers, environment, sources)
     if need > MEMORY_BUDGET:
         raise SceneError("image", f"{width}x{height} px with {states} states and the surroundings: states needs about "
                                   f"{gib(need)} of memory; allowed at most {gib(MEMORY_BUDGET)} (render smaller)")

@@ -4,6 +4,7 @@ with ``relight`` (docs/measures.md, "Lighting states")."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from ..fileio import atomic_write_bytes
@@ -41,16 +42,35 @@ def run(args: argparse.Namespace) -> int:
     path = environment_file(args.scene, scene["environment"])
     traced = traced_scene(args.scene, scene)  # the measured curves by their full paths beside the file
     traced = traced if path is None else {**traced, "environment": {**traced["environment"], "file": path}}
-    budget.check_states(size["width"], size["height"], size["samples"], len(S.states_of(scene)) - 1,
-                        environment=environment.world_bytes(traced))
+    # A parametric design's states are one walk keeping each source's light (``states.one_walk``),
+    # its bands on the band pool's workers as a render's where they fit; a free-form one's a render each.
+    count = len(S.states_of(scene)) - 1
+    sources = 1 + len(scene["lamps"]) if meshes is None else 0
+    world = environment.world_bytes(traced)
+    workers = 0
+    if meshes is None and budget.uses_pool(size["width"], size["height"], size["samples"]):
+        workers = os.cpu_count() or 1
+        if budget.states_bytes(size["width"], size["height"], count, "exr", workers, world, sources) > \
+                budget.MEMORY_BUDGET:
+            workers = 0
+    budget.check_states(size["width"], size["height"], size["samples"], count, workers=workers, environment=world,
+                        sources=sources)
+    pool = None
+    if workers:
+        from ..raytrace import band_pool  # only for heavy walks (start-up speed)
+
+        pool = band_pool.shared()
 
     def progress(done: int, total: int, label: str) -> None:
-        print(f"state {done + 1} of {total}: {label}", flush=True)
+        if sources and done == 0:
+            print(f"one walk for {label}", flush=True)
+        elif not sources:
+            print(f"state {done + 1} of {total}: {label}", flush=True)
 
     with ctrl_c_sets() as stop:
         try:
             light = S.render_states(traced, progress=progress, should_stop=stop.is_set, meshes=meshes,
-                                    recorded=scene)
+                                    recorded=scene, pool=pool)
         except RenderCancelled:
             raise stop.interrupt() from None
     atomic_write_bytes(args.output, S.to_bytes(light))

@@ -34,6 +34,7 @@ from ..raytrace.engine.rays import (
     BACKGROUND_PASS,
     BODY_PASS,
     BULB_PASS,
+    BY_PASS,
     LENS_SURFACE,
     NOT_DEFERRED,
     REFLECTOR_CONSTANT,
@@ -96,6 +97,8 @@ class MeshRays(Rays):
 
 class _Context(Lighting):
     """Everything constant during one render of a free-form design."""
+
+    planes = BY_PASS  # its bands accumulate the passes (``rays.Band``)
 
     def __init__(self, scene: dict, camera: Camera, geometry: Geometry, embree: EmbreeScene, samples: int,
                  filter_name: str, record: bool, bands: int | None = None):

@@ -1,12 +1,13 @@
 """Lighting states without re-rendering (issue 23 item 5; Speos calls its version the Light Panel).
 
-Radiance is linear in each source. A design is rendered once with every bulb off (the *surroundings*:
-sun, sky or environment, ambient, phantom light, the reflector's appearance constant of the paper mode)
-and once per *state* with only that source lit: each lamp's bulb, and each filament of a two-filament
-bulb (P21/5W, PY21/5W: tail and stop) on its own. A state's pass is its render minus the
-surroundings', so that
+Radiance is linear in each source. A design is walked once with every bulb lit, each path's light
+kept per source as it is added (``raytrace.engine.rays.BySource``): the *surroundings* (sun, sky or
+environment, ambient, phantom light, the reflector's appearance constant of the paper mode) and each
+lamp's bulb or LED dies. A *state* is a lamp's bulb, or each filament of a two-filament bulb (P21/5W,
+PY21/5W: tail and stop) on its own; the filaments of one bulb share its sphere and spectrum, so a
+filament's pass is the lamp's light times its flux over the flux walked (L ∝ Φ, L = Φ / (4π² r²)):
 
-    image = w₀ · surroundings + Σ_s w_s · pass_s
+    pass_s = (Φ_s / Φ_walked) · L_lamp(s),   image = w₀ · surroundings + Σ_s w_s · pass_s
 
 with w = 1 for what the design itself has lit reproduces the design's render, and switching a function
 on or off or changing a bulb's flux is a weighted sum of arrays (``relight``: milliseconds at 512²)
@@ -14,11 +15,13 @@ instead of a render. A filament's weight is its flux over the flux it was render
 or a scale of the bulb's intensity (paper). Both filaments of a P21/5W lit (tail and stop at once)
 is their sum, as in the bulb.
 
-What the passes keep fixed: every render uses the same rays (the seed, the samples, the pixel filter);
-the tracer's cut-off is on a branch's attenuation, not its brightness, so it is the same in every
-render; its adaptive sampling is off here (``ADAPTIVE_OFF``) because it chooses pixels by their
-values. Glare is not linear (a threshold): the passes are without it, and a re-weighted image gets
-glare, when the design has it on, after the sum (``images.glare``).
+A state's image equals a direct render of that state: the same rays (the seed, the samples, the
+pixel filter) whose light is added in another order; the tracer's cut-off is on a branch's
+attenuation, not its brightness, so it is the same whatever is lit; its adaptive sampling is off here
+(``ADAPTIVE_OFF``) because it chooses pixels by their values (a direct render would choose others). A
+free-form design (its own tracer) is still rendered once with every bulb off and once per state, its
+pass that render minus the surroundings'. Glare is not linear (a threshold): the passes are without it,
+and a re-weighted image gets glare, when the design has it on, after the sum (``images.glare``).
 
 The file (``save``/``load``) is an .npz of float32 arrays with a JSON header: the scene rendered, the
 states and their labels, the light model and bands, and the size.
@@ -44,6 +47,7 @@ from ..scene.reading import SceneError
 
 if TYPE_CHECKING:
     from ..freeform.cache import DesignMeshes
+    from ..raytrace.engine.schedule import BandsElsewhere
 
 SURROUNDINGS = "surroundings"
 FORMAT = "lamp-light-states/1"
@@ -172,6 +176,24 @@ def states_of(scene: dict) -> list[State]:
     return out
 
 
+def lit_scene(scene: dict) -> dict:
+    """The scene walked for the states (``render_states``): every bulb lit, each in its own filament
+    state, glare off."""
+    out = copy.deepcopy(scene)
+    out["glare"]["on"] = False
+    for _prefix, _name, bulb in sources(out):
+        bulb["on"] = True
+    return out
+
+
+def walked_level(scene: dict, states: list[State], lamp: int) -> float:
+    """What lamp ``lamp``'s light was walked with in ``lit_scene``: the flux (photometric) or scale
+    (paper) of its state whose filament the bulb is in (a single-filament bulb's only state)."""
+    bulb = sources(scene)[lamp][2]
+    own = [s for s in states if s.lamp == lamp and s.filament in (bulb.get("state"), "on")]
+    return (own or [s for s in states if s.lamp == lamp])[0].rendered
+
+
 def scene_for(scene: dict, state: State | None) -> dict:
     """The scene with only ``state`` lit (None: every bulb off), glare off."""
     out = copy.deepcopy(scene)
@@ -206,25 +228,27 @@ class LightStates:
 
 def render_states(scene: dict, *, progress: Callable[[int, int, str], None] | None = None,
                   should_stop: Callable[[], bool] | None = None, threads: int | None = None,
-                  meshes: DesignMeshes | None = None, recorded: dict | None = None) -> LightStates:
-    """Render the surroundings and one pass per state of a normalised scene (a free-form design's on
-    its ``meshes``, its bulb parts the states). ``progress(done, total, label)`` before each render.
-    ``recorded`` is the scene the file keeps, when ``scene`` is traced with full paths (its curves)."""
-    from ..raytrace.engine import render_passes
-
+                  meshes: DesignMeshes | None = None, recorded: dict | None = None,
+                  pool: BandsElsewhere | None = None) -> LightStates:
+    """The surroundings and one pass per state of a normalised scene: a parametric design's from one
+    walk (``one_walk``), a free-form design's on its ``meshes`` by a render per state (its bulb parts
+    the states). ``progress(done, total, label)`` as the work goes on (the walk's percent done of
+    100, or the renders done). ``recorded`` is the scene the file keeps, when ``scene`` is traced with full paths
+    (its curves). ``pool`` (``band_pool.shared()``) traces the walk's bands as a render's."""
     if "freeform" in scene and meshes is None:
         raise SceneError("freeform", "the design's meshes were not given; allowed a free-form design loaded with "
                                      "its .glb")
+    if meshes is None:
+        return one_walk(scene, progress=progress, should_stop=should_stop, threads=threads, recorded=recorded,
+                        pool=pool)
     states = states_of(scene)
     total = len(states)
 
     def one(state: State | None, k: int):
         if progress is not None:
             progress(k, total, state.label if state is not None else states[0].label)
-        if meshes is not None:  # every sample of every pixel, as the free-form tracer always traces
-            return meshes.render_passes(scene_for(scene, state), should_stop=should_stop, threads=threads)
-        return render_passes(scene_for(scene, state), keep_passes=False, should_stop=should_stop,
-                             threads=threads, adaptive_threshold=ADAPTIVE_OFF)
+        # every sample of every pixel, as the free-form tracer always traces
+        return meshes.render_passes(scene_for(scene, state), should_stop=should_stop, threads=threads)
 
     base = one(None, 0)
     surroundings = base.image.astype(np.float32)
@@ -234,6 +258,37 @@ def render_states(scene: dict, *, progress: Callable[[int, int, str], None] | No
         passes[state.key] = lit - surroundings
     stats = {"light_model": base.stats.get("light_model", "paper"), "bands": base.stats.get("bands")}
     return LightStates(copy.deepcopy(scene if recorded is None else recorded), states, surroundings, passes, stats)
+
+
+def one_walk(scene: dict, *, progress: Callable[[int, int, str], None] | None = None,
+             should_stop: Callable[[], bool] | None = None, threads: int | None = None,
+             recorded: dict | None = None, pool: BandsElsewhere | None = None) -> LightStates:
+    """``render_states`` of a parametric design: one walk of ``lit_scene`` keeping each source's light
+    (``render_passes(by_source=True)``); each state's pass its lamp's light times Φ_s / Φ_walked."""
+    from ..raytrace.engine import render_passes
+
+    states = states_of(scene)
+    label = f"{len(states) - 1} states and the surroundings"
+
+    def walked(fraction: float) -> None:
+        if progress is not None:
+            progress(min(99, int(100 * fraction)), 100, label)
+
+    walked(0.0)
+    result = render_passes(lit_scene(scene), keep_passes=True, by_source=True, should_stop=should_stop,
+                           threads=threads, adaptive_threshold=ADAPTIVE_OFF, progress=walked, pool=pool)
+    passes = {}
+    for state in states[1:]:
+        light = result.passes[f"lamp{state.lamp}"]
+        walked_with = walked_level(scene, states, state.lamp)
+        if state.rendered == walked_with:
+            passes[state.key] = light
+        else:  # the bulb's other filament: L ∝ Φ
+            ratio = state.rendered / walked_with if walked_with > 0 else 0.0
+            passes[state.key] = light * np.float32(ratio)
+    stats = {"light_model": result.stats.get("light_model", "paper"), "bands": result.stats.get("bands")}
+    return LightStates(copy.deepcopy(scene if recorded is None else recorded), states, result.passes["surroundings"],
+                       passes, stats)
 
 
 def weights_for(light: LightStates, on: dict[str, bool] | None = None,

@@ -2,8 +2,9 @@
 """The Light Panel: switch the design's functions on and off and change bulb fluxes without rendering
 (``core_tracer.measures.states``; Speos calls its version the Light Panel).
 
-``Render Light States`` renders the surroundings and one pass per bulb and filament (a modal job on a
-thread: progress in the status bar, Esc cancels); each state then has a switch and a level (lm for a
+``Render Light States`` walks the design once, keeping the light of its surroundings and of each lamp
+apart (``core_tracer.measures.states.one_walk``; its bands on the band pool's workers, as F12's; a modal
+job on a thread: progress in the status bar, Esc cancels); each state then has a switch and a level (lm for a
 photometric bulb, a scale for a paper bulb and the surroundings) whose change re-weights the held
 passes into the "Lamp Light Panel" image at once (the time shows in the panel). The passes live in
 memory for this session, keyed by scene; a change to the design makes them stale, which the panel
@@ -21,6 +22,7 @@ import numpy as np
 from bpy.props import BoolProperty, CollectionProperty, FloatProperty, PointerProperty, StringProperty
 
 from ...core_tracer.images import glare
+from ...core_tracer.raytrace import band_pool
 from ...core_tracer.scene.reading import SceneError
 from .. import image_view, jobs, reports
 from ..design import properties as design_properties
@@ -125,7 +127,8 @@ def forget_all() -> None:
 
 
 class StatesRun:
-    """``render_states`` on a thread, with its progress and a stop."""
+    """``render_states`` (one walk, its bands on the band pool as F12's) on a thread, with its progress
+    and a stop."""
 
     def __init__(self, scene: dict):
         self.scene = scene
@@ -141,10 +144,11 @@ class StatesRun:
         from ...core_tracer.raytrace.engine import RenderCancelled
 
         def progress(done: int, total: int, label: str) -> None:
-            self.fraction, self.stage = done / total, f"{label} ({done + 1} of {total})"
+            self.fraction, self.stage = done / total, label
 
         try:
-            self.result = S.render_states(self.scene, progress=progress, should_stop=self._stop.is_set)
+            self.result = S.render_states(self.scene, progress=progress, should_stop=self._stop.is_set,
+                                          pool=band_pool.shared())
         except RenderCancelled:
             self.error = "cancelled"
         except SceneError as e:
@@ -176,8 +180,8 @@ def _finish(operator, context, run: StatesRun, design_key: str, seconds: float) 
 
 
 class LAMP_OT_light_states_render(jobs.ModalJob, bpy.types.Operator):
-    """Render the design once per bulb and filament (and its surroundings), so that the Light Panel switches
-    functions and changes fluxes without rendering"""
+    """Render the design once, keeping the light of each bulb and filament (and of its surroundings) apart,
+    so that the Light Panel switches functions and changes fluxes without rendering"""
 
     bl_idname = "lamp.light_states_render"
     bl_label = "Render Light States"

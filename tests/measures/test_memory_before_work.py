@@ -43,7 +43,7 @@ def test_the_states_estimate_holds_what_it_allocates():
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    estimate = budget.states_bytes(64, 48, count) - budget.BASE_BYTES
+    estimate = budget.states_bytes(64, 48, count, sources=1 + len(scene["lamps"])) - budget.BASE_BYTES
     arrays = (count + 1) * 64 * 48 * 12
     assert estimate >= 2 * arrays and peak <= estimate + budget.BASE_BYTES, (peak, estimate)
 

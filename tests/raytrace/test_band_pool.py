@@ -51,6 +51,9 @@ CASES = {
                                 {"samples": 8, "adaptive_threshold": 0}),
     "adaptive-surroundings": (_day, 96, 64, 4, {"samples": 16}),
     "every-sample-surroundings": (_day, 64, 48, 4, {"samples": 8, "adaptive_threshold": 0}),
+    # the light states' one walk: each source's light kept (``rays.BySource``), with and without adaptive sampling
+    "by-source-surroundings": (_day, 64, 48, 4, {"samples": 8, "adaptive_threshold": 0, "by_source": True}),
+    "adaptive-by-source-surroundings": (_day, 96, 64, 4, {"samples": 16, "by_source": True}),
 }
 
 

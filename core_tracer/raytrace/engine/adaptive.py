@@ -15,7 +15,7 @@ from ..parts import body_box
 from ..parts.base import rows
 from . import sampling
 from .context import Context
-from .rays import BACKGROUND_PASS, PASS_NAMES, Band
+from .rays import BACKGROUND_PASS, Band
 from .sampling import Requests, over_samples, pilot_samples, sample_groups
 
 # Adaptive sampling's agreement, a fraction of a pixel's brightness: on the four-lamp preset at 16
@@ -37,7 +37,7 @@ def sample_rays(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
     # sums whatever the threads.
     for count, o, d in sample_groups(ctx.camera, pixels, ctx.samples, ctx.filter_name):
         group = yield o, d
-        per_ray = group.acc.reshape(len(PASS_NAMES), len(pixels), count, ctx.pass_channels)
+        per_ray = group.acc.reshape(ctx.planes.count, len(pixels), count, ctx.pass_channels)
         band.acc += over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
@@ -67,10 +67,10 @@ def _trace_adaptive(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
     pilot_values = yield from sampling.per_sample(ctx, band, pixels, pilot)
     # Each pass's least and greatest pilot sample over the pixel's 3 x 3 neighbourhood, on the passes'
     # own planes (passes, rows, columns, channels): no transposed copies.
-    shape = (len(PASS_NAMES), y1 - y0, width, ctx.pass_channels)
+    shape = (ctx.planes.count, y1 - y0, width, ctx.pass_channels)
     low = _neighbourhood(over_samples(np.minimum, pilot_values).reshape(shape), np.minimum)
     high = _neighbourhood(over_samples(np.maximum, pilot_values).reshape(shape), np.maximum)
-    per_pixel = (len(PASS_NAMES), -1, ctx.pass_channels)  # views of the same planes, a pixel per column
+    per_pixel = (ctx.planes.count, -1, ctx.pass_channels)  # views of the same planes, a pixel per column
     pilot_mean = over_samples(np.add, pilot_values) / len(pilot)
     threshold = ctx.adaptive_threshold * pilot_mean.sum(axis=0).max(axis=1)
     busy = _spread(high.reshape(per_pixel), low.reshape(per_pixel)) > threshold
@@ -83,7 +83,8 @@ def _trace_adaptive(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
         # Busy pixels whose whole neighbourhood's pilot samples saw only the world (a textured sky):
         # their other samples are looked up in it rather than traced (``_world_samples``, which
         # traces any whose rays meet the body after all).
-        world = busy & ~_any_but_background(high) & ~_any_but_background(low)
+        background = ctx.planes.of(BACKGROUND_PASS)
+        world = busy & ~_any_but_background(high, background) & ~_any_but_background(low, background)
         busy &= ~world
         busy[_world_samples(ctx, band, pixels, np.flatnonzero(world), pilot, pilot_values)] = True
     busy = np.flatnonzero(busy)
@@ -141,11 +142,13 @@ def _outside_rows(ctx: Context, band: Band, y0: int, y1: int, pilot: np.ndarray,
         busy[pixel] = _spread(row_high, row_low) > threshold[pixel]
 
 
-def _any_but_background(planes: np.ndarray) -> np.ndarray:
-    """Per pixel of (passes, pixels, channels) ``planes``: whether a pass other than the background's is not 0."""
+def _any_but_background(planes: np.ndarray, background: int) -> np.ndarray:
+    """Per pixel of (planes, pixels, channels) ``planes``: whether a plane other than the background's
+    (``background``; a render of light states has it hold all the surroundings, the body too, which
+    ``_world_samples`` then finds by its box) is not 0."""
     found = np.zeros(planes.shape[1:], dtype=bool)
-    for pass_id, plane in enumerate(planes):
-        if pass_id != BACKGROUND_PASS:
+    for plane_id, plane in enumerate(planes):
+        if plane_id != background:
             found |= plane != 0
     return found.any(axis=1)
 
@@ -173,12 +176,12 @@ def _world_samples(ctx: Context, band: Band, pixels: np.ndarray, idx: np.ndarray
             toward[near] = ((t_near <= t_far) & (t_near > 0)).reshape(len(rest), len(near)).any(axis=0)
         by_sample = np.empty((ctx.samples, len(part), ctx.pass_channels))
         by_sample[rest] = ctx.sky_seen(d).reshape(len(rest), len(part), ctx.pass_channels)
-        by_sample[pilot] = pilot_values[:, BACKGROUND_PASS][:, part]
+        by_sample[pilot] = pilot_values[:, ctx.planes.of(BACKGROUND_PASS)][:, part]
         total = by_sample[0].copy()
         for k in range(1, ctx.samples):  # in sample order, as the traced pixels
             total += by_sample[k]
         seen = ~toward
-        band.acc[BACKGROUND_PASS, part[seen]] = total[seen] / ctx.samples
+        band.acc[ctx.planes.of(BACKGROUND_PASS), part[seen]] = total[seen] / ctx.samples
         band.segments += len(rest) * int(seen.sum())
         band.max_depth = max(band.max_depth, 1)
         met.append(part[toward])

@@ -16,7 +16,7 @@ from . import walk
 from .adaptive import sample_rays
 from .context import Context
 from .eyes import put_traced, rays_toward_body, slots_seeing_body
-from .rays import PASS_NAMES, Band, Rays, concat, no_rays
+from .rays import Band, Rays, concat, no_rays
 from .sampling import Requests
 
 # Below this many live rays, a worker stops tracing its band alone: the rays left (the band's deep
@@ -170,7 +170,7 @@ def _carried_wavefront(ctx: Context, tails: list[_Tail], wave: _Wavefront | None
             tail.put_back(wave.acc)
         carried_pixels = np.unique(image_pix)
     n_carried = len(carried_pixels)
-    acc = np.zeros((len(PASS_NAMES), n_carried + n, ctx.pass_channels))
+    acc = np.zeros((ctx.planes.count, n_carried + n, ctx.pass_channels))
     for tail in tails:
         tail.lo, tail.hi = np.searchsorted(carried_pixels, [tail.first_pixel, tail.first_pixel + tail.band.n])
         tail.pixels = carried_pixels[tail.lo:tail.hi]

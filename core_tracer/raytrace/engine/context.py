@@ -11,6 +11,7 @@ from ..camera import Camera
 from ..lamp_table import LampTable
 from ..lighting import Lighting
 from ..parts import body_box, parts_for
+from .rays import BY_PASS
 
 # The depth limit (docs/photometric.md, light guides): at most this many segments along one branch;
 # the branches still alive there end, counted in ``Band.cut_at_depth`` and the render's statistics.
@@ -26,6 +27,7 @@ class Context(Lighting):
     """Everything constant during one render."""
 
     walker = None  # how rays find surfaces: the parametric lamps' own walk (``walk.Walker``)
+    planes = BY_PASS  # what a band accumulates: the passes, or each source's light (``rays.BySource``)
 
     def __init__(self, scene: dict, camera: Camera, record_transitions: bool, samples: int, filter_name: str,
                  adaptive_threshold: float = 0.0, bands: int | None = None):

@@ -28,7 +28,7 @@ def rays_toward_body(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> 
     if len(miss) < len(o) // 8:
         return None
     if ctx.background_seen and ctx.world_seen:
-        put_slots(band.acc[BACKGROUND_PASS], miss, ctx.sky_seen(d[miss]))
+        put_slots(band.acc[band.planes.of(BACKGROUND_PASS)], miss, ctx.sky_seen(d[miss]))
     band.segments += len(miss)
     band.max_depth = max(band.max_depth, 1)
     return np.nonzero(toward)[0]

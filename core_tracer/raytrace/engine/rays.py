@@ -147,12 +147,71 @@ def _bin_sums(slot: np.ndarray, values: np.ndarray, n_slots: int) -> np.ndarray:
                        minlength=channels * n_slots).reshape(n_slots, channels)
 
 
+class ByPass:
+    """The planes a band accumulates: one per contribution pass (``PASS_NAMES``, docs/model.md §5.2)."""
+
+    names = PASS_NAMES
+
+    @property
+    def count(self) -> int:
+        return len(self.names)
+
+    def of(self, pass_id: int) -> int:
+        """The plane of what ``pass_id`` adds that no lamp emits (the background, the body, the sun)."""
+        return pass_id
+
+    def add(self, acc: np.ndarray, pass_id: int, pix: np.ndarray, values: np.ndarray,
+            lamp: np.ndarray | None = None) -> None:
+        """Add ``values`` (N, C) of pass ``pass_id`` to the pixels ``pix`` of the planes ``acc``;
+        ``lamp``: the lamp that emitted each value (None: no lamp did)."""
+        add_to_pass(acc[pass_id], pix, values)
+
+
+class BySource(ByPass):
+    """The planes of a render of light states: one per source of light, so that the light of each
+    can be weighted after one walk (``measures.states``). Radiance is linear in the sources,
+
+        L = L_surroundings + Σ_lamps L_lamp
+
+    where L_lamp is what lamp's bulb or LED dies emit (a bulb hit ⑪, a die, eq. 3's glow or the
+    photometric reflector's scatter of the bulb's light) and L_surroundings everything else (the
+    sun, sky and environment, the ambient term, the reflector constant, the phantom light). Plane 0
+    holds the surroundings, plane 1 + i lamp i's light: the same rays, so the planes' sum is the
+    render's image."""
+
+    SURROUNDINGS = 0
+
+    def __init__(self, lamp_count: int):
+        self.names = ("surroundings", *(f"lamp{i}" for i in range(lamp_count)))
+
+    def of(self, pass_id: int) -> int:
+        return self.SURROUNDINGS
+
+    def add(self, acc: np.ndarray, pass_id: int, pix: np.ndarray, values: np.ndarray,
+            lamp: np.ndarray | None = None) -> None:
+        if lamp is None:
+            add_to_pass(acc[self.SURROUNDINGS], pix, values)
+            return
+        lamps = np.unique(lamp)
+        if len(lamps) == 1:  # every ray of one lamp: no gathers
+            add_to_pass(acc[1 + int(lamps[0])], pix, values)
+            return
+        for one in lamps:
+            sel = np.nonzero(lamp == one)[0]
+            add_to_pass(acc[1 + int(one)], pix.take(sel), rows(values, sel))
+
+
+BY_PASS = ByPass()
+
+
 class Band:
-    """Accumulates the passes of one band of pixels and the band's statistics."""
+    """Accumulates the planes of one band of pixels (``ctx.planes``: its passes, or its sources'
+    light) and the band's statistics."""
 
     def __init__(self, n_pixels: int, ctx, acc: np.ndarray | None = None):
         self.n = n_pixels
-        self.acc = np.zeros((len(PASS_NAMES), n_pixels, ctx.pass_channels)) if acc is None else acc
+        self.planes = ctx.planes
+        self.acc = np.zeros((self.planes.count, n_pixels, ctx.pass_channels)) if acc is None else acc
         self.to_xyz = ctx.to_xyz  # (K, 3): a photometric leaf's bands to X, Y, Z as added; None: kept (R, G, B)
         self.segments = 0
         self.max_depth = 0
@@ -161,14 +220,16 @@ class Band:
         self.transitions: set[tuple[int, int, int]] = set()
         self.record = ctx.record  # whether the render records path transitions (its context's flag)
 
-    def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
+    def add(self, pass_id: int, pix: np.ndarray, values: np.ndarray, lamp: np.ndarray | None = None) -> None:
         """Add ``values`` (N, C) to the pixels ``pix`` of a pass: R, G, B as they are; photometric
-        bands (N, K) as X, Y, Z, so that passes, samples and adaptive sampling work on 3 channels."""
-        add_to_pass(self.acc[pass_id], pix, self.in_pass(values))
+        bands (N, K) as X, Y, Z, so that passes, samples and adaptive sampling work on 3 channels.
+        ``lamp`` (N,): the lamps whose bulb or dies emitted the values (``BySource``); None: light
+        no lamp emits."""
+        self.planes.add(self.acc, pass_id, pix, self.in_pass(values), lamp)
 
     def add_seen(self, pass_id: int, pix: np.ndarray, values: np.ndarray) -> None:
         """Add values already as the pass holds them (``Lighting.sky_seen``)."""
-        add_to_pass(self.acc[pass_id], pix, values)
+        add_to_pass(self.acc[self.planes.of(pass_id)], pix, values)
 
     def in_pass(self, values: np.ndarray) -> np.ndarray:
         """Leaf values (N, C) as a pass holds them: photometric bands turned to X, Y, Z in cd/m²."""

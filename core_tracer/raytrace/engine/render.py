@@ -25,7 +25,7 @@ from ..camera import make_camera
 from . import schedule
 from .adaptive import ADAPTIVE_THRESHOLD
 from .context import Context
-from .rays import PASS_NAMES
+from .rays import PASS_NAMES, BySource
 from .schedule import BandImage, BandsElsewhere, band_rows, never
 
 
@@ -42,10 +42,12 @@ class Film:
 
     def __init__(self, width: int, height: int, keep_passes: bool,
                  on_rows: Callable[[int, int, np.ndarray], None] | None = None,
-                 on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None):
+                 on_band: Callable[[int, int, np.ndarray, dict[str, np.ndarray]], None] | None = None,
+                 names: tuple[str, ...] = PASS_NAMES):
         self.width, self.height, self.keep_passes = width, height, keep_passes
         self.on_rows, self.on_band = on_rows, on_band
-        self.passes = np.zeros((len(PASS_NAMES) if keep_passes else 0, height, width, 3), dtype=np.float32)
+        self.names = names  # the planes kept: the passes, or the sources (``rays.BySource``)
+        self.passes = np.zeros((len(names) if keep_passes else 0, height, width, 3), dtype=np.float32)
         self.image = np.zeros((height, width, 3), dtype=np.float32)
         self.stats = {"segments": 0, "max_depth": 0, "cut_at_depth": 0, "transitions": set(), "busy_pixels": 0}
         self.workers: set[int] = set()  # the processes that traced bands (0: this one)
@@ -53,7 +55,7 @@ class Film:
     def add(self, y0: int, y1: int, band: BandImage) -> None:
         """The rows ``y0:y1`` traced."""
         if self.keep_passes:
-            self.passes[:, y0:y1] = band.passes.reshape(len(PASS_NAMES), y1 - y0, self.width, 3)
+            self.passes[:, y0:y1] = band.passes.reshape(len(self.names), y1 - y0, self.width, 3)
         self.image[y0:y1] = band.image.reshape(y1 - y0, self.width, 3)
         self.stats["segments"] += band.segments
         self.stats["busy_pixels"] += band.busy
@@ -65,7 +67,7 @@ class Film:
             self.on_rows(y0, y1, self.image[y0:y1])
         if self.on_band is not None:
             self.on_band(y0, y1, self.image[y0:y1],
-                         {name: self.passes[i, y0:y1] for i, name in enumerate(PASS_NAMES)} if self.keep_passes
+                         {name: self.passes[i, y0:y1] for i, name in enumerate(self.names)} if self.keep_passes
                          else {})
 
     def expose(self, traced: Iterator[tuple[int, int, BandImage]], n_bands: int,
@@ -81,7 +83,7 @@ class Film:
         stats["seconds"] = seconds
         stats["width"], stats["height"], stats["samples"] = self.width, self.height, samples
         stats["worker_processes"] = len(self.workers - {0})  # how many of a pool's processes traced bands
-        passes = dict(zip(PASS_NAMES, self.passes, strict=False)) if self.keep_passes else {}
+        passes = dict(zip(self.names, self.passes, strict=False)) if self.keep_passes else {}
         return RenderResult(self.image, passes, stats)
 
 
@@ -94,7 +96,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
                   keep_passes: bool = True, samples: int | None = None,
                   filter_name: str = pixel_filter.DEFAULT_FILTER, world_seen: bool = True,
                   adaptive_threshold: float | None = None, pool: BandsElsewhere | None = None,
-                  bands: int | None = None) -> RenderResult:
+                  bands: int | None = None, by_source: bool = False) -> RenderResult:
     """Render a normalised scene; returns the image and its contribution passes (docs/model.md §5.2).
 
     ``width``/``height`` override the scene's image size (the camera's field of view still
@@ -115,17 +117,21 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     A scene whose ``light_model`` is "photometric" is traced on ``bands`` wavelength bands
     (None: ``spectral.DEFAULT_BANDS``) and its image and passes are CIE XYZ with Y in cd/m²
     (``stats["light_model"]`` says which); the paper mode's are linear RGB.
+
+    ``by_source`` keeps, instead of the passes, each source's light (``rays.BySource``): the
+    ``surroundings`` and ``lamp0``, ``lamp1``, ... (what each lamp's bulb or LED dies emit), from the
+    same rays, summing to the image (the light states of ``measures.states``, from one walk).
     """
     width = int(width or scene["image"]["width"])
     height = int(height or scene["image"]["height"])
     start = time.perf_counter()
     ctx = make_context(scene, width, height, record_transitions=record_transitions, samples=samples,
                        filter_name=filter_name, adaptive_threshold=adaptive_threshold, world_seen=world_seen,
-                       bands=bands)
+                       bands=bands, by_source=by_source)
     band_count = bands
     bands = band_rows(ctx)
     threads = max(1, min(threads or os.cpu_count() or 1, len(bands)))
-    film = Film(width, height, keep_passes, on_rows, on_band)
+    film = Film(width, height, keep_passes, on_rows, on_band, ctx.planes.names)
 
     def on_threads(some: list[tuple[int, int]]) -> Iterator[tuple[int, int, BandImage]]:
         for y0, y1, band in schedule.traced_bands(ctx, some, max(1, min(threads, len(some))), should_stop or never):
@@ -134,7 +140,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     if pool is not None and threads > 1:
         options = {"record_transitions": record_transitions, "samples": ctx.samples, "filter_name": filter_name,
                    "adaptive_threshold": ctx.adaptive_threshold, "world_seen": world_seen,
-                   "keep_passes": keep_passes, "bands": band_count}
+                   "keep_passes": keep_passes, "bands": band_count, "by_source": by_source}
         traced = pool.traced_bands(scene, width, height, options, bands, threads, should_stop or never, on_threads)
     else:
         traced = on_threads(bands)
@@ -149,7 +155,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
 def make_context(scene: dict, width: int, height: int, *, record_transitions: bool = False,
                  samples: int | None = None, filter_name: str = pixel_filter.DEFAULT_FILTER,
                  adaptive_threshold: float | None = None, world_seen: bool = True,
-                 bands: int | None = None) -> Context:
+                 bands: int | None = None, by_source: bool = False) -> Context:
     """Everything constant during one render of ``scene`` at ``width`` x ``height`` (the
     arguments as ``render_passes`` takes them): built alike in this process and in a worker
     process of a ``band_pool``, so that both trace the same bands to the same values."""
@@ -160,6 +166,8 @@ def make_context(scene: dict, width: int, height: int, *, record_transitions: bo
     ctx = Context(scene, make_camera(scene["camera"], width, height), record_transitions, samples, filter_name,
                   adaptive_threshold, bands)
     ctx.world_seen = world_seen
+    if by_source:
+        ctx.planes = BySource(len(scene["lamps"]))
     return ctx
 
 

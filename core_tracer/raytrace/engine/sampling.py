@@ -16,7 +16,7 @@ import numpy as np
 from .. import pixel_filter
 from ..camera import Camera, eye_rays
 from .context import Context
-from .rays import PASS_NAMES, Band
+from .rays import Band
 from .walk import trace_eye_rays
 
 TILE_RAYS = 65536  # eye rays per band of rows: bounds memory whatever the image size (benchmarks/bench_tracer.py)
@@ -73,12 +73,12 @@ def per_sample(ctx: Context, band: Band, pixels: np.ndarray,
         ray_pixels = np.tile(group_pixels, count)
         offsets = pixel_filter.grid_offsets(ctx.filter_name, group_pixels, sample_ids, ctx.samples, sample_major=True)
         group = yield eye_rays(ctx.camera, ray_pixels, offsets)
-        traced = group.acc.reshape(len(PASS_NAMES), count, len(group_pixels), ctx.pass_channels).transpose(1, 0, 2, 3)
+        traced = group.acc.reshape(ctx.planes.count, count, len(group_pixels), ctx.pass_channels).transpose(1, 0, 2, 3)
         if len(group_pixels) == len(pixels):
             values = traced
         else:
             if values is None:
-                values = np.empty((count, len(PASS_NAMES), len(pixels), ctx.pass_channels))
+                values = np.empty((count, ctx.planes.count, len(pixels), ctx.pass_channels))
             values[:, :, i0:i0 + len(group_pixels)] = traced
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)

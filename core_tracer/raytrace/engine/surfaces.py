@@ -85,7 +85,7 @@ def at_reflector(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
     if throughput is None:
         first = np.nonzero(~rays.seen_reflector.take(met))[0]
         band.add(REFLECTOR_CONSTANT, pix.take(first), rows(k, first) * rows(lamps.reflector_color, lamp.take(first)))
-        band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_intensity, lamp))
+        band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_intensity, lamp), lamp)
         k_bands = k
     else:  # no appearance constant; the finish's reflectance (one more reflection off it, deferred)
         # spread by the normalised lobe over the bulb's light
@@ -94,7 +94,7 @@ def at_reflector(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
         k_bands = throughput.bands(k, travelled, lamp)
         irradiance = bulb_irradiance(to_bulb, normal, hit, lamps, lamp)
         scattered = optics.scaled(k_bands, scatter * irradiance)
-        band.add(REFLECTOR_SCATTER, pix, scattered * rows(lamps.bulb_intensity, lamp))
+        band.add(REFLECTOR_SCATTER, pix, scattered * rows(lamps.bulb_intensity, lamp), lamp)
         deferred = (throughput, travelled, lamp)
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         band.add(REFLECTOR_SCATTER, pix, k_bands * sunlight.phantom(ctx.sun, ctx.phantom_lamps, lamp, hit, normal, -d))

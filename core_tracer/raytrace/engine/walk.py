@@ -176,7 +176,8 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
             k_met = rows(k, met)
             if throughput is not None:
                 k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
-            band.add(pass_id, rays.pix.take(met), k_met * rows(color, lamp))
+            # a bulb's light is its lamp's (``rays.BySource``); a wall's or socket's colour the surroundings'
+            band.add(pass_id, rays.pix.take(met), k_met * rows(color, lamp), lamp if sid == P.BULB else None)
     # LED dies end the path with their luminance toward the eye, k · L(θ, φ) (``parts.led_die``)
     met = np.nonzero(surface == P.LED)[0] if ctx.leds else ()
     if len(met):
@@ -186,7 +187,7 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
             k_met = throughput.bands(k_met, rows(rays.travelled, met), lamp)
         d_met = rows(rays.d, met)
         at = rows(rays.o, met) + optics.scaled(d_met, t.take(met))  # which die: a guide lit at both ends has two arrays
-        band.add(BULB_PASS, rays.pix.take(met), k_met * led_die.emitted(lamps, lamp, d_met, at))
+        band.add(BULB_PASS, rays.pix.take(met), k_met * led_die.emitted(lamps, lamp, d_met, at), lamp)
     # a plate lamp's housing ends the path
     met = np.nonzero(surface == P.HOUSING)[0] if ctx.plates and throughput is None else ()
     if len(met):
