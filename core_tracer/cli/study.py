@@ -347,10 +347,8 @@ def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view, 
     scenes = [v.scene for v in study.variants]
     if view is None and any(photometric.is_photometric(scene) for scene in scenes):
         # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
-        from ..photometry import output
-
         sheet = study_sheet.compose(study, images, text="bitmap", measured=measured, as_values=True)
-        output.write_photometric_exr(args.output, sheet, channels=("X", "Y", "Z"), attributes={
+        photometric.write_photometric_exr(args.output, sheet, channels=("X", "Y", "Z"), attributes={
             study_sheet.STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()})
         return ", XYZ (Y in cd/m2)"
     stops = common.photometric_stops(args)  # on top of the photometric cells' EV100 only
