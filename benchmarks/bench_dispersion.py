@@ -18,7 +18,6 @@ pick one band out of a render; the tracer itself is unchanged.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import copy
 import sys
@@ -31,6 +30,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.common import arguments  # noqa: E402
 from core_tracer import load_scene, render_passes  # noqa: E402
 from core_tracer.photometry import materials  # noqa: E402
 from core_tracer.raytrace import spectral  # noqa: E402
@@ -82,11 +82,7 @@ def compare(held: np.ndarray, own: np.ndarray) -> dict[str, float]:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default=str(ROOT / "presets" / "photometric-stop-lamp.json"))
-    parser.add_argument("--size", type=int, default=128)
-    parser.add_argument("--bands", type=int, default=spectral.DEFAULT_BANDS)
-    args = parser.parse_args()
+    args = arguments(__doc__, "photometric-stop-lamp.json", size=128, bands=spectral.DEFAULT_BANDS).parse_args()
     base = load_scene(args.preset)
     base["image"].update(width=args.size, height=args.size, samples=1)
     print(f"{Path(args.preset).name}, {args.size}x{args.size} px, 1 sample, K = {args.bands}: directions held at n_d "

@@ -11,7 +11,6 @@ The machine may be shared: each figure is the minimum over the runs (the least d
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import importlib.util
 import os
@@ -24,6 +23,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.common import arguments  # noqa: E402
 from core_tracer.freeform import GeometryCache, render_passes  # noqa: E402
 from core_tracer.freeform.meshes import MeshData  # noqa: E402
 from core_tracer.freeform.shapes import uv_sphere  # noqa: E402
@@ -178,10 +178,7 @@ def shown(times: list[tuple[float, float]]) -> str:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default=str(ROOT / "presets" / "four-lamp-rear-combination.json"))
-    parser.add_argument("--runs", type=int, default=5)
-    parser.add_argument("--size", type=int, default=512)
+    parser = arguments(__doc__, "four-lamp-rear-combination.json", runs=5, size=512)
     parser.add_argument("--save", metavar="PNG", help="also write the last render as PNG")
     args = parser.parse_args()
 

@@ -8,7 +8,6 @@ against the budget's estimate (``budget.GLARE_BYTES_PER_PIXEL``).
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import sys
 import time
@@ -21,16 +20,13 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 import core_tracer  # noqa: E402
+from benchmarks.common import arguments  # noqa: E402
 from core_tracer import budget  # noqa: E402
 from core_tracer.images import glare  # noqa: E402
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default=str(ROOT / "presets" / "four-lamp-rear-combination.json"))
-    parser.add_argument("--runs", type=int, default=5)
-    parser.add_argument("--size", type=int, default=512)
-    args = parser.parse_args()
+    args = arguments(__doc__, "four-lamp-rear-combination.json", runs=5, size=512).parse_args()
 
     scene = core_tracer.load_scene(args.preset)
     scene["glare"]["on"] = True

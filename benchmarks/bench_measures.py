@@ -11,7 +11,6 @@ directions (light tracing against the rendered cone means), with the time of eac
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import tempfile
@@ -21,16 +20,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.common import arguments  # noqa: E402
 from core_tracer.measures import export, intensity, light_tracing, report  # noqa: E402
 from core_tracer.raytrace.engine import render_passes  # noqa: E402
 from core_tracer.scene import load_scene  # noqa: E402
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default=str(ROOT / "presets" / "four-lamp-night-lit-photometric.json"))
-    parser.add_argument("--pixel-mm", type=float, default=2.0)
-    parser.add_argument("--replicates", type=int, default=2)
+    parser = arguments(__doc__, "four-lamp-night-lit-photometric.json", pixel_mm=2.0, replicates=2)
     parser.add_argument("--agreement", action="store_true", help="also compare the two estimators")
     args = parser.parse_args()
     scene = load_scene(args.preset)

@@ -8,7 +8,6 @@ the estimators give and the task's memory estimate (what the workers' limits are
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
 import sys
@@ -18,16 +17,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.common import arguments  # noqa: E402
 from core_tracer.optimise import photometric as P  # noqa: E402
 from core_tracer.optimise import search, spec  # noqa: E402
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default=str(ROOT / "presets" / "photometric-stop-lamp.json"))
-    parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--photons", type=int, default=P.DEFAULT_PHOTONS)
-    args = parser.parse_args()
+    args = arguments(__doc__, "photometric-stop-lamp.json", runs=3, photons=P.DEFAULT_PHOTONS).parse_args()
     cases = {
         "homogeneity, 1 mm front view": [{"measure": "luminance_cv", "pixel_mm": 1.0}],
         "homogeneity, 2 mm front view": [{"measure": "luminance_cv", "pixel_mm": 2.0}],

@@ -103,3 +103,18 @@ def _alive(pid: int) -> bool:
     except (PermissionError, OverflowError):
         return True  # someone else's process, or a number no process has: leave it
     return True
+
+
+class ImagesInOrder:
+    """The progress of a run that fills ``images``, one slot per variant or cell (None until its
+    image is back): a study's processes (``study.run``) and a cluster's cells (``cluster.engine``)."""
+
+    images: list
+
+    @property
+    def total(self) -> int:
+        return len(self.images)
+
+    @property
+    def done(self) -> int:
+        return sum(image is not None for image in self.images)

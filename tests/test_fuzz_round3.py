@@ -134,7 +134,7 @@ def cache_cells(n: int, folder: Path, rng: random.Random) -> collections.Counter
 def optimise_files(n: int, folder: Path, rng: random.Random) -> collections.Counter:
     """Hostile optimise files: read (``spec.from_doc``) and, when accepted, their study opened; nothing
     may appear outside their folder."""
-    from core_tracer.optimise import search, spec
+    from core_tracer.optimise import spec, storage
 
     good = {"schema": spec.SCHEMA, "base": "base.json",
             "parameters": [{"parameter": "cuts.height", "range": [0.5, 2.0]}],
@@ -148,7 +148,7 @@ def optimise_files(n: int, folder: Path, rng: random.Random) -> collections.Coun
         kind, doc = H.hostile_optimise_doc(rng, good)
         try:
             opt = spec.from_doc(doc, str(place), "o")
-            search.open_study(opt)
+            storage.open_study(opt)
             out["accepted"] += 1
         except SceneError:
             out["refused"] += 1

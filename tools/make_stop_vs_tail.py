@@ -26,8 +26,9 @@ sys.path.insert(0, ROOT)
 
 from core_tracer import load_scene, render_passes  # noqa: E402
 from core_tracer.images import display, labels, photometric  # noqa: E402
+from core_tracer.images import photometric as photometric_images  # noqa: E402
 from core_tracer.images.imageio import write_display  # noqa: E402
-from core_tracer.photometry import output, regulation  # noqa: E402
+from core_tracer.photometry import regulation  # noqa: E402
 
 PRESETS = (("stop", "photometric-stop-lamp.json"), ("tail", "photometric-tail-lamp.json"))
 LIT_FRACTION = 0.1  # of the 99th luminance percentile: the lit lens
@@ -78,9 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     view = display.view_transform()
     together = display.shown(images, scenes, view=view, ev100=common)
     shown, ev100 = together.pixels, together.exposure.ev100
-    lo, hi = output.luminance_range(np.concatenate([XYZ[..., 1].ravel() for XYZ in images]))
-    false = [output.false_colour(XYZ[..., 1], lo, hi, legend=False) for XYZ in images]
-    legend = output.false_colour(images[0][..., 1], lo, hi)[:, args.size:]
+    lo, hi = photometric_images.luminance_range(np.concatenate([XYZ[..., 1].ravel() for XYZ in images]))
+    false = [photometric_images.false_colour(XYZ[..., 1], lo, hi, legend=False) for XYZ in images]
+    legend = photometric_images.false_colour(images[0][..., 1], lo, hi)[:, args.size:]
 
     size = 14 if args.size >= 256 else 10
     print(f"EV100 {ev100:g} for both ({view.view}); false colour {lo:g} to {hi:g} cd/m2; K = {stats[0]['bands']}")

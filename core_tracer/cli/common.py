@@ -186,6 +186,14 @@ def check_output_folder(folder: str, what: str) -> None:
                                  "to") from None
 
 
+def add_image_arguments(parser: argparse.ArgumentParser, view: str = display.DEFAULT_VIEW,
+                        false_colour: bool = True) -> None:
+    """How a command's .png images look: the display options (``add_display_arguments``) and the
+    photometric ones (``add_photometric_arguments``)."""
+    add_display_arguments(parser, view)
+    add_photometric_arguments(parser, false_colour)
+
+
 def add_display_arguments(parser: argparse.ArgumentParser, view: str = display.DEFAULT_VIEW) -> None:
     """``--view NAME`` and ``--exposure EV|auto``: how a .png shows the linear image (an .exr keeps
     the linear values). The values are checked by ``check_view`` and ``_exposure``. ``view``: the

@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     from .. import budget
     from ..cluster import local_pool
     from ..cluster.cache import CellCache
-    from ..optimise import results, search
+    from ..optimise import results, search, storage
 
     cache = None if args.no_cache else CellCache(args.cache)
     tty = sys.stderr.isatty()
@@ -111,14 +111,14 @@ def run(args: argparse.Namespace) -> int:
     study = outcome.study
     results.write_trials(opt, study, os.path.join(folder, "trials.json"))
     results.write_history(opt, study, os.path.join(folder, "history.png"))
-    best = search.best(opt, study)
-    measured = len(search.finished_trials(study))
-    refused = search.count_finished(study) - measured
+    best = storage.best(opt, study)
+    measured = len(storage.finished_trials(study))
+    refused = storage.count_finished(study) - measured
     print(f"{measured + refused} trials in {printable(opt.storage)} ({measured} measured, {refused} refused by the "
           f"scene; {len(outcome.told)} this run: {outcome.rendered} rendered, {outcome.from_cache} from the cache) "
           f"in {seconds:.1f} s {where}")
     if not best:
-        closest = search.closest_infeasible(study)
+        closest = storage.closest_infeasible(study)
         detail = ""
         if closest is not None:
             detail = (f"; the closest is trial {closest.number} ({results.setting(closest.user_attrs['design'])}: "
@@ -127,11 +127,11 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 1
     presets = results.write_presets(opt, best, folder)
-    top = search.ranked(opt, study, results.SHEET_TRIALS)
+    top = storage.ranked(opt, study, results.SHEET_TRIALS)
     if opt.needs_task:
         results.write_sheet(opt, top, results.trial_images(opt, top, cache), os.path.join(folder, "sheet.png"))
-    first = search.finished_trials(study)[:1]
-    if first and first[0].number == 0 and search.feasible(first[0]):
+    first = storage.finished_trials(study)[:1]
+    if first and first[0].number == 0 and storage.feasible(first[0]):
         shown = ", ".join(f"{o.measure.name} {v:.4g}" for o, v in zip(opt.objectives, first[0].values, strict=True))
         print(f"start: trial 0 (the design as given): {results.setting(first[0].user_attrs['design'])} -> {shown}")
     for trial in best:

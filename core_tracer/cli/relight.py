@@ -11,7 +11,7 @@ import time
 from ..images.imageio import image_format
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
-from .common import add_display_arguments, add_photometric_arguments, check_output, view_for
+from .common import add_image_arguments, check_output, view_for
 
 HELP = "switch a design's functions on or off and change bulb fluxes on the passes 'states' wrote, without rendering"
 MAX_BYTES = 2_000_000_000
@@ -29,8 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--level", action="append", default=[], metavar="KEY=VALUE",
                         help="a state's flux in lm (photometric bulbs) or scale (paper bulbs, surroundings); "
                              "giving one switches the state on")
-    add_display_arguments(parser)
-    add_photometric_arguments(parser)
+    add_image_arguments(parser)
 
 
 def _keys(values: list[str]) -> list[str]:

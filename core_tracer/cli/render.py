@@ -14,8 +14,7 @@ from ..scene.beside import environment_file
 from ..scene.reading import SceneError
 from ..scene.safe_text import printable
 from .common import (
-    add_display_arguments,
-    add_photometric_arguments,
+    add_image_arguments,
     check_output,
     check_output_folder,
     ctrl_c_sets,
@@ -43,8 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--environment", metavar="IMAGE",
                         help="your own environment image (.exr or .hdr, any folder) as the surroundings, in place "
                              "of the scene's; a scene file names only an image beside it or a bundled world")
-    add_display_arguments(parser)
-    add_photometric_arguments(parser)
+    add_image_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -23,18 +23,9 @@ from ..images.imageio import image_format
 from ..scene.reading import SceneError, read_json
 from ..scene.safe_text import printable
 from ..study import definition as st
+from ..study.measured import measured_doc
 from ..study.parameters import study_parameters
-from .common import (
-    add_display_arguments,
-    add_photometric_arguments,
-    check_output,
-    check_output_folder,
-    ctrl_c_sets,
-    design_meshes,
-    in_file,
-    photometric_stops,
-    view_for,
-)
+from . import common
 
 VARIANTS = "variant presets (variant-NN.json)"
 HELP = "render variants of a design (one or two parameters varied) on a labelled contact sheet"
@@ -69,8 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-cache", action="store_true", help="render every variant, keep none")
     parser.add_argument("--save-study", metavar="STUDY.json", help="write the study definition (base embedded)")
     parser.add_argument("--save-variants", metavar="DIR", help="write every variant as a lamp-scene/1 preset")
-    add_display_arguments(parser, view=display.LAMP_VIEW)  # a sheet of lamps: the project's lamp view
-    add_photometric_arguments(parser, false_colour=False)
+    common.add_image_arguments(parser, view=display.LAMP_VIEW, false_colour=False)  # a sheet of lamps: the lamp view
     parser.add_argument("--list", action="store_true", help="list the parameters a study can vary and exit")
     parser.add_argument("--measure", action="append", default=[], metavar="NAME",
                         help="a measure to put under each cell (photometric designs; e.g. homogeneity.lmin_lmax, "
@@ -95,14 +85,7 @@ def _size(text: str) -> tuple[int, int]:
 
 def _measured(args: argparse.Namespace) -> dict:
     """The study fields of ``--measure``, ``--sort`` and ``--filter`` (those given)."""
-    doc: dict = {}
-    if args.measure:
-        doc["measures"] = list(args.measure)
-    if args.sort:
-        doc["sort"] = args.sort
-    if args.filter:
-        doc["filter"] = list(args.filter)
-    return doc
+    return measured_doc(args.measure, args.sort, args.filter)
 
 
 def _with_options(error: SceneError) -> SceneError:
@@ -144,7 +127,7 @@ def _build(args: argparse.Namespace) -> st.Study:
         return st.Study.build(base, axes, size, args.title or "", measured)  # None: framed on the lamp
     except SceneError as e:
         if e.path == "base" or e.path.startswith("base."):  # a problem of the design file itself
-            raise in_file(SceneError(e.path[len("base."):], e.message), args.base) from None
+            raise common.in_file(SceneError(e.path[len("base."):], e.message), args.base) from None
         raise _with_options(e) from None
 
 
@@ -159,7 +142,7 @@ def _with_environment(study: st.Study, document: str) -> tuple[st.Study, int]:
     try:
         path = environment_file(document, study.base["environment"])
     except SceneError as e:
-        raise in_file(SceneError(f"base.{e.path}", e.message), document) from None
+        raise common.in_file(SceneError(f"base.{e.path}", e.message), document) from None
     runnable = study
     if path is not None:
         doc = study.to_doc()
@@ -181,7 +164,7 @@ def _with_curves(study: st.Study, document: str) -> st.Study:
 
     mesh_file = None
     if "freeform" in study.base:  # its meshes beside the document too, checked before any worker starts
-        design_meshes(document, study.base)
+        common.design_meshes(document, study.base)
         from ..freeform.loading import mesh_file_path
 
         mesh_file = mesh_file_path(document, study.base["freeform"]["mesh_file"])
@@ -190,7 +173,7 @@ def _with_curves(study: st.Study, document: str) -> st.Study:
         try:
             found = spectrum_files(document, v.scene)
         except SceneError as e:
-            raise in_file(SceneError(f"base.{e.path}", e.message), document) from None
+            raise common.in_file(SceneError(f"base.{e.path}", e.message), document) from None
         if mesh_file is not None:
             found[("freeform", "mesh_file")] = mesh_file
         variants.append(dataclasses.replace(v, scene=with_curves_at(v.scene, found)))
@@ -254,13 +237,13 @@ def run(args: argparse.Namespace) -> int:
     view = None
     if args.output is not None:
         if image_format(args.output) == "png":
-            view = view_for(args)
-        check_output(args.output, "output")
+            view = common.view_for(args)
+        common.check_output(args.output, "output")
     if args.save_study:
-        check_output(args.save_study, "--save-study")
+        common.check_output(args.save_study, "--save-study")
     if args.save_variants:
-        check_output_folder(args.save_variants, "--save-variants")
-        check_output_folder(os.path.dirname(os.path.abspath(args.save_variants)), "--save-variants")
+        common.check_output_folder(args.save_variants, "--save-variants")
+        common.check_output_folder(os.path.dirname(os.path.abspath(args.save_variants)), "--save-variants")
         try:
             check_replaceable_folder(args.save_variants, _is_variant_file, VARIANTS)
         except OSError as e:
@@ -298,7 +281,7 @@ def run(args: argparse.Namespace) -> int:
     if engine == "dask":
         dask_engine.scheduler_address(args.scheduler)  # checked before the first worker starts
     counted = ""
-    with ctrl_c_sets() as stop:
+    with common.ctrl_c_sets() as stop:
         if engine in ("dask", "pool"):
             images, how, counted = _run_cells(args, runnable, world, on_progress, stop, dask=engine == "dask")
         else:
@@ -364,13 +347,11 @@ def _write_sheet(args: argparse.Namespace, study: st.Study, images: list, view, 
     scenes = [v.scene for v in study.variants]
     if view is None and any(photometric.is_photometric(scene) for scene in scenes):
         # an .exr of a photometric study: the cells' XYZ in cd/m², named and with units
-        from ..photometry import output
-
         sheet = study_sheet.compose(study, images, text="bitmap", measured=measured, as_values=True)
-        output.write_photometric_exr(args.output, sheet, channels=("X", "Y", "Z"), attributes={
+        photometric.write_photometric_exr(args.output, sheet, channels=("X", "Y", "Z"), attributes={
             study_sheet.STUDY_ATTRIBUTE: study.to_json(), "ImageDescription": study.heading()})
         return ", XYZ (Y in cd/m2)"
-    stops = photometric_stops(args)  # on top of the photometric cells' EV100 only
+    stops = common.photometric_stops(args)  # on top of the photometric cells' EV100 only
     used = study_sheet.write_sheet(args.output, study, images, view=view, exposure=args.exposure, measured=measured,
                                    ev100=args.ev100, stops=stops)
     if view is None:

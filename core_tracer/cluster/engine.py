@@ -323,7 +323,7 @@ class RunCount:
     workers: list[str] | None = None  # the workers tasks went to when only some had the memory (None: any)
 
 
-class CellRun:
+class CellRun(processes.ImagesInOrder):
     """The cells of one run as a non-blocking object (Blender's modal operators drive it from a
     timer): the cache is read when it is made, ``submit()`` sends the rest as tasks, ``poll()``
     takes in what finished and says whether every image is in, ``cancel()`` stops every task."""
@@ -347,14 +347,6 @@ class CellRun:
         self.pending: set = set()
         self.sent: dict = {}
         self.workers: list[str] | None = None  # where tasks went when only some workers' memory fits
-
-    @property
-    def total(self) -> int:
-        return len(self.cells)
-
-    @property
-    def done(self) -> int:
-        return sum(image is not None for image in self.images)
 
     @property
     def finished(self) -> bool:

@@ -31,6 +31,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..photometry import output
+
 DISPLAY = "sRGB"
 SCENE_LINEAR = "Linear Rec.709"  # the tracer's values: linear, Rec.709 primaries (Blender's scene linear)
 STANDARD = "Standard"
@@ -369,14 +371,12 @@ def exposure_for(images: list[np.ndarray], scenes: list[dict], *, ev100: float |
     paper = [i for i in range(len(scenes)) if i not in set(photometric)]
     camera = None
     if photometric:
-        from ..raytrace import spectral  # numpy only; imported on use (it imports this module)
-
         xyz = [np.asarray(images[i]) for i in photometric]
         first = scenes[photometric[0]]
         if ev100 is None:
-            camera = spectral.exposure_ev100(xyz, first)
+            camera = exposure_ev100(xyz, first)
         elif ev100 == "auto":
-            camera = spectral.exposure_ev100(xyz, {**first, "camera": {**first["camera"], "exposure": "auto"}})
+            camera = exposure_ev100(xyz, {**first, "camera": {**first["camera"], "exposure": "auto"}})
         else:
             camera = float(ev100)
     paper_stops = resolve_exposure(exposure, [np.asarray(images[i]) for i in paper]) if paper else None
@@ -389,8 +389,6 @@ def scene_linear(image: np.ndarray, model: str, exposure: Exposure) -> np.ndarra
     XYZ → Rec.709 scaled by 1 / (1.2 · 2^EV100) (``photometry.output.exposure_scale``) and 2^stops;
     paper: the RGB scaled by 2^paper_stops."""
     if model == PHOTOMETRIC:
-        from ..photometry import output  # imported on use: output imports this module's package
-
         if exposure.ev100 is None:
             raise ValueError("a photometric image needs an EV100 to be shown")
         rgb = output.scene_linear_rec709(image, exposure.ev100) * 2.0 ** exposure.stops
@@ -429,3 +427,22 @@ def shown(images: np.ndarray | list[np.ndarray], scenes: dict | list[dict], *, v
     if view is not None:
         pixels = [view.to_display(p) for p in pixels]
     return Shown(pixels, chosen)
+
+
+def exposure_ev100(XYZ: np.ndarray | list[np.ndarray], scene: dict) -> float:
+    """The camera's EV100 for a photometric image (or several shown together, one exposure): the
+    scene's ``camera.ev100``, or with ``camera.exposure`` "auto" the project's automatic exposure
+    (``auto_exposure``: the lit lens's bright end just below the view's shoulder)
+    expressed as an EV100."""
+    camera = scene["camera"]
+    if camera.get("exposure", "auto") == "ev100":
+        return float(camera["ev100"])
+    images = XYZ if isinstance(XYZ, list) else [XYZ]
+    stops = auto_exposure([output.scene_linear_rec709(image, 0.0) for image in images])
+    return float(np.clip(-stops, -20.0, 30.0))  # 2^stops / (1.2 · 2^0) = 1 / (1.2 · 2^EV100)
+
+
+def display_linear(XYZ: np.ndarray, ev100: float) -> np.ndarray:
+    """Blender's scene-linear (linear Rec.709, float32) of an XYZ image in cd/m² at camera ``ev100``:
+    what the view transform takes at exposure 0 (out-of-gamut colours unclipped)."""
+    return output.scene_linear_rec709(XYZ, ev100).astype(np.float32)

@@ -18,7 +18,7 @@ from ..images import bitmap_font, display, labels
 from ..images.imageio import write_display
 from ..scene.reading import scene_to_json
 from ..study.definition import format_value
-from . import search
+from . import storage
 from . import trials as T
 from .spec import Optimisation
 
@@ -134,7 +134,7 @@ def write_history(opt: Optimisation, study, path: str) -> None:
     matplotlib.use("Agg")
     from matplotlib import pyplot as plt
 
-    done = search.finished_trials(study)
+    done = storage.finished_trials(study)
     n = len(opt.objectives)
     panels = n + (1 if n == 2 else 0)
     fig, axes = plt.subplots(1, panels, figsize=(4.2 * panels, 3.4), squeeze=False)
@@ -142,7 +142,7 @@ def write_history(opt: Optimisation, study, path: str) -> None:
         ax = axes[0][j]
         numbers = [t.number for t in done]
         values = [t.values[j] for t in done]
-        ok = [search.feasible(t) for t in done]
+        ok = [storage.feasible(t) for t in done]
         ax.scatter([x for x, f in zip(numbers, ok, strict=True) if f],
                    [v for v, f in zip(values, ok, strict=True) if f], s=16, color="tab:blue", label="trial")
         ax.scatter([x for x, f in zip(numbers, ok, strict=True) if not f],
@@ -150,7 +150,7 @@ def write_history(opt: Optimisation, study, path: str) -> None:
                    edgecolors="tab:gray", label="infeasible")
         best, line_x, line_y = None, [], []
         for t in sorted(done, key=lambda t: t.number):
-            if not search.feasible(t):
+            if not storage.feasible(t):
                 continue
             v = t.values[j]
             if best is None or (v > best if objective.goal == "maximise" else v < best):
@@ -165,7 +165,7 @@ def write_history(opt: Optimisation, study, path: str) -> None:
         ax.legend(fontsize=7)
     if n == 2:
         ax = axes[0][2]
-        front = search.best(opt, study)
+        front = storage.best(opt, study)
         ax.scatter([t.values[0] for t in done], [t.values[1] for t in done], s=12, color="tab:gray", label="trials")
         ax.scatter([t.values[0] for t in front], [t.values[1] for t in front], s=20, color="tab:red",
                    label="Pareto front")

@@ -26,7 +26,7 @@
   beside it), so an interrupted optimisation resumes and several processes can share it; or a
   database server's URL (``postgresql://``, ``mysql://``). A database that holds anything but
   Optuna's tables, or a study of that name this program did not make, is refused untouched; so is
-  resuming a study whose parameters changed (``search.open_study``). ``name`` names the Optuna
+  resuming a study whose parameters changed (``storage.open_study``). ``name`` names the Optuna
   study in it (default: the file's name).
 
 Every error is a ``SceneError`` naming the JSON path, with the allowed range.

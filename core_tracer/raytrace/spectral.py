@@ -39,8 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..images import display
-from ..photometry import daylight, far_field, materials, output, sources
+from ..photometry import daylight, far_field, materials, sources
 from ..photometry.bands import VISIBLE_NM, Bands
 from ..photometry.cie import xyz_matrix
 from ..photometry.spectrum import Spectrum
@@ -443,26 +442,3 @@ def _read_curve(path: str, where: str) -> Spectrum:
         return sources.from_csv(path)
     except ValueError as e:
         raise SceneError(where, str(e)) from None
-
-
-# ---------------------------------------------------------------------------------------------
-# Display
-
-
-def exposure_ev100(XYZ: np.ndarray | list[np.ndarray], scene: dict) -> float:
-    """The camera's EV100 for a photometric image (or several shown together, one exposure): the
-    scene's ``camera.ev100``, or with ``camera.exposure`` "auto" the project's automatic exposure
-    (``images.display.auto_exposure``: the lit lens's bright end just below the view's shoulder)
-    expressed as an EV100."""
-    camera = scene["camera"]
-    if camera.get("exposure", "auto") == "ev100":
-        return float(camera["ev100"])
-    images = XYZ if isinstance(XYZ, list) else [XYZ]
-    stops = display.auto_exposure([output.scene_linear_rec709(image, 0.0) for image in images])
-    return float(np.clip(-stops, -20.0, 30.0))  # 2^stops / (1.2 · 2^0) = 1 / (1.2 · 2^EV100)
-
-
-def display_linear(XYZ: np.ndarray, ev100: float) -> np.ndarray:
-    """Blender's scene-linear (linear Rec.709, float32) of an XYZ image in cd/m² at camera ``ev100``:
-    what the view transform takes at exposure 0 (out-of-gamut colours unclipped)."""
-    return output.scene_linear_rec709(XYZ, ev100).astype(np.float32)

@@ -58,7 +58,7 @@ from ..scene.messages import show_value
 from ..scene.reading import SceneError, parse_json_text, read_json, scene_to_json
 from ..scene.safe_text import has_surrogate, show_key
 from ..scene.validate import parse_scene
-from .measured import Choice
+from .measured import Choice, parse_number
 from .measured import parse as parse_measures
 from .parameters import Parameter, apply_values, check_value, resolve_parameter, sets_same
 
@@ -434,22 +434,12 @@ def _is_choice(name: str) -> bool:
 def _parse_item(name: str, item: str) -> Any:
     item = item.strip()
     if "/" in item:
-        return [_parse_number(name, x) for x in item.split("/")]
+        return [parse_number(name, x) for x in item.split("/")]
     if item.lower() in ("on", "true"):
         return True
     if item.lower() in ("off", "false"):
         return False
-    return _parse_number(name, item)
-
-
-def _parse_number(name: str, text: str) -> float:
-    try:
-        x = float(text)
-    except ValueError:
-        raise SceneError(name, f"{text.strip()!r} is not a number") from None
-    if not math.isfinite(x):
-        raise SceneError(name, f"{text.strip()} is not a finite number")
-    return x
+    return parse_number(name, item)
 
 
 _show = show_value

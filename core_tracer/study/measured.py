@@ -67,14 +67,14 @@ class Choice:
         return tuple(dict.fromkeys(n for n in wanted if n))
 
     def to_doc(self) -> dict:
-        doc: dict = {}
-        if self.measures:
-            doc["measures"] = list(self.measures)
-        if self.sort:
-            doc["sort"] = self.sort
-        if self.filters:
-            doc["filter"] = [str(f) for f in self.filters]
-        return doc
+        return measured_doc(self.measures, self.sort, self.filters)
+
+
+def measured_doc(measures: Sequence[str], sort: str, filters: Sequence[Any]) -> dict:
+    """A study's measure fields as its document holds them, only those given (``measures``,
+    ``sort``, ``filter``: each filter as its text)."""
+    doc = {"measures": list(measures or ()), "sort": sort, "filter": [str(f) for f in filters or ()]}
+    return {name: value for name, value in doc.items() if value}
 
 
 def parse_filter(text: Any, where: str) -> Filter:
@@ -83,13 +83,18 @@ def parse_filter(text: Any, where: str) -> Filter:
         raise SceneError(where, f"{show_value(text)} is not MEASURE OPERATOR NUMBER (e.g. \"grid.pass==1\"); allowed "
                                 f"operators {' '.join(OPERATORS)} and {by_name.allowed_text()}")
     name, operator, number = found.groups()
+    return Filter(by_name.check_name(name, where), operator, parse_number(where, number))
+
+
+def parse_number(where: str, text: str) -> float:
+    """A finite number written as ``text`` (a study's filter, a ``--vary`` value), or a ``SceneError`` at ``where``."""
     try:
-        value = float(number)
+        x = float(text)
     except ValueError:
-        raise SceneError(where, f"{show_value(number)} is not a number") from None
-    if not math.isfinite(value):
-        raise SceneError(where, f"{number} is not a finite number")
-    return Filter(by_name.check_name(name, where), operator, value)
+        raise SceneError(where, f"{text.strip()!r} is not a number") from None
+    if not math.isfinite(x):
+        raise SceneError(where, f"{text.strip()} is not a finite number")
+    return x
 
 
 def parse(doc: dict, base: dict) -> Choice:

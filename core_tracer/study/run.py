@@ -81,7 +81,7 @@ class _Worker:
 
 
 @dataclass
-class StudyRun:
+class StudyRun(processes.ImagesInOrder):
     """One run of a study over worker processes, driven by ``poll()``."""
 
     study: Study
@@ -104,14 +104,6 @@ class StudyRun:
             raise ValueError(f"workers must be at least 1, got {self.workers}")
 
     # -- state --------------------------------------------------------------------------------
-
-    @property
-    def total(self) -> int:
-        return len(self.study)
-
-    @property
-    def done(self) -> int:
-        return sum(img is not None for img in self.images)
 
     @property
     def fraction(self) -> float:

@@ -2,7 +2,7 @@
 """Measuring the design from Blender, and opening the one-page report.
 
 ``Measure Design`` runs the ``measure`` command of ``core_tracer`` (the same code as
-``python -m core_tracer measure``) in a worker process (``core_tracer.measures.job``) while a modal
+``python -m core_tracer measure``) in a worker process (``core_tracer.cli.job``) while a modal
 operator polls it on a timer: the interface keeps responding, the progress shows in the status
 bar, Esc stops the worker (SIGTERM: the command leaves no partial folder). Called from a script or in
 background mode the operator waits for it (``execute``). The results go to ``<name>_measures`` next
@@ -69,7 +69,7 @@ class MeasureRun:
             json.dump(scene, f)
         # --exit-zero: a failing regulation is a finding the panel shows, not a failed run
         arguments = [self._scene_path, "-o", folder, "--exit-zero"] + ([] if beam_files else ["--no-beam-files"])
-        self._command = processes.worker_command("measures.job", *arguments)
+        self._command = processes.worker_command("cli.job", "measure", *arguments)
         self._process: subprocess.Popen | None = None
         self._reader: threading.Thread | None = None
         self.cancelled = False

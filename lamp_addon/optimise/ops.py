@@ -95,7 +95,7 @@ class OptimiseRun:
     def _work(self) -> None:
         from ...core_tracer.cluster import engine
         from ...core_tracer.cluster.cache import CellCache
-        from ...core_tracer.optimise import results, search
+        from ...core_tracer.optimise import results, search, storage
 
         try:
             cache = CellCache()
@@ -114,14 +114,14 @@ class OptimiseRun:
             results.write_trials(self.opt, study, os.path.join(self.folder, "trials.json"))
             if importable("matplotlib"):  # the history plot is matplotlib's; Blender's Python has none
                 results.write_history(self.opt, study, os.path.join(self.folder, "history.png"))
-            best = search.best(self.opt, study)
+            best = storage.best(self.opt, study)
             if best:
                 results.write_presets(self.opt, best, self.folder)
                 if self.opt.needs_task:
-                    top = search.ranked(self.opt, study, results.SHEET_TRIALS)
+                    top = storage.ranked(self.opt, study, results.SHEET_TRIALS)
                     results.write_sheet(self.opt, top, results.trial_images(self.opt, top, cache),
                                         os.path.join(self.folder, "sheet.png"))
-            done = len(search.finished_trials(study))
+            done = len(storage.finished_trials(study))
             self.outcome = settings.Outcome(
                 self.opt.name, [o.label for o in self.opt.objectives],
                 [(t.number, dict(t.user_attrs["design"]), list(t.values)) for t in best], self.folder,

@@ -28,7 +28,6 @@ import bpy
 import numpy as np
 
 from ...core_tracer.images import display
-from ...core_tracer.raytrace import spectral
 from ...core_tracer.scene.reading import SceneError
 
 REC709 = "Linear Rec.709"
@@ -104,7 +103,7 @@ class Display:
 
 
 def auto_ev100(scene: dict) -> float:
-    """The automatic EV100 of a photometric design (``spectral.exposure_ev100``), measured on a small
+    """The automatic EV100 of a photometric design (``display.exposure_ev100``), measured on a small
     preview of the same view."""
     from ...core_tracer import render
 
@@ -137,4 +136,4 @@ def for_image(scene: dict, XYZ: np.ndarray) -> Display | None:
     camera = scene["camera"]
     if camera.get("exposure", "auto") == "ev100":
         return Display(float(camera["ev100"]))
-    return Display(spectral.exposure_ev100(XYZ, scene))
+    return Display(display.exposure_ev100(XYZ, scene))

@@ -11,6 +11,7 @@ import pytest
 from helpers import STOP_LAMP, lit_lens_ratios, run_cli
 
 from core_tracer.images import display, imageio
+from core_tracer.images import photometric as photometric_images
 from core_tracer.photometry import cie, output
 
 pytestmark = pytest.mark.blender
@@ -34,7 +35,7 @@ def test_openimageio_reads_the_header_and_the_values(red_exr):
     assert spec.getattribute("whiteLuminance") == 1.0
     assert "Y: CIE 1931 2 deg Y = luminance in cd/m2" in spec.getattribute("lamp:units")
     assert spec.getattribute("lamp:ev100") == "15"  # the preset's camera
-    channels, _attrs = output.read_photometric_exr(red_exr)
+    channels, _attrs = photometric_images.read_photometric_exr(red_exr)
     XYZ = np.stack([channels[c] for c in "XYZ"], axis=-1)
     lit = XYZ[..., 1] > 0.5 * XYZ[..., 1].max()
     x, y = cie.xy(XYZ[lit].sum(axis=0))
@@ -58,7 +59,7 @@ def test_blender_reads_it_as_xyz_and_shows_it_red(lamp_addon, bl_scene, red_exr)
     assert g < 0.5 and b < 0.5, (g, b)
     # what Blender read is the file's XYZ taken to Rec.709 (adapted from E's white to D65's:
     # Blender's own configuration), so a white of X = Y = Z shows neutral
-    channels, _attrs = output.read_photometric_exr(red_exr)
+    channels, _attrs = photometric_images.read_photometric_exr(red_exr)
     XYZ = np.stack([channels[c] for c in "XYZ"], axis=-1)
     lit = XYZ[..., 1] > 0.5 * XYZ[..., 1].max()
     ours = cie.xyz_to_linear_rec709(XYZ[lit].mean(axis=0))
@@ -71,7 +72,7 @@ def test_blender_took_xyz_for_rgb_without_the_chromaticities(lamp_addon, bl_scen
     """The fault the attribute removes (and why the references carry it too)."""
     import bpy
 
-    channels, _attrs = output.read_photometric_exr(red_exr)
+    channels, _attrs = photometric_images.read_photometric_exr(red_exr)
     XYZ = np.stack([channels[c] for c in "XYZ"], axis=-1)
     imageio.write_channels(tmp_path / "bare.exr", XYZ, ("X", "Y", "Z"))
     image = bpy.data.images.load(str(tmp_path / "bare.exr"), check_existing=False)

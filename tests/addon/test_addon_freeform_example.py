@@ -127,9 +127,9 @@ TWIN = PRESETS / "freeform-sculpted-wrap-lamp-photometric.json"
 def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_addon, addon, tmp_path):
     """The example's photometric twin (the same .glb, a P21/5W tail filament, a red PMMA lens, night at
     3 lx): applied from the browser, F12 shows the command line's XYZ (cd/m²) as scene-linear Rec.709
-    at the preset's EV100 15, the one display path of photometric images (``spectral.display_linear``)."""
-    from core_tracer.photometry import output
-    from core_tracer.raytrace import spectral
+    at the preset's EV100 15, the one display path of photometric images (``display.display_linear``)."""
+    from core_tracer.images import display
+    from core_tracer.images import photometric as photometric_images
 
     bl_scene = _applied(TWIN)
     parts = lamp_addon.freeform.properties.role_objects(bl_scene)
@@ -139,9 +139,9 @@ def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_add
 
     done = run_cli("render", TWIN, "-o", tmp_path / "cli.exr")
     assert done.returncode == 0, done.stderr
-    channels = output.read_photometric_exr(tmp_path / "cli.exr")[0]
+    channels = photometric_images.read_photometric_exr(tmp_path / "cli.exr")[0]
     xyz = np.stack([channels[c] for c in "XYZ"], axis=-1)
-    shown = spectral.display_linear(xyz, 15.0)
+    shown = display.display_linear(xyz, 15.0)
     assert f12.shape == shown.shape == (256, 320, 3)
     lit = channels["Y"] > 0.05 * channels["Y"].max()
     print(f"F12 vs CLI at EV100 15: largest |difference| {np.abs(f12 - shown).max():.3g} of {shown.max():.3g}")

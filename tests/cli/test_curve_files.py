@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 from helpers import PRESETS, run_cli
 
+from core_tracer.images import photometric as photometric_images
 from core_tracer.images.imageio import read_attribute
-from core_tracer.photometry import materials, output
+from core_tracer.photometry import materials
 
 pytestmark = pytest.mark.slow
 
@@ -48,7 +49,7 @@ def test_a_filter_file_beside_the_design_is_read_by_validate_render_and_states(t
     for path, out in ((measured, tmp_path / "measured.exr"), (named, tmp_path / "named.exr")):
         done = run_cli("render", path, "-o", out, "--width", "40", "--height", "40", "--samples", "1")
         assert done.returncode == 0, done.stderr
-        channels = output.read_photometric_exr(out)[0]
+        channels = photometric_images.read_photometric_exr(out)[0]
         images.append(np.stack([channels[c] for c in "XYZ"], axis=-1))
     lens = images[1][..., 1] > 0.05 * images[1][..., 1].max()
     assert lens.sum() > 50
@@ -98,7 +99,7 @@ def test_the_photometric_free_form_twin_renders_and_is_relit_from_the_command_li
     shutil.copy(PRESETS / "freeform-sculpted-wrap-lamp-photometric.json", twin)
     done = run_cli("render", twin, "-o", tmp_path / "twin.exr", "--width", "48", "--height", "40")
     assert done.returncode == 0 and "on 40 bands" in done.stdout, done.stderr
-    channels = output.read_photometric_exr(tmp_path / "twin.exr")[0]
+    channels = photometric_images.read_photometric_exr(tmp_path / "twin.exr")[0]
     lit = channels["Y"] > 0.1 * channels["Y"].max()
     assert lit.sum() > 20 and channels["x"][lit].mean() > 0.6  # a red lamp
     done = run_cli("states", twin, "-o", tmp_path / "twin.npz", "--width", "24", "--height", "20")

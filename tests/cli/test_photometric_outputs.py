@@ -12,6 +12,7 @@ from helpers import BASELINE, PRESETS, assert_bad_input, run_cli
 
 from core_tracer import render_passes
 from core_tracer.images import imageio
+from core_tracer.images import photometric as photometric_images
 from core_tracer.photometry import output
 from core_tracer.scene.validate import load_scene
 
@@ -62,7 +63,7 @@ def test_exr_holds_xyz_in_cd_m2_with_units_and_passes(tmp_path):
     proc = run_cli("render", STOP, "-o", out, *SIZE, "--passes", passes)
     assert proc.returncode == 0, proc.stderr
     assert "XYZ (Y in cd/m2)" in proc.stdout
-    channels, attrs = output.read_photometric_exr(out)
+    channels, attrs = photometric_images.read_photometric_exr(out)
     assert sorted(channels) == ["X", "Y", "Z", "x", "y"]  # EXR keeps its channels sorted
     assert "Y: CIE 1931 2 deg Y = luminance in cd/m2" in attrs[output.UNITS_ATTRIBUTE]
     assert attrs["lamp:ev100"] == "15"
@@ -75,7 +76,7 @@ def test_exr_holds_xyz_in_cd_m2_with_units_and_passes(tmp_path):
     assert channels["x"][lit].mean() > 0.6  # red chromaticity
     names = sorted(p.stem for p in passes.iterdir())
     assert names == sorted(expected.passes)
-    bulb, attrs = output.read_photometric_exr(passes / "bulb.exr")
+    bulb, attrs = photometric_images.read_photometric_exr(passes / "bulb.exr")
     assert sorted(bulb) == ["X", "Y", "Z"] and "cd/m2" in attrs[output.UNITS_ATTRIBUTE]
 
 
@@ -130,7 +131,7 @@ def test_a_photometric_study_sheet_exr_holds_xyz(tmp_path):
     out = tmp_path / "sheet.exr"
     proc = run_cli("study", STOP, "--vary", "bulb.state=tail,stop", "--size", "32x32", "-o", out, "--workers", "0")
     assert proc.returncode == 0, proc.stderr
-    channels, attrs = output.read_photometric_exr(out)
+    channels, attrs = photometric_images.read_photometric_exr(out)
     assert sorted(channels) == ["X", "Y", "Z"] and "cd/m2" in attrs[output.UNITS_ATTRIBUTE]
     assert channels["Y"].max() > 1000.0
 

@@ -21,7 +21,7 @@ from core_tracer.freeform import render_passes
 from core_tracer.freeform.gltf import read_glb
 from core_tracer.images import glare
 from core_tracer.images.imageio import read_image, write_image
-from core_tracer.optimise import search, spec
+from core_tracer.optimise import search, spec, storage
 from core_tracer.optimise import trials as T
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
@@ -170,19 +170,19 @@ def optimisation(folder, trials: int = 4) -> spec.Optimisation:
 def test_an_optimisation_varies_a_free_form_parts_values_here_and_on_a_local_cluster(client, tmp_path):
     opt = optimisation(tmp_path)
     outcome = search.run(opt, None, None)
-    done = search.finished_trials(outcome.study)
+    done = storage.finished_trials(outcome.study)
     assert outcome.rendered == 4 and len(done) == 4
     reds = [t.user_attrs["design"]["freeform.parts[0].lens.transmitted_color[0]"] for t in done]
     assert len(set(reds)) == 4
     # Each trial's score is its design's render on the meshes: the task is the render.
-    best = search.best(opt, outcome.study)[0]
+    best = storage.best(opt, outcome.study)[0]
     scene = opt.traced(opt.scene_of(best.user_attrs["design"]))
     image, mask = T.render_trial(make_cell(scene, *SIZE, Inputs()))
     assert search.measure(opt, scene, image, mask)[0] == pytest.approx(best.values, abs=0)
     assert best.values[0] > min(t.values[0] for t in done)  # the red varied reaches the image
     # Two more trials as tasks on the cluster, their .glb sent with them.
     more = search.run(spec.Optimisation(**{**opt.__dict__, "trials": 6}), client, None, parallel=2)
-    assert more.rendered == 2 and len(search.finished_trials(more.study)) == 6
+    assert more.rendered == 2 and len(storage.finished_trials(more.study)) == 6
 
 
 def test_an_optimisation_of_a_free_form_design_refuses_the_parametric_lamps_measures(tmp_path):

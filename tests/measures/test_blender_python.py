@@ -63,7 +63,7 @@ def test_the_interpreter_has_numpy_and_nothing_blender_lacks(blender_python):
 def test_the_measure_worker_writes_its_whole_folder(blender_python, repo_root, tmp_path):
     """The Measures panel's command line (``ops.MeasureRun``), beam files on, in that interpreter."""
     out = tmp_path / "stop_measures"
-    command = processes.worker_command("measures.job", str(repo_root / "presets" / "photometric-stop-lamp.json"),
+    command = processes.worker_command("cli.job", "measure", str(repo_root / "presets" / "photometric-stop-lamp.json"),
                                        "-o", str(out), "--exit-zero", "--pixel-mm", "4", "--replicates", "1",
                                        "--beam-grid", "30,10,10", python=blender_python)
     proc = subprocess.run(command, capture_output=True, text=True, timeout=1200, env=processes.worker_environment())

@@ -20,7 +20,7 @@ from core_tracer.cluster.cache import CellCache
 from core_tracer.cluster.cells import Inputs, make_cell
 from core_tracer.images import glare
 from core_tracer.images.imageio import write_image
-from core_tracer.optimise import search, spec
+from core_tracer.optimise import search, spec, storage
 from core_tracer.optimise import trials as T
 from core_tracer.optimise.measures import MEASURES, Trial
 from core_tracer.raytrace.engine import render_passes
@@ -134,7 +134,7 @@ def test_the_search_reaches_a_dense_sweeps_best_with_a_fifth_of_its_renders(fold
         scores.append(search.measure(opt, scene, image, mask)[0][0])
     sweep_best = max(scores)
     outcome = search.run(opt, None, None)
-    found = search.best(opt, outcome.study)[0]
+    found = storage.best(opt, outcome.study)[0]
     assert outcome.rendered == 8 == len(sweep) // 5
     assert found.values[0] >= 0.98 * sweep_best, (found.values[0], sweep_best, found.params)
     print(f"sweep best {sweep_best:.4f} at {sweep[int(np.argmax(scores))]:.3f} mm; "
@@ -148,15 +148,15 @@ def test_an_interrupted_search_resumes_the_same_study(folder):
     seen = []
     with pytest.raises(search.Cancelled):
         search.run(opt, None, cache, progress=lambda p: seen.append(p.number), should_stop=lambda: len(seen) >= 3)
-    first = search.open_study(opt)
-    assert len(search.finished_trials(first)) == 3
+    first = storage.open_study(opt)
+    assert len(storage.finished_trials(first)) == 3
     resumed = search.run(opt, None, cache)
     assert len(resumed.told) == 3  # only the missing trials
-    numbers = [t.number for t in search.finished_trials(resumed.study)]
+    numbers = [t.number for t in storage.finished_trials(resumed.study)]
     assert len(numbers) == 6 and numbers[:3] == seen
     # Raising the count continues the same study again.
     more = search.run(spec.Optimisation(**{**opt.__dict__, "trials": 8}), None, cache)
-    assert len(more.told) == 2 and len(search.finished_trials(more.study)) == 8
+    assert len(more.told) == 2 and len(storage.finished_trials(more.study)) == 8
 
 
 @pytest.mark.slow
@@ -169,7 +169,7 @@ def test_two_processes_share_one_study(folder):
     outs = [p.communicate(timeout=300) for p in procs]
     assert [p.returncode for p in procs] == [0, 0], outs
     opt = spec.load(str(path))
-    done = search.finished_trials(search.open_study(opt))
+    done = storage.finished_trials(storage.open_study(opt))
     assert 8 <= len(done) <= 9  # each process stops once the study holds 8 (one may be under way then)
     told = [int(o.split(" this run")[0].split("; ")[-1]) for o, _ in outs]
     assert sum(told) == len(done) and all(told), outs  # both worked on it
@@ -198,10 +198,10 @@ def test_two_objectives_give_a_pareto_front_of_presets(folder):
     presets = sorted(n for n in os.listdir(folder / "out") if n.startswith("pareto-"))
     assert presets and {"sheet.png", "history.png", "trials.json"} <= set(os.listdir(folder / "out"))
     opt = spec.load(str(path))
-    front = search.best(opt, search.open_study(opt))
+    front = storage.best(opt, storage.open_study(opt))
     assert len(front) == len(presets)
     for a in front:  # nobody beats a front design on both
-        for b in search.finished_trials(search.open_study(opt)):
+        for b in storage.finished_trials(storage.open_study(opt)):
             assert not (b.values[0] > a.values[0] and b.values[1] < a.values[1])
 
 
@@ -211,9 +211,9 @@ def test_trials_run_as_tasks_on_a_local_cluster(folder, dask):
     opt = spec.from_doc(opt_doc(folder, trials=4), str(folder))
     with local_pool.connect(workers=2, memory_limit=engine.worker_memory([]), dask=dask) as client:
         outcome = search.run(opt, client, CellCache(folder / "cache"), parallel=2)
-    assert outcome.rendered == 4 and len(search.finished_trials(outcome.study)) == 4
+    assert outcome.rendered == 4 and len(storage.finished_trials(outcome.study)) == 4
     # The same designs rendered here measure the same: the task is the render.
-    trial = search.finished_trials(outcome.study)[0]
+    trial = storage.finished_trials(outcome.study)[0]
     scene = opt.scene_of(trial.user_attrs["design"])
     image, mask = T.render_trial(make_cell(scene, SIZE, SIZE, Inputs()))
     assert search.measure(opt, scene, image, mask)[0] == pytest.approx(trial.values, abs=0)
@@ -231,7 +231,7 @@ def test_ctrl_c_stops_the_search_in_one_line_and_keeps_what_finished(folder, wor
     assert (proc.returncode, err.strip().splitlines()[-1]) == (130, "interrupted"), err
     assert "Traceback" not in err and not (folder / "out" / "trials.json").exists()
     opt = spec.load(str(path))
-    states = [t.state for t in search.open_study(opt).trials]
+    states = [t.state for t in storage.open_study(opt).trials]
     assert optuna.trial.TrialState.RUNNING not in states  # the trials under way were told as failed
     assert states.count(optuna.trial.TrialState.COMPLETE) >= 1
 

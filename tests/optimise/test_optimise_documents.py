@@ -12,7 +12,7 @@ import sqlite3
 import pytest
 from helpers import BASELINE, assert_bad_input, baseline_doc, run_cli
 
-from core_tracer.optimise import search, spec
+from core_tracer.optimise import spec, storage
 from core_tracer.scene.reading import SceneError
 
 
@@ -81,7 +81,7 @@ def test_an_unrelated_sqlite_database_is_refused_without_a_table_added(tmp_path)
     before = db.read_bytes()
     opt = spec.from_doc(doc(storage="sqlite:///accounts.db"), str(tmp_path))
     with pytest.raises(SceneError) as e:
-        search.open_study(opt)
+        storage.open_study(opt)
     assert e.value.path == "storage" and "accounts" in e.value.message and "nothing was changed" in e.value.message
     assert tables(db) == ["accounts"] and db.read_bytes() == before
 
@@ -90,7 +90,7 @@ def test_a_file_that_is_not_a_database_is_refused_untouched(tmp_path):
     (tmp_path / "notes.db").write_text("my notes\n" * 100)
     opt = spec.from_doc(doc(storage="sqlite:///notes.db"), str(tmp_path))
     with pytest.raises(SceneError, match="not a SQLite database"):
-        search.open_study(opt)
+        storage.open_study(opt)
     assert (tmp_path / "notes.db").read_text() == "my notes\n" * 100
 
 
@@ -110,7 +110,7 @@ def test_a_study_of_that_name_not_made_here_is_refused(tmp_path):
     optuna.create_study(storage=f"sqlite:///{tmp_path / 'shared.db'}", study_name="theirs")
     opt = spec.from_doc(doc(storage="sqlite:///shared.db", name="theirs"), str(tmp_path))
     with pytest.raises(SceneError, match="not made by an optimisation file"):
-        search.open_study(opt)
+        storage.open_study(opt)
 
 
 def test_a_step_of_1e_300_is_refused(tmp_path):
@@ -169,7 +169,7 @@ def test_trials_json_holds_no_nan_even_when_a_measure_had_none(tmp_path):
     from core_tracer.optimise import results
 
     opt = spec.from_doc(doc(storage="sqlite:///t.db"), str(tmp_path))
-    study = search.open_study(opt)
+    study = storage.open_study(opt)
     trial = study.ask()
     trial.set_user_attr("measures", {"lens_luminance": float("nan"), "lit_fraction": float("inf")})
     study.tell(trial, 1.0)

@@ -21,7 +21,7 @@ from core_tracer.measures.directions import direction
 from core_tracer.measures.homogeneity import homogeneity
 from core_tracer.measures.light_tracing import traced_intensity
 from core_tracer.optimise import photometric as P
-from core_tracer.optimise import search, spec
+from core_tracer.optimise import search, spec, storage
 from core_tracer.optimise import trials as T
 from core_tracer.optimise.measures import MEASURES
 from core_tracer.scene.reading import SceneError, read_json
@@ -181,7 +181,7 @@ def test_the_search_reaches_a_dense_sweeps_most_even_lens_with_a_fifth_of_its_re
     opt = spec.from_doc(opt_doc(tmp_path), str(tmp_path))
     sweep_best, where = dense_sweep(opt, -2.0, 4.0, 50)
     outcome = search.run(opt, None, CellCache(tmp_path / "cache"))
-    found = search.best(opt, outcome.study)[0]
+    found = storage.best(opt, outcome.study)[0]
     assert outcome.rendered == 10 == 50 // 5
     assert found.values[0] <= 1.02 * sweep_best, (found.values[0], sweep_best, found.params)
     print(f"sweep best {sweep_best:.4f} at {where:.3f} mm; search {found.values[0]:.4f} at "
@@ -196,13 +196,13 @@ def test_cmaes_runs_and_improves_on_the_start(tmp_path):
     opt = spec.from_doc(opt_doc(tmp_path, sampler="cmaes", seed=1, trials=8,
                                 parameters=[{"parameter": OFFSET, "range": [-2.0, 4.0]},
                                             {"parameter": "cuts.height", "range": [0.5, 2.0]}]), str(tmp_path))
-    study = search.open_study(opt)
+    study = storage.open_study(opt)
     assert isinstance(study.sampler, optuna.samplers.CmaEsSampler)
     outcome = search.run(opt, None, None)
-    done = search.finished_trials(outcome.study)
+    done = storage.finished_trials(outcome.study)
     start = next(t for t in done if t.number == 0)
     assert start.params == {OFFSET: 0.0, "cuts.height": 1.5}  # the design as given
-    best = search.best(opt, outcome.study)[0]
+    best = storage.best(opt, outcome.study)[0]
     assert len(done) == 8 and best.values[0] < 0.97 * start.values[0], (best.values, start.values)
 
 
@@ -259,7 +259,7 @@ def test_designs_light_tracing_cannot_follow_are_refused_trials_not_a_crash(tmp_
     outcome = search.run(opt, None, None)
     trials = outcome.study.get_trials(deepcopy=False)
     refused = [t for t in trials if t.user_attrs.get("refused")]
-    measured = search.finished_trials(outcome.study)
+    measured = storage.finished_trials(outcome.study)
     assert refused and measured and len(refused) + len(measured) == 4 and outcome.refused == len(refused)
     assert all(t.user_attrs["design"]["lens.shape"] == "cylindrical" for t in refused)
     assert all("flat-lensed" in t.user_attrs["refused"] for t in refused), [t.user_attrs["refused"] for t in refused]
@@ -283,7 +283,7 @@ def test_workers_too_small_for_a_trial_are_refused_in_one_line_before_anything_r
     assert e.value.path == "--scheduler" and "\n" not in message
     assert f"worker {address} has a memory limit of 200 MB" in message
     assert f"needs about {engine.megabytes(need + engine.DASK_BYTES)}" in message and "allowed" in message
-    assert not search.finished_trials(search.open_study(opt))
+    assert not storage.finished_trials(storage.open_study(opt))
 
 
 @pytest.mark.slow
@@ -297,7 +297,7 @@ def test_trials_go_only_to_the_workers_whose_memory_holds_them(tmp_path):
         ran_on = {t["worker"] for t in stream.data if str(t["key"]).startswith("lamp-trial-")}
     assert outcome.workers == [large] and small not in outcome.workers
     assert ran_on == {large}, ran_on
-    assert len(search.finished_trials(outcome.study)) == 3 and outcome.rendered == 3
+    assert len(storage.finished_trials(outcome.study)) == 3 and outcome.rendered == 3
 
 
 def test_a_measured_filter_beside_the_base_reaches_every_trial(tmp_path):

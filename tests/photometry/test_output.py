@@ -10,6 +10,7 @@ import OpenImageIO as oiio
 import pytest
 
 from core_tracer.images import imageio
+from core_tracer.images import photometric as photometric_images
 from core_tracer.photometry import cie, output, sources
 from core_tracer.photometry.bands import Bands
 
@@ -38,8 +39,8 @@ def test_exr_channels_units_and_values(tmp_path):
     image, lum = _bulb_image(b)
     xyz = output.band_image_to_xyz(image, b)
     path = tmp_path / "lamp.exr"
-    output.write_photometric_exr(path, xyz, channels=("X", "Y", "Z", "L", "x", "y"), bands=b)
-    planes, attrs = output.read_photometric_exr(path)
+    photometric_images.write_photometric_exr(path, xyz, channels=("X", "Y", "Z", "L", "x", "y"), bands=b)
+    planes, attrs = photometric_images.read_photometric_exr(path)
     assert sorted(planes) == sorted(["X", "Y", "Z", "L", "x", "y"])  # EXR keeps channels by name, not order
     np.testing.assert_allclose(planes["Y"][2, 3], lum, rtol=1e-6)  # float32
     np.testing.assert_allclose(planes["L"], planes["Y"])
@@ -56,9 +57,9 @@ def test_exr_channels_units_and_values(tmp_path):
 def test_exr_refuses_other_formats_and_channels(tmp_path):
     xyz = np.ones((2, 2, 3))
     with pytest.raises(imageio.SceneError, match=".exr"):
-        output.write_photometric_exr(tmp_path / "lamp.png", xyz)
+        photometric_images.write_photometric_exr(tmp_path / "lamp.png", xyz)
     with pytest.raises(ValueError, match="channel"):
-        output.write_photometric_exr(tmp_path / "lamp.exr", xyz, channels=("R",))
+        photometric_images.write_photometric_exr(tmp_path / "lamp.exr", xyz, channels=("R",))
     assert not any(tmp_path.iterdir())
 
 
@@ -81,27 +82,27 @@ def test_scene_linear_keeps_out_of_gamut_red():
 
 def test_false_colour_is_monotone_with_a_legend():
     lum = np.outer(np.logspace(4, -1, 50), np.ones(30))
-    image = output.false_colour(lum, 0.1, 1e4)
-    assert image.shape == (50, 30 + output.LEGEND_WIDTH, 3)
+    image = photometric_images.false_colour(lum, 0.1, 1e4)
+    assert image.shape == (50, 30 + photometric_images.LEGEND_WIDTH, 3)
     assert image.min() >= 0.0 and image.max() <= 1.0
     column = image[:, 5]
     brightness = column.sum(axis=1)
     assert brightness[0] > brightness[-1]  # bright (white end) at the top, dark blue at the bottom
     legend = image[:, 30:]
     assert (legend == 1.0).all(axis=2).sum() > 50  # white ink: the labels and ticks
-    dark = output.false_colour(np.zeros((4, 4)), 1.0, 10.0, legend=False)
+    dark = photometric_images.false_colour(np.zeros((4, 4)), 1.0, 10.0, legend=False)
     assert (dark == 0).all()
     with pytest.raises(ValueError, match="range"):
-        output.false_colour(lum, 10.0, 1.0)
+        photometric_images.false_colour(lum, 10.0, 1.0)
 
 
 def test_false_colour_png(tmp_path):
     lum = np.outer(np.logspace(5, -1, 120), np.ones(160))
     path = tmp_path / "false.png"
-    lo, hi = output.write_false_colour_png(path, lum)
+    lo, hi = photometric_images.write_false_colour_png(path, lum)
     assert (lo, hi) == (10.0, 1e5)
     inp = oiio.ImageInput.open(str(path))
     spec = inp.spec()
-    assert (spec.width, spec.height) == (160 + output.LEGEND_WIDTH, 120)
+    assert (spec.width, spec.height) == (160 + photometric_images.LEGEND_WIDTH, 120)
     assert spec.getattribute("lamp:false_colour") == "log10 luminance 10 to 100000 cd/m2"
     inp.close()
