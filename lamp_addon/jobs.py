@@ -52,20 +52,45 @@ class ModalJob:
     work when Blender ends the operator: file load, quit), ``status`` (the status-bar text) and
     ``fraction`` (done so far, 0..1, or None when unknown)."""
 
-    job_key = ""  # the key the run is claimed under: the operator's idname
+    bl_options = {"REGISTER"}  # the work changes no data by itself (a job that builds objects says so)
+    job_key = ""  # the key the run is claimed under (``key``): empty for the operator's idname
     busy_message = "A job of this kind is running (Esc cancels it)"
+    settings = ""  # the scene's property that holds the job's settings, which ``poll`` wants
+
+    @classmethod
+    def key(cls) -> str:
+        """The key a run of this kind is claimed under: ``job_key``, else the operator's idname."""
+        return cls.job_key or cls.bl_idname
+
+    @classmethod
+    def poll(cls, context):
+        """A scene with the job's settings, nothing in the way (``refusal``), no run of this kind under way."""
+        scene = context.scene
+        if scene is None or (cls.settings and not hasattr(scene, cls.settings)):
+            cls.poll_message_set("No scene")
+            return False
+        why = cls.refusal(context)
+        if why:
+            cls.poll_message_set(why)
+            return False
+        return cls.poll_not_running()
+
+    @classmethod
+    def refusal(cls, context) -> str | None:
+        """Why the job cannot start in this scene (the poll message), or None."""
+        return None
 
     @classmethod
     def poll_not_running(cls) -> bool:
         """For ``poll``: False, saying why, while a run of this kind is under way."""
-        if running(cls.job_key) is not None:
+        if running(cls.key()) is not None:
             cls.poll_message_set(cls.busy_message)
             return False
         return True
 
     def begin_modal(self, context, run: object) -> set[str]:
         """Claim the run, add the timer and the modal handler, start the progress display."""
-        claim(self.job_key, run, self.busy_message)
+        claim(self.key(), run, self.busy_message)
         self._job_run = run
         wm = context.window_manager
         self._job_timer = wm.event_timer_add(POLL_SECONDS, window=context.window)
@@ -105,7 +130,7 @@ class ModalJob:
         wm.progress_end()
         if context.workspace is not None:
             context.workspace.status_text_set(None)
-        release(self.job_key, self._job_run)
+        release(self.key(), self._job_run)
 
     def _show_status(self, context) -> None:
         fraction = self.fraction()

@@ -118,9 +118,25 @@ class DesignSection(LampTab):
     bl_parent_id = "LAMP_PT_design"
 
 
-class LAMP_PT_info(DesignSection, bpy.types.Panel):
-    bl_label = "Design"
+class ClosedSection(DesignSection):
+    """A sub-panel of the Lamp Design panel that starts closed."""
+
     bl_options = {"DEFAULT_CLOSED"}
+
+
+def property_column(layout, settings, *names: str):
+    """An aligned column of ``settings``' properties ``names``, labels on the left as Blender's own
+    panels have them; returned for more."""
+    col = layout.column(align=True)
+    col.use_property_split = True
+    col.use_property_decorate = False
+    for name in names:
+        col.prop(settings, name)
+    return col
+
+
+class LAMP_PT_info(ClosedSection, bpy.types.Panel):
+    bl_label = "Design"
     bl_order = 0
 
     def draw(self, context):
@@ -152,9 +168,8 @@ class LAMP_PT_light(DesignSection, bpy.types.Panel):
         draw_section(layout.column(heading="Surroundings"), design.environment, S.ENVIRONMENT)
 
 
-class LAMP_PT_camera(DesignSection, bpy.types.Panel):
+class LAMP_PT_camera(ClosedSection, bpy.types.Panel):
     bl_label = "Camera & Image"
-    bl_options = {"DEFAULT_CLOSED"}
     bl_order = 3
 
     def draw(self, context):

@@ -19,15 +19,16 @@ import time
 
 import bpy
 import numpy as np
-from bpy.props import BoolProperty, CollectionProperty, FloatProperty, PointerProperty, StringProperty
+from bpy.props import BoolProperty, CollectionProperty, FloatProperty, StringProperty
 
 from ...core_tracer.images import glare
 from ...core_tracer.raytrace import band_pool
 from ...core_tracer.scene.reading import SceneError
 from .. import image_view, jobs, reports
 from ..design import properties as design_properties
-from ..design.panels import DesignSection
+from ..design.panels import ClosedSection
 from ..render import photometric_display
+from ..scene_settings import SceneSettings
 
 IMAGE_NAME = "Lamp Light Panel"
 _held: dict[str, dict] = {}  # scene name -> {"key": design JSON, "light": LightStates, "display", "ms"}
@@ -64,18 +65,12 @@ class LAMP_PG_light_state(bpy.types.PropertyGroup):
                                      "(paper bulbs and the surroundings)")
 
 
-class LAMP_PG_light_panel(bpy.types.PropertyGroup):
+class LAMP_PG_light_panel(SceneSettings, bpy.types.PropertyGroup):
+    scene_attribute = "lamp_light_panel"
+    scene_name = "Lamp Light Panel"
+    scene_description = "Lighting states re-weighted without rendering"
+
     states: CollectionProperty(type=LAMP_PG_light_state)
-
-    @classmethod
-    def register(cls):
-        bpy.types.Scene.lamp_light_panel = PointerProperty(type=cls, name="Lamp Light Panel",
-                                                           description="Lighting states re-weighted without "
-                                                                       "rendering")
-
-    @classmethod
-    def unregister(cls):
-        del bpy.types.Scene.lamp_light_panel
 
 
 def _weights(bl_scene, light) -> dict[str, float]:
@@ -185,21 +180,14 @@ class LAMP_OT_light_states_render(jobs.ModalJob, bpy.types.Operator):
 
     bl_idname = "lamp.light_states_render"
     bl_label = "Render Light States"
-    bl_options = {"REGISTER"}
 
-    job_key = bl_idname
     busy_message = "Light states are being rendered (Esc cancels them)"
     cancelled_message = "Light states cancelled"
+    settings = "lamp_light_panel"
 
     @classmethod
-    def poll(cls, context):
-        if context.scene is None or not hasattr(context.scene, "lamp_light_panel"):
-            cls.poll_message_set("No scene")
-            return False
-        if not context.scene.lamp_design.lamps:
-            cls.poll_message_set("Add a lamp first")
-            return False
-        return cls.poll_not_running()
+    def refusal(cls, context):
+        return None if context.scene.lamp_design.lamps else "Add a lamp first"
 
     def _run(self, context) -> StatesRun:
         from .ops import measured_scene
@@ -313,9 +301,8 @@ def _apply_bulb(bulb, lit: list, level: dict[str, float]) -> list[str]:
             f"({filaments}; a {kind.name}'s flux is its filament's)"]
 
 
-class LAMP_PT_light_panel(DesignSection, bpy.types.Panel):
+class LAMP_PT_light_panel(ClosedSection, bpy.types.Panel):
     bl_label = "Light Panel"
-    bl_options = {"DEFAULT_CLOSED"}
     bl_order = 23
 
     def draw(self, context):

@@ -176,21 +176,14 @@ class LAMP_OT_measures_run(jobs.ModalJob, bpy.types.Operator):
 
     bl_idname = "lamp.measures_run"
     bl_label = "Measure Design"
-    bl_options = {"REGISTER"}
 
-    job_key = bl_idname
     busy_message = "The design is being measured (Esc cancels it)"
     cancelled_message = "Measures cancelled"
+    settings = "lamp_measures"
 
     @classmethod
-    def poll(cls, context):
-        if context.scene is None or not hasattr(context.scene, "lamp_measures"):
-            cls.poll_message_set("No scene")
-            return False
-        if not_photometric(context.scene):
-            cls.poll_message_set("The measures need the Photometric light model")
-            return False
-        return cls.poll_not_running()
+    def refusal(cls, context):
+        return "The measures need the Photometric light model" if not_photometric(context.scene) else None
 
     def execute(self, context):
         try:

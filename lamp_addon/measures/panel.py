@@ -6,16 +6,15 @@ from __future__ import annotations
 
 import bpy
 
-from ..design.panels import DesignSection
+from ..design.panels import ClosedSection
 from . import ops
 from . import settings as measures_settings
 
 ROWS_SHOWN = 40  # rows of the table drawn at most (the four-lamp design has about 150)
 
 
-class LAMP_PT_measures(DesignSection, bpy.types.Panel):
+class LAMP_PT_measures(ClosedSection, bpy.types.Panel):
     bl_label = "Measures"
-    bl_options = {"DEFAULT_CLOSED"}
     bl_order = 22
 
     def draw(self, context):

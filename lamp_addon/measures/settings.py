@@ -11,12 +11,18 @@ import json
 import os
 
 import bpy
-from bpy.props import BoolProperty, PointerProperty, StringProperty
+from bpy.props import BoolProperty, StringProperty
+
+from ..scene_settings import SceneSettings
 
 _read: dict[str, tuple[float, dict]] = {}  # measures.json path -> (its mtime, its contents)
 
 
-class LAMP_PG_measures(bpy.types.PropertyGroup):
+class LAMP_PG_measures(SceneSettings, bpy.types.PropertyGroup):
+    scene_attribute = "lamp_measures"
+    scene_name = "Lamp Measures"
+    scene_description = "The design's measures (intensity grids, colour, homogeneity)"
+
     folder: StringProperty(name="Folder", subtype="DIR_PATH", options=set(),
                            description="The folder of the last measures (measures.json, measures.png)")
     beam_files: BoolProperty(name="Beam Files", default=False,
@@ -24,16 +30,6 @@ class LAMP_PG_measures(bpy.types.PropertyGroup):
                                          "about a third longer)")
     show_all: BoolProperty(name="Show Every Row", default=False,
                            description="Every test point of the table, not only the failed ones and the figures")
-
-    @classmethod
-    def register(cls):
-        bpy.types.Scene.lamp_measures = PointerProperty(type=cls, name="Lamp Measures",
-                                                        description="The design's measures (intensity grids, "
-                                                                    "colour, homogeneity)")
-
-    @classmethod
-    def unregister(cls):
-        del bpy.types.Scene.lamp_measures
 
 
 def output_folder(blend_path: str, temporary: str) -> str:

@@ -156,17 +156,9 @@ class LAMP_OT_optimise_run(jobs.ModalJob, bpy.types.Operator):
 
     bl_idname = "lamp.optimise_run"
     bl_label = "Optimise"
-    bl_options = {"REGISTER"}
 
-    job_key = bl_idname
     busy_message = "An optimisation is running (Esc stops it)"
-
-    @classmethod
-    def poll(cls, context):
-        if context.scene is None or not hasattr(context.scene, "lamp_optimise"):
-            cls.poll_message_set("No scene")
-            return False
-        return cls.poll_not_running()
+    settings = "lamp_optimise"
 
     def _run(self, context) -> OptimiseRun:
         if not importable("optuna"):

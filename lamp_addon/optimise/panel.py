@@ -6,24 +6,18 @@ from __future__ import annotations
 
 import bpy
 
-from ..design.panels import DesignSection
+from ..design.panels import ClosedSection, property_column
 from . import settings as optimise_settings
 
 
-class LAMP_PT_optimise(DesignSection, bpy.types.Panel):
+class LAMP_PT_optimise(ClosedSection, bpy.types.Panel):
     bl_label = "Optimise"
-    bl_options = {"DEFAULT_CLOSED"}
     bl_order = 21
 
     def draw(self, context):
         layout = self.layout
         settings = context.scene.lamp_optimise
-        col = layout.column(align=True)
-        col.use_property_split = True
-        col.use_property_decorate = False
-        col.prop(settings, "file")
-        col.prop(settings, "scheduler")
-        col.prop(settings, "trials")
+        property_column(layout, settings, "file", "scheduler", "trials")
         layout.operator("lamp.optimise_run", icon="PLAY")
         outcome = optimise_settings.last()
         if outcome is None:

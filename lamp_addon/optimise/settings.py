@@ -11,7 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import bpy
-from bpy.props import IntProperty, PointerProperty, StringProperty
+from bpy.props import IntProperty, StringProperty
+
+from ..scene_settings import SceneSettings
 
 
 @dataclass
@@ -40,7 +42,11 @@ def _forget(*_args) -> None:
     _last.clear()
 
 
-class LAMP_PG_optimise(bpy.types.PropertyGroup):
+class LAMP_PG_optimise(SceneSettings, bpy.types.PropertyGroup):
+    scene_attribute = "lamp_optimise"
+    scene_name = "Lamp Optimisation"
+    scene_description = "Settings of the design optimisation"
+
     file: StringProperty(name="File", subtype="FILE_PATH", default="",
                          description="The optimisation, a lamp-optimise/1 JSON file (docs/cluster.md); without a "
                                      "base it starts from this design")
@@ -54,14 +60,13 @@ class LAMP_PG_optimise(bpy.types.PropertyGroup):
 
     @classmethod
     def register(cls):
-        bpy.types.Scene.lamp_optimise = PointerProperty(type=cls, name="Lamp Optimisation",
-                                                        description="Settings of the design optimisation")
+        super().register()
         if _forget not in bpy.app.handlers.load_post:
             bpy.app.handlers.load_post.append(_forget)
 
     @classmethod
     def unregister(cls):
-        del bpy.types.Scene.lamp_optimise
+        super().unregister()
         if _forget in bpy.app.handlers.load_post:
             bpy.app.handlers.load_post.remove(_forget)
 

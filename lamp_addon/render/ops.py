@@ -115,17 +115,14 @@ class LAMP_OT_render_tracer(jobs.ModalJob, bpy.types.Operator):
 
     bl_idname = "lamp.render_tracer"
     bl_label = "Render with Lamp Tracer"
-    bl_options = {"REGISTER"}
 
-    job_key = bl_idname
     busy_message = "A Lamp Tracer render is running (Esc cancels it)"
 
     @classmethod
-    def poll(cls, context):
-        if context.scene is None or context.scene.camera is None:
-            cls.poll_message_set("The scene has no camera; Frame Lamp (Camera & Image) or Build Lamp makes one")
-            return False
-        return cls.poll_not_running()
+    def refusal(cls, context):
+        if context.scene.camera is None:
+            return "The scene has no camera; Frame Lamp (Camera & Image) or Build Lamp makes one"
+        return None
 
     def execute(self, context):
         try:

@@ -165,18 +165,10 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
 
     bl_idname = "lamp.study_run"
     bl_label = "Run Study"
-    bl_options = {"REGISTER"}
 
-    job_key = bl_idname
     busy_message = "A study is running (Esc cancels it)"
     cancelled_message = "Lamp Study cancelled"
-
-    @classmethod
-    def poll(cls, context):
-        if context.scene is None or not hasattr(context.scene, "lamp_study"):
-            cls.poll_message_set("No scene")
-            return False
-        return cls.poll_not_running()
+    settings = "lamp_study"
 
     def execute(self, context):
         from ...core_tracer.study.run import StudyError

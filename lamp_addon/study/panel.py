@@ -7,7 +7,7 @@ from __future__ import annotations
 import bpy
 
 from ...core_tracer.scene import spec as S
-from ..design.panels import DesignSection
+from ..design.panels import ClosedSection, property_column
 from . import settings as study_settings
 
 # ---------------------------------------------------------------------------------------------
@@ -37,9 +37,8 @@ def _draw_axis(layout, axis, title: str) -> None:
             col.label(text=spec.range_text().capitalize())
 
 
-class LAMP_PT_study(DesignSection, bpy.types.Panel):
+class LAMP_PT_study(ClosedSection, bpy.types.Panel):
     bl_label = "Study"
-    bl_options = {"DEFAULT_CLOSED"}
     bl_order = 20
 
     def draw(self, context):
@@ -49,24 +48,13 @@ class LAMP_PT_study(DesignSection, bpy.types.Panel):
         layout.prop(settings, "use_axis_2")
         if settings.use_axis_2:
             _draw_axis(layout, settings.axis_2, "Rows")
-        col = layout.column(align=True)
-        col.use_property_split = True
-        col.use_property_decorate = False
-        col.prop(settings, "width")
-        col.prop(settings, "height")
-        col.prop(settings, "fit_lamp")
-        col.prop(settings, "scheduler")
+        col = property_column(layout, settings, "width", "height", "fit_lamp", "scheduler")
         if study_settings.uses_cluster(settings):
             col.label(text="Variants render as Dask tasks", icon="NETWORK_DRIVE")
         else:
             col.prop(settings, "workers")
         if context.scene.lamp_design.light_model == "photometric":
-            col = layout.column(align=True)
-            col.use_property_split = True
-            col.use_property_decorate = False
-            col.prop(settings, "measures")
-            col.prop(settings, "sort_by")
-            col.prop(settings, "filter")
+            property_column(layout, settings, "measures", "sort_by", "filter")
         layout.operator("lamp.study_run", icon="IMGDISPLAY")
 
         study = study_settings.last_study()

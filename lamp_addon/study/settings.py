@@ -26,6 +26,7 @@ from ..convert import camera as cm
 from ..design import photometric_words
 from ..design import properties as design_properties
 from ..render import camera as render_camera
+from ..scene_settings import SceneSettings
 
 ALL_LAMPS = "ALL"
 SHEET_IMAGE = "Lamp Study"
@@ -129,7 +130,11 @@ LAMP_PG_study_axis_1 = _axis_group("LAMP_PG_study_axis_1", "lens.ior", 1.45, 1.6
 LAMP_PG_study_axis_2 = _axis_group("LAMP_PG_study_axis_2", "cuts.height", 0.5, 2.0)
 
 
-class LAMP_PG_study(bpy.types.PropertyGroup):
+class LAMP_PG_study(SceneSettings, bpy.types.PropertyGroup):
+    scene_attribute = "lamp_study"
+    scene_name = "Lamp Study"
+    scene_description = "Settings of the design study"
+
     axis_1: PointerProperty(type=LAMP_PG_study_axis_1, name="Columns")
     use_axis_2: BoolProperty(name="Second Parameter", default=True,
                              description="Vary a second parameter down the rows of the sheet")
@@ -159,15 +164,6 @@ class LAMP_PG_study(bpy.types.PropertyGroup):
                                        "by commas); the others are listed under the sheet")
     variant: IntProperty(name="Variant", default=1, min=1, max=st.MAX_VARIANTS,
                          description="A variant of the last study (numbered along the rows of the sheet)")
-
-    @classmethod
-    def register(cls):
-        bpy.types.Scene.lamp_study = PointerProperty(type=cls, name="Lamp Study",
-                                                     description="Settings of the design study")
-
-    @classmethod
-    def unregister(cls):
-        del bpy.types.Scene.lamp_study
 
 
 def axis_doc(axis) -> dict:

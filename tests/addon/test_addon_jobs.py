@@ -35,7 +35,7 @@ def test_the_modal_operators_share_the_base(lamp_addon):
                          (lamp_addon.study.ops, "LAMP_OT_study_run")):
         operator = getattr(module, name)
         assert issubclass(operator, lamp_addon.jobs.ModalJob), name
-        assert operator.job_key == operator.bl_idname
+        assert operator.key() == operator.bl_idname
     # The modal jobs' polling interval is declared once (the viewport preview polls at its own rate).
     declared = [p.relative_to(ADDON).as_posix() for p in ADDON.rglob("*.py")
                 if re.search(r"^POLL_SECONDS\s*=", p.read_text(), re.M)]
