@@ -160,4 +160,5 @@ class ModalJob:
         raise NotImplementedError
 
     def fraction(self) -> float | None:
-        return None
+        """Done so far (0..1): the run's own ``fraction`` when it keeps one, else None (unknown)."""
+        return getattr(getattr(self, "_job_run", None), "fraction", None)

@@ -228,9 +228,6 @@ class LAMP_OT_light_states_render(jobs.ModalJob, bpy.types.Operator):
     def status(self) -> str:
         return f"Light states: {self._states.stage}, {100 * self._states.fraction:.0f}% (Esc to cancel)"
 
-    def fraction(self) -> float:
-        return self._states.fraction
-
 
 class LAMP_OT_light_states_apply(bpy.types.Operator):
     """Set the design's bulbs as the Light Panel has them: which lamps are on, which filament of a two-filament

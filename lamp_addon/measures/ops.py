@@ -230,9 +230,6 @@ class LAMP_OT_measures_run(jobs.ModalJob, bpy.types.Operator):
     def status(self) -> str:
         return f"Lamp Measures: {self._run.stage}, {100 * self._run.fraction:.0f}% (Esc to cancel)"
 
-    def fraction(self) -> float:
-        return self._run.fraction
-
 
 class LAMP_OT_measures_open_report(bpy.types.Operator):
     """Show the last measures' one-page report in an Image Editor"""

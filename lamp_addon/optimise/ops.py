@@ -203,9 +203,6 @@ class LAMP_OT_optimise_run(jobs.ModalJob, bpy.types.Operator):
         stopping = " stopping..." if job.stop.is_set() else " (Esc to stop)"
         return f"Lamp Optimise: {job.finished_trials}/{job.opt.trials} trials{stopping}"
 
-    def fraction(self) -> float:
-        return self._job.fraction
-
 
 class LAMP_OT_optimise_apply(bpy.types.Operator):
     """Set the design's parameters to the values of the chosen best design of the last optimisation"""
