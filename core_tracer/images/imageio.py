@@ -123,15 +123,9 @@ def write_image(
     return ev
 
 
-def write_display(
-    path: str | os.PathLike,
-    shown: np.ndarray,
-    scene: dict | None = None,
-    *,
-    attributes: Mapping[str, str] | None = None,
-    view: str = display.STANDARD,
-    exposure: float = 0.0,
-) -> None:
+def write_display(path: str | os.PathLike, shown: np.ndarray, scene: dict | None = None, *,
+                  attributes: Mapping[str, str] | None = None, view: str = display.STANDARD,
+                  exposure: float = 0.0) -> None:
     """Write display values ``shown`` (H, W, 3 in [0, 1], top row first) as an 8-bit PNG, for images
     composed on the display side (labels on a sheet); ``view`` and ``exposure`` say how the
     pictures in it were made, for ``read_image`` to undo."""
