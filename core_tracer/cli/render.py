@@ -156,7 +156,7 @@ def _writers(args: argparse.Namespace, scene: dict, image, stats: dict, view):
     from ..images import photometric
     from ..photometry.bands import Bands
 
-    bands = Bands.uniform(int(stats["bands"]))
+    bands = Bands(stats["band_edges_nm"])  # the render's own (``raytrace.spectral_bands``)
     ev100 = photometric.ev100_for(image, scene, args.ev100)
     stops = photometric_stops(args)
     false_colour = (args.luminance_range or (None, None)) if args.false_color else None

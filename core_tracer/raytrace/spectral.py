@@ -120,9 +120,8 @@ class Photometric:
         return materials.rgb_to_reflectance(np.asarray(rgb, dtype=np.float64), self.bands)
 
 
-def setup(scene: dict, k: int | None, sun_direction: np.ndarray) -> Photometric:
-    """The photometric light of a normalised scene on ``k`` bands (None: ``DEFAULT_BANDS``)."""
-    bands = bands_of(k)
+def setup(scene: dict, bands: Bands, sun_direction: np.ndarray) -> Photometric:
+    """The photometric light of a normalised scene on ``bands`` (``spectral_bands.render_bands``)."""
     lux = float(scene["light"]["illuminance_lux"])
     sun = PhotometricSun(np.asarray(sun_direction, dtype=np.float64), daylight.sun_spectral_irradiance(lux, bands),
                          lux)
@@ -279,21 +278,24 @@ def band_index(part: dict, bands: Bands) -> np.ndarray:
     return materials.refractive_index(*index_of(part), bands.centres_nm)
 
 
-def filter_transmittance(part: dict, bands: Bands, where: str) -> np.ndarray:
-    """(K,) band-mean internal transmittance of a part's filter at its ``filter_thickness``."""
+def filter_curve(part: dict, where: str) -> Spectrum:
+    """A part's filter: its internal transmittance at its ``filter_thickness`` per wavelength."""
     kind = part["filter"]
     if kind == "file":
         curve = _read_curve(part["filter_file"], f"{where}.filter_file")
         if float(curve.values.max()) > 1.0:
             raise SceneError(f"{where}.filter_file", "holds transmittances above 1; allowed internal "
                                                      "transmittances from 0 to 1")
-        return np.maximum(curve.band_means(bands), MIN_TRANSMITTANCE)
+        return curve
     if kind == "custom":
         low, high = part["filter_range"]
-        curve = materials.cut_on_filter(part["filter_edge_nm"], part["filter_slope_nm"], low, high).spectrum()
-    else:
-        curve = materials.FILTERS[kind].spectrum()
-    return np.clip(curve.band_means(bands), MIN_TRANSMITTANCE, 1.0)
+        return materials.cut_on_filter(part["filter_edge_nm"], part["filter_slope_nm"], low, high).spectrum()
+    return materials.FILTERS[kind].spectrum()
+
+
+def filter_transmittance(part: dict, bands: Bands, where: str) -> np.ndarray:
+    """(K,) band-mean internal transmittance of a part's filter at its ``filter_thickness``."""
+    return np.clip(filter_curve(part, where).band_means(bands), MIN_TRANSMITTANCE, 1.0)
 
 
 def absorption(part: dict, bands: Bands, where: str) -> np.ndarray:
