@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..photometry import daylight, materials
-from ..photometry.bands import VISIBLE_NM, Bands
+from ..photometry.bands import Bands
 from ..photometry.cie import xyz_matrix
 from ..photometry.spectrum import Spectrum
 from ..scene.led_array import uses_leds
