@@ -7,7 +7,7 @@ apart from the surroundings: the region is then every pixel), and their differen
 reference: max(|Δx|, |Δy|) and ΔL in %. Limits (issue 32): xy 0.002, luminance 1 %. With ``--time``
 each cell also gives the render's time over the 40-band render's, in the same run (the same size).
 
-    .venv/bin/python benchmarks/bench_photometric_bands.py [--ks 40,48,64,81] [--size 96] [--samples 1] [--time]
+    .venv/bin/python benchmarks/bench_photometric_bands.py [--ks 40,48,64,81] [--size 96] [--samples 1] [--time] [--only NAME]
 
 The last line says whether the scenes' own bands meet both limits on every preset, and the smallest K of
 the list from which every larger uniform K does.
@@ -87,6 +87,7 @@ def main() -> int:
     parser.add_argument("--size", type=int, default=96, help="image side in pixels")
     parser.add_argument("--samples", type=int, default=1, help="samples per pixel (the same at every K)")
     parser.add_argument("--time", action="store_true", help="each render's time over the 40-band one's")
+    parser.add_argument("--only", default="", help="the presets whose name holds this (default every one)")
     args = parser.parse_args()
     ks = sorted({int(k) for k in args.ks.split(",")} | ({spectral.DEFAULT_BANDS} if args.time else set()))
     columns = [SCENE] + ks
@@ -97,7 +98,7 @@ def main() -> int:
     print(f"{'preset':40s}" + "".join(f"{'K=' + str(k) if k else 'scene':>{width}s}" for k in columns)
           + f"   L({REFERENCE_K}) cd/m2   xy({REFERENCE_K})")
     worst = {k: (0.0, 0.0) for k in columns}
-    for path in photometric_presets():
+    for path in (p for p in photometric_presets() if args.only in p.stem):
         table, lum, xy, pixels = errors(load_scene(path), columns, args.size, args.samples, timed=True)
         base = table[spectral.DEFAULT_BANDS][2] if args.time else None
         cells = ""

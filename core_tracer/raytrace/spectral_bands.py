@@ -13,9 +13,10 @@ light is (docs/photometric.md, "The bands K, per scene").
 
 from __future__ import annotations
 
+import hashlib
 import json
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -24,6 +25,7 @@ from ..photometry.bands import Bands
 from ..photometry.cie import xyz_matrix
 from ..photometry.spectrum import Spectrum
 from ..scene.led_array import uses_leds
+from ..scene.reading import SceneError
 from . import spectral
 
 # The reference: 0.5 nm bands (their own error is (0.5 / 10)² = 1/400 of the 10 nm bands').
@@ -52,16 +54,37 @@ class Path:
     filters: tuple[Spectrum, ...]
     parts: tuple[Spectrum, ...] = ()
     passes: float = 1.0
+    # (801, 3) X, Y, Z on FINE summed from 380 nm to each of its edges, T(λ)^(d/t) in 0.5 nm bands
+    fine_cumulative: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        per_band = _light(self, FINE)[:, None] * xyz_matrix(FINE)
+        object.__setattr__(self, "fine_cumulative", np.vstack([np.zeros((1, 3)), np.cumsum(per_band, axis=0)]))
 
 
 def scene_paths(scene: dict) -> list[Path]:
-    """Every source-to-eye product of a normalised photometric scene's spectra: each bulb or LED array
-    as if lit (so that a scene's lighting states share its bands, ``measures.states``), and the sun when it shines, through each lens's filter (and its plate's or guide's), with
-    and without each reflector's finish, at each of ``PASSES``."""
+    """Every source-to-eye product of a normalised photometric scene's spectra, each once: each bulb or
+    LED array as if lit (so that a scene's lighting states share its bands, ``measures.states``), and the
+    sun when it shines, through each lens's filter (and its plate's or guide's), with and without each
+    reflector's finish, at each of ``PASSES``. Equal curves are one object (``_light``'s ``means``)."""
     sun = [daylight.daylight_spectrum(daylight.SUN_CCT_K)] if scene["light"]["illuminance_lux"] > 0 else []
-    return [Path(source, chain, parts, passes) for sources, chains, finishes in _lamps(scene)
-            for source in sources + sun for chain in chains
-            for parts in [()] + [(finish,) for finish in finishes] for passes in PASSES]
+    curves: list[Spectrum] = []
+
+    def one(curve: Spectrum) -> Spectrum:
+        same = next((c for c in curves if c == curve), None)
+        if same is None:
+            curves.append(curve)
+        return same or curve
+
+    products = []
+    for sources, chains, finishes in _lamps(scene):
+        for source in sources + sun:
+            for chain in chains:
+                for parts in [()] + [(finish,) for finish in finishes]:
+                    product = (one(source), tuple(map(one, chain)), tuple(map(one, parts)))
+                    if product not in products:
+                        products.append(product)
+    return [Path(*product, passes) for product in products for passes in PASSES]
 
 
 def _lamps(scene: dict) -> list[tuple[list[Spectrum], list[tuple[Spectrum, ...]], list[Spectrum]]]:
@@ -92,38 +115,35 @@ def _finish(reflector: dict) -> Spectrum:
     return materials.mirror_reflectance(spectral.FINISHES[reflector["finish"]])
 
 
-def _light(path: Path, bands: Bands) -> np.ndarray:
-    """(K,) the path's band-mean light, its source scaled to luminance 1 in ``bands`` (as the tracer does)."""
-    source = path.source.band_means(bands)
+def _light(path: Path, bands: Bands, means: dict[int, np.ndarray] | None = None) -> np.ndarray:
+    """(K,) the path's band-mean light, its source scaled to luminance 1 in ``bands`` (as the tracer does).
+    ``means`` keeps each curve's band means on ``bands`` by the curve's id, for the next path."""
+    means = {} if means is None else means
+
+    def mean(curve: Spectrum) -> np.ndarray:
+        if id(curve) not in means:
+            means[id(curve)] = curve.band_means(bands)
+        return means[id(curve)]
+
+    source = mean(path.source)
     light = source / float(source @ xyz_matrix(bands)[:, 1])
     for curve in path.filters:
-        light = light * np.maximum(curve.band_means(bands), spectral.MIN_TRANSMITTANCE) ** path.passes
+        light = light * np.maximum(mean(curve), spectral.MIN_TRANSMITTANCE) ** path.passes
     for curve in path.parts:
-        light = light * curve.band_means(bands)
+        light = light * mean(curve)
     return light
 
 
-def _fine_cumulative(path: Path) -> np.ndarray:
-    """(801, 3) X, Y, Z of ``path`` with T(λ)^(d/t) on FINE, summed from 380 nm to each FINE edge."""
-    source = path.source.band_means(FINE)
-    light = source / float(source @ xyz_matrix(FINE)[:, 1])
-    for curve in path.filters:
-        light = light * np.maximum(curve.band_means(FINE), spectral.MIN_TRANSMITTANCE) ** path.passes
-    for curve in path.parts:
-        light = light * curve.band_means(FINE)
-    return np.vstack([np.zeros((1, 3)), np.cumsum(light[:, None] * xyz_matrix(FINE), axis=0)])
-
-
-def _per_band(path: Path, bands: Bands) -> tuple[np.ndarray, np.ndarray]:
+def _per_band(path: Path, bands: Bands, means: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """((K, 3) X, Y, Z per band on ``bands``, (K, 3) the same from FINE), for one path."""
-    cumulative = _fine_cumulative(path)
+    cumulative = path.fine_cumulative
     fine = np.diff(np.stack([np.interp(bands.edges_nm, FINE.edges_nm, c) for c in cumulative.T], axis=1), axis=0)
-    return _light(path, bands)[:, None] * xyz_matrix(bands), fine
+    return _light(path, bands, means)[:, None] * xyz_matrix(bands), fine
 
 
-def path_error(path: Path, bands: Bands) -> tuple[float, float]:
+def path_error(path: Path, bands: Bands, means: dict[int, np.ndarray] | None = None) -> tuple[float, float]:
     """(max |Δx|, |Δy| of the chromaticity, |ΔY| / Y) of ``path`` on ``bands`` against FINE."""
-    coarse, fine = (a.sum(axis=0) for a in _per_band(path, bands))
+    coarse, fine = (a.sum(axis=0) for a in _per_band(path, bands, {} if means is None else means))
     if not fine[1] > 0:
         return 0.0, 0.0
     xy_coarse, xy_fine = coarse[:2] / coarse.sum(), fine[:2] / fine.sum()
@@ -132,7 +152,8 @@ def path_error(path: Path, bands: Bands) -> tuple[float, float]:
 
 def scene_error(paths: list[Path], bands: Bands) -> tuple[float, float]:
     """The worst (xy, relative luminance) error over ``paths`` on ``bands``."""
-    errors = [path_error(p, bands) for p in paths] or [(0.0, 0.0)]
+    means: dict[int, np.ndarray] = {}
+    errors = [path_error(p, bands, means) for p in paths] or [(0.0, 0.0)]
     return max(e[0] for e in errors), max(e[1] for e in errors)
 
 
@@ -144,9 +165,9 @@ def refined(paths: list[Path], bands: Bands) -> Bands:
     """``bands`` with the bands that add most to the error halved, again until every path meets
     ``REFINE`` (or ``MAX_BANDS``): each band's share is |its X, Y, Z − FINE's over it| / Y."""
     while bands.k < MAX_BANDS and not meets(scene_error(paths, bands), REFINE):
-        share = np.zeros(bands.k)
+        share, means = np.zeros(bands.k), {}
         for path in paths:
-            coarse, fine = _per_band(path, bands)
+            coarse, fine = _per_band(path, bands, means)
             total = fine[:, 1].sum()
             if total > 0:
                 share = np.maximum(share, np.abs(coarse - fine).max(axis=1) / total)
@@ -174,6 +195,25 @@ def scene_bands(scene: dict) -> Bands:
     """The bands a normalised photometric scene is traced on: ``spectral.DEFAULT_BANDS`` uniform bands
     when every path of its light meets ``ACCEPT`` on them, else those bands ``refined`` where its light is."""
     return _chosen(_key(scene), scene)
+
+
+def words(bands: Bands) -> str:
+    """The bands in words, as the command line prints them: "40 bands", "55 bands of 2.5 to 10 nm"."""
+    narrow, wide = float(bands.widths_nm.min()), float(bands.widths_nm.max())
+    return f"{bands.k} bands" if wide - narrow < 1e-9 else f"{bands.k} bands of {narrow:g} to {wide:g} nm"
+
+
+def look(scene: dict) -> str:
+    """The bands a scene is traced on, in words for a thumbnail's name: "40 bands" for the default ones
+    (every thumbnail made before the choice keeps its name), else K and a hash of the edges. A scene whose
+    curves cannot be read says so (its thumbnail fails with the field's message when it is made)."""
+    try:
+        bands = scene_bands(scene)
+    except SceneError:
+        return "bands of unread curves"
+    if bands == Bands.uniform(spectral.DEFAULT_BANDS):
+        return f"{bands.k} bands"
+    return f"{bands.k} bands {hashlib.sha256(bands.edges_nm.tobytes()).hexdigest()[:8]}"
 
 
 def _key(scene: dict) -> str:
