@@ -54,7 +54,8 @@ from .lamp_table import LampTable
 # test_band_convergence.py, docs/photometric.md): the red stop and tail lamps (illuminant A through a
 # red cut-on) need the most; at 96 px their lit lens's xy is 0.0041 off at K = 16, 0.00099 at 32,
 # 0.00057 at 40 (10 nm), and its luminance 1.9 %, 0.39 %, 0.22 %. 32 sits on the xy limit (0.001);
-# 40 keeps a margin (xy at 57 % of it, luminance at 44 % of 0.5 %).
+# 40 keeps a margin (xy at 57 % of it, luminance at 44 % of 0.5 %). A scene with narrower spectra (an
+# LED line) is traced on these bands refined where its light is (``spectral_bands.scene_bands``).
 DEFAULT_BANDS = 40
 FINISHES = {"aluminised": "aluminium", "silvered": "silver"}
 MIN_TRANSMITTANCE = 1e-9  # a measured filter's 0 read as this, so that its absorption stays finite

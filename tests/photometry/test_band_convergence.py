@@ -85,7 +85,8 @@ def test_an_explicit_k_wins_with_a_warning_when_too_coarse():
         warnings.simplefilter("error")  # 40 bands suit a bulb behind a red filter: no warning
         render_passes({**bulb, "image": {**bulb["image"], "width": 8, "height": 8, "samples": 1}}, bands=40, threads=1)
     chosen = render_passes(small, threads=1).stats
-    assert chosen["bands"] == spectral_bands.scene_bands(scene).k and len(chosen["band_edges_nm"]) == chosen["bands"] + 1
+    assert chosen["bands"] == spectral_bands.scene_bands(scene).k
+    assert len(chosen["band_edges_nm"]) == chosen["bands"] + 1
 
 
 def test_a_narrow_csv_line_is_refined_down_to_its_width(tmp_path):
