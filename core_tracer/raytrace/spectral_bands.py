@@ -5,18 +5,18 @@ S(λ) through filters and finishes A(λ) is counted as Σ_k S̄_k Ā_k M_k (``ci
 Km ∫ S A (x̄, ȳ, z̄) dλ. The difference grows with each band's width squared times the curves'
 curvature, so a narrow LED line (630 nm, 20 nm wide) needs finer bands than an incandescent bulb
 behind a red filter. ``scene_error`` evaluates that difference for every path a scene's light takes
-(each lit source through each lamp's lens and plate or guide filters, with and without the
-reflector's finish; the sun through them too), against 1 nm bands, without tracing; ``scene_bands``
-takes the default 40 bands of 10 nm when they meet ``TARGET`` and otherwise refines them where the
-light is (docs/photometric.md, "The bands K, per scene").
+(each source as if lit through each lamp's lens and plate or guide filters, with and without the
+reflector's finish; the sun through them too), against 0.5 nm bands, without tracing; ``scene_bands``
+takes the default 40 bands of 10 nm when they meet ``ACCEPT`` and otherwise refines them where the
+light is (docs/photometric.md, "Bands per scene").
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
-import json
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -54,12 +54,12 @@ class Path:
     filters: tuple[Spectrum, ...]
     parts: tuple[Spectrum, ...] = ()
     passes: float = 1.0
-    # (801, 3) X, Y, Z on FINE summed from 380 nm to each of its edges, T(λ)^(d/t) in 0.5 nm bands
-    fine_cumulative: np.ndarray = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self) -> None:
+    @functools.cached_property
+    def fine_cumulative(self) -> np.ndarray:
+        """(801, 3) X, Y, Z on FINE summed from 380 nm to each of its edges, T(λ)^(d/t) in 0.5 nm bands."""
         per_band = _light(self, FINE)[:, None] * xyz_matrix(FINE)
-        object.__setattr__(self, "fine_cumulative", np.vstack([np.zeros((1, 3)), np.cumsum(per_band, axis=0)]))
+        return np.vstack([np.zeros((1, 3)), np.cumsum(per_band, axis=0)])
 
 
 def scene_paths(scene: dict) -> list[Path]:
@@ -126,7 +126,9 @@ def _light(path: Path, bands: Bands, means: dict[int, np.ndarray] | None = None)
         return means[id(curve)]
 
     source = mean(path.source)
-    light = source / float(source @ xyz_matrix(bands)[:, 1])
+    luminance = float(source @ xyz_matrix(bands)[:, 1])
+    # no visible light: no error to weigh (the render refuses the source, ``spectral.bulb_radiance``)
+    light = source / luminance if luminance > 0 else np.zeros(bands.k)
     for curve in path.filters:
         light = light * np.maximum(mean(curve), spectral.MIN_TRANSMITTANCE) ** path.passes
     for curve in path.parts:
@@ -193,8 +195,19 @@ def render_bands(scene: dict, k: int | None) -> Bands:
 
 def scene_bands(scene: dict) -> Bands:
     """The bands a normalised photometric scene is traced on: ``spectral.DEFAULT_BANDS`` uniform bands
-    when every path of its light meets ``ACCEPT`` on them, else those bands ``refined`` where its light is."""
-    return _chosen(_key(scene), scene)
+    when every path of its light meets ``ACCEPT`` on them, else those bands ``refined`` where its light
+    is. Kept per set of paths (a render makes a context in each of its worker processes; an edit of a
+    lamp's shape keeps its spectra), found by their curves' values, so an edited CSV file counts."""
+    paths = scene_paths(scene)
+    key = hashlib.sha256(b"".join(
+        np.concatenate([curve.wavelengths_nm, curve.values, [path.passes]]).tobytes()
+        for path in paths for curve in (path.source, *path.filters, *path.parts))).hexdigest()
+    if key not in _CHOSEN:
+        if len(_CHOSEN) >= CHOSEN_KEPT:
+            _CHOSEN.clear()
+        default = Bands.uniform(spectral.DEFAULT_BANDS)
+        _CHOSEN[key] = default if meets(scene_error(paths, default), ACCEPT) else refined(paths, default)
+    return _CHOSEN[key]
 
 
 def words(bands: Bands) -> str:
@@ -216,23 +229,8 @@ def look(scene: dict) -> str:
     return f"{bands.k} bands {hashlib.sha256(bands.edges_nm.tobytes()).hexdigest()[:8]}"
 
 
-def _key(scene: dict) -> str:
-    """What the choice depends on: the sun's presence and the lamps' (or meshes' parts') sections, which
-    name their spectra and filters (a CSV file by its path: a file changed during a session keeps the
-    bands chosen from it first)."""
-    lamps = scene["freeform"]["parts"] if "freeform" in scene else scene["lamps"]
-    return json.dumps([scene["light"]["illuminance_lux"] > 0, lamps], sort_keys=True, default=str)
-
-
-_CHOSEN: dict[str, Bands] = {}  # per _key: a render makes a context in each of its worker processes
-
-
-def _chosen(key: str, scene: dict) -> Bands:
-    if key not in _CHOSEN:
-        default = Bands.uniform(spectral.DEFAULT_BANDS)
-        paths = scene_paths(scene)
-        _CHOSEN[key] = default if meets(scene_error(paths, default), ACCEPT) else refined(paths, default)
-    return _CHOSEN[key]
+_CHOSEN: dict[str, Bands] = {}  # ``scene_bands``'s, by a hash of the paths' curves
+CHOSEN_KEPT = 64
 
 
 def coarse_warning(scene: dict, bands: Bands) -> str | None:
