@@ -153,8 +153,10 @@ def _writers(args: argparse.Namespace, scene: dict, image, stats: dict, view):
 
     from ..images import photometric
     from ..photometry.bands import Bands
+    from ..raytrace import spectral_bands
 
-    bands = Bands.uniform(int(stats["bands"]))
+    bands = Bands(stats["band_edges_nm"])  # the render's own (``raytrace.spectral_bands``)
+    bands_words = spectral_bands.words(bands)
     ev100 = photometric.ev100_for(image, scene, args.ev100)
     stops = photometric_stops(args)
     false_colour = (args.luminance_range or (None, None)) if args.false_color else None
@@ -163,11 +165,11 @@ def _writers(args: argparse.Namespace, scene: dict, image, stats: dict, view):
         photometric.write_render(args.output, image, scene, ev100=ev100, view=view, stops=stops, bands=bands,
                                  false_colour=false_colour)
         if image_format(args.output) == "exr":
-            return f", XYZ (Y in cd/m2) on {bands.k} bands"
+            return f", XYZ (Y in cd/m2) on {bands_words}"
         if false_colour is not None:
-            return f", false colour of luminance in cd/m2 on {bands.k} bands"
+            return f", false colour of luminance in cd/m2 on {bands_words}"
         extra = f" {stops:+.1f} EV" if stops else ""
-        return f", {view.view} at EV100 {ev100:.1f}{extra} on {bands.k} bands"
+        return f", {view.view} at EV100 {ev100:.1f}{extra} on {bands_words}"
 
     return write, lambda path, data: photometric.write_pass(path, data, scene, bands)
 

@@ -173,6 +173,7 @@ def render_passes(scene: dict, meshes: dict[str, MeshData], width: int | None = 
     result.stats["light_model"] = "paper" if ctx.photometric is None else "photometric"
     if ctx.photometric is not None:
         result.stats["bands"] = ctx.channels
+        result.stats["band_edges_nm"] = ctx.photometric.bands.edges_nm.tolist()
     return result
 
 

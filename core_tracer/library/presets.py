@@ -329,9 +329,9 @@ def thumbnail_digest(entry: PresetEntry) -> str:
     ``PHOTOMETRIC_THUMBNAIL_LOOK`` for a photometric preset)."""
     look = THUMBNAIL_LOOK
     if entry.scene.get("light_model") == "photometric":
-        from ..raytrace.spectral import DEFAULT_BANDS  # loaded for a photometric preset only
+        from ..raytrace import spectral_bands  # loaded for a photometric preset only
 
-        look = f"{PHOTOMETRIC_THUMBNAIL_LOOK}; {DEFAULT_BANDS} bands"
+        look = f"{PHOTOMETRIC_THUMBNAIL_LOOK}; {spectral_bands.look(with_spectrum_files(entry.file, entry.scene))}"
     return hashlib.sha256(f"{entry.digest}\n{look}".encode()).hexdigest()[:16]
 
 

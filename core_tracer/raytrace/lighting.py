@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import environment, optics, spectral, sunlight
+from . import environment, optics, spectral, spectral_bands, sunlight
 
 
 class Lighting:
@@ -34,7 +34,7 @@ class Lighting:
         self.pass_channels = 3  # what the passes hold: R, G, B; photometric: X, Y, Z (``Band.add``)
         self.photometric = None
         if scene.get("light_model", "paper") == "photometric":
-            self.photometric = spectral.setup(scene, bands, self.sun.direction)
+            self.photometric = spectral.setup(scene, spectral_bands.render_bands(scene, bands), self.sun.direction)
             self.channels = self.photometric.channels
             self.sun = self.photometric.sun
             self.background = np.zeros(self.channels)

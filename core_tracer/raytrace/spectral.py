@@ -53,7 +53,8 @@ from .lamp_table import LampTable
 # test_band_convergence.py, docs/photometric.md): the red stop and tail lamps (illuminant A through a
 # red cut-on) need the most; at 96 px their lit lens's xy is 0.0041 off at K = 16, 0.00099 at 32,
 # 0.00057 at 40 (10 nm), and its luminance 1.9 %, 0.39 %, 0.22 %. 32 sits on the xy limit (0.001);
-# 40 keeps a margin (xy at 57 % of it, luminance at 44 % of 0.5 %).
+# 40 keeps a margin (xy at 57 % of it, luminance at 44 % of 0.5 %). A scene with narrower spectra (an
+# LED line) is traced on these bands refined where its light is (``spectral_bands.scene_bands``).
 DEFAULT_BANDS = 40
 FINISHES = {"aluminised": "aluminium", "silvered": "silver"}
 MIN_TRANSMITTANCE = 1e-9  # a measured filter's 0 read as this, so that its absorption stays finite
@@ -119,9 +120,8 @@ class Photometric:
         return materials.rgb_to_reflectance(np.asarray(rgb, dtype=np.float64), self.bands)
 
 
-def setup(scene: dict, k: int | None, sun_direction: np.ndarray) -> Photometric:
-    """The photometric light of a normalised scene on ``k`` bands (None: ``DEFAULT_BANDS``)."""
-    bands = bands_of(k)
+def setup(scene: dict, bands: Bands, sun_direction: np.ndarray) -> Photometric:
+    """The photometric light of a normalised scene on ``bands`` (``spectral_bands.render_bands``)."""
     lux = float(scene["light"]["illuminance_lux"])
     sun = PhotometricSun(np.asarray(sun_direction, dtype=np.float64), daylight.sun_spectral_irradiance(lux, bands),
                          lux)
@@ -278,21 +278,24 @@ def band_index(part: dict, bands: Bands) -> np.ndarray:
     return materials.refractive_index(*index_of(part), bands.centres_nm)
 
 
-def filter_transmittance(part: dict, bands: Bands, where: str) -> np.ndarray:
-    """(K,) band-mean internal transmittance of a part's filter at its ``filter_thickness``."""
+def filter_curve(part: dict, where: str) -> Spectrum:
+    """A part's filter: its internal transmittance at its ``filter_thickness`` per wavelength."""
     kind = part["filter"]
     if kind == "file":
         curve = _read_curve(part["filter_file"], f"{where}.filter_file")
         if float(curve.values.max()) > 1.0:
             raise SceneError(f"{where}.filter_file", "holds transmittances above 1; allowed internal "
                                                      "transmittances from 0 to 1")
-        return np.maximum(curve.band_means(bands), MIN_TRANSMITTANCE)
+        return curve
     if kind == "custom":
         low, high = part["filter_range"]
-        curve = materials.cut_on_filter(part["filter_edge_nm"], part["filter_slope_nm"], low, high).spectrum()
-    else:
-        curve = materials.FILTERS[kind].spectrum()
-    return np.clip(curve.band_means(bands), MIN_TRANSMITTANCE, 1.0)
+        return materials.cut_on_filter(part["filter_edge_nm"], part["filter_slope_nm"], low, high).spectrum()
+    return materials.FILTERS[kind].spectrum()
+
+
+def filter_transmittance(part: dict, bands: Bands, where: str) -> np.ndarray:
+    """(K,) band-mean internal transmittance of a part's filter at its ``filter_thickness``."""
+    return np.clip(filter_curve(part, where).band_means(bands), MIN_TRANSMITTANCE, 1.0)
 
 
 def absorption(part: dict, bands: Bands, where: str) -> np.ndarray:

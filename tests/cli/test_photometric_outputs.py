@@ -14,6 +14,7 @@ from core_tracer import render_passes
 from core_tracer.images import imageio
 from core_tracer.images import photometric as photometric_images
 from core_tracer.photometry import output
+from core_tracer.raytrace import spectral_bands
 from core_tracer.scene.validate import load_scene
 
 pytestmark = pytest.mark.slow
@@ -144,3 +145,16 @@ def test_study_options_checked_before_any_render(tmp_path):
                    tmp_path / "s.exr")
     assert_bad_input(proc, "light_model", ".png")
     assert not any(tmp_path.iterdir())
+
+
+def test_an_led_scene_says_its_own_bands_in_the_line_and_the_exr_header(tmp_path):
+    """The LED stop lamp is traced on the bands it chooses (``raytrace.spectral_bands``): the printed line
+    gives their number and widths, the EXR's ``lamp:bands`` their edges."""
+    led = PRESETS / "led-stop-lamp.json"
+    bands = spectral_bands.scene_bands(load_scene(led))
+    proc = run_cli("render", led, "-o", tmp_path / "led.exr", "--width", "24", "--height", "24", "--samples", "1")
+    assert proc.returncode == 0, proc.stderr
+    assert f"on {bands.k} bands of 2.5 to 10 nm" in proc.stdout, proc.stdout
+    header = output.read_photometric_exr(tmp_path / "led.exr")[1]
+    assert np.allclose([float(e) for e in header[output.BANDS_ATTRIBUTE].split()], bands.edges_nm)
+    assert bands.k > 40

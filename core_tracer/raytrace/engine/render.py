@@ -149,6 +149,7 @@ def render_passes(scene: dict, width: int | None = None, height: int | None = No
     result.stats["light_model"] = "paper" if ctx.photometric is None else "photometric"
     if ctx.photometric is not None:
         result.stats["bands"] = ctx.channels
+        result.stats["band_edges_nm"] = ctx.photometric.bands.edges_nm.tolist()
     return result
 
 
