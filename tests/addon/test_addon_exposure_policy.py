@@ -23,14 +23,12 @@ SMALL = (96, 96)
 
 
 @pytest.fixture
-def startup(addon):
+def startup(startup_scene):
+    """The factory startup file with the preset browser filled."""
     import bpy
 
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    scene = bpy.context.scene
-    assert scene.view_settings.exposure == 0.0
     bpy.ops.lamp.preset_refresh()
-    return scene
+    return startup_scene
 
 
 def apply_preset(file_name: str, capfd=None) -> str:

@@ -16,16 +16,6 @@ pytestmark = pytest.mark.blender
 
 
 @pytest.fixture
-def startup_scene(addon):
-    """Blender's factory startup file (the add-on stays enabled); its scene."""
-    import bpy
-
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    assert {o.name for o in bpy.data.objects} == {"Cube", "Camera", "Light"}
-    return bpy.context.scene
-
-
-@pytest.fixture
 def builder(lamp_addon):
     return lamp_addon.design.builder
 

@@ -14,11 +14,12 @@ import time
 
 import pytest
 from helpers import BASELINE, ROOT, assert_bad_input, cli_command, run_cli
+from needs import require
 
 from core_tracer.cluster import engine
 from core_tracer.scene.reading import SceneError
 
-pytestmark = pytest.mark.skipif(not engine.available(), reason="needs dask distributed")
+require("distributed")
 
 STUDY = ("study", BASELINE, "--vary", "lens.ior=1.4,1.6", "--size", "24x24", "--no-cache")
 

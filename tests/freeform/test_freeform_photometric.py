@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from helpers import slab_series
+from needs import require
 
 from core_tracer.freeform import render_passes, shapes
 from core_tracer.photometry import materials
@@ -20,7 +21,7 @@ from core_tracer.scene import beside
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
 
-pytest.importorskip("embreex")
+require("embreex")
 
 FLUX = 440.0
 RADIUS = 8.0

@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import copy
 import json
-import os
 import struct
 import warnings
 
 import numpy as np
 import pytest
 from glb_writer import write_glb
-from hypothesis import HealthCheck, given, settings
+from helpers import fuzz
+from hypothesis import given
 from hypothesis import strategies as st
 from test_glb_limits import join_glb, split_glb
 
@@ -26,15 +26,6 @@ from core_tracer.freeform.gltf import read_glb
 from core_tracer.freeform.meshes import MAX_COORDINATE_MM, check_lens_volume, check_mesh
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
-
-SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
-
-
-def fuzz(examples: int):
-    """``examples`` per run (times LAMP_FUZZ_EXAMPLES), no example database, no deadline."""
-    return settings(max_examples=examples * SCALE, deadline=None, database=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                           HealthCheck.function_scoped_fixture])
 
 
 @pytest.fixture(scope="module")

@@ -12,11 +12,12 @@ import sys
 
 import numpy as np
 import pytest
+from needs import require
 
 from core_tracer.measures import export as E
 from core_tracer.measures.directions import direction
 
-photompy = pytest.importorskip("photompy")
+photompy = require("photompy")
 
 
 def cosine_beam(grid: E.BeamGrid, peak: float = 300.0, flux: float = 440.0, out: float | None = 100.0,

@@ -24,6 +24,7 @@ import math
 import numpy as np
 import pytest
 from helpers import baseline_doc, write_exr
+from needs import require
 
 from core_tracer import render_passes
 from core_tracer.raytrace import environment
@@ -223,7 +224,7 @@ def test_photometric_furnace_never_exceeds_the_world(uniform_world, lens):
 def test_free_form_meshes_in_the_furnace(uniform_world):
     """A white lens colour on a clear slab mesh and a white body mesh, ambient at its default: the lens
     surface is Fresnel's r of each eye ray times the world (1), the body the world."""
-    pytest.importorskip("embreex")
+    require("embreex")
     from core_tracer.freeform import render_passes as freeform_passes
     from core_tracer.freeform import shapes
     from core_tracer.raytrace.camera import eye_rays, make_camera

@@ -26,8 +26,8 @@ import warnings
 
 import numpy as np
 import pytest
-from helpers import baseline_doc, status_bytes
-from hypothesis import HealthCheck, currently_in_test_context, event, given, settings
+from helpers import baseline_doc, fuzz, status_bytes
+from hypothesis import currently_in_test_context, event, given
 from hypothesis import strategies as st
 
 from core_tracer import budget
@@ -39,15 +39,7 @@ from core_tracer.scene.safe_text import printable
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 
-SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
 MIB = 2**20
-
-
-def fuzz(examples: int):
-    """``examples`` per run (times LAMP_FUZZ_EXAMPLES), no example database, no deadline."""
-    return settings(max_examples=examples * SCALE, deadline=None, database=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                           HealthCheck.function_scoped_fixture])
 
 
 # -- what every answer must be -------------------------------------------------------------------
