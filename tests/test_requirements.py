@@ -27,3 +27,7 @@ def test_installed_at_the_pinned_version(name, version):
     except importlib.metadata.PackageNotFoundError:
         pytest.fail(f"{name} {version} (requirements.txt) is not installed: tools/ensure-venv", pytrace=False)
     assert installed == version, f"{name}: {installed} installed, {version} pinned"
+
+
+def test_ci_turns_a_missing_requirement_into_a_failure():
+    assert "\nexport LAMP_REQUIRE_ALL=1\n" in (ROOT / ".ci" / "run").read_text(encoding="utf-8")
