@@ -115,6 +115,20 @@ def test_the_lamp_sun_follows_the_sun_of_the_design_and_of_the_environment(lamp_
 
 
 @pytest.mark.slow
+def _body_against_cycles(lamp_addon, bl_scene, scene: dict, what: str) -> np.ndarray:
+    """Cycles' mean colour of the body's front face against the tracer's, relative per channel, in a
+    16x10 region left of the lens and clear of the body's edges (64x64, ``BODY_SAMPLES`` in Cycles)."""
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
+    region = (slice(24, 40), slice(4, 14))
+    t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
+    c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
+    relative = (c - t) / t
+    print(f"\nbody {what}, {BODY_SAMPLES} spp Cycles, 64x64, 16x10 region: tracer {t}, Cycles {c}, "
+          f"relative difference {relative}, seconds {result['seconds']}")
+    return relative
+
+
 def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene, world_images):
     # The body's front face sees the open half of the world: the tracer's C0 E(n) / pi against Cycles'
     # Diffuse BSDF under the same world (no sun, no ambient, no specular).
@@ -124,15 +138,7 @@ def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene, wo
     doc["environment"] = {"world": "courtyard", "strength": 1.0, "rotation_deg": 40.0}
     doc["image"] = {"width": 64, "height": 64}
     scene = core_tracer.parse_scene(doc)
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
-    region = (slice(24, 40), slice(4, 14))  # left of the lens, clear of the body's edges (as the lit-body test)
-    t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
-    c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
-    relative = (c - t) / t
-    print(f"\nbody lit by courtyard, {BODY_SAMPLES} spp Cycles, 64x64, 16x10 region: tracer {t}, Cycles {c}, "
-          f"relative difference {relative}, seconds {result['seconds']}")
-    assert np.abs(relative).max() < TOLERANCE
+    assert np.abs(_body_against_cycles(lamp_addon, bl_scene, scene, "lit by courtyard")).max() < TOLERANCE
 
 
 def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_nodes(lamp_addon, bl_scene,
@@ -203,12 +209,4 @@ def test_body_under_a_followed_sun_agrees_with_cycles(lamp_addon, bl_scene, worl
     scene = core_tracer.parse_scene(doc)
     toward = environment.from_scene(scene).sun_direction()
     assert -toward[1] > 0.3  # turned so that the sun lights the front face
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
-    region = (slice(24, 40), slice(4, 14))
-    t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
-    c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
-    relative = (c - t) / t
-    print(f"\nbody under city with a followed sun, {BODY_SAMPLES} spp Cycles, 64x64: tracer {t}, Cycles {c}, "
-          f"relative difference {relative}")
-    assert np.abs(relative).max() < TOLERANCE
+    assert np.abs(_body_against_cycles(lamp_addon, bl_scene, scene, "under city with a followed sun")).max() < TOLERANCE
