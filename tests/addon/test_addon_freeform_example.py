@@ -57,6 +57,7 @@ def test_the_example_ships_with_its_mesh_file():
     assert roles == ["body", "bulb", "lens", "reflector", "side_wall", "socket"]
 
 
+@pytest.mark.slow
 def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, addon, tmp_path):
     import bpy
 
@@ -124,6 +125,7 @@ def test_applied_over_a_built_parametric_lamp_nothing_is_traced_twice(lamp_addon
 TWIN = PRESETS / "freeform-sculpted-wrap-lamp-photometric.json"
 
 
+@pytest.mark.slow
 def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_addon, addon, tmp_path):
     """The example's photometric twin (the same .glb, a P21/5W tail filament, a red PMMA lens, night at
     3 lx): applied from the browser, F12 shows the command line's XYZ (cd/m²) as scene-linear Rec.709

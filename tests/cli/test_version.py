@@ -8,9 +8,12 @@ import re
 import subprocess
 import sys
 
+import pytest
+
 from core_tracer import __version__
 
 
+@pytest.mark.slow
 def test_version_is_printed(repo_root):
     proc = subprocess.run([sys.executable, "-m", "core_tracer", "--version"], cwd=repo_root, capture_output=True,
                           text=True, timeout=60)

@@ -91,6 +91,7 @@ def test_a_free_form_study_renders_each_variant_on_its_meshes_here_and_in_the_lo
     assert red[0] / red[2] > 2 * blue[0] / blue[2]  # the lens colour varied reaches the image
 
 
+@pytest.mark.slow
 def test_the_study_command_writes_a_free_form_designs_sheet(tmp_path):
     document = write_design(tmp_path)
     sheet = tmp_path / "sheet.png"

@@ -64,6 +64,7 @@ def refusal(folder, data: bytes) -> str:
     return text
 
 
+@pytest.mark.slow
 def test_a_huge_node_scale_is_refused_in_one_line_not_an_overflow(tmp_path):
     doc, blob = lens_glb(tmp_path)
     doc["nodes"][0]["scale"] = [1e103, 1e103, 1e103]
