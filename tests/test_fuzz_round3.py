@@ -214,6 +214,7 @@ def _clean(counts: collections.Counter) -> None:
     assert not bad, bad
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("surface", [s for s in SURFACES if s != "study and scheduler flags"])
 def test_a_campaign_finds_no_traceback_hang_or_non_finite_output(tmp_path, surface):
     counts = SURFACES[surface](SMALL * FUZZ_SCALE, tmp_path, random.Random(33))

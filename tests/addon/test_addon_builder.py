@@ -203,6 +203,7 @@ def test_geometry_on_the_analytic_surfaces(lamp_addon, bl_scene, scene_mod, pres
         assert dev <= TOL_MM, f"{preset} {part}: {dev:.4f} mm from the analytic surface"
 
 
+@pytest.mark.slow
 def test_smooth_caps_with_sharp_creases(lamp_addon, bl_scene, scene_mod):
     scene = _load(scene_mod, "paper-baseline")
     _build(lamp_addon, bl_scene, scene)
@@ -232,6 +233,7 @@ def test_smooth_caps_with_sharp_creases(lamp_addon, bl_scene, scene_mod):
     assert crease > 50 and inner > 500
 
 
+@pytest.mark.slow
 def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     import bpy
     from mathutils import Matrix
@@ -265,6 +267,7 @@ def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
 
 
+@pytest.mark.slow
 def test_two_scenes_keep_their_own_lamps(lamp_addon, bl_scene, scene_mod):
     import bpy
 
@@ -345,6 +348,7 @@ def test_lamp_list_operators(lamp_addon, bl_scene):
         bpy.ops.lamp.lamp_remove()
 
 
+@pytest.mark.slow
 def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, scene_mod):
     import bpy
 
@@ -405,6 +409,7 @@ def _input(mat, node, socket):
     return list(value) if hasattr(value, "__len__") else value
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", ["paper-baseline", "paper-lens-color", "paper-lamp-off",
                                     "four-lamp-rear-combination"])
 def test_material_values_follow_the_mapping(lamp_addon, bl_scene, scene_mod, preset):

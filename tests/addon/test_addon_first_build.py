@@ -182,6 +182,7 @@ def test_compare_rebuilds_out_of_date_objects(lamp_addon, bl_scene):
     assert lamp_addon.design.builder.is_up_to_date(bl_scene)
 
 
+@pytest.mark.slow
 def test_the_first_build_keeps_a_view_that_shows_the_body_and_frames_one_that_does_not(lamp_addon, startup_scene):
     import bpy
 

@@ -163,6 +163,7 @@ def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_n
     assert tree.nodes["Background Or Surroundings"].inputs[0].default_value == 1.0
 
 
+@pytest.mark.slow
 def test_a_followed_sun_leaves_the_world_and_the_surroundings_replace_the_ambient(lamp_addon, bl_scene, world_images):
     """docs/model.md §8.18 in Blender's world: where the Lamp Sun follows the environment's sun, the
     world shows the tracer's image without it (each light once, in Compare's Cycles render too), and

@@ -80,6 +80,7 @@ def paths(node, prefix=()) -> list[tuple]:
     return out
 
 
+@pytest.mark.slow
 @fuzz(120)
 @given(data=st.data())
 def test_any_value_anywhere_in_the_gltf_json(tmp_path, lens, data):
@@ -98,6 +99,7 @@ def test_any_value_anywhere_in_the_gltf_json(tmp_path, lens, data):
     answer(tmp_path, join_glb(doc, blob))
 
 
+@pytest.mark.slow
 @fuzz(80)
 @given(data=st.data())
 def test_numbers_at_their_edges_in_transforms_and_vertices(tmp_path, lens, data):
@@ -116,6 +118,7 @@ def test_numbers_at_their_edges_in_transforms_and_vertices(tmp_path, lens, data)
     answer(tmp_path, join_glb(doc, bytes(raw)))
 
 
+@pytest.mark.slow
 @fuzz(150)
 @given(data=st.data())
 def test_damaged_bytes(tmp_path, lens, data):
@@ -152,6 +155,7 @@ DESIGN = {"schema": "lamp-scene/2", "lamps": [{}], "image": {"width": 8, "height
           "freeform": {"mesh_file": "lamp.glb", "parts": [{"object": "Lens", "role": "lens"}]}}
 
 
+@pytest.mark.slow
 @fuzz(150)
 @given(data=st.data())
 def test_any_value_in_the_freeform_section(data):

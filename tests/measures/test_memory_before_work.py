@@ -36,6 +36,7 @@ def test_states_past_the_budget_is_refused_before_rendering(tmp_path, scene, siz
     assert "state 1 of" not in done.stdout and not (tmp_path / "s.npz").exists()
 
 
+@pytest.mark.slow
 def test_the_states_estimate_holds_what_it_allocates():
     scene = load_scene_file(NIGHT, 64, 48, 1)
     count = len(S.states_of(scene)) - 1

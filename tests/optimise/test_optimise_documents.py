@@ -105,6 +105,7 @@ def test_the_cli_refuses_an_unrelated_database_in_one_line(tmp_path):
     assert tables(db) == ["orders"]
 
 
+@pytest.mark.slow
 def test_a_study_of_that_name_not_made_here_is_refused(tmp_path):
     import optuna
 

@@ -43,6 +43,7 @@ def _ours_and_colour_sciences(colour, name: str, bands: int) -> tuple[np.ndarray
     return spectrum.band_means(b) @ cie.xyz_matrix(b), _colour_xyz(colour, spectrum)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SPECTRA)
 def test_81_bands_give_colour_sciences_xyz(colour, name):
     ours, reference = _ours_and_colour_sciences(colour, name, 81)

@@ -135,6 +135,7 @@ def _sunny_env(path: str, follow: bool) -> environment.Environment:
                                    "light": {"follow_environment": follow}})
 
 
+@pytest.mark.slow
 def test_sun_that_follows_the_image_takes_its_sun_out_of_it(sunny_world):
     followed, seen = _sunny_env(sunny_world, True), _sunny_env(sunny_world, False)
     toward = SUN[None, :]
