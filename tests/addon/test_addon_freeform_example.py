@@ -58,11 +58,10 @@ def test_the_example_ships_with_its_mesh_file():
 
 
 @pytest.mark.slow
-def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, addon, tmp_path):
+def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, startup_scene, tmp_path):
     import bpy
 
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    bl_scene = bpy.context.scene
+    bl_scene = startup_scene
     bpy.ops.lamp.preset_refresh()
     wm = bpy.context.window_manager
     listed = [item.file for item in wm.lamp_presets]
