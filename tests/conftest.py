@@ -21,6 +21,13 @@ Function fixtures
   or its module), else by its ``seed`` parameter, else by ``DEFAULT_SEED``: the same numbers on every run.
 - ``bl_scene``: ``bpy.context.scene`` of the freshly reset file.
 - ``gpu_context``: Blender's ``gpu`` module with its GPU context made (skipped without a display).
+- ``startup_scene``: Blender's factory startup file (Cube, Camera, Light; the add-on stays enabled),
+  checked to be what the tests expect of it; its scene.
+- ``world_images`` (session): Blender's folder of world images (the bpy wheel's); without it the test
+  skips, and fails under CI (``tests/needs.py``).
+
+Hypothesis runs with the profile ``lamp`` registered here: no example database left in the work tree,
+no deadline (a shared machine may pause any example); ``helpers.fuzz(n)`` sets the examples a test.
 - ``_reset_blender`` (autouse): before every test that uses ``addon`` (directly or through another
   fixture) or is marked ``blender``, ``bpy.ops.wm.read_homefile(use_empty=True)`` empties the file;
   it keeps the enabled add-ons.
@@ -35,8 +42,12 @@ import sys
 import tempfile
 from pathlib import Path
 
+import needs
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
+
+from core_tracer.raytrace import environment
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 EXTENSION_ID = "lamp_styling"
@@ -50,6 +61,11 @@ atexit.register(shutil.rmtree, _USER_RESOURCES, True)  # removes the link to the
 
 if str(REPO_ROOT) not in sys.path:  # `import core_tracer` however pytest was started
     sys.path.insert(0, str(REPO_ROOT))
+
+settings.register_profile("lamp", deadline=None, database=None,
+                          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                                 HealthCheck.function_scoped_fixture])
+settings.load_profile("lamp")
 
 
 @pytest.fixture(scope="session")
@@ -139,3 +155,23 @@ def gpu_context(bl_scene):
         except SystemError as e:
             pytest.skip(f"no GPU context on this display: {e}")
     return gpu
+
+
+@pytest.fixture
+def startup_scene(addon):
+    """Blender's factory startup file (the add-on stays enabled); its scene."""
+    import bpy
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    scene = bpy.context.scene
+    assert {o.name for o in bpy.data.objects} == {"Cube", "Camera", "Light"} and hasattr(scene, "lamp_design")
+    assert scene.render.engine == "BLENDER_EEVEE" and scene.view_settings.exposure == 0.0
+    return scene
+
+
+@pytest.fixture(scope="session")
+def world_images() -> Path:
+    folder = environment.bundled_folder()
+    if folder is None:
+        needs.missing("Blender's world images are not on this machine (no bpy module)")
+    return folder

@@ -15,6 +15,8 @@ import sys
 import time
 from pathlib import Path
 
+from hypothesis import settings
+
 from core_tracer import SceneError
 from core_tracer.checkpoints import ENV_MARKER, ENV_POINT
 from core_tracer.scene.validate import parse_scene
@@ -26,6 +28,16 @@ FOUR_LAMPS = PRESETS / "four-lamp-rear-combination.json"
 # The built-in presets that are parametric designs only (the free-form example carries its meshes in a
 # .glb beside it and is tested on its own: tests/addon/test_addon_freeform_example.py).
 PARAMETRIC_PRESETS = sorted(p for p in PRESETS.glob("*.json") if '"freeform"' not in p.read_text(encoding="utf-8"))
+
+
+# LAMP_FUZZ_EXAMPLES=N multiplies the inputs of every fuzz test by N for a long run.
+FUZZ_SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
+
+
+def fuzz(examples: int) -> settings:
+    """Hypothesis settings of a fuzz test: ``examples`` per run (times LAMP_FUZZ_EXAMPLES), under the
+    ``lamp`` profile of tests/conftest.py (no example database, no deadline)."""
+    return settings(max_examples=examples * FUZZ_SCALE)
 
 
 def cli_command(*args: str | Path) -> list[str]:

@@ -22,11 +22,10 @@ import helpers
 import hostile_files as H
 import numpy as np
 import pytest
-from helpers import BASELINE, ROOT, cli_command
+from helpers import BASELINE, FUZZ_SCALE, ROOT, cli_command
 
 from core_tracer.scene.reading import SceneError
 
-SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
 SMALL = 12
 CLI_TIMEOUT = 120  # seconds before a command counts as hung
 BAD = ("traceback", "hang", "non-finite")
@@ -215,16 +214,17 @@ def _clean(counts: collections.Counter) -> None:
     assert not bad, bad
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("surface", [s for s in SURFACES if s != "study and scheduler flags"])
 def test_a_campaign_finds_no_traceback_hang_or_non_finite_output(tmp_path, surface):
-    counts = SURFACES[surface](SMALL * SCALE, tmp_path, random.Random(33))
+    counts = SURFACES[surface](SMALL * FUZZ_SCALE, tmp_path, random.Random(33))
     _clean(counts)
     assert counts["refused"] > 0, counts
 
 
 @pytest.mark.slow
 def test_study_and_scheduler_flags_find_no_traceback_or_hang(tmp_path):
-    counts = study_flags(SMALL // 2 * SCALE, tmp_path, random.Random(33))
+    counts = study_flags(SMALL // 2 * FUZZ_SCALE, tmp_path, random.Random(33))
     _clean(counts)
 
 

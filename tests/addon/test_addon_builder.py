@@ -27,6 +27,13 @@ def _load(scene_mod, name: str) -> dict:
     return scene_mod.load_scene(PRESETS / f"{name}.json")
 
 
+def _built(lamp_addon, bl_scene, scene_mod, name: str) -> dict:
+    """The preset ``name``, built in ``bl_scene``; its scene."""
+    scene = _load(scene_mod, name)
+    _build(lamp_addon, bl_scene, scene)
+    return scene
+
+
 def _build(lamp_addon, bl_scene, scene: dict) -> None:
     import bpy
 
@@ -112,8 +119,7 @@ def test_objects_and_names(lamp_addon, bl_scene, scene_mod):
 
 
 def test_body_has_an_opening_per_lens(lamp_addon, bl_scene, scene_mod):
-    scene = _load(scene_mod, "four-lamp-rear-combination")
-    _build(lamp_addon, bl_scene, scene)
+    scene = _built(lamp_addon, bl_scene, scene_mod, "four-lamp-rear-combination")
     body = _objects(bl_scene)["Lamp Body"]
     front = [p for p in body.data.polygons if abs(p.center.y) < 1e-9]
     assert all(tuple(p.normal) == pytest.approx((0, -1, 0), abs=1e-6) for p in front)
@@ -136,8 +142,7 @@ def test_body_has_an_opening_per_lens(lamp_addon, bl_scene, scene_mod):
 @pytest.mark.parametrize("preset", ["paper-baseline", "four-lamp-rear-combination", "paper-cut-size",
                                     "paper-bulb-position"])
 def test_geometry_on_the_analytic_surfaces(lamp_addon, bl_scene, scene_mod, preset):
-    scene = _load(scene_mod, preset)
-    _build(lamp_addon, bl_scene, scene)
+    scene = _built(lamp_addon, bl_scene, scene_mod, preset)
     objs = _objects(bl_scene)
     worst = {}
     for i, lamp in enumerate(scene["lamps"]):
@@ -203,9 +208,9 @@ def test_geometry_on_the_analytic_surfaces(lamp_addon, bl_scene, scene_mod, pres
         assert dev <= TOL_MM, f"{preset} {part}: {dev:.4f} mm from the analytic surface"
 
 
+@pytest.mark.slow
 def test_smooth_caps_with_sharp_creases(lamp_addon, bl_scene, scene_mod):
-    scene = _load(scene_mod, "paper-baseline")
-    _build(lamp_addon, bl_scene, scene)
+    scene = _built(lamp_addon, bl_scene, scene_mod, "paper-baseline")
     mesh = _objects(bl_scene)["Lamp 1 Lens"].data
     p = scene["lamps"][0]["cuts"]["pitch"]
     smooth = _poly_array(mesh, "use_smooth", bool)
@@ -232,6 +237,7 @@ def test_smooth_caps_with_sharp_creases(lamp_addon, bl_scene, scene_mod):
     assert crease > 50 and inner > 500
 
 
+@pytest.mark.slow
 def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     import bpy
     from mathutils import Matrix
@@ -265,6 +271,7 @@ def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
 
 
+@pytest.mark.slow
 def test_two_scenes_keep_their_own_lamps(lamp_addon, bl_scene, scene_mod):
     import bpy
 
@@ -345,6 +352,7 @@ def test_lamp_list_operators(lamp_addon, bl_scene):
         bpy.ops.lamp.lamp_remove()
 
 
+@pytest.mark.slow
 def test_adding_lamps_to_the_baseline_gives_valid_designs(lamp_addon, bl_scene, scene_mod):
     import bpy
 
@@ -405,13 +413,13 @@ def _input(mat, node, socket):
     return list(value) if hasattr(value, "__len__") else value
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", ["paper-baseline", "paper-lens-color", "paper-lamp-off",
                                     "four-lamp-rear-combination"])
 def test_material_values_follow_the_mapping(lamp_addon, bl_scene, scene_mod, preset):
     import bpy
 
-    scene = _load(scene_mod, preset)
-    _build(lamp_addon, bl_scene, scene)
+    scene = _built(lamp_addon, bl_scene, scene_mod, preset)
     for i, lamp in enumerate(scene["lamps"]):
         label = f"Lamp {i + 1}"
         lens = bpy.data.materials[f"{label} Lens"]
@@ -472,8 +480,7 @@ def test_material_values_follow_the_mapping(lamp_addon, bl_scene, scene_mod, pre
 def test_materials_are_updated_not_duplicated(lamp_addon, bl_scene, scene_mod):
     import bpy
 
-    scene = _load(scene_mod, "paper-baseline")
-    _build(lamp_addon, bl_scene, scene)
+    _built(lamp_addon, bl_scene, scene_mod, "paper-baseline")
     lens = bpy.data.materials["Lamp 1 Lens"]
     pointer = lens.as_pointer()
     bl_scene.lamp_design.lamps[0].lens.ior = 1.6

@@ -29,6 +29,7 @@ def _load(lamp_addon, bl_scene, path, size) -> dict:
     return lamp_addon.render.camera.scene_for_render(bl_scene)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("view", ["AgX", "Standard", "False Color"])
 def test_lamp_tracer_image_in_blender_equals_the_cli_png(lamp_addon, bl_scene, tmp_path, view):
     import bpy

@@ -23,14 +23,12 @@ SMALL = (96, 96)
 
 
 @pytest.fixture
-def startup(addon):
+def startup(startup_scene):
+    """The factory startup file with the preset browser filled."""
     import bpy
 
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    scene = bpy.context.scene
-    assert scene.view_settings.exposure == 0.0
     bpy.ops.lamp.preset_refresh()
-    return scene
+    return startup_scene
 
 
 def apply_preset(file_name: str, capfd=None) -> str:
@@ -45,6 +43,7 @@ def apply_preset(file_name: str, capfd=None) -> str:
     return capfd.readouterr().out if capfd is not None else ""
 
 
+@pytest.mark.slow
 def test_lamp_off_then_tail_lamp_then_f12_keeps_the_exposure(lamp_addon, startup, tmp_path):
     """The issue's reproduction: "Paper study: lamp off", then "Round red tail lamp", then F12. The
     first lamp set the exposure for the lamp lit; the tail lamp keeps it and shows its cut pattern."""
@@ -69,6 +68,7 @@ def test_lamp_off_then_tail_lamp_then_f12_keeps_the_exposure(lamp_addon, startup
     assert clipped < 0.01 and spread >= 30  # not the washed-out pink disk
 
 
+@pytest.mark.slow
 def test_build_and_apply_preset_keep_the_users_exposure(lamp_addon, startup):
     import bpy
 
@@ -81,6 +81,7 @@ def test_build_and_apply_preset_keep_the_users_exposure(lamp_addon, startup):
         assert startup.view_settings.exposure == -2.5, preset
 
 
+@pytest.mark.slow
 def test_a_brighter_bulb_keeps_the_exposure_so_it_looks_brighter(lamp_addon, startup):
     import bpy
 
@@ -96,6 +97,7 @@ def test_a_brighter_bulb_keeps_the_exposure_so_it_looks_brighter(lamp_addon, sta
     assert startup.view_settings.exposure == pytest.approx(first - 2.0, abs=0.15)
 
 
+@pytest.mark.slow
 def test_exposure_from_design_says_when_nothing_is_lit(lamp_addon, startup, capfd):
     import bpy
 
@@ -150,6 +152,7 @@ def test_a_stop_lamp_beside_a_tail_lamp_in_one_study_is_brighter_by_their_bulbs(
     np.testing.assert_allclose(measured, ratio, rtol=1e-3)
 
 
+@pytest.mark.slow
 def test_each_light_model_keeps_its_own_exposure(lamp_addon, startup, tmp_path, capfd):
     """Issue 31: the exposure kept from a paper design (about -4 EV) made the first photometric F12
     nearly black (its EV100 already puts display white at 1). Each light model keeps its own: the

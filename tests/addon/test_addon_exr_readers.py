@@ -27,6 +27,7 @@ def red_exr(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_openimageio_reads_the_header_and_the_values(red_exr):
     oiio = imageio.oiio_module()
     spec = oiio.ImageInput.open(str(red_exr)).spec()
@@ -43,6 +44,7 @@ def test_openimageio_reads_the_header_and_the_values(red_exr):
     np.testing.assert_allclose(channels["x"][lit], cie.xy(XYZ[lit])[:, 0], atol=1e-6)
 
 
+@pytest.mark.slow
 def test_blender_reads_it_as_xyz_and_shows_it_red(lamp_addon, bl_scene, red_exr):
     import bpy
 
@@ -68,6 +70,7 @@ def test_blender_reads_it_as_xyz_and_shows_it_red(lamp_addon, bl_scene, red_exr)
     bpy.data.images.remove(image)
 
 
+@pytest.mark.slow
 def test_blender_took_xyz_for_rgb_without_the_chromaticities(lamp_addon, bl_scene, red_exr, tmp_path):
     """The fault the attribute removes (and why the references carry it too)."""
     import bpy

@@ -138,6 +138,7 @@ def rims_in_image(lamp_addon, bl_scene) -> list[bool]:
     return inside
 
 
+@pytest.mark.slow
 def test_four_lamps_added_in_the_startup_file_are_all_in_the_image(lamp_addon, bl_scene):
     """The first Build in the startup file makes the Lamp Camera the scene camera; Add Lamp keeps it
     framed, so all four lamps are in the image."""
@@ -154,6 +155,7 @@ def test_four_lamps_added_in_the_startup_file_are_all_in_the_image(lamp_addon, b
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 4
 
 
+@pytest.mark.slow
 def test_four_lamps_after_add_lamp_are_all_in_the_image(lamp_addon, bl_scene):
     import bpy
 

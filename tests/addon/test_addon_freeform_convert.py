@@ -80,6 +80,7 @@ def test_parametric_equals_freeform(lamp_addon, addon_core, bl_scene, path):
     assert within >= MIN_SHARE_WITHIN and excepted <= MAX_SHARE_EXCEPTED
 
 
+@pytest.mark.slow
 def test_convert_makes_closed_lenses_with_roles_and_hides_the_parametric_parts(lamp_addon, addon_core, bl_scene):
     import bpy
 
@@ -111,6 +112,7 @@ def test_convert_makes_closed_lenses_with_roles_and_hides_the_parametric_parts(l
     assert lamp_addon.freeform.parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get()) == []
 
 
+@pytest.mark.slow
 def test_converting_again_says_the_earlier_parts_are_traced_too(lamp_addon, addon_core, bl_scene, capfd):
     import bpy
 
@@ -131,6 +133,7 @@ def _lens_volumes(lamp_addon, addon_core, bl_scene, parts) -> dict[str, float]:
             if o.lamp_role.role == "lens"}
 
 
+@pytest.mark.slow
 def test_convert_makes_the_prism_plate_a_closed_lens_and_its_housing_a_wall(lamp_addon, addon_core, bl_scene):
     import bpy
 
@@ -177,6 +180,7 @@ def test_convert_closes_the_glass_of_a_wrap_around_lens(lamp_addon, addon_core, 
     assert sorted(o.name for o in walls) == [f"Lamp {i} Side Wall (Free-form)" for i in (1, 2, 3)]
 
 
+@pytest.mark.slow
 def test_a_mixed_design_renders_the_parametric_lamp_as_the_parametric_tracer(lamp_addon, addon_core, bl_scene):
     """The built paper lamp, not converted, with the designer's own slab and bulb beside it: its lens
     pixels as the parametric tracer renders the lamp alone, within the chord tolerance."""

@@ -57,11 +57,11 @@ def test_the_example_ships_with_its_mesh_file():
     assert roles == ["body", "bulb", "lens", "reflector", "side_wall", "socket"]
 
 
-def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, addon, tmp_path):
+@pytest.mark.slow
+def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, startup_scene, tmp_path):
     import bpy
 
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    bl_scene = bpy.context.scene
+    bl_scene = startup_scene
     bpy.ops.lamp.preset_refresh()
     wm = bpy.context.window_manager
     listed = [item.file for item in wm.lamp_presets]
@@ -103,6 +103,7 @@ def test_the_browser_lists_it_and_f12_equals_the_command_line(lamp_addon, addon,
     assert lens.mean() > 0.15 and cli[lens].max() > 1.0  # the lit red lens fills a good part of the frame
 
 
+@pytest.mark.slow
 def test_applied_over_a_built_parametric_lamp_nothing_is_traced_twice(lamp_addon, addon):
     """The quick start's order: a parametric preset built, then the free-form example applied, then F12."""
     import bpy
@@ -124,6 +125,7 @@ def test_applied_over_a_built_parametric_lamp_nothing_is_traced_twice(lamp_addon
 TWIN = PRESETS / "freeform-sculpted-wrap-lamp-photometric.json"
 
 
+@pytest.mark.slow
 def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_addon, addon, tmp_path):
     """The example's photometric twin (the same .glb, a P21/5W tail filament, a red PMMA lens, night at
     3 lx): applied from the browser, F12 shows the command line's XYZ (cd/m²) as scene-linear Rec.709
@@ -149,6 +151,7 @@ def test_the_photometric_twin_renders_in_blender_as_on_the_command_line(lamp_add
     np.testing.assert_allclose(f12, shown, rtol=1e-4, atol=1e-6 * shown.max())
 
 
+@pytest.mark.slow
 def test_the_measures_light_study_and_optimise_panels_refuse_free_form_parts_in_one_line(lamp_addon, addon,
                                                                                          tmp_path):
     """In Blender the Measures, Light Panel, Study and Optimise operators work on the parametric lamp,

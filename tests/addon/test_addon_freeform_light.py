@@ -35,6 +35,7 @@ def _lens_pixels(passes: dict[str, np.ndarray]) -> np.ndarray:
 FLUTES = "paper-baseline+flutes"  # the paper's lamp with flutes (no preset has them)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [p.stem if p == BASELINE else pytest.param(p.stem, marks=pytest.mark.slow)
                                   for p in sorted(set(PRESETS.glob("*.json")) - UNDER_A_SKY)] +
                          [pytest.param(FLUTES, marks=pytest.mark.slow)])

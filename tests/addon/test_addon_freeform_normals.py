@@ -21,13 +21,12 @@ def _corners(mesh) -> tuple[np.ndarray, np.ndarray]:
 
 
 @pytest.mark.slow
-def test_parts_made_from_the_example_export_back_to_its_numbers(lamp_addon, addon, tmp_path):
+def test_parts_made_from_the_example_export_back_to_its_numbers(lamp_addon, startup_scene, tmp_path):
     import bpy
 
     from core_tracer.freeform.gltf import read_glb
 
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    bl_scene = bpy.context.scene
+    bl_scene = startup_scene
     bpy.ops.lamp.preset_refresh()
     wm = bpy.context.window_manager
     wm.lamp_presets_index = next(i for i, item in enumerate(wm.lamp_presets) if item.file.endswith(EXAMPLE.name))

@@ -45,6 +45,7 @@ def _expected(lamp_addon, bl_scene) -> np.ndarray:
     return lamp_addon.freeform.render.render_passes(prepared, seen["image"]["width"], seen["image"]["height"]).image
 
 
+@pytest.mark.slow
 def test_f12_renders_the_parts_with_the_freeform_tracer(lamp_addon, addon_core, bl_scene, tmp_path):
     _converted(lamp_addon, addon_core, bl_scene)
     rgba = _f12(bl_scene, tmp_path / "f12.exr")
@@ -62,6 +63,7 @@ def test_f12_renders_the_parts_with_the_freeform_tracer(lamp_addon, addon_core, 
                                   addon_core.render(lamp_addon.render.camera.scene_for_render(bl_scene)))
 
 
+@pytest.mark.slow
 def test_geometry_is_built_once_per_geometry_change(lamp_addon, addon_core, bl_scene, tmp_path):
     import bpy
 
@@ -118,6 +120,7 @@ def test_exported_pair_renders_the_same_from_the_command_line(lamp_addon, addon_
     assert in_blender[:, :, :3].max() > 1.0  # the bulb seen through the lens
 
 
+@pytest.mark.slow
 def test_export_never_replaces_without_being_asked(lamp_addon, addon_core, bl_scene, tmp_path):
     import bpy
 
@@ -212,6 +215,7 @@ def test_an_exported_pair_imports_back_as_parts_with_roles(lamp_addon, addon_cor
     assert equal.all()
 
 
+@pytest.mark.slow
 def test_a_freeform_preset_with_a_missing_mesh_file_changes_nothing(lamp_addon, addon_core, bl_scene, tmp_path):
     import bpy
 
@@ -271,6 +275,7 @@ def _state(objects) -> list:
              o.lamp_role.role, o.hide_render, o.hide_get()) for o in objects]
 
 
+@pytest.mark.slow
 def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, addon_core, bl_scene, tmp_path):
     import bpy
 
@@ -338,6 +343,7 @@ def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, 
     assert not any(".lamp-export-aside" in o.name or "(Parametric)" in o.name for o in bpy.data.objects)
 
 
+@pytest.mark.slow
 def test_rebuilding_the_parametric_lamp_of_a_mixed_design_is_rendered(lamp_addon, addon_core, bl_scene, tmp_path):
     import bpy
 
@@ -358,6 +364,7 @@ def test_rebuilding_the_parametric_lamp_of_a_mixed_design_is_rendered(lamp_addon
     assert 3 <= shift <= 6
 
 
+@pytest.mark.slow
 def test_the_viewport_renders_a_mixed_design(lamp_addon, addon_core, bl_scene):
 
     _mixed(lamp_addon, addon_core, bl_scene)

@@ -172,6 +172,7 @@ def test_role_list_filters_to_parts(lamp_addon, bl_scene):
     assert shown == ["Zed"]
 
 
+@pytest.mark.slow
 def test_registration_is_symmetric_and_keeps_the_roles(lamp_addon, bl_scene):
     import bpy
 

@@ -2,6 +2,7 @@
 below the panels and operators that use them)."""
 
 
+import pytest
 from helpers import ROOT, package_imports
 
 ADDON = ROOT / "lamp_addon"
@@ -35,6 +36,7 @@ def test_the_circle_finder_finds_a_circle():
     assert _circle({"a": {"b"}, "b": {"c"}, "c": set()}) is None
 
 
+@pytest.mark.slow
 def test_no_import_circles_in_the_addon():
     graph = _graph()
     assert {"preferences", "presets.library", "study.ops", "study.panel", "study.settings"} <= set(graph)
@@ -57,6 +59,7 @@ def test_library_folders_changed_marks_the_listing_stale(addon, lamp_addon):
         prefs.library_folders.remove(len(prefs.library_folders) - 1)
 
 
+@pytest.mark.slow
 def test_the_render_side_does_not_depend_on_a_panel():
     """The render engine, its camera and the operators reach no sidebar panel module, directly or
     through another module: the actions area's registry (``actions``) sits below both."""
@@ -85,6 +88,7 @@ def _registered_classes(lamp_addon) -> list[type]:
     return out
 
 
+@pytest.mark.slow
 def test_every_sub_package_lists_what_it_registers_and_registering_repeats(lamp_addon, bl_scene):
     """``lamp_addon.register`` hands over to the sub-packages, each registering the modules of its
     ``modules()``; unregistering takes all of it away and registering again, twice, brings back the

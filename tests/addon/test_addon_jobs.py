@@ -43,6 +43,7 @@ def test_the_modal_operators_share_the_base(lamp_addon):
     assert not {"render/ops.py", "compare/ops.py", "study/ops.py", "presets/library.py"} & set(declared)
 
 
+@pytest.mark.slow
 def test_no_import_circle_through_the_study_camera_and_compare_modules():
     graph = package_imports(ADDON)
 

@@ -32,6 +32,7 @@ def _lens_colours(shown: np.ndarray, XYZ: np.ndarray) -> list[tuple[float, float
     return [((h * 360.0 + 180.0) % 360.0 - 180.0, s) for h, s, _v in hsv]
 
 
+@pytest.mark.slow
 def test_the_lamp_view_keeps_red_and_amber_where_agx_washes_them():
     scene = load_scene(NIGHT)
     XYZ = render(scene, 240, 150)
@@ -46,6 +47,7 @@ def test_the_lamp_view_keeps_red_and_amber_where_agx_washes_them():
     assert agx_amber < amber and agx_amber_hue < amber_hue  # AgX: toward a paler orange (peach)
 
 
+@pytest.mark.slow
 def test_the_lamp_view_button_sets_the_view_on_request_only(lamp_addon, addon_core, bl_scene):
     import bpy
 

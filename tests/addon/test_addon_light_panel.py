@@ -42,6 +42,7 @@ def test_registration_is_symmetric_and_repeatable(lamp_addon, night):
         assert hasattr(bpy.types.Scene, "lamp_light_panel") and hasattr(bpy.types, "LAMP_OT_light_states_render")
 
 
+@pytest.mark.slow
 def test_switching_a_lamp_re_weights_without_rendering_and_keeps_the_design(lamp_addon, night):
     import bpy
 
@@ -74,6 +75,7 @@ def test_switching_a_lamp_re_weights_without_rendering_and_keeps_the_design(lamp
     assert json.dumps(lamp_addon.design.properties.design_document(night), sort_keys=True) == before
 
 
+@pytest.mark.slow
 def test_a_design_change_makes_the_states_stale_and_apply_sets_the_bulbs(lamp_addon, night):
     import bpy
 
@@ -92,6 +94,7 @@ def test_a_design_change_makes_the_states_stale_and_apply_sets_the_bulbs(lamp_ad
     assert not bpy.types.LAMP_OT_light_states_apply.poll(bpy.context)
 
 
+@pytest.mark.slow
 def test_apply_keeps_every_level_or_says_what_it_cannot_keep(lamp_addon, night, capfd):
     """Issue 31: Apply to Design dropped a level without a word. A named bulb's level (or both its
     filaments lit) becomes a Custom bulb of its spectrum and that flux, the same light; the
@@ -125,6 +128,7 @@ def test_apply_keeps_every_level_or_says_what_it_cannot_keep(lamp_addon, night, 
     assert np.abs(rendered - relit).max() <= 1e-4 * float(rendered.max())
 
 
+@pytest.mark.slow
 def test_the_held_passes_are_forgotten_when_a_file_is_opened(lamp_addon, night):
     import bpy
 
@@ -134,6 +138,7 @@ def test_the_held_passes_are_forgotten_when_a_file_is_opened(lamp_addon, night):
     assert lamp_addon.measures.light_panel.held(bpy.context.scene) is None
 
 
+@pytest.mark.slow
 def test_in_the_startup_file_the_light_panel_shows_what_f12_shows(lamp_addon, addon):
     """A new user's file (Cube, Camera, Light): apply the photometric stop lamp from the preset browser,
     render the light states; the design's own states give the tracer's render of the scene camera, the

@@ -14,6 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from helpers import BASELINE, scene_with
+from study_axes import one_axis
 
 pytestmark = pytest.mark.blender
 
@@ -59,12 +60,7 @@ def test_study_runs_and_save_sheet_says_why_not(lamp_addon, bl_scene, tmp_path, 
     import bpy
 
     _design(lamp_addon, bl_scene)
-    settings = bl_scene.lamp_study
-    settings.width, settings.height, settings.workers = 24, 24, 0
-    settings.axis_1.parameter = "lens.ior"
-    settings.axis_1.mode = "LIST"
-    settings.axis_1.values = "1.45, 1.6"
-    settings.use_axis_2 = False
+    one_axis(bl_scene.lamp_study, width=24, height=24, workers=0)
     assert bpy.ops.lamp.study_run() == {"FINISHED"}  # composed in numpy, labels in the bitmap font
     image = bpy.data.images["Lamp Study"]
     assert lamp_addon.image_view.image_to_array(image).max() > 0

@@ -11,6 +11,7 @@ import pytest
 pytestmark = pytest.mark.blender
 
 
+@pytest.mark.slow
 def test_docs_panel_txt_is_up_to_date(lamp_addon, addon, repo_root):
     from tools import make_docs_images
 

@@ -191,6 +191,7 @@ PHOTOMETRIC_CHOICES = (("paper", "custom", "incandescent", "pmma", "red", "illum
                        ("photometric", "P21/5W", "incandescent", "polycarbonate", "clear", "illuminance"))
 
 
+@pytest.mark.slow
 def test_every_parameter_is_reachable(lamp_addon, S, bl_scene, design):
     shown = set()
     lamp = design.lamps[2]
@@ -437,6 +438,7 @@ def _addon_panels(addon) -> list[type]:
                    and getattr(bpy.types, cls.__name__, None) is cls}, key=lambda c: c.__name__)
 
 
+@pytest.mark.slow
 def test_every_panel_of_the_addon_is_drawn(addon, lamp_addon, bl_scene, design):
     import bpy
 

@@ -60,6 +60,7 @@ def test_a_function_change_renames_the_parts_it_named_and_keeps_the_designers_na
     assert _build(bl_scene)["lamps[0].socket"] == "Tail Socket"
 
 
+@pytest.mark.slow
 def test_numbering_by_function_is_stable(design, bl_scene):
     import bpy
 

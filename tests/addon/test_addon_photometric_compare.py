@@ -128,6 +128,7 @@ def test_body_under_the_sun_agrees_with_cycles(lamp_addon, bl_scene):
     assert xy < XY_TOLERANCE
 
 
+@pytest.mark.slow
 def test_watts_from_lumens_against_colour_science(lamp_addon):
     """Φ_e = Φ / K_r with K_r = 683 ∫V S / ∫S over 380–780 nm, checked with colour-science's own
     luminous efficacy of illuminant A restricted to the same range, and the sun's W/m² from lux."""

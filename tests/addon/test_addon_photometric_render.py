@@ -87,6 +87,7 @@ def test_another_working_space_gets_its_own_rgb(lamp_addon, addon_core, bl_scene
         display.from_rec709()
 
 
+@pytest.mark.slow
 def test_the_viewport_shows_the_xyz_at_the_designs_ev100(lamp_addon, addon_core, bl_scene):
     _stop_lamp(lamp_addon, addon_core, bl_scene)
     session = lamp_addon.render.viewport.ViewportSession(None, in_background=False)
@@ -163,6 +164,7 @@ def test_a_preset_finds_its_curves_beside_it(lamp_addon, addon_core, bl_scene, t
     assert rendered["lamps"][0]["bulb"]["spectrum_file"] == str(tmp_path / "my-led.csv")
 
 
+@pytest.mark.slow
 def test_auto_exposure_is_measured_once_per_render(lamp_addon, addon_core, bl_scene, tmp_path):
     """With "auto", F12 shows the image at the EV100 measured on a small preview of the same view, one
     factor for every pixel (never re-exposed band by band)."""

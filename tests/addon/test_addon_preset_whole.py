@@ -80,6 +80,7 @@ def _meshes(bpy) -> dict:
             for ob in bpy.data.objects if ob.type == "MESH" and ob.get("lamp_part")}
 
 
+@pytest.mark.slow
 def test_a_rebuild_that_fails_while_meshing_leaves_the_built_lamp_as_it_was(lamp_addon, bl_scene, monkeypatch):
     """The lamp is built; applying another preset rebuilds it, and making its third new shape fails (as
     a deep-cut lens that runs out of memory, or an interrupt, would): the objects, their meshes and the

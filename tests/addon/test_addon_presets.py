@@ -150,6 +150,7 @@ def test_two_designers_share_a_folder(browser, add_library, bl_scene, tmp_path, 
     assert leaves(addon_core.library.presets.load_preset(saved)) == leaves(expected)
 
 
+@pytest.mark.slow
 def test_overwrite_is_refused_without_confirmation(browser, add_library, bl_scene, tmp_path):
     import bpy
 
@@ -238,6 +239,7 @@ def test_apply_is_all_or_nothing(browser, add_library, bl_scene, tmp_path, capfd
     assert "UNDO" in bpy.types.LAMP_OT_preset_apply.bl_options
 
 
+@pytest.mark.slow
 def test_read_only_libraries_refuse_changes(browser, add_library, tmp_path):
     import bpy
 
@@ -270,6 +272,7 @@ def test_rename_and_delete(browser, add_library, bl_scene, tmp_path):
     assert all(item.library != "Team" for item in wm.lamp_presets)
 
 
+@pytest.mark.slow
 def test_export_then_import(browser, bl_scene, tmp_path, addon_core):
     import bpy
 
@@ -398,6 +401,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     _assert_camera_shows(camera, scene, props.design_to_scene(scene))
 
 
+@pytest.mark.slow
 def test_applying_never_moves_the_designers_own_camera(browser, bl_scene, addon_core, capfd):
     """A preset applied in a file not yet set up for the lamp sets it up like a first build: the Lamp
     Camera becomes the scene camera at the preset's view and the designer's own camera object is left
@@ -438,6 +442,7 @@ def test_a_camera_the_tracer_cannot_render_is_not_saved(browser, add_library, bl
     assert list(tmp_path.glob("*.json")) == []
 
 
+@pytest.mark.slow
 def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(browser, add_library, bl_scene,
                                                                              tmp_path, addon_core):
     """Through a camera of the designer's, the design's camera fields are not used (they are the Lamp
@@ -459,6 +464,7 @@ def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(bro
     assert saved["camera"]["position"] == pytest.approx([0.0, -800.0, 0.0], abs=1e-4)  # where Studio is
 
 
+@pytest.mark.slow
 def test_importing_a_hostile_file_is_refused_naming_the_field(browser, bl_scene, tmp_path, capfd):
     """Huge numbers, lone surrogates, repeated keys...: each import is refused with the field named (in
     the one-line error, or, when that is cut to one line, whole in the Info editor), and the design

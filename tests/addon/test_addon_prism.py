@@ -60,6 +60,7 @@ def _ring_face_distance(points: np.ndarray, lamp: dict, g: dict) -> np.ndarray:
     return best
 
 
+@pytest.mark.slow
 def test_prism_plate_lamp_is_built_with_plate_and_housing_instead_of_a_reflector(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(PRESET)
     parts = build_parts(lamp_addon, bl_scene, scene)
@@ -81,6 +82,7 @@ def test_prism_plate_lamp_is_built_with_plate_and_housing_instead_of_a_reflector
     assert np.abs(np.hypot(housing[:, 0], housing[:, 2]) - lamp["lens"]["radius"]).max() < 1e-3
 
 
+@pytest.mark.slow
 def test_prism_plate_materials_follow_the_design(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(PRESET)
     parts = build_parts(lamp_addon, bl_scene, scene)
@@ -94,6 +96,7 @@ def test_prism_plate_materials_follow_the_design(lamp_addon, bl_scene):
     assert tuple(housing.inputs["Color"].default_value)[:3] == pytest.approx(plate["housing_color"])
 
 
+@pytest.mark.slow
 def test_switching_back_to_the_reflector_removes_plate_and_housing(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(PRESET)
     build_parts(lamp_addon, bl_scene, scene)

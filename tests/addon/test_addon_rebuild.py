@@ -16,16 +16,6 @@ pytestmark = pytest.mark.blender
 
 
 @pytest.fixture
-def startup_scene(addon):
-    """Blender's factory startup file (the add-on stays enabled); its scene."""
-    import bpy
-
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    assert {o.name for o in bpy.data.objects} == {"Cube", "Camera", "Light"}
-    return bpy.context.scene
-
-
-@pytest.fixture
 def builder(lamp_addon):
     return lamp_addon.design.builder
 
@@ -86,6 +76,7 @@ def test_build_in_the_startup_file_touches_none_of_its_objects(lamp_addon, addon
     assert all(o.users_collection[0] == root.users_collection[0] for o in parts)
 
 
+@pytest.mark.slow
 def test_rebuild_keeps_the_designers_edits(lamp_addon, addon_core, builder, startup_scene):
     """Survive a rebuild: the root parented to another object and moved; a part renamed, nudged,
     hidden, re-parented under another part; a modifier; a material edit on an input the design does not
@@ -154,6 +145,7 @@ def test_rebuild_keeps_the_designers_edits(lamp_addon, addon_core, builder, star
     assert np.allclose(np.array(in_root), np.array(expected), atol=1e-6)
 
 
+@pytest.mark.slow
 def test_unchanged_meshes_are_not_remade(lamp_addon, addon_core, builder, bl_scene):
     _design(lamp_addon, addon_core, bl_scene, "four-lamp-rear-combination")
     props = lamp_addon.design.properties
@@ -198,6 +190,7 @@ def test_a_material_of_the_designers_own_is_kept(lamp_addon, addon_core, builder
     assert report.not_driven == ["Lamp Body: the designer's material 'Car Paint'"]
 
 
+@pytest.mark.slow
 def test_removing_a_lamp_removes_its_parts_and_keeps_the_designers_objects(lamp_addon, addon_core, bl_scene):
     import bpy
 

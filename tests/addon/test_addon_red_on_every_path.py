@@ -56,6 +56,7 @@ def test_f12_and_the_image_editors_render_show_red(lamp_addon, stop_lamp, tmp_pa
     _assert_red(_as_shown(lamp_addon, stop_lamp, image), "Lamp Tracer image")
 
 
+@pytest.mark.slow
 def test_the_viewport_shows_red(lamp_addon, stop_lamp):
     from test_addon_viewport import _blender_camera, _window_matrix
 
@@ -70,6 +71,7 @@ def test_the_viewport_shows_red(lamp_addon, stop_lamp):
     _assert_red(lamp_addon.image_view.scene_view(stop_lamp).to_display(linear), "viewport")
 
 
+@pytest.mark.slow
 def test_run_study_and_save_sheet_show_red(lamp_addon, stop_lamp, tmp_path):
     """The fault of issue 31: the sheet run from Blender showed the red lamp gold."""
     import bpy
@@ -90,6 +92,7 @@ def test_run_study_and_save_sheet_show_red(lamp_addon, stop_lamp, tmp_path):
     _assert_red(np.asarray(ImageBuf(str(tmp_path / "sheet.png")).get_pixels(FLOAT))[..., :3], "Save Sheet .png")
 
 
+@pytest.mark.slow
 def test_the_light_panel_shows_red(lamp_addon, stop_lamp):
     import bpy
 

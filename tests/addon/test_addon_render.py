@@ -352,6 +352,7 @@ def test_engine_reports_design_errors_without_traceback(lamp_addon, bl_scene, tm
     assert image.shape == (16, 16, 3) and not image.any()  # a black result, not a stale one
 
 
+@pytest.mark.slow
 def test_engine_panels_are_compatible_and_registration_is_symmetric(lamp_addon):
     import bpy
 
@@ -554,6 +555,7 @@ class _RecordingLayout:
         self.log.append((data, prop))
 
 
+@pytest.mark.slow
 def test_contribution_passes_panel_and_symmetric_registration(lamp_addon, bl_scene):
     from types import SimpleNamespace
 

@@ -243,6 +243,7 @@ def test_a_fluted_glass_is_closed_and_its_bands_cover_the_outline(lamp_addon, ad
         assert data.max_deviation <= 0.05
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cut_type", ["fisheye", "sawtooth", "flutes"])
 def test_a_rectangular_lens_s_side_wall_reaches_the_reflector_edge(lamp_addon, addon_core, cut_type):
     """The side wall of a rectangular lens stands up to the trimmed reflector's edge, whatever the

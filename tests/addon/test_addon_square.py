@@ -46,6 +46,7 @@ def square(lamp_addon, bl_scene, addon_core):
     return scene, _objects(bl_scene)
 
 
+@pytest.mark.slow
 def test_square_lamp_parts_lie_on_their_surfaces(square, addon_core):
     scene, objs = square
     lamp = scene["lamps"][0]

@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 from helpers import BASELINE, whole_report
+from study_axes import one_axis
 
 import core_tracer
 from core_tracer.images import display
@@ -34,13 +35,6 @@ def design(lamp_addon, bl_scene):
     return bl_scene
 
 
-def _two_by_one(settings) -> None:
-    settings.axis_1.parameter = "lens.ior"
-    settings.axis_1.mode = "LIST"
-    settings.axis_1.values = "1.45, 1.6"
-    settings.use_axis_2 = False
-
-
 def test_every_study_parameter_is_offered(lamp_addon):
     offered = [item[0] for item in lamp_addon.study.settings.PARAMETER_ITEMS]
     # the panel studies the parametric design; a free-form one's parts are studied from the command line
@@ -52,7 +46,7 @@ def test_every_study_parameter_is_offered(lamp_addon):
 def test_run_study_operator_makes_the_sheet_image(design, lamp_addon):
     import bpy
 
-    _two_by_one(design.lamp_study)
+    one_axis(design.lamp_study)
     assert bpy.ops.lamp.study_run() == {"FINISHED"}
     image = bpy.data.images["Lamp Study"]
     study = lamp_addon.study.settings.last_study()
@@ -93,7 +87,7 @@ def test_bad_settings_are_reported_without_rendering(design, lamp_addon, addon_c
     import bpy
 
     settings = design.lamp_study
-    _two_by_one(settings)
+    one_axis(settings)
     settings.axis_1.values = "1.45, 3.5"
     run_module = f"{addon_core.__name__}.study_run"
     before = getattr(sys.modules.get(run_module), "workers_started", 0)
@@ -107,7 +101,7 @@ def test_bad_settings_are_reported_without_rendering(design, lamp_addon, addon_c
 def test_apply_variant_sets_the_varied_parameter(design, lamp_addon):
     import bpy
 
-    _two_by_one(design.lamp_study)
+    one_axis(design.lamp_study)
     bpy.ops.lamp.study_run()
     design.lamp_study.variant = 2
     assert bpy.ops.lamp.study_apply_variant() == {"FINISHED"}
@@ -119,7 +113,7 @@ def test_apply_variant_sets_the_varied_parameter(design, lamp_addon):
 def test_save_sheet_writes_the_study_into_the_file(design, lamp_addon, tmp_path):
     import bpy
 
-    _two_by_one(design.lamp_study)
+    one_axis(design.lamp_study)
     bpy.ops.lamp.study_run()
     path = tmp_path / "sheet.exr"
     assert bpy.ops.lamp.study_save_sheet(filepath=str(path)) == {"FINISHED"}
@@ -134,7 +128,7 @@ def test_keep_variant_saves_a_preset_in_the_user_library(design, lamp_addon, add
 
     library, why = lamp_addon.presets.library.user_library()
     assert library is not None, why
-    _two_by_one(design.lamp_study)
+    one_axis(design.lamp_study)
     bpy.ops.lamp.study_run()
     design.lamp_study.variant = 1
     before = set(os.listdir(library.folder))

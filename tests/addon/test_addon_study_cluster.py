@@ -10,6 +10,7 @@ import json
 import numpy as np
 import pytest
 from helpers import BASELINE
+from study_axes import one_axis
 
 import core_tracer
 from core_tracer.cluster import engine
@@ -24,12 +25,7 @@ def design(lamp_addon, bl_scene, tmp_path, monkeypatch):
         scene = core_tracer.parse_scene(json.load(f))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
-    settings = bl_scene.lamp_study
-    settings.width, settings.height, settings.fit_lamp = 32, 32, False
-    settings.axis_1.parameter = "lens.ior"
-    settings.axis_1.mode = "LIST"
-    settings.axis_1.values = "1.45, 1.6"
-    settings.use_axis_2 = False
+    one_axis(bl_scene.lamp_study, width=32, height=32, fit_lamp=False)
     return bl_scene
 
 

@@ -6,6 +6,7 @@ import time
 
 import pytest
 from helpers import PRESETS
+from study_axes import one_axis
 
 pytestmark = pytest.mark.blender
 
@@ -14,13 +15,7 @@ pytestmark = pytest.mark.blender
 def stop_study(lamp_addon, addon_core, bl_scene):
     scene = addon_core.scene.load_scene(PRESETS / "photometric-stop-lamp.json")
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    settings = bl_scene.lamp_study
-    settings.width, settings.height, settings.fit_lamp = 24, 16, False
-    settings.workers = 1
-    settings.axis_1.parameter = "cuts.height"
-    settings.axis_1.mode = "LIST"
-    settings.axis_1.values = "0.5, 3"
-    settings.use_axis_2 = False
+    one_axis(bl_scene.lamp_study, "cuts.height", "0.5, 3", width=24, height=16, fit_lamp=False, workers=1)
     return bl_scene
 
 

@@ -30,6 +30,7 @@ def _design(tmp_path, follow: bool) -> dict:
     return core_tracer.parse_scene(doc)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("follow", [True, False])
 def test_the_lamp_sun_has_the_tracers_colour(lamp_addon, bl_scene, tmp_path, follow):
     scene = _design(tmp_path, follow)

@@ -34,9 +34,7 @@ def _mirror_scene(size=(48, 32)) -> dict:
     return core_tracer.parse_scene(doc)
 
 
-def test_the_world_holds_the_environment(lamp_addon, bl_scene):
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_the_world_holds_the_environment(lamp_addon, bl_scene, world_images):
     scene = _mirror_scene()
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lamp_addon.design.builder.build_lamp(bl_scene, scene)
@@ -56,9 +54,7 @@ def test_the_world_holds_the_environment(lamp_addon, bl_scene):
 
 
 @pytest.mark.slow
-def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon, bl_scene, world_images):
     scene = _mirror_scene()
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES, resolution=(48, 32))
@@ -80,9 +76,8 @@ def test_flat_clear_lens_mirroring_the_environment_agrees_with_cycles(lamp_addon
 
 @pytest.mark.slow
 @pytest.mark.parametrize("samples", [1, 4])
-def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp_addon, bl_scene, tmp_path, samples):
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp_addon, bl_scene, tmp_path, samples,
+                                                                           world_images):
     doc = json.loads(BASELINE.read_text(encoding="utf-8"))
     doc["environment"] = {"world": "sunset", "strength": 1.0, "rotation_deg": 0.0}
     doc["image"] = {"width": 48, "height": 32, "samples": samples}
@@ -101,9 +96,7 @@ def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp
     np.testing.assert_allclose(rgba[alpha == 1, :3], full[alpha == 1], rtol=1e-6, atol=1e-7)
 
 
-def test_the_lamp_sun_follows_the_sun_of_the_design_and_of_the_environment(lamp_addon, bl_scene):
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_the_lamp_sun_follows_the_sun_of_the_design_and_of_the_environment(lamp_addon, bl_scene, world_images):
     doc = json.loads(BASELINE.read_text(encoding="utf-8"))
     doc["light"] = {"direction": [0.3, -1.0, 0.6], "color": [1, 1, 1], "ambient": 0.2, "strength": 2.5,
                     "sun_color": [1.0, 0.6, 0.3], "follow_environment": True}
@@ -122,31 +115,34 @@ def test_the_lamp_sun_follows_the_sun_of_the_design_and_of_the_environment(lamp_
 
 
 @pytest.mark.slow
-def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene):
+def _body_against_cycles(lamp_addon, bl_scene, scene: dict, what: str) -> np.ndarray:
+    """Cycles' mean colour of the body's front face against the tracer's, relative per channel, in a
+    16x10 region left of the lens and clear of the body's edges (64x64, ``BODY_SAMPLES`` in Cycles)."""
+    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
+    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
+    region = (slice(24, 40), slice(4, 14))
+    t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
+    c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
+    relative = (c - t) / t
+    print(f"\nbody {what}, {BODY_SAMPLES} spp Cycles, 64x64, 16x10 region: tracer {t}, Cycles {c}, "
+          f"relative difference {relative}, seconds {result['seconds']}")
+    return relative
+
+
+def test_body_lit_by_the_environment_agrees_with_cycles(lamp_addon, bl_scene, world_images):
     # The body's front face sees the open half of the world: the tracer's C0 E(n) / pi against Cycles'
     # Diffuse BSDF under the same world (no sun, no ambient, no specular).
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
     doc = json.loads(BASELINE.read_text(encoding="utf-8"))
     doc["body"]["specular"] = 0.0
     doc["light"] = {"direction": [0.3, -1.0, 0.6], "color": [1, 1, 1], "ambient": 0.0, "strength": 0.0}
     doc["environment"] = {"world": "courtyard", "strength": 1.0, "rotation_deg": 40.0}
     doc["image"] = {"width": 64, "height": 64}
     scene = core_tracer.parse_scene(doc)
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
-    region = (slice(24, 40), slice(4, 14))  # left of the lens, clear of the body's edges (as the lit-body test)
-    t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
-    c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
-    relative = (c - t) / t
-    print(f"\nbody lit by courtyard, {BODY_SAMPLES} spp Cycles, 64x64, 16x10 region: tracer {t}, Cycles {c}, "
-          f"relative difference {relative}, seconds {result['seconds']}")
-    assert np.abs(relative).max() < TOLERANCE
+    assert np.abs(_body_against_cycles(lamp_addon, bl_scene, scene, "lit by courtyard")).max() < TOLERANCE
 
 
-def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_nodes(lamp_addon, bl_scene):
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_nodes(lamp_addon, bl_scene,
+                                                                                     world_images):
     scene = _mirror_scene()
     scene["environment"]["world"] = "none"
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
@@ -167,12 +163,11 @@ def test_a_world_built_without_surroundings_gains_them_and_keeps_the_designers_n
     assert tree.nodes["Background Or Surroundings"].inputs[0].default_value == 1.0
 
 
-def test_a_followed_sun_leaves_the_world_and_the_surroundings_replace_the_ambient(lamp_addon, bl_scene):
+@pytest.mark.slow
+def test_a_followed_sun_leaves_the_world_and_the_surroundings_replace_the_ambient(lamp_addon, bl_scene, world_images):
     """docs/model.md §8.18 in Blender's world: where the Lamp Sun follows the environment's sun, the
     world shows the tracer's image without it (each light once, in Compare's Cycles render too), and
     wherever surroundings are shown the ambient of eq. (1) gives way to them."""
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
     doc = json.loads(BASELINE.read_text(encoding="utf-8"))
     doc["light"].update(ambient=0.25, strength=2.0, follow_environment=True)
     doc["environment"] = {"world": "city", "strength": 1.0, "rotation_deg": 0.0}
@@ -200,14 +195,12 @@ def test_a_followed_sun_leaves_the_world_and_the_surroundings_replace_the_ambien
 
 
 @pytest.mark.slow
-def test_body_under_a_followed_sun_agrees_with_cycles(lamp_addon, bl_scene):
+def test_body_under_a_followed_sun_agrees_with_cycles(lamp_addon, bl_scene, world_images):
     """The body's front face under the city world with the Lamp Sun following its sun, ambient 0.25:
     the tracer's C0 (E_sky / pi + (1 - d) s cos theta), the sky without its sun, against Cycles' diffuse
     body under the world Compare builds (the same sunless image, no ambient) and the Lamp Sun of
     strength pi (1 - d) s. Each counts the sun once; before docs/model.md §8.18 both counted it twice
     (the image's and the Lamp Sun), and agreed."""
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
     doc = json.loads(BASELINE.read_text(encoding="utf-8"))
     doc["body"]["specular"] = 0.0
     doc["light"] = {"direction": [0.3, -1.0, 0.6], "color": [1, 1, 1], "ambient": 0.25, "strength": 2.0,
@@ -217,12 +210,4 @@ def test_body_under_a_followed_sun_agrees_with_cycles(lamp_addon, bl_scene):
     scene = core_tracer.parse_scene(doc)
     toward = environment.from_scene(scene).sun_direction()
     assert -toward[1] > 0.3  # turned so that the sun lights the front face
-    lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=BODY_SAMPLES, resolution=(64, 64))
-    region = (slice(24, 40), slice(4, 14))
-    t = result["tracer"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
-    c = result["cycles"][region].reshape(-1, 3).astype(np.float64).mean(axis=0)
-    relative = (c - t) / t
-    print(f"\nbody under city with a followed sun, {BODY_SAMPLES} spp Cycles, 64x64: tracer {t}, Cycles {c}, "
-          f"relative difference {relative}")
-    assert np.abs(relative).max() < TOLERANCE
+    assert np.abs(_body_against_cycles(lamp_addon, bl_scene, scene, "under city with a followed sun")).max() < TOLERANCE

@@ -14,14 +14,6 @@ import pytest
 pytestmark = pytest.mark.blender
 
 
-@pytest.fixture
-def startup(addon):
-    import bpy
-
-    bpy.ops.wm.read_homefile(use_factory_startup=True)
-    return bpy.context.scene
-
-
 def _inside_every_view(lamp_addon, bl_scene) -> list[tuple[str, float]]:
     """(area, reach) per 3D View of the windows: the largest |x|, |y| of the design's box corners in the
     region's normalised device coordinates (inside the region below 1), through the region's own
@@ -39,10 +31,10 @@ def _inside_every_view(lamp_addon, bl_scene) -> list[tuple[str, float]]:
     return reaches
 
 
-def test_the_view_matrix_is_blenders(lamp_addon, startup):
+def test_the_view_matrix_is_blenders(lamp_addon, startup_scene):
     """The view matrix computed from the view's centre, rotation and distance is the one Blender drew
     the startup file's 3D View with (to its stored single precision)."""
-    for _, _, view in lamp_addon.render.view_frame.views_of(startup):
+    for _, _, view in lamp_addon.render.view_frame.views_of(startup_scene):
         ours = lamp_addon.render.view_frame.view_matrix(view)
         scale = view.view_distance
         assert max(abs(a - b) for ra, rb in zip(ours, view.view_matrix, strict=True)
@@ -53,19 +45,19 @@ def _cube_state(ob) -> tuple:
     return tuple(ob.location), tuple(ob.scale), ob.hide_get(), ob.hide_viewport, ob.hide_render
 
 
-def test_the_first_lamp_frames_the_3d_view_and_names_the_cube(lamp_addon, startup, capfd):
+def test_the_first_lamp_frames_the_3d_view_and_names_the_cube(lamp_addon, startup_scene, capfd):
     import bpy
 
-    views = lamp_addon.render.view_frame.views_of(startup)
+    views = lamp_addon.render.view_frame.views_of(startup_scene)
     assert views  # the startup file's Layout has a 3D View, under xvfb-run as on a desktop
     before = {id(v): (tuple(v.view_location), v.view_distance) for _, _, v in views}
-    reach_before = dict(_inside_every_view(lamp_addon, startup))
-    cube = startup.objects["Cube"]
+    reach_before = dict(_inside_every_view(lamp_addon, startup_scene))
+    cube = startup_scene.objects["Cube"]
     cube_before = _cube_state(cube)
     capfd.readouterr()
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     said = capfd.readouterr().out
-    reaches = _inside_every_view(lamp_addon, startup)
+    reaches = _inside_every_view(lamp_addon, startup_scene)
     print(f"\nbefore: {reach_before}\nafter: {reaches}")
     assert reaches and all(0.5 < reach < 1.0 for _, reach in reaches)  # inside, and filling most of it
     assert any(before[id(v)] != (tuple(v.view_location), v.view_distance) for _, _, v in views)
@@ -73,18 +65,18 @@ def test_the_first_lamp_frames_the_3d_view_and_names_the_cube(lamp_addon, startu
     assert _cube_state(cube) == cube_before  # nothing of the user's hidden or moved
 
     assert bpy.ops.lamp.hide_others() == {"FINISHED"}
-    assert cube.hide_get() and startup.objects["Light"].hide_get()
+    assert cube.hide_get() and startup_scene.objects["Light"].hide_get()
     assert not cube.hide_render  # renders unchanged
     bpy.ops.ed.undo_push(message="after hide")
-    assert lamp_addon.render.view_frame.enclosing(startup) == []
+    assert lamp_addon.render.view_frame.enclosing(startup_scene) == []
 
 
-def test_hide_other_objects_is_one_undo_step_and_alt_h_shows_them(lamp_addon, startup):
+def test_hide_other_objects_is_one_undo_step_and_alt_h_shows_them(lamp_addon, startup_scene):
     import bpy
 
     assert bpy.types.LAMP_OT_hide_others.bl_options == {"REGISTER", "UNDO"}  # headless Blender has no undo stack
     assert bpy.ops.lamp.hide_others() == {"FINISHED"}
-    others = [ob for ob in startup.objects if not lamp_addon.render.view_frame.is_lamp_object(ob)]
+    others = [ob for ob in startup_scene.objects if not lamp_addon.render.view_frame.is_lamp_object(ob)]
     assert others and all(ob.hide_get() for ob in others)
     assert not bpy.ops.lamp.hide_others.poll()  # only the lamp is visible now
     window = bpy.context.window
@@ -95,15 +87,15 @@ def test_hide_other_objects_is_one_undo_step_and_alt_h_shows_them(lamp_addon, st
     assert not any(ob.hide_get() for ob in others)
 
 
-def test_frame_lamp_frames_the_3d_view_on_a_moved_lamp(lamp_addon, startup):
+def test_frame_lamp_frames_the_3d_view_on_a_moved_lamp(lamp_addon, startup_scene):
     import bpy
 
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    root = lamp_addon.design.root.find_root(startup)
+    root = lamp_addon.design.root.find_root(startup_scene)
     root.location = (3.0, 2.0, 1.0)
-    for _, _, view in lamp_addon.render.view_frame.views_of(startup):
+    for _, _, view in lamp_addon.render.view_frame.views_of(startup_scene):
         view.view_location, view.view_distance = (-5.0, 0.0, 0.0), 30.0  # the user looked elsewhere
-    startup.view_layers[0].update()
+    startup_scene.view_layers[0].update()
     assert bpy.ops.lamp.frame_design() == {"FINISHED"}
-    assert all(0.5 < reach < 1.0 for _, reach in _inside_every_view(lamp_addon, startup))
+    assert all(0.5 < reach < 1.0 for _, reach in _inside_every_view(lamp_addon, startup_scene))

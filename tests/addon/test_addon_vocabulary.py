@@ -84,6 +84,7 @@ def test_the_lens_too_large_for_the_body_highlights_the_lens_and_offers_the_body
     assert "a smaller Lamp 1 › Lens › Radius, at most 60 mm" in problem.text()
 
 
+@pytest.mark.slow
 def test_the_command_line_keeps_the_json_paths(tmp_path):
     scene = core_tracer.load_scene(str(BASELINE))
     scene["lamps"][0]["cuts"]["height"] = 8.0

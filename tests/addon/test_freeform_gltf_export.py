@@ -12,6 +12,7 @@ from core_tracer.freeform.meshes import check_lens_volume
 pytestmark = pytest.mark.blender
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("smooth", [False, True])
 def test_a_mesh_exported_by_blender_reads_back_in_model_millimetres(tmp_path, smooth):
     import bmesh

@@ -2,44 +2,40 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import run_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 PRESET = ROOT / "presets" / "four-lamp-night-lit-photometric.json"
 
 
-def _run(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "core_tracer", *map(str, args)], cwd=ROOT, capture_output=True,
-                          text=True, timeout=600)
-
-
 @pytest.fixture(scope="module")
 def states(tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("states") / "night.npz"
-    done = _run("states", PRESET, "-o", path, "--width", 48, "--height", 32, "--samples", 1)
+    done = run_cli("states", PRESET, "-o", path, "--width", 48, "--height", 32, "--samples", 1)
     assert done.returncode == 0, done.stderr
     assert "one walk for 8 states and the surroundings" in done.stdout  # one walk, not a render per state
     assert "state 1 of" not in done.stdout
     return path
 
 
+@pytest.mark.slow
 def test_relight_lists_the_states_and_writes_images(states, tmp_path):
-    listed = _run("relight", states, "--list")
+    listed = run_cli("relight", states, "--list")
     assert listed.returncode == 0
     assert "Turn (lamp 3, P21/5W) (also lamps[2].stop)" in listed.stdout  # named by function (issue 31)
     assert listed.stdout.splitlines()[1].split()[:2] == ["on", "tail"]
     assert listed.stdout.splitlines()[2].split()[:2] == ["off", "tail.stop_filament"]
     exr, only_tail = tmp_path / "design.exr", tmp_path / "tail.exr"
-    assert _run("relight", states, "-o", exr).returncode == 0
-    done = _run("relight", states, "-o", only_tail, "--off", "stop,turn,reversing")
+    assert run_cli("relight", states, "-o", exr).returncode == 0
+    done = run_cli("relight", states, "-o", only_tail, "--off", "stop,turn,reversing")
     assert done.returncode == 0 and "lit: surroundings, tail" in done.stdout, done.stdout
     old_keys = tmp_path / "tail-old-keys.exr"  # the keys of earlier versions still work
-    assert _run("relight", states, "-o", old_keys, "--off", "lamps[1].stop,lamps[2].stop,lamps[3].stop").returncode == 0
+    old_off = "lamps[1].stop,lamps[2].stop,lamps[3].stop"
+    assert run_cli("relight", states, "-o", old_keys, "--off", old_off).returncode == 0
     import OpenImageIO as oiio
 
     def luminance(path):
@@ -51,10 +47,11 @@ def test_relight_lists_the_states_and_writes_images(states, tmp_path):
     off = design - tail  # cd/m2: the three lamps switched off
     assert off.min() >= -1e-5 * design.max() and off.max() > 1000.0
     png = tmp_path / "stop.png"
-    assert _run("relight", states, "-o", png, "--level", "stop=500", "--ev100", "12").returncode == 0
+    assert run_cli("relight", states, "-o", png, "--level", "stop=500", "--ev100", "12").returncode == 0
     assert png.stat().st_size > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args, words", [
     (["--on", "lamps[7].stop"], "error: lamps[7].stop: not a state of this design; allowed surroundings"),
     (["--level", "lamps[0].stop=lots"], "error: --level: 'lamps[0].stop=lots' is not KEY=VALUE"),
@@ -64,16 +61,17 @@ def test_relight_lists_the_states_and_writes_images(states, tmp_path):
 ])
 def test_bad_states_are_refused_in_one_line(states, tmp_path, args, words):
     out = tmp_path / "x.png"
-    done = _run("relight", states, "-o", out, *args)
+    done = run_cli("relight", states, "-o", out, *args)
     assert done.returncode == 2 and done.stderr.strip().startswith(words), done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and not out.exists()
 
 
+@pytest.mark.slow
 def test_a_file_that_is_not_a_states_file_is_refused(tmp_path):
     bogus = tmp_path / "bogus.npz"
     np.savez(bogus, header=np.zeros(3))
-    done = _run("relight", bogus, "-o", tmp_path / "x.png")
+    done = run_cli("relight", bogus, "-o", tmp_path / "x.png")
     assert done.returncode == 2 and "is not a light-states file of this version" in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
-    done = _run("states", PRESET, "-o", tmp_path / "x.exr")
+    done = run_cli("states", PRESET, "-o", tmp_path / "x.exr")
     assert done.returncode == 2 and "allowed a name ending .npz" in done.stderr

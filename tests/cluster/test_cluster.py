@@ -223,6 +223,7 @@ def test_the_cache_keeps_the_cells_used_last_within_its_size(tmp_path):
     assert kept == [0, 4]
 
 
+@pytest.mark.slow
 def test_the_measured_curves_travel_with_the_task_to_a_worker_that_cannot_see_the_design(client, tmp_path):
     """A photometric study whose lens filter is a measured curve beside its design: the cells carry the
     curve's bytes (named by their SHA-256, not by the folder), so the study renders on the cluster after

@@ -14,11 +14,12 @@ import time
 
 import pytest
 from helpers import BASELINE, ROOT, assert_bad_input, cli_command, run_cli
+from needs import require
 
 from core_tracer.cluster import engine
 from core_tracer.scene.reading import SceneError
 
-pytestmark = pytest.mark.skipif(not engine.available(), reason="needs dask distributed")
+require("distributed")
 
 STUDY = ("study", BASELINE, "--vary", "lens.ior=1.4,1.6", "--size", "24x24", "--no-cache")
 
@@ -106,12 +107,14 @@ def test_well_formed_addresses_pass(address, normal):
     assert engine.check_address(address) == normal
 
 
+@pytest.mark.slow
 def test_a_malformed_dask_scheduler_address_is_named_as_the_variable(tmp_path):
     env = dict(os.environ, DASK_SCHEDULER_ADDRESS="tcp://nowhere:99999")
     done = run_cli(*STUDY, "--engine", "dask", "-o", tmp_path / "s.png", env=env)
     assert_bad_input(done, "DASK_SCHEDULER_ADDRESS", "port from 1 to 65535")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["study", "optimise"])
 def test_100000_workers_are_refused_in_one_line(tmp_path, command):
     if command == "study":
@@ -129,6 +132,7 @@ def test_the_worker_bound_follows_the_machine():
         engine.check_workers(engine.max_workers() + 1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cache", ["/dev/null", "x" * 5000])
 def test_a_cache_that_cannot_be_a_folder_names_the_cache_not_the_scheduler(tmp_path, cache):
     """Every OSError used to be 'cannot reach the scheduler', even a file where the cache folder should be."""

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from needs import require
 
 from core_tracer.freeform import GeometryCache, available, render_passes, shapes
 from core_tracer.freeform.meshes import MeshData
 from core_tracer.raytrace.engine import PASS_NAMES, RenderCancelled
 from core_tracer.scene.validate import normalize, parse_scene
 
-pytest.importorskip("embreex")
+require("embreex")
 
 
 def small_design():

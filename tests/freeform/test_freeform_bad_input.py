@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from glb_writer import write_glb
 from helpers import ROOT, run_cli
+from needs import require
 
 from core_tracer.freeform import load, render_passes, shapes
 from core_tracer.freeform.meshes import MAX_TRIANGLES_PER_MESH, MeshData
@@ -19,7 +20,7 @@ from core_tracer.scene.validate import parse_scene
 
 pytestmark = pytest.mark.slow
 
-pytest.importorskip("embreex")
+require("embreex")
 
 
 def design(parts: list[dict]) -> dict:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from needs import require
 
 from core_tracer.freeform import render_passes, shapes
 from core_tracer.freeform.meshes import MeshData
@@ -16,7 +17,7 @@ from core_tracer.scene.validate import parse_scene
 
 pytestmark = pytest.mark.slow
 
-pytest.importorskip("embreex")
+require("embreex")
 
 
 def squashed(mesh: MeshData, centre, scale) -> MeshData:

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from helpers import slab_series
+from needs import require
 
 from core_tracer.freeform import render_passes, shapes
 from core_tracer.photometry import materials
@@ -20,7 +21,7 @@ from core_tracer.scene import beside
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
 
-pytest.importorskip("embreex")
+require("embreex")
 
 FLUX = 440.0
 RADIUS = 8.0
@@ -125,6 +126,7 @@ def test_file_fields_their_kind_does_not_read_are_refused_in_one_line():
     assert err.value.path == "freeform.parts[1].bulb.spectrum_file" and "\n" not in str(err.value)
 
 
+@pytest.mark.slow
 def test_a_free_form_design_is_measured_on_its_meshes_by_both_estimators():
     """Rendered views and forward light tracing measure the meshes (a bare bulb mesh: I = L · its
     projected area, Φ/(4π) for a convex Lambertian emitter; every photon leaves: the flux out is Φ);

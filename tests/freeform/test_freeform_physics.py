@@ -8,13 +8,14 @@ import math
 import numpy as np
 import pytest
 from helpers import slab_series
+from needs import require
 
 from core_tracer.freeform import GeometryCache, render_passes, shapes
 from core_tracer.freeform.render import surface_hits
 from core_tracer.raytrace.engine.rays import CUTOFF
 from core_tracer.scene.validate import parse_scene
 
-pytest.importorskip("embreex")
+require("embreex")
 
 
 

@@ -76,6 +76,7 @@ def direct(folder, study: st.Study) -> list[np.ndarray]:
             for v in study.variants]
 
 
+@pytest.mark.slow
 def test_a_free_form_study_renders_each_variant_on_its_meshes_here_and_in_the_local_pool(tmp_path):
     document = write_design(tmp_path)
     study = lens_study()
@@ -91,6 +92,7 @@ def test_a_free_form_study_renders_each_variant_on_its_meshes_here_and_in_the_lo
     assert red[0] / red[2] > 2 * blue[0] / blue[2]  # the lens colour varied reaches the image
 
 
+@pytest.mark.slow
 def test_the_study_command_writes_a_free_form_designs_sheet(tmp_path):
     document = write_design(tmp_path)
     sheet = tmp_path / "sheet.png"
@@ -119,6 +121,7 @@ def client():
         yield c
 
 
+@pytest.mark.slow
 def test_the_mesh_file_travels_with_the_cells_to_workers_that_cannot_see_the_design(client, tmp_path):
     """The cells carry the .glb's bytes named by their SHA-256: the study renders on a local cluster
     after the design's folder is renamed, as in this process before; the key is the file's content."""
@@ -167,6 +170,7 @@ def optimisation(folder, trials: int = 4) -> spec.Optimisation:
     return spec.from_doc(doc, str(folder))
 
 
+@pytest.mark.slow
 def test_an_optimisation_varies_a_free_form_parts_values_here_and_on_a_local_cluster(client, tmp_path):
     opt = optimisation(tmp_path)
     outcome = search.run(opt, None, None)
@@ -185,6 +189,7 @@ def test_an_optimisation_varies_a_free_form_parts_values_here_and_on_a_local_clu
     assert more.rendered == 2 and len(storage.finished_trials(more.study)) == 6
 
 
+@pytest.mark.slow
 def test_an_optimisation_of_a_free_form_design_refuses_the_parametric_lamps_measures(tmp_path):
     opt = optimisation(tmp_path)
     doc = {**opt.doc, "objectives": [{"measure": "lens_thickness", "goal": "minimise"}]}

@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 from helpers import fresnel_unpolarised, scene_with, smooth_sky, write_exr
+from needs import require
 
 from core_tracer import render_passes as parametric_passes
 from core_tracer.freeform import render_passes, shapes
@@ -21,7 +22,7 @@ from core_tracer.raytrace.camera import eye_rays, make_camera
 from core_tracer.scene.derived import lamp_geometry
 from core_tracer.scene.validate import parse_scene
 
-pytest.importorskip("embreex")
+require("embreex")
 
 W, H = 64, 32
 IOR = 1.49

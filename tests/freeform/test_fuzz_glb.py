@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import copy
 import json
-import os
 import struct
 import warnings
 
 import numpy as np
 import pytest
 from glb_writer import write_glb
-from hypothesis import HealthCheck, given, settings
+from helpers import fuzz
+from hypothesis import given
 from hypothesis import strategies as st
 from test_glb_limits import join_glb, split_glb
 
@@ -26,15 +26,6 @@ from core_tracer.freeform.gltf import read_glb
 from core_tracer.freeform.meshes import MAX_COORDINATE_MM, check_lens_volume, check_mesh
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
-
-SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
-
-
-def fuzz(examples: int):
-    """``examples`` per run (times LAMP_FUZZ_EXAMPLES), no example database, no deadline."""
-    return settings(max_examples=examples * SCALE, deadline=None, database=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                           HealthCheck.function_scoped_fixture])
 
 
 @pytest.fixture(scope="module")
@@ -89,11 +80,11 @@ def paths(node, prefix=()) -> list[tuple]:
     return out
 
 
+@pytest.mark.slow
 @fuzz(120)
 @given(data=st.data())
 def test_any_value_anywhere_in_the_gltf_json(tmp_path, lens, data):
-    doc, blob, _ = lens
-    doc = copy.deepcopy(doc)
+    doc, blob = copy.deepcopy(lens[0]), lens[1]
     for _ in range(data.draw(st.integers(1, 3))):
         where = data.draw(st.sampled_from(paths(doc) + [("nodes", 0, "mesh"), ("bufferViews", 0, "byteStride"),
                                                          ("nodes", 0, "children"), ("nodes", 0, "matrix")]))
@@ -107,11 +98,11 @@ def test_any_value_anywhere_in_the_gltf_json(tmp_path, lens, data):
     answer(tmp_path, join_glb(doc, blob))
 
 
+@pytest.mark.slow
 @fuzz(80)
 @given(data=st.data())
 def test_numbers_at_their_edges_in_transforms_and_vertices(tmp_path, lens, data):
-    doc, blob, _ = lens
-    doc = copy.deepcopy(doc)
+    doc, blob = copy.deepcopy(lens[0]), lens[1]
     edge = st.sampled_from([0.0, -0.0, 1e-320, 1e-30, 1e3, 1e6, 1.0000001e6, 1e7, 1e30, 3e38, 1e103, 1e308,
                             float("nan"), float("inf"), -1e103])
     key, size = data.draw(st.sampled_from([("translation", 3), ("rotation", 4), ("scale", 3), ("matrix", 16)]))
@@ -125,6 +116,7 @@ def test_numbers_at_their_edges_in_transforms_and_vertices(tmp_path, lens, data)
     answer(tmp_path, join_glb(doc, bytes(raw)))
 
 
+@pytest.mark.slow
 @fuzz(150)
 @given(data=st.data())
 def test_damaged_bytes(tmp_path, lens, data):
@@ -161,6 +153,7 @@ DESIGN = {"schema": "lamp-scene/2", "lamps": [{}], "image": {"width": 8, "height
           "freeform": {"mesh_file": "lamp.glb", "parts": [{"object": "Lens", "role": "lens"}]}}
 
 
+@pytest.mark.slow
 @fuzz(150)
 @given(data=st.data())
 def test_any_value_in_the_freeform_section(data):

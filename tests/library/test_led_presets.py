@@ -20,6 +20,7 @@ LED_PRESETS = ("led-stop-lamp", "led-light-guide-tail-lamp", "led-stop-lamp-free
                "led-rear-combination-photometric")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stem", LED_PRESETS)
 def test_validates_and_renders_small_from_the_cli(stem, tmp_path):
     path = PRESETS / f"{stem}.json"

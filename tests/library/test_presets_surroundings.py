@@ -30,9 +30,7 @@ def test_each_time_of_day_has_a_lit_and_an_unlit_preset_differing_only_in_the_bu
     assert lit == unlit
 
 
-def test_the_sun_is_high_by_day_low_in_the_evening_and_absent_at_night():
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_the_sun_is_high_by_day_low_in_the_evening_and_absent_at_night(world_images):
     day = environment.from_scene(_load("day", "lit")).sun_direction()
     evening = environment.from_scene(_load("evening", "lit")).sun_direction()
     assert np.degrees(np.arcsin(day[2])) > 40 and 0 < np.degrees(np.arcsin(evening[2])) < 6
@@ -41,9 +39,7 @@ def test_the_sun_is_high_by_day_low_in_the_evening_and_absent_at_night():
 
 
 @pytest.mark.slow
-def test_the_low_evening_sun_lights_the_unlit_lamps_and_the_night_does_not():
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_the_low_evening_sun_lights_the_unlit_lamps_and_the_night_does_not(world_images):
     size = (96, 60)
     evening = render_passes(_load("evening", "unlit"), *size, samples=1).passes["reflector_scatter"]
     night = render_passes(_load("night", "unlit"), *size, samples=1).passes["reflector_scatter"]

@@ -12,11 +12,12 @@ import sys
 
 import numpy as np
 import pytest
+from needs import require
 
 from core_tracer.measures import export as E
 from core_tracer.measures.directions import direction
 
-photompy = pytest.importorskip("photompy")
+photompy = require("photompy")
 
 
 def cosine_beam(grid: E.BeamGrid, peak: float = 300.0, flux: float = 440.0, out: float | None = 100.0,
@@ -106,6 +107,7 @@ def test_white_light_gets_its_colour_rendering_index_in_both_files(tmp_path, rep
     assert E.emitted_spectrum(load_scene(repo_root / "presets" / "paper-baseline.json")) is None  # no spectra
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text", ["10", "10,x", "7,2.5", "10,0.1", "10,2.5,5,1"])
 def test_a_bad_beam_grid_is_refused_in_one_line(repo_root, tmp_path, text):
     proc = subprocess.run([sys.executable, "-m", "core_tracer", "measure", str(repo_root / "presets" /

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from needs import missing
 
 from core_tracer import processes
 
@@ -30,7 +31,7 @@ def blender_python(tmp_path_factory, repo_root) -> str:
     images, here the bpy wheel's)."""
     bpy_spec = importlib.util.find_spec("bpy")
     if bpy_spec is None:
-        pytest.skip("the bpy wheel (for Blender's data files) is not installed")
+        missing("the bpy wheel (for Blender's data files) is not installed")
     version = tmp_path_factory.mktemp("blender") / "5.0"
     version.mkdir()
     datafiles = next(Path(bpy_spec.submodule_search_locations[0]).glob("[0-9]*/datafiles"))

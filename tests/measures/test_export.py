@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from needs import require
 
 from core_tracer.measures import export as E
 
@@ -41,7 +42,7 @@ def test_ies_text_follows_lm63_2002():
 
 def test_ldt_reads_back_in_an_independent_parser(tmp_path):
     """pyldt (PyPI eulumdat-py 1.0.0, MIT) reads the angles and cd/klm back; × flux/1000 = cd."""
-    pyldt = pytest.importorskip("pyldt", reason="eulumdat-py is not installed (asked for in the report)")
+    pyldt = require("pyldt", "eulumdat-py")
     dist = synthetic()
     E.write_ldt(dist, tmp_path / "lamp.ldt")
     ldt = pyldt.LdtReader.read(tmp_path / "lamp.ldt")
@@ -137,7 +138,7 @@ def _floor_checks(dist, image, size_m=12.0, pixels=241):
 @pytest.mark.slow
 @pytest.mark.blender
 def test_ies_round_trip_in_cycles_synthetic(tmp_path):
-    bpy = pytest.importorskip("bpy")
+    bpy = require("bpy")
     dist = synthetic()
     E.write_ies(dist, tmp_path / "synthetic.ies")
     for where, expected, rendered in _floor_checks(dist, _cycles_floor(bpy, tmp_path / "synthetic.ies", tmp_path)):
@@ -149,7 +150,7 @@ def test_ies_round_trip_in_cycles_synthetic(tmp_path):
 def test_ies_round_trip_in_cycles_of_the_stop_lamp(tmp_path, repo_root):
     """The photometric stop lamp's beam, rendered on a (C, γ) grid of 30° × 10°, as an IES file: the
     floor at 3 m gets I cos θ / d² within 3 % at the grid's directions."""
-    bpy = pytest.importorskip("bpy")
+    bpy = require("bpy")
     from core_tracer.scene import load_scene
 
     scene = load_scene(repo_root / "presets" / "photometric-stop-lamp.json")

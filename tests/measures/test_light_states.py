@@ -48,6 +48,7 @@ def baseline():
     return S.render_states(_scene("paper-baseline.json"))
 
 
+@pytest.mark.slow
 def test_the_states_of_a_two_filament_bulb_are_its_filaments(night):
     keys = [s.key for s in night.states]
     assert keys[0] == S.SURROUNDINGS
@@ -85,6 +86,7 @@ def test_a_paper_bulb_twice_as_bright_equals_a_render_with_twice_the_intensity(b
     assert _close(relit, _render(scene)) < TOLERANCE
 
 
+@pytest.mark.slow
 def test_a_custom_bulb_flux_in_lm_equals_a_render_with_that_flux():
     scene = _scene("photometric-stop-lamp.json")
     bulb = scene["lamps"][0]["bulb"]

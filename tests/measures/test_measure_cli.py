@@ -3,28 +3,24 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
+from helpers import run_cli
 
 
-def _run(repo_root, *args, timeout=600):
-    return subprocess.run([sys.executable, "-m", "core_tracer", "measure", *map(str, args)], cwd=repo_root,
-                          capture_output=True, text=True, timeout=timeout)
-
-
+@pytest.mark.slow
 def test_a_paper_scene_is_refused_naming_the_field(repo_root, tmp_path):
-    proc = _run(repo_root, repo_root / "presets" / "four-lamp-night-lit.json", "-o", tmp_path / "out")
+    proc = run_cli("measure", repo_root / "presets" / "four-lamp-night-lit.json", "-o", tmp_path / "out")
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "light_model" in proc.stderr and "photometric" in proc.stderr
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("option", [["--function", "3=stop"], ["--function", "0=brake"], ["--pixel-mm", "0"],
                                     ["--replicates", "0"]])
 def test_bad_options_are_one_line_naming_the_option(repo_root, tmp_path, option):
-    proc = _run(repo_root, repo_root / "presets" / "photometric-stop-lamp.json", "-o", tmp_path / "out", *option)
+    proc = run_cli("measure", repo_root / "presets" / "photometric-stop-lamp.json", "-o", tmp_path / "out", *option)
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.count("\n") == 1 and option[0] in proc.stderr and "allowed" in proc.stderr
 
@@ -35,8 +31,8 @@ def test_measure_the_stop_lamp(repo_root, tmp_path):
     lamp: measures.json holds both regulations' rows, its red colour and the homogeneity figures;
     the page is written."""
     out = tmp_path / "report"
-    proc = _run(repo_root, repo_root / "presets" / "photometric-stop-lamp.json", "-o", out, "--pixel-mm", "3",
-                "--replicates", "2", "--no-beam-files")
+    proc = run_cli("measure", repo_root / "presets" / "photometric-stop-lamp.json", "-o", out, "--pixel-mm", "3",
+                   "--replicates", "2", "--no-beam-files")
     assert proc.returncode == 0, proc.stderr
     result = json.loads((out / "measures.json").read_text(encoding="utf-8"))
     assert set(result["functions"]) == {"stop"}
@@ -58,30 +54,33 @@ def _strict_json(path) -> dict:
     return json.loads(path.read_text(encoding="utf-8"), parse_constant=refuse)
 
 
+@pytest.mark.slow
 def test_a_missing_output_parent_is_refused_before_any_work(repo_root, tmp_path):
     """Before: the measuring ran a minute, then the folder could not be made."""
-    proc = _run(repo_root, repo_root / "presets" / "photometric-stop-lamp.json", "-o", tmp_path / "no" / "report",
-                timeout=60)
+    proc = run_cli("measure", repo_root / "presets" / "photometric-stop-lamp.json", "-o", tmp_path / "no" / "report",
+                   timeout=60)
     assert proc.returncode == 2, proc.stderr
     assert proc.stdout == "" and proc.stderr.count("\n") == 1 and "does not exist" in proc.stderr
     assert "--output" in proc.stderr and str(tmp_path / "no") in proc.stderr
 
 
+@pytest.mark.slow
 def test_a_failing_verdict_exits_1_and_one_replicate_writes_strict_json(repo_root, tmp_path):
     """The stop lamp measured as a tail lamp fails R1's 17 cd maximum: exit 1 (before: 0), ``--exit-zero``
     keeps 0; with one replicate the standard errors are missing: null, not NaN (before: 101 NaN)."""
     scene = repo_root / "presets" / "photometric-stop-lamp.json"
     options = ["--function", "0=tail", "--pixel-mm", "5", "--replicates", "1", "--no-beam-files"]
-    proc = _run(repo_root, scene, "-o", tmp_path / "a", *options)
+    proc = run_cli("measure", scene, "-o", tmp_path / "a", *options)
     assert proc.returncode == 1, proc.stderr
     assert "fails R148 R1" in proc.stdout.splitlines()[-1]
     result = _strict_json(tmp_path / "a" / "measures.json")
     assert result["verdicts"] == {"R148 R1": False, "FMVSS taillamp": False}
     assert all(row["stderr"] is None for row in result["rows"] if row["kind"] == "min")
     assert all(err is None for *_, err in result["intensities_cd"]["tail"])
-    assert _run(repo_root, scene, "-o", tmp_path / "b", *options, "--exit-zero").returncode == 0
+    assert run_cli("measure", scene, "-o", tmp_path / "b", *options, "--exit-zero").returncode == 0
 
 
+@pytest.mark.slow
 def test_measures_json_names_its_schema_tool_date_and_scene(repo_root, tmp_path):
     import datetime
 
@@ -90,7 +89,7 @@ def test_measures_json_names_its_schema_tool_date_and_scene(repo_root, tmp_path)
     from core_tracer.scene import load_scene
 
     scene = repo_root / "presets" / "photometric-stop-lamp.json"
-    proc = _run(repo_root, scene, "-o", tmp_path / "a", "--pixel-mm", "5", "--replicates", "2", "--no-beam-files")
+    proc = run_cli("measure", scene, "-o", tmp_path / "a", "--pixel-mm", "5", "--replicates", "2", "--no-beam-files")
     assert proc.returncode == 0, proc.stderr
     result = _strict_json(tmp_path / "a" / "measures.json")
     assert result["schema"] == "lamp-measures/1"

@@ -11,6 +11,7 @@ from core_tracer.photometry import cie, materials, sources
 from core_tracer.photometry.bands import VISIBLE_NM
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("filter_name", ["red", "amber", "smoke"])
 def test_illuminant_a_through_a_filter_is_colour_sciences(colour, filter_name):
     """Illuminant A times a filter's transmittance curve (the project's logistic cut-on at its

@@ -19,6 +19,7 @@ STOP = PRESETS / "photometric-stop-lamp.json"
 NIGHT = PRESETS / "four-lamp-night-lit-photometric.json"
 
 
+@pytest.mark.slow
 def test_measure_with_tiny_pixels_is_refused_before_rendering(tmp_path):
     start = time.monotonic()
     line = assert_bad_input(run_cli("measure", STOP, "-o", tmp_path / "m", "--pixel-mm", "0.05"), "--pixel-mm",
@@ -27,6 +28,7 @@ def test_measure_with_tiny_pixels_is_refused_before_rendering(tmp_path):
     assert not (tmp_path / "m").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scene, size, words", [(STOP, "8192", "2 states"), (NIGHT, "4096", "8 states")])
 def test_states_past_the_budget_is_refused_before_rendering(tmp_path, scene, size, words):
     done = run_cli("states", scene, "-o", tmp_path / "s.npz", "--width", size, "--height", size, "--samples", "1")
@@ -34,6 +36,7 @@ def test_states_past_the_budget_is_refused_before_rendering(tmp_path, scene, siz
     assert "state 1 of" not in done.stdout and not (tmp_path / "s.npz").exists()
 
 
+@pytest.mark.slow
 def test_the_states_estimate_holds_what_it_allocates():
     scene = load_scene_file(NIGHT, 64, 48, 1)
     count = len(S.states_of(scene)) - 1

@@ -97,6 +97,7 @@ def test_a_member_whose_data_inflates_past_what_its_directory_says_stops_there(g
     assert time.perf_counter() - start < 1.0
 
 
+@pytest.mark.slow
 def test_relight_refuses_a_bomb_in_one_line_fast(good, tmp_path):
     parts = H.members(good)
     path = tmp_path / "bomb.npz"
@@ -108,6 +109,7 @@ def test_relight_refuses_a_bomb_in_one_line_fast(good, tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.slow
 def test_relight_never_writes_a_non_finite_image(good, tmp_path):
     """Finite passes whose weighted sum overflows float32 are refused at the writer (exit 2, nothing written)."""
     parts = H.members(good)

@@ -87,6 +87,7 @@ def test_bad_input_is_one_error_naming_the_json_path(folder, edit, where, allowe
     assert e.value.path == where and allowed in e.value.message and "allowed" in e.value.message
 
 
+@pytest.mark.slow
 def test_the_cli_names_the_file_and_the_path_in_one_line(folder):
     path = folder / "opt.json"
     path.write_text(json.dumps(opt_doc(folder, parameters=[{"parameter": "cuts.height", "range": [3, 1]}])))
@@ -95,6 +96,7 @@ def test_the_cli_names_the_file_and_the_path_in_one_line(folder):
     assert "opt.json: parameters[0].range" in proc.stderr and "allowed lo < hi" in proc.stderr
 
 
+@pytest.mark.slow
 def test_a_size_the_reference_is_not_is_refused_in_one_line_before_any_trial(folder):
     """Issue 31: changing ``size`` after rendering the ssim reference gave a traceback."""
     path = folder / "opt.json"

@@ -94,6 +94,7 @@ def test_a_file_that_is_not_a_database_is_refused_untouched(tmp_path):
     assert (tmp_path / "notes.db").read_text() == "my notes\n" * 100
 
 
+@pytest.mark.slow
 def test_the_cli_refuses_an_unrelated_database_in_one_line(tmp_path):
     db = tmp_path / "shop.db"
     with sqlite3.connect(db) as c:
@@ -104,6 +105,7 @@ def test_the_cli_refuses_an_unrelated_database_in_one_line(tmp_path):
     assert tables(db) == ["orders"]
 
 
+@pytest.mark.slow
 def test_a_study_of_that_name_not_made_here_is_refused(tmp_path):
     import optuna
 
@@ -120,6 +122,7 @@ def test_a_step_of_1e_300_is_refused(tmp_path):
     assert e.value.path == "parameters[0].step" and "1.5e-06" in e.value.message
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("changed, words", [
     ({"parameters": [{"parameter": "cuts.height", "values": [0.5, 1.0]}]},
      ("was a range [0.5, 2] in the study", "now values [0.5, 1.0]")),
@@ -155,6 +158,7 @@ def test_a_name_with_control_characters_is_refused(tmp_path, name):
     assert e.value.path == "name" and "printable" in e.value.message
 
 
+@pytest.mark.slow
 def test_a_name_with_dollars_draws_its_history(tmp_path):
     path = tmp_path / "o.optimise.json"
     path.write_text(json.dumps(doc(name="$\\frac{x}{$ cost $5")))

@@ -85,6 +85,7 @@ def test_bad_input_is_one_error_naming_the_json_path(tmp_path, edit, where, allo
     assert "\n" not in e.value.message
 
 
+@pytest.mark.slow
 def test_a_paper_design_asking_for_a_photometric_measure_is_one_line_from_the_cli(tmp_path):
     path = tmp_path / "opt.json"
     path.write_text(json.dumps(opt_doc(tmp_path, base=read_json(str(BASELINE)),
@@ -228,6 +229,7 @@ def test_a_grid_margin_no_design_can_meet_is_said_after_the_search(tmp_path):
     assert all(t["measures"]["grid_min_margin"] < -0.5 for t in trials)
 
 
+@pytest.mark.slow
 def test_the_sheet_shows_a_red_stop_lamp_red(tmp_path):
     """The trials' images are XYZ in cd/m²: the sheet shows them through the base's camera EV100
     (images.display.shown), not as if X, Y, Z were R, G, B (which turned the red stop

@@ -36,12 +36,17 @@ TOLERANCE_81 = {"illuminant A": (5e-5, 1e-4), "red LED 630/20": (5e-4, 2.5e-3),
                 "amber LED 592/17": (5e-4, 2.5e-3), "white LED-B5": (5e-4, 1e-3)}
 
 
+def _ours_and_colour_sciences(colour, name: str, bands: int) -> tuple[np.ndarray, np.ndarray]:
+    """XYZ of the spectrum ``name`` from its means in ``bands`` uniform bands, and colour-science's."""
+    spectrum = SPECTRA[name]()
+    b = Bands.uniform(bands)
+    return spectrum.band_means(b) @ cie.xyz_matrix(b), _colour_xyz(colour, spectrum)
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SPECTRA)
 def test_81_bands_give_colour_sciences_xyz(colour, name):
-    spectrum = SPECTRA[name]()
-    b = Bands.uniform(81)
-    ours = spectrum.band_means(b) @ cie.xyz_matrix(b)
-    reference = _colour_xyz(colour, spectrum)
+    ours, reference = _ours_and_colour_sciences(colour, name, 81)
     xy_tol, y_tol = TOLERANCE_81[name]
     assert ours[1] == pytest.approx(reference[1], rel=y_tol)
     np.testing.assert_allclose(cie.xy(ours), colour.XYZ_to_xy(reference), atol=xy_tol)
@@ -49,10 +54,7 @@ def test_81_bands_give_colour_sciences_xyz(colour, name):
 
 @pytest.mark.parametrize("name", SPECTRA)
 def test_1_nm_bands_converge_to_colour_sciences_xyz(colour, name):
-    spectrum = SPECTRA[name]()
-    b = Bands.uniform(400)
-    ours = spectrum.band_means(b) @ cie.xyz_matrix(b)
-    reference = _colour_xyz(colour, spectrum)
+    ours, reference = _ours_and_colour_sciences(colour, name, 400)
     assert ours[1] == pytest.approx(reference[1], rel=5e-4)
     np.testing.assert_allclose(cie.xy(ours), colour.XYZ_to_xy(reference), atol=5e-5)
 

@@ -74,6 +74,7 @@ def test_cut_off_bound_never_ends_a_branch_the_bands_keep(stop_lamp_context, rng
     assert not going[bound < CUTOFF].any()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", ["photometric-stop-lamp", "four-lamp-night-lit-photometric"])
 def test_render_with_nodes_matches_fresnel_per_band(preset, monkeypatch):
     """The lit lens (luminance at least 1/10 of the 99th percentile) rendered with Fresnel at the

@@ -8,11 +8,12 @@ import math
 
 import numpy as np
 import pytest
+from needs import require
 
 from core_tracer.measures import export
 from core_tracer.photometry import far_field
 
-photompy = pytest.importorskip("photompy")
+photompy = require("photompy")
 
 
 def _shape(c_deg: np.ndarray, gamma_deg: np.ndarray) -> np.ndarray:

@@ -76,6 +76,7 @@ def closed_form_out(scene: dict) -> float:
     return out
 
 
+@pytest.mark.slow
 def test_a_clear_guide_passes_its_closed_form_flux():
     scene = guide_scene()
     expected = closed_form_out(scene)
@@ -123,6 +124,7 @@ def _march_checked(ctx, o: np.ndarray, d: np.ndarray, inside, reach: float) -> n
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("section", ["round", "rectangular"])
 def test_guide_hits_are_where_a_fine_march_finds_the_boundary(section):
     """Random rays from points in and around the rod: the hit is the first change of inside/outside
@@ -177,6 +179,7 @@ def test_a_guide_that_cannot_be_is_refused_in_one_line_naming_the_field(change, 
     assert words in str(caught.value) and "\n" not in str(caught.value)
 
 
+@pytest.mark.slow
 def test_a_guide_lit_at_both_ends_passes_each_end_the_one_end_far_plus_near_flux():
     """Superposition and symmetry: the mirrored array's light leaves the far end as the first array's
     leaves the first end, so each end of the guide lit at both ends passes Φ_far + Φ_near of one end."""
@@ -215,6 +218,7 @@ def test_the_mirrored_leds_are_where_the_engine_meets_and_sees_them():
     assert np.isinf(led_die.hit_dies(o[:1], d[:1], one, lamp[:1])[0])  # lit at one end: no image
 
 
+@pytest.mark.slow
 def test_the_guide_lit_at_both_ends_is_the_sum_of_its_two_one_end_pictures():
     """The preset's guide seen head-on (128 × 48, 16 samples, the same seed): lit at both ends, its picture
     is the one-end picture plus that of the same lamp with its LED moved by hand to the far end face
@@ -318,6 +322,7 @@ def test_arc_guide_hits_are_where_a_fine_march_finds_the_boundary():
     assert checked.sum() > 150 and crossed_facets > 10, (checked.sum(), crossed_facets)
 
 
+@pytest.mark.slow
 def test_total_internal_reflection_carries_light_around_a_gentle_arc():
     """A clear rod 4 × 4 mm bent along a 60° arc of radius 100 mm (≫ its thickness) passes more than
     80 % of what the straight rod of the same length (104.7 mm) passes out of its far end (the light
@@ -346,6 +351,7 @@ def test_an_arc_guide_that_cannot_be_is_refused_in_one_line(change, field, words
     assert caught.value.path == field and words in str(caught.value) and "\n" not in str(caught.value)
 
 
+@pytest.mark.slow
 def test_an_arc_guide_lit_at_both_ends_passes_the_same_flux_out_of_each_end():
     """The mirror plane of an arc guide is the radial plane through its middle: the image of the LED
     at the first end faces the far end along its tangent, so both ends pass alike (symmetry), each the

@@ -24,6 +24,7 @@ import math
 import numpy as np
 import pytest
 from helpers import baseline_doc, write_exr
+from needs import require
 
 from core_tracer import render_passes
 from core_tracer.raytrace import environment
@@ -134,6 +135,7 @@ def _sunny_env(path: str, follow: bool) -> environment.Environment:
                                    "light": {"follow_environment": follow}})
 
 
+@pytest.mark.slow
 def test_sun_that_follows_the_image_takes_its_sun_out_of_it(sunny_world):
     followed, seen = _sunny_env(sunny_world, True), _sunny_env(sunny_world, False)
     toward = SUN[None, :]
@@ -223,7 +225,7 @@ def test_photometric_furnace_never_exceeds_the_world(uniform_world, lens):
 def test_free_form_meshes_in_the_furnace(uniform_world):
     """A white lens colour on a clear slab mesh and a white body mesh, ambient at its default: the lens
     surface is Fresnel's r of each eye ray times the world (1), the body the world."""
-    pytest.importorskip("embreex")
+    require("embreex")
     from core_tracer.freeform import render_passes as freeform_passes
     from core_tracer.freeform import shapes
     from core_tracer.raytrace.camera import eye_rays, make_camera

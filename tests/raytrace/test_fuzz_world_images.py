@@ -26,8 +26,8 @@ import warnings
 
 import numpy as np
 import pytest
-from helpers import baseline_doc, status_bytes
-from hypothesis import HealthCheck, currently_in_test_context, event, given, settings
+from helpers import baseline_doc, fuzz, status_bytes
+from hypothesis import currently_in_test_context, event, given
 from hypothesis import strategies as st
 
 from core_tracer import budget
@@ -39,15 +39,7 @@ from core_tracer.scene.safe_text import printable
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 
-SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
 MIB = 2**20
-
-
-def fuzz(examples: int):
-    """``examples`` per run (times LAMP_FUZZ_EXAMPLES), no example database, no deadline."""
-    return settings(max_examples=examples * SCALE, deadline=None, database=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                           HealthCheck.function_scoped_fixture])
 
 
 # -- what every answer must be -------------------------------------------------------------------
@@ -219,6 +211,7 @@ def hdr_files(draw) -> bytes:
     return head + pixels
 
 
+@pytest.mark.slow
 @fuzz(200)
 @given(data=hdr_files(), suffix=st.sampled_from([".hdr"] * 4 + [".HDR", ".exr"]),
        strength=st.sampled_from([0.0, 1.0, 10.0, 1e4]))
@@ -298,6 +291,7 @@ def exr_files(draw, folder: str) -> bytes:
     return damaged(draw, raw)
 
 
+@pytest.mark.slow
 @fuzz(200)
 @given(data=st.data(), suffix=st.sampled_from([".exr", ".EXR", ".hdr"]), strength=st.sampled_from([1.0, 10.0, 1e4]))
 def test_any_openexr_file(space, capfd, data, suffix, strength):
@@ -309,6 +303,7 @@ def test_any_openexr_file(space, capfd, data, suffix, strength):
     check_answer(capfd, folder, name, strength=strength, rotation=data.draw(st.sampled_from([0.0, 90.0, -360.0])))
 
 
+@pytest.mark.slow
 @fuzz(40)
 @given(data=st.data(), kind=st.sampled_from(["hdr", "exr"]))
 def test_any_image_in_a_study(space, capfd, data, kind):
@@ -319,6 +314,7 @@ def test_any_image_in_a_study(space, capfd, data, kind):
     check_answer(capfd, folder, "sky." + kind, strength=data.draw(st.sampled_from([1.0, 1e4])), study=True)
 
 
+@pytest.mark.slow
 @fuzz(60)
 @given(data=st.binary(max_size=300), magic=st.sampled_from([b"", b"\x76\x2f\x31\x01", b"#?RADIANCE\n", b"\x89PNG",
                                                              b"II*\0", b"\xff\xd8\xff", b"GIF89a", b"P6\n"]),
@@ -349,6 +345,7 @@ def test_an_image_of_another_format_under_an_environment_name_is_refused(space, 
 SKY = np.linspace(0.2, 2.0, 16 * 32 * 3, dtype=np.float32).reshape(16, 32, 3)
 
 
+@pytest.mark.slow
 @fuzz(80)
 @given(form=st.sampled_from(["absolute", "dotdot", "dotdot-inside", "symlink-out", "symlink-in", "symlink-loop",
                              "folder", "dot", "hidden", "home", "nul", "backslash", "spaces", "plain", "fifo",

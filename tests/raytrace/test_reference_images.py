@@ -32,7 +32,6 @@ from helpers import PRESETS  # noqa: E402
 
 from core_tracer import load_scene, render  # noqa: E402
 from core_tracer.images.imageio import XYZ_CHROMATICITIES, read_image, write_image  # noqa: E402
-from core_tracer.raytrace import environment  # noqa: E402
 
 REFERENCES = HERE / "references"
 FAILURES = HERE / "_failures"
@@ -58,9 +57,9 @@ def _buf(image: np.ndarray) -> oiio.ImageBuf:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("case", CASES)
-def test_render_matches_reference(case):
-    if case in WORLD_CASES and environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine (no bpy module)")
+def test_render_matches_reference(case, request):
+    if case in WORLD_CASES:
+        request.getfixturevalue("world_images")
     reference_file = REFERENCES / f"{case}.exr"
     assert reference_file.exists(), f"missing {reference_file}; run {Path(__file__).name} --regenerate"
     reference, scene_in_header = read_image(reference_file)

@@ -83,10 +83,7 @@ def test_without_surroundings_or_switched_off_the_spec_colour_holds():
     assert np.array_equal(render(paper), render(switched))  # the paper's setting, bit for bit
 
 
-def test_blenders_sunset_gives_a_warm_sun():
-    folder = environment.bundled_folder()
-    if folder is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_blenders_sunset_gives_a_warm_sun(world_images):
     scene = scene_with(**{"environment": {"world": "sunset"}, "light.follow_environment_color": True})
     r, g, b = sunlight.sun_color(scene)
     assert r > g > b >= 0.0

@@ -63,6 +63,7 @@ def bomb(request, tmp_path) -> tuple[str, str]:
     return name, BOMBS[name][1]
 
 
+@pytest.mark.slow
 def test_a_header_bomb_is_refused_by_render_in_one_line(tmp_path, bomb):
     name, said = bomb
     scene = _preset(tmp_path / "lib", {"world": "file", "file": name})
@@ -71,6 +72,7 @@ def test_a_header_bomb_is_refused_by_render_in_one_line(tmp_path, bomb):
     assert not (tmp_path / "out.exr").exists()
 
 
+@pytest.mark.slow
 def test_a_header_bomb_is_refused_before_the_band_pool_starts(tmp_path, bomb):
     name, said = bomb
     scene = _preset(tmp_path / "lib", {"world": "file", "file": name})
@@ -80,6 +82,7 @@ def test_a_header_bomb_is_refused_before_the_band_pool_starts(tmp_path, bomb):
     assert_bad_input(proc, "environment.file", name, said)
 
 
+@pytest.mark.slow
 def test_a_header_bomb_is_refused_by_a_study_in_one_line(tmp_path, bomb):
     name, said = bomb
     scene = _preset(tmp_path / "lib", {"world": "file", "file": name})
@@ -127,6 +130,7 @@ def library(tmp_path) -> dict:
     return {"lib": lib, "outside": outside, "far": str(outside / "far.exr")}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("form", ["absolute", "dotdot", "symlink", "folder"])
 def test_an_environment_path_out_of_the_scene_folder_is_refused(tmp_path, library, form):
     file = {"absolute": library["far"], "dotdot": "../outside/far.exr", "symlink": "link.exr",
@@ -143,6 +147,7 @@ def test_an_environment_path_out_of_the_scene_folder_is_refused(tmp_path, librar
     assert_bad_input(study, "environment.file", said)
 
 
+@pytest.mark.slow
 def test_an_image_beside_the_scene_renders_from_another_working_directory(tmp_path, library):
     scene = _preset(library["lib"], {"world": "file", "file": "sky.exr"})
     # run_cli works in the repository's folder, not the scene's
@@ -159,6 +164,7 @@ def test_an_image_beside_the_scene_renders_from_another_working_directory(tmp_pa
     assert list((library["lib"] / "thumbnails").glob("scene*.png"))
 
 
+@pytest.mark.slow
 def test_a_users_own_image_elsewhere_is_given_on_the_command_line(tmp_path, library):
     scene = _preset(library["lib"], {"world": "none"})
     proc = run_cli("render", scene, "-o", tmp_path / "out.exr", "--environment", library["far"])
@@ -174,6 +180,7 @@ def test_a_users_own_image_elsewhere_is_given_on_the_command_line(tmp_path, libr
 # -- values: finite out, one line for every refusal -------------------------------------------------
 
 
+@pytest.mark.slow
 def test_an_absurdly_bright_sky_gives_a_finite_image_without_warnings(tmp_path):
     # Before: inf in 60 of the 64 pixels, exit 0, and numpy's overflow warning on stderr.
     sky = np.full((16, 32, 3), 3e38, np.float32)
@@ -193,6 +200,7 @@ def test_an_absurdly_bright_sky_gives_a_finite_image_without_warnings(tmp_path):
     assert image.max() <= 10.0 * world_image.MAX_RADIANCE
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("content", [b"not an image at all", b"\x76\x2f\x31\x01" + bytes(60)])
 def test_a_broken_image_is_one_line_without_library_messages(tmp_path, content):
     lib = tmp_path / "lib"

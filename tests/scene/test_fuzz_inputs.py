@@ -20,8 +20,8 @@ import sys
 
 import helpers
 import pytest
-from helpers import ROOT
-from hypothesis import HealthCheck, assume, given, settings
+from helpers import ROOT, fuzz
+from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from core_tracer.scene import spec as S
@@ -33,14 +33,6 @@ from core_tracer.study import definition as study_mod
 pytestmark = pytest.mark.slow
 
 BUILTIN = ROOT / "presets"
-SCALE = max(1, int(os.environ.get("LAMP_FUZZ_EXAMPLES", "1")))
-
-
-def fuzz(examples: int):
-    """Hypothesis settings: ``examples`` per run (times LAMP_FUZZ_EXAMPLES), no example database
-    left in the work tree, no deadline (a shared machine may pause any example)."""
-    return settings(max_examples=examples * SCALE, deadline=None, database=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 
 
 DESIGNS = {stem: json.loads((BUILTIN / f"{stem}.json").read_text())

@@ -10,6 +10,7 @@ from core_tracer.study import definition as st
 STOP = PRESETS / "photometric-stop-lamp.json"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("args", "line"), [
     (["--measure", "grid.passes"], "error: --measure: grid.passes is not a measure; allowed colour.distance_outside"),
     (["--sort=-grid.passes"], "error: --sort: \"-grid.passes\" is not a measure, or \"-\" and one; allowed"),
@@ -21,6 +22,7 @@ def test_bad_measure_options_are_one_line(tmp_path, args, line):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_measures_of_a_paper_design_are_refused(tmp_path):
     done = run_cli("study", BASELINE, "--vary", "lens.ior=1.45,1.6", "--measure", "grid.pass", "-o", tmp_path / "s.png")
     assert done.returncode == 2 and "--measure: measures need a photometric design" in done.stderr

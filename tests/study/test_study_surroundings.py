@@ -5,7 +5,6 @@ from __future__ import annotations
 import pytest
 from helpers import BASELINE, baseline_doc, run_cli
 
-from core_tracer.raytrace import environment
 from core_tracer.scene.reading import SceneError
 from core_tracer.study import definition as st
 from core_tracer.study.parameters import study_parameters
@@ -40,9 +39,7 @@ def test_bad_surroundings_are_named(vary, message):
         st.Study.build(baseline_doc(), [st.parse_vary(vary)])
 
 
-def test_cli_study_over_the_worlds(tmp_path):
-    if environment.bundled_folder() is None:
-        pytest.skip("Blender's world images are not on this machine")
+def test_cli_study_over_the_worlds(tmp_path, world_images):
     proc = run_cli("study", BASELINE, "--vary", "environment.world=none,sunset",
                    "--size", "32x24", "--workers", "0", "-o", tmp_path / "sheet.png")
     assert proc.returncode == 0, proc.stderr
