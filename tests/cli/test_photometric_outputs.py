@@ -155,6 +155,6 @@ def test_an_led_scene_says_its_own_bands_in_the_line_and_the_exr_header(tmp_path
     proc = run_cli("render", led, "-o", tmp_path / "led.exr", "--width", "24", "--height", "24", "--samples", "1")
     assert proc.returncode == 0, proc.stderr
     assert f"on {bands.k} bands of 2.5 to 10 nm" in proc.stdout, proc.stdout
-    header = output.read_photometric_exr(tmp_path / "led.exr")[1]
+    header = photometric_images.read_photometric_exr(tmp_path / "led.exr")[1]
     assert np.allclose([float(e) for e in header[output.BANDS_ATTRIBUTE].split()], bands.edges_nm)
     assert bands.k > 40
