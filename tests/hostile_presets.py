@@ -16,21 +16,6 @@ def _doc(stem: str = "paper-baseline") -> dict:
     return json.loads((BUILTIN / f"{stem}.json").read_text())
 
 
-def leaves(node, prefix: str = "") -> dict:
-    """Every parameter of a scene as a flat ``path -> value`` dict (``lamps[0].lens.ior``)."""
-    if isinstance(node, dict):
-        out = {}
-        for k, v in node.items():
-            out.update(leaves(v, f"{prefix}.{k}" if prefix else k))
-        return out
-    if isinstance(node, list) and node and isinstance(node[0], dict):
-        out = {}
-        for i, v in enumerate(node):
-            out.update(leaves(v, f"{prefix}[{i}]"))
-        return out
-    return {prefix: node}
-
-
 def make_hostile_folder(folder: Path) -> tuple[set[str], dict[str, tuple[str, ...]]]:
     """Good presets and bad ones; returns the good file names and, per bad file, what its warning says."""
     folder.mkdir()

@@ -54,3 +54,18 @@ def lens_size(lens: dict) -> str:
     if lens.get("outline", "round") == "round":
         return f"lens radius {lens['radius']:g} mm"
     return f"lens {lens['width']:g} x {lens['height']:g} mm"
+
+
+def leaves(doc: Any, path: str = "") -> dict[str, Any]:
+    """A design's leaf values by the path a message names them with (``lamps[0].lens.radius``)."""
+    if isinstance(doc, dict):
+        out: dict[str, Any] = {}
+        for key, value in doc.items():
+            out.update(leaves(value, f"{path}.{key}" if path else key))
+        return out
+    if isinstance(doc, list) and doc and isinstance(doc[0], dict):
+        out = {}
+        for i, value in enumerate(doc):
+            out.update(leaves(value, f"{path}[{i}]"))
+        return out
+    return {path: doc}

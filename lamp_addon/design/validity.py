@@ -16,6 +16,7 @@ from ...core_tracer.raytrace import spectral
 from ...core_tracer.scene import spec as S
 from ...core_tracer.scene.light_models import ignored_note
 from ...core_tracer.scene.limits import lamp_limits
+from ...core_tracer.scene.messages import leaves
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
 from . import photometric_words, properties
@@ -144,21 +145,6 @@ def remember(bl_scene) -> None:
         _memo["valid"][bl_scene.name] = properties.design_document(bl_scene)
 
 
-def _leaves(doc, path: str = "") -> dict:
-    """The design's leaf values by path (``lamps[0].lens.radius``)."""
-    if isinstance(doc, dict):
-        out = {}
-        for key, value in doc.items():
-            out.update(_leaves(value, f"{path}.{key}" if path else key))
-        return out
-    if isinstance(doc, list) and doc and isinstance(doc[0], dict):
-        out = {}
-        for i, value in enumerate(doc):
-            out.update(_leaves(value, f"{path}[{i}]"))
-        return out
-    return {path: doc}
-
-
 def _set_leaf(doc: dict, path: str, value) -> None:
     node = doc
     parts = re.findall(r"[^.\[\]]+|\[\d+\]", path)
@@ -181,7 +167,7 @@ def fixing_field(doc: dict, valid: dict | None, error_path: str) -> str:
     the designer just changed, to highlight before the one the error names."""
     if valid is None:
         return ""
-    now, before = _leaves(doc), _leaves(valid)
+    now, before = leaves(doc), leaves(valid)
     if set(now) != set(before):
         return ""  # lamps added or removed: no single field to go back on
     changed = [path for path in now if now[path] != before[path]]

@@ -9,7 +9,9 @@ from pathlib import Path
 
 import pytest
 from helpers import PRESETS, whole_report
-from hostile_presets import leaves, make_hostile_folder
+from hostile_presets import make_hostile_folder
+
+from core_tracer.scene.messages import leaves
 
 pytestmark = pytest.mark.blender
 

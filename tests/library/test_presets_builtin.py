@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import PRESETS
-from hostile_presets import leaves
 
 from core_tracer import render
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
 from core_tracer.library import shipping
 from core_tracer.scene.derived import lamp_geometry, lens_absorption
+from core_tracer.scene.messages import leaves
 from core_tracer.scene.reading import read_json
 from core_tracer.scene.validate import parse_scene
 

@@ -13,13 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import ROOT, assert_bad_input, run_cli
-from hostile_presets import leaves, make_hostile_folder
+from hostile_presets import make_hostile_folder
 
 from core_tracer import fileio
 from core_tracer.images import imageio
 from core_tracer.library import presets as P
 from core_tracer.library import shipping
 from core_tracer.scene import reading
+from core_tracer.scene.messages import leaves
 from core_tracer.scene.reading import SceneError, read_json, scene_to_json
 from core_tracer.scene.validate import parse_scene
 
