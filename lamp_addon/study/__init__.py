@@ -1,5 +1,5 @@
-"""Design studies: ``settings`` (``Scene.lamp_study``), ``panel`` (the Study section of the Lamp tab),
-``ops`` (running a study and using its contact sheet) and ``meshes`` (a free-form design's mesh file).
+"""Design studies: ``settings`` (``Scene.lamp_study``), ``panel`` (the Study section of the Lamp tab)
+and ``ops`` (running a study and using its contact sheet).
 """
 
 from ..registration import modules_factory
@@ -7,9 +7,9 @@ from ..registration import modules_factory
 
 def modules() -> tuple:
     """The modules that register, in order: the settings before the panel and operators."""
-    from . import meshes, ops, panel, settings
+    from . import ops, panel, settings
 
-    return (settings, meshes, panel, ops)
+    return (settings, panel, ops)
 
 
 register, unregister = modules_factory(modules)

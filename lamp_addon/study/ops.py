@@ -28,8 +28,8 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from .. import image_view, jobs, reports
 from ..design import properties as design_properties
+from ..freeform import written as freeform_written
 from ..presets import library as preset_library
-from . import meshes as study_meshes
 from . import settings
 from .settings import last_study, sheet_image
 
@@ -64,7 +64,7 @@ def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, 
     from ...core_tracer.study import run as study_run
 
     study = settings.study_from_settings(context.scene)
-    traced = study_meshes.runnable(study)  # a free-form design's variants: its mesh file by its full path
+    traced = freeform_written.runnable(study)  # a free-form design's variants: its mesh file by its full path
     if workers is None:
         workers = context.scene.lamp_study.workers or None
     start = time.perf_counter()
@@ -198,7 +198,7 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
 
         try:
             self._study = settings.study_from_settings(context.scene)
-            self._traced = study_meshes.runnable(self._study)  # a free-form design's mesh file by its full path
+            self._traced = freeform_written.runnable(self._study)  # a free-form design's mesh file by its full path
         except SceneError as e:
             return reports.cancelled(self, str(e))
         try:
@@ -369,7 +369,7 @@ class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
         try:
             # a free-form design's meshes beside the sheet (first, as an export writes the .glb before
             # the JSON naming it), where ``study --study`` finds them
-            meshes = study_meshes.copy_beside(study, self.filepath)
+            meshes = freeform_written.copy_beside(study, self.filepath)
             study_sheet.write_composed(self.filepath, study, image_view.image_to_array(image),
                                        view=image_view.scene_view(context.scene),
                                        exposure=image_view.image_exposure(image),

@@ -25,8 +25,8 @@ from ...core_tracer.study.parameters import resolve_parameter, study_parameters
 from ..convert import camera as cm
 from ..design import photometric_words
 from ..design import properties as design_properties
+from ..freeform import written as freeform_written
 from ..render import camera as render_camera
-from . import meshes as study_meshes
 
 ALL_LAMPS = "ALL"
 SHEET_IMAGE = "Lamp Study"
@@ -202,7 +202,7 @@ def study_from_settings(bl_scene) -> st.Study:
     free-form parts, of the design F12 renders, its meshes written to a file (``study.meshes``).
     Raises ``SceneError`` (with the parameter, value and range) for a bad setting or design."""
     settings = bl_scene.lamp_study
-    parts = study_meshes.shown_parts(bl_scene)
+    parts = freeform_written.shown_parts(bl_scene)
     size = (settings.width, settings.height)
     if settings.fit_lamp and parts:  # the parts' view as F12 frames it, at the pixels asked for
         aspect = bl_scene.render.resolution_x / bl_scene.render.resolution_y
@@ -215,7 +215,7 @@ def study_from_settings(bl_scene) -> st.Study:
         base = design_properties.design_to_scene(bl_scene)
         base["image"] = {**base["image"], "width": size[0], "height": size[1]}
     if parts:  # the parts are the lamp: the view F12 shows of them, not one framed on the hidden body
-        base = study_meshes.with_parts(bl_scene, base, parts)
+        base = freeform_written.with_parts(bl_scene, base, parts)
     elif bl_scene.camera is None or render_camera.is_lamp_camera(bl_scene.camera):
         # The add-on's own view: each cell frames the lamp's body at the cell's size (a camera of the
         # designer's own is their choice of view, kept as it is).

@@ -1,17 +1,18 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""A free-form design's meshes in a study run from Blender, as the command line's ``study`` has them.
+"""A design's free-form parts written for the worker processes (a study's, Measure Design's), as the
+command line has them: a document naming a ``.glb`` beside it.
 
-The study of a design with free-form parts is the design as F12 renders it with a ``freeform``
-section (``freeform.scene``) naming its mesh file by a plain name, as an exported pair does: the
-study's JSON (on the sheet image, in a saved sheet's header) is a ``lamp-study/1`` document the
-command line re-runs with the ``.glb`` beside it. Blender's glTF exporter writes the meshes once per
-run (``freeform.export.write_glb``, the parts and the parametric lamps traced with them, in the
-design root's frame) into this session's folder, under a name made of their bytes' SHA-256
-(``lamp-study-<hash>.glb``: the same meshes, the same name; a changed design, a new one). The
-variants the workers render name that file by its full path (``runnable``), found beside the study
-in that folder and confined to it like every file a document names (``freeform.loading
-.mesh_file_path``); a Dask worker is sent its bytes (``cluster.cells``). Save Sheet copies the file
-beside the sheet (``copy_beside``), where ``study --study sheet.png`` looks for it.
+The design as F12 renders it gets a ``freeform`` section (``freeform.scene``) naming its mesh file by
+a plain name, as an exported pair does (``with_parts``): a study's JSON (on the sheet image, in a
+saved sheet's header) is a ``lamp-study/1`` document the command line re-runs with the ``.glb``
+beside it. Blender's glTF exporter writes the meshes once per run (``export.write_glb``, the parts
+and the parametric lamps traced with them, in the design root's frame) into this session's folder,
+under a name made of their bytes' SHA-256 (``lamp-study-<hash>.glb``: the same meshes, the same
+name; a changed design, a new one). What a worker traces names that file by its full path
+(``traced``, ``runnable``), found in that folder and confined to it like every file a document names
+(``core_tracer.freeform.loading.mesh_file_path``); a Dask worker is sent its bytes
+(``cluster.cells``), the ``measure`` worker finds it beside its scene file (``measures.ops``). Save
+Sheet copies the file beside the sheet (``copy_beside``), where ``study --study sheet.png`` looks.
 """
 
 from __future__ import annotations
@@ -29,18 +30,18 @@ from ...core_tracer.scene.beside import with_curves_at
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from ..design import curves as design_curves
-from ..freeform import export as freeform_export
-from ..freeform import geometry as freeform_geometry
-from ..freeform import parametric as freeform_parametric
-from ..freeform import scene as freeform_scene
-from ..freeform import status as freeform_status
+from . import export as freeform_export
+from . import geometry as freeform_geometry
+from . import parametric as freeform_parametric
+from . import scene as freeform_scene
+from . import status as freeform_status
 
 MESH_FILE = ("freeform", "mesh_file")
 _folder: list[str] = []  # this session's folder of study meshes (made on first use)
 
 
 def folder() -> str:
-    """This session's folder of the studies' mesh files."""
+    """This session's folder of the written mesh files."""
     if not _folder:
         _folder.append(tempfile.mkdtemp(prefix="lamp_study_meshes_"))
     return _folder[0]
@@ -72,26 +73,31 @@ def with_parts(bl_scene, base: dict, parts: list) -> dict:
     return design_curves.with_curves(bl_scene, scene, ("freeform",))
 
 
-def mesh_path(study: st.Study) -> str | None:
-    """The full path of the study's mesh file in this session's folder (None for a parametric study);
-    confined to that folder (``freeform.loading.mesh_file_path``). Raises ``SceneError`` when the file
-    is not there (a study of an earlier session)."""
-    if "freeform" not in study.base:
+def mesh_path(scene: dict) -> str | None:
+    """The full path of the mesh file ``scene`` names in this session's folder (None for a parametric
+    design); confined to that folder (``core_tracer.freeform.loading.mesh_file_path``). Raises
+    ``SceneError`` when the file is not there (a study of an earlier session)."""
+    if "freeform" not in scene:
         return None
     from ...core_tracer.freeform.loading import mesh_file_path
 
-    return mesh_file_path(os.path.join(folder(), "study.json"), study.base["freeform"]["mesh_file"])
+    return mesh_file_path(os.path.join(folder(), "design.json"), scene["freeform"]["mesh_file"])
+
+
+def traced(scene: dict) -> dict:
+    """``scene`` (``with_parts``'s) naming its mesh file by its full path; a parametric one as it is."""
+    path = mesh_path(scene)
+    return scene if path is None else with_curves_at(scene, {MESH_FILE: path})
 
 
 def runnable(study: st.Study) -> st.Study:
     """The study whose variants name the mesh file by its full path, their geometry checked once
     before any worker starts; the study itself when it has no meshes."""
-    path = mesh_path(study)
-    if path is None:
+    if "freeform" not in study.base:
         return study
     from ...core_tracer.freeform.traced import meshes_of
 
-    variants = tuple(dataclasses.replace(v, scene=with_curves_at(v.scene, {MESH_FILE: path})) for v in study.variants)
+    variants = tuple(dataclasses.replace(v, scene=traced(v.scene)) for v in study.variants)
     first = variants[0].scene
     design = meshes_of(first)
     design.cache.get(first, design.meshes)  # an open lens, overlapping lenses: one line, before the workers
@@ -103,7 +109,7 @@ def copy_beside(study: st.Study, sheet_path: str) -> str | None:
     name, hence those bytes, is there already); its path, or None for a parametric study. Raises
     ``SceneError`` when the file is no longer in this session's folder."""
     try:
-        source = mesh_path(study)
+        source = mesh_path(study.base)
     except SceneError:
         raise SceneError("Save Sheet", "the study's meshes are gone (a study of an earlier session); allowed: run "
                                        "the study again, then save its sheet") from None
