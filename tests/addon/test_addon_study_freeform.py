@@ -30,6 +30,7 @@ def _cell_means(lamp_addon, image, study) -> list[np.ndarray]:
     return means
 
 
+@pytest.mark.slow  # worker processes
 def test_run_study_of_the_free_form_photometric_example_and_save_its_sheet(lamp_addon, addon, tmp_path):
     import bpy
 
