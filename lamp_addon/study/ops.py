@@ -28,6 +28,8 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from .. import image_view, jobs, reports
 from ..design import properties as design_properties
+from ..freeform import properties as freeform_properties
+from ..freeform import scene as freeform_scene
 from ..freeform import written as freeform_written
 from ..presets import library as preset_library
 from . import settings
@@ -304,9 +306,14 @@ class LAMP_OT_study_apply_variant(_OnLastStudy, bpy.types.Operator):
         study, index = chosen
         try:
             design = design_properties.design_to_scene(context.scene)
-            # The design may have changed since the study: its lamps are checked again.
+            parts = freeform_written.shown_parts(context.scene)  # a free-form part's values go to its object
+            if parts:
+                design["freeform"] = freeform_scene.freeform_section(parts)
+            # The design may have changed since the study: its lamps and parts are checked again.
             parameters = tuple(st.resolve_parameter(axis.parameter.text, design) for axis in study.axes)
             st.apply_values(design, parameters, study.variants[index].values)
+            for obj, part in zip(parts, design.pop("freeform", {"parts": ()})["parts"], strict=True):
+                freeform_properties.set_role(obj, part["role"], part[part["role"]])
             design_properties.scene_to_design(context.scene, design)
         except SceneError as e:
             return reports.cancelled(self, str(e))

@@ -67,6 +67,12 @@ def test_run_study_of_the_free_form_photometric_example_and_save_its_sheet(lamp_
     again = json.loads(json.dumps(study.to_doc()))
     assert again["base"]["freeform"]["mesh_file"] == mesh_file
 
+    # Apply to Design sets the parts' values of the chosen variant (4: amber, stop)
+    settings.variant = 4
+    assert bpy.ops.lamp.study_apply_variant() == {"FINISHED"}
+    parts = {o.lamp_role.role: o for o in lamp_addon.freeform.properties.role_objects(bl_scene)}
+    assert parts["lens"].lamp_role.lens.filter == "amber" and parts["bulb"].lamp_role.bulb.state == "stop"
+
 
 def test_a_lamp_parameter_of_a_free_form_design_is_refused_in_one_line(lamp_addon, addon):
     import bpy
