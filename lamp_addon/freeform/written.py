@@ -17,6 +17,7 @@ Sheet copies the file beside the sheet (``copy_beside``), where ``study --study 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import os
@@ -60,11 +61,17 @@ def with_parts(bl_scene, base: dict, parts: list) -> dict:
     if not ok:
         raise SceneError("Free-form Parts", f"cannot be studied: {reason}")
     built = freeform_parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get())
-    path = os.path.join(folder(), "writing.glb")
-    freeform_export.write_glb(bl_scene, parts, path, built)
-    with open(path, "rb") as f:
-        name = f"lamp-study-{hashlib.sha256(f.read()).hexdigest()[:16]}.glb"
-    os.replace(path, os.path.join(folder(), name))
+    handle, path = tempfile.mkstemp(suffix=".glb", prefix=".writing-", dir=folder())  # a study and a measure at once
+    os.close(handle)
+    try:
+        freeform_export.write_glb(bl_scene, parts, path, built)
+        with open(path, "rb") as f:
+            name = f"lamp-study-{hashlib.sha256(f.read()).hexdigest()[:16]}.glb"
+        os.replace(path, os.path.join(folder(), name))
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(path)
+        raise
     try:
         scene = freeform_scene.with_freeform(base, parts, name, freeform_parametric.part_documents(built, base))
     except SceneError as e:
