@@ -1,5 +1,6 @@
 """The extension as a user gets it: built and validated by Blender's own tool, installed headless from
-the zip, enabled, used, disabled and enabled again.
+the zip, enabled, used, disabled and enabled again; and the walk a designer makes with it through the
+LED presets (F12 with the Lamp Tracer, Measure Design).
 
 The build runs ``tools/build-extension`` (Blender's ``blender_ext.py`` from the bpy wheel); the install
 runs in a fresh Python process with its own ``BLENDER_USER_RESOURCES``, so it neither sees nor
