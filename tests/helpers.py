@@ -530,3 +530,16 @@ def local_mm(obj, lamp: dict):
     world = (co.reshape(-1, 3).astype(np.float64) @ m[:3, :3].T + m[:3, 3]) * 1000.0
     cx, cz = lamp["center"]
     return world - np.array([cx, 0.0, cz])
+
+
+def applied_preset(preset: Path):
+    """Blender's startup file with ``preset`` applied from the preset browser; the scene."""
+    import bpy
+
+    bpy.ops.wm.read_homefile(use_factory_startup=True)
+    bpy.ops.lamp.preset_refresh()
+    wm = bpy.context.window_manager
+    listed = [item.file for item in wm.lamp_presets]
+    wm.lamp_presets_index = next(i for i, f in enumerate(listed) if f.endswith(preset.name))
+    assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
+    return bpy.context.scene

@@ -64,7 +64,9 @@ STEPS: tuple[Step, ...] = (
     _measure("led-stop-lamp"),
     # The three LED presets' reports without beam files: their (C, γ) grid of 1009 directions had not passed
     # its first direction after 7 minutes on the loaded machine they were made on (the grids, 45-55 directions,
-    # take 4-8 minutes).
+    # take 4-8 minutes). Measured again on 2026-12-08 (the free-form lens stop lamp, --pixel-mm 1,
+    # --beam-grid 90,10,30, one run, load ~37 on 2 cores): a beam-file direction costs 6.4 s against 8.9 s
+    # for one of the 45 intensity directions, so the default grid is ~16 times the intensity grid, ~1.8 h there.
     _measure("led-light-guide-tail-lamp", "--function", "0=tail", "--pixel-mm", "1", "--no-beam-files"),
     _measure("led-stop-lamp-freeform-lens-photometric", "--function", "0=stop", "--pixel-mm", "1", "--no-beam-files"),
     _measure("led-rear-combination-photometric", "--pixel-mm", "1", "--no-beam-files"),

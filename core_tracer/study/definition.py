@@ -368,7 +368,13 @@ def framed_size(base_doc: Any, pixels: int = DEFAULT_SIZE[0] * DEFAULT_SIZE[1]) 
         width, height = parse_scene(base_doc)["body"]["size"]
     except (SceneError, TypeError, KeyError):
         return DEFAULT_SIZE
-    aspect = min(MAX_CELL_ASPECT, max(1.0 / MAX_CELL_ASPECT, width / height * CELL_MARGIN))
+    return cell_size(width / height * CELL_MARGIN, pixels)
+
+
+def cell_size(aspect: float, pixels: int) -> tuple[int, int]:
+    """A cell of ``aspect`` (width over height; at most ``MAX_CELL_ASPECT`` either way) at about
+    ``pixels`` pixels, even sides, each at least 8 and at most ``MAX_SIZE``."""
+    aspect = min(MAX_CELL_ASPECT, max(1.0 / MAX_CELL_ASPECT, aspect))
     return tuple(min(MAX_SIZE, max(8, 2 * round(math.sqrt(pixels * a) / 2))) for a in (aspect, 1.0 / aspect))
 
 

@@ -6,7 +6,8 @@
 - ``scene``: the ``lamp-scene/2`` document; ``render``: which tracer renders, with which meshes;
   ``status``: what the panel says above its list.
 - ``conversion`` and ``solids``: Convert to Free-form; ``export``: the JSON and ``.glb`` for
-  headless use; ``loading``: a free-form preset's parts brought into Blender.
+  headless use; ``loading``: a free-form preset's parts brought into Blender; ``written``: the
+  parts written for the worker processes of a study or a measure.
 - ``ops``: the operators; ``panel``: the Free-form Parts sub-panel.
 """
 
@@ -15,9 +16,9 @@ from ..registration import modules_factory
 
 def modules() -> tuple:
     """The modules that register, in order: the properties before what uses them."""
-    from . import geometry, ops, panel, properties
+    from . import geometry, ops, panel, properties, written
 
-    return (properties, geometry, ops, panel)
+    return (properties, geometry, written, ops, panel)
 
 
 register, unregister = modules_factory(modules)

@@ -190,8 +190,11 @@ class LAMP_OT_light_states_render(jobs.ModalJob, bpy.types.Operator):
         return None if context.scene.lamp_design.lamps else "Add a lamp first"
 
     def _run(self, context) -> StatesRun:
+        from ..freeform import geometry as freeform_geometry
         from .ops import measured_scene
 
+        # the states switch the parametric lamps' bulbs (the command line relights an exported pair)
+        freeform_geometry.refuse_parts("measured", "states")
         self._key = _design_key(context.scene)
         return StatesRun(measured_scene(context.scene))
 

@@ -9,6 +9,9 @@ background mode the operator waits for it (``execute``). The results go to ``<na
 to the saved .blend, or to a temporary folder while the file is unsaved; the panel reads the table
 from its ``measures.json``; ``Open Report`` shows its ``measures.png`` in an Image Editor.
 
+A design with free-form parts is measured as F12 renders it, its meshes written with Blender's glTF
+exporter beside the worker's scene file (``freeform.written``), as ``measure`` reads an exported pair.
+
 Only ``{'REGISTER'}``: measuring changes nothing the design is made of.
 """
 
@@ -17,6 +20,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import subprocess
 import tempfile
 import threading
@@ -25,9 +29,11 @@ import time
 import bpy
 
 from ...core_tracer import processes
+from ...core_tracer.scene.beside import with_curves_at
 from ...core_tracer.scene.reading import SceneError
 from .. import image_view, jobs, reports
 from ..design import properties as design_properties
+from ..freeform import written as freeform_written
 from ..render import camera as render_camera
 from . import settings
 
@@ -40,15 +46,15 @@ _STAGES = (("homogeneity", 0.75), ("beam files", 0.8))
 
 def measured_scene(bl_scene) -> dict:
     """The design as the measures see it: through Blender's scene camera when there is one (the
-    report's picture of the lamp), else the design's own camera. Raises ``SceneError``, and for a
-    design with free-form parts, which the panel would not measure (it measures the parametric lamp,
-    which Convert hides): the command line measures and relights such a design from its files."""
-    from ..freeform import geometry as freeform_geometry
-
-    freeform_geometry.refuse_parts("measured", "measure (or states)")
+    report's picture of the lamp), else the design's own camera; with free-form parts, the design F12
+    renders, its meshes written for the worker (``freeform.written``) and named by their full path.
+    Raises ``SceneError``."""
     if bl_scene.camera is not None:
-        return render_camera.scene_for_render(bl_scene)
-    return design_properties.design_to_scene(bl_scene)
+        scene = render_camera.scene_for_render(bl_scene)
+    else:
+        scene = design_properties.design_to_scene(bl_scene)
+    parts = freeform_written.shown_parts(bl_scene)
+    return freeform_written.traced(freeform_written.with_parts(bl_scene, scene, parts)) if parts else scene
 
 
 def not_photometric(bl_scene) -> bool:
@@ -65,6 +71,10 @@ class MeasureRun:
         self._lines: list[str] = []
         self._scratch = tempfile.mkdtemp(prefix="lamp_measures_scene_")
         self._scene_path = os.path.join(self._scratch, "scene.json")
+        if "freeform" in scene:  # the mesh file beside the scene file, named plainly, as a pair has it
+            mesh_file = scene["freeform"]["mesh_file"]
+            shutil.copyfile(mesh_file, os.path.join(self._scratch, os.path.basename(mesh_file)))
+            scene = with_curves_at(scene, {("freeform", "mesh_file"): os.path.basename(mesh_file)})
         with open(self._scene_path, "w", encoding="utf-8") as f:
             json.dump(scene, f)
         # --exit-zero: a failing regulation is a finding the panel shows, not a failed run

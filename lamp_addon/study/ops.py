@@ -28,6 +28,9 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from .. import image_view, jobs, reports
 from ..design import properties as design_properties
+from ..freeform import properties as freeform_properties
+from ..freeform import scene as freeform_scene
+from ..freeform import written as freeform_written
 from ..presets import library as preset_library
 from . import settings
 from .settings import last_study, sheet_image
@@ -63,11 +66,12 @@ def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, 
     from ...core_tracer.study import run as study_run
 
     study = settings.study_from_settings(context.scene)
+    traced = freeform_written.runnable(study)  # a free-form design's variants: its mesh file by its full path
     if workers is None:
         workers = context.scene.lamp_study.workers or None
     start = time.perf_counter()
     if settings.uses_cluster(context.scene.lamp_study):
-        run = _cluster_run(context, study)
+        run = _cluster_run(context, traced)
         try:
             run.start()
             while not run.poll(timeout=0.05):
@@ -76,12 +80,12 @@ def render_study(context, workers: int | None = None) -> tuple[bpy.types.Image, 
         finally:
             run.close()
     else:
-        images = study_run.run_study(study, workers)
+        images = study_run.run_study(traced, workers)
     measured = None
     if study.measured:
         from ...core_tracer.study import measured as study_measured
 
-        measured = study_measured.measure_variants([v.scene for v in study.variants], study.measured.names)
+        measured = study_measured.measure_variants([v.scene for v in traced.variants], study.measured.names)
     seconds = time.perf_counter() - start
     return show_sheet(context, study, images, measured), study, seconds
 
@@ -188,13 +192,14 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
 
         try:
             self._study = settings.study_from_settings(context.scene)
+            self._traced = freeform_written.runnable(self._study)  # a free-form design's mesh file by its full path
         except SceneError as e:
             return reports.cancelled(self, str(e))
         try:
             if settings.uses_cluster(context.scene.lamp_study):
-                self._run = _cluster_run(context, self._study)
+                self._run = _cluster_run(context, self._traced)
             else:
-                self._run = StudyRun(self._study, context.scene.lamp_study.workers or None)
+                self._run = StudyRun(self._traced, context.scene.lamp_study.workers or None)
         except SceneError as e:
             return reports.cancelled(self, str(e))
         try:
@@ -217,7 +222,7 @@ class LAMP_OT_study_run(jobs.ModalJob, bpy.types.Operator):
             return None
         if self._study.measured:  # then each variant is measured, one worker process after another
             if self._measures is None:
-                self._measures = VariantMeasures(self._study)
+                self._measures = VariantMeasures(self._traced)
             try:
                 if not self._measures.poll():
                     return None
@@ -293,9 +298,14 @@ class LAMP_OT_study_apply_variant(_OnLastStudy, bpy.types.Operator):
         study, index = chosen
         try:
             design = design_properties.design_to_scene(context.scene)
-            # The design may have changed since the study: its lamps are checked again.
+            parts = freeform_written.shown_parts(context.scene)  # a free-form part's values go to its object
+            if parts:
+                design["freeform"] = freeform_scene.freeform_section(parts)
+            # The design may have changed since the study: its lamps and parts are checked again.
             parameters = tuple(st.resolve_parameter(axis.parameter.text, design) for axis in study.axes)
             st.apply_values(design, parameters, study.variants[index].values)
+            for obj, part in zip(parts, design.pop("freeform", {"parts": ()})["parts"], strict=True):
+                freeform_properties.set_role(obj, part["role"], part[part["role"]])
             design_properties.scene_to_design(context.scene, design)
         except SceneError as e:
             return reports.cancelled(self, str(e))
@@ -356,6 +366,9 @@ class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
             return reports.cancelled(self, f"Sheet not saved: {image_view.NO_OPENIMAGEIO}; save the image from the "
                                            "Image Editor")
         try:
+            # a free-form design's meshes beside the sheet (first, as an export writes the .glb before
+            # the JSON naming it), where ``study --study`` finds them
+            meshes = freeform_written.copy_beside(study, self.filepath)
             study_sheet.write_composed(self.filepath, study, image_view.image_to_array(image),
                                        view=image_view.scene_view(context.scene),
                                        exposure=image_view.image_exposure(image),
@@ -363,7 +376,8 @@ class LAMP_OT_study_save_sheet(_OnLastStudy, bpy.types.Operator, ExportHelper):
                                        ev100=image.get(image_view.EV100_PROPERTY))
         except (SceneError, OSError) as e:
             return reports.cancelled(self, str(e))
-        return reports.finished(self, f"Saved {self.filepath}")
+        beside = f" and {os.path.basename(meshes)} beside it" if meshes is not None else ""
+        return reports.finished(self, f"Saved {self.filepath}{beside}")
 
 
 classes = (LAMP_OT_study_run, LAMP_OT_study_apply_variant, LAMP_OT_study_keep_variant, LAMP_OT_study_save_sheet)

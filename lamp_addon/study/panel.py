@@ -32,7 +32,7 @@ def _draw_axis(layout, axis, title: str) -> None:
         sub.prop(axis, "steps")
     else:
         col.prop(axis, "values", text="Values")
-        spec = S.lookup(axis.parameter)
+        spec = study_settings.parameter_spec(axis.parameter)
         if isinstance(spec, S.Choice):  # the names the list may hold
             col.label(text=spec.range_text().capitalize())
 

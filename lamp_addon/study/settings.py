@@ -21,10 +21,11 @@ from ...core_tracer.scene import spec as S
 from ...core_tracer.scene.functions import suggested_values
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
-from ...core_tracer.study.parameters import study_parameters
+from ...core_tracer.study.parameters import resolve_parameter, study_parameters
 from ..convert import camera as cm
 from ..design import photometric_words
 from ..design import properties as design_properties
+from ..freeform import written as freeform_written
 from ..render import camera as render_camera
 from ..scene_settings import SceneSettings
 
@@ -33,12 +34,20 @@ SHEET_IMAGE = "Lamp Study"
 STUDY_PROPERTY = "lamp_study"  # custom property of the sheet image: the study's JSON, so it can be re-run
 
 
+def parameter_spec(path: str) -> S.Spec:
+    """The field declaration of a study parameter (a lamp's, the scene's or a free-form part's)."""
+    return resolve_parameter(path).spec
+
+
 def _parameter_label(path: str) -> str:
-    spec = S.lookup(path)
-    *parents, key = path.split(".")
+    param = resolve_parameter(path)
+    spec = param.spec
+    *parents, key = param.keys
     unit = spec.unit if isinstance(spec, S.Num) else ""
     prefix = " ".join(design_properties.display_name(p) for p in parents)
-    parent = S.lookup(".".join(parents)) if parents else S.SCENE
+    if param.part_scope:  # a free-form part's value, under its role: "Free-form Lens: Filter"
+        prefix = f"Free-form {prefix}"
+    parent = param.section
     rule = parent.rule_of(key) if isinstance(parent, S.Section) else None
     if rule is not None and rule.of_key(key).name == key:  # the field that picks a form: the form's name
         label = rule.of_key(key).label
@@ -52,10 +61,8 @@ def _parameter_label(path: str) -> str:
 
 def _parameter_items() -> tuple[tuple[str, str, str], ...]:
     items = []
-    for path in study_parameters():
-        if path.startswith("freeform."):  # the panel studies the parametric design (free-form: the command line)
-            continue
-        spec = S.lookup(path)
+    for path in study_parameters():  # a free-form part's values too (every part of its role)
+        spec = parameter_spec(path)
         vector = isinstance(spec, S.Num) and spec.size > 1
         how = "a list of values written a/b/c" if vector else "a list of names" if isinstance(spec, S.Choice) \
             else "a range or a list"
@@ -76,7 +83,7 @@ def uses_cluster(settings) -> bool:
 
 
 def is_single_number(path: str) -> bool:
-    spec = S.lookup(path)
+    spec = parameter_spec(path)
     return isinstance(spec, S.Num) and spec.size == 1
 
 
@@ -86,7 +93,7 @@ def is_lamp_parameter(path: str) -> bool:
 
 def _suggest_range(self, context) -> None:
     """A new parameter gets a range around its default, inside its allowed range."""
-    spec = S.lookup(self.parameter)
+    spec = parameter_spec(self.parameter)
     if isinstance(spec, S.Num) and spec.size == 1:
         lo, hi = design_properties.blender_range(spec)
         d = float(spec.default)
@@ -178,7 +185,7 @@ def axis_doc(axis) -> dict:
         steps = axis.steps
         values = [axis.start + (axis.stop - axis.start) * i / (steps - 1) for i in range(steps)] if steps > 1 \
             else [axis.start]
-        if S.lookup(axis.parameter).integer:
+        if parameter_spec(axis.parameter).integer:
             return {"parameter": path, "range": [axis.start, axis.stop], "steps": axis.steps}
         return {"parameter": path, "values": [float(f"{v:.4g}") for v in values]}
     if not axis.values.strip():
@@ -187,21 +194,25 @@ def axis_doc(axis) -> dict:
 
 
 def study_from_settings(bl_scene) -> st.Study:
-    """The study the settings describe, of the scene's current design seen through its camera.
+    """The study the settings describe, of the scene's current design seen through its camera; with
+    free-form parts, of the design F12 renders, its meshes written to a file (``study.meshes``).
     Raises ``SceneError`` (with the parameter, value and range) for a bad setting or design."""
-    from ..freeform import geometry as freeform_geometry
-
-    freeform_geometry.refuse_parts("studied", "study")  # the panel's parameters are the parametric lamp's
     settings = bl_scene.lamp_study
+    parts = freeform_written.shown_parts(bl_scene)
     size = (settings.width, settings.height)
-    if settings.fit_lamp:  # the body's aspect at the pixels asked for (st.framed_size)
+    if settings.fit_lamp and parts:  # the parts' view as F12 frames it, at the pixels asked for
+        aspect = bl_scene.render.resolution_x / bl_scene.render.resolution_y
+        size = st.cell_size(aspect, settings.width * settings.height)
+    elif settings.fit_lamp:  # the body's aspect at the pixels asked for (st.framed_size)
         size = st.framed_size(design_properties.design_to_scene(bl_scene), settings.width * settings.height)
     if bl_scene.camera is not None:
         base = render_camera.scene_for_render(bl_scene, size=size)
     else:  # no scene camera: the design's own camera section
         base = design_properties.design_to_scene(bl_scene)
         base["image"] = {**base["image"], "width": size[0], "height": size[1]}
-    if bl_scene.camera is None or render_camera.is_lamp_camera(bl_scene.camera):
+    if parts:  # the parts are the lamp: the view F12 shows of them, not one framed on the hidden body
+        base = freeform_written.with_parts(bl_scene, base, parts)
+    elif bl_scene.camera is None or render_camera.is_lamp_camera(bl_scene.camera):
         # The add-on's own view: each cell frames the lamp's body at the cell's size (a camera of the
         # designer's own is their choice of view, kept as it is).
         base["camera"] = cm.frame_view(base["camera"], cm.body_box(base), size)
@@ -257,6 +268,10 @@ def worded(study: st.Study) -> st.Study:
     for axis in study.axes:
         p = axis.parameter
         full = validity.field_words(p.text) or p.text
+        if p.part_scope:  # "Free-form Parts › Lens › Filter": the role's field as a lamp's is worded
+            field = ".".join(p.keys)
+            whose = "Free-form Parts" if p.part is None else f"Free-form Part {p.part + 1}"
+            full = f"{whose}{validity.SEPARATOR}{validity.field_words(field) or field}"
         words = [w for w in full.split(validity.SEPARATOR) if not w.startswith("Lamp ")]
         short = " ".join(words[-2:])  # "Bulb On", "Cuts Height", "Function"
         if p.component is not None:

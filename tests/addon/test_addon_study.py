@@ -37,9 +37,11 @@ def design(lamp_addon, bl_scene):
 
 def test_every_study_parameter_is_offered(lamp_addon):
     offered = [item[0] for item in lamp_addon.study.settings.PARAMETER_ITEMS]
-    # the panel studies the parametric design; a free-form one's parts are studied from the command line
-    assert offered == [p for p in study_parameters() if not p.startswith("freeform.")]
+    # a free-form design's parts too, under their role (tests/addon/test_addon_study_freeform.py)
+    assert offered == study_parameters()
     assert "lens.transmitted_color" in offered and "cuts.height" in offered
+    labels = dict((item[0], item[1]) for item in lamp_addon.study.settings.PARAMETER_ITEMS)
+    assert labels["freeform.parts[].lens.filter"].startswith("Free-form Lens: ")
 
 
 @pytest.mark.slow
