@@ -1,0 +1,86 @@
+"""Edge samples (issue 34, "clean bulb edges"): more samples where a pixel holds the edge of an
+emitter's image. A bulb or an LED die seen through a lens's cuts and off the reflector makes many
+images smaller than a pixel, hard-edged: a sample sees the source or not, and at N samples under
+the 3-pixel filter that hit-or-miss is almost all of a lit lens's error. Light elsewhere is smooth.
+
+After a band's samples are traced, a pixel *holds an edge* when its own samples of the emitter pass
+(``BULB_PASS``: the bulb and the LED dies) disagree: the brightest is lit (at least ``EDGE_SHARE``
+of the brightest source) and the dimmest below ``EDGE_CONTRAST`` of it. Those pixels and their
+neighbours within ``EDGE_REACH`` (the filter spans 3 pixels: a neighbour's samples see the same
+small image) trace
+``EDGE_SAMPLES`` x N more samples, placed by the filter on the stratified pattern of that count
+(``pixel_filter.grid_offsets``), and each is the mean of all its N + EDGE_SAMPLES x N samples:
+
+    pixel = (Σ_N L_i + Σ_{K N} L_j) / (N + K N)
+
+Every sample is distributed by the filter, so the mean stays the filter-weighted image; only a
+source image that none of a pixel's neighbourhood's samples saw stays as it was (rendered at N
+samples), which biases nothing the N samples did not already miss
+(benchmarks/bench_bulb_edges.py measures the lit lens's converged mean before and after).
+
+The neighbours taken are those inside the band (the rows just outside it are another band's).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .context import Context
+from .rays import BULB_PASS, Band
+from .sampling import Requests, TILE_RAYS, over_samples, per_sample
+
+# More samples per sample, K, where a pixel holds an emitter's edge; 0: none. Off: on the four-lamp
+# night photometric preset they lower the lit lens's error no more than as many samples everywhere
+# (benchmarks/bench_bulb_edges.py, RESULTS.md). K = 1 would repeat the N samples: K >= 2.
+EDGE_SAMPLES = 0
+EDGE_CONTRAST = 0.5  # the dimmest sample of the emitter pass below this share of the brightest: an edge
+EDGE_REACH = 0  # pixels: the neighbours of an edge pixel that take edge samples too
+EDGE_SHARE = 0.05  # the brightest sample of the emitter pass at least this share of the brightest source: it matters
+
+
+def emitter_light(values: np.ndarray, sample_major: bool) -> np.ndarray:
+    """The emitter pass of per-sample ``values`` summed over its channels, (samples, pixels): from
+    sample-major (samples, passes, pixels, channels) or pixel-major (passes, pixels, samples, channels)."""
+    if sample_major:
+        return values[:, BULB_PASS].sum(axis=-1)
+    return values[BULB_PASS].sum(axis=-1).T
+
+
+def brightest_source(ctx: Context) -> float:
+    """The luminance of the brightest source (a lit bulb, an LED die head-on), its channels summed as
+    ``emitter_light`` sums a sample's: a sample of it through the optics is that times the path's
+    throughput."""
+    lamps = ctx.lamps
+    return float(max(lamps.bulb_intensity.sum(axis=1).max(initial=0.0),
+                     lamps.led_radiance.sum(axis=1).max(initial=0.0) if ctx.leds else 0.0))
+
+
+def holding_edges(ctx: Context, rows: int, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """The pixels of a band of ``rows`` rows (flat indices) that take edge samples: those whose
+    samples of the emitter pass span ``low`` to ``high`` with ``high`` at least ``EDGE_SHARE`` of the
+    brightest source (the images that weigh: a path's throughput of that share or more) and ``low``
+    below ``EDGE_CONTRAST`` of ``high``, and their neighbours within ``EDGE_REACH`` in the band."""
+    mixed = (high > 0.0) & (high >= EDGE_SHARE * brightest_source(ctx)) & (low < EDGE_CONTRAST * high)
+    near = mixed.reshape(rows, ctx.camera.width).copy()
+    for _ in range(EDGE_REACH):
+        grown = near.copy()
+        grown[1:] |= near[:-1]
+        grown[:-1] |= near[1:]
+        near = grown.copy()
+        near[:, 1:] |= grown[:, :-1]
+        near[:, :-1] |= grown[:, 1:]
+    return np.flatnonzero(near)
+
+
+def edge_samples(ctx: Context, band: Band, pixels: np.ndarray, edges: np.ndarray) -> Requests:
+    """Trace ``EDGE_SAMPLES`` x N more samples of the pixels ``pixels[edges]``, whose ``band.acc``
+    holds the mean of their N samples, and make each the mean of all N + K N (module docstring)."""
+    if EDGE_SAMPLES < 2 or not len(edges) or ctx.samples < 2:
+        return
+    extra = EDGE_SAMPLES * ctx.samples
+    ids = np.arange(extra)
+    chunk = max(1, TILE_RAYS // extra)
+    for c0 in range(0, len(edges), chunk):
+        idx = edges[c0:c0 + chunk]
+        traced = yield from per_sample(ctx, band, pixels[idx], ids, count=extra)
+        band.acc[:, idx] = (band.acc[:, idx] * ctx.samples + over_samples(np.add, traced)) / (ctx.samples + extra)
