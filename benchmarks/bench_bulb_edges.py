@@ -1,10 +1,11 @@
 """Edge samples against as many samples everywhere (issue 34, "clean bulb edges"): the lit lens's
 relative error of the four-lamp night photometric preset at its 8 samples, with ``engine.edges``'s
-edge samples (K x 8 more samples where a pixel's samples of the bulb pass disagree) and without,
-and plainly at more samples, each with the ray segments it traced and its time.
+edge samples (K x 8 more samples where a pixel's samples of the bulb pass disagree, along the main
+branches or as whole trees) and without, and plainly at more samples, each with the ray segments it
+traced and its time, as ratios to the plain 8 samples'.
 
-    .venv/bin/python benchmarks/bench_bulb_edges.py [--size 256x160] [--edge-samples 2 4]
-        [--samples 8 16 24 32] [--reference-samples 64] [--reach 0]
+    .venv/bin/python benchmarks/bench_bulb_edges.py [--size 256x160] [--edge-samples 4 8 16]
+        [--whole-tree 4] [--samples 8 16 24 32] [--reference-samples 64] [--reach 0]
 
 The metric is ``bench_cycles_noise``'s: the RMS over the lit lens (luminance at least 1/10 of the
 99th percentile of the reference) of a render's Y minus the reference's, over the lit lens's mean
@@ -41,7 +42,9 @@ def render_y(scene: dict, size: tuple[int, int], samples: int, every_sample: boo
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", default="256x160")
-    parser.add_argument("--edge-samples", type=int, nargs="+", default=[2, 4])
+    parser.add_argument("--edge-samples", type=int, nargs="+", default=[4, 8, 16])
+    parser.add_argument("--whole-tree", type=int, nargs="*", default=[4],
+                        help="edge samples K traced as whole trees (MAIN_SHARE 0)")
     parser.add_argument("--samples", type=int, nargs="+", default=[8, 16, 24, 32])
     parser.add_argument("--reference-samples", type=int, default=64)
     parser.add_argument("--reach", type=int, default=0, help="edges.EDGE_REACH")
@@ -56,9 +59,11 @@ def main() -> int:
           f"({seconds:.1f} s): lit lens {int(mask.sum())} px, mean Y {mean:.1f} cd/m²", flush=True)
     base = None
 
-    def report(label: str, samples: int, k: int) -> None:
+    main_share = edges.MAIN_SHARE
+
+    def report(label: str, samples: int, k: int, share: float = main_share) -> None:
         nonlocal base
-        edges.EDGE_SAMPLES = k
+        edges.EDGE_SAMPLES, edges.MAIN_SHARE = k, share
         y, segments, seconds = render_y(scene, size, samples)
         error = float(np.sqrt(np.mean((y[mask] - reference[mask]) ** 2)) / mean)
         base = base or (segments, seconds)
@@ -68,7 +73,9 @@ def main() -> int:
     for samples in args.samples:
         report(f"{samples} samples", samples, 0)
     for k in args.edge_samples:
-        report(f"8 samples, K={k} edges", 8, k)
+        report(f"8 samples, K={k} main", 8, k)
+    for k in args.whole_tree:
+        report(f"8 samples, K={k} trees", 8, k, 0.0)
     return 0
 
 

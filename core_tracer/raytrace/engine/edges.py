@@ -25,16 +25,20 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import pixel_filter
+from ..camera import eye_rays
 from .context import Context
 from .rays import BULB_PASS, Band
 from .sampling import Requests, TILE_RAYS, over_samples, per_sample
+from .walk import depth_limit, first_generation, next_generation
 
-# More samples per sample, K, where a pixel holds an emitter's edge; 0: none. Off: on the four-lamp
-# night photometric preset they lower the lit lens's error no more than as many samples everywhere
-# (benchmarks/bench_bulb_edges.py, RESULTS.md). K = 1 would repeat the N samples: K >= 2.
-EDGE_SAMPLES = 0
+# More samples per sample, K, where a pixel holds an emitter's edge; 0: none (K = 1 would repeat the
+# N samples: K >= 2). Chosen on the four-lamp night photometric preset at 8 samples
+# (benchmarks/bench_bulb_edges.py, RESULTS.md).
+EDGE_SAMPLES = 8
 EDGE_CONTRAST = 0.5  # the dimmest sample of the emitter pass below this share of the brightest: an edge
 EDGE_REACH = 0  # pixels: the neighbours of an edge pixel that take edge samples too
+MAIN_SHARE = 0.3  # edge samples follow the branches of throughput k at least this (0: whole trees)
 EDGE_SHARE = 0.05  # the brightest sample of the emitter pass at least this share of the brightest source: it matters
 
 
@@ -74,8 +78,12 @@ def holding_edges(ctx: Context, rows: int, low: np.ndarray, high: np.ndarray) ->
 
 def edge_samples(ctx: Context, band: Band, pixels: np.ndarray, edges: np.ndarray) -> Requests:
     """Trace ``EDGE_SAMPLES`` x N more samples of the pixels ``pixels[edges]``, whose ``band.acc``
-    holds the mean of their N samples, and make each the mean of all N + K N (module docstring)."""
+    holds the mean of their N samples, and make each the mean of all N + K N (module docstring).
+    With ``MAIN_SHARE`` > 0 the edge samples follow the main branches only (``main_edge_samples``)."""
     if EDGE_SAMPLES < 2 or not len(edges) or ctx.samples < 2:
+        return
+    if MAIN_SHARE > 0.0:
+        main_edge_samples(ctx, band, pixels[edges], edges)
         return
     extra = EDGE_SAMPLES * ctx.samples
     ids = np.arange(extra)
@@ -84,3 +92,46 @@ def edge_samples(ctx: Context, band: Band, pixels: np.ndarray, edges: np.ndarray
         idx = edges[c0:c0 + chunk]
         traced = yield from per_sample(ctx, band, pixels[idx], ids, count=extra)
         band.acc[:, idx] = (band.acc[:, idx] * ctx.samples + over_samples(np.add, traced)) / (ctx.samples + extra)
+
+
+def main_branches(ctx: Context, band: Band, o: np.ndarray, d: np.ndarray) -> None:
+    """Trace the eye rays ``o, d`` (ray i into slot i of ``band``) along their main branches only: a
+    ray whose throughput k (its greatest channel) falls below ``MAIN_SHARE`` ends there, with all
+    its descendants (k only falls along a path: Fresnel factors and reflectances are at most 1)."""
+    band.segments += len(o)
+    rays = first_generation(ctx, band, o, d, np.arange(len(o)))
+    depth, limit = 1, depth_limit(ctx)
+    while len(rays) and depth < limit:
+        rays = rays.take(rays.k.max(axis=1) >= MAIN_SHARE)
+        band.segments += len(rays)
+        rays = next_generation(ctx, band, rays)
+        depth += 1
+
+
+def _main_light(ctx: Context, band: Band, pixels: np.ndarray, samples: np.ndarray, count: int) -> np.ndarray:
+    """The emitter pass (pixels, channels) summed over the samples ``samples`` (of the pattern of
+    ``count``) of each of ``pixels``, traced along their main branches (``main_branches``)."""
+    offsets = pixel_filter.grid_offsets(ctx.filter_name, pixels, samples, count, sample_major=True)
+    o, d = eye_rays(ctx.camera, np.tile(pixels, len(samples)), offsets)
+    traced = Band(len(o), ctx)
+    main_branches(ctx, traced, o, d)
+    band.segments += traced.segments
+    return traced.acc[BULB_PASS].reshape(len(samples), len(pixels), ctx.pass_channels).sum(axis=0)
+
+
+def main_edge_samples(ctx: Context, band: Band, pixels: np.ndarray, idx: np.ndarray) -> None:
+    """Edge samples along the main branches (``main_branches``) of the pixels ``pixels`` (slots
+    ``idx`` of ``band``): their N samples again and K N more, traced so, correct the emitter pass as a
+    control variate, the N samples' whole-tree light keeping what the main branches leave out:
+
+        L = mean_N(L_tree) - mean_N(L_main) + mean_{N + K N}(L_main)
+
+    whose expectation is mean_N(L_tree)'s (the image's), the hit-or-miss of the main branches now
+    averaged over (K + 1) N samples."""
+    n, extra = ctx.samples, EDGE_SAMPLES * ctx.samples
+    chunk = max(1, TILE_RAYS // (n + extra))
+    for c0 in range(0, len(idx), chunk):
+        part = slice(c0, c0 + chunk)
+        main_n = _main_light(ctx, band, pixels[part], np.arange(n), n)
+        main_more = _main_light(ctx, band, pixels[part], np.arange(extra), extra)
+        band.acc[BULB_PASS, idx[part]] += (main_n + main_more) / (n + extra) - main_n / n
