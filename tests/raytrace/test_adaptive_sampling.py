@@ -9,6 +9,7 @@ from helpers import PRESETS
 
 from core_tracer import load_scene
 from core_tracer.raytrace import engine
+from core_tracer.raytrace.engine import edges
 from core_tracer.raytrace.engine import render_passes
 from core_tracer.raytrace.engine.sampling import pilot_samples
 
@@ -31,6 +32,15 @@ def test_adaptive_agrees_with_every_sample_and_traces_less(case):
     assert error.mean() <= MEAN_OF_MEAN * full.image.mean()
     pixels = 96 * 64
     assert full.stats["busy_pixels"] == 0 and 0 < adaptive.stats["busy_pixels"] < pixels
+    assert adaptive.stats["segments"] < 0.95 * full.stats["segments"]
+
+
+@pytest.mark.slow
+def test_adaptive_traces_less_than_every_sample(monkeypatch):
+    """The saving of adaptive sampling itself, without the edge samples both take (``engine.edges``,
+    which on this preset add about as many segments as adaptive sampling saves)."""
+    monkeypatch.setattr(edges, "EDGE_SAMPLES", 0)
+    full, adaptive = _render("four-lamp-rear-combination", 0.0), _render("four-lamp-rear-combination", None)
     assert adaptive.stats["segments"] < 0.9 * full.stats["segments"]
 
 
