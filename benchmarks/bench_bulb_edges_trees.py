@@ -1,7 +1,7 @@
 """Old tree against new for edge samples (issue 34 item 4), run once per tree in one command: the
 four-lamp night photometric preset at its 512x320 and 8 samples in the band pool, its lit lens's
 relative error, time, ray segments and mean against a 64-sample reference (every sample) that
-``ref`` renders (in the old tree) to ``--reference``.
+``ref`` renders (in the old tree) to the third argument's file. Run from the new tree's folder:
 
     OLD=/tmp/edges-old   # git worktree add --detach /tmp/edges-old main; ln -s <venv> $OLD/.venv
     $OLD/.venv/bin/python benchmarks/bench_bulb_edges_trees.py $OLD ref
@@ -23,6 +23,7 @@ def main() -> int:
     tree, what = os.path.abspath(sys.argv[1]), sys.argv[2]
     reference_file = sys.argv[3] if len(sys.argv) > 3 else "/tmp/bulb-edges-reference.npy"
     sys.path.insert(0, tree)
+    # Imported here: which tree's tracer is the argument (this script lives in the new tree only).
     from core_tracer import load_scene, render_passes
     from core_tracer.raytrace import band_pool
 
