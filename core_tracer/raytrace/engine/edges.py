@@ -5,20 +5,20 @@ the 3-pixel filter that hit-or-miss is almost all of a lit lens's error. Light e
 
 After a band's samples are traced, a pixel *holds an edge* when its own samples of the emitter pass
 (``BULB_PASS``: the bulb and the LED dies) disagree: the brightest is lit (at least ``EDGE_SHARE``
-of the brightest source) and the dimmest below ``EDGE_CONTRAST`` of it. Those pixels and their
-neighbours within ``EDGE_REACH`` (the filter spans 3 pixels: a neighbour's samples see the same
-small image) trace
-``EDGE_SAMPLES`` x N more samples, placed by the filter on the stratified pattern of that count
-(``pixel_filter.grid_offsets``), and each is the mean of all its N + EDGE_SAMPLES x N samples:
+of the brightest source) and the dimmest below ``EDGE_CONTRAST`` of it. Those pixels (and their
+neighbours within ``EDGE_REACH``) take ``EDGE_SAMPLES`` x N more samples, placed by the filter on
+the stratified pattern of that count (``pixel_filter.grid_offsets``), traced along the main branches
+only (``main_branches``: a lens ray's tree is tens of segments, its main branches a few), and the
+emitter pass becomes a control variate (``main_edge_samples``):
 
-    pixel = (Σ_N L_i + Σ_{K N} L_j) / (N + K N)
+    L = mean_N(L_tree) - mean_N(L_main) + mean_{N + K N}(L_main)
 
-Every sample is distributed by the filter, so the mean stays the filter-weighted image; only a
-source image that none of a pixel's neighbourhood's samples saw stays as it was (rendered at N
-samples), which biases nothing the N samples did not already miss
-(benchmarks/bench_bulb_edges.py measures the lit lens's converged mean before and after).
+Its expectation is the N samples' (the image's); only the noise changes. With ``MAIN_SHARE`` 0 the
+edge samples are whole trees and each pixel the mean of its N + K N samples (no better than as many
+samples everywhere on the four-lamp night preset: benchmarks/RESULTS.md, "Bulb edges").
 
-The neighbours taken are those inside the band (the rows just outside it are another band's).
+A pixel that adaptive sampling left with its pilot samples has mean_N(L_tree) of those; the
+neighbours taken are those inside the band (the rows just outside it are another band's).
 """
 
 from __future__ import annotations
