@@ -32,7 +32,8 @@ from core_tracer.raytrace.engine import edges  # noqa: E402
 PRESET = os.path.join(ROOT, "presets", "four-lamp-night-lit-photometric.json")
 
 
-def render_y(scene: dict, size: tuple[int, int], samples: int, every_sample: bool = False) -> tuple[np.ndarray, int, float]:
+def render_y(scene: dict, size: tuple[int, int], samples: int,
+             every_sample: bool = False) -> tuple[np.ndarray, int, float]:
     start = time.perf_counter()
     result = render_passes(scene, *size, samples=samples, keep_passes=False, threads=1,
                            adaptive_threshold=0.0 if every_sample else None)

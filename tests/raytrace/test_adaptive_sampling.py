@@ -9,8 +9,7 @@ from helpers import PRESETS
 
 from core_tracer import load_scene
 from core_tracer.raytrace import engine
-from core_tracer.raytrace.engine import edges
-from core_tracer.raytrace.engine import render_passes
+from core_tracer.raytrace.engine import edges, render_passes
 from core_tracer.raytrace.engine.sampling import pilot_samples
 
 # Measured at 96 x 64 and 16 samples: at most 8e-5 of the peak, 7e-5 of the mean (docs/model.md).

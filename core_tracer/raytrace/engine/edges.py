@@ -29,7 +29,7 @@ from .. import pixel_filter
 from ..camera import eye_rays
 from .context import Context
 from .rays import BULB_PASS, Band
-from .sampling import Requests, TILE_RAYS, over_samples, per_sample
+from .sampling import TILE_RAYS, Requests, over_samples, per_sample
 from .walk import depth_limit, first_generation, next_generation
 
 # More samples per sample, K, where a pixel holds an emitter's edge; 0: none (K = 1 would repeat the
