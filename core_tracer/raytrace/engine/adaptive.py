@@ -15,6 +15,7 @@ from ..parts import body_box
 from ..parts.base import rows
 from . import sampling
 from .context import Context
+from .edges import edge_samples, emitter_light, holding_edges, wanted
 from .rays import BACKGROUND_PASS, Band
 from .sampling import Requests, over_samples, pilot_samples, sample_groups
 
@@ -35,16 +36,24 @@ def sample_rays(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
     # Samples in groups of at most sampling.TILE_RAYS rays (a wide row at many samples takes several),
     # each ray counted in its own slot (pixel-major), summed per pixel in sample order: the same
     # sums whatever the threads.
+    edging = wanted(ctx)  # edge samples asked for: the emitter pass's extremes kept (``edges``)
+    low, high = np.full(len(pixels), np.inf), np.zeros(len(pixels))
     for count, o, d in sample_groups(ctx.camera, pixels, ctx.samples, ctx.filter_name):
         group = yield o, d
         per_ray = group.acc.reshape(ctx.planes.count, len(pixels), count, ctx.pass_channels)
         band.acc += over_samples(np.add, per_ray.transpose(2, 0, 1, 3))
+        if edging:
+            light = emitter_light(per_ray, sample_major=False)
+            np.minimum(low, light.min(axis=0), out=low)
+            np.maximum(high, light.max(axis=0), out=high)
         band.segments += group.segments
         band.max_depth = max(band.max_depth, group.max_depth)
         band.cut_at_depth += group.cut_at_depth
         band.transitions |= group.transitions
     # The samples are placed by the filter (importance sampling), so the pixel is their plain mean.
     band.acc /= ctx.samples
+    if edging:
+        yield from edge_samples(ctx, band, pixels, holding_edges(ctx, y1 - y0, low, high))
 
 
 def _trace_adaptive(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
@@ -88,6 +97,10 @@ def _trace_adaptive(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
         busy &= ~world
         busy[_world_samples(ctx, band, pixels, np.flatnonzero(world), pilot, pilot_values)] = True
     busy = np.flatnonzero(busy)
+    edging = wanted(ctx)  # edge samples asked for: the emitter pass's extremes kept (``edges``)
+    if edging:
+        light = emitter_light(pilot_values, sample_major=True)
+        low, high = light.min(axis=0), light.max(axis=0)
     chunk = max(1, sampling.TILE_RAYS // len(rest))
     for c0 in range(0, len(busy), chunk):
         idx = busy[c0:c0 + chunk]
@@ -98,6 +111,12 @@ def _trace_adaptive(ctx: Context, band: Band, y0: int, y1: int) -> Requests:
         for k in range(1, ctx.samples):  # in sample order, as ``over_samples`` and the full path
             total += by_sample[k]
         band.acc[:, idx] = total / ctx.samples
+        if edging:
+            light = emitter_light(traced, sample_major=True)
+            low[idx] = np.minimum(low[idx], light.min(axis=0))
+            high[idx] = np.maximum(high[idx], light.max(axis=0))
+    if edging:
+        yield from edge_samples(ctx, band, pixels, holding_edges(ctx, y1 - y0, low, high))
 
 
 def _spread(high: np.ndarray, low: np.ndarray) -> np.ndarray:

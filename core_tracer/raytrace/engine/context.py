@@ -34,6 +34,8 @@ class Context(Lighting):
         super().__init__(scene, bands)
         self.camera = camera
         self.samples = samples
+        # the emitter edges' extra samples per sample (``edges``; 0: none)
+        self.edge_samples = int(scene["image"].get("edge_samples", 0))
         self.filter_name = filter_name
         self.adaptive_threshold = adaptive_threshold
         self.lamps = LampTable.from_scene(scene)

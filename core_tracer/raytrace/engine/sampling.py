@@ -58,20 +58,22 @@ def pilot_samples(samples: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, samples - 1, count)).astype(np.int64))
 
 
-def per_sample(ctx: Context, band: Band, pixels: np.ndarray,
-                sample_ids: np.ndarray) -> Generator[tuple[np.ndarray, np.ndarray], Band, np.ndarray]:
-    """Trace the samples ``sample_ids`` of every pixel (asked for in groups of at most TILE_RAYS rays,
+def per_sample(ctx: Context, band: Band, pixels: np.ndarray, sample_ids: np.ndarray,
+               count: int | None = None) -> Generator[tuple[np.ndarray, np.ndarray], Band, np.ndarray]:
+    """Trace the samples ``sample_ids`` (of the pattern of ``count`` samples, None: the render's)
+    of every pixel (asked for in groups of at most TILE_RAYS rays,
     whole pixels to a group, as ``sample_rays``): returns each ray's passes, sample-major (samples,
     passes, pixels, channels), so that one sample of every pixel is one block (a view of the traced group's
     passes when one group holds every pixel: no copy); the band's statistics take the rays' counts.
     Every ray has its own slot, so the order of the rays changes no value."""
+    pattern = ctx.samples if count is None else count
     count = len(sample_ids)
     per_group = max(1, TILE_RAYS // count)
     values = None
     for i0 in range(0, len(pixels), per_group):
         group_pixels = pixels[i0:i0 + per_group]
         ray_pixels = np.tile(group_pixels, count)
-        offsets = pixel_filter.grid_offsets(ctx.filter_name, group_pixels, sample_ids, ctx.samples, sample_major=True)
+        offsets = pixel_filter.grid_offsets(ctx.filter_name, group_pixels, sample_ids, pattern, sample_major=True)
         group = yield eye_rays(ctx.camera, ray_pixels, offsets)
         traced = group.acc.reshape(ctx.planes.count, count, len(group_pixels), ctx.pass_channels).transpose(1, 0, 2, 3)
         if len(group_pixels) == len(pixels):
