@@ -135,10 +135,14 @@ def _meets_box(frame: tuple, g: dict) -> np.ndarray:
                                           (s0, ds, 0.0, g["length"])):
             t_lo, t_hi = (lo - EPS - origin) / direction, (hi + EPS - origin) / direction
             # a ray parallel to a slab: inside it for ever (NaN where it starts on a bound: kept) or never
+            near, far = np.fmin(t_lo, t_hi), np.fmax(t_lo, t_hi)
             parallel = direction == 0
-            outside = parallel & ((origin < lo - EPS) | (origin > hi + EPS))
-            np.fmax(t_near, np.where(parallel, np.where(outside, np.inf, 0.0), np.fmin(t_lo, t_hi)), out=t_near)
-            np.fmin(t_far, np.where(parallel, np.where(outside, -np.inf, np.inf), np.fmax(t_lo, t_hi)), out=t_far)
+            if parallel.any():
+                outside = parallel & ((origin < lo - EPS) | (origin > hi + EPS))
+                near = np.where(parallel, np.where(outside, np.inf, 0.0), near)
+                far = np.where(parallel, np.where(outside, -np.inf, np.inf), far)
+            np.fmax(t_near, near, out=t_near)
+            np.fmin(t_far, far, out=t_far)
     return (t_near <= t_far) & (t_far > T_MIN)
 
 
@@ -156,9 +160,10 @@ def _hit_in_frame(frame: tuple, g: dict) -> tuple[np.ndarray, tuple]:
         t_lo, t_hi = (lo - origin) / direction, (hi - origin) / direction  # (the caller ignores x / 0)
         near, far = np.fmin(t_lo, t_hi), np.fmax(t_lo, t_hi)
         parallel = direction == 0  # in the slab for ever, or never
-        outside = parallel & ((origin < lo) | (origin > hi))
-        near = np.where(parallel, np.where(outside, np.inf, -np.inf), near)
-        far = np.where(parallel, np.where(outside, -np.inf, np.inf), far)
+        if parallel.any():
+            outside = parallel & ((origin < lo) | (origin > hi))
+            near = np.where(parallel, np.where(outside, np.inf, -np.inf), near)
+            far = np.where(parallel, np.where(outside, -np.inf, np.inf), far)
         sign_near = np.where(direction > 0, -1.0, 1.0)  # entering through the lo side when moving up
         take = near > enter
         np.copyto(enter, near, where=take)
@@ -171,7 +176,10 @@ def _hit_in_frame(frame: tuple, g: dict) -> tuple[np.ndarray, tuple]:
 
     slab(s0, ds, 0.0, g["length"], 0)
     rnd = g["round"] > 0
-    if (~rnd).any():
+    if not rnd.any():  # rectangular rods only: their slabs as they are
+        slab(u0, du, -g["half_u"], g["half_u"], 1)
+        slab(v0, dv, -g["half_v"], g["half_v"], 2)
+    elif not rnd.all():
         inf = np.where(rnd, np.inf, 1.0)  # round rods are bounded by the cylinder below, not by slabs
         slab(u0, du, -g["half_u"] * inf, g["half_u"] * inf, 1)
         slab(v0, dv, -g["half_v"] * inf, g["half_v"] * inf, 2)
