@@ -168,9 +168,16 @@ def fresnel_split(k: np.ndarray, d: np.ndarray, facing: np.ndarray, n1: np.ndarr
     # k_s R_s + k_p R_p = k_s + k_p, and nothing transmitted), so only the crossing rows are multiplied
     r_s = np.ones(k.shape)
     k_p = k - k_s
+    crossing = np.nonzero(partial)[0]
+    if 2 * len(crossing) > len(k):  # mostly crossing (a lens's faces): the products on every row are cheaper
+        r_p = np.ones(k.shape)
+        r_s[crossing], r_p[crossing] = optics.fresnel_polarised(
+            cos_i_clipped[crossing, None], _rows_of(band_n1, crossing), _rows_of(band_n2, crossing))
+        reflected_s, transmitted_s = k_s * r_s, k_s * (1.0 - r_s)
+        return Split(cos_i, eta, r_s, reflected_s + k_p * r_p, transmitted_s + k_p * (1.0 - r_p), partial,
+                     reflected_s, transmitted_s)
     reflected_s, reflected = k_s.copy(), k_s + k_p
     transmitted_s, transmitted = np.zeros(k.shape), np.zeros(k.shape)
-    crossing = np.nonzero(partial)[0]
     if len(crossing):
         r_s_c, r_p_c = optics.fresnel_polarised(
             cos_i_clipped[crossing, None], _rows_of(band_n1, crossing), _rows_of(band_n2, crossing))
