@@ -3,7 +3,10 @@ lamp at 512x512 and 8 samples, interleaved in one process, and prints each rende
 time, its ray segments, segments per eye ray, deepest path and the branches ended at the depth
 limit, and the ratio of the cost per segment (guide / stop lamp).
 
-    .venv/bin/python benchmarks/bench_light_guide.py [--runs 1] [--size 512] [--samples 8]
+    .venv/bin/python benchmarks/bench_light_guide.py [--runs 1] [--size 512] [--samples 8] [--guide SCENE.json]
+
+``--guide`` renders another guide lamp in the preset's place (an older version of it, to time a change of
+the code on the same design).
 
 Target (issue 32): a guide's paths are long (tens of total internal reflections), so it is judged per
 segment: the guide lamp's CPU time per segment within 1.3x the stop lamp's. The ratio is taken in one
@@ -33,8 +36,9 @@ def main() -> int:
     parser.add_argument("--runs", type=int, default=1)
     parser.add_argument("--size", type=int, default=512)
     parser.add_argument("--samples", type=int, default=8)
+    parser.add_argument("--guide", type=Path, default=PRESETS["guide"], help="the guide lamp's scene file")
     args = parser.parse_args()
-    scenes = {name: core_tracer.load_scene(path) for name, path in PRESETS.items()}
+    scenes = {name: core_tracer.load_scene(path) for name, path in {**PRESETS, "guide": args.guide}.items()}
     for scene in scenes.values():
         scene["image"]["samples"] = args.samples
     per_segment: dict[str, list[float]] = {name: [] for name in scenes}

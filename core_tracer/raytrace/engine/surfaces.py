@@ -16,7 +16,7 @@ from .. import optics, sunlight
 from .. import paths as P
 from ..lamp_table import LampTable
 from ..parts import reflector
-from ..parts.base import rows
+from ..parts.base import put_rows, rows
 from ..spectral import Throughput
 from .context import Context
 from .rays import (
@@ -164,17 +164,32 @@ def fresnel_split(k: np.ndarray, d: np.ndarray, facing: np.ndarray, n1: np.ndarr
     eta = n1 / n2
     partial = (1.0 - cos_i_clipped * cos_i_clipped) * (eta * eta) < 1.0  # Snell has a transmitted ray
     # Fresnel's equations only where some light crosses: total internal reflection reflects every band
-    # whole (most of a light guide's segments), the same values as the equations' own TIR branch
-    r_s, r_p = np.ones(k.shape), np.ones(k.shape)
+    # whole (most of a light guide's segments), the same values as the equations' own TIR branch (R = 1:
+    # k_s R_s + k_p R_p = k_s + k_p, and nothing transmitted), so only the crossing rows are multiplied
+    r_s = np.ones(k.shape)
+    k_p = k - k_s
     crossing = np.nonzero(partial)[0]
-    if len(crossing):
+    if 2 * len(crossing) > len(k):  # mostly crossing (a lens's faces): the products on every row are cheaper
+        r_p = np.ones(k.shape)
         r_s[crossing], r_p[crossing] = optics.fresnel_polarised(
             cos_i_clipped[crossing, None], _rows_of(band_n1, crossing), _rows_of(band_n2, crossing))
-    k_p = k - k_s
-    reflected_s, reflected_p = k_s * r_s, k_p * r_p
-    transmitted_s, transmitted_p = k_s * (1.0 - r_s), k_p * (1.0 - r_p)
-    return Split(cos_i, eta, r_s, reflected_s + reflected_p, transmitted_s + transmitted_p, partial, reflected_s,
-                 transmitted_s)
+        reflected_s, transmitted_s = k_s * r_s, k_s * (1.0 - r_s)
+        return Split(cos_i, eta, r_s, reflected_s + k_p * r_p, transmitted_s + k_p * (1.0 - r_p), partial,
+                     reflected_s, transmitted_s)
+    reflected_s, reflected = k_s.copy(), k_s + k_p
+    transmitted_s, transmitted = np.zeros(k.shape), np.zeros(k.shape)
+    if len(crossing):
+        r_s_c, r_p_c = optics.fresnel_polarised(
+            cos_i_clipped[crossing, None], _rows_of(band_n1, crossing), _rows_of(band_n2, crossing))
+        k_s_c, k_p_c = rows(k_s, crossing), rows(k_p, crossing)
+        put_rows(r_s, crossing, r_s_c)
+        # R_s k_s + R_p k_p reflected, (1 − R_s) k_s + (1 − R_p) k_p transmitted, per band
+        reflected_s_c, transmitted_s_c = k_s_c * r_s_c, k_s_c * (1.0 - r_s_c)
+        put_rows(reflected_s, crossing, reflected_s_c)
+        put_rows(reflected, crossing, reflected_s_c + k_p_c * r_p_c)
+        put_rows(transmitted_s, crossing, transmitted_s_c)
+        put_rows(transmitted, crossing, transmitted_s_c + k_p_c * (1.0 - r_p_c))
+    return Split(cos_i, eta, r_s, reflected, transmitted, partial, reflected_s, transmitted_s)
 
 
 def split_at_face(k: np.ndarray, k_s: np.ndarray, d: np.ndarray, facing: np.ndarray, from_inside: np.ndarray,

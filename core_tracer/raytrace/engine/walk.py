@@ -88,9 +88,12 @@ def intersect(ctx: Context, rays: Rays) -> tuple[np.ndarray, np.ndarray, _Normal
     surface = np.full(n, P.NOTHING, np.int8)
     normals: _Normals = []
     reaching: dict[tuple[int, ...], tuple[np.ndarray | None, Segments]] = {}
+    # Light guides and no prism plate: the rays inside a rod meet its surface first (a closed solid inside
+    # the lamp), so they are not given the lens's and the air's parts (the side wall, the cuts).
+    rods_only = ctx.lamps.guide is not None and not ctx.lamps.ring_count.any()
     for media, run in _runs_of_media(ctx.parts):
         if media not in reaching:
-            reaching[media] = _reaching(rays, media)
+            reaching[media] = _reaching(rays, media, rods_only)
         idx, seg = reaching[media]
         if len(seg.o) == 0:
             continue
@@ -138,14 +141,17 @@ def normals_at(normals: _Normals, met: np.ndarray, faces: np.ndarray) -> np.ndar
     return normal
 
 
-def _reaching(rays: Rays, media: tuple[int, ...]) -> tuple[np.ndarray | None, Segments]:
-    """The rays travelling in one of ``media``: their indices (None for all) and their segments."""
-    if {P.IN_LENS, P.IN_AIR} <= set(media):
+def _reaching(rays: Rays, media: tuple[int, ...], rods: bool = False) -> tuple[np.ndarray | None, Segments]:
+    """The rays travelling in one of ``media``: their indices (None for all) and their segments. The
+    parts of the lens and the air are given every ray (the rays of a prism plate too), or with ``rods``
+    (lamps with light guides, none with a plate) all but those inside a rod."""
+    if {P.IN_LENS, P.IN_AIR} <= set(media) and not rods:
         idx = None
-    elif len(media) == 1:
-        idx = np.nonzero(rays.medium == media[0])[0]
-    else:  # the prism plate's parts: the air and the plate
-        idx = np.nonzero(np.isin(rays.medium, media))[0]
+    else:  # one medium, or the prism plate's and the light guide's parts: the air and the plate
+        reach = rays.medium == media[0]
+        for medium in media[1:]:  # (a comparison per medium: np.isin sorts, several times slower)
+            reach |= rays.medium == medium
+        idx = np.nonzero(reach)[0]
     if idx is None or len(idx) == len(rays):
         return None, Segments(rays.o, rays.d, rays.lamp, rays.src, rays.medium)
     return idx, Segments(rows(rays.o, idx), rows(rays.d, idx), rays.lamp.take(idx), rays.src.take(idx),

@@ -40,11 +40,17 @@ def intersect(rays: Segments, lamps: LampTable, t_limit: np.ndarray) -> tuple[np
     if guide is None:
         return t, normal
     present, arc = guide.present.take(rays.lamp) > 0, guide.arc.take(rays.lamp) > 0
-    for sel, hit in ((np.nonzero(present & ~arc)[0], hit_guide), (np.nonzero(present & arc)[0], guide_arc.hit_arc)):
-        if len(sel):
-            t_sel, n_sel = hit(rows(rays.o, sel), rows(rays.d, sel), guide, rays.lamp.take(sel))
-            t[sel] = t_sel
-            put_rows(normal, sel, n_sel)
+    straight = np.nonzero(present & ~arc)[0]
+    if len(straight):  # the rays inside a rod meet it: no box test for them
+        t_sel, n_sel = hit_guide(rows(rays.o, straight), rows(rays.d, straight), guide, rays.lamp.take(straight),
+                                 rays.medium.take(straight) == P.IN_GUIDE)
+        t[straight] = t_sel
+        put_rows(normal, straight, n_sel)
+    bent = np.nonzero(present & arc)[0]
+    if len(bent):
+        t_sel, n_sel = guide_arc.hit_arc(rows(rays.o, bent), rows(rays.d, bent), guide, rays.lamp.take(bent))
+        t[bent] = t_sel
+        put_rows(normal, bent, n_sel)
     return t, normal
 
 
@@ -88,24 +94,32 @@ def gathered(guide: GuideTable, lamp: np.ndarray) -> dict:
     return {key: getattr(guide, key).take(lamp) for key in keys}
 
 
-def hit_guide(o: np.ndarray, d: np.ndarray, guide: GuideTable, lamp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def hit_guide(o: np.ndarray, d: np.ndarray, guide: GuideTable, lamp: np.ndarray,
+              inside_rod: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Per ray, the nearest hit on the rod of its lamp's guide (inf for none) and the unit normal
-    there pointing out of the rod's material, in the lamp frame.
+    there pointing out of the rod's material, in the lamp frame. ``inside_rod`` marks rays known
+    to travel inside the rod (they meet it: the bounding-box test is skipped for them).
 
     The rod without its grooves is convex: the ray's span inside it is [t_enter, t_exit], the
     largest entry and the smallest exit over its end planes and its side (slabs, or the cylinder's
     two roots), and its hit the entry, or the exit for a ray inside. The grooves only take material
     away near the back: that hit is dropped where its point lies in a groove, and the facets the ray
     crosses within the span, cell by cell, are offered instead (``_facets``)."""
-    g = gathered(guide, lamp)
-    frame = to_guide(o, d, guide, lamp)
     t, normal = np.full(len(o), np.inf), np.zeros((len(o), 3))
-    near = np.nonzero(_meets_box(frame, g))[0]  # most rays pass far from a thin rod: the rest only for these
+    frame = to_guide(o, d, guide, lamp)
+    box = {key: getattr(guide, key).take(lamp) for key in ("half_u", "half_v", "length")}
+    # most rays of the air pass far from a thin rod: the rest only for the rays that meet its box
+    meets = _meets_box(frame, box)
+    if inside_rod is not None:
+        meets |= inside_rod
+    near = np.nonzero(meets)[0]
     if len(near):
-        sub = {key: value[near] for key, value in g.items()}
-        t_near, n_frame = _hit_in_frame(tuple(part[near] for part in frame), sub)
+        lamp_near = lamp.take(near)
+        sub = gathered(guide, lamp_near)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_near, n_frame = _hit_in_frame(tuple(part.take(near) for part in frame), sub)
         t[near] = t_near
-        axis, across = rows(guide.axis, lamp.take(near)), rows(guide.across, lamp.take(near))
+        axis, across = rows(guide.axis, lamp_near), rows(guide.across, lamp_near)
         n_near = axis * n_frame[0][:, None] + across * n_frame[1][:, None]
         n_near[:, 1] += n_frame[2]
         put_rows(normal, near, n_near)
@@ -121,10 +135,14 @@ def _meets_box(frame: tuple, g: dict) -> np.ndarray:
                                           (s0, ds, 0.0, g["length"])):
             t_lo, t_hi = (lo - EPS - origin) / direction, (hi + EPS - origin) / direction
             # a ray parallel to a slab: inside it for ever (NaN where it starts on a bound: kept) or never
+            near, far = np.fmin(t_lo, t_hi), np.fmax(t_lo, t_hi)
             parallel = direction == 0
-            outside = parallel & ((origin < lo - EPS) | (origin > hi + EPS))
-            np.fmax(t_near, np.where(parallel, np.where(outside, np.inf, 0.0), np.fmin(t_lo, t_hi)), out=t_near)
-            np.fmin(t_far, np.where(parallel, np.where(outside, -np.inf, np.inf), np.fmax(t_lo, t_hi)), out=t_far)
+            if parallel.any():
+                outside = parallel & ((origin < lo - EPS) | (origin > hi + EPS))
+                near = np.where(parallel, np.where(outside, np.inf, 0.0), near)
+                far = np.where(parallel, np.where(outside, -np.inf, np.inf), far)
+            np.fmax(t_near, near, out=t_near)
+            np.fmin(t_far, far, out=t_far)
     return (t_near <= t_far) & (t_far > T_MIN)
 
 
@@ -139,13 +157,13 @@ def _hit_in_frame(frame: tuple, g: dict) -> tuple[np.ndarray, tuple]:
 
     def slab(origin, direction, lo, hi, axis):
         """Narrow the span to the slab lo <= x <= hi along one axis of the guide's frame."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t_lo, t_hi = (lo - origin) / direction, (hi - origin) / direction
+        t_lo, t_hi = (lo - origin) / direction, (hi - origin) / direction  # (the caller ignores x / 0)
         near, far = np.fmin(t_lo, t_hi), np.fmax(t_lo, t_hi)
         parallel = direction == 0  # in the slab for ever, or never
-        outside = parallel & ((origin < lo) | (origin > hi))
-        near = np.where(parallel, np.where(outside, np.inf, -np.inf), near)
-        far = np.where(parallel, np.where(outside, -np.inf, np.inf), far)
+        if parallel.any():
+            outside = parallel & ((origin < lo) | (origin > hi))
+            near = np.where(parallel, np.where(outside, np.inf, -np.inf), near)
+            far = np.where(parallel, np.where(outside, -np.inf, np.inf), far)
         sign_near = np.where(direction > 0, -1.0, 1.0)  # entering through the lo side when moving up
         take = near > enter
         np.copyto(enter, near, where=take)
@@ -158,7 +176,10 @@ def _hit_in_frame(frame: tuple, g: dict) -> tuple[np.ndarray, tuple]:
 
     slab(s0, ds, 0.0, g["length"], 0)
     rnd = g["round"] > 0
-    if (~rnd).any():
+    if not rnd.any():  # rectangular rods only: their slabs as they are
+        slab(u0, du, -g["half_u"], g["half_u"], 1)
+        slab(v0, dv, -g["half_v"], g["half_v"], 2)
+    elif not rnd.all():
         inf = np.where(rnd, np.inf, 1.0)  # round rods are bounded by the cylinder below, not by slabs
         slab(u0, du, -g["half_u"] * inf, g["half_u"] * inf, 1)
         slab(v0, dv, -g["half_v"] * inf, g["half_v"] * inf, 2)
@@ -194,8 +215,7 @@ def _hit_in_frame(frame: tuple, g: dict) -> tuple[np.ndarray, tuple]:
 
     # the grooves matter only to rays whose span inside the rod rises above the grooves' bottom (v is
     # linear along a ray: its highest point is one end of the span)
-    with np.errstate(invalid="ignore"):
-        v_top = np.maximum(v0 + np.maximum(enter, 0.0) * dv, v0 + np.minimum(exit_, 1e30) * dv)
+    v_top = np.maximum(v0 + np.maximum(enter, 0.0) * dv, v0 + np.minimum(exit_, 1e30) * dv)
     has = np.nonzero(span & (g["prisms"] > 0) & (v_top > g["half_v"] - g["prism_depth"]))[0]
     if len(has):
         _grooves(has, t, (ns, nu, nv), s0, v0, ds, dv, g, enter, exit_)
@@ -214,41 +234,60 @@ def _grooves(has, t, normal, s0, v0, ds, dv, g, enter, exit_) -> None:
     v_hit = v0 + t_sub * dv
     high = np.nonzero(v_hit > bottom)[0]  # only there can the hit lie in a groove
     if len(high):
-        at_high = {key: value[high] for key, value in sub.items()}
-        grooved = in_groove(s0[high] + t_sub[high] * ds[high], v_hit[high], at_high)
+        at_high = {key: value.take(high) for key, value in sub.items()}
+        grooved = in_groove(s0.take(high) + t_sub.take(high) * ds.take(high), v_hit.take(high), at_high)
         t_sub[high[grooved]] = np.inf
     ns, nu, nv = (part.take(has) for part in normal)
-    lo = np.maximum(enter[has], 0.0)
-    t_in, t_out = slab_span(v0, dv, bottom, sub["half_v"], np.minimum(exit_[has], t_sub))
-    t_in = np.maximum(t_in, lo)
+    t_in, t_out = slab_span(v0, dv, bottom, sub["half_v"], np.minimum(exit_.take(has), t_sub))
+    t_in = np.maximum(t_in, np.maximum(enter.take(has), 0.0))
     live = np.nonzero(t_in <= t_out)[0]
     if len(live):
-        row = {key: sub[key][live] for key in ("first_prism", "pitch", "prisms")}
-        k_in = nearest_prism(s0[live] + t_in[live] * ds[live], row)
-        k_out = nearest_prism(s0[live] + t_out[live] * ds[live], row)
-        step = np.sign(k_out - k_in)
-        cells = np.abs(k_out - k_in).astype(np.int64)
-        m = sub["slope"][live]
-        sec = np.sqrt(1.0 + m * m)
-        span_lo, span_hi = enter[has][live] - EPS, exit_[has][live] + EPS
+        # the live rays' values gathered once; the cells walked in step, each a subset of the last
+        ray = {"s0": s0.take(live), "v0": v0.take(live), "ds": ds.take(live), "dv": dv.take(live),
+               "bottom": bottom.take(live), "top": sub["half_v"].take(live) + EPS,
+               "first": sub["first_prism"].take(live), "pitch": sub["pitch"].take(live), "m": sub["slope"].take(live),
+               "lo": enter.take(has).take(live) - EPS, "hi": exit_.take(has).take(live) + EPS,
+               "t": t_sub.take(live), "ns": ns.take(live), "nv": nv.take(live), "at": np.arange(len(live))}
+        row = {"first_prism": ray["first"], "pitch": ray["pitch"], "prisms": sub["prisms"].take(live)}
+        k_in = nearest_prism(ray["s0"] + t_in.take(live) * ray["ds"], row)
+        k_out = nearest_prism(ray["s0"] + t_out.take(live) * ray["ds"], row)
+        ray["k"], ray["step"] = k_in, np.sign(k_out - k_in)
+        ray["cells"] = np.abs(k_out - k_in).astype(np.int64)
+        ray["sec"] = np.sqrt(1.0 + ray["m"] * ray["m"])
+        found = {"t": ray["t"].copy(), "ns": ray["ns"].copy(), "nv": ray["nv"].copy(), "nu": nu.take(live)}
+        cells = ray["cells"]
         for j in range(int(cells.max()) + 1):
-            going = np.nonzero(cells >= j)[0]
-            rays = live[going]
-            apex = sub["first_prism"][rays] + (k_in + j * step)[going] * sub["pitch"][rays]
-            for side in (1.0, -1.0):  # the facet beyond the apex (s > s_k) rises with s, the other falls
-                # v = bottom + side m (s − apex) along the ray: v0 + t dv = bottom + side m (s0 + t ds − apex)
-                mg = m[going]
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    tf = (bottom[rays] + side * mg * (s0[rays] - apex) - v0[rays]) / (dv[rays] - side * mg * ds[rays])
-                s_hit = s0[rays] + tf * ds[rays]
-                ok = (tf > T_MIN) & (tf < t_sub[rays]) & (side * (s_hit - apex) >= -EPS)
-                ok &= (tf >= span_lo[going]) & (tf <= span_hi[going])
-                ok &= v0[rays] + tf * dv[rays] <= sub["half_v"][rays] + EPS
-                take = rays[ok]
-                t_sub[take] = tf[ok]
-                ns[take] = -side * mg[ok] / sec[going][ok]
-                nu[take] = 0.0
-                nv[take] = 1.0 / sec[going][ok]
+            if j:  # the rays with a j-th cell still to cross
+                going = np.nonzero(ray["cells"] >= j)[0]
+                ray = {key: value.take(going) for key, value in ray.items()}
+                ray["t"] = found["t"].take(ray["at"])
+            _cell_facets(ray, j, found)
+        t_sub[live], ns[live], nu[live], nv[live] = found["t"], found["ns"], found["nu"], found["nv"]
     t[has] = t_sub
     for part, values in zip(normal, (ns, nu, nv), strict=True):
         part[has] = values
+
+
+def _cell_facets(ray: dict, j: int, found: dict) -> None:
+    """The two facets of the j-th prism cell of each ray in ``ray`` (the live rays' values; ``at``: their
+    places in ``found``), where met nearer than the ray's best so far, within its span, below the back:
+    taken into ``found`` (t and the normal's s, u, v) and ``ray["t"]``."""
+    m, s0, v0, ds, dv = ray["m"], ray["s0"], ray["v0"], ray["ds"], ray["dv"]
+    apex = ray["first"] + (ray["k"] + j * ray["step"]) * ray["pitch"]
+    for side in (1.0, -1.0):  # the facet beyond the apex (s > s_k) rises with s, the other falls
+        # v = bottom + side m (s − apex) along the ray: v0 + t dv = bottom + side m (s0 + t ds − apex)
+        tf = (ray["bottom"] + side * m * (s0 - apex) - v0) / (dv - side * m * ds)
+        s_hit = s0 + tf * ds
+        ok = (tf > T_MIN) & (tf < ray["t"]) & (side * (s_hit - apex) >= -EPS)
+        ok &= (tf >= ray["lo"]) & (tf <= ray["hi"])
+        ok &= v0 + tf * dv <= ray["top"]
+        take = np.nonzero(ok)[0]
+        if len(take):
+            at = ray["at"].take(take)
+            t_new = tf.take(take)
+            ray["t"][take] = t_new
+            found["t"][at] = t_new
+            sec = ray["sec"].take(take)
+            found["ns"][at] = -side * m.take(take) / sec
+            found["nu"][at] = 0.0
+            found["nv"][at] = 1.0 / sec
