@@ -25,9 +25,10 @@ NAME = "led-stop-lamp-freeform-lens-photometric"
 RISE_MM = 2.0  # how far the dome's top stands out toward the viewer from the flat lens
 # Each die's flux (lm): a 1 x 1 mm red power die (about 625 nm) driven at 350-700 mA gives some 40-90 lm
 # (LED makers' datasheets for that class of die). The dome tilts the fish-eye cells' beams outward
-# (a 6 mm dome leaves 8.7 cd at H-V from 80 lm dies); DIE_LM and RISE_MM are chosen so that `measure`
-# passes UN R148 S1 and FMVSS 108 stop (docs/measures/led-stop-lamp-freeform-lens-photometric).
-DIE_LM = 50.0
+# (a 6 mm dome leaves 8.7 cd at H-V from 80 lm dies). Domed 2 mm, 50 lm dies gave 91 cd at H-V but 310 cd
+# at 10U-10L, over S1's 260 cd maximum; 40 lm keeps every point of UN R148 S1 and FMVSS 108 stop
+# (docs/measures/led-stop-lamp-freeform-lens-photometric; the intensities are proportional to the flux).
+DIE_LM = 40.0
 PACKAGE_MM = (1.6, 0.6)  # the LED package behind each die: its side and its depth along the die's normal
 PACKAGE_GAP_MM = 0.02  # between the die and the package's front, so the two meshes do not touch
 
