@@ -2,15 +2,13 @@
 
     xvfb-run -a .venv/bin/python tools/make_freeform_led_example.py [--out presets]
 
-A free-form design traces its meshes only, not the parametric lamps beside them (docs/photometric.md,
-"Free-form parts"), and Convert to Free-form converts lens, reflector, bulb and socket, not LED dies.
-So the LED stop lamp (``presets/led-stop-lamp.json``: nine 1 x 1 mm red dies) is built in
-Blender's Python module, converted, its lens bowed into a dome 6 mm high (its cuts following), and its LED
-dies given to the tracer as what a free-form design has: one **bulb** part made of the nine die
-rectangles (the LED object's own mesh, 9 mm²) with the nine dies' flux and the red LED's spectrum,
-so its luminance Φ / (π A) is that of a parametric die of a ninth of it (``DIE_LM``); and behind each die a
-dark **socket** box (the LED package, 1.6 x 1.6 x 0.6 mm), since a free-form bulb glows on both
-sides of its mesh and the parametric die only in front. *Export Free-form Design* writes the pair.
+Convert to Free-form makes meshes of the lens, reflector, bulb and socket; a lamp's LED dies stay
+its light source (``lamps[0].source: "led"``), found and lit beside the meshes exactly as the parametric
+tracer finds and lights them (``core_tracer/freeform/leds.py``: opaque dies, L = Φ / (π A) toward the
+front only, or a far-field file's pattern). So the LED stop lamp (``presets/led-stop-lamp.json``: nine
+1 x 1 mm red dies) is built in Blender's Python module, converted, and its lens bowed into a dome
+``RISE_MM`` high (its cuts following); behind each die a dark **socket** box is added (the LED
+package, 1.6 x 1.6 x 0.6 mm). *Export Free-form Design* writes the pair.
 """
 
 from __future__ import annotations
@@ -24,11 +22,13 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 NAME = "led-stop-lamp-freeform-lens-photometric"
-RISE_MM = 6.0  # how far the dome's top stands out toward the viewer from the flat lens
-# Each die's flux (lm). The dome spreads the fish-eye cuts' beam: with the parametric lamp's 35 lm a die,
-# `measure` gives 32.5 cd at H-V, under UN R148 S1's 60 cd (docs/measures.md); 80 lm a die (a 1 mm² red
-# die driven harder) brings H-V back above it.
-DIE_LM = 80.0
+RISE_MM = 2.0  # how far the dome's top stands out toward the viewer from the flat lens
+# Each die's flux (lm): a 1 x 1 mm red power die (about 625 nm) driven at 350-700 mA gives some 40-90 lm
+# (LED makers' datasheets for that class of die). The dome tilts the fish-eye cells' beams outward
+# (a 6 mm dome leaves 8.7 cd at H-V from 80 lm dies). Domed 2 mm, 50 lm dies gave 91 cd at H-V but 310 cd
+# at 10U-10L, over S1's 260 cd maximum; 40 lm keeps every point of UN R148 S1 and FMVSS 108 stop
+# (docs/measures/led-stop-lamp-freeform-lens-photometric; the intensities are proportional to the flux).
+DIE_LM = 40.0
 PACKAGE_MM = (1.6, 0.6)  # the LED package behind each die: its side and its depth along the die's normal
 PACKAGE_GAP_MM = 0.02  # between the die and the package's front, so the two meshes do not touch
 
@@ -49,24 +49,21 @@ def dome(bpy, lens, rise_mm: float, radius_mm: float) -> int:
     return moved
 
 
-def design(core) -> dict:
+def design(core, rise_mm: float = RISE_MM, die_lm: float = DIE_LM) -> dict:
     """The LED stop lamp as the parametric preset has it, named and described as the free-form twin."""
     scene = core.load_scene(os.path.join(ROOT, "presets", "led-stop-lamp.json"))
     led = scene["lamps"][0]["led"]
-    led["flux_lm"] = DIE_LM  # the lamp's own LED section says so too, though a free-form design traces its meshes
+    led["flux_lm"] = die_lm  # the dies are the lamp's LED section: traced beside the meshes
     count = led["columns"] * led["rows"]
     scene["name"] = "LED stop lamp behind a free-form lens (photometric)"
     scene["description"] = (
         f"The LED stop lamp's {count} red dies ({led['die_size'][0]:g} x {led['die_size'][1]:g} mm, "
         f"{led['flux_lm']:g} lm each, {led['pitch'][0]:g} mm pitch) behind a free-form lens: the red PMMA "
-        f"fish-eye lens converted to a mesh and bowed, cuts and all, into a dome {RISE_MM:g} mm high toward "
-        "the viewer (tools/make_freeform_led_example.py). A free-form design traces only meshes, so the dies "
-        f"are one Lambertian bulb part of their area ({count} mm², {count * led['flux_lm']:g} lm, the red LED "
-        "spectrum: each die's luminance as a parametric die's) with a dark package box behind each die. The "
-        f"dome spreads the cuts' beam, so the dies run at {DIE_LM:g} lm where the flat lens's take 35 (with 35 "
-        "the dome gives 32.5 cd at H-V, under S1's 60); unlike the parametric LED, the reflector's scatter "
-        "share is lit as by a sphere of the dies' area at their centre. At night (3 lx), EV100 15, as the "
-        "parametric LED stop lamp.")
+        f"fish-eye lens converted to a mesh and bowed, cuts and all, into a dome {rise_mm:g} mm high toward "
+        "the viewer (tools/make_freeform_led_example.py). The dies are the lamp's LED source, traced beside "
+        "the meshes as the parametric tracer traces them (opaque, lit toward the front, the red LED "
+        "spectrum), with a dark package box behind each die. At night (3 lx), EV100 15, as the parametric "
+        "LED stop lamp.")
     scene["tags"] = ["photometric", "stop", "LED", "free-form"]
     return scene
 
@@ -92,50 +89,44 @@ def package_mesh(bpy, dies, name: str):
     return mesh
 
 
-def add_led_parts(bpy, addon, bl_scene, led: dict) -> list[str]:
-    """The built LED object's dies as a bulb part and their packages as a socket part, in the free-form
-    collection where Convert to Free-form put the other parts; the LED object is hidden as converted
-    parts are. Returns the new objects' names."""
+def add_led_parts(bpy, addon, bl_scene) -> list[str]:
+    """The LED packages, a box behind each die of the built LED object, as a socket part in the
+    free-form collection where Convert to Free-form put the other parts; the LED object itself is
+    hidden (its dies are traced from the lamp's LED section). Returns the new object's name."""
     root = addon.design.root.find_root(bl_scene)
     leds = next(ob for ob in bl_scene.objects if ob.get(addon.design.root.PART_KEY, "").endswith(".led"))
     coll = bpy.data.collections[addon.freeform.conversion.COLLECTION_NAME]
-    count = led["columns"] * led["rows"]
-    made = []
-    for label, mesh, role, values in (
-            ("LED Dies", leds.data.copy(), "bulb",
-             {"type": "custom", "on": True, "flux_lm": count * led["flux_lm"], "spectrum": led["spectrum"]}),
-            ("LED Packages", package_mesh(bpy, leds.data, "LED Packages"), "socket", {"color": [0.04, 0.04, 0.04]})):
-        mesh.materials.clear()
-        name = leds.name.replace(" LEDs", f" {label}") + addon.freeform.conversion.SUFFIX
-        mesh.name = name
-        obj = bpy.data.objects.new(name, mesh)
-        coll.objects.link(obj)
-        obj.parent = root
-        obj.matrix_world = leds.matrix_world
-        addon.freeform.properties.set_role(obj, role, values)
-        addon.freeform.materials.give_role_material(obj)
-        made.append(obj.name)
+    mesh = package_mesh(bpy, leds.data, "LED Packages")
+    name = leds.name.replace(" LEDs", " LED Packages") + addon.freeform.conversion.SUFFIX
+    mesh.name = name
+    obj = bpy.data.objects.new(name, mesh)
+    coll.objects.link(obj)
+    obj.parent = root
+    obj.matrix_world = leds.matrix_world
+    addon.freeform.properties.set_role(obj, "socket", {"color": [0.04, 0.04, 0.04]})
+    addon.freeform.materials.give_role_material(obj)
     leds.hide_set(True)
     leds.hide_render = True
-    return made
+    return [obj.name]
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=os.path.join(ROOT, "presets"), help="folder to write into")
     parser.add_argument("--rise", type=float, default=RISE_MM, help="the dome's height, mm (0: the flat lens)")
+    parser.add_argument("--die-lm", type=float, default=DIE_LM, help="each die's flux, lm")
     args = parser.parse_args(argv)
     from tools import dev_extension
 
     with dev_extension.blender_with_addon("lamp_freeform_led") as (bpy, addon, core):
         bpy.ops.wm.read_homefile(use_empty=True)
         bl_scene = bpy.context.scene
-        scene = design(core)
+        scene = design(core, args.rise, args.die_lm)
         addon.design.properties.scene_to_design(bl_scene, scene)
         addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
         assert bpy.ops.lamp.build() == {"FINISHED"}
         assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
-        print("LED parts:", add_led_parts(bpy, addon, bl_scene, scene["lamps"][0]["led"]))
+        print("LED parts:", add_led_parts(bpy, addon, bl_scene))
         lens = next(ob for ob in addon.freeform.properties.role_objects(bl_scene) if ob.lamp_role.role == "lens")
         radius = scene["lamps"][0]["lens"]["radius"]
         print(f"domed {dome(bpy, lens, args.rise, radius)} vertices of {lens.name!r}")

@@ -10,7 +10,8 @@ The sources are the photometric roles' (``roles``), each sampled by its own emis
 - each reflector's glow toward its bulbs, the radiance the renderer adds at a reflector hit
   (``render._reflector``): L_g(x, ω) = ρ(λ) s (n + 8)/(8π) cos^n β · Ω_b(x) cos θ_b · L_b(λ), a
   photon at a uniform point of the reflector mesh in a cosine-distributed direction about its
-  shading normal turned toward the bulb, carrying π A L_g(x, ω) / N.
+  shading normal turned toward the bulb, carrying π A L_g(x, ω) / N;
+- each LED lamp's dies (``leds``), as the parametric lamp's (``measures.light_tracing.led_photons``).
 
 The light's transport is the renderer's own walk over the meshes (``render._step``: the nearest
 triangle through Embree, Beer–Lambert inside a lens, the Fresnel split per band and polarisation,
@@ -36,7 +37,7 @@ from ..raytrace.engine.surfaces import sphere_irradiance
 from ..raytrace.optics import cosine_directions
 from .cache import DesignMeshes
 from .hits import nearest, shading_normal
-from .render import MeshRays, _Context, _step
+from .render import MeshRays, _Context, _step, die_hits
 
 Emit = Callable[[int, np.random.Generator], tuple[MeshRays, np.ndarray]]
 
@@ -50,7 +51,7 @@ def context(measured: dict, meshes: DesignMeshes, bands: int | None = None) -> _
 
 def sources(ctx: _Context, scene: dict) -> list[Emit]:
     """Every source of ``scene`` (the context's): each lit bulb part, then each reflector's glow
-    toward each of its bulbs (``roles.PartTable.bulbs_of``)."""
+    toward each of its bulbs (``roles.PartTable.bulbs_of``), then each LED lamp's dies."""
     parts = ctx.parts
     bulbs = [i for i, p in enumerate(scene["freeform"]["parts"]) if p["role"] == "bulb"]  # as PartTable numbers them
     out: list[Emit] = []
@@ -61,7 +62,15 @@ def sources(ctx: _Context, scene: dict) -> list[Emit]:
         for b in np.nonzero(parts.bulbs_of[part, :len(bulbs)])[0]:
             if parts.bulb_intensity[b].any():
                 out.append(lambda n, rng, b=int(b), part=int(part): _glow_photons(ctx, part, b, n, rng))
+    for lamp in [] if ctx.dies is None else ctx.dies.lit:
+        if ctx.dies.lamps.led_radiance[lamp].any():
+            out.append(lambda n, rng, lamp=lamp: _die_photons(ctx, lamp, n, rng))
     return out
+
+
+def _die_photons(ctx: _Context, lamp: int, n: int, rng: np.random.Generator) -> tuple[MeshRays, np.ndarray]:
+    o, d, flux = ctx.dies.photons(lamp, n, rng)
+    return _rays(ctx, -1, np.full(n, -1, np.int64), o, d, P.LED), flux
 
 
 def _points(ctx: _Context, part: int, n: int, rng: np.random.Generator
@@ -120,8 +129,10 @@ def trace(ctx: _Context, rays: MeshRays) -> tuple[np.ndarray, np.ndarray, np.nda
     for _depth in range(ctx.max_depth):
         if not len(rays):
             break
-        _t, tri, _uv = nearest(ctx.geometry, ctx.embree, rays.o, rays.d, rays.triangle)
-        gone = np.nonzero((tri < 0) & (rays.medium == P.IN_AIR))[0]
+        t, tri, _uv = nearest(ctx.geometry, ctx.embree, rays.o, rays.d, rays.triangle)
+        on_die = die_hits(ctx, rays, t, tri)[0]
+        tri[on_die] = -2  # absorbed by an LED die: neither out nor on
+        gone = np.nonzero((tri == -1) & (rays.medium == P.IN_AIR))[0]
         out_pix.append(rays.pix[gone])
         out_d.append(rays.d[gone])
         out_k.append(rays.k[gone])

@@ -55,6 +55,7 @@ from .cache import GeometryCache
 from .embree import EmbreeScene
 from .geometry import BODY, Geometry
 from .hits import hit_point, nearest, on_side, shading_normal, surface_hits, toward
+from .leds import Dies
 from .meshes import MeshData
 from .roles import PartTable
 
@@ -110,6 +111,7 @@ class _Context(Lighting):
         self.max_depth = MAX_DEPTH  # meshes hold no light guide (``walk.depth_limit``)
         self.box_lo = self.box_hi = self.window = None  # no body's box: every eye ray is traced
         self.parts = PartTable(scene, geometry, self.photometric)
+        self.dies = Dies.of(scene, self.photometric)  # the LED lamps' dies, found beside the meshes (``leds``)
         self.sun_transmit = sunlight.plate_transmittance(self.sun, self.parts.ior, self.parts.absorption,
                                                          mean_thickness(geometry, len(self.parts.ior)))
         self.phantom = scene["light"].get("phantom", False) and bool(self.sun_transmit.any())
@@ -211,13 +213,18 @@ def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
     """One generation: find each segment's end, add its luminance, spawn the children."""
     g, parts = ctx.geometry, ctx.parts
     t, tri, uv = nearest(g, ctx.embree, rays.o, rays.d, rays.triangle)
+    on_die, die_lamp, t_die = die_hits(ctx, rays, t, tri)
+    if len(on_die):
+        tri = tri.copy()
+        tri[on_die] = -1  # the ray ends on the die, before any triangle
     hit_any = tri >= 0
     surface = np.where(hit_any, g.surface[np.maximum(tri, 0)], P.NOTHING).astype(np.int8)
+    surface[on_die] = P.LED
     cls = CLASS[rays.medium, rays.src, surface]
     if not first:
         band.note(rays.pix, rays.parent, rays.branch, cls)
 
-    hits = np.nonzero(hit_any)[0]  # the rays that meet a surface
+    hits = np.nonzero(tri >= 0)[0]  # the rays that meet a triangle
     tri_hit = tri[hits]
     t_hit, point = hit_point(g, rays.o[hits], rays.d[hits], t[hits], tri_hit)
     t = t.copy()
@@ -237,6 +244,10 @@ def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
             k_s = k_s.copy()
             k_s[inside] *= transmittance
 
+    if len(on_die):  # LED dies end the path with their luminance toward the eye, k · L(θ, φ) (``leds``)
+        at = rays.o[on_die] + t_die[:, None] * rays.d[on_die]
+        band.add(BULB_PASS, rays.pix[on_die], k[on_die] * ctx.dies.emitted(die_lamp, rays.d[on_die], at))
+        hit_any[on_die] = True  # not a miss: nothing of the surroundings behind a die
     miss = np.nonzero(~hit_any)[0]
     if not (first and not ctx.world_seen) and ctx.background_seen and len(miss):
         # Out of the lamp: the surroundings along the ray (through an outer face, ⑩: refracted)
@@ -273,6 +284,18 @@ def _step(ctx: _Context, band: Band, rays: MeshRays, first: bool) -> MeshRays:
     if not children:
         return rays.take(np.zeros(0, dtype=np.int64))
     return concat(children) if len(children) > 1 else children[0]
+
+
+def die_hits(ctx: _Context, rays: MeshRays, t: np.ndarray, tri: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rays (indices) that meet an LED die before any triangle (only rays in air can), their
+    dies' lamps and their distances to them; empty when the design has no LED lamp."""
+    if ctx.dies is None:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+    air = np.nonzero(rays.medium == P.IN_AIR)[0]
+    t_die, lamp = ctx.dies.hit(rays.o[air], rays.d[air])
+    nearer = t_die < np.where(tri[air] >= 0, t[air], np.inf)
+    return air[nearer], lamp[nearer], t_die[nearer]
 
 
 def _reflector(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np.ndarray, k_s: np.ndarray,

@@ -4,10 +4,8 @@ from the command line, is listed by the preset browser, and carries what its des
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
-import numpy as np
 import pytest
 from helpers import PRESETS, run_cli
 
@@ -54,21 +52,16 @@ def test_the_rear_combination_sets_each_lamps_function():
     assert [lamp["led"]["spectrum"] for lamp in lamps[1:]] == ["red_led", "amber_led", "white_led"]
 
 
-def test_the_free_form_dies_are_as_bright_as_parametric_ones():
-    """The dies' bulb part: its luminance Φ / (π A) over the mesh's area equals that of a parametric
-    die of the lamp's LED section, Φ_die / (π A_die), so the mesh must be the nine dies' rectangles
-    and its flux nine times the die's."""
+def test_the_free_form_lamp_is_lit_by_its_led_dies():
+    """The free-form LED stop lamp's source is its lamp's LED dies (traced beside the meshes,
+    ``freeform/leds.py``), as the parametric LED stop lamp's: no bulb part, the package boxes a socket
+    part behind the dies (in the .glb, with the lens, reflector, side wall and body)."""
     path = PRESETS / "led-stop-lamp-freeform-lens-photometric.json"
     scene = load_scene(path)
-    led = scene["lamps"][0]["led"]
+    lamp = scene["lamps"][0]
+    assert lamp["source"] == "led" and lamp["led"]["spectrum"] == "red_led" and lamp["bulb"]["on"]
     parts = {part["object"]: part for part in scene["freeform"]["parts"]}
-    dies = parts["Lamp 1 LED Dies (Free-form)"]
-    assert dies["role"] == "bulb" and dies["bulb"]["spectrum"] == led["spectrum"] == "red_led"
-    mesh = load_meshes(path, scene)["Lamp 1 LED Dies (Free-form)"]
-    c = mesh.vertices[mesh.triangles]
-    area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum()
-    die_area = led["die_size"][0] * led["die_size"][1]
-    assert area == pytest.approx(led["columns"] * led["rows"] * die_area, rel=1e-5)
-    assert dies["bulb"]["flux_lm"] / (math.pi * area) == pytest.approx(led["flux_lm"] / (math.pi * die_area),
-                                                                       rel=1e-5)
-    assert parts["Lamp 1 LED Packages (Free-form)"]["role"] == "socket"  # no glow from the dies' backs
+    assert sorted(part["role"] for part in parts.values()) == ["body", "lens", "reflector", "side_wall", "socket"]
+    assert parts["Lamp 1 LED Packages (Free-form)"]["role"] == "socket"
+    packages = load_meshes(path, scene)["Lamp 1 LED Packages (Free-form)"]
+    assert packages.vertices[:, 1].min() > lamp["led"]["position"][1]  # behind the dies' plane
