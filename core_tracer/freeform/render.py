@@ -100,6 +100,7 @@ class _Context(Lighting):
     """Everything constant during one render of a free-form design."""
 
     planes = BY_PASS  # its bands accumulate the passes (``rays.Band``)
+    edge_samples = 0  # edge samples follow the parametric walk's main branches (``engine.edges``): none on meshes
 
     def __init__(self, scene: dict, camera: Camera, geometry: Geometry, embree: EmbreeScene, samples: int,
                  filter_name: str, record: bool, bands: int | None = None):

@@ -93,6 +93,9 @@ def _lamps(scene: dict) -> list[tuple[list[Spectrum], list[tuple[Spectrum, ...]]
         parts = [(f"freeform.parts[{i}].{part['role']}", part["role"], part[part["role"]])
                  for i, part in enumerate(scene["freeform"]["parts"])]
         sources = [spectral.bulb_spectrum(v, where)[1] for where, role, v in parts if role == "bulb"]
+        # the LED dies of the design's lamps, traced beside the meshes (``freeform.leds``)
+        sources += [spectral.led_spectrum(lamp["led"], f"lamps[{i}].led")
+                    for i, lamp in enumerate(scene["lamps"]) if uses_leds(lamp)]
         chains = [(spectral.filter_curve(v, where),) for where, role, v in parts if role == "lens"] or [()]
         finishes = [_finish(v) for _, role, v in parts if role == "reflector"]
         return [(sources, chains, finishes)]
