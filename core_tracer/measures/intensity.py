@@ -204,13 +204,22 @@ MIN_POOLED_DIRECTIONS = 4
 
 
 def intensities_at(scene: dict, directions: Sequence[tuple[float, float]],
-                   groups: Sequence[Sequence[int]] | None = None, *, seeds: Sequence[int] | None = None,
-                   workers: int | None = None, progress: Callable[[int, int], None] | None = None,
-                   **options) -> list[list[Intensity]]:
+                   groups: Sequence[Sequence[int]] | None = None, **options) -> list[list[Intensity]]:
+    """``rendered_intensities`` at each (H, V) of ``directions`` (``measured_together`` without tasks)."""
+    return measured_together(scene, directions, groups, **options)[0]
+
+
+def measured_together(scene: dict, directions: Sequence[tuple[float, float]],
+                      groups: Sequence[Sequence[int]] | None = None, *, tasks: Sequence[tuple[Callable, tuple]] = (),
+                      seeds: Sequence[int] | None = None, workers: int | None = None,
+                      progress: Callable[[int, int], None] | None = None,
+                      **options) -> tuple[list[list[Intensity]], list]:
     """``rendered_intensities`` at each (H, V) of ``directions`` (seed ``seeds[k]``, default 0), the
     same values bit for bit, with the directions shared among ``workers`` processes (None: one per
-    core, as many as the memory budget holds, ``pool_workers``; 1: this process alone).
-    ``progress(done, total)`` as directions finish."""
+    core, as many as the memory budget holds, ``pool_workers``; 1: this process alone), and the
+    results of ``tasks`` ((function, arguments) pairs: a light tracing, a front view), submitted to the
+    same pool before the directions so that they run beside them rather than after them, on one
+    thread. ``progress(done, total)`` as directions finish."""
     seeds = [0] * len(directions) if seeds is None else list(seeds)
     count = pool_workers(scene, len(directions), options.get("pixel_mm", DEFAULT_PIXEL_MM)) if workers is None \
         else max(1, min(workers, len(directions)))
@@ -218,14 +227,16 @@ def intensities_at(scene: dict, directions: Sequence[tuple[float, float]],
         count = 1
     out: list[list[Intensity] | None] = [None] * len(directions)
     if count < 2:
+        done = [function(*arguments) for function, arguments in tasks]
         for k, (h, v) in enumerate(directions):
             out[k] = rendered_intensities(scene, h, v, groups, seed=seeds[k], **options)
             if progress is not None:
                 progress(k + 1, len(directions))
-        return out  # type: ignore[return-value]
+        return out, done  # type: ignore[return-value]
     from ..cluster.local_pool import LocalPool
 
     with LocalPool(count) as pool:
+        others = [pool.submit(function, *arguments).future for function, arguments in tasks]
         futures = {pool.submit(_direction_task, scene, h, v, groups, seeds[k], options).future: k
                    for k, (h, v) in enumerate(directions)}
         try:
@@ -233,10 +244,11 @@ def intensities_at(scene: dict, directions: Sequence[tuple[float, float]],
                 out[futures[future]] = future.result()
                 if progress is not None:
                     progress(done, len(directions))
+            results = [f.result() for f in others]
         except BaseException:
             pool.cancel([])
             raise
-    return out  # type: ignore[return-value]
+    return out, results  # type: ignore[return-value]
 
 
 def _direction_task(scene: dict, h_deg: float, v_deg: float, groups, seed: int, options: dict) -> list[Intensity]:
