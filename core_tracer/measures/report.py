@@ -118,8 +118,8 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
     on that grid (``export.measure_distributions``, its flux out traced with ``photons``).
 
     One sweep on the local pool (``intensity.measured_together``) measures the regulation grids'
-    directions and the beam files' together, a direction both read once (at the grid's seed), with
-    the flux out's light tracing and the front view as tasks beside them."""
+    directions and the beam files' together, each at the seed it has alone (the same figures bit for
+    bit), with the flux out's light tracing and the front view as tasks beside them."""
     say = progress or (lambda text: None)
     measurement_scene(scene)  # refuses a paper-mode scene at once, naming light_model
     _band_pool(PICTURE_WIDTH, PICTURE_WIDTH)  # started now, its workers are ready for lamp_picture
@@ -140,10 +140,10 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
             wanted.update(dict.fromkeys(regulation_grid.directions_for(key)))
     grid_points = list(wanted)
     beam_points = export.beam_directions(beams) if beams is not None and names else []
-    index = {_same(h, v): k for k, (h, v) in enumerate(grid_points)}
-    sweep = grid_points + [d for d in beam_points if _same(*d) not in index]  # a shared direction once
-    index.update({_same(*d): k for k, d in enumerate(sweep) if _same(*d) not in index})
-    seeds = list(range(len(grid_points))) + [0] * (len(sweep) - len(grid_points))  # the beam files' seed, as alone
+    # A direction both read (17 of the default grid's: on the H and V axes) is measured twice, each at
+    # its own seed: read once, the beam file's nodes there moved by their estimates' scatter (up to 13
+    # of the two-replicate standard errors: benchmarks/RESULTS.md) for 1.6 % of the sweep's time.
+    seeds = list(range(len(grid_points))) + [0] * len(beam_points)  # each sweep's seeds, as alone
     view = view_along(scene, direction(0.0, 0.0), front_pixel_mm)
     tasks = [(render_view, (measurement_scene(scene), view, None, 1 if meshes is None else None, meshes))]
     if beam_points and photons:
@@ -155,20 +155,16 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
         if done % 10 == 0 and done < total:
             say(f"intensity: direction {done + 1} of {total}")
 
-    say(f"intensity: direction 1 of {len(sweep)}")
-    values, done = measured_together(scene, sweep, groups, tasks=tasks, seeds=seeds, progress=counted,
-                                     pixel_mm=pixel_mm, replicates=replicates, meshes=meshes)  # the local pool
+    say(f"intensity: direction 1 of {len(grid_points) + len(beam_points)}")
+    values, done = measured_together(scene, grid_points + beam_points, groups, tasks=tasks, seeds=seeds,
+                                     progress=counted, pixel_mm=pixel_mm, replicates=replicates,
+                                     meshes=meshes)  # the local pool
     for (h, v), at in zip(grid_points, values, strict=False):
         for name, value in zip(names, at, strict=True):
             measured[name][(h, v)] = (value.cd, value.stderr)
             if (h, v) == (0.0, 0.0):
                 xyz_at_axis[name] = value.xyz
     seconds["intensity"] = time.perf_counter() - start
-    distributions = {}
-    if beam_points:
-        say("beam files: from the sweep's directions")
-        read = [values[index[_same(*d)]] for d in beam_points]
-        distributions = export.distributions(scene, names, groups, beams, read, done[1] if photons else None)
 
     start = time.perf_counter()
     rows: list[regulation_grid.Row] = []
@@ -206,16 +202,16 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
             blurred[mask] = figures.blurred[mask]
     seconds["homogeneity"] = time.perf_counter() - start
     front = {"luminance": luminance, "blurred": blurred, "dark": dark, "pixel_mm": front_pixel_mm}
+    distributions = {}
+    if beam_points:
+        say("beam files: from the sweep's directions")
+        distributions = export.distributions(scene, names, groups, beams, values[len(grid_points):],
+                                             done[1] if photons else None)
     from ..library.presets import digest
 
     date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     return Measures(scene.get("name", ""), by_function, rows, colours, lit, measured, seconds, pixel_mm, front,
                     digest(scene), date, distributions)
-
-
-def _same(h: float, v: float) -> tuple[float, float]:
-    """A direction's key: the grids' (H, V) and the beam files' (C, γ) converted meet to 1e-9 degree."""
-    return round(h, 9) + 0.0, round(v, 9) + 0.0
 
 
 def write_json(result: Measures, path: str | os.PathLike) -> None:
