@@ -1,7 +1,7 @@
 """``measure`` against one render, before and after the measures went on the local pool (issue 34
 item 2), in one run.
 
-    .venv/bin/python benchmarks/bench_measure_pool.py [--before /work/main] [--rounds 1]
+    .venv/bin/python benchmarks/bench_measure_pool.py [--before /work/main] [--rounds 1] [--no-beam-files]
 
 The four-lamp night photometric preset: ``render -o x.exr --width 512 --height 512 --samples 8``
 (the band pool, as the command renders), then ``measure -o DIR`` with this tree's code and, given
@@ -53,22 +53,24 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--before", type=Path, help="a checkout of the code before (e.g. /work/main)")
     parser.add_argument("--rounds", type=int, default=1)
+    parser.add_argument("--no-beam-files", action="store_true", help="measure the report alone (measure's option)")
     args = parser.parse_args()
     print(f"{os.cpu_count()} cores; load average before: {load()}")
     runs: dict[str, list[float]] = {"render 512x512, 8 samples": [], "measure (this tree)": []}
     if args.before:
         runs["measure (before)"] = []
+    extra = ["--no-beam-files"] if args.no_beam_files else []
     with tempfile.TemporaryDirectory() as folder:
         for r in range(args.rounds):
             runs["render 512x512, 8 samples"].append(timed(ROOT, ["render", str(PRESET), "-o", f"{folder}/r.exr",
                                                                   "--width", "512", "--height", "512",
                                                                   "--samples", "8"],
                                                             "render 512x512, 8 samples"))
-            runs["measure (this tree)"].append(timed(ROOT, ["measure", str(PRESET), "-o", f"{folder}/m{r}"],
+            runs["measure (this tree)"].append(timed(ROOT, ["measure", str(PRESET), "-o", f"{folder}/m{r}", *extra],
                                                      "measure (this tree)"))
             if args.before:
-                runs["measure (before)"].append(timed(args.before, ["measure", str(PRESET), "-o", f"{folder}/b{r}"],
-                                                       "measure (before)"))
+                before = ["measure", str(PRESET), "-o", f"{folder}/b{r}", *extra]
+                runs["measure (before)"].append(timed(args.before, before, "measure (before)"))
     render = min(runs["render 512x512, 8 samples"])
     render_cpu = min(CPU["render 512x512, 8 samples"])
     for name, times in runs.items():
