@@ -156,7 +156,8 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
             say(f"intensity: direction {done + 1} of {total}")
 
     say(f"intensity: direction 1 of {len(grid_points) + len(beam_points)}")
-    values, done = measured_together(scene, grid_points + beam_points, groups, tasks=tasks, seeds=seeds,
+    values, done = measured_together(scene, grid_points + beam_points, groups, tasks=tasks,
+                                     task_pixels=view.width * view.height, seeds=seeds,
                                      progress=counted, pixel_mm=pixel_mm, replicates=replicates,
                                      meshes=meshes)  # the local pool
     for (h, v), at in zip(grid_points, values, strict=False):

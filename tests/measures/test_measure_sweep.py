@@ -46,3 +46,17 @@ def test_one_sweep_gives_the_report_and_the_beam_files_each_measured_alone(repo_
         assert (got.out_lm, got.out_stderr_lm, got.xy) == (dist.out_lm, dist.out_stderr_lm, dist.xy)
         assert got.out_lm > 0
     assert alone.beams == {}
+
+
+def test_a_task_s_image_is_counted_in_each_worker_before_the_pool_starts(repo_root, monkeypatch):
+    """The front view (0.5 mm pixels) goes to a worker beside the 2 mm views: the larger image counts."""
+    from core_tracer import budget
+    from core_tracer.raytrace import band_pool
+
+    scene = load_scene(repo_root / "presets" / "photometric-stop-lamp.json")
+    monkeypatch.delitem(sys.modules, "bpy", raising=False)
+    monkeypatch.setattr(band_pool, "running_workers", lambda: 0)
+    monkeypatch.setattr("os.cpu_count", lambda: 8)
+    assert intensity.pool_workers(scene, 45, 2.0) == intensity.pool_workers(scene, 45, 2.0, 1000) == 6
+    huge = 500 * 2**20 // budget.RGB_BYTES // 2  # an image of about 500 MB (the view and the file's copy)
+    assert intensity.pool_workers(scene, 45, 2.0, huge) == 3  # (4 GB - 160 MB) over 640 MB + 500 MB
