@@ -71,6 +71,9 @@ from .intensity import Intensity, measured_together
 IES_LINE = 256  # LM-63-2002: no line longer than 256 characters
 NEAR_DEG = 50.0  # γ up to here at the fine step: every test point of R148 and FMVSS 108 (45° of AR at V 5°)
 TRACED_PHOTONS = 50_000  # per lamp and source for the flux out: about 0.2 % standard error on the stop lamp
+# A process's peak while it light-traces the flux out (batches of ``light_tracing.BATCH`` photons, not
+# their count): 1,052 MB resident for the four-lamp night preset's four lamps (issue 34 item 2)
+TRACED_FLUX_BYTES = 1100 * 2**20
 MANUFACTURER = "Lamp Styling (simulated design, not a product)"
 
 

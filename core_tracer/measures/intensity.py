@@ -211,7 +211,7 @@ def intensities_at(scene: dict, directions: Sequence[tuple[float, float]],
 
 def measured_together(scene: dict, directions: Sequence[tuple[float, float]],
                       groups: Sequence[Sequence[int]] | None = None, *, tasks: Sequence[tuple[Callable, tuple]] = (),
-                      task_pixels: int = 0, seeds: Sequence[int] | None = None, workers: int | None = None,
+                      task_bytes: int = 0, seeds: Sequence[int] | None = None, workers: int | None = None,
                       progress: Callable[[int, int], None] | None = None,
                       **options) -> tuple[list[list[Intensity]], list]:
     """``rendered_intensities`` at each (H, V) of ``directions`` (seed ``seeds[k]``, default 0), the
@@ -219,11 +219,11 @@ def measured_together(scene: dict, directions: Sequence[tuple[float, float]],
     core, as many as the memory budget holds, ``pool_workers``; 1: this process alone), and the
     results of ``tasks`` ((function, arguments) pairs: a light tracing, a front view), submitted to the
     same pool before the directions so that they run beside them rather than after them, on one
-    thread; a task's image of ``task_pixels`` is counted in each worker's memory (``pool_workers``).
+    thread; the worker running the largest takes ``task_bytes`` (``pool_workers`` counts it).
     ``progress(done, total)`` as directions finish."""
     seeds = [0] * len(directions) if seeds is None else list(seeds)
     if workers is None:
-        count = pool_workers(scene, len(directions), options.get("pixel_mm", DEFAULT_PIXEL_MM), task_pixels)
+        count = pool_workers(scene, len(directions), options.get("pixel_mm", DEFAULT_PIXEL_MM), task_bytes)
     else:
         count = max(1, min(workers, len(directions)))
     if options.get("meshes") is not None:  # a free-form design's Embree scenes stay in this process
@@ -260,11 +260,12 @@ def _direction_task(scene: dict, h_deg: float, v_deg: float, groups, seed: int, 
     return rendered_intensities(scene, h_deg, v_deg, groups, seed=seed, **{**options, "threads": 1})
 
 
-def pool_workers(scene: dict, directions: int, pixel_mm: float, task_pixels: int = 0) -> int:
+def pool_workers(scene: dict, directions: int, pixel_mm: float, task_bytes: int = 0) -> int:
     """How many processes measure ``directions`` directions: one per core, at most one per
     direction, and as many as the memory budget holds beside this process and its band pool's
     workers (``budget``): each a band worker's figure (``budget.WORKER_BYTES``) and its largest
-    view's image (or a task's, ``task_pixels``: the front view). 1 below
+    view's image; one of them runs the largest task beside the directions, whose ``task_bytes`` (a
+    worker's whole figure while it runs it) is counted for that worker where it is more. 1 below
     ``MIN_POOLED_DIRECTIONS``, inside Blender, whose process is not to be forked, and in a worker
     process (a study's or a trial's task, on the pool or on Dask: its siblings have the cores)."""
     import multiprocessing
@@ -277,11 +278,11 @@ def pool_workers(scene: dict, directions: int, pixel_mm: float, task_pixels: int
         return 1
     lo, hi = body_box.body_box(scene["body"])  # no view is wider than the window's diagonal
     side = math.ceil(float(np.linalg.norm(hi - lo)) / pixel_mm + 2 * WINDOW_MARGIN_MM / pixel_mm) + 2
-    per_worker = budget.WORKER_BYTES + budget.render_bytes(max(side * side, task_pixels), 1, False, "exr") \
-        - budget.BASE_BYTES
+    per_worker = budget.WORKER_BYTES + budget.render_bytes(side, side, False, "exr") - budget.BASE_BYTES
     from ..raytrace import band_pool
 
     beside = budget.BASE_BYTES + band_pool.running_workers() * budget.WORKER_BYTES  # this process and its band pool
+    beside += max(0, task_bytes - per_worker)  # the worker running the largest task
     fits = (budget.MEMORY_BUDGET - beside) // per_worker
     return int(max(1, min(os.cpu_count() or 1, directions, fits)))
 

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .. import budget
 from . import colour, export, page, regulation_grid
 from .directions import direction
 from .functions import FUNCTIONS, NOTE
@@ -103,8 +104,6 @@ def largest_view(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5
 
 def check_memory(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5) -> None:
     """Refuse, before anything is rendered, a ``measure`` past the memory budget (``budget.check_measure``)."""
-    from .. import budget
-
     budget.check_measure(*largest_view(scene, pixel_mm, front_pixel_mm))
 
 
@@ -146,8 +145,10 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
     seeds = list(range(len(grid_points))) + [0] * len(beam_points)  # each sweep's seeds, as alone
     view = view_along(scene, direction(0.0, 0.0), front_pixel_mm)
     tasks = [(render_view, (measurement_scene(scene), view, None, 1 if meshes is None else None, meshes))]
+    task_bytes = budget.WORKER_BYTES + budget.render_bytes(view.width, view.height, False, "exr") - budget.BASE_BYTES
     if beam_points and photons:
         tasks.append((export.traced_flux, (scene, groups, photons)))
+        task_bytes = max(task_bytes, export.TRACED_FLUX_BYTES)
     measured: dict[str, dict] = {n: {} for n in names}
     xyz_at_axis: dict[str, np.ndarray] = {}
 
@@ -157,7 +158,7 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
 
     say(f"intensity: direction 1 of {len(grid_points) + len(beam_points)}")
     values, done = measured_together(scene, grid_points + beam_points, groups, tasks=tasks,
-                                     task_pixels=view.width * view.height, seeds=seeds,
+                                     task_bytes=task_bytes, seeds=seeds,
                                      progress=counted, pixel_mm=pixel_mm, replicates=replicates,
                                      meshes=meshes)  # the local pool
     for (h, v), at in zip(grid_points, values, strict=False):
@@ -257,7 +258,6 @@ def _band_pool(width: int, height: int):
     import multiprocessing
     import os
 
-    from .. import budget
     from ..raytrace import band_pool
 
     workers = os.cpu_count() or 1

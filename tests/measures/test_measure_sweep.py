@@ -48,8 +48,9 @@ def test_one_sweep_gives_the_report_and_the_beam_files_each_measured_alone(repo_
     assert alone.beams == {}
 
 
-def test_a_task_s_image_is_counted_in_each_worker_before_the_pool_starts(repo_root, monkeypatch):
-    """The front view (0.5 mm pixels) goes to a worker beside the 2 mm views: the larger image counts."""
+def test_the_task_beside_the_directions_is_counted_before_the_pool_starts(repo_root, monkeypatch):
+    """The flux out's light tracing (about 1.1 GB) goes to a worker beside the views: its excess over a
+    worker's figure is counted once, before any worker starts."""
     from core_tracer import budget
     from core_tracer.raytrace import band_pool
 
@@ -57,6 +58,8 @@ def test_a_task_s_image_is_counted_in_each_worker_before_the_pool_starts(repo_ro
     monkeypatch.delitem(sys.modules, "bpy", raising=False)
     monkeypatch.setattr(band_pool, "running_workers", lambda: 0)
     monkeypatch.setattr("os.cpu_count", lambda: 8)
-    assert intensity.pool_workers(scene, 45, 2.0) == intensity.pool_workers(scene, 45, 2.0, 1000) == 6
-    huge = 500 * 2**20 // budget.RGB_BYTES // 2  # an image of about 500 MB (the view and the file's copy)
-    assert intensity.pool_workers(scene, 45, 2.0, huge) == 3  # (4 GB - 160 MB) over 640 MB + 500 MB
+    assert intensity.pool_workers(scene, 45, 2.0) == intensity.pool_workers(scene, 45, 2.0, 2**20) == 6
+    assert intensity.pool_workers(scene, 45, 2.0, export.TRACED_FLUX_BYTES) == 5  # 460 MB more for one worker
+    monkeypatch.setattr(budget, "MEMORY_BUDGET", budget.BASE_BYTES + 2 * budget.WORKER_BYTES + 2**23)
+    assert intensity.pool_workers(scene, 45, 2.0) == 2
+    assert intensity.pool_workers(scene, 45, 2.0, export.TRACED_FLUX_BYTES) == 1  # then in this process alone
