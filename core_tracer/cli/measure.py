@@ -71,16 +71,12 @@ def run(args: argparse.Namespace) -> int:
 
     result = report.measure(scene, functions=functions, pixel_mm=args.pixel_mm, replicates=args.replicates,
                             distance_m=args.distance_m, progress=lambda text: print(text, flush=True),
-                            meshes=meshes)
+                            meshes=meshes, beams=None if args.no_beam_files else grid)  # one sweep for both
     picture = report.lamp_picture(scene, meshes=meshes)
     with atomic_folder(args.output, _ours, "measures") as folder:
-        if not args.no_beam_files:
-            beams = export.measure_distributions(scene, result.functions, grid=grid, pixel_mm=args.pixel_mm,
-                                                 replicates=args.replicates, meshes=meshes,
-                                                 progress=lambda text: print(text, flush=True))
-            for name, dist in beams.items():
-                export.write_ies(dist, os.path.join(folder, f"{name}.ies"))
-                export.write_ldt(dist, os.path.join(folder, f"{name}.ldt"))
+        for name, dist in result.beams.items():
+            export.write_ies(dist, os.path.join(folder, f"{name}.ies"))
+            export.write_ldt(dist, os.path.join(folder, f"{name}.ldt"))
         report.write_json(result, os.path.join(folder, "measures.json"))
         report.write_page(result, os.path.join(folder, "measures.png"), picture)
     verdicts = result.verdicts()

@@ -66,11 +66,14 @@ from ..photometry.bands import Bands
 from ..photometry.colour_rendering import general_cri
 from ..photometry.spectrum import Spectrum
 from .directions import angles_of
-from .intensity import intensities_at
+from .intensity import Intensity, measured_together
 
 IES_LINE = 256  # LM-63-2002: no line longer than 256 characters
 NEAR_DEG = 50.0  # γ up to here at the fine step: every test point of R148 and FMVSS 108 (45° of AR at V 5°)
 TRACED_PHOTONS = 50_000  # per lamp and source for the flux out: about 0.2 % standard error on the stop lamp
+# A process's peak while it light-traces the flux out (batches of ``light_tracing.BATCH`` photons, not
+# their count): 1,052 MB resident for the four-lamp night preset's four lamps (issue 34 item 2)
+TRACED_FLUX_BYTES = 1100 * 2**20
 MANUFACTURER = "Lamp Styling (simulated design, not a product)"
 
 
@@ -205,32 +208,61 @@ def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], 
                           photons: int = TRACED_PHOTONS, progress: Callable[[str], None] | None = None,
                           **options) -> dict[str, Distribution]:
     """The intensity of each named group of lamps (None: all) on the (C, γ) ``grid``, by rendered
-    views (``intensity.intensities_at``, one render per direction for every group, on the local pool;
-    ``options`` as ``rendered_intensities`` takes them), and the flux leaving each group, light-traced
-    with ``photons`` (0: not traced)."""
-    from ..scene.reading import SceneError
-    from .light_tracing import traced_beam
-
+    views (``intensity.measured_together``, one render per direction for every group, on the local
+    pool; ``options`` as ``rendered_intensities`` takes them), and the flux leaving each group,
+    light-traced with ``photons`` (0: not traced) on the same pool beside the views."""
     grid = grid or BeamGrid()
     say = progress or (lambda text: None)
-    c, gamma = grid.c_angles(), grid.gamma_angles()
-    names = list(groups)
-    lamp_lists = [list(range(len(scene["lamps"]))) if groups[n] is None else list(groups[n]) for n in names]
-    cd = np.zeros((len(names), len(c), len(gamma)))
-    err = np.zeros_like(cd)
-    axis_xyz = [np.zeros(3) for _ in names]
-    # Every C plane meets at the axis: γ = 0 is measured once (C = 0). The directions are measured
-    # together, on the local pool (``intensity.intensities_at``).
-    cells = [(i, j) for j, g in enumerate(gamma) for i in range(len(c)) if not (g == 0.0 and i > 0)]
-    directions = [tuple(float(a) for a in angles_of(gonio_direction(float(c[i]), float(gamma[j])))) for i, j in cells]
+    lamp_lists = group_lamps(scene, groups)
+    directions = beam_directions(grid)
 
     def counted(done: int, total: int) -> None:
         if done % 200 == 0 and done < total:
             say(f"beam files: direction {done + 1} of {total} ({grid.text()})")
 
-    say(f"beam files: direction 1 of {len(cells)} ({grid.text()})")
-    for (i, j), at in zip(cells, intensities_at(scene, directions, lamp_lists, progress=counted, **options),
-                          strict=True):
+    say(f"beam files: direction 1 of {len(directions)} ({grid.text()})")
+    tasks = [(traced_flux, (scene, lamp_lists, photons))] if photons else []
+    values, done = measured_together(scene, directions, lamp_lists, tasks=tasks, progress=counted, **options)
+    return distributions(scene, list(groups), lamp_lists, grid, values, done[0] if photons else None)
+
+
+def group_lamps(scene: dict, groups: dict[str, Sequence[int] | None]) -> list[list[int]]:
+    """Each named group's lamps (None: all of them)."""
+    return [list(range(len(scene["lamps"]))) if g is None else list(g) for g in groups.values()]
+
+
+def beam_directions(grid: BeamGrid) -> list[tuple[float, float]]:
+    """The (H, V) of each node of ``grid`` measured, γ by γ, C by C; every C plane meets at the axis:
+    γ = 0 is measured once (C = 0)."""
+    c, gamma = grid.c_angles(), grid.gamma_angles()
+    return [tuple(float(a) for a in angles_of(gonio_direction(float(c[i]), float(g))))
+            for g in gamma for i in range(len(c)) if not (g == 0.0 and i > 0)]
+
+
+def traced_flux(scene: dict, lamp_lists: Sequence[Sequence[int]], photons: int) -> list[tuple[float, float] | None]:
+    """The flux in lm (and its standard error) leaving each group of lamps, light-traced with
+    ``photons`` per lamp and source (``light_tracing.traced_beam``); None for each where light tracing
+    does not follow the optics (the file's integral stands for the flux out)."""
+    from ..scene.reading import SceneError
+    from .light_tracing import traced_beam
+
+    try:
+        return traced_beam(scene, [(0.0, 0.0)], lamp_lists, photons=photons)[1]  # its flux out, not the cone
+    except SceneError:
+        return [None] * len(lamp_lists)
+
+
+def distributions(scene: dict, names: Sequence[str], lamp_lists: Sequence[Sequence[int]], grid: BeamGrid,
+                  values: Sequence[Sequence[Intensity]], traced: Sequence[tuple[float, float] | None] | None
+                  ) -> dict[str, Distribution]:
+    """Each group's ``Distribution`` from the intensities measured at ``beam_directions(grid)`` and the
+    light-traced flux leaving it (None: not traced)."""
+    c, gamma = grid.c_angles(), grid.gamma_angles()
+    cd = np.zeros((len(names), len(c), len(gamma)))
+    err = np.zeros_like(cd)
+    axis_xyz = [np.zeros(3) for _ in names]
+    cells = [(i, j) for j, g in enumerate(gamma) for i in range(len(c)) if not (g == 0.0 and i > 0)]
+    for (i, j), at in zip(cells, values, strict=True):
         for k, value in enumerate(at):
             cd[k, i, j], err[k, i, j] = value.cd, value.stderr
             if gamma[j] == 0.0:
@@ -238,13 +270,7 @@ def measure_distributions(scene: dict, groups: dict[str, Sequence[int] | None], 
     for j, g in enumerate(gamma):
         if g == 0.0:
             cd[:, 1:, j], err[:, 1:, j] = cd[:, :1, j], err[:, :1, j]
-    traced: list[tuple[float, float] | None] = [None] * len(names)
-    if photons:
-        say("beam files: the flux leaving the lamp, light-traced")
-        try:
-            traced = traced_beam(scene, [(0.0, 0.0)], lamp_lists, photons=photons)[1]  # its flux out, not the cone
-        except SceneError:  # optics light tracing does not follow: the file's integral stands for the flux out
-            pass
+    traced = traced or [None] * len(names)
     date = datetime.datetime.now(datetime.UTC).date().isoformat()
     out = {}
     for k, n in enumerate(names):

@@ -204,28 +204,42 @@ MIN_POOLED_DIRECTIONS = 4
 
 
 def intensities_at(scene: dict, directions: Sequence[tuple[float, float]],
-                   groups: Sequence[Sequence[int]] | None = None, *, seeds: Sequence[int] | None = None,
-                   workers: int | None = None, progress: Callable[[int, int], None] | None = None,
-                   **options) -> list[list[Intensity]]:
+                   groups: Sequence[Sequence[int]] | None = None, **options) -> list[list[Intensity]]:
+    """``rendered_intensities`` at each (H, V) of ``directions`` (``measured_together`` without tasks)."""
+    return measured_together(scene, directions, groups, **options)[0]
+
+
+def measured_together(scene: dict, directions: Sequence[tuple[float, float]],
+                      groups: Sequence[Sequence[int]] | None = None, *, tasks: Sequence[tuple[Callable, tuple]] = (),
+                      task_bytes: int = 0, seeds: Sequence[int] | None = None, workers: int | None = None,
+                      progress: Callable[[int, int], None] | None = None,
+                      **options) -> tuple[list[list[Intensity]], list]:
     """``rendered_intensities`` at each (H, V) of ``directions`` (seed ``seeds[k]``, default 0), the
     same values bit for bit, with the directions shared among ``workers`` processes (None: one per
-    core, as many as the memory budget holds, ``pool_workers``; 1: this process alone).
+    core, as many as the memory budget holds, ``pool_workers``; 1: this process alone), and the
+    results of ``tasks`` ((function, arguments) pairs: a light tracing, a front view), submitted to the
+    same pool before the directions so that they run beside them rather than after them, on one
+    thread; the worker running the largest takes ``task_bytes`` (``pool_workers`` counts it).
     ``progress(done, total)`` as directions finish."""
     seeds = [0] * len(directions) if seeds is None else list(seeds)
-    count = pool_workers(scene, len(directions), options.get("pixel_mm", DEFAULT_PIXEL_MM)) if workers is None \
-        else max(1, min(workers, len(directions)))
+    if workers is None:
+        count = pool_workers(scene, len(directions), options.get("pixel_mm", DEFAULT_PIXEL_MM), task_bytes)
+    else:
+        count = max(1, min(workers, len(directions)))
     if options.get("meshes") is not None:  # a free-form design's Embree scenes stay in this process
         count = 1
     out: list[list[Intensity] | None] = [None] * len(directions)
     if count < 2:
+        done = [function(*arguments) for function, arguments in tasks]
         for k, (h, v) in enumerate(directions):
             out[k] = rendered_intensities(scene, h, v, groups, seed=seeds[k], **options)
             if progress is not None:
                 progress(k + 1, len(directions))
-        return out  # type: ignore[return-value]
+        return out, done  # type: ignore[return-value]
     from ..cluster.local_pool import LocalPool
 
     with LocalPool(count) as pool:
+        others = [pool.submit(function, *arguments).future for function, arguments in tasks]
         futures = {pool.submit(_direction_task, scene, h, v, groups, seeds[k], options).future: k
                    for k, (h, v) in enumerate(directions)}
         try:
@@ -233,10 +247,11 @@ def intensities_at(scene: dict, directions: Sequence[tuple[float, float]],
                 out[futures[future]] = future.result()
                 if progress is not None:
                     progress(done, len(directions))
+            results = [f.result() for f in others]
         except BaseException:
             pool.cancel([])
             raise
-    return out  # type: ignore[return-value]
+    return out, results  # type: ignore[return-value]
 
 
 def _direction_task(scene: dict, h_deg: float, v_deg: float, groups, seed: int, options: dict) -> list[Intensity]:
@@ -245,11 +260,12 @@ def _direction_task(scene: dict, h_deg: float, v_deg: float, groups, seed: int, 
     return rendered_intensities(scene, h_deg, v_deg, groups, seed=seed, **{**options, "threads": 1})
 
 
-def pool_workers(scene: dict, directions: int, pixel_mm: float) -> int:
+def pool_workers(scene: dict, directions: int, pixel_mm: float, task_bytes: int = 0) -> int:
     """How many processes measure ``directions`` directions: one per core, at most one per
     direction, and as many as the memory budget holds beside this process and its band pool's
     workers (``budget``): each a band worker's figure (``budget.WORKER_BYTES``) and its largest
-    view's image. 1 below
+    view's image; one of them runs the largest task beside the directions, whose ``task_bytes`` (a
+    worker's whole figure while it runs it) is counted for that worker where it is more. 1 below
     ``MIN_POOLED_DIRECTIONS``, inside Blender, whose process is not to be forked, and in a worker
     process (a study's or a trial's task, on the pool or on Dask: its siblings have the cores)."""
     import multiprocessing
@@ -266,6 +282,7 @@ def pool_workers(scene: dict, directions: int, pixel_mm: float) -> int:
     from ..raytrace import band_pool
 
     beside = budget.BASE_BYTES + band_pool.running_workers() * budget.WORKER_BYTES  # this process and its band pool
+    beside += max(0, task_bytes - per_worker)  # the worker running the largest task
     fits = (budget.MEMORY_BUDGET - beside) // per_worker
     return int(max(1, min(os.cpu_count() or 1, directions, fits)))
 

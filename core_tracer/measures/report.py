@@ -20,11 +20,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import colour, page, regulation_grid
+from .. import budget
+from . import colour, export, page, regulation_grid
 from .directions import direction
 from .functions import FUNCTIONS, NOTE
 from .homogeneity import DEFAULT_DISTANCE_M, homogeneity
-from .intensity import intensities_at, lamp_of_pixels, measurement_scene, render_view, view_along
+from .intensity import lamp_of_pixels, measured_together, measurement_scene, render_view, view_along
 
 if TYPE_CHECKING:
     from ..freeform.cache import DesignMeshes
@@ -61,6 +62,7 @@ class Measures:
     front_view: dict = field(default_factory=dict)  # luminance image, mask and blurred map for the picture
     scene_digest: str = ""  # library.presets.digest of the scene measured: which design these figures are of
     date: str = ""  # when it was measured, UTC, ISO 8601
+    beams: dict[str, export.Distribution] = field(default_factory=dict)  # each function's beam file, when asked
 
     def verdicts(self) -> dict[str, bool]:
         out: dict[str, bool] = {}
@@ -91,12 +93,10 @@ def largest_view(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5
     """(width, height) px of the largest view ``measure`` renders: the front view at ``front_pixel_mm``,
     or a view at ``pixel_mm`` from a direction of the beam files' (C, γ) sweep, which spans every
     direction the regulation grids read too (γ up to 90°: side views included)."""
-    from .export import angles_of, gonio_direction
-
     views = [view_along(scene, direction(0.0, 0.0), front_pixel_mm)]
     for c in range(0, 360, 30):
         for gamma in range(0, 91, 10):
-            h, v = angles_of(gonio_direction(float(c), float(gamma)))
+            h, v = export.angles_of(export.gonio_direction(float(c), float(gamma)))
             views.append(view_along(scene, direction(float(h), float(v)), pixel_mm))
     view = max(views, key=lambda w: w.width * w.height)
     return view.width, view.height
@@ -104,17 +104,21 @@ def largest_view(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5
 
 def check_memory(scene: dict, pixel_mm: float = 2.0, front_pixel_mm: float = 0.5) -> None:
     """Refuse, before anything is rendered, a ``measure`` past the memory budget (``budget.check_measure``)."""
-    from .. import budget
-
     budget.check_measure(*largest_view(scene, pixel_mm, front_pixel_mm))
 
 
 def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: float = 2.0, replicates: int = 2,
             distance_m: float = DEFAULT_DISTANCE_M, front_pixel_mm: float = 0.5,
-            progress: Callable[[str], None] | None = None, meshes: DesignMeshes | None = None) -> Measures:
+            progress: Callable[[str], None] | None = None, meshes: DesignMeshes | None = None,
+            beams: export.BeamGrid | None = None, photons: int = export.TRACED_PHOTONS) -> Measures:
     """Every measure of a photometric design (module docstring); a free-form design's on its
     ``meshes``, measured whole as one lamp of the function of its first lamp (``--function 0=NAME``
-    names another), its bulbs as its parts have them."""
+    names another), its bulbs as its parts have them. With ``beams``, also each function's beam file
+    on that grid (``export.measure_distributions``, its flux out traced with ``photons``).
+
+    One sweep on the local pool (``intensity.measured_together``) measures the regulation grids'
+    directions and the beam files' together, each at the seed it has alone (the same figures bit for
+    bit), with the flux out's light tracing and the front view as tasks beside them."""
     say = progress or (lambda text: None)
     measurement_scene(scene)  # refuses a paper-mode scene at once, naming light_model
     _band_pool(PICTURE_WIDTH, PICTURE_WIDTH)  # started now, its workers are ready for lamp_picture
@@ -133,6 +137,18 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
     for name in names:
         for key in FUNCTIONS[name][:2]:
             wanted.update(dict.fromkeys(regulation_grid.directions_for(key)))
+    grid_points = list(wanted)
+    beam_points = export.beam_directions(beams) if beams is not None and names else []
+    # A direction both read (17 of the default grid's: on the H and V axes) is measured twice, each at
+    # its own seed: read once, the beam file's nodes there moved by their estimates' scatter (up to 13
+    # of the two-replicate standard errors: benchmarks/RESULTS.md) for 1.6 % of the sweep's time.
+    seeds = list(range(len(grid_points))) + [0] * len(beam_points)  # each sweep's seeds, as alone
+    view = view_along(scene, direction(0.0, 0.0), front_pixel_mm)
+    tasks = [(render_view, (measurement_scene(scene), view, None, 1 if meshes is None else None, meshes))]
+    task_bytes = budget.WORKER_BYTES + budget.render_bytes(view.width, view.height, False, "exr") - budget.BASE_BYTES
+    if beam_points and photons:
+        tasks.append((export.traced_flux, (scene, groups, photons)))
+        task_bytes = max(task_bytes, export.TRACED_FLUX_BYTES)
     measured: dict[str, dict] = {n: {} for n in names}
     xyz_at_axis: dict[str, np.ndarray] = {}
 
@@ -140,10 +156,12 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
         if done % 10 == 0 and done < total:
             say(f"intensity: direction {done + 1} of {total}")
 
-    say(f"intensity: direction 1 of {len(wanted)}")
-    values = intensities_at(scene, list(wanted), groups, seeds=range(len(wanted)), progress=counted,
-                            pixel_mm=pixel_mm, replicates=replicates, meshes=meshes)  # the local pool: intensity.py
-    for (h, v), at in zip(wanted, values, strict=True):
+    say(f"intensity: direction 1 of {len(grid_points) + len(beam_points)}")
+    values, done = measured_together(scene, grid_points + beam_points, groups, tasks=tasks,
+                                     task_bytes=task_bytes, seeds=seeds,
+                                     progress=counted, pixel_mm=pixel_mm, replicates=replicates,
+                                     meshes=meshes)  # the local pool
+    for (h, v), at in zip(grid_points, values, strict=False):
         for name, value in zip(names, at, strict=True):
             measured[name][(h, v)] = (value.cd, value.stderr)
             if (h, v) == (0.0, 0.0):
@@ -172,9 +190,7 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
 
     start = time.perf_counter()
     say("homogeneity: front view")
-    view = view_along(scene, direction(0.0, 0.0), front_pixel_mm)
-    image = render_view(measurement_scene(scene), view, meshes=meshes)
-    luminance = image[..., 1]
+    luminance = done[0][..., 1]  # the front view, rendered on the pool beside the directions
     owner = lamp_of_pixels(scene, view)
     lit = {}
     dark = np.zeros(luminance.shape, bool)
@@ -188,11 +204,16 @@ def measure(scene: dict, *, functions: dict[int, str] | None = None, pixel_mm: f
             blurred[mask] = figures.blurred[mask]
     seconds["homogeneity"] = time.perf_counter() - start
     front = {"luminance": luminance, "blurred": blurred, "dark": dark, "pixel_mm": front_pixel_mm}
+    distributions = {}
+    if beam_points:
+        say("beam files: from the sweep's directions")
+        distributions = export.distributions(scene, names, groups, beams, values[len(grid_points):],
+                                             done[1] if photons else None)
     from ..library.presets import digest
 
     date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     return Measures(scene.get("name", ""), by_function, rows, colours, lit, measured, seconds, pixel_mm, front,
-                    digest(scene), date)
+                    digest(scene), date, distributions)
 
 
 def write_json(result: Measures, path: str | os.PathLike) -> None:
@@ -237,7 +258,6 @@ def _band_pool(width: int, height: int):
     import multiprocessing
     import os
 
-    from .. import budget
     from ..raytrace import band_pool
 
     workers = os.cpu_count() or 1
