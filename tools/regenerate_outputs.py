@@ -183,6 +183,9 @@ NOT_REGENERATED: dict[str, str] = {
     "docs/issue24": "before/after of issue 24: needs the tree the issue was filed against "
                     "(tools/make_issue24_images.py BEFORE_TREE)",
     "docs/issue24-exposure-before-after.png": "of issue 24, from a past tree (as docs/issue24)",
+    **{f"docs/images/lit-lens-8spp-{when}{kind}.png": "before/after of issue 34's edge samples: the tree "
+       "before them beside this one (benchmarks/RESULTS.md, \"Bulb edges\")"
+       for when in ("before", "after") for kind in ("", "-luminance")},
 }
 
 OUTPUT_FLAGS = ("-o", "--output", "--out")
