@@ -27,10 +27,10 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from core_tracer.cluster import engine  # noqa: E402
-from core_tracer.cluster import study as dask_study  # noqa: E402
 from core_tracer.cluster.cells import BAND_TASK_RAYS  # noqa: E402
 from core_tracer.scene.reading import read_json  # noqa: E402
 from core_tracer.study import definition as st  # noqa: E402
+from core_tracer.study import on_cluster as dask_study  # noqa: E402
 from core_tracer.study import run as study_run  # noqa: E402
 
 BASE = ROOT / "presets" / "paper-baseline.json"

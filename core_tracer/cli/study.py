@@ -388,8 +388,8 @@ def _run_cells(args: argparse.Namespace, study: st.Study, world: int, on_progres
     """(the images, how they were rendered, what the cache gave) on a Dask cluster (``dask``) or the
     local worker pool."""
     from ..cluster import engine as dask_engine
-    from ..cluster import study as dask_study
     from ..cluster.cache import CellCache
+    from ..study import on_cluster as dask_study
 
     cache = None if args.no_cache else CellCache(args.cache)
     where = []

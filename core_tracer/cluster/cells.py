@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import pool_worker
+
 STOP_POLL = 0.5  # seconds between a task's looks at its study's stop flag on the scheduler
 PACKAGE = Path(__file__).resolve().parent.parent  # core_tracer
 
@@ -159,10 +161,8 @@ def stop_flag(name: str | None):
     or None elsewhere."""
     if name is None:
         return None
-    from . import local_pool
-
-    if local_pool.worker_stop is not None:  # a local pool's worker: its shared event, cheap to read
-        return local_pool.worker_stop.is_set
+    if pool_worker.stop is not None:  # a local pool's worker: its shared event, cheap to read
+        return pool_worker.stop.is_set
     try:
         from distributed import Event, get_worker
 

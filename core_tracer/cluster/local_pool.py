@@ -31,16 +31,12 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from .. import budget, processes
-
-# Set in a pool worker by ``_start_worker``: the pool's stop event (cells.stop_flag polls it).
-worker_stop = None
+from . import engine, pool_worker
 
 
 def dask_wanted(scheduler: str | None) -> bool:
     """Whether a run goes to Dask: a scheduler's address (given, or ``$DASK_SCHEDULER_ADDRESS``), or
     a local Dask cluster asked for by name ("local")."""
-    from . import engine
-
     named = scheduler if scheduler is not None else os.environ.get(engine.SCHEDULER_VARIABLE)
     return named == engine.LOCAL or engine.scheduler_address(scheduler) is not None
 
@@ -52,8 +48,6 @@ def connect(scheduler: str | None = None, workers: int | None = None, memory_lim
     ends its wait for a scheduler), else a ``LocalPool`` of ``workers`` processes, which has nothing
     to wait for; closed on leaving."""
     if dask or dask_wanted(scheduler):
-        from . import engine
-
         with engine.connect(scheduler, workers=workers, memory_limit=memory_limit, should_stop=should_stop) as client:
             yield client
         return
@@ -117,8 +111,6 @@ class LocalPool:
     """``workers`` processes (default one per core) with one thread each, started at once."""
 
     def __init__(self, workers: int | None = None, memory_limit: int | None = None) -> None:
-        from . import engine
-
         count = workers or engine.default_workers()
         self.local = PoolInfo(count, memory_limit or budget.MEMORY_BUDGET)
         context = multiprocessing.get_context("fork" if sys.platform.startswith("linux") else "spawn")
@@ -184,8 +176,7 @@ def _start_worker(stop, parent: int) -> None:
     stops its workers itself); SIGTERM ends it (the parent's handler came with the fork), and so
     does its parent's death; freed memory kept mapped; numpy's own threads at one, the workers
     being the parallelism."""
-    global worker_stop
-    worker_stop = stop
+    pool_worker.stop = stop
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     if hasattr(os, "setsid"):

@@ -149,7 +149,7 @@ def _cluster_run(context, study: st.Study):
         raise SceneError("Scheduler", "needs Dask (distributed) in Blender's Python, which is not installed; "
                                       "allowed \"local\" (this computer's worker processes)")
     from ...core_tracer.cluster.cache import CellCache
-    from ...core_tracer.cluster.study import DaskStudyRun
+    from ...core_tracer.study.on_cluster import DaskStudyRun
 
     return DaskStudyRun(study, context.scene.lamp_study.scheduler.strip(), cache=CellCache())
 

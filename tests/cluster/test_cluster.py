@@ -13,10 +13,10 @@ import pytest
 from helpers import baseline_doc
 
 from core_tracer.cluster import engine
-from core_tracer.cluster import study as dask_study
 from core_tracer.cluster.cache import CellCache
 from core_tracer.cluster.cells import Cell, Inputs, make_cell, render_cell
 from core_tracer.study import definition as st
+from core_tracer.study import on_cluster as dask_study
 from core_tracer.study import run as study_run
 
 SIZE = (24, 24)

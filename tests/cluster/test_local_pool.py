@@ -42,7 +42,8 @@ def test_the_local_path_needs_no_dask_and_starts_at_once(tmp_path):
     code = f"""
 import sys, time
 sys.path.insert(0, {str(ROOT)!r})
-from core_tracer.cluster import local_pool, study as cluster_study
+from core_tracer.cluster import local_pool
+from core_tracer.study import on_cluster as cluster_study
 from core_tracer.scene.reading import read_json
 from core_tracer.study import definition as st
 study = st.Study.build(read_json({str(BASELINE)!r}), [st.parse_vary("lens.ior=1.4,1.6")], (16, 16))

@@ -15,7 +15,6 @@ from test_freeform_files import DESIGN, lamp_meshes, write_design
 
 from core_tracer.cli.study import _with_curves
 from core_tracer.cluster import engine
-from core_tracer.cluster import study as dask_study
 from core_tracer.cluster.cells import MESH_FILE, Inputs, make_cell
 from core_tracer.freeform import render_passes
 from core_tracer.freeform.gltf import read_glb
@@ -26,6 +25,7 @@ from core_tracer.optimise import trials as T
 from core_tracer.scene.reading import SceneError
 from core_tracer.scene.validate import parse_scene
 from core_tracer.study import definition as st
+from core_tracer.study import on_cluster as dask_study
 from core_tracer.study import run as study_run
 from core_tracer.study.parameters import study_parameters
 

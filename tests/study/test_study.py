@@ -88,7 +88,7 @@ def test_a_default_camera_frames_the_body_at_the_study_size():
     wide = st.Study.build(doc, [st.parse_vary("lens.ior=1.5")], (96, 32))
     expected = parse_scene({**doc, "image": {"width": 96, "height": 32}})
     assert wide.base["camera"] == expected["camera"] != parse_scene(doc)["camera"]
-    assert wide.variants[0].scene["image"] == {"width": 96, "height": 32, "samples": 1}
+    assert wide.variants[0].scene["image"] == {"width": 96, "height": 32, "samples": 1, "edge_samples": 0}
 
 
 def test_two_axes_on_one_field_differ_by_lamp_or_component():
@@ -490,7 +490,7 @@ def test_samples_vary_like_any_parameter_and_count_in_the_budget():
     assert "image.samples" in study_parameters()
     doc = {**baseline_doc(), "image": {"width": 9, "height": 9, "samples": 4}}
     s = st.Study.build(doc, [st.parse_vary("image.samples=1,16")], SIZE)
-    assert s.base["image"] == {"width": SIZE[0], "height": SIZE[1], "samples": 4}  # the design's, at the study's size
+    assert s.base["image"] == {"width": SIZE[0], "height": SIZE[1], "samples": 4, "edge_samples": 0}  # the design's, at the study's size
     one, many = (v.scene for v in s.variants)
     assert (one["image"]["samples"], many["image"]["samples"]) == (1, 16)
     assert not np.array_equal(render(one), render(many))

@@ -15,10 +15,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..study.definition import Study
-from . import engine, local_pool
-from .cache import CellCache
-from .cells import Inputs, make_cell
+from ..cluster import engine, local_pool
+from ..cluster.cache import CellCache
+from ..cluster.cells import Inputs, make_cell
+from .definition import Study
 
 
 def study_cells(study: Study) -> tuple[list, Inputs]:
