@@ -25,7 +25,7 @@ from bpy.app.handlers import persistent
 from ...core_tracer.scene.reading import SceneError
 from ..design import root as design_root
 from . import meshes as freeform_meshes
-from . import parametric, properties
+from . import parametric, properties, status
 
 
 @dataclass(frozen=True)
@@ -127,6 +127,7 @@ def _on_depsgraph_update(scene, depsgraph) -> None:
 @persistent
 def _on_load(*_args) -> None:
     forget()
+    status.forget_mesh_problems()
 
 
 def register() -> None:

@@ -47,6 +47,11 @@ def note_mesh_problem(bl_scene: bpy.types.Scene, message: str | None) -> None:
         _mesh_problems[bl_scene.name] = message
 
 
+def forget_mesh_problems() -> None:
+    """A new file: the mesh problems renders met were of the old file's scenes (their names come again)."""
+    _mesh_problems.clear()
+
+
 def part_problem(bl_scene: bpy.types.Scene) -> str | None:
     """The first problem of the scene's parts in one line, or None."""
     objects = properties.role_objects(bl_scene)

@@ -92,7 +92,7 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
     else:
         assert back["width"] == pytest.approx(want["width"], abs=1e-4)
     rendered = lamp_addon.render.camera.scene_for_render(bl_scene)
-    assert rendered["image"] == {"width": size[0], "height": size[1], "samples": 1}
+    assert rendered["image"] == {"width": size[0], "height": size[1], "samples": 1, "edge_samples": 0}
     # The scene camera shows the design's own view (to single precision): the render takes the design's
     # numbers, free of float32 (issue 24), which are what the camera object gives back, within it.
     assert rendered["camera"] == lamp_addon.design.properties.design_to_scene(bl_scene)["camera"]
@@ -186,7 +186,7 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     bpy.context.view_layer.update()  # Blender's depsgraph update: the add-on's handler writes the design
     design = lamp_addon.design.properties.design_to_scene(bl_scene)
     assert design["camera"]["position"][0] == pytest.approx(scene["camera"]["position"][0] + 50.0, abs=1e-3)
-    assert design["image"] == {"width": 48, "height": 36, "samples": 1}
+    assert design["image"] == {"width": 48, "height": 36, "samples": 1, "edge_samples": 0}
     assert link.sync_view(bl_scene) == ""  # both sides agree now
 
 
@@ -690,7 +690,7 @@ def test_headless_job_writes_the_side_by_side_image(tmp_path):
     assert done.returncode == 0, done.stderr
     image, scene = imageio.read_image(out)
     assert image.shape[1] == 3 * 40 + 2 * 2 and image.shape[0] > 32  # tracer, Cycles, |difference|
-    assert scene["image"] == {"width": 40, "height": 32, "samples": 1}
+    assert scene["image"] == {"width": 40, "height": 32, "samples": 1, "edge_samples": 0}
     assert "Lamp Tracer:  40x32 in" in done.stdout and "2 samples per pixel" in done.stdout
     assert "mean difference" in done.stdout
     assert "lens mean difference" in done.stdout and "lens RMS difference" in done.stdout

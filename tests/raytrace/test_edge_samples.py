@@ -73,7 +73,9 @@ def test_main_branches_are_the_trees_without_their_faint_branches(night, monkeyp
     monkeypatch.setattr(edges, "MAIN_SHARE", share)
     edges.main_branches(ctx, main, o, d)
     if relation == "all":
-        np.testing.assert_array_equal(main.acc, whole.acc)
+        # the same values up to rounding: the walk's Fresnel split takes another order of products when
+        # most of a generation is totally reflected (the guide's shortcut), and the generations differ
+        np.testing.assert_allclose(main.acc, whole.acc, rtol=1e-12, atol=1e-12 * whole.acc.max())
         assert main.segments == whole.segments
     else:
         light, kept = whole.acc[BULB_PASS].sum(), main.acc[BULB_PASS].sum()
