@@ -53,7 +53,7 @@ def main() -> int:
     paper = {**photometric, "light_model": "paper"}
     meshes = None
     if "freeform" in photometric:
-        from core_tracer.freeform.cache import DesignMeshes
+        from core_tracer.freeform.design import DesignMeshes
         from core_tracer.freeform.loading import load_meshes
 
         meshes = DesignMeshes(load_meshes(args.preset, photometric))

@@ -90,13 +90,13 @@ def traced_scene(path: str | os.PathLike, scene: dict) -> dict:
 
 def design_meshes(path: str | os.PathLike, scene: dict):
     """The meshes of a free-form design beside ``path``, their geometry checked before any render
-    (the meshes, their roles, the lens volumes) in a ``freeform.cache.DesignMeshes`` that every
+    (the meshes, their roles, the lens volumes) in a ``freeform.design.DesignMeshes`` that every
     render of them shares; None for a parametric design."""
     if "freeform" not in scene:
         return None
     # free-form only: the mesh modules load when a design has meshes (start-up speed)
     from ..freeform import available
-    from ..freeform.cache import DesignMeshes
+    from ..freeform.design import DesignMeshes
     from ..freeform.loading import load_meshes
 
     ok, reason = available()

@@ -37,18 +37,3 @@ class GeometryCache:
         self.geometry, self.embree = geometry, embree
         self.builds += 1
         return geometry, embree, True
-
-
-class DesignMeshes:
-    """A free-form design's meshes by name and the one ``GeometryCache`` every render of them shares
-    (the measures render a design from many directions: its geometry is built once)."""
-
-    def __init__(self, meshes: dict[str, MeshData]):
-        self.meshes = meshes
-        self.cache = GeometryCache()
-
-    def render_passes(self, scene: dict, width: int | None = None, height: int | None = None, **options):
-        """``freeform.render.render_passes`` of ``scene`` on these meshes."""
-        from .render import render_passes
-
-        return render_passes(scene, self.meshes, width, height, geometry_cache=self.cache, **options)

@@ -35,7 +35,7 @@ from ..raytrace.camera import make_camera
 from ..raytrace.engine.rays import NOT_DEFERRED, Band
 from ..raytrace.engine.surfaces import sphere_irradiance
 from ..raytrace.optics import cosine_directions
-from .cache import DesignMeshes
+from .design import DesignMeshes
 from .hits import nearest, shading_normal
 from .render import MeshRays, _Context, _step, die_hits
 

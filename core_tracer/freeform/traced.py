@@ -34,7 +34,7 @@ def render_scene(scene: dict, width: int | None = None, height: int | None = Non
 
 
 def meshes_of(scene: dict):
-    """The ``freeform.cache.DesignMeshes`` of a free-form scene whose mesh file is a full path (kept
+    """The ``freeform.design.DesignMeshes`` of a free-form scene whose mesh file is a full path (kept
     while the file is unchanged); None for a parametric scene."""
     if "freeform" not in scene:
         return None
@@ -55,7 +55,7 @@ def by_content(scene: dict) -> dict:
 @functools.lru_cache(maxsize=KEPT_DESIGNS)
 def _design(path: str, size: int, mtime_ns: int):
     """The meshes of the .glb at ``path`` (as it is now: its size and time are part of the key)."""
-    from .cache import DesignMeshes
+    from .design import DesignMeshes
     from .gltf import read_glb
 
     return DesignMeshes(read_glb(path))

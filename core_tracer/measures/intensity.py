@@ -37,7 +37,7 @@ from ..scene.reading import SceneError
 from .directions import direction
 
 if TYPE_CHECKING:
-    from ..freeform.cache import DesignMeshes
+    from ..freeform.design import DesignMeshes
 
 DEFAULT_PIXEL_MM = 1.0
 DEFAULT_REPLICATES = 4

@@ -59,7 +59,7 @@ from .directions import cone_solid_angle, direction
 from .intensity import Intensity, measurement_scene
 
 if TYPE_CHECKING:
-    from ..freeform.cache import DesignMeshes
+    from ..freeform.design import DesignMeshes
 
 DEFAULT_CONE_DEG = 3.0
 DEFAULT_PHOTONS = 400_000  # per lamp and source

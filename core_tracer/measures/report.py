@@ -28,7 +28,7 @@ from .homogeneity import DEFAULT_DISTANCE_M, homogeneity
 from .intensity import lamp_of_pixels, measured_together, measurement_scene, render_view, view_along
 
 if TYPE_CHECKING:
-    from ..freeform.cache import DesignMeshes
+    from ..freeform.design import DesignMeshes
 
 SCHEMA = "lamp-measures/1"  # measures.json's format; readers of earlier files (no schema) still read them
 

@@ -46,7 +46,7 @@ from ..scene.messages import show_value
 from ..scene.reading import SceneError
 
 if TYPE_CHECKING:
-    from ..freeform.cache import DesignMeshes
+    from ..freeform.design import DesignMeshes
     from ..raytrace.engine.schedule import BandsElsewhere
 
 SURROUNDINGS = "surroundings"

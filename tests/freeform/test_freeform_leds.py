@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from core_tracer.freeform import render_passes, shapes
-from core_tracer.freeform.cache import DesignMeshes
+from core_tracer.freeform.design import DesignMeshes
 from core_tracer.freeform.light_tracing import context, sources
 from core_tracer.scene.validate import parse_scene
 

@@ -131,7 +131,7 @@ def test_a_free_form_design_is_measured_on_its_meshes_by_both_estimators():
     """Rendered views and forward light tracing measure the meshes (a bare bulb mesh: I = L · its
     projected area, Φ/(4π) for a convex Lambertian emitter; every photon leaves: the flux out is Φ);
     light tracing without the meshes refuses in one line rather than count the parametric lamps' light."""
-    from core_tracer.freeform.cache import DesignMeshes
+    from core_tracer.freeform.design import DesignMeshes
     from core_tracer.measures import intensity, light_tracing
 
     sphere = shapes.uv_sphere("Bulb", (0.0, 40.0, 0.0), RADIUS, segments=64)
@@ -161,7 +161,7 @@ def test_light_tracing_a_free_form_lamp_agrees_with_its_rendered_views():
     167.7 ± 2.5 against 168.9 cd and 127.0 ± 2.2 against 127.8 cd at 200 000 photons a source."""
     from test_freeform_files import lamp_meshes
 
-    from core_tracer.freeform.cache import DesignMeshes
+    from core_tracer.freeform.design import DesignMeshes
     from core_tracer.measures import intensity, light_tracing
 
     parts = [{"object": "Lens", "role": "lens", "lens": {"material": "pmma", "filter": "red"}},

@@ -490,7 +490,8 @@ def test_samples_vary_like_any_parameter_and_count_in_the_budget():
     assert "image.samples" in study_parameters()
     doc = {**baseline_doc(), "image": {"width": 9, "height": 9, "samples": 4}}
     s = st.Study.build(doc, [st.parse_vary("image.samples=1,16")], SIZE)
-    assert s.base["image"] == {"width": SIZE[0], "height": SIZE[1], "samples": 4, "edge_samples": 0}  # the design's, at the study's size
+    # the design's, at the study's size
+    assert s.base["image"] == {"width": SIZE[0], "height": SIZE[1], "samples": 4, "edge_samples": 0}
     one, many = (v.scene for v in s.variants)
     assert (one["image"]["samples"], many["image"]["samples"]) == (1, 16)
     assert not np.array_equal(render(one), render(many))
