@@ -56,11 +56,11 @@ def sources(ctx: _Context, scene: dict) -> list[Emit]:
     bulbs = [i for i, p in enumerate(scene["freeform"]["parts"]) if p["role"] == "bulb"]  # as PartTable numbers them
     out: list[Emit] = []
     for b, part in enumerate(bulbs):
-        if parts.bulb_intensity[b].any():
+        if parts.bulb_radiance[b].any():
             out.append(lambda n, rng, b=b, part=part: _bulb_photons(ctx, part, b, n, rng))
     for part in np.nonzero(parts.scatter > 0.0)[0]:
         for b in np.nonzero(parts.bulbs_of[part, :len(bulbs)])[0]:
-            if parts.bulb_intensity[b].any():
+            if parts.bulb_radiance[b].any():
                 out.append(lambda n, rng, b=int(b), part=int(part): _glow_photons(ctx, part, b, n, rng))
     for lamp in [] if ctx.dies is None else ctx.dies.lit:
         if ctx.dies.lamps.led_radiance[lamp].any():
@@ -102,7 +102,7 @@ def _bulb_photons(ctx: _Context, part: int, bulb: int, n: int, rng: np.random.Ge
     tri, _uv, x, area = _points(ctx, part, n, rng)
     normal = ctx.geometry.normal[tri]
     outward = np.where((optics.dot(normal, x - ctx.parts.bulb_center[bulb]) < 0.0)[:, None], -normal, normal)
-    flux = math.pi * area * ctx.parts.bulb_intensity[bulb] / n  # π L A / N per band
+    flux = math.pi * area * ctx.parts.bulb_radiance[bulb] / n  # π L A / N per band
     return _rays(ctx, part, tri, x, cosine_directions(outward, rng), P.BULB), np.broadcast_to(flux, (n, ctx.channels))
 
 
@@ -117,7 +117,7 @@ def _glow_photons(ctx: _Context, part: int, bulb: int, n: int, rng: np.random.Ge
     d = cosine_directions(facing, rng)
     lobe = optics.blinn(facing, d, to_bulb, parts.scatter[part], parts.shininess[part])
     lit = lobe * sphere_irradiance(gap, parts.bulb_radius[bulb], facing, to_bulb)
-    radiance = parts.glow_tint[part] * parts.bulb_intensity[bulb]  # ρ(λ) L_b(λ)
+    radiance = parts.glow_tint[part] * parts.bulb_radiance[bulb]  # ρ(λ) L_b(λ)
     return _rays(ctx, part, tri, x, d, P.REFLECTOR), (math.pi * area / n) * lit[:, None] * radiance
 
 

@@ -322,7 +322,7 @@ def _reflector(ctx: _Context, band: Band, rays: MeshRays, met: np.ndarray, k: np
         if ctx.photometric is not None:
             scatter = scatter * sphere_irradiance(gap, parts.bulb_radius[bulb], facing[sel], to_bulb)
         glow = k[sel] * parts.glow_tint[part[sel]]  # exactly k in the paper mode (a tint of ones)
-        band.add(REFLECTOR_SCATTER, pix[sel], glow * scatter[:, None] * parts.bulb_intensity[bulb])
+        band.add(REFLECTOR_SCATTER, pix[sel], glow * scatter[:, None] * parts.bulb_radiance[bulb])
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         lens = _lens_toward_sun(ctx, hit, tri, facing)
         lit = lens >= 0

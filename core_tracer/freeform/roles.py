@@ -93,7 +93,7 @@ class PartTable:
             centre, area = part_areas(geometry, i)
             self.bulb_center[b] = (centre * area[:, None]).sum(axis=0) / max(area.sum(), 1e-300)
             self.bulb_radius[b] = math.sqrt(emitting_area(parts[i]["bulb"], geometry, i) / (4.0 * math.pi))
-        self.bulb_intensity = self.color[bulbs] if bulbs else np.zeros((0, channels))
+        self.bulb_radiance = self.color[bulbs] if bulbs else np.zeros((0, channels))
         self.bulbs_of = np.zeros((n, max(1, len(bulbs))), bool)  # [reflector part, bulb]
         for i, part in enumerate(parts):
             if part["role"] != "reflector" or not bulbs:

@@ -106,7 +106,7 @@ def bulb_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> t
     normal = uniform_sphere(n, rng)
     o = lamps.bulb_center[lamp] + radius * normal
     d = cosine_directions(normal, rng)
-    radiance = lamps.bulb_intensity[lamp]
+    radiance = lamps.bulb_radiance[lamp]
     flux = math.pi * radiance * 4.0 * math.pi * (radius * 1e-3) ** 2  # Φ(λ) = π L · 4π r², r in m
     # The back of the bulb inside the socket (which runs from the vertex to the bulb's centre plane)
     # sends no light: its samples count, with nothing traced.
@@ -171,7 +171,7 @@ def glow_photons(ctx: Context, lamp: int, n: int, rng: np.random.Generator) -> t
     irradiance = bulb_irradiance(to_bulb, normal, hit, lamps, index)
     area = math.pi * (outer**2 - inner**2) * 1e-6  # m²
     jacobian = np.sqrt(1.0 + (radial / (2.0 * focal)) ** 2)
-    radiance = lamps.reflector_bands[lamp] * lamps.bulb_intensity[lamp]  # ρ(λ) L(λ)
+    radiance = lamps.reflector_bands[lamp] * lamps.bulb_radiance[lamp]  # ρ(λ) L(λ)
     flux = (math.pi * area / n) * (lobe * irradiance * jacobian)[:, None] * radiance
     return _rays(lamp, hit, d, ctx.channels, P.REFLECTOR), flux
 
@@ -296,7 +296,7 @@ def traced_beam(scene: dict, angles: Sequence[tuple[float, float]],
     groups = [list(range(len(scene["lamps"])))] if groups is None else [list(g) for g in groups]
     per_lamp: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     for lamp in sorted({i for g in groups for i in g}):
-        if not (ctx.lamps.bulb_intensity[lamp].any() or ctx.lamps.led_radiance[lamp].any()):
+        if not (ctx.lamps.bulb_radiance[lamp].any() or ctx.lamps.led_radiance[lamp].any()):
             columns = len(targets) + 1
             per_lamp[lamp] = (np.zeros(columns), np.zeros(columns), np.zeros((columns, 3)))
             continue

@@ -50,7 +50,9 @@ class LampTable:
     scatter_shininess: np.ndarray
     bulb_center: np.ndarray  # (L, 3) local
     bulb_radius: np.ndarray
-    bulb_intensity: np.ndarray  # (L, 3), zero when the bulb is off
+    # what a ray that meets the bulb sees, zero when the bulb is off: the paper mode's bulb intensity I0
+    # (eq. 3, R, G, B); photometric, its spectral radiance L(λ) in W/(m² sr nm) per band (``spectral``)
+    bulb_radiance: np.ndarray  # (L, 3) or (L, K)
     socket_radius: np.ndarray
     socket_color: np.ndarray  # (L, 3)
     # A cylindrical lens (``scene.derived.lens_cylinder``): 1.0 where the lamp has one, and its
@@ -138,7 +140,7 @@ class LampTable:
                 lens_shininess=lens["shininess"], focal=refl["focal_length"], rim=g["rim"], vertex=g["vertex"],
                 reflector_color=refl["color"], reflectance=refl["reflectance"], scatter=refl["scatter"],
                 scatter_shininess=refl["shininess"], bulb_center=g["bulb_center"], bulb_radius=bulb["radius"],
-                bulb_intensity=bulb["intensity"] if bulb["on"] else [0.0, 0.0, 0.0],
+                bulb_radiance=bulb["intensity"] if bulb["on"] else [0.0, 0.0, 0.0],
                 socket_radius=lamp["socket"]["radius"], socket_color=lamp["socket"]["color"],
                 cylindrical=cyl is not None, **{"cyl_" + k: math.nan if cyl is None else cyl[k] for k in CYLINDER_KEYS},
             )
@@ -165,7 +167,7 @@ def _led_row(lamp: dict, row: dict) -> dict:
     leds = LedArray.of(lamp["led"])
     return dict(has_bulb=0.0, bulb_radius=0.0, scatter=0.0, led_center=leds.center, led_normal=leds.normal,
                 led_across=leds.across, led_up=leds.up, led_half=leds.half_size, led_pitch=leds.pitch,
-                led_columns=leds.columns, led_rows=leds.rows, led_radiance=row["bulb_intensity"])
+                led_columns=leds.columns, led_rows=leds.rows, led_radiance=row["bulb_radiance"])
 
 
 def _plate_row(lamp: dict, g: dict) -> dict:

@@ -335,6 +335,12 @@ class Throughput:
     times exp(−min α_lens d_lens − min α_plate d_plate) · (max ρ)^m (``reach``); branches whose
     bound is near the cut-off are tested band by band (``rays.alive``)."""
 
+    # The columns of ``Rays.travelled``: what a ray has crossed and met so far.
+    LENS_MM = 0  # mm through the lens's material
+    PLATE_MM = 1  # mm through the prism plate's or the light guide's
+    REFLECTIONS = 2  # reflections off the reflector's finish
+    TRAVELLED = 3
+
     nodes_nm: np.ndarray  # (J,)
     to_bands: np.ndarray  # (J, K) float32: node values to band values, each band's column summing to 1
     ior_nodes: np.ndarray  # (L, J) lens index at the nodes, per lamp (Fresnel)
@@ -377,10 +383,11 @@ class Throughput:
         leaves' matrix products and exponentials being the mode's largest per-band work)."""
         out = k.astype(np.float32) @ self.to_bands
         n, lamps = len(k), len(self.bounds)
-        spread = np.zeros((n, 3 * lamps), np.float32)  # each ray's three numbers in its lamp's block of rows
+        size = self.TRAVELLED
+        spread = np.zeros((n, size * lamps), np.float32)  # each ray's three numbers in its lamp's block of rows
         rows = np.arange(n)
-        for j in range(3):
-            spread[rows, 3 * lamp + j] = travelled[:, j]
+        for j in range(size):
+            spread[rows, size * lamp + j] = travelled[:, j]
         exponent = spread @ self.exponents
         out *= np.exp(exponent, out=exponent)
         return out
@@ -401,7 +408,7 @@ def photometric_lamps(table: LampTable, scene: dict, bands: Bands) -> LampTable:
     k, n = bands.k, len(scene["lamps"])
     zeros = np.zeros((n, k))
     rows: dict[str, list] = {key: [] for key in ("ior", "ior_bands", "absorption", "plate_ior", "plate_ior_bands",
-                                                  "plate_absorption", "bulb_intensity", "reflector_bands",
+                                                  "plate_absorption", "bulb_radiance", "reflector_bands",
                                                   "reflectance", "scatter", "led_radiance")}
     patterns = []
     for i, lamp in enumerate(scene["lamps"]):
@@ -421,7 +428,7 @@ def photometric_lamps(table: LampTable, scene: dict, bands: Bands) -> LampTable:
             rows["plate_ior"].append(1.0)
             rows["plate_ior_bands"].append(np.ones(k))
             rows["plate_absorption"].append(np.zeros(k))
-        rows["bulb_intensity"].append(bulb_radiance(lamp["bulb"], bands, f"{where}.bulb")
+        rows["bulb_radiance"].append(bulb_radiance(lamp["bulb"], bands, f"{where}.bulb")
                                       if not uses_leds(lamp) else np.zeros(k))
         rows["led_radiance"].append(led_radiance(lamp, bands, where))
         patterns.append(led_pattern(lamp, where))

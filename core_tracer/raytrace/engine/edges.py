@@ -64,7 +64,7 @@ def brightest_source(ctx: Context) -> float:
     ``emitter_light`` sums a sample's: a sample of it through the optics is that times the path's
     throughput."""
     lamps = ctx.lamps
-    return float(max(lamps.bulb_intensity.sum(axis=1).max(initial=0.0),
+    return float(max(lamps.bulb_radiance.sum(axis=1).max(initial=0.0),
                      lamps.led_radiance.sum(axis=1).max(initial=0.0) if ctx.leds else 0.0))
 
 

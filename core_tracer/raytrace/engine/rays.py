@@ -68,24 +68,32 @@ def field_names(kind: type[Rays]) -> tuple[str, ...]:
     return tuple(f.name for f in fields(kind))
 
 
-class _Unrecorded:
-    """A column of the rays that the render does not keep: the parent classes and branches when it
-    records no transitions (they only feed ``Band.note``), the s-polarised share in the paper mode;
-    nothing is computed or gathered for them: every gather of this is itself."""
+class NotKept:
+    """A column of the rays that a render does not keep, one of three (below): nothing is computed
+    or gathered for it, every gather of it is itself, and it says which it is."""
 
-    def take(self, *_args, **_kwargs) -> _Unrecorded:
+    def __init__(self, name: str, why: str):
+        self.name, self.why = name, why
+
+    def __repr__(self) -> str:
+        return self.name
+
+    def take(self, *_args, **_kwargs) -> NotKept:
         return self
 
-    def __getitem__(self, _key) -> _Unrecorded:
+    def __getitem__(self, _key) -> NotKept:
         return self
 
 
-UNRECORDED = _Unrecorded()
-UNPOLARISED = UNRECORDED  # ``Rays.k_s`` of the paper mode
-NOT_DEFERRED = UNRECORDED  # ``Rays.travelled`` of the paper mode
+# ``Rays.parent`` and ``Rays.branch`` of a render that records no transitions (they only feed ``Band.note``)
+UNRECORDED = NotKept("UNRECORDED", "the render records no path transitions")
+# ``Rays.k_s`` of the paper mode, which splits k by the average reflectance
+UNPOLARISED = NotKept("UNPOLARISED", "the paper mode splits k by the average reflectance")
+# ``Rays.travelled`` of the paper mode, whose k holds the absorption and the finish
+NOT_DEFERRED = NotKept("NOT_DEFERRED", "the paper mode's k holds what the photometric one defers")
 
 
-def branch_tags(cls: np.ndarray | _Unrecorded, branch: int, n: int) -> np.ndarray | _Unrecorded:
+def branch_tags(cls: np.ndarray | NotKept, branch: int, n: int) -> np.ndarray | NotKept:
     """The ``branch`` of ``n`` children whose parents' classes are ``cls`` (UNRECORDED: none kept)."""
     return UNRECORDED if cls is UNRECORDED else np.full(n, branch, np.int8)
 
@@ -93,7 +101,15 @@ def branch_tags(cls: np.ndarray | _Unrecorded, branch: int, n: int) -> np.ndarra
 def concat(parts: list[Rays]) -> Rays:
     kind = type(parts[0])
     columns = ([getattr(p, f) for p in parts] for f in field_names(kind))
-    return kind(*(UNRECORDED if any(a is UNRECORDED for a in each) else np.concatenate(each) for each in columns))
+    return kind(*(_kept(each) for each in columns))
+
+
+def _kept(column: list) -> np.ndarray | NotKept:
+    """One column of several generations of rays, joined; a column not kept stays so."""
+    for part in column:
+        if isinstance(part, NotKept):
+            return part
+    return np.concatenate(column)
 
 
 def add_to_pass(acc: np.ndarray, pix: np.ndarray, values: np.ndarray) -> None:

@@ -52,7 +52,7 @@ def into_lenses(ctx: Context, band: Band, pix: np.ndarray, lamp: np.ndarray, d: 
         nodes = len(throughput.nodes_nm)
         split = fresnel_split(np.ones((n, nodes)), d, face_normal, 1.0, ior, np.full((n, nodes), 0.5),
                               1.0, throughput.ior_nodes[lamp])
-        travelled = np.zeros((n, 3))
+        travelled = np.zeros((n, Throughput.TRAVELLED))
         reflected = split.reflected @ throughput.to_bands  # nothing travelled yet
     surface = ctx.lens_surface(face_normal, d, lamps.lens_diffuse[lamp], lamps.lens_specular[lamp],
                                lamps.lens_shininess[lamp])
@@ -85,16 +85,16 @@ def at_reflector(ctx: Context, band: Band, rays: Rays, met: np.ndarray, k: np.nd
     if throughput is None:
         first = np.nonzero(~rays.seen_reflector.take(met))[0]
         band.add(REFLECTOR_CONSTANT, pix.take(first), rows(k, first) * rows(lamps.reflector_color, lamp.take(first)))
-        band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_intensity, lamp), lamp)
+        band.add(REFLECTOR_SCATTER, pix, optics.scaled(k, scatter) * rows(lamps.bulb_radiance, lamp), lamp)
         k_bands = k
     else:  # no appearance constant; the finish's reflectance (one more reflection off it, deferred)
         # spread by the normalised lobe over the bulb's light
         travelled = rows(rays.travelled, met)
-        travelled[:, 2] += 1.0
+        travelled[:, Throughput.REFLECTIONS] += 1.0
         k_bands = throughput.bands(k, travelled, lamp)
         irradiance = bulb_irradiance(to_bulb, normal, hit, lamps, lamp)
         scattered = optics.scaled(k_bands, scatter * irradiance)
-        band.add(REFLECTOR_SCATTER, pix, scattered * rows(lamps.bulb_intensity, lamp), lamp)
+        band.add(REFLECTOR_SCATTER, pix, scattered * rows(lamps.bulb_radiance, lamp), lamp)
         deferred = (throughput, travelled, lamp)
     if ctx.phantom:  # the sun's light scattered back out of the lamp (sunlight.phantom)
         band.add(REFLECTOR_SCATTER, pix, k_bands * sunlight.phantom(ctx.sun, ctx.phantom_lamps, lamp, hit, normal, -d))

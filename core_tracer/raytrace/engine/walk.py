@@ -14,6 +14,7 @@ from .. import optics
 from .. import paths as P
 from ..parts import led_die
 from ..parts.base import Segments, put_rows, rows
+from ..spectral import Throughput
 from .context import Context
 from .eyes import first_hits, put_traced, rays_toward_body
 from .rays import BULB_PASS, SIDE_WALL_PASS, SOCKET_PASS, UNPOLARISED, UNRECORDED, Band, Rays, concat
@@ -172,8 +173,8 @@ def step(ctx: Context, band: Band, rays: Rays) -> Rays:
     # Surfaces that end a path: the luminance they show, times k. The photometric mode's side wall,
     # socket and housing are unlit (``spectral``): only its bulb adds, k expanded to the bands.
     throughput = ctx.throughput
-    ends = ((P.BULB, BULB_PASS, lamps.bulb_intensity),) if throughput is not None else (
-        (P.WALL, SIDE_WALL_PASS, lamps.wall_color), (P.BULB, BULB_PASS, lamps.bulb_intensity),
+    ends = ((P.BULB, BULB_PASS, lamps.bulb_radiance),) if throughput is not None else (
+        (P.WALL, SIDE_WALL_PASS, lamps.wall_color), (P.BULB, BULB_PASS, lamps.bulb_radiance),
         (P.SOCKET, SOCKET_PASS, lamps.socket_color))
     for sid, pass_id, color in ends:
         met = np.nonzero(surface == sid)[0]
@@ -231,8 +232,8 @@ def _absorbed(ctx: Context, rays: Rays, t: np.ndarray) -> Rays:
     bands' absorption taken at the leaves (``spectral.Throughput``)."""
     if ctx.throughput is not None:
         travelled = rays.travelled.copy()
-        for column, medium in ((0, P.IN_LENS), (1, P.IN_PLATE)):
-            inside = np.nonzero(rays.medium == medium)[0] if column == 0 or ctx.plates else ()
+        for column, medium in ((Throughput.LENS_MM, P.IN_LENS), (Throughput.PLATE_MM, P.IN_PLATE)):
+            inside = np.nonzero(rays.medium == medium)[0] if medium == P.IN_LENS or ctx.plates else ()
             if len(inside):
                 travelled[inside, column] += t.take(inside)
         return replace(rays, travelled=travelled)
