@@ -55,19 +55,12 @@ def normalize(v: np.ndarray) -> np.ndarray:
 
 
 def fresnel_reflectance(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float) -> np.ndarray:
-    """Unpolarised reflectance R from the exact Fresnel equations (paper §3.3.1).
-
-    ``cos_i`` is the cosine of the angle of incidence (>= 0), ``n1`` the index on the incident
-    side, ``n2`` on the far side. Total internal reflection gives exactly 1.
-    """
-    cos_i = np.clip(cos_i, 0.0, 1.0)
-    eta = n1 / n2
-    sin2_t = (1.0 - cos_i * cos_i) * (eta * eta)  # Snell: sin t = (n1 / n2) sin i
-    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
-    r_s = _ratio(n1 * cos_i, n2 * cos_t)  # (n1 cos i - n2 cos t) / (n1 cos i + n2 cos t), s-polarised
-    r_p = _ratio(n2 * cos_i, n1 * cos_t)  # p-polarised
-    reflectance = (r_s * r_s + r_p * r_p) * 0.5  # R = (r_s² + r_p²) / 2
-    return np.where(sin2_t >= 1.0, 1.0, reflectance)  # total internal reflection: exactly 1
+    """Unpolarised reflectance R = (R_s + R_p) / 2 of the exact Fresnel equations (paper §3.3.1,
+    ``fresnel_polarised``): ``cos_i`` the cosine of the angle of incidence (clipped to [0, 1]),
+    ``n1`` the index on the incident side, ``n2`` on the far side. Total internal reflection gives
+    exactly 1."""
+    r_s, r_p = fresnel_polarised(np.clip(cos_i, 0.0, 1.0), n1, n2)
+    return (r_s + r_p) * 0.5
 
 
 def fresnel_polarised(cos_i: np.ndarray, n1: np.ndarray | float, n2: np.ndarray | float
