@@ -26,7 +26,6 @@ of worker processes as the command line renders). numpy's BLAS runs single-threa
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 import os
 import shutil
@@ -41,6 +40,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
+from benchmarks.common import design_in_blender  # noqa: E402
 from core_tracer import load_scene, render_passes  # noqa: E402
 from core_tracer.raytrace import band_pool  # noqa: E402
 
@@ -91,12 +91,7 @@ def main() -> int:
 
 
 def _run(bpy, package: str, args, document: dict, size: tuple[int, int]) -> int:
-    comparison = importlib.import_module(f"{package}.lamp_addon.compare.comparison")
-    design = importlib.import_module(f"{package}.lamp_addon.design.properties")
-    lamp_camera = importlib.import_module(f"{package}.lamp_addon.render.lamp_camera")
-    bl_scene = bpy.context.scene
-    design.scene_to_design(bl_scene, document)
-    bl_scene.camera, _ = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    bl_scene, comparison = design_in_blender(bpy, package, document)
     preset_samples = int(document["image"]["samples"])
     pool = band_pool.shared()
     if not pool.ready(60):

@@ -12,7 +12,6 @@ edge's spread remains. Prints both profiles and the largest and mean differences
 from __future__ import annotations
 
 import argparse
-import importlib
 import os
 import sys
 
@@ -21,6 +20,7 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
+from benchmarks.common import design_in_blender  # noqa: E402
 from core_tracer.raytrace.engine import render_passes  # noqa: E402
 from core_tracer.scene.validate import load_scene  # noqa: E402
 from tools import dev_extension  # noqa: E402
@@ -45,12 +45,7 @@ def main() -> int:
     scene = load_scene(PRESET)
     scene["image"].update(width=width, height=height, samples=64)
     with dev_extension.enabled_from_source(bpy, "lamp_styling_dev") as package:
-        compare = importlib.import_module(f"{package}.lamp_addon.compare.comparison")
-        design = importlib.import_module(f"{package}.lamp_addon.design.properties")
-        camera = importlib.import_module(f"{package}.lamp_addon.render.lamp_camera")
-        bl_scene = bpy.context.scene
-        design.scene_to_design(bl_scene, scene)
-        bl_scene.camera, _ = camera.ensure_lamp_camera(bl_scene, frame=False)
+        bl_scene, compare = design_in_blender(bpy, package, scene)
         comparison = compare.compare_design(bl_scene, samples=args.cycles_samples, resolution=(width, height))
     rendered = comparison["scene"]
     cycles = comparison["cycles"]

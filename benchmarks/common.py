@@ -7,6 +7,7 @@ the repository on ``sys.path`` itself, then imports this module as ``benchmarks.
 from __future__ import annotations
 
 import argparse
+import importlib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,3 +27,15 @@ def arguments(doc: str, preset: str, **numbers: int | float) -> argparse.Argumen
     for name, default in numbers.items():
         parser.add_argument("--" + name.replace("_", "-"), type=type(default), default=default)
     return parser
+
+
+def design_in_blender(bpy, package: str, document: dict):
+    """Blender's scene holding the design ``document`` through the add-on loaded as ``package``, seen by
+    its lamp camera; returns (the scene, the add-on's Compare module)."""
+    comparison = importlib.import_module(f"{package}.lamp_addon.compare.comparison")
+    design = importlib.import_module(f"{package}.lamp_addon.design.properties")
+    lamp_camera = importlib.import_module(f"{package}.lamp_addon.render.lamp_camera")
+    bl_scene = bpy.context.scene
+    design.scene_to_design(bl_scene, document)
+    bl_scene.camera, _ = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    return bl_scene, comparison

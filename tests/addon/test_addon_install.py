@@ -82,6 +82,17 @@ def test_manifest_rules():
     assert (ROOT / "__init__.py").read_text().count("import") == 1  # the root only hands over
 
 
+# Both scripts start so: the built zip (``zip_path``) installed into the user's extensions and
+# enabled; ``mod`` its module, ``installed`` its folder.
+INSTALLED = textwrap.dedent(f"""
+    name = "bl_ext.user_default.{MANIFEST_ID}"
+    result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default",
+                                                      enable_on_install=True)
+    assert result == {{"FINISHED"}}, result
+    assert addon_utils.check(name)[1], "not enabled after install"
+    mod = sys.modules[name]
+    installed = os.path.dirname(mod.__file__)""").strip()
+
 INSTALL_SCRIPT = textwrap.dedent("""
     import os, sys
     import bpy
@@ -91,13 +102,7 @@ INSTALL_SCRIPT = textwrap.dedent("""
         raise ex
 
     zip_path = sys.argv[1]
-    name = "bl_ext.user_default.{id}"
-    result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default",
-                                                      enable_on_install=True)
-    assert result == {{"FINISHED"}}, result
-    assert addon_utils.check(name)[1], "not enabled after install"
-    mod = sys.modules[name]
-    installed = os.path.dirname(mod.__file__)
+    {installed}
     assert installed.startswith(os.environ["BLENDER_USER_RESOURCES"]), installed
 
     # Use it: a built-in preset from the installed copy, built as objects by the operator.
@@ -120,7 +125,7 @@ INSTALL_SCRIPT = textwrap.dedent("""
     addon_utils.disable(name, default_set=True, handle_error=fail)
     addon_utils.enable(name, default_set=True, handle_error=fail)
     print("INSTALL-OK")
-""").format(id=MANIFEST_ID)
+""").format(id=MANIFEST_ID, installed=INSTALLED)
 
 
 def test_install_enable_disable_enable(built_zip, tmp_path):
@@ -139,13 +144,7 @@ LED_WALK_SCRIPT = textwrap.dedent("""
     import numpy as np
 
     zip_path, out = sys.argv[1], sys.argv[2]
-    name = "bl_ext.user_default.{id}"
-    result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default",
-                                                      enable_on_install=True)
-    assert result == {{"FINISHED"}}, result
-    assert addon_utils.check(name)[1], "not enabled after install"
-    mod = sys.modules[name]
-    installed = os.path.dirname(mod.__file__)
+    {installed}
     walked = {{}}
     for preset in sorted(glob.glob(os.path.join(installed, "presets", "led-*.json"))):
         started = time.perf_counter()
@@ -176,7 +175,7 @@ LED_WALK_SCRIPT = textwrap.dedent("""
                         "seconds": time.perf_counter() - started}}
         print(stem, walked[stem], flush=True)
     print("LED-WALK " + json.dumps(walked))
-""").format(id=MANIFEST_ID)
+""").format(id=MANIFEST_ID, installed=INSTALLED)
 
 
 def test_the_four_led_presets_render_lit_and_measure_from_the_installed_zip(built_zip, tmp_path):
