@@ -129,7 +129,7 @@ def main() -> int:
     print(f"the scenes' own bands {'meet' if meets[SCENE] else 'miss'} xy {XY_LIMIT} and luminance "
           f"{LUMINANCE_LIMIT} % on every preset; smallest uniform K meeting them: "
           f"{f'K = {good[0]}' if good else f'none of {ks}'} ({time.perf_counter() - start:.1f} s)")
-    return 0
+    return 0 if meets[SCENE] else 1  # a scene's own bands that miss the limits fail the run
 
 
 if __name__ == "__main__":

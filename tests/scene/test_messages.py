@@ -25,6 +25,12 @@ def _error(doc: dict, path: str | None = None) -> SceneError:
     return info.value
 
 
+def _refused(doc: dict, path: str) -> tuple[SceneError, list[tuple[float, float]]]:
+    """The error ``doc`` is refused with, naming ``path``, and its allowed ranges (not empty)."""
+    err = _error(doc, path)
+    return err, _assert_not_empty(err)
+
+
 def _assert_not_empty(err: SceneError) -> list[tuple[float, float]]:
     ranges = allowed_ranges(err.message)
     assert ranges, err.message
@@ -36,8 +42,7 @@ def _assert_not_empty(err: SceneError) -> list[tuple[float, float]]:
 def test_a_shrunk_body_blames_its_size_with_a_range_that_holds_the_lens():
     doc = _doc()
     doc["body"]["size"] = [80, 30]
-    err = _error(doc, "body.size")
-    (w_lo, w_hi), (h_lo, h_hi) = _assert_not_empty(err)
+    err, ((w_lo, w_hi), (h_lo, h_hi)) = _refused(doc, "body.size")
     assert "at most 15 mm" in err.message  # or the lens radius that fits the body as it is
     doc["body"]["size"] = [w_lo, h_lo]
     parse_scene(doc)
@@ -46,8 +51,7 @@ def test_a_shrunk_body_blames_its_size_with_a_range_that_holds_the_lens():
 def test_a_shrunk_body_of_four_lamps_blames_its_size():
     doc = _doc(FOUR_LAMPS)
     doc["body"]["size"][1] = 60  # the 90 mm lenses no longer fit in height
-    err = _error(doc, "body.size")
-    (w_lo, _), (h_lo, _) = _assert_not_empty(err)
+    err, ((w_lo, _), (h_lo, _)) = _refused(doc, "body.size")
     doc["body"]["size"] = [max(w_lo, doc["body"]["size"][0]), h_lo]
     parse_scene(doc)
 
@@ -55,8 +59,7 @@ def test_a_shrunk_body_of_four_lamps_blames_its_size():
 def test_a_lens_moved_out_of_the_body_blames_its_centre():
     doc = _doc()
     doc["lamps"][0]["center"] = [80, 0]
-    err = _error(doc, "lamps[0].center")
-    (x_lo, x_hi), (z_lo, z_hi) = _assert_not_empty(err)
+    err, ((x_lo, x_hi), (z_lo, z_hi)) = _refused(doc, "lamps[0].center")
     doc["lamps"][0]["center"] = [x_hi, z_lo]
     parse_scene(doc)
 
@@ -65,8 +68,7 @@ def test_a_lens_moved_out_of_the_body_blames_its_centre():
 def test_a_bulb_moved_along_the_axis_blames_the_offset(y):
     doc = _doc()
     doc["lamps"][0]["bulb"]["offset"] = [0, y, 0]
-    err = _error(doc, "lamps[0].bulb.offset")
-    (lo, hi), = _assert_not_empty(err)
+    err, ((lo, hi),) = _refused(doc, "lamps[0].bulb.offset")
     for value in (lo, hi, (lo + hi) / 2):
         ok = copy.deepcopy(doc)
         ok["lamps"][0]["bulb"]["offset"] = [0, value, 0]
@@ -91,13 +93,11 @@ def test_a_bulb_moved_sideways_blames_the_offset_with_the_distance_that_fits():
 def test_a_bulb_too_big_for_its_reflector_blames_the_radius():
     doc = _doc()
     doc["lamps"][0]["bulb"]["radius"] = 30
-    err = _error(doc, "lamps[0].bulb.radius")
-    (lo, hi), = _assert_not_empty(err)
+    err, ((lo, hi),) = _refused(doc, "lamps[0].bulb.radius")
     assert lo == 0 and 8 < hi < 30
     doc["lamps"][0]["bulb"]["radius"] = hi
     # It fits on the axis, deeper than the focus: the offset says where.
-    err = _error(doc, "lamps[0].bulb.offset")
-    (y_lo, y_hi), = _assert_not_empty(err)
+    err, ((y_lo, y_hi),) = _refused(doc, "lamps[0].bulb.offset")
     doc["lamps"][0]["bulb"]["offset"] = [0, (y_lo + y_hi) / 2, 0]
     parse_scene(doc)
 
@@ -105,8 +105,7 @@ def test_a_bulb_too_big_for_its_reflector_blames_the_radius():
 def test_a_cut_height_above_the_hemisphere_states_the_limit_of_this_pitch():
     doc = _doc()
     doc["lamps"][0]["cuts"]["height"] = 100
-    err = _error(doc, "lamps[0].cuts.height")
-    (lo, hi), = _assert_not_empty(err)
+    err, ((lo, hi),) = _refused(doc, "lamps[0].cuts.height")
     assert hi == pytest.approx(9 / 2 ** 0.5, abs=1e-3) and "pitch 9" in err.message
     doc["lamps"][0]["cuts"]["height"] = hi
     parse_scene(doc)
@@ -115,8 +114,7 @@ def test_a_cut_height_above_the_hemisphere_states_the_limit_of_this_pitch():
 def test_a_reflector_deeper_than_the_body_blames_the_focal_length_with_its_range():
     doc = _doc()
     doc["lamps"][0]["reflector"]["focal_length"] = 5
-    err = _error(doc, "lamps[0].reflector.focal_length")
-    (lo, hi), = _assert_not_empty(err)
+    err, ((lo, hi),) = _refused(doc, "lamps[0].reflector.focal_length")
     assert "or body.depth at least" in err.message
     doc["lamps"][0]["reflector"]["focal_length"] = lo  # the reflector fits; a deep bowl moves the focus
     _error(doc, "lamps[0].bulb.offset")  # toward the vertex: the bulb is next to move
@@ -127,8 +125,7 @@ def test_a_reflector_deeper_than_the_body_blames_the_focal_length_with_its_range
 def test_a_body_shallower_than_the_lens_blames_its_depth():
     doc = _doc()
     doc["body"]["depth"] = 3  # shallower than lens and cuts: no focal length helps
-    err = _error(doc, "body.depth")
-    (lo, hi), = _assert_not_empty(err)
+    err, ((lo, hi),) = _refused(doc, "body.depth")
     doc["body"]["depth"] = lo
     parse_scene(doc)
 
