@@ -176,8 +176,10 @@ def scene_for_render(bl_scene, *, camera_object=None, size: tuple[int, int] | No
     render = bl_scene.render
     width, height = size if size is not None else cm.render_size(
         render.resolution_x, render.resolution_y, render.resolution_percentage)
-    # The design's samples per pixel go with it (F12 renders them); only the size is Blender's.
-    image = {"width": int(width), "height": int(height), "samples": int(bl_scene.lamp_design.image.samples)}
+    # The design's samples per pixel (and edge samples) go with it (F12 renders them); only the size is Blender's.
+    own_image = bl_scene.lamp_design.image
+    image = {"width": int(width), "height": int(height), "samples": int(own_image.samples),
+             "edge_samples": int(own_image.edge_samples)}
     seen = scene_camera_to_dict(bl_scene, camera_object)
     own = _design_camera(bl_scene)
     if own is not None and same_view(seen, own):

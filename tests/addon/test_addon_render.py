@@ -188,6 +188,10 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     assert design["camera"]["position"][0] == pytest.approx(scene["camera"]["position"][0] + 50.0, abs=1e-3)
     assert design["image"] == {"width": 48, "height": 36, "samples": 1, "edge_samples": 0}
     assert link.sync_view(bl_scene) == ""  # both sides agree now
+    # F12 renders the design's samples and edge samples at Blender's size
+    bl_scene.lamp_design.image.samples, bl_scene.lamp_design.image.edge_samples = 4, 8
+    rendered = lamp_addon.render.camera.scene_for_render(bl_scene)["image"]
+    assert rendered == {"width": 48, "height": 36, "samples": 4, "edge_samples": 8}
 
 
 def test_a_users_camera_is_rendered_as_it_is_and_never_moved(lamp_addon, bl_scene):
