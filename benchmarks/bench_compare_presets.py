@@ -83,7 +83,7 @@ def main() -> int:
 def _row(bpy, package: str, preset: Path, size: tuple[int, int], samples: int, tracer_samples: int) -> str:
     comparison = importlib.import_module(f"{package}.lamp_addon.compare.comparison")
     design = importlib.import_module(f"{package}.lamp_addon.design.properties")
-    lamp_camera = importlib.import_module(f"{package}.lamp_addon.render.lamp_camera")
+    lamp_camera = importlib.import_module(f"{package}.lamp_addon.design.lamp_camera")
     sheet = importlib.import_module(f"{package}.lamp_addon.convert.sheet")
     bpy.ops.wm.read_homefile(use_empty=True)
     bl_scene = bpy.context.scene

@@ -53,7 +53,7 @@ def main() -> int:
                 scene = core.scene.load_scene(PRESET)
                 scene["image"] = {"width": args.size, "height": args.size, "samples": 1}
                 addon.design.properties.scene_to_design(bl_scene, scene)
-                addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+                addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
                 addon.design.builder.build_lamp(bl_scene, addon.design.properties.design_to_scene(bl_scene))
                 bl_scene.render.engine = "LAMP_TRACER"
                 addon.freeform.geometry.forget()

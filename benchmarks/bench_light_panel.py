@@ -45,7 +45,7 @@ def main() -> None:
             bl_scene = bpy.context.scene
             addon.design.properties.scene_to_design(bl_scene, scene)
             bl_scene.lamp_design.auto_build = False
-            addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+            addon.design.lamp_camera.ensure_lamp_camera(bl_scene)
             bl_scene.render.engine = "LAMP_TRACER"
             bpy.ops.render.render()  # the band pool's workers started
             start = time.perf_counter()

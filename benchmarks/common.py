@@ -34,7 +34,7 @@ def design_in_blender(bpy, package: str, document: dict):
     its lamp camera; returns (the scene, the add-on's Compare module)."""
     comparison = importlib.import_module(f"{package}.lamp_addon.compare.comparison")
     design = importlib.import_module(f"{package}.lamp_addon.design.properties")
-    lamp_camera = importlib.import_module(f"{package}.lamp_addon.render.lamp_camera")
+    lamp_camera = importlib.import_module(f"{package}.lamp_addon.design.lamp_camera")
     bl_scene = bpy.context.scene
     design.scene_to_design(bl_scene, document)
     bl_scene.camera, _ = lamp_camera.ensure_lamp_camera(bl_scene, frame=False)

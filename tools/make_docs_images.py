@@ -153,7 +153,7 @@ def draw_viewport(bpy, addon, bl_scene, width: int, height: int, window, view) -
 
     render = bl_scene.render
     kept = bl_scene.camera, render.engine, render.resolution_x, render.resolution_y
-    addon.render.view_link.pause_link(bl_scene)  # the probe's tiny render is not the user's size
+    addon.design.view_link.pause_link(bl_scene)  # the probe's tiny render is not the user's size
     bpy.utils.register_class(DocsDrawProbe)
     stand_in = None
     try:
@@ -171,7 +171,7 @@ def draw_viewport(bpy, addon, bl_scene, width: int, height: int, window, view) -
             bpy.data.objects.remove(stand_in)
             bpy.data.cameras.remove(camera_data)
         bpy.utils.unregister_class(DocsDrawProbe)
-        addon.render.view_link.resume_link(bl_scene)
+        addon.design.view_link.resume_link(bl_scene)
         offscreen.free()
     return out
 

@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
         bpy.ops.wm.read_homefile(use_empty=True)
         bl_scene = bpy.context.scene
         addon.design.properties.scene_to_design(bl_scene, design(core))
-        addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=True)  # the preset's direction, on this body
+        addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=True)  # the preset's direction, on this body
         assert bpy.ops.lamp.build() == {"FINISHED"}
         assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
         lens = next(ob for ob in addon.freeform.properties.role_objects(bl_scene) if ob.lamp_role.role == "lens")

@@ -123,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
         bl_scene = bpy.context.scene
         scene = design(core, args.rise, args.die_lm)
         addon.design.properties.scene_to_design(bl_scene, scene)
-        addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+        addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
         assert bpy.ops.lamp.build() == {"FINISHED"}
         assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
         print("LED parts:", add_led_parts(bpy, addon, bl_scene))

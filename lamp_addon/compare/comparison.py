@@ -55,12 +55,13 @@ from ..convert.sheet import (
     side_by_side,
 )
 from ..design import builder as design_builder
+from ..design import camera as render_camera
+from ..design import lamp_camera, view_link
 from ..design import root as design_root
 from ..freeform import materials as freeform_materials
 from ..freeform import parametric as freeform_parametric
 from ..freeform import properties as freeform_properties
-from ..render import camera as render_camera
-from ..render import lamp_camera, photometric_display, view_link
+from ..render import photometric_display
 from ..render.engine import ENGINE_ID
 from .scope import needs_build, objects_outside_design
 from .settings import MIN_BOUNCES, STANDARD_VIEW, SceneSettings, cycles_settings, exr_output_values
@@ -195,7 +196,7 @@ class CompareRun:
             self.ended = how
 
     def prepare(self) -> None:
-        """Make sure the Lamp Camera exists (made and framed the first time, ``render.lamp_camera``), build
+        """Make sure the Lamp Camera exists (made and framed the first time, ``design.lamp_camera``), build
         the lamp when its objects are out of date, fix the scene the tracer renders, set the render
         settings both renders use and leave out of the Cycles render every object that is not part of
         the design (``left_out``). Raises ``SceneError``."""

@@ -14,8 +14,8 @@ from ...core_tracer.images import display, imageio
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import load_scene
 from ..convert.sheet import CLIP_PERCENT, percent_text
+from ..design import lamp_camera
 from ..design import properties as design_properties
-from ..render import lamp_camera
 from .comparison import DEFAULT_SAMPLES, compare_design, write_comparison
 from .scope import left_out_text
 

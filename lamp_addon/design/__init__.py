@@ -7,6 +7,10 @@ the builder that makes the lamp's objects from it.
 - ``parts`` (what a lamp is made of), ``materials`` (its Cycles materials), ``builder`` (the parts
   as Blender objects under the root, ``root``).
 - ``panels``: the Lamp tab of the 3D Viewport sidebar.
+- How the design is seen: ``camera`` (the scene camera read and written in the design's space),
+  ``lamp_camera`` (the add-on's own camera, made and framed), ``view_link`` (the design's view and
+  the Lamp Camera kept equal), ``setup`` (what a file needs to show the lamp), ``view_frame`` (the
+  3D View framed on the lamp, Hide Other Objects).
 """
 
 from ..registration import modules_factory
@@ -14,9 +18,9 @@ from ..registration import modules_factory
 
 def modules() -> tuple:
     """The modules that register, in order: the properties before what uses them."""
-    from . import autobuild, ops, panels, properties
+    from . import autobuild, ops, panels, properties, view_frame
 
-    return (properties, ops, autobuild, panels)
+    return (properties, ops, autobuild, panels, view_frame)
 
 
 register, unregister = modules_factory(modules)

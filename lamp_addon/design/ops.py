@@ -20,9 +20,8 @@ from ..convert.layout import (
     refusal_of_new_lamp,
     with_new_lamp_unchecked,
 )
-from ..render import lamp_camera, view_link
-from ..render import setup as render_setup
-from . import builder, properties, validity
+from . import builder, lamp_camera, properties, validity, view_link
+from . import setup as render_setup
 from .operator import DesignOperator
 
 

@@ -17,8 +17,8 @@ import bpy
 from ...core_tracer.scene import functions, light_models
 from ...core_tracer.scene import spec as S
 from ..actions import ACTION_OPERATORS
-from ..render import setup as render_setup
 from . import properties, validity
+from . import setup as render_setup
 
 
 # (operator idname, button text, icon) drawn in the actions area, in order.

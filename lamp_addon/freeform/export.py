@@ -1,6 +1,6 @@
 """Export a free-form design for headless use: a ``lamp-scene/2`` JSON and a ``.glb`` beside it.
 
-The JSON is the design as F12 renders it (``render.camera.scene_for_render``: the scene camera's
+The JSON is the design as F12 renders it (``design.camera.scene_for_render``: the scene camera's
 numbers as F12 reads them, at the render size; so the file renders what F12 shows, bit for bit) with
 a ``freeform`` section: the mesh file's name and each part's object name, role and values.
 The ``.glb`` is written by Blender's own glTF exporter (``export_scene.gltf``, GLB, +Y up, no

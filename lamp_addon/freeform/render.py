@@ -58,7 +58,7 @@ def prepare(bl_scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph, scene: di
     except freeform_scene.SceneError as e:
         raise freeform_scene.SceneError("free-form part", status.part_error_text(e, parts)) from None
     # photometric: the parts' measured curves by their full paths, beside the .blend file or the preset
-    # (the lamps' were found with the design, ``render.camera.scene_for_render``)
+    # (the lamps' were found with the design, ``design.camera.scene_for_render``)
     with_parts = design_curves.with_curves(bl_scene, with_parts, ("freeform",))
     return Prepared(with_parts, freeform_geometry.geometry(bl_scene, depsgraph, parts, built))
 

@@ -11,7 +11,7 @@ import bpy
 
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
-from ..render.camera import scene_for_render
+from ..design.camera import scene_for_render
 from . import meshes as freeform_meshes
 from . import parametric, properties
 

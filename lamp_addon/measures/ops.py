@@ -32,9 +32,9 @@ from ...core_tracer import processes
 from ...core_tracer.scene.beside import with_curves_at
 from ...core_tracer.scene.reading import SceneError
 from .. import image_view, jobs, reports
+from ..design import camera as render_camera
 from ..design import properties as design_properties
 from ..freeform import written as freeform_written
-from ..render import camera as render_camera
 from . import settings
 
 REPORT_IMAGE = "Lamp Measures"

@@ -20,15 +20,15 @@ from ...core_tracer.scene.beside import environment_file
 from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import normalize
 from ..design import builder as design_builder
+from ..design import camera as render_camera
 from ..design import curves as design_curves
+from ..design import lamp_camera
 from ..design import properties as design_properties
 from ..design import root as design_root
+from ..design import setup as render_setup
 from ..design import validity as design_validity
 from ..freeform import loading as freeform_loading
 from ..freeform import parametric as freeform_parametric
-from ..render import camera as render_camera
-from ..render import lamp_camera
-from ..render import setup as render_setup
 from .state import SceneState
 
 # ---------------------------------------------------------------------------------------------
@@ -69,7 +69,7 @@ def design_as_seen(bl_scene: bpy.types.Scene) -> dict:
 def show_view(bl_scene: bpy.types.Scene, scene: dict) -> render_setup.News | None:
     """Show the design's view (just set from a preset) through the add-on's Lamp Camera.
 
-    The design's camera fields are the Lamp Camera (``render.view_link.sync_view``): it takes the
+    The design's camera fields are the Lamp Camera (``design.view_link.sync_view``): it takes the
     preset's view, made when the scene has none, and is framed on the body from that view's direction
     when the view does not show the whole body, as the first lamp of a file does (so a preset is
     framed the same whatever was applied before). A camera of the designer's stays as it is.

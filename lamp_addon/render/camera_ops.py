@@ -8,11 +8,11 @@ import bpy
 from .. import actions, reports
 from ..convert import camera as cm
 from ..design import root as design_root
+from ..design import view_frame
+from ..design.camera import is_lamp_camera, scene_camera_to_dict, scene_for_render
+from ..design.lamp_camera import ensure_lamp_camera, frame_on_body
 from ..design.operator import DesignOperator
-from . import view_frame
-from .camera import is_lamp_camera, scene_camera_to_dict, scene_for_render
-from .lamp_camera import ensure_lamp_camera, frame_on_body
-from .view_link import sync_view, write_design_camera
+from ..design.view_link import sync_view, write_design_camera
 
 
 class LAMP_OT_frame_design(DesignOperator, bpy.types.Operator):

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import bpy
 
+from ..design.camera import is_lamp_camera
 from ..design.panels import LampTab
-from .camera import is_lamp_camera
-from .view_link import view_status
+from ..design.view_link import view_status
 
 
 class LAMP_PT_camera_view(LampTab, bpy.types.Panel):

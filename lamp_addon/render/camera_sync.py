@@ -8,9 +8,9 @@ from __future__ import annotations
 import bpy
 
 from ..design import properties as design_properties
-from .camera import find_lamp_camera
-from .lamp_camera import CARRIED_KEY, carry_with_root
-from .view_link import is_linked, sync_view
+from ..design.camera import find_lamp_camera
+from ..design.lamp_camera import CARRIED_KEY, carry_with_root
+from ..design.view_link import is_linked, sync_view
 
 _syncing: list[bool] = []  # re-entrancy guard: writing one side triggers the handlers again
 

@@ -3,7 +3,7 @@
 As a ``RenderEngine`` the tracer gets everything Blender gives any engine: F12, render slots,
 Image > Save, ``bpy.ops.render.render(write_still=True)`` headless, the output and colour
 management panels. The scene it renders is the design from the Lamp panel seen through the
-scene camera at the render resolution (``render.camera.scene_for_render``), with the free-form
+scene camera at the render resolution (``design.camera.scene_for_render``), with the free-form
 parts the depsgraph shows (``freeform.render``).
 """
 
@@ -17,13 +17,13 @@ from ...core_tracer.raytrace import band_pool
 from ...core_tracer.raytrace.engine import PASS_NAMES
 from ...core_tracer.scene.reading import SceneError
 from .. import reports
+from ..design import camera
 from ..design import validity as design_validity
+from ..design.setup import ENGINE_ID
 from ..freeform import render as freeform_render
 from ..freeform import status as freeform_status
-from . import camera, photometric_display
+from . import photometric_display
 from . import viewport as render_viewport
-
-ENGINE_ID = "LAMP_TRACER"
 
 # Blender's name of each contribution pass, in the tracer's order: "Lamp Lens Surface", ...
 PASS_LABELS = {name: "Lamp " + name.replace("_", " ").title() for name in PASS_NAMES}

@@ -22,8 +22,8 @@ from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, reports
 from ..design import properties as design_properties
+from ..design import setup
 from ..design.operator import DesignOperator
-from . import setup
 
 
 class LAMP_OT_exposure_from_design(DesignOperator, bpy.types.Operator):

@@ -29,8 +29,9 @@ from ...core_tracer.images import glare
 from ...core_tracer.raytrace import band_pool
 from ...core_tracer.scene.reading import SceneError
 from .. import actions, image_view, jobs, reports
+from ..design import camera, view_link
 from ..design import validity as design_validity
-from . import camera, photometric_display, view_link
+from . import photometric_display
 
 IMAGE_NAME = "Lamp Tracer"
 

@@ -23,13 +23,13 @@ import numpy as np
 from ...core_tracer.images import display
 from ...core_tracer.scene.reading import SceneError
 from ..convert import viewport
+from ..design import camera as camera_module
 from ..design import curves as design_curves
 from ..design import properties as design_properties
 from ..design import root as design_root
 from ..design import validity as design_validity
 from ..freeform import geometry as freeform_geometry
 from ..freeform import render as freeform_render
-from . import camera as camera_module
 from . import photometric_display
 from .preview import ProgressivePreview
 

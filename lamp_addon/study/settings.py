@@ -23,10 +23,10 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.study import definition as st
 from ...core_tracer.study.parameters import resolve_parameter, study_parameters
 from ..convert import camera as cm
+from ..design import camera as render_camera
 from ..design import photometric_words
 from ..design import properties as design_properties
 from ..freeform import written as freeform_written
-from ..render import camera as render_camera
 from ..scene_settings import SceneSettings
 
 ALL_LAMPS = "ALL"

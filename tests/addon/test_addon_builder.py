@@ -268,7 +268,7 @@ def test_rebuild_replaces_in_place(lamp_addon, bl_scene, scene_mod):
     # The user's camera object is kept as it was; the first build made the Lamp Camera the scene camera
     # (test_addon_first_build.py: a camera the user picks afterwards stays the scene camera).
     assert cam.name in bl_scene.objects and cam.matrix_world == Matrix.Identity(4) and cam.data == cam_data
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera)
 
 
 @pytest.mark.slow

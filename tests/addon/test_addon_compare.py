@@ -165,7 +165,7 @@ def _handlers_installed(compare) -> list[str]:
 def _design_and_user_settings(lamp_addon, bl_scene, size=(24, 16)) -> dict:
     """The baseline design with its scene camera and the user's settings; returns those settings."""
     lamp_addon.design.properties.scene_to_design(bl_scene, _scene(size=size))
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
     return _settings(lamp_addon.compare, bl_scene)
 
@@ -177,7 +177,7 @@ def test_compare_design_fills_slots_and_restores_settings(lamp_addon, bl_scene, 
     compare = lamp_addon.compare
     scene = _scene(size=(40, 24))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     _user_settings(bl_scene)
     before = _settings(compare, bl_scene)
     result = compare.comparison.compare_design(bl_scene, samples=2, resolution=(40, 24))
@@ -235,7 +235,7 @@ def test_compare_design_creates_the_scene_camera(lamp_addon, bl_scene):
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     assert bl_scene.camera is None
     result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)  # the Lamp Camera, at the design's view
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera)  # the Lamp Camera, at the design's view
     assert result["size"] == (24, 16) and result["scene"]["camera"]["position"] == pytest.approx(
         scene["camera"]["position"], abs=1e-3)
     assert result["left_out"] == []

@@ -36,7 +36,7 @@ def test_the_image_of_a_new_design_follows_its_body_as_lamps_are_added(lamp_addo
         assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
         image = (design.image.width, design.image.height)
         assert image == lamp_addon.convert.layout.image_size_for_body(design.body.size), count
-        seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+        seen = lamp_addon.design.camera.scene_for_render(bl_scene)
         assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == image
         width, height = body_share(lamp_addon, seen)
         assert max(width, height) > 0.75 and min(width, height) > 0.4, (count, width, height)
@@ -61,7 +61,7 @@ def test_study_cells_frame_the_lamp(lamp_addon, bl_scene):
 
     scene = core_tracer.load_scene(str(FOUR_LAMPS))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene)
     settings = bl_scene.lamp_study
     settings.width, settings.height = 128, 128
     settings.axis_1.parameter, settings.axis_1.mode, settings.axis_1.values = "lens.ior", "LIST", "1.45, 1.6"
@@ -75,7 +75,7 @@ def test_study_cells_frame_the_lamp(lamp_addon, bl_scene):
     bl_scene.collection.objects.link(mine)
     mine.location, mine.rotation_euler = (0.0, -3.0, 0.0), (1.5708, 0.0, 0.0)
     bl_scene.camera = mine
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene, size=(128, 128))
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene, size=(128, 128))
     study = lamp_addon.study.settings.study_from_settings(bl_scene)
     for key in ("position", "target"):
         assert study.variants[0].scene["camera"][key] == pytest.approx(seen["camera"][key])

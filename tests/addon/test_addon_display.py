@@ -25,8 +25,8 @@ def _load(lamp_addon, bl_scene, path, size) -> dict:
     doc["image"] = {"width": size[0], "height": size[1]}
     scene = core_tracer.parse_scene(doc)
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
-    return lamp_addon.render.camera.scene_for_render(bl_scene)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    return lamp_addon.design.camera.scene_for_render(bl_scene)
 
 
 @pytest.mark.slow

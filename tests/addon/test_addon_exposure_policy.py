@@ -1,4 +1,4 @@
-"""One exposure policy (``lamp_addon.render.setup``): the exposure belongs to the view, not the design.
+"""One exposure policy (``lamp_addon.design.setup``): the exposure belongs to the view, not the design.
 
 A new file's first lamp sets the scene's exposure once (measured with the bulbs on, so a first design
 whose bulbs are all off does not wash out the lit one applied next); Build Lamp and Apply Preset never
@@ -51,9 +51,9 @@ def test_lamp_off_then_tail_lamp_then_f12_keeps_the_exposure(lamp_addon, startup
 
     apply_preset("paper-lamp-off.json")
     first = startup.view_settings.exposure
-    seen = lamp_addon.render.camera.scene_for_render(startup)
+    seen = lamp_addon.design.camera.scene_for_render(startup)
     assert not any(lamp["bulb"]["on"] for lamp in seen["lamps"])
-    lit = lamp_addon.render.setup.lit_version(seen)
+    lit = lamp_addon.design.setup.lit_version(seen)
     assert first == pytest.approx(lamp_addon.image_view.design_exposure(lit), abs=1e-5) and first < -2.0
 
     apply_preset(BASELINE.name)
@@ -63,7 +63,7 @@ def test_lamp_off_then_tail_lamp_then_f12_keeps_the_exposure(lamp_addon, startup
     assert startup.view_settings.exposure == first  # and so does Build
     codes = f12_codes(startup, tmp_path / "f12.png")
     assert startup.view_settings.exposure == first
-    clipped, spread = lens_reading(codes, lit_lens_mask(lamp_addon.render.camera.scene_for_render(startup)))
+    clipped, spread = lens_reading(codes, lit_lens_mask(lamp_addon.design.camera.scene_for_render(startup)))
     print(f"\nF12 of the tail lamp at {first:+.2f} EV: lit lens clipped {clipped:.1%}, spread {spread:.0f} codes")
     assert clipped < 0.01 and spread >= 30  # not the washed-out pink disk
 
@@ -130,7 +130,7 @@ def test_a_stop_lamp_beside_a_tail_lamp_in_one_study_is_brighter_by_their_bulbs(
     import bpy
 
     lamp_addon.design.properties.scene_to_design(bl_scene, _small_baseline())
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     settings = bl_scene.lamp_study
     settings.width, settings.height, settings.workers = 48, 48, 1
     settings.axis_1.parameter, settings.axis_1.mode, settings.axis_1.values = "function", "LIST", "tail, stop"

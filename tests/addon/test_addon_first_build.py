@@ -1,4 +1,4 @@
-"""The first build of a design sets the file up to show the lamp (``lamp_addon.render.setup``).
+"""The first build of a design sets the file up to show the lamp (``lamp_addon.design.setup``).
 
 In Blender's startup file the first Build makes the Lamp Camera (framing every lens) the scene
 camera, switches EEVEE to Lamp Tracer and sets the scene's exposure to the design's automatic
@@ -45,12 +45,12 @@ def test_first_build_in_the_startup_file_sets_the_scene_up_for_the_lamp(lamp_add
     report = capfd.readouterr().out
 
     lamp_camera = startup_scene.camera
-    assert lamp_addon.render.camera.is_lamp_camera(lamp_camera) and lamp_camera.name == "Lamp Camera"
+    assert lamp_addon.design.camera.is_lamp_camera(lamp_camera) and lamp_camera.name == "Lamp Camera"
     assert lamp_camera.parent == lamp_addon.design.root.find_root(startup_scene)  # moves with the lamp
     assert _object_state(camera) == before  # the user's camera object: untouched
     assert rims_in_image(lamp_addon, startup_scene) == [True]
     assert startup_scene.render.engine == "LAMP_TRACER"
-    expected = lamp_addon.image_view.design_exposure(lamp_addon.render.camera.scene_for_render(startup_scene))
+    expected = lamp_addon.image_view.design_exposure(lamp_addon.design.camera.scene_for_render(startup_scene))
     assert expected < -1.0  # a lit lens is many times display white
     assert startup_scene.view_settings.exposure == pytest.approx(expected, abs=1e-6)
     view = core_tracer.images.display.LAMP_VIEW  # lit red and amber keep their hue (issue 31)
@@ -91,7 +91,7 @@ def test_a_file_set_up_otherwise_is_left_alone(lamp_addon, startup_scene):
     lamp_addon.design.properties.scene_to_design(startup_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert startup_scene.render.engine == "CYCLES" and startup_scene.view_settings.exposure == -1.0
-    assert lamp_addon.render.camera.is_lamp_camera(startup_scene.camera)
+    assert lamp_addon.design.camera.is_lamp_camera(startup_scene.camera)
 
 
 def test_the_first_lamp_added_sets_the_scene_up(lamp_addon, startup_scene):
@@ -101,7 +101,7 @@ def test_the_first_lamp_added_sets_the_scene_up(lamp_addon, startup_scene):
 
     assert len(startup_scene.lamp_design.lamps) == 0 and startup_scene.lamp_design.auto_build
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
-    assert lamp_addon.render.camera.is_lamp_camera(startup_scene.camera)
+    assert lamp_addon.design.camera.is_lamp_camera(startup_scene.camera)
     assert startup_scene.render.engine == "LAMP_TRACER" and startup_scene.view_settings.exposure < -1.0
     assert rims_in_image(lamp_addon, startup_scene) == [True]
     # The build the timer makes (tests have no event loop: the same build called here).
@@ -119,13 +119,13 @@ def test_the_lamp_camera_moves_with_the_root(lamp_addon, startup_scene):
 
     lamp_addon.design.properties.scene_to_design(startup_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    view = dict(lamp_addon.render.camera.scene_for_render(startup_scene)["camera"])
+    view = dict(lamp_addon.design.camera.scene_for_render(startup_scene)["camera"])
     root = lamp_addon.design.root.find_root(startup_scene)
     root.location = (1.2, 2.5, 0.7)
     root.rotation_euler = Euler((0.0, 0.0, math.radians(180)))
     startup_scene.view_layers[0].update()
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    moved = lamp_addon.render.camera.scene_for_render(startup_scene)["camera"]
+    moved = lamp_addon.design.camera.scene_for_render(startup_scene)["camera"]
     np.testing.assert_allclose(moved["position"], view["position"], atol=1e-3)
     np.testing.assert_allclose(moved["target"], view["target"], atol=1e-3)
     assert rims_in_image(lamp_addon, startup_scene) == [True]
@@ -188,9 +188,9 @@ def test_the_first_build_keeps_a_view_that_shows_the_body_and_frames_one_that_do
 
     scene = _baseline()
     lamp_addon.design.properties.scene_to_design(startup_scene, scene)
-    assert lamp_addon.render.setup.design_view_shows_body(startup_scene)
+    assert lamp_addon.design.setup.design_view_shows_body(startup_scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    seen = lamp_addon.render.camera.scene_for_render(startup_scene)["camera"]
+    seen = lamp_addon.design.camera.scene_for_render(startup_scene)["camera"]
     np.testing.assert_allclose(seen["position"], scene["camera"]["position"], atol=1e-3)  # the preset's view
     np.testing.assert_allclose(seen["target"], scene["camera"]["target"], atol=1e-3)
 
@@ -198,11 +198,11 @@ def test_the_first_build_keeps_a_view_that_shows_the_body_and_frames_one_that_do
     startup_scene = bpy.context.scene
     close = {**scene, "camera": {**scene["camera"], "position": [60.0, -150.0, 20.0]}}  # too close to hold the body
     lamp_addon.design.properties.scene_to_design(startup_scene, close)
-    assert not lamp_addon.render.setup.design_view_shows_body(startup_scene)
+    assert not lamp_addon.design.setup.design_view_shows_body(startup_scene)
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert rims_in_image(lamp_addon, startup_scene) == [True]
-    seen = lamp_addon.render.camera.scene_for_render(startup_scene)["camera"]
-    assert lamp_addon.render.setup.design_view_shows_body(startup_scene)  # the design's fields follow the framing
+    seen = lamp_addon.design.camera.scene_for_render(startup_scene)["camera"]
+    assert lamp_addon.design.setup.design_view_shows_body(startup_scene)  # the design's fields follow the framing
     direction = np.subtract(seen["target"], seen["position"])
     wanted = np.subtract(close["camera"]["target"], close["camera"]["position"])
     cosine = direction @ wanted / np.linalg.norm(direction) / np.linalg.norm(wanted)
@@ -220,7 +220,7 @@ def test_a_preset_applied_in_the_startup_file_sets_the_scene_up(lamp_addon, star
     bpy.ops.lamp.preset_refresh()
     wm.lamp_presets_index = next(i for i, item in enumerate(wm.lamp_presets) if item.file.endswith(BASELINE.name))
     assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
-    assert lamp_addon.render.camera.is_lamp_camera(startup_scene.camera)
+    assert lamp_addon.design.camera.is_lamp_camera(startup_scene.camera)
     assert startup_scene.render.engine == "LAMP_TRACER" and startup_scene.view_settings.exposure < -1.0
     assert rims_in_image(lamp_addon, startup_scene) == [True]
     assert _object_state(startup_scene.objects["Camera"]) == camera_before

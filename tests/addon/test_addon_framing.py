@@ -67,7 +67,7 @@ def test_startup_file_build_then_compare_shows_the_lamp_in_both_halves(lamp_addo
     before = tuple(startup_camera.location), tuple(startup_camera.rotation_euler), startup_camera.data.lens
     lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)  # the first Build made it the scene camera
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera)  # the first Build made it the scene camera
     assert bpy.ops.lamp.compare_cycles(samples=SAMPLES) == {"FINISHED"}
     result = lamp_addon.compare.comparison.compare_design(bl_scene, samples=SAMPLES)
     _assert_same_lamp(result, clean_shares)
@@ -76,7 +76,7 @@ def test_startup_file_build_then_compare_shows_the_lamp_in_both_halves(lamp_addo
     # Put back exactly: the Cube and the Light render again; the startup camera never moved.
     assert not bl_scene.objects["Cube"].hide_render and not bl_scene.objects["Light"].hide_render
     assert (tuple(startup_camera.location), tuple(startup_camera.rotation_euler), startup_camera.data.lens) == before
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera)
     # The render size is the design's, not the startup file's 1920 x 1080.
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == SIZE
     lamp_addon.compare.comparison.write_comparison(str(tmp_path / "startup-compare.png"), result)
@@ -125,7 +125,7 @@ def test_a_cancelled_comparison_puts_the_left_out_objects_back(lamp_addon, bl_sc
 
 def rims_in_image(lamp_addon, bl_scene) -> list[bool]:
     """For each lamp: whether its whole lens rim projects inside the image the tracer renders."""
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     size = (seen["image"]["width"], seen["image"]["height"])
     inside = []
     for lamp in seen["lamps"]:
@@ -151,7 +151,7 @@ def test_four_lamps_added_in_the_startup_file_are_all_in_the_image(lamp_addon, b
     for _ in range(3):
         assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera)
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 4
 
 
@@ -161,14 +161,14 @@ def test_four_lamps_after_add_lamp_are_all_in_the_image(lamp_addon, bl_scene):
 
     lamp_addon.design.properties.scene_to_design(bl_scene, _baseline())
     assert bpy.ops.lamp.build() == {"FINISHED"}  # an empty file: Build makes the Lamp Camera
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera)
     for _ in range(3):
         assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert bpy.ops.lamp.build() == {"FINISHED"}
     assert len(bl_scene.lamp_design.lamps) == 4
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 4
     # What the tracer renders holds every lens: a red lens pixel near each lens centre.
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     image = core_tracer.render(seen)
     size = (seen["image"]["width"], seen["image"]["height"])
     for lamp in seen["lamps"]:
@@ -182,8 +182,8 @@ def test_four_lamps_after_add_lamp_are_all_in_the_image(lamp_addon, bl_scene):
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 3
     bl_scene.lamp_design.body.size = (320.0, 110.0)
     bl_scene.lamp_design.body.center = (95.0, 0.0)
-    assert lamp_addon.render.lamp_camera.keep_framed(bl_scene)
-    near = lamp_addon.render.camera.scene_for_render(bl_scene)["camera"]
+    assert lamp_addon.design.lamp_camera.keep_framed(bl_scene)
+    near = lamp_addon.design.camera.scene_for_render(bl_scene)["camera"]
     assert math.dist(near["position"], near["target"]) < 0.8 * far
     assert rims_in_image(lamp_addon, bl_scene) == [True] * 3
 
@@ -198,7 +198,7 @@ def test_without_reframing_the_fourth_lamp_leaves_the_image(lamp_addon, bl_scene
     for _ in range(3):
         doc = from_ops.design_with_new_lamp(doc, 0)
     lamp_addon.design.properties.scene_to_design(bl_scene, doc)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene)
     assert rims_in_image(lamp_addon, bl_scene) != [True] * 4
 
 
@@ -215,8 +215,8 @@ def test_frame_lamp_moves_only_the_lamp_camera(lamp_addon, bl_scene):
     bl_scene.lamp_design.body.center = (90.0, 0.0)
     assert bpy.ops.lamp.frame_design() == {"FINISHED"}
     assert (tuple(mine.location), tuple(mine.rotation_euler), mine.data.lens) == before
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)  # framing shows the lamp
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera)  # framing shows the lamp
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     assert seen["camera"]["target"] == pytest.approx([90.0, 40.0, 0.0], abs=1e-3)  # the body box's centre
     body = lamp_addon.convert.camera.body_box(seen)
     size = (seen["image"]["width"], seen["image"]["height"])
@@ -247,7 +247,7 @@ def test_the_design_fov_reaches_both_halves_of_compare(lamp_addon, bl_scene):
     wide = lamp_addon.compare.comparison.compare_design(bl_scene, samples=1)
     assert narrow["scene"]["camera"]["fov_deg"] == pytest.approx(16.0, abs=1e-4)
     assert wide["scene"]["camera"]["fov_deg"] == pytest.approx(40.0, abs=1e-4)
-    assert lamp_addon.render.camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
+    assert lamp_addon.design.camera.scene_camera_to_dict(bl_scene)["fov_deg"] == pytest.approx(40.0, abs=1e-4)
     # Cycles sees it too: the lens covers a smaller share of the wider view, in both halves.
     for half in ("tracer", "cycles"):
         assert lens_share(wide[half]) < 0.5 * lens_share(narrow[half]), half

@@ -15,7 +15,7 @@ def _scene(lamp_addon, addon_core, bl_scene) -> None:
     scene = addon_core.scene.load_scene(BASELINE)
     scene["image"] = {"width": 24, "height": 16, "samples": 1}
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
 
 

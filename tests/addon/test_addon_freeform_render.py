@@ -18,7 +18,7 @@ def _converted(lamp_addon, addon_core, bl_scene, path=BASELINE, size=SIZE) -> di
     scene = addon_core.scene.load_scene(path)
     scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     lamp_addon.freeform.conversion.convert_to_freeform(bl_scene)
     bl_scene.render.engine = "LAMP_TRACER"
     return scene
@@ -40,7 +40,7 @@ def _f12(bl_scene, path) -> np.ndarray:
 def _expected(lamp_addon, bl_scene) -> np.ndarray:
     import bpy
 
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     prepared = lamp_addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(), seen)
     return lamp_addon.freeform.render.render_passes(prepared, seen["image"]["width"], seen["image"]["height"]).image
 
@@ -60,7 +60,7 @@ def test_f12_renders_the_parts_with_the_freeform_tracer(lamp_addon, addon_core, 
         lamp_addon.freeform.properties.set_role(obj, "NONE")
     parametric = _f12(bl_scene, tmp_path / "parametric.exr")
     np.testing.assert_array_equal(parametric[:, :, :3],
-                                  addon_core.render(lamp_addon.render.camera.scene_for_render(bl_scene)))
+                                  addon_core.render(lamp_addon.design.camera.scene_for_render(bl_scene)))
 
 
 @pytest.mark.slow
@@ -103,7 +103,7 @@ def test_exported_pair_renders_the_same_from_the_command_line(lamp_addon, addon_
     lens = next(o for o in lamp_addon.freeform.properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
     lens.modifiers.new("Bend", "SIMPLE_DEFORM").deform_axis = "Z"  # reshaped: modifiers are applied
     lens.modifiers["Bend"].angle = 0.2
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bpy.context.view_layer.update()
     in_blender = _f12(bl_scene, tmp_path / "blender.exr")
     json_path = tmp_path / "my lamp.json"
@@ -265,7 +265,7 @@ def _mixed(lamp_addon, addon_core, bl_scene, size=SIZE, path=BASELINE) -> tuple[
     scene["image"] = {"width": size[0], "height": size[1], "samples": 1}
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lamp_addon.design.builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     return scene, _add_my_lamp(lamp_addon, bl_scene)
 
@@ -291,7 +291,7 @@ def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, ad
     rgba = _f12(bl_scene, tmp_path / "mixed.exr")
     np.testing.assert_array_equal(rgba[:, :, :3], _expected(lamp_addon, bl_scene))
     prepared = lamp_addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
-                                                  lamp_addon.render.camera.scene_for_render(bl_scene))
+                                                  lamp_addon.design.camera.scene_for_render(bl_scene))
     roles = sorted(p["role"] for p in prepared.scene["freeform"]["parts"])
     assert roles == ["body", "bulb", "bulb", "lens", "lens", "reflector", "side_wall", "socket"]
     # Both lamps are in the picture: the red lens in the middle, the designer's bulb through their slab.
@@ -308,7 +308,7 @@ def test_f12_renders_the_parametric_lamp_with_the_designers_parts(lamp_addon, ad
     assert status.rendered_text(bl_scene) == status.NOT_BUILT_TEXT
     assert "Build Lamp" in " ".join(line.text for line in status.panel_lines(bl_scene))
     parts_only = lamp_addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(),
-                                                    lamp_addon.render.camera.scene_for_render(bl_scene))
+                                                    lamp_addon.design.camera.scene_for_render(bl_scene))
     assert sorted(p["role"] for p in parts_only.scene["freeform"]["parts"]) == ["bulb", "lens"]
 
 
@@ -325,14 +325,14 @@ def test_exported_mixed_pair_renders_the_same_from_the_command_line(lamp_addon, 
     root.rotation_euler = (0.1, 0.2, 0.3)
     for obj in (bpy.data.objects["My Slab"], bpy.data.objects["My Bulb"]):
         obj.parent = root  # the designer's parts move with the lamp
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bpy.context.view_layer.update()
     in_blender = _f12(bl_scene, tmp_path / "blender.exr")
     json_path = tmp_path / "mixed.json"
     assert bpy.ops.lamp.freeform_export(filepath=str(json_path)) == {"FINISHED"}
     doc = json.loads(json_path.read_text())
     built = lamp_addon.freeform.parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get())
-    parametric = lamp_addon.freeform.parametric.part_documents(built, lamp_addon.render.camera.scene_for_render(
+    parametric = lamp_addon.freeform.parametric.part_documents(built, lamp_addon.design.camera.scene_for_render(
         bl_scene))
     assert len(doc["freeform"]["parts"]) == 2 + len(parametric) >= 8  # the designer's 2 and the lamp's
     proc = run_cli("render", json_path, "-o", tmp_path / "cli.exr")

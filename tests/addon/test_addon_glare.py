@@ -24,7 +24,7 @@ def _glare_scene(size=(48, 32)) -> dict:
 
 def _load_design(lamp_addon, bl_scene, scene: dict) -> None:
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def _cli_exr(scene: dict, tmp_path) -> np.ndarray:
@@ -52,7 +52,7 @@ def test_engine_glare_equals_the_command_line(lamp_addon, bl_scene, tmp_path):
     buf = oiio.ImageBuf(str(path))
     engine = np.asarray(buf.get_pixels(oiio.FLOAT)).reshape(32, 48, -1)[:, :, :3]
 
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     assert seen["glare"] == {"on": True, "threshold": 2.0, "strength": 0.75}
     cli = _cli_exr(seen, tmp_path)
     np.testing.assert_array_equal(engine, cli)  # pixel for pixel
@@ -68,7 +68,7 @@ def test_lamp_tracer_image_and_job_hold_the_glare(lamp_addon, bl_scene):
     scene = _glare_scene()
     _load_design(lamp_addon, bl_scene, scene)
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     expected = glare.apply(core_tracer.render(seen), seen)
     image = bpy.data.images["Lamp Tracer"]
     assert image["lamp_exposure"] == 0.0  # shown at the view's exposure, as F12

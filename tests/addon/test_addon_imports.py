@@ -74,7 +74,7 @@ def test_the_render_side_does_not_depend_on_a_panel():
         return seen
 
     panels = {name for name in graph if name.rpartition(".")[2] in ("panel", "panels")}
-    for module in ("render.engine", "render.camera", "render.lamp_camera", "render.view_link", "render.camera_sync",
+    for module in ("render.engine", "design.camera", "design.lamp_camera", "design.view_link", "render.camera_sync",
                    "render.camera_ops", "render.ops", "compare.ops", "render.exposure"):
         assert not reached(module) & panels, (module, reached(module) & panels)
 

@@ -59,6 +59,6 @@ def test_no_import_circle_through_the_study_camera_and_compare_modules():
                     todo.append(nxt)
         return False
 
-    for module in ("study.ops", "study.panel", "study.settings", "render.camera", "render.lamp_camera",
-                   "render.view_link", "render.ops", "compare.ops", "compare.headless", "jobs"):
+    for module in ("study.ops", "study.panel", "study.settings", "design.camera", "design.lamp_camera",
+                   "design.view_link", "render.ops", "compare.ops", "compare.headless", "jobs"):
         assert not reaches(module, module), module

@@ -55,7 +55,7 @@ def test_the_lamp_view_button_sets_the_view_on_request_only(lamp_addon, addon_co
     settings.view_transform, settings.look = "AgX", "AgX - Punchy"  # the user's own choice, before any lamp
     scene = addon_core.scene.load_scene(NIGHT)
     lamp_addon.presets.apply.apply_preset(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     assert bpy.ops.lamp.build() == {"FINISHED"}
     bpy.ops.lamp.exposure_from_design()
     assert (settings.view_transform, settings.look) == ("AgX", "AgX - Punchy")  # kept: it is theirs

@@ -19,7 +19,7 @@ def night(lamp_addon, addon_core, bl_scene):
     scene["image"] = {"width": 96, "height": 64}
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     bl_scene.lamp_design.auto_build = False
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene)
     bl_scene.render.engine = "LAMP_TRACER"
     return bl_scene
 

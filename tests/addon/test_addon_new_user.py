@@ -87,14 +87,14 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}
     assert bpy.ops.lamp.build() == {"FINISHED"}
     watch.lap("Add Lamp x2 + Build")
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera)
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera)
     assert (startup_camera.matrix_world, startup_camera.data.lens) == camera_before
     assert bl_scene.render.engine == "LAMP_TRACER"
     assert (bl_scene.render.resolution_x, bl_scene.render.resolution_y) == SIZE
     assert rims_in_image(lamp_addon, bl_scene) == [True, True]
 
     # F12: the lit lens through AgX at the scene's (the design's) exposure.
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     lit = lit_lens_mask(seen)
     assert lit.sum() > 0.02 * lit.size  # the lenses are plainly in the picture
     codes = f12_codes(bl_scene, tmp_path / "f12.png")
@@ -132,7 +132,7 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):
     watch.lap("Compare (Cycles 4 spp)")
     compare = bpy.data.images[lamp_addon.compare.comparison.COMPARE_IMAGE]
     shown = lamp_addon.image_view.image_to_array(compare)  # labels strip on top, a gap between the halves
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     lit = lit_lens_mask(seen)
     height, width = lit.shape
     below = shown[shown.shape[0] - height:]
@@ -145,7 +145,7 @@ def test_a_new_user_in_the_startup_file(lamp_addon, gpu_context, tmp_path):
     # The viewport orbited to a three-quarter view: the draw path into an offscreen shows the lamp.
     window, view = _three_quarter_view(*VIEWPORT)  # around the origin: orbit where the root now is
     drawn = _draw_viewport(lamp_addon, bl_scene, *VIEWPORT, window, view @ root.matrix_world.inverted())
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera) and bl_scene.render.resolution_x == SIZE[0]
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera) and bl_scene.render.resolution_x == SIZE[0]
     watch.lap("viewport: coarse + full stages, drawn")
     pixels = drawn["pixels"][::-1, :, :3]  # top row first
     background = np.asarray(drawn["scene"]["background"], np.float32)

@@ -27,7 +27,7 @@ def no_openimageio(monkeypatch):
 def _design(lamp_addon, bl_scene) -> None:
     scene = scene_with(image={"width": 24, "height": 16})
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def test_openimageio_is_missing_as_blender_sees_it(lamp_addon, no_openimageio):

@@ -20,7 +20,7 @@ SIZE = 120
 def _stop_lamp(lamp_addon, addon_core, bl_scene, size: int = SIZE) -> dict:
     scene = addon_core.scene.load_scene(PRESETS / "photometric-stop-lamp.json")
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.resolution_x = bl_scene.render.resolution_y = size
     bl_scene.lamp_design.image.samples = 1
@@ -31,7 +31,7 @@ def _xyz(lamp_addon, addon_core, bl_scene) -> np.ndarray:
     """The tracer's own photometric image of what F12 renders (CIE XYZ, cd/m²)."""
     import bpy
 
-    scene = lamp_addon.render.camera.scene_for_render(bl_scene, camera_object=bpy.context.scene.camera)
+    scene = lamp_addon.design.camera.scene_for_render(bl_scene, camera_object=bpy.context.scene.camera)
     assert scene["light_model"] == "photometric" and scene["camera"]["ev100"] == 15.0
     return addon_core.render(scene, SIZE, SIZE)
 
@@ -137,14 +137,14 @@ def test_a_measured_spectrum_is_read_beside_the_saved_blend_file(lamp_addon, add
 
     _named_curve_design(lamp_addon, addon_core, bl_scene)
     with pytest.raises(addon_core.SceneError, match="save the .blend file"):
-        lamp_addon.render.camera.scene_for_render(bl_scene)
+        lamp_addon.design.camera.scene_for_render(bl_scene)
     bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "lamp.blend"))
     bl_scene = bpy.context.scene
     with pytest.raises(addon_core.SceneError, match="beside the saved .blend file") as missing:
-        lamp_addon.render.camera.scene_for_render(bl_scene)
+        lamp_addon.design.camera.scene_for_render(bl_scene)
     assert missing.value.path == "lamps[0].bulb.spectrum_file" and str(tmp_path) in missing.value.message
     _write_led_curve(tmp_path)
-    scene = lamp_addon.render.camera.scene_for_render(bl_scene)
+    scene = lamp_addon.design.camera.scene_for_render(bl_scene)
     assert scene["lamps"][0]["bulb"]["spectrum_file"] == str(tmp_path / "my-led.csv")
     pixels = render_engine_exr(bl_scene, tmp_path / "f12.exr")
     XYZ = addon_core.render(scene, 48, 48)
@@ -160,7 +160,7 @@ def test_a_preset_finds_its_curves_beside_it(lamp_addon, addon_core, bl_scene, t
     (tmp_path / "led-lamp.json").write_text(addon_core.scene_to_json(addon_core.parse_scene(doc)))
     scene = addon_core.scene.load_scene(tmp_path / "led-lamp.json")
     lamp_addon.presets.apply.apply_preset(bl_scene, scene, str(tmp_path / "led-lamp.json"))
-    rendered = lamp_addon.render.camera.scene_for_render(bl_scene)
+    rendered = lamp_addon.design.camera.scene_for_render(bl_scene)
     assert rendered["lamps"][0]["bulb"]["spectrum_file"] == str(tmp_path / "my-led.csv")
 
 
@@ -173,7 +173,7 @@ def test_auto_exposure_is_measured_once_per_render(lamp_addon, addon_core, bl_sc
     pixels = render_engine_exr(bl_scene, tmp_path / "f12.exr")
     import bpy
 
-    scene = lamp_addon.render.camera.scene_for_render(bl_scene, camera_object=bpy.context.scene.camera)
+    scene = lamp_addon.design.camera.scene_for_render(bl_scene, camera_object=bpy.context.scene.camera)
     ev100 = lamp_addon.render.photometric_display.auto_ev100(scene)
     assert 5.0 < ev100 < 20.0 and ev100 != 15.0
     expected = addon_core.photometry.output.xyz_to_linear_rec709(addon_core.render(scene, SIZE, SIZE))
@@ -183,11 +183,11 @@ def test_auto_exposure_is_measured_once_per_render(lamp_addon, addon_core, bl_sc
 def test_a_photometric_design_never_sets_the_scenes_exposure(lamp_addon, addon_core, bl_scene):
     """Its EV100 is in the pixels: Build and Apply Preset leave the view's exposure at 0 for the stop
     and the tail lamp alike (the paper's automatic exposure would darken the stop lamp to match)."""
-    setup = lamp_addon.render.setup
+    setup = lamp_addon.design.setup
     for name in ("photometric-stop-lamp", "photometric-tail-lamp"):
         scene = addon_core.scene.load_scene(PRESETS / f"{name}.json")
         lamp_addon.presets.apply.apply_preset(bl_scene, scene)
-        lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+        lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
         bl_scene.view_settings.exposure = -3.0  # a paper-mode exposure left over: Exposure from Design resets it
         setup.set_design_exposure(bl_scene)  # what Exposure from Design does (Build and Apply never expose)
         assert bl_scene.view_settings.exposure == 0.0, name

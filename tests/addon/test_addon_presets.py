@@ -350,7 +350,7 @@ def _assert_camera_shows(camera_module, bl_scene, preset: dict) -> None:
 def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_scene, tmp_path, addon_core, capfd):
     import bpy
 
-    camera = browser.render.camera
+    camera = browser.design.camera
     team = add_library(tmp_path, "Team share")
     props = browser.design.properties
 
@@ -370,7 +370,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     assert preset["camera"]["position"] != design_camera["position"]
     for key, value in seen.items():
         assert preset["camera"][key] == (value if isinstance(value, str) else pytest.approx(value, abs=1e-4)), key
-    # Moving the Lamp Camera moved the design's camera: one view (render.view_link.sync_view).
+    # Moving the Lamp Camera moved the design's camera: one view (design.view_link.sync_view).
     for key, value in props.design_to_scene(bl_scene)["camera"].items():
         assert value == (seen[key] if isinstance(value, str) else pytest.approx(seen[key], abs=1e-4)), key
 
@@ -421,7 +421,7 @@ def test_applying_never_moves_the_designers_own_camera(browser, bl_scene, addon_
     assert bpy.ops.lamp.preset_apply() == {"FINISHED"}
     assert 'your "Studio" is kept as it was' in capfd.readouterr().out
     assert ([list(row) for row in own.matrix_world], own.data.lens, own.data.shift_x) == before
-    assert browser.render.camera.is_lamp_camera(bl_scene.camera)
+    assert browser.design.camera.is_lamp_camera(bl_scene.camera)
     preset = addon_core.library.presets.load_preset(BUILTIN / "four-lamp-rear-combination.json")
     assert leaves(browser.design.properties.design_to_scene(bl_scene)) == leaves(preset)  # the design has its view
 
@@ -456,7 +456,7 @@ def test_the_scene_camera_is_saved_even_if_the_designs_own_camera_is_invalid(bro
     bpy.ops.lamp.preset_apply()
     own = bpy.data.objects.new("Studio", bpy.data.cameras.new("Studio"))
     bl_scene.collection.objects.link(own)
-    browser.render.camera.apply_camera(own, browser.design.properties.design_to_scene(bl_scene)["camera"], bl_scene)
+    browser.design.camera.apply_camera(own, browser.design.properties.design_to_scene(bl_scene)["camera"], bl_scene)
     bl_scene.camera = own
     bl_scene.lamp_design.camera.position = (0.0, 500.0, 0.0)  # behind the lamp: not a view of it
     with pytest.raises(addon_core.SceneError, match="camera.position"):

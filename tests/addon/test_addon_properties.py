@@ -237,19 +237,19 @@ def test_tags_and_text(lamp_addon, bl_scene, S, scene_mod):
 
 
 def test_an_image_size_out_of_range_is_not_clamped_through_the_render_resolution(lamp_addon, bl_scene, scene_mod):
-    """The design's image size is Blender's render resolution (``render.view_link``): a width out of
+    """The design's image size is Blender's render resolution (``design.view_link``): a width out of
     range is not handed to Blender, whose resolution would clamp it and write the clamped size back."""
     import bpy
 
     lamp_addon.design.properties.scene_to_design(bl_scene, scene_mod.load_scene(BASELINE))
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene)
     before = bl_scene.render.resolution_x
     bl_scene.lamp_design.image.width = -5
     assert bpy.ops.lamp.lamp_add() == {"FINISHED"}  # frames the view again and syncs the link
-    lamp_addon.render.view_link.sync_view(bl_scene)
+    lamp_addon.design.view_link.sync_view(bl_scene)
     assert bl_scene.lamp_design.image.width == -5 and bl_scene.render.resolution_x == before
     text = lamp_addon.design.validity.status(bl_scene).problem.text()
     assert text == "Camera & Image › Width: -5 is out of range; allowed [1, 8192] px"
     bl_scene.lamp_design.image.width = 200
-    lamp_addon.render.view_link.sync_view(bl_scene)
+    lamp_addon.design.view_link.sync_view(bl_scene)
     assert bl_scene.render.resolution_x == 200

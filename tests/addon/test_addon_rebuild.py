@@ -66,7 +66,7 @@ def test_build_in_the_startup_file_touches_none_of_its_objects(lamp_addon, addon
     # scene's camera pointer is a scene setting, not the Camera object: the first build makes the Lamp
     # Camera the scene camera (test_addon_first_build.py), so the lamp is what F12 shows.
     assert {name: _state(bpy.data.objects[name]) for name in before} == before
-    assert camera.name == "Camera" and lamp_addon.render.camera.is_lamp_camera(startup_scene.camera)
+    assert camera.name == "Camera" and lamp_addon.design.camera.is_lamp_camera(startup_scene.camera)
     assert world.use_fake_user  # the startup world is replaced by the design's, not lost
     root = lamp_addon.design.root.find_root(startup_scene)
     assert root.name == "Lamp Design" and root.type == "EMPTY" and root.parent is None

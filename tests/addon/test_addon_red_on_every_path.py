@@ -32,7 +32,7 @@ def stop_lamp(lamp_addon, addon_core, bl_scene):
     scene["image"].update(width=SIZE, height=SIZE, samples=1)
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     bl_scene.lamp_design.auto_build = False
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.resolution_x = bl_scene.render.resolution_y = SIZE
     return bl_scene

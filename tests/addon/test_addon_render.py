@@ -57,7 +57,7 @@ def _preset_scene(camera: dict | None = None, size=(48, 32)) -> dict:
 
 def _load_design(lamp_addon, bl_scene, scene: dict) -> None:
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
 
 
 def _axes(cam, camera_module):
@@ -74,7 +74,7 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
     scene = _preset_scene(CAMERAS[name], size)
     _load_design(lamp_addon, bl_scene, scene)
     # What the renderers see: the camera as the depsgraph evaluates it (location + rotation, float32)
-    back = lamp_addon.render.camera.scene_camera_to_dict(bl_scene, lamp_addon.render.camera.evaluated_camera(bl_scene))
+    back = lamp_addon.design.camera.scene_camera_to_dict(bl_scene, lamp_addon.design.camera.evaluated_camera(bl_scene))
     want = scene["camera"]
     assert back["type"] == want["type"]
     assert back["sensor_fit"] == want["sensor_fit"]
@@ -91,12 +91,12 @@ def test_camera_round_trip(lamp_addon, bl_scene, name, size):
         assert back["fov_deg"] == pytest.approx(want["fov_deg"], abs=1e-4)
     else:
         assert back["width"] == pytest.approx(want["width"], abs=1e-4)
-    rendered = lamp_addon.render.camera.scene_for_render(bl_scene)
+    rendered = lamp_addon.design.camera.scene_for_render(bl_scene)
     assert rendered["image"] == {"width": size[0], "height": size[1], "samples": 1, "edge_samples": 0}
     # The scene camera shows the design's own view (to single precision): the render takes the design's
     # numbers, free of float32 (issue 24), which are what the camera object gives back, within it.
     assert rendered["camera"] == lamp_addon.design.properties.design_to_scene(bl_scene)["camera"]
-    assert lamp_addon.render.camera.same_view(rendered["camera"], back)
+    assert lamp_addon.design.camera.same_view(rendered["camera"], back)
 
 
 def _tracer_projection(cam: dict, width: int, height: int, point) -> tuple[float, float]:
@@ -121,7 +121,7 @@ def test_tracer_camera_projects_like_blender(lamp_addon, bl_scene, name, size):
 
     scene = _preset_scene(CAMERAS[name], size)
     _load_design(lamp_addon, bl_scene, scene)
-    read = lamp_addon.render.camera.scene_camera_to_dict(bl_scene)
+    read = lamp_addon.design.camera.scene_camera_to_dict(bl_scene)
     for point in ([-110, 0, -60], [110, 0, 60], [45, 30, -20], [0, 80, 0]):
         blender = world_to_camera_view(bl_scene, bl_scene.camera, Vector(point) * 0.001)
         tracer = _tracer_projection(read, size[0], size[1], point)
@@ -131,15 +131,15 @@ def test_tracer_camera_projects_like_blender(lamp_addon, bl_scene, name, size):
 
 def test_camera_refuses_what_the_tracer_cannot_render(lamp_addon, addon_core, bl_scene):
     with pytest.raises(addon_core.SceneError, match="no camera"):
-        lamp_addon.render.camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.design.camera.scene_camera_to_dict(bl_scene)
     _load_design(lamp_addon, bl_scene, _preset_scene())
     bl_scene.render.pixel_aspect_x = 2.0
     with pytest.raises(addon_core.SceneError, match="pixel aspect 2:1"):
-        lamp_addon.render.camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.design.camera.scene_camera_to_dict(bl_scene)
     bl_scene.render.pixel_aspect_x = 1.0
     bl_scene.camera.data.type = "PANO"
     with pytest.raises(addon_core.SceneError, match='camera.type: "pano"'):
-        lamp_addon.render.camera.scene_camera_to_dict(bl_scene)
+        lamp_addon.design.camera.scene_camera_to_dict(bl_scene)
 
 
 def _user_camera(lamp_addon, bl_scene, scene: dict):
@@ -148,8 +148,8 @@ def _user_camera(lamp_addon, bl_scene, scene: dict):
 
     ob = bpy.data.objects.new("My Camera", bpy.data.cameras.new("My Camera"))
     bl_scene.collection.objects.link(ob)
-    lamp_addon.render.camera.apply_camera(ob, scene["camera"], bl_scene)
-    lamp_addon.render.camera.set_render_size(bl_scene, scene["image"])
+    lamp_addon.design.camera.apply_camera(ob, scene["camera"], bl_scene)
+    lamp_addon.design.camera.set_render_size(bl_scene, scene["image"])
     bl_scene.camera = ob
     return ob
 
@@ -159,7 +159,7 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     moving the Lamp Camera or changing the resolution writes the design: one view, one size."""
     import bpy
 
-    rc, lc, link = lamp_addon.render.camera, lamp_addon.render.lamp_camera, lamp_addon.render.view_link
+    rc, lc, link = lamp_addon.design.camera, lamp_addon.design.lamp_camera, lamp_addon.design.view_link
     scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     ob, made = lc.ensure_lamp_camera(bl_scene, frame=False)
@@ -190,14 +190,14 @@ def test_the_design_view_is_the_lamp_camera_and_the_render_size(lamp_addon, bl_s
     assert link.sync_view(bl_scene) == ""  # both sides agree now
     # F12 renders the design's samples and edge samples at Blender's size
     bl_scene.lamp_design.image.samples, bl_scene.lamp_design.image.edge_samples = 4, 8
-    rendered = lamp_addon.render.camera.scene_for_render(bl_scene)["image"]
+    rendered = lamp_addon.design.camera.scene_for_render(bl_scene)["image"]
     assert rendered == {"width": 48, "height": 36, "samples": 4, "edge_samples": 8}
 
 
 def test_a_users_camera_is_rendered_as_it_is_and_never_moved(lamp_addon, bl_scene):
     import bpy
 
-    rc, lc, link = lamp_addon.render.camera, lamp_addon.render.lamp_camera, lamp_addon.render.view_link
+    rc, lc, link = lamp_addon.design.camera, lamp_addon.design.lamp_camera, lamp_addon.design.view_link
     scene = _preset_scene(CAMERAS["perspective-vertical"], (40, 30))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
     lc.ensure_lamp_camera(bl_scene, frame=False)
@@ -231,7 +231,7 @@ def test_an_out_of_date_design_camera_does_not_block_a_render(lamp_addon, addon_
     with pytest.raises(addon_core.SceneError, match=r"camera\.position: y = 500"):
         lamp_addon.design.properties.design_to_scene(bl_scene)
     # The Blender camera renders, and it replaces the design's camera before the scene is checked.
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-3)
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     _assert_shown(lamp_addon, bpy.data.images["Lamp Tracer"], core_tracer.render(seen))
@@ -252,7 +252,7 @@ def test_engine_equals_core_render(lamp_addon, bl_scene, tmp_path):
     _load_design(lamp_addon, bl_scene, scene)
     bl_scene.render.engine = "LAMP_TRACER"
     rgba = render_engine_exr(bl_scene, tmp_path / "engine.exr")
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     # The scene the engine rendered is the preset's, camera included (up to Blender's float32 storage).
     assert seen["camera"]["position"] == pytest.approx(scene["camera"]["position"], abs=1e-4)
     assert seen["camera"]["fov_deg"] == pytest.approx(scene["camera"]["fov_deg"], abs=1e-4)
@@ -278,7 +278,7 @@ def test_engine_traces_its_bands_in_the_worker_processes(lamp_addon, addon_core,
     bl_scene.render.threads = 2
     rgba = render_engine_exr(bl_scene, tmp_path / "engine.exr")
     assert pool.renders == renders + 1
-    expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.design.camera.scene_for_render(bl_scene))
     np.testing.assert_array_equal(rgba[:, :, :3], expected)
     lamp_addon.render.engine.unregister()
     try:
@@ -298,7 +298,7 @@ def test_engine_renders_percentage_and_writes_still(lamp_addon, bl_scene, tmp_pa
     assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
     image, _ = imageio.read_image(tmp_path / "still.png")
     assert image.shape == (20, 32, 3)
-    expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.design.camera.scene_for_render(bl_scene))
     assert expected.shape == (20, 32, 3)
     # PNG: 8-bit sRGB under the scene's view transform; compare where the view is the identity
     bl_scene.view_settings.view_transform = "Standard"
@@ -442,7 +442,7 @@ def test_engine_writes_contribution_passes_to_multilayer_exr(lamp_addon, bl_scen
     assert set(layers) == {"ViewLayer"}
     got = layers["ViewLayer"]
     assert set(got) == {"Combined", *LABELS.values()}
-    expected = core_tracer.render_passes(lamp_addon.render.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render_passes(lamp_addon.design.camera.scene_for_render(bl_scene))
     assert got["Combined"].shape == (24, 40, 4)
     np.testing.assert_array_equal(got["Combined"][:, :, :3], expected.image)
     np.testing.assert_array_equal(got["Combined"][:, :, 3], 1.0)
@@ -460,7 +460,7 @@ def test_engine_without_contribution_passes_writes_combined_only(lamp_addon, bl_
     layers = _render_multilayer_exr(bl_scene, tmp_path / "combined.exr")
     assert {layer: set(passes) for layer, passes in layers.items()} == {"ViewLayer": {"Combined"}}
     np.testing.assert_array_equal(layers["ViewLayer"]["Combined"][:, :, :3],
-                                  core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene)))
+                                  core_tracer.render(lamp_addon.design.camera.scene_for_render(bl_scene)))
 
 
 def test_engine_contribution_passes_are_per_view_layer(lamp_addon, bl_scene, tmp_path):
@@ -473,7 +473,7 @@ def test_engine_contribution_passes_are_per_view_layer(lamp_addon, bl_scene, tmp
     layers = _render_multilayer_exr(bl_scene, tmp_path / "layers.exr")
     assert set(layers["ViewLayer"]) == {"Combined", *LABELS.values()}
     assert set(layers["Plain"]) == {"Combined"}
-    expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.design.camera.scene_for_render(bl_scene))
     np.testing.assert_array_equal(layers["Plain"]["Combined"][:, :, :3], expected)
     np.testing.assert_array_equal(layers["ViewLayer"]["Combined"][:, :, :3], expected)
 
@@ -492,7 +492,7 @@ def test_engine_contribution_passes_follow_transparency_and_region(lamp_addon, b
     x0, x1, y0, y1 = 0, 15, 17, 32  # the border in whole pixels, rows counted from the bottom
     alpha = got["Combined"][:, :, 3]
     assert set(np.unique(alpha)) == {0.0, 1.0}  # the lamp's outline cuts the region
-    expected = core_tracer.render_passes(lamp_addon.render.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render_passes(lamp_addon.design.camera.scene_for_render(bl_scene))
     for name, label in LABELS.items():
         want = expected.passes[name][32 - y1:32 - y0, x0:x1] * alpha[:, :, None]
         np.testing.assert_array_equal(got[label], want, err_msg=label)
@@ -538,7 +538,7 @@ def test_contribution_passes_in_the_compositor(lamp_addon, bl_scene, tmp_path):
     assert offered() == {"Image", "Alpha", *LABELS.values()}
     tree.links.new(render_layers.outputs["Lamp Bulb"], tree.nodes.new("NodeGroupOutput").inputs[0])
     rgba = render_engine_exr(bl_scene, tmp_path / "bulb.exr")
-    bulb = core_tracer.render_passes(lamp_addon.render.camera.scene_for_render(bl_scene)).passes["bulb"]
+    bulb = core_tracer.render_passes(lamp_addon.design.camera.scene_for_render(bl_scene)).passes["bulb"]
     assert bulb.max() > 1.0
     np.testing.assert_array_equal(rgba[:, :, :3], bulb)
     layer.lamp_contribution_passes = False
@@ -614,14 +614,14 @@ def test_render_operator_image_equals_core_render(lamp_addon, bl_scene):
     image = bpy.data.images["Lamp Tracer"]
     assert image.is_float and tuple(image.size) == (48, 32)
     assert image.colorspace_settings.name == lamp_addon.image_view.scene_linear_colorspace()
-    expected = core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene))
+    expected = core_tracer.render(lamp_addon.design.camera.scene_for_render(bl_scene))
     _assert_shown(lamp_addon, image, expected)
     # Again at another size: the same data-block, resized, still exact.
     bl_scene.render.resolution_x = 24
     assert bpy.ops.lamp.render_tracer() == {"FINISHED"}
     again = bpy.data.images["Lamp Tracer"]
     assert again == image and tuple(again.size) == (24, 32)
-    _assert_shown(lamp_addon, again, core_tracer.render(lamp_addon.render.camera.scene_for_render(bl_scene)))
+    _assert_shown(lamp_addon, again, core_tracer.render(lamp_addon.design.camera.scene_for_render(bl_scene)))
 
 
 def _assert_shown(lamp_addon, image, expected) -> None:
@@ -640,7 +640,7 @@ def test_render_operator_refuses_without_camera(lamp_addon, bl_scene):
         bpy.ops.lamp.render_tracer()
     # ... and both do: Build in a file without a camera makes the Lamp Camera.
     assert bpy.ops.lamp.build() == {"FINISHED"}
-    assert lamp_addon.render.camera.is_lamp_camera(bl_scene.camera) and bpy.ops.lamp.render_tracer.poll()
+    assert lamp_addon.design.camera.is_lamp_camera(bl_scene.camera) and bpy.ops.lamp.render_tracer.poll()
 
 
 def test_tracer_job_runs_on_a_thread_and_equals_core_render(lamp_addon):
@@ -722,7 +722,7 @@ def test_engine_renders_the_designs_samples(lamp_addon, bl_scene, tmp_path, capf
     bl_scene.lamp_design.image.samples = 4
     bl_scene.render.engine = "LAMP_TRACER"
     rgba = render_engine_exr(bl_scene, tmp_path / "engine.exr")
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     assert seen["image"]["samples"] == 4
     np.testing.assert_array_equal(rgba[:, :, :3], core_tracer.render(seen))
     assert not np.array_equal(rgba[:, :, :3], core_tracer.render({**seen, "image": {**seen["image"], "samples": 1}}))
@@ -746,7 +746,7 @@ def test_engine_film_transparent_alpha_is_the_covered_fraction_with_samples(lamp
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
     rgba = render_engine_exr(bl_scene, tmp_path / "alpha.exr")
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     alpha = rgba[:, :, 3]
     edge = (alpha > 0) & (alpha < 1)
     assert edge.sum() > 40  # the outline's pixels

@@ -28,7 +28,7 @@ def design(lamp_addon, bl_scene):
     with open(PRESET, encoding="utf-8") as f:
         scene = core_tracer.parse_scene(json.load(f))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     settings = bl_scene.lamp_study
     settings.width, settings.height, settings.fit_lamp = 32, 32, False  # cells of exactly that size
     settings.workers = 2

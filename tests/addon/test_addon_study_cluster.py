@@ -24,7 +24,7 @@ def design(lamp_addon, bl_scene, tmp_path, monkeypatch):
     with open(BASELINE, encoding="utf-8") as f:
         scene = core_tracer.parse_scene(json.load(f))
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     one_axis(bl_scene.lamp_study, width=32, height=32, fit_lamp=False)
     return bl_scene
 

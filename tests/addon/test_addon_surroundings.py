@@ -83,14 +83,14 @@ def test_a_transparent_film_leaves_out_the_surroundings_but_not_their_light(lamp
     doc["image"] = {"width": 48, "height": 32, "samples": samples}
     scene = core_tracer.parse_scene(doc)
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.render.film_transparent = True
     rgba = render_engine_exr(bl_scene, tmp_path / "film.exr")
     alpha = rgba[:, :, 3]
     assert (alpha == 0).sum() > 100 and (alpha == 1).sum() > 100
     np.testing.assert_allclose(rgba[alpha == 0, :3], 0.0, atol=1e-7)  # no sky where nothing is
-    seen = lamp_addon.render.camera.scene_for_render(bl_scene)
+    seen = lamp_addon.design.camera.scene_for_render(bl_scene)
     full = core_tracer.render(seen)
     # Where every ray hits the lamp, the sky still shows in the lens and lights the body.
     np.testing.assert_allclose(rgba[alpha == 1, :3], full[alpha == 1], rtol=1e-6, atol=1e-7)

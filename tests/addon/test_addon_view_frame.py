@@ -1,5 +1,5 @@
 """The 3D View framed on the lamp, and the startup Cube named, never hidden silently
-(``lamp_addon.render.view_frame``).
+(``lamp_addon.design.view_frame``).
 
 In Blender's startup file the lamp is built at the origin inside the 2 m Cube. The first lamp frames
 the 3D Views on the design as View Selected does (checked through each region's own matrices: the
@@ -18,10 +18,10 @@ def _inside_every_view(lamp_addon, bl_scene) -> list[tuple[str, float]]:
     """(area, reach) per 3D View of the windows: the largest |x|, |y| of the design's box corners in the
     region's normalised device coordinates (inside the region below 1), through the region's own
     projection matrix (Blender's ``window_matrix``) and its view matrix."""
-    corners = lamp_addon.render.view_frame.design_corners(bl_scene)
+    corners = lamp_addon.design.view_frame.design_corners(bl_scene)
     reaches = []
-    for area, _region, view in lamp_addon.render.view_frame.views_of(bl_scene):
-        to_clip = view.window_matrix @ lamp_addon.render.view_frame.view_matrix(view)
+    for area, _region, view in lamp_addon.design.view_frame.views_of(bl_scene):
+        to_clip = view.window_matrix @ lamp_addon.design.view_frame.view_matrix(view)
         reach = 0.0
         for corner in corners:
             x, y, _, w = to_clip @ corner.to_4d()
@@ -34,8 +34,8 @@ def _inside_every_view(lamp_addon, bl_scene) -> list[tuple[str, float]]:
 def test_the_view_matrix_is_blenders(lamp_addon, startup_scene):
     """The view matrix computed from the view's centre, rotation and distance is the one Blender drew
     the startup file's 3D View with (to its stored single precision)."""
-    for _, _, view in lamp_addon.render.view_frame.views_of(startup_scene):
-        ours = lamp_addon.render.view_frame.view_matrix(view)
+    for _, _, view in lamp_addon.design.view_frame.views_of(startup_scene):
+        ours = lamp_addon.design.view_frame.view_matrix(view)
         scale = view.view_distance
         assert max(abs(a - b) for ra, rb in zip(ours, view.view_matrix, strict=True)
                    for a, b in zip(ra, rb, strict=True)) < 1e-3 * scale
@@ -48,7 +48,7 @@ def _cube_state(ob) -> tuple:
 def test_the_first_lamp_frames_the_3d_view_and_names_the_cube(lamp_addon, startup_scene, capfd):
     import bpy
 
-    views = lamp_addon.render.view_frame.views_of(startup_scene)
+    views = lamp_addon.design.view_frame.views_of(startup_scene)
     assert views  # the startup file's Layout has a 3D View, under xvfb-run as on a desktop
     before = {id(v): (tuple(v.view_location), v.view_distance) for _, _, v in views}
     reach_before = dict(_inside_every_view(lamp_addon, startup_scene))
@@ -68,7 +68,7 @@ def test_the_first_lamp_frames_the_3d_view_and_names_the_cube(lamp_addon, startu
     assert cube.hide_get() and startup_scene.objects["Light"].hide_get()
     assert not cube.hide_render  # renders unchanged
     bpy.ops.ed.undo_push(message="after hide")
-    assert lamp_addon.render.view_frame.enclosing(startup_scene) == []
+    assert lamp_addon.design.view_frame.enclosing(startup_scene) == []
 
 
 def test_hide_other_objects_is_one_undo_step_and_alt_h_shows_them(lamp_addon, startup_scene):
@@ -76,7 +76,7 @@ def test_hide_other_objects_is_one_undo_step_and_alt_h_shows_them(lamp_addon, st
 
     assert bpy.types.LAMP_OT_hide_others.bl_options == {"REGISTER", "UNDO"}  # headless Blender has no undo stack
     assert bpy.ops.lamp.hide_others() == {"FINISHED"}
-    others = [ob for ob in startup_scene.objects if not lamp_addon.render.view_frame.is_lamp_object(ob)]
+    others = [ob for ob in startup_scene.objects if not lamp_addon.design.view_frame.is_lamp_object(ob)]
     assert others and all(ob.hide_get() for ob in others)
     assert not bpy.ops.lamp.hide_others.poll()  # only the lamp is visible now
     window = bpy.context.window
@@ -94,7 +94,7 @@ def test_frame_lamp_frames_the_3d_view_on_a_moved_lamp(lamp_addon, startup_scene
     assert bpy.ops.lamp.build() == {"FINISHED"}
     root = lamp_addon.design.root.find_root(startup_scene)
     root.location = (3.0, 2.0, 1.0)
-    for _, _, view in lamp_addon.render.view_frame.views_of(startup_scene):
+    for _, _, view in lamp_addon.design.view_frame.views_of(startup_scene):
         view.view_location, view.view_distance = (-5.0, 0.0, 0.0), 30.0  # the user looked elsewhere
     startup_scene.view_layers[0].update()
     assert bpy.ops.lamp.frame_design() == {"FINISHED"}

@@ -31,7 +31,7 @@ def _design(lamp_addon, bl_scene):
     scene = core_tracer.load_scene(str(BASELINE))
     scene["image"] = {"width": 24, "height": 16}
     lamp_addon.design.properties.scene_to_design(bl_scene, scene)
-    lamp_addon.render.lamp_camera.ensure_lamp_camera(bl_scene)
+    lamp_addon.design.lamp_camera.ensure_lamp_camera(bl_scene)
     bl_scene.render.engine = "LAMP_TRACER"
     bl_scene.lamp_design.auto_build = False
     return bl_scene.lamp_design

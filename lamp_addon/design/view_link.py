@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 
 from ...core_tracer.scene import spec as S
-from ..design import properties as design_properties
+from . import properties as design_properties
 from .camera import apply_camera, find_lamp_camera, is_lamp_camera, scene_camera_to_dict, set_render_size
 
 LINK_KEY = "lamp_view_link"  # scene custom property: the view last seen in the design and in Blender

@@ -40,9 +40,10 @@ from ...core_tracer.scene.reading import SceneError
 from ...core_tracer.scene.validate import parse_scene
 from .. import image_view
 from ..convert import camera as cm
-from ..design import properties as design_properties
 from . import camera, lamp_camera, view_frame
-from .engine import ENGINE_ID
+from . import properties as design_properties
+
+ENGINE_ID = "LAMP_TRACER"  # the Lamp Tracer's RenderEngine (``render.engine``), which a file set up renders with
 
 # scene custom property: JSON {"exposure": the value the add-on set, or null, "model": the light model
 # last seen, "exposures": {light model: the exposure kept for it}}

@@ -32,9 +32,9 @@ import bpy
 
 from ..convert import camera as cm
 from ..convert import units
-from ..design import curves as design_curves
-from ..design import properties as design_properties
-from ..design import root as design_root
+from . import curves as design_curves
+from . import properties as design_properties
+from . import root as design_root
 
 MM_PER_BU = units.MM_PER_BU
 CAMERA_NAME = "Lamp Camera"

@@ -17,8 +17,8 @@ from mathutils import Matrix, Vector
 from .. import actions, reports
 from ..convert import camera as cm
 from ..convert.units import BU_PER_MM
-from ..design import properties as design_properties
-from ..design import root as design_root
+from . import properties as design_properties
+from . import root as design_root
 from .camera import is_lamp_camera
 
 MARGIN = 0.8  # the design's box fills at most this fraction of the region's half-width and half-height

@@ -8,8 +8,8 @@ from __future__ import annotations
 import bpy
 
 from ..convert import camera as cm
-from ..design import properties as design_properties
-from ..design import root as design_root
+from . import properties as design_properties
+from . import root as design_root
 from .camera import (
     CAMERA_NAME,
     LAMP_CAMERA_KEY,
