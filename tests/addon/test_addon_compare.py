@@ -381,7 +381,8 @@ def test_compare_operator(lamp_addon, bl_scene, tmp_path):
     assert not (tmp_path / "c.png").exists()
     assert bpy.ops.lamp.compare_cycles(samples=1, filepath=str(tmp_path / "c.exr")) == {"FINISHED"}
     written, scene = imageio.read_image(tmp_path / "c.exr")
-    assert written.shape == shown.shape and scene["image"] == {"width": 24, "height": 16, "samples": 1}
+    assert written.shape == shown.shape
+    assert scene["image"] == {"width": 24, "height": 16, "samples": 1, "edge_samples": 0}
     with pytest.raises(RuntimeError, match=r"\.jpg is not an image format"):
         bpy.ops.lamp.compare_cycles(samples=1, filepath=str(tmp_path / "c.jpg"))
     assert not (tmp_path / "c.jpg").exists()

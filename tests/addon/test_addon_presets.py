@@ -366,7 +366,7 @@ def test_a_preset_records_the_view_the_designer_sees(browser, add_library, bl_sc
     seen = camera.scene_camera_to_dict(bl_scene)
     assert bpy.ops.lamp.preset_save(name="Amber, low view", author="Alice", library=team) == {"FINISHED"}
     preset = addon_core.library.presets.load_preset(Path(team) / "amber-low-view.json")
-    assert preset["image"] == {"width": 80, "height": 45, "samples": 1}  # what F12 renders
+    assert preset["image"] == {"width": 80, "height": 45, "samples": 1, "edge_samples": 0}  # what F12 renders
     assert preset["camera"]["position"] != design_camera["position"]
     for key, value in seen.items():
         assert preset["camera"][key] == (value if isinstance(value, str) else pytest.approx(value, abs=1e-4)), key

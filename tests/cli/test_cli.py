@@ -213,7 +213,7 @@ def test_render_exr_with_passes(tmp_path):
     image, sc = imageio.read_image(out)
     assert image.shape == (24, 40, 3)
     assert np.isfinite(image).all() and (image >= 0).all() and image.max() > 0
-    assert sc["image"] == {"width": 40, "height": 24, "samples": 1}
+    assert sc["image"] == {"width": 40, "height": 24, "samples": 1, "edge_samples": 0}
     expected = load_scene(BASELINE)
     expected["image"] = {"width": 40, "height": 24}
     assert sc["lamps"] == expected["lamps"] and sc["body"] == expected["body"]
@@ -266,7 +266,7 @@ def test_render_samples_override_the_scene(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "24x16 px at 4 samples" in proc.stdout
     image, sc = imageio.read_image(out)
-    assert sc["image"] == {"width": 24, "height": 16, "samples": 4}
+    assert sc["image"] == {"width": 24, "height": 16, "samples": 4, "edge_samples": 0}
     scene = load_scene(BASELINE)
     scene["image"].update(width=24, height=16, samples=4)
     np.testing.assert_array_equal(image, render(scene))
