@@ -250,7 +250,8 @@ def cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
     area_radius = outline.half_w if outline.round else math.sqrt(outline.area / math.pi)  # same cell count
     light = preview_subdivision(area_radius, p) if preview else mesh_builder.MAX_CELL_SUBDIVISION
     most = light + 1 if preview else mesh_builder.MAX_CELL_SUBDIVISION
-    k = subdivisions.get((t, p, h, most), partial(_cut_subdivision, t, p, h, most))
+    tol = mesh_builder.chord_tolerance()  # Convert to Free-form's finer one needs more quads
+    k = subdivisions.get((t, p, h, most, tol), partial(_cut_subdivision, t, p, h, most, tol))
     return min(k, light), k > light
 
 
@@ -269,9 +270,9 @@ def body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple], sun: dict
                     paint, Matrix.Identity(4))
 
 
-def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:
+def _cut_subdivision(thickness: float, pitch: float, height: float, most: int, tol: float) -> int:
     rho = None if height == 0 else cut_sphere_radius(pitch, height)
-    return fisheye.cut_subdivision(fisheye.CutSurface(thickness, pitch, height, rho), most=most)[0]
+    return fisheye.cut_subdivision(fisheye.CutSurface(thickness, pitch, height, rho), tol, most=most)[0]
 
 
 def preview_subdivision(radius: float, pitch: float) -> int:
