@@ -1,10 +1,11 @@
 """Convert to Free-form, and the issue's "parametric ≡ free-form" test: every built-in preset rendered
 by the parametric tracer and, after conversion, by the free-form tracer on the converted meshes.
 
-Tolerance. The builder's meshes lie within the chord tolerance ε = 0.05 mm of the analytic surfaces
-(``design.parts.CHORD_TOLERANCE_MM``, measured per mesh by the builder). A hit point is thus off by at
-most ε: 2 % of the 2.3 mm a pixel covers on the lamp at 96² (the design camera spans 225 mm), and
-1.7 % of the 3 mm plate a ray crosses (absorption, eq. 2). So a pixel agrees within τ = 2 % of its
+Tolerance. Convert's meshes lie within the chord tolerance ε = 0.0125 mm of the analytic surfaces
+(``convert.meshes.builder.FREEFORM_CHORD_TOLERANCE_MM``, measured per mesh; Build's within 0.05 mm). A
+hit point is thus off by at most ε (at Build's 0.05 mm: 2 % of the 2.3 mm a pixel covers on the lamp
+at 96², the design camera spanning 225 mm, and 1.7 % of the 3 mm plate a ray crosses, absorption eq. 2).
+So a pixel agrees within τ = 2 % of its
 value (its largest channel; at least 0.1 % of the image's brightest pixel, so that near-black pixels
 are not held to a relative bound). Silhouettes and creases (the rim, the cut cells' edges) are where
 an ε shift moves a whole pixel from one surface to another: pixels whose value differs from a
