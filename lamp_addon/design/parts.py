@@ -141,11 +141,11 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
                                  "Side Wall BSDF")], axis),
         *(dataclasses.replace(part, matrix=axis) for part in collecting),
         MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, tol),
-                  partial(part_meshes.sphere_mesh, rb, tol),
+                  partial(part_meshes.sphere_mesh, rb),
                   [Slot(f"{base}.bulb", f"{label} Bulb", partial(materials.bulb, lamp=lamp))],
                   _translation(cx + bx, by, cz + bz)),
         MeshPart(f"{base}.socket", f"{label} Socket", ("socket", rs, g["vertex"], by, tol),
-                  partial(part_meshes.socket_mesh, rs, g["vertex"], by, tol),
+                  partial(part_meshes.socket_mesh, rs, g["vertex"], by),
                   [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
     if uses_leds(lamp):  # the LED dies in place of bulb and socket

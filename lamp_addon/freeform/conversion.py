@@ -89,7 +89,7 @@ def convert_to_freeform(bl_scene: bpy.types.Scene) -> ConvertReport:
     report = ConvertReport(earlier_parts=len(properties.role_objects(bl_scene)))
     scene = design_properties.design_to_scene(bl_scene)  # raises SceneError before anything changes
     report.built = not design_builder.is_up_to_date(bl_scene)
-    with mesh_builder.tolerances():  # the free-form meshes' finer tolerances
+    with mesh_builder.tolerances(mesh_builder.FREEFORM_CHORD_TOLERANCE_MM, mesh_builder.FREEFORM_CUT_TOLERANCE_MM):
         design_builder.build_lamp(bl_scene, scene)
     root = design_root.find_root(bl_scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()

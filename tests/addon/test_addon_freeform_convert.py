@@ -113,6 +113,36 @@ def test_convert_makes_closed_lenses_with_roles_and_hides_the_parametric_parts(l
     assert lamp_addon.freeform.parametric.built_parts(bl_scene, bpy.context.evaluated_depsgraph_get()) == []
 
 
+def test_convert_makes_finer_meshes_and_leaves_the_built_parts_at_builds_tolerance(lamp_addon, addon_core, bl_scene):
+    """Convert makes its meshes to ``FREEFORM_CHORD_TOLERANCE_MM`` / ``FREEFORM_CUT_TOLERANCE_MM`` (issue 32),
+    the parametric parts stay as Build makes them, and the finer tolerances hold in their context only:
+    another thread (Auto Build's worker) makes Build's meshes meanwhile."""
+    import importlib
+    import threading
+
+    import bpy
+
+    mesh_builder = importlib.import_module(f"{lamp_addon.__name__}.convert.meshes.builder")
+    _design(lamp_addon, addon_core, bl_scene, BASELINE)
+    lamp_addon.design.builder.build_lamp(bl_scene, lamp_addon.design.properties.design_to_scene(bl_scene))
+    lens = next(o for o in bl_scene.objects if o.get(lamp_addon.design.root.PART_KEY) == "lamps[0].lens")
+    built = len(lens.data.polygons)
+    assert bpy.ops.lamp.freeform_convert() == {"FINISHED"}
+    assert len(lens.data.polygons) == built and lamp_addon.design.builder.is_up_to_date(bl_scene)
+    glass = next(o for o in lamp_addon.freeform.properties.role_objects(bl_scene) if o.lamp_role.role == "lens")
+    assert len(glass.data.polygons) > 1.5 * built  # measured 2.2x on the stop lamp
+
+    seen = []
+    with mesh_builder.tolerances(0.01, 0.002):
+        worker = threading.Thread(target=lambda: seen.append((mesh_builder.chord_tolerance(),
+                                                              mesh_builder.cut_tolerance())))
+        worker.start()
+        worker.join()
+        assert (mesh_builder.chord_tolerance(), mesh_builder.cut_tolerance()) == (0.01, 0.002)
+    assert seen == [(mesh_builder.CHORD_TOLERANCE_MM, mesh_builder.CUT_TOLERANCE_MM)]
+    assert mesh_builder.chord_tolerance() == mesh_builder.CHORD_TOLERANCE_MM
+
+
 @pytest.mark.slow
 def test_converting_again_says_the_earlier_parts_are_traced_too(lamp_addon, addon_core, bl_scene, capfd):
     import bpy

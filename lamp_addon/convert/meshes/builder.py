@@ -63,7 +63,7 @@ def cut_tolerance() -> float:
 
 
 @contextmanager
-def tolerances(chord: float = FREEFORM_CHORD_TOLERANCE_MM, cut: float = FREEFORM_CUT_TOLERANCE_MM) -> Iterator[None]:
+def tolerances(chord: float, cut: float) -> Iterator[None]:
     """Make the meshes of this thread to other tolerances within (Convert to Free-form: the finer ones)."""
     token = _tolerances.set((chord, cut))
     try:
