@@ -28,7 +28,8 @@ CHORD_TOLERANCE_MM = 0.05
 CUT_TOLERANCE_MM = 0.0075
 # Convert to Free-form builds its meshes finer still (issue 32): the photometric stop lamp's lit lens as
 # meshes is then +0.39 % off the parametric (+0.52 % at the tolerances above) and its R148 grid within
-# 0.45 % (1.26 % at H = ±20°, V = ±10°), benchmarks/RESULTS.md. Build and Auto Build keep the above.
+# 0.51 % (1.15-1.45 % at H = ±20°, V = ±10°), benchmarks/RESULTS.md; 2-3x the triangles. Build and Auto
+# Build keep the above.
 FREEFORM_CHORD_TOLERANCE_MM = 0.0125
 FREEFORM_CUT_TOLERANCE_MM = 0.0025
 # (chord, cut surfaces) tolerance of the meshes made in this thread: a context variable, so that
