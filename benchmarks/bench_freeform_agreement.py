@@ -24,9 +24,9 @@ the lens as a flat plate of the mesh's mean thickness, where the parametric lamp
 (docs/model.md §8.14). At 128x128 and below the creases' few pixels move a preset's total by
 up to 0.75 %.
 
-``--tolerance`` and ``--cut-tolerance`` build with other tolerances than the add-on's
-``CHORD_TOLERANCE_MM`` and ``CUT_TOLERANCE_MM`` / ``FLUTE_TOLERANCE_MM`` (the module constants and the
-tessellation functions' defaults are set for this process only).
+``--tolerance`` and ``--cut-tolerance`` convert with other tolerances than Convert to Free-form's
+``FREEFORM_CHORD_TOLERANCE_MM`` and ``FREEFORM_CUT_TOLERANCE_MM`` / ``FLUTE_TOLERANCE_MM`` (the module
+constants, for this process only; Build's 0.05 / 0.0075 mm: ``--tolerance 0.05 --cut-tolerance 0.0075``).
 """
 
 from __future__ import annotations
@@ -87,25 +87,15 @@ def designs(names: list[str]) -> list[tuple[str, dict]]:
 
 
 def set_tolerances(package: str, chord: float | None, cut: float | None) -> None:
-    """Build with other tolerances in this process: the chord tolerance (``CHORD_TOLERANCE_MM``, the
-    constants and every tessellation function's default that is it) and the cut surfaces' own
-    (``CUT_TOLERANCE_MM``)."""
+    """Convert to Free-form with other tolerances in this process: the chord tolerance
+    (``FREEFORM_CHORD_TOLERANCE_MM``) and the cut surfaces' (``FREEFORM_CUT_TOLERANCE_MM``, the flutes'
+    ``FLUTE_TOLERANCE_MM`` too); Build's are not changed."""
     meshes = sys.modules[f"{package}.lamp_addon.convert.meshes.builder"]
-    modules = [module for name, module in list(sys.modules.items()) if name.startswith(f"{package}.lamp_addon")]
     if cut:
-        for module in modules:
-            for name in ("CUT_TOLERANCE_MM", "FLUTE_TOLERANCE_MM"):
-                if hasattr(module, name):
-                    setattr(module, name, cut)
+        meshes.FREEFORM_CUT_TOLERANCE_MM = cut
+        sys.modules[f"{package}.lamp_addon.convert.meshes.flutes"].FLUTE_TOLERANCE_MM = cut
     if chord:
-        old = meshes.CHORD_TOLERANCE_MM
-        for module in modules:
-            if getattr(module, "CHORD_TOLERANCE_MM", None) == old:
-                module.CHORD_TOLERANCE_MM = chord
-            for function in vars(module).values():
-                defaults = getattr(function, "__defaults__", None)
-                if callable(function) and defaults and old in defaults:
-                    function.__defaults__ = tuple(chord if d == old else d for d in defaults)
+        meshes.FREEFORM_CHORD_TOLERANCE_MM = chord
     parts = sys.modules[f"{package}.lamp_addon.design.parts"]
     parts.shapes.items.clear()
     parts.subdivisions.items.clear()
@@ -162,7 +152,7 @@ def main() -> int:
             lamp_addon, core = sys.modules[f"{package}.lamp_addon"], sys.modules[f"{package}.core_tracer"]
             set_tolerances(package, args.tolerance, args.cut_tolerance)
             meshes = sys.modules[f"{package}.lamp_addon.convert.meshes.builder"]
-            tol, cut = meshes.CHORD_TOLERANCE_MM, meshes.CUT_TOLERANCE_MM
+            tol, cut = meshes.FREEFORM_CHORD_TOLERANCE_MM, meshes.FREEFORM_CUT_TOLERANCE_MM
             print(f"chord tolerance {tol} mm, cut surfaces {cut} mm, {args.size}x{args.size}, "
                   f"{args.samples} samples per pixel")
             print(f"{'preset':32} {'light':>7} {'all':>7} {'away':>7} {'(share)':>7} {'rim':>4} {'lens tris':>9} "

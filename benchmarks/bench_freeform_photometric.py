@@ -43,7 +43,7 @@ AGREE = 0.02
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--tolerance", type=float, help="chord tolerance, mm (default: the add-on's)")
+    p.add_argument("--tolerance", type=float, help="chord tolerance, mm (default: Convert to Free-form's)")
     p.add_argument("--cut-tolerance", type=float, help="the cut surfaces' tolerance, mm")
     p.add_argument("--socket-tolerance", type=float, help="the socket's chord tolerance only, mm")
     p.add_argument("--bulb-tolerance", type=float, help="the bulb's chord tolerance only, mm")

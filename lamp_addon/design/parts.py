@@ -97,6 +97,7 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     """Lamp i's mesh parts, named after ``label`` ("Stop" makes "Stop Lens"), its rim polygon in scene
     [x, z] and its bore (for the body's opening), and whether its lens is a preview."""
     base = f"lamps[{i}]"
+    tol = mesh_builder.chord_tolerance()  # Build's, or Convert to Free-form's finer (``mesh_builder.tolerances``)
     g = lamp_geometry(lamp)
     R = lamp["lens"]["radius"]
     outline = Outline.of_lens(lamp["lens"])
@@ -107,17 +108,17 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
         n = mesh_builder.circle_segments(R)
         collecting = prism_plate_parts(base, label, lamp, n)
     elif outline.round:
-        reflector_shape = ("reflector", R, f, g["vertex"], CHORD_TOLERANCE_MM)
+        reflector_shape = ("reflector", R, f, g["vertex"], tol)
         reflector = shapes.get(reflector_shape,
                                 lambda: part_meshes.reflector_mesh(lamp, mesh_builder.circle_segments(R),
-                                                                   CHORD_TOLERANCE_MM))
+                                                                   tol))
         n = ring_segments(reflector)  # the reflector may have refined the rim: lens and body follow it
     else:  # one rim polygon for the lens, the trimmed reflector and the body opening
-        rim_local = mesh_builder.outline_rim(lamp, CHORD_TOLERANCE_MM)
+        rim_local = mesh_builder.outline_rim(lamp, tol)
         lens_outline = ("rectangular", outline.half_w, outline.half_h, outline.corner, f, g["vertex"])
-        reflector_shape = ("reflector", lens_outline, CHORD_TOLERANCE_MM)
+        reflector_shape = ("reflector", lens_outline, tol)
         reflector = shapes.get(reflector_shape,
-                                lambda: part_meshes.trimmed_reflector_mesh(lamp, rim_local, CHORD_TOLERANCE_MM))
+                                lambda: part_meshes.trimmed_reflector_mesh(lamp, rim_local, tol))
         n = len(rim_local)
     if not prism:
         collecting = [MeshPart(f"{base}.reflector", f"{label} Reflector", reflector_shape, lambda: reflector,
@@ -132,18 +133,18 @@ def lamp_parts(i: int, lamp: dict, preview: bool, label: str) -> tuple[list[Mesh
     parts = [
         MeshPart(f"{base}.lens", f"{label} Lens",
                   # the cuts' own tolerances are part of the shape: a lens built before they changed is made again
-                  ("lens", lens_outline, lens["thickness"], cuts["pitch"], _cut_shape(cuts), n, CHORD_TOLERANCE_MM,
-                   k, mesh_builder.CUT_TOLERANCE_MM, flutes.FLUTE_TOLERANCE_MM),
-                  partial(lens_meshes.lens_mesh, lamp, n, CHORD_TOLERANCE_MM, k, rim_local),
+                  ("lens", lens_outline, lens["thickness"], cuts["pitch"], _cut_shape(cuts), n, tol,
+                   k, mesh_builder.cut_tolerance(), flutes.FLUTE_TOLERANCE_MM),
+                  partial(lens_meshes.lens_mesh, lamp, n, tol, k, rim_local),
                   [Slot(f"{base}.lens", f"{label} Lens", partial(materials.lens_glass, lamp=lamp)),
                    _diffuse_slot(f"{base}.side_wall", f"{label} Side Wall", lens["side_wall_color"],
                                  "Side Wall BSDF")], axis),
         *(dataclasses.replace(part, matrix=axis) for part in collecting),
-        MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, CHORD_TOLERANCE_MM),
+        MeshPart(f"{base}.bulb", f"{label} Bulb", ("sphere", rb, tol),
                   partial(part_meshes.sphere_mesh, rb),
                   [Slot(f"{base}.bulb", f"{label} Bulb", partial(materials.bulb, lamp=lamp))],
                   _translation(cx + bx, by, cz + bz)),
-        MeshPart(f"{base}.socket", f"{label} Socket", ("socket", rs, g["vertex"], by, CHORD_TOLERANCE_MM),
+        MeshPart(f"{base}.socket", f"{label} Socket", ("socket", rs, g["vertex"], by, tol),
                   partial(part_meshes.socket_mesh, rs, g["vertex"], by),
                   [_diffuse_slot(f"{base}.socket", f"{label} Socket", lamp["socket"]["color"], "Socket BSDF")], axis),
     ]
@@ -169,8 +170,8 @@ def _cylindrical(parts: list[MeshPart], lamp: dict, rim: np.ndarray, lens_outlin
     cylinder, and the body's opening where its outer face meets its side wall."""
     lens, cuts = lamp["lens"], lamp["cuts"]
     key = ("cylindrical lens", lens_outline, lens["thickness"], cuts["pitch"], cuts["height"], len(rim),
-           lens["wrap_radius"], lens["wrap_toward"], CHORD_TOLERANCE_MM, k)
-    data = shapes.get(key, partial(wrap.cylindrical_lens_mesh, lamp, rim, k, CHORD_TOLERANCE_MM))
+           lens["wrap_radius"], lens["wrap_toward"], mesh_builder.chord_tolerance(), k)
+    data = shapes.get(key, partial(wrap.cylindrical_lens_mesh, lamp, rim, k, mesh_builder.chord_tolerance()))
     old = parts[0]
     parts[0] = MeshPart(old.part, old.name, key, lambda: data, old.slots, old.matrix)
     opening = wrap.outer_rim(data, lamp) + np.array(lamp["center"])
@@ -193,16 +194,16 @@ def prism_plate_parts(base: str, label: str, lamp: dict, segments: int) -> list[
     """A prism-plate lamp's plate (glass) and housing (diffuse) in place of the reflector (docs/model.md, the
     prism plate); their matrices are set by ``lamp_parts``."""
     plate = lamp["prism_plate"]
-    g = lamp_geometry(lamp)
+    g, tol = lamp_geometry(lamp), mesh_builder.chord_tolerance()
     profile = (lamp["lens"]["radius"], plate["pitch"], plate["focal_length"], plate["ior"], g["plate_front"],
-               g["plate_base"], segments, CHORD_TOLERANCE_MM)
+               g["plate_base"], segments, tol)
     return [
         MeshPart(f"{base}.prism_plate", f"{label} Prism Plate", ("prism_plate", *profile),
                   partial(prism_plate.prism_plate_mesh, lamp, segments),
                   [Slot(f"{base}.prism_plate", f"{label} Prism Plate",
                         partial(materials.prism_plate_glass, lamp=lamp))], None),
         MeshPart(f"{base}.housing", f"{label} Housing",
-                  ("housing", lamp["lens"]["radius"], g["plate_front"], g["vertex"], segments, CHORD_TOLERANCE_MM),
+                  ("housing", lamp["lens"]["radius"], g["plate_front"], g["vertex"], segments, tol),
                   partial(prism_plate.housing_mesh, lamp, segments),
                   [_diffuse_slot(f"{base}.housing", f"{label} Housing", plate["housing_color"], "Housing BSDF")],
                   None),
@@ -215,7 +216,7 @@ def light_guide_parts(base: str, label: str, lamp: dict, axis: Matrix) -> list[M
     shape = tuple((key, tuple(value) if isinstance(value, list) else value) for key, value in sorted(guide.items())
                   if key not in ("glass_ior", "absorption"))
     return [
-        MeshPart(f"{base}.light_guide", f"{label} Light Guide", ("light_guide", shape, CHORD_TOLERANCE_MM),
+        MeshPart(f"{base}.light_guide", f"{label} Light Guide", ("light_guide", shape, mesh_builder.chord_tolerance()),
                   partial(guide_meshes.guide_mesh, lamp),
                   [Slot(f"{base}.light_guide", f"{label} Light Guide",
                         partial(materials.light_guide_glass, lamp=lamp))], axis),
@@ -249,7 +250,8 @@ def cut_quads(lamp: dict, preview: bool) -> tuple[int, bool]:
     area_radius = outline.half_w if outline.round else math.sqrt(outline.area / math.pi)  # same cell count
     light = preview_subdivision(area_radius, p) if preview else mesh_builder.MAX_CELL_SUBDIVISION
     most = light + 1 if preview else mesh_builder.MAX_CELL_SUBDIVISION
-    k = subdivisions.get((t, p, h, most), partial(_cut_subdivision, t, p, h, most))
+    tol = mesh_builder.chord_tolerance()  # Convert to Free-form's finer one needs more quads
+    k = subdivisions.get((t, p, h, most, tol), partial(_cut_subdivision, t, p, h, most, tol))
     return min(k, light), k > light
 
 
@@ -268,9 +270,9 @@ def body_part(scene: dict, rims: list[np.ndarray], bores: list[tuple], sun: dict
                     paint, Matrix.Identity(4))
 
 
-def _cut_subdivision(thickness: float, pitch: float, height: float, most: int) -> int:
+def _cut_subdivision(thickness: float, pitch: float, height: float, most: int, tol: float) -> int:
     rho = None if height == 0 else cut_sphere_radius(pitch, height)
-    return fisheye.cut_subdivision(fisheye.CutSurface(thickness, pitch, height, rho), most=most)[0]
+    return fisheye.cut_subdivision(fisheye.CutSurface(thickness, pitch, height, rho), tol, most=most)[0]
 
 
 def preview_subdivision(radius: float, pitch: float) -> int:

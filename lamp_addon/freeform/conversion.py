@@ -9,7 +9,10 @@ apex plane or the reflector's edge), a prism plate as a ``lens`` (its glass clos
 plate's index and absorption) and its housing as a ``side_wall`` (it ends a path with its colour,
 ⑲), the reflector, bulb, socket and body as themselves. Each copy gets a role material
 (``freeform.materials``) so that Cycles renders it as the tracer traces it. How the meshes are made
-into solids and walls is ``freeform.solids``.
+into solids and walls is ``freeform.solids``. The meshes are made finer than Build's for this
+(``convert.meshes.builder.tolerances``: chord 0.0125 mm, cut surfaces 0.0025 mm, issue 32) and the parts
+built again to Build's afterwards, so that the free-form lamp traces as the parametric one does (the
+photometric stop lamp's lit lens within 0.5 %, its R148 grid within 1 %: benchmarks/RESULTS.md).
 
 The parametric lamp's own objects are hidden afterwards (viewport and render), since the copies
 stand in their place; the designer's objects are never touched. Nothing is deleted: Undo takes
@@ -25,6 +28,7 @@ import bpy
 
 from ...core_tracer.scene import spec as S
 from ...core_tracer.scene.reading import SceneError
+from ..convert.meshes import builder as mesh_builder
 from ..design import builder as design_builder
 from ..design import properties as design_properties
 from ..design import root as design_root
@@ -84,9 +88,9 @@ def convert_to_freeform(bl_scene: bpy.types.Scene) -> ConvertReport:
     design is not valid (nothing is changed then)."""
     report = ConvertReport(earlier_parts=len(properties.role_objects(bl_scene)))
     scene = design_properties.design_to_scene(bl_scene)  # raises SceneError before anything changes
-    if not design_builder.is_up_to_date(bl_scene):
+    report.built = not design_builder.is_up_to_date(bl_scene)
+    with mesh_builder.tolerances(mesh_builder.FREEFORM_CHORD_TOLERANCE_MM, mesh_builder.FREEFORM_CUT_TOLERANCE_MM):
         design_builder.build_lamp(bl_scene, scene)
-        report.built = True
     root = design_root.find_root(bl_scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
     parts = sorted((obj for obj in bl_scene.objects
@@ -94,10 +98,11 @@ def convert_to_freeform(bl_scene: bpy.types.Scene) -> ConvertReport:
                    key=lambda obj: obj.get(design_root.PART_KEY))
     if not parts:
         raise SceneError("lamps", "no built lamp part was found to convert; allowed a design built with Build Lamp")
+    meshes = [bpy.data.meshes.new_from_object(obj.evaluated_get(depsgraph)) for obj in parts]
+    design_builder.build_lamp(bl_scene, scene)  # the parametric parts back to Build's tolerances
     coll = _collection(bl_scene)
-    for obj in parts:
+    for obj, mesh in zip(parts, meshes, strict=True):
         roles = roles_of(obj[design_root.PART_KEY], scene)
-        mesh = bpy.data.meshes.new_from_object(obj.evaluated_get(depsgraph))
         kind = obj[design_root.PART_KEY].rsplit(".", 1)[-1]
         if kind == "lens":
             glass, wall = solids.split_lens(mesh)

@@ -2,7 +2,8 @@
 pixels that the free-form tracer renders from the converted meshes is within 0.5 % of the parametric
 tracer's.
 
-The curved cuts are built to ``CUT_TOLERANCE_MM`` (flutes ``FLUTE_TOLERANCE_MM``) for this. At
+The curved cuts are built to ``CUT_TOLERANCE_MM`` (flutes ``FLUTE_TOLERANCE_MM``; Convert finer still,
+``FREEFORM_CUT_TOLERANCE_MM``) for this. At
 the chord tolerance of the other parts (0.05 mm) the faceted caps' shading normals, averaged from the
 faces, are flatter than the caps near the creases between cells, and the lens lets through 0.5-4 %
 more light (``benchmarks/bench_freeform_agreement.py`` gives the figures, per preset). The presets under a sky

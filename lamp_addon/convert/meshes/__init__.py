@@ -1,7 +1,8 @@
 """Tessellated lamp parts: vertices in mm, faces, smoothing groups (numpy; no Blender data).
 
 Every part is built to a chord tolerance: no point of any triangle of the mesh lies further than
-``builder.CHORD_TOLERANCE_MM`` (0.05 mm) from the analytic surface the tracer uses (docs/model.md §3).
+``builder.CHORD_TOLERANCE_MM`` (0.05 mm; Convert to Free-form's 0.0125 mm, ``builder.tolerances``) from
+the analytic surface the tracer uses (docs/model.md §3).
 The tessellation is chosen from that tolerance and then *measured* (``MeshData.max_deviation``: the
 largest distance to the analytic surface over 28 sample points on every triangle of both diagonal
 splits of every quad); curved surfaces are refined until the measurement is within ``SAMPLED_MARGIN``

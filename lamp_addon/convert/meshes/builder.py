@@ -7,7 +7,9 @@ collar (see the package's docstring for the conventions).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +26,16 @@ CHORD_TOLERANCE_MM = 0.05
 # while the edits go on) keeps the chord tolerance's quads or fewer; the cylindrical lens, made a quad
 # at a time, keeps them too (its preset within 0.3 % all the same).
 CUT_TOLERANCE_MM = 0.0075
+# Convert to Free-form builds its meshes finer still (issue 32): the photometric stop lamp's lit lens as
+# meshes is then +0.39 % off the parametric (+0.52 % at the tolerances above) and its R148 grid within
+# 0.51 % (1.15-1.45 % at H = ±20°, V = ±10°), benchmarks/RESULTS.md; 2-3x the triangles. Build and Auto
+# Build keep the above.
+FREEFORM_CHORD_TOLERANCE_MM = 0.0125
+FREEFORM_CUT_TOLERANCE_MM = 0.0025
+# (chord, cut surfaces) tolerance of the meshes made in this thread: a context variable, so that
+# Convert's finer build leaves Auto Build's worker thread at the defaults.
+_tolerances: ContextVar[tuple[float, float]] = ContextVar("mesh tolerances",
+                                                         default=(CHORD_TOLERANCE_MM, CUT_TOLERANCE_MM))
 MAX_CELL_SUBDIVISION = 48  # quads per side of one lenslet cell
 MAX_SEGMENTS = 1024  # around a circle
 # Curved surfaces measured by sampling are refined to this fraction of the tolerance, so that the
@@ -38,6 +50,27 @@ SNAP_MM = 1e-3
 # Material slots of the lens mesh.
 LENS_GLASS = 0
 LENS_SIDE_WALL = 1
+
+
+def chord_tolerance(tol: float | None = None) -> float:
+    """``tol``, or when None the chord tolerance meshes are made to here (``CHORD_TOLERANCE_MM`` but in
+    ``tolerances``)."""
+    return _tolerances.get()[0] if tol is None else tol
+
+
+def cut_tolerance() -> float:
+    """The cut surfaces' tolerance meshes are made to here (``CUT_TOLERANCE_MM`` but in ``tolerances``)."""
+    return _tolerances.get()[1]
+
+
+@contextmanager
+def tolerances(chord: float, cut: float) -> Iterator[None]:
+    """Make the meshes of this thread to other tolerances within (Convert to Free-form: the finer ones)."""
+    token = _tolerances.set((chord, cut))
+    try:
+        yield
+    finally:
+        _tolerances.reset(token)
 
 
 @dataclass
@@ -132,8 +165,9 @@ def fan_triangles(faces: Sequence[Sequence[int]]) -> np.ndarray:
 # Rims: regular polygons, a rectangular lens's outline, convex clipping
 
 
-def circle_segments(radius: float, tol: float = CHORD_TOLERANCE_MM, multiple: int = 4, minimum: int = 16) -> int:
+def circle_segments(radius: float, tol: float | None = None, multiple: int = 4, minimum: int = 16) -> int:
     """Segments of a regular polygon inscribed in a circle whose sagitta r(1 - cos(pi/n)) is <= tol."""
+    tol = chord_tolerance(tol)
     if tol >= radius:
         n = minimum
     else:
@@ -148,11 +182,12 @@ def rim_polygon(radius: float, segments: int) -> np.ndarray:
     return np.column_stack([radius * np.cos(a), radius * np.sin(a)])
 
 
-def outline_rim(lamp: dict, tol: float = CHORD_TOLERANCE_MM) -> np.ndarray:
+def outline_rim(lamp: dict, tol: float | None = None) -> np.ndarray:
     """The rim polygon of a rectangular lens (``Outline.perimeter``), shared by its lens, reflector and
     body opening: corners within ``tol``, and no edge longer than the chord of the reflector's edge that
     sags ``tol`` (along a straight side the edge is the parabola y = y_v - (x^2 + z^2) / 4f, whose chord
     of length L sags L^2 / 16f), over sqrt 2 so that a quad's diagonal is no longer than that chord."""
+    tol = chord_tolerance(tol)
     f = lamp["reflector"]["focal_length"]
     return Outline.of_lens(lamp["lens"]).perimeter(tol, max_edge=math.sqrt(16.0 * f * tol) / math.sqrt(2.0))
 

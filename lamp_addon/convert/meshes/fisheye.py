@@ -14,8 +14,6 @@ import numpy as np
 from ....core_tracer.scene.derived import cut_sphere_radius
 from ....core_tracer.scene.outline import Outline
 from .builder import (
-    CHORD_TOLERANCE_MM,
-    CUT_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     MAX_CELL_SUBDIVISION,
@@ -23,8 +21,10 @@ from .builder import (
     SNAP_MM,
     MeshBuilder,
     MeshData,
+    chord_tolerance,
     clip_convex,
     collar_top,
+    cut_tolerance,
     fan_triangles,
     outline_rim,
     polygon_area,
@@ -79,10 +79,11 @@ def cell_lines(surface: CutSurface, k: int) -> np.ndarray:
     return lines
 
 
-def cut_subdivision(surface: CutSurface, tol: float = CHORD_TOLERANCE_MM,
+def cut_subdivision(surface: CutSurface, tol: float | None = None,
                     most: int = MAX_CELL_SUBDIVISION) -> tuple[int, float]:
     """Quads per side of a cell so that one whole cell is within ``tol``, at most ``most``; returns
     (k, deviation)."""
+    tol = chord_tolerance(tol)
     if surface.rho is None:
         return 1, 0.0
     # Start from the sagitta estimate L^2 / (8 rho) along the cell's axes, then measure.
@@ -166,7 +167,7 @@ def _with_rim_vertices(poly: list, rim: np.ndarray, edge_list: Sequence[int]) ->
     return out
 
 
-def fisheye_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
+def fisheye_lens_mesh(lamp: dict, segments: int, tol: float | None = None,
                       max_subdivision: int = MAX_CELL_SUBDIVISION, rim: np.ndarray | None = None) -> MeshData:
     """The lens solid of one lamp with spherical lenslet cuts, relative to its axis.
 
@@ -182,12 +183,13 @@ def fisheye_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM
     stands up to the reflector's edge, which lies behind the rim plane along the straight sides (docs/model.md:
     the lens outline).
     """
+    tol = chord_tolerance(tol)
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     shape = Outline.of_lens(lamp["lens"])
     surface = CutSurface(t, p, h, None if h == 0 else cut_sphere_radius(p, h))
     if max_subdivision >= cut_subdivision(surface, tol)[0]:  # not a preview: to the cuts' own tolerance
-        k, dev_cell = cut_subdivision(surface, min(tol, CUT_TOLERANCE_MM))
+        k, dev_cell = cut_subdivision(surface, min(tol, cut_tolerance()))
     else:
         k, dev_cell = cut_subdivision(surface, tol, max_subdivision)
     if shape.round:

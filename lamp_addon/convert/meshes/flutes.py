@@ -17,12 +17,12 @@ import numpy as np
 
 from ....core_tracer.scene.derived import flute_radius
 from .builder import (
-    CHORD_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     SAMPLED_MARGIN,
     MeshBuilder,
     MeshData,
+    chord_tolerance,
     collar_top,
     fan_triangles,
     rim_polygon,
@@ -45,11 +45,12 @@ def bands_per_flute(pitch: float, rho: float, tol: float) -> int:
     return max(1, math.ceil(2.0 * half / phi - 1e-9))
 
 
-def flutes_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
+def flutes_lens_mesh(lamp: dict, segments: int, tol: float | None = None,
                      rim: np.ndarray | None = None) -> MeshData:
     """The lens solid of a fluted lamp, relative to its axis, as ``fisheye.fisheye_lens_mesh`` for fish-eye
     cuts (outer face, cut surface, side wall and open collar up to the apex plane). ``rim``: the
     lens outline, any convex polygon counter-clockwise seen from -y (default: the round lens's)."""
+    tol = chord_tolerance(tol)
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     p, h = lamp["cuts"]["pitch"], lamp["cuts"]["height"]
     a = np.array(ridge_across(lamp["cuts"]["orientation"]))

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ....core_tracer.raytrace.guide_table import GuideTable
-from .builder import CHORD_TOLERANCE_MM, FLAT, MeshBuilder, MeshData, circle_segments
+from .builder import FLAT, MeshBuilder, MeshData, chord_tolerance, circle_segments
 
 
 def _frame(lamp: dict) -> tuple[GuideTable, np.ndarray, np.ndarray, np.ndarray]:
@@ -25,7 +25,7 @@ def section_polygon(guide: GuideTable) -> np.ndarray:
     """The rod's cross-section (N, 2) [u, v], counter-clockwise seen from +s."""
     hu, hv = float(guide.half_u[0]), float(guide.half_v[0])
     if guide.round[0]:
-        n = circle_segments(hu, CHORD_TOLERANCE_MM)
+        n = circle_segments(hu, chord_tolerance())
         a = 2.0 * np.pi * np.arange(n) / n
         # a vertex on the back line v = r, where the prisms cut: the grooves' bottom is a chord there
         return np.stack([hu * np.sin(a), hu * np.cos(a)], axis=1)
@@ -61,7 +61,7 @@ def sweep_stations(guide: GuideTable, section: np.ndarray) -> np.ndarray:
                 stations.extend((apex - reach, apex + reach))
     if guide.arc[0]:  # the arc's walls as chords within the tolerance (a full circle's segments, pro rata)
         outer = float(guide.radius[0] + guide.half_u[0])
-        step = 2.0 * np.pi * float(guide.radius[0]) / circle_segments(outer, CHORD_TOLERANCE_MM)
+        step = 2.0 * np.pi * float(guide.radius[0]) / circle_segments(outer, chord_tolerance())
         stations.extend(np.linspace(0.0, length, int(np.ceil(length / step)) + 1))
     return np.unique(np.clip(np.array(stations), 0.0, length))
 

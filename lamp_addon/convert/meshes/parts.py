@@ -11,12 +11,12 @@ import numpy as np
 
 from ....core_tracer.scene.derived import lamp_geometry
 from .builder import (
-    CHORD_TOLERANCE_MM,
     FLAT,
     MAX_SEGMENTS,
     SAMPLED_MARGIN,
     MeshBuilder,
     MeshData,
+    chord_tolerance,
     circle_segments,
     fan_triangles,
     triangle_deviation,
@@ -37,13 +37,14 @@ def paraboloid_distance(vertex_y: float, focal_length: float) -> Callable[[np.nd
     return distance
 
 
-def reflector_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def reflector_mesh(lamp: dict, segments: int, tol: float | None = None) -> MeshData:
     """The paraboloid from the rim (radius R, y = rim) to the vertex, normals toward the lamp interior.
 
     Rings are spaced evenly in arc length along the profile. ``segments`` (shared with the lens rim and
     the body opening) is raised if the measured deviation needs it; ``MeshData.group`` is one smooth
     group.
     """
+    tol = chord_tolerance(tol)
     R = lamp["lens"]["radius"]
     f = lamp["reflector"]["focal_length"]
     yv = lamp_geometry(lamp)["vertex"]
@@ -66,10 +67,11 @@ def reflector_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM) -
 
 
 
-def trimmed_reflector_mesh(lamp: dict, rim: np.ndarray, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def trimmed_reflector_mesh(lamp: dict, rim: np.ndarray, tol: float | None = None) -> MeshData:
     """The paraboloid trimmed to a rectangular lens's prism (docs/model.md: the lens outline): rows of points
     s P_k for the rim polygon's vertices P_k and fractions s from 0 (the vertex) to 1 (the rim, on the
     side wall), spaced evenly in arc length along the longest profile; refined until measured."""
+    tol = chord_tolerance(tol)
     f = lamp["reflector"]["focal_length"]
     yv = lamp_geometry(lamp)["vertex"]
     distance = paraboloid_distance(yv, f)
@@ -126,8 +128,9 @@ def _revolve(radii: np.ndarray, profile: Callable[[np.ndarray], np.ndarray], seg
 # Bulb and socket
 
 
-def sphere_mesh(radius: float, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def sphere_mesh(radius: float, tol: float | None = None) -> MeshData:
     """A UV sphere about the origin (poles on the z axis), outward normals, smooth; measured like the rest."""
+    tol = chord_tolerance(tol)
     n = circle_segments(radius, tol / 2.0, multiple=4, minimum=16)
     center = np.zeros(3)
 
@@ -163,8 +166,9 @@ def _uv_sphere(radius: float, segments: int) -> MeshData:
     return mb.result()
 
 
-def socket_mesh(radius: float, y0: float, y1: float, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def socket_mesh(radius: float, y0: float, y1: float, tol: float | None = None) -> MeshData:
     """A capped cylinder on the lamp axis from y0 to y1 (y0 > y1 allowed); smooth side, flat caps."""
+    tol = chord_tolerance(tol)
     n = circle_segments(radius, tol, multiple=4, minimum=16)
     lo, hi = min(y0, y1), max(y0, y1)
     mb = MeshBuilder()

@@ -18,12 +18,12 @@ import numpy as np
 
 from ....core_tracer.scene.derived import tooth_height
 from .builder import (
-    CHORD_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     LENS_SIDE_WALL,
     MeshBuilder,
     MeshData,
+    chord_tolerance,
     collar_top,
     fan_triangles,
     rim_polygon,
@@ -96,7 +96,7 @@ class _Loop:
         self.points.append((x, z, b, top, foot) if rising else (x, z, b, foot, top))
 
 
-def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_MM,
+def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float | None = None,
                        rim: np.ndarray | None = None) -> MeshData:
     """The lens solid of a saw-tooth lamp, relative to its axis: outer disk at y = 0, one flat
     polygon per inclined facet and per return facet, the side wall from y = 0 to the cut surface
@@ -105,6 +105,7 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float = CHORD_TOLERANCE_M
     counter-clockwise seen from -y (default: the round lens's ``rim_polygon(R, segments)``).
     ``max_deviation`` is the measured distance of the facets' vertices from their analytic planes
     and of the side wall from the cylinder of the round lens."""
+    tol = chord_tolerance(tol)
     R, t = lamp["lens"]["radius"], lamp["lens"]["thickness"]
     cuts = lamp["cuts"]
     p, across = cuts["pitch"], ridge_across(cuts["orientation"])

@@ -23,13 +23,13 @@ import numpy as np
 from ....core_tracer.scene.derived import cut_sphere_radius, lamp_geometry, lens_cylinder
 from ....core_tracer.scene.outline import Outline
 from .builder import (
-    CHORD_TOLERANCE_MM,
     FLAT,
     LENS_GLASS,
     LENS_SIDE_WALL,
     SAMPLED_MARGIN,
     MeshBuilder,
     MeshData,
+    chord_tolerance,
     clip_convex,
     fan_triangles,
     triangle_deviation,
@@ -38,11 +38,12 @@ from .fisheye import CutSurface, cell_lines
 from .parts import add_bores
 
 
-def strip_lines(x_t: float, stop: float, radius: float, tol: float = CHORD_TOLERANCE_MM) -> np.ndarray:
+def strip_lines(x_t: float, stop: float, radius: float, tol: float | None = None) -> np.ndarray:
     """Lines x = const from the tangent line ``x_t`` of a cylinder of ``radius`` (axis at x_t)
     toward ``stop`` (either side), ``stop`` included, evenly spaced in angle about the axis so
     that the chord across each strip, radius (1 - cos(dphi / 2)) off the cylinder, stays within
     ``tol`` (with the measuring margin)."""
+    tol = chord_tolerance(tol)
     u = min(abs(stop - x_t) / radius, 1.0)
     phi_end = math.asin(u)
     step = 2.0 * math.acos(1.0 - SAMPLED_MARGIN * tol / radius)
@@ -106,9 +107,10 @@ def _ccw(poly: Sequence[tuple[float, float]]) -> bool:
     return sum(poly[i - 1][0] * poly[i][1] - poly[i][0] * poly[i - 1][1] for i in range(len(poly))) > 0
 
 
-def cylindrical_lens_mesh(lamp: dict, rim: np.ndarray, k: int, tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+def cylindrical_lens_mesh(lamp: dict, rim: np.ndarray, k: int, tol: float | None = None) -> MeshData:
     """The lens solid of a lamp with a cylindrical lens, relative to its axis; ``rim`` is the
     outline polygon in [x, z], convex, counter-clockwise seen from -y; ``k`` quads per cell side."""
+    tol = chord_tolerance(tol)
     cuts = _Cuts(lamp)
     cyl, p = cuts.cyl, cuts.p
     surface = CutSurface(lamp["lens"]["thickness"], p, lamp["cuts"]["height"], cuts.rho)
@@ -307,9 +309,10 @@ def front_depth(wraps: Sequence[tuple[float, float, float]]) -> Callable[[float]
 
 def body_mesh_wrapped(scene: dict, rims: Sequence[np.ndarray], bores: Sequence[tuple[float, float]],
                       wraps: Sequence[tuple[float, float, float]], triangulate: Callable[[list], list],
-                      tol: float = CHORD_TOLERANCE_MM) -> MeshData:
+                      tol: float | None = None) -> MeshData:
     """``parts.body_mesh`` for a front that curves round to the side: the front triangulated with
     its openings in [x, z], cut along the strip lines of each curved end and lifted onto the front."""
+    tol = chord_tolerance(tol)
     body = scene["body"]
     bx, bz = body["center"]
     w, hgt = body["size"]
