@@ -49,7 +49,9 @@ def main() -> int:
                     bl_scene = bpy.context.scene
                     addon.design.properties.scene_to_design(bl_scene, core.scene.load_scene(
                         args.tree / "presets" / f"{name}.json"))
-                    addon.render.lamp_camera.ensure_lamp_camera(bl_scene, frame=False)
+                    # the Lamp Camera moved from render/ to design/ (issue 35): either tree
+                    seen = getattr(addon.design, "lamp_camera", None) or addon.render.lamp_camera
+                    seen.ensure_lamp_camera(bl_scene, frame=False)
                     addon.design.builder.build_lamp(bl_scene, addon.design.properties.design_to_scene(bl_scene))
                     start = time.perf_counter()
                     addon.freeform.conversion.convert_to_freeform(bl_scene)

@@ -17,18 +17,8 @@ import math
 import numpy as np
 
 from ....core_tracer.scene.derived import tooth_height
-from .builder import (
-    FLAT,
-    LENS_GLASS,
-    LENS_SIDE_WALL,
-    MeshBuilder,
-    MeshData,
-    chord_tolerance,
-    collar_top,
-    fan_triangles,
-    rim_polygon,
-    triangle_deviation,
-)
+from . import builder
+from .builder import MeshBuilder, MeshData, chord_tolerance, collar_top, fan_triangles, rim_polygon, triangle_deviation
 
 ON_BORDER = 1e-9  # mm: a rim vertex this close to a strip border is where the border crosses the rim
 
@@ -128,7 +118,7 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float | None = None,
                 span.append(s)
         if not span or max(span) - min(span) <= 2 * ON_BORDER:
             continue  # no facet: the rim only touches the strip's border (a side lying on it)
-        mb.face(face[::-1], FLAT, LENS_GLASS)
+        mb.face(face[::-1], builder.FLAT, builder.LENS_GLASS)
     facets = len(mb.faces)
 
     # Return facets: the two crossings of each border, foot to top, wound to face +a (the air).
@@ -143,7 +133,8 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float | None = None,
         quad = [feet[0], feet[1], tops[1], tops[0]]
         v = np.array([mb.verts[i] for i in quad[:3]])
         normal = np.cross(v[1] - v[0], v[2] - v[1])
-        mb.face(quad if normal[0] * across[0] + normal[2] * across[1] > 0 else quad[::-1], FLAT, LENS_GLASS)
+        facing = normal[0] * across[0] + normal[2] * across[1] > 0
+        mb.face(quad if facing else quad[::-1], builder.FLAT, builder.LENS_GLASS)
     walls = len(mb.faces)
 
     # Side wall below the cut surface, collar above it: between consecutive rim points, taking in
@@ -160,14 +151,14 @@ def sawtooth_lens_mesh(lamp: dict, segments: int, tol: float | None = None,
         right_used, right_other = ids[j1][0], ids[j1][1]
         left_mid = [left_other] if ya_a < yl_a else []  # under the used (higher) vertex
         right_mid = [right_other] if yl_b < ya_b else []
-        mb.face([bottom[j], *left_mid, left_used, right_used, *right_mid, bottom[j1]], 1, LENS_SIDE_WALL)
+        mb.face([bottom[j], *left_mid, left_used, right_used, *right_mid, bottom[j1]], 1, builder.LENS_SIDE_WALL)
         top_a = mb.vertex(xa, top(xa, za) if callable(top) else top, za)
         top_b = mb.vertex(xb, top(xb, zb) if callable(top) else top, zb)
         left_up = [left_other] if ya_a > yl_a else []  # between the used (lower) vertex and the top
         right_up = [right_other] if yl_b > ya_b else []
-        mb.face([left_used, *left_up, top_a, top_b, *right_up, right_used], 1, LENS_SIDE_WALL)
+        mb.face([left_used, *left_up, top_a, top_b, *right_up, right_used], 1, builder.LENS_SIDE_WALL)
     side = mb.faces[walls:]
-    mb.face(bottom, FLAT, LENS_GLASS)  # outer face, counter-clockwise seen from -y
+    mb.face(bottom, builder.FLAT, builder.LENS_GLASS)  # outer face, counter-clockwise seen from -y
 
     data = mb.result()
     data.max_deviation = max(facet_deviation(data, facets, walls, lamp),
