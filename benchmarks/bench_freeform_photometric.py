@@ -79,7 +79,7 @@ def main() -> int:
             addon.freeform.conversion.convert_to_freeform(bl_scene)
             prepared = addon.freeform.render.prepare(bl_scene, bpy.context.evaluated_depsgraph_get(), design)
             freeform = prepared.scene
-            meshes = core("freeform.cache").DesignMeshes(prepared.geometry.meshes)
+            meshes = core("freeform.design").DesignMeshes(prepared.geometry.meshes)
             print("triangles:", {n: len(m.triangles) for n, m in prepared.geometry.meshes.items()}, flush=True)
             intensity, direction = core("measures.intensity"), core("measures.directions").direction
             homogeneity = core("measures.homogeneity").homogeneity

@@ -305,7 +305,7 @@ def test_photometric_stop_lamp_equals_its_freeform_meshes(lamp_addon, addon_core
     assert prepared.geometry is not None and "freeform" in prepared.scene
     freeform = prepared.scene
     assert freeform["light_model"] == "photometric"
-    meshes = core("freeform.cache").DesignMeshes(prepared.geometry.meshes)
+    meshes = core("freeform.design").DesignMeshes(prepared.geometry.meshes)
     intensity, grid = core("measures.intensity"), core("measures.regulation_grid")
     direction = core("measures.directions").direction
 
