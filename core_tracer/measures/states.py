@@ -256,7 +256,8 @@ def render_states(scene: dict, *, progress: Callable[[int, int, str], None] | No
     for k, state in enumerate(states[1:], start=1):
         lit = one(state, k).image.astype(np.float32)
         passes[state.key] = lit - surroundings
-    stats = {"light_model": base.stats.get("light_model", "paper"), "bands": base.stats.get("bands")}
+    stats = {"light_model": base.stats.get("light_model", "paper"), "bands": base.stats.get("bands"),
+             "band_edges_nm": base.stats.get("band_edges_nm")}
     return LightStates(copy.deepcopy(scene if recorded is None else recorded), states, surroundings, passes, stats)
 
 
@@ -286,7 +287,8 @@ def one_walk(scene: dict, *, progress: Callable[[int, int, str], None] | None = 
         else:  # the bulb's other filament: L ∝ Φ
             ratio = state.rendered / walked_with if walked_with > 0 else 0.0
             passes[state.key] = light * np.float32(ratio)
-    stats = {"light_model": result.stats.get("light_model", "paper"), "bands": result.stats.get("bands")}
+    stats = {"light_model": result.stats.get("light_model", "paper"), "bands": result.stats.get("bands"),
+             "band_edges_nm": result.stats.get("band_edges_nm")}
     return LightStates(copy.deepcopy(scene if recorded is None else recorded), states, result.passes["surroundings"],
                        passes, stats)
 
@@ -445,12 +447,23 @@ def _check_states(given: object, states: list[State], bad: Callable[[str], Scene
 
 
 def _checked_stats(given: object, scene: dict, bad: Callable[[str], SceneError]) -> dict:
-    from ..photometry.bands import MAX_BANDS
+    from ..photometry.bands import MAX_BANDS, Bands
 
     model = scene.get("light_model", "paper")
     if not isinstance(given, dict) or given.get("light_model") != model:
         raise bad(f"its stats do not say the scene's light model ({model})")
     bands = given.get("bands")
-    if model == "photometric" and not (type(bands) is int and 1 <= bands <= MAX_BANDS):
+    if model != "photometric":
+        return {"light_model": model, "bands": None, "band_edges_nm": None}
+    if not (type(bands) is int and 1 <= bands <= MAX_BANDS):
         raise bad(f"its stats give {show_value(bands)} bands; allowed 1 to {MAX_BANDS}")
-    return {"light_model": model, "bands": bands if model == "photometric" else None}
+    # the bands' edges, nm (``raytrace.spectral_bands``); a file written before the scene chose its
+    # bands has none: its K bands were uniform
+    edges = given.get("band_edges_nm")
+    if edges is None:
+        edges = Bands.uniform(bands).edges_nm.tolist()
+    if not (isinstance(edges, list) and len(edges) == bands + 1
+            and all(type(e) in (int, float) and math.isfinite(e) for e in edges)
+            and all(a < b for a, b in zip(edges, edges[1:], strict=False))):
+        raise bad(f"its stats give band edges {show_value(edges)[:60]}; allowed {bands + 1} increasing wavelengths")
+    return {"light_model": model, "bands": bands, "band_edges_nm": [float(e) for e in edges]}

@@ -139,13 +139,21 @@ def check_database(opt: Optimisation) -> None:
     if found is None:
         return
     tables, studies = found
-    if tables and not OPTUNA_TABLES <= tables:
+    if tables and not OPTUNA_TABLES <= tables and not tables <= optuna_schema():
         shown = ", ".join(sorted(tables)[:5]) + (", ..." if len(tables) > 5 else "")
         raise SceneError("storage", f"{opt.storage!r} holds tables ({shown}) that are not an Optuna study's; allowed a "
                                     "new database, or one this program made (nothing was changed)")
     if opt.name in studies and "parameters" not in studies[opt.name]:
         raise SceneError("name", f"the study {opt.name!r} in {opt.storage} was not made by an optimisation file; "
                                  "allowed another name (nothing was changed)")
+
+
+def optuna_schema() -> set[str]:
+    """Every table Optuna's storage makes (its models' and Alembic's): a database holding only some
+    of them is one Optuna is making now (another process's first trial), not a foreign one."""
+    from optuna.storages._rdb import models
+
+    return set(models.BaseModel.metadata.tables) | {"alembic_version"}
 
 
 def knobs_record(opt: Optimisation) -> list[dict]:
