@@ -54,11 +54,17 @@ def main() -> int:
                 runs[label].setdefault(name, []).append(measured)
     print(f"one thread, least CPU of {args.rounds} rounds; load average {os.getloadavg()[0]:.1f}")
     for name, _, _ in CASES:
-        (old, segments_old), (new, segments_new) = (min(runs[k][name]) for k in ("old", "new"))
-        print(f"{name}: old {old:.2f} s ({segments_old / old / 1e6:.2f} M segments/s), new {new:.2f} s "
-              f"({segments_new / new / 1e6:.2f} M segments/s): time new/old {new / old:.3f}, throughput "
-              f"{segments_new / new / (segments_old / old):.3f}x")
+        print(_compared(name, min(runs["old"][name]), min(runs["new"][name])))
     return 0
+
+
+def _compared(name: str, old: tuple[float, int], new: tuple[float, int]) -> str:
+    """One preset's line: each tree's (CPU seconds, segments), the time and throughput ratios."""
+    (old_s, old_segments), (new_s, new_segments) = old, new
+    old_rate, new_rate = old_segments / old_s, new_segments / new_s
+    return (f"{name}: old {old_s:.2f} s ({old_rate / 1e6:.2f} M segments/s), new {new_s:.2f} s "
+            f"({new_rate / 1e6:.2f} M segments/s): time new/old {new_s / old_s:.3f}, throughput "
+            f"{new_rate / old_rate:.3f}x")
 
 
 if __name__ == "__main__":
