@@ -129,3 +129,29 @@ def test_a_state_rendered_at_a_number_of_400_digits_is_refused(good):
     header["states"][1]["rendered"] = 10**400
     text = json.dumps(header).encode()
     _refused(H.npz_of({**parts, "header.npy": H.npy_bytes(np.frombuffer(text, np.uint8))}), "rendered at")
+
+
+def test_a_photometric_file_keeps_its_bands_and_an_older_one_reads_as_uniform_bands():
+    """The bands the scene chose (narrow where an LED's line is) travel with the file, so ``relight``
+    writes its images on them; a file written before the scene chose its bands has none and read its
+    K bands as uniform; edges that are not K + 1 increasing wavelengths are refused."""
+    from core_tracer.photometry.bands import Bands
+
+    doc = json.loads((helpers.PRESETS / "led-stop-lamp.json").read_text())
+    doc["image"].update(width=24, height=16, samples=1)
+    data = S.to_bytes(S.render_states(parse_scene(doc)))
+    stats = S.from_bytes(data).stats
+    edges = stats["band_edges_nm"]
+    assert len(edges) == stats["bands"] + 1 and edges != Bands.uniform(stats["bands"]).edges_nm.tolist()
+
+    parts = H.members(data)
+    header = json.loads(np.lib.format.read_array(io.BytesIO(parts["header.npy"])).tobytes())
+
+    def with_stats(given: dict) -> bytes:
+        h = {**header, "stats": given}
+        return H.npz_of({**parts, "header.npy": H.npy_bytes(np.frombuffer(json.dumps(h).encode(), np.uint8))})
+
+    older = {k: v for k, v in header["stats"].items() if k != "band_edges_nm"}
+    assert S.from_bytes(with_stats(older)).stats["band_edges_nm"] == Bands.uniform(stats["bands"]).edges_nm.tolist()
+    _refused(with_stats({**header["stats"], "band_edges_nm": edges[::-1]}), "band edges")
+    _refused(with_stats({**header["stats"], "band_edges_nm": edges[:-1]}), "band edges")
